@@ -1,0 +1,3 @@
+//! The `eom-gen` command-line tool.
+
+fn main() {}

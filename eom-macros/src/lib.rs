@@ -1,0 +1,1 @@
+//! `#[multibody(model = "models/x.ron")]`: eom-gen at compile time.
