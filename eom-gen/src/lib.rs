@@ -1,7 +1,15 @@
 //! eom-gen: a symbolic equation-of-motion generator for multibody systems.
 //!
 //! The pipeline runs one way (see `DESIGN.md`):
-//! `model` (parse and check a RON file) → `graph` (spanning tree, cut joints)
-//! → `mech` (kinematics and dynamics as `sym` expressions) → `emit` (Rust).
+//! [`model`] (parse and check a RON file) → [`System`] (validated, with its
+//! [`graph`]: spanning tree and cut joints) → `mech` (kinematics and
+//! dynamics as [`sym`] expressions) → `emit` (Rust source).
 
+pub mod graph;
+pub mod model;
+pub mod summary;
 pub mod sym;
+pub mod system;
+
+pub use model::{Checked, Diagnostic, Report, Source, Spec, check, check_file};
+pub use system::System;

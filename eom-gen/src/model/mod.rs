@@ -1,0 +1,165 @@
+//! Model files: RON schema ([`spec`]), parsing, validation and diagnostics.
+//!
+//! [`load`] reads a file, [`parse`] turns text into a [`Spec`] (syntax and
+//! type errors, from `ron`), and [`check`] turns text into a validated
+//! [`System`] reporting every problem at once, each at its
+//! `file:line:col`. The [`builder`] constructs the same [`Spec`] in code.
+
+pub mod builder;
+pub mod diag;
+pub mod expr;
+pub mod locate;
+pub mod rotation;
+pub mod spec;
+mod validate;
+
+pub use diag::{Diagnostic, Report, Severity, Source, Span};
+pub use spec::Spec;
+pub use validate::{Gap, closure_gaps, initial_poses};
+
+use crate::system::System;
+use diag::{did_you_mean, list_names};
+use ron::error::Error as RonError;
+
+/// A model that passed validation, with its warnings.
+#[derive(Clone, Debug)]
+pub struct Checked {
+    /// The validated system.
+    pub system: System,
+    /// The parsed specification.
+    pub spec: Spec,
+    /// Warnings (never errors).
+    pub warnings: Vec<Diagnostic>,
+    /// The source, for rendering the warnings.
+    pub source: Source,
+}
+
+/// Reads a model file. `path` is kept exactly as given for diagnostics.
+pub fn load(path: &str) -> Result<Source, Report> {
+    let fail = |d: Diagnostic| Report {
+        source: Source::new(path, ""),
+        diagnostics: vec![d],
+    };
+    let bytes = std::fs::read(path).map_err(|e| {
+        fail(
+            Diagnostic::file_error(format!("cannot read model file: {e}"))
+                .with_help("give the path of a `.ron` model file, e.g. `models/pendulum.ron`"),
+        )
+    })?;
+    match String::from_utf8(bytes) {
+        Ok(text) => Ok(Source::new(path, text)),
+        Err(e) => {
+            let at = e.utf8_error().valid_up_to();
+            let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
+            Err(Report {
+                source: Source::new(path, text),
+                diagnostics: vec![
+                    Diagnostic::error(Span::new(at, at + 1), "model file is not valid UTF-8")
+                        .with_help("save the file as UTF-8 text"),
+                ],
+            })
+        }
+    }
+}
+
+fn ron_options() -> ron::Options {
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
+/// Parses model text into a [`Spec`]: syntax and type errors only.
+pub fn parse(src: &Source) -> Result<Spec, Report> {
+    ron_options()
+        .from_str::<Spec>(&src.text)
+        .map_err(|e| Report {
+            source: src.clone(),
+            diagnostics: vec![ron_diagnostic(src, &e)],
+        })
+}
+
+/// Parses and validates model text.
+pub fn check(src: &Source) -> Result<Checked, Report> {
+    let spec = parse(src)?;
+    check_spec(src, spec)
+}
+
+/// Validates an already parsed [`Spec`] whose text is `src`.
+pub fn check_spec(src: &Source, spec: Spec) -> Result<Checked, Report> {
+    let root = locate::parse(&src.text);
+    let (system, diagnostics) = validate::check(src, &spec, root.as_ref());
+    match system {
+        Some(system) => Ok(Checked {
+            system,
+            spec,
+            warnings: diagnostics,
+            source: src.clone(),
+        }),
+        None => Err(Report {
+            source: src.clone(),
+            diagnostics,
+        }),
+    }
+}
+
+/// Loads, parses and validates a model file.
+pub fn check_file(path: &str) -> Result<Checked, Report> {
+    check(&load(path)?)
+}
+
+fn ron_diagnostic(src: &Source, e: &ron::error::SpannedError) -> Diagnostic {
+    let start = src.offset_of(e.span.start.line, e.span.start.col);
+    let end = src
+        .offset_of(e.span.end.line, e.span.end.col)
+        .max(start + 1);
+    let span = Span::new(start, end);
+    let outer = |o: &Option<String>| o.as_ref().map_or(String::new(), |o| format!(" of `{o}`"));
+    let (message, help) = match &e.code {
+        RonError::NoSuchStructField {
+            expected,
+            found,
+            outer: o,
+        } => (
+            format!("unknown field `{found}`{}", outer(o)),
+            suggest(found, expected, "fields"),
+        ),
+        RonError::MissingStructField { field, outer: o } => (
+            format!("missing field `{field}`{}", outer(o)),
+            format!("add `{field}: …` (see docs/model-format.md)"),
+        ),
+        RonError::DuplicateStructField { field, outer: o } => (
+            format!("field `{field}`{} is given twice", outer(o)),
+            "remove one of them".to_string(),
+        ),
+        RonError::NoSuchEnumVariant {
+            expected,
+            found,
+            outer: o,
+        } => (
+            format!("unknown variant `{found}`{}", outer(o)),
+            suggest(found, expected, "variants"),
+        ),
+        RonError::InvalidValueForType { expected, found } => (
+            format!("expected {expected}, found {found}"),
+            "see docs/model-format.md for the type of each field".to_string(),
+        ),
+        RonError::ExpectedDifferentStructName { expected, found } => (
+            format!("expected `{expected}(…)`, found `{found}(…)`"),
+            format!("write `{expected}(` or just `(`"),
+        ),
+        RonError::ExpectedDifferentLength { expected, found } => (
+            format!("expected {expected}, found {found} element(s)"),
+            "vectors have three components: `(x, y, z)`".to_string(),
+        ),
+        other => (
+            format!("{other}"),
+            "the model is a RON file: see docs/model-format.md".to_string(),
+        ),
+    };
+    Diagnostic::error(span, message).with_help(help)
+}
+
+fn suggest(found: &str, expected: &[&str], what: &str) -> String {
+    match did_you_mean(found, expected.iter().copied()) {
+        Some(best) => format!("did you mean `{best}`?"),
+        None => format!("{what} are {}", list_names(expected.iter().copied())),
+    }
+}

@@ -1,0 +1,485 @@
+//! The model file format: serde types that mirror the RON text one to one.
+//!
+//! Nothing here is checked beyond types; [`super::check`] turns a [`Spec`]
+//! into a validated [`crate::System`]. Field-by-field documentation with
+//! units is in `docs/model-format.md`; the doc comments here are the same
+//! text in short.
+
+use serde::de::{self, Visitor};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+use std::fmt;
+
+/// A number or an arithmetic expression over parameters (`"l/2"`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Num {
+    /// A plain number.
+    Value(f64),
+    /// An expression, parsed during validation.
+    Expr(String),
+}
+
+impl Default for Num {
+    fn default() -> Self {
+        Num::Value(0.0)
+    }
+}
+
+impl From<f64> for Num {
+    fn from(v: f64) -> Self {
+        Num::Value(v)
+    }
+}
+
+impl From<&str> for Num {
+    fn from(s: &str) -> Self {
+        Num::Expr(s.to_string())
+    }
+}
+
+impl Num {
+    /// True for the literal number zero.
+    pub fn is_zero(&self) -> bool {
+        matches!(self, Num::Value(v) if *v == 0.0)
+    }
+}
+
+impl Serialize for Num {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            Num::Value(v) => s.serialize_f64(*v),
+            Num::Expr(e) => s.serialize_str(e),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Num {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct NumVisitor;
+        impl Visitor<'_> for NumVisitor {
+            type Value = Num;
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+                f.write_str("a number or an expression string such as \"l/2\"")
+            }
+            fn visit_f64<E: de::Error>(self, v: f64) -> Result<Num, E> {
+                Ok(Num::Value(v))
+            }
+            fn visit_i64<E: de::Error>(self, v: i64) -> Result<Num, E> {
+                Ok(Num::Value(v as f64))
+            }
+            fn visit_u64<E: de::Error>(self, v: u64) -> Result<Num, E> {
+                Ok(Num::Value(v as f64))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<Num, E> {
+                Ok(Num::Expr(v.to_string()))
+            }
+        }
+        d.deserialize_any(NumVisitor)
+    }
+}
+
+/// A 3-vector `(x, y, z)` of numbers or expressions.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct V3(pub Num, pub Num, pub Num);
+
+impl V3 {
+    /// The three components.
+    pub fn components(&self) -> [&Num; 3] {
+        [&self.0, &self.1, &self.2]
+    }
+
+    /// True if all three are literal zeros.
+    pub fn is_zero(&self) -> bool {
+        self.components().iter().all(|n| n.is_zero())
+    }
+}
+
+impl<A: Into<Num>, B: Into<Num>, C: Into<Num>> From<(A, B, C)> for V3 {
+    fn from((a, b, c): (A, B, C)) -> Self {
+        V3(a.into(), b.into(), c.into())
+    }
+}
+
+/// A whole model file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Model", deny_unknown_fields)]
+pub struct Spec {
+    /// Model name: a Rust identifier, used for generated items.
+    pub name: String,
+    /// Gravitational acceleration in world axes, m/s²; absent = no gravity.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<V3>,
+    /// Named constants, in order; later ones may use earlier ones.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parameters: Vec<Parameter>,
+    /// The rigid bodies (the inertial body is `ground`, never listed).
+    pub bodies: Vec<Body>,
+    /// The joints; together with `ground` and the bodies they form the
+    /// system graph.
+    pub joints: Vec<Joint>,
+    /// Force elements.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub forces: Vec<Force>,
+    /// Constraints that are not joints.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub constraints: Vec<Constraint>,
+    /// What the scene wants computed besides the equations of motion.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub outputs: Vec<Output>,
+}
+
+/// A named constant.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Parameter {
+    /// Name used in expressions.
+    pub name: String,
+    /// Value (an expression over earlier parameters is allowed).
+    pub value: Num,
+    /// `false` (default): fixed, inlined into generated code.
+    /// `true`: a runtime field of the generated parameter struct.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub tunable: bool,
+    /// Free text (units, source).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub doc: Option<String>,
+}
+
+/// A rigid body.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Body {
+    /// Unique name (`ground` is reserved).
+    pub name: String,
+    /// Mass, kg (> 0).
+    pub mass: Num,
+    /// Centre of mass in body axes, m.
+    #[serde(default, skip_serializing_if = "V3::is_zero")]
+    pub com: V3,
+    /// Inertia tensor about the centre of mass in body axes, kg m²;
+    /// absent = a point mass.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inertia: Option<Inertia>,
+    /// Named points and frames on the body.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub markers: Vec<Marker>,
+}
+
+/// An inertia tensor about the centre of mass, in body axes, kg m².
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Inertia {
+    /// Principal moments `(Ixx, Iyy, Izz)` along the body axes.
+    Diag(Num, Num, Num),
+    /// The full symmetric tensor by rows (off-diagonal entries are tensor
+    /// entries, i.e. minus the products of inertia).
+    Matrix(V3, V3, V3),
+}
+
+/// A named point (and frame) on a body.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Marker {
+    /// Name, unique on its body.
+    pub name: String,
+    /// Position in body axes, m.
+    #[serde(default, skip_serializing_if = "V3::is_zero")]
+    pub position: V3,
+    /// Orientation of the marker frame relative to the body.
+    #[serde(default, skip_serializing_if = "Orientation::is_identity")]
+    pub orientation: Orientation,
+}
+
+/// A rotation: how a frame's axes sit in its reference frame's axes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub enum Orientation {
+    /// No rotation.
+    #[default]
+    Identity,
+    /// Right-handed rotation by `angle` (rad) about `axis` (any length > 0).
+    AxisAngle {
+        /// The axis.
+        axis: V3,
+        /// The angle, rad.
+        angle: Num,
+    },
+    /// Roll, pitch, yaw (rad) about fixed x, y, z: `R = Rz(yaw) Ry(pitch) Rx(roll)`,
+    /// as in URDF.
+    Rpy(Num, Num, Num),
+    /// Rotation matrix by rows; its columns are the frame's axes in the
+    /// reference frame. Must be orthonormal with determinant +1.
+    Matrix(V3, V3, V3),
+}
+
+impl Orientation {
+    /// True for [`Orientation::Identity`].
+    pub fn is_identity(&self) -> bool {
+        *self == Orientation::Identity
+    }
+}
+
+/// A frame fixed on a body: position and orientation in body axes.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Frame {
+    /// Origin in body axes, m.
+    #[serde(default, skip_serializing_if = "V3::is_zero")]
+    pub position: V3,
+    /// Orientation relative to the body axes.
+    #[serde(default, skip_serializing_if = "Orientation::is_identity")]
+    pub orientation: Orientation,
+}
+
+impl Frame {
+    /// True for the body frame itself.
+    pub fn is_identity(&self) -> bool {
+        self.position.is_zero() && self.orientation.is_identity()
+    }
+}
+
+/// The kind of a joint, with its axes in joint-frame axes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum JointKind {
+    /// Rotation about `axis`: one coordinate, the angle (rad).
+    Revolute {
+        /// Rotation axis.
+        axis: V3,
+    },
+    /// Translation along `axis`: one coordinate, the displacement (m).
+    Prismatic {
+        /// Translation axis.
+        axis: V3,
+    },
+    /// Rotation about and translation along `axis`: (angle, displacement).
+    Cylindrical {
+        /// The common axis.
+        axis: V3,
+    },
+    /// Cardan joint: rotation about `axis1`, then about `axis2` as carried
+    /// by the first rotation: (angle1, angle2).
+    Universal {
+        /// First axis (fixed in the parent joint frame).
+        axis1: V3,
+        /// Second axis (fixed in the child joint frame).
+        axis2: V3,
+    },
+    /// Ball joint: unit quaternion `(w, x, y, z)`, angular velocity in child axes.
+    Spherical,
+    /// Translation along joint-frame x and y, rotation about z: (x, y, angle).
+    Planar,
+    /// Six degrees of freedom: translation (parent axes) then quaternion;
+    /// speeds are linear then angular velocity, both in child axes.
+    Free,
+    /// Rotation about `axis` with translation `pitch * angle` along it.
+    Screw {
+        /// The screw axis.
+        axis: V3,
+        /// Lead per radian, m/rad.
+        pitch: Num,
+    },
+    /// No relative motion.
+    Fixed,
+}
+
+impl JointKind {
+    /// Numbers of position coordinates and speeds.
+    pub fn dims(&self) -> (usize, usize) {
+        match self {
+            JointKind::Revolute { .. } | JointKind::Prismatic { .. } | JointKind::Screw { .. } => {
+                (1, 1)
+            }
+            JointKind::Cylindrical { .. } | JointKind::Universal { .. } => (2, 2),
+            JointKind::Planar => (3, 3),
+            JointKind::Spherical => (4, 3),
+            JointKind::Free => (7, 6),
+            JointKind::Fixed => (0, 0),
+        }
+    }
+
+    /// Lower-case name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            JointKind::Revolute { .. } => "revolute",
+            JointKind::Prismatic { .. } => "prismatic",
+            JointKind::Cylindrical { .. } => "cylindrical",
+            JointKind::Universal { .. } => "universal",
+            JointKind::Spherical => "spherical",
+            JointKind::Planar => "planar",
+            JointKind::Free => "free",
+            JointKind::Screw { .. } => "screw",
+            JointKind::Fixed => "fixed",
+        }
+    }
+}
+
+/// A joint between two bodies.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Joint {
+    /// Unique name.
+    pub name: String,
+    /// Kind and axes.
+    pub kind: JointKind,
+    /// Parent body (`ground` is the inertial body).
+    pub parent: String,
+    /// Child body.
+    pub child: String,
+    /// Joint frame on the parent, in parent body axes.
+    #[serde(default, skip_serializing_if = "Frame::is_identity")]
+    pub parent_frame: Frame,
+    /// Joint frame on the child, in child body axes; it coincides with the
+    /// parent joint frame when all coordinates are zero.
+    #[serde(default, skip_serializing_if = "Frame::is_identity")]
+    pub child_frame: Frame,
+    /// Names of the position coordinates (default: derived from the joint name).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coordinates: Option<Vec<String>>,
+    /// Names of the speeds (default: derived from the coordinate names).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speeds: Option<Vec<String>>,
+    /// Initial positions, one per coordinate (default: zero, identity quaternion).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub q0: Option<Vec<Num>>,
+    /// Initial speeds, one per speed (default: zero).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u0: Option<Vec<Num>>,
+    /// Held at `q0`: the joint contributes no coordinates.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub locked: bool,
+    /// Prescribed motion: one expression of `t` per coordinate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prescribed: Option<Vec<Num>>,
+    /// Cut this joint if it closes a loop (otherwise the graph chooses).
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub cut: bool,
+}
+
+/// A point on a body: by position or by marker name.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Anchor {
+    /// The body (`ground` allowed).
+    pub body: String,
+    /// Position in body axes, m (default: the body origin).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub point: Option<V3>,
+    /// A marker of the body instead of `point`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub marker: Option<String>,
+}
+
+/// A force element.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Force {
+    /// Linear spring and damper between two points:
+    /// `F = k (L - rest_length) + c dL/dt` along the line.
+    SpringDamper {
+        /// Unique force name.
+        name: String,
+        /// First end.
+        a: Anchor,
+        /// Second end.
+        b: Anchor,
+        /// Stiffness k, N/m.
+        stiffness: Num,
+        /// Damping c, N s/m.
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        damping: Num,
+        /// Rest length, m.
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        rest_length: Num,
+    },
+    /// Spring and damper on every coordinate of a joint:
+    /// `τ = -k (q - rest) - c q̇` (N m/rad or N/m).
+    JointSpringDamper {
+        /// Unique force name.
+        name: String,
+        /// The joint.
+        joint: String,
+        /// Stiffness.
+        stiffness: Num,
+        /// Damping.
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        damping: Num,
+        /// Rest position.
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        rest: Num,
+    },
+    /// Known generalised forces on a joint, one per speed: expressions of
+    /// parameters, `t`, coordinates and speeds.
+    JointForce {
+        /// Unique force name.
+        name: String,
+        /// The joint.
+        joint: String,
+        /// One value per speed of the joint.
+        values: Vec<Num>,
+    },
+    /// Runtime inputs acting as generalised forces on a joint, one per speed.
+    Actuator {
+        /// Unique force name.
+        name: String,
+        /// The joint.
+        joint: String,
+        /// Input names (default: `<name>` for one speed, `<name>_<k>` for more).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        inputs: Option<Vec<String>>,
+    },
+}
+
+/// A constraint that is not a joint.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Constraint {
+    /// A thin disk or wheel rolling without slipping on the ground plane
+    /// `z = 0` (world +z up): contact point at rest (nonholonomic).
+    RollingDisk {
+        /// Unique constraint name.
+        name: String,
+        /// The disk's body.
+        body: String,
+        /// Radius, m.
+        radius: Num,
+        /// Disk axis (normal of the disk plane) in body axes.
+        axis: V3,
+        /// Disk centre in body axes (default: the body origin).
+        #[serde(default, skip_serializing_if = "V3::is_zero")]
+        center: V3,
+    },
+    /// `expr = 0`, an expression of coordinates, parameters and `t`.
+    Holonomic {
+        /// Unique constraint name.
+        name: String,
+        /// The constraint function.
+        expr: String,
+    },
+}
+
+/// A quantity the scene wants computed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub enum Output {
+    /// Position of a marker in world axes.
+    Position {
+        /// The body.
+        body: String,
+        /// The marker.
+        marker: String,
+    },
+    /// Velocity of a marker in world axes.
+    Velocity {
+        /// The body.
+        body: String,
+        /// The marker.
+        marker: String,
+    },
+    /// Reaction force and torque transmitted by a joint.
+    JointReaction {
+        /// The joint.
+        joint: String,
+    },
+    /// Kinetic and potential energy.
+    Energy,
+    /// Linear and angular momentum (about the world origin).
+    Momentum,
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}

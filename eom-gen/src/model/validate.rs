@@ -1,0 +1,1680 @@
+//! Validation: [`Spec`] → [`System`], collecting every problem at once.
+//!
+//! Each check reports at the span of the offending value (found by its
+//! path through the [`locate`](super::locate) tree), names it in backticks
+//! and says what would be right. Checks go on after a failure wherever the
+//! remaining ones still make sense, so one run reports everything.
+
+use super::diag::{Diagnostic, Source, Span, did_you_mean, list_names};
+use super::expr::{Ast, EvalError, Func};
+use super::locate::{Node, Seg, string_contents_start};
+use super::rotation::{self, Pose};
+use super::spec::{self, Num, Orientation, Spec, V3};
+use crate::graph::{Arc, Graph, GraphError, JointId};
+use crate::system::*;
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use std::collections::{HashMap, HashSet};
+
+/// Relative tolerance of the numeric checks (symmetry, orthonormality,
+/// unit quaternions, triangle inequalities).
+const TOL: f64 = 1e-9;
+/// Loop closure gap (m, rad) at the initial state above which `check` warns.
+const CLOSURE_TOL: f64 = 1e-6;
+
+type Path = Vec<Seg<'static>>;
+
+fn f(name: &'static str) -> Seg<'static> {
+    Seg::Field(name)
+}
+fn i(index: usize) -> Seg<'static> {
+    Seg::Index(index)
+}
+fn join(path: &[Seg<'static>], more: &[Seg<'static>]) -> Path {
+    path.iter().chain(more).copied().collect()
+}
+
+/// Which names an expression may use.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Scope {
+    /// Parameters only (geometry, masses, initial values).
+    Params,
+    /// Parameters and time (prescribed motion).
+    Time,
+    /// Parameters, time, coordinates and speeds (forces, constraints).
+    State,
+}
+
+/// Validates `spec` (read from `src`, whose span tree is `root`).
+/// Returns the system when there is no error, and every diagnostic.
+pub fn check(src: &Source, spec: &Spec, root: Option<&Node>) -> (Option<System>, Vec<Diagnostic>) {
+    let mut cx = Ctx {
+        src,
+        root,
+        diags: Vec::new(),
+        params: Vec::new(),
+        state_names: HashMap::new(),
+        later_params: Vec::new(),
+    };
+    let system = cx.system(spec);
+    let mut diags = cx.diags;
+    diags.sort_by_key(|d| (d.span.map(|s| s.start), d.severity));
+    let system = if diags.iter().any(Diagnostic::is_error) {
+        None
+    } else {
+        system
+    };
+    (system, diags)
+}
+
+struct Ctx<'a> {
+    src: &'a Source,
+    root: Option<&'a Node>,
+    diags: Vec<Diagnostic>,
+    /// Parameters defined so far, with their default values.
+    params: Vec<(String, f64)>,
+    /// Coordinates, speeds and inputs: name → what it is (for messages).
+    state_names: HashMap<String, &'static str>,
+    /// Parameters not defined yet (while parameters are being read).
+    later_params: Vec<String>,
+}
+
+fn is_ident(s: &str) -> bool {
+    let mut chars = s.chars();
+    chars
+        .next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+const RESERVED: [&str; 2] = ["t", "pi"];
+
+impl Ctx<'_> {
+    fn span(&self, path: &[Seg<'static>]) -> Span {
+        self.root.map_or(Span::default(), |r| r.span_of(path))
+    }
+
+    fn error(&mut self, path: &[Seg<'static>], message: String, help: impl Into<String>) {
+        let d = Diagnostic::error(self.span(path), message).with_help(help);
+        self.diags.push(d);
+    }
+
+    fn warning(&mut self, path: &[Seg<'static>], message: String, help: impl Into<String>) {
+        let d = Diagnostic::warning(self.span(path), message).with_help(help);
+        self.diags.push(d);
+    }
+
+    fn param_value(&self, name: &str) -> Option<f64> {
+        self.params
+            .iter()
+            .rev()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| *v)
+    }
+
+    /// Checks that `name` is a usable identifier for an expression name.
+    fn check_symbol_name(&mut self, name: &str, path: &[Seg<'static>], what: &'static str) -> bool {
+        if !is_ident(name) {
+            self.error(
+                path,
+                format!("{what} name `{name}` is not an identifier"),
+                "use letters, digits and `_`, starting with a letter or `_`",
+            );
+            return false;
+        }
+        if RESERVED.contains(&name) || Func::ALL.iter().any(|f| f.name() == name) {
+            self.error(
+                path,
+                format!("{what} name `{name}` is reserved in expressions"),
+                "`t`, `pi` and the function names cannot be redefined; choose another name",
+            );
+            return false;
+        }
+        if self.param_value(name).is_some() || self.state_names.contains_key(name) {
+            let other = self.state_names.get(name).copied().unwrap_or("parameter");
+            self.error(
+                path,
+                format!("{what} name `{name}` is already used by a {other}"),
+                "parameters, coordinates, speeds and inputs share one namespace; rename one of them",
+            );
+            return false;
+        }
+        true
+    }
+
+    /// Parses and evaluates a number field.
+    fn quantity(&mut self, num: &Num, path: &[Seg<'static>], scope: Scope) -> Option<Quantity> {
+        let span = self.span(path);
+        let (expr, text) = match num {
+            Num::Value(v) => (Ast::Num(*v), None),
+            Num::Expr(text) => {
+                let base = string_contents_start(&self.src.text, span);
+                match Ast::parse(text) {
+                    Ok(ast) => (ast, Some(base)),
+                    Err(e) => {
+                        let at = Span::new(base + e.offset, base + e.offset + 1);
+                        self.diags.push(
+                            Diagnostic::error(at, format!("in expression `{text}`: {}", e.message))
+                                .with_help(e.help),
+                        );
+                        return None;
+                    }
+                }
+            }
+        };
+        let mut ok = true;
+        for (name, offset) in expr.names() {
+            if name == "pi" || self.param_value(name).is_some() {
+                continue;
+            }
+            let allowed = match self.state_names.get(name) {
+                _ if name == "t" => scope != Scope::Params,
+                Some(_) => scope == Scope::State,
+                None => false,
+            };
+            if allowed {
+                continue;
+            }
+            ok = false;
+            let at = text.map_or(span, |base| {
+                Span::new(base + offset, base + offset + name.len())
+            });
+            if let Some(later) = self.later_params.iter().find(|p| p.as_str() == name) {
+                let at = text.map_or(span, |base| {
+                    Span::new(base + offset, base + offset + name.len())
+                });
+                self.diags.push(
+                    Diagnostic::error(at, format!("parameter `{later}` is used before it is defined"))
+                        .with_help("parameters may use only parameters defined above them: move its definition up"),
+                );
+                continue;
+            }
+            let message = match (name, self.state_names.get(name)) {
+                ("t", _) => "time `t` cannot be used here".to_string(),
+                (_, Some(kind)) => format!("{kind} `{name}` cannot be used here"),
+                _ => format!("unknown name `{name}` in expression"),
+            };
+            let mut candidates: Vec<&str> = self.params.iter().map(|(n, _)| n.as_str()).collect();
+            if scope == Scope::State {
+                candidates.extend(self.state_names.keys().map(String::as_str));
+            }
+            candidates.sort_unstable();
+            let help = match did_you_mean(name, candidates.iter().copied()) {
+                Some(best) => format!("did you mean `{best}`?"),
+                None => match scope {
+                    Scope::Params => format!(
+                        "this field may use parameters defined above it and `pi`; parameters: {}",
+                        list_names(candidates.iter().copied())
+                    ),
+                    Scope::Time => "prescribed motion may use parameters, `pi` and time `t`".into(),
+                    Scope::State => {
+                        "forces and constraints may use parameters, `pi`, `t`, coordinates and speeds"
+                            .into()
+                    }
+                },
+            };
+            self.diags
+                .push(Diagnostic::error(at, message).with_help(help));
+        }
+        if !ok {
+            return None;
+        }
+        let lookup = |n: &str| {
+            self.param_value(n)
+                .or_else(|| (n == "t" || self.state_names.contains_key(n)).then_some(0.0))
+        };
+        match expr.eval(&lookup) {
+            Ok(value) => Some(Quantity { expr, value, span }),
+            Err(EvalError::NotFinite) if scope == Scope::Params => {
+                self.error(
+                    path,
+                    format!(
+                        "`{}` is not a finite number at the default parameters",
+                        expr
+                    ),
+                    "check for division by zero, `sqrt` or `ln` of a negative value",
+                );
+                None
+            }
+            // With time or state at zero a singular value is not an error
+            // of the model: the value is only a placeholder.
+            Err(_) => Some(Quantity {
+                expr,
+                value: f64::NAN,
+                span,
+            }),
+        }
+    }
+
+    fn vec3(&mut self, v: &V3, path: &[Seg<'static>], scope: Scope) -> Option<Vec3Q> {
+        let [a, b, c] = v.components();
+        let x = self.quantity(a, &join(path, &[i(0)]), scope);
+        let y = self.quantity(b, &join(path, &[i(1)]), scope);
+        let z = self.quantity(c, &join(path, &[i(2)]), scope);
+        Some([x?, y?, z?])
+    }
+
+    fn axis(&mut self, v: &V3, path: &[Seg<'static>], what: &str) -> Option<Axis> {
+        let written = self.vec3(v, path, Scope::Params)?;
+        let raw = values(&written);
+        let norm = raw.norm();
+        if norm < 1e-12 || !norm.is_finite() {
+            self.error(
+                path,
+                format!("{what} has zero length"),
+                "give a direction such as `(0, 0, 1)`",
+            );
+            return None;
+        }
+        Some(Axis {
+            written,
+            unit: raw / norm,
+        })
+    }
+
+    fn frame(&mut self, frame: &spec::Frame, path: &[Seg<'static>]) -> Option<FrameInfo> {
+        let position = self.vec3(
+            &frame.position,
+            &join(path, &[f("position")]),
+            Scope::Params,
+        );
+        let rot = self.orientation(&frame.orientation, &join(path, &[f("orientation")]));
+        let (rotation, matrix) = rot?;
+        Some(FrameInfo {
+            position: position?,
+            rotation,
+            matrix,
+        })
+    }
+
+    fn orientation(
+        &mut self,
+        o: &Orientation,
+        path: &[Seg<'static>],
+    ) -> Option<(Rotation, Matrix3<f64>)> {
+        match o {
+            Orientation::Identity => Some((Rotation::Identity, Matrix3::identity())),
+            Orientation::AxisAngle { axis, angle } => {
+                let a = self.axis(axis, &join(path, &[f("axis")]), "rotation axis");
+                let angle = self.quantity(angle, &join(path, &[f("angle")]), Scope::Params);
+                let (a, angle) = (a?, angle?);
+                let m = rotation::axis_angle(&a.unit, angle.value);
+                Some((
+                    Rotation::AxisAngle {
+                        axis: a.written,
+                        angle,
+                    },
+                    m,
+                ))
+            }
+            Orientation::Rpy(r, p, y) => {
+                let r = self.quantity(r, &join(path, &[i(0)]), Scope::Params);
+                let p = self.quantity(p, &join(path, &[i(1)]), Scope::Params);
+                let y = self.quantity(y, &join(path, &[i(2)]), Scope::Params);
+                let (r, p, y) = (r?, p?, y?);
+                let m = rotation::rpy(r.value, p.value, y.value);
+                Some((Rotation::Rpy([r, p, y]), m))
+            }
+            Orientation::Matrix(a, b, c) => {
+                let rows = [
+                    self.vec3(a, &join(path, &[i(0)]), Scope::Params),
+                    self.vec3(b, &join(path, &[i(1)]), Scope::Params),
+                    self.vec3(c, &join(path, &[i(2)]), Scope::Params),
+                ];
+                let [Some(a), Some(b), Some(c)] = rows else {
+                    return None;
+                };
+                let m = Matrix3::from_rows(&[
+                    values(&a).transpose(),
+                    values(&b).transpose(),
+                    values(&c).transpose(),
+                ]);
+                let (err, det) = rotation::orthonormality(&m);
+                if err > TOL {
+                    self.error(
+                        path,
+                        format!("rotation matrix is not orthonormal (largest entry of RᵀR − I is {err:.3e})"),
+                        "rows must be unit vectors at right angles to each other; or write `AxisAngle(axis: …, angle: …)` or `Rpy(roll, pitch, yaw)`",
+                    );
+                    return None;
+                }
+                if det < 0.0 {
+                    self.error(
+                        path,
+                        "rotation matrix is a reflection (determinant −1)".into(),
+                        "negate one row to make it a proper rotation",
+                    );
+                    return None;
+                }
+                Some((Rotation::Matrix([a, b, c]), m))
+            }
+        }
+    }
+
+    fn system(&mut self, spec: &Spec) -> Option<System> {
+        if !is_ident(&spec.name) {
+            self.error(
+                &[f("name")],
+                format!("model name `{}` is not an identifier", spec.name),
+                "generated code is named after the model: use letters, digits and `_`",
+            );
+        }
+        let parameters = self.parameters(spec);
+        let gravity = spec
+            .gravity
+            .as_ref()
+            .and_then(|g| self.vec3(g, &[f("gravity")], Scope::Params));
+        let bodies = self.bodies(spec);
+        let joints = self.joints(spec, &bodies);
+        let graph = self.graph(spec, &bodies);
+        let (Some(graph), Some(mut joints)) = (graph, joints) else {
+            return None;
+        };
+        self.assign_coordinates(spec, &graph, &mut joints);
+        let (forces, inputs) = self.forces(spec, &bodies, &joints);
+        let constraints = self.constraints(spec, &bodies);
+        let outputs = self.outputs(spec, &bodies, &joints);
+        let mut system = System {
+            name: spec.name.clone(),
+            gravity,
+            parameters: parameters?,
+            bodies,
+            joints,
+            graph,
+            forces: forces?,
+            inputs,
+            constraints: constraints?,
+            outputs: outputs?,
+            grubler: Grubler {
+                dof: 0,
+                planar: false,
+            },
+        };
+        if self.diags.iter().any(Diagnostic::is_error) {
+            return None;
+        }
+        let poses = initial_poses(&system);
+        system.grubler = grubler(&system, &poses);
+        self.check_closure(&system, &poses);
+        Some(system)
+    }
+
+    fn parameters(&mut self, spec: &Spec) -> Option<Vec<Parameter>> {
+        let mut out = Vec::new();
+        let mut ok = true;
+        for (k, p) in spec.parameters.iter().enumerate() {
+            self.later_params = spec.parameters[k..]
+                .iter()
+                .map(|p| p.name.clone())
+                .collect();
+            let path = [f("parameters"), i(k)];
+            let named = self.check_symbol_name(&p.name, &join(&path, &[f("name")]), "parameter");
+            // Later parameters are not visible yet: a forward reference is
+            // reported as an unknown name with the definition order in help.
+            match self.quantity(&p.value, &join(&path, &[f("value")]), Scope::Params) {
+                Some(value) => {
+                    if p.tunable && !matches!(value.expr, Ast::Num(_)) {
+                        self.warning(
+                            &join(&path, &[f("value")]),
+                            format!("tunable parameter `{}` is given by an expression", p.name),
+                            "its default is the expression's value; at run time it is set directly",
+                        );
+                    }
+                    if named {
+                        self.params.push((p.name.clone(), value.value));
+                    }
+                    out.push(Parameter {
+                        name: p.name.clone(),
+                        value,
+                        tunable: p.tunable,
+                    });
+                }
+                None => ok = false,
+            }
+        }
+        self.later_params.clear();
+        ok.then_some(out)
+    }
+
+    fn bodies(&mut self, spec: &Spec) -> Vec<BodyInfo> {
+        let mut bodies = vec![BodyInfo {
+            name: "ground".into(),
+            mass: None,
+            com: None,
+            inertia: None,
+            markers: Vec::new(),
+            span: Span::default(),
+        }];
+        let mut seen: HashMap<&str, usize> = HashMap::new();
+        for (k, b) in spec.bodies.iter().enumerate() {
+            let path = [f("bodies"), i(k)];
+            let name_path = join(&path, &[f("name")]);
+            if b.name == "ground" {
+                self.error(
+                    &name_path,
+                    "`ground` is the inertial body and cannot be defined".into(),
+                    "refer to it as a joint's `parent` without listing it; rename this body",
+                );
+            } else if !is_ident(&b.name) {
+                self.error(
+                    &name_path,
+                    format!("body name `{}` is not an identifier", b.name),
+                    "use letters, digits and `_`, starting with a letter or `_`",
+                );
+            } else if let Some(prev) = seen.insert(&b.name, k) {
+                self.error(
+                    &name_path,
+                    format!("body `{}` is defined twice", b.name),
+                    format!(
+                        "the first definition is body number {}; rename one of them",
+                        prev + 1
+                    ),
+                );
+            }
+            let mass = self.quantity(&b.mass, &join(&path, &[f("mass")]), Scope::Params);
+            if let Some(m) = &mass
+                && m.value <= 0.0
+            {
+                self.error(
+                    &join(&path, &[f("mass")]),
+                    format!("mass of body `{}` is {} kg", b.name, m.value),
+                    "a body needs a positive mass; model a massless link by placing the next joint's frame on the previous body",
+                );
+            }
+            let com = self.vec3(&b.com, &join(&path, &[f("com")]), Scope::Params);
+            let inertia = b
+                .inertia
+                .as_ref()
+                .and_then(|ine| self.inertia(ine, &b.name, &join(&path, &[f("inertia")])));
+            let mut markers = Vec::new();
+            let mut marker_names = HashSet::new();
+            for (m, marker) in b.markers.iter().enumerate() {
+                let mpath = join(&path, &[f("markers"), i(m)]);
+                if !marker_names.insert(marker.name.as_str()) {
+                    self.error(
+                        &join(&mpath, &[f("name")]),
+                        format!(
+                            "marker `{}` is defined twice on body `{}`",
+                            marker.name, b.name
+                        ),
+                        "marker names must be unique on their body",
+                    );
+                }
+                let frame = spec::Frame {
+                    position: marker.position.clone(),
+                    orientation: marker.orientation.clone(),
+                };
+                if let Some(frame) = self.frame(&frame, &mpath) {
+                    markers.push(MarkerInfo {
+                        name: marker.name.clone(),
+                        frame,
+                    });
+                }
+            }
+            bodies.push(BodyInfo {
+                name: b.name.clone(),
+                mass,
+                com,
+                inertia,
+                markers,
+                span: self.span(&path),
+            });
+        }
+        bodies
+    }
+
+    fn inertia(
+        &mut self,
+        ine: &spec::Inertia,
+        body: &str,
+        path: &[Seg<'static>],
+    ) -> Option<[Vec3Q; 3]> {
+        let rows = match ine {
+            spec::Inertia::Diag(a, b, c) => {
+                let d = [
+                    self.quantity(a, &join(path, &[i(0)]), Scope::Params),
+                    self.quantity(b, &join(path, &[i(1)]), Scope::Params),
+                    self.quantity(c, &join(path, &[i(2)]), Scope::Params),
+                ];
+                let [Some(a), Some(b), Some(c)] = d else {
+                    return None;
+                };
+                let zero = |s: Span| Quantity {
+                    expr: Ast::Num(0.0),
+                    value: 0.0,
+                    span: s,
+                };
+                let (sa, sb, sc) = (a.span, b.span, c.span);
+                [
+                    [a, zero(sa), zero(sa)],
+                    [zero(sb), b, zero(sb)],
+                    [zero(sc), zero(sc), c],
+                ]
+            }
+            spec::Inertia::Matrix(a, b, c) => {
+                let rows = [
+                    self.vec3(a, &join(path, &[i(0)]), Scope::Params),
+                    self.vec3(b, &join(path, &[i(1)]), Scope::Params),
+                    self.vec3(c, &join(path, &[i(2)]), Scope::Params),
+                ];
+                let [Some(a), Some(b), Some(c)] = rows else {
+                    return None;
+                };
+                [a, b, c]
+            }
+        };
+        let m = Matrix3::from_fn(|r, c| rows[r][c].value);
+        let scale = m.amax().max(f64::MIN_POSITIVE);
+        let asym = (m - m.transpose()).amax();
+        if asym > TOL * scale {
+            self.error(
+                path,
+                format!("inertia of body `{body}` is not symmetric (largest |I_ij − I_ji| = {asym:.3e})"),
+                "an inertia tensor is symmetric: make the entry below the diagonal equal the one above it",
+            );
+            return None;
+        }
+        let mut eig: Vec<f64> = SymmetricEigen::new(m).eigenvalues.iter().copied().collect();
+        eig.sort_by(f64::total_cmp);
+        if eig[0] < -TOL * scale {
+            self.error(
+                path,
+                format!(
+                    "inertia of body `{body}` is not positive semi-definite (principal moments {:.6}, {:.6}, {:.6})",
+                    eig[0], eig[1], eig[2]
+                ),
+                "principal moments of inertia cannot be negative; check signs (off-diagonal entries are tensor entries, minus the products of inertia)",
+            );
+            return None;
+        }
+        if eig[0] + eig[1] < eig[2] - TOL * scale {
+            self.error(
+                path,
+                format!(
+                    "inertia of body `{body}` violates the triangle inequality: {:.6} + {:.6} < {:.6}",
+                    eig[0], eig[1], eig[2]
+                ),
+                "no mass distribution has these principal moments: each must be at most the sum of the other two",
+            );
+            return None;
+        }
+        Some(rows)
+    }
+
+    fn joints(&mut self, spec: &Spec, bodies: &[BodyInfo]) -> Option<Vec<JointInfo>> {
+        let mut seen: HashMap<&str, usize> = HashMap::new();
+        let mut out = Vec::new();
+        let mut ok = true;
+        for (k, j) in spec.joints.iter().enumerate() {
+            let path = [f("joints"), i(k)];
+            let name_path = join(&path, &[f("name")]);
+            if !is_ident(&j.name) {
+                self.error(
+                    &name_path,
+                    format!("joint name `{}` is not an identifier", j.name),
+                    "use letters, digits and `_`, starting with a letter or `_`",
+                );
+            } else if seen.insert(&j.name, k).is_some() {
+                self.error(
+                    &name_path,
+                    format!("joint `{}` is defined twice", j.name),
+                    "joint names must be unique; rename one of them",
+                );
+            }
+            let parent = self.body_ref(bodies, &j.parent, &join(&path, &[f("parent")]), "parent");
+            let child = self.body_ref(bodies, &j.child, &join(&path, &[f("child")]), "child");
+            match self.joint(j, &path, parent, child) {
+                Some(info) => out.push(info),
+                None => ok = false,
+            }
+        }
+        ok.then_some(out)
+    }
+
+    fn body_ref(
+        &mut self,
+        bodies: &[BodyInfo],
+        name: &str,
+        path: &[Seg<'static>],
+        role: &str,
+    ) -> Option<usize> {
+        if let Some(b) = bodies.iter().position(|b| b.name == name) {
+            return Some(b);
+        }
+        let names = bodies.iter().map(|b| b.name.as_str());
+        let help = match did_you_mean(name, names.clone()) {
+            Some(best) => format!("did you mean `{best}`?"),
+            None => format!("bodies are {}", list_names(names)),
+        };
+        self.error(path, format!("unknown {role} body `{name}`"), help);
+        None
+    }
+
+    fn joint(
+        &mut self,
+        j: &spec::Joint,
+        path: &[Seg<'static>],
+        parent: Option<usize>,
+        child: Option<usize>,
+    ) -> Option<JointInfo> {
+        let kp = join(path, &[f("kind")]);
+        let kind = match &j.kind {
+            spec::JointKind::Revolute { axis } => self
+                .axis(axis, &join(&kp, &[f("axis")]), "joint axis")
+                .map(JointType::Revolute),
+            spec::JointKind::Prismatic { axis } => self
+                .axis(axis, &join(&kp, &[f("axis")]), "joint axis")
+                .map(JointType::Prismatic),
+            spec::JointKind::Cylindrical { axis } => self
+                .axis(axis, &join(&kp, &[f("axis")]), "joint axis")
+                .map(JointType::Cylindrical),
+            spec::JointKind::Universal { axis1, axis2 } => {
+                let a = self.axis(axis1, &join(&kp, &[f("axis1")]), "first axis");
+                let b = self.axis(axis2, &join(&kp, &[f("axis2")]), "second axis");
+                match (a, b) {
+                    (Some(a), Some(b)) if a.unit.cross(&b.unit).norm() < 1e-6 => {
+                        self.error(
+                            &join(&kp, &[f("axis2")]),
+                            format!("the axes of universal joint `{}` are parallel", j.name),
+                            "a Cardan joint needs two non-parallel (usually perpendicular) axes",
+                        );
+                        None
+                    }
+                    (Some(a), Some(b)) => Some(JointType::Universal(a, b)),
+                    _ => None,
+                }
+            }
+            spec::JointKind::Spherical => Some(JointType::Spherical),
+            spec::JointKind::Planar => Some(JointType::Planar),
+            spec::JointKind::Free => Some(JointType::Free),
+            spec::JointKind::Screw { axis, pitch } => {
+                let a = self.axis(axis, &join(&kp, &[f("axis")]), "joint axis");
+                let p = self.quantity(pitch, &join(&kp, &[f("pitch")]), Scope::Params);
+                Some(JointType::Screw(a?, p?))
+            }
+            spec::JointKind::Fixed => Some(JointType::Fixed),
+        };
+        let parent_frame = self.frame(&j.parent_frame, &join(path, &[f("parent_frame")]));
+        let child_frame = self.frame(&j.child_frame, &join(path, &[f("child_frame")]));
+        let (nq, nu) = j.kind.dims();
+        let quaternion_at = match j.kind {
+            spec::JointKind::Spherical => Some(0),
+            spec::JointKind::Free => Some(3),
+            _ => None,
+        };
+        let kind_name = j.kind.name();
+
+        let coordinate_names = self.names(
+            j.coordinates.as_ref(),
+            default_coordinate_names(&j.name, &j.kind),
+            &join(path, &[f("coordinates")]),
+            "coordinate",
+            nq,
+            &j.name,
+        );
+        let default_speeds = match j.kind {
+            spec::JointKind::Spherical => ["wx", "wy", "wz"]
+                .map(|s| format!("{}_{s}", j.name))
+                .to_vec(),
+            spec::JointKind::Free => ["vx", "vy", "vz", "wx", "wy", "wz"]
+                .map(|s| format!("{}_{s}", j.name))
+                .to_vec(),
+            _ => coordinate_names
+                .iter()
+                .flatten()
+                .map(|c| format!("{c}_dot"))
+                .collect(),
+        };
+        let speed_names = self.names(
+            j.speeds.as_ref(),
+            default_speeds,
+            &join(path, &[f("speeds")]),
+            "speed",
+            nu,
+            &j.name,
+        );
+
+        let q0 = self.initial(j.q0.as_ref(), path, "q0", nq, &j.name, quaternion_at);
+        let u0 = self.initial(j.u0.as_ref(), path, "u0", nu, &j.name, None);
+        let mut motion = Motion::Free;
+        if let Some(pres) = &j.prescribed {
+            let ppath = join(path, &[f("prescribed")]);
+            if j.locked {
+                self.error(
+                    &ppath,
+                    format!("joint `{}` is both locked and prescribed", j.name),
+                    "remove `locked: true` to drive the joint, or remove `prescribed` to hold it at `q0`",
+                );
+            } else if quaternion_at.is_some() {
+                self.error(
+                    &ppath,
+                    format!(
+                        "prescribed motion of {kind_name} joint `{}` is not supported",
+                        j.name
+                    ),
+                    "prescribe the motion of a chain of revolute joints instead",
+                );
+            } else if pres.len() != nq {
+                self.error(
+                    &ppath,
+                    format!(
+                        "joint `{}` has {nq} coordinate(s) but `prescribed` has {} expression(s)",
+                        j.name,
+                        pres.len()
+                    ),
+                    format!("give one expression of `t` per coordinate ({nq})"),
+                );
+            } else {
+                let values: Vec<Option<Quantity>> = pres
+                    .iter()
+                    .enumerate()
+                    .map(|(k, p)| self.quantity(p, &join(&ppath, &[i(k)]), Scope::Time))
+                    .collect();
+                motion = Motion::Prescribed(values.into_iter().collect::<Option<_>>()?);
+            }
+        } else if j.locked {
+            motion = Motion::Locked;
+        }
+        Some(JointInfo {
+            name: j.name.clone(),
+            kind: kind?,
+            parent: parent?,
+            child: child?,
+            parent_frame: parent_frame?,
+            child_frame: child_frame?,
+            coordinate_names: coordinate_names?,
+            speed_names: speed_names?,
+            q0: q0?,
+            u0: u0?,
+            motion,
+            q_index: 0,
+            u_index: 0,
+            span: self.span(path),
+        })
+    }
+
+    /// Coordinate or speed names: given or default, right count, unique.
+    fn names(
+        &mut self,
+        given: Option<&Vec<String>>,
+        default: Vec<String>,
+        path: &[Seg<'static>],
+        what: &'static str,
+        count: usize,
+        joint: &str,
+    ) -> Option<Vec<String>> {
+        let names = match given {
+            Some(names) if names.len() != count => {
+                self.error(
+                    path,
+                    format!(
+                        "joint `{joint}` has {count} {what}(s) but {} name(s) are given",
+                        names.len()
+                    ),
+                    format!(
+                        "give {count} name(s), or leave the field out for {}",
+                        list_names(default.iter().map(String::as_str))
+                    ),
+                );
+                return None;
+            }
+            Some(names) => names.clone(),
+            None => default,
+        };
+        let mut ok = true;
+        for (k, name) in names.iter().enumerate() {
+            let at = if given.is_some() {
+                join(path, &[i(k)])
+            } else {
+                path.to_vec()
+            };
+            if self.check_symbol_name(name, &at, what) {
+                self.state_names.insert(name.clone(), what);
+            } else {
+                ok = false;
+            }
+        }
+        ok.then_some(names)
+    }
+
+    fn initial(
+        &mut self,
+        given: Option<&Vec<Num>>,
+        path: &[Seg<'static>],
+        field: &'static str,
+        count: usize,
+        joint: &str,
+        quaternion_at: Option<usize>,
+    ) -> Option<Vec<Quantity>> {
+        let fpath = join(path, &[f(field)]);
+        let Some(given) = given else {
+            let mut v = vec![0.0; count];
+            if let Some(k) = quaternion_at {
+                v[k] = 1.0;
+            }
+            let span = self.span(path);
+            return Some(
+                v.into_iter()
+                    .map(|x| Quantity {
+                        expr: Ast::Num(x),
+                        value: x,
+                        span,
+                    })
+                    .collect(),
+            );
+        };
+        if given.len() != count {
+            let layout = match (quaternion_at, field) {
+                (Some(0), "q0") => " (a unit quaternion w, x, y, z)",
+                (Some(_), "q0") => " (position x, y, z, then a unit quaternion w, x, y, z)",
+                _ => "",
+            };
+            self.error(
+                &fpath,
+                format!(
+                    "joint `{joint}` needs {count} value(s) in `{field}`{layout}, got {}",
+                    given.len()
+                ),
+                format!(
+                    "write {count} value(s), one per {}",
+                    if field == "q0" { "coordinate" } else { "speed" }
+                ),
+            );
+            return None;
+        }
+        let values: Vec<Option<Quantity>> = given
+            .iter()
+            .enumerate()
+            .map(|(k, n)| self.quantity(n, &join(&fpath, &[i(k)]), Scope::Params))
+            .collect();
+        let values: Vec<Quantity> = values.into_iter().collect::<Option<_>>()?;
+        if let Some(k) = quaternion_at {
+            let norm = values[k..k + 4]
+                .iter()
+                .map(|q| q.value * q.value)
+                .sum::<f64>()
+                .sqrt();
+            if (norm - 1.0).abs() > TOL {
+                self.error(
+                    &join(&fpath, &[i(k)]),
+                    format!("initial quaternion of joint `{joint}` has norm {norm:.12}, not 1"),
+                    "write a unit quaternion (w, x, y, z), e.g. (cos(a/2), sin(a/2), 0, 0) for angle a about x",
+                );
+                return None;
+            }
+        }
+        Some(values)
+    }
+
+    fn graph(&mut self, spec: &Spec, bodies: &[BodyInfo]) -> Option<Graph> {
+        // Built from the body names alone, so that graph errors are found
+        // even when other fields of the joints are wrong. Unknown names
+        // are reported by `joints`.
+        let id = |name: &str| bodies.iter().position(|b| b.name == name);
+        let arcs: Vec<Arc> = spec
+            .joints
+            .iter()
+            .map(|s| {
+                Some(Arc {
+                    parent: id(&s.parent)?,
+                    child: id(&s.child)?,
+                    prefer_cut: s.cut,
+                })
+            })
+            .collect::<Option<_>>()?;
+        match Graph::new(bodies.len(), arcs) {
+            Ok(g) => {
+                for (k, s) in spec.joints.iter().enumerate() {
+                    if s.cut && g.is_tree_joint(k) {
+                        self.warning(
+                            &[f("joints"), i(k), f("cut")],
+                            format!(
+                                "joint `{}` is marked `cut` but body `{}` hangs from it alone, so it stays in the tree",
+                                s.name, s.child
+                            ),
+                            "only a joint that closes a loop can be cut; remove `cut: true`",
+                        );
+                    }
+                }
+                Some(g)
+            }
+            Err(errors) => {
+                for e in errors {
+                    match e {
+                        GraphError::SelfLoop(j) => self.error(
+                            &[f("joints"), i(j), f("child")],
+                            format!("joint `{}` joins body `{}` to itself", spec.joints[j].name, spec.joints[j].child),
+                            "a joint connects two different bodies",
+                        ),
+                        GraphError::Disconnected(b) => self.error(
+                            &[f("bodies"), i(b - 1), f("name")],
+                            format!("body `{}` is not connected to ground", bodies[b].name),
+                            format!(
+                                "add a joint with `child: \"{}\"` and a `parent` that is `ground` or a body connected to it",
+                                bodies[b].name
+                            ),
+                        ),
+                        GraphError::OnlyReversed { body, joint } => self.error(
+                            &[f("joints"), i(joint), f("parent")],
+                            format!(
+                                "body `{}` is reached only through joint `{}`, where it is the parent",
+                                bodies[body].name, spec.joints[joint].name
+                            ),
+                            "joints point away from ground: swap `parent` and `child` (and the two joint frames)",
+                        ),
+                    }
+                }
+                None
+            }
+        }
+    }
+
+    /// Numbers coordinates along the tree; reports cut joints that were
+    /// locked, prescribed or given initial values.
+    fn assign_coordinates(&mut self, spec: &Spec, graph: &Graph, joints: &mut [JointInfo]) {
+        let (mut q, mut u) = (0, 0);
+        for &j in graph.tree_joints() {
+            let joint = &mut joints[j];
+            joint.q_index = q;
+            joint.u_index = u;
+            if joint.motion == Motion::Free {
+                q += joint.kind.nq();
+                u += joint.kind.nu();
+            }
+        }
+        for &j in graph.cut_joints() {
+            let s = &spec.joints[j];
+            let path = [f("joints"), i(j)];
+            if s.locked || s.prescribed.is_some() {
+                self.error(
+                    &join(&path, &[f(if s.locked { "locked" } else { "prescribed" })]),
+                    format!(
+                        "joint `{}` closes a loop and is cut, so it cannot be locked or prescribed",
+                        s.name
+                    ),
+                    "mark another joint of the loop with `cut: true`",
+                );
+            }
+            if s.q0.is_some() || s.u0.is_some() {
+                self.warning(
+                    &join(&path, &[f(if s.q0.is_some() { "q0" } else { "u0" })]),
+                    format!("initial values of cut joint `{}` are ignored", s.name),
+                    "a cut joint has no coordinates; give initial values on the tree joints of its loop",
+                );
+            }
+            joints[j].motion = Motion::Cut;
+            // Its names were reserved while parsing; they name nothing.
+            for n in joints[j]
+                .coordinate_names
+                .iter()
+                .chain(&joints[j].speed_names)
+            {
+                self.state_names.remove(n);
+            }
+        }
+        for j in joints.iter() {
+            if matches!(j.motion, Motion::Locked | Motion::Prescribed(_)) {
+                for n in j.coordinate_names.iter().chain(&j.speed_names) {
+                    self.state_names.remove(n);
+                }
+            }
+        }
+    }
+
+    fn joint_ref(
+        &mut self,
+        joints: &[JointInfo],
+        name: &str,
+        path: &[Seg<'static>],
+    ) -> Option<JointId> {
+        if let Some(j) = joints.iter().position(|j| j.name == name) {
+            return Some(j);
+        }
+        let names = joints.iter().map(|j| j.name.as_str());
+        let help = match did_you_mean(name, names.clone()) {
+            Some(best) => format!("did you mean `{best}`?"),
+            None => format!("joints are {}", list_names(names)),
+        };
+        self.error(path, format!("unknown joint `{name}`"), help);
+        None
+    }
+
+    /// A joint whose coordinates a force can act on.
+    fn driven_joint(
+        &mut self,
+        joints: &[JointInfo],
+        name: &str,
+        path: &[Seg<'static>],
+        what: &str,
+    ) -> Option<JointId> {
+        let j = self.joint_ref(joints, name, path)?;
+        let joint = &joints[j];
+        let problem = match joint.motion {
+            Motion::Cut => {
+                Some("is cut to close a loop, so its coordinates are not coordinates of the system")
+            }
+            Motion::Locked => Some("is locked"),
+            Motion::Prescribed(_) => Some("has prescribed motion"),
+            Motion::Free if joint.kind.nu() == 0 => Some("is fixed"),
+            Motion::Free => None,
+        };
+        if let Some(problem) = problem {
+            self.error(
+                path,
+                format!("{what} on joint `{name}`, which {problem}"),
+                if joint.motion == Motion::Cut {
+                    "mark another joint of the loop with `cut: true` so this one stays in the tree"
+                } else {
+                    "apply it to a joint with free coordinates"
+                },
+            );
+            return None;
+        }
+        Some(j)
+    }
+
+    fn anchor(
+        &mut self,
+        a: &spec::Anchor,
+        bodies: &[BodyInfo],
+        path: &[Seg<'static>],
+    ) -> Option<Point> {
+        let body = self.body_ref(bodies, &a.body, &join(path, &[f("body")]), "anchor")?;
+        match (&a.point, &a.marker) {
+            (Some(_), Some(_)) => {
+                self.error(
+                    path,
+                    "an anchor has both `point` and `marker`".into(),
+                    "give one of them",
+                );
+                None
+            }
+            (Some(p), None) => Some(Point {
+                body,
+                position: self.vec3(p, &join(path, &[f("point")]), Scope::Params)?,
+            }),
+            (None, Some(m)) => {
+                let Some(marker) = bodies[body].markers.iter().find(|x| &x.name == m) else {
+                    let names = bodies[body].markers.iter().map(|x| x.name.as_str());
+                    self.error(
+                        &join(path, &[f("marker")]),
+                        format!("body `{}` has no marker `{m}`", a.body),
+                        format!("its markers are {}", list_names(names)),
+                    );
+                    return None;
+                };
+                Some(Point {
+                    body,
+                    position: marker.frame.position.clone(),
+                })
+            }
+            (None, None) => {
+                let zero = Quantity {
+                    expr: Ast::Num(0.0),
+                    value: 0.0,
+                    span: self.span(path),
+                };
+                Some(Point {
+                    body,
+                    position: [zero.clone(), zero.clone(), zero],
+                })
+            }
+        }
+    }
+
+    fn forces(
+        &mut self,
+        spec: &Spec,
+        bodies: &[BodyInfo],
+        joints: &[JointInfo],
+    ) -> (Option<Vec<Force>>, Vec<String>) {
+        let mut out = Vec::new();
+        let mut inputs = Vec::new();
+        let mut ok = true;
+        let mut names = HashSet::new();
+        for (k, force) in spec.forces.iter().enumerate() {
+            let path = [f("forces"), i(k)];
+            let name = match force {
+                spec::Force::SpringDamper { name, .. }
+                | spec::Force::JointSpringDamper { name, .. }
+                | spec::Force::JointForce { name, .. }
+                | spec::Force::Actuator { name, .. } => name,
+            };
+            if !names.insert(name.as_str()) {
+                self.error(
+                    &join(&path, &[f("name")]),
+                    format!("force `{name}` is defined twice"),
+                    "force names must be unique",
+                );
+            }
+            let element = match force {
+                spec::Force::SpringDamper {
+                    a,
+                    b,
+                    stiffness,
+                    damping,
+                    rest_length,
+                    ..
+                } => {
+                    let a = self.anchor(a, bodies, &join(&path, &[f("a")]));
+                    let b = self.anchor(b, bodies, &join(&path, &[f("b")]));
+                    let k =
+                        self.quantity(stiffness, &join(&path, &[f("stiffness")]), Scope::Params);
+                    let c =
+                        self.nonnegative(damping, &join(&path, &[f("damping")]), "damping", name);
+                    let l = self.nonnegative(
+                        rest_length,
+                        &join(&path, &[f("rest_length")]),
+                        "rest length",
+                        name,
+                    );
+                    (|| {
+                        Some(ForceElement::SpringDamper {
+                            a: a?,
+                            b: b?,
+                            stiffness: k?,
+                            damping: c?,
+                            rest_length: l?,
+                        })
+                    })()
+                }
+                spec::Force::JointSpringDamper {
+                    joint,
+                    stiffness,
+                    damping,
+                    rest,
+                    ..
+                } => {
+                    let jp = join(&path, &[f("joint")]);
+                    let j = self.driven_joint(joints, joint, &jp, "a joint spring-damper");
+                    if let Some(j) = j
+                        && matches!(joints[j].kind, JointType::Spherical | JointType::Free)
+                    {
+                        self.error(
+                            &jp,
+                            format!("a joint spring-damper on {} joint `{joint}` is not supported", joints[j].kind.name()),
+                            "its coordinates include a quaternion; use point-to-point spring-dampers instead",
+                        );
+                        ok = false;
+                    }
+                    let k =
+                        self.quantity(stiffness, &join(&path, &[f("stiffness")]), Scope::Params);
+                    let c =
+                        self.nonnegative(damping, &join(&path, &[f("damping")]), "damping", name);
+                    let r = self.quantity(rest, &join(&path, &[f("rest")]), Scope::Params);
+                    (|| {
+                        Some(ForceElement::JointSpringDamper {
+                            joint: j?,
+                            stiffness: k?,
+                            damping: c?,
+                            rest: r?,
+                        })
+                    })()
+                }
+                spec::Force::JointForce { joint, values, .. } => {
+                    let j = self.driven_joint(
+                        joints,
+                        joint,
+                        &join(&path, &[f("joint")]),
+                        "a joint force",
+                    );
+                    let vpath = join(&path, &[f("values")]);
+                    match j {
+                        Some(j) if values.len() != joints[j].kind.nu() => {
+                            self.error(
+                                &vpath,
+                                format!(
+                                    "joint `{joint}` has {} speed(s) but {} force value(s) are given",
+                                    joints[j].kind.nu(),
+                                    values.len()
+                                ),
+                                format!("give one generalised force per speed: {}", list_names(joints[j].speed_names.iter().map(String::as_str))),
+                            );
+                            None
+                        }
+                        Some(j) => {
+                            let v: Vec<Option<Quantity>> = values
+                                .iter()
+                                .enumerate()
+                                .map(|(k, v)| {
+                                    self.quantity(v, &join(&vpath, &[i(k)]), Scope::State)
+                                })
+                                .collect();
+                            v.into_iter()
+                                .collect::<Option<Vec<_>>>()
+                                .map(|values| ForceElement::JointForce { joint: j, values })
+                        }
+                        None => None,
+                    }
+                }
+                spec::Force::Actuator {
+                    joint,
+                    inputs: given,
+                    ..
+                } => {
+                    let j = self.driven_joint(
+                        joints,
+                        joint,
+                        &join(&path, &[f("joint")]),
+                        "an actuator",
+                    );
+                    match j {
+                        Some(j) => {
+                            let nu = joints[j].kind.nu();
+                            let default = if nu == 1 {
+                                vec![name.clone()]
+                            } else {
+                                (1..=nu).map(|k| format!("{name}_{k}")).collect()
+                            };
+                            let names = self.input_names(
+                                given.as_ref(),
+                                default,
+                                &join(&path, &[f("inputs")]),
+                                nu,
+                                name,
+                            );
+                            names.map(|names| {
+                                let first = inputs.len();
+                                inputs.extend(names);
+                                ForceElement::Actuator {
+                                    joint: j,
+                                    inputs: (first..inputs.len()).collect(),
+                                }
+                            })
+                        }
+                        None => None,
+                    }
+                }
+            };
+            match element {
+                Some(element) => out.push(Force {
+                    name: name.clone(),
+                    element,
+                }),
+                None => ok = false,
+            }
+        }
+        (ok.then_some(out), inputs)
+    }
+
+    fn input_names(
+        &mut self,
+        given: Option<&Vec<String>>,
+        default: Vec<String>,
+        path: &[Seg<'static>],
+        count: usize,
+        actuator: &str,
+    ) -> Option<Vec<String>> {
+        let names = match given {
+            Some(n) if n.len() != count => {
+                self.error(
+                    path,
+                    format!("actuator `{actuator}` drives {count} speed(s) but {} input name(s) are given", n.len()),
+                    format!("give {count} name(s), or leave `inputs` out"),
+                );
+                return None;
+            }
+            Some(n) => n.clone(),
+            None => default,
+        };
+        let mut ok = true;
+        for (k, n) in names.iter().enumerate() {
+            let at = if given.is_some() {
+                join(path, &[i(k)])
+            } else {
+                path.to_vec()
+            };
+            if self.check_symbol_name(n, &at, "input") {
+                self.state_names.insert(n.clone(), "input");
+            } else {
+                ok = false;
+            }
+        }
+        ok.then_some(names)
+    }
+
+    fn nonnegative(
+        &mut self,
+        n: &Num,
+        path: &[Seg<'static>],
+        what: &str,
+        owner: &str,
+    ) -> Option<Quantity> {
+        let q = self.quantity(n, path, Scope::Params)?;
+        if q.value < 0.0 {
+            self.error(
+                path,
+                format!("{what} of `{owner}` is negative ({})", q.value),
+                format!("a {what} is zero or positive"),
+            );
+            return None;
+        }
+        Some(q)
+    }
+
+    fn constraints(&mut self, spec: &Spec, bodies: &[BodyInfo]) -> Option<Vec<Constraint>> {
+        let mut out = Vec::new();
+        let mut ok = true;
+        let mut names = HashSet::new();
+        for (k, c) in spec.constraints.iter().enumerate() {
+            let path = [f("constraints"), i(k)];
+            let name = match c {
+                spec::Constraint::RollingDisk { name, .. }
+                | spec::Constraint::Holonomic { name, .. } => name,
+            };
+            if !names.insert(name.as_str()) {
+                self.error(
+                    &join(&path, &[f("name")]),
+                    format!("constraint `{name}` is defined twice"),
+                    "constraint names must be unique",
+                );
+            }
+            let kind = match c {
+                spec::Constraint::RollingDisk {
+                    body,
+                    radius,
+                    axis,
+                    center,
+                    ..
+                } => {
+                    let b = self.body_ref(bodies, body, &join(&path, &[f("body")]), "disk");
+                    if b == Some(0) {
+                        self.error(
+                            &join(&path, &[f("body")]),
+                            "the ground cannot roll".into(),
+                            "name the disk's body",
+                        );
+                    }
+                    let r = self.quantity(radius, &join(&path, &[f("radius")]), Scope::Params);
+                    if let Some(r) = &r
+                        && r.value <= 0.0
+                    {
+                        self.error(
+                            &join(&path, &[f("radius")]),
+                            format!("radius of rolling disk `{name}` is {} m", r.value),
+                            "a disk's radius is positive",
+                        );
+                    }
+                    let a = self.axis(axis, &join(&path, &[f("axis")]), "disk axis");
+                    let ctr = self.vec3(center, &join(&path, &[f("center")]), Scope::Params);
+                    (|| {
+                        Some(ConstraintKind::RollingDisk {
+                            body: b.filter(|&b| b != 0)?,
+                            radius: r.filter(|r| r.value > 0.0)?,
+                            axis: a?,
+                            center: ctr?,
+                        })
+                    })()
+                }
+                spec::Constraint::Holonomic { expr, .. } => {
+                    let epath = join(&path, &[f("expr")]);
+                    let q = self.quantity(&Num::Expr(expr.clone()), &epath, Scope::State);
+                    if let Some(q) = &q {
+                        let uses_q = q
+                            .expr
+                            .names()
+                            .iter()
+                            .any(|(n, _)| self.state_names.get(*n) == Some(&"coordinate"));
+                        if !uses_q {
+                            self.error(
+                                &epath,
+                                format!("constraint `{name}` does not depend on any coordinate"),
+                                "a holonomic constraint restricts positions: write it in terms of coordinate names",
+                            );
+                        }
+                        let uses_speed = q
+                            .expr
+                            .names()
+                            .iter()
+                            .find(|(n, _)| {
+                                matches!(self.state_names.get(*n), Some(&"speed" | &"input"))
+                            })
+                            .map(|(n, _)| n.to_string());
+                        if let Some(n) = uses_speed {
+                            self.error(
+                                &epath,
+                                format!("holonomic constraint `{name}` uses `{n}`"),
+                                "a holonomic constraint may use coordinates, parameters and `t` only",
+                            );
+                        }
+                    }
+                    q.map(ConstraintKind::Holonomic)
+                }
+            };
+            match kind {
+                Some(kind) => out.push(Constraint {
+                    name: name.clone(),
+                    kind,
+                }),
+                None => ok = false,
+            }
+        }
+        ok.then_some(out)
+    }
+
+    fn outputs(
+        &mut self,
+        spec: &Spec,
+        bodies: &[BodyInfo],
+        joints: &[JointInfo],
+    ) -> Option<Vec<OutputKind>> {
+        let mut out = Vec::new();
+        let mut ok = true;
+        for (k, o) in spec.outputs.iter().enumerate() {
+            let path = [f("outputs"), i(k)];
+            let kind = match o {
+                spec::Output::Position { body, marker }
+                | spec::Output::Velocity { body, marker } => {
+                    let b = self.body_ref(bodies, body, &join(&path, &[f("body")]), "output");
+                    let m = b.and_then(|b| {
+                        let found = bodies[b].markers.iter().position(|x| &x.name == marker);
+                        if found.is_none() {
+                            let names = bodies[b].markers.iter().map(|x| x.name.as_str());
+                            self.error(
+                                &join(&path, &[f("marker")]),
+                                format!("body `{body}` has no marker `{marker}`"),
+                                format!("its markers are {}", list_names(names)),
+                            );
+                        }
+                        found
+                    });
+                    match (b, m, o) {
+                        (Some(b), Some(m), spec::Output::Position { .. }) => {
+                            Some(OutputKind::Position(b, m))
+                        }
+                        (Some(b), Some(m), _) => Some(OutputKind::Velocity(b, m)),
+                        _ => None,
+                    }
+                }
+                spec::Output::JointReaction { joint } => self
+                    .joint_ref(joints, joint, &join(&path, &[f("joint")]))
+                    .map(OutputKind::JointReaction),
+                spec::Output::Energy => Some(OutputKind::Energy),
+                spec::Output::Momentum => Some(OutputKind::Momentum),
+            };
+            match kind {
+                Some(kind) => out.push(kind),
+                None => ok = false,
+            }
+        }
+        ok.then_some(out)
+    }
+
+    /// Warns about cut joints whose two frames do not meet at the initial state.
+    fn check_closure(&mut self, sys: &System, poses: &[Pose]) {
+        for (&j, gap) in sys.graph.cut_joints().iter().zip(closure_gaps(sys, poses)) {
+            let joint = &sys.joints[j];
+            if gap.position > CLOSURE_TOL || gap.angle > CLOSURE_TOL {
+                self.warning(
+                    &[f("joints"), i(j)],
+                    format!(
+                        "cut joint `{}` is open at the initial state: its frames are {:.3e} m apart and their axes {:.3e} rad out of line",
+                        joint.name, gap.position, gap.angle
+                    ),
+                    "check the joint frames and the initial values of the loop's tree joints; simulation starts by assembling the loop",
+                );
+            }
+        }
+    }
+}
+
+fn default_coordinate_names(joint: &str, kind: &spec::JointKind) -> Vec<String> {
+    use spec::JointKind as K;
+    let suffixes: &[&str] = match kind {
+        K::Revolute { .. } | K::Prismatic { .. } | K::Screw { .. } => {
+            return vec![joint.to_string()];
+        }
+        K::Cylindrical { .. } => &["angle", "s"],
+        K::Universal { .. } => &["1", "2"],
+        K::Planar => &["x", "y", "angle"],
+        K::Spherical => &["qw", "qx", "qy", "qz"],
+        K::Free => &["x", "y", "z", "qw", "qx", "qy", "qz"],
+        K::Fixed => &[],
+    };
+    suffixes.iter().map(|s| format!("{joint}_{s}")).collect()
+}
+
+/// World pose of every body at the initial state (locked joints at `q0`,
+/// prescribed ones at `t = 0`).
+pub fn initial_poses(sys: &System) -> Vec<Pose> {
+    let mut poses = vec![Pose::identity(); sys.bodies.len()];
+    for &j in sys.graph.tree_joints() {
+        let joint = &sys.joints[j];
+        let q: Vec<f64> = match &joint.motion {
+            Motion::Prescribed(p) => p.iter().map(|x| x.value).collect(),
+            _ => joint.q0.iter().map(|x| x.value).collect(),
+        };
+        let fp = frame_pose(&joint.parent_frame);
+        let fc = frame_pose(&joint.child_frame);
+        let jt = rotation::joint_transform(&joint.kind, &q);
+        poses[joint.child] = poses[joint.parent].then(&fp).then(&jt).then(&fc.inverse());
+    }
+    poses
+}
+
+fn frame_pose(frame: &FrameInfo) -> Pose {
+    Pose {
+        r: frame.matrix,
+        p: values(&frame.position),
+    }
+}
+
+/// How far a cut joint is from closing.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gap {
+    /// Distance between the two joint frames' origins, in the directions
+    /// the joint does not allow, m.
+    pub position: f64,
+    /// Angle between the constrained axes, rad.
+    pub angle: f64,
+}
+
+/// Gaps of every cut joint at the given poses, in cut-joint order.
+pub fn closure_gaps(sys: &System, poses: &[Pose]) -> Vec<Gap> {
+    sys.graph
+        .cut_joints()
+        .iter()
+        .map(|&j| {
+            let joint = &sys.joints[j];
+            let on_parent = poses[joint.parent].then(&frame_pose(&joint.parent_frame));
+            let on_child = poses[joint.child].then(&frame_pose(&joint.child_frame));
+            let d = on_child.p - on_parent.p;
+            let angle_between = |a: &Vector3<f64>| {
+                let (wa, wb) = (on_parent.r * a, on_child.r * a);
+                wa.cross(&wb).norm().atan2(wa.dot(&wb))
+            };
+            let along = |a: &Vector3<f64>| d - (on_parent.r * a) * (on_parent.r * a).dot(&d);
+            match &joint.kind {
+                JointType::Revolute(a) => Gap {
+                    position: d.norm(),
+                    angle: angle_between(&a.unit),
+                },
+                JointType::Prismatic(a) | JointType::Cylindrical(a) | JointType::Screw(a, _) => {
+                    Gap {
+                        position: along(&a.unit).norm(),
+                        angle: angle_between(&a.unit),
+                    }
+                }
+                JointType::Planar => Gap {
+                    position: (on_parent.r * Vector3::z()).dot(&d).abs(),
+                    angle: angle_between(&Vector3::z()),
+                },
+                JointType::Universal(..) | JointType::Spherical => Gap {
+                    position: d.norm(),
+                    angle: 0.0,
+                },
+                JointType::Fixed => {
+                    let rel = on_parent.r.transpose() * on_child.r;
+                    Gap {
+                        position: d.norm(),
+                        angle: ((rel.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos(),
+                    }
+                }
+                JointType::Free => Gap {
+                    position: 0.0,
+                    angle: 0.0,
+                },
+            }
+        })
+        .collect()
+}
+
+/// Grübler–Kutzbach count, planar (λ = 3) if every joint keeps the motion
+/// in planes normal to one direction, else spatial (λ = 6).
+fn grubler(sys: &System, poses: &[Pose]) -> Grubler {
+    let planar_normal = planar_normal(sys, poses);
+    let lambda: i64 = if planar_normal.is_some() { 3 } else { 6 };
+    let n = (sys.bodies.len() - 1) as i64;
+    let mut dof = lambda * n;
+    for j in &sys.joints {
+        let f = match (&j.motion, planar_normal.is_some()) {
+            (Motion::Locked | Motion::Prescribed(_), _) => 0,
+            (_, true) => match j.kind {
+                JointType::Planar => 3,
+                JointType::Fixed => 0,
+                _ => 1,
+            },
+            (_, false) => j.kind.nu() as i64,
+        };
+        dof -= lambda - f;
+    }
+    for c in &sys.constraints {
+        dof -= c.equations().0 as i64;
+    }
+    Grubler {
+        dof,
+        planar: planar_normal.is_some(),
+    }
+}
+
+/// The common normal of a planar system, if it is one.
+fn planar_normal(sys: &System, poses: &[Pose]) -> Option<Vector3<f64>> {
+    if sys
+        .constraints
+        .iter()
+        .any(|c| matches!(c.kind, ConstraintKind::RollingDisk { .. }))
+    {
+        return None;
+    }
+    let mut normal: Option<Vector3<f64>> = None;
+    let mut in_plane: Vec<Vector3<f64>> = Vec::new();
+    for j in &sys.joints {
+        let frame = poses[j.parent].r * j.parent_frame.matrix;
+        let n = match &j.kind {
+            JointType::Revolute(a) => frame * a.unit,
+            JointType::Planar => frame * Vector3::z(),
+            JointType::Prismatic(a) => {
+                in_plane.push(frame * a.unit);
+                continue;
+            }
+            JointType::Fixed => continue,
+            _ => return None,
+        };
+        match normal {
+            None => normal = Some(n),
+            Some(m) if m.cross(&n).norm() < 1e-9 => {}
+            Some(_) => return None,
+        }
+    }
+    let n = normal?;
+    in_plane.iter().all(|a| a.dot(&n).abs() < 1e-9).then_some(n)
+}

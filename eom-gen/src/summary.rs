@@ -1,0 +1,119 @@
+//! What `eom-gen check` prints: a human summary and a JSON object.
+
+use crate::model::{Checked, closure_gaps, initial_poses};
+use crate::system::{Motion, System};
+use serde_json::{Value, json};
+
+/// The `check --json` object.
+pub fn json(checked: &Checked) -> Value {
+    let sys = &checked.system;
+    let gaps = closure_gaps(sys, &initial_poses(sys));
+    let names = |pred: &dyn Fn(&Motion) -> bool| -> Vec<&str> {
+        sys.joints
+            .iter()
+            .filter(|j| pred(&j.motion))
+            .map(|j| j.name.as_str())
+            .collect()
+    };
+    json!({
+        "name": sys.name,
+        "valid": true,
+        "bodies": sys.bodies.len() - 1,
+        "joints": sys.joints.len(),
+        "nq": sys.nq(),
+        "nu": sys.nu(),
+        "coordinate_names": sys.coordinate_names(),
+        "speed_names": sys.speed_names(),
+        "q0": sys.q0(),
+        "u0": sys.u0(),
+        "cut_joints": sys.cut_joint_names(),
+        "constraints": sys.constraints.iter().map(|c| c.name.as_str()).collect::<Vec<_>>(),
+        "grubler_dof": sys.grubler.dof,
+        "grubler_space": if sys.grubler.planar { "planar" } else { "spatial" },
+        "body_names": sys.bodies.iter().skip(1).map(|b| b.name.as_str()).collect::<Vec<_>>(),
+        "tree": sys.graph.tree_joints().iter().map(|&j| {
+            let joint = &sys.joints[j];
+            json!({
+                "joint": joint.name,
+                "kind": joint.kind.name(),
+                "parent": sys.bodies[joint.parent].name,
+                "child": sys.bodies[joint.child].name,
+            })
+        }).collect::<Vec<_>>(),
+        "locked_joints": names(&|m| *m == Motion::Locked),
+        "prescribed_joints": names(&|m| matches!(m, Motion::Prescribed(_))),
+        "inputs": sys.inputs,
+        "parameters": sys.parameters.iter().map(|p| json!({
+            "name": p.name, "value": p.value.value, "tunable": p.tunable,
+        })).collect::<Vec<_>>(),
+        "loop_closure": sys.graph.cut_joints().iter().zip(&gaps).map(|(&j, g)| json!({
+            "joint": sys.joints[j].name, "position_gap": g.position, "angle_gap": g.angle,
+        })).collect::<Vec<_>>(),
+        "warnings": checked.warnings.len(),
+    })
+}
+
+/// A few lines for people.
+pub fn human(checked: &Checked) -> String {
+    let sys: &System = &checked.system;
+    let mut out = format!("model `{}` ({}): valid\n", sys.name, checked.source.path);
+    let bodies: Vec<&str> = sys.bodies.iter().skip(1).map(|b| b.name.as_str()).collect();
+    out += &format!("  bodies       {}: {}\n", bodies.len(), bodies.join(", "));
+    let cut = sys.cut_joint_names();
+    out += &format!(
+        "  joints       {}: {} in the tree, {} cut{}\n",
+        sys.joints.len(),
+        sys.graph.tree_joints().len(),
+        cut.len(),
+        if cut.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", cut.join(", "))
+        }
+    );
+    out += &format!(
+        "  coordinates  nq = {}: {}\n",
+        sys.nq(),
+        sys.coordinate_names().join(", ")
+    );
+    out += &format!(
+        "  speeds       nu = {}: {}\n",
+        sys.nu(),
+        sys.speed_names().join(", ")
+    );
+    let locked: Vec<&str> = sys
+        .joints
+        .iter()
+        .filter(|j| j.motion == Motion::Locked)
+        .map(|j| j.name.as_str())
+        .collect();
+    let prescribed: Vec<&str> = sys
+        .joints
+        .iter()
+        .filter(|j| matches!(j.motion, Motion::Prescribed(_)))
+        .map(|j| j.name.as_str())
+        .collect();
+    if !locked.is_empty() {
+        out += &format!("  locked       {}\n", locked.join(", "));
+    }
+    if !prescribed.is_empty() {
+        out += &format!("  prescribed   {}\n", prescribed.join(", "));
+    }
+    if !sys.inputs.is_empty() {
+        out += &format!("  inputs       {}\n", sys.inputs.join(", "));
+    }
+    if !sys.constraints.is_empty() {
+        let c: Vec<&str> = sys.constraints.iter().map(|c| c.name.as_str()).collect();
+        out += &format!("  constraints  {}\n", c.join(", "));
+    }
+    out += &format!(
+        "  Grübler–Kutzbach ({}): {} degree(s) of freedom\n",
+        if sys.grubler.planar {
+            "planar"
+        } else {
+            "spatial"
+        },
+        sys.grubler.dof
+    );
+    out
+}

@@ -1,0 +1,434 @@
+//! The validated multibody system: typed, index-based and immutable.
+//!
+//! Built only by [`crate::model::check`], so every name resolves, every
+//! number is finite, and the graph has a spanning tree. Quantities keep
+//! their expression (tunable parameters stay symbolic for the formulation
+//! stage), their value at the parameters' defaults, and their span in the
+//! model file (so later stages can still point at the line that caused a
+//! problem).
+
+use crate::graph::{BodyId, Graph, JointId};
+use crate::model::diag::Span;
+use crate::model::expr::Ast;
+use nalgebra::{Matrix3, Vector3};
+
+/// An expression from the model with its value at the default parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Quantity {
+    /// The expression, over parameter names (and `t` or coordinates where
+    /// the field allows them).
+    pub expr: Ast,
+    /// Its value with every parameter at its default (and `t`, coordinates
+    /// and speeds at zero where they occur).
+    pub value: f64,
+    /// Where it is written.
+    pub span: Span,
+}
+
+/// A 3-vector of quantities.
+pub type Vec3Q = [Quantity; 3];
+
+/// Values of a vector of quantities.
+pub fn values(v: &Vec3Q) -> Vector3<f64> {
+    Vector3::new(v[0].value, v[1].value, v[2].value)
+}
+
+/// A named parameter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Parameter {
+    /// Name.
+    pub name: String,
+    /// Value or defining expression (over earlier parameters).
+    pub value: Quantity,
+    /// A runtime field (`true`) or inlined (`false`).
+    pub tunable: bool,
+}
+
+/// An orientation as written, with its rotation matrix at the defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Rotation {
+    /// No rotation.
+    Identity,
+    /// `angle` about the unit vector along `axis`.
+    AxisAngle {
+        /// Axis as written (any length).
+        axis: Vec3Q,
+        /// Angle, rad.
+        angle: Quantity,
+    },
+    /// `Rz(yaw) Ry(pitch) Rx(roll)`.
+    Rpy([Quantity; 3]),
+    /// Rows of the matrix.
+    Matrix([Vec3Q; 3]),
+}
+
+/// A frame on a body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameInfo {
+    /// Origin in body axes.
+    pub position: Vec3Q,
+    /// Orientation as written.
+    pub rotation: Rotation,
+    /// Rotation matrix at the defaults (columns: frame axes in body axes).
+    pub matrix: Matrix3<f64>,
+}
+
+/// A marker on a body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MarkerInfo {
+    /// Name.
+    pub name: String,
+    /// The frame.
+    pub frame: FrameInfo,
+}
+
+/// A body; index 0 is ground.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BodyInfo {
+    /// Name (`ground` for body 0).
+    pub name: String,
+    /// Mass, kg (zero for ground).
+    pub mass: Option<Quantity>,
+    /// Centre of mass in body axes, m.
+    pub com: Option<Vec3Q>,
+    /// Inertia about the centre of mass by rows; `None` for a point mass.
+    pub inertia: Option<[Vec3Q; 3]>,
+    /// Markers.
+    pub markers: Vec<MarkerInfo>,
+    /// Where the body is defined.
+    pub span: Span,
+}
+
+/// A joint kind with its unit axes (as written and normalised at defaults).
+#[derive(Clone, Debug, PartialEq)]
+pub enum JointType {
+    /// Rotation about an axis.
+    Revolute(Axis),
+    /// Translation along an axis.
+    Prismatic(Axis),
+    /// Rotation about and translation along an axis.
+    Cylindrical(Axis),
+    /// Rotation about `0`, then about `1` as carried by the first.
+    Universal(Axis, Axis),
+    /// Unit quaternion.
+    Spherical,
+    /// x, y and angle about z of the joint frame.
+    Planar,
+    /// Translation and quaternion.
+    Free,
+    /// Rotation about the axis with `pitch * angle` along it.
+    Screw(Axis, Quantity),
+    /// Rigid connection.
+    Fixed,
+}
+
+/// A joint axis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Axis {
+    /// As written.
+    pub written: Vec3Q,
+    /// Unit vector at the defaults.
+    pub unit: Vector3<f64>,
+}
+
+impl JointType {
+    /// Number of position coordinates.
+    pub fn nq(&self) -> usize {
+        match self {
+            JointType::Revolute(_) | JointType::Prismatic(_) | JointType::Screw(..) => 1,
+            JointType::Cylindrical(_) | JointType::Universal(..) => 2,
+            JointType::Planar => 3,
+            JointType::Spherical => 4,
+            JointType::Free => 7,
+            JointType::Fixed => 0,
+        }
+    }
+
+    /// Number of speeds (degrees of freedom).
+    pub fn nu(&self) -> usize {
+        match self {
+            JointType::Spherical => 3,
+            JointType::Free => 6,
+            _ => self.nq(),
+        }
+    }
+
+    /// Lower-case name as in the model format.
+    pub fn name(&self) -> &'static str {
+        match self {
+            JointType::Revolute(_) => "revolute",
+            JointType::Prismatic(_) => "prismatic",
+            JointType::Cylindrical(_) => "cylindrical",
+            JointType::Universal(..) => "universal",
+            JointType::Spherical => "spherical",
+            JointType::Planar => "planar",
+            JointType::Free => "free",
+            JointType::Screw(..) => "screw",
+            JointType::Fixed => "fixed",
+        }
+    }
+}
+
+/// How a joint's coordinates are determined.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Motion {
+    /// Coordinates of the system (tree joints only).
+    Free,
+    /// Held at `q0`.
+    Locked,
+    /// Known functions of time, one per coordinate.
+    Prescribed(Vec<Quantity>),
+    /// A cut joint: its relative motion is constrained, not a coordinate.
+    Cut,
+}
+
+/// A joint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointInfo {
+    /// Name.
+    pub name: String,
+    /// Kind and axes.
+    pub kind: JointType,
+    /// Parent body.
+    pub parent: BodyId,
+    /// Child body.
+    pub child: BodyId,
+    /// Joint frame on the parent.
+    pub parent_frame: FrameInfo,
+    /// Joint frame on the child.
+    pub child_frame: FrameInfo,
+    /// Names of the joint's position coordinates.
+    pub coordinate_names: Vec<String>,
+    /// Names of its speeds.
+    pub speed_names: Vec<String>,
+    /// Initial positions.
+    pub q0: Vec<Quantity>,
+    /// Initial speeds.
+    pub u0: Vec<Quantity>,
+    /// Free, locked, prescribed or cut.
+    pub motion: Motion,
+    /// First index into the system's `q` (meaningful when `motion` is `Free`).
+    pub q_index: usize,
+    /// First index into the system's `u`.
+    pub u_index: usize,
+    /// Where the joint is defined.
+    pub span: Span,
+}
+
+/// A point on a body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    /// The body.
+    pub body: BodyId,
+    /// Position in body axes.
+    pub position: Vec3Q,
+}
+
+/// A force element, resolved.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ForceElement {
+    /// Point-to-point spring-damper.
+    SpringDamper {
+        /// First end.
+        a: Point,
+        /// Second end.
+        b: Point,
+        /// N/m.
+        stiffness: Quantity,
+        /// N s/m.
+        damping: Quantity,
+        /// m.
+        rest_length: Quantity,
+    },
+    /// Spring-damper on every coordinate of a joint.
+    JointSpringDamper {
+        /// The joint.
+        joint: JointId,
+        /// Stiffness.
+        stiffness: Quantity,
+        /// Damping.
+        damping: Quantity,
+        /// Rest position.
+        rest: Quantity,
+    },
+    /// Known generalised forces, one per speed of the joint.
+    JointForce {
+        /// The joint.
+        joint: JointId,
+        /// Values.
+        values: Vec<Quantity>,
+    },
+    /// Runtime inputs, one per speed of the joint.
+    Actuator {
+        /// The joint.
+        joint: JointId,
+        /// Indices into the system's inputs.
+        inputs: Vec<usize>,
+    },
+}
+
+/// A named force element.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Force {
+    /// Name.
+    pub name: String,
+    /// What it does.
+    pub element: ForceElement,
+}
+
+/// A constraint that is not a joint.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ConstraintKind {
+    /// Disk rolling without slipping on `z = 0`: one holonomic contact
+    /// condition and two nonholonomic no-slip conditions.
+    RollingDisk {
+        /// The disk.
+        body: BodyId,
+        /// Radius.
+        radius: Quantity,
+        /// Disk axis in body axes.
+        axis: Axis,
+        /// Centre in body axes.
+        center: Vec3Q,
+    },
+    /// `expr(q, t) = 0`.
+    Holonomic(Quantity),
+}
+
+/// A named constraint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Constraint {
+    /// Name.
+    pub name: String,
+    /// What it constrains.
+    pub kind: ConstraintKind,
+}
+
+impl Constraint {
+    /// (holonomic, nonholonomic) equation counts.
+    pub fn equations(&self) -> (usize, usize) {
+        match self.kind {
+            ConstraintKind::RollingDisk { .. } => (1, 2),
+            ConstraintKind::Holonomic(_) => (1, 0),
+        }
+    }
+}
+
+/// A requested output.
+#[derive(Clone, Debug, PartialEq)]
+pub enum OutputKind {
+    /// World position of a marker.
+    Position(BodyId, usize),
+    /// World velocity of a marker.
+    Velocity(BodyId, usize),
+    /// Reaction in a joint.
+    JointReaction(JointId),
+    /// Kinetic and potential energy.
+    Energy,
+    /// Linear and angular momentum.
+    Momentum,
+}
+
+/// The Grübler–Kutzbach count of degrees of freedom.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Grubler {
+    /// `dof = λ (n_bodies) − Σ (λ − f_j) − n_holonomic`, λ = 6 or 3.
+    pub dof: i64,
+    /// True if every joint keeps the motion in one plane (λ = 3).
+    pub planar: bool,
+}
+
+/// A validated system.
+#[derive(Clone, Debug)]
+pub struct System {
+    /// Model name.
+    pub name: String,
+    /// Gravity in world axes, if any.
+    pub gravity: Option<Vec3Q>,
+    /// Parameters in file order.
+    pub parameters: Vec<Parameter>,
+    /// Bodies; 0 is ground.
+    pub bodies: Vec<BodyInfo>,
+    /// Joints in file order.
+    pub joints: Vec<JointInfo>,
+    /// Graph and spanning tree.
+    pub graph: Graph,
+    /// Force elements.
+    pub forces: Vec<Force>,
+    /// Runtime input names (from actuators), in order.
+    pub inputs: Vec<String>,
+    /// Constraints.
+    pub constraints: Vec<Constraint>,
+    /// Requested outputs.
+    pub outputs: Vec<OutputKind>,
+    /// Grübler–Kutzbach count.
+    pub grubler: Grubler,
+}
+
+impl System {
+    /// Joints whose coordinates are the system's, in coordinate order.
+    pub fn free_joints(&self) -> impl Iterator<Item = &JointInfo> {
+        self.graph
+            .tree_joints()
+            .iter()
+            .map(|&j| &self.joints[j])
+            .filter(|j| j.motion == Motion::Free)
+    }
+
+    /// Names of the position coordinates `q`, in order.
+    pub fn coordinate_names(&self) -> Vec<&str> {
+        self.free_joints()
+            .flat_map(|j| j.coordinate_names.iter().map(String::as_str))
+            .collect()
+    }
+
+    /// Names of the speeds `u`, in order.
+    pub fn speed_names(&self) -> Vec<&str> {
+        self.free_joints()
+            .flat_map(|j| j.speed_names.iter().map(String::as_str))
+            .collect()
+    }
+
+    /// Number of position coordinates.
+    pub fn nq(&self) -> usize {
+        self.free_joints().map(|j| j.kind.nq()).sum()
+    }
+
+    /// Number of speeds.
+    pub fn nu(&self) -> usize {
+        self.free_joints().map(|j| j.kind.nu()).sum()
+    }
+
+    /// Initial `q` at the default parameters.
+    pub fn q0(&self) -> Vec<f64> {
+        self.free_joints()
+            .flat_map(|j| j.q0.iter().map(|q| q.value))
+            .collect()
+    }
+
+    /// Initial `u` at the default parameters.
+    pub fn u0(&self) -> Vec<f64> {
+        self.free_joints()
+            .flat_map(|j| j.u0.iter().map(|u| u.value))
+            .collect()
+    }
+
+    /// Names of the cut joints.
+    pub fn cut_joint_names(&self) -> Vec<&str> {
+        self.graph
+            .cut_joints()
+            .iter()
+            .map(|&j| self.joints[j].name.as_str())
+            .collect()
+    }
+
+    /// Index of the body called `name`.
+    pub fn body_id(&self, name: &str) -> Option<BodyId> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// Index of the joint called `name`.
+    pub fn joint_id(&self, name: &str) -> Option<JointId> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+}
