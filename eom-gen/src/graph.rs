@@ -251,11 +251,10 @@ impl Graph {
             v
         };
         let mut t = vec![vec![0i8; self.n_bodies]; self.tree.len()];
-        for b in 0..self.n_bodies {
-            for j in self.path_to(b) {
-                if let Some(k) = row_of[j] {
-                    t[k][b] = 1;
-                }
+        let paths = (0..self.n_bodies).map(|b| (b, self.path_to(b)));
+        for (b, path) in paths {
+            for k in path.into_iter().filter_map(|j| row_of[j]) {
+                t[k][b] = 1;
             }
         }
         t

@@ -226,37 +226,52 @@ impl fmt::Display for Report {
 
 impl std::error::Error for Report {}
 
-/// The closest of `candidates` to `name` by edit distance, if it is close
-/// enough to be a plausible typo.
+/// The closest of `candidates` to `name`, if it is close enough to be a
+/// plausible typo: at most one edit per three characters, counting a swap
+/// of neighbours as one edit and ignoring case (so names of one or two
+/// characters are matched only up to case).
 pub fn did_you_mean<'a>(
     name: &str,
     candidates: impl IntoIterator<Item = &'a str>,
 ) -> Option<&'a str> {
-    let limit = (name.chars().count() / 3).max(1);
+    let limit = name.chars().count() / 3;
+    let lower = name.to_lowercase();
     candidates
         .into_iter()
-        .map(|c| (edit_distance(name, c), c))
+        .filter(|c| *c != name)
+        .map(|c| (edit_distance(&lower, &c.to_lowercase()), c))
         .filter(|&(d, _)| d <= limit)
         .min_by_key(|&(d, _)| d)
         .map(|(_, c)| c)
 }
 
-/// Levenshtein distance over characters.
+/// Edit distance over characters with adjacent transpositions (optimal
+/// string alignment): insertions, deletions, substitutions and swaps of
+/// neighbours each cost 1.
 pub fn edit_distance(a: &str, b: &str) -> usize {
+    let a: Vec<char> = a.chars().collect();
     let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diag = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let next = (diag + usize::from(ca != cb))
-                .min(row[j] + 1)
-                .min(row[j + 1] + 1);
-            diag = row[j + 1];
-            row[j + 1] = next;
+    let w = b.len() + 1;
+    let mut d = vec![0usize; (a.len() + 1) * w];
+    for i in 0..=a.len() {
+        d[i * w] = i;
+    }
+    for (j, cell) in d.iter_mut().enumerate().take(w) {
+        *cell = j;
+    }
+    for i in 1..=a.len() {
+        for j in 1..=b.len() {
+            let cost = usize::from(a[i - 1] != b[j - 1]);
+            let mut best = (d[(i - 1) * w + j] + 1)
+                .min(d[i * w + j - 1] + 1)
+                .min(d[(i - 1) * w + j - 1] + cost);
+            if i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] {
+                best = best.min(d[(i - 2) * w + j - 2] + 1);
+            }
+            d[i * w + j] = best;
         }
     }
-    row[b.len()]
+    d[a.len() * w + b.len()]
 }
 
 /// `` `a`, `b`, `c` `` — a list of names for help messages.
@@ -310,6 +325,22 @@ mod tests {
             Some("link1")
         );
         assert_eq!(did_you_mean("zzzzz", ["link1", "ground"]), None);
+        assert_eq!(
+            did_you_mean("cmo", ["name", "com", "mass"]),
+            Some("com"),
+            "a swap is one edit"
+        );
+        assert_eq!(
+            did_you_mean("L", ["g", "l"]),
+            Some("l"),
+            "short names match up to case"
+        );
+        assert_eq!(
+            did_you_mean("t", ["g", "l"]),
+            None,
+            "short names are not guessed"
+        );
         assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("ab", "ba"), 1);
     }
 }

@@ -148,7 +148,7 @@ mod tests {
 
     #[test]
     fn quaternion_matches_axis_angle() {
-        let (angle, a) = (0.8, Vector3::new(1.0, 2.0, 2.0) / 3.0);
+        let (angle, a): (f64, _) = (0.8, Vector3::new(1.0, 2.0, 2.0) / 3.0);
         let (s, c) = (angle / 2.0).sin_cos();
         let got = quaternion(c, s * a.x, s * a.y, s * a.z);
         assert!((got - axis_angle(&a, angle)).amax() < 1e-15);

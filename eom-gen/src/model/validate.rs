@@ -54,6 +54,7 @@ pub fn check(src: &Source, spec: &Spec, root: Option<&Node>) -> (Option<System>,
         params: Vec::new(),
         state_names: HashMap::new(),
         later_params: Vec::new(),
+        failed_params: HashSet::new(),
     };
     let system = cx.system(spec);
     let mut diags = cx.diags;
@@ -76,6 +77,9 @@ struct Ctx<'a> {
     state_names: HashMap<String, &'static str>,
     /// Parameters not defined yet (while parameters are being read).
     later_params: Vec<String>,
+    /// Parameters whose value was wrong (already reported): uses of them
+    /// fail silently rather than as unknown names.
+    failed_params: HashSet<String>,
 }
 
 fn is_ident(s: &str) -> bool {
@@ -131,6 +135,14 @@ impl Ctx<'_> {
         }
         if self.param_value(name).is_some() || self.state_names.contains_key(name) {
             let other = self.state_names.get(name).copied().unwrap_or("parameter");
+            if other == what {
+                self.error(
+                    path,
+                    format!("{what} `{name}` is defined twice"),
+                    format!("{what} names must be unique; rename one of them"),
+                );
+                return false;
+            }
             self.error(
                 path,
                 format!("{what} name `{name}` is already used by a {other}"),
@@ -164,6 +176,10 @@ impl Ctx<'_> {
         let mut ok = true;
         for (name, offset) in expr.names() {
             if name == "pi" || self.param_value(name).is_some() {
+                continue;
+            }
+            if self.failed_params.contains(name) {
+                ok = false;
                 continue;
             }
             let allowed = match self.state_names.get(name) {
@@ -227,10 +243,12 @@ impl Ctx<'_> {
             Err(EvalError::NotFinite) if scope == Scope::Params => {
                 self.error(
                     path,
-                    format!(
-                        "`{}` is not a finite number at the default parameters",
-                        expr
-                    ),
+                    match num {
+                        Num::Expr(text) => {
+                            format!("`{text}` is not a finite number at the default parameters")
+                        }
+                        Num::Value(v) => format!("`{v}` is not a finite number"),
+                    },
                     "check for division by zero, `sqrt` or `ln` of a negative value",
                 );
                 None
@@ -428,7 +446,10 @@ impl Ctx<'_> {
                         tunable: p.tunable,
                     });
                 }
-                None => ok = false,
+                None => {
+                    self.failed_params.insert(p.name.clone());
+                    ok = false;
+                }
             }
         }
         self.later_params.clear();

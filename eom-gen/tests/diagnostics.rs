@@ -1,0 +1,123 @@
+//! Every class of model error, pinned: the exact `file:line:col` message,
+//! the source line with its underline, and the `help:` line. Each case
+//! starts from a valid two-link model and breaks one thing (or several, to
+//! show they are all reported at once).
+
+use eom_gen::model::{Source, check};
+
+const BASE: &str = r#"// A valid model; each test breaks it.
+Model(
+    name: "two_link",
+    gravity: (0, 0, "-g"),
+    parameters: [
+        (name: "g", value: 9.81),
+        (name: "m", value: 1.5),
+        (name: "l", value: 0.3),
+    ],
+    bodies: [
+        (name: "link1", mass: "m", com: (0, 0, "l/2"), inertia: Diag(0.02, 0.02, 0.005)),
+        (name: "link2", mass: "m", com: (0, 0, "l/2"), inertia: Diag(0.02, 0.02, 0.005), markers: [(name: "tip", position: (0, 0, "l"))]),
+    ],
+    joints: [
+        (name: "j1", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "link1", coordinates: ["q1"], q0: [0.1]),
+        (name: "j2", kind: Revolute(axis: (0, 1, 0)), parent: "link1", child: "link2", parent_frame: (position: (0, 0, "l")), coordinates: ["q2"]),
+    ],
+    forces: [JointSpringDamper(name: "spring", joint: "j2", stiffness: 10, damping: 0.1)],
+    outputs: [Position(body: "link2", marker: "tip")],
+)
+"#;
+
+/// The rendered diagnostics of `BASE` with each `(from, to)` replaced.
+fn diagnose(edits: &[(&str, &str)]) -> String {
+    let mut text = BASE.to_string();
+    for (from, to) in edits {
+        assert!(
+            text.contains(from),
+            "test setup: `{from}` is not in the base model"
+        );
+        text = text.replacen(from, to, 1);
+    }
+    match check(&Source::new("models/two_link.ron", text)) {
+        Ok(c) => format!("valid\n{}", c.source.render_all(&c.warnings)),
+        Err(report) => {
+            assert!(
+                report.diagnostics.iter().all(|d| d.span.is_some()),
+                "every diagnostic has a location"
+            );
+            report.to_string()
+        }
+    }
+}
+
+#[test]
+fn base_model_is_valid() {
+    assert_eq!(diagnose(&[]), "valid\n");
+}
+
+macro_rules! pin {
+    ($name:ident, $($from:expr => $to:expr),+ $(,)?) => {
+        #[test]
+        fn $name() {
+            insta::assert_snapshot!(diagnose(&[$(($from, $to)),+]));
+        }
+    };
+}
+
+// Syntax and types (reported by the RON reader, one at a time).
+pin!(syntax_error, "(name: \"l\", value: 0.3)," => "(name: \"l\" value: 0.3),");
+pin!(unknown_field, "com: (0, 0, \"l/2\"), inertia" => "cmo: (0, 0, \"l/2\"), inertia");
+pin!(missing_field, "(name: \"link1\", mass: \"m\", " => "(name: \"link1\", ");
+pin!(unknown_joint_kind, "Revolute(axis: (0, 1, 0))" => "Revolve(axis: (0, 1, 0))");
+pin!(wrong_type, "value: 1.5" => "value: [1.5]");
+pin!(vector_of_two, "com: (0, 0, \"l/2\"), inertia" => "com: (0, 0), inertia");
+
+// Names.
+pin!(unknown_body, "child: \"link2\"" => "child: \"lnk2\"");
+pin!(duplicate_body, "(name: \"link2\", mass" => "(name: \"link1\", mass");
+pin!(duplicate_joint, "(name: \"j2\"" => "(name: \"j1\"");
+pin!(duplicate_parameter, "(name: \"l\", value: 0.3)" => "(name: \"m\", value: 0.3)");
+pin!(duplicate_coordinate, "coordinates: [\"q2\"]" => "coordinates: [\"q1\"]");
+pin!(coordinate_named_like_a_parameter, "coordinates: [\"q2\"]" => "coordinates: [\"g\"]");
+pin!(reserved_name, "(name: \"g\", value: 9.81)" => "(name: \"pi\", value: 9.81)");
+pin!(ground_defined, "(name: \"link1\", mass" => "(name: \"ground\", mass");
+pin!(unknown_marker, "marker: \"tip\"" => "marker: \"top\"");
+pin!(unknown_joint_in_force, "joint: \"j2\"" => "joint: \"j3\"");
+
+// Expressions.
+pin!(unknown_parameter_in_expression, "com: (0, 0, \"l/2\"), inertia: Diag(0.02, 0.02, 0.005), markers" => "com: (0, 0, \"L/2\"), inertia: Diag(0.02, 0.02, 0.005), markers");
+pin!(unparsable_expression, "com: (0, 0, \"l/2\"), inertia: Diag(0.02, 0.02, 0.005))," => "com: (0, 0, \"l/*2\"), inertia: Diag(0.02, 0.02, 0.005)),");
+pin!(parameter_used_before_defined, "(name: \"m\", value: 1.5)" => "(name: \"m\", value: \"5*l\")");
+pin!(time_in_geometry, "parent_frame: (position: (0, 0, \"l\"))" => "parent_frame: (position: (0, 0, \"l*t\"))");
+pin!(not_finite, "(name: \"l\", value: 0.3)" => "(name: \"l\", value: \"sqrt(-0.3)\")");
+
+// Physical values.
+pin!(negative_mass, "(name: \"m\", value: 1.5)" => "(name: \"m\", value: -1.5)");
+pin!(zero_mass, "(name: \"link1\", mass: \"m\"" => "(name: \"link1\", mass: 0");
+pin!(inertia_not_symmetric, "inertia: Diag(0.02, 0.02, 0.005))," => "inertia: Matrix((0.02, 0.001, 0), (0, 0.02, 0), (0, 0, 0.005))),");
+pin!(inertia_not_positive, "inertia: Diag(0.02, 0.02, 0.005))," => "inertia: Diag(0.02, -0.02, 0.005)),");
+pin!(inertia_triangle_inequality, "inertia: Diag(0.02, 0.02, 0.005))," => "inertia: Diag(0.01, 0.01, 0.05)),");
+pin!(zero_axis, "Revolute(axis: (0, 0, 1))" => "Revolute(axis: (0, 0, 0))");
+pin!(non_finite_axis, "Revolute(axis: (0, 0, 1))" => "Revolute(axis: (0, 0, \"1/0\"))");
+pin!(rotation_not_orthonormal, "parent_frame: (position: (0, 0, \"l\"))" => "parent_frame: (position: (0, 0, \"l\"), orientation: Matrix((1, 0, 0), (0, 1, 0.1), (0, 0, 1)))");
+pin!(rotation_reflection, "parent_frame: (position: (0, 0, \"l\"))" => "parent_frame: (position: (0, 0, \"l\"), orientation: Matrix((1, 0, 0), (0, 1, 0), (0, 0, -1)))");
+pin!(negative_damping, "damping: 0.1" => "damping: -0.1");
+
+// Joints and the graph.
+pin!(body_not_connected_to_ground, "parent: \"link1\", child: \"link2\"" => "parent: \"link2\", child: \"link2\"");
+pin!(body_only_reached_reversed, "parent: \"ground\", child: \"link1\"" => "parent: \"link1\", child: \"ground\"");
+pin!(wrong_number_of_initial_values, "q0: [0.1]" => "q0: [0.1, 0.2]");
+pin!(wrong_number_of_speeds, "q0: [0.1])" => "q0: [0.1], u0: [])");
+pin!(wrong_number_of_coordinate_names, "coordinates: [\"q1\"]" => "coordinates: [\"q1\", \"q1b\"]");
+pin!(prescribed_and_locked, "q0: [0.1])" => "q0: [0.1], locked: true, prescribed: [\"sin(t)\"])");
+pin!(non_unit_quaternion, "Revolute(axis: (0, 0, 1)), parent: \"ground\", child: \"link1\", coordinates: [\"q1\"], q0: [0.1]" => "Spherical, parent: \"ground\", child: \"link1\", q0: [1, 0, 0, 0.1]");
+pin!(parallel_universal_axes, "Revolute(axis: (0, 1, 0))" => "Universal(axis1: (0, 1, 0), axis2: (0, 2, 0))");
+pin!(spring_on_locked_joint, "coordinates: [\"q2\"])" => "coordinates: [\"q2\"], locked: true)");
+
+// Several problems at once: all of them are reported, in file order.
+pin!(
+    every_error_at_once,
+    "(name: \"m\", value: 1.5)" => "(name: \"m\", value: -1.5)",
+    "child: \"link2\"" => "child: \"lnk2\"",
+    "Revolute(axis: (0, 0, 1))" => "Revolute(axis: (0, 0, 0))",
+    "marker: \"tip\"" => "marker: \"top\"",
+);

@@ -1,0 +1,197 @@
+//! No model file makes `check` panic, and every error it reports has a
+//! location inside the file. The inputs are the bundled models, mutated:
+//! truncated, with characters deleted, inserted or swapped, and with
+//! values replaced by hostile ones (`inf`, `NaN`, huge exponents, unknown
+//! names, unbalanced brackets).
+
+use eom_gen::model::{Source, check, load};
+use proptest::prelude::*;
+
+fn bundled() -> Vec<String> {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../models");
+    let mut paths: Vec<_> = std::fs::read_dir(dir)
+        .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).collect())
+        .unwrap_or_default();
+    paths.sort();
+    paths
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "ron"))
+        .filter_map(|p| std::fs::read_to_string(p).ok())
+        .collect()
+}
+
+const TOKENS: &[&str] = &[
+    "",
+    "-1",
+    "0",
+    "1e400",
+    "inf",
+    "NaN",
+    "-inf",
+    "\"",
+    "(",
+    ")",
+    "[",
+    "]",
+    "{",
+    "}",
+    ",",
+    ":",
+    "\"ground\"",
+    "\"1/0\"",
+    "\"sqrt(-1)\"",
+    "\"((((\"",
+    "\"x\"",
+    "\"t\"",
+    "Spherical",
+    "Free",
+    "Fixed",
+    "true",
+    "Some(",
+    "None",
+    "//",
+    "/*",
+    "r#\"",
+    "'",
+    "ü",
+    "\u{0}",
+    "1.5",
+    "\"pi\"",
+    "[]",
+    "()",
+];
+
+#[derive(Clone, Debug)]
+enum Mutation {
+    Truncate(usize),
+    Delete(usize, usize),
+    Insert(usize, &'static str),
+    Replace(usize, usize, &'static str),
+    Swap(usize, usize),
+}
+
+fn mutation() -> impl Strategy<Value = Mutation> {
+    let token = proptest::sample::select(TOKENS);
+    prop_oneof![
+        any::<usize>().prop_map(Mutation::Truncate),
+        (any::<usize>(), 1usize..40).prop_map(|(a, n)| Mutation::Delete(a, n)),
+        (any::<usize>(), token.clone()).prop_map(|(a, t)| Mutation::Insert(a, t)),
+        (any::<usize>(), 1usize..12, token).prop_map(|(a, n, t)| Mutation::Replace(a, n, t)),
+        (any::<usize>(), any::<usize>()).prop_map(|(a, b)| Mutation::Swap(a, b)),
+    ]
+}
+
+/// Applies a mutation on character boundaries.
+fn apply(text: &str, m: &Mutation) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let n = chars.len().max(1);
+    let s = |v: &[char]| v.iter().collect::<String>();
+    match *m {
+        Mutation::Truncate(a) => s(&chars[..a % n]),
+        Mutation::Delete(a, k) => {
+            let a = a % n;
+            let b = (a + k).min(chars.len());
+            s(&chars[..a]) + &s(&chars[b..])
+        }
+        Mutation::Insert(a, t) => {
+            let a = a % n;
+            s(&chars[..a]) + t + &s(&chars[a..])
+        }
+        Mutation::Replace(a, k, t) => {
+            let a = a % n;
+            let b = (a + k).min(chars.len());
+            s(&chars[..a]) + t + &s(&chars[b..])
+        }
+        Mutation::Swap(a, b) => {
+            let mut c = chars.clone();
+            if !c.is_empty() {
+                let (a, b) = (a % c.len(), b % c.len());
+                c.swap(a, b);
+            }
+            s(&c)
+        }
+    }
+}
+
+fn assert_located(text: &str) -> Result<(), TestCaseError> {
+    match check(&Source::new("m.ron", text)) {
+        Ok(_) => Ok(()),
+        Err(report) => {
+            prop_assert!(
+                !report.diagnostics.is_empty(),
+                "an error report names at least one error"
+            );
+            for d in &report.diagnostics {
+                let span = d
+                    .span
+                    .ok_or_else(|| TestCaseError::fail(format!("no location: {d:?}")))?;
+                prop_assert!(
+                    span.start <= text.len(),
+                    "span {span:?} beyond the text ({})",
+                    text.len()
+                );
+            }
+            // Rendering never panics either.
+            let _ = report.to_string();
+            Ok(())
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 4096, ..ProptestConfig::default() })]
+
+    #[test]
+    fn mutated_models_never_panic_and_errors_have_locations(
+        which in any::<usize>(),
+        mutations in proptest::collection::vec(mutation(), 1..4),
+    ) {
+        let models = bundled();
+        prop_assume!(!models.is_empty());
+        let mut text = models[which % models.len()].clone();
+        for m in &mutations {
+            text = apply(&text, m);
+        }
+        assert_located(&text)?;
+    }
+
+    #[test]
+    fn arbitrary_text_never_panics(text in "\\PC{0,200}") {
+        assert_located(&text)?;
+    }
+}
+
+#[test]
+fn bundled_models_are_found() {
+    assert!(bundled().len() >= 11, "models/ holds the bundled models");
+}
+
+#[test]
+fn invalid_utf8_is_reported_at_its_byte() {
+    let dir = std::env::temp_dir().join(format!("eom-robustness-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let path = dir.join("bad.ron");
+    let _ = std::fs::write(&path, b"Model(\n  name: \"x\xff\",\n)");
+    let path = path.to_string_lossy().into_owned();
+    let report = load(&path).expect_err("not UTF-8");
+    let d = &report.diagnostics[0];
+    let lc = report.source.line_col(d.span.map_or(0, |s| s.start));
+    assert_eq!((lc.line, lc.col), (2, 11), "{report}");
+    let missing = load("no/such/model.ron").expect_err("missing file");
+    assert!(
+        missing
+            .to_string()
+            .starts_with("no/such/model.ron: error: cannot read model file")
+    );
+}
+
+#[test]
+fn deeply_nested_input_is_an_error_not_a_stack_overflow() {
+    for text in [
+        "[".repeat(50_000),
+        "(".repeat(50_000),
+        format!("Model(name: \"{}\")", "(".repeat(50_000)),
+    ] {
+        assert!(check(&Source::new("deep.ron", text)).is_err());
+    }
+}
