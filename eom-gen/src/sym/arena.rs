@@ -89,7 +89,7 @@ pub struct Arena {
     sym_nodes: Vec<Id>,
     sym_by_name: FxHashMap<String, SymId>,
     pub(crate) rules: RuleSet,
-    pub(crate) diff_memo: FxHashMap<(Id, SymId), Id>,
+    pub(crate) diff_memo: FxHashMap<SymId, FxHashMap<Id, Id>>,
 }
 
 impl Default for Arena {

@@ -8,20 +8,7 @@
 //! - `a - b` is `(+ a (* -1 b))`, `-a` is `(* -1 a)`, `a / b` is
 //!   `(* a (^ b -1))`.
 //!
-//! Rules and what they assume (all rewrites assume real arithmetic on the
-//! domain where both sides are defined; "finite" means not inf/NaN):
-//!
-//! | rule | rewrites | assumes |
-//! |---|---|---|
-//! | `FOLD` | operations on constants; exact for rationals, `f64` otherwise, folded only if the result is finite | — |
-//! | `IDENTITY` | `x + 0 = x`, `1·x = x`, `0·x = 0`, `x^0 = 1`, `x^1 = x`, `select(c, a, a) = a` | `0·x = 0`: x finite |
-//! | `COLLECT` | like terms `a·x + b·x = (a+b)·x` for numeric `a, b`; so `x - x = 0` | x finite |
-//! | `POWERS` | `x^a·x^b = x^(a+b)` (so `x/x = 1`), `(x^a)^b = x^(ab)`, `(xy)^n = x^n y^n`, `sqrt(x)^2k = x^k`, `abs(x)^2k = x^2k`, `sqrt(x^2k) = abs(x)^k` | `x/x = 1`, `x^a x^-a = 1`: x ≠ 0; `sqrt(x)^2 = x`: x ≥ 0 |
-//! | `DISTRIBUTE` | numeric coefficient over a sum: `c·(a + b) = c·a + c·b` | — |
-//! | `SIGN` | `sin(-x) = -sin x`, `cos(-x) = cos x`, `tan(-x) = -tan x`, `abs(-x) = abs x`; "negative" is decided on a negation-invariant key; acts only together with `FOLD` (and on sums only with `DISTRIBUTE`) so that it terminates | — |
-//! | `PYTHAGORAS` | `k sin²x R + k cos²x R = k R`, `k - k sin²x = k cos²x`, `k - k cos²x = k sin²x` (see [`trig`](super::trig)) | — |
-//! | `ANGLE_SUM` | `k cos a cos b R ∓ k sin a sin b R = k cos(a ± b) R`, `k sin a cos b R ± k cos a sin b R = k sin(a ± b) R` | — |
-//! | `ELEMENTARY` | `exp(ln x) = x`, `ln(exp x) = x`, `abs(abs x) = abs x`, `abs(sqrt x) = sqrt x`, `abs(exp x) = exp x`, `abs(x^2k) = x^2k` | `exp(ln x) = x`: x > 0 |
+//! The rules and what each assumes are listed on [`RuleSet`].
 
 use super::arena::Arena;
 use super::node::{Id, View};
@@ -29,6 +16,21 @@ use super::num::Num;
 use std::ops::BitOr;
 
 /// A set of construction-time simplification rules (bit flags).
+///
+/// Rules and what they assume (all rewrites assume real arithmetic on the
+/// domain where both sides are defined; "finite" means not inf/NaN):
+///
+/// | rule | rewrites | assumes |
+/// |---|---|---|
+/// | `FOLD` | operations on constants; exact for rationals, `f64` otherwise, folded only if the result is finite | — |
+/// | `IDENTITY` | `x + 0 = x`, `1·x = x`, `0·x = 0`, `x^0 = 1`, `x^1 = x`, `select(c, a, a) = a` | `0·x = 0`: x finite |
+/// | `COLLECT` | like terms `a·x + b·x = (a+b)·x` for numeric `a, b`; so `x - x = 0` | x finite |
+/// | `POWERS` | `x^a·x^b = x^(a+b)` (so `x/x = 1`), `(x^a)^b = x^(ab)`, `(xy)^n = x^n y^n`, `sqrt(x)^2k = x^k`, `abs(x)^2k = x^2k`, `sqrt(x^2k) = abs(x)^k` | `x/x = 1`, `x^a x^-a = 1`: x ≠ 0; `sqrt(x)^2 = x`: x ≥ 0 |
+/// | `DISTRIBUTE` | numeric coefficient over a sum: `c·(a + b) = c·a + c·b` | — |
+/// | `SIGN` | `sin(-x) = -sin x`, `cos(-x) = cos x`, `tan(-x) = -tan x`, `abs(-x) = abs x`; "negative" is decided on a negation-invariant key; acts only together with `FOLD` (and on sums only with `DISTRIBUTE`) so that it terminates | — |
+/// | `PYTHAGORAS` | `k sin²x R + k cos²x R = k R`, `k - k sin²x = k cos²x`, `k - k cos²x = k sin²x` (see [`trig`](super::trig)) | — |
+/// | `ANGLE_SUM` | `k cos a cos b R ∓ k sin a sin b R = k cos(a ± b) R`, `k sin a cos b R ± k cos a sin b R = k sin(a ± b) R` | — |
+/// | `ELEMENTARY` | `exp(ln x) = x`, `ln(exp x) = x`, `abs(abs x) = abs x`, `abs(sqrt x) = sqrt x`, `abs(exp x) = exp x`, `abs(x^2k) = x^2k` | `exp(ln x) = x`: x > 0 |
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 pub struct RuleSet(pub u32);
 
