@@ -1,0 +1,730 @@
+//! Lowering to a [`Program`]: straight-line SSA with common subexpressions
+//! computed once, dead code removed and operations counted.
+//!
+//! Lowering walks the nodes reachable from all outputs together in
+//! ascending id order (children first), so hash-consing already shares
+//! every equal subexpression across outputs; a value-numbering table on the
+//! emitted instructions additionally shares the partial sums and products
+//! that n-ary nodes expand into (`x·y` inside `x·y·z` and `2·x·y`). Sums
+//! become chains of `+` and `−` (terms with a negative coefficient are
+//! subtracted), products split into numerator and denominator with a single
+//! division, integer powers use square-and-multiply, and `sin x`/`cos x` of
+//! one argument that are both needed become one `SinCos` instruction.
+//!
+//! [`Program::optimize`] is the second round: constant propagation, algebraic
+//! identities (`x − x = 0`, `x·1`, `x·0`, …), value numbering with
+//! canonical operand order, and dead-code elimination, repeated until
+//! nothing changes. It catches temporaries that become constant only once
+//! common subexpressions are named.
+
+use super::arena::Arena;
+use super::node::{Id, SymId, Symbol, View};
+use super::num::Num;
+use rustc_hash::{FxHashMap, FxHashSet};
+use std::fmt;
+
+/// An instruction operand.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub enum Operand {
+    /// A constant.
+    Const(Num),
+    /// Program input `i` (see [`Program::inputs`]).
+    Var(u32),
+    /// Temporary `i`, assigned by an earlier instruction.
+    Tmp(u32),
+}
+
+/// An operation; its result goes to the instruction's `dst` temporary.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub enum Op {
+    /// `a + b`
+    Add(Operand, Operand),
+    /// `a - b`
+    Sub(Operand, Operand),
+    /// `a * b`
+    Mul(Operand, Operand),
+    /// `a / b`
+    Div(Operand, Operand),
+    /// `-a`
+    Neg(Operand),
+    /// `sqrt(a)`
+    Sqrt(Operand),
+    /// `sin(a)`
+    Sin(Operand),
+    /// `cos(a)`
+    Cos(Operand),
+    /// `sin(a)` into `dst` and `cos(a)` into `dst + 1`, computed together.
+    SinCos(Operand),
+    /// `tan(a)`
+    Tan(Operand),
+    /// `atan2(y, x)`
+    Atan2(Operand, Operand),
+    /// `exp(a)`
+    Exp(Operand),
+    /// `ln(a)`
+    Ln(Operand),
+    /// `|a|`
+    Abs(Operand),
+    /// `if c > 0 { a } else { b }`
+    Select(Operand, Operand, Operand),
+}
+
+impl Op {
+    fn operands(&self) -> impl Iterator<Item = Operand> {
+        let v: [Option<Operand>; 3] = match *self {
+            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => [Some(a), Some(b), None],
+            Op::Neg(a)
+            | Op::Sqrt(a)
+            | Op::Sin(a)
+            | Op::Cos(a)
+            | Op::SinCos(a)
+            | Op::Tan(a)
+            | Op::Exp(a)
+            | Op::Ln(a)
+            | Op::Abs(a) => [Some(a), None, None],
+            Op::Select(c, a, b) => [Some(c), Some(a), Some(b)],
+        };
+        v.into_iter().flatten()
+    }
+
+    fn map(self, f: impl Fn(Operand) -> Operand) -> Op {
+        match self {
+            Op::Add(a, b) => Op::Add(f(a), f(b)),
+            Op::Sub(a, b) => Op::Sub(f(a), f(b)),
+            Op::Mul(a, b) => Op::Mul(f(a), f(b)),
+            Op::Div(a, b) => Op::Div(f(a), f(b)),
+            Op::Atan2(a, b) => Op::Atan2(f(a), f(b)),
+            Op::Neg(a) => Op::Neg(f(a)),
+            Op::Sqrt(a) => Op::Sqrt(f(a)),
+            Op::Sin(a) => Op::Sin(f(a)),
+            Op::Cos(a) => Op::Cos(f(a)),
+            Op::SinCos(a) => Op::SinCos(f(a)),
+            Op::Tan(a) => Op::Tan(f(a)),
+            Op::Exp(a) => Op::Exp(f(a)),
+            Op::Ln(a) => Op::Ln(f(a)),
+            Op::Abs(a) => Op::Abs(f(a)),
+            Op::Select(c, a, b) => Op::Select(f(c), f(a), f(b)),
+        }
+    }
+
+    /// Number of temporaries written (2 for `SinCos`).
+    pub fn results(&self) -> u32 {
+        if matches!(self, Op::SinCos(_)) { 2 } else { 1 }
+    }
+}
+
+/// One assignment `dst = op`.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+pub struct Instr {
+    /// The temporary assigned (and `dst + 1` for `SinCos`).
+    pub dst: u32,
+    /// What is computed.
+    pub op: Op,
+}
+
+/// Operation counts of a program. A `SinCos` counts as one trig operation.
+#[derive(Clone, Copy, PartialEq, Eq, Default, Debug)]
+pub struct OpCount {
+    /// Additions and subtractions.
+    pub adds: usize,
+    /// Multiplications.
+    pub muls: usize,
+    /// Divisions.
+    pub divs: usize,
+    /// Negations.
+    pub negs: usize,
+    /// Square roots.
+    pub sqrts: usize,
+    /// sin, cos, sin_cos, tan, atan2.
+    pub trig: usize,
+    /// exp, ln, abs, select.
+    pub other: usize,
+}
+
+impl OpCount {
+    /// Sum of all counts.
+    pub fn total(&self) -> usize {
+        self.adds + self.muls + self.divs + self.negs + self.sqrts + self.trig + self.other
+    }
+}
+
+impl fmt::Display for OpCount {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} ops: {} add, {} mul, {} div, {} neg, {} sqrt, {} trig, {} other",
+            self.total(),
+            self.adds,
+            self.muls,
+            self.divs,
+            self.negs,
+            self.sqrts,
+            self.trig,
+            self.other
+        )
+    }
+}
+
+/// A straight-line program: inputs, SSA assignments in dependency order,
+/// named outputs.
+#[derive(Clone, PartialEq, Debug)]
+pub struct Program {
+    /// The variables read, sorted by kind then name; `Operand::Var(i)` is `inputs[i]`.
+    pub inputs: Vec<Symbol>,
+    /// Assignments; every operand is an input, a constant or an earlier temporary.
+    pub instrs: Vec<Instr>,
+    /// Output names and values, in the order asked for.
+    pub outputs: Vec<(String, Operand)>,
+    /// Number of temporaries (`dst` values are `0..n_tmps`).
+    pub n_tmps: u32,
+}
+
+/// Options for [`Arena::lower`].
+#[derive(Clone, Copy, Debug)]
+pub struct LowerOptions {
+    /// Share common subexpressions (off expands the DAG into a tree: only for
+    /// testing, exponential on deep DAGs).
+    pub cse: bool,
+    /// Run [`Program::optimize`] afterwards.
+    pub optimize: bool,
+}
+
+impl Default for LowerOptions {
+    fn default() -> Self {
+        LowerOptions { cse: true, optimize: true }
+    }
+}
+
+struct Lowerer<'a> {
+    arena: &'a Arena,
+    cse: bool,
+    memo: FxHashMap<Id, Operand>,
+    vn: FxHashMap<Op, Operand>,
+    instrs: Vec<Instr>,
+    next: u32,
+    input_of: FxHashMap<SymId, u32>,
+    reach: FxHashSet<Id>,
+}
+
+fn commutative_key(o: &Operand) -> (u8, u64) {
+    match *o {
+        Operand::Const(n) => (0, n.to_f64().to_bits()),
+        Operand::Var(i) => (1, i as u64),
+        Operand::Tmp(i) => (2, i as u64),
+    }
+}
+
+/// Put the operands of `+` and `*` in a canonical order.
+fn canonical(op: Op) -> Op {
+    match op {
+        Op::Add(a, b) if commutative_key(&b) < commutative_key(&a) => Op::Add(b, a),
+        Op::Mul(a, b) if commutative_key(&b) < commutative_key(&a) => Op::Mul(b, a),
+        _ => op,
+    }
+}
+
+impl Lowerer<'_> {
+    fn emit(&mut self, op: Op) -> Operand {
+        let op = canonical(op);
+        if self.cse {
+            if let Some(&o) = self.vn.get(&op) {
+                return o;
+            }
+        }
+        let dst = self.next;
+        self.next += op.results();
+        self.instrs.push(Instr { dst, op });
+        let o = Operand::Tmp(dst);
+        if self.cse {
+            self.vn.insert(op, o);
+        }
+        o
+    }
+
+    fn mul_opt(&mut self, acc: Option<Operand>, x: Operand) -> Option<Operand> {
+        Some(match acc {
+            None => x,
+            Some(a) => self.emit(Op::Mul(a, x)),
+        })
+    }
+
+    /// `x^n` for `n >= 1` by square-and-multiply.
+    fn powi(&mut self, x: Operand, n: u32) -> Operand {
+        let mut acc: Option<Operand> = None;
+        let mut base = x;
+        let mut e = n;
+        loop {
+            if e & 1 == 1 {
+                acc = self.mul_opt(acc, base);
+            }
+            e >>= 1;
+            if e == 0 {
+                break;
+            }
+            base = self.emit(Op::Mul(base, base));
+        }
+        acc.expect("n >= 1")
+    }
+
+    /// `coef · Π factors`, numerator and denominator apart.
+    fn product(&mut self, coef: Num, factors: &[Id]) -> Operand {
+        let mut coef = coef;
+        let mut numer: Option<Operand> = None;
+        let mut denom: Option<Operand> = None;
+        for &f in factors {
+            match self.arena.view(f) {
+                View::Pow(b, e) if e < 0 => {
+                    let ob = self.node(b);
+                    let p = self.powi(ob, e.unsigned_abs());
+                    denom = self.mul_opt(denom, p);
+                }
+                _ => {
+                    let o = self.node(f);
+                    numer = self.mul_opt(numer, o);
+                }
+            }
+        }
+        let r = match (numer, denom) {
+            (Some(n), Some(d)) => self.emit(Op::Div(n, d)),
+            (Some(n), None) => n,
+            (None, Some(d)) => {
+                let c = std::mem::replace(&mut coef, Num::ONE);
+                self.emit(Op::Div(Operand::Const(c), d))
+            }
+            (None, None) => return Operand::Const(coef),
+        };
+        if coef.is_one() {
+            r
+        } else if coef == Num::MINUS_ONE {
+            self.emit(Op::Neg(r))
+        } else {
+            self.emit(Op::Mul(Operand::Const(coef), r))
+        }
+    }
+
+    /// Split a product node into its leading constant and the rest.
+    fn split_coef(&self, cs: &[Id]) -> (Num, usize) {
+        match self.arena.num(cs[0]) {
+            Some(c) => (c, 1),
+            None => (Num::ONE, 0),
+        }
+    }
+
+    fn node(&mut self, id: Id) -> Operand {
+        if self.cse {
+            if let Some(&o) = self.memo.get(&id) {
+                return o;
+            }
+        }
+        let o = self.compute(id);
+        if self.cse {
+            self.memo.insert(id, o);
+        }
+        o
+    }
+
+    fn trig(&mut self, x: Id, is_sin: bool) -> Operand {
+        let partner = if is_sin { View::Cos(x) } else { View::Sin(x) };
+        let paired = self.cse && self.arena.lookup(&partner).is_some_and(|p| self.reach.contains(&p));
+        let a = self.node(x);
+        if !paired {
+            return self.emit(if is_sin { Op::Sin(a) } else { Op::Cos(a) });
+        }
+        let Operand::Tmp(t) = self.emit(Op::SinCos(a)) else { unreachable!("emit returns a temporary") };
+        if let Some(p) = self.arena.lookup(&partner) {
+            let (s, c) = (Operand::Tmp(t), Operand::Tmp(t + 1));
+            self.memo.insert(p, if is_sin { c } else { s });
+            return if is_sin { s } else { c };
+        }
+        unreachable!("partner checked above")
+    }
+
+    fn compute(&mut self, id: Id) -> Operand {
+        match self.arena.view(id) {
+            View::Num(n) => Operand::Const(n),
+            View::Sym(s) => Operand::Var(self.input_of[&s]),
+            View::Add(cs) => {
+                let mut pos: Vec<Operand> = Vec::new();
+                let mut neg: Vec<Operand> = Vec::new();
+                for &c in cs {
+                    match self.arena.view(c) {
+                        View::Num(n) if n.is_negative() => neg.push(Operand::Const(n.neg())),
+                        View::Mul(ms) if self.arena.num(ms[0]).is_some_and(|k| k.is_negative()) => {
+                            let (k, skip) = self.split_coef(ms);
+                            let o = self.product(k.neg(), &ms[skip..]);
+                            neg.push(o);
+                        }
+                        _ => {
+                            let o = self.node(c);
+                            pos.push(o);
+                        }
+                    }
+                }
+                let sum = |l: &mut Self, xs: &[Operand]| xs[1..].iter().fold(xs[0], |acc, &x| l.emit(Op::Add(acc, x)));
+                if pos.is_empty() {
+                    let s = sum(self, &neg);
+                    return self.emit(Op::Neg(s));
+                }
+                let mut acc = sum(self, &pos);
+                for n in neg {
+                    acc = self.emit(Op::Sub(acc, n));
+                }
+                acc
+            }
+            View::Mul(cs) => {
+                let (k, skip) = self.split_coef(cs);
+                self.product(k, &cs[skip..])
+            }
+            View::Pow(b, n) => {
+                if n == 0 {
+                    return Operand::Const(Num::ONE);
+                }
+                let ob = self.node(b);
+                let p = self.powi(ob, n.unsigned_abs());
+                if n < 0 { self.emit(Op::Div(Operand::Const(Num::ONE), p)) } else { p }
+            }
+            View::Sin(x) => self.trig(x, true),
+            View::Cos(x) => self.trig(x, false),
+            View::Sqrt(x) => self.unary(x, Op::Sqrt),
+            View::Tan(x) => self.unary(x, Op::Tan),
+            View::Exp(x) => self.unary(x, Op::Exp),
+            View::Ln(x) => self.unary(x, Op::Ln),
+            View::Abs(x) => self.unary(x, Op::Abs),
+            View::Atan2(y, x) => {
+                let (a, b) = (self.node(y), self.node(x));
+                self.emit(Op::Atan2(a, b))
+            }
+            View::Select(c, a, b) => {
+                let (c, a, b) = (self.node(c), self.node(a), self.node(b));
+                self.emit(Op::Select(c, a, b))
+            }
+        }
+    }
+
+    fn unary(&mut self, x: Id, f: fn(Operand) -> Op) -> Operand {
+        let a = self.node(x);
+        self.emit(f(a))
+    }
+}
+
+impl Arena {
+    /// Lower named outputs to one [`Program`] (CSE across all outputs).
+    pub fn lower(&self, outputs: &[(&str, Id)], opts: LowerOptions) -> Program {
+        let roots: Vec<Id> = outputs.iter().map(|&(_, id)| id).collect();
+        let order = self.reachable(&roots, |_| false);
+        let mut syms: Vec<SymId> = order.iter().filter_map(|&id| self.as_sym(id)).collect();
+        syms.sort_by(|&a, &b| {
+            let (sa, sb) = (self.symbol(a), self.symbol(b));
+            (sa.kind, &sa.name).cmp(&(sb.kind, &sb.name))
+        });
+        let mut l = Lowerer {
+            arena: self,
+            cse: opts.cse,
+            memo: FxHashMap::default(),
+            vn: FxHashMap::default(),
+            instrs: Vec::new(),
+            next: 0,
+            input_of: syms.iter().enumerate().map(|(i, &s)| (s, i as u32)).collect(),
+            reach: order.iter().copied().collect(),
+        };
+        if opts.cse {
+            for &id in &order {
+                l.node(id);
+            }
+        }
+        let outs: Vec<(String, Operand)> = outputs.iter().map(|&(name, id)| (name.to_string(), l.node(id))).collect();
+        let mut p = Program {
+            inputs: syms.iter().map(|&s| self.symbol(s).clone()).collect(),
+            instrs: l.instrs,
+            outputs: outs,
+            n_tmps: l.next,
+        };
+        if opts.optimize {
+            p.optimize();
+        } else {
+            p.remove_dead();
+        }
+        p
+    }
+}
+
+/// Fold an operation on constants; `None` unless the result is finite.
+fn fold(op: &Op) -> Option<Num> {
+    let c = |o: &Operand| match o {
+        Operand::Const(n) => Some(*n),
+        _ => None,
+    };
+    match *op {
+        Op::Add(a, b) => c(&a)?.add(c(&b)?),
+        Op::Sub(a, b) => c(&a)?.add(c(&b)?.neg()),
+        Op::Mul(a, b) => c(&a)?.mul(c(&b)?),
+        Op::Div(a, b) => c(&a)?.mul(c(&b)?.recip()?),
+        Op::Neg(a) => Some(c(&a)?.neg()),
+        Op::Sqrt(a) => c(&a)?.sqrt(),
+        Op::Sin(a) => c(&a)?.map(f64::sin),
+        Op::Cos(a) => c(&a)?.map(f64::cos),
+        Op::Tan(a) => c(&a)?.map(f64::tan),
+        Op::Exp(a) => c(&a)?.map(f64::exp),
+        Op::Ln(a) => c(&a)?.map(f64::ln),
+        Op::Abs(a) => c(&a)?.map(f64::abs),
+        Op::Atan2(y, x) => {
+            let x = c(&x)?.to_f64();
+            c(&y)?.map(|y| y.atan2(x))
+        }
+        Op::SinCos(_) | Op::Select(..) => None,
+    }
+}
+
+impl Program {
+    /// Second round: constant propagation, identities, value numbering and
+    /// dead-code elimination until nothing changes. Returns the number of
+    /// instructions removed.
+    ///
+    /// Identities used: `x ± 0 = x`, `0 − x = −x`, `x − x = 0`, `x·1 = x`,
+    /// `x·(−1) = −x`, `x·0 = 0` (assumes x finite), `x/1 = x`, `−(−x) = x`,
+    /// `select(c, a, a) = a`.
+    pub fn optimize(&mut self) -> usize {
+        let before = self.instrs.len();
+        for _ in 0..8 {
+            let n = self.instrs.len();
+            self.propagate();
+            self.remove_dead();
+            if self.instrs.len() == n {
+                break;
+            }
+        }
+        before - self.instrs.len()
+    }
+
+    fn propagate(&mut self) {
+        let mut subst: FxHashMap<u32, Operand> = FxHashMap::default();
+        let mut vn: FxHashMap<Op, Operand> = FxHashMap::default();
+        let mut negs: FxHashMap<u32, Operand> = FxHashMap::default();
+        let mut out = Vec::with_capacity(self.instrs.len());
+        let zero = Operand::Const(Num::ZERO);
+        let one = Operand::Const(Num::ONE);
+        for ins in &self.instrs {
+            let op = canonical(ins.op.map(|o| match o {
+                Operand::Tmp(t) => subst.get(&t).copied().unwrap_or(o),
+                _ => o,
+            }));
+            let simpler: Option<Operand> = fold(&op).map(Operand::Const).or_else(|| match op {
+                Op::Add(a, b) if a == zero => Some(b),
+                Op::Add(a, b) if b == zero => Some(a),
+                Op::Sub(a, b) if b == zero => Some(a),
+                Op::Sub(a, b) if a == b => Some(zero),
+                Op::Mul(a, b) if a == one => Some(b),
+                Op::Mul(a, b) if b == one => Some(a),
+                Op::Mul(a, b) if a == zero || b == zero => Some(zero),
+                Op::Div(a, b) if b == one => Some(a),
+                Op::Neg(Operand::Tmp(t)) => negs.get(&t).copied(),
+                Op::Select(_, a, b) if a == b => Some(a),
+                _ => None,
+            });
+            if let Some(s) = simpler {
+                subst.insert(ins.dst, s);
+                continue;
+            }
+            let op = match op {
+                Op::Sub(a, b) if a == zero => Op::Neg(b),
+                Op::Mul(Operand::Const(m), b) if m == Num::MINUS_ONE => Op::Neg(b),
+                _ => op,
+            };
+            if let Some(&prev) = vn.get(&op) {
+                subst.insert(ins.dst, prev);
+                if let (Op::SinCos(_), Operand::Tmp(p)) = (op, prev) {
+                    subst.insert(ins.dst + 1, Operand::Tmp(p + 1));
+                }
+                continue;
+            }
+            vn.insert(op, Operand::Tmp(ins.dst));
+            if let Op::Neg(a) = op {
+                negs.insert(ins.dst, a);
+            }
+            out.push(Instr { dst: ins.dst, op });
+        }
+        for (_, o) in &mut self.outputs {
+            if let Operand::Tmp(t) = *o {
+                if let Some(&s) = subst.get(&t) {
+                    *o = s;
+                }
+            }
+        }
+        self.instrs = out;
+    }
+
+    /// Remove instructions whose results are unused, turn a `SinCos` with
+    /// one used half into `Sin` or `Cos`, and renumber temporaries densely.
+    pub fn remove_dead(&mut self) {
+        let mut used: FxHashSet<u32> = FxHashSet::default();
+        for (_, o) in &self.outputs {
+            if let Operand::Tmp(t) = o {
+                used.insert(*t);
+            }
+        }
+        // For each kept instruction, the temporary its (first) result is read from.
+        let mut keep: Vec<Option<u32>> = vec![None; self.instrs.len()];
+        for (i, ins) in self.instrs.iter_mut().enumerate().rev() {
+            let (s, c) = (used.contains(&ins.dst), used.contains(&(ins.dst + 1)));
+            let live = match ins.op {
+                Op::SinCos(a) if s && !c => {
+                    ins.op = Op::Sin(a);
+                    Some(ins.dst)
+                }
+                Op::SinCos(a) if c && !s => {
+                    ins.op = Op::Cos(a);
+                    Some(ins.dst + 1)
+                }
+                Op::SinCos(_) if s && c => Some(ins.dst),
+                _ => s.then_some(ins.dst),
+            };
+            if live.is_some() {
+                keep[i] = live;
+                for o in ins.op.operands() {
+                    if let Operand::Tmp(t) = o {
+                        used.insert(t);
+                    }
+                }
+            }
+        }
+        let mut renum: FxHashMap<u32, u32> = FxHashMap::default();
+        let mut next = 0;
+        let mut out = Vec::with_capacity(self.instrs.len());
+        for (ins, k) in self.instrs.iter().zip(keep) {
+            let Some(from) = k else { continue };
+            let op = ins.op.map(|o| match o {
+                Operand::Tmp(t) => Operand::Tmp(renum[&t]),
+                _ => o,
+            });
+            renum.insert(from, next);
+            if let Op::SinCos(_) = op {
+                renum.insert(ins.dst + 1, next + 1);
+            }
+            out.push(Instr { dst: next, op });
+            next += op.results();
+        }
+        for (_, o) in &mut self.outputs {
+            if let Operand::Tmp(t) = o {
+                *o = Operand::Tmp(renum[t]);
+            }
+        }
+        self.instrs = out;
+        self.n_tmps = next;
+    }
+
+    /// Operation counts.
+    pub fn op_count(&self) -> OpCount {
+        let mut c = OpCount::default();
+        for ins in &self.instrs {
+            match ins.op {
+                Op::Add(..) | Op::Sub(..) => c.adds += 1,
+                Op::Mul(..) => c.muls += 1,
+                Op::Div(..) => c.divs += 1,
+                Op::Neg(_) => c.negs += 1,
+                Op::Sqrt(_) => c.sqrts += 1,
+                Op::Sin(_) | Op::Cos(_) | Op::SinCos(_) | Op::Tan(_) | Op::Atan2(..) => c.trig += 1,
+                Op::Exp(_) | Op::Ln(_) | Op::Abs(_) | Op::Select(..) => c.other += 1,
+            }
+        }
+        c
+    }
+
+    /// Run the program; `inputs[i]` is the value of `self.inputs[i]`.
+    /// Returns the outputs in order.
+    pub fn eval(&self, inputs: &[f64]) -> Vec<f64> {
+        let mut t = vec![0.0; self.n_tmps as usize];
+        let get = |t: &[f64], o: Operand| match o {
+            Operand::Const(n) => n.to_f64(),
+            Operand::Var(i) => inputs.get(i as usize).copied().unwrap_or(f64::NAN),
+            Operand::Tmp(i) => t[i as usize],
+        };
+        for ins in &self.instrs {
+            let g = |o| get(&t, o);
+            let d = ins.dst as usize;
+            let v = match ins.op {
+                Op::Add(a, b) => g(a) + g(b),
+                Op::Sub(a, b) => g(a) - g(b),
+                Op::Mul(a, b) => g(a) * g(b),
+                Op::Div(a, b) => g(a) / g(b),
+                Op::Neg(a) => -g(a),
+                Op::Sqrt(a) => g(a).sqrt(),
+                Op::Sin(a) => g(a).sin(),
+                Op::Cos(a) => g(a).cos(),
+                Op::SinCos(a) => {
+                    let (s, c) = g(a).sin_cos();
+                    t[d + 1] = c;
+                    s
+                }
+                Op::Tan(a) => g(a).tan(),
+                Op::Atan2(y, x) => g(y).atan2(g(x)),
+                Op::Exp(a) => g(a).exp(),
+                Op::Ln(a) => g(a).ln(),
+                Op::Abs(a) => g(a).abs(),
+                Op::Select(c, a, b) => super::eval::ops::select(g(c), g(a), g(b)),
+            };
+            t[d] = v;
+        }
+        self.outputs.iter().map(|&(_, o)| get(&t, o)).collect()
+    }
+
+    /// Run the program with values given per arena symbol (as for
+    /// [`Arena::eval`]); inputs are matched by name.
+    pub fn eval_arena_values(&self, arena: &Arena, values: &[f64]) -> Vec<f64> {
+        let ins: Vec<f64> = self
+            .inputs
+            .iter()
+            .map(|s| {
+                arena
+                    .find_symbol(&s.name)
+                    .and_then(|id| values.get(id.index()).copied())
+                    .unwrap_or(f64::NAN)
+            })
+            .collect();
+        self.eval(&ins)
+    }
+}
+
+impl fmt::Display for Operand {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Operand::Const(n) => write!(f, "{n}"),
+            Operand::Var(i) => write!(f, "in{i}"),
+            Operand::Tmp(i) => write!(f, "t{i}"),
+        }
+    }
+}
+
+impl fmt::Display for Program {
+    /// A readable listing: inputs, one assignment per line, outputs.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("inputs:")?;
+        for (i, s) in self.inputs.iter().enumerate() {
+            write!(f, " in{i}={}", s.name)?;
+        }
+        writeln!(f)?;
+        for ins in &self.instrs {
+            let d = ins.dst;
+            match ins.op {
+                Op::Add(a, b) => writeln!(f, "t{d} = {a} + {b}"),
+                Op::Sub(a, b) => writeln!(f, "t{d} = {a} - {b}"),
+                Op::Mul(a, b) => writeln!(f, "t{d} = {a} * {b}"),
+                Op::Div(a, b) => writeln!(f, "t{d} = {a} / {b}"),
+                Op::Neg(a) => writeln!(f, "t{d} = -{a}"),
+                Op::SinCos(a) => writeln!(f, "(t{d}, t{}) = sin_cos({a})", d + 1),
+                Op::Atan2(y, x) => writeln!(f, "t{d} = atan2({y}, {x})"),
+                Op::Select(c, a, b) => writeln!(f, "t{d} = select({c}, {a}, {b})"),
+                Op::Sqrt(a) => writeln!(f, "t{d} = sqrt({a})"),
+                Op::Sin(a) => writeln!(f, "t{d} = sin({a})"),
+                Op::Cos(a) => writeln!(f, "t{d} = cos({a})"),
+                Op::Tan(a) => writeln!(f, "t{d} = tan({a})"),
+                Op::Exp(a) => writeln!(f, "t{d} = exp({a})"),
+                Op::Ln(a) => writeln!(f, "t{d} = ln({a})"),
+                Op::Abs(a) => writeln!(f, "t{d} = abs({a})"),
+            }?;
+        }
+        for (name, o) in &self.outputs {
+            writeln!(f, "{name} = {o}")?;
+        }
+        Ok(())
+    }
+}
