@@ -6,6 +6,7 @@
 //! dynamics as [`sym`] expressions) → `emit` (Rust source).
 
 pub mod graph;
+pub mod mech;
 pub mod model;
 pub mod summary;
 pub mod sym;

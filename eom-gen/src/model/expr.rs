@@ -239,6 +239,113 @@ impl Ast {
         })
     }
 
+    /// The derivative with respect to the name `var` (used for prescribed
+    /// motion: `q(t)` gives `q̇(t)` and `q̈(t)`). Exact zeros and ones are
+    /// folded so repeated differentiation stays small.
+    pub fn diff(&self, var: &str) -> Ast {
+        use Ast::*;
+        let num = |v: f64| Num(v);
+        let add = |a: Ast, b: Ast| match (&a, &b) {
+            (Num(x), _) if *x == 0.0 => b,
+            (_, Num(y)) if *y == 0.0 => a,
+            _ => Bin(BinOp::Add, Box::new(a), Box::new(b)),
+        };
+        let mul = |a: Ast, b: Ast| match (&a, &b) {
+            (Num(x), _) | (_, Num(x)) if *x == 0.0 => Num(0.0),
+            (Num(x), _) if *x == 1.0 => b,
+            (_, Num(y)) if *y == 1.0 => a,
+            _ => Bin(BinOp::Mul, Box::new(a), Box::new(b)),
+        };
+        let neg = |a: Ast| match a {
+            Num(x) => Num(-x),
+            a => Neg(Box::new(a)),
+        };
+        let div = |a: Ast, b: Ast| match &a {
+            Num(x) if *x == 0.0 => Num(0.0),
+            _ => Bin(BinOp::Div, Box::new(a), Box::new(b)),
+        };
+        let call = |f: Func, a: &Ast| Call(f, vec![a.clone()], 0);
+        match self {
+            Num(_) => num(0.0),
+            Var(name, _) => num(if name == var { 1.0 } else { 0.0 }),
+            Neg(a) => neg(a.diff(var)),
+            Bin(op, a, b) => {
+                let (da, db) = (a.diff(var), b.diff(var));
+                let (a, b) = ((**a).clone(), (**b).clone());
+                match op {
+                    BinOp::Add => add(da, db),
+                    BinOp::Sub => add(da, neg(db)),
+                    BinOp::Mul => add(mul(da, b), mul(a, db)),
+                    // (a/b)' = a'/b − a b' / b²
+                    BinOp::Div => add(
+                        div(da, b.clone()),
+                        neg(div(
+                            mul(a, db),
+                            Bin(BinOp::Pow, Box::new(b), Box::new(Num(2.0))),
+                        )),
+                    ),
+                    BinOp::Pow => match &b {
+                        // (a^n)' = n a^(n−1) a'
+                        Num(n) => mul(
+                            mul(
+                                Num(*n),
+                                Bin(BinOp::Pow, Box::new(a), Box::new(Num(n - 1.0))),
+                            ),
+                            da,
+                        ),
+                        // (a^b)' = a^b (b' ln a + b a'/a)
+                        _ => mul(
+                            self.clone(),
+                            add(mul(db, call(Func::Ln, &a)), div(mul(b, da), a)),
+                        ),
+                    },
+                }
+            }
+            Call(f, args, _) => {
+                let a = &args[0];
+                let da = a.diff(var);
+                let one_minus_sq = || {
+                    add(
+                        Num(1.0),
+                        neg(Bin(BinOp::Pow, Box::new(a.clone()), Box::new(Num(2.0)))),
+                    )
+                };
+                let inner = match f {
+                    Func::Sin => call(Func::Cos, a),
+                    Func::Cos => neg(call(Func::Sin, a)),
+                    Func::Tan => add(
+                        Num(1.0),
+                        Bin(BinOp::Pow, Box::new(call(Func::Tan, a)), Box::new(Num(2.0))),
+                    ),
+                    Func::Asin => div(Num(1.0), call(Func::Sqrt, &one_minus_sq())),
+                    Func::Acos => neg(div(Num(1.0), call(Func::Sqrt, &one_minus_sq()))),
+                    Func::Atan => div(
+                        Num(1.0),
+                        add(
+                            Num(1.0),
+                            Bin(BinOp::Pow, Box::new(a.clone()), Box::new(Num(2.0))),
+                        ),
+                    ),
+                    Func::Sqrt => div(Num(0.5), call(Func::Sqrt, a)),
+                    Func::Exp => call(Func::Exp, a),
+                    Func::Ln => div(Num(1.0), a.clone()),
+                    Func::Abs => div(a.clone(), call(Func::Abs, a)),
+                    Func::Atan2 => {
+                        // atan2(y, x)' = (x y' − y x') / (x² + y²)
+                        let (y, x) = (a.clone(), args.get(1).cloned().unwrap_or(Num(1.0)));
+                        let dx = x.diff(var);
+                        let den = add(
+                            Bin(BinOp::Pow, Box::new(x.clone()), Box::new(Num(2.0))),
+                            Bin(BinOp::Pow, Box::new(y.clone()), Box::new(Num(2.0))),
+                        );
+                        return div(add(mul(x, da), neg(mul(y, dx))), den);
+                    }
+                };
+                mul(inner, da)
+            }
+        }
+    }
+
     /// Replaces every name for which `f` gives an expression.
     pub fn substitute(&self, f: &dyn Fn(&str) -> Option<Ast>) -> Ast {
         match self {
@@ -571,6 +678,31 @@ mod tests {
         let ast = Ast::parse("1/(l - 1)").expect("parses");
         assert_eq!(ast.eval(&lookup), Err(EvalError::NotFinite));
         assert_eq!(ast.names(), vec![("l", 3)]);
+    }
+
+    #[test]
+    fn derivatives_match_central_differences() {
+        let cases = [
+            "pi/2 + 2*pi*t",
+            "0.3*sin(3*t)^2 - t^3/(1 + t^2)",
+            "sqrt(1 + t^2)*exp(-t)*cos(t)",
+            "atan2(sin(t), 2 + cos(t)) + asin(t/3) + acos(t/4) + atan(t) + ln(2 + t) + tan(t/2)",
+            "abs(t - 0.1) + (1 + t)^t + -t",
+        ];
+        for text in cases {
+            let ast = Ast::parse(text).expect("parses");
+            let d = ast.diff("t");
+            let at = |a: &Ast, t: f64| a.eval(&|n: &str| (n == "t").then_some(t)).expect("finite");
+            for t in [0.37, 0.81, 1.3] {
+                let h = 1e-6;
+                let want = (at(&ast, t + h) - at(&ast, t - h)) / (2.0 * h);
+                let got = at(&d, t);
+                assert!(
+                    (got - want).abs() < 1e-7 * (1.0 + want.abs()),
+                    "d/dt {text} at {t}: got {got}, want {want}"
+                );
+            }
+        }
     }
 
     #[test]

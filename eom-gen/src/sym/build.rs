@@ -109,16 +109,32 @@ impl Arena {
     pub(crate) fn term_of(&self, id: Id) -> Term {
         if self.rules.has(RuleSet::COLLECT) {
             if let Some(n) = self.num(id) {
-                return Term { coef: n, fs: Vec::new(), orig: Some(id) };
+                return Term {
+                    coef: n,
+                    fs: Vec::new(),
+                    orig: Some(id),
+                };
             }
             if let View::Mul(cs) = self.view(id) {
                 if let Some(c) = self.num(cs[0]) {
-                    return Term { coef: c, fs: cs[1..].to_vec(), orig: Some(id) };
+                    return Term {
+                        coef: c,
+                        fs: cs[1..].to_vec(),
+                        orig: Some(id),
+                    };
                 }
-                return Term { coef: Num::ONE, fs: cs.to_vec(), orig: Some(id) };
+                return Term {
+                    coef: Num::ONE,
+                    fs: cs.to_vec(),
+                    orig: Some(id),
+                };
             }
         }
-        Term { coef: Num::ONE, fs: vec![id], orig: Some(id) }
+        Term {
+            coef: Num::ONE,
+            fs: vec![id],
+            orig: Some(id),
+        }
     }
 
     /// The node for a term.

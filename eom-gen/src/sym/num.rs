@@ -154,7 +154,9 @@ impl Num {
     /// `-self` (always exact).
     pub fn neg(self) -> Num {
         match self {
-            Num::Rat(p, q) => Num::ratio(-(p as i64), q as i64).unwrap_or(Num::Float(-self.to_f64())),
+            Num::Rat(p, q) => {
+                Num::ratio(-(p as i64), q as i64).unwrap_or(Num::Float(-self.to_f64()))
+            }
             Num::Float(x) => Num::Float(-x),
         }
     }
@@ -163,7 +165,9 @@ impl Num {
     pub fn recip(self) -> Option<Num> {
         match self {
             Num::Rat(0, _) => None,
-            Num::Rat(p, q) => Num::ratio(q as i64, p as i64).or_else(|| Num::finite(q as f64 / p as f64)),
+            Num::Rat(p, q) => {
+                Num::ratio(q as i64, p as i64).or_else(|| Num::finite(q as f64 / p as f64))
+            }
             Num::Float(x) => Num::finite(1.0 / x),
         }
     }
@@ -201,7 +205,10 @@ impl Num {
             return None;
         }
         if let Num::Rat(p, q) = self {
-            let (sp, sq) = ((p as f64).sqrt().round() as i64, (q as f64).sqrt().round() as i64);
+            let (sp, sq) = (
+                (p as f64).sqrt().round() as i64,
+                (q as f64).sqrt().round() as i64,
+            );
             if sp * sp == p as i64 && sq * sq == q as i64 {
                 return Num::ratio(sp, sq);
             }
@@ -247,7 +254,10 @@ mod tests {
         let a = Num::ratio(1, 12).unwrap();
         let got = a.mul(Num::int(12)).unwrap();
         assert_eq!(got, Num::ONE, "got {got} want 1");
-        assert_eq!(Num::ratio(1, 3).unwrap().add(Num::ratio(1, 6).unwrap()), Num::ratio(1, 2));
+        assert_eq!(
+            Num::ratio(1, 3).unwrap().add(Num::ratio(1, 6).unwrap()),
+            Num::ratio(1, 2)
+        );
     }
 
     #[test]
@@ -269,7 +279,12 @@ mod tests {
 
     #[test]
     fn display_round_trips() {
-        for n in [Num::int(3), Num::ratio(-1, 2).unwrap(), Num::Float(0.1), Num::Float(1e-7)] {
+        for n in [
+            Num::int(3),
+            Num::ratio(-1, 2).unwrap(),
+            Num::Float(0.1),
+            Num::Float(1e-7),
+        ] {
             let s = n.to_string();
             let back = if let Some((p, q)) = s.split_once('/') {
                 Num::ratio(p.parse().unwrap(), q.parse().unwrap()).unwrap()

@@ -72,7 +72,9 @@ pub enum Op {
 impl Op {
     fn operands(&self) -> impl Iterator<Item = Operand> {
         let v: [Option<Operand>; 3] = match *self {
-            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => [Some(a), Some(b), None],
+            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
+                [Some(a), Some(b), None]
+            }
             Op::Neg(a)
             | Op::Sqrt(a)
             | Op::Sin(a)
@@ -191,7 +193,10 @@ pub struct LowerOptions {
 
 impl Default for LowerOptions {
     fn default() -> Self {
-        LowerOptions { cse: true, optimize: true }
+        LowerOptions {
+            cse: true,
+            optimize: true,
+        }
     }
 }
 
@@ -325,12 +330,18 @@ impl Lowerer<'_> {
 
     fn trig(&mut self, x: Id, is_sin: bool) -> Operand {
         let partner = if is_sin { View::Cos(x) } else { View::Sin(x) };
-        let paired = self.cse && self.arena.lookup(&partner).is_some_and(|p| self.reach.contains(&p));
+        let paired = self.cse
+            && self
+                .arena
+                .lookup(&partner)
+                .is_some_and(|p| self.reach.contains(&p));
         let a = self.node(x);
         if !paired {
             return self.emit(if is_sin { Op::Sin(a) } else { Op::Cos(a) });
         }
-        let Operand::Tmp(t) = self.emit(Op::SinCos(a)) else { unreachable!("emit returns a temporary") };
+        let Operand::Tmp(t) = self.emit(Op::SinCos(a)) else {
+            unreachable!("emit returns a temporary")
+        };
         if let Some(p) = self.arena.lookup(&partner) {
             let (s, c) = (Operand::Tmp(t), Operand::Tmp(t + 1));
             self.memo.insert(p, if is_sin { c } else { s });
@@ -360,7 +371,11 @@ impl Lowerer<'_> {
                         }
                     }
                 }
-                let sum = |l: &mut Self, xs: &[Operand]| xs[1..].iter().fold(xs[0], |acc, &x| l.emit(Op::Add(acc, x)));
+                let sum = |l: &mut Self, xs: &[Operand]| {
+                    xs[1..]
+                        .iter()
+                        .fold(xs[0], |acc, &x| l.emit(Op::Add(acc, x)))
+                };
                 if pos.is_empty() {
                     let s = sum(self, &neg);
                     return self.emit(Op::Neg(s));
@@ -381,7 +396,11 @@ impl Lowerer<'_> {
                 }
                 let ob = self.node(b);
                 let p = self.powi(ob, n.unsigned_abs());
-                if n < 0 { self.emit(Op::Div(Operand::Const(Num::ONE), p)) } else { p }
+                if n < 0 {
+                    self.emit(Op::Div(Operand::Const(Num::ONE), p))
+                } else {
+                    p
+                }
             }
             View::Sin(x) => self.trig(x, true),
             View::Cos(x) => self.trig(x, false),
@@ -424,7 +443,11 @@ impl Arena {
             vn: FxHashMap::default(),
             instrs: Vec::new(),
             next: 0,
-            input_of: syms.iter().enumerate().map(|(i, &s)| (s, i as u32)).collect(),
+            input_of: syms
+                .iter()
+                .enumerate()
+                .map(|(i, &s)| (s, i as u32))
+                .collect(),
             reach: order.iter().copied().collect(),
         };
         if opts.cse {
@@ -432,7 +455,10 @@ impl Arena {
                 l.node(id);
             }
         }
-        let outs: Vec<(String, Operand)> = outputs.iter().map(|&(name, id)| (name.to_string(), l.node(id))).collect();
+        let outs: Vec<(String, Operand)> = outputs
+            .iter()
+            .map(|&(name, id)| (name.to_string(), l.node(id)))
+            .collect();
         let mut p = Program {
             inputs: syms.iter().map(|&s| self.symbol(s).clone()).collect(),
             instrs: l.instrs,

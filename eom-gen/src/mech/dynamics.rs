@@ -1,0 +1,743 @@
+//! The recursive algorithms, each written once over any [`Scalar`]
+//! (Featherstone, *Rigid Body Dynamics Algorithms*, 2008):
+//!
+//! - [`Evaluator::kinematics`]: poses, subspaces and velocities, root to leaves;
+//! - [`Evaluator::rnea`]: inverse dynamics by recursive Newton–Euler (§5.3);
+//! - [`Evaluator::crba`]: the joint-space mass matrix by composite rigid
+//!   bodies (§6.2);
+//! - [`Evaluator::aba`]: forward dynamics in O(n) by articulated bodies (§7.3);
+//! - [`ltdl`] / [`ltdl_solve`]: the sparse `LᵀDL` factorisation of the mass
+//!   matrix that follows the tree (§6.5), the other forward-dynamics route;
+//! - energies and momenta, force elements.
+//!
+//! Conventions: all spatial quantities of body `i` are in its own
+//! coordinates at its origin; ground is the world frame; gravity enters as
+//! the base acceleration `a₀ = −g` (§5.3). The equations of motion are
+//! `M(q) u̇ = τ − b(q, u, t)`, where `b = C + g − Jᵀf_ext − Q` collects
+//! velocity products, gravity, point forces and the model's generalised
+//! forces `Q` (joint springs, joint forces, actuator inputs); `τ` is any
+//! extra generalised force.
+
+// Index loops over small dense matrices read like the textbook formulas.
+#![allow(clippy::needless_range_loop)]
+
+use super::joint::JointModel;
+use super::spatial::{Force, Inertia6, Motion, Pose};
+use super::tree::{Coords, Env, Lowering, MechError, TreeModel};
+use crate::sym::{Scalar, Vec3};
+use crate::system::{ForceElement, System};
+use std::ops::{Add, Sub};
+
+/// A joint's positions, speeds and (if known) accelerations.
+type JointValues<S> = (Vec<S>, Vec<S>, Option<Vec<S>>);
+
+/// A point-to-point spring-damper, resolved to tree bodies.
+#[derive(Clone, Debug)]
+pub struct SpringModel<S> {
+    /// Tree index and point (body coordinates) of each end; `None` = ground.
+    pub ends: [(Option<usize>, Vec3<S>); 2],
+    /// Stiffness, damping, rest length.
+    pub k: S,
+    /// Damping.
+    pub c: S,
+    /// Rest length.
+    pub l0: S,
+}
+
+/// A generalised force on one speed.
+#[derive(Clone, Debug)]
+pub enum GenForce<S> {
+    /// `−k (q − rest) − c u` on coordinate `q` / speed `u`.
+    Spring {
+        /// Coordinate index.
+        q: usize,
+        /// Speed index.
+        u: usize,
+        /// Stiffness.
+        k: S,
+        /// Damping.
+        c: S,
+        /// Rest position.
+        rest: S,
+    },
+    /// A known value (expression of parameters, `t`, coordinates, speeds).
+    Value {
+        /// Speed index.
+        u: usize,
+        /// The expression.
+        expr: crate::model::expr::Ast,
+    },
+    /// A runtime input.
+    Input {
+        /// Speed index.
+        u: usize,
+        /// Input index.
+        input: usize,
+    },
+}
+
+/// The force elements of a system.
+#[derive(Clone, Debug)]
+pub struct Applied<S> {
+    /// Point-to-point spring-dampers.
+    pub springs: Vec<SpringModel<S>>,
+    /// Generalised forces.
+    pub generalized: Vec<GenForce<S>>,
+    /// Coordinate names, for expressions.
+    pub coordinate_names: Vec<String>,
+    /// Speed names, for expressions.
+    pub speed_names: Vec<String>,
+}
+
+impl<S: Scalar> Applied<S> {
+    /// The force elements of `sys` on the tree `tree`.
+    pub fn new(sys: &System, tree: &TreeModel<S>, env: &dyn Env<S>) -> Result<Self, MechError> {
+        let low = Lowering::new(env);
+        let mut springs = Vec::new();
+        let mut generalized = Vec::new();
+        for force in &sys.forces {
+            match &force.element {
+                ForceElement::SpringDamper {
+                    a,
+                    b,
+                    stiffness,
+                    damping,
+                    rest_length,
+                } => springs.push(SpringModel {
+                    ends: [
+                        (tree.index_of_body[a.body], low.vec3(&a.position)?),
+                        (tree.index_of_body[b.body], low.vec3(&b.position)?),
+                    ],
+                    k: low.quantity(stiffness)?,
+                    c: low.quantity(damping)?,
+                    l0: low.quantity(rest_length)?,
+                }),
+                ForceElement::JointSpringDamper {
+                    joint,
+                    stiffness,
+                    damping,
+                    rest,
+                } => {
+                    let j = &sys.joints[*joint];
+                    for k in 0..j.kind.nu() {
+                        generalized.push(GenForce::Spring {
+                            q: j.q_index + k,
+                            u: j.u_index + k,
+                            k: low.quantity(stiffness)?,
+                            c: low.quantity(damping)?,
+                            rest: low.quantity(rest)?,
+                        });
+                    }
+                }
+                ForceElement::JointForce { joint, values } => {
+                    let j = &sys.joints[*joint];
+                    for (k, v) in values.iter().enumerate() {
+                        generalized.push(GenForce::Value {
+                            u: j.u_index + k,
+                            expr: v.expr.clone(),
+                        });
+                    }
+                }
+                ForceElement::Actuator { joint, inputs } => {
+                    let j = &sys.joints[*joint];
+                    for (k, &input) in inputs.iter().enumerate() {
+                        generalized.push(GenForce::Input {
+                            u: j.u_index + k,
+                            input,
+                        });
+                    }
+                }
+            }
+        }
+        Ok(Applied {
+            springs,
+            generalized,
+            coordinate_names: sys
+                .coordinate_names()
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            speed_names: sys.speed_names().iter().map(|s| s.to_string()).collect(),
+        })
+    }
+}
+
+/// The state at which the algorithms are evaluated.
+#[derive(Clone, Copy, Debug)]
+pub struct State<'a, S> {
+    /// Positions (`nq`).
+    pub q: &'a [S],
+    /// Speeds (`nu`).
+    pub u: &'a [S],
+    /// Time.
+    pub t: S,
+    /// Runtime inputs.
+    pub inputs: &'a [S],
+}
+
+/// Per-evaluation kinematics (the "data" to the model's "model").
+#[derive(Clone, Debug)]
+pub struct Kinematics<S> {
+    /// Pose of each body in its parent.
+    pub x: Vec<Pose<S>>,
+    /// Pose of each body in the world.
+    pub world: Vec<Pose<S>>,
+    /// Motion subspace columns in body coordinates.
+    pub s: Vec<Vec<Motion<S>>>,
+    /// `S̊ u` in body coordinates.
+    pub c: Vec<Motion<S>>,
+    /// Joint velocity `S u`.
+    pub vj: Vec<Motion<S>>,
+    /// Body velocity.
+    pub v: Vec<Motion<S>>,
+    /// Known joint accelerations (locked and prescribed joints).
+    pub known_ud: Vec<Option<Vec<S>>>,
+}
+
+/// Runs the algorithms of one tree.
+pub struct Evaluator<'a, S> {
+    /// The tree.
+    pub tree: &'a TreeModel<S>,
+    /// Its force elements.
+    pub applied: &'a Applied<S>,
+    /// Parameter values or symbols.
+    pub env: &'a dyn Env<S>,
+}
+
+impl<'a, S: Scalar> Evaluator<'a, S> {
+    /// An evaluator.
+    pub fn new(tree: &'a TreeModel<S>, applied: &'a Applied<S>, env: &'a dyn Env<S>) -> Self {
+        Evaluator { tree, applied, env }
+    }
+
+    fn time_lookup(&self, t: S) -> impl Fn(&str) -> Option<S> {
+        move |n: &str| (n == "t").then_some(t)
+    }
+
+    /// Joint positions, speeds and (if known) accelerations of body `i`.
+    fn joint_state(&self, i: usize, st: &State<'_, S>) -> Result<JointValues<S>, MechError> {
+        let body = &self.tree.bodies[i];
+        let (nq, nu) = (body.kind.nq(), body.kind.nu());
+        let low = Lowering::new(self.env);
+        Ok(match &body.coords {
+            Coords::Free { q, u } => (st.q[*q..q + nq].to_vec(), st.u[*u..u + nu].to_vec(), None),
+            Coords::Locked(q0) => (
+                q0.iter().map(|&v| S::from_f64(v)).collect(),
+                vec![S::zero(); nu],
+                Some(vec![S::zero(); nu]),
+            ),
+            Coords::Prescribed { q, qd, qdd } => {
+                let tl = self.time_lookup(st.t);
+                let lower = |v: &Vec<crate::model::expr::Ast>| -> Result<Vec<S>, MechError> {
+                    v.iter().map(|a| low.expr(a, &tl)).collect()
+                };
+                (lower(q)?, lower(qd)?, Some(lower(qdd)?))
+            }
+        })
+    }
+
+    /// Poses, subspaces and velocities, from ground outwards.
+    pub fn kinematics(&self, st: &State<'_, S>) -> Result<Kinematics<S>, MechError> {
+        let n = self.tree.bodies.len();
+        let mut k = Kinematics {
+            x: Vec::with_capacity(n),
+            world: Vec::with_capacity(n),
+            s: Vec::with_capacity(n),
+            c: Vec::with_capacity(n),
+            vj: Vec::with_capacity(n),
+            v: Vec::with_capacity(n),
+            known_ud: Vec::with_capacity(n),
+        };
+        // Forward pass over bodies (Featherstone Table 5.1, first loop).
+        for (i, body) in self.tree.bodies.iter().enumerate() {
+            let (q, u, known) = self.joint_state(i, st)?;
+            let fc = body.frame_child;
+            let x = body
+                .frame_parent
+                .then(&body.kind.transform(&q))
+                .then(&fc.inverse());
+            let s: Vec<Motion<S>> = body
+                .kind
+                .subspace(&q)
+                .into_iter()
+                .map(|m| fc.motion_to_parent(m))
+                .collect();
+            let c = fc.motion_to_parent(body.kind.bias(&q, &u));
+            let vj = s
+                .iter()
+                .zip(&u)
+                .fold(Motion::zero(), |acc, (col, &uk)| acc.add(col.scale(uk)));
+            let (v, world) = match body.parent {
+                Some(p) => (x.motion_to_child(k.v[p]).add(vj), k.world[p].then(&x)),
+                None => (vj, x),
+            };
+            k.x.push(x);
+            k.world.push(world);
+            k.s.push(s);
+            k.c.push(c);
+            k.vj.push(vj);
+            k.v.push(v);
+            k.known_ud.push(known);
+        }
+        Ok(k)
+    }
+
+    /// World position and velocity of a point fixed on tree body `b`
+    /// (`None` = ground).
+    pub fn point(&self, k: &Kinematics<S>, b: Option<usize>, p: Vec3<S>) -> (Vec3<S>, Vec3<S>) {
+        match b {
+            None => (p, Vec3::zero()),
+            Some(i) => {
+                let w = &k.world[i];
+                let vel = k.v[i].v + k.v[i].w.cross(p);
+                (w.point(p), w.e.mul_vec(vel))
+            }
+        }
+    }
+
+    /// Spatial forces of the point spring-dampers on each body (body
+    /// coordinates, at the body origin), and their potential energy.
+    pub fn point_forces(&self, k: &Kinematics<S>) -> (Vec<Force<S>>, S) {
+        let mut f = vec![Force::zero(); self.tree.bodies.len()];
+        let mut energy = S::zero();
+        for s in &self.applied.springs {
+            let (xa, va) = self.point(k, s.ends[0].0, s.ends[0].1);
+            let (xb, vb) = self.point(k, s.ends[1].0, s.ends[1].1);
+            let d = xb - xa;
+            let len = d.norm();
+            let e = d.scale(S::one() / len);
+            let stretch = len - s.l0;
+            // Tension: k (L − L0) + c L̇, pulling the ends together.
+            let tension = s.k * stretch + s.c * e.dot(vb - va);
+            energy = energy + S::from_ratio(1, 2) * s.k * stretch * stretch;
+            for (end, sign) in [(0, S::one()), (1, -S::one())] {
+                if let Some(i) = s.ends[end].0 {
+                    let fw = e.scale(tension * sign);
+                    let fb = k.world[i].e.tr_mul_vec(fw);
+                    f[i] = f[i].add(Force {
+                        n: s.ends[end].1.cross(fb),
+                        f: fb,
+                    });
+                }
+            }
+        }
+        (f, energy)
+    }
+
+    /// Generalised forces `Q` of joint springs, joint forces and inputs
+    /// (one per speed), and the joint springs' potential energy.
+    pub fn generalized_forces(&self, st: &State<'_, S>) -> Result<(Vec<S>, S), MechError> {
+        let mut q_out = vec![S::zero(); self.tree.nu];
+        let mut energy = S::zero();
+        let low = Lowering::new(self.env);
+        let names = &self.applied;
+        let lookup = |n: &str| -> Option<S> {
+            if n == "t" {
+                return Some(st.t);
+            }
+            if let Some(i) = names.coordinate_names.iter().position(|c| c == n) {
+                return st.q.get(i).copied();
+            }
+            names
+                .speed_names
+                .iter()
+                .position(|c| c == n)
+                .and_then(|i| st.u.get(i).copied())
+        };
+        for g in &self.applied.generalized {
+            match g {
+                GenForce::Spring { q, u, k, c, rest } => {
+                    let stretch = st.q[*q] - *rest;
+                    q_out[*u] = q_out[*u] - *k * stretch - *c * st.u[*u];
+                    energy = energy + S::from_ratio(1, 2) * *k * stretch * stretch;
+                }
+                GenForce::Value { u, expr } => q_out[*u] = q_out[*u] + low.expr(expr, &lookup)?,
+                GenForce::Input { u, input } => {
+                    q_out[*u] = q_out[*u] + st.inputs.get(*input).copied().unwrap_or(S::zero())
+                }
+            }
+        }
+        Ok((q_out, energy))
+    }
+
+    /// Recursive Newton–Euler (Featherstone §5.3): the generalised forces
+    /// `M u̇ + C + g − Jᵀ f_ext` for the given accelerations of the free
+    /// speeds (known accelerations of locked and prescribed joints are
+    /// used as they are), and the spatial force each joint transmits to
+    /// its child (child coordinates).
+    pub fn rnea(&self, k: &Kinematics<S>, ud: &[S], fext: &[Force<S>]) -> (Vec<S>, Vec<Force<S>>) {
+        let n = self.tree.bodies.len();
+        let base = Motion {
+            w: Vec3::zero(),
+            v: -self.tree.gravity,
+        };
+        let mut a: Vec<Motion<S>> = Vec::with_capacity(n);
+        let mut f: Vec<Force<S>> = Vec::with_capacity(n);
+        // Forward pass over bodies: accelerations and net forces.
+        for (i, body) in self.tree.bodies.iter().enumerate() {
+            let ap = body.parent.map_or(base, |p| a[p]);
+            let udj = self.joint_ud(i, k, ud);
+            let mut ai = k.x[i]
+                .motion_to_child(ap)
+                .add(k.c[i])
+                .add(k.v[i].cross_motion(k.vj[i]));
+            for (col, &x) in k.s[i].iter().zip(&udj) {
+                ai = ai.add(col.scale(x));
+            }
+            let inertia = &body.inertia;
+            let fi = inertia
+                .mul_motion(ai)
+                .add(k.v[i].cross_force(inertia.mul_motion(k.v[i])))
+                .sub(fext[i]);
+            a.push(ai);
+            f.push(fi);
+        }
+        // Backward pass over bodies: project on the joints, pass to parents.
+        let mut tau = vec![S::zero(); self.tree.nu];
+        for i in (0..n).rev() {
+            if let Coords::Free { u, .. } = self.tree.bodies[i].coords {
+                for (kk, col) in k.s[i].iter().enumerate() {
+                    tau[u + kk] = col.dot(f[i]);
+                }
+            }
+            if let Some(p) = self.tree.bodies[i].parent {
+                let fp = k.x[i].force_to_parent(f[i]);
+                f[p] = f[p].add(fp);
+            }
+        }
+        (tau, f)
+    }
+
+    fn joint_ud(&self, i: usize, k: &Kinematics<S>, ud: &[S]) -> Vec<S> {
+        match (&self.tree.bodies[i].coords, &k.known_ud[i]) {
+            (Coords::Free { u, .. }, _) => ud[*u..*u + k.s[i].len()].to_vec(),
+            (_, Some(known)) => known.clone(),
+            _ => vec![S::zero(); k.s[i].len()],
+        }
+    }
+
+    /// Composite-rigid-body algorithm (Featherstone §6.2): the mass matrix
+    /// over the free speeds, as a dense symmetric `nu × nu` matrix.
+    pub fn crba(&self, k: &Kinematics<S>) -> Vec<Vec<S>> {
+        let n = self.tree.bodies.len();
+        let nu = self.tree.nu;
+        let mut m = vec![vec![S::zero(); nu]; nu];
+        let mut ic: Vec<_> = self.tree.bodies.iter().map(|b| b.inertia).collect();
+        // Backward pass over bodies: composite inertias.
+        for i in (0..n).rev() {
+            if let Some(p) = self.tree.bodies[i].parent {
+                let moved = ic[i].to_parent(&k.x[i]);
+                ic[p] = ic[p].add(moved);
+            }
+        }
+        for i in 0..n {
+            let Coords::Free { u: ui, .. } = self.tree.bodies[i].coords else {
+                continue;
+            };
+            for (a, col) in k.s[i].iter().enumerate() {
+                let mut force = ic[i].mul_motion(*col);
+                for (b, col2) in k.s[i].iter().enumerate() {
+                    m[ui + b][ui + a] = col2.dot(force);
+                }
+                // Up the tree: M[j][i] = S_jᵀ (X…ᵀ F).
+                let mut j = i;
+                while let Some(p) = self.tree.bodies[j].parent {
+                    force = k.x[j].force_to_parent(force);
+                    j = p;
+                    if let Coords::Free { u: uj, .. } = self.tree.bodies[j].coords {
+                        for (b, col2) in k.s[j].iter().enumerate() {
+                            let x = col2.dot(force);
+                            m[uj + b][ui + a] = x;
+                            m[ui + a][uj + b] = x;
+                        }
+                    }
+                }
+            }
+        }
+        m
+    }
+
+    /// Articulated-body algorithm (Featherstone §7.3, Table 7.1): `u̇` for
+    /// generalised forces `tau` (one per free speed) and body forces `fext`.
+    /// Locked and prescribed joints move with their known accelerations.
+    pub fn aba(&self, k: &Kinematics<S>, tau: &[S], fext: &[Force<S>]) -> Vec<S> {
+        let n = self.tree.bodies.len();
+        let mut ia: Vec<Inertia6<S>> = self
+            .tree
+            .bodies
+            .iter()
+            .map(|b| Inertia6::from_rigid(&b.inertia))
+            .collect();
+        let mut pa: Vec<Force<S>> = (0..n)
+            .map(|i| {
+                let inertia = &self.tree.bodies[i].inertia;
+                k.v[i].cross_force(inertia.mul_motion(k.v[i])).sub(fext[i])
+            })
+            .collect();
+        // U_i, D_i⁻¹ and u_i of the free joints, kept for the last pass.
+        let mut uu: Vec<Vec<Force<S>>> = vec![Vec::new(); n];
+        let mut dinv: Vec<Vec<Vec<S>>> = vec![Vec::new(); n];
+        let mut small_u: Vec<Vec<S>> = vec![Vec::new(); n];
+        // Velocity-product accelerations c_i = S̊ u + v_i ×ₘ v_J (eq. 7.34).
+        let cv: Vec<Motion<S>> = (0..n)
+            .map(|i| k.c[i].add(k.v[i].cross_motion(k.vj[i])))
+            .collect();
+        // Backward pass over bodies: articulated inertias and bias forces.
+        for i in (0..n).rev() {
+            let s = &k.s[i];
+            let (ia_a, pa_a) = match (&self.tree.bodies[i].coords, &k.known_ud[i]) {
+                (Coords::Free { u, .. }, _) => {
+                    let ucols: Vec<Force<S>> = s.iter().map(|col| ia[i].mul_motion(*col)).collect();
+                    let d: Vec<Vec<S>> = s
+                        .iter()
+                        .map(|sr| ucols.iter().map(|uc| sr.dot(*uc)).collect())
+                        .collect();
+                    let di = invert_spd(d);
+                    let ui: Vec<S> = s
+                        .iter()
+                        .enumerate()
+                        .map(|(r, col)| tau[u + r] - col.dot(pa[i]))
+                        .collect();
+                    // Ia = IA − U D⁻¹ Uᵀ,  pa = pA + Ia c + U D⁻¹ u  (Table 7.1).
+                    let mut inner = ia[i];
+                    for r in 0..s.len() {
+                        for c in 0..s.len() {
+                            inner = inner.sub_outer(&ucols[r], &ucols[c], di[r][c]);
+                        }
+                    }
+                    let mut p = pa[i].add(inner.mul_motion(cv[i]));
+                    for r in 0..s.len() {
+                        let w = (0..s.len()).fold(S::zero(), |acc, c| acc + di[r][c] * ui[c]);
+                        p = p.add(ucols[r].scale(w));
+                    }
+                    uu[i] = ucols;
+                    dinv[i] = di;
+                    small_u[i] = ui;
+                    (inner, p)
+                }
+                (_, known) => {
+                    // Known acceleration: the joint transmits everything.
+                    let mut acc = cv[i];
+                    if let Some(kud) = known {
+                        for (col, &x) in s.iter().zip(kud) {
+                            acc = acc.add(col.scale(x));
+                        }
+                    }
+                    (ia[i], pa[i].add(ia[i].mul_motion(acc)))
+                }
+            };
+            if let Some(p) = self.tree.bodies[i].parent {
+                let moved = ia_a.to_parent(&k.x[i]);
+                ia[p] = ia[p].add(moved);
+                let fp = k.x[i].force_to_parent(pa_a);
+                pa[p] = pa[p].add(fp);
+            }
+        }
+        // Forward pass over bodies: accelerations.
+        let base = Motion {
+            w: Vec3::zero(),
+            v: -self.tree.gravity,
+        };
+        let mut a: Vec<Motion<S>> = Vec::with_capacity(n);
+        let mut ud = vec![S::zero(); self.tree.nu];
+        for i in 0..n {
+            let ap = self.tree.bodies[i].parent.map_or(base, |p| a[p]);
+            let mut ai = k.x[i].motion_to_child(ap).add(cv[i]);
+            match (&self.tree.bodies[i].coords, &k.known_ud[i]) {
+                (Coords::Free { u, .. }, _) => {
+                    let m = k.s[i].len();
+                    let rhs: Vec<S> = (0..m).map(|r| small_u[i][r] - ai.dot(uu[i][r])).collect();
+                    for r in 0..m {
+                        let x = (0..m).fold(S::zero(), |acc, c| acc + dinv[i][r][c] * rhs[c]);
+                        ud[u + r] = x;
+                        ai = ai.add(k.s[i][r].scale(x));
+                    }
+                }
+                (_, Some(known)) => {
+                    for (col, &x) in k.s[i].iter().zip(known) {
+                        ai = ai.add(col.scale(x));
+                    }
+                }
+                _ => {}
+            }
+            a.push(ai);
+        }
+        ud
+    }
+
+    /// Kinetic energy `½ Σ vᵢᵀ Iᵢ vᵢ`.
+    pub fn kinetic_energy(&self, k: &Kinematics<S>) -> S {
+        let half = S::from_ratio(1, 2);
+        self.tree
+            .bodies
+            .iter()
+            .zip(&k.v)
+            .fold(S::zero(), |acc, (b, v)| {
+                acc + half * v.dot(b.inertia.mul_motion(*v))
+            })
+    }
+
+    /// Gravitational potential energy `−Σ mᵢ g · cᵢ` (world origin at zero).
+    pub fn gravity_potential(&self, k: &Kinematics<S>) -> S {
+        self.tree
+            .bodies
+            .iter()
+            .zip(&k.world)
+            .fold(S::zero(), |acc, (b, w)| {
+                // m c in world coordinates: E h + m r.
+                let mc = w.e.mul_vec(b.inertia.h) + w.r.scale(b.inertia.m);
+                acc - self.tree.gravity.dot(mc)
+            })
+    }
+
+    /// Spatial momentum about the world origin, in world coordinates:
+    /// `(angular, linear)`.
+    pub fn momentum(&self, k: &Kinematics<S>) -> Force<S> {
+        self.tree
+            .bodies
+            .iter()
+            .enumerate()
+            .fold(Force::zero(), |acc, (i, b)| {
+                acc.add(k.world[i].force_to_parent(b.inertia.mul_motion(k.v[i])))
+            })
+    }
+
+    /// `q̇ = N(q) u` for the whole system.
+    pub fn qdot(&self, st: &State<'_, S>) -> Vec<S> {
+        let mut out = vec![S::zero(); self.tree.nq];
+        for b in &self.tree.bodies {
+            if let Coords::Free { q, u } = b.coords {
+                let (nq, nu) = (b.kind.nq(), b.kind.nu());
+                let d = b.kind.qdot(&st.q[q..q + nq], &st.u[u..u + nu]);
+                out[q..q + nq].copy_from_slice(&d);
+            }
+        }
+        out
+    }
+
+    /// Speed-level parent array for [`ltdl`]: the previous free speed on
+    /// the path to ground (`None` at the root).
+    pub fn speed_parents(&self) -> Vec<Option<usize>> {
+        let mut lambda = vec![None; self.tree.nu];
+        let mut last: Vec<Option<usize>> = vec![None; self.tree.bodies.len()];
+        for (i, b) in self.tree.bodies.iter().enumerate() {
+            let above = b.parent.and_then(|p| last[p]);
+            last[i] = above;
+            if let Coords::Free { u, .. } = b.coords {
+                for k in 0..b.kind.nu() {
+                    lambda[u + k] = if k == 0 { above } else { Some(u + k - 1) };
+                }
+                if b.kind.nu() > 0 {
+                    last[i] = Some(u + b.kind.nu() - 1);
+                }
+            }
+        }
+        lambda
+    }
+}
+
+/// Is this joint model one with a quaternion?
+pub fn has_quaternion<S: Scalar>(j: &JointModel<S>) -> bool {
+    j.quaternion_at().is_some()
+}
+
+/// Inverse of a small symmetric positive definite matrix by `LDLᵀ`
+/// (no pivoting: articulated joint inertias are positive definite).
+pub fn invert_spd<S: Scalar>(d: Vec<Vec<S>>) -> Vec<Vec<S>> {
+    let n = d.len();
+    if n == 1 {
+        return vec![vec![S::one() / d[0][0]]];
+    }
+    (0..n)
+        .map(|c| {
+            let mut e = vec![S::zero(); n];
+            e[c] = S::one();
+            solve_dense(&d, e)
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .enumerate()
+        .fold(vec![vec![S::zero(); n]; n], |mut inv, (c, col)| {
+            for (r, x) in col.into_iter().enumerate() {
+                inv[r][c] = x;
+            }
+            inv
+        })
+}
+
+/// Solves `A x = b` for symmetric positive definite `A` by `LDLᵀ`.
+pub fn solve_dense<S: Scalar>(a: &[Vec<S>], mut b: Vec<S>) -> Vec<S> {
+    let n = a.len();
+    let mut l = a.to_vec();
+    // Factor: l holds L below the diagonal and D on it.
+    for j in 0..n {
+        for k in 0..j {
+            let ljk = l[j][k];
+            l[j][j] = l[j][j] - ljk * ljk * l[k][k];
+        }
+        for i in j + 1..n {
+            let mut x = l[i][j];
+            for k in 0..j {
+                x = x - l[i][k] * l[j][k] * l[k][k];
+            }
+            l[i][j] = x / l[j][j];
+        }
+    }
+    for i in 0..n {
+        for k in 0..i {
+            b[i] = b[i] - l[i][k] * b[k];
+        }
+    }
+    for i in 0..n {
+        b[i] = b[i] / l[i][i];
+    }
+    for i in (0..n).rev() {
+        for k in i + 1..n {
+            b[i] = b[i] - l[k][i] * b[k];
+        }
+    }
+    b
+}
+
+/// In-place `LᵀDL` factorisation of a mass matrix that follows the tree
+/// (Featherstone Table 6.3): afterwards the diagonal holds `D` and the
+/// entries `(k, i)` with `i` an ancestor of `k` hold `L`. No fill-in
+/// outside the ancestor pattern.
+pub fn ltdl<S: Scalar>(m: &mut [Vec<S>], lambda: &[Option<usize>]) {
+    for k in (0..m.len()).rev() {
+        let mut i = lambda[k];
+        while let Some(ii) = i {
+            let a = m[k][ii] / m[k][k];
+            let mut j = Some(ii);
+            while let Some(jj) = j {
+                m[ii][jj] = m[ii][jj] - a * m[k][jj];
+                j = lambda[jj];
+            }
+            m[k][ii] = a;
+            i = lambda[ii];
+        }
+    }
+}
+
+/// Solves `M x = b` with `M` factorised by [`ltdl`] (Featherstone Table 6.4).
+pub fn ltdl_solve<S: Scalar>(f: &[Vec<S>], lambda: &[Option<usize>], mut b: Vec<S>) -> Vec<S> {
+    let n = b.len();
+    for i in (0..n).rev() {
+        let mut j = lambda[i];
+        while let Some(jj) = j {
+            b[jj] = b[jj] - f[i][jj] * b[i];
+            j = lambda[jj];
+        }
+    }
+    for i in 0..n {
+        b[i] = b[i] / f[i][i];
+    }
+    for i in 0..n {
+        let mut j = lambda[i];
+        while let Some(jj) = j {
+            b[i] = b[i] - f[i][jj] * b[jj];
+            j = lambda[jj];
+        }
+    }
+    b
+}

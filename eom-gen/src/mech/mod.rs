@@ -1,0 +1,16 @@
+//! Mechanics: joints, tree kinematics and dynamics, written once over any
+//! [`Scalar`](crate::sym::Scalar) — run on `f64` they are the reference
+//! numerics, run on [`Expr`](crate::sym::Expr) they build the expressions
+//! the generator emits.
+
+pub mod dynamics;
+pub mod joint;
+pub mod numeric;
+pub mod spatial;
+pub mod tree;
+
+pub use dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
+pub use joint::JointModel;
+pub use numeric::Numeric;
+pub use spatial::{Force, Motion, Pose, RigidInertia};
+pub use tree::{Env, MechError, NumericEnv, TreeModel};

@@ -1,0 +1,157 @@
+//! The recursive algorithms on `f64`: the reference numerics every
+//! generated function is tested against, and the baseline that shows what
+//! generation buys.
+
+use super::dynamics::{Applied, Evaluator, State, ltdl, ltdl_solve};
+use super::spatial::Force;
+use super::tree::{MechError, NumericEnv, TreeModel};
+use crate::system::System;
+
+/// A system ready for numeric evaluation.
+#[derive(Clone, Debug)]
+pub struct Numeric {
+    env: NumericEnv,
+    tree: TreeModel<f64>,
+    applied: Applied<f64>,
+}
+
+/// Everything the equations of motion need at one state.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Terms {
+    /// Mass matrix `M(q)`, `nu × nu`.
+    pub mass_matrix: Vec<Vec<f64>>,
+    /// `b = C + g − Jᵀ f_ext − Q`, so that `M u̇ = τ − b`.
+    pub bias: Vec<f64>,
+}
+
+impl Numeric {
+    /// `sys` with every parameter at its default.
+    pub fn new(sys: &System) -> Result<Self, MechError> {
+        Self::with_env(sys, NumericEnv::defaults(sys))
+    }
+
+    /// `sys` with the given parameter values.
+    pub fn with_env(sys: &System, env: NumericEnv) -> Result<Self, MechError> {
+        let tree = TreeModel::new(sys, &env)?;
+        let applied = Applied::new(sys, &tree, &env)?;
+        Ok(Numeric { env, tree, applied })
+    }
+
+    /// The tree.
+    pub fn tree(&self) -> &TreeModel<f64> {
+        &self.tree
+    }
+
+    fn eval(&self) -> Evaluator<'_, f64> {
+        Evaluator::new(&self.tree, &self.applied, &self.env)
+    }
+
+    /// `M(q)` and `b(q, u, t)`.
+    pub fn terms(&self, q: &[f64], u: &[f64], t: f64, inputs: &[f64]) -> Result<Terms, MechError> {
+        let ev = self.eval();
+        let st = State { q, u, t, inputs };
+        let k = ev.kinematics(&st)?;
+        let (fext, _) = ev.point_forces(&k);
+        let (generalized, _) = ev.generalized_forces(&st)?;
+        let zero = vec![0.0; self.tree.nu];
+        let (c, _) = ev.rnea(&k, &zero, &fext);
+        Ok(Terms {
+            mass_matrix: ev.crba(&k),
+            bias: c.iter().zip(&generalized).map(|(c, g)| c - g).collect(),
+        })
+    }
+
+    /// Forward dynamics by the articulated-body algorithm: `u̇` with extra
+    /// generalised forces `tau` (one per speed).
+    pub fn forward_dynamics(
+        &self,
+        q: &[f64],
+        u: &[f64],
+        t: f64,
+        tau: &[f64],
+        inputs: &[f64],
+    ) -> Result<Vec<f64>, MechError> {
+        let ev = self.eval();
+        let st = State { q, u, t, inputs };
+        let k = ev.kinematics(&st)?;
+        let (fext, _) = ev.point_forces(&k);
+        let (generalized, _) = ev.generalized_forces(&st)?;
+        let total: Vec<f64> = generalized.iter().zip(tau).map(|(g, t)| g + t).collect();
+        Ok(ev.aba(&k, &total, &fext))
+    }
+
+    /// Forward dynamics by `M u̇ = τ − b` with the tree-sparse `LᵀDL`.
+    pub fn forward_dynamics_ltdl(
+        &self,
+        q: &[f64],
+        u: &[f64],
+        t: f64,
+        tau: &[f64],
+        inputs: &[f64],
+    ) -> Result<Vec<f64>, MechError> {
+        let mut terms = self.terms(q, u, t, inputs)?;
+        let lambda = self.eval().speed_parents();
+        ltdl(&mut terms.mass_matrix, &lambda);
+        let rhs: Vec<f64> = tau.iter().zip(&terms.bias).map(|(t, b)| t - b).collect();
+        Ok(ltdl_solve(&terms.mass_matrix, &lambda, rhs))
+    }
+
+    /// Inverse dynamics: the extra generalised forces `τ = M u̇ + b` that
+    /// produce the accelerations `ud`.
+    pub fn inverse_dynamics(
+        &self,
+        q: &[f64],
+        u: &[f64],
+        ud: &[f64],
+        t: f64,
+        inputs: &[f64],
+    ) -> Result<Vec<f64>, MechError> {
+        let ev = self.eval();
+        let st = State { q, u, t, inputs };
+        let k = ev.kinematics(&st)?;
+        let (fext, _) = ev.point_forces(&k);
+        let (generalized, _) = ev.generalized_forces(&st)?;
+        let (tau, _) = ev.rnea(&k, ud, &fext);
+        Ok(tau.iter().zip(&generalized).map(|(t, g)| t - g).collect())
+    }
+
+    /// Kinetic and potential energy (gravity, point springs, joint springs).
+    pub fn energy(&self, q: &[f64], u: &[f64], t: f64) -> Result<(f64, f64), MechError> {
+        let ev = self.eval();
+        let st = State {
+            q,
+            u,
+            t,
+            inputs: &[],
+        };
+        let k = ev.kinematics(&st)?;
+        let (_, springs) = ev.point_forces(&k);
+        let (_, joint_springs) = ev.generalized_forces(&st)?;
+        Ok((
+            ev.kinetic_energy(&k),
+            ev.gravity_potential(&k) + springs + joint_springs,
+        ))
+    }
+
+    /// Angular momentum about the world origin and linear momentum, world axes.
+    pub fn momentum(&self, q: &[f64], u: &[f64], t: f64) -> Result<Force<f64>, MechError> {
+        let ev = self.eval();
+        let k = ev.kinematics(&State {
+            q,
+            u,
+            t,
+            inputs: &[],
+        })?;
+        Ok(ev.momentum(&k))
+    }
+
+    /// `q̇ = N(q) u`.
+    pub fn qdot(&self, q: &[f64], u: &[f64]) -> Vec<f64> {
+        self.eval().qdot(&State {
+            q,
+            u,
+            t: 0.0,
+            inputs: &[],
+        })
+    }
+}
