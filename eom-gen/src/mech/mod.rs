@@ -4,12 +4,14 @@
 //! the generator emits.
 
 pub mod dynamics;
+pub mod formulate;
 pub mod joint;
 pub mod numeric;
 pub mod spatial;
 pub mod tree;
 
 pub use dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
+pub use formulate::{FdForm, Formulation, Request, formulate};
 pub use joint::JointModel;
 pub use numeric::Numeric;
 pub use spatial::{Force, Motion, Pose, RigidInertia};

@@ -1,0 +1,299 @@
+//! Symbolic formulation: the recursive algorithms run on [`Expr`], lowered
+//! to straight-line [`Program`]s, one per generated function.
+//!
+//! Fixed parameters are inlined as constants and tunable ones stay symbols;
+//! quantities that use only fixed parameters enter as numbers, so their
+//! arithmetic never reaches the graph. Forward dynamics is built both ways —
+//! articulated bodies (O(n)) and the mass matrix with its tree-sparse `LᵀDL`
+//! factorisation — and the form with fewer counted operations is kept.
+
+use super::dynamics::{Applied, Evaluator, State, ltdl, ltdl_solve};
+use super::tree::{Env, MechError, NumericEnv, TreeModel};
+use crate::sym::{Context, Expr, LowerOptions, OpCount, Program, Scalar, SymError};
+use crate::system::System;
+use std::fmt;
+use std::time::Instant;
+
+/// How forward dynamics is computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FdForm {
+    /// Articulated-body algorithm (Featherstone §7.3).
+    Aba,
+    /// Composite-rigid-body mass matrix, tree-sparse `LᵀDL`, substitution
+    /// (Featherstone §6.2, §6.5).
+    MassMatrix,
+}
+
+impl fmt::Display for FdForm {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            FdForm::Aba => "articulated-body algorithm",
+            FdForm::MassMatrix => "mass matrix + tree-sparse LTDL",
+        })
+    }
+}
+
+/// Which functions to generate (model only what a scene needs).
+#[derive(Clone, Copy, Debug)]
+pub struct Request {
+    /// `u̇ = FD(q, u, t, τ)`.
+    pub forward_dynamics: bool,
+    /// `M(q)`.
+    pub mass_matrix: bool,
+    /// `b(q, u, t)`.
+    pub bias: bool,
+    /// `τ = ID(q, u, u̇, t)`.
+    pub inverse_dynamics: bool,
+    /// Kinetic and potential energy.
+    pub energy: bool,
+    /// Linear and angular momentum.
+    pub momentum: bool,
+}
+
+impl Default for Request {
+    fn default() -> Self {
+        Request {
+            forward_dynamics: true,
+            mass_matrix: true,
+            bias: true,
+            inverse_dynamics: true,
+            energy: true,
+            momentum: true,
+        }
+    }
+}
+
+/// Why formulation failed.
+#[derive(Debug)]
+pub enum FormulateError {
+    /// A mechanics problem.
+    Mech(MechError),
+    /// A symbol could not be created (a parameter named like a state symbol).
+    Sym(SymError),
+}
+
+impl fmt::Display for FormulateError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            FormulateError::Mech(e) => write!(f, "{e}"),
+            FormulateError::Sym(e) => write!(f, "{e:?}"),
+        }
+    }
+}
+
+impl std::error::Error for FormulateError {}
+
+impl From<MechError> for FormulateError {
+    fn from(e: MechError) -> Self {
+        FormulateError::Mech(e)
+    }
+}
+
+impl From<SymError> for FormulateError {
+    fn from(e: SymError) -> Self {
+        FormulateError::Sym(e)
+    }
+}
+
+/// Generated straight-line programs of one system.
+#[derive(Clone, Debug)]
+pub struct Formulation {
+    /// `q̇ = N(q) u`: outputs `qdot0 …`.
+    pub qdot: Program,
+    /// Forward dynamics: outputs `udot0 …`; inputs include `tau0 …`.
+    pub forward_dynamics: Option<Program>,
+    /// The form chosen for forward dynamics.
+    pub fd_form: FdForm,
+    /// Operation counts of both forward-dynamics forms.
+    pub fd_candidates: Vec<(FdForm, OpCount)>,
+    /// Mass matrix, lower triangle row by row: outputs `m_i_j`, `j ≤ i`.
+    pub mass_matrix: Option<Program>,
+    /// Bias `b` with `M u̇ = τ − b`: outputs `b0 …`.
+    pub bias: Option<Program>,
+    /// Inverse dynamics: outputs `tau0 …`; inputs include `ud0 …`.
+    pub inverse_dynamics: Option<Program>,
+    /// Outputs `kinetic`, `potential`.
+    pub energy: Option<Program>,
+    /// Outputs `lx, ly, lz` (angular, about the world origin) and `px, py, pz`.
+    pub momentum: Option<Program>,
+    /// Wall time of formulation and lowering, seconds.
+    pub seconds: f64,
+}
+
+struct SymEnv<'cx> {
+    cx: &'cx Context,
+    numeric: NumericEnv,
+}
+
+impl<'cx> Env<Expr<'cx>> for SymEnv<'cx> {
+    fn param(&self, name: &str) -> Option<Expr<'cx>> {
+        if self.numeric.is_tunable(name) {
+            self.cx.param(name).ok()
+        } else {
+            self.numeric.param(name).map(Expr::from_f64)
+        }
+    }
+    fn is_tunable(&self, name: &str) -> bool {
+        self.numeric.is_tunable(name)
+    }
+}
+
+/// Multiplications, subtractions and divisions of the `LᵀDL` factorisation
+/// for the parent array `lambda` if no entry were zero (Featherstone §6.5:
+/// for each speed `k` and each ancestor `i`, one division and two
+/// operations per ancestor of `i`).
+pub fn ltdl_flops(lambda: &[Option<usize>]) -> usize {
+    let depth: Vec<usize> = {
+        let mut d = vec![0; lambda.len()];
+        for k in 0..lambda.len() {
+            d[k] = lambda[k].map_or(1, |p| d[p] + 1);
+        }
+        d
+    };
+    (0..lambda.len())
+        .map(|k| {
+            let mut ops = 0;
+            let mut i = lambda[k];
+            while let Some(ii) = i {
+                ops += 1 + 2 * depth[ii];
+                i = lambda[ii];
+            }
+            ops
+        })
+        .sum()
+}
+
+/// Builds the programs `request` asks for.
+pub fn formulate(sys: &System, request: Request) -> Result<Formulation, FormulateError> {
+    let start = Instant::now();
+    let cx = Context::new();
+    let env = SymEnv {
+        cx: &cx,
+        numeric: NumericEnv::defaults(sys),
+    };
+    for p in sys.parameters.iter().filter(|p| p.tunable) {
+        cx.param(&p.name)?;
+    }
+    let tree = TreeModel::new(sys, &env)?;
+    let applied = Applied::new(sys, &tree, &env)?;
+    let ev = Evaluator::new(&tree, &applied, &env);
+    let (nq, nu) = (tree.nq, tree.nu);
+    let q: Vec<Expr> = (0..nq).map(|i| cx.q(i as u32)).collect();
+    let u: Vec<Expr> = (0..nu).map(|i| cx.u(i as u32)).collect();
+    let inputs: Vec<Expr> = sys
+        .inputs
+        .iter()
+        .map(|n| cx.input(n))
+        .collect::<Result<_, _>>()?;
+    let tau: Vec<Expr> = (0..nu)
+        .map(|i| cx.input(&format!("tau{i}")))
+        .collect::<Result<_, _>>()?;
+    let st = State {
+        q: &q,
+        u: &u,
+        t: cx.t(),
+        inputs: &inputs,
+    };
+    let k = ev.kinematics(&st)?;
+    let (fext, spring_energy) = ev.point_forces(&k);
+    let (generalized, joint_spring_energy) = ev.generalized_forces(&st)?;
+    let opts = LowerOptions::default();
+    let named = |prefix: &str, v: &[Expr<'_>]| -> Vec<(String, usize)> {
+        (0..v.len()).map(|i| (format!("{prefix}{i}"), i)).collect()
+    };
+    let lower = |prefix: &str, v: &[Expr<'_>]| -> Program {
+        let names = named(prefix, v);
+        let outs: Vec<(&str, Expr<'_>)> = names.iter().map(|(n, i)| (n.as_str(), v[*i])).collect();
+        cx.lower(&outs, opts)
+    };
+
+    let qdot = lower("qdot", &ev.qdot(&st));
+    let zero = vec![Expr::zero(); nu];
+    let need_mm = request.mass_matrix || request.forward_dynamics;
+    let need_bias = request.bias || request.forward_dynamics;
+    let mass = need_mm.then(|| ev.crba(&k));
+    let bias: Option<Vec<Expr>> = need_bias.then(|| {
+        let (c, _) = ev.rnea(&k, &zero, &fext);
+        c.iter().zip(&generalized).map(|(&c, &g)| c - g).collect()
+    });
+
+    let (forward_dynamics, fd_form, fd_candidates) = if request.forward_dynamics {
+        let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
+        let aba = lower("udot", &ev.aba(&k, &drive, &fext));
+        let lambda = ev.speed_parents();
+        let mut candidates = vec![(FdForm::Aba, aba.op_count())];
+        // The mass-matrix route costs at least its factorisation; skip
+        // building it when that alone exceeds the articulated-body count
+        // (long chains, where M is dense and LᵀDL is cubic).
+        if ltdl_flops(&lambda) >= aba.op_count().total() {
+            (Some(aba), FdForm::Aba, candidates)
+        } else {
+            let (mut m, b) = (
+                mass.clone().unwrap_or_default(),
+                bias.clone().unwrap_or_default(),
+            );
+            ltdl(&mut m, &lambda);
+            let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
+            let sparse = lower("udot", &ltdl_solve(&m, &lambda, rhs));
+            candidates.push((FdForm::MassMatrix, sparse.op_count()));
+            if sparse.op_count().total() < aba.op_count().total() {
+                (Some(sparse), FdForm::MassMatrix, candidates)
+            } else {
+                (Some(aba), FdForm::Aba, candidates)
+            }
+        }
+    } else {
+        (None, FdForm::Aba, Vec::new())
+    };
+
+    let mass_matrix = (request.mass_matrix).then(|| {
+        let m = mass.clone().unwrap_or_default();
+        let names: Vec<String> = (0..nu)
+            .flat_map(|i| (0..=i).map(move |j| format!("m_{i}_{j}")))
+            .collect();
+        let vals: Vec<Expr> = (0..nu)
+            .flat_map(|i| (0..=i).map(move |j| (i, j)))
+            .map(|(i, j)| m[i][j])
+            .collect();
+        let outs: Vec<(&str, Expr<'_>)> = names.iter().map(String::as_str).zip(vals).collect();
+        cx.lower(&outs, opts)
+    });
+    let bias_program = request
+        .bias
+        .then(|| lower("b", &bias.clone().unwrap_or_default()));
+    let inverse_dynamics = request.inverse_dynamics.then(|| {
+        let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
+        let (t, _) = ev.rnea(&k, &ud, &fext);
+        let tau: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
+        lower("tau", &tau)
+    });
+    let energy = request.energy.then(|| {
+        let kinetic = ev.kinetic_energy(&k);
+        let potential = ev.gravity_potential(&k) + spring_energy + joint_spring_energy;
+        cx.lower(&[("kinetic", kinetic), ("potential", potential)], opts)
+    });
+    let momentum = request.momentum.then(|| {
+        let h = ev.momentum(&k);
+        let outs = [
+            ("lx", h.n.0[0]),
+            ("ly", h.n.0[1]),
+            ("lz", h.n.0[2]),
+            ("px", h.f.0[0]),
+            ("py", h.f.0[1]),
+            ("pz", h.f.0[2]),
+        ];
+        cx.lower(&outs, opts)
+    });
+    Ok(Formulation {
+        qdot,
+        forward_dynamics,
+        fd_form,
+        fd_candidates,
+        mass_matrix,
+        bias: bias_program,
+        inverse_dynamics,
+        energy,
+        momentum,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
