@@ -42,7 +42,13 @@ impl Rng {
     }
 }
 
+/// The value given to the k-th model input in these tests.
+fn input_value(k: usize) -> f64 {
+    0.37 * (k as f64 + 1.0)
+}
+
 struct Point {
+    params: Vec<(String, f64)>,
     q: Vec<f64>,
     u: Vec<f64>,
     ud: Vec<f64>,
@@ -65,6 +71,7 @@ fn random_point(sys: &System, rng: &mut Rng) -> Point {
     }
     let nu = sys.nu();
     Point {
+        params: Vec::new(),
         q,
         u: (0..nu).map(|_| 1.5 * rng.next()).collect(),
         ud: (0..nu).map(|_| rng.next()).collect(),
@@ -83,16 +90,26 @@ fn run(p: &Program, sys: &System, x: &Point) -> Vec<f64> {
             SymKind::Speed(i) => x.u[i as usize],
             SymKind::SpeedRate(i) => x.ud[i as usize],
             SymKind::Time => x.t,
-            SymKind::Input => s
-                .name
-                .strip_prefix("tau")
-                .and_then(|k| k.parse::<usize>().ok())
-                .map_or(0.0, |k| x.tau[k]),
-            SymKind::Param => sys
-                .parameters
+            SymKind::Input => match sys.inputs.iter().position(|n| *n == s.name) {
+                Some(k) => input_value(k),
+                None => s
+                    .name
+                    .strip_prefix("tau")
+                    .and_then(|k| k.parse::<usize>().ok())
+                    .map_or(f64::NAN, |k| x.tau[k]),
+            },
+            SymKind::Param => x
+                .params
                 .iter()
-                .find(|p| p.name == s.name)
-                .map_or(f64::NAN, |p| p.value.value),
+                .find(|(n, _)| *n == s.name)
+                .map(|(_, v)| *v)
+                .or_else(|| {
+                    sys.parameters
+                        .iter()
+                        .find(|p| p.name == s.name)
+                        .map(|p| p.value.value)
+                })
+                .unwrap_or(f64::NAN),
             SymKind::CoordRate(_) => f64::NAN,
         })
         .collect();
@@ -186,5 +203,188 @@ fn the_cheaper_forward_dynamics_form_is_chosen() {
         assert_eq!(chosen, best, "{name}: {:?}", f.fd_candidates);
         assert_eq!(f.fd_candidates.len(), 2);
         let _ = FdForm::Aba;
+    }
+}
+
+#[test]
+fn requested_outputs_equal_the_f64_kinematics() {
+    // Marker positions and velocities, their Jacobians (∂v/∂u, so J u = v),
+    // and joint reactions at the accelerations of forward dynamics.
+    let mut rng = Rng(0x0F0F_1234_ABCD_9876);
+    for name in ["pendulum", "double_pendulum", "heavy_top", "rolling_disk"] {
+        let sys = system(name);
+        let f = formulate(&sys, Request::default()).expect("formulates");
+        let num = Numeric::new(&sys).expect("numeric");
+        let outputs = f.outputs.as_ref().expect("the model requests outputs");
+        for _ in 0..3 {
+            let mut x = random_point(&sys, &mut rng);
+            x.tau = vec![0.0; sys.nu()];
+            x.ud = num
+                .forward_dynamics(&x.q, &x.u, x.t, &x.tau, &[])
+                .expect("fd");
+            let got = run(outputs, &sys, &x);
+            let mut want = Vec::new();
+            let mut velocities = Vec::new();
+            for out in &sys.outputs {
+                match *out {
+                    eom_gen::system::OutputKind::Position(b, m) => {
+                        let p = &sys.bodies[b].markers[m].frame.position;
+                        let (pos, vel) = num
+                            .point(b, [p[0].value, p[1].value, p[2].value], &x.q, &x.u, x.t)
+                            .expect("point");
+                        want.extend(pos);
+                        velocities.push(vel);
+                    }
+                    eom_gen::system::OutputKind::JointReaction(j) => {
+                        let r = num
+                            .joint_reaction(j, &x.q, &x.u, &x.ud, x.t)
+                            .expect("reaction")
+                            .expect("tree joint");
+                        want.extend(r.f.0);
+                        want.extend(r.n.0);
+                    }
+                    _ => {}
+                }
+            }
+            assert_close(&format!("{name} outputs"), &got, &want);
+            let jac = run(f.jacobians.as_ref().expect("jacobians"), &sys, &x);
+            let nu = sys.nu();
+            let jv: Vec<f64> = jac
+                .chunks(nu)
+                .map(|row| row.iter().zip(&x.u).map(|(j, u)| j * u).sum())
+                .collect();
+            let v: Vec<f64> = velocities.iter().flatten().copied().collect();
+            assert_close(&format!("{name} J u"), &jv, &v);
+        }
+    }
+}
+
+#[test]
+fn pendulum_hinge_carries_the_tension_m_l_thetadot2_plus_m_g_cos_theta() {
+    // A massless link transmits only tension along itself (body y here):
+    // f = (0, m (l θ̇² + g cos θ), 0), no moment.
+    let sys = system("pendulum");
+    let f = formulate(&sys, Request::default()).expect("formulates");
+    let num = Numeric::new(&sys).expect("numeric");
+    for (th, w) in [(0.3, 1.2), (2.0, -0.5), (-1.0, 3.0)] {
+        let ud = num
+            .forward_dynamics(&[th], &[w], 0.0, &[0.0], &[])
+            .expect("fd");
+        let x = Point {
+            params: Vec::new(),
+            q: vec![th],
+            u: vec![w],
+            ud,
+            tau: vec![0.0],
+            t: 0.0,
+        };
+        let got = run(f.outputs.as_ref().expect("outputs"), &sys, &x);
+        // Outputs: tip position (3), hinge force (3), hinge moment (3).
+        let want = [0.0, w * w + 9.81 * f64::cos(th), 0.0, 0.0, 0.0, 0.0];
+        for (k, (g, w)) in got[3..].iter().zip(want).enumerate() {
+            assert!((g - w).abs() < 1e-12, "reaction[{k}] = {g}, want {w}");
+        }
+    }
+}
+
+/// `models/<name>.ron` with textual edits, checked.
+fn variant(name: &str, edits: &[(&str, &str)]) -> System {
+    let path = format!("{}/../models/{name}.ron", env!("CARGO_MANIFEST_DIR"));
+    let mut text = std::fs::read_to_string(path).unwrap_or_default();
+    for (from, to) in edits {
+        assert!(text.contains(from), "test setup: `{from}` not in {name}");
+        text = text.replacen(from, to, 1);
+    }
+    check(&Source::new(name, text))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system
+}
+
+#[test]
+fn tunable_parameters_locked_joints_springs_and_inputs_agree_with_f64() {
+    use eom_gen::mech::NumericEnv;
+    let cases: Vec<(&str, System, Vec<(&str, f64)>)> = vec![
+        // Tunable length and gravity: symbols in the generated code, set at run time.
+        (
+            "tunable",
+            variant(
+                "double_pendulum",
+                &[
+                    (
+                        "(name: \"l2\", value: 1.0,",
+                        "(name: \"l2\", value: 1.0, tunable: true,",
+                    ),
+                    (
+                        "(name: \"g\", value: 9.8,",
+                        "(name: \"g\", value: 9.8, tunable: true,",
+                    ),
+                ],
+            ),
+            vec![("l2", 0.7), ("g", 3.5)],
+        ),
+        // A locked elbow makes one rigid compound pendulum.
+        (
+            "locked",
+            variant(
+                "double_pendulum",
+                &[("q0: [\"-13*pi/18\"],", "q0: [\"-13*pi/18\"], locked: true,")],
+            ),
+            vec![],
+        ),
+        // Joint spring-dampers and actuator inputs on arm7.
+        (
+            "springs+inputs",
+            variant(
+                "arm7",
+                &[(
+                    "outputs: [Energy],",
+                    "forces: [JointSpringDamper(name: \"s2\", joint: \"j2\", stiffness: 20, damping: 0.5, rest: 3), Actuator(name: \"m4\", joint: \"j4\"), Actuator(name: \"m6\", joint: \"j6\")], outputs: [Energy],",
+                )],
+            ),
+            vec![],
+        ),
+    ];
+    let mut rng = Rng(0x5555_AAAA_3333_CCCC);
+    for (what, sys, params) in cases {
+        let f = formulate(&sys, Request::default()).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let num = Numeric::with_env(&sys, NumericEnv::with(&sys, &params)).expect("numeric");
+        let inputs: Vec<f64> = (0..sys.inputs.len()).map(input_value).collect();
+        for _ in 0..3 {
+            let mut x = random_point(&sys, &mut rng);
+            x.params = params.iter().map(|(n, v)| (n.to_string(), *v)).collect();
+            let fd = num
+                .forward_dynamics(&x.q, &x.u, x.t, &x.tau, &inputs)
+                .expect("fd");
+            assert_close(
+                &format!("{what} forward dynamics"),
+                &run(f.forward_dynamics.as_ref().expect("fd"), &sys, &x),
+                &fd,
+            );
+            let terms = num.terms(&x.q, &x.u, x.t, &inputs).expect("terms");
+            assert_close(
+                &format!("{what} bias"),
+                &run(f.bias.as_ref().expect("b"), &sys, &x),
+                &terms.bias,
+            );
+            let (t, v) = num.energy(&x.q, &x.u, x.t).expect("energy");
+            assert_close(
+                &format!("{what} energy"),
+                &run(f.energy.as_ref().expect("E"), &sys, &x),
+                &[t, v],
+            );
+        }
+        if what == "tunable" {
+            let fd = f.forward_dynamics.as_ref().expect("fd");
+            let params: Vec<&str> = fd
+                .inputs
+                .iter()
+                .filter(|s| s.kind == SymKind::Param)
+                .map(|s| s.name.as_str())
+                .collect();
+            assert_eq!(params, ["g", "l2"], "tunable parameters stay symbols");
+        }
+        if what == "locked" {
+            assert_eq!(sys.nu(), 1);
+        }
     }
 }

@@ -7,10 +7,11 @@
 //! articulated bodies (O(n)) and the mass matrix with its tree-sparse `LᵀDL`
 //! factorisation — and the form with fewer counted operations is kept.
 
-use super::dynamics::{Applied, Evaluator, State, ltdl, ltdl_solve};
+use super::dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
+use super::spatial::Force;
 use super::tree::{Env, MechError, NumericEnv, TreeModel};
 use crate::sym::{Context, Expr, LowerOptions, OpCount, Program, Scalar, SymError};
-use crate::system::System;
+use crate::system::{OutputKind, System};
 use std::fmt;
 use std::time::Instant;
 
@@ -116,6 +117,13 @@ pub struct Formulation {
     pub energy: Option<Program>,
     /// Outputs `lx, ly, lz` (angular, about the world origin) and `px, py, pz`.
     pub momentum: Option<Program>,
+    /// The model's requested outputs (marker positions and velocities in
+    /// world axes, joint reactions in the child joint frame); inputs may
+    /// include `ud0 …` for reactions. `None` if the model requests none.
+    pub outputs: Option<Program>,
+    /// Partial velocities of the requested marker positions: outputs
+    /// `J_<body>_<marker>_<axis>_<k>` = ∂v/∂u_k.
+    pub jacobians: Option<Program>,
     /// Wall time of formulation and lowering, seconds.
     pub seconds: f64,
 }
@@ -284,6 +292,7 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         ];
         cx.lower(&outs, opts)
     });
+    let (outputs, jacobians) = outputs(sys, &cx, &ev, &tree, &k, &fext, opts)?;
     Ok(Formulation {
         qdot,
         forward_dynamics,
@@ -294,6 +303,97 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         inverse_dynamics,
         energy,
         momentum,
+        outputs,
+        jacobians,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Programs for the model's requested outputs and marker Jacobians.
+fn outputs<'cx>(
+    sys: &System,
+    cx: &'cx Context,
+    ev: &Evaluator<'_, Expr<'cx>>,
+    tree: &TreeModel<Expr<'cx>>,
+    k: &Kinematics<Expr<'cx>>,
+    fext: &[Force<Expr<'cx>>],
+    opts: LowerOptions,
+) -> Result<(Option<Program>, Option<Program>), FormulateError> {
+    if sys.outputs.is_empty() {
+        return Ok((None, None));
+    }
+    let low = super::tree::Lowering::new(ev.env);
+    let mut names: Vec<String> = Vec::new();
+    let mut values: Vec<Expr<'cx>> = Vec::new();
+    let mut jac_names: Vec<String> = Vec::new();
+    let mut jac_values: Vec<Expr<'cx>> = Vec::new();
+    let mut reactions: Option<Vec<Force<Expr<'cx>>>> = None;
+    let axes = ["x", "y", "z"];
+    for out in &sys.outputs {
+        match *out {
+            OutputKind::Position(b, m) | OutputKind::Velocity(b, m) => {
+                let marker = &sys.bodies[b].markers[m];
+                let p = low.vec3(&marker.frame.position)?;
+                let (x, v) = ev.point(k, tree.index_of_body[b], p);
+                let tag = format!("{}_{}", sys.bodies[b].name, marker.name);
+                if matches!(out, OutputKind::Position(..)) {
+                    for (a, &e) in axes.iter().zip(&x.0) {
+                        names.push(format!("{tag}_{a}"));
+                        values.push(e);
+                    }
+                    for (a, &e) in axes.iter().zip(&v.0) {
+                        for kk in 0..tree.nu {
+                            jac_names.push(format!("J_{tag}_{a}_{kk}"));
+                            jac_values.push(cx.diff(e, cx.u(kk as u32)));
+                        }
+                    }
+                } else {
+                    for (a, &e) in axes.iter().zip(&v.0) {
+                        names.push(format!("{tag}_v{a}"));
+                        values.push(e);
+                    }
+                }
+            }
+            OutputKind::JointReaction(j) => {
+                let joint = &sys.joints[j];
+                let Some(i) =
+                    tree.index_of_body[joint.child].filter(|&i| tree.bodies[i].joint == j)
+                else {
+                    // Cut joints transmit the constraint forces λ (closed-loop formulation).
+                    continue;
+                };
+                let f = reactions
+                    .get_or_insert_with(|| {
+                        let ud: Vec<Expr> = (0..tree.nu).map(|i| cx.ud(i as u32)).collect();
+                        ev.rnea(k, &ud, fext).1
+                    })
+                    .get(i)
+                    .copied()
+                    .unwrap_or_else(Force::zero);
+                // Into the child joint frame C at its origin: n_C = Rᵀ(n − p × f), f_C = Rᵀ f.
+                let fc = tree.bodies[i].frame_child;
+                let (n, force) = (fc.e.tr_mul_vec(f.n - fc.r.cross(f.f)), fc.e.tr_mul_vec(f.f));
+                for (a, &e) in axes.iter().zip(&force.0) {
+                    names.push(format!("{}_f{a}", joint.name));
+                    values.push(e);
+                }
+                for (a, &e) in axes.iter().zip(&n.0) {
+                    names.push(format!("{}_n{a}", joint.name));
+                    values.push(e);
+                }
+            }
+            OutputKind::Energy | OutputKind::Momentum => {}
+        }
+    }
+    let lower = |names: &[String], values: &[Expr<'cx>]| -> Option<Program> {
+        (!names.is_empty()).then(|| {
+            let outs: Vec<(&str, Expr<'cx>)> = names
+                .iter()
+                .map(String::as_str)
+                .zip(values.iter().copied())
+                .collect();
+            cx.lower(&outs, opts)
+        })
+    };
+    Ok((lower(&names, &values), lower(&jac_names, &jac_values)))
 }

@@ -154,4 +154,59 @@ impl Numeric {
             inputs: &[],
         })
     }
+
+    /// World position and velocity of `point` (body coordinates) on
+    /// system body `body`.
+    pub fn point(
+        &self,
+        body: usize,
+        point: [f64; 3],
+        q: &[f64],
+        u: &[f64],
+        t: f64,
+    ) -> Result<([f64; 3], [f64; 3]), MechError> {
+        let ev = self.eval();
+        let k = ev.kinematics(&State {
+            q,
+            u,
+            t,
+            inputs: &[],
+        })?;
+        let (x, v) = ev.point(
+            &k,
+            self.tree.index_of_body.get(body).copied().flatten(),
+            crate::sym::Vec3(point),
+        );
+        Ok((x.0, v.0))
+    }
+
+    /// Force and moment that tree joint `joint` transmits to its child, in
+    /// the child joint frame at its origin, at accelerations `ud`;
+    /// `None` for a joint outside the tree.
+    pub fn joint_reaction(
+        &self,
+        joint: usize,
+        q: &[f64],
+        u: &[f64],
+        ud: &[f64],
+        t: f64,
+    ) -> Result<Option<Force<f64>>, MechError> {
+        let Some(i) = self.tree.bodies.iter().position(|b| b.joint == joint) else {
+            return Ok(None);
+        };
+        let ev = self.eval();
+        let k = ev.kinematics(&State {
+            q,
+            u,
+            t,
+            inputs: &[],
+        })?;
+        let (fext, _) = ev.point_forces(&k);
+        let f = ev.rnea(&k, ud, &fext).1[i];
+        let fc = self.tree.bodies[i].frame_child;
+        Ok(Some(Force {
+            n: fc.e.tr_mul_vec(f.n - fc.r.cross(f.f)),
+            f: fc.e.tr_mul_vec(f.f),
+        }))
+    }
 }
