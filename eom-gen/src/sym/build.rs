@@ -28,7 +28,7 @@ use std::ops::BitOr;
 /// | `POWERS` | `x^a·x^b = x^(a+b)` (so `x/x = 1`), `(x^a)^b = x^(ab)`, `(xy)^n = x^n y^n`, `sqrt(x)^2k = x^k`, `abs(x)^2k = x^2k`, `sqrt(x^2k) = abs(x)^k` | `x/x = 1`, `x^a x^-a = 1`: x ≠ 0; `sqrt(x)^2 = x`: x ≥ 0 |
 /// | `DISTRIBUTE` | numeric coefficient over a sum: `c·(a + b) = c·a + c·b` | — |
 /// | `SIGN` | `sin(-x) = -sin x`, `cos(-x) = cos x`, `tan(-x) = -tan x`, `abs(-x) = abs x`; "negative" is decided on a negation-invariant key; acts only together with `FOLD` (and on sums only with `DISTRIBUTE`) so that it terminates | — |
-/// | `PYTHAGORAS` | `k sin²x R + k cos²x R = k R`, `k - k sin²x = k cos²x`, `k - k cos²x = k sin²x` (see [`trig`](super::trig)) | — |
+/// | `PYTHAGORAS` | `k sin²x R + k cos²x R = k R`, `k - k sin²x = k cos²x`, `k - k cos²x = k sin²x` | — |
 /// | `ANGLE_SUM` | `k cos a cos b R ∓ k sin a sin b R = k cos(a ± b) R`, `k sin a cos b R ± k cos a sin b R = k sin(a ± b) R` | — |
 /// | `ELEMENTARY` | `exp(ln x) = x`, `ln(exp x) = x`, `abs(abs x) = abs x`, `abs(sqrt x) = sqrt x`, `abs(exp x) = exp x`, `abs(x^2k) = x^2k` | `exp(ln x) = x`: x > 0 |
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -98,7 +98,7 @@ pub(crate) struct Term {
 }
 
 fn sort_canonical(a: &Arena, v: &mut [Id]) {
-    v.sort_unstable_by_key(|&id| (a.num(id).is_none(), id));
+    v.sort_unstable_by(|&x, &y| a.canonical_cmp(x, y));
 }
 
 impl Arena {
@@ -408,7 +408,7 @@ impl Arena {
                 let lead = cs
                     .iter()
                     .map(|&c| self.term_of(c))
-                    .min_by(|a, b| a.fs.cmp(&b.fs));
+                    .min_by(|a, b| self.canonical_cmp_slices(&a.fs, &b.fs));
                 lead.is_some_and(|t| t.coef.is_negative())
             }
             _ => false,
