@@ -30,27 +30,44 @@ fn expr(smooth: bool) -> impl Strategy<Value = String> {
     leaf().prop_recursive(4, 40, 4, move |inner| {
         let i = || inner.clone();
         let mut arms: Vec<BoxedStrategy<String>> = vec![
-            vec(i(), 2..4).prop_map(|v| format!("(+ {})", v.join(" "))).boxed(),
-            vec(i(), 2..4).prop_map(|v| format!("(* {})", v.join(" "))).boxed(),
+            vec(i(), 2..4)
+                .prop_map(|v| format!("(+ {})", v.join(" ")))
+                .boxed(),
+            vec(i(), 2..4)
+                .prop_map(|v| format!("(* {})", v.join(" ")))
+                .boxed(),
             (i(), i()).prop_map(|(a, b)| format!("(- {a} {b})")).boxed(),
             i().prop_map(|a| format!("(- {a})")).boxed(),
-            (i(), i()).prop_map(|(a, b)| format!("(/ {a} (+ 2 (^ {b} 2)))")).boxed(),
-            (i(), 0..4i32).prop_map(|(a, n)| format!("(^ {a} {n})")).boxed(),
-            i().prop_map(|a| format!("(^ (+ 3/2 (^ {a} 2)) -2)")).boxed(),
+            (i(), i())
+                .prop_map(|(a, b)| format!("(/ {a} (+ 2 (^ {b} 2)))"))
+                .boxed(),
+            (i(), 0..4i32)
+                .prop_map(|(a, n)| format!("(^ {a} {n})"))
+                .boxed(),
+            i().prop_map(|a| format!("(^ (+ 3/2 (^ {a} 2)) -2)"))
+                .boxed(),
             i().prop_map(|a| format!("(sin {a})")).boxed(),
             i().prop_map(|a| format!("(cos {a})")).boxed(),
             i().prop_map(|a| format!("(tan (* 1/4 (sin {a})))")).boxed(),
             i().prop_map(|a| format!("(sqrt (+ 1 (^ {a} 2)))")).boxed(),
-            i().prop_map(|a| format!("(^ (sqrt (+ 1 (^ {a} 2))) 2)")).boxed(),
+            i().prop_map(|a| format!("(^ (sqrt (+ 1 (^ {a} 2))) 2)"))
+                .boxed(),
             i().prop_map(|a| format!("(exp (sin {a}))")).boxed(),
             i().prop_map(|a| format!("(ln (+ 1 (^ {a} 2)))")).boxed(),
-            i().prop_map(|a| format!("(exp (ln (+ 1 (^ {a} 2))))")).boxed(),
-            (i(), i()).prop_map(|(a, b)| format!("(atan2 {a} (+ 1/2 (^ {b} 2)))")).boxed(),
+            i().prop_map(|a| format!("(exp (ln (+ 1 (^ {a} 2))))"))
+                .boxed(),
+            (i(), i())
+                .prop_map(|(a, b)| format!("(atan2 {a} (+ 1/2 (^ {b} 2)))"))
+                .boxed(),
             // patterns
             (i(), i(), i())
-                .prop_map(|(k, x, r)| format!("(+ (* {k} (^ (sin {x}) 2) {r}) (* {r} (^ (cos {x}) 2) {k}))"))
+                .prop_map(|(k, x, r)| {
+                    format!("(+ (* {k} (^ (sin {x}) 2) {r}) (* {r} (^ (cos {x}) 2) {k}))")
+                })
                 .boxed(),
-            (i(), i()).prop_map(|(k, x)| format!("(- {k} (* {k} (^ (cos {x}) 2)))")).boxed(),
+            (i(), i())
+                .prop_map(|(k, x)| format!("(- {k} (* {k} (^ (cos {x}) 2)))"))
+                .boxed(),
             (i(), i(), i(), any::<bool>())
                 .prop_map(|(a, b, r, p)| {
                     let op = if p { "+" } else { "-" };
@@ -64,9 +81,14 @@ fn expr(smooth: bool) -> impl Strategy<Value = String> {
                 })
                 .boxed(),
             i().prop_map(|a| format!("(- {a} {a})")).boxed(),
-            i().prop_map(|a| format!("(/ (+ 2 (^ {a} 2)) (+ (^ {a} 2) 2))")).boxed(),
-            (i(), i()).prop_map(|(a, b)| format!("(+ (* 2 {a} {b}) (* {b} 3 {a}))")).boxed(),
-            (i(), i(), i()).prop_map(|(a, b, c)| format!("(+ (* {a} {c}) (* {b} {c}))")).boxed(),
+            i().prop_map(|a| format!("(/ (+ 2 (^ {a} 2)) (+ (^ {a} 2) 2))"))
+                .boxed(),
+            (i(), i())
+                .prop_map(|(a, b)| format!("(+ (* 2 {a} {b}) (* {b} 3 {a}))"))
+                .boxed(),
+            (i(), i(), i())
+                .prop_map(|(a, b, c)| format!("(+ (* {a} {c}) (* {b} {c}))"))
+                .boxed(),
         ];
         if !smooth {
             arms.push(i().prop_map(|a| format!("(abs {a})")).boxed());
@@ -82,7 +104,13 @@ fn expr(smooth: bool) -> impl Strategy<Value = String> {
 }
 
 fn point() -> impl Strategy<Value = [f64; 5]> {
-    [-2.0..2.0f64, -2.0..2.0f64, -2.0..2.0f64, -2.0..2.0f64, -2.0..2.0f64]
+    [
+        -2.0..2.0f64,
+        -2.0..2.0f64,
+        -2.0..2.0f64,
+        -2.0..2.0f64,
+        -2.0..2.0f64,
+    ]
 }
 
 fn values(a: &Arena, p: &[f64; 5]) -> Vec<f64> {
@@ -113,7 +141,11 @@ fn check_rewrite(src: &str, p: &[f64; 5], runner: &Runner) -> Result<(), TestCas
 
 /// The rules a given rule needs to act at all.
 fn rule_with_deps(name: &str) -> RuleSet {
-    let (_, r) = RuleSet::NAMED.iter().find(|(n, _)| *n == name).copied().unwrap();
+    let (_, r) = RuleSet::NAMED
+        .iter()
+        .find(|(n, _)| *n == name)
+        .copied()
+        .unwrap();
     match name {
         "sign" => r | RuleSet::FOLD | RuleSet::DISTRIBUTE | RuleSet::COLLECT,
         "pythagoras" | "angle_sum" => r | RuleSet::COLLECT,
@@ -177,13 +209,36 @@ proptest! {
         let names: Vec<String> = (0..ids.len()).map(|i| format!("out{i}")).collect();
         let outs: Vec<(&str, _)> = names.iter().map(|n| n.as_str()).zip(ids.iter().copied()).collect();
         let on = a.lower(&outs, LowerOptions::default());
-        let off = a.lower(&outs, LowerOptions { cse: false, optimize: false });
+        let off = a.lower(&outs, LowerOptions::PLAIN);
         let got_on = on.eval_arena_values(&a, &vals);
         let got_off = off.eval_arena_values(&a, &vals);
         prop_assert!(on.op_count().total() <= off.op_count().total());
         for i in 0..ids.len() {
             prop_assert!(close(got_on[i], want[i], TOL), "{}: cse on got {} want {}\n{on}", srcs[i], got_on[i], want[i]);
             prop_assert!(close(got_off[i], want[i], TOL), "{}: cse off got {} want {}", srcs[i], got_off[i], want[i]);
+        }
+    }
+
+    /// The second round (program → fresh arena → program) and the peephole
+    /// optimiser preserve values, starting from raw (unsimplified) graphs.
+    #[test]
+    fn second_round_preserves_value(srcs in vec(expr(false), 1..4), p in point()) {
+        let mut a = Arena::with_rules(RuleSet::NONE);
+        let ids: Vec<_> = srcs.iter().map(|s| a.parse(s).unwrap()).collect();
+        let vals = values(&a, &p);
+        let want = a.eval_many(&ids, &vals);
+        prop_assume!(want.iter().all(|w| w.is_finite() && w.abs() < 1e6));
+        let names: Vec<String> = (0..ids.len()).map(|i| format!("out{i}")).collect();
+        let outs: Vec<(&str, _)> = names.iter().map(|n| n.as_str()).zip(ids.iter().copied()).collect();
+        let plain = a.lower(&outs, LowerOptions { second_round: false, optimize: false, ..LowerOptions::default() });
+        let mut opt = plain.clone();
+        opt.optimize();
+        let second = plain.resimplify();
+        for prog in [&plain, &opt, &second] {
+            let got = prog.eval_arena_values(&a, &vals);
+            for i in 0..ids.len() {
+                prop_assert!(close(got[i], want[i], TOL), "{}: got {} want {}\n{prog}", srcs[i], got[i], want[i]);
+            }
         }
     }
 
@@ -261,7 +316,11 @@ fn chain_tip<S: Scalar>(q: &[S], l: S) -> Vec3<S> {
     let mut r = Mat3::<S>::identity();
     let mut p = Vec3::<S>::zero();
     for (i, &qi) in q.iter().enumerate() {
-        let axis = if i % 2 == 0 { eom_gen::sym::Axis::Z } else { eom_gen::sym::Axis::Y };
+        let axis = if i % 2 == 0 {
+            eom_gen::sym::Axis::Z
+        } else {
+            eom_gen::sym::Axis::Y
+        };
         r = r * Mat3::rot(axis, qi);
         p = p + r.mul_vec(Vec3::new(l, S::zero(), S::from_ratio(1, 2)));
     }

@@ -110,7 +110,10 @@ fn sign_normalisation() {
 fn sin2_cos2_is_one() {
     check("(+ (^ (sin x) 2) (^ (cos x) 2))", "1");
     check("(+ (* k (^ (sin x) 2) r) (* k (^ (cos x) 2) r))", "(* k r)");
-    check("(+ (* 3 (^ (sin x) 2) r) (* 3 (^ (cos x) 2) r) y)", "(+ (* 3 r) y)");
+    check(
+        "(+ (* 3 (^ (sin x) 2) r) (* 3 (^ (cos x) 2) r) y)",
+        "(+ (* 3 r) y)",
+    );
     // nested: the argument is itself a sum, and the factor R a product
     check(
         "(+ (* (^ (sin (+ q1 q2)) 2) m (^ l 2)) (* m (^ l 2) (^ (cos (+ q2 q1)) 2)))",
@@ -121,22 +124,31 @@ fn sin2_cos2_is_one() {
     check("(- 1 (^ (sin x) 2))", "(^ (cos x) 2)");
     check("(- 2 (* 2 (^ (cos x) 2)))", "(* 2 (^ (sin x) 2))");
     // unequal coefficients are left alone
-    assert_eq!(
-        show("(+ (* 2 (^ (sin x) 2)) (^ (cos x) 2))"),
-        {
-            let mut a = Arena::with_rules(RuleSet::ALL.without(RuleSet::PYTHAGORAS));
-            let id = a.parse("(+ (* 2 (^ (sin x) 2)) (^ (cos x) 2))").unwrap();
-            a.to_sexpr_string(id)
-        }
-    );
+    assert_eq!(show("(+ (* 2 (^ (sin x) 2)) (^ (cos x) 2))"), {
+        let mut a = Arena::with_rules(RuleSet::ALL.without(RuleSet::PYTHAGORAS));
+        let id = a.parse("(+ (* 2 (^ (sin x) 2)) (^ (cos x) 2))").unwrap();
+        a.to_sexpr_string(id)
+    });
 }
 
 #[test]
 fn angle_sums_contract() {
-    check("(- (* (cos a) (cos b)) (* (sin a) (sin b)))", "(cos (+ a b))");
-    check("(+ (* (cos a) (cos b)) (* (sin a) (sin b)))", "(cos (- a b))");
-    check("(+ (* (sin a) (cos b)) (* (cos a) (sin b)))", "(sin (+ a b))");
-    check("(- (* (sin a) (cos b)) (* (cos a) (sin b)))", "(sin (- a b))");
+    check(
+        "(- (* (cos a) (cos b)) (* (sin a) (sin b)))",
+        "(cos (+ a b))",
+    );
+    check(
+        "(+ (* (cos a) (cos b)) (* (sin a) (sin b)))",
+        "(cos (- a b))",
+    );
+    check(
+        "(+ (* (sin a) (cos b)) (* (cos a) (sin b)))",
+        "(sin (+ a b))",
+    );
+    check(
+        "(- (* (sin a) (cos b)) (* (cos a) (sin b)))",
+        "(sin (- a b))",
+    );
     check(
         "(- (* 2 l (cos a) (cos b)) (* 2 l (sin a) (sin b)))",
         "(* 2 l (cos (+ a b)))",

@@ -43,7 +43,10 @@ impl fmt::Display for SymError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SymError::NameClash { name, existing } => {
-                write!(f, "name `{name}` is already a {existing:?}; choose another name")
+                write!(
+                    f,
+                    "name `{name}` is already a {existing:?}; choose another name"
+                )
             }
             SymError::ReservedName(name) => write!(
                 f,
@@ -51,7 +54,10 @@ impl fmt::Display for SymError {
             ),
             SymError::Parse { offset, message } => write!(f, "at byte {offset}: {message}"),
             SymError::NoRate(name) => {
-                write!(f, "no time derivative known for `{name}`; pass its rate explicitly")
+                write!(
+                    f,
+                    "no time derivative known for `{name}`; pass its rate explicitly"
+                )
             }
         }
     }
@@ -189,7 +195,9 @@ impl Arena {
     pub(crate) fn lookup(&self, v: &View<'_>) -> Option<Id> {
         let hash = hash_view(v);
         let (nodes, args) = (&self.nodes, &self.args);
-        self.table.find(hash, |&i| view_of(nodes, args, i) == *v).map(|&i| Id(i))
+        self.table
+            .find(hash, |&i| view_of(nodes, args, i) == *v)
+            .map(|&i| Id(i))
     }
 
     /// Hash-cons a node exactly as given (no simplification). Children of
@@ -326,13 +334,19 @@ impl Arena {
         let name = Symbol::conventional_name(kind).expect("indexed kind");
         // Conventional names are reserved: parameters and inputs can never
         // take them, so this cannot clash.
-        self.declare(kind, name).expect("conventional names are reserved")
+        self.declare(kind, name)
+            .expect("conventional names are reserved")
     }
 
     fn check_free_name(name: &str) -> Result<(), SymError> {
         let ident = !name.is_empty()
-            && name.chars().next().is_some_and(|c| c.is_alphabetic() || c == '_')
-            && name.chars().all(|c| c.is_alphanumeric() || c == '_' || c == '.');
+            && name
+                .chars()
+                .next()
+                .is_some_and(|c| c.is_alphabetic() || c == '_')
+            && name
+                .chars()
+                .all(|c| c.is_alphanumeric() || c == '_' || c == '.');
         if !ident || Symbol::kind_from_name(name) != SymKind::Param || name == "select" {
             return Err(SymError::ReservedName(name.to_string()));
         }

@@ -109,16 +109,32 @@ impl Arena {
     pub(crate) fn term_of(&self, id: Id) -> Term {
         if self.rules.has(RuleSet::COLLECT) {
             if let Some(n) = self.num(id) {
-                return Term { coef: n, fs: Vec::new(), orig: Some(id) };
+                return Term {
+                    coef: n,
+                    fs: Vec::new(),
+                    orig: Some(id),
+                };
             }
             if let View::Mul(cs) = self.view(id) {
                 if let Some(c) = self.num(cs[0]) {
-                    return Term { coef: c, fs: cs[1..].to_vec(), orig: Some(id) };
+                    return Term {
+                        coef: c,
+                        fs: cs[1..].to_vec(),
+                        orig: Some(id),
+                    };
                 }
-                return Term { coef: Num::ONE, fs: cs.to_vec(), orig: Some(id) };
+                return Term {
+                    coef: Num::ONE,
+                    fs: cs.to_vec(),
+                    orig: Some(id),
+                };
             }
         }
-        Term { coef: Num::ONE, fs: vec![id], orig: Some(id) }
+        Term {
+            coef: Num::ONE,
+            fs: vec![id],
+            orig: Some(id),
+        }
     }
 
     /// The node for a term.
@@ -153,14 +169,14 @@ impl Arena {
         let fold = self.rules.has(RuleSet::FOLD);
         let mut out: Vec<Term> = Vec::with_capacity(terms.len());
         for t in terms.drain(..) {
-            if let Some(last) = out.last_mut() {
-                if last.fs == t.fs && (fold || !t.fs.is_empty()) {
-                    if let Some(c) = last.coef.add(t.coef) {
-                        last.coef = c;
-                        last.orig = None;
-                        continue;
-                    }
-                }
+            if let Some(last) = out.last_mut()
+                && last.fs == t.fs
+                && (fold || !t.fs.is_empty())
+                && let Some(c) = last.coef.checked_add(t.coef)
+            {
+                last.coef = c;
+                last.orig = None;
+                continue;
             }
             out.push(t);
         }
@@ -198,7 +214,7 @@ impl Arena {
                 let mut folded = 0;
                 let mut rest = Vec::with_capacity(out.len());
                 for &x in &out {
-                    match self.num(x).and_then(|n| acc.add(n)) {
+                    match self.num(x).and_then(|n| acc.checked_add(n)) {
                         Some(s) => {
                             acc = s;
                             folded += 1;
@@ -257,11 +273,9 @@ impl Arena {
         let mut factors: Vec<(Id, i32)> = Vec::with_capacity(xs.len() + 2);
         let mut push = |a: &Arena, x: Id, coef: &mut Num, consts: &mut Vec<Id>| {
             if let Some(n) = a.num(x) {
-                if fold {
-                    if let Some(c) = coef.mul(n) {
-                        *coef = c;
-                        return;
-                    }
+                if fold && let Some(c) = coef.checked_mul(n) {
+                    *coef = c;
+                    return;
                 }
                 consts.push(x);
                 return;
@@ -292,13 +306,12 @@ impl Arena {
             factors.sort_unstable();
             let mut merged: Vec<(Id, i32)> = Vec::with_capacity(factors.len());
             for (b, e) in factors {
-                if let Some(last) = merged.last_mut() {
-                    if last.0 == b {
-                        if let Some(s) = last.1.checked_add(e) {
-                            last.1 = s;
-                            continue;
-                        }
-                    }
+                if let Some(last) = merged.last_mut()
+                    && last.0 == b
+                    && let Some(s) = last.1.checked_add(e)
+                {
+                    last.1 = s;
+                    continue;
                 }
                 merged.push((b, e));
             }
@@ -320,13 +333,16 @@ impl Arena {
         } else {
             out.extend(factors.iter().map(|&(b, _)| b));
         }
-        if rules.has(RuleSet::DISTRIBUTE) && !coef.is_one() && consts.is_empty() && out.len() == 1 {
-            if let View::Add(ts) = self.view(out[0]) {
-                let ts = ts.to_vec();
-                let c = self.num_node(coef);
-                let scaled: Vec<Id> = ts.iter().map(|&t| self.mul(&[c, t])).collect();
-                return self.add(&scaled);
-            }
+        if rules.has(RuleSet::DISTRIBUTE)
+            && !coef.is_one()
+            && consts.is_empty()
+            && out.len() == 1
+            && let View::Add(ts) = self.view(out[0])
+        {
+            let ts = ts.to_vec();
+            let c = self.num_node(coef);
+            let scaled: Vec<Id> = ts.iter().map(|&t| self.mul(&[c, t])).collect();
+            return self.add(&scaled);
         }
         if !coef.is_one() {
             let c = self.num_node(coef);
@@ -370,10 +386,10 @@ impl Arena {
                 return a;
             }
         }
-        if rules.has(RuleSet::FOLD) {
-            if let Some(v) = self.num(a).and_then(|x| x.powi(n)) {
-                return self.num_node(v);
-            }
+        if rules.has(RuleSet::FOLD)
+            && let Some(v) = self.num(a).and_then(|x| x.powi(n))
+        {
+            return self.num_node(v);
         }
         if rules.has(RuleSet::POWERS) {
             match self.view(a) {
@@ -430,18 +446,17 @@ impl Arena {
 
     /// `sqrt(a)`.
     pub fn sqrt(&mut self, a: Id) -> Id {
-        if self.rules.has(RuleSet::FOLD) {
-            if let Some(v) = self.num(a).and_then(Num::sqrt) {
-                return self.num_node(v);
-            }
+        if self.rules.has(RuleSet::FOLD)
+            && let Some(v) = self.num(a).and_then(Num::sqrt)
+        {
+            return self.num_node(v);
         }
-        if self.rules.has(RuleSet::POWERS) {
-            if let View::Pow(b, n) = self.view(a) {
-                if n % 2 == 0 {
-                    let ab = self.abs(b);
-                    return self.pow(ab, n / 2);
-                }
-            }
+        if self.rules.has(RuleSet::POWERS)
+            && let View::Pow(b, n) = self.view(a)
+            && n % 2 == 0
+        {
+            let ab = self.abs(b);
+            return self.pow(ab, n / 2);
         }
         self.intern(View::Sqrt(a))
     }
@@ -483,12 +498,11 @@ impl Arena {
 
     /// `atan2(y, x)`.
     pub fn atan2(&mut self, y: Id, x: Id) -> Id {
-        if self.rules.has(RuleSet::FOLD) {
-            if let (Some(a), Some(b)) = (self.num(y), self.num(x)) {
-                if let Some(v) = a.map(|a| a.atan2(b.to_f64())) {
-                    return self.num_node(v);
-                }
-            }
+        if self.rules.has(RuleSet::FOLD)
+            && let (Some(a), Some(b)) = (self.num(y), self.num(x))
+            && let Some(v) = a.map(|a| a.atan2(b.to_f64()))
+        {
+            return self.num_node(v);
         }
         self.intern(View::Atan2(y, x))
     }
@@ -498,10 +512,10 @@ impl Arena {
         if let Some(v) = self.fold1(a, f64::exp) {
             return v;
         }
-        if self.rules.has(RuleSet::ELEMENTARY) {
-            if let View::Ln(b) = self.view(a) {
-                return b;
-            }
+        if self.rules.has(RuleSet::ELEMENTARY)
+            && let View::Ln(b) = self.view(a)
+        {
+            return b;
         }
         self.intern(View::Exp(a))
     }
@@ -511,10 +525,10 @@ impl Arena {
         if let Some(v) = self.fold1(a, f64::ln) {
             return v;
         }
-        if self.rules.has(RuleSet::ELEMENTARY) {
-            if let View::Exp(b) = self.view(a) {
-                return b;
-            }
+        if self.rules.has(RuleSet::ELEMENTARY)
+            && let View::Exp(b) = self.view(a)
+        {
+            return b;
         }
         self.intern(View::Ln(a))
     }
@@ -542,10 +556,10 @@ impl Arena {
         if self.rules.has(RuleSet::IDENTITY) && a == b {
             return a;
         }
-        if self.rules.has(RuleSet::FOLD) {
-            if let Some(n) = self.num(c) {
-                return if n.to_f64() > 0.0 { a } else { b };
-            }
+        if self.rules.has(RuleSet::FOLD)
+            && let Some(n) = self.num(c)
+        {
+            return if n.to_f64() > 0.0 { a } else { b };
         }
         self.intern(View::Select(c, a, b))
     }

@@ -23,7 +23,12 @@ use rustc_hash::FxHashMap;
 type Seed<'s> = dyn FnMut(&mut Arena, SymId) -> Result<Id, SymError> + 's;
 
 /// Forward-mode derivative of `root` with the given seed and memo table.
-fn derive(arena: &mut Arena, root: Id, seed: &mut Seed<'_>, memo: &mut FxHashMap<Id, Id>) -> Result<Id, SymError> {
+fn derive(
+    arena: &mut Arena,
+    root: Id,
+    seed: &mut Seed<'_>,
+    memo: &mut FxHashMap<Id, Id>,
+) -> Result<Id, SymError> {
     if let Some(&d) = memo.get(&root) {
         return Ok(d);
     }
@@ -54,7 +59,12 @@ fn derive(arena: &mut Arena, root: Id, seed: &mut Seed<'_>, memo: &mut FxHashMap
                     if di == zero {
                         continue;
                     }
-                    let mut fs: Vec<Id> = cs.iter().enumerate().filter(|&(j, _)| j != i).map(|(_, &c)| c).collect();
+                    let mut fs: Vec<Id> = cs
+                        .iter()
+                        .enumerate()
+                        .filter(|&(j, _)| j != i)
+                        .map(|(_, &c)| c)
+                        .collect();
                     fs.push(di);
                     terms.push(arena.mul(&fs));
                 }
@@ -130,8 +140,11 @@ impl Arena {
         let mut memo = self.diff_memo.remove(&s).unwrap_or_default();
         let one = self.num_node(Num::ONE);
         let zero = self.num_node(Num::ZERO);
-        let mut seed = |_: &mut Arena, v: SymId| -> Result<Id, SymError> { Ok(if v == s { one } else { zero }) };
-        let d = derive(self, e, &mut seed, &mut memo).expect("partial derivative seeds cannot fail");
+        let mut seed = |_: &mut Arena, v: SymId| -> Result<Id, SymError> {
+            Ok(if v == s { one } else { zero })
+        };
+        let d =
+            derive(self, e, &mut seed, &mut memo).expect("partial derivative seeds cannot fail");
         self.diff_memo.insert(s, memo);
         d
     }
@@ -212,7 +225,13 @@ mod tests {
         let vn = a.sym_named(var).unwrap();
         let v = a.as_sym(vn).unwrap();
         let got = a.diff(e, v);
-        assert_eq!(got, w, "d/d{var} {src}: got {} want {}", a.display(got), a.display(w));
+        assert_eq!(
+            got,
+            w,
+            "d/d{var} {src}: got {} want {}",
+            a.display(got),
+            a.display(w)
+        );
     }
 
     #[test]
@@ -255,7 +274,9 @@ mod tests {
         td.rate(q0, u0);
         let v = td.apply(&mut a, x).unwrap();
         let acc = td.apply(&mut a, v).unwrap();
-        let want = a.parse("(- (* l (cos q0) ud0) (* l (sin q0) (^ u0 2)))").unwrap();
+        let want = a
+            .parse("(- (* l (cos q0) ud0) (* l (sin q0) (^ u0 2)))")
+            .unwrap();
         assert_eq!(acc, want, "got {} want {}", a.display(acc), a.display(want));
         let qd = a.qd(0);
         assert_eq!(td.apply(&mut a, qd), Err(SymError::NoRate("qd0".into())));

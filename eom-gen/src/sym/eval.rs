@@ -67,7 +67,9 @@ impl Arena {
 
     /// The value vector giving symbol `s` the value `f(s)`.
     pub fn values_with(&self, f: impl Fn(SymId) -> f64) -> Vec<f64> {
-        (0..self.symbols().len()).map(|i| f(SymId(i as u32))).collect()
+        (0..self.symbols().len())
+            .map(|i| f(SymId(i as u32)))
+            .collect()
     }
 }
 

@@ -54,7 +54,9 @@ impl Context {
     }
     /// Wrap an existing arena.
     pub fn from_arena(arena: Arena) -> Context {
-        Context { arena: RefCell::new(arena) }
+        Context {
+            arena: RefCell::new(arena),
+        }
     }
     /// Take the arena back.
     pub fn into_arena(self) -> Arena {
@@ -180,7 +182,12 @@ impl<'cx> Expr<'cx> {
     }
 
     /// Apply a unary smart constructor (or fold a free constant).
-    fn unary(self, fold: impl Fn(Num) -> Option<Num>, raw: fn(f64) -> f64, build: fn(&mut Arena, Id) -> Id) -> Expr<'cx> {
+    fn unary(
+        self,
+        fold: impl Fn(Num) -> Option<Num>,
+        raw: fn(f64) -> f64,
+        build: fn(&mut Arena, Id) -> Id,
+    ) -> Expr<'cx> {
         match self {
             Expr::Const(n) => Expr::Const(fold(n).unwrap_or(Num::Float(raw(n.to_f64())))),
             Expr::Node(id, cx) => {
@@ -219,7 +226,8 @@ impl<'cx> Expr<'cx> {
             (Expr::Const(a), Expr::Const(b)) => {
                 Expr::Const(fold(a, b).unwrap_or(Num::Float(raw(a.to_f64(), b.to_f64()))))
             }
-            _ => Expr::nary(&[self, rhs], |a, ids| build(a, ids[0], ids[1])).expect("one operand is a node"),
+            _ => Expr::nary(&[self, rhs], |a, ids| build(a, ids[0], ids[1]))
+                .expect("one operand is a node"),
         }
     }
 
@@ -265,7 +273,7 @@ impl<'cx> Add for Expr<'cx> {
         if rhs.is_num(Num::ZERO) {
             return self;
         }
-        self.binary(rhs, Num::add, |a, b| a + b, Arena::add2)
+        self.binary(rhs, Num::checked_add, |a, b| a + b, Arena::add2)
     }
 }
 
@@ -275,7 +283,7 @@ impl<'cx> Sub for Expr<'cx> {
         if rhs.is_num(Num::ZERO) {
             return self;
         }
-        self.binary(rhs, |a, b| a.add(b.neg()), |a, b| a - b, Arena::sub)
+        self.binary(rhs, |a, b| a.checked_add(b.negated()), |a, b| a - b, Arena::sub)
     }
 }
 
@@ -291,7 +299,7 @@ impl<'cx> Mul for Expr<'cx> {
         if rhs.is_num(Num::ONE) {
             return self;
         }
-        self.binary(rhs, Num::mul, |a, b| a * b, Arena::mul2)
+        self.binary(rhs, Num::checked_mul, |a, b| a * b, Arena::mul2)
     }
 }
 
@@ -301,14 +309,14 @@ impl<'cx> Div for Expr<'cx> {
         if rhs.is_num(Num::ONE) {
             return self;
         }
-        self.binary(rhs, |a, b| a.mul(b.recip()?), |a, b| a / b, Arena::div)
+        self.binary(rhs, |a, b| a.checked_mul(b.recip()?), |a, b| a / b, Arena::div)
     }
 }
 
 impl<'cx> Neg for Expr<'cx> {
     type Output = Expr<'cx>;
     fn neg(self) -> Expr<'cx> {
-        self.unary(|n| Some(n.neg()), |x| -x, Arena::neg)
+        self.unary(|n| Some(n.negated()), |x| -x, Arena::neg)
     }
 }
 
@@ -329,7 +337,12 @@ impl<'cx> Scalar for Expr<'cx> {
         self.unary(|n| n.map(f64::tan), f64::tan, Arena::tan)
     }
     fn atan2(self, x: Self) -> Self {
-        self.binary(x, |y, x| y.map(|y| y.atan2(x.to_f64())), f64::atan2, Arena::atan2)
+        self.binary(
+            x,
+            |y, x| y.map(|y| y.atan2(x.to_f64())),
+            f64::atan2,
+            Arena::atan2,
+        )
     }
     fn sqrt(self) -> Self {
         self.unary(Num::sqrt, f64::sqrt, Arena::sqrt)
@@ -356,7 +369,8 @@ impl<'cx> Scalar for Expr<'cx> {
         if let Expr::Const(c) = cond {
             return if c.to_f64() > 0.0 { a } else { b };
         }
-        Expr::nary(&[cond, a, b], |ar, ids| ar.select(ids[0], ids[1], ids[2])).expect("condition is a node")
+        Expr::nary(&[cond, a, b], |ar, ids| ar.select(ids[0], ids[1], ids[2]))
+            .expect("condition is a node")
     }
     fn is_zero(&self) -> bool {
         self.as_num() == Some(Num::ZERO)

@@ -224,7 +224,9 @@ impl<S: Scalar> Mat3<S> {
     /// `R = R_{a1}(θ1) · R_{a2}(θ2) · R_{a3}(θ3)`. Classical Euler angles are
     /// `[Z, X, Z]`, Bryan (Cardan) angles `[X, Y, Z]`.
     pub fn from_euler(axes: [Axis; 3], angles: [S; 3]) -> Self {
-        Mat3::rot(axes[0], angles[0]) * Mat3::rot(axes[1], angles[1]) * Mat3::rot(axes[2], angles[2])
+        Mat3::rot(axes[0], angles[0])
+            * Mat3::rot(axes[1], angles[1])
+            * Mat3::rot(axes[2], angles[2])
     }
 
     /// Rotation from a unit quaternion `(w, x, y, z)` (Euler–Rodrigues
@@ -278,7 +280,10 @@ mod tests {
     use crate::sym::{Context, Expr};
 
     fn count_not_0_1(m: &Mat3<Expr<'_>>) -> usize {
-        m.0.iter().flatten().filter(|e| !e.is_zero() && !e.is_one()).count()
+        m.0.iter()
+            .flatten()
+            .filter(|e| !e.is_zero() && !e.is_one())
+            .count()
     }
 
     #[test]
@@ -312,7 +317,10 @@ mod tests {
             for j in 0..3 {
                 let got = cx.eval(rtr.0[i][j], &vals);
                 let want = if i == j { 1.0 } else { 0.0 };
-                assert!((got - want).abs() < 1e-14, "RᵀR[{i}][{j}]: got {got} want {want}");
+                assert!(
+                    (got - want).abs() < 1e-14,
+                    "RᵀR[{i}][{j}]: got {got} want {want}"
+                );
             }
         }
     }
@@ -326,7 +334,12 @@ mod tests {
         let b = Mat3::from_axis_angle(k, th);
         for i in 0..3 {
             for j in 0..3 {
-                assert!((a.0[i][j] - b.0[i][j]).abs() < 1e-15, "[{i}][{j}]: got {} want {}", a.0[i][j], b.0[i][j]);
+                assert!(
+                    (a.0[i][j] - b.0[i][j]).abs() < 1e-15,
+                    "[{i}][{j}]: got {} want {}",
+                    a.0[i][j],
+                    b.0[i][j]
+                );
             }
         }
     }

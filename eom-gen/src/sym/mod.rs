@@ -61,6 +61,7 @@ mod linalg;
 mod node;
 mod num;
 mod program;
+mod reimport;
 mod scalar;
 mod sexpr;
 mod simplify;

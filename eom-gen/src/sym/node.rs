@@ -195,7 +195,11 @@ impl<'a> View<'a> {
             View::Atan2(a, b) => ([Some(a), Some(b), None], &[]),
             View::Select(a, b, c) => ([Some(a), Some(b), Some(c)], &[]),
         };
-        ChildIter { small, pos: 0, slice }
+        ChildIter {
+            small,
+            pos: 0,
+            slice,
+        }
     }
 
     /// The constant, if this is one.

@@ -72,7 +72,9 @@ pub enum Op {
 impl Op {
     fn operands(&self) -> impl Iterator<Item = Operand> {
         let v: [Option<Operand>; 3] = match *self {
-            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => [Some(a), Some(b), None],
+            Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
+                [Some(a), Some(b), None]
+            }
             Op::Neg(a)
             | Op::Sqrt(a)
             | Op::Sin(a)
@@ -187,12 +189,28 @@ pub struct LowerOptions {
     pub cse: bool,
     /// Run [`Program::optimize`] afterwards.
     pub optimize: bool,
+    /// Then also try [`Program::resimplify`] and keep its result if it has
+    /// fewer operations.
+    pub second_round: bool,
 }
 
 impl Default for LowerOptions {
     fn default() -> Self {
-        LowerOptions { cse: true, optimize: true }
+        LowerOptions {
+            cse: true,
+            optimize: true,
+            second_round: true,
+        }
     }
+}
+
+impl LowerOptions {
+    /// No CSE, no optimisation: the tree as written (for tests).
+    pub const PLAIN: LowerOptions = LowerOptions {
+        cse: false,
+        optimize: false,
+        second_round: false,
+    };
 }
 
 struct Lowerer<'a> {
@@ -226,10 +244,10 @@ fn canonical(op: Op) -> Op {
 impl Lowerer<'_> {
     fn emit(&mut self, op: Op) -> Operand {
         let op = canonical(op);
-        if self.cse {
-            if let Some(&o) = self.vn.get(&op) {
-                return o;
-            }
+        if self.cse
+            && let Some(&o) = self.vn.get(&op)
+        {
+            return o;
         }
         let dst = self.next;
         self.next += op.results();
@@ -311,10 +329,10 @@ impl Lowerer<'_> {
     }
 
     fn node(&mut self, id: Id) -> Operand {
-        if self.cse {
-            if let Some(&o) = self.memo.get(&id) {
-                return o;
-            }
+        if self.cse
+            && let Some(&o) = self.memo.get(&id)
+        {
+            return o;
         }
         let o = self.compute(id);
         if self.cse {
@@ -325,12 +343,18 @@ impl Lowerer<'_> {
 
     fn trig(&mut self, x: Id, is_sin: bool) -> Operand {
         let partner = if is_sin { View::Cos(x) } else { View::Sin(x) };
-        let paired = self.cse && self.arena.lookup(&partner).is_some_and(|p| self.reach.contains(&p));
+        let paired = self.cse
+            && self
+                .arena
+                .lookup(&partner)
+                .is_some_and(|p| self.reach.contains(&p));
         let a = self.node(x);
         if !paired {
             return self.emit(if is_sin { Op::Sin(a) } else { Op::Cos(a) });
         }
-        let Operand::Tmp(t) = self.emit(Op::SinCos(a)) else { unreachable!("emit returns a temporary") };
+        let Operand::Tmp(t) = self.emit(Op::SinCos(a)) else {
+            unreachable!("emit returns a temporary")
+        };
         if let Some(p) = self.arena.lookup(&partner) {
             let (s, c) = (Operand::Tmp(t), Operand::Tmp(t + 1));
             self.memo.insert(p, if is_sin { c } else { s });
@@ -348,10 +372,10 @@ impl Lowerer<'_> {
                 let mut neg: Vec<Operand> = Vec::new();
                 for &c in cs {
                     match self.arena.view(c) {
-                        View::Num(n) if n.is_negative() => neg.push(Operand::Const(n.neg())),
+                        View::Num(n) if n.is_negative() => neg.push(Operand::Const(n.negated())),
                         View::Mul(ms) if self.arena.num(ms[0]).is_some_and(|k| k.is_negative()) => {
                             let (k, skip) = self.split_coef(ms);
-                            let o = self.product(k.neg(), &ms[skip..]);
+                            let o = self.product(k.negated(), &ms[skip..]);
                             neg.push(o);
                         }
                         _ => {
@@ -360,7 +384,11 @@ impl Lowerer<'_> {
                         }
                     }
                 }
-                let sum = |l: &mut Self, xs: &[Operand]| xs[1..].iter().fold(xs[0], |acc, &x| l.emit(Op::Add(acc, x)));
+                let sum = |l: &mut Self, xs: &[Operand]| {
+                    xs[1..]
+                        .iter()
+                        .fold(xs[0], |acc, &x| l.emit(Op::Add(acc, x)))
+                };
                 if pos.is_empty() {
                     let s = sum(self, &neg);
                     return self.emit(Op::Neg(s));
@@ -381,7 +409,11 @@ impl Lowerer<'_> {
                 }
                 let ob = self.node(b);
                 let p = self.powi(ob, n.unsigned_abs());
-                if n < 0 { self.emit(Op::Div(Operand::Const(Num::ONE), p)) } else { p }
+                if n < 0 {
+                    self.emit(Op::Div(Operand::Const(Num::ONE), p))
+                } else {
+                    p
+                }
             }
             View::Sin(x) => self.trig(x, true),
             View::Cos(x) => self.trig(x, false),
@@ -424,7 +456,11 @@ impl Arena {
             vn: FxHashMap::default(),
             instrs: Vec::new(),
             next: 0,
-            input_of: syms.iter().enumerate().map(|(i, &s)| (s, i as u32)).collect(),
+            input_of: syms
+                .iter()
+                .enumerate()
+                .map(|(i, &s)| (s, i as u32))
+                .collect(),
             reach: order.iter().copied().collect(),
         };
         if opts.cse {
@@ -432,7 +468,10 @@ impl Arena {
                 l.node(id);
             }
         }
-        let outs: Vec<(String, Operand)> = outputs.iter().map(|&(name, id)| (name.to_string(), l.node(id))).collect();
+        let outs: Vec<(String, Operand)> = outputs
+            .iter()
+            .map(|&(name, id)| (name.to_string(), l.node(id)))
+            .collect();
         let mut p = Program {
             inputs: syms.iter().map(|&s| self.symbol(s).clone()).collect(),
             instrs: l.instrs,
@@ -443,6 +482,12 @@ impl Arena {
             p.optimize();
         } else {
             p.remove_dead();
+        }
+        if opts.second_round {
+            let q = p.resimplify();
+            if q.op_count().total() < p.op_count().total() {
+                return q;
+            }
         }
         p
     }
@@ -455,11 +500,11 @@ fn fold(op: &Op) -> Option<Num> {
         _ => None,
     };
     match *op {
-        Op::Add(a, b) => c(&a)?.add(c(&b)?),
-        Op::Sub(a, b) => c(&a)?.add(c(&b)?.neg()),
-        Op::Mul(a, b) => c(&a)?.mul(c(&b)?),
-        Op::Div(a, b) => c(&a)?.mul(c(&b)?.recip()?),
-        Op::Neg(a) => Some(c(&a)?.neg()),
+        Op::Add(a, b) => c(&a)?.checked_add(c(&b)?),
+        Op::Sub(a, b) => c(&a)?.checked_add(c(&b)?.negated()),
+        Op::Mul(a, b) => c(&a)?.checked_mul(c(&b)?),
+        Op::Div(a, b) => c(&a)?.checked_mul(c(&b)?.recip()?),
+        Op::Neg(a) => Some(c(&a)?.negated()),
         Op::Sqrt(a) => c(&a)?.sqrt(),
         Op::Sin(a) => c(&a)?.map(f64::sin),
         Op::Cos(a) => c(&a)?.map(f64::cos),
@@ -544,10 +589,10 @@ impl Program {
             out.push(Instr { dst: ins.dst, op });
         }
         for (_, o) in &mut self.outputs {
-            if let Operand::Tmp(t) = *o {
-                if let Some(&s) = subst.get(&t) {
-                    *o = s;
-                }
+            if let Operand::Tmp(t) = *o
+                && let Some(&s) = subst.get(&t)
+            {
+                *o = s;
             }
         }
         self.instrs = out;

@@ -14,7 +14,13 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 /// `powi` is an integer power, `atan2` is the four-quadrant arctangent of
 /// `self / x`.
 pub trait Scalar:
-    Copy + Debug + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
+    Copy
+    + Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
 {
     /// A constant (small dyadic rationals are exact for symbolic scalars).
     fn from_f64(x: f64) -> Self;

@@ -55,7 +55,10 @@ impl fmt::Display for SExpr {
 }
 
 fn perr(offset: usize, message: impl Into<String>) -> SymError {
-    SymError::Parse { offset, message: message.into() }
+    SymError::Parse {
+        offset,
+        message: message.into(),
+    }
 }
 
 impl FromStr for SExpr {
@@ -90,7 +93,10 @@ impl FromStr for SExpr {
                 }
                 _ => {
                     let start = i;
-                    while i < bytes.len() && !bytes[i].is_ascii_whitespace() && bytes[i] != b'(' && bytes[i] != b')'
+                    while i < bytes.len()
+                        && !bytes[i].is_ascii_whitespace()
+                        && bytes[i] != b'('
+                        && bytes[i] != b')'
                     {
                         i += 1;
                     }
@@ -155,23 +161,35 @@ impl Arena {
                     if rest.len() == n {
                         Ok(())
                     } else {
-                        Err(perr(*o, format!("`{op}` takes {n} argument(s), got {}", rest.len())))
+                        Err(perr(
+                            *o,
+                            format!("`{op}` takes {n} argument(s), got {}", rest.len()),
+                        ))
                     }
                 };
                 if op == "^" {
                     arity(2)?;
                     let SExpr::Atom(n, no) = &rest[1] else {
-                        return Err(perr(rest[1].offset(), "exponent must be an integer literal"));
+                        return Err(perr(
+                            rest[1].offset(),
+                            "exponent must be an integer literal",
+                        ));
                     };
-                    let n: i32 = n.parse().map_err(|_| perr(*no, format!("exponent `{n}` is not an integer")))?;
+                    let n: i32 = n
+                        .parse()
+                        .map_err(|_| perr(*no, format!("exponent `{n}` is not an integer")))?;
                     let b = self.from_sexpr(&rest[0])?;
                     return Ok(self.pow(b, n));
                 }
-                let args = rest.iter().map(|x| self.from_sexpr(x)).collect::<Result<Vec<Id>, _>>()?;
-                let unary = |arena: &mut Arena, f: fn(&mut Arena, Id) -> Id| -> Result<Id, SymError> {
-                    arity(1)?;
-                    Ok(f(arena, args[0]))
-                };
+                let args = rest
+                    .iter()
+                    .map(|x| self.from_sexpr(x))
+                    .collect::<Result<Vec<Id>, _>>()?;
+                let unary =
+                    |arena: &mut Arena, f: fn(&mut Arena, Id) -> Id| -> Result<Id, SymError> {
+                        arity(1)?;
+                        Ok(f(arena, args[0]))
+                    };
                 match op.as_str() {
                     "+" if !args.is_empty() => Ok(self.add(&args)),
                     "*" if !args.is_empty() => Ok(self.mul(&args)),
@@ -206,7 +224,9 @@ impl Arena {
                         arity(3)?;
                         Ok(self.select(args[0], args[1], args[2]))
                     }
-                    "+" | "*" | "-" | "/" => Err(perr(*o, format!("`{op}` needs at least one argument"))),
+                    "+" | "*" | "-" | "/" => {
+                        Err(perr(*o, format!("`{op}` needs at least one argument")))
+                    }
                     _ => Err(perr(*o, format!("unknown operator `{op}`"))),
                 }
             }

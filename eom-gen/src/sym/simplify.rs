@@ -39,7 +39,10 @@ impl std::fmt::Debug for Rewrite {
 
 /// The default named rewrites, in the order they are tried.
 pub fn rewrites() -> Vec<Rewrite> {
-    vec![Rewrite { name: "factor", apply: factor_common }]
+    vec![Rewrite {
+        name: "factor",
+        apply: factor_common,
+    }]
 }
 
 /// Why a run stopped.
@@ -100,7 +103,11 @@ pub struct Report {
 impl Runner {
     /// Only the construction rules `rules`, no extra rewrites.
     pub fn with_rules(rules: RuleSet) -> Runner {
-        Runner { rules, rewrites: Vec::new(), ..Runner::default() }
+        Runner {
+            rules,
+            rewrites: Vec::new(),
+            ..Runner::default()
+        }
     }
 
     /// Simplify `roots` in `arena`. The arena's own rules are restored afterwards.
@@ -109,7 +116,8 @@ impl Runner {
         let saved = arena.rules();
         arena.set_rules(self.rules);
         let before = arena.dag_size(roots);
-        let mut applied: Vec<(&'static str, usize)> = self.rewrites.iter().map(|r| (r.name, 0)).collect();
+        let mut applied: Vec<(&'static str, usize)> =
+            self.rewrites.iter().map(|r| (r.name, 0)).collect();
         let mut cur: Vec<Id> = roots.to_vec();
         let mut iterations = 0;
         let stop = loop {
@@ -153,13 +161,21 @@ impl Runner {
         };
         arena.set_rules(saved);
         let after = arena.dag_size(&cur);
-        Report { roots: cur, stop, iterations, applied, dag_size: (before, after) }
+        Report {
+            roots: cur,
+            stop,
+            iterations,
+            applied,
+            dag_size: (before, after),
+        }
     }
 }
 
 /// `factor` rewrite: see the module docs.
 pub fn factor_common(arena: &mut Arena, id: Id) -> Option<Id> {
-    let View::Add(cs) = arena.view(id) else { return None };
+    let View::Add(cs) = arena.view(id) else {
+        return None;
+    };
     let cs = cs.to_vec();
     let terms: Vec<_> = cs.iter().map(|&c| arena.term_of(c)).collect();
     // base -> (number of terms containing it, smallest positive exponent)
@@ -188,9 +204,10 @@ pub fn factor_common(arena: &mut Arena, id: Id) -> Option<Id> {
     let mut inner = Vec::new();
     let mut rest = Vec::new();
     for (&c, t) in cs.iter().zip(&terms) {
-        let has = t.fs.iter().any(|&x| {
-            x == base || matches!(arena.view(x), View::Pow(b, k) if b == base && k >= e)
-        });
+        let has = t
+            .fs
+            .iter()
+            .any(|&x| x == base || matches!(arena.view(x), View::Pow(b, k) if b == base && k >= e));
         if has {
             inner.push(arena.mul(&[c, inv]));
         } else {
@@ -214,7 +231,13 @@ mod tests {
         let e = a.parse("(+ (* a x) (* b x) c)").unwrap();
         let want = a.parse("(+ (* x (+ a b)) c)").unwrap();
         let r = Runner::default().run(&mut a, &[e]);
-        assert_eq!(r.roots[0], want, "got {} want {}", a.display(r.roots[0]), a.display(want));
+        assert_eq!(
+            r.roots[0],
+            want,
+            "got {} want {}",
+            a.display(r.roots[0]),
+            a.display(want)
+        );
         assert_eq!(r.stop, StopReason::Saturated);
         assert_eq!(r.applied, vec![("factor", 1)]);
     }
@@ -223,7 +246,10 @@ mod tests {
     fn raw_graph_is_canonicalised() {
         let mut a = Arena::with_rules(RuleSet::NONE);
         let e = a.parse("(+ (^ (sin x) 2) (^ (cos x) 2) (* 0 y))").unwrap();
-        assert_eq!(a.to_sexpr_string(e), "(+ (^ (sin x) 2) (* 0 y) (^ (cos x) 2))");
+        assert_eq!(
+            a.to_sexpr_string(e),
+            "(+ (^ (sin x) 2) (* 0 y) (^ (cos x) 2))"
+        );
         let r = Runner::with_rules(RuleSet::ALL).run(&mut a, &[e]);
         assert_eq!(a.to_sexpr_string(r.roots[0]), "1");
         assert_eq!(a.rules(), RuleSet::NONE, "arena rules restored");
@@ -233,11 +259,23 @@ mod tests {
     fn limits_stop_with_reason() {
         let mut a = Arena::with_rules(RuleSet::NONE);
         let e = a.parse("(+ x x)").unwrap();
-        let r = Runner { iter_limit: 1, ..Runner::default() }.run(&mut a, &[e]);
+        let r = Runner {
+            iter_limit: 1,
+            ..Runner::default()
+        }
+        .run(&mut a, &[e]);
         assert_eq!(r.stop, StopReason::IterLimit);
-        let r = Runner { node_limit: 0, ..Runner::default() }.run(&mut a, &[e]);
+        let r = Runner {
+            node_limit: 0,
+            ..Runner::default()
+        }
+        .run(&mut a, &[e]);
         assert_eq!(r.stop, StopReason::NodeLimit);
-        let r = Runner { time_limit: Duration::ZERO, ..Runner::default() }.run(&mut a, &[e]);
+        let r = Runner {
+            time_limit: Duration::ZERO,
+            ..Runner::default()
+        }
+        .run(&mut a, &[e]);
         assert_eq!(r.stop, StopReason::TimeLimit);
     }
 }

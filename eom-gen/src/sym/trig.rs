@@ -68,31 +68,43 @@ impl Arena {
             }
             for fi in 0..terms[i].fs.len() {
                 let f = terms[i].fs[fi];
-                let View::Pow(s, 2) = self.view(f) else { continue };
+                let View::Pow(s, 2) = self.view(f) else {
+                    continue;
+                };
                 let partner = match self.view(s) {
                     View::Sin(x) => View::Cos(x),
                     View::Cos(x) => View::Sin(x),
                     _ => continue,
                 };
                 let coef = terms[i].coef;
-                let p2 = self.lookup(&partner).and_then(|p| self.lookup(&View::Pow(p, 2)));
+                let p2 = self
+                    .lookup(&partner)
+                    .and_then(|p| self.lookup(&View::Pow(p, 2)));
                 if let Some(p2) = p2 {
                     let pfs = replace_sorted(self, &terms[i].fs, &[fi], &[p2]);
                     if let Some(j) = terms.iter().position(|t| t.coef == coef && t.fs == pfs) {
                         let rest = replace_sorted(self, &terms[i].fs, &[fi], &[]);
                         Self::remove_pair(terms, i, j);
-                        terms.push(Term { coef, fs: rest, orig: None });
+                        terms.push(Term {
+                            coef,
+                            fs: rest,
+                            orig: None,
+                        });
                         return true;
                     }
                 }
                 // k - k sin²x = k cos²x (and with sin, cos swapped).
                 if terms[i].fs.len() == 1 {
-                    let k = coef.neg();
+                    let k = coef.negated();
                     if let Some(j) = terms.iter().position(|t| t.fs.is_empty() && t.coef == k) {
                         let p = self.intern(partner);
                         let p2 = self.pow(p, 2);
                         Self::remove_pair(terms, i, j);
-                        terms.push(Term { coef: k, fs: vec![p2], orig: None });
+                        terms.push(Term {
+                            coef: k,
+                            fs: vec![p2],
+                            orig: None,
+                        });
                         return true;
                     }
                 }
@@ -115,7 +127,9 @@ impl Arena {
                     let (f, g) = (terms[i].fs[ai], terms[i].fs[bi]);
                     // (is_cos_cos, a, b, partner factors)
                     let (cc, a, b, p) = match (self.view(f), self.view(g)) {
-                        (View::Cos(a), View::Cos(b)) if ai < bi => (true, a, b, [View::Sin(a), View::Sin(b)]),
+                        (View::Cos(a), View::Cos(b)) if ai < bi => {
+                            (true, a, b, [View::Sin(a), View::Sin(b)])
+                        }
                         (View::Sin(a), View::Cos(b)) => (false, a, b, [View::Cos(a), View::Sin(b)]),
                         _ => continue,
                     };
@@ -127,14 +141,20 @@ impl Arena {
                     };
                     let pfs = replace_sorted(self, &terms[i].fs, &[ai, bi], &[p1, p2]);
                     let k = terms[i].coef;
-                    let Some(j) = terms.iter().position(|t| t.fs == pfs && (t.coef == k || t.coef == k.neg()))
+                    let Some(j) = terms
+                        .iter()
+                        .position(|t| t.fs == pfs && (t.coef == k || t.coef == k.negated()))
                     else {
                         continue;
                     };
                     let same = terms[j].coef == k;
                     // cos: partner -k → a+b, +k → a-b; sin: partner +k → a+b, -k → a-b.
                     let plus = if cc { !same } else { same };
-                    let arg = if plus { self.add2(a, b) } else { self.sub(a, b) };
+                    let arg = if plus {
+                        self.add2(a, b)
+                    } else {
+                        self.sub(a, b)
+                    };
                     let trig = if cc { self.cos(arg) } else { self.sin(arg) };
                     let rest = replace_sorted(self, &terms[i].fs, &[ai, bi], &[]);
                     let mut cs = vec![self.num_node(k), trig];
