@@ -11,7 +11,8 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group};
 use eom_gen::sym::{
-    Arena, Axis, Context, Expr, Id, LowerOptions, Mat3, Program, RuleSet, Runner, Scalar, TimeDerivative, Vec3,
+    Arena, Axis, Context, Expr, Id, LowerOptions, Mat3, Program, RuleSet, Runner, Scalar,
+    TimeDerivative, Vec3,
 };
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -128,15 +129,26 @@ fn random_workload(a: &mut Arena) -> Vec<(String, Id)> {
         };
         pool.push(r);
     }
-    pool.iter().step_by(16).enumerate().map(|(i, &id)| (format!("o{i}"), id)).collect()
+    pool.iter()
+        .step_by(16)
+        .enumerate()
+        .map(|(i, &id)| (format!("o{i}"), id))
+        .collect()
 }
 
 /// Simplify and lower; returns the program and the runner's stop reason.
 fn simplify_and_lower(a: &mut Arena, outs: &[(String, Id)]) -> (Program, String) {
     let roots: Vec<Id> = outs.iter().map(|(_, id)| *id).collect();
     let rep = Runner::default().run(a, &roots);
-    let named: Vec<(&str, Id)> = outs.iter().map(|(s, _)| s.as_str()).zip(rep.roots).collect();
-    (a.lower(&named, LowerOptions::default()), format!("{:?} after {} iterations", rep.stop, rep.iterations))
+    let named: Vec<(&str, Id)> = outs
+        .iter()
+        .map(|(s, _)| s.as_str())
+        .zip(rep.roots)
+        .collect();
+    (
+        a.lower(&named, LowerOptions::default()),
+        format!("{:?} after {} iterations", rep.stop, rep.iterations),
+    )
 }
 
 fn median(mut xs: Vec<Duration>) -> Duration {
@@ -147,7 +159,10 @@ fn median(mut xs: Vec<Duration>) -> Duration {
 /// One-shot report: sizes, memory, op counts, and the median of 5 runs per phase.
 fn report() {
     println!("== sym report ==");
-    println!("size_of::<View>() = {} bytes (stored Node is 16)", std::mem::size_of::<eom_gen::sym::View>());
+    println!(
+        "size_of::<View>() = {} bytes (stored Node is 16)",
+        std::mem::size_of::<eom_gen::sym::View>()
+    );
     let mut times = Vec::new();
     for _ in 0..5 {
         let mut a = Arena::with_rules(RuleSet::NONE);
@@ -163,6 +178,23 @@ fn report() {
         N_INTERN as f64 / t.as_secs_f64() / 1e6
     );
 
+    println!("chain scaling (links: nodes built, program ops, build+simplify+lower time):");
+    for limit in [usize::MAX, 32, 16, 8, 4] {
+        for n in [4u32, 8, 16, 32, 64] {
+            let t0 = Instant::now();
+            let cx = Context::new();
+            cx.arena_mut().set_flatten_limit(limit);
+            let outs = chain_workload(&cx, n);
+            let mut a = cx.into_arena();
+            let built = a.len();
+            let (p, _) = simplify_and_lower(&mut a, &outs);
+            println!(
+                "  limit {limit} n {n}: {built} nodes, {} ops, {:.1?}",
+                p.op_count().total(),
+                t0.elapsed()
+            );
+        }
+    }
     for name in ["chain", "random"] {
         let (mut tb, mut ts, mut tt) = (Vec::new(), Vec::new(), Vec::new());
         let mut last = None;
@@ -184,16 +216,32 @@ fn report() {
             let roots: Vec<Id> = outs.iter().map(|(_, id)| *id).collect();
             let rep = Runner::default().run(&mut arena, &roots);
             let t2 = Instant::now();
-            let named: Vec<(&str, Id)> = outs.iter().map(|(s, _)| s.as_str()).zip(rep.roots.iter().copied()).collect();
+            let named: Vec<(&str, Id)> = outs
+                .iter()
+                .map(|(s, _)| s.as_str())
+                .zip(rep.roots.iter().copied())
+                .collect();
             let p = arena.lower(&named, LowerOptions::default());
             let t3 = Instant::now();
-            let plain = arena.lower(&named, LowerOptions { second_round: false, ..LowerOptions::default() });
+            let plain = arena.lower(
+                &named,
+                LowerOptions {
+                    second_round: false,
+                    ..LowerOptions::default()
+                },
+            );
+            // The arena only grows, so the unsimplified roots are still valid.
+            let unsimplified: Vec<(&str, Id)> =
+                outs.iter().map(|(s, id)| (s.as_str(), *id)).collect();
+            let no_runner = arena
+                .lower(&unsimplified, LowerOptions::default())
+                .op_count();
             tb.push(t1 - t0);
             ts.push(t2 - t1);
             tt.push(t3 - t2);
-            last = Some((built, mem, dag, rep, p, plain, outs.len()));
+            last = Some((built, mem, dag, rep, p, plain, outs.len(), no_runner));
         }
-        let (built, mem, dag, rep, p, plain, n_out) = last.unwrap();
+        let (built, mem, dag, rep, p, plain, n_out, no_runner) = last.unwrap();
         let (b, s, l) = (median(tb), median(ts), median(tt));
         println!("{name}: {built} nodes built, {dag} reachable from {n_out} outputs");
         println!(
@@ -209,8 +257,13 @@ fn report() {
             "  runner: {:?} after {} iterations, applied {:?}, DAG {} -> {}",
             rep.stop, rep.iterations, rep.applied, rep.dag_size.0, rep.dag_size.1
         );
-        println!("  program: {} instructions, {}", p.instrs.len(), p.op_count());
+        println!(
+            "  program: {} instructions, {}",
+            p.instrs.len(),
+            p.op_count()
+        );
         println!("  (without second round: {})", plain.op_count());
+        println!("  (without the runner:   {no_runner})");
         println!(
             "  median of 5: build {:.1?} + simplify {:.1?} + lower {:.1?} = {:.1?}",
             b,

@@ -15,6 +15,9 @@ use rustc_hash::{FxHashMap, FxHashSet, FxHasher};
 use std::fmt;
 use std::hash::{Hash, Hasher};
 
+/// Default of [`Arena::flatten_limit`].
+pub const DEFAULT_FLATTEN_LIMIT: usize = 8;
+
 /// Errors from the symbolic engine (naming, parsing, derivatives).
 #[derive(Clone, PartialEq, Eq, Debug)]
 pub enum SymError {
@@ -70,7 +73,8 @@ impl std::error::Error for SymError {}
 pub struct MemoryStats {
     /// Number of nodes.
     pub nodes: usize,
-    /// Bytes used by the node vector (`nodes * size_of::<Node>()`).
+    /// Bytes used by the node vector and the structural hashes
+    /// (`nodes * (size_of::<Node>() + 4)`).
     pub node_bytes: usize,
     /// Bytes used by the side vector of n-ary children.
     pub arg_bytes: usize,
@@ -98,6 +102,7 @@ pub struct Arena {
     sym_nodes: Vec<Id>,
     sym_by_name: FxHashMap<String, SymId>,
     pub(crate) rules: RuleSet,
+    pub(crate) flatten_limit: usize,
     pub(crate) diff_memo: FxHashMap<SymId, FxHashMap<Id, Id>>,
 }
 
@@ -153,6 +158,7 @@ impl Arena {
             sym_nodes: Vec::new(),
             sym_by_name: FxHashMap::default(),
             rules,
+            flatten_limit: DEFAULT_FLATTEN_LIMIT,
             diff_memo: FxHashMap::default(),
         }
     }
@@ -165,6 +171,20 @@ impl Arena {
     /// Change the construction-time rules for nodes built from now on.
     pub fn set_rules(&mut self, rules: RuleSet) {
         self.rules = rules;
+    }
+
+    /// Sums with more than this many terms are not flattened into an
+    /// enclosing sum (nor multiplied out by a numeric coefficient): they
+    /// stay one shared child, so recursively built quantities
+    /// (`v_i = v_{i-1} + ω_i × r_i`) grow linearly instead of quadratically.
+    /// Like terms are not collected across such a boundary.
+    pub fn flatten_limit(&self) -> usize {
+        self.flatten_limit
+    }
+
+    /// Set [`Arena::flatten_limit`] (`usize::MAX` flattens always).
+    pub fn set_flatten_limit(&mut self, n: usize) {
+        self.flatten_limit = n;
     }
 
     /// Number of nodes.
@@ -462,7 +482,8 @@ impl Arena {
     pub fn memory(&self) -> MemoryStats {
         MemoryStats {
             nodes: self.nodes.len(),
-            node_bytes: self.nodes.len() * std::mem::size_of::<Node>(),
+            node_bytes: self.nodes.len()
+                * (std::mem::size_of::<Node>() + std::mem::size_of::<u32>()),
             arg_bytes: self.args.len() * std::mem::size_of::<Id>(),
             table_bytes: self.table.allocation_size(),
         }

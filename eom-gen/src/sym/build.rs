@@ -190,7 +190,7 @@ impl Arena {
         let mut flat: Vec<Id> = Vec::with_capacity(xs.len() + 2);
         for &x in xs {
             match self.view(x) {
-                View::Add(cs) => flat.extend_from_slice(cs),
+                View::Add(cs) if cs.len() <= self.flatten_limit => flat.extend_from_slice(cs),
                 _ => flat.push(x),
             }
         }
@@ -338,6 +338,7 @@ impl Arena {
             && consts.is_empty()
             && out.len() == 1
             && let View::Add(ts) = self.view(out[0])
+            && ts.len() <= self.flatten_limit
         {
             let ts = ts.to_vec();
             let c = self.num_node(coef);
@@ -420,7 +421,9 @@ impl Arena {
         match self.view(x) {
             View::Num(n) => n.is_negative(),
             View::Mul(cs) => self.num(cs[0]).is_some_and(|c| c.is_negative()),
-            View::Add(cs) if self.rules.has(RuleSet::DISTRIBUTE) => {
+            View::Add(cs)
+                if self.rules.has(RuleSet::DISTRIBUTE) && cs.len() <= self.flatten_limit =>
+            {
                 let lead = cs
                     .iter()
                     .map(|&c| self.term_of(c))

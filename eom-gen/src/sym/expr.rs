@@ -283,7 +283,12 @@ impl<'cx> Sub for Expr<'cx> {
         if rhs.is_num(Num::ZERO) {
             return self;
         }
-        self.binary(rhs, |a, b| a.checked_add(b.negated()), |a, b| a - b, Arena::sub)
+        self.binary(
+            rhs,
+            |a, b| a.checked_add(b.negated()),
+            |a, b| a - b,
+            Arena::sub,
+        )
     }
 }
 
@@ -309,7 +314,12 @@ impl<'cx> Div for Expr<'cx> {
         if rhs.is_num(Num::ONE) {
             return self;
         }
-        self.binary(rhs, |a, b| a.checked_mul(b.recip()?), |a, b| a / b, Arena::div)
+        self.binary(
+            rhs,
+            |a, b| a.checked_mul(b.recip()?),
+            |a, b| a / b,
+            Arena::div,
+        )
     }
 }
 

@@ -67,7 +67,7 @@ mod sexpr;
 mod simplify;
 mod trig;
 
-pub use arena::{Arena, MemoryStats, SymError};
+pub use arena::{Arena, DEFAULT_FLATTEN_LIMIT, MemoryStats, SymError};
 pub use build::RuleSet;
 pub use diff::TimeDerivative;
 pub use expr::{Context, Expr};
@@ -77,4 +77,4 @@ pub use num::Num;
 pub use program::{Instr, LowerOptions, Op, OpCount, Operand, Program};
 pub use scalar::Scalar;
 pub use sexpr::{Display, SExpr};
-pub use simplify::{Report, Rewrite, Runner, StopReason, factor_common, rewrites};
+pub use simplify::{Report, Rewrite, Runner, StopReason, Uses, factor_common, rewrites};

@@ -256,7 +256,9 @@ mod tests {
         let got = a.checked_mul(Num::int(12)).unwrap();
         assert_eq!(got, Num::ONE, "got {got} want 1");
         assert_eq!(
-            Num::ratio(1, 3).unwrap().checked_add(Num::ratio(1, 6).unwrap()),
+            Num::ratio(1, 3)
+                .unwrap()
+                .checked_add(Num::ratio(1, 6).unwrap()),
             Num::ratio(1, 2)
         );
     }

@@ -439,7 +439,48 @@ impl Lowerer<'_> {
     }
 }
 
+/// Multiplications in `x^n` by square-and-multiply.
+fn powi_muls(n: u32) -> usize {
+    (31 - n.leading_zeros() + n.count_ones() - 1) as usize
+}
+
 impl Arena {
+    /// Estimated operation count of lowering `roots`, computed on the DAG
+    /// without building a program: an n-ary sum costs n−1, a product one
+    /// multiplication per extra factor plus one for a coefficient ≠ ±1 and
+    /// one division for all negative powers, `x^n` square-and-multiply,
+    /// every other node one; `sin x` and `cos x` of one argument count once.
+    /// It ignores the sharing of partial sums and products that lowering
+    /// finds, so it is an upper bound of the same shape as [`OpCount::total`].
+    pub fn op_estimate(&self, roots: &[Id]) -> usize {
+        let mut n = 0;
+        let mut trig_args: FxHashSet<Id> = FxHashSet::default();
+        for id in self.reachable(roots, |_| false) {
+            n += match self.view(id) {
+                View::Num(_) | View::Sym(_) => 0,
+                View::Add(cs) => cs.len() - 1,
+                View::Mul(cs) => {
+                    let mut c = cs.len() - 1;
+                    let mut div = false;
+                    for &f in cs {
+                        match self.view(f) {
+                            View::Num(k) if k == Num::ONE || k == Num::MINUS_ONE => {
+                                c = c.saturating_sub(1)
+                            }
+                            View::Pow(_, e) if e < 0 => div = true,
+                            _ => {}
+                        }
+                    }
+                    c + div as usize
+                }
+                View::Pow(_, e) => powi_muls(e.unsigned_abs().max(1)) + (e < 0) as usize,
+                View::Sin(x) | View::Cos(x) => trig_args.insert(x) as usize,
+                _ => 1,
+            };
+        }
+        n
+    }
+
     /// Lower named outputs to one [`Program`] (CSE across all outputs).
     pub fn lower(&self, outputs: &[(&str, Id)], opts: LowerOptions) -> Program {
         let roots: Vec<Id> = outputs.iter().map(|&(_, id)| id).collect();
