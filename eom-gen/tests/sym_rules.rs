@@ -175,3 +175,47 @@ fn canonical_order_is_commutative() {
     check("(* a (+ b c))", "(* (+ c b) a)");
     check("(+ a (+ b c))", "(+ (+ a b) c)");
 }
+
+#[test]
+fn long_sums_stay_one_shared_child() {
+    // Sums longer than the flatten limit (8) are not copied into an
+    // enclosing sum: recursively built quantities grow linearly.
+    let mut a = Arena::new();
+    let long = a.parse("(+ a b c d e f g h i)").unwrap();
+    let x = a.parse("x").unwrap();
+    let s = a.add2(long, x);
+    assert_eq!(
+        a.to_sexpr_string(s).matches('(').count(),
+        2,
+        "got {}",
+        a.display(s)
+    );
+    let short = a.parse("(+ a b c)").unwrap();
+    let s = a.add2(short, x);
+    assert_eq!(
+        a.to_sexpr_string(s).matches('(').count(),
+        1,
+        "got {}",
+        a.display(s)
+    );
+    // with the limit lifted, everything flattens
+    a.set_flatten_limit(usize::MAX);
+    let s = a.add2(long, x);
+    assert_eq!(
+        a.to_sexpr_string(s).matches('(').count(),
+        1,
+        "got {}",
+        a.display(s)
+    );
+}
+
+#[test]
+fn op_estimate_counts_like_lowering() {
+    let mut a = Arena::new();
+    // 2 products (1 mul each), 1 addition, one sin/cos pair
+    let e = a.parse("(+ (* l (sin q)) (* m (cos q)))").unwrap();
+    assert_eq!(a.op_estimate(&[e]), 4);
+    let mut raw = Arena::with_rules(RuleSet::NONE);
+    let e = raw.parse("(* -1 -1 x)").unwrap();
+    assert_eq!(raw.op_estimate(&[e]), 0);
+}

@@ -15,6 +15,9 @@ use rustc_hash::{FxHashMap, FxHashSet, FxHasher};
 use std::fmt;
 use std::hash::{Hash, Hasher};
 
+/// Default of [`Arena::flatten_limit`].
+pub const DEFAULT_FLATTEN_LIMIT: usize = 8;
+
 /// Errors from the symbolic engine (naming, parsing, derivatives).
 #[derive(Clone, PartialEq, Eq, Debug)]
 pub enum SymError {
@@ -70,7 +73,8 @@ impl std::error::Error for SymError {}
 pub struct MemoryStats {
     /// Number of nodes.
     pub nodes: usize,
-    /// Bytes used by the node vector (`nodes * size_of::<Node>()`).
+    /// Bytes used by the node vector and the structural hashes
+    /// (`nodes * (size_of::<Node>() + 4)`).
     pub node_bytes: usize,
     /// Bytes used by the side vector of n-ary children.
     pub arg_bytes: usize,
@@ -89,12 +93,16 @@ impl MemoryStats {
 #[derive(Clone)]
 pub struct Arena {
     nodes: Vec<Node>,
+    /// Structural hash of each node: independent of ids, so of the order in
+    /// which nodes were created (see [`Arena::shash`]).
+    shash: Vec<u32>,
     args: Vec<Id>,
     table: HashTable<u32>,
     syms: Vec<Symbol>,
     sym_nodes: Vec<Id>,
     sym_by_name: FxHashMap<String, SymId>,
     pub(crate) rules: RuleSet,
+    pub(crate) flatten_limit: usize,
     pub(crate) diff_memo: FxHashMap<SymId, FxHashMap<Id, Id>>,
 }
 
@@ -143,12 +151,14 @@ impl Arena {
     pub fn with_rules(rules: RuleSet) -> Arena {
         Arena {
             nodes: Vec::new(),
+            shash: Vec::new(),
             args: Vec::new(),
             table: HashTable::new(),
             syms: Vec::new(),
             sym_nodes: Vec::new(),
             sym_by_name: FxHashMap::default(),
             rules,
+            flatten_limit: DEFAULT_FLATTEN_LIMIT,
             diff_memo: FxHashMap::default(),
         }
     }
@@ -161,6 +171,20 @@ impl Arena {
     /// Change the construction-time rules for nodes built from now on.
     pub fn set_rules(&mut self, rules: RuleSet) {
         self.rules = rules;
+    }
+
+    /// Sums with more than this many terms are not flattened into an
+    /// enclosing sum (nor multiplied out by a numeric coefficient): they
+    /// stay one shared child, so recursively built quantities
+    /// (`v_i = v_{i-1} + ω_i × r_i`) grow linearly instead of quadratically.
+    /// Like terms are not collected across such a boundary.
+    pub fn flatten_limit(&self) -> usize {
+        self.flatten_limit
+    }
+
+    /// Set [`Arena::flatten_limit`] (`usize::MAX` flattens always).
+    pub fn set_flatten_limit(&mut self, n: usize) {
+        self.flatten_limit = n;
     }
 
     /// Number of nodes.
@@ -231,11 +255,64 @@ impl Arena {
             View::Atan2(a, b) => Node::Atan2(a, b),
             View::Select(a, b, c) => Node::Select(a, b, c),
         };
+        let sh = self.struct_hash(&v);
         self.nodes.push(node);
+        self.shash.push(sh);
         let (nodes, args) = (&self.nodes, &self.args);
         self.table
             .insert_unique(hash, id, |&i| hash_view(&view_of(nodes, args, i)));
         Id(id)
+    }
+
+    /// A 32-bit structural hash of node `id`, computed from its operation,
+    /// constant value or symbol name and its children's structural hashes —
+    /// never from ids. Canonical orders sort by it, so printed text and
+    /// programs do not depend on the order in which nodes were created.
+    pub fn shash(&self, id: Id) -> u32 {
+        self.shash[id.index()]
+    }
+
+    fn struct_hash(&self, v: &View<'_>) -> u32 {
+        let mut h = FxHasher::default();
+        std::mem::discriminant(v).hash(&mut h);
+        match *v {
+            View::Num(n) => n.hash(&mut h),
+            View::Sym(s) => self.syms[s.index()].name.hash(&mut h),
+            View::Pow(a, n) => {
+                self.shash[a.index()].hash(&mut h);
+                n.hash(&mut h);
+            }
+            _ => {
+                for c in v.children() {
+                    self.shash[c.index()].hash(&mut h);
+                }
+            }
+        }
+        let x = h.finish();
+        (x ^ (x >> 32)) as u32
+    }
+
+    /// Compare two nodes in canonical order: constants first by value, then
+    /// by structural hash; ids only break (rare) hash ties.
+    pub(crate) fn canonical_cmp(&self, x: Id, y: Id) -> std::cmp::Ordering {
+        use std::cmp::Ordering;
+        match (self.num(x), self.num(y)) {
+            (Some(m), Some(n)) => m.total_cmp(n).then(x.cmp(&y)),
+            (Some(_), None) => Ordering::Less,
+            (None, Some(_)) => Ordering::Greater,
+            (None, None) => self.shash(x).cmp(&self.shash(y)).then(x.cmp(&y)),
+        }
+    }
+
+    /// Compare factor lists in canonical order (lexicographic on [`Arena::canonical_cmp`]).
+    pub(crate) fn canonical_cmp_slices(&self, a: &[Id], b: &[Id]) -> std::cmp::Ordering {
+        for (&x, &y) in a.iter().zip(b) {
+            let o = self.canonical_cmp(x, y);
+            if o.is_ne() {
+                return o;
+            }
+        }
+        a.len().cmp(&b.len())
     }
 
     /// The constant node for `n`.
@@ -266,9 +343,9 @@ impl Arena {
             return Err(SymError::NameClash { name, existing });
         }
         let s = SymId(self.syms.len() as u32);
-        let node = self.intern(View::Sym(s));
         self.sym_by_name.insert(name.clone(), s);
         self.syms.push(Symbol { kind, name });
+        let node = self.intern(View::Sym(s));
         self.sym_nodes.push(node);
         Ok(node)
     }
@@ -405,7 +482,8 @@ impl Arena {
     pub fn memory(&self) -> MemoryStats {
         MemoryStats {
             nodes: self.nodes.len(),
-            node_bytes: self.nodes.len() * std::mem::size_of::<Node>(),
+            node_bytes: self.nodes.len()
+                * (std::mem::size_of::<Node>() + std::mem::size_of::<u32>()),
             arg_bytes: self.args.len() * std::mem::size_of::<Id>(),
             table_bytes: self.table.allocation_size(),
         }

@@ -28,7 +28,7 @@ use std::ops::BitOr;
 /// | `POWERS` | `x^a·x^b = x^(a+b)` (so `x/x = 1`), `(x^a)^b = x^(ab)`, `(xy)^n = x^n y^n`, `sqrt(x)^2k = x^k`, `abs(x)^2k = x^2k`, `sqrt(x^2k) = abs(x)^k` | `x/x = 1`, `x^a x^-a = 1`: x ≠ 0; `sqrt(x)^2 = x`: x ≥ 0 |
 /// | `DISTRIBUTE` | numeric coefficient over a sum: `c·(a + b) = c·a + c·b` | — |
 /// | `SIGN` | `sin(-x) = -sin x`, `cos(-x) = cos x`, `tan(-x) = -tan x`, `abs(-x) = abs x`; "negative" is decided on a negation-invariant key; acts only together with `FOLD` (and on sums only with `DISTRIBUTE`) so that it terminates | — |
-/// | `PYTHAGORAS` | `k sin²x R + k cos²x R = k R`, `k - k sin²x = k cos²x`, `k - k cos²x = k sin²x` (see [`trig`](super::trig)) | — |
+/// | `PYTHAGORAS` | `k sin²x R + k cos²x R = k R`, `k - k sin²x = k cos²x`, `k - k cos²x = k sin²x` | — |
 /// | `ANGLE_SUM` | `k cos a cos b R ∓ k sin a sin b R = k cos(a ± b) R`, `k sin a cos b R ± k cos a sin b R = k sin(a ± b) R` | — |
 /// | `ELEMENTARY` | `exp(ln x) = x`, `ln(exp x) = x`, `abs(abs x) = abs x`, `abs(sqrt x) = sqrt x`, `abs(exp x) = exp x`, `abs(x^2k) = x^2k` | `exp(ln x) = x`: x > 0 |
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
@@ -98,7 +98,7 @@ pub(crate) struct Term {
 }
 
 fn sort_canonical(a: &Arena, v: &mut [Id]) {
-    v.sort_unstable_by_key(|&id| (a.num(id).is_none(), id));
+    v.sort_unstable_by(|&x, &y| a.canonical_cmp(x, y));
 }
 
 impl Arena {
@@ -169,14 +169,14 @@ impl Arena {
         let fold = self.rules.has(RuleSet::FOLD);
         let mut out: Vec<Term> = Vec::with_capacity(terms.len());
         for t in terms.drain(..) {
-            if let Some(last) = out.last_mut() {
-                if last.fs == t.fs && (fold || !t.fs.is_empty()) {
-                    if let Some(c) = last.coef.add(t.coef) {
-                        last.coef = c;
-                        last.orig = None;
-                        continue;
-                    }
-                }
+            if let Some(last) = out.last_mut()
+                && last.fs == t.fs
+                && (fold || !t.fs.is_empty())
+                && let Some(c) = last.coef.checked_add(t.coef)
+            {
+                last.coef = c;
+                last.orig = None;
+                continue;
             }
             out.push(t);
         }
@@ -190,7 +190,7 @@ impl Arena {
         let mut flat: Vec<Id> = Vec::with_capacity(xs.len() + 2);
         for &x in xs {
             match self.view(x) {
-                View::Add(cs) => flat.extend_from_slice(cs),
+                View::Add(cs) if cs.len() <= self.flatten_limit => flat.extend_from_slice(cs),
                 _ => flat.push(x),
             }
         }
@@ -214,7 +214,7 @@ impl Arena {
                 let mut folded = 0;
                 let mut rest = Vec::with_capacity(out.len());
                 for &x in &out {
-                    match self.num(x).and_then(|n| acc.add(n)) {
+                    match self.num(x).and_then(|n| acc.checked_add(n)) {
                         Some(s) => {
                             acc = s;
                             folded += 1;
@@ -273,11 +273,9 @@ impl Arena {
         let mut factors: Vec<(Id, i32)> = Vec::with_capacity(xs.len() + 2);
         let mut push = |a: &Arena, x: Id, coef: &mut Num, consts: &mut Vec<Id>| {
             if let Some(n) = a.num(x) {
-                if fold {
-                    if let Some(c) = coef.mul(n) {
-                        *coef = c;
-                        return;
-                    }
+                if fold && let Some(c) = coef.checked_mul(n) {
+                    *coef = c;
+                    return;
                 }
                 consts.push(x);
                 return;
@@ -308,13 +306,12 @@ impl Arena {
             factors.sort_unstable();
             let mut merged: Vec<(Id, i32)> = Vec::with_capacity(factors.len());
             for (b, e) in factors {
-                if let Some(last) = merged.last_mut() {
-                    if last.0 == b {
-                        if let Some(s) = last.1.checked_add(e) {
-                            last.1 = s;
-                            continue;
-                        }
-                    }
+                if let Some(last) = merged.last_mut()
+                    && last.0 == b
+                    && let Some(s) = last.1.checked_add(e)
+                {
+                    last.1 = s;
+                    continue;
                 }
                 merged.push((b, e));
             }
@@ -336,13 +333,17 @@ impl Arena {
         } else {
             out.extend(factors.iter().map(|&(b, _)| b));
         }
-        if rules.has(RuleSet::DISTRIBUTE) && !coef.is_one() && consts.is_empty() && out.len() == 1 {
-            if let View::Add(ts) = self.view(out[0]) {
-                let ts = ts.to_vec();
-                let c = self.num_node(coef);
-                let scaled: Vec<Id> = ts.iter().map(|&t| self.mul(&[c, t])).collect();
-                return self.add(&scaled);
-            }
+        if rules.has(RuleSet::DISTRIBUTE)
+            && !coef.is_one()
+            && consts.is_empty()
+            && out.len() == 1
+            && let View::Add(ts) = self.view(out[0])
+            && ts.len() <= self.flatten_limit
+        {
+            let ts = ts.to_vec();
+            let c = self.num_node(coef);
+            let scaled: Vec<Id> = ts.iter().map(|&t| self.mul(&[c, t])).collect();
+            return self.add(&scaled);
         }
         if !coef.is_one() {
             let c = self.num_node(coef);
@@ -386,10 +387,10 @@ impl Arena {
                 return a;
             }
         }
-        if rules.has(RuleSet::FOLD) {
-            if let Some(v) = self.num(a).and_then(|x| x.powi(n)) {
-                return self.num_node(v);
-            }
+        if rules.has(RuleSet::FOLD)
+            && let Some(v) = self.num(a).and_then(|x| x.powi(n))
+        {
+            return self.num_node(v);
         }
         if rules.has(RuleSet::POWERS) {
             match self.view(a) {
@@ -420,11 +421,13 @@ impl Arena {
         match self.view(x) {
             View::Num(n) => n.is_negative(),
             View::Mul(cs) => self.num(cs[0]).is_some_and(|c| c.is_negative()),
-            View::Add(cs) if self.rules.has(RuleSet::DISTRIBUTE) => {
+            View::Add(cs)
+                if self.rules.has(RuleSet::DISTRIBUTE) && cs.len() <= self.flatten_limit =>
+            {
                 let lead = cs
                     .iter()
                     .map(|&c| self.term_of(c))
-                    .min_by(|a, b| a.fs.cmp(&b.fs));
+                    .min_by(|a, b| self.canonical_cmp_slices(&a.fs, &b.fs));
                 lead.is_some_and(|t| t.coef.is_negative())
             }
             _ => false,
@@ -446,18 +449,17 @@ impl Arena {
 
     /// `sqrt(a)`.
     pub fn sqrt(&mut self, a: Id) -> Id {
-        if self.rules.has(RuleSet::FOLD) {
-            if let Some(v) = self.num(a).and_then(Num::sqrt) {
-                return self.num_node(v);
-            }
+        if self.rules.has(RuleSet::FOLD)
+            && let Some(v) = self.num(a).and_then(Num::sqrt)
+        {
+            return self.num_node(v);
         }
-        if self.rules.has(RuleSet::POWERS) {
-            if let View::Pow(b, n) = self.view(a) {
-                if n % 2 == 0 {
-                    let ab = self.abs(b);
-                    return self.pow(ab, n / 2);
-                }
-            }
+        if self.rules.has(RuleSet::POWERS)
+            && let View::Pow(b, n) = self.view(a)
+            && n % 2 == 0
+        {
+            let ab = self.abs(b);
+            return self.pow(ab, n / 2);
         }
         self.intern(View::Sqrt(a))
     }
@@ -499,12 +501,11 @@ impl Arena {
 
     /// `atan2(y, x)`.
     pub fn atan2(&mut self, y: Id, x: Id) -> Id {
-        if self.rules.has(RuleSet::FOLD) {
-            if let (Some(a), Some(b)) = (self.num(y), self.num(x)) {
-                if let Some(v) = a.map(|a| a.atan2(b.to_f64())) {
-                    return self.num_node(v);
-                }
-            }
+        if self.rules.has(RuleSet::FOLD)
+            && let (Some(a), Some(b)) = (self.num(y), self.num(x))
+            && let Some(v) = a.map(|a| a.atan2(b.to_f64()))
+        {
+            return self.num_node(v);
         }
         self.intern(View::Atan2(y, x))
     }
@@ -514,10 +515,10 @@ impl Arena {
         if let Some(v) = self.fold1(a, f64::exp) {
             return v;
         }
-        if self.rules.has(RuleSet::ELEMENTARY) {
-            if let View::Ln(b) = self.view(a) {
-                return b;
-            }
+        if self.rules.has(RuleSet::ELEMENTARY)
+            && let View::Ln(b) = self.view(a)
+        {
+            return b;
         }
         self.intern(View::Exp(a))
     }
@@ -527,10 +528,10 @@ impl Arena {
         if let Some(v) = self.fold1(a, f64::ln) {
             return v;
         }
-        if self.rules.has(RuleSet::ELEMENTARY) {
-            if let View::Exp(b) = self.view(a) {
-                return b;
-            }
+        if self.rules.has(RuleSet::ELEMENTARY)
+            && let View::Exp(b) = self.view(a)
+        {
+            return b;
         }
         self.intern(View::Ln(a))
     }
@@ -558,10 +559,10 @@ impl Arena {
         if self.rules.has(RuleSet::IDENTITY) && a == b {
             return a;
         }
-        if self.rules.has(RuleSet::FOLD) {
-            if let Some(n) = self.num(c) {
-                return if n.to_f64() > 0.0 { a } else { b };
-            }
+        if self.rules.has(RuleSet::FOLD)
+            && let Some(n) = self.num(c)
+        {
+            return if n.to_f64() > 0.0 { a } else { b };
         }
         self.intern(View::Select(c, a, b))
     }

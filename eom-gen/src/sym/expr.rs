@@ -273,7 +273,7 @@ impl<'cx> Add for Expr<'cx> {
         if rhs.is_num(Num::ZERO) {
             return self;
         }
-        self.binary(rhs, Num::add, |a, b| a + b, Arena::add2)
+        self.binary(rhs, Num::checked_add, |a, b| a + b, Arena::add2)
     }
 }
 
@@ -283,7 +283,12 @@ impl<'cx> Sub for Expr<'cx> {
         if rhs.is_num(Num::ZERO) {
             return self;
         }
-        self.binary(rhs, |a, b| a.add(b.neg()), |a, b| a - b, Arena::sub)
+        self.binary(
+            rhs,
+            |a, b| a.checked_add(b.negated()),
+            |a, b| a - b,
+            Arena::sub,
+        )
     }
 }
 
@@ -299,7 +304,7 @@ impl<'cx> Mul for Expr<'cx> {
         if rhs.is_num(Num::ONE) {
             return self;
         }
-        self.binary(rhs, Num::mul, |a, b| a * b, Arena::mul2)
+        self.binary(rhs, Num::checked_mul, |a, b| a * b, Arena::mul2)
     }
 }
 
@@ -309,14 +314,19 @@ impl<'cx> Div for Expr<'cx> {
         if rhs.is_num(Num::ONE) {
             return self;
         }
-        self.binary(rhs, |a, b| a.mul(b.recip()?), |a, b| a / b, Arena::div)
+        self.binary(
+            rhs,
+            |a, b| a.checked_mul(b.recip()?),
+            |a, b| a / b,
+            Arena::div,
+        )
     }
 }
 
 impl<'cx> Neg for Expr<'cx> {
     type Output = Expr<'cx>;
     fn neg(self) -> Expr<'cx> {
-        self.unary(|n| Some(n.neg()), |x| -x, Arena::neg)
+        self.unary(|n| Some(n.negated()), |x| -x, Arena::neg)
     }
 }
 

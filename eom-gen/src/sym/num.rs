@@ -85,10 +85,11 @@ impl Num {
             let mut scaled = x;
             let mut den: i64 = 1;
             while den <= 1 << 20 {
-                if scaled == scaled.trunc() && scaled.abs() < 2147483647.0 {
-                    if let Some(n) = Num::ratio(scaled as i64, den) {
-                        return n;
-                    }
+                if scaled == scaled.trunc()
+                    && scaled.abs() < 2147483647.0
+                    && let Some(n) = Num::ratio(scaled as i64, den)
+                {
+                    return n;
                 }
                 scaled *= 2.0;
                 den *= 2;
@@ -131,7 +132,7 @@ impl Num {
     }
 
     /// `self + other`, exact for rationals when it fits.
-    pub fn add(self, other: Num) -> Option<Num> {
+    pub fn checked_add(self, other: Num) -> Option<Num> {
         if let (Num::Rat(a, b), Num::Rat(c, d)) = (self, other) {
             let (a, b, c, d) = (a as i64, b as i64, c as i64, d as i64);
             if let Some(n) = Num::ratio(a * d + c * b, b * d) {
@@ -142,17 +143,17 @@ impl Num {
     }
 
     /// `self * other`, exact for rationals when it fits.
-    pub fn mul(self, other: Num) -> Option<Num> {
-        if let (Num::Rat(a, b), Num::Rat(c, d)) = (self, other) {
-            if let Some(n) = Num::ratio(a as i64 * c as i64, b as i64 * d as i64) {
-                return Some(n);
-            }
+    pub fn checked_mul(self, other: Num) -> Option<Num> {
+        if let (Num::Rat(a, b), Num::Rat(c, d)) = (self, other)
+            && let Some(n) = Num::ratio(a as i64 * c as i64, b as i64 * d as i64)
+        {
+            return Some(n);
         }
         Num::finite(self.to_f64() * other.to_f64())
     }
 
     /// `-self` (always exact).
-    pub fn neg(self) -> Num {
+    pub fn negated(self) -> Num {
         match self {
             Num::Rat(p, q) => {
                 Num::ratio(-(p as i64), q as i64).unwrap_or(Num::Float(-self.to_f64()))
@@ -183,11 +184,11 @@ impl Num {
         let mut e = n as u32;
         while e > 0 {
             if e & 1 == 1 {
-                acc = acc.mul(base)?;
+                acc = acc.checked_mul(base)?;
             }
             e >>= 1;
             if e > 0 {
-                base = base.mul(base)?;
+                base = base.checked_mul(base)?;
             }
         }
         Some(acc)
@@ -243,7 +244,7 @@ mod tests {
     #[test]
     fn halves_are_exact() {
         let h = Num::ratio(1, 2).unwrap();
-        assert_eq!(h.add(h), Some(Num::ONE), "1/2 + 1/2");
+        assert_eq!(h.checked_add(h), Some(Num::ONE), "1/2 + 1/2");
         assert_eq!(Num::from_f64(0.5), h);
         assert_eq!(Num::from_f64(-3.0), Num::int(-3));
         assert!(matches!(Num::from_f64(0.1), Num::Float(_)));
@@ -252,10 +253,12 @@ mod tests {
     #[test]
     fn twelfths_are_exact() {
         let a = Num::ratio(1, 12).unwrap();
-        let got = a.mul(Num::int(12)).unwrap();
+        let got = a.checked_mul(Num::int(12)).unwrap();
         assert_eq!(got, Num::ONE, "got {got} want 1");
         assert_eq!(
-            Num::ratio(1, 3).unwrap().add(Num::ratio(1, 6).unwrap()),
+            Num::ratio(1, 3)
+                .unwrap()
+                .checked_add(Num::ratio(1, 6).unwrap()),
             Num::ratio(1, 2)
         );
     }
@@ -265,14 +268,14 @@ mod tests {
         assert_eq!(Num::ZERO.recip(), None);
         assert_eq!(Num::ZERO.powi(-2), None);
         assert_eq!(Num::int(-4).sqrt(), None);
-        assert_eq!(Num::Float(1e300).mul(Num::Float(1e300)), None);
+        assert_eq!(Num::Float(1e300).checked_mul(Num::Float(1e300)), None);
         assert_eq!(Num::ratio(9, 4).unwrap().sqrt(), Num::ratio(3, 2));
     }
 
     #[test]
     fn overflow_falls_back_to_float() {
         let big = Num::int(i32::MAX);
-        let got = big.mul(big).unwrap();
+        let got = big.checked_mul(big).unwrap();
         assert!(matches!(got, Num::Float(_)), "got {got:?}");
         assert_eq!(got.to_f64(), (i32::MAX as f64).powi(2));
     }

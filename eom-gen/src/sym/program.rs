@@ -189,6 +189,9 @@ pub struct LowerOptions {
     pub cse: bool,
     /// Run [`Program::optimize`] afterwards.
     pub optimize: bool,
+    /// Then also try [`Program::resimplify`] and keep its result if it has
+    /// fewer operations.
+    pub second_round: bool,
 }
 
 impl Default for LowerOptions {
@@ -196,8 +199,18 @@ impl Default for LowerOptions {
         LowerOptions {
             cse: true,
             optimize: true,
+            second_round: true,
         }
     }
+}
+
+impl LowerOptions {
+    /// No CSE, no optimisation: the tree as written (for tests).
+    pub const PLAIN: LowerOptions = LowerOptions {
+        cse: false,
+        optimize: false,
+        second_round: false,
+    };
 }
 
 struct Lowerer<'a> {
@@ -231,10 +244,10 @@ fn canonical(op: Op) -> Op {
 impl Lowerer<'_> {
     fn emit(&mut self, op: Op) -> Operand {
         let op = canonical(op);
-        if self.cse {
-            if let Some(&o) = self.vn.get(&op) {
-                return o;
-            }
+        if self.cse
+            && let Some(&o) = self.vn.get(&op)
+        {
+            return o;
         }
         let dst = self.next;
         self.next += op.results();
@@ -316,10 +329,10 @@ impl Lowerer<'_> {
     }
 
     fn node(&mut self, id: Id) -> Operand {
-        if self.cse {
-            if let Some(&o) = self.memo.get(&id) {
-                return o;
-            }
+        if self.cse
+            && let Some(&o) = self.memo.get(&id)
+        {
+            return o;
         }
         let o = self.compute(id);
         if self.cse {
@@ -359,10 +372,10 @@ impl Lowerer<'_> {
                 let mut neg: Vec<Operand> = Vec::new();
                 for &c in cs {
                     match self.arena.view(c) {
-                        View::Num(n) if n.is_negative() => neg.push(Operand::Const(n.neg())),
+                        View::Num(n) if n.is_negative() => neg.push(Operand::Const(n.negated())),
                         View::Mul(ms) if self.arena.num(ms[0]).is_some_and(|k| k.is_negative()) => {
                             let (k, skip) = self.split_coef(ms);
-                            let o = self.product(k.neg(), &ms[skip..]);
+                            let o = self.product(k.negated(), &ms[skip..]);
                             neg.push(o);
                         }
                         _ => {
@@ -426,7 +439,48 @@ impl Lowerer<'_> {
     }
 }
 
+/// Multiplications in `x^n` by square-and-multiply.
+fn powi_muls(n: u32) -> usize {
+    (31 - n.leading_zeros() + n.count_ones() - 1) as usize
+}
+
 impl Arena {
+    /// Estimated operation count of lowering `roots`, computed on the DAG
+    /// without building a program: an n-ary sum costs n−1, a product one
+    /// multiplication per extra factor plus one for a coefficient ≠ ±1 and
+    /// one division for all negative powers, `x^n` square-and-multiply,
+    /// every other node one; `sin x` and `cos x` of one argument count once.
+    /// It ignores the sharing of partial sums and products that lowering
+    /// finds, so it is an upper bound of the same shape as [`OpCount::total`].
+    pub fn op_estimate(&self, roots: &[Id]) -> usize {
+        let mut n = 0;
+        let mut trig_args: FxHashSet<Id> = FxHashSet::default();
+        for id in self.reachable(roots, |_| false) {
+            n += match self.view(id) {
+                View::Num(_) | View::Sym(_) => 0,
+                View::Add(cs) => cs.len() - 1,
+                View::Mul(cs) => {
+                    let mut c = cs.len() - 1;
+                    let mut div = false;
+                    for &f in cs {
+                        match self.view(f) {
+                            View::Num(k) if k == Num::ONE || k == Num::MINUS_ONE => {
+                                c = c.saturating_sub(1)
+                            }
+                            View::Pow(_, e) if e < 0 => div = true,
+                            _ => {}
+                        }
+                    }
+                    c + div as usize
+                }
+                View::Pow(_, e) => powi_muls(e.unsigned_abs().max(1)) + (e < 0) as usize,
+                View::Sin(x) | View::Cos(x) => trig_args.insert(x) as usize,
+                _ => 1,
+            };
+        }
+        n
+    }
+
     /// Lower named outputs to one [`Program`] (CSE across all outputs).
     pub fn lower(&self, outputs: &[(&str, Id)], opts: LowerOptions) -> Program {
         let roots: Vec<Id> = outputs.iter().map(|&(_, id)| id).collect();
@@ -470,6 +524,12 @@ impl Arena {
         } else {
             p.remove_dead();
         }
+        if opts.second_round {
+            let q = p.resimplify();
+            if q.op_count().total() < p.op_count().total() {
+                return q;
+            }
+        }
         p
     }
 }
@@ -481,11 +541,11 @@ fn fold(op: &Op) -> Option<Num> {
         _ => None,
     };
     match *op {
-        Op::Add(a, b) => c(&a)?.add(c(&b)?),
-        Op::Sub(a, b) => c(&a)?.add(c(&b)?.neg()),
-        Op::Mul(a, b) => c(&a)?.mul(c(&b)?),
-        Op::Div(a, b) => c(&a)?.mul(c(&b)?.recip()?),
-        Op::Neg(a) => Some(c(&a)?.neg()),
+        Op::Add(a, b) => c(&a)?.checked_add(c(&b)?),
+        Op::Sub(a, b) => c(&a)?.checked_add(c(&b)?.negated()),
+        Op::Mul(a, b) => c(&a)?.checked_mul(c(&b)?),
+        Op::Div(a, b) => c(&a)?.checked_mul(c(&b)?.recip()?),
+        Op::Neg(a) => Some(c(&a)?.negated()),
         Op::Sqrt(a) => c(&a)?.sqrt(),
         Op::Sin(a) => c(&a)?.map(f64::sin),
         Op::Cos(a) => c(&a)?.map(f64::cos),
@@ -570,10 +630,10 @@ impl Program {
             out.push(Instr { dst: ins.dst, op });
         }
         for (_, o) in &mut self.outputs {
-            if let Operand::Tmp(t) = *o {
-                if let Some(&s) = subst.get(&t) {
-                    *o = s;
-                }
+            if let Operand::Tmp(t) = *o
+                && let Some(&s) = subst.get(&t)
+            {
+                *o = s;
             }
         }
         self.instrs = out;

@@ -6,12 +6,16 @@
 //! [`RuleSet`] is re-applied to graphs built under other rules, e.g. raw
 //! ones), then tries each named [`Rewrite`] on the rebuilt node. The run
 //! stops when an iteration changes no root ([`StopReason::Saturated`]) or
-//! a limit is hit.
+//! a limit is hit. With the cost guard on (default), an iteration is only
+//! kept if it does not raise [`Arena::op_estimate`], so the runner never
+//! makes the generated code bigger by that measure.
 //!
 //! Named rewrites (beyond the construction rules; see [`rewrites`]):
 //! - `factor`: pull the factor shared by most terms out of a sum,
 //!   `a·x + b·x + c = (a + b)·x + c` (symbolic `a`, `b`), when at least two
-//!   terms share it. Saves one multiplication per extra term. Uses
+//!   terms share it. Saves one multiplication per extra term. Terms that are
+//!   used elsewhere in the DAG ([`Uses`]) are not factored, since they are
+//!   computed anyway and factoring them would only add work. Uses
 //!   `x^a · x^-a = 1` (assumes the factor is nonzero where it divides out,
 //!   which holds since it multiplied every term it is removed from).
 
@@ -21,14 +25,28 @@ use super::node::{Id, View};
 use rustc_hash::FxHashMap;
 use std::time::{Duration, Instant};
 
+/// How many parents use each node of the DAG being simplified (counted
+/// over the nodes reachable from the roots, plus one per root). Rewrites use
+/// it to avoid destroying sharing: a subexpression used elsewhere is
+/// computed anyway, so rewriting it away here saves nothing.
+#[derive(Clone, Debug, Default)]
+pub struct Uses(FxHashMap<Id, u32>);
+
+impl Uses {
+    /// Number of uses of `id`; nodes not seen count as used once.
+    pub fn get(&self, id: Id) -> u32 {
+        self.0.get(&id).copied().unwrap_or(1)
+    }
+}
+
 /// A named rewrite: returns the replacement of a (canonical) node, or
 /// `None` if it does not apply.
 #[derive(Clone, Copy)]
 pub struct Rewrite {
     /// Name used in reports.
     pub name: &'static str,
-    /// The rewrite.
-    pub apply: fn(&mut Arena, Id) -> Option<Id>,
+    /// The rewrite, given the use counts of the rebuilt DAG's nodes.
+    pub apply: fn(&mut Arena, Id, &Uses) -> Option<Id>,
 }
 
 impl std::fmt::Debug for Rewrite {
@@ -56,6 +74,9 @@ pub enum StopReason {
     NodeLimit,
     /// `time_limit` elapsed.
     TimeLimit,
+    /// The last iteration raised the estimated operation count
+    /// ([`Arena::op_estimate`]); its result was discarded.
+    NoImprovement,
 }
 
 /// Limits and rules of a simplification run.
@@ -71,6 +92,9 @@ pub struct Runner {
     pub rules: RuleSet,
     /// Extra rewrites tried on each rebuilt node.
     pub rewrites: Vec<Rewrite>,
+    /// Keep an iteration's result only if it does not raise the estimated
+    /// operation count; otherwise stop with [`StopReason::NoImprovement`].
+    pub cost_guard: bool,
 }
 
 impl Default for Runner {
@@ -81,6 +105,7 @@ impl Default for Runner {
             time_limit: Duration::from_secs(10),
             rules: RuleSet::ALL,
             rewrites: rewrites(),
+            cost_guard: true,
         }
     }
 }
@@ -126,6 +151,16 @@ impl Runner {
             }
             iterations += 1;
             let order = arena.reachable(&cur, |_| false);
+            let mut old_uses: FxHashMap<Id, u32> = FxHashMap::default();
+            for &r in &cur {
+                *old_uses.entry(r).or_default() += 1;
+            }
+            for &id in &order {
+                for c in arena.view(id).children() {
+                    *old_uses.entry(c).or_default() += 1;
+                }
+            }
+            let mut uses = Uses::default();
             let mut map: FxHashMap<Id, Id> = FxHashMap::default();
             map.reserve(order.len());
             let mut timed_out = false;
@@ -136,18 +171,22 @@ impl Runner {
                 }
                 let mut new = arena.rebuild(id, |c| map[&c]);
                 for (i, r) in self.rewrites.iter().enumerate() {
-                    if let Some(x) = (r.apply)(arena, new) {
+                    if let Some(x) = (r.apply)(arena, new, &uses) {
                         new = x;
                         applied[i].1 += 1;
                     }
                 }
                 map.insert(id, new);
+                *uses.0.entry(new).or_default() += old_uses.get(&id).copied().unwrap_or(1);
             }
             if timed_out {
                 break StopReason::TimeLimit;
             }
             let next: Vec<Id> = cur.iter().map(|r| map[r]).collect();
             let changed = next != cur;
+            if changed && self.cost_guard && arena.op_estimate(&next) > arena.op_estimate(&cur) {
+                break StopReason::NoImprovement;
+            }
             cur = next;
             if !changed {
                 break StopReason::Saturated;
@@ -171,12 +210,13 @@ impl Runner {
     }
 }
 
-/// `factor` rewrite: see the module docs.
-pub fn factor_common(arena: &mut Arena, id: Id) -> Option<Id> {
+/// `factor` rewrite: see the module docs. Terms used elsewhere (shared)
+/// are left out, since they are computed anyway.
+pub fn factor_common(arena: &mut Arena, id: Id, uses: &Uses) -> Option<Id> {
     let View::Add(cs) = arena.view(id) else {
         return None;
     };
-    let cs = cs.to_vec();
+    let (cs, shared): (Vec<Id>, Vec<Id>) = cs.iter().partition(|&&c| uses.get(c) <= 1);
     let terms: Vec<_> = cs.iter().map(|&c| arena.term_of(c)).collect();
     // base -> (number of terms containing it, smallest positive exponent)
     let mut count: FxHashMap<Id, (usize, i32)> = FxHashMap::default();
@@ -197,12 +237,12 @@ pub fn factor_common(arena: &mut Arena, id: Id) -> Option<Id> {
     let (&base, &(n, e)) = count
         .iter()
         .filter(|(_, (n, _))| *n >= 2)
-        .max_by(|(b1, (n1, _)), (b2, (n2, _))| n1.cmp(n2).then(b2.cmp(b1)))?;
+        .max_by(|(b1, (n1, _)), (b2, (n2, _))| n1.cmp(n2).then(arena.canonical_cmp(**b2, **b1)))?;
     debug_assert!(n >= 2);
     let f = arena.pow(base, e);
     let inv = arena.pow(base, -e);
     let mut inner = Vec::new();
-    let mut rest = Vec::new();
+    let mut rest = shared;
     for (&c, t) in cs.iter().zip(&terms) {
         let has = t
             .fs
@@ -248,7 +288,7 @@ mod tests {
         let e = a.parse("(+ (^ (sin x) 2) (^ (cos x) 2) (* 0 y))").unwrap();
         assert_eq!(
             a.to_sexpr_string(e),
-            "(+ (^ (sin x) 2) (^ (cos x) 2) (* 0 y))"
+            "(+ (^ (sin x) 2) (* 0 y) (^ (cos x) 2))"
         );
         let r = Runner::with_rules(RuleSet::ALL).run(&mut a, &[e]);
         assert_eq!(a.to_sexpr_string(r.roots[0]), "1");
@@ -277,5 +317,21 @@ mod tests {
         }
         .run(&mut a, &[e]);
         assert_eq!(r.stop, StopReason::TimeLimit);
+        // A rewrite that only adds work (x → x + 0, kept raw) is discarded.
+        fn worse(a: &mut Arena, id: Id, _: &Uses) -> Option<Id> {
+            let zero = a.constant(0.0);
+            a.as_sym(id).map(|_| a.add2(id, zero))
+        }
+        let runner = Runner {
+            rules: RuleSet::NONE,
+            rewrites: vec![Rewrite {
+                name: "worse",
+                apply: worse,
+            }],
+            ..Runner::default()
+        };
+        let r = runner.run(&mut a, &[e]);
+        assert_eq!(r.stop, StopReason::NoImprovement);
+        assert_eq!(r.roots, vec![e], "result discarded");
     }
 }

@@ -27,7 +27,8 @@ use super::node::{Id, View};
 const MAX_ROUNDS: usize = 16;
 const MAX_FACTORS: usize = 8;
 
-fn replace_sorted(fs: &[Id], drop: &[usize], add: &[Id]) -> Vec<Id> {
+/// `fs` without the factors at `drop`, plus `add`, in canonical order.
+fn replace_sorted(a: &Arena, fs: &[Id], drop: &[usize], add: &[Id]) -> Vec<Id> {
     let mut v: Vec<Id> = fs
         .iter()
         .enumerate()
@@ -35,7 +36,7 @@ fn replace_sorted(fs: &[Id], drop: &[usize], add: &[Id]) -> Vec<Id> {
         .map(|(_, &f)| f)
         .collect();
     v.extend_from_slice(add);
-    v.sort_unstable();
+    v.sort_unstable_by(|&x, &y| a.canonical_cmp(x, y));
     v
 }
 
@@ -80,9 +81,9 @@ impl Arena {
                     .lookup(&partner)
                     .and_then(|p| self.lookup(&View::Pow(p, 2)));
                 if let Some(p2) = p2 {
-                    let pfs = replace_sorted(&terms[i].fs, &[fi], &[p2]);
+                    let pfs = replace_sorted(self, &terms[i].fs, &[fi], &[p2]);
                     if let Some(j) = terms.iter().position(|t| t.coef == coef && t.fs == pfs) {
-                        let rest = replace_sorted(&terms[i].fs, &[fi], &[]);
+                        let rest = replace_sorted(self, &terms[i].fs, &[fi], &[]);
                         Self::remove_pair(terms, i, j);
                         terms.push(Term {
                             coef,
@@ -94,7 +95,7 @@ impl Arena {
                 }
                 // k - k sin²x = k cos²x (and with sin, cos swapped).
                 if terms[i].fs.len() == 1 {
-                    let k = coef.neg();
+                    let k = coef.negated();
                     if let Some(j) = terms.iter().position(|t| t.fs.is_empty() && t.coef == k) {
                         let p = self.intern(partner);
                         let p2 = self.pow(p, 2);
@@ -138,11 +139,11 @@ impl Arena {
                     let (Some(p1), Some(p2)) = (self.lookup(&p[0]), self.lookup(&p[1])) else {
                         continue;
                     };
-                    let pfs = replace_sorted(&terms[i].fs, &[ai, bi], &[p1, p2]);
+                    let pfs = replace_sorted(self, &terms[i].fs, &[ai, bi], &[p1, p2]);
                     let k = terms[i].coef;
                     let Some(j) = terms
                         .iter()
-                        .position(|t| t.fs == pfs && (t.coef == k || t.coef == k.neg()))
+                        .position(|t| t.fs == pfs && (t.coef == k || t.coef == k.negated()))
                     else {
                         continue;
                     };
@@ -155,7 +156,7 @@ impl Arena {
                         self.sub(a, b)
                     };
                     let trig = if cc { self.cos(arg) } else { self.sin(arg) };
-                    let rest = replace_sorted(&terms[i].fs, &[ai, bi], &[]);
+                    let rest = replace_sorted(self, &terms[i].fs, &[ai, bi], &[]);
                     let mut cs = vec![self.num_node(k), trig];
                     cs.extend_from_slice(&rest);
                     let node = self.mul(&cs);

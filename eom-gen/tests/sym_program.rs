@@ -1,0 +1,246 @@
+//! Lowering: pinned programs, operation counts, the second optimisation
+//! round, dead code, and determinism.
+
+use eom_gen::sym::{
+    Arena, Axis, Context, Expr, Instr, LowerOptions, Mat3, Op, Operand, Program, Scalar, SymKind,
+    Symbol, Vec3,
+};
+
+/// Tip of a planar double pendulum: x = l1 sin q1 + l2 sin(q1+q2), y = −l1 cos q1 − l2 cos(q1+q2).
+fn double_pendulum(a: &mut Arena) -> Vec<(&'static str, eom_gen::sym::Id)> {
+    let x = a
+        .parse("(+ (* l1 (sin q1)) (* l2 (sin (+ q1 q2))))")
+        .unwrap();
+    let y = a
+        .parse("(- (+ (* l1 (cos q1)) (* l2 (cos (+ q1 q2)))))")
+        .unwrap();
+    vec![("x", x), ("y", y)]
+}
+
+#[test]
+fn double_pendulum_program_is_pinned() {
+    let mut a = Arena::new();
+    let outs = double_pendulum(&mut a);
+    let p = a.lower(&outs, LowerOptions::default());
+    // Inputs sorted by kind then name: parameters first, then coordinates.
+    let want = "\
+inputs: in0=l1 in1=l2 in2=q1 in3=q2
+(t0, t1) = sin_cos(in2)
+t2 = in0 * t0
+t3 = in2 + in3
+(t4, t5) = sin_cos(t3)
+t6 = in1 * t4
+t7 = t2 + t6
+t8 = in0 * t1
+t9 = in1 * t5
+t10 = t8 + t9
+t11 = -t10
+x = t7
+y = t11
+";
+    assert_eq!(p.to_string(), want, "got\n{p}\nwant\n{want}");
+    let c = p.op_count();
+    assert_eq!(
+        (c.adds, c.muls, c.trig, c.negs, c.total()),
+        (3, 4, 2, 1, 10),
+        "got {c}"
+    );
+}
+
+#[test]
+fn sin_cos_pair_only_when_both_are_needed() {
+    let mut a = Arena::new();
+    let s = a.parse("(* l (sin q1))").unwrap();
+    let p = a.lower(&[("s", s)], LowerOptions::default());
+    assert!(matches!(p.instrs[0].op, Op::Sin(_)), "got\n{p}");
+    let c = a.parse("(* l (cos q1))").unwrap();
+    let p = a.lower(&[("s", s), ("c", c)], LowerOptions::default());
+    assert!(matches!(p.instrs[0].op, Op::SinCos(_)), "got\n{p}");
+    assert_eq!(p.op_count().trig, 1);
+}
+
+#[test]
+fn cse_shares_partial_products_across_outputs() {
+    let mut a = Arena::new();
+    let e1 = a.parse("(* m l (sin q1))").unwrap();
+    let e2 = a.parse("(* 2 m l (sin q1))").unwrap();
+    let e3 = a.parse("(+ (* m l (sin q1)) g)").unwrap();
+    let p = a.lower(
+        &[("e1", e1), ("e2", e2), ("e3", e3)],
+        LowerOptions::default(),
+    );
+    let off = a.lower(&[("e1", e1), ("e2", e2), ("e3", e3)], LowerOptions::PLAIN);
+    // m·l·sin once (2 muls + 1 sin), 2·(…) one mul, + g one add.
+    assert_eq!(p.op_count().total(), 5, "got {}\n{p}", p.op_count());
+    assert!(
+        off.op_count().total() > p.op_count().total(),
+        "cse off: {}",
+        off.op_count()
+    );
+}
+
+#[test]
+fn division_and_powers_lower_to_one_div() {
+    let mut a = Arena::new();
+    let e = a.parse("(/ (* a (^ x 3)) (* b (^ y 2)))").unwrap();
+    let p = a.lower(&[("e", e)], LowerOptions::default());
+    let c = p.op_count();
+    // x³ = x·x·x (2), a·x³ (1), y² (1), b·y² (1); one division
+    assert_eq!((c.muls, c.divs), (5, 1), "got {c}\n{p}");
+    let v = a.values(&[("a", 1.5), ("b", -0.5), ("x", 1.2), ("y", 0.7)]);
+    let want = a.eval(e, &v);
+    let got = p.eval_arena_values(&a, &v)[0];
+    assert!(
+        (got - want).abs() < 1e-14 * want.abs(),
+        "got {got} want {want}"
+    );
+}
+
+/// The prototype's lesson: terms that are equal only after CSE names them
+/// cancel in the second round. Built raw so the arena does not see it.
+#[test]
+fn second_round_folds_temporaries_that_cancel() {
+    let mut a = Arena::with_rules(eom_gen::sym::RuleSet::NONE);
+    let e = a.parse("(+ (* (* x y) z) (- (* z (* y x))) w)").unwrap();
+    let raw = a.lower(
+        &[("e", e)],
+        LowerOptions {
+            optimize: false,
+            second_round: false,
+            ..LowerOptions::default()
+        },
+    );
+    let opt = a.lower(&[("e", e)], LowerOptions::default());
+    assert_eq!(opt.to_string(), "inputs: in0=w\ne = in0\n", "got\n{opt}");
+    assert!(raw.op_count().total() > 0, "raw:\n{raw}");
+}
+
+#[test]
+fn optimize_applies_identities_and_removes_dead_code() {
+    let x = Operand::Var(0);
+    let t = Operand::Tmp;
+    let one = Operand::Const(eom_gen::sym::Num::ONE);
+    let mut p = Program {
+        inputs: vec![Symbol {
+            kind: SymKind::Param,
+            name: "x".into(),
+        }],
+        instrs: vec![
+            Instr {
+                dst: 0,
+                op: Op::Mul(x, one),
+            }, // x
+            Instr {
+                dst: 1,
+                op: Op::Sub(t(0), x),
+            }, // 0
+            Instr {
+                dst: 2,
+                op: Op::Add(t(1), x),
+            }, // x
+            Instr {
+                dst: 3,
+                op: Op::SinCos(t(2)),
+            }, // only cos used
+            Instr {
+                dst: 5,
+                op: Op::Neg(t(4)),
+            },
+            Instr {
+                dst: 6,
+                op: Op::Neg(t(5)),
+            }, // cos x
+            Instr {
+                dst: 7,
+                op: Op::Exp(x),
+            }, // dead
+        ],
+        outputs: vec![("c".into(), t(6))],
+        n_tmps: 8,
+    };
+    let removed = p.optimize();
+    let want = "inputs: in0=x\nt0 = cos(in0)\nc = t0\n";
+    assert_eq!(p.to_string(), want, "got\n{p}");
+    assert_eq!(removed, 6);
+    assert_eq!(p.eval(&[0.3]), vec![0.3f64.cos()]);
+}
+
+/// A 6-link spatial chain built generically on `Expr`: enough to exercise
+/// rotations, cross products and CSE.
+fn chain_outputs(cx: &Context) -> Vec<(String, Expr<'_>)> {
+    let l = cx.param("l").unwrap();
+    let mut r = Mat3::<Expr<'_>>::identity();
+    let mut p = Vec3::<Expr<'_>>::zero();
+    let mut w = Vec3::<Expr<'_>>::zero();
+    let mut outs = Vec::new();
+    for i in 0..6u32 {
+        let axis = [Axis::Z, Axis::Y, Axis::X][i as usize % 3];
+        r = r * Mat3::rot(axis, cx.q(i));
+        w = w + r.mul_vec(Vec3::unit(axis).scale(cx.u(i)));
+        let v = w.cross(r.mul_vec(Vec3::new(l, Expr::zero(), Expr::zero())));
+        p = p + r.mul_vec(Vec3::new(l, Expr::zero(), Expr::from_ratio(1, 2)));
+        for k in 0..3 {
+            outs.push((format!("p{i}_{k}"), p[k]));
+            outs.push((format!("v{i}_{k}"), v[k]));
+        }
+    }
+    outs
+}
+
+fn build_chain() -> (Program, Vec<String>) {
+    let cx = Context::new();
+    let outs = chain_outputs(&cx);
+    let text: Vec<String> = outs.iter().map(|(_, e)| e.to_string()).collect();
+    let named: Vec<(&str, Expr<'_>)> = outs.iter().map(|(n, e)| (n.as_str(), *e)).collect();
+    (cx.lower(&named, LowerOptions::default()), text)
+}
+
+#[test]
+fn building_twice_gives_identical_programs_and_text() {
+    let (p1, t1) = build_chain();
+    let (p2, t2) = build_chain();
+    assert_eq!(t1, t2, "printed expressions differ");
+    assert_eq!(p1, p2, "programs differ");
+    assert_eq!(p1.to_string(), p2.to_string());
+}
+
+#[test]
+fn printed_form_does_not_depend_on_construction_order() {
+    let srcs = [
+        "(+ (* l2 (cos (+ q1 q2))) (* l1 (cos q1)) (sin (- q2 q1)))",
+        "(* m (+ a b) (sin c))",
+        "(- (* (cos a) (cos b)) (* (sin b) (sin a)))",
+    ];
+    let mut fwd = Arena::new();
+    let show = |a: &mut Arena, s: &str| {
+        let id = a.parse(s).unwrap();
+        a.to_sexpr_string(id)
+    };
+    let f: Vec<String> = srcs.iter().map(|s| show(&mut fwd, s)).collect();
+    let mut rev = Arena::new();
+    // Create the symbols in another order first.
+    rev.parse("(+ c b a m l2 l1 q2 q1)").unwrap();
+    let mut r: Vec<String> = srcs.iter().rev().map(|s| show(&mut rev, s)).collect();
+    r.reverse();
+    assert_eq!(f, r);
+}
+
+#[test]
+fn chain_program_matches_expressions() {
+    let cx = Context::new();
+    let outs = chain_outputs(&cx);
+    let named: Vec<(&str, Expr<'_>)> = outs.iter().map(|(n, e)| (n.as_str(), *e)).collect();
+    let p = cx.lower(&named, LowerOptions::default());
+    let vals = cx.arena().values_with(|s| 0.1 + 0.37 * s.index() as f64);
+    let got = p.eval_arena_values(&cx.arena(), &vals);
+    for (i, (name, e)) in outs.iter().enumerate() {
+        let want = cx.eval(*e, &vals);
+        assert!(
+            (got[i] - want).abs() <= 1e-12 * (1.0 + want.abs()),
+            "{name}: got {} want {want}",
+            got[i]
+        );
+    }
+    // Every rotation angle needs exactly one sin_cos.
+    assert_eq!(p.op_count().trig, 6, "got {}", p.op_count());
+}
