@@ -13,7 +13,7 @@ fn system(name: &str) -> System {
 }
 
 /// One RK4 step of q̇ = N(q) u, u̇ = FD(q, u); quaternions renormalised.
-fn step(num: &Numeric, quats: &[usize], q: &mut Vec<f64>, u: &mut Vec<f64>, h: f64) {
+fn step(num: &Numeric, quats: &[usize], q: &mut [f64], u: &mut [f64], h: f64) {
     let zero = vec![0.0; u.len()];
     let f = |q: &[f64], u: &[f64]| {
         (

@@ -303,7 +303,8 @@ fn variant(name: &str, edits: &[(&str, &str)]) -> System {
 #[test]
 fn tunable_parameters_locked_joints_springs_and_inputs_agree_with_f64() {
     use eom_gen::mech::NumericEnv;
-    let cases: Vec<(&str, System, Vec<(&str, f64)>)> = vec![
+    type Case = (&'static str, System, Vec<(&'static str, f64)>);
+    let cases: Vec<Case> = vec![
         // Tunable length and gravity: symbols in the generated code, set at run time.
         (
             "tunable",
@@ -385,6 +386,58 @@ fn tunable_parameters_locked_joints_springs_and_inputs_agree_with_f64() {
         }
         if what == "locked" {
             assert_eq!(sys.nu(), 1);
+        }
+    }
+}
+
+fn chain_fd(n: usize, spatial: bool) -> eom_gen::mech::Formulation {
+    let text = n_link_chain(n, spatial).to_ron();
+    let sys = check(&Source::new("chain", text))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let request = Request {
+        mass_matrix: false,
+        bias: false,
+        inverse_dynamics: false,
+        energy: false,
+        momentum: false,
+        ..Request::default()
+    };
+    formulate(&sys, request).expect("formulates")
+}
+
+fn chain_ops(n: usize, spatial: bool) -> usize {
+    chain_fd(n, spatial)
+        .forward_dynamics
+        .map_or(0, |p| p.op_count().total())
+}
+
+#[test]
+fn forward_dynamics_op_count_grows_linearly() {
+    // Op counts are exact, so this is a test, not a benchmark:
+    // ops(200)/ops(100) ≤ 2.1 for planar and spatial chains.
+    for spatial in [false, true] {
+        let (a, b) = (chain_ops(100, spatial), chain_ops(200, spatial));
+        let ratio = b as f64 / a as f64;
+        assert!(
+            ratio <= 2.1,
+            "spatial={spatial}: ops(200)/ops(100) = {b}/{a} = {ratio:.3}"
+        );
+    }
+}
+
+#[test]
+#[ignore = "prints the op counts of chains; run with --ignored --nocapture"]
+fn print_chain_ops() {
+    for spatial in [false, true] {
+        for n in [5, 10, 25, 50, 100, 200] {
+            let f = chain_fd(n, spatial);
+            let c: Vec<_> = f
+                .fd_candidates
+                .iter()
+                .map(|(form, c)| (*form, c.total()))
+                .collect();
+            println!("spatial={spatial} n={n}: {c:?} {:.3}s", f.seconds);
         }
     }
 }
