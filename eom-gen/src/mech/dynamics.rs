@@ -24,7 +24,7 @@
 use super::joint::JointModel;
 use super::spatial::{Force, Inertia6, Motion, Pose};
 use super::tree::{Coords, Env, Lowering, MechError, TreeModel};
-use crate::sym::{Scalar, Vec3};
+use crate::sym::{Mat3, Scalar, Vec3};
 use crate::system::{ForceElement, System};
 use std::ops::{Add, Sub};
 
@@ -248,6 +248,9 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             v: Vec::with_capacity(n),
             known_ud: Vec::with_capacity(n),
         };
+        // Per body: (base rotation, axis, summed angle) of a run of revolute
+        // joints about one axis ending at it.
+        let mut chain: Vec<Option<(Mat3<S>, Vec3<S>, S)>> = Vec::with_capacity(n);
         // Forward pass over bodies (Featherstone Table 5.1, first loop).
         for (i, body) in self.tree.bodies.iter().enumerate() {
             let (q, u, known) = self.joint_state(i, st)?;
@@ -267,10 +270,30 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 .iter()
                 .zip(&u)
                 .fold(Motion::zero(), |acc, (col, &uk)| acc.add(col.scale(uk)));
-            let (v, world) = match body.parent {
+            let (v, mut world) = match body.parent {
                 Some(p) => (x.motion_to_child(k.v[p]).add(vj), k.world[p].then(&x)),
                 None => (vj, x),
             };
+            // Consecutive revolute joints about one axis (Wittenburg's
+            // specialisation): the world rotation is the chain's base
+            // rotation turned by the summed angle, one sin/cos instead of a
+            // matrix product per body.
+            let summed = match (&body.kind, body.parent.and_then(|p| chain[p].clone())) {
+                (JointModel::Revolute(a), Some((base, axis, angle)))
+                    if (0..3).all(|c| (axis.0[c] - a.0[c]).is_zero()) && is_identity(&body.frame_parent.e) && is_identity(&fc.e) =>
+                {
+                    Some((base, axis, angle + q[0]))
+                }
+                (JointModel::Revolute(a), _) if is_identity(&fc.e) => {
+                    let base = body.parent.map_or(body.frame_parent.e, |p| k.world[p].e * body.frame_parent.e);
+                    Some((base, *a, q[0]))
+                }
+                _ => None,
+            };
+            if let Some((base, axis, angle)) = &summed {
+                world.e = *base * Mat3::from_axis_angle(*axis, *angle);
+            }
+            chain.push(summed);
             k.x.push(x);
             k.world.push(world);
             k.s.push(s);
@@ -740,4 +763,9 @@ pub fn ltdl_solve<S: Scalar>(f: &[Vec<S>], lambda: &[Option<usize>], mut b: Vec<
         }
     }
     b
+}
+
+/// Is `m` structurally the identity (exact zeros and ones)?
+fn is_identity<S: Scalar>(m: &Mat3<S>) -> bool {
+    (0..3).all(|i| (0..3).all(|j| if i == j { m.0[i][j].is_one() } else { m.0[i][j].is_zero() }))
 }
