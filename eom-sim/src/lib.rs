@@ -33,10 +33,12 @@ mod integrate;
 pub use integrate::dop853::Dop853;
 pub use integrate::dopri5::Dopri5;
 pub use integrate::driver::{
-    Direction, Event, EventAction, EventHit, Solution, SolveOptions, Stepper, integrate,
+    Direction, Event, EventAction, EventFn, EventHit, Solution, SolveOptions, Stepper, integrate,
 };
 pub use integrate::fixed::{Euler, Rk4};
-pub use integrate::midpoint::{ImplicitMidpoint, SecondOrderSystem, VerletSolution, stormer_verlet};
+pub use integrate::midpoint::{
+    ImplicitMidpoint, SecondOrderSystem, VerletSolution, stormer_verlet,
+};
 pub use integrate::radau5::Radau5;
 pub use integrate::system::{FnSystem, OdeSystem};
 pub use integrate::{ExplicitConfig, Stats, StopReason};

@@ -1,5 +1,8 @@
 //! Events, dense sampling, non-finite states, limits.
 
+// Reference values keep their published digits; loops mirror the formulas.
+#![allow(clippy::excessive_precision, clippy::needless_range_loop)]
+
 mod common;
 
 use common::*;
@@ -19,16 +22,39 @@ impl OdeSystem<2> for Osc {
 }
 
 fn stop_at_first_zero<M: Stepper<2>>(name: &str, mut m: M, tol: f64) {
-    let mut events = [Event::new(|_t, y: &[f64; 2]| y[0], Direction::Falling, EventAction::Stop)];
-    let s = integrate(&mut m, &Osc, 0.0, [1.0, 0.0], 10.0, &SolveOptions::default(), &mut events);
+    let mut events = [Event::new(
+        |_t, y: &[f64; 2]| y[0],
+        Direction::Falling,
+        EventAction::Stop,
+    )];
+    let s = integrate(
+        &mut m,
+        &Osc,
+        0.0,
+        [1.0, 0.0],
+        10.0,
+        &SolveOptions::default(),
+        &mut events,
+    );
     let StopReason::EventStop { index, t } = s.stop else {
         panic!("{name}: got {:?} want EventStop", s.stop);
     };
     assert_eq!(index, 0);
-    eprintln!("{name}: event at {t:.17} (π/2 error {:.2e}), y = {:?}", (t - PI / 2.0).abs(), s.y_final);
-    assert!((t - PI / 2.0).abs() < tol, "{name}: event time got {t} want π/2 ± {tol:e}");
+    eprintln!(
+        "{name}: event at {t:.17} (π/2 error {:.2e}), y = {:?}",
+        (t - PI / 2.0).abs(),
+        s.y_final
+    );
+    assert!(
+        (t - PI / 2.0).abs() < tol,
+        "{name}: event time got {t} want π/2 ± {tol:e}"
+    );
     assert_eq!(s.t_final, t);
-    assert!(s.y_final[0] <= 0.0 && s.y_final[0].abs() < 1e-9, "{name}: y at event {:?}", s.y_final);
+    assert!(
+        s.y_final[0] <= 0.0 && s.y_final[0].abs() < 1e-9,
+        "{name}: y at event {:?}",
+        s.y_final
+    );
 }
 
 /// cos t crosses zero (falling) at π/2; located on the dense output to
@@ -48,14 +74,40 @@ fn terminal_event_located_to_1e_10() {
 #[test]
 fn recorded_events_with_direction_filter() {
     let mut events = [
-        Event::new(|_t, y: &[f64; 2]| y[0], Direction::Both, EventAction::Record),
-        Event::new(|_t, y: &[f64; 2]| y[0], Direction::Rising, EventAction::Record),
-        Event::new(|_t, y: &[f64; 2]| y[0] - 0.5, Direction::Falling, EventAction::Record),
+        Event::new(
+            |_t, y: &[f64; 2]| y[0],
+            Direction::Both,
+            EventAction::Record,
+        ),
+        Event::new(
+            |_t, y: &[f64; 2]| y[0],
+            Direction::Rising,
+            EventAction::Record,
+        ),
+        Event::new(
+            |_t, y: &[f64; 2]| y[0] - 0.5,
+            Direction::Falling,
+            EventAction::Record,
+        ),
     ];
     let mut m = Dopri5::<2>::new(1e-10, 1e-10);
-    let s = integrate(&mut m, &Osc, 0.0, [1.0, 0.0], 10.0, &SolveOptions::default(), &mut events);
+    let s = integrate(
+        &mut m,
+        &Osc,
+        0.0,
+        [1.0, 0.0],
+        10.0,
+        &SolveOptions::default(),
+        &mut events,
+    );
     assert_eq!(s.stop, StopReason::Finished);
-    let times = |i: usize| s.events.iter().filter(|e| e.index == i).map(|e| e.t).collect::<Vec<_>>();
+    let times = |i: usize| {
+        s.events
+            .iter()
+            .filter(|e| e.index == i)
+            .map(|e| e.t)
+            .collect::<Vec<_>>()
+    };
     let both = times(0);
     let rising = times(1);
     let half = times(2);
@@ -84,11 +136,25 @@ fn ball_hits_ground() {
         dy[0] = y[1];
         dy[1] = -9.81;
     });
-    let mut ev = [Event::new(|_t, y: &[f64; 2]| y[0], Direction::Falling, EventAction::Stop)];
+    let mut ev = [Event::new(
+        |_t, y: &[f64; 2]| y[0],
+        Direction::Falling,
+        EventAction::Stop,
+    )];
     let mut m = Dop853::<2>::new(1e-10, 1e-10);
-    let s = integrate(&mut m, &ball, 0.0, [10.0, 0.0], 5.0, &SolveOptions::default(), &mut ev);
+    let s = integrate(
+        &mut m,
+        &ball,
+        0.0,
+        [10.0, 0.0],
+        5.0,
+        &SolveOptions::default(),
+        &mut ev,
+    );
     let want = (20.0f64 / 9.81).sqrt();
-    let StopReason::EventStop { t, .. } = s.stop else { panic!("got {:?}", s.stop) };
+    let StopReason::EventStop { t, .. } = s.stop else {
+        panic!("got {:?}", s.stop)
+    };
     assert!((t - want).abs() < 1e-12, "impact got {t} want {want}");
 }
 
@@ -101,25 +167,43 @@ fn dense_sampling_every_dt() {
         ("DOPRI5", {
             let mut m = Dopri5::<1>::new(1e-10, 1e-10);
             let s = integrate(&mut m, &Forced, 0.0, [1.0], 10.0, &opts, &mut []);
-            assert!(s.t.is_empty(), "steps not recorded when record_steps = false");
-            s.t_out.iter().zip(&s.y_out).map(|(t, y)| (y[0] - forced_exact(*t)).abs()).collect::<Vec<_>>()
+            assert!(
+                s.t.is_empty(),
+                "steps not recorded when record_steps = false"
+            );
+            s.t_out
+                .iter()
+                .zip(&s.y_out)
+                .map(|(t, y)| (y[0] - forced_exact(*t)).abs())
+                .collect::<Vec<_>>()
         }),
         ("DOP853", {
             let mut m = Dop853::<1>::new(1e-10, 1e-10);
             let s = integrate(&mut m, &Forced, 0.0, [1.0], 10.0, &opts, &mut []);
-            s.t_out.iter().zip(&s.y_out).map(|(t, y)| (y[0] - forced_exact(*t)).abs()).collect::<Vec<_>>()
+            s.t_out
+                .iter()
+                .zip(&s.y_out)
+                .map(|(t, y)| (y[0] - forced_exact(*t)).abs())
+                .collect::<Vec<_>>()
         }),
         ("RADAU5", {
             let mut m = Radau5::<1>::new(1e-10, 1e-10);
             let s = integrate(&mut m, &Forced, 0.0, [1.0], 10.0, &opts, &mut []);
-            s.t_out.iter().zip(&s.y_out).map(|(t, y)| (y[0] - forced_exact(*t)).abs()).collect::<Vec<_>>()
+            s.t_out
+                .iter()
+                .zip(&s.y_out)
+                .map(|(t, y)| (y[0] - forced_exact(*t)).abs())
+                .collect::<Vec<_>>()
         }),
     ] {
         assert_eq!(errs.len(), 101, "{name}: sample count");
         errs.sort_by(f64::total_cmp);
         let worst = errs[100];
         eprintln!("{name}: worst dense-sample error {worst:.2e}");
-        assert!(worst < 1e-8, "{name}: dense sample error got {worst:e} want < 1e-8");
+        assert!(
+            worst < 1e-8,
+            "{name}: dense sample error got {worst:e} want < 1e-8"
+        );
     }
 }
 
@@ -128,13 +212,37 @@ fn dense_sampling_every_dt() {
 fn backward_integration() {
     let y5 = [forced_exact(5.0)];
     let mut m = Dopri5::<1>::new(1e-10, 1e-10);
-    let s = integrate(&mut m, &Forced, 5.0, y5, 0.0, &SolveOptions::default(), &mut []);
+    let s = integrate(
+        &mut m,
+        &Forced,
+        5.0,
+        y5,
+        0.0,
+        &SolveOptions::default(),
+        &mut [],
+    );
     assert_eq!(s.stop, StopReason::Finished);
     assert_eq!(s.t_final, 0.0);
-    assert!((s.y_final[0] - 1.0).abs() < 1e-8, "got {} want 1", s.y_final[0]);
+    assert!(
+        (s.y_final[0] - 1.0).abs() < 1e-8,
+        "got {} want 1",
+        s.y_final[0]
+    );
     let mut r = Radau5::<1>::new(1e-10, 1e-10);
-    let s = integrate(&mut r, &Forced, 5.0, y5, 0.0, &SolveOptions::default(), &mut []);
-    assert!((s.y_final[0] - 1.0).abs() < 1e-8, "RADAU5 got {} want 1", s.y_final[0]);
+    let s = integrate(
+        &mut r,
+        &Forced,
+        5.0,
+        y5,
+        0.0,
+        &SolveOptions::default(),
+        &mut [],
+    );
+    assert!(
+        (s.y_final[0] - 1.0).abs() < 1e-8,
+        "RADAU5 got {} want 1",
+        s.y_final[0]
+    );
 }
 
 /// y' = y², y(0) = 1 blows up at t = 1 (y = 1/(1 - t)). Every method must
@@ -147,25 +255,83 @@ fn blow_up_stops_cleanly() {
     let check = |name: &str, stop: StopReason, t: f64| {
         eprintln!("{name}: {stop:?} at t = {t}");
         assert!(
-            matches!(stop, StopReason::NonFinite { component: 0, .. } | StopReason::StepSizeTooSmall { .. }),
+            matches!(
+                stop,
+                StopReason::NonFinite { component: 0, .. } | StopReason::StepSizeTooSmall { .. }
+            ),
             "{name}: got {stop:?}"
         );
         assert!(t <= 1.0 + 0.02 && t > 0.9, "{name}: stopped at t = {t}");
     };
-    let s = integrate(&mut Dopri5::<1>::new(1e-8, 1e-8), &sys, 0.0, [1.0], 2.0, &opts, &mut []);
+    let s = integrate(
+        &mut Dopri5::<1>::new(1e-8, 1e-8),
+        &sys,
+        0.0,
+        [1.0],
+        2.0,
+        &opts,
+        &mut [],
+    );
     check("DOPRI5", s.stop, s.t_final);
-    let s = integrate(&mut Dop853::<1>::new(1e-8, 1e-8), &sys, 0.0, [1.0], 2.0, &opts, &mut []);
+    let s = integrate(
+        &mut Dop853::<1>::new(1e-8, 1e-8),
+        &sys,
+        0.0,
+        [1.0],
+        2.0,
+        &opts,
+        &mut [],
+    );
     check("DOP853", s.stop, s.t_final);
-    let s = integrate(&mut Radau5::<1>::new(1e-8, 1e-8), &sys, 0.0, [1.0], 2.0, &opts, &mut []);
+    let s = integrate(
+        &mut Radau5::<1>::new(1e-8, 1e-8),
+        &sys,
+        0.0,
+        [1.0],
+        2.0,
+        &opts,
+        &mut [],
+    );
     check("RADAU5", s.stop, s.t_final);
-    let s = integrate(&mut Rk4::<1>::new(0.01), &sys, 0.0, [1.0], 2.0, &opts, &mut []);
+    let s = integrate(
+        &mut Rk4::<1>::new(0.01),
+        &sys,
+        0.0,
+        [1.0],
+        2.0,
+        &opts,
+        &mut [],
+    );
     check("RK4", s.stop, s.t_final);
-    let s = integrate(&mut Euler::<1>::new(0.01), &sys, 0.0, [1.0], 2.0, &opts, &mut []);
-    assert!(matches!(s.stop, StopReason::NonFinite { .. } | StopReason::Finished), "Euler {:?}", s.stop);
-    let s = integrate(&mut ImplicitMidpoint::<1>::new(0.01), &sys, 0.0, [1.0], 2.0, &opts, &mut []);
+    let s = integrate(
+        &mut Euler::<1>::new(0.01),
+        &sys,
+        0.0,
+        [1.0],
+        2.0,
+        &opts,
+        &mut [],
+    );
+    assert!(
+        matches!(s.stop, StopReason::NonFinite { .. } | StopReason::Finished),
+        "Euler {:?}",
+        s.stop
+    );
+    let s = integrate(
+        &mut ImplicitMidpoint::<1>::new(0.01),
+        &sys,
+        0.0,
+        [1.0],
+        2.0,
+        &opts,
+        &mut [],
+    );
     eprintln!("midpoint: {:?} at {}", s.stop, s.t_final);
     assert!(
-        matches!(s.stop, StopReason::NonFinite { .. } | StopReason::ConvergenceFailure { .. }),
+        matches!(
+            s.stop,
+            StopReason::NonFinite { .. } | StopReason::ConvergenceFailure { .. }
+        ),
         "midpoint got {:?}",
         s.stop
     );
@@ -181,13 +347,61 @@ fn nan_component_is_named() {
         dy[2] = (1.0 - y[0]).sqrt();
     });
     let opts = SolveOptions::default();
-    let s = integrate(&mut Rk4::<3>::new(0.03), &sys, 0.0, [0.0; 3], 2.0, &opts, &mut []);
+    let s = integrate(
+        &mut Rk4::<3>::new(0.03),
+        &sys,
+        0.0,
+        [0.0; 3],
+        2.0,
+        &opts,
+        &mut [],
+    );
     eprintln!("RK4: {:?}", s.stop);
-    assert!(matches!(s.stop, StopReason::NonFinite { component: 2, t } if t > 0.9 && t <= 1.0), "got {:?}", s.stop);
+    assert!(
+        matches!(s.stop, StopReason::NonFinite { component: 2, t } if t > 0.9 && t <= 1.0),
+        "got {:?}",
+        s.stop
+    );
     for (name, stop) in [
-        ("DOPRI5", integrate(&mut Dopri5::<3>::new(1e-8, 1e-8), &sys, 0.0, [0.0; 3], 2.0, &opts, &mut []).stop),
-        ("DOP853", integrate(&mut Dop853::<3>::new(1e-8, 1e-8), &sys, 0.0, [0.0; 3], 2.0, &opts, &mut []).stop),
-        ("RADAU5", integrate(&mut Radau5::<3>::new(1e-8, 1e-8), &sys, 0.0, [0.0; 3], 2.0, &opts, &mut []).stop),
+        (
+            "DOPRI5",
+            integrate(
+                &mut Dopri5::<3>::new(1e-8, 1e-8),
+                &sys,
+                0.0,
+                [0.0; 3],
+                2.0,
+                &opts,
+                &mut [],
+            )
+            .stop,
+        ),
+        (
+            "DOP853",
+            integrate(
+                &mut Dop853::<3>::new(1e-8, 1e-8),
+                &sys,
+                0.0,
+                [0.0; 3],
+                2.0,
+                &opts,
+                &mut [],
+            )
+            .stop,
+        ),
+        (
+            "RADAU5",
+            integrate(
+                &mut Radau5::<3>::new(1e-8, 1e-8),
+                &sys,
+                0.0,
+                [0.0; 3],
+                2.0,
+                &opts,
+                &mut [],
+            )
+            .stop,
+        ),
     ] {
         eprintln!("{name}: {stop:?}");
         assert!(
@@ -196,18 +410,74 @@ fn nan_component_is_named() {
         );
     }
     // A non-finite initial state is rejected before any step.
-    let s = integrate(&mut Dopri5::<3>::new(1e-6, 1e-6), &sys, 0.0, [0.0, f64::NAN, 0.0], 1.0, &opts, &mut []);
-    assert_eq!(s.stop, StopReason::NonFinite { t: 0.0, component: 1 });
+    let s = integrate(
+        &mut Dopri5::<3>::new(1e-6, 1e-6),
+        &sys,
+        0.0,
+        [0.0, f64::NAN, 0.0],
+        1.0,
+        &opts,
+        &mut [],
+    );
+    assert_eq!(
+        s.stop,
+        StopReason::NonFinite {
+            t: 0.0,
+            component: 1
+        }
+    );
 }
 
 #[test]
 fn max_steps_is_enforced() {
-    let opts = SolveOptions { max_steps: 50, ..SolveOptions::default() };
-    let s = integrate(&mut Dopri5::<4>::new(1e-12, 1e-12), &Arenstorf, 0.0, ARENSTORF_Y0, ARENSTORF_T, &opts, &mut []);
-    assert!(matches!(s.stop, StopReason::MaxSteps { .. }), "got {:?}", s.stop);
+    let opts = SolveOptions {
+        max_steps: 50,
+        ..SolveOptions::default()
+    };
+    let s = integrate(
+        &mut Dopri5::<4>::new(1e-12, 1e-12),
+        &Arenstorf,
+        0.0,
+        ARENSTORF_Y0,
+        ARENSTORF_T,
+        &opts,
+        &mut [],
+    );
+    assert!(
+        matches!(s.stop, StopReason::MaxSteps { .. }),
+        "got {:?}",
+        s.stop
+    );
     assert_eq!(s.stats.steps, 50);
-    let s = integrate(&mut Rk4::<4>::new(1e-3), &Arenstorf, 0.0, ARENSTORF_Y0, ARENSTORF_T, &opts, &mut []);
-    assert!(matches!(s.stop, StopReason::MaxSteps { .. }), "got {:?}", s.stop);
-    let s = integrate(&mut Radau5::<2>::new(1e-10, 1e-10), &VanDerPol { eps: 1e-6, analytic_jacobian: false }, 0.0, [2.0, 0.0], 2.0, &opts, &mut []);
-    assert!(matches!(s.stop, StopReason::MaxSteps { .. }), "got {:?}", s.stop);
+    let s = integrate(
+        &mut Rk4::<4>::new(1e-3),
+        &Arenstorf,
+        0.0,
+        ARENSTORF_Y0,
+        ARENSTORF_T,
+        &opts,
+        &mut [],
+    );
+    assert!(
+        matches!(s.stop, StopReason::MaxSteps { .. }),
+        "got {:?}",
+        s.stop
+    );
+    let s = integrate(
+        &mut Radau5::<2>::new(1e-10, 1e-10),
+        &VanDerPol {
+            eps: 1e-6,
+            analytic_jacobian: false,
+        },
+        0.0,
+        [2.0, 0.0],
+        2.0,
+        &opts,
+        &mut [],
+    );
+    assert!(
+        matches!(s.stop, StopReason::MaxSteps { .. }),
+        "got {:?}",
+        s.stop
+    );
 }

@@ -3,6 +3,9 @@
 //! extra stages), following Hairer's `dop853.f` (Hairer, Nørsett & Wanner,
 //! *Solving ODEs I*, II.10).
 
+// Coefficients are kept with all the digits Hairer published.
+#![allow(clippy::excessive_precision)]
+
 use super::dopri5::{Control, Verdict};
 use super::driver::Stepper;
 use super::system::OdeSystem;

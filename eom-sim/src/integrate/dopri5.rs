@@ -141,7 +141,13 @@ impl Control {
     /// Hairer's controller: `fac11 = err^expo1`, `fac = fac11 / facold^beta`,
     /// `h_new = h / clamp(fac / safe, 1/fac_max, 1/fac_min)`; on rejection
     /// `h_new = h / min(1/fac_min, fac11 / safe)`.
-    pub fn decide(&mut self, err: f64, expo1: f64, cfg: &ExplicitConfig, stats: &mut Stats) -> Verdict {
+    pub fn decide(
+        &mut self,
+        err: f64,
+        expo1: f64,
+        cfg: &ExplicitConfig,
+        stats: &mut Stats,
+    ) -> Verdict {
         let facc1 = 1.0 / cfg.fac_min;
         let facc2 = 1.0 / cfg.fac_max;
         let err = if err.is_nan() { f64::INFINITY } else { err };
@@ -205,7 +211,7 @@ impl Control {
 
     /// Whether the stiffness test runs after this accepted step.
     pub fn test_stiffness(&self, cfg: &ExplicitConfig, stats: &Stats) -> bool {
-        cfg.nstiff > 0 && (stats.accepted % cfg.nstiff == 0 || self.iasti > 0)
+        cfg.nstiff > 0 && (stats.accepted.is_multiple_of(cfg.nstiff) || self.iasti > 0)
     }
 
     /// Initial step: user value or HINIT.
@@ -231,7 +237,18 @@ impl Control {
         self.h = if cfg.h0 != 0.0 {
             cfg.h0.abs().min(self.hmax) * self.posneg
         } else {
-            hinit(sys, t0, y0, f0, self.posneg, order, self.hmax, cfg.rtol, cfg.atol, stats)
+            hinit(
+                sys,
+                t0,
+                y0,
+                f0,
+                self.posneg,
+                order,
+                self.hmax,
+                cfg.rtol,
+                cfg.atol,
+                stats,
+            )
         };
     }
 }
@@ -353,8 +370,7 @@ impl<const N: usize> Stepper<N> for Dopri5<N> {
             let mut err = 0.0;
             for i in 0..N {
                 let e = h
-                    * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i]
-                        + E7 * k7[i]);
+                    * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
                 err += (e / weight(cfg.atol, cfg.rtol, y[i], y1[i])).powi(2);
             }
             let mut err = (err / N as f64).sqrt();
@@ -385,7 +401,11 @@ impl<const N: usize> Stepper<N> for Dopri5<N> {
                         self.cont[2][i] = bspl;
                         self.cont[3][i] = ydiff - h * k7[i] - bspl;
                         self.cont[4][i] = h
-                            * (D1 * k1[i] + D3 * k3[i] + D4 * k4[i] + D5 * k5[i] + D6 * k6[i]
+                            * (D1 * k1[i]
+                                + D3 * k3[i]
+                                + D4 * k4[i]
+                                + D5 * k5[i]
+                                + D6 * k6[i]
                                 + D7 * k7[i]);
                     }
                     self.t_prev = t;

@@ -73,6 +73,9 @@ pub enum EventAction {
     Record,
 }
 
+/// A boxed event function `g(t, y)`.
+pub type EventFn<'a, const N: usize> = Box<dyn Fn(f64, &[f64; N]) -> f64 + 'a>;
+
 /// An event function `g(t, y)` whose zero crossings are located on the
 /// dense output.
 ///
@@ -82,7 +85,7 @@ pub enum EventAction {
 /// that matters).
 pub struct Event<'a, const N: usize> {
     /// The event function.
-    pub g: Box<dyn Fn(f64, &[f64; N]) -> f64 + 'a>,
+    pub g: EventFn<'a, N>,
     /// Direction filter.
     pub direction: Direction,
     /// Stop or record.
@@ -183,7 +186,13 @@ pub struct Solution<const N: usize> {
 /// neither zero) with the Illinois method; returns a time on the side of
 /// `b` (where `g` has the sign of `gb` or is zero) within a few ulps of the
 /// root.
-fn illinois(g: &mut dyn FnMut(f64) -> f64, mut a: f64, mut ga: f64, mut b: f64, mut gb: f64) -> f64 {
+fn illinois(
+    g: &mut dyn FnMut(f64) -> f64,
+    mut a: f64,
+    mut ga: f64,
+    mut b: f64,
+    mut gb: f64,
+) -> f64 {
     // Invariant: ga and gb have opposite signs, b is on the "after" side
     // initially; we track which endpoint is on the after side.
     let after_sign = gb.signum();
@@ -253,7 +262,10 @@ pub fn integrate<const N: usize, S: OdeSystem<N>, M: Stepper<N>>(
         sol.y.push(y0);
     }
     if let Some(i) = first_non_finite(&y0) {
-        sol.stop = StopReason::NonFinite { t: t0, component: i };
+        sol.stop = StopReason::NonFinite {
+            t: t0,
+            component: i,
+        };
         return sol;
     }
     let dir = if t_end >= t0 { 1.0 } else { -1.0 };

@@ -114,7 +114,11 @@ mod tests {
             assert!((b[i] - x[i]).abs() < 1e-14, "got {b:?} want {x:?}");
         }
         // Complex: (A + i I) z = (A + i I) x_c.
-        let xc = [Complex::new(1.0, 1.0), Complex::new(0.0, -2.0), Complex::new(3.0, 0.5)];
+        let xc = [
+            Complex::new(1.0, 1.0),
+            Complex::new(0.0, -2.0),
+            Complex::new(3.0, 0.5),
+        ];
         let mut luc = Lu::<Complex<f64>, 3>::zeros();
         let mut bc = [Complex::new(0.0, 0.0); 3];
         for i in 0..3 {

@@ -307,7 +307,9 @@ pub fn stormer_verlet<const D: usize, S: SecondOrderSystem<D>>(
         out.stats.steps += 1;
         out.stats.accepted += 1;
         t = t1;
-        if let Some(component) = first_non_finite(&q).or_else(|| first_non_finite(&v).map(|i| i + D)) {
+        if let Some(component) =
+            first_non_finite(&q).or_else(|| first_non_finite(&v).map(|i| i + D))
+        {
             out.stop = StopReason::NonFinite { t, component };
             return out;
         }

@@ -1,6 +1,10 @@
 //! Integrators: shared types (statistics, stop reasons, step-size control
 //! configuration) and helpers used by several methods.
 
+// The numerical kernels index several arrays with the same loop variable,
+// as the formulas do; iterator chains would obscure them.
+#![allow(clippy::needless_range_loop)]
+
 pub mod dop853;
 pub mod dopri5;
 pub mod driver;

@@ -13,6 +13,9 @@
 //! heap allocation per step. The complex system is solved in complex
 //! arithmetic, not as a real `2N × 2N` system.
 
+// Coefficients are kept with all the digits Hairer published.
+#![allow(clippy::excessive_precision)]
+
 use nalgebra::{Complex, SMatrix};
 
 use super::lu::Lu;
@@ -196,7 +199,9 @@ impl<const N: usize> Radau5<N> {
 
 /// Outcome of the simplified Newton iteration.
 enum Newton {
-    Converged { newt: usize },
+    Converged {
+        newt: usize,
+    },
     /// Too slow: retry with the reduced step (already set).
     Restart,
     /// Divergence, too many iterations or non-finite values.
@@ -414,7 +419,8 @@ impl<const N: usize> Work<N> {
             let mut dyno = 0.0;
             for i in 0..N {
                 let d = self.scal[i];
-                dyno += (self.z1[i] / d).powi(2) + (self.z2[i] / d).powi(2) + (self.z3[i] / d).powi(2);
+                dyno +=
+                    (self.z1[i] / d).powi(2) + (self.z2[i] / d).powi(2) + (self.z3[i] / d).powi(2);
             }
             let dyno = (dyno / (3 * N) as f64).sqrt();
             if !dyno.is_finite() {
@@ -422,12 +428,16 @@ impl<const N: usize> Work<N> {
             }
             if newt > 1 && newt < nit {
                 let thq = dyno / dynold;
-                self.theta = if newt == 2 { thq } else { (thq * thqold).sqrt() };
+                self.theta = if newt == 2 {
+                    thq
+                } else {
+                    (thq * thqold).sqrt()
+                };
                 thqold = thq;
                 if self.theta < 0.99 {
                     self.faccon = self.theta / (1.0 - self.theta);
-                    let dyth = self.faccon * dyno * self.theta.powi((nit - 1 - newt) as i32)
-                        / self.fnewt;
+                    let dyth =
+                        self.faccon * dyno * self.theta.powi((nit - 1 - newt) as i32) / self.fnewt;
                     if dyth >= 1.0 {
                         // Convergence too slow for the remaining iterations:
                         // shrink the step by the predicted factor.
@@ -487,7 +497,11 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
         } else {
             (t_end - t0).abs()
         };
-        let mut h = if self.h0.abs() <= 10.0 * UROUND { 1e-6 } else { self.h0.abs() };
+        let mut h = if self.h0.abs() <= 10.0 * UROUND {
+            1e-6
+        } else {
+            self.h0.abs()
+        };
         h = h.min(hmaxn) * posneg;
         let mut last = false;
         if (t0 + h * 1.0001 - t_end) * posneg >= 0.0 {
@@ -495,7 +509,11 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
             last = true;
         }
         let mut mass = Mat::<N>::zeros();
-        let mass = if sys.mass_matrix(&mut mass) { Some(mass) } else { None };
+        let mass = if sys.mass_matrix(&mut mass) {
+            Some(mass)
+        } else {
+            None
+        };
         let mut w = Box::new(Work {
             k: Consts::new(),
             rtol,

@@ -1,5 +1,7 @@
 //! Shared test problems and helpers.
 #![allow(dead_code)]
+// Published constants keep all their digits.
+#![allow(clippy::excessive_precision)]
 
 use eom_sim::{Dop853, Dopri5, ExplicitConfig, OdeSystem, Radau5};
 
