@@ -54,6 +54,7 @@ fn timed<const N: usize, M: Stepper<N>, S: OdeSystem<N>>(
 ) -> (Solution<N>, f64) {
     let opts = SolveOptions {
         record_steps: false,
+        max_steps: 10_000_000,
         ..SolveOptions::default()
     };
     let mut times = Vec::new();
@@ -71,6 +72,7 @@ fn timed<const N: usize, M: Stepper<N>, S: OdeSystem<N>>(
 }
 
 fn row<const N: usize>(method: &str, param: &str, sol: &Solution<N>, err: f64, secs: f64) {
+    assert_eq!(sol.stop, eom_sim::StopReason::Finished, "{method} {param}");
     println!(
         "| {method} | {param} | {err:.2e} | {} | {} | {} | {} | {:.1} |",
         sol.stats.rhs_evals,
@@ -111,7 +113,9 @@ fn main() {
             t,
         );
     }
-    for n in [1000usize, 2000, 5000, 10_000, 20_000, 50_000, 100_000] {
+    for n in [
+        2000usize, 5000, 10_000, 20_000, 50_000, 100_000, 200_000, 500_000,
+    ] {
         let h = T / n as f64;
         let (s, t) = timed(|| Rk4::<4>::new(h), &Arenstorf, Y0, T);
         row(
