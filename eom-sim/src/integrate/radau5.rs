@@ -104,6 +104,10 @@ struct Work<const N: usize> {
     y: [f64; N],
     fy: [f64; N],
     scal: [f64; N],
+    scal_base: [f64; N],
+    /// First index-2 and first index-3 component.
+    i2: usize,
+    i3: usize,
     z1: [f64; N],
     z2: [f64; N],
     z3: [f64; N],
@@ -169,6 +173,13 @@ pub struct Radau5<const N: usize> {
     /// Start Newton from zero instead of extrapolating the collocation
     /// polynomial (`STARTN`, false).
     pub zero_start: bool,
+    /// Number of index-2 variables of a DAE (`NIND2`): the components
+    /// `N - index2_vars - index3_vars .. N - index3_vars`. Their error
+    /// weights are divided by `|h|` (Hairer & Wanner II, VII.8).
+    pub index2_vars: usize,
+    /// Number of index-3 variables (`NIND3`): the last `index3_vars`
+    /// components. Their error weights are divided by `h²`.
+    pub index3_vars: usize,
     idle: [f64; N],
     w: Option<Box<Work<N>>>,
 }
@@ -191,6 +202,8 @@ impl<const N: usize> Radau5<N> {
             facr: 0.125,
             gustafsson: true,
             zero_start: false,
+            index2_vars: 0,
+            index3_vars: 0,
             idle: [0.0; N],
             w: None,
         }
@@ -360,7 +373,23 @@ impl<const N: usize> Work<N> {
 
     fn update_scal(&mut self) {
         for i in 0..N {
-            self.scal[i] = self.atol + self.rtol * self.y[i].abs();
+            self.scal_base[i] = self.atol + self.rtol * self.y[i].abs();
+        }
+        self.scale_for_index();
+    }
+
+    /// Error weights of index-2 / index-3 variables scaled by `1/|h|` and
+    /// `1/h²` for the current step size.
+    fn scale_for_index(&mut self) {
+        let h = self.h.abs();
+        for i in 0..N {
+            self.scal[i] = if i >= self.i3 {
+                self.scal_base[i] / (h * h)
+            } else if i >= self.i2 {
+                self.scal_base[i] / h
+            } else {
+                self.scal_base[i]
+            };
         }
     }
 
@@ -528,6 +557,9 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
             y: *y0,
             fy: [0.0; N],
             scal: [0.0; N],
+            scal_base: [0.0; N],
+            i3: N - self.index3_vars.min(N),
+            i2: N - (self.index2_vars + self.index3_vars).min(N),
             z1: [0.0; N],
             z2: [0.0; N],
             z3: [0.0; N],
@@ -606,6 +638,9 @@ impl<const N: usize> Stepper<N> for Radau5<N> {
                 return Err(StopReason::StepSizeTooSmall { t: w.t, h: w.h });
             }
             stats.steps += 1;
+            if w.i2 < N {
+                w.scale_for_index();
+            }
             let h = w.h;
             let t = w.t;
             let tph = t + h;
