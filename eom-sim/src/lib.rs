@@ -27,6 +27,26 @@
 //! Runs go through [`integrate`], which handles events ([`Event`]), dense
 //! sampling at requested times ([`SolveOptions::t_eval`]), the projection
 //! hook ([`OdeSystem::project`]), non-finite detection and statistics.
+//!
+//! ```
+//! use eom_sim::{Direction, Dopri5, Event, EventAction, FnSystem, SolveOptions, StopReason, integrate};
+//!
+//! // Harmonic oscillator y'' = -y from y = 1 at rest: y = cos t.
+//! let sys = FnSystem(|_t: f64, y: &[f64; 2], dy: &mut [f64; 2]| {
+//!     dy[0] = y[1];
+//!     dy[1] = -y[0];
+//! });
+//! // Stop when y falls through zero (at t = π/2), sampling every 0.1.
+//! let mut events = [Event::new(|_t, y: &[f64; 2]| y[0], Direction::Falling, EventAction::Stop)];
+//! let opts = SolveOptions::every(0.0, 10.0, 0.1);
+//! let mut method = Dopri5::new(1e-10, 1e-10);
+//! let sol = integrate(&mut method, &sys, 0.0, [1.0, 0.0], 10.0, &opts, &mut events);
+//! let StopReason::EventStop { t, .. } = sol.stop else { panic!("{:?}", sol.stop) };
+//! assert!((t - std::f64::consts::FRAC_PI_2).abs() < 1e-10);
+//! assert_eq!(sol.t_out.len(), 16); // 0.0, 0.1, ..., 1.5
+//! assert!((sol.y_out[10][0] - 1f64.cos()).abs() < 1e-9);
+//! println!("{:?}", sol.stats);
+//! ```
 
 mod integrate;
 

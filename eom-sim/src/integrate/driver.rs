@@ -183,9 +183,10 @@ pub struct Solution<const N: usize> {
 }
 
 /// Locates a sign change of `g` in `[a, b]` (`ga`, `gb` of opposite signs,
-/// neither zero) with the Illinois method; returns a time on the side of
-/// `b` (where `g` has the sign of `gb` or is zero) within a few ulps of the
-/// root.
+/// neither zero) with the Illinois variant of regula falsi (superlinear,
+/// never leaves the bracket). Returns the bracket end on the side of `b`
+/// (where `g` has the sign of `gb`, i.e. just after the crossing), once the
+/// bracket is a few ulps wide.
 fn illinois(
     g: &mut dyn FnMut(f64) -> f64,
     mut a: f64,
@@ -193,10 +194,7 @@ fn illinois(
     mut b: f64,
     mut gb: f64,
 ) -> f64 {
-    // Invariant: ga and gb have opposite signs, b is on the "after" side
-    // initially; we track which endpoint is on the after side.
     let after_sign = gb.signum();
-    let mut after = b;
     for _ in 0..200 {
         let tol = 4.0 * f64::EPSILON * a.abs().max(b.abs()).max(1e-300);
         if (b - a).abs() <= tol {
@@ -212,26 +210,19 @@ fn illinois(
         if gc == 0.0 || !gc.is_finite() {
             return c;
         }
-        if gc.signum() == after_sign {
-            after = c;
-        }
         if gc * gb < 0.0 {
+            // The root lies between b and c: the old b becomes the retained end.
             a = b;
             ga = gb;
         } else {
-            // Illinois: halve the retained end's value to avoid one-sided
-            // convergence of regula falsi.
+            // Same side as b: halve the retained end's value (Illinois) so
+            // the secant does not stall on one side.
             ga *= 0.5;
         }
         b = c;
         gb = gc;
-        if gb.signum() == after_sign {
-            after = b;
-        } else if ga.signum() == after_sign {
-            after = a;
-        }
     }
-    after
+    if gb.signum() == after_sign { b } else { a }
 }
 
 /// Runs `method` on `sys` from `(t0, y0)` to `t_end`, with `events` located
