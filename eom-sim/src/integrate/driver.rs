@@ -145,15 +145,27 @@ impl Default for SolveOptions {
 }
 
 impl SolveOptions {
-    /// Dense samples every `dt` from `t0` to `t_end` inclusive (the last one
-    /// is `t_end` if it falls within `dt/1e6` of a multiple), without
-    /// recording the steps.
+    /// Dense samples every `dt` from `t0` to `t_end` inclusive, without
+    /// recording the steps. Sample `k` is `t0 + k·dt`; when `t_end` lies
+    /// within `dt·1e-6` of a multiple, the last sample is `t_end` exactly
+    /// (so round-off in `k·dt` never drops it).
     pub fn every(t0: f64, t_end: f64, dt: f64) -> Self {
-        let dt = dt.abs() * (t_end - t0).signum();
-        let n = ((t_end - t0) / dt + 1e-6).floor().max(0.0) as usize;
+        let span = t_end - t0;
+        let dt = dt.abs() * span.signum();
+        let t_eval = if dt == 0.0 || !dt.is_finite() {
+            vec![t0]
+        } else {
+            let r = span / dt;
+            let n = (r + 1e-6).floor().max(0.0) as usize;
+            let mut v: Vec<f64> = (0..=n).map(|k| t0 + k as f64 * dt).collect();
+            if (r - n as f64).abs() <= 1e-6 {
+                v[n] = t_end;
+            }
+            v
+        };
         SolveOptions {
             record_steps: false,
-            t_eval: (0..=n).map(|k| t0 + k as f64 * dt).collect(),
+            t_eval,
             ..SolveOptions::default()
         }
     }
@@ -381,4 +393,47 @@ pub fn integrate<const N: usize, S: OdeSystem<N>, M: Stepper<N>>(
     sol.t_final = method.t();
     sol.y_final = *method.y();
     sol
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_ends_exactly_on_t_end() {
+        for (t0, t1, dt, n) in [
+            (0.0, 1.0, 0.1, 11),
+            (0.0, 0.7, 0.1, 8),
+            (1.0, 0.0, 0.1, 11),
+            (0.0, 1.05, 0.1, 11),
+        ] {
+            let o = SolveOptions::every(t0, t1, dt);
+            assert_eq!(
+                o.t_eval.len(),
+                n,
+                "every({t0}, {t1}, {dt}) got {:?}",
+                o.t_eval
+            );
+            assert_eq!(o.t_eval[0], t0);
+            if n == 11 && t1 != 1.05 {
+                assert_eq!(*o.t_eval.last().unwrap(), t1, "got {:?}", o.t_eval);
+            }
+        }
+    }
+
+    #[test]
+    fn illinois_finds_roots_to_ulps() {
+        // cos has its root at π/2; cubic t³ - 2 at 2^(1/3); both bracketed.
+        let mut g = |t: f64| t.cos();
+        let r = illinois(&mut g, 1.0, 1f64.cos(), 2.0, 2f64.cos());
+        assert!((r - std::f64::consts::FRAC_PI_2).abs() < 1e-15, "got {r}");
+        assert!(
+            r.cos() <= 0.0,
+            "root must be on the after side, got cos = {}",
+            r.cos()
+        );
+        let mut c = |t: f64| t * t * t - 2.0;
+        let r = illinois(&mut c, 0.0, -2.0, 2.0, 6.0);
+        assert!((r - 2f64.cbrt()).abs() < 1e-15, "got {r}");
+    }
 }
