@@ -26,15 +26,23 @@ fn median_formulation(sys: &eom_gen::System, runs: usize) -> (f64, Formulation) 
         last = Some(f);
     }
     times.sort_by(f64::total_cmp);
-    (times[times.len() / 2], last.unwrap_or_else(|| unreachable!("runs > 0")))
+    (
+        times[times.len() / 2],
+        last.unwrap_or_else(|| unreachable!("runs > 0")),
+    )
 }
 
 fn ops(p: &Option<eom_gen::sym::Program>) -> String {
-    p.as_ref().map_or("—".into(), |p| p.op_count().total().to_string())
+    p.as_ref()
+        .map_or("—".into(), |p| p.op_count().total().to_string())
 }
 
 fn row(name: &str, nu: usize, secs: f64, f: &Formulation) {
-    let cand: Vec<String> = f.fd_candidates.iter().map(|(form, c)| format!("{form:?} {}", c.total())).collect();
+    let cand: Vec<String> = f
+        .fd_candidates
+        .iter()
+        .map(|(form, c)| format!("{form:?} {}", c.total()))
+        .collect();
     println!(
         "| {name} | {nu} | {:.1} | {} ({:?}) | {} | {} | {} | {} |",
         secs * 1e3,
@@ -49,9 +57,17 @@ fn row(name: &str, nu: usize, secs: f64, f: &Formulation) {
 
 fn main() {
     // `cargo bench` passes `--bench`; nothing else is accepted.
-    println!("| model | nu | generation ms (median of 5) | FD ops (form) | FD candidates | ID ops | M ops | b ops |");
+    println!(
+        "| model | nu | generation ms (median of 5) | FD ops (form) | FD candidates | ID ops | M ops | b ops |"
+    );
     println!("|---|---|---|---|---|---|---|---|");
-    for name in ["pendulum", "double_pendulum", "arm7", "heavy_top", "free_body"] {
+    for name in [
+        "pendulum",
+        "double_pendulum",
+        "arm7",
+        "heavy_top",
+        "free_body",
+    ] {
         let path = format!("{}/../models/{name}.ron", env!("CARGO_MANIFEST_DIR"));
         let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
         let sys = system_from(text, name);

@@ -5,6 +5,8 @@
 //! [`graph`]: spanning tree and cut joints) → `mech` (kinematics and
 //! dynamics as [`sym`] expressions) → `emit` (Rust source).
 
+pub mod emit;
+pub mod generate;
 pub mod graph;
 pub mod mech;
 pub mod model;
@@ -12,5 +14,6 @@ pub mod summary;
 pub mod sym;
 pub mod system;
 
+pub use generate::{GenerateError, Generated, generate, generate_file};
 pub use model::{Checked, Diagnostic, Report, Source, Spec, check, check_file};
 pub use system::System;

@@ -49,6 +49,9 @@
 //! ```
 
 mod integrate;
+mod model;
+
+pub use model::{Model, Vector};
 
 pub use integrate::dop853::Dop853;
 pub use integrate::dopri5::Dopri5;

@@ -280,12 +280,16 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             // matrix product per body.
             let summed = match (&body.kind, body.parent.and_then(|p| chain[p].clone())) {
                 (JointModel::Revolute(a), Some((base, axis, angle)))
-                    if (0..3).all(|c| (axis.0[c] - a.0[c]).is_zero()) && is_identity(&body.frame_parent.e) && is_identity(&fc.e) =>
+                    if (0..3).all(|c| (axis.0[c] - a.0[c]).is_zero())
+                        && is_identity(&body.frame_parent.e)
+                        && is_identity(&fc.e) =>
                 {
                     Some((base, axis, angle + q[0]))
                 }
                 (JointModel::Revolute(a), _) if is_identity(&fc.e) => {
-                    let base = body.parent.map_or(body.frame_parent.e, |p| k.world[p].e * body.frame_parent.e);
+                    let base = body
+                        .parent
+                        .map_or(body.frame_parent.e, |p| k.world[p].e * body.frame_parent.e);
                     Some((base, *a, q[0]))
                 }
                 _ => None,
@@ -767,5 +771,13 @@ pub fn ltdl_solve<S: Scalar>(f: &[Vec<S>], lambda: &[Option<usize>], mut b: Vec<
 
 /// Is `m` structurally the identity (exact zeros and ones)?
 fn is_identity<S: Scalar>(m: &Mat3<S>) -> bool {
-    (0..3).all(|i| (0..3).all(|j| if i == j { m.0[i][j].is_one() } else { m.0[i][j].is_zero() }))
+    (0..3).all(|i| {
+        (0..3).all(|j| {
+            if i == j {
+                m.0[i][j].is_one()
+            } else {
+                m.0[i][j].is_zero()
+            }
+        })
+    })
 }

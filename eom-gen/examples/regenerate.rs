@@ -1,0 +1,55 @@
+//! Regenerates `generated/src/` from every model in `models/`:
+//! `cargo run -p eom-gen --example regenerate`.
+
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+    let mut names: Vec<String> = match std::fs::read_dir(format!("{root}/models")) {
+        Ok(dir) => dir
+            .filter_map(|e| e.ok())
+            .filter_map(|e| e.file_name().into_string().ok())
+            .filter_map(|n| n.strip_suffix(".ron").map(str::to_string))
+            .collect(),
+        Err(e) => {
+            eprintln!("cannot read models/: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    names.sort();
+    let mut lib = String::from(
+        "//! Generated source of every bundled model, one module per model, committed\n\
+         //! so readers can see what eom-gen emits. A test fails when a file is stale;\n\
+         //! refresh with `cargo run -p eom-gen --example regenerate`.\n\n",
+    );
+    for name in &names {
+        let model = format!("models/{name}.ron");
+        eprintln!("… {model}");
+        let src = match std::fs::read_to_string(format!("{root}/{model}")) {
+            Ok(text) => eom_gen::Source::new(model.clone(), text),
+            Err(e) => {
+                eprintln!("cannot read {model}: {e}");
+                return ExitCode::from(1);
+            }
+        };
+        match eom_gen::generate(&src) {
+            Ok(g) => {
+                if let Err(e) = std::fs::write(format!("{root}/generated/src/{name}.rs"), g.source)
+                {
+                    eprintln!("cannot write generated/src/{name}.rs: {e}");
+                    return ExitCode::from(1);
+                }
+                lib += &format!("pub mod {name};\n");
+            }
+            Err(e) => {
+                eprintln!("{e}");
+                return ExitCode::from(1);
+            }
+        }
+    }
+    if let Err(e) = std::fs::write(format!("{root}/generated/src/lib.rs"), lib) {
+        eprintln!("cannot write generated/src/lib.rs: {e}");
+        return ExitCode::from(1);
+    }
+    ExitCode::SUCCESS
+}

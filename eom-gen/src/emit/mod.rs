@@ -1,0 +1,600 @@
+//! Emission: [`Program`]s → Rust tokens (`quote`) → formatted source
+//! (`prettyplease`).
+//!
+//! Per model the output holds a parameter struct (tunable parameters with
+//! their defaults), the model struct (parameters and runtime inputs), an
+//! implementation of `eom_sim::Model` and one of `eom_sim::OdeSystem` on the
+//! state `y = (q, u)`. Every function is straight-line: one `let` per
+//! instruction, constants inlined as unsuffixed literals (or `std` float
+//! constants where they match one exactly), `sin_cos` for paired trig, and
+//! array indices that are compile-time constants into fixed-size arrays,
+//! so nothing can panic or allocate. Output is byte-identical for
+//! identical input.
+
+use crate::mech::Formulation;
+use crate::sym::{Op, Operand, Program, SymKind, Symbol};
+use crate::system::{JointType, Motion, System};
+use proc_macro2::{Ident, Literal, Span, TokenStream};
+use quote::{format_ident, quote};
+
+/// The generator's version, written into every generated file.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// How a program's inputs and outputs map to Rust.
+struct Binding<'a> {
+    sys: &'a System,
+    /// Name of the `u̇` argument (`udot` in inverse dynamics).
+    speed_rate: &'a str,
+}
+
+impl Binding<'_> {
+    fn input(&self, s: &Symbol) -> TokenStream {
+        let idx = |i: u32| Literal::usize_unsuffixed(i as usize);
+        match s.kind {
+            SymKind::Coord(i) => {
+                let i = idx(i);
+                quote!(q[#i])
+            }
+            SymKind::Speed(i) => {
+                let i = idx(i);
+                quote!(u[#i])
+            }
+            SymKind::SpeedRate(i) => {
+                let i = idx(i);
+                let name = Ident::new(self.speed_rate, Span::call_site());
+                quote!(#name[#i])
+            }
+            SymKind::CoordRate(i) => {
+                let i = idx(i);
+                quote!(qdot[#i])
+            }
+            SymKind::Time => quote!(t),
+            SymKind::Param => {
+                let name = format_ident!("{}", s.name);
+                quote!(self.params.#name)
+            }
+            SymKind::Input => match self.sys.inputs.iter().position(|n| *n == s.name) {
+                Some(k) => {
+                    let k = Literal::usize_unsuffixed(k);
+                    quote!(self.inputs[#k])
+                }
+                None => {
+                    // `tau<k>`: the extra generalised forces.
+                    let k: usize = s.name.trim_start_matches("tau").parse().unwrap_or(0);
+                    let k = Literal::usize_unsuffixed(k);
+                    quote!(tau[#k])
+                }
+            },
+        }
+    }
+}
+
+/// A float literal (unsuffixed), a `std` constant it equals exactly, or a
+/// negated one.
+fn float(x: f64) -> TokenStream {
+    use std::f64::consts as c;
+    let named: [(f64, &str); 18] = [
+        (c::PI, "PI"),
+        (c::TAU, "TAU"),
+        (c::FRAC_PI_2, "FRAC_PI_2"),
+        (c::FRAC_PI_3, "FRAC_PI_3"),
+        (c::FRAC_PI_4, "FRAC_PI_4"),
+        (c::FRAC_PI_6, "FRAC_PI_6"),
+        (c::FRAC_PI_8, "FRAC_PI_8"),
+        (c::FRAC_1_PI, "FRAC_1_PI"),
+        (c::FRAC_2_PI, "FRAC_2_PI"),
+        (c::FRAC_2_SQRT_PI, "FRAC_2_SQRT_PI"),
+        (c::SQRT_2, "SQRT_2"),
+        (c::FRAC_1_SQRT_2, "FRAC_1_SQRT_2"),
+        (c::E, "E"),
+        (c::LOG2_E, "LOG2_E"),
+        (c::LOG10_E, "LOG10_E"),
+        (c::LN_2, "LN_2"),
+        (c::LN_10, "LN_10"),
+        (c::LOG2_10, "LOG2_10"),
+    ];
+    let magnitude = x.abs();
+    let body = match named.iter().find(|(v, _)| *v == magnitude) {
+        Some((_, name)) => {
+            let name = format_ident!("{name}");
+            quote!(::core::f64::consts::#name)
+        }
+        None => {
+            let lit = Literal::f64_unsuffixed(magnitude);
+            quote!(#lit)
+        }
+    };
+    if x.is_sign_negative() && x != 0.0 {
+        quote!(-#body)
+    } else {
+        body
+    }
+}
+
+/// [`float`] in operand position: negative values in parentheses.
+fn float_operand(x: f64) -> TokenStream {
+    let f = float(x);
+    if x.is_sign_negative() && x != 0.0 {
+        quote!((#f))
+    } else {
+        f
+    }
+}
+
+fn tmp(i: u32) -> Ident {
+    format_ident!("x{i}")
+}
+
+fn operand(b: &Binding<'_>, p: &Program, o: Operand) -> TokenStream {
+    match o {
+        Operand::Const(n) => float_operand(n.to_f64()),
+        Operand::Var(i) => b.input(&p.inputs[i as usize]),
+        Operand::Tmp(i) => {
+            let t = tmp(i);
+            quote!(#t)
+        }
+    }
+}
+
+/// The body of a program: one statement per instruction.
+fn statements(b: &Binding<'_>, p: &Program) -> TokenStream {
+    let mut out = TokenStream::new();
+    for ins in &p.instrs {
+        let o = |x| operand(b, p, x);
+        let dst = tmp(ins.dst);
+        let value = match ins.op {
+            Op::Add(x, y) => {
+                let (x, y) = (o(x), o(y));
+                quote!(#x + #y)
+            }
+            Op::Sub(x, y) => {
+                let (x, y) = (o(x), o(y));
+                quote!(#x - #y)
+            }
+            Op::Mul(x, y) => {
+                let (x, y) = (o(x), o(y));
+                quote!(#x * #y)
+            }
+            Op::Div(x, y) => {
+                let (x, y) = (o(x), o(y));
+                quote!(#x / #y)
+            }
+            Op::Neg(x) => {
+                let x = o(x);
+                quote!(-#x)
+            }
+            Op::Sqrt(x) => unary("sqrt", o(x)),
+            Op::Sin(x) => unary("sin", o(x)),
+            Op::Cos(x) => unary("cos", o(x)),
+            Op::Tan(x) => unary("tan", o(x)),
+            Op::Exp(x) => unary("exp", o(x)),
+            Op::Ln(x) => unary("ln", o(x)),
+            Op::Abs(x) => unary("abs", o(x)),
+            Op::Atan2(y, x) => {
+                let (y, x) = (o(y), o(x));
+                quote!(f64::atan2(#y, #x))
+            }
+            Op::Select(c, x, y) => {
+                let (c, x, y) = (o(c), o(x), o(y));
+                quote!(if #c > 0.0 { #x } else { #y })
+            }
+            Op::SinCos(x) => {
+                let (s, c, x) = (tmp(ins.dst), tmp(ins.dst + 1), o(x));
+                out.extend(quote!(let (#s, #c) = f64::sin_cos(#x);));
+                continue;
+            }
+        };
+        out.extend(quote!(let #dst = #value;));
+    }
+    out
+}
+
+fn unary(f: &str, x: TokenStream) -> TokenStream {
+    let f = format_ident!("{f}");
+    quote!(f64::#f(#x))
+}
+
+/// Does the program read `kind`?
+fn reads(p: &Program, pred: impl Fn(&SymKind) -> bool) -> bool {
+    p.inputs.iter().any(|s| pred(&s.kind))
+}
+
+/// An argument name, prefixed with `_` when the program does not read it.
+fn arg(name: &str, used: bool) -> Ident {
+    if used {
+        format_ident!("{name}")
+    } else {
+        format_ident!("_{name}")
+    }
+}
+
+fn output_value(b: &Binding<'_>, p: &Program, k: usize) -> TokenStream {
+    match p.outputs[k].1 {
+        Operand::Const(n) => float(n.to_f64()),
+        o => operand(b, p, o),
+    }
+}
+
+/// `Name` from `snake_name`.
+pub fn camel(name: &str) -> String {
+    name.split('_')
+        .filter(|s| !s.is_empty())
+        .map(|s| {
+            let mut c = s.chars();
+            c.next().map_or(String::new(), |f| {
+                f.to_ascii_uppercase().to_string() + c.as_str()
+            })
+        })
+        .collect()
+}
+
+/// A 64-bit FNV-1a hash, for the content hash in the header.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+fn list(names: &[&str]) -> String {
+    names
+        .iter()
+        .map(|n| format!("`{n}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Emits the formatted Rust source of one model; `source_text` is the
+/// model file's text, hashed into the doc comment with the generator
+/// version.
+pub fn emit(sys: &System, f: &Formulation, source_text: &str) -> String {
+    let tokens = emit_tokens(sys, f, source_text);
+    match syn::parse2::<syn::File>(tokens.clone()) {
+        Ok(file) => prettyplease::unparse(&file),
+        // Unreachable for well-formed programs; keep the raw tokens visible.
+        Err(e) => format!("// eom-gen: formatting failed ({e}); raw tokens follow\n{tokens}\n"),
+    }
+}
+
+/// The tokens of [`emit`], unformatted (for `#[multibody]`).
+pub fn emit_tokens(sys: &System, f: &Formulation, source_text: &str) -> TokenStream {
+    let name = &sys.name;
+    let ty = format_ident!("{}", camel(name));
+    let params_ty = format_ident!("{}Params", camel(name));
+    let (nq, nu, ni) = (sys.nq(), sys.nu(), sys.inputs.len());
+    let (nq_l, nu_l, ni_l, ny_l) = (
+        Literal::usize_unsuffixed(nq),
+        Literal::usize_unsuffixed(nu),
+        Literal::usize_unsuffixed(ni),
+        Literal::usize_unsuffixed(nq + nu),
+    );
+    let hash = format!(
+        "{:016x}",
+        fnv1a(format!("{VERSION}\n{source_text}").as_bytes())
+    );
+    let coords = sys.coordinate_names();
+    let speeds = sys.speed_names();
+    let inputs: Vec<&str> = sys.inputs.iter().map(String::as_str).collect();
+    let quats: Vec<usize> = sys
+        .free_joints()
+        .filter_map(|j| match j.kind {
+            JointType::Spherical => Some(j.q_index),
+            JointType::Free => Some(j.q_index + 3),
+            _ => None,
+        })
+        .collect();
+    let quats_l = quats.iter().map(|&k| Literal::usize_unsuffixed(k));
+    let q0 = sys.q0().into_iter().map(float);
+    let u0 = sys.u0().into_iter().map(float);
+    let tunable: Vec<_> = sys.parameters.iter().filter(|p| p.tunable).collect();
+    let param_fields = tunable.iter().map(|p| {
+        let n = format_ident!("{}", p.name);
+        let doc = format!(" `{}` (default {}).", p.name, p.value.value);
+        quote!(#[doc = #doc] pub #n: f64,)
+    });
+    let param_defaults = tunable.iter().map(|p| {
+        let n = format_ident!("{}", p.name);
+        let v = float(p.value.value);
+        quote!(#n: #v,)
+    });
+    let locked: Vec<&str> = sys
+        .joints
+        .iter()
+        .filter(|j| j.motion == Motion::Locked)
+        .map(|j| j.name.as_str())
+        .collect();
+    let prescribed: Vec<&str> = sys
+        .joints
+        .iter()
+        .filter(|j| matches!(j.motion, Motion::Prescribed(_)))
+        .map(|j| j.name.as_str())
+        .collect();
+
+    let b = Binding {
+        sys,
+        speed_rate: "udot",
+    };
+    let q_doc = format!("`q` = ({})", list(&coords));
+    let u_doc = format!("`u` = ({})", list(&speeds));
+
+    // q̇ = N(q) u
+    let p = &f.qdot;
+    let body = statements(&b, p);
+    let assign = (0..nq).map(|k| {
+        let (kl, v) = (Literal::usize_unsuffixed(k), output_value(&b, p, k));
+        quote!(qdot[#kl] = #v;)
+    });
+    let (q_arg, u_arg) = (
+        arg("q", reads(p, |k| matches!(k, SymKind::Coord(_)))),
+        arg("u", reads(p, |k| matches!(k, SymKind::Speed(_)))),
+    );
+    let qdot_fn = quote! {
+        fn qdot(&self, #q_arg: &[f64; #nq_l], #u_arg: &[f64; #nu_l], qdot: &mut [f64; #nq_l]) {
+            #body
+            #(#assign)*
+        }
+    };
+
+    let fd_fn = f.forward_dynamics.as_ref().map(|p| {
+        let body = statements(&b, p);
+        let assign = (0..nu).map(|k| {
+            let (kl, v) = (Literal::usize_unsuffixed(k), output_value(&b, p, k));
+            quote!(udot[#kl] = #v;)
+        });
+        let args = state_args(p);
+        let tau = arg("tau", reads(p, |k| *k == SymKind::Input));
+        let doc = format!(
+            " Forward dynamics by the {} ({} operations): `u̇ = M⁻¹ (τ − b)`.",
+            f.fd_form,
+            p.op_count().total()
+        );
+        quote! {
+            #[doc = #doc]
+            fn forward_dynamics(&self, #args, #tau: &[f64; #nu_l], udot: &mut [f64; #nu_l]) {
+                #body
+                #(#assign)*
+            }
+        }
+    });
+    let mm_fn = f.mass_matrix.as_ref().map(|p| {
+        let body = statements(&b, p);
+        let mut assign = TokenStream::new();
+        let mut k = 0;
+        for i in 0..nu {
+            for j in 0..=i {
+                let (il, jl, v) = (
+                    Literal::usize_unsuffixed(i),
+                    Literal::usize_unsuffixed(j),
+                    output_value(&b, p, k),
+                );
+                assign.extend(if i == j {
+                    quote!(m[#il][#jl] = #v;)
+                } else {
+                    quote!(m[#il][#jl] = #v; m[#jl][#il] = m[#il][#jl];)
+                });
+                k += 1;
+            }
+        }
+        let (t, q) = (
+            arg("t", reads(p, |k| *k == SymKind::Time)),
+            arg("q", reads(p, |k| matches!(k, SymKind::Coord(_)))),
+        );
+        quote! {
+            fn mass_matrix(&self, #t: f64, #q: &[f64; #nq_l], m: &mut [[f64; #nu_l]; #nu_l]) {
+                #body
+                #assign
+            }
+        }
+    });
+    let bias_fn = f.bias.as_ref().map(|p| {
+        let body = statements(&b, p);
+        let assign = (0..nu).map(|k| {
+            let (kl, v) = (Literal::usize_unsuffixed(k), output_value(&b, p, k));
+            quote!(b[#kl] = #v;)
+        });
+        let args = state_args(p);
+        quote! {
+            fn bias(&self, #args, b: &mut [f64; #nu_l]) {
+                #body
+                #(#assign)*
+            }
+        }
+    });
+    let id_fn = f.inverse_dynamics.as_ref().map(|p| {
+        let body = statements(&b, p);
+        let assign = (0..nu).map(|k| {
+            let (kl, v) = (Literal::usize_unsuffixed(k), output_value(&b, p, k));
+            quote!(tau[#kl] = #v;)
+        });
+        let args = state_args(p);
+        let ud = arg("udot", reads(p, |k| matches!(k, SymKind::SpeedRate(_))));
+        quote! {
+            fn inverse_dynamics(&self, #args, #ud: &[f64; #nu_l], tau: &mut [f64; #nu_l]) {
+                #body
+                #(#assign)*
+            }
+        }
+    });
+    let energy_fn = f.energy.as_ref().map(|p| {
+        let body = statements(&b, p);
+        let (k0, k1) = (output_value(&b, p, 0), output_value(&b, p, 1));
+        let args = state_args(p);
+        quote! {
+            fn energy(&self, #args) -> [f64; 2] {
+                #body
+                [#k0, #k1]
+            }
+        }
+    });
+    let momentum_fn = f.momentum.as_ref().map(|p| {
+        let body = statements(&b, p);
+        let vals = (0..6).map(|k| output_value(&b, p, k));
+        let args = state_args(p);
+        quote! {
+            fn momentum(&self, #args) -> [f64; 6] {
+                #body
+                [#(#vals),*]
+            }
+        }
+    });
+
+    let doc_top = format!(
+        " Model `{name}`: {nq} coordinate(s), {nu} speed(s), {ni} input(s). Generated by eom-gen {VERSION}; model content hash {hash}."
+    );
+    let doc_layout = format!(
+        " State layout: {q_doc}; {u_doc}; inputs ({}). Locked joints: {}. Prescribed joints: {}. Equations: `q̇ = N(q) u`, `M(q) u̇ = τ − b(q, u, t)`.",
+        if inputs.is_empty() {
+            "none".to_string()
+        } else {
+            list(&inputs)
+        },
+        if locked.is_empty() {
+            "none".to_string()
+        } else {
+            list(&locked)
+        },
+        if prescribed.is_empty() {
+            "none".to_string()
+        } else {
+            list(&prescribed)
+        },
+    );
+    let ode_doc = format!(
+        " The first-order system `y = (q, u)` of `{name}` ({} states) with `τ = 0`.",
+        nq + nu
+    );
+    let params_doc = format!(" Tunable parameters of `{name}`, defaults from the model file.");
+    let q_split = (0..nq).map(|k| {
+        let kl = Literal::usize_unsuffixed(k);
+        quote!(y[#kl])
+    });
+    let u_split = (0..nu).map(|k| {
+        let yl = Literal::usize_unsuffixed(nq + k);
+        quote!(y[#yl])
+    });
+    let dy_q = (0..nq).map(|k| {
+        let kl = Literal::usize_unsuffixed(k);
+        quote!(dy[#kl] = qdot[#kl];)
+    });
+    let dy_u = (0..nu).map(|k| {
+        let (kl, yl) = (
+            Literal::usize_unsuffixed(k),
+            Literal::usize_unsuffixed(nq + k),
+        );
+        quote!(dy[#yl] = udot[#kl];)
+    });
+    let project_body = if quats.is_empty() {
+        quote!(let _ = y; false)
+    } else {
+        let norms = quats.iter().map(|&a| {
+            let idx: Vec<Literal> = (a..a + 4).map(Literal::usize_unsuffixed).collect();
+            let (i0, i1, i2, i3) = (&idx[0], &idx[1], &idx[2], &idx[3]);
+            quote! {
+                let n = f64::sqrt(y[#i0] * y[#i0] + y[#i1] * y[#i1] + y[#i2] * y[#i2] + y[#i3] * y[#i3]);
+                if n > 0.0 && n.is_finite() {
+                    y[#i0] /= n; y[#i1] /= n; y[#i2] /= n; y[#i3] /= n;
+                }
+            }
+        });
+        quote!(#(#norms)* true)
+    };
+    let coords_l = coords.iter();
+    let speeds_l = speeds.iter();
+    let inputs_l = inputs.iter();
+    let params_item = if tunable.is_empty() {
+        quote! {
+            #[doc = #params_doc]
+            #[derive(Clone, Copy, Debug, Default, PartialEq)]
+            pub struct #params_ty {}
+        }
+    } else {
+        quote! {
+            #[doc = #params_doc]
+            #[derive(Clone, Copy, Debug, PartialEq)]
+            pub struct #params_ty {
+                #(#param_fields)*
+            }
+
+            impl Default for #params_ty {
+                fn default() -> Self {
+                    #params_ty { #(#param_defaults)* }
+                }
+            }
+        }
+    };
+    quote! {
+        #params_item
+
+        #[doc = #doc_top]
+        #[doc = ""]
+        #[doc = #doc_layout]
+        #[derive(Clone, Copy, Debug, PartialEq)]
+        pub struct #ty {
+            /// Tunable parameters.
+            pub params: #params_ty,
+            /// Runtime inputs (actuator commands), in `INPUT_NAMES` order.
+            pub inputs: [f64; #ni_l],
+        }
+
+        impl Default for #ty {
+            fn default() -> Self {
+                #ty { params: #params_ty::default(), inputs: [0.0; #ni_l] }
+            }
+        }
+
+        impl ::eom_sim::Model for #ty {
+            const NAME: &'static str = #name;
+            const NQ: usize = #nq_l;
+            const NU: usize = #nu_l;
+            const NINPUTS: usize = #ni_l;
+            const COORDINATE_NAMES: &'static [&'static str] = &[#(#coords_l),*];
+            const SPEED_NAMES: &'static [&'static str] = &[#(#speeds_l),*];
+            const INPUT_NAMES: &'static [&'static str] = &[#(#inputs_l),*];
+            const QUATERNIONS: &'static [usize] = &[#(#quats_l),*];
+            type Q = [f64; #nq_l];
+            type U = [f64; #nu_l];
+            type Inputs = [f64; #ni_l];
+            type MassMatrix = [[f64; #nu_l]; #nu_l];
+            const MASS_ZERO: [[f64; #nu_l]; #nu_l] = [[0.0; #nu_l]; #nu_l];
+
+            fn q0(&self) -> [f64; #nq_l] {
+                [#(#q0),*]
+            }
+            fn u0(&self) -> [f64; #nu_l] {
+                [#(#u0),*]
+            }
+            #qdot_fn
+            #fd_fn
+            #mm_fn
+            #bias_fn
+            #id_fn
+            #energy_fn
+            #momentum_fn
+        }
+
+        #[doc = #ode_doc]
+        impl ::eom_sim::OdeSystem<#ny_l> for #ty {
+            fn rhs(&self, t: f64, y: &[f64; #ny_l], dy: &mut [f64; #ny_l]) {
+                use ::eom_sim::Model as _;
+                let q: [f64; #nq_l] = [#(#q_split),*];
+                let u: [f64; #nu_l] = [#(#u_split),*];
+                let mut qdot = [0.0; #nq_l];
+                let mut udot = [0.0; #nu_l];
+                self.qdot(&q, &u, &mut qdot);
+                self.forward_dynamics(t, &q, &u, &[0.0; #nu_l], &mut udot);
+                #(#dy_q)*
+                #(#dy_u)*
+            }
+            fn project(&self, _t: f64, y: &mut [f64; #ny_l]) -> bool {
+                #project_body
+            }
+        }
+    }
+}
+
+/// `t: f64, q: &[f64; NQ], u: &[f64; NU]` with unused ones prefixed `_`.
+fn state_args(p: &Program) -> TokenStream {
+    let t = arg("t", reads(p, |k| *k == SymKind::Time));
+    let q = arg("q", reads(p, |k| matches!(k, SymKind::Coord(_))));
+    let u = arg("u", reads(p, |k| matches!(k, SymKind::Speed(_))));
+    quote!(#t: f64, #q: &Self::Q, #u: &Self::U)
+}

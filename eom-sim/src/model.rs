@@ -1,0 +1,84 @@
+//! The contract between generated code and the runtime.
+//!
+//! `eom-gen` emits, per model, a struct holding the tunable parameters and
+//! the runtime inputs, and implements [`Model`] for it with fixed-size
+//! arrays (`[f64; NQ]`, `[f64; NU]`, …) as the associated types. The
+//! generated functions are straight-line code: no allocation, no panics
+//! (indices are compile-time constants into fixed-size arrays).
+//!
+//! The equations of motion are `q̇ = N(q) u` and `M(q) u̇ = τ − b(q, u, t)`
+//! with `b = C + g − Jᵀ f_ext − Q` (velocity products, gravity, point
+//! forces and the model's own generalised forces, inputs included);
+//! `τ` is any extra generalised force.
+
+/// A fixed-size vector of `f64` (`[f64; N]`).
+pub trait Vector: Copy + AsRef<[f64]> + AsMut<[f64]> {
+    /// All zeros.
+    const ZERO: Self;
+}
+
+impl<const N: usize> Vector for [f64; N] {
+    const ZERO: Self = [0.0; N];
+}
+
+/// A generated multibody model.
+pub trait Model {
+    /// The model's name.
+    const NAME: &'static str;
+    /// Number of position coordinates.
+    const NQ: usize;
+    /// Number of speeds.
+    const NU: usize;
+    /// Number of runtime inputs.
+    const NINPUTS: usize;
+    /// Coordinate names, in order.
+    const COORDINATE_NAMES: &'static [&'static str];
+    /// Speed names, in order.
+    const SPEED_NAMES: &'static [&'static str];
+    /// Input names, in order.
+    const INPUT_NAMES: &'static [&'static str];
+    /// Positions of the first entries of unit quaternions in `q`.
+    const QUATERNIONS: &'static [usize];
+    /// Positions `[f64; NQ]`.
+    type Q: Vector;
+    /// Speeds `[f64; NU]`.
+    type U: Vector;
+    /// Inputs `[f64; NINPUTS]`.
+    type Inputs: Vector;
+    /// Mass matrix `[[f64; NU]; NU]`, by rows.
+    type MassMatrix: Copy + AsRef<[Self::U]> + AsMut<[Self::U]>;
+    /// A zero mass matrix (to fill).
+    const MASS_ZERO: Self::MassMatrix;
+
+    /// Initial positions from the model file.
+    fn q0(&self) -> Self::Q;
+    /// Initial speeds from the model file.
+    fn u0(&self) -> Self::U;
+    /// `q̇ = N(q) u`.
+    fn qdot(&self, q: &Self::Q, u: &Self::U, qdot: &mut Self::Q);
+    /// Forward dynamics: `u̇ = M⁻¹ (τ − b)`.
+    fn forward_dynamics(&self, t: f64, q: &Self::Q, u: &Self::U, tau: &Self::U, udot: &mut Self::U);
+    /// Mass matrix `M(q)` (symmetric, filled completely).
+    fn mass_matrix(&self, t: f64, q: &Self::Q, m: &mut Self::MassMatrix);
+    /// Bias `b(q, u, t)`.
+    fn bias(&self, t: f64, q: &Self::Q, u: &Self::U, b: &mut Self::U);
+    /// Inverse dynamics: `τ = M u̇ + b`.
+    fn inverse_dynamics(&self, t: f64, q: &Self::Q, u: &Self::U, udot: &Self::U, tau: &mut Self::U);
+    /// Kinetic and potential energy.
+    fn energy(&self, t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2];
+    /// Angular momentum about the world origin, then linear momentum, world axes.
+    fn momentum(&self, t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6];
+
+    /// Normalises the unit quaternions in `q` (after an integration step).
+    fn normalize(&self, q: &mut Self::Q) {
+        let q = q.as_mut();
+        for &a in Self::QUATERNIONS {
+            if let Some(quat) = q.get_mut(a..a + 4) {
+                let n = quat.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if n > 0.0 && n.is_finite() {
+                    quat.iter_mut().for_each(|x| *x /= n);
+                }
+            }
+        }
+    }
+}
