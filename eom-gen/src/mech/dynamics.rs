@@ -28,6 +28,9 @@ use crate::sym::{Mat3, Scalar, Vec3};
 use crate::system::{ForceElement, System};
 use std::ops::{Add, Sub};
 
+/// Base rotation, axis and summed angle of a run of revolute joints.
+type AngleChain<S> = (Mat3<S>, Vec3<S>, S);
+
 /// A joint's positions, speeds and (if known) accelerations.
 type JointValues<S> = (Vec<S>, Vec<S>, Option<Vec<S>>);
 
@@ -250,7 +253,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         };
         // Per body: (base rotation, axis, summed angle) of a run of revolute
         // joints about one axis ending at it.
-        let mut chain: Vec<Option<(Mat3<S>, Vec3<S>, S)>> = Vec::with_capacity(n);
+        let mut chain: Vec<Option<AngleChain<S>>> = Vec::with_capacity(n);
         // Forward pass over bodies (Featherstone Table 5.1, first loop).
         for (i, body) in self.tree.bodies.iter().enumerate() {
             let (q, u, known) = self.joint_state(i, st)?;
@@ -278,7 +281,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             // specialisation): the world rotation is the chain's base
             // rotation turned by the summed angle, one sin/cos instead of a
             // matrix product per body.
-            let summed = match (&body.kind, body.parent.and_then(|p| chain[p].clone())) {
+            let summed = match (&body.kind, body.parent.and_then(|p| chain[p])) {
                 (JointModel::Revolute(a), Some((base, axis, angle)))
                     if (0..3).all(|c| (axis.0[c] - a.0[c]).is_zero())
                         && is_identity(&body.frame_parent.e)
