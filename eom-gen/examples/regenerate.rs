@@ -39,7 +39,9 @@ fn main() -> ExitCode {
                     eprintln!("cannot write generated/src/{name}.rs: {e}");
                     return ExitCode::from(1);
                 }
-                lib += &format!("pub mod {name};\n");
+                lib += &format!(
+                    "/// Model `{name}`, generated from `models/{name}.ron`.\npub mod {name};\n"
+                );
             }
             Err(e) => {
                 eprintln!("{e}");

@@ -5,6 +5,7 @@
 //! [`graph`]: spanning tree and cut joints) → `mech` (kinematics and
 //! dynamics as [`sym`] expressions) → `emit` (Rust source).
 
+pub mod builder;
 pub mod emit;
 pub mod generate;
 pub mod graph;
@@ -14,6 +15,7 @@ pub mod summary;
 pub mod sym;
 pub mod system;
 
+pub use builder::{BuildError, Builder};
 pub use generate::{GenerateError, Generated, generate, generate_file};
 pub use model::{Checked, Diagnostic, Report, Source, Spec, check, check_file};
 pub use system::System;

@@ -2,16 +2,29 @@
 //! so readers can see what eom-gen emits. A test fails when a file is stale;
 //! refresh with `cargo run -p eom-gen --example regenerate`.
 
+/// Model `andrews`, generated from `models/andrews.ron`.
 pub mod andrews;
+/// Model `arm7`, generated from `models/arm7.ron`.
 pub mod arm7;
+/// Model `bricard`, generated from `models/bricard.ron`.
 pub mod bricard;
+/// Model `double_pendulum`, generated from `models/double_pendulum.ron`.
 pub mod double_pendulum;
+/// Model `fourbar`, generated from `models/fourbar.ron`.
 pub mod fourbar;
+/// Model `free_body`, generated from `models/free_body.ron`.
 pub mod free_body;
+/// Model `heavy_top`, generated from `models/heavy_top.ron`.
 pub mod heavy_top;
+/// Model `pendulum`, generated from `models/pendulum.ron`.
 pub mod pendulum;
+/// Model `rolling_disk`, generated from `models/rolling_disk.ron`.
 pub mod rolling_disk;
+/// Model `slider_crank`, generated from `models/slider_crank.ron`.
 pub mod slider_crank;
+/// Model `slider_crank_driven`, generated from `models/slider_crank_driven.ron`.
 pub mod slider_crank_driven;
+/// Model `stewart`, generated from `models/stewart.ron`.
 pub mod stewart;
+/// Model `stewart_driven`, generated from `models/stewart_driven.ron`.
 pub mod stewart_driven;

@@ -1,0 +1,92 @@
+//! `build.rs` support, in the manner of `prost-build`: generate one module
+//! per model into `OUT_DIR` and tell cargo to rerun when a model changes.
+//!
+//! ```no_run
+//! // build.rs
+//! fn main() {
+//!     eom_gen::Builder::new()
+//!         .model("models/double_pendulum.ron")
+//!         .compile()
+//!         .unwrap_or_else(|e| panic!("{e}"));
+//! }
+//! // src/main.rs:
+//! // include!(concat!(env!("OUT_DIR"), "/double_pendulum.rs"));
+//! ```
+
+use crate::model::load;
+use crate::{GenerateError, generate};
+use std::fmt;
+use std::path::PathBuf;
+
+/// Generates Rust modules from model files at build time.
+#[derive(Clone, Debug, Default)]
+pub struct Builder {
+    models: Vec<String>,
+    out_dir: Option<PathBuf>,
+}
+
+/// Why a build step failed.
+#[derive(Debug)]
+pub enum BuildError {
+    /// A model could not be generated (diagnostics with positions).
+    Generate(GenerateError),
+    /// No output directory (`OUT_DIR` unset outside build scripts).
+    NoOutDir,
+    /// Writing the generated file failed.
+    Io(String, std::io::Error),
+}
+
+impl fmt::Display for BuildError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            BuildError::Generate(e) => write!(f, "{e}"),
+            BuildError::NoOutDir => write!(
+                f,
+                "OUT_DIR is not set: call `Builder::out_dir` outside build scripts"
+            ),
+            BuildError::Io(path, e) => write!(f, "cannot write `{path}`: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for BuildError {}
+
+impl Builder {
+    /// A builder with no models.
+    pub fn new() -> Self {
+        Builder::default()
+    }
+
+    /// Adds a model file (path relative to the crate being built).
+    pub fn model(mut self, path: impl Into<String>) -> Self {
+        self.models.push(path.into());
+        self
+    }
+
+    /// Writes into `dir` instead of `OUT_DIR`.
+    pub fn out_dir(mut self, dir: impl Into<PathBuf>) -> Self {
+        self.out_dir = Some(dir.into());
+        self
+    }
+
+    /// Generates every model into `<out_dir>/<model name>.rs` and prints
+    /// `cargo:rerun-if-changed=<model>` for each. Reports the first model
+    /// that fails, with all of its diagnostics.
+    pub fn compile(self) -> Result<Vec<PathBuf>, BuildError> {
+        let dir = match self.out_dir {
+            Some(d) => d,
+            None => PathBuf::from(std::env::var_os("OUT_DIR").ok_or(BuildError::NoOutDir)?),
+        };
+        let mut written = Vec::new();
+        for path in &self.models {
+            println!("cargo:rerun-if-changed={path}");
+            let src = load(path).map_err(|r| BuildError::Generate(GenerateError::Model(r)))?;
+            let g = generate(&src).map_err(BuildError::Generate)?;
+            let file = dir.join(format!("{}.rs", g.checked.system.name));
+            std::fs::write(&file, &g.source)
+                .map_err(|e| BuildError::Io(file.display().to_string(), e))?;
+            written.push(file);
+        }
+        Ok(written)
+    }
+}
