@@ -1,17 +1,15 @@
 //! `build.rs` support, in the manner of `prost-build`: generate one module
 //! per model into `OUT_DIR` and tell cargo to rerun when a model changes.
 //!
+//! In `build.rs`:
 //! ```no_run
-//! // build.rs
-//! fn main() {
-//!     eom_gen::Builder::new()
-//!         .model("models/double_pendulum.ron")
-//!         .compile()
-//!         .unwrap_or_else(|e| panic!("{e}"));
-//! }
-//! // src/main.rs:
-//! // include!(concat!(env!("OUT_DIR"), "/double_pendulum.rs"));
+//! eom_gen::Builder::new()
+//!     .model("models/double_pendulum.ron")
+//!     .compile()
+//!     .unwrap_or_else(|e| panic!("{e}"));
 //! ```
+//! and in the crate: `include!(concat!(env!("OUT_DIR"), "/double_pendulum.rs"));`
+//! (see `examples/build_rs`).
 
 use crate::model::load;
 use crate::{GenerateError, generate};
