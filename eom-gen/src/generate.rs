@@ -72,3 +72,24 @@ pub fn generate_file(path: &str) -> Result<Generated, GenerateError> {
     let src = crate::model::load(path).map_err(GenerateError::Model)?;
     generate(&src)
 }
+
+/// The generated items of `src` as tokens, with the model struct named
+/// `type_name` (for `#[multibody]`).
+pub fn generate_tokens(
+    src: &Source,
+    type_name: &str,
+) -> Result<proc_macro2::TokenStream, GenerateError> {
+    let checked = check(src).map_err(GenerateError::Model)?;
+    let formulation = formulate(&checked.system, Request::default()).map_err(|error| {
+        GenerateError::Formulate {
+            path: src.path.clone(),
+            error,
+        }
+    })?;
+    Ok(emit::emit_tokens(
+        &checked.system,
+        &formulation,
+        &src.text,
+        Some(type_name),
+    ))
+}

@@ -247,7 +247,7 @@ fn list(names: &[&str]) -> String {
 /// model file's text, hashed into the doc comment with the generator
 /// version.
 pub fn emit(sys: &System, f: &Formulation, source_text: &str) -> String {
-    let tokens = emit_tokens(sys, f, source_text);
+    let tokens = emit_tokens(sys, f, source_text, None);
     match syn::parse2::<syn::File>(tokens.clone()) {
         Ok(file) => prettyplease::unparse(&file),
         // Unreachable for well-formed programs; keep the raw tokens visible.
@@ -255,11 +255,18 @@ pub fn emit(sys: &System, f: &Formulation, source_text: &str) -> String {
     }
 }
 
-/// The tokens of [`emit`], unformatted (for `#[multibody]`).
-pub fn emit_tokens(sys: &System, f: &Formulation, source_text: &str) -> TokenStream {
+/// The tokens of [`emit`], unformatted; `type_name` replaces the model
+/// struct's name (`#[multibody]` uses the annotated struct's).
+pub fn emit_tokens(
+    sys: &System,
+    f: &Formulation,
+    source_text: &str,
+    type_name: Option<&str>,
+) -> TokenStream {
     let name = &sys.name;
-    let ty = format_ident!("{}", camel(name));
-    let params_ty = format_ident!("{}Params", camel(name));
+    let base = type_name.map_or_else(|| camel(name), str::to_string);
+    let ty = format_ident!("{base}");
+    let params_ty = format_ident!("{base}Params");
     let (nq, nu, ni) = (sys.nq(), sys.nu(), sys.inputs.len());
     let (nq_l, nu_l, ni_l, ny_l) = (
         Literal::usize_unsuffixed(nq),

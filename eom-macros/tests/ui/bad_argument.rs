@@ -1,0 +1,6 @@
+use eom_macros::multibody;
+
+#[multibody(modle = "models/pendulum.ron")]
+pub struct Misspelt;
+
+fn main() {}
