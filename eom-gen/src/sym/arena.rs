@@ -343,8 +343,13 @@ impl Arena {
         a.len().cmp(&b.len())
     }
 
-    /// The constant node for `n`.
+    /// The constant node for `n` (a float that is a small dyadic rational
+    /// is stored as the exact rational, see [`Num::from_f64`]).
     pub fn num_node(&mut self, n: Num) -> Id {
+        let n = match n {
+            Num::Float(x) => Num::from_f64(x),
+            n => n,
+        };
         self.intern(View::Num(n))
     }
 
@@ -503,7 +508,11 @@ impl Arena {
     /// Does `e` depend on symbol `s`?
     pub fn depends_on(&self, e: Id, s: SymId) -> bool {
         let target = self.sym_node(s);
-        target <= e && self.reachable(&[e], |id| id < target).contains(&target)
+        target <= e
+            && self
+                .reachable(&[e], |id| id < target)
+                .binary_search(&target)
+                .is_ok()
     }
 
     /// Storage sizes (see [`MemoryStats::bytes_per_node`]).

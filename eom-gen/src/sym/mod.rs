@@ -76,5 +76,5 @@ pub use node::{ChildIter, Id, SymId, SymKind, Symbol, View};
 pub use num::Num;
 pub use program::{Instr, LowerOptions, Op, OpCount, Operand, Program};
 pub use scalar::Scalar;
-pub use sexpr::{Display, SExpr};
+pub use sexpr::{Display, MAX_DEPTH, SExpr};
 pub use simplify::{Report, Rewrite, Runner, StopReason, Uses, factor_common, rewrites};

@@ -11,11 +11,15 @@
 //! division, integer powers use square-and-multiply, and `sin x`/`cos x` of
 //! one argument that are both needed become one `SinCos` instruction.
 //!
-//! [`Program::optimize`] is the second round: constant propagation, algebraic
-//! identities (`x − x = 0`, `x·1`, `x·0`, …), value numbering with
-//! canonical operand order, and dead-code elimination, repeated until
-//! nothing changes. It catches temporaries that become constant only once
-//! common subexpressions are named.
+//! Two further rounds work on the program:
+//! - [`Program::optimize`] (on by default): constant propagation, algebraic
+//!   identities (`x − x = 0`, `x·1`, `x·0`, …), value numbering with
+//!   canonical operand order, and dead-code elimination, repeated until
+//!   nothing changes. It catches temporaries that become constant only once
+//!   common subexpressions are named.
+//! - [`Program::resimplify`] (opt-in, `LowerOptions::second_round`): read the
+//!   program back into a fresh arena, so every assignment is canonicalised by
+//!   the smart constructors with its operands named, and lower again.
 
 use super::arena::Arena;
 use super::node::{Id, SymId, Symbol, View};
