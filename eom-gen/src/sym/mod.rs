@@ -16,7 +16,8 @@
 //! - `Display`/`FromStr`: s-expressions, `(+ (* 2 (sin q1)) l)`
 //!   ([`Arena::parse`], [`Arena::display`], [`SExpr`]).
 //! - Derivatives: [`Arena::diff`] (memoised per node and variable),
-//!   [`Arena::jacobian`], [`TimeDerivative`] (total `d/dt` along `q̇`, `u̇`).
+//!   [`Arena::jacobian`], [`TimeDerivative`] (total `d/dt` along `q̇`, `u̇`);
+//!   [`Arena::substitute`] replaces symbols (fixed parameters, `q̇ = u`).
 //! - [`Vec3`], [`Mat3`]: generic over [`Scalar`], with rotations from
 //!   axis–angle, Euler/Bryan angles and unit quaternions; structural zeros
 //!   stay exact.
@@ -65,6 +66,7 @@ mod reimport;
 mod scalar;
 mod sexpr;
 mod simplify;
+mod subst;
 mod trig;
 
 pub use arena::{Arena, DEFAULT_FLATTEN_LIMIT, MemoryStats, SymError};
