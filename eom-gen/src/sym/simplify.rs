@@ -4,7 +4,10 @@
 //! Each iteration rebuilds every node reachable from the roots, children
 //! first, through the smart constructors (so the construction-time
 //! [`RuleSet`] is re-applied to graphs built under other rules, e.g. raw
-//! ones), then tries each named [`Rewrite`] on the rebuilt node. The run
+//! ones), then tries each named [`Rewrite`] on the rebuilt node. Work is
+//! incremental: a node whose children did not change is not rebuilt if the
+//! arena built it under the same rules, and is skipped altogether once it is
+//! known to be a fixed point of the rebuild and the rewrites. The run
 //! stops when an iteration changes no root ([`StopReason::Saturated`]) or
 //! a limit is hit. With the cost guard on (default), an iteration is only
 //! kept if it does not raise [`Arena::op_estimate`], so the runner never
