@@ -110,7 +110,13 @@ fn second_round_folds_temporaries_that_cancel() {
             ..LowerOptions::default()
         },
     );
-    let opt = a.lower(&[("e", e)], LowerOptions::default());
+    let opt = a.lower(
+        &[("e", e)],
+        LowerOptions {
+            second_round: true,
+            ..LowerOptions::default()
+        },
+    );
     assert_eq!(opt.to_string(), "inputs: in0=w\ne = in0\n", "got\n{opt}");
     assert!(raw.op_count().total() > 0, "raw:\n{raw}");
 }

@@ -300,6 +300,37 @@ proptest! {
         }
     }
 
+    /// Substituting constants for some variables, then evaluating, equals
+    /// evaluating at those values.
+    #[test]
+    fn substitution_preserves_value(src in expr(false), p in point(), mask in 0u8..32) {
+        let mut a = Arena::new();
+        let e = a.parse(&src).unwrap();
+        let want = a.eval(e, &values(&a, &p));
+        prop_assume!(want.is_finite() && want.abs() < 1e6);
+        let mut map = rustc_hash::FxHashMap::default();
+        for (k, name) in VARS.iter().enumerate() {
+            if mask & (1 << k) != 0 && let Some(s) = a.find_symbol(name) {
+                map.insert(s, a.constant(p[k]));
+            }
+        }
+        let got_id = a.substitute(&[e], |s| map.get(&s).copied())[0];
+        let got = a.eval(got_id, &values(&a, &p));
+        prop_assert!(close(got, want, TOL), "{src} → {}: got {got} want {want}", a.display(got_id));
+    }
+
+    /// Multiplying out preserves values.
+    #[test]
+    fn expand_preserves_value(src in expr(false), p in point()) {
+        let mut a = Arena::new();
+        let e = a.parse(&src).unwrap();
+        let want = a.eval(e, &values(&a, &p));
+        prop_assume!(want.is_finite() && want.abs() < 1e6);
+        let x = a.expand(&[e], 32)[0];
+        let got = a.eval(x, &values(&a, &p));
+        prop_assert!(close(got, want, TOL), "{src} → {}: got {got} want {want}", a.display(x));
+    }
+
     /// Canonical forms are fixed points: re-running the rules changes nothing.
     #[test]
     fn canonical_form_is_a_fixed_point(src in expr(false)) {

@@ -219,3 +219,79 @@ fn op_estimate_counts_like_lowering() {
     let e = raw.parse("(* -1 -1 x)").unwrap();
     assert_eq!(raw.op_estimate(&[e]), 0);
 }
+
+/// Mass matrix of a planar double pendulum with point masses at the link
+/// ends, as M = Σ m_k J_kᵀ J_k from the Jacobians of the mass positions.
+/// Analytic answer (e.g. any textbook): M11 = m1 l1² + m2 (l1² + l2² + 2 l1 l2 cos q2),
+/// M12 = m2 (l2² + l1 l2 cos q2), M22 = m2 l2². Reaching it needs expansion,
+/// like-term collection, sin²+cos² = 1, angle-difference contraction and
+/// cos(−x) = cos x together.
+#[test]
+fn double_pendulum_mass_matrix_simplifies_to_the_textbook_form() {
+    let mut a = Arena::new();
+    let p1 = [
+        a.parse("(* l1 (sin q1))").unwrap(),
+        a.parse("(- (* l1 (cos q1)))").unwrap(),
+    ];
+    let p2 = [
+        a.parse("(+ (* l1 (sin q1)) (* l2 (sin (+ q1 q2))))")
+            .unwrap(),
+        a.parse("(- (+ (* l1 (cos q1)) (* l2 (cos (+ q1 q2)))))")
+            .unwrap(),
+    ];
+    let qs = [a.q(1), a.q(2)].map(|q| a.as_sym(q).unwrap());
+    let (j1, j2) = (a.jacobian(&p1, &qs), a.jacobian(&p2, &qs));
+    let (m1, m2) = (a.param("m1").unwrap(), a.param("m2").unwrap());
+    let mut m = [[a.constant(0.0); 2]; 2];
+    for i in 0..2 {
+        for j in 0..2 {
+            let mut terms = Vec::new();
+            for k in 0..2 {
+                let t1 = a.mul(&[m1, j1[k][i], j1[k][j]]);
+                let t2 = a.mul(&[m2, j2[k][i], j2[k][j]]);
+                terms.extend([t1, t2]);
+            }
+            let s = a.add(&terms);
+            m[i][j] = a.expand(&[s], 64)[0];
+        }
+    }
+    let want = [
+        "(+ (* m1 (^ l1 2)) (* m2 (^ l1 2)) (* m2 (^ l2 2)) (* 2 m2 l1 l2 (cos q2)))",
+        "(+ (* m2 (^ l2 2)) (* m2 l1 l2 (cos q2)))",
+        "(* m2 (^ l2 2))",
+    ];
+    for (got, want) in [m[0][0], m[0][1], m[1][1]].into_iter().zip(want) {
+        let w = a.parse(want).unwrap();
+        assert_eq!(got, w, "got {} want {}", a.display(got), a.display(w));
+    }
+    assert_eq!(m[0][1], m[1][0], "M is symmetric");
+}
+
+#[test]
+fn structural_zeros_and_ones_reach_the_program_as_constants() {
+    use eom_gen::sym::{Context, LowerOptions, Mat3, Op, Operand};
+    let cx = Context::new();
+    let r = Mat3::rot(eom_gen::sym::Axis::Z, cx.q(1))
+        * Mat3::rot(eom_gen::sym::Axis::Z, cx.q(2))
+        * Mat3::rot(eom_gen::sym::Axis::Z, cx.q(3));
+    let names: Vec<String> = (0..9).map(|k| format!("r{}{}", k / 3, k % 3)).collect();
+    let outs: Vec<(&str, _)> = (0..9)
+        .map(|k| (names[k].as_str(), r.0[k / 3][k % 3]))
+        .collect();
+    let p = cx.lower(&outs, LowerOptions::default());
+    let consts: Vec<&str> = p
+        .outputs
+        .iter()
+        .filter(|(_, o)| matches!(o, Operand::Const(_)))
+        .map(|(n, _)| n.as_str())
+        .collect();
+    assert_eq!(consts, ["r02", "r12", "r20", "r21", "r22"], "got\n{p}");
+    // q1 + q2 + q3 (2 adds), one sin_cos, one negation
+    let c = p.op_count();
+    assert_eq!(
+        (c.adds, c.trig, c.negs, c.total()),
+        (2, 1, 1, 4),
+        "got {c}\n{p}"
+    );
+    assert!(p.instrs.iter().any(|i| matches!(i.op, Op::SinCos(_))));
+}

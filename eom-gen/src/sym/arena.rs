@@ -1,7 +1,8 @@
 //! The hash-consed expression arena.
 //!
-//! Nodes live in one flat `Vec` (16 bytes each), children before parents;
-//! n-ary sums and products keep their children in a side `Vec<Id>`. A
+//! Nodes live in one flat `Vec` (12 bytes each, plus a 4-byte structural
+//! hash), children before parents; sums, products and selects keep their
+//! children in a side `Vec<Id>`, float constants in a side `Vec<f64>`. A
 //! `hashbrown::HashTable<u32>` keyed with `FxHasher` maps a node's structure to
 //! its id, so structurally equal nodes are one node. Hashing is deterministic
 //! and the table is never iterated, so ids — and everything printed or
@@ -76,7 +77,8 @@ pub struct MemoryStats {
     /// Bytes used by the node vector and the structural hashes
     /// (`nodes * (size_of::<Node>() + 4)`).
     pub node_bytes: usize,
-    /// Bytes used by the side vector of n-ary children.
+    /// Bytes used by the side vectors: children of sums, products and
+    /// selects, and float constants.
     pub arg_bytes: usize,
     /// Bytes allocated by the hash table.
     pub table_bytes: usize,
@@ -97,11 +99,14 @@ pub struct Arena {
     /// which nodes were created (see [`Arena::shash`]).
     shash: Vec<u32>,
     args: Vec<Id>,
+    /// Values of float constants (rationals are stored inline).
+    floats: Vec<f64>,
     table: HashTable<u32>,
     syms: Vec<Symbol>,
     sym_nodes: Vec<Id>,
     sym_by_name: FxHashMap<String, SymId>,
     pub(crate) rules: RuleSet,
+    rules_uniform: bool,
     pub(crate) flatten_limit: usize,
     pub(crate) diff_memo: FxHashMap<SymId, FxHashMap<Id, Id>>,
 }
@@ -112,10 +117,10 @@ impl Default for Arena {
     }
 }
 
-fn view_of<'a>(nodes: &[Node], args: &'a [Id], id: u32) -> View<'a> {
+fn view_of<'a>(nodes: &[Node], args: &'a [Id], floats: &[f64], id: u32) -> View<'a> {
     match nodes[id as usize] {
         Node::Rat(p, q) => View::Num(Num::Rat(p, q)),
-        Node::Float(b) => View::Num(Num::Float(f64::from_bits(b))),
+        Node::Float(i) => View::Num(Num::Float(floats[i as usize])),
         Node::Sym(s) => View::Sym(s),
         Node::Add(s, l) => View::Add(&args[s as usize..(s + l) as usize]),
         Node::Mul(s, l) => View::Mul(&args[s as usize..(s + l) as usize]),
@@ -128,7 +133,10 @@ fn view_of<'a>(nodes: &[Node], args: &'a [Id], id: u32) -> View<'a> {
         Node::Ln(a) => View::Ln(a),
         Node::Abs(a) => View::Abs(a),
         Node::Atan2(a, b) => View::Atan2(a, b),
-        Node::Select(a, b, c) => View::Select(a, b, c),
+        Node::Select(s) => {
+            let s = s as usize;
+            View::Select(args[s], args[s + 1], args[s + 2])
+        }
     }
 }
 
@@ -153,11 +161,13 @@ impl Arena {
             nodes: Vec::new(),
             shash: Vec::new(),
             args: Vec::new(),
+            floats: Vec::new(),
             table: HashTable::new(),
             syms: Vec::new(),
             sym_nodes: Vec::new(),
             sym_by_name: FxHashMap::default(),
             rules,
+            rules_uniform: true,
             flatten_limit: DEFAULT_FLATTEN_LIMIT,
             diff_memo: FxHashMap::default(),
         }
@@ -170,7 +180,16 @@ impl Arena {
 
     /// Change the construction-time rules for nodes built from now on.
     pub fn set_rules(&mut self, rules: RuleSet) {
+        if rules != self.rules && !self.is_empty() {
+            self.rules_uniform = false;
+        }
         self.rules = rules;
+    }
+
+    /// True if every node was built under the current rules (they were
+    /// never changed while the arena had nodes), so all nodes are canonical.
+    pub fn rules_uniform(&self) -> bool {
+        self.rules_uniform
     }
 
     /// Sums with more than this many terms are not flattened into an
@@ -199,14 +218,14 @@ impl Arena {
 
     /// The structure of node `id`.
     pub fn view(&self, id: Id) -> View<'_> {
-        view_of(&self.nodes, &self.args, id.0)
+        view_of(&self.nodes, &self.args, &self.floats, id.0)
     }
 
     /// The constant value of `id`, if it is a constant.
     pub fn num(&self, id: Id) -> Option<Num> {
         match self.nodes[id.index()] {
             Node::Rat(p, q) => Some(Num::Rat(p, q)),
-            Node::Float(b) => Some(Num::Float(f64::from_bits(b))),
+            Node::Float(i) => Some(Num::Float(self.floats[i as usize])),
             _ => None,
         }
     }
@@ -214,9 +233,9 @@ impl Arena {
     /// Find an existing node with this structure, without creating it.
     pub(crate) fn lookup(&self, v: &View<'_>) -> Option<Id> {
         let hash = hash_view(v);
-        let (nodes, args) = (&self.nodes, &self.args);
+        let (nodes, args, floats) = (&self.nodes, &self.args, &self.floats);
         self.table
-            .find(hash, |&i| view_of(nodes, args, i) == *v)
+            .find(hash, |&i| view_of(nodes, args, floats, i) == *v)
             .map(|&i| Id(i))
     }
 
@@ -225,14 +244,20 @@ impl Arena {
     /// reached a canonical form.
     pub(crate) fn intern(&mut self, v: View<'_>) -> Id {
         let hash = hash_view(&v);
-        let (nodes, args) = (&self.nodes, &self.args);
-        if let Some(&i) = self.table.find(hash, |&i| view_of(nodes, args, i) == v) {
+        let (nodes, args, floats) = (&self.nodes, &self.args, &self.floats);
+        if let Some(&i) = self
+            .table
+            .find(hash, |&i| view_of(nodes, args, floats, i) == v)
+        {
             return Id(i);
         }
         let id = u32::try_from(self.nodes.len()).expect("arena exceeds u32::MAX nodes");
         let node = match v {
             View::Num(Num::Rat(p, q)) => Node::Rat(p, q),
-            View::Num(Num::Float(x)) => Node::Float(x.to_bits()),
+            View::Num(Num::Float(x)) => {
+                self.floats.push(x);
+                Node::Float(self.floats.len() as u32 - 1)
+            }
             View::Sym(s) => Node::Sym(s),
             View::Add(s) | View::Mul(s) => {
                 debug_assert!(s.iter().all(|c| c.0 < id));
@@ -253,14 +278,17 @@ impl Arena {
             View::Ln(a) => Node::Ln(a),
             View::Abs(a) => Node::Abs(a),
             View::Atan2(a, b) => Node::Atan2(a, b),
-            View::Select(a, b, c) => Node::Select(a, b, c),
+            View::Select(a, b, c) => {
+                self.args.extend_from_slice(&[a, b, c]);
+                Node::Select(self.args.len() as u32 - 3)
+            }
         };
         let sh = self.struct_hash(&v);
         self.nodes.push(node);
         self.shash.push(sh);
-        let (nodes, args) = (&self.nodes, &self.args);
+        let (nodes, args, floats) = (&self.nodes, &self.args, &self.floats);
         self.table
-            .insert_unique(hash, id, |&i| hash_view(&view_of(nodes, args, i)));
+            .insert_unique(hash, id, |&i| hash_view(&view_of(nodes, args, floats, i)));
         Id(id)
     }
 
@@ -315,8 +343,13 @@ impl Arena {
         a.len().cmp(&b.len())
     }
 
-    /// The constant node for `n`.
+    /// The constant node for `n` (a float that is a small dyadic rational
+    /// is stored as the exact rational, see [`Num::from_f64`]).
     pub fn num_node(&mut self, n: Num) -> Id {
+        let n = match n {
+            Num::Float(x) => Num::from_f64(x),
+            n => n,
+        };
         self.intern(View::Num(n))
     }
 
@@ -475,7 +508,11 @@ impl Arena {
     /// Does `e` depend on symbol `s`?
     pub fn depends_on(&self, e: Id, s: SymId) -> bool {
         let target = self.sym_node(s);
-        target <= e && self.reachable(&[e], |id| id < target).contains(&target)
+        target <= e
+            && self
+                .reachable(&[e], |id| id < target)
+                .binary_search(&target)
+                .is_ok()
     }
 
     /// Storage sizes (see [`MemoryStats::bytes_per_node`]).
@@ -484,7 +521,8 @@ impl Arena {
             nodes: self.nodes.len(),
             node_bytes: self.nodes.len()
                 * (std::mem::size_of::<Node>() + std::mem::size_of::<u32>()),
-            arg_bytes: self.args.len() * std::mem::size_of::<Id>(),
+            arg_bytes: self.args.len() * std::mem::size_of::<Id>()
+                + self.floats.len() * std::mem::size_of::<f64>(),
             table_bytes: self.table.allocation_size(),
         }
     }

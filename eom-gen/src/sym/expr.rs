@@ -20,6 +20,7 @@
 
 use super::arena::{Arena, SymError};
 use super::build::RuleSet;
+use super::diff::TimeDerivative;
 use super::node::{Id, SymId};
 use super::num::Num;
 use super::program::{LowerOptions, Program};
@@ -136,6 +137,23 @@ impl Context {
             }
             None => Expr::Const(Num::ZERO),
         }
+    }
+    /// Jacobian `J[i][j] = ∂es[i]/∂vars[j]`; each `vars[j]` must be a symbol
+    /// (a non-symbol column is zero).
+    pub fn jacobian<'a>(&'a self, es: &[Expr<'a>], vars: &[Expr<'a>]) -> Vec<Vec<Expr<'a>>> {
+        es.iter()
+            .map(|&e| vars.iter().map(|&v| self.diff(e, v)).collect())
+            .collect()
+    }
+    /// Total time derivative `de/dt` with the rates of `td` (see [`TimeDerivative`]).
+    pub fn time_derivative<'a>(
+        &'a self,
+        td: &mut TimeDerivative,
+        e: Expr<'a>,
+    ) -> Result<Expr<'a>, SymError> {
+        let id = self.id(e);
+        let d = td.apply(&mut self.arena_mut(), id)?;
+        Ok(self.expr(d))
     }
     /// Lower named outputs to a [`Program`].
     pub fn lower(&self, outputs: &[(&str, Expr<'_>)], opts: LowerOptions) -> Program {
@@ -402,6 +420,33 @@ mod tests {
         assert_eq!(e, cx.parse("(+ (* 2 (sin q1)) l)").unwrap(), "got {e}");
         let s2c2 = q.sin() * q.sin() + q.cos().powi(2);
         assert!(s2c2.is_one(), "got {s2c2} want 1");
+    }
+
+    #[test]
+    fn jacobian_and_time_derivative_through_the_handle() {
+        let cx = Context::new();
+        let (q0, q1) = (cx.q(0), cx.q(1));
+        let x = q0.cos() * q1;
+        let j = cx.jacobian(&[x], &[q0, q1]);
+        assert_eq!(
+            j[0][0],
+            cx.parse("(* -1 q1 (sin q0))").unwrap(),
+            "got {}",
+            j[0][0]
+        );
+        assert_eq!(j[0][1], q0.cos());
+        let mut td = TimeDerivative::new();
+        let v = cx.time_derivative(&mut td, x).unwrap();
+        assert_eq!(
+            v,
+            cx.parse("(- (* qd1 (cos q0)) (* q1 qd0 (sin q0)))")
+                .unwrap(),
+            "got {v}"
+        );
+        let dep = cx.arena().depends_on(cx.id(v), cx.sym_id(q1).unwrap());
+        assert!(dep);
+        let s = cx.sym_id(cx.u(3)).unwrap();
+        assert!(!cx.arena().depends_on(cx.id(v), s));
     }
 
     #[test]

@@ -16,7 +16,9 @@
 //! - `Display`/`FromStr`: s-expressions, `(+ (* 2 (sin q1)) l)`
 //!   ([`Arena::parse`], [`Arena::display`], [`SExpr`]).
 //! - Derivatives: [`Arena::diff`] (memoised per node and variable),
-//!   [`Arena::jacobian`], [`TimeDerivative`] (total `d/dt` along `q̇`, `u̇`).
+//!   [`Arena::jacobian`], [`TimeDerivative`] (total `d/dt` along `q̇`, `u̇`);
+//!   [`Arena::substitute`] replaces symbols (fixed parameters, `q̇ = u`);
+//!   [`Arena::expand`] multiplies out products of sums (opt-in).
 //! - [`Vec3`], [`Mat3`]: generic over [`Scalar`], with rotations from
 //!   axis–angle, Euler/Bryan angles and unit quaternions; structural zeros
 //!   stay exact.
@@ -56,6 +58,7 @@ mod arena;
 mod build;
 mod diff;
 mod eval;
+mod expand;
 mod expr;
 mod linalg;
 mod node;
@@ -65,16 +68,18 @@ mod reimport;
 mod scalar;
 mod sexpr;
 mod simplify;
+mod subst;
 mod trig;
 
 pub use arena::{Arena, DEFAULT_FLATTEN_LIMIT, MemoryStats, SymError};
 pub use build::RuleSet;
 pub use diff::TimeDerivative;
+pub use expand::MAX_EXPAND_POWER;
 pub use expr::{Context, Expr};
 pub use linalg::{Axis, Mat3, Vec3};
 pub use node::{ChildIter, Id, SymId, SymKind, Symbol, View};
 pub use num::Num;
 pub use program::{Instr, LowerOptions, Op, OpCount, Operand, Program};
 pub use scalar::Scalar;
-pub use sexpr::{Display, SExpr};
+pub use sexpr::{Display, MAX_DEPTH, SExpr};
 pub use simplify::{Report, Rewrite, Runner, StopReason, Uses, factor_common, rewrites};

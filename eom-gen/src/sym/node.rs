@@ -102,12 +102,13 @@ impl Symbol {
     }
 }
 
-/// A stored node: 16 bytes. Sums and products keep their children in the
-/// arena's side vector as `(start, len)`.
+/// A stored node: 12 bytes. Sums and products keep their children in the
+/// arena's side vector as `(start, len)`, a select its three children at
+/// `start`; a float constant is an index into the arena's float vector.
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Node {
     Rat(i32, i32),
-    Float(u64),
+    Float(u32),
     Sym(SymId),
     Add(u32, u32),
     Mul(u32, u32),
@@ -120,7 +121,7 @@ pub(crate) enum Node {
     Ln(Id),
     Abs(Id),
     Atan2(Id, Id),
-    Select(Id, Id, Id),
+    Select(u32),
 }
 
 /// A borrowed, structural view of a node, as returned by
@@ -239,9 +240,9 @@ mod tests {
     use super::*;
 
     #[test]
-    fn node_is_16_bytes() {
+    fn node_is_12_bytes() {
         let got = std::mem::size_of::<Node>();
-        assert!(got <= 16, "got {got} bytes want <= 16");
+        assert!(got <= 12, "got {got} bytes want <= 12");
     }
 
     #[test]

@@ -37,7 +37,7 @@ impl PartialEq for Num {
 }
 impl Eq for Num {}
 
-fn gcd(mut a: i64, mut b: i64) -> i64 {
+fn gcd(mut a: i128, mut b: i128) -> i128 {
     a = a.abs();
     b = b.abs();
     while b != 0 {
@@ -63,6 +63,11 @@ impl Num {
 
     /// An exact rational `p/q`, reduced; `None` if `q == 0` or it does not fit.
     pub fn ratio(p: i64, q: i64) -> Option<Num> {
+        Num::ratio_wide(p as i128, q as i128)
+    }
+
+    /// [`Num::ratio`] on 128-bit integers (no intermediate overflow).
+    fn ratio_wide(p: i128, q: i128) -> Option<Num> {
         if q == 0 {
             return None;
         }
@@ -134,8 +139,8 @@ impl Num {
     /// `self + other`, exact for rationals when it fits.
     pub fn checked_add(self, other: Num) -> Option<Num> {
         if let (Num::Rat(a, b), Num::Rat(c, d)) = (self, other) {
-            let (a, b, c, d) = (a as i64, b as i64, c as i64, d as i64);
-            if let Some(n) = Num::ratio(a * d + c * b, b * d) {
+            let (a, b, c, d) = (a as i128, b as i128, c as i128, d as i128);
+            if let Some(n) = Num::ratio_wide(a * d + c * b, b * d) {
                 return Some(n);
             }
         }
@@ -145,7 +150,7 @@ impl Num {
     /// `self * other`, exact for rationals when it fits.
     pub fn checked_mul(self, other: Num) -> Option<Num> {
         if let (Num::Rat(a, b), Num::Rat(c, d)) = (self, other)
-            && let Some(n) = Num::ratio(a as i64 * c as i64, b as i64 * d as i64)
+            && let Some(n) = Num::ratio_wide(a as i128 * c as i128, b as i128 * d as i128)
         {
             return Some(n);
         }
@@ -278,6 +283,28 @@ mod tests {
         let got = big.checked_mul(big).unwrap();
         assert!(matches!(got, Num::Float(_)), "got {got:?}");
         assert_eq!(got.to_f64(), (i32::MAX as f64).powi(2));
+    }
+
+    #[test]
+    fn extremes_do_not_overflow() {
+        let (max, min) = (Num::int(i32::MAX), Num::int(i32::MIN));
+        let h = Num::ratio(1, i32::MAX as i64).unwrap();
+        for (a, b) in [(max, max), (min, min), (min, max), (h, min), (min, h)] {
+            let want = a.to_f64() + b.to_f64();
+            let got = a.checked_add(b).unwrap().to_f64();
+            assert!(
+                (got - want).abs() <= 1e-15 * want.abs(),
+                "{a} + {b}: got {got} want {want}"
+            );
+            let want = a.to_f64() * b.to_f64();
+            let got = a.checked_mul(b).unwrap().to_f64();
+            assert!(
+                (got - want).abs() <= 1e-15 * want.abs(),
+                "{a} * {b}: got {got} want {want}"
+            );
+        }
+        assert_eq!(Num::ratio(i64::MIN, -1), None);
+        assert_eq!(min.negated(), Num::Float(2147483648.0));
     }
 
     #[test]

@@ -11,11 +11,15 @@
 //! division, integer powers use square-and-multiply, and `sin x`/`cos x` of
 //! one argument that are both needed become one `SinCos` instruction.
 //!
-//! [`Program::optimize`] is the second round: constant propagation, algebraic
-//! identities (`x − x = 0`, `x·1`, `x·0`, …), value numbering with
-//! canonical operand order, and dead-code elimination, repeated until
-//! nothing changes. It catches temporaries that become constant only once
-//! common subexpressions are named.
+//! Two further rounds work on the program:
+//! - [`Program::optimize`] (on by default): constant propagation, algebraic
+//!   identities (`x − x = 0`, `x·1`, `x·0`, …), value numbering with
+//!   canonical operand order, and dead-code elimination, repeated until
+//!   nothing changes. It catches temporaries that become constant only once
+//!   common subexpressions are named.
+//! - [`Program::resimplify`] (opt-in, `LowerOptions::second_round`): read the
+//!   program back into a fresh arena, so every assignment is canonicalised by
+//!   the smart constructors with its operands named, and lower again.
 
 use super::arena::Arena;
 use super::node::{Id, SymId, Symbol, View};
@@ -190,7 +194,10 @@ pub struct LowerOptions {
     /// Run [`Program::optimize`] afterwards.
     pub optimize: bool,
     /// Then also try [`Program::resimplify`] and keep its result if it has
-    /// fewer operations.
+    /// fewer operations. Off by default: on graphs built with every rule on,
+    /// the benchmarks found nothing for it to remove (see BENCHMARKS.md),
+    /// while it doubles lowering time; it pays off on graphs built raw or
+    /// with fewer rules.
     pub second_round: bool,
 }
 
@@ -199,7 +206,7 @@ impl Default for LowerOptions {
         LowerOptions {
             cse: true,
             optimize: true,
-            second_round: true,
+            second_round: false,
         }
     }
 }
@@ -216,12 +223,14 @@ impl LowerOptions {
 struct Lowerer<'a> {
     arena: &'a Arena,
     cse: bool,
-    memo: FxHashMap<Id, Operand>,
+    /// Operand of each lowered node, indexed by id.
+    memo: Vec<Option<Operand>>,
     vn: FxHashMap<Op, Operand>,
     instrs: Vec<Instr>,
     next: u32,
     input_of: FxHashMap<SymId, u32>,
-    reach: FxHashSet<Id>,
+    /// Is the node (by id) reachable from the outputs?
+    reach: Vec<bool>,
 }
 
 fn commutative_key(o: &Operand) -> (u8, u64) {
@@ -330,13 +339,13 @@ impl Lowerer<'_> {
 
     fn node(&mut self, id: Id) -> Operand {
         if self.cse
-            && let Some(&o) = self.memo.get(&id)
+            && let Some(o) = self.memo[id.index()]
         {
             return o;
         }
         let o = self.compute(id);
         if self.cse {
-            self.memo.insert(id, o);
+            self.memo[id.index()] = Some(o);
         }
         o
     }
@@ -347,7 +356,7 @@ impl Lowerer<'_> {
             && self
                 .arena
                 .lookup(&partner)
-                .is_some_and(|p| self.reach.contains(&p));
+                .is_some_and(|p| self.reach[p.index()]);
         let a = self.node(x);
         if !paired {
             return self.emit(if is_sin { Op::Sin(a) } else { Op::Cos(a) });
@@ -357,7 +366,7 @@ impl Lowerer<'_> {
         };
         if let Some(p) = self.arena.lookup(&partner) {
             let (s, c) = (Operand::Tmp(t), Operand::Tmp(t + 1));
-            self.memo.insert(p, if is_sin { c } else { s });
+            self.memo[p.index()] = Some(if is_sin { c } else { s });
             return if is_sin { s } else { c };
         }
         unreachable!("partner checked above")
@@ -493,7 +502,7 @@ impl Arena {
         let mut l = Lowerer {
             arena: self,
             cse: opts.cse,
-            memo: FxHashMap::default(),
+            memo: vec![None; self.len()],
             vn: FxHashMap::default(),
             instrs: Vec::new(),
             next: 0,
@@ -502,7 +511,13 @@ impl Arena {
                 .enumerate()
                 .map(|(i, &s)| (s, i as u32))
                 .collect(),
-            reach: order.iter().copied().collect(),
+            reach: {
+                let mut r = vec![false; self.len()];
+                for &id in &order {
+                    r[id.index()] = true;
+                }
+                r
+            },
         };
         if opts.cse {
             for &id in &order {
@@ -572,26 +587,29 @@ impl Program {
     pub fn optimize(&mut self) -> usize {
         let before = self.instrs.len();
         for _ in 0..8 {
-            let n = self.instrs.len();
-            self.propagate();
+            let changed = self.propagate();
             self.remove_dead();
-            if self.instrs.len() == n {
+            if !changed {
                 break;
             }
         }
         before - self.instrs.len()
     }
 
-    fn propagate(&mut self) {
-        let mut subst: FxHashMap<u32, Operand> = FxHashMap::default();
+    /// One forward pass; returns whether any instruction was replaced.
+    fn propagate(&mut self) -> bool {
+        let n = self.n_tmps as usize;
+        let mut subst: Vec<Option<Operand>> = vec![None; n];
         let mut vn: FxHashMap<Op, Operand> = FxHashMap::default();
-        let mut negs: FxHashMap<u32, Operand> = FxHashMap::default();
+        vn.reserve(self.instrs.len());
+        let mut negs: Vec<Option<Operand>> = vec![None; n];
+        let mut changed = false;
         let mut out = Vec::with_capacity(self.instrs.len());
         let zero = Operand::Const(Num::ZERO);
         let one = Operand::Const(Num::ONE);
         for ins in &self.instrs {
             let op = canonical(ins.op.map(|o| match o {
-                Operand::Tmp(t) => subst.get(&t).copied().unwrap_or(o),
+                Operand::Tmp(t) => subst[t as usize].unwrap_or(o),
                 _ => o,
             }));
             let simpler: Option<Operand> = fold(&op).map(Operand::Const).or_else(|| match op {
@@ -603,12 +621,13 @@ impl Program {
                 Op::Mul(a, b) if b == one => Some(a),
                 Op::Mul(a, b) if a == zero || b == zero => Some(zero),
                 Op::Div(a, b) if b == one => Some(a),
-                Op::Neg(Operand::Tmp(t)) => negs.get(&t).copied(),
+                Op::Neg(Operand::Tmp(t)) => negs[t as usize],
                 Op::Select(_, a, b) if a == b => Some(a),
                 _ => None,
             });
             if let Some(s) = simpler {
-                subst.insert(ins.dst, s);
+                subst[ins.dst as usize] = Some(s);
+                changed = true;
                 continue;
             }
             let op = match op {
@@ -617,41 +636,44 @@ impl Program {
                 _ => op,
             };
             if let Some(&prev) = vn.get(&op) {
-                subst.insert(ins.dst, prev);
+                subst[ins.dst as usize] = Some(prev);
                 if let (Op::SinCos(_), Operand::Tmp(p)) = (op, prev) {
-                    subst.insert(ins.dst + 1, Operand::Tmp(p + 1));
+                    subst[ins.dst as usize + 1] = Some(Operand::Tmp(p + 1));
                 }
+                changed = true;
                 continue;
             }
             vn.insert(op, Operand::Tmp(ins.dst));
             if let Op::Neg(a) = op {
-                negs.insert(ins.dst, a);
+                negs[ins.dst as usize] = Some(a);
             }
+            changed |= op != ins.op;
             out.push(Instr { dst: ins.dst, op });
         }
         for (_, o) in &mut self.outputs {
             if let Operand::Tmp(t) = *o
-                && let Some(&s) = subst.get(&t)
+                && let Some(s) = subst[t as usize]
             {
                 *o = s;
             }
         }
         self.instrs = out;
+        changed
     }
 
     /// Remove instructions whose results are unused, turn a `SinCos` with
     /// one used half into `Sin` or `Cos`, and renumber temporaries densely.
     pub fn remove_dead(&mut self) {
-        let mut used: FxHashSet<u32> = FxHashSet::default();
+        let mut used = vec![false; self.n_tmps as usize + 1];
         for (_, o) in &self.outputs {
             if let Operand::Tmp(t) = o {
-                used.insert(*t);
+                used[*t as usize] = true;
             }
         }
         // For each kept instruction, the temporary its (first) result is read from.
         let mut keep: Vec<Option<u32>> = vec![None; self.instrs.len()];
         for (i, ins) in self.instrs.iter_mut().enumerate().rev() {
-            let (s, c) = (used.contains(&ins.dst), used.contains(&(ins.dst + 1)));
+            let (s, c) = (used[ins.dst as usize], used[ins.dst as usize + 1]);
             let live = match ins.op {
                 Op::SinCos(a) if s && !c => {
                     ins.op = Op::Sin(a);
@@ -668,30 +690,30 @@ impl Program {
                 keep[i] = live;
                 for o in ins.op.operands() {
                     if let Operand::Tmp(t) = o {
-                        used.insert(t);
+                        used[t as usize] = true;
                     }
                 }
             }
         }
-        let mut renum: FxHashMap<u32, u32> = FxHashMap::default();
+        let mut renum: Vec<u32> = vec![u32::MAX; self.n_tmps as usize + 1];
         let mut next = 0;
         let mut out = Vec::with_capacity(self.instrs.len());
         for (ins, k) in self.instrs.iter().zip(keep) {
             let Some(from) = k else { continue };
             let op = ins.op.map(|o| match o {
-                Operand::Tmp(t) => Operand::Tmp(renum[&t]),
+                Operand::Tmp(t) => Operand::Tmp(renum[t as usize]),
                 _ => o,
             });
-            renum.insert(from, next);
+            renum[from as usize] = next;
             if let Op::SinCos(_) = op {
-                renum.insert(ins.dst + 1, next + 1);
+                renum[ins.dst as usize + 1] = next + 1;
             }
             out.push(Instr { dst: next, op });
             next += op.results();
         }
         for (_, o) in &mut self.outputs {
             if let Operand::Tmp(t) = o {
-                *o = Operand::Tmp(renum[t]);
+                *o = Operand::Tmp(renum[*t as usize]);
             }
         }
         self.instrs = out;

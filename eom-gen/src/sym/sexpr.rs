@@ -54,6 +54,9 @@ impl fmt::Display for SExpr {
     }
 }
 
+/// Deepest nesting the parser accepts (building and dropping the tree recurse).
+pub const MAX_DEPTH: usize = 1000;
+
 fn perr(offset: usize, message: impl Into<String>) -> SymError {
     SymError::Parse {
         offset,
@@ -79,6 +82,9 @@ impl FromStr for SExpr {
             }
             let item = match c {
                 b'(' => {
+                    if stack.len() >= MAX_DEPTH {
+                        return Err(perr(i, format!("nested deeper than {MAX_DEPTH} levels")));
+                    }
                     stack.push((Vec::new(), i));
                     i += 1;
                     continue;
@@ -312,6 +318,21 @@ mod tests {
     }
 
     #[test]
+    fn deep_nesting_is_an_error_not_a_stack_overflow() {
+        let src = "(- ".repeat(100_000) + "x" + &")".repeat(100_000);
+        match Arena::new().parse(&src) {
+            Err(SymError::Parse { message, .. }) => {
+                assert!(message.contains("deeper"), "got {message}")
+            }
+            other => panic!("got {other:?} want a parse error"),
+        }
+        let ok = "(- ".repeat(500) + "x" + &")".repeat(500);
+        let mut a = Arena::new();
+        let e = a.parse(&ok).unwrap();
+        assert_eq!(a.to_sexpr_string(e), "x", "an even number of negations");
+    }
+
+    #[test]
     fn errors_have_offsets() {
         let mut a = Arena::new();
         let cases = [
@@ -321,6 +342,9 @@ mod tests {
             ("(^ x 1.5)", 5, "not an integer"),
             ("x )", 2, "unexpected text"),
             ("(+ 1x 2)", 3, "not a number"),
+            ("()", 0, "empty list"),
+            ("", 0, "empty input"),
+            ("((sin) x)", 0, "must start with an operator"),
         ];
         for (src, off, msg) in cases {
             match a.parse(src) {

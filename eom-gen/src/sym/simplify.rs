@@ -4,7 +4,10 @@
 //! Each iteration rebuilds every node reachable from the roots, children
 //! first, through the smart constructors (so the construction-time
 //! [`RuleSet`] is re-applied to graphs built under other rules, e.g. raw
-//! ones), then tries each named [`Rewrite`] on the rebuilt node. The run
+//! ones), then tries each named [`Rewrite`] on the rebuilt node. Work is
+//! incremental: a node whose children did not change is not rebuilt if the
+//! arena built it under the same rules, and is skipped altogether once it is
+//! known to be a fixed point of the rebuild and the rewrites. The run
 //! stops when an iteration changes no root ([`StopReason::Saturated`]) or
 //! a limit is hit. With the cost guard on (default), an iteration is only
 //! kept if it does not raise [`Arena::op_estimate`], so the runner never
@@ -22,7 +25,7 @@
 use super::arena::Arena;
 use super::build::RuleSet;
 use super::node::{Id, View};
-use rustc_hash::FxHashMap;
+use rustc_hash::{FxHashMap, FxHashSet};
 use std::time::{Duration, Instant};
 
 /// How many parents use each node of the DAG being simplified (counted
@@ -139,7 +142,12 @@ impl Runner {
     pub fn run(&self, arena: &mut Arena, roots: &[Id]) -> Report {
         let start = Instant::now();
         let saved = arena.rules();
+        // Nodes built under the runner's own rules are already canonical:
+        // rebuilding one whose children did not change gives it back.
+        let canonical = saved == self.rules && arena.rules_uniform();
         arena.set_rules(self.rules);
+        // Nodes known to be fixed points of rebuild and rewrites.
+        let mut settled: FxHashSet<Id> = FxHashSet::default();
         let before = arena.dag_size(roots);
         let mut applied: Vec<(&'static str, usize)> =
             self.rewrites.iter().map(|r| (r.name, 0)).collect();
@@ -169,11 +177,20 @@ impl Runner {
                     timed_out = true;
                     break;
                 }
-                let mut new = arena.rebuild(id, |c| map[&c]);
-                for (i, r) in self.rewrites.iter().enumerate() {
-                    if let Some(x) = (r.apply)(arena, new, &uses) {
-                        new = x;
-                        applied[i].1 += 1;
+                let same_children = arena.view(id).children().all(|c| map[&c] == c);
+                let mut new = id;
+                if !(same_children && settled.contains(&id)) {
+                    if !(same_children && canonical) {
+                        new = arena.rebuild(id, |c| map[&c]);
+                    }
+                    for (i, r) in self.rewrites.iter().enumerate() {
+                        if let Some(x) = (r.apply)(arena, new, &uses) {
+                            new = x;
+                            applied[i].1 += 1;
+                        }
+                    }
+                    if new == id {
+                        settled.insert(id);
                     }
                 }
                 map.insert(id, new);
