@@ -6,9 +6,11 @@
 //! dynamics as [`sym`] expressions) → `emit` (Rust source).
 
 pub mod builder;
+pub mod compiled;
 pub mod emit;
 pub mod generate;
 pub mod graph;
+pub mod interpret;
 pub mod mech;
 pub mod model;
 pub mod summary;

@@ -31,6 +31,30 @@ enum Command {
         #[arg(short, long)]
         output: Option<String>,
     },
+    /// Evaluate the equations of motion at a state (default: the model's
+    /// initial state), compiled (built once, cached) or interpreted.
+    Eval {
+        /// The model file (`.ron`).
+        model: String,
+        /// Positions, comma-separated (default: the model's q0).
+        #[arg(long, allow_hyphen_values = true)]
+        q: Option<String>,
+        /// Speeds, comma-separated (default: the model's u0).
+        #[arg(long, allow_hyphen_values = true)]
+        u: Option<String>,
+        /// Extra generalised forces, one per speed (default: zero).
+        #[arg(long, allow_hyphen_values = true)]
+        tau: Option<String>,
+        /// Time.
+        #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+        t: f64,
+        /// Use the evaluator instead of compiled code (no compiler needed).
+        #[arg(long)]
+        interpret: bool,
+        /// Print one JSON object (the only format).
+        #[arg(long)]
+        json: bool,
+    },
     /// Operation counts of the generated functions and generation time.
     Stats {
         /// The model file (`.ron`).
@@ -47,6 +71,22 @@ fn main() -> ExitCode {
         Command::Check { model, json } => check(&model, json),
         Command::Dump { model, output } => dump(&model, output.as_deref()),
         Command::Stats { model, json: _ } => stats(&model),
+        Command::Eval {
+            model,
+            q,
+            u,
+            tau,
+            t,
+            interpret,
+            json: _,
+        } => eval(
+            &model,
+            q.as_deref(),
+            u.as_deref(),
+            tau.as_deref(),
+            t,
+            interpret,
+        ),
     }
 }
 
@@ -91,8 +131,49 @@ fn diagnostics_json(report: &Report) -> serde_json::Value {
     serde_json::json!({ "valid": false, "diagnostics": items })
 }
 
+/// Generates with a progress line on a terminal when it takes longer
+/// than half a second (large models).
+fn generate_with_progress(path: &str) -> Result<eom_gen::Generated, eom_gen::GenerateError> {
+    use std::io::{IsTerminal, Write};
+    use std::sync::mpsc;
+    use std::time::{Duration, Instant};
+    if !std::io::stderr().is_terminal() {
+        return eom_gen::generate_file(path);
+    }
+    let (done, wait) = mpsc::channel::<()>();
+    let label = path.to_string();
+    let spinner = std::thread::spawn(move || {
+        let start = Instant::now();
+        let frames = ['|', '/', '-', '\\'];
+        let mut k = 0;
+        let mut shown = false;
+        while wait.recv_timeout(Duration::from_millis(120)).is_err() {
+            if start.elapsed() > Duration::from_millis(500) {
+                eprint!(
+                    "\r{} generating `{label}` … {:.1} s",
+                    frames[k % 4],
+                    start.elapsed().as_secs_f64()
+                );
+                let _ = std::io::stderr().flush();
+                shown = true;
+                k += 1;
+            }
+        }
+        if shown {
+            eprintln!(
+                "\rgenerated `{label}` in {:.1} s        ",
+                start.elapsed().as_secs_f64()
+            );
+        }
+    });
+    let result = eom_gen::generate_file(path);
+    let _ = done.send(());
+    let _ = spinner.join();
+    result
+}
+
 fn generated(path: &str) -> Result<eom_gen::Generated, ExitCode> {
-    eom_gen::generate_file(path).map_err(|e| {
+    generate_with_progress(path).map_err(|e| {
         eprint!("{e}");
         if !e.to_string().ends_with('\n') {
             eprintln!();
@@ -159,4 +240,87 @@ fn op_json(c: &eom_gen::sym::OpCount) -> serde_json::Value {
         "add": c.adds, "mul": c.muls, "div": c.divs, "neg": c.negs,
         "sqrt": c.sqrts, "trig": c.trig, "other": c.other, "total": c.total(),
     })
+}
+
+/// A comma-separated list of `n` numbers, or the default.
+fn parse_list(
+    what: &str,
+    text: Option<&str>,
+    n: usize,
+    default: Vec<f64>,
+) -> Result<Vec<f64>, String> {
+    let Some(text) = text else { return Ok(default) };
+    let values: Result<Vec<f64>, _> = text.split(',').map(|x| x.trim().parse::<f64>()).collect();
+    match values {
+        Ok(v) if v.len() == n => Ok(v),
+        Ok(v) => Err(format!(
+            "--{what} has {} value(s), the model has {n}",
+            v.len()
+        )),
+        Err(e) => Err(format!("--{what}: {e}")),
+    }
+}
+
+fn eval(
+    path: &str,
+    q: Option<&str>,
+    u: Option<&str>,
+    tau: Option<&str>,
+    t: f64,
+    interpret: bool,
+) -> ExitCode {
+    let g = match generated(path) {
+        Ok(g) => g,
+        Err(code) => return code,
+    };
+    let sys = &g.checked.system;
+    let (nq, nu) = (sys.nq(), sys.nu());
+    let parsed = (|| -> Result<_, String> {
+        Ok((
+            parse_list("q", q, nq, sys.q0())?,
+            parse_list("u", u, nu, sys.u0())?,
+            parse_list("tau", tau, nu, vec![0.0; nu])?,
+        ))
+    })();
+    let (q, u, tau) = match parsed {
+        Ok(v) => v,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let result = if interpret {
+        let point = eom_gen::interpret::Point {
+            sys,
+            q: &q,
+            u: &u,
+            udot: &[],
+            tau: &tau,
+            inputs: &[],
+            params: &[],
+            t,
+        };
+        Ok(eom_gen::interpret::evaluate(&g.formulation, &point))
+    } else {
+        eom_gen::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t)
+    };
+    match result {
+        Ok(e) => {
+            let v = serde_json::json!({
+                "coordinate_names": sys.coordinate_names(),
+                "speed_names": sys.speed_names(),
+                "q": q, "u": u, "t": t,
+                "qdot": e.qdot, "udot": e.udot,
+                "mass_matrix": e.mass_matrix, "bias": e.bias,
+                "kinetic_energy": e.kinetic_energy, "potential_energy": e.potential_energy,
+                "mode": if interpret { "interpreted" } else { "compiled" },
+            });
+            println!("{v}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(1)
+        }
+    }
 }

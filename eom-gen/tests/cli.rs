@@ -113,3 +113,83 @@ fn missing_file_exits_1_and_usage_errors_exit_2() {
     );
     assert_eq!(eom_gen(&["frobnicate"]).status.code(), Some(2));
 }
+
+#[test]
+fn eval_compiled_and_interpreted_agree() {
+    // The compiled path builds a cached crate once (release); both paths
+    // must give the same numbers at a state away from the initial one.
+    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
+    for (model, q, u) in [
+        ("models/double_pendulum.ron", "0.3,-1.2", "0.5,2.0"),
+        ("models/heavy_top.ron", "0.8,0.2,-0.4,0.4", "1.0,150,-4.6"),
+    ] {
+        let mut values = Vec::new();
+        for interpret in [true, false] {
+            let mut args = vec!["eval", model, "--q", q, "--u", u, "--t", "0.1", "--json"];
+            if interpret {
+                args.push("--interpret");
+            }
+            let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+                .args(&args)
+                .env("EOM_CACHE_DIR", cache)
+                .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+                .output()
+                .expect("eom-gen runs");
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+            values.push(v);
+        }
+        for key in [
+            "qdot",
+            "udot",
+            "bias",
+            "mass_matrix",
+            "kinetic_energy",
+            "potential_energy",
+        ] {
+            let flat = |v: &serde_json::Value| -> Vec<f64> {
+                match v {
+                    serde_json::Value::Array(a) => a
+                        .iter()
+                        .flat_map(|x| x.as_array().cloned().unwrap_or_else(|| vec![x.clone()]))
+                        .filter_map(|x| x.as_f64())
+                        .collect(),
+                    x => x.as_f64().into_iter().collect(),
+                }
+            };
+            let (a, b) = (flat(&values[0][key]), flat(&values[1][key]));
+            assert_eq!(a.len(), b.len(), "{model} {key}");
+            for (x, y) in a.iter().zip(&b) {
+                assert!(
+                    (x - y).abs() <= 1e-12 * x.abs().max(1.0),
+                    "{model} {key}: interpreted {x}, compiled {y}"
+                );
+            }
+        }
+        assert_eq!(values[1]["mode"], "compiled");
+    }
+}
+
+#[test]
+fn stats_and_dump_describe_the_generated_code() {
+    let out = eom_gen(&["stats", "models/arm7.ron", "--json"]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    for key in ["forward_dynamics", "inverse_dynamics", "mass_matrix"] {
+        assert!(
+            v["ops"][key]["total"].as_u64().is_some_and(|n| n > 0),
+            "{key} in {v}"
+        );
+    }
+    assert!(v["formulation"].as_str().is_some());
+    let out = eom_gen(&["dump", "models/pendulum.ron"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("impl ::eom_sim::Model for Pendulum"),
+        "{text}"
+    );
+}

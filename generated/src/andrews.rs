@@ -27,15 +27,8 @@ impl ::eom_sim::Model for Andrews {
     const NQ: usize = 7;
     const NU: usize = 7;
     const NINPUTS: usize = 0;
-    const COORDINATE_NAMES: &'static [&'static str] = &[
-        "beta",
-        "theta",
-        "gamma",
-        "delta",
-        "phi",
-        "epsilon",
-        "omega",
-    ];
+    const COORDINATE_NAMES: &'static [&'static str] =
+        &["beta", "theta", "gamma", "delta", "phi", "epsilon", "omega"];
     const SPEED_NAMES: &'static [&'static str] = &[
         "beta_dot",
         "theta_dot",

@@ -27,23 +27,9 @@ impl ::eom_sim::Model for Arm7 {
     const NQ: usize = 7;
     const NU: usize = 7;
     const NINPUTS: usize = 0;
-    const COORDINATE_NAMES: &'static [&'static str] = &[
-        "q1",
-        "q2",
-        "q3",
-        "q4",
-        "q5",
-        "q6",
-        "q7",
-    ];
+    const COORDINATE_NAMES: &'static [&'static str] = &["q1", "q2", "q3", "q4", "q5", "q6", "q7"];
     const SPEED_NAMES: &'static [&'static str] = &[
-        "q1_dot",
-        "q2_dot",
-        "q3_dot",
-        "q4_dot",
-        "q5_dot",
-        "q6_dot",
-        "q7_dot",
+        "q1_dot", "q2_dot", "q3_dot", "q4_dot", "q5_dot", "q6_dot", "q7_dot",
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];

@@ -28,13 +28,8 @@ impl ::eom_sim::Model for Bricard {
     const NU: usize = 5;
     const NINPUTS: usize = 0;
     const COORDINATE_NAMES: &'static [&'static str] = &["q1", "q2", "q3", "q4", "q5"];
-    const SPEED_NAMES: &'static [&'static str] = &[
-        "q1_dot",
-        "q2_dot",
-        "q3_dot",
-        "q4_dot",
-        "q5_dot",
-    ];
+    const SPEED_NAMES: &'static [&'static str] =
+        &["q1_dot", "q2_dot", "q3_dot", "q4_dot", "q5_dot"];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
     type Q = [f64; 5];

@@ -28,21 +28,10 @@ impl ::eom_sim::Model for FreeBody {
     const NU: usize = 6;
     const NINPUTS: usize = 0;
     const COORDINATE_NAMES: &'static [&'static str] = &[
-        "float_x",
-        "float_y",
-        "float_z",
-        "float_qw",
-        "float_qx",
-        "float_qy",
-        "float_qz",
+        "float_x", "float_y", "float_z", "float_qw", "float_qx", "float_qy", "float_qz",
     ];
     const SPEED_NAMES: &'static [&'static str] = &[
-        "float_vx",
-        "float_vy",
-        "float_vz",
-        "float_wx",
-        "float_wy",
-        "float_wz",
+        "float_vx", "float_vy", "float_vz", "float_wx", "float_wy", "float_wz",
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[3];

@@ -37,7 +37,11 @@ impl ::eom_sim::Model for SliderCrank {
     type MassMatrix = [[f64; 3]; 3];
     const MASS_ZERO: [[f64; 3]; 3] = [[0.0; 3]; 3];
     fn q0(&self) -> [f64; 3] {
-        [::core::f64::consts::FRAC_PI_2, -1.9106332362490186, 0.282842712474619]
+        [
+            ::core::f64::consts::FRAC_PI_2,
+            -1.9106332362490186,
+            0.282842712474619,
+        ]
     }
     fn u0(&self) -> [f64; 3] {
         [0.0, 0.0, 0.0]

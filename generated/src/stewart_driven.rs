@@ -28,39 +28,12 @@ impl ::eom_sim::Model for StewartDriven {
     const NU: usize = 15;
     const NINPUTS: usize = 0;
     const COORDINATE_NAMES: &'static [&'static str] = &[
-        "a1",
-        "b1",
-        "qw",
-        "qx",
-        "qy",
-        "qz",
-        "a2",
-        "b2",
-        "a3",
-        "b3",
-        "a4",
-        "b4",
-        "a5",
-        "b5",
-        "a6",
+        "a1", "b1", "qw", "qx", "qy", "qz", "a2", "b2", "a3", "b3", "a4", "b4", "a5", "b5", "a6",
         "b6",
     ];
     const SPEED_NAMES: &'static [&'static str] = &[
-        "a1_dot",
-        "b1_dot",
-        "wx",
-        "wy",
-        "wz",
-        "a2_dot",
-        "b2_dot",
-        "a3_dot",
-        "b3_dot",
-        "a4_dot",
-        "b4_dot",
-        "a5_dot",
-        "b5_dot",
-        "a6_dot",
-        "b6_dot",
+        "a1_dot", "b1_dot", "wx", "wy", "wz", "a2_dot", "b2_dot", "a3_dot", "b3_dot", "a4_dot",
+        "b4_dot", "a5_dot", "b5_dot", "a6_dot", "b6_dot",
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[2];
@@ -70,10 +43,14 @@ impl ::eom_sim::Model for StewartDriven {
     type MassMatrix = [[f64; 15]; 15];
     const MASS_ZERO: [[f64; 15]; 15] = [[0.0; 15]; 15];
     fn q0(&self) -> [f64; 16] {
-        [0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        [
+            0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+        ]
     }
     fn u0(&self) -> [f64; 15] {
-        [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        [
+            0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,
+        ]
     }
     fn qdot(&self, q: &[f64; 16], u: &[f64; 15], qdot: &mut [f64; 16]) {
         let x0 = q[4] * u[3];
@@ -7994,39 +7971,12 @@ impl ::eom_sim::OdeSystem<31> for StewartDriven {
     fn rhs(&self, t: f64, y: &[f64; 31], dy: &mut [f64; 31]) {
         use ::eom_sim::Model as _;
         let q: [f64; 16] = [
-            y[0],
-            y[1],
-            y[2],
-            y[3],
-            y[4],
-            y[5],
-            y[6],
-            y[7],
-            y[8],
-            y[9],
-            y[10],
-            y[11],
-            y[12],
-            y[13],
-            y[14],
-            y[15],
+            y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7], y[8], y[9], y[10], y[11], y[12], y[13],
+            y[14], y[15],
         ];
         let u: [f64; 15] = [
-            y[16],
-            y[17],
-            y[18],
-            y[19],
-            y[20],
-            y[21],
-            y[22],
-            y[23],
-            y[24],
-            y[25],
-            y[26],
-            y[27],
-            y[28],
-            y[29],
-            y[30],
+            y[16], y[17], y[18], y[19], y[20], y[21], y[22], y[23], y[24], y[25], y[26], y[27],
+            y[28], y[29], y[30],
         ];
         let mut qdot = [0.0; 16];
         let mut udot = [0.0; 15];
