@@ -58,8 +58,79 @@ fn json(v: &[f64]) -> String {
     format!("[{}]", items.join(","))
 }
 
+/// `sim INTEGRATOR RTOL ATOL DT T_END EVERY CSV`: integrate from the model's
+/// initial state and print JSON; `EVERY` 0 records the accepted steps.
+fn simulate(args: &[String]) {
+    use eom_sim::{Dop853, Dopri5, Euler, ImplicitMidpoint, Radau5, Rk4, SolveOptions, StopReason, integrate};
+    let arg = |k: usize| args.get(k).map(String::as_str).unwrap_or("");
+    let num = |k: usize, d: f64| arg(k).parse::<f64>().unwrap_or(d);
+    let (rtol, atol, dt, t_end, every) = (num(3, 1e-8), num(4, 1e-10), num(5, 1e-3), num(6, 1.0), num(7, 0.0));
+    let m = model::MODEL::default();
+    let (q0, u0) = (m.q0(), m.u0());
+    let mut y0 = [0.0; model::NY];
+    y0[..model::NQ].copy_from_slice(q0.as_ref());
+    y0[model::NQ..].copy_from_slice(u0.as_ref());
+    let opts = if every > 0.0 { SolveOptions::every(0.0, t_end, every) } else { SolveOptions::default() };
+    let start = std::time::Instant::now();
+    let sol = match arg(2) {
+        "euler" => integrate(&mut Euler::new(dt), &m, 0.0, y0, t_end, &opts, &mut []),
+        "rk4" => integrate(&mut Rk4::new(dt), &m, 0.0, y0, t_end, &opts, &mut []),
+        "midpoint" => integrate(&mut ImplicitMidpoint::new(dt), &m, 0.0, y0, t_end, &opts, &mut []),
+        "dop853" => integrate(&mut Dop853::new(rtol, atol), &m, 0.0, y0, t_end, &opts, &mut []),
+        "radau5" => integrate(&mut Radau5::new(rtol, atol), &m, 0.0, y0, t_end, &opts, &mut []),
+        _ => integrate(&mut Dopri5::new(rtol, atol), &m, 0.0, y0, t_end, &opts, &mut []),
+    };
+    let cpu = start.elapsed().as_secs_f64();
+    let names: Vec<&str> = <model::MODEL as Model>::COORDINATE_NAMES
+        .iter()
+        .chain(<model::MODEL as Model>::SPEED_NAMES)
+        .copied()
+        .collect();
+    let stop = match sol.stop {
+        StopReason::Finished => "\"finished\"".to_string(),
+        StopReason::NonFinite { t, component } => format!(
+            "{{\"reason\":\"non-finite state\",\"t\":{t:?},\"coordinate\":\"{}\"}}",
+            names.get(component).copied().unwrap_or("?")
+        ),
+        other => format!("\"{other:?}\""),
+    };
+    let csv = arg(8);
+    if !csv.is_empty() && csv != "-" {
+        let (ts, ys) = if every > 0.0 { (&sol.t_out, &sol.y_out) } else { (&sol.t, &sol.y) };
+        let mut text = format!("t,{}\n", names.join(","));
+        for (t, y) in ts.iter().zip(ys) {
+            let row: Vec<String> = y.iter().map(|x| format!("{x:?}")).collect();
+            text += &format!("{t:?},{}\n", row.join(","));
+        }
+        if let Err(e) = std::fs::write(csv, text) {
+            eprintln!("cannot write {csv}: {e}");
+            std::process::exit(1);
+        }
+    }
+    let s = &sol.stats;
+    let energy = |y: &[f64; model::NY]| -> f64 {
+        let mut q = <model::MODEL as Model>::Q::ZERO;
+        let mut u = <model::MODEL as Model>::U::ZERO;
+        q.as_mut().copy_from_slice(&y[..model::NQ]);
+        u.as_mut().copy_from_slice(&y[model::NQ..]);
+        m.energy(sol.t_final, &q, &u).iter().sum()
+    };
+    let (e0, e1) = (energy(&y0), energy(&sol.y_final));
+    println!(
+        "{{\"t\":{:?},\"q\":{},\"u\":{},\"energy\":[{e0:?},{e1:?}],\"stop\":{stop},\"stats\":{{\"steps\":{},\"accepted\":{},\"rejected\":{},\"rhs_evals\":{},\"jacobian_evals\":{},\"lu_decompositions\":{},\"newton_iterations\":{},\"stiffness_detections\":{}}},\"cpu_s\":{cpu:?}}}",
+        sol.t_final,
+        json(&sol.y_final[..model::NQ]),
+        json(&sol.y_final[model::NQ..]),
+        s.steps, s.accepted, s.rejected, s.rhs_evals, s.jac_evals, s.lu_decomps, s.newton_iters, s.stiffness_detections
+    );
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
+    if args.get(1).map(String::as_str) == Some("sim") {
+        simulate(&args);
+        return;
+    }
     let arg = |k: usize| args.get(k).map(String::as_str).unwrap_or("");
     let m = model::MODEL::default();
     let q: <model::MODEL as Model>::Q = vector(&list(arg(1)));
@@ -83,17 +154,10 @@ fn main() {
 }
 "#;
 
-/// Builds (once) and runs the compiled model at a state.
-pub fn evaluate(
-    name: &str,
-    source: &str,
-    q: &[f64],
-    u: &[f64],
-    tau: &[f64],
-    t: f64,
-) -> Result<Evaluation, String> {
+/// Builds (once) the cached crate of a model and returns its executable.
+pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<PathBuf, String> {
     let root = cache_root();
-    let key = format!("{:016x}", fnv1a(source.as_bytes()));
+    let key = format!("{:016x}", fnv1a(format!("{source}{MAIN}").as_bytes()));
     let dir = root.join(format!("{name}-{key}"));
     let exe_name = format!("eom-eval-{name}-{key}");
     let target = root.join("target");
@@ -105,7 +169,11 @@ pub fn evaluate(
             "[package]\nname = \"{exe_name}\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n[dependencies]\n{}\n\n[workspace]\n",
             eom_sim_dependency()
         );
-        let model = format!("{source}\npub type MODEL = {};\n", camel(name));
+        let model = format!(
+            "{source}\npub type MODEL = {};\npub const NQ: usize = {nq};\npub const NY: usize = {};\n",
+            camel(name),
+            nq + nu
+        );
         for (file, text) in [
             ("Cargo.toml", manifest.as_str()),
             ("src/main.rs", MAIN),
@@ -129,6 +197,19 @@ pub fn evaluate(
             ));
         }
     }
+    Ok(exe)
+}
+
+/// Builds (once) and runs the compiled model at a state.
+pub fn evaluate(
+    name: &str,
+    source: &str,
+    q: &[f64],
+    u: &[f64],
+    tau: &[f64],
+    t: f64,
+) -> Result<Evaluation, String> {
+    let exe = executable(name, source, q.len(), u.len())?;
     let join = |v: &[f64]| {
         v.iter()
             .map(|x| format!("{x:?}"))
@@ -166,4 +247,53 @@ pub fn evaluate(
         kinetic_energy: v["kinetic_energy"].as_f64().unwrap_or(f64::NAN),
         potential_energy: v["potential_energy"].as_f64().unwrap_or(f64::NAN),
     })
+}
+
+/// How to integrate.
+#[derive(Clone, Debug)]
+pub struct SimOptions {
+    /// `euler`, `rk4`, `midpoint`, `dopri5`, `dop853` or `radau5`.
+    pub integrator: String,
+    /// Relative tolerance (adaptive methods).
+    pub rtol: f64,
+    /// Absolute tolerance (adaptive methods).
+    pub atol: f64,
+    /// Step size (fixed-step methods).
+    pub dt: f64,
+    /// End time.
+    pub t_end: f64,
+    /// Output interval for the CSV (dense output); 0 = accepted steps.
+    pub every: f64,
+    /// CSV file to write, if any.
+    pub csv: Option<String>,
+}
+
+/// Integrates the compiled model from its initial state; returns the JSON
+/// object the simulator printed.
+pub fn simulate(
+    name: &str,
+    source: &str,
+    nq: usize,
+    nu: usize,
+    o: &SimOptions,
+) -> Result<serde_json::Value, String> {
+    let exe = executable(name, source, nq, nu)?;
+    let out = Command::new(&exe)
+        .args([
+            "sim".to_string(),
+            o.integrator.clone(),
+            format!("{:?}", o.rtol),
+            format!("{:?}", o.atol),
+            format!("{:?}", o.dt),
+            format!("{:?}", o.t_end),
+            format!("{:?}", o.every),
+            o.csv.clone().unwrap_or_else(|| "-".into()),
+        ])
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;
+    if !out.status.success() {
+        return Err(String::from_utf8_lossy(&out.stderr).into_owned());
+    }
+    serde_json::from_slice(&out.stdout)
+        .map_err(|e| format!("unexpected output of {}: {e}", exe.display()))
 }

@@ -55,6 +55,35 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Integrate the compiled model from its initial state.
+    Simulate {
+        /// The model file (`.ron`).
+        model: String,
+        /// End time, s.
+        #[arg(long)]
+        t_end: f64,
+        /// rk4, dopri5, dop853, radau5, midpoint or euler.
+        #[arg(long, default_value = "dopri5")]
+        integrator: String,
+        /// Relative tolerance (adaptive methods).
+        #[arg(long, default_value_t = 1e-8)]
+        rtol: f64,
+        /// Absolute tolerance (adaptive methods).
+        #[arg(long, default_value_t = 1e-10)]
+        atol: f64,
+        /// Step size (fixed-step methods).
+        #[arg(long, default_value_t = 1e-3)]
+        dt: f64,
+        /// Write the trajectory (t, q, u) to this CSV file.
+        #[arg(long)]
+        csv: Option<String>,
+        /// Output interval of the CSV, using dense output (default: every step).
+        #[arg(long)]
+        every: Option<f64>,
+        /// Print one JSON object instead of the summary.
+        #[arg(long)]
+        json: bool,
+    },
     /// Operation counts of the generated functions and generation time.
     Stats {
         /// The model file (`.ron`).
@@ -71,6 +100,28 @@ fn main() -> ExitCode {
         Command::Check { model, json } => check(&model, json),
         Command::Dump { model, output } => dump(&model, output.as_deref()),
         Command::Stats { model, json: _ } => stats(&model),
+        Command::Simulate {
+            model,
+            t_end,
+            integrator,
+            rtol,
+            atol,
+            dt,
+            csv,
+            every,
+            json,
+        } => {
+            let o = eom_gen::compiled::SimOptions {
+                integrator,
+                rtol,
+                atol,
+                dt,
+                t_end,
+                every: every.unwrap_or(0.0),
+                csv,
+            };
+            simulate(&model, &o, json)
+        }
         Command::Eval {
             model,
             q,
@@ -316,6 +367,98 @@ fn eval(
                 "mode": if interpret { "interpreted" } else { "compiled" },
             });
             println!("{v}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+const INTEGRATORS: [&str; 6] = ["euler", "rk4", "midpoint", "dopri5", "dop853", "radau5"];
+
+fn simulate(path: &str, o: &eom_gen::compiled::SimOptions, json: bool) -> ExitCode {
+    if !INTEGRATORS.contains(&o.integrator.as_str()) {
+        eprintln!(
+            "error: unknown integrator `{}`; choose one of {}",
+            o.integrator,
+            INTEGRATORS.join(", ")
+        );
+        return ExitCode::from(2);
+    }
+    if !(o.t_end.is_finite() && o.t_end > 0.0) {
+        eprintln!("error: --t-end must be a positive number of seconds");
+        return ExitCode::from(2);
+    }
+    let g = match generated(path) {
+        Ok(g) => g,
+        Err(code) => return code,
+    };
+    let sys = &g.checked.system;
+    if !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty() {
+        eprintln!(
+            "error: `{}` has closed loops or constraints ({}); simulating them needs the constraint solvers, which are not built yet",
+            sys.name,
+            sys.cut_joint_names()
+                .iter()
+                .chain(
+                    sys.constraints
+                        .iter()
+                        .map(|c| c.name.as_str())
+                        .collect::<Vec<_>>()
+                        .iter()
+                )
+                .map(|n| format!("`{n}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        return ExitCode::from(1);
+    }
+    match eom_gen::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o) {
+        Ok(v) => {
+            if json {
+                println!("{v}");
+            } else {
+                let adaptive = matches!(o.integrator.as_str(), "dopri5" | "dop853" | "radau5");
+                let setting = if adaptive {
+                    format!("rtol {:e}, atol {:e}", o.rtol, o.atol)
+                } else {
+                    format!("step {:e} s", o.dt)
+                };
+                let e = |k: usize| v["energy"][k].as_f64().unwrap_or(f64::NAN);
+                println!(
+                    "{}: {} to t = {} s ({setting}): {}",
+                    sys.name, o.integrator, v["t"], v["stop"]
+                );
+                println!(
+                    "  {} steps ({} rejected), {} right-hand sides, {:.3} ms",
+                    v["stats"]["steps"],
+                    v["stats"]["rejected"],
+                    v["stats"]["rhs_evals"],
+                    v["cpu_s"].as_f64().unwrap_or(f64::NAN) * 1e3
+                );
+                let names = sys.coordinate_names();
+                let q: Vec<String> = v["q"]
+                    .as_array()
+                    .map(|a| {
+                        a.iter()
+                            .zip(&names)
+                            .map(|(x, n)| format!("{n} = {:.6}", x.as_f64().unwrap_or(f64::NAN)))
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                println!("  final {}", q.join(", "));
+                println!(
+                    "  energy {:.9} → {:.9} (relative change {:.1e})",
+                    e(0),
+                    e(1),
+                    ((e(1) - e(0)) / e(0).abs().max(1e-300)).abs()
+                );
+                if let Some(csv) = &o.csv {
+                    println!("  trajectory written to {csv}");
+                }
+            }
             ExitCode::SUCCESS
         }
         Err(e) => {

@@ -193,3 +193,79 @@ fn stats_and_dump_describe_the_generated_code() {
         "{text}"
     );
 }
+
+#[test]
+fn simulate_runs_the_compiled_model_and_reports_statistics() {
+    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
+    let csv = std::env::temp_dir().join(format!("eom-sim-{}.csv", std::process::id()));
+    let csv = csv.to_string_lossy().into_owned();
+    let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+        .args([
+            "simulate",
+            "models/pendulum.ron",
+            "--t-end",
+            "2",
+            "--integrator",
+            "dop853",
+            "--rtol",
+            "1e-10",
+            "--csv",
+            &csv,
+            "--every",
+            "0.5",
+            "--json",
+        ])
+        .env("EOM_CACHE_DIR", cache)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .output()
+        .expect("eom-gen runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["t"], 2.0);
+    assert_eq!(v["stop"], "finished");
+    for key in [
+        "steps",
+        "accepted",
+        "rejected",
+        "rhs_evals",
+        "jacobian_evals",
+        "lu_decompositions",
+    ] {
+        assert!(v["stats"][key].as_u64().is_some(), "stats.{key} in {v}");
+    }
+    assert!(v["cpu_s"].as_f64().is_some_and(|s| s >= 0.0));
+    let (e0, e1) = (
+        v["energy"][0].as_f64().unwrap_or(f64::NAN),
+        v["energy"][1].as_f64().unwrap_or(f64::NAN),
+    );
+    assert!((e1 - e0).abs() < 1e-8, "energy {e0} → {e1}");
+    let text = std::fs::read_to_string(&csv).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.first().copied(), Some("t,theta,theta_dot"));
+    assert_eq!(lines.len(), 1 + 5, "samples at 0, 0.5, …, 2: {text}");
+    // Closed loops need the constraint solvers: a clear error, exit 1.
+    let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+        .args(["simulate", "models/fourbar.ron", "--t-end", "1"])
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .output()
+        .expect("eom-gen runs");
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("closed loops"));
+    assert_eq!(
+        eom_gen(&[
+            "simulate",
+            "models/pendulum.ron",
+            "--t-end",
+            "1",
+            "--integrator",
+            "leapfrog"
+        ])
+        .status
+        .code(),
+        Some(2)
+    );
+}
