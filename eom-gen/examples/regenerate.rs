@@ -40,7 +40,7 @@ fn main() -> ExitCode {
                     return ExitCode::from(1);
                 }
                 lib += &format!(
-                    "/// Model `{name}`, generated from `models/{name}.ron`.\npub mod {name};\n"
+                    "/// Model `{name}`, generated from `models/{name}.ron`.\n#[rustfmt::skip] // formatted by prettyplease; stays byte-identical\npub mod {name};\n"
                 );
             }
             Err(e) => {

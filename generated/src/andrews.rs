@@ -27,8 +27,15 @@ impl ::eom_sim::Model for Andrews {
     const NQ: usize = 7;
     const NU: usize = 7;
     const NINPUTS: usize = 0;
-    const COORDINATE_NAMES: &'static [&'static str] =
-        &["beta", "theta", "gamma", "delta", "phi", "epsilon", "omega"];
+    const COORDINATE_NAMES: &'static [&'static str] = &[
+        "beta",
+        "theta",
+        "gamma",
+        "delta",
+        "phi",
+        "epsilon",
+        "omega",
+    ];
     const SPEED_NAMES: &'static [&'static str] = &[
         "beta_dot",
         "theta_dot",
@@ -72,8 +79,8 @@ impl ::eom_sim::Model for Andrews {
     fn forward_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 7],
+        u: &[f64; 7],
         tau: &[f64; 7],
         udot: &mut [f64; 7],
     ) {
@@ -361,7 +368,7 @@ impl ::eom_sim::Model for Andrews {
         m[5][6] = m[6][5];
         m[6][6] = 0.000000803380146;
     }
-    fn bias(&self, _t: f64, q: &Self::Q, u: &Self::U, b: &mut [f64; 7]) {
+    fn bias(&self, _t: f64, q: &[f64; 7], u: &[f64; 7], b: &mut [f64; 7]) {
         let (x0, x1) = f64::sin_cos(q[1]);
         let x2 = u[0] + u[1];
         let (x3, x4) = f64::sin_cos(q[2]);
@@ -518,8 +525,8 @@ impl ::eom_sim::Model for Andrews {
     fn inverse_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 7],
+        u: &[f64; 7],
         udot: &[f64; 7],
         tau: &mut [f64; 7],
     ) {
@@ -736,7 +743,7 @@ impl ::eom_sim::Model for Andrews {
         tau[5] = x184;
         tau[6] = x163;
     }
-    fn energy(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, _t: f64, q: &[f64; 7], u: &[f64; 7]) -> [f64; 2] {
         let (x0, x1) = f64::sin_cos(q[1]);
         let x2 = u[0] + u[1];
         let (x3, x4) = f64::sin_cos(q[2]);
@@ -836,7 +843,7 @@ impl ::eom_sim::Model for Andrews {
         let x100 = x99 - x96;
         [x100, x26]
     }
-    fn momentum(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, _t: f64, q: &[f64; 7], u: &[f64; 7]) -> [f64; 6] {
         let (x0, x1) = f64::sin_cos(q[0]);
         let (x2, x3) = f64::sin_cos(q[1]);
         let x4 = q[0] + q[1];

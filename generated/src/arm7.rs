@@ -27,9 +27,23 @@ impl ::eom_sim::Model for Arm7 {
     const NQ: usize = 7;
     const NU: usize = 7;
     const NINPUTS: usize = 0;
-    const COORDINATE_NAMES: &'static [&'static str] = &["q1", "q2", "q3", "q4", "q5", "q6", "q7"];
+    const COORDINATE_NAMES: &'static [&'static str] = &[
+        "q1",
+        "q2",
+        "q3",
+        "q4",
+        "q5",
+        "q6",
+        "q7",
+    ];
     const SPEED_NAMES: &'static [&'static str] = &[
-        "q1_dot", "q2_dot", "q3_dot", "q4_dot", "q5_dot", "q6_dot", "q7_dot",
+        "q1_dot",
+        "q2_dot",
+        "q3_dot",
+        "q4_dot",
+        "q5_dot",
+        "q6_dot",
+        "q7_dot",
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
@@ -57,8 +71,8 @@ impl ::eom_sim::Model for Arm7 {
     fn forward_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 7],
+        u: &[f64; 7],
         tau: &[f64; 7],
         udot: &mut [f64; 7],
     ) {
@@ -1834,7 +1848,7 @@ impl ::eom_sim::Model for Arm7 {
         m[5][6] = m[6][5];
         m[6][6] = 0.005;
     }
-    fn bias(&self, _t: f64, q: &Self::Q, u: &Self::U, b: &mut [f64; 7]) {
+    fn bias(&self, _t: f64, q: &[f64; 7], u: &[f64; 7], b: &mut [f64; 7]) {
         let (x0, x1) = f64::sin_cos(q[1]);
         let x2 = u[0] * x1;
         let (x3, x4) = f64::sin_cos(q[2]);
@@ -2790,8 +2804,8 @@ impl ::eom_sim::Model for Arm7 {
     fn inverse_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 7],
+        u: &[f64; 7],
         udot: &[f64; 7],
         tau: &mut [f64; 7],
     ) {
@@ -3817,7 +3831,7 @@ impl ::eom_sim::Model for Arm7 {
         tau[5] = x790;
         tau[6] = x745;
     }
-    fn energy(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, _t: f64, q: &[f64; 7], u: &[f64; 7]) -> [f64; 2] {
         let (x0, x1) = f64::sin_cos(q[1]);
         let x2 = u[0] * x1;
         let (x3, x4) = f64::sin_cos(q[2]);
@@ -4197,7 +4211,7 @@ impl ::eom_sim::Model for Arm7 {
         let x382 = x381 - x377;
         [x370, x382]
     }
-    fn momentum(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, _t: f64, q: &[f64; 7], u: &[f64; 7]) -> [f64; 6] {
         let (x0, x1) = f64::sin_cos(q[0]);
         let (x2, x3) = f64::sin_cos(q[1]);
         let x4 = u[0] * x3;

@@ -28,8 +28,13 @@ impl ::eom_sim::Model for Bricard {
     const NU: usize = 5;
     const NINPUTS: usize = 0;
     const COORDINATE_NAMES: &'static [&'static str] = &["q1", "q2", "q3", "q4", "q5"];
-    const SPEED_NAMES: &'static [&'static str] =
-        &["q1_dot", "q2_dot", "q3_dot", "q4_dot", "q5_dot"];
+    const SPEED_NAMES: &'static [&'static str] = &[
+        "q1_dot",
+        "q2_dot",
+        "q3_dot",
+        "q4_dot",
+        "q5_dot",
+    ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
     type Q = [f64; 5];
@@ -54,8 +59,8 @@ impl ::eom_sim::Model for Bricard {
     fn forward_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 5],
+        u: &[f64; 5],
         tau: &[f64; 5],
         udot: &mut [f64; 5],
     ) {
@@ -1532,7 +1537,7 @@ impl ::eom_sim::Model for Bricard {
         m[3][4] = m[4][3];
         m[4][4] = 0.33416666666666667;
     }
-    fn bias(&self, _t: f64, q: &Self::Q, u: &Self::U, b: &mut [f64; 5]) {
+    fn bias(&self, _t: f64, q: &[f64; 5], u: &[f64; 5], b: &mut [f64; 5]) {
         let (x0, x1) = f64::sin_cos(q[1]);
         let x2 = 0.5 * x0;
         let x3 = 0.5 + x2;
@@ -2067,8 +2072,8 @@ impl ::eom_sim::Model for Bricard {
     fn inverse_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 5],
+        u: &[f64; 5],
         udot: &[f64; 5],
         tau: &mut [f64; 5],
     ) {
@@ -2631,7 +2636,7 @@ impl ::eom_sim::Model for Bricard {
         tau[3] = x436;
         tau[4] = x366;
     }
-    fn energy(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, _t: f64, q: &[f64; 5], u: &[f64; 5]) -> [f64; 2] {
         let (x0, x1) = f64::sin_cos(q[1]);
         let x2 = 0.5 * x0;
         let x3 = 0.5 + x2;
@@ -2861,7 +2866,7 @@ impl ::eom_sim::Model for Bricard {
         let x230 = x229 - x225;
         [x213, x230]
     }
-    fn momentum(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, _t: f64, q: &[f64; 5], u: &[f64; 5]) -> [f64; 6] {
         let (x0, x1) = f64::sin_cos(q[0]);
         let x2 = 0.5 * x1;
         let (x3, x4) = f64::sin_cos(q[1]);

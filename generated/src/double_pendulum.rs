@@ -50,8 +50,8 @@ impl ::eom_sim::Model for DoublePendulum {
     fn forward_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 2],
+        u: &[f64; 2],
         tau: &[f64; 2],
         udot: &mut [f64; 2],
     ) {
@@ -114,7 +114,7 @@ impl ::eom_sim::Model for DoublePendulum {
         m[0][1] = m[1][0];
         m[1][1] = 1.0;
     }
-    fn bias(&self, _t: f64, q: &Self::Q, u: &Self::U, b: &mut [f64; 2]) {
+    fn bias(&self, _t: f64, q: &[f64; 2], u: &[f64; 2], b: &mut [f64; 2]) {
         let x0 = f64::sin(q[0]);
         let (x1, x2) = f64::sin_cos(q[1]);
         let x3 = u[0] * x2;
@@ -158,8 +158,8 @@ impl ::eom_sim::Model for DoublePendulum {
     fn inverse_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 2],
+        u: &[f64; 2],
         udot: &[f64; 2],
         tau: &mut [f64; 2],
     ) {
@@ -214,7 +214,7 @@ impl ::eom_sim::Model for DoublePendulum {
         tau[0] = x49;
         tau[1] = x32;
     }
-    fn energy(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, _t: f64, q: &[f64; 2], u: &[f64; 2]) -> [f64; 2] {
         let x0 = f64::cos(q[0]);
         let (x1, x2) = f64::sin_cos(q[1]);
         let x3 = u[0] * x2;
@@ -242,7 +242,7 @@ impl ::eom_sim::Model for DoublePendulum {
         let x25 = -x24;
         [x21, x25]
     }
-    fn momentum(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, _t: f64, q: &[f64; 2], u: &[f64; 2]) -> [f64; 6] {
         let (x0, x1) = f64::sin_cos(q[0]);
         let (x2, x3) = f64::sin_cos(q[1]);
         let x4 = u[0] * x3;

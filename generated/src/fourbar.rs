@@ -51,8 +51,8 @@ impl ::eom_sim::Model for Fourbar {
     fn forward_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 3],
+        u: &[f64; 3],
         tau: &[f64; 3],
         udot: &mut [f64; 3],
     ) {
@@ -183,7 +183,7 @@ impl ::eom_sim::Model for Fourbar {
         m[1][2] = m[2][1];
         m[2][2] = 0.3333333333333333;
     }
-    fn bias(&self, _t: f64, q: &Self::Q, u: &Self::U, b: &mut [f64; 3]) {
+    fn bias(&self, _t: f64, q: &[f64; 3], u: &[f64; 3], b: &mut [f64; 3]) {
         let x0 = f64::sin(q[0]);
         let (x1, x2) = f64::sin_cos(q[1]);
         let x3 = 0.5 * x1;
@@ -250,8 +250,8 @@ impl ::eom_sim::Model for Fourbar {
     fn inverse_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 3],
+        u: &[f64; 3],
         udot: &[f64; 3],
         tau: &mut [f64; 3],
     ) {
@@ -343,7 +343,7 @@ impl ::eom_sim::Model for Fourbar {
         tau[1] = x66;
         tau[2] = x57;
     }
-    fn energy(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, _t: f64, q: &[f64; 3], u: &[f64; 3]) -> [f64; 2] {
         let (x0, x1) = f64::sin_cos(q[0]);
         let (x2, x3) = f64::sin_cos(q[1]);
         let x4 = 0.5 * x2;
@@ -394,7 +394,7 @@ impl ::eom_sim::Model for Fourbar {
         let x49 = x43 + x48;
         [x41, x49]
     }
-    fn momentum(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, _t: f64, q: &[f64; 3], u: &[f64; 3]) -> [f64; 6] {
         let (x0, x1) = f64::sin_cos(q[0]);
         let x2 = 0.5 * x1;
         let (x3, x4) = f64::sin_cos(q[1]);

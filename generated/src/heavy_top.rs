@@ -85,8 +85,8 @@ impl ::eom_sim::Model for HeavyTop {
     fn forward_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 4],
+        u: &[f64; 3],
         tau: &[f64; 3],
         udot: &mut [f64; 3],
     ) {
@@ -127,7 +127,7 @@ impl ::eom_sim::Model for HeavyTop {
         m[1][2] = m[2][1];
         m[2][2] = 15.234375;
     }
-    fn bias(&self, _t: f64, q: &Self::Q, u: &Self::U, b: &mut [f64; 3]) {
+    fn bias(&self, _t: f64, q: &[f64; 4], u: &[f64; 3], b: &mut [f64; 3]) {
         let x0 = q[1] * q[1];
         let x1 = q[2] * q[2];
         let x2 = q[1] * q[3];
@@ -152,8 +152,8 @@ impl ::eom_sim::Model for HeavyTop {
     fn inverse_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 4],
+        u: &[f64; 3],
         udot: &[f64; 3],
         tau: &mut [f64; 3],
     ) {
@@ -183,7 +183,7 @@ impl ::eom_sim::Model for HeavyTop {
         tau[1] = x9;
         tau[2] = x21;
     }
-    fn energy(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, _t: f64, q: &[f64; 4], u: &[f64; 3]) -> [f64; 2] {
         let x0 = q[2] * q[3];
         let x1 = 294.3 * x0;
         let x2 = q[0] * q[1];
@@ -199,7 +199,7 @@ impl ::eom_sim::Model for HeavyTop {
         let x12 = x9 + x11;
         [x12, x4]
     }
-    fn momentum(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, _t: f64, q: &[f64; 4], u: &[f64; 3]) -> [f64; 6] {
         let x0 = q[1] * q[1];
         let x1 = q[2] * q[2];
         let x2 = q[3] * q[3];

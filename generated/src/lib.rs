@@ -3,28 +3,41 @@
 //! refresh with `cargo run -p eom-gen --example regenerate`.
 
 /// Model `andrews`, generated from `models/andrews.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod andrews;
 /// Model `arm7`, generated from `models/arm7.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod arm7;
 /// Model `bricard`, generated from `models/bricard.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod bricard;
 /// Model `double_pendulum`, generated from `models/double_pendulum.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod double_pendulum;
 /// Model `fourbar`, generated from `models/fourbar.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod fourbar;
 /// Model `free_body`, generated from `models/free_body.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod free_body;
 /// Model `heavy_top`, generated from `models/heavy_top.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod heavy_top;
 /// Model `pendulum`, generated from `models/pendulum.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod pendulum;
 /// Model `rolling_disk`, generated from `models/rolling_disk.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod rolling_disk;
 /// Model `slider_crank`, generated from `models/slider_crank.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod slider_crank;
 /// Model `slider_crank_driven`, generated from `models/slider_crank_driven.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod slider_crank_driven;
 /// Model `stewart`, generated from `models/stewart.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod stewart;
 /// Model `stewart_driven`, generated from `models/stewart_driven.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod stewart_driven;

@@ -49,8 +49,8 @@ impl ::eom_sim::Model for Pendulum {
     fn forward_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        _u: &Self::U,
+        q: &[f64; 1],
+        _u: &[f64; 1],
         tau: &[f64; 1],
         udot: &mut [f64; 1],
     ) {
@@ -62,7 +62,7 @@ impl ::eom_sim::Model for Pendulum {
     fn mass_matrix(&self, _t: f64, _q: &[f64; 1], m: &mut [[f64; 1]; 1]) {
         m[0][0] = 1.0;
     }
-    fn bias(&self, _t: f64, q: &Self::Q, _u: &Self::U, b: &mut [f64; 1]) {
+    fn bias(&self, _t: f64, q: &[f64; 1], _u: &[f64; 1], b: &mut [f64; 1]) {
         let x0 = f64::sin(q[0]);
         let x1 = 9.81 * x0;
         b[0] = x1;
@@ -70,8 +70,8 @@ impl ::eom_sim::Model for Pendulum {
     fn inverse_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        _u: &Self::U,
+        q: &[f64; 1],
+        _u: &[f64; 1],
         udot: &[f64; 1],
         tau: &mut [f64; 1],
     ) {
@@ -80,14 +80,14 @@ impl ::eom_sim::Model for Pendulum {
         let x2 = udot[0] + x1;
         tau[0] = x2;
     }
-    fn energy(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, _t: f64, q: &[f64; 1], u: &[f64; 1]) -> [f64; 2] {
         let x0 = f64::cos(q[0]);
         let x1 = u[0] * u[0];
         let x2 = 0.5 * x1;
         let x3 = (-9.81) * x0;
         [x2, x3]
     }
-    fn momentum(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, _t: f64, q: &[f64; 1], u: &[f64; 1]) -> [f64; 6] {
         let (x0, x1) = f64::sin_cos(q[0]);
         let x2 = u[0] * x1;
         let x3 = u[0] * x0;

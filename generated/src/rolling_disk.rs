@@ -28,10 +28,21 @@ impl ::eom_sim::Model for RollingDisk {
     const NU: usize = 6;
     const NINPUTS: usize = 0;
     const COORDINATE_NAMES: &'static [&'static str] = &[
-        "float_x", "float_y", "float_z", "float_qw", "float_qx", "float_qy", "float_qz",
+        "float_x",
+        "float_y",
+        "float_z",
+        "float_qw",
+        "float_qx",
+        "float_qy",
+        "float_qz",
     ];
     const SPEED_NAMES: &'static [&'static str] = &[
-        "float_vx", "float_vy", "float_vz", "float_wx", "float_wy", "float_wz",
+        "float_vx",
+        "float_vy",
+        "float_vz",
+        "float_wx",
+        "float_wy",
+        "float_wz",
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[3];
@@ -144,8 +155,8 @@ impl ::eom_sim::Model for RollingDisk {
     fn forward_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 7],
+        u: &[f64; 6],
         tau: &[f64; 6],
         udot: &mut [f64; 6],
     ) {
@@ -232,7 +243,7 @@ impl ::eom_sim::Model for RollingDisk {
         m[4][5] = m[5][4];
         m[5][5] = 0.0025000000000000005;
     }
-    fn bias(&self, _t: f64, q: &Self::Q, u: &Self::U, b: &mut [f64; 6]) {
+    fn bias(&self, _t: f64, q: &[f64; 7], u: &[f64; 6], b: &mut [f64; 6]) {
         let x0 = q[4] * q[4];
         let x1 = q[5] * q[5];
         let x2 = q[4] * q[6];
@@ -275,8 +286,8 @@ impl ::eom_sim::Model for RollingDisk {
     fn inverse_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 7],
+        u: &[f64; 6],
         udot: &[f64; 6],
         tau: &mut [f64; 6],
     ) {
@@ -327,7 +338,7 @@ impl ::eom_sim::Model for RollingDisk {
         tau[4] = x19;
         tau[5] = x23;
     }
-    fn energy(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, _t: f64, q: &[f64; 7], u: &[f64; 6]) -> [f64; 2] {
         let x0 = u[3] * u[3];
         let x1 = u[4] * u[4];
         let x2 = u[5] * u[5];
@@ -348,7 +359,7 @@ impl ::eom_sim::Model for RollingDisk {
         let x17 = 9.81 * q[2];
         [x16, x17]
     }
-    fn momentum(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, _t: f64, q: &[f64; 7], u: &[f64; 6]) -> [f64; 6] {
         let x0 = q[4] * q[4];
         let x1 = q[5] * q[5];
         let x2 = q[6] * q[6];

@@ -37,11 +37,7 @@ impl ::eom_sim::Model for SliderCrank {
     type MassMatrix = [[f64; 3]; 3];
     const MASS_ZERO: [[f64; 3]; 3] = [[0.0; 3]; 3];
     fn q0(&self) -> [f64; 3] {
-        [
-            ::core::f64::consts::FRAC_PI_2,
-            -1.9106332362490186,
-            0.282842712474619,
-        ]
+        [::core::f64::consts::FRAC_PI_2, -1.9106332362490186, 0.282842712474619]
     }
     fn u0(&self) -> [f64; 3] {
         [0.0, 0.0, 0.0]
@@ -55,8 +51,8 @@ impl ::eom_sim::Model for SliderCrank {
     fn forward_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 3],
+        u: &[f64; 3],
         tau: &[f64; 3],
         udot: &mut [f64; 3],
     ) {
@@ -155,7 +151,7 @@ impl ::eom_sim::Model for SliderCrank {
         m[1][2] = m[2][1];
         m[2][2] = 0.3;
     }
-    fn bias(&self, _t: f64, q: &Self::Q, u: &Self::U, b: &mut [f64; 3]) {
+    fn bias(&self, _t: f64, q: &[f64; 3], u: &[f64; 3], b: &mut [f64; 3]) {
         let x0 = f64::cos(q[0]);
         let (x1, x2) = f64::sin_cos(q[1]);
         let x3 = u[0] + u[1];
@@ -211,8 +207,8 @@ impl ::eom_sim::Model for SliderCrank {
     fn inverse_dynamics(
         &self,
         _t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 3],
+        u: &[f64; 3],
         udot: &[f64; 3],
         tau: &mut [f64; 3],
     ) {
@@ -292,7 +288,7 @@ impl ::eom_sim::Model for SliderCrank {
         tau[1] = x50;
         tau[2] = x61;
     }
-    fn energy(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, _t: f64, q: &[f64; 3], u: &[f64; 3]) -> [f64; 2] {
         let x0 = f64::sin(q[0]);
         let (x1, x2) = f64::sin_cos(q[1]);
         let x3 = u[0] + u[1];
@@ -329,7 +325,7 @@ impl ::eom_sim::Model for SliderCrank {
         let x34 = x32 + x33;
         [x31, x34]
     }
-    fn momentum(&self, _t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, _t: f64, q: &[f64; 3], u: &[f64; 3]) -> [f64; 6] {
         let (x0, x1) = f64::sin_cos(q[0]);
         let (x2, x3) = f64::sin_cos(q[1]);
         let x4 = q[0] + q[1];

@@ -50,8 +50,8 @@ impl ::eom_sim::Model for SliderCrankDriven {
     fn forward_dynamics(
         &self,
         t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 2],
+        u: &[f64; 2],
         tau: &[f64; 2],
         udot: &mut [f64; 2],
     ) {
@@ -86,7 +86,7 @@ impl ::eom_sim::Model for SliderCrankDriven {
         m[0][1] = m[1][0];
         m[1][1] = 0.3;
     }
-    fn bias(&self, t: f64, q: &Self::Q, u: &Self::U, b: &mut [f64; 2]) {
+    fn bias(&self, t: f64, q: &[f64; 2], u: &[f64; 2], b: &mut [f64; 2]) {
         let x0 = ::core::f64::consts::TAU * t;
         let (x1, x2) = f64::sin_cos(q[0]);
         let x3 = ::core::f64::consts::FRAC_PI_2 + x0;
@@ -112,8 +112,8 @@ impl ::eom_sim::Model for SliderCrankDriven {
     fn inverse_dynamics(
         &self,
         t: f64,
-        q: &Self::Q,
-        u: &Self::U,
+        q: &[f64; 2],
+        u: &[f64; 2],
         udot: &[f64; 2],
         tau: &mut [f64; 2],
     ) {
@@ -142,7 +142,7 @@ impl ::eom_sim::Model for SliderCrankDriven {
         tau[0] = x21;
         tau[1] = x22;
     }
-    fn energy(&self, t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2] {
+    fn energy(&self, t: f64, q: &[f64; 2], u: &[f64; 2]) -> [f64; 2] {
         let x0 = ::core::f64::consts::TAU * t;
         let x1 = ::core::f64::consts::FRAC_PI_2 + x0;
         let x2 = f64::sin(x1);
@@ -175,7 +175,7 @@ impl ::eom_sim::Model for SliderCrankDriven {
         let x30 = x28 + x29;
         [x27, x30]
     }
-    fn momentum(&self, t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6] {
+    fn momentum(&self, t: f64, q: &[f64; 2], u: &[f64; 2]) -> [f64; 6] {
         let x0 = ::core::f64::consts::TAU * t;
         let x1 = ::core::f64::consts::FRAC_PI_2 + x0;
         let (x2, x3) = f64::sin_cos(x1);

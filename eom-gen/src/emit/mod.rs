@@ -12,7 +12,10 @@
 //! identical input.
 
 use crate::mech::Formulation;
-use crate::sym::{Op, Operand, Program, SymKind, Symbol};
+use crate::sym::{SymKind, Symbol};
+use split::{Arg, lower};
+
+mod split;
 use crate::system::{JointType, Motion, System};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
@@ -125,96 +128,6 @@ fn tmp(i: u32) -> Ident {
     format_ident!("x{i}")
 }
 
-fn operand(b: &Binding<'_>, p: &Program, o: Operand) -> TokenStream {
-    match o {
-        Operand::Const(n) => float_operand(n.to_f64()),
-        Operand::Var(i) => b.input(&p.inputs[i as usize]),
-        Operand::Tmp(i) => {
-            let t = tmp(i);
-            quote!(#t)
-        }
-    }
-}
-
-/// The body of a program: one statement per instruction.
-fn statements(b: &Binding<'_>, p: &Program) -> TokenStream {
-    let mut out = TokenStream::new();
-    for ins in &p.instrs {
-        let o = |x| operand(b, p, x);
-        let dst = tmp(ins.dst);
-        let value = match ins.op {
-            Op::Add(x, y) => {
-                let (x, y) = (o(x), o(y));
-                quote!(#x + #y)
-            }
-            Op::Sub(x, y) => {
-                let (x, y) = (o(x), o(y));
-                quote!(#x - #y)
-            }
-            Op::Mul(x, y) => {
-                let (x, y) = (o(x), o(y));
-                quote!(#x * #y)
-            }
-            Op::Div(x, y) => {
-                let (x, y) = (o(x), o(y));
-                quote!(#x / #y)
-            }
-            Op::Neg(x) => {
-                let x = o(x);
-                quote!(-#x)
-            }
-            Op::Sqrt(x) => unary("sqrt", o(x)),
-            Op::Sin(x) => unary("sin", o(x)),
-            Op::Cos(x) => unary("cos", o(x)),
-            Op::Tan(x) => unary("tan", o(x)),
-            Op::Exp(x) => unary("exp", o(x)),
-            Op::Ln(x) => unary("ln", o(x)),
-            Op::Abs(x) => unary("abs", o(x)),
-            Op::Atan2(y, x) => {
-                let (y, x) = (o(y), o(x));
-                quote!(f64::atan2(#y, #x))
-            }
-            Op::Select(c, x, y) => {
-                let (c, x, y) = (o(c), o(x), o(y));
-                quote!(if #c > 0.0 { #x } else { #y })
-            }
-            Op::SinCos(x) => {
-                let (s, c, x) = (tmp(ins.dst), tmp(ins.dst + 1), o(x));
-                out.extend(quote!(let (#s, #c) = f64::sin_cos(#x);));
-                continue;
-            }
-        };
-        out.extend(quote!(let #dst = #value;));
-    }
-    out
-}
-
-fn unary(f: &str, x: TokenStream) -> TokenStream {
-    let f = format_ident!("{f}");
-    quote!(f64::#f(#x))
-}
-
-/// Does the program read `kind`?
-fn reads(p: &Program, pred: impl Fn(&SymKind) -> bool) -> bool {
-    p.inputs.iter().any(|s| pred(&s.kind))
-}
-
-/// An argument name, prefixed with `_` when the program does not read it.
-fn arg(name: &str, used: bool) -> Ident {
-    if used {
-        format_ident!("{name}")
-    } else {
-        format_ident!("_{name}")
-    }
-}
-
-fn output_value(b: &Binding<'_>, p: &Program, k: usize) -> TokenStream {
-    match p.outputs[k].1 {
-        Operand::Const(n) => float(n.to_f64()),
-        o => operand(b, p, o),
-    }
-}
-
 /// `Name` from `snake_name`.
 pub fn camel(name: &str) -> String {
     name.split('_')
@@ -322,33 +235,66 @@ pub fn emit_tokens(
     };
     let q_doc = format!("`q` = ({})", list(&coords));
     let u_doc = format!("`u` = ({})", list(&speeds));
+    let model_inputs: Vec<String> = sys.inputs.clone();
+    let arg_t = || Arg {
+        name: "t",
+        ty: quote!(f64),
+        carries: Box::new(|s: &Symbol| s.kind == SymKind::Time),
+    };
+    let arg_q = || Arg {
+        name: "q",
+        ty: quote!(&[f64; #nq_l]),
+        carries: Box::new(|s: &Symbol| matches!(s.kind, SymKind::Coord(_))),
+    };
+    let arg_u = || Arg {
+        name: "u",
+        ty: quote!(&[f64; #nu_l]),
+        carries: Box::new(|s: &Symbol| matches!(s.kind, SymKind::Speed(_))),
+    };
+    let arg_tau = || {
+        let inputs = model_inputs.clone();
+        Arg {
+            name: "tau",
+            ty: quote!(&[f64; #nu_l]),
+            carries: Box::new(move |s: &Symbol| {
+                s.kind == SymKind::Input && !inputs.contains(&s.name)
+            }),
+        }
+    };
+    let arg_udot = || Arg {
+        name: "udot",
+        ty: quote!(&[f64; #nu_l]),
+        carries: Box::new(|s: &Symbol| matches!(s.kind, SymKind::SpeedRate(_))),
+    };
+    let mut parts = TokenStream::new();
+    let idx = Literal::usize_unsuffixed;
+    // Assignments `out[k] = value;` for the outputs of a lowered program.
+    let assign_all = |out: &str, values: &[TokenStream]| -> TokenStream {
+        let out = format_ident!("{out}");
+        let items = values.iter().enumerate().map(|(k, v)| {
+            let k = idx(k);
+            quote!(#out[#k] = #v;)
+        });
+        quote!(#(#items)*)
+    };
 
     // q̇ = N(q) u
-    let p = &f.qdot;
-    let body = statements(&b, p);
-    let assign = (0..nq).map(|k| {
-        let (kl, v) = (Literal::usize_unsuffixed(k), output_value(&b, p, k));
-        quote!(qdot[#kl] = #v;)
-    });
-    let (q_arg, u_arg) = (
-        arg("q", reads(p, |k| matches!(k, SymKind::Coord(_)))),
-        arg("u", reads(p, |k| matches!(k, SymKind::Speed(_)))),
-    );
+    let args = [arg_q(), arg_u()];
+    let l = lower(&b, &f.qdot, "qdot", &args);
+    parts.extend(l.parts.clone());
+    let (params, body, assign) = (l.params(&args), &l.body, assign_all("qdot", &l.outputs));
     let qdot_fn = quote! {
-        fn qdot(&self, #q_arg: &[f64; #nq_l], #u_arg: &[f64; #nu_l], qdot: &mut [f64; #nq_l]) {
+        fn qdot(&self, #params, qdot: &mut [f64; #nq_l]) {
             #body
-            #(#assign)*
+            #assign
         }
     };
 
     let fd_fn = f.forward_dynamics.as_ref().map(|p| {
-        let body = statements(&b, p);
-        let assign = (0..nu).map(|k| {
-            let (kl, v) = (Literal::usize_unsuffixed(k), output_value(&b, p, k));
-            quote!(udot[#kl] = #v;)
-        });
-        let args = state_args(p);
-        let tau = arg("tau", reads(p, |k| *k == SymKind::Input));
+        let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
+        let l = lower(&b, p, "forward_dynamics", &args);
+        parts.extend(l.parts.clone());
+        let (params, body, assign) = (l.params(&args), &l.body, assign_all("udot", &l.outputs));
         let doc = format!(
             " Forward dynamics by the {} ({} operations): `u̇ = M⁻¹ (τ − b)`.",
             f.fd_form,
@@ -356,23 +302,22 @@ pub fn emit_tokens(
         );
         quote! {
             #[doc = #doc]
-            fn forward_dynamics(&self, #args, #tau: &[f64; #nu_l], udot: &mut [f64; #nu_l]) {
+            fn forward_dynamics(&self, #params, udot: &mut [f64; #nu_l]) {
                 #body
-                #(#assign)*
+                #assign
             }
         }
     });
     let mm_fn = f.mass_matrix.as_ref().map(|p| {
-        let body = statements(&b, p);
+        let args = [arg_t(), arg_q()];
+        let l = lower(&b, p, "mass_matrix", &args);
+        parts.extend(l.parts.clone());
+        let (params, body) = (l.params(&args), &l.body);
         let mut assign = TokenStream::new();
         let mut k = 0;
         for i in 0..nu {
             for j in 0..=i {
-                let (il, jl, v) = (
-                    Literal::usize_unsuffixed(i),
-                    Literal::usize_unsuffixed(j),
-                    output_value(&b, p, k),
-                );
+                let (il, jl, v) = (idx(i), idx(j), &l.outputs[k]);
                 assign.extend(if i == j {
                     quote!(m[#il][#jl] = #v;)
                 } else {
@@ -381,68 +326,72 @@ pub fn emit_tokens(
                 k += 1;
             }
         }
-        let (t, q) = (
-            arg("t", reads(p, |k| *k == SymKind::Time)),
-            arg("q", reads(p, |k| matches!(k, SymKind::Coord(_)))),
-        );
         quote! {
-            fn mass_matrix(&self, #t: f64, #q: &[f64; #nq_l], m: &mut [[f64; #nu_l]; #nu_l]) {
+            fn mass_matrix(&self, #params, m: &mut [[f64; #nu_l]; #nu_l]) {
                 #body
                 #assign
             }
         }
     });
     let bias_fn = f.bias.as_ref().map(|p| {
-        let body = statements(&b, p);
-        let assign = (0..nu).map(|k| {
-            let (kl, v) = (Literal::usize_unsuffixed(k), output_value(&b, p, k));
-            quote!(b[#kl] = #v;)
-        });
-        let args = state_args(p);
+        let args = [arg_t(), arg_q(), arg_u()];
+        let l = lower(&b, p, "bias", &args);
+        parts.extend(l.parts.clone());
+        let (params, body, assign) = (l.params(&args), &l.body, assign_all("b", &l.outputs));
         quote! {
-            fn bias(&self, #args, b: &mut [f64; #nu_l]) {
+            fn bias(&self, #params, b: &mut [f64; #nu_l]) {
                 #body
-                #(#assign)*
+                #assign
             }
         }
     });
     let id_fn = f.inverse_dynamics.as_ref().map(|p| {
-        let body = statements(&b, p);
-        let assign = (0..nu).map(|k| {
-            let (kl, v) = (Literal::usize_unsuffixed(k), output_value(&b, p, k));
-            quote!(tau[#kl] = #v;)
-        });
-        let args = state_args(p);
-        let ud = arg("udot", reads(p, |k| matches!(k, SymKind::SpeedRate(_))));
+        let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
+        let l = lower(&b, p, "inverse_dynamics", &args);
+        parts.extend(l.parts.clone());
+        let (params, body, assign) = (l.params(&args), &l.body, assign_all("tau", &l.outputs));
         quote! {
-            fn inverse_dynamics(&self, #args, #ud: &[f64; #nu_l], tau: &mut [f64; #nu_l]) {
+            fn inverse_dynamics(&self, #params, tau: &mut [f64; #nu_l]) {
                 #body
-                #(#assign)*
+                #assign
             }
         }
     });
     let energy_fn = f.energy.as_ref().map(|p| {
-        let body = statements(&b, p);
-        let (k0, k1) = (output_value(&b, p, 0), output_value(&b, p, 1));
-        let args = state_args(p);
+        let args = [arg_t(), arg_q(), arg_u()];
+        let l = lower(&b, p, "energy", &args);
+        parts.extend(l.parts.clone());
+        let (params, body, o) = (l.params(&args), &l.body, &l.outputs);
+        let (k0, k1) = (&o[0], &o[1]);
         quote! {
-            fn energy(&self, #args) -> [f64; 2] {
+            fn energy(&self, #params) -> [f64; 2] {
                 #body
                 [#k0, #k1]
             }
         }
     });
     let momentum_fn = f.momentum.as_ref().map(|p| {
-        let body = statements(&b, p);
-        let vals = (0..6).map(|k| output_value(&b, p, k));
-        let args = state_args(p);
+        let args = [arg_t(), arg_q(), arg_u()];
+        let l = lower(&b, p, "momentum", &args);
+        parts.extend(l.parts.clone());
+        let (params, body, o) = (l.params(&args), &l.body, &l.outputs);
         quote! {
-            fn momentum(&self, #args) -> [f64; 6] {
+            fn momentum(&self, #params) -> [f64; 6] {
                 #body
-                [#(#vals),*]
+                [#(#o),*]
             }
         }
     });
+    let parts_impl = if parts.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! {
+            /// Parts of the long generated functions (see `eom_gen::emit`).
+            impl #ty {
+                #parts
+            }
+        }
+    };
 
     let doc_top = format!(
         " Model `{name}`: {nq} coordinate(s), {nu} speed(s), {ni} input(s). Generated by eom-gen {VERSION}; model content hash {hash}."
@@ -578,6 +527,8 @@ pub fn emit_tokens(
             #momentum_fn
         }
 
+        #parts_impl
+
         #[doc = #ode_doc]
         impl ::eom_sim::OdeSystem<#ny_l> for #ty {
             fn rhs(&self, t: f64, y: &[f64; #ny_l], dy: &mut [f64; #ny_l]) {
@@ -596,12 +547,4 @@ pub fn emit_tokens(
             }
         }
     }
-}
-
-/// `t: f64, q: &[f64; NQ], u: &[f64; NU]` with unused ones prefixed `_`.
-fn state_args(p: &Program) -> TokenStream {
-    let t = arg("t", reads(p, |k| *k == SymKind::Time));
-    let q = arg("q", reads(p, |k| matches!(k, SymKind::Coord(_))));
-    let u = arg("u", reads(p, |k| matches!(k, SymKind::Speed(_))));
-    quote!(#t: f64, #q: &Self::Q, #u: &Self::U)
 }

@@ -1,0 +1,297 @@
+//! Long programs become several functions.
+//!
+//! rustc and LLVM are superlinear in the length of a function, and very
+//! long straight-line functions can exhaust rustc's stack. A program of more
+//! than [`PART_LIMIT`] instructions is cut into consecutive parts, each an
+//! `#[inline(never)]` method; a temporary that is defined in one part and
+//! read in a later one (or is an output) gets a slot in a scratch array
+//! `s` on the caller's stack, so every part stays short and the caller
+//! reads the outputs from `s`.
+
+use super::{Binding, float, float_operand, tmp};
+use crate::sym::{Op, Operand, Program, Symbol};
+use proc_macro2::{Ident, Literal, TokenStream};
+use quote::{format_ident, quote};
+use std::collections::HashMap;
+
+/// Instructions per part.
+pub const PART_LIMIT: usize = 1500;
+
+/// An argument of a generated function.
+pub struct Arg<'a> {
+    /// Its name.
+    pub name: &'static str,
+    /// Its type.
+    pub ty: TokenStream,
+    /// Which symbols it carries.
+    pub carries: Box<dyn Fn(&Symbol) -> bool + 'a>,
+}
+
+/// A program ready to be placed in a function.
+pub struct Lowered {
+    /// Statements of the function body (the instructions, or the calls of
+    /// the parts).
+    pub body: TokenStream,
+    /// The value of each output.
+    pub outputs: Vec<TokenStream>,
+    /// Methods holding the parts (empty if not split).
+    pub parts: TokenStream,
+    /// Per argument: is it used (else its name gets a `_` prefix)?
+    pub used: Vec<bool>,
+}
+
+impl Lowered {
+    /// The argument list `name: ty, …` with unused names prefixed `_`.
+    pub fn params(&self, args: &[Arg<'_>]) -> TokenStream {
+        let items = args.iter().zip(&self.used).map(|(a, &used)| {
+            let n = if used {
+                format_ident!("{}", a.name)
+            } else {
+                format_ident!("_{}", a.name)
+            };
+            let ty = &a.ty;
+            quote!(#n: #ty)
+        });
+        quote!(#(#items),*)
+    }
+}
+
+fn reads(p: &Program, ops: &[Operand], carries: &dyn Fn(&Symbol) -> bool) -> bool {
+    ops.iter()
+        .any(|o| matches!(o, Operand::Var(i) if carries(&p.inputs[*i as usize])))
+}
+
+fn operands(op: &Op) -> Vec<Operand> {
+    match *op {
+        Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
+            vec![a, b]
+        }
+        Op::Select(c, a, b) => vec![c, a, b],
+        Op::Neg(a)
+        | Op::Sqrt(a)
+        | Op::Sin(a)
+        | Op::Cos(a)
+        | Op::SinCos(a)
+        | Op::Tan(a)
+        | Op::Exp(a)
+        | Op::Ln(a)
+        | Op::Abs(a) => vec![a],
+    }
+}
+
+/// One statement per instruction of `p.instrs[range]`; temporaries outside
+/// the range (and those listed in `store`) go through the scratch slots.
+fn statements(
+    b: &Binding<'_>,
+    p: &Program,
+    range: std::ops::Range<usize>,
+    slots: &HashMap<u32, usize>,
+    split: bool,
+) -> TokenStream {
+    // Temporaries are numbered in instruction order: the part defines
+    // those from its first instruction's up to the next part's first.
+    let first = p.instrs.get(range.start).map_or(0, |i| i.dst);
+    let next = p.instrs.get(range.end).map_or(u32::MAX, |i| i.dst);
+    let defined_here = |t: u32| !split || (first..next).contains(&t);
+    let o = |x: Operand| -> TokenStream {
+        match x {
+            Operand::Const(n) => float_operand(n.to_f64()),
+            Operand::Var(i) => b.input(&p.inputs[i as usize]),
+            Operand::Tmp(t) if defined_here(t) => {
+                let t = tmp(t);
+                quote!(#t)
+            }
+            Operand::Tmp(t) => {
+                let k = Literal::usize_unsuffixed(slots.get(&t).copied().unwrap_or(0));
+                quote!(s[#k])
+            }
+        }
+    };
+    let mut out = TokenStream::new();
+    for ins in &p.instrs[range] {
+        let dst = tmp(ins.dst);
+        let value = match ins.op {
+            Op::Add(x, y) => {
+                let (x, y) = (o(x), o(y));
+                quote!(#x + #y)
+            }
+            Op::Sub(x, y) => {
+                let (x, y) = (o(x), o(y));
+                quote!(#x - #y)
+            }
+            Op::Mul(x, y) => {
+                let (x, y) = (o(x), o(y));
+                quote!(#x * #y)
+            }
+            Op::Div(x, y) => {
+                let (x, y) = (o(x), o(y));
+                quote!(#x / #y)
+            }
+            Op::Neg(x) => {
+                let x = o(x);
+                quote!(-#x)
+            }
+            Op::Sqrt(x) => unary("sqrt", o(x)),
+            Op::Sin(x) => unary("sin", o(x)),
+            Op::Cos(x) => unary("cos", o(x)),
+            Op::Tan(x) => unary("tan", o(x)),
+            Op::Exp(x) => unary("exp", o(x)),
+            Op::Ln(x) => unary("ln", o(x)),
+            Op::Abs(x) => unary("abs", o(x)),
+            Op::Atan2(y, x) => {
+                let (y, x) = (o(y), o(x));
+                quote!(f64::atan2(#y, #x))
+            }
+            Op::Select(c, x, y) => {
+                let (c, x, y) = (o(c), o(x), o(y));
+                quote!(if #c > 0.0 { #x } else { #y })
+            }
+            Op::SinCos(x) => {
+                let (sn, cs, x) = (tmp(ins.dst), tmp(ins.dst + 1), o(x));
+                out.extend(quote!(let (#sn, #cs) = f64::sin_cos(#x);));
+                for t in [ins.dst, ins.dst + 1] {
+                    out.extend(store(slots, t, split));
+                }
+                continue;
+            }
+        };
+        out.extend(quote!(let #dst = #value;));
+        out.extend(store(slots, ins.dst, split));
+    }
+    out
+}
+
+fn store(slots: &HashMap<u32, usize>, t: u32, split: bool) -> TokenStream {
+    match slots.get(&t) {
+        Some(&k) if split => {
+            let (k, x) = (Literal::usize_unsuffixed(k), tmp(t));
+            quote!(s[#k] = #x;)
+        }
+        _ => TokenStream::new(),
+    }
+}
+
+fn unary(f: &str, x: TokenStream) -> TokenStream {
+    let f = format_ident!("{f}");
+    quote!(f64::#f(#x))
+}
+
+/// Lowers `p` for a function called `name` with arguments `args`.
+pub fn lower(b: &Binding<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
+    let used: Vec<bool> = args
+        .iter()
+        .map(|a| p.inputs.iter().any(|s| (a.carries)(s)))
+        .collect();
+    let output = |o: Operand, slots: &HashMap<u32, usize>, split: bool| match o {
+        Operand::Const(n) => float(n.to_f64()),
+        Operand::Var(i) => b.input(&p.inputs[i as usize]),
+        Operand::Tmp(t) => match slots.get(&t) {
+            Some(&k) if split => {
+                let k = Literal::usize_unsuffixed(k);
+                quote!(s[#k])
+            }
+            _ => {
+                let t = tmp(t);
+                quote!(#t)
+            }
+        },
+    };
+    if p.instrs.len() <= PART_LIMIT {
+        let slots = HashMap::new();
+        return Lowered {
+            body: statements(b, p, 0..p.instrs.len(), &slots, false),
+            outputs: p
+                .outputs
+                .iter()
+                .map(|&(_, o)| output(o, &slots, false))
+                .collect(),
+            parts: TokenStream::new(),
+            used,
+        };
+    }
+    // Part of each instruction, and of each temporary's definition.
+    let parts: Vec<std::ops::Range<usize>> = (0..p.instrs.len())
+        .step_by(PART_LIMIT)
+        .map(|s| s..(s + PART_LIMIT).min(p.instrs.len()))
+        .collect();
+    let mut part_of_tmp: HashMap<u32, usize> = HashMap::new();
+    for (k, r) in parts.iter().enumerate() {
+        for ins in &p.instrs[r.clone()] {
+            part_of_tmp.insert(ins.dst, k);
+            if let Op::SinCos(_) = ins.op {
+                part_of_tmp.insert(ins.dst + 1, k);
+            }
+        }
+    }
+    // Slots: temporaries read in a later part, and temporary outputs.
+    let mut slots: HashMap<u32, usize> = HashMap::new();
+    let add = |t: u32, slots: &mut HashMap<u32, usize>| {
+        let n = slots.len();
+        slots.entry(t).or_insert(n);
+    };
+    for (k, r) in parts.iter().enumerate() {
+        for ins in &p.instrs[r.clone()] {
+            for o in operands(&ins.op) {
+                if let Operand::Tmp(t) = o
+                    && part_of_tmp.get(&t).is_some_and(|&d| d < k)
+                {
+                    add(t, &mut slots);
+                }
+            }
+        }
+    }
+    for &(_, o) in &p.outputs {
+        if let Operand::Tmp(t) = o {
+            add(t, &mut slots);
+        }
+    }
+    let ns = Literal::usize_unsuffixed(slots.len().max(1));
+    let mut methods = TokenStream::new();
+    let mut calls = TokenStream::new();
+    for (k, r) in parts.iter().enumerate() {
+        let fname: Ident = format_ident!("{name}_part{k}");
+        let ops: Vec<Operand> = p.instrs[r.clone()]
+            .iter()
+            .flat_map(|i| operands(&i.op))
+            .collect();
+        let params = args.iter().map(|a| {
+            let n = if reads(p, &ops, &*a.carries) {
+                format_ident!("{}", a.name)
+            } else {
+                format_ident!("_{}", a.name)
+            };
+            let ty = &a.ty;
+            quote!(#n: #ty)
+        });
+        let body = statements(b, p, r.clone(), &slots, true);
+        let doc = format!(
+            " Part {} of {} of `{name}` (instructions {}–{}).",
+            k + 1,
+            parts.len(),
+            r.start,
+            r.end - 1
+        );
+        methods.extend(quote! {
+            #[doc = #doc]
+            #[inline(never)]
+            fn #fname(&self, #(#params,)* s: &mut [f64; #ns]) {
+                #body
+            }
+        });
+        let names = args.iter().map(|a| format_ident!("{}", a.name));
+        calls.extend(quote!(self.#fname(#(#names,)* &mut s);));
+    }
+    Lowered {
+        body: quote! {
+            let mut s = [0.0f64; #ns];
+            #calls
+        },
+        outputs: p
+            .outputs
+            .iter()
+            .map(|&(_, o)| output(o, &slots, true))
+            .collect(),
+        parts: methods,
+        used: vec![true; args.len()],
+    }
+}
