@@ -12,5 +12,15 @@ fn main() {
         builder = builder.model(path);
     }
     builder.compile().unwrap_or_else(|e| panic!("{e}"));
+    // The same 10-link chain with fused multiply-adds, for the FMA test.
+    let mut spec = eom_gen::model::builder::n_link_chain(10, true);
+    spec.name = "chain10_fma".into();
+    let path = format!("{out}/chain10_fma.ron");
+    std::fs::write(&path, spec.to_ron()).unwrap_or_else(|e| panic!("{path}: {e}"));
+    eom_gen::Builder::new()
+        .model(path)
+        .fma(true)
+        .compile()
+        .unwrap_or_else(|e| panic!("{e}"));
     println!("cargo:rerun-if-changed=build.rs");
 }

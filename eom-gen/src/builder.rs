@@ -12,7 +12,7 @@
 //! (see `examples/build_rs`).
 
 use crate::model::load;
-use crate::{GenerateError, generate};
+use crate::{GenerateError, generate_with};
 use std::fmt;
 use std::path::PathBuf;
 
@@ -21,6 +21,7 @@ use std::path::PathBuf;
 pub struct Builder {
     models: Vec<String>,
     out_dir: Option<PathBuf>,
+    fma: bool,
 }
 
 /// Why a build step failed.
@@ -67,6 +68,12 @@ impl Builder {
         self
     }
 
+    /// Emits `f64::mul_add` for `a·b + c` (see [`crate::EmitOptions::fma`]).
+    pub fn fma(mut self, on: bool) -> Self {
+        self.fma = on;
+        self
+    }
+
     /// Generates every model into `<out_dir>/<model name>.rs` and prints
     /// `cargo:rerun-if-changed=<model>` for each. Reports the first model
     /// that fails, with all of its diagnostics.
@@ -79,7 +86,11 @@ impl Builder {
         for path in &self.models {
             println!("cargo:rerun-if-changed={path}");
             let src = load(path).map_err(|r| BuildError::Generate(GenerateError::Model(r)))?;
-            let g = generate(&src).map_err(BuildError::Generate)?;
+            let opts = crate::EmitOptions {
+                type_name: None,
+                fma: self.fma,
+            };
+            let g = generate_with(&src, &opts).map_err(BuildError::Generate)?;
             let file = dir.join(format!("{}.rs", g.checked.system.name));
             std::fs::write(&file, &g.source)
                 .map_err(|e| BuildError::Io(file.display().to_string(), e))?;

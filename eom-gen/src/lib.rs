@@ -18,6 +18,9 @@ pub mod sym;
 pub mod system;
 
 pub use builder::{BuildError, Builder};
-pub use generate::{GenerateError, Generated, generate, generate_file, generate_tokens};
+pub use emit::EmitOptions;
+pub use generate::{
+    GenerateError, Generated, generate, generate_file, generate_tokens, generate_with,
+};
 pub use model::{Checked, Diagnostic, Report, Source, Spec, check, check_file};
 pub use system::System;

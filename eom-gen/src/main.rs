@@ -30,6 +30,9 @@ enum Command {
         /// Write to this file instead of standard output.
         #[arg(short, long)]
         output: Option<String>,
+        /// Emit `f64::mul_add` for `a·b + c` (compile with FMA enabled).
+        #[arg(long)]
+        fma: bool,
     },
     /// Evaluate the equations of motion at a state (default: the model's
     /// initial state), compiled (built once, cached) or interpreted.
@@ -98,7 +101,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Check { model, json } => check(&model, json),
-        Command::Dump { model, output } => dump(&model, output.as_deref()),
+        Command::Dump { model, output, fma } => dump(&model, output.as_deref(), fma),
         Command::Stats { model, json: _ } => stats(&model),
         Command::Simulate {
             model,
@@ -233,10 +236,27 @@ fn generated(path: &str) -> Result<eom_gen::Generated, ExitCode> {
     })
 }
 
-fn dump(path: &str, output: Option<&str>) -> ExitCode {
-    let g = match generated(path) {
-        Ok(g) => g,
-        Err(code) => return code,
+fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
+    let g = if fma {
+        let opts = eom_gen::EmitOptions {
+            type_name: None,
+            fma,
+        };
+        match eom_gen::model::load(path)
+            .map_err(eom_gen::GenerateError::Model)
+            .and_then(|src| eom_gen::generate_with(&src, &opts))
+        {
+            Ok(g) => g,
+            Err(e) => {
+                eprint!("{e}");
+                return ExitCode::from(1);
+            }
+        }
+    } else {
+        match generated(path) {
+            Ok(g) => g,
+            Err(code) => return code,
+        }
     };
     eprint!("{}", g.checked.source.render_all(&g.checked.warnings));
     match output {

@@ -31,3 +31,11 @@ fn parameters_marked_tunable_become_fields_with_defaults() {
         "the length is read at run time"
     );
 }
+
+#[test]
+fn arm7_source_is_pinned() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/arm7.ron");
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let g = generate(&Source::new("models/arm7.ron", text)).unwrap_or_else(|e| panic!("{e}"));
+    insta::assert_snapshot!(g.source);
+}

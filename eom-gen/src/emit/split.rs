@@ -107,10 +107,34 @@ fn statements(
             }
         }
     };
+    // Products used once, by an addition in this part: fused into it.
+    let fused = if b.fma {
+        fusable(p, range.clone(), slots)
+    } else {
+        HashMap::new()
+    };
+    let fma = |m: u32, c: TokenStream, negate_product: bool| -> TokenStream {
+        let (x, y) = fused[&m];
+        let (x, y) = (o(x), o(y));
+        if negate_product {
+            quote!(f64::mul_add(-#x, #y, #c))
+        } else {
+            quote!(f64::mul_add(#x, #y, #c))
+        }
+    };
+    let is_fused = |x: Operand| matches!(x, Operand::Tmp(t) if fused.contains_key(&t));
     let mut out = TokenStream::new();
     for ins in &p.instrs[range] {
         let dst = tmp(ins.dst);
         let value = match ins.op {
+            Op::Mul(..) if fused.contains_key(&ins.dst) => continue,
+            Op::Add(Operand::Tmp(m), y) if is_fused(Operand::Tmp(m)) => fma(m, o(y), false),
+            Op::Add(x, Operand::Tmp(m)) if is_fused(Operand::Tmp(m)) => fma(m, o(x), false),
+            Op::Sub(x, Operand::Tmp(m)) if is_fused(Operand::Tmp(m)) => fma(m, o(x), true),
+            Op::Sub(Operand::Tmp(m), y) if is_fused(Operand::Tmp(m)) => {
+                let y = o(y);
+                fma(m, quote!(-#y), false)
+            }
             Op::Add(x, y) => {
                 let (x, y) = (o(x), o(y));
                 quote!(#x + #y)
@@ -159,6 +183,56 @@ fn statements(
         out.extend(store(slots, ins.dst, split));
     }
     out
+}
+
+/// Products `a·b` in `range` whose only use is an addition or subtraction
+/// in the same range (and not an output or a value passed between parts):
+/// those can become `mul_add`. Returns product temporary → `(a, b)`.
+fn fusable(
+    p: &Program,
+    range: std::ops::Range<usize>,
+    slots: &HashMap<u32, usize>,
+) -> HashMap<u32, (Operand, Operand)> {
+    let mut uses: HashMap<u32, usize> = HashMap::new();
+    for ins in &p.instrs {
+        for o in operands(&ins.op) {
+            if let Operand::Tmp(t) = o {
+                *uses.entry(t).or_insert(0) += 1;
+            }
+        }
+    }
+    for &(_, o) in &p.outputs {
+        if let Operand::Tmp(t) = o {
+            *uses.entry(t).or_insert(0) += 2;
+        }
+    }
+    let products: HashMap<u32, (Operand, Operand)> = p.instrs[range.clone()]
+        .iter()
+        .filter_map(|i| match i.op {
+            Op::Mul(a, b) if uses.get(&i.dst) == Some(&1) && !slots.contains_key(&i.dst) => {
+                Some((i.dst, (a, b)))
+            }
+            _ => None,
+        })
+        .collect();
+    // Keep the products actually consumed by an addition here, at most one
+    // per addition (the other operand stays a plain value).
+    let mut fused = HashMap::new();
+    for ins in &p.instrs[range] {
+        let (x, y) = match ins.op {
+            Op::Add(x, y) | Op::Sub(x, y) => (x, y),
+            _ => continue,
+        };
+        for side in [y, x] {
+            if let Operand::Tmp(t) = side
+                && let Some(&ab) = products.get(&t)
+            {
+                fused.insert(t, ab);
+                break;
+            }
+        }
+    }
+    fused
 }
 
 fn store(slots: &HashMap<u32, usize>, t: u32, split: bool) -> TokenStream {
