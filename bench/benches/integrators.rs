@@ -37,7 +37,9 @@ where
         last = Some(sol);
     }
     times.sort_by(f64::total_cmp);
-    let Some(sol) = last else { return (0, 0.0, 0.0) };
+    let Some(sol) = last else {
+        return (0, 0.0, 0.0);
+    };
     let ([t0, v0], [t1, v1]) = (energy(&y0), energy(&sol.y_final));
     let de = ((t1 + v1) - (t0 + v0)).abs() / (t0.abs() + v0.abs()).max(t1.abs() + v1.abs());
     (sol.stats.rhs_evals, times[2], de)
@@ -53,14 +55,22 @@ where
             ("dop853", run(m, || Dop853::new(tol, tol))),
             ("radau5", run(m, || Radau5::new(tol, tol))),
         ] {
-            println!("| {name} | {method} | {tol:e} | {evals} | {:.3} | {de:.1e} |", secs * 1e3);
+            println!(
+                "| {name} | {method} | {tol:e} | {evals} | {:.3} | {de:.1e} |",
+                secs * 1e3
+            );
         }
     }
 }
 
 fn main() {
-    println!("| model | method | rtol = atol | rhs evaluations | CPU ms (median of 5) | energy error (relative to T + |V|) |");
+    println!(
+        "| model | method | rtol = atol | rhs evaluations | CPU ms (median of 5) | energy error (relative to T + |V|) |"
+    );
     println!("|---|---|---|---|---|---|");
-    table::<_, 4>("double_pendulum", &eom_generated::double_pendulum::DoublePendulum::default());
+    table::<_, 4>(
+        "double_pendulum",
+        &eom_generated::double_pendulum::DoublePendulum::default(),
+    );
     table::<_, 14>("arm7", &eom_generated::arm7::Arm7::default());
 }

@@ -150,7 +150,7 @@ fn dop853_reproduces_hairer_dop853f_on_van_der_pol() {
     assert_eq!(s.stats.rhs_evals, 21553 - 1);
 }
 
-/// Step counts at rtol = atol = 1e-7 (reported in BENCHMARKS-integrators.md).
+/// Step counts at rtol = atol = 1e-7 (reported in BENCHMARKS.md (section "Integrators: work-precision")).
 /// Invariants of Hairer's bookkeeping: DOPRI5 spends 6 evaluations per
 /// attempted step plus 2 at the start (f(y0) and the HINIT Euler step);
 /// DOP853 12 per step plus 2.
@@ -207,7 +207,7 @@ fn arenstorf_step_counts_at_1e_7() {
         "DOP853 evals"
     );
     // Sanity window around the counts measured when this test was written
-    // (see BENCHMARKS-integrators.md): a broken controller moves them far.
+    // (see BENCHMARKS.md (section "Integrators: work-precision")): a broken controller moves them far.
     assert!(
         (150..=300).contains(&s5.stats.accepted),
         "DOPRI5 accepted {}",
