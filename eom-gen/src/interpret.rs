@@ -107,3 +107,224 @@ pub fn evaluate(f: &Formulation, x: &Point<'_>) -> Evaluation {
         potential_energy: energy.get(1).copied().unwrap_or(f64::NAN),
     }
 }
+
+/// The equations of motion run by the evaluator, as a first-order system
+/// `y = (q, u)` of `N` states.
+struct Interpreted<'a, const N: usize> {
+    f: &'a Formulation,
+    sys: &'a System,
+    nq: usize,
+    quaternions: Vec<usize>,
+}
+
+impl<const N: usize> eom_sim::OdeSystem<N> for Interpreted<'_, N> {
+    fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        let (q, u) = y.split_at(self.nq);
+        let zero = vec![0.0; u.len()];
+        let x = Point {
+            sys: self.sys,
+            q,
+            u,
+            udot: &[],
+            tau: &zero,
+            inputs: &[],
+            params: &[],
+            t,
+        };
+        let qdot = run(&self.f.qdot, &x);
+        let udot = self
+            .f
+            .forward_dynamics
+            .as_ref()
+            .map(|p| run(p, &x))
+            .unwrap_or_default();
+        for (d, v) in dy.iter_mut().zip(qdot.iter().chain(&udot)) {
+            *d = *v;
+        }
+    }
+
+    fn project(&self, _t: f64, y: &mut [f64; N]) -> bool {
+        for &a in &self.quaternions {
+            if let Some(quat) = y.get_mut(a..a + 4) {
+                let n = quat.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if n > 0.0 && n.is_finite() {
+                    quat.iter_mut().for_each(|x| *x /= n);
+                }
+            }
+        }
+        !self.quaternions.is_empty()
+    }
+}
+
+/// Largest state (`nq + nu`) the interpreter integrates; the integrators
+/// are sized at compile time, one instance per size.
+pub const MAX_STATES: usize = 32;
+
+/// Integrates the formulation with the evaluator from the initial state;
+/// the JSON matches `eom-gen simulate --json` on compiled code.
+pub fn simulate(
+    f: &Formulation,
+    sys: &System,
+    o: &crate::compiled::SimOptions,
+) -> Result<serde_json::Value, String> {
+    macro_rules! sized {
+        ($($n:literal)*) => {
+            match sys.nq() + sys.nu() {
+                $($n => simulate_n::<$n>(f, sys, o),)*
+                n => Err(format!(
+                    "the interpreter integrates up to {MAX_STATES} states, `{}` has {n}; run it compiled (without --interpret)",
+                    sys.name
+                )),
+            }
+        };
+    }
+    sized!(1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 21 22 23 24 25 26 27 28 29 30 31 32)
+}
+
+fn simulate_n<const N: usize>(
+    f: &Formulation,
+    sys: &System,
+    o: &crate::compiled::SimOptions,
+) -> Result<serde_json::Value, String> {
+    use eom_sim::{
+        Dop853, Dopri5, Euler, ImplicitMidpoint, Radau5, Rk4, SolveOptions, StopReason, integrate,
+    };
+    let nq = sys.nq();
+    let quaternions = sys
+        .free_joints()
+        .filter_map(|j| match j.kind {
+            crate::system::JointType::Spherical => Some(j.q_index),
+            crate::system::JointType::Free => Some(j.q_index + 3),
+            _ => None,
+        })
+        .collect();
+    let model = Interpreted::<N> {
+        f,
+        sys,
+        nq,
+        quaternions,
+    };
+    let mut y0 = [0.0; N];
+    for (d, v) in y0.iter_mut().zip(sys.q0().iter().chain(&sys.u0())) {
+        *d = *v;
+    }
+    let opts = if o.every > 0.0 {
+        SolveOptions::every(0.0, o.t_end, o.every)
+    } else {
+        SolveOptions::default()
+    };
+    let start = std::time::Instant::now();
+    let sol = match o.integrator.as_str() {
+        "euler" => integrate(
+            &mut Euler::new(o.dt),
+            &model,
+            0.0,
+            y0,
+            o.t_end,
+            &opts,
+            &mut [],
+        ),
+        "rk4" => integrate(
+            &mut Rk4::new(o.dt),
+            &model,
+            0.0,
+            y0,
+            o.t_end,
+            &opts,
+            &mut [],
+        ),
+        "midpoint" => integrate(
+            &mut ImplicitMidpoint::new(o.dt),
+            &model,
+            0.0,
+            y0,
+            o.t_end,
+            &opts,
+            &mut [],
+        ),
+        "dop853" => integrate(
+            &mut Dop853::new(o.rtol, o.atol),
+            &model,
+            0.0,
+            y0,
+            o.t_end,
+            &opts,
+            &mut [],
+        ),
+        "radau5" => integrate(
+            &mut Radau5::new(o.rtol, o.atol),
+            &model,
+            0.0,
+            y0,
+            o.t_end,
+            &opts,
+            &mut [],
+        ),
+        _ => integrate(
+            &mut Dopri5::new(o.rtol, o.atol),
+            &model,
+            0.0,
+            y0,
+            o.t_end,
+            &opts,
+            &mut [],
+        ),
+    };
+    let cpu = start.elapsed().as_secs_f64();
+    let names: Vec<&str> = sys
+        .coordinate_names()
+        .into_iter()
+        .chain(sys.speed_names())
+        .collect();
+    if let Some(csv) = &o.csv {
+        let (ts, ys) = if o.every > 0.0 {
+            (&sol.t_out, &sol.y_out)
+        } else {
+            (&sol.t, &sol.y)
+        };
+        let mut text = format!("t,{}\n", names.join(","));
+        for (t, y) in ts.iter().zip(ys) {
+            let row: Vec<String> = y.iter().map(|x| format!("{x:?}")).collect();
+            text += &format!("{t:?},{}\n", row.join(","));
+        }
+        std::fs::write(csv, text).map_err(|e| format!("cannot write {csv}: {e}"))?;
+    }
+    let energy = |y: &[f64; N], t: f64| -> f64 {
+        let (q, u) = y.split_at(nq);
+        let x = Point {
+            sys,
+            q,
+            u,
+            udot: &[],
+            tau: &[],
+            inputs: &[],
+            params: &[],
+            t,
+        };
+        f.energy
+            .as_ref()
+            .map(|p| run(p, &x).iter().sum())
+            .unwrap_or(f64::NAN)
+    };
+    let stop = match sol.stop {
+        StopReason::Finished => serde_json::json!("finished"),
+        StopReason::NonFinite { t, component } => serde_json::json!({
+            "reason": "non-finite state", "t": t, "coordinate": names.get(component).copied().unwrap_or("?"),
+        }),
+        other => serde_json::json!(format!("{other:?}")),
+    };
+    let s = &sol.stats;
+    Ok(serde_json::json!({
+        "t": sol.t_final,
+        "q": &sol.y_final[..nq],
+        "u": &sol.y_final[nq..],
+        "energy": [energy(&y0, 0.0), energy(&sol.y_final, sol.t_final)],
+        "stop": stop,
+        "stats": {
+            "steps": s.steps, "accepted": s.accepted, "rejected": s.rejected, "rhs_evals": s.rhs_evals,
+            "jacobian_evals": s.jac_evals, "lu_decompositions": s.lu_decomps,
+            "newton_iterations": s.newton_iters, "stiffness_detections": s.stiffness_detections,
+        },
+        "cpu_s": cpu,
+    }))
+}

@@ -83,6 +83,9 @@ enum Command {
         /// Output interval of the CSV, using dense output (default: every step).
         #[arg(long)]
         every: Option<f64>,
+        /// Run the programs in the evaluator instead of compiled code.
+        #[arg(long)]
+        interpret: bool,
         /// Print one JSON object instead of the summary.
         #[arg(long)]
         json: bool,
@@ -112,6 +115,7 @@ fn main() -> ExitCode {
             dt,
             csv,
             every,
+            interpret,
             json,
         } => {
             let o = eom_gen::compiled::SimOptions {
@@ -123,7 +127,7 @@ fn main() -> ExitCode {
                 every: every.unwrap_or(0.0),
                 csv,
             };
-            simulate(&model, &o, json)
+            simulate(&model, &o, json, interpret)
         }
         Command::Eval {
             model,
@@ -398,7 +402,12 @@ fn eval(
 
 const INTEGRATORS: [&str; 6] = ["euler", "rk4", "midpoint", "dopri5", "dop853", "radau5"];
 
-fn simulate(path: &str, o: &eom_gen::compiled::SimOptions, json: bool) -> ExitCode {
+fn simulate(
+    path: &str,
+    o: &eom_gen::compiled::SimOptions,
+    json: bool,
+    interpret: bool,
+) -> ExitCode {
     if !INTEGRATORS.contains(&o.integrator.as_str()) {
         eprintln!(
             "error: unknown integrator `{}`; choose one of {}",
@@ -435,7 +444,12 @@ fn simulate(path: &str, o: &eom_gen::compiled::SimOptions, json: bool) -> ExitCo
         );
         return ExitCode::from(1);
     }
-    match eom_gen::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o) {
+    let result = if interpret {
+        eom_gen::interpret::simulate(&g.formulation, sys, o)
+    } else {
+        eom_gen::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o)
+    };
+    match result {
         Ok(v) => {
             if json {
                 println!("{v}");

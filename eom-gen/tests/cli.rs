@@ -269,3 +269,56 @@ fn simulate_runs_the_compiled_model_and_reports_statistics() {
         Some(2)
     );
 }
+
+#[test]
+fn simulate_interpreted_and_compiled_agree() {
+    // Same programs, same integrator: the same steps and the same state.
+    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
+    let mut runs = Vec::new();
+    for interpret in [true, false] {
+        let mut args = vec![
+            "simulate",
+            "models/heavy_top.ron",
+            "--t-end",
+            "0.5",
+            "--integrator",
+            "dop853",
+            "--rtol",
+            "1e-10",
+            "--json",
+        ];
+        if interpret {
+            args.push("--interpret");
+        }
+        let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+            .args(&args)
+            .env("EOM_CACHE_DIR", cache)
+            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+            .output()
+            .expect("eom-gen runs");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        runs.push(serde_json::from_slice::<serde_json::Value>(&out.stdout).expect("JSON"));
+    }
+    assert_eq!(runs[0]["stats"]["steps"], runs[1]["stats"]["steps"]);
+    for key in ["q", "u"] {
+        let (a, b) = (
+            runs[0][key].as_array().cloned().unwrap_or_default(),
+            runs[1][key].as_array().cloned().unwrap_or_default(),
+        );
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(&b) {
+            let (x, y) = (
+                x.as_f64().unwrap_or(f64::NAN),
+                y.as_f64().unwrap_or(f64::NAN),
+            );
+            assert!(
+                (x - y).abs() <= 1e-9 * x.abs().max(1.0),
+                "{key}: interpreted {x}, compiled {y}"
+            );
+        }
+    }
+}
