@@ -50,6 +50,8 @@ fn close(what: &str, got: &[f64], want: &[f64]) {
 fn compare<M: Model + Default>(name: &str) {
     let sys = system(name);
     let num = Numeric::new(&sys).expect("numeric");
+    let formulation =
+        eom_gen::mech::formulate(&sys, eom_gen::mech::Request::default()).expect("formulates");
     let model = M::default();
     assert_eq!((M::NQ, M::NU), (sys.nq(), sys.nu()), "{name}: sizes");
     assert_eq!(M::COORDINATE_NAMES, sys.coordinate_names().as_slice());
@@ -97,6 +99,27 @@ fn compare<M: Model + Default>(name: &str) {
             &model.energy(t, &q, &u),
             &[ke, pe],
         );
+        // Outputs (markers, reactions) against the same programs run by the
+        // evaluator (which the numeric twins check against the f64 algorithms).
+        let mut out = M::Outputs::ZERO;
+        model.outputs(t, &q, &u, &vector::<M::U>(&fd), &mut out);
+        if let Some(p) = &formulation.outputs {
+            let x = eom_gen::interpret::Point {
+                sys: &sys,
+                q: &qv,
+                u: &uv,
+                udot: &fd,
+                tau: &[],
+                inputs: &[],
+                params: &[],
+                t,
+            };
+            close(
+                &format!("{name} outputs"),
+                out.as_ref(),
+                &eom_gen::interpret::run(p, &x),
+            );
+        }
         let h = num.momentum(&qv, &uv, t).expect("momentum");
         let want = [h.n.0[0], h.n.0[1], h.n.0[2], h.f.0[0], h.f.0[1], h.f.0[2]];
         close(

@@ -97,9 +97,23 @@ fn simulate(args: &[String]) {
     let csv = arg(8);
     if !csv.is_empty() && csv != "-" {
         let (ts, ys) = if every > 0.0 { (&sol.t_out, &sol.y_out) } else { (&sol.t, &sol.y) };
-        let mut text = format!("t,{}\n", names.join(","));
+        let outputs = <model::MODEL as Model>::OUTPUT_NAMES;
+        let header: Vec<&str> = names.iter().chain(outputs).copied().collect();
+        let mut text = format!("t,{}\n", header.join(","));
         for (t, y) in ts.iter().zip(ys) {
-            let row: Vec<String> = y.iter().map(|x| format!("{x:?}")).collect();
+            let mut row: Vec<String> = y.iter().map(|x| format!("{x:?}")).collect();
+            if !outputs.is_empty() {
+                // Outputs at the sample; reactions need u̇ from forward dynamics.
+                let mut q = <model::MODEL as Model>::Q::ZERO;
+                let mut u = <model::MODEL as Model>::U::ZERO;
+                q.as_mut().copy_from_slice(&y[..model::NQ]);
+                u.as_mut().copy_from_slice(&y[model::NQ..]);
+                let mut udot = <model::MODEL as Model>::U::ZERO;
+                m.forward_dynamics(*t, &q, &u, &<model::MODEL as Model>::U::ZERO, &mut udot);
+                let mut out = <model::MODEL as Model>::Outputs::ZERO;
+                m.outputs(*t, &q, &u, &udot, &mut out);
+                row.extend(out.as_ref().iter().map(|x| format!("{x:?}")));
+            }
             text += &format!("{t:?},{}\n", row.join(","));
         }
         if let Err(e) = std::fs::write(csv, text) {

@@ -282,9 +282,41 @@ fn simulate_n<const N: usize>(
         } else {
             (&sol.t, &sol.y)
         };
-        let mut text = format!("t,{}\n", names.join(","));
+        let output_names: Vec<&str> = f
+            .outputs
+            .as_ref()
+            .map(|p| p.outputs.iter().map(|(n, _)| n.as_str()).collect())
+            .unwrap_or_default();
+        let header: Vec<&str> = names
+            .iter()
+            .copied()
+            .chain(output_names.iter().copied())
+            .collect();
+        let mut text = format!("t,{}\n", header.join(","));
         for (t, y) in ts.iter().zip(ys) {
-            let row: Vec<String> = y.iter().map(|x| format!("{x:?}")).collect();
+            let mut row: Vec<String> = y.iter().map(|x| format!("{x:?}")).collect();
+            if let Some(p) = &f.outputs {
+                // Outputs at the sample; reactions need u̇ from forward dynamics.
+                let (q, u) = y.split_at(nq);
+                let zero = vec![0.0; u.len()];
+                let mut x = Point {
+                    sys,
+                    q,
+                    u,
+                    udot: &[],
+                    tau: &zero,
+                    inputs: &[],
+                    params: &[],
+                    t: *t,
+                };
+                let udot = f
+                    .forward_dynamics
+                    .as_ref()
+                    .map(|fd| run(fd, &x))
+                    .unwrap_or_default();
+                x.udot = &udot;
+                row.extend(run(p, &x).iter().map(|v| format!("{v:?}")));
+            }
             text += &format!("{t:?},{}\n", row.join(","));
         }
         std::fs::write(csv, text).map_err(|e| format!("cannot write {csv}: {e}"))?;

@@ -245,7 +245,21 @@ fn simulate_runs_the_compiled_model_and_reports_statistics() {
     assert!((e1 - e0).abs() < 1e-8, "energy {e0} → {e1}");
     let text = std::fs::read_to_string(&csv).unwrap_or_default();
     let lines: Vec<&str> = text.lines().collect();
-    assert_eq!(lines.first().copied(), Some("t,theta,theta_dot"));
+    // Coordinates, speeds, then the model's outputs (tip position, hinge reaction).
+    assert_eq!(
+        lines.first().copied(),
+        Some(
+            "t,theta,theta_dot,bob_tip_x,bob_tip_y,bob_tip_z,hinge_fx,hinge_fy,hinge_fz,hinge_nx,hinge_ny,hinge_nz"
+        )
+    );
+    // At t = 0 (horizontal, at rest) the tip is at (1, 0, 0) and the link is slack.
+    let first: Vec<f64> = lines[1].split(',').filter_map(|x| x.parse().ok()).collect();
+    assert!(
+        (first[3] - 1.0).abs() < 1e-12 && first[4].abs() < 1e-12,
+        "{}",
+        lines[1]
+    );
+    assert!(first[7].abs() < 1e-12, "tension at release: {}", lines[1]);
     assert_eq!(lines.len(), 1 + 5, "samples at 0, 0.5, …, 2: {text}");
     // Closed loops need the constraint solvers: a clear error, exit 1.
     let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))

@@ -39,12 +39,17 @@ pub trait Model {
     const INPUT_NAMES: &'static [&'static str];
     /// Positions of the first entries of unit quaternions in `q`.
     const QUATERNIONS: &'static [usize];
+    /// Names of the requested outputs (marker positions and velocities,
+    /// joint reactions), in order.
+    const OUTPUT_NAMES: &'static [&'static str];
     /// Positions `[f64; NQ]`.
     type Q: Vector;
     /// Speeds `[f64; NU]`.
     type U: Vector;
     /// Inputs `[f64; NINPUTS]`.
     type Inputs: Vector;
+    /// Requested outputs `[f64; OUTPUT_NAMES.len()]`.
+    type Outputs: Vector;
     /// Mass matrix `[[f64; NU]; NU]`, by rows.
     type MassMatrix: Copy + AsRef<[Self::U]> + AsMut<[Self::U]>;
     /// A zero mass matrix (to fill).
@@ -68,6 +73,8 @@ pub trait Model {
     fn energy(&self, t: f64, q: &Self::Q, u: &Self::U) -> [f64; 2];
     /// Angular momentum about the world origin, then linear momentum, world axes.
     fn momentum(&self, t: f64, q: &Self::Q, u: &Self::U) -> [f64; 6];
+    /// The requested outputs; joint reactions need the accelerations `udot`.
+    fn outputs(&self, t: f64, q: &Self::Q, u: &Self::U, udot: &Self::U, out: &mut Self::Outputs);
 
     /// Normalises the unit quaternions in `q` (after an integration step).
     fn normalize(&self, q: &mut Self::Q) {

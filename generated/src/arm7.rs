@@ -47,9 +47,11 @@ impl ::eom_sim::Model for Arm7 {
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
+    const OUTPUT_NAMES: &'static [&'static str] = &[];
     type Q = [f64; 7];
     type U = [f64; 7];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 0];
     type MassMatrix = [[f64; 7]; 7];
     const MASS_ZERO: [[f64; 7]; 7] = [[0.0; 7]; 7];
     fn q0(&self) -> [f64; 7] {
@@ -4914,6 +4916,14 @@ impl ::eom_sim::Model for Arm7 {
         let x706 = x641 + x653;
         [x678, x688, x693, x699, x705, x706]
     }
+    fn outputs(
+        &self,
+        _t: f64,
+        _q: &[f64; 7],
+        _u: &[f64; 7],
+        _udot: &[f64; 7],
+        _out: &mut [f64; 0],
+    ) {}
 }
 /// The first-order system `y = (q, u)` of `arm7` (14 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<14> for Arm7 {

@@ -37,9 +37,11 @@ impl ::eom_sim::Model for Bricard {
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
+    const OUTPUT_NAMES: &'static [&'static str] = &[];
     type Q = [f64; 5];
     type U = [f64; 5];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 0];
     type MassMatrix = [[f64; 5]; 5];
     const MASS_ZERO: [[f64; 5]; 5] = [[0.0; 5]; 5];
     fn q0(&self) -> [f64; 5] {
@@ -3350,6 +3352,14 @@ impl ::eom_sim::Model for Bricard {
         let x485 = x424 + x484;
         [x452, x462, x472, x473, x482, x485]
     }
+    fn outputs(
+        &self,
+        _t: f64,
+        _q: &[f64; 5],
+        _u: &[f64; 5],
+        _udot: &[f64; 5],
+        _out: &mut [f64; 0],
+    ) {}
 }
 /// The first-order system `y = (q, u)` of `bricard` (10 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<10> for Bricard {

@@ -31,9 +31,15 @@ impl ::eom_sim::Model for DoublePendulum {
     const SPEED_NAMES: &'static [&'static str] = &["q1_dot", "q2_dot"];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
+    const OUTPUT_NAMES: &'static [&'static str] = &[
+        "lower_tip_x",
+        "lower_tip_y",
+        "lower_tip_z",
+    ];
     type Q = [f64; 2];
     type U = [f64; 2];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 3];
     type MassMatrix = [[f64; 2]; 2];
     const MASS_ZERO: [[f64; 2]; 2] = [[0.0; 2]; 2];
     fn q0(&self) -> [f64; 2] {
@@ -272,6 +278,24 @@ impl ::eom_sim::Model for DoublePendulum {
         let x29 = x11 + x16;
         let x30 = x29 - x18;
         [0.0, 0.0, x26, x28, x30, 0.0]
+    }
+    fn outputs(
+        &self,
+        _t: f64,
+        q: &[f64; 2],
+        _u: &[f64; 2],
+        _udot: &[f64; 2],
+        out: &mut [f64; 3],
+    ) {
+        let (x0, x1) = f64::sin_cos(q[0]);
+        let x2 = q[0] + q[1];
+        let (x3, x4) = f64::sin_cos(x2);
+        let x5 = x0 + x3;
+        let x6 = x1 + x4;
+        let x7 = -x6;
+        out[0] = x5;
+        out[1] = x7;
+        out[2] = 0.0;
     }
 }
 /// The first-order system `y = (q, u)` of `double_pendulum` (4 states) with `τ = 0`.

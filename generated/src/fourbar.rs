@@ -31,9 +31,11 @@ impl ::eom_sim::Model for Fourbar {
     const SPEED_NAMES: &'static [&'static str] = &["phi1_dot", "phi2_dot", "phi3_dot"];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
+    const OUTPUT_NAMES: &'static [&'static str] = &[];
     type Q = [f64; 3];
     type U = [f64; 3];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 0];
     type MassMatrix = [[f64; 3]; 3];
     const MASS_ZERO: [[f64; 3]; 3] = [[0.0; 3]; 3];
     fn q0(&self) -> [f64; 3] {
@@ -470,6 +472,14 @@ impl ::eom_sim::Model for Fourbar {
         let x76 = x75 - x74;
         [0.0, 0.0, x67, x72, x76, 0.0]
     }
+    fn outputs(
+        &self,
+        _t: f64,
+        _q: &[f64; 3],
+        _u: &[f64; 3],
+        _udot: &[f64; 3],
+        _out: &mut [f64; 0],
+    ) {}
 }
 /// The first-order system `y = (q, u)` of `fourbar` (6 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<6> for Fourbar {

@@ -46,9 +46,11 @@ impl ::eom_sim::Model for FreeBody {
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[3];
+    const OUTPUT_NAMES: &'static [&'static str] = &[];
     type Q = [f64; 7];
     type U = [f64; 6];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 0];
     type MassMatrix = [[f64; 6]; 6];
     const MASS_ZERO: [[f64; 6]; 6] = [[0.0; 6]; 6];
     fn q0(&self) -> [f64; 7] {
@@ -374,6 +376,14 @@ impl ::eom_sim::Model for FreeBody {
         let x76 = x75 - x64;
         [x68, x72, x76, x33, x38, x43]
     }
+    fn outputs(
+        &self,
+        _t: f64,
+        _q: &[f64; 7],
+        _u: &[f64; 6],
+        _udot: &[f64; 6],
+        _out: &mut [f64; 0],
+    ) {}
 }
 /// The first-order system `y = (q, u)` of `free_body` (13 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<13> for FreeBody {

@@ -31,9 +31,15 @@ impl ::eom_sim::Model for HeavyTop {
     const SPEED_NAMES: &'static [&'static str] = &["wx", "wy", "wz"];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[0];
+    const OUTPUT_NAMES: &'static [&'static str] = &[
+        "top_tip_x",
+        "top_tip_y",
+        "top_tip_z",
+    ];
     type Q = [f64; 4];
     type U = [f64; 3];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 3];
     type MassMatrix = [[f64; 3]; 3];
     const MASS_ZERO: [[f64; 3]; 3] = [[0.0; 3]; 3];
     fn q0(&self) -> [f64; 4] {
@@ -269,6 +275,34 @@ impl ::eom_sim::Model for HeavyTop {
         let x66 = x63 + x65;
         let x67 = x61 + x66;
         [x51, x59, x67, x33, x38, x43]
+    }
+    fn outputs(
+        &self,
+        _t: f64,
+        q: &[f64; 4],
+        _u: &[f64; 3],
+        _udot: &[f64; 3],
+        out: &mut [f64; 3],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = q[3] * q[3];
+        let x2 = q[0] * q[3];
+        let x3 = q[1] * q[2];
+        let x4 = 2.0 * x3;
+        let x5 = 2.0 * x2;
+        let x6 = x4 - x5;
+        let x7 = 2.0 * x0;
+        let x8 = 2.0 * x1;
+        let x9 = 1.0 - x7;
+        let x10 = x9 - x8;
+        let x11 = q[2] * q[3];
+        let x12 = 2.0 * x11;
+        let x13 = q[0] * q[1];
+        let x14 = 2.0 * x13;
+        let x15 = x12 + x14;
+        out[0] = x6;
+        out[1] = x10;
+        out[2] = x15;
     }
 }
 /// The first-order system `y = (q, u)` of `heavy_top` (7 states) with `τ = 0`.

@@ -31,9 +31,21 @@ impl ::eom_sim::Model for Pendulum {
     const SPEED_NAMES: &'static [&'static str] = &["theta_dot"];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
+    const OUTPUT_NAMES: &'static [&'static str] = &[
+        "bob_tip_x",
+        "bob_tip_y",
+        "bob_tip_z",
+        "hinge_fx",
+        "hinge_fy",
+        "hinge_fz",
+        "hinge_nx",
+        "hinge_ny",
+        "hinge_nz",
+    ];
     type Q = [f64; 1];
     type U = [f64; 1];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 9];
     type MassMatrix = [[f64; 1]; 1];
     const MASS_ZERO: [[f64; 1]; 1] = [[0.0; 1]; 1];
     fn q0(&self) -> [f64; 1] {
@@ -92,6 +104,31 @@ impl ::eom_sim::Model for Pendulum {
         let x2 = u[0] * x1;
         let x3 = u[0] * x0;
         [0.0, 0.0, u[0], x2, x3, 0.0]
+    }
+    fn outputs(
+        &self,
+        _t: f64,
+        q: &[f64; 1],
+        u: &[f64; 1],
+        udot: &[f64; 1],
+        out: &mut [f64; 9],
+    ) {
+        let (x0, x1) = f64::sin_cos(q[0]);
+        let x2 = -x1;
+        let x3 = 9.81 * x0;
+        let x4 = 9.81 * x1;
+        let x5 = u[0] * u[0];
+        let x6 = x4 + x5;
+        let x7 = udot[0] + x3;
+        out[0] = x0;
+        out[1] = x2;
+        out[2] = 0.0;
+        out[3] = x7;
+        out[4] = x6;
+        out[5] = 0.0;
+        out[6] = 0.0;
+        out[7] = 0.0;
+        out[8] = x7;
     }
 }
 /// The first-order system `y = (q, u)` of `pendulum` (2 states) with `τ = 0`.

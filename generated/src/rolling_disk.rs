@@ -46,9 +46,15 @@ impl ::eom_sim::Model for RollingDisk {
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[3];
+    const OUTPUT_NAMES: &'static [&'static str] = &[
+        "disk_center_x",
+        "disk_center_y",
+        "disk_center_z",
+    ];
     type Q = [f64; 7];
     type U = [f64; 6];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 3];
     type MassMatrix = [[f64; 6]; 6];
     const MASS_ZERO: [[f64; 6]; 6] = [[0.0; 6]; 6];
     fn q0(&self) -> [f64; 7] {
@@ -441,6 +447,18 @@ impl ::eom_sim::Model for RollingDisk {
         let x78 = x66 + x77;
         let x79 = x78 - x67;
         [x71, x75, x79, x33, x38, x43]
+    }
+    fn outputs(
+        &self,
+        _t: f64,
+        q: &[f64; 7],
+        _u: &[f64; 6],
+        _udot: &[f64; 6],
+        out: &mut [f64; 3],
+    ) {
+        out[0] = q[0];
+        out[1] = q[1];
+        out[2] = q[2];
     }
 }
 /// The first-order system `y = (q, u)` of `rolling_disk` (13 states) with `τ = 0`.

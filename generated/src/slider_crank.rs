@@ -31,9 +31,11 @@ impl ::eom_sim::Model for SliderCrank {
     const SPEED_NAMES: &'static [&'static str] = &["phi_dot", "psi_dot", "s_dot"];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
+    const OUTPUT_NAMES: &'static [&'static str] = &[];
     type Q = [f64; 3];
     type U = [f64; 3];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 0];
     type MassMatrix = [[f64; 3]; 3];
     const MASS_ZERO: [[f64; 3]; 3] = [[0.0; 3]; 3];
     fn q0(&self) -> [f64; 3] {
@@ -369,6 +371,14 @@ impl ::eom_sim::Model for SliderCrank {
         let x43 = x42 - x40;
         [0.0, 0.0, x37, x43, x39, 0.0]
     }
+    fn outputs(
+        &self,
+        _t: f64,
+        _q: &[f64; 3],
+        _u: &[f64; 3],
+        _udot: &[f64; 3],
+        _out: &mut [f64; 0],
+    ) {}
 }
 /// The first-order system `y = (q, u)` of `slider_crank` (6 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<6> for SliderCrank {

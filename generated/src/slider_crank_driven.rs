@@ -31,9 +31,11 @@ impl ::eom_sim::Model for SliderCrankDriven {
     const SPEED_NAMES: &'static [&'static str] = &["psi_dot", "s_dot"];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[];
+    const OUTPUT_NAMES: &'static [&'static str] = &[];
     type Q = [f64; 2];
     type U = [f64; 2];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 0];
     type MassMatrix = [[f64; 2]; 2];
     const MASS_ZERO: [[f64; 2]; 2] = [[0.0; 2]; 2];
     fn q0(&self) -> [f64; 2] {
@@ -214,6 +216,14 @@ impl ::eom_sim::Model for SliderCrankDriven {
         let x38 = x37 - x35;
         [0.0, 0.0, x32, x38, x34, 0.0]
     }
+    fn outputs(
+        &self,
+        _t: f64,
+        _q: &[f64; 2],
+        _u: &[f64; 2],
+        _udot: &[f64; 2],
+        _out: &mut [f64; 0],
+    ) {}
 }
 /// The first-order system `y = (q, u)` of `slider_crank_driven` (4 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<4> for SliderCrankDriven {

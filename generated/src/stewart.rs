@@ -76,9 +76,11 @@ impl ::eom_sim::Model for Stewart {
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[3];
+    const OUTPUT_NAMES: &'static [&'static str] = &[];
     type Q = [f64; 22];
     type U = [f64; 21];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 0];
     type MassMatrix = [[f64; 21]; 21];
     const MASS_ZERO: [[f64; 21]; 21] = [[0.0; 21]; 21];
     fn q0(&self) -> [f64; 22] {
@@ -6277,6 +6279,14 @@ impl ::eom_sim::Model for Stewart {
         let x1434 = x1433 - x1429;
         [x1403, x1412, x1416, x1422, x1428, x1434]
     }
+    fn outputs(
+        &self,
+        _t: f64,
+        _q: &[f64; 22],
+        _u: &[f64; 21],
+        _udot: &[f64; 21],
+        _out: &mut [f64; 0],
+    ) {}
 }
 /// Parts of the long generated functions (see `eom_gen::emit`).
 impl Stewart {

@@ -64,9 +64,11 @@ impl ::eom_sim::Model for StewartDriven {
     ];
     const INPUT_NAMES: &'static [&'static str] = &[];
     const QUATERNIONS: &'static [usize] = &[2];
+    const OUTPUT_NAMES: &'static [&'static str] = &[];
     type Q = [f64; 16];
     type U = [f64; 15];
     type Inputs = [f64; 0];
+    type Outputs = [f64; 0];
     type MassMatrix = [[f64; 15]; 15];
     const MASS_ZERO: [[f64; 15]; 15] = [[0.0; 15]; 15];
     fn q0(&self) -> [f64; 16] {
@@ -5984,6 +5986,14 @@ impl ::eom_sim::Model for StewartDriven {
         let x1463 = x1462 - x1458;
         [x1432, x1441, x1445, x1451, x1457, x1463]
     }
+    fn outputs(
+        &self,
+        _t: f64,
+        _q: &[f64; 16],
+        _u: &[f64; 15],
+        _udot: &[f64; 15],
+        _out: &mut [f64; 0],
+    ) {}
 }
 /// Parts of the long generated functions (see `eom_gen::emit`).
 impl StewartDriven {

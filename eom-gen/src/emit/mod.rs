@@ -403,6 +403,30 @@ pub fn emit_tokens(
             }
         }
     });
+    let output_names: Vec<String> = f
+        .outputs
+        .as_ref()
+        .map(|p| p.outputs.iter().map(|(n, _)| n.clone()).collect())
+        .unwrap_or_default();
+    let nout_l = idx(output_names.len());
+    let outputs_fn = match f.outputs.as_ref() {
+        Some(p) => {
+            let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
+            let l = lower(&b, p, "outputs", &args);
+            parts.extend(l.parts.clone());
+            let (params, body, assign) = (l.params(&args), &l.body, assign_all("out", &l.outputs));
+            quote! {
+                fn outputs(&self, #params, out: &mut [f64; #nout_l]) {
+                    #body
+                    #assign
+                }
+            }
+        }
+        None => quote! {
+            fn outputs(&self, _t: f64, _q: &[f64; #nq_l], _u: &[f64; #nu_l], _udot: &[f64; #nu_l], _out: &mut [f64; 0]) {}
+        },
+    };
+    let output_names_l = output_names.iter();
     let parts_impl = if parts.is_empty() {
         TokenStream::new()
     } else {
@@ -527,9 +551,11 @@ pub fn emit_tokens(
             const SPEED_NAMES: &'static [&'static str] = &[#(#speeds_l),*];
             const INPUT_NAMES: &'static [&'static str] = &[#(#inputs_l),*];
             const QUATERNIONS: &'static [usize] = &[#(#quats_l),*];
+            const OUTPUT_NAMES: &'static [&'static str] = &[#(#output_names_l),*];
             type Q = [f64; #nq_l];
             type U = [f64; #nu_l];
             type Inputs = [f64; #ni_l];
+            type Outputs = [f64; #nout_l];
             type MassMatrix = [[f64; #nu_l]; #nu_l];
             const MASS_ZERO: [[f64; #nu_l]; #nu_l] = [[0.0; #nu_l]; #nu_l];
 
@@ -546,6 +572,7 @@ pub fn emit_tokens(
             #id_fn
             #energy_fn
             #momentum_fn
+            #outputs_fn
         }
 
         #parts_impl
