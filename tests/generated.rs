@@ -4,6 +4,7 @@
 //! is deterministic.
 
 use eom_gen::mech::Numeric;
+use eom_gen::testkit::Rng;
 use eom_gen::{Source, System, check_file, generate};
 use eom_generated as g;
 use eom_sim::{Model, Vector};
@@ -16,17 +17,6 @@ fn system(name: &str) -> System {
     check_file(&path(name))
         .unwrap_or_else(|r| panic!("{r}"))
         .system
-}
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let x = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D);
-        (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
 }
 
 fn vector<V: Vector>(values: &[f64]) -> V {
@@ -58,13 +48,13 @@ fn compare<M: Model + Default>(name: &str) {
     close(&format!("{name} q0"), model.q0().as_ref(), &sys.q0());
     let mut rng = Rng(0xC0FF_EE00_1234_5678);
     for _ in 0..5 {
-        let mut qv: Vec<f64> = sys.q0().iter().map(|q| q + 0.8 * rng.next()).collect();
+        let mut qv: Vec<f64> = sys.q0().iter().map(|q| q + 0.8 * rng.uniform()).collect();
         let mut q: M::Q = vector(&qv);
         model.normalize(&mut q);
         qv = q.as_ref().to_vec();
-        let uv: Vec<f64> = (0..M::NU).map(|_| 1.5 * rng.next()).collect();
-        let tauv: Vec<f64> = (0..M::NU).map(|_| rng.next()).collect();
-        let t = rng.next().abs();
+        let uv: Vec<f64> = (0..M::NU).map(|_| 1.5 * rng.uniform()).collect();
+        let tauv: Vec<f64> = (0..M::NU).map(|_| rng.uniform()).collect();
+        let t = rng.uniform().abs();
         let (u, tau): (M::U, M::U) = (vector(&uv), vector(&tauv));
         let mut out_u = M::U::ZERO;
         model.forward_dynamics(t, &q, &u, &tau, &mut out_u);

@@ -16,6 +16,7 @@ pub mod model;
 pub mod summary;
 pub mod sym;
 pub mod system;
+pub mod testkit;
 
 pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;

@@ -6,6 +6,7 @@
 
 use eom_gen::mech::Numeric;
 use eom_gen::mech::dynamics::solve_dense;
+use eom_gen::testkit::{Rng, random_state};
 use eom_gen::{System, check_file};
 
 fn system(name: &str) -> System {
@@ -31,39 +32,6 @@ const MODELS: [&str; 13] = [
     "rolling_disk",
 ];
 
-/// A small deterministic generator (xorshift64*), uniform in [−1, 1).
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let x = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D);
-        (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-    fn vec(&mut self, n: usize, scale: f64) -> Vec<f64> {
-        (0..n).map(|_| scale * self.next()).collect()
-    }
-}
-
-/// A random state: coordinates around the initial ones, unit quaternions.
-fn random_state(sys: &System, rng: &mut Rng) -> (Vec<f64>, Vec<f64>) {
-    let mut q: Vec<f64> = sys.q0().iter().map(|q| q + 0.8 * rng.next()).collect();
-    for j in sys.free_joints() {
-        let at = match j.kind.name() {
-            "spherical" => Some(j.q_index),
-            "free" => Some(j.q_index + 3),
-            _ => None,
-        };
-        if let Some(a) = at {
-            let n = q[a..a + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
-            q[a..a + 4].iter_mut().for_each(|x| *x /= n);
-        }
-    }
-    let u = rng.vec(sys.nu(), 1.5);
-    (q, u)
-}
-
 fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
@@ -84,7 +52,7 @@ fn aba_equals_mass_matrix_solve_dense_and_sparse() {
         for _ in 0..5 {
             let (q, u) = random_state(&sys, &mut rng);
             let tau = rng.vec(sys.nu(), 2.0);
-            let t = rng.next().abs();
+            let t = rng.uniform().abs();
             let aba = num.forward_dynamics(&q, &u, t, &tau, &[]).expect("aba");
             let sparse = num
                 .forward_dynamics_ltdl(&q, &u, t, &tau, &[])

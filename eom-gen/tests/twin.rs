@@ -8,6 +8,7 @@ use eom_gen::mech::{FdForm, Numeric, Request, formulate};
 use eom_gen::model::builder::n_link_chain;
 use eom_gen::model::{Source, check};
 use eom_gen::sym::{Program, SymKind};
+use eom_gen::testkit::{Rng, random_state};
 use eom_gen::{System, check_file};
 
 fn system(name: &str) -> System {
@@ -31,17 +32,6 @@ const MODELS: [&str; 13] = [
     "rolling_disk",
 ];
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let x = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D);
-        (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
-    }
-}
-
 /// The value given to the k-th model input in these tests.
 fn input_value(k: usize) -> f64 {
     0.37 * (k as f64 + 1.0)
@@ -57,26 +47,15 @@ struct Point {
 }
 
 fn random_point(sys: &System, rng: &mut Rng) -> Point {
-    let mut q: Vec<f64> = sys.q0().iter().map(|q| q + 0.8 * rng.next()).collect();
-    for j in sys.free_joints() {
-        let at = match j.kind.name() {
-            "spherical" => Some(j.q_index),
-            "free" => Some(j.q_index + 3),
-            _ => None,
-        };
-        if let Some(a) = at {
-            let n = q[a..a + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
-            q[a..a + 4].iter_mut().for_each(|x| *x /= n);
-        }
-    }
+    let (q, u) = random_state(sys, rng);
     let nu = sys.nu();
     Point {
         params: Vec::new(),
         q,
-        u: (0..nu).map(|_| 1.5 * rng.next()).collect(),
-        ud: (0..nu).map(|_| rng.next()).collect(),
-        tau: (0..nu).map(|_| rng.next()).collect(),
-        t: rng.next().abs(),
+        u,
+        ud: rng.vec(nu, 1.0),
+        tau: rng.vec(nu, 1.0),
+        t: rng.uniform().abs(),
     }
 }
 

@@ -1,0 +1,44 @@
+//! Helpers for tests of generated models: a small deterministic random
+//! generator and random states that respect unit quaternions.
+
+use crate::system::{JointType, System};
+
+/// xorshift64* — deterministic, seedable, no dependencies; uniform in
+/// [−1, 1) from [`Rng::uniform`].
+#[derive(Clone, Debug)]
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// The next number in [−1, 1).
+    pub fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        let x = self.0.wrapping_mul(0x2545_F491_4F6C_DD1D);
+        (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+
+    /// `n` numbers in [−scale, scale).
+    pub fn vec(&mut self, n: usize, scale: f64) -> Vec<f64> {
+        (0..n).map(|_| scale * self.uniform()).collect()
+    }
+}
+
+/// Positions within ±0.8 of the initial ones, quaternions normalised, and
+/// speeds in ±1.5.
+pub fn random_state(sys: &System, rng: &mut Rng) -> (Vec<f64>, Vec<f64>) {
+    let mut q: Vec<f64> = sys.q0().iter().map(|q| q + 0.8 * rng.uniform()).collect();
+    for j in sys.free_joints() {
+        let at = match j.kind {
+            JointType::Spherical => Some(j.q_index),
+            JointType::Free => Some(j.q_index + 3),
+            _ => None,
+        };
+        if let Some(a) = at {
+            let n = q[a..a + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
+            q[a..a + 4].iter_mut().for_each(|x| *x /= n);
+        }
+    }
+    let u = rng.vec(sys.nu(), 1.5);
+    (q, u)
+}
