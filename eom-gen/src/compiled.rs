@@ -171,7 +171,11 @@ fn main() {
 /// Builds (once) the cached crate of a model and returns its executable.
 pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<PathBuf, String> {
     let root = cache_root();
-    let key = format!("{:016x}", fnv1a(format!("{source}{MAIN}").as_bytes()));
+    // The key covers the model source, this template and the runtime used.
+    let key = format!(
+        "{:016x}",
+        fnv1a(format!("{source}{MAIN}{}", eom_sim_dependency()).as_bytes())
+    );
     let dir = root.join(format!("{name}-{key}"));
     let exe_name = format!("eom-eval-{name}-{key}");
     let target = root.join("target");
