@@ -8,6 +8,7 @@ use serde_json::{Value, json};
 pub fn json(checked: &Checked) -> Value {
     let sys = &checked.system;
     let gaps = closure_gaps(sys, &initial_poses(sys));
+    let mobility = mobility(sys);
     let names = |pred: &dyn Fn(&Motion) -> bool| -> Vec<&str> {
         sys.joints
             .iter()
@@ -50,7 +51,19 @@ pub fn json(checked: &Checked) -> Value {
             "joint": sys.joints[j].name, "position_gap": g.position, "angle_gap": g.angle,
         })).collect::<Vec<_>>(),
         "warnings": checked.warnings.len(),
+        "constraint_equations": mobility.map(|m| m.equations),
+        "constraint_rank": mobility.map(|m| m.rank),
+        "mobility": mobility.map_or(sys.grubler.dof, |m| m.dof as i64),
     })
+}
+
+/// Rank of the closure conditions at the initial state, if there are loops.
+fn mobility(sys: &System) -> Option<crate::mech::numeric::Mobility> {
+    if sys.graph.cut_joints().is_empty() {
+        return None;
+    }
+    let num = crate::mech::Numeric::new(sys).ok()?;
+    num.mobility(&sys.q0(), 0.0).ok()
 }
 
 /// A few lines for people.
@@ -115,5 +128,11 @@ pub fn human(checked: &Checked) -> String {
         },
         sys.grubler.dof
     );
+    if let Some(m) = mobility(sys) {
+        out += &format!(
+            "  mobility     {} (rank {} of {} closure equations at the initial state)\n",
+            m.dof, m.rank, m.equations
+        );
+    }
     out
 }

@@ -52,6 +52,20 @@ fn check_reports_cut_joints_of_closed_loops() {
     assert_eq!(v["bodies"], 7);
     assert_eq!(v["cut_joints"], serde_json::json!(["E3", "E4", "E6"]));
     assert_eq!(v["grubler_dof"], 1);
+    // Bricard: Grübler–Kutzbach 0, true mobility 1 (one redundant equation).
+    let v = json(&["check", "models/bricard.ron", "--json"]);
+    assert_eq!(
+        (v["grubler_dof"].as_i64(), v["mobility"].as_i64()),
+        (Some(0), Some(1)),
+        "{v}"
+    );
+    assert_eq!(
+        (
+            v["constraint_equations"].as_u64(),
+            v["constraint_rank"].as_u64()
+        ),
+        (Some(5), Some(4))
+    );
     let v = json(&["check", "models/fourbar.ron", "--json"]);
     assert_eq!(
         (v["nq"].as_u64(), v["cut_joints"].as_array().map(Vec::len)),

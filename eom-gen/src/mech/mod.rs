@@ -3,6 +3,7 @@
 //! numerics, run on [`Expr`](crate::sym::Expr) they build the expressions
 //! the generator emits.
 
+pub mod constraints;
 pub mod dynamics;
 pub mod formulate;
 pub mod joint;

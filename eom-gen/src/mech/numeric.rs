@@ -13,6 +13,18 @@ pub struct Numeric {
     env: NumericEnv,
     tree: TreeModel<f64>,
     applied: Applied<f64>,
+    cuts: Vec<super::constraints::CutJoint<f64>>,
+}
+
+/// The rank of the constraint Jacobian and what it implies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Mobility {
+    /// Number of closure equations.
+    pub equations: usize,
+    /// Rank of `Φ_q N(q)` (numerical, relative tolerance 1e-8).
+    pub rank: usize,
+    /// Degrees of freedom: speeds minus rank.
+    pub dof: usize,
 }
 
 /// Everything the equations of motion need at one state.
@@ -34,7 +46,13 @@ impl Numeric {
     pub fn with_env(sys: &System, env: NumericEnv) -> Result<Self, MechError> {
         let tree = TreeModel::new(sys, &env)?;
         let applied = Applied::new(sys, &tree, &env)?;
-        Ok(Numeric { env, tree, applied })
+        let cuts = super::constraints::cut_joints(sys, &tree, &env)?;
+        Ok(Numeric {
+            env,
+            tree,
+            applied,
+            cuts,
+        })
     }
 
     /// The tree.
@@ -208,5 +226,66 @@ impl Numeric {
             n: fc.e.tr_mul_vec(f.n - fc.r.cross(f.f)),
             f: fc.e.tr_mul_vec(f.f),
         }))
+    }
+
+    /// Closure conditions `Φ(q, t)` of the cut joints.
+    pub fn constraints(&self, q: &[f64], t: f64) -> Result<Vec<f64>, MechError> {
+        let zero = vec![0.0; self.tree.nu];
+        let ev = self.eval();
+        let k = ev.kinematics(&State {
+            q,
+            u: &zero,
+            t,
+            inputs: &[],
+        })?;
+        Ok(super::constraints::phi(&k, &self.cuts))
+    }
+
+    /// `J = ∂Φ̇/∂u` by central differences of `Φ` along `q̇ = N(q) e_k`.
+    pub fn constraint_jacobian(&self, q: &[f64], t: f64) -> Result<Vec<Vec<f64>>, MechError> {
+        let h = 1e-7;
+        let nu = self.tree.nu;
+        let mut cols = Vec::with_capacity(nu);
+        for k in 0..nu {
+            let mut e = vec![0.0; nu];
+            e[k] = 1.0;
+            let qd = self.qdot(q, &e);
+            let step = |s: f64| -> Vec<f64> { q.iter().zip(&qd).map(|(q, d)| q + s * d).collect() };
+            let (p, m) = (
+                self.constraints(&step(h), t)?,
+                self.constraints(&step(-h), t)?,
+            );
+            cols.push(
+                p.iter()
+                    .zip(&m)
+                    .map(|(a, b)| (a - b) / (2.0 * h))
+                    .collect::<Vec<f64>>(),
+            );
+        }
+        let rows = cols.first().map_or(0, Vec::len);
+        Ok((0..rows)
+            .map(|i| cols.iter().map(|c| c[i]).collect())
+            .collect())
+    }
+
+    /// Rank of the constraint Jacobian at `q` and the true mobility.
+    pub fn mobility(&self, q: &[f64], t: f64) -> Result<Mobility, MechError> {
+        let j = self.constraint_jacobian(q, t)?;
+        let nu = self.tree.nu;
+        let rank = if j.is_empty() || nu == 0 {
+            0
+        } else {
+            let m = nalgebra::DMatrix::from_fn(j.len(), nu, |r, c| j[r][c]);
+            let sv = m.svd(false, false).singular_values;
+            let largest = sv.iter().copied().fold(0.0, f64::max);
+            sv.iter()
+                .filter(|&&s| s > 1e-8 * largest.max(1e-300))
+                .count()
+        };
+        Ok(Mobility {
+            equations: j.len(),
+            rank,
+            dof: nu - rank,
+        })
     }
 }

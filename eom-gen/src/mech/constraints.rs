@@ -1,0 +1,236 @@
+//! Closure conditions of cut joints (Wittenburg ch. 5.6, Shabana ch. 3):
+//! `Φ(q, t) = 0`, written once over any [`Scalar`].
+//!
+//! For a cut joint between bodies P and C with joint frames `F_P`, `F_C`,
+//! let `d` be the vector from the parent joint frame's origin to the child
+//! joint frame's origin and `M = R_Pᵀ R_C` the relative rotation, both in
+//! parent-joint-frame axes. Each joint kind constrains what it does not
+//! allow (`b₁, b₂` complete the joint axis `a` to an orthonormal triad):
+//!
+//! | kind | equations |
+//! |---|---|
+//! | revolute | `d` (3), `b₁·Ma`, `b₂·Ma` |
+//! | spherical | `d` (3) |
+//! | universal | `d` (3), `a₁·Ma₂` |
+//! | prismatic | `b₁·d`, `b₂·d`, `e₁·Me₂`, `e₂·Me₃`, `e₃·Me₁` |
+//! | cylindrical | `b₁·d`, `b₂·d`, `b₁·Ma`, `b₂·Ma` |
+//! | planar | `z·d`, `x·Mz`, `y·Mz` |
+//! | fixed | `d` (3), `e₁·Me₂`, `e₂·Me₃`, `e₃·Me₁` |
+//!
+//! In a planar system (all motion in planes normal to `n`) only the
+//! independent in-plane equations are kept: a revolute cut joint about `n`
+//! gives the two in-plane components of `d`; a prismatic one the in-plane
+//! offset across its axis and the relative angle about `n`. Redundant
+//! equations of spatial loops (Bricard's) are kept; the solvers handle the
+//! rank deficiency.
+
+use super::dynamics::Kinematics;
+use super::spatial::Pose;
+use super::tree::{Env, Lowering, MechError, TreeModel, snap};
+use crate::sym::{Scalar, Vec3};
+use crate::system::{JointType, System};
+use nalgebra::Vector3;
+
+/// A cut joint as the constraint equations see it.
+#[derive(Clone, Debug)]
+pub struct CutJoint<S> {
+    /// Joint name.
+    pub name: String,
+    /// Tree index of the parent body (`None`: ground).
+    pub parent: Option<usize>,
+    /// Tree index of the child body (`None`: ground).
+    pub child: Option<usize>,
+    /// Joint frame on the parent.
+    pub frame_parent: Pose<S>,
+    /// Joint frame on the child.
+    pub frame_child: Pose<S>,
+    /// Which equations, as unit vectors in joint-frame axes.
+    pub equations: Vec<Equation>,
+}
+
+/// One scalar closure condition.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Equation {
+    /// `v · d`: the offset of the child frame's origin along `v`.
+    Offset([f64; 3]),
+    /// `v · M w`: orientation coupling of directions `v` (parent) and `w` (child).
+    Align([f64; 3], [f64; 3]),
+}
+
+fn unit(v: Vector3<f64>) -> [f64; 3] {
+    let v = v.normalize();
+    [snap(v.x), snap(v.y), snap(v.z)]
+}
+
+/// Two unit vectors completing `a` to a right-handed orthonormal triad.
+fn complete(a: Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let a = a.normalize();
+    let trial = if a.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let b1 = (trial - a * a.dot(&trial)).normalize();
+    (b1, a.cross(&b1))
+}
+
+/// The equations of a cut joint of `kind` (`planar_normal`: the system's
+/// plane normal in this joint's frame, if the system is planar).
+pub fn equations(kind: &JointType, planar_normal: Option<Vector3<f64>>) -> Vec<Equation> {
+    let (ex, ey, ez) = (Vector3::x(), Vector3::y(), Vector3::z());
+    let offsets = |vs: &[Vector3<f64>]| {
+        vs.iter()
+            .map(|v| Equation::Offset(unit(*v)))
+            .collect::<Vec<_>>()
+    };
+    let rotation3 = || {
+        vec![
+            Equation::Align(unit(ex), unit(ey)),
+            Equation::Align(unit(ey), unit(ez)),
+            Equation::Align(unit(ez), unit(ex)),
+        ]
+    };
+    match (kind, planar_normal) {
+        (JointType::Revolute(a), Some(_)) => {
+            let (b1, b2) = complete(a.unit);
+            offsets(&[b1, b2])
+        }
+        (JointType::Revolute(a), None) => {
+            let (b1, b2) = complete(a.unit);
+            let mut e = offsets(&[ex, ey, ez]);
+            e.push(Equation::Align(unit(b1), unit(a.unit)));
+            e.push(Equation::Align(unit(b2), unit(a.unit)));
+            e
+        }
+        (JointType::Prismatic(a), Some(n)) => {
+            let across = n.cross(&a.unit);
+            vec![
+                Equation::Offset(unit(across)),
+                Equation::Align(unit(across), unit(a.unit)),
+            ]
+        }
+        (JointType::Prismatic(a), None) => {
+            let (b1, b2) = complete(a.unit);
+            let mut e = offsets(&[b1, b2]);
+            e.extend(rotation3());
+            e
+        }
+        (JointType::Cylindrical(a), _) | (JointType::Screw(a, _), _) => {
+            let (b1, b2) = complete(a.unit);
+            let mut e = offsets(&[b1, b2]);
+            e.push(Equation::Align(unit(b1), unit(a.unit)));
+            e.push(Equation::Align(unit(b2), unit(a.unit)));
+            e
+        }
+        (JointType::Spherical, _) => offsets(&[ex, ey, ez]),
+        (JointType::Universal(a1, a2), _) => {
+            let mut e = offsets(&[ex, ey, ez]);
+            e.push(Equation::Align(unit(a1.unit), unit(a2.unit)));
+            e
+        }
+        (JointType::Planar, Some(_)) => Vec::new(),
+        (JointType::Planar, None) => vec![
+            Equation::Offset(unit(ez)),
+            Equation::Align(unit(ex), unit(ez)),
+            Equation::Align(unit(ey), unit(ez)),
+        ],
+        (JointType::Fixed, Some(n)) => {
+            let (b1, b2) = complete(n);
+            vec![
+                Equation::Offset(unit(b1)),
+                Equation::Offset(unit(b2)),
+                Equation::Align(unit(b1), unit(b2)),
+            ]
+        }
+        (JointType::Fixed, None) => {
+            let mut e = offsets(&[ex, ey, ez]);
+            e.extend(rotation3());
+            e
+        }
+        (JointType::Free, _) => Vec::new(),
+    }
+}
+
+/// The cut joints of `sys` over the tree `tree`.
+pub fn cut_joints<S: Scalar>(
+    sys: &System,
+    tree: &TreeModel<S>,
+    env: &dyn Env<S>,
+) -> Result<Vec<CutJoint<S>>, MechError> {
+    let low = Lowering::new(env);
+    let poses = crate::model::initial_poses(sys);
+    let normal = planar_normal(sys);
+    sys.graph
+        .cut_joints()
+        .iter()
+        .map(|&j| {
+            let joint = &sys.joints[j];
+            // The plane normal in this joint's parent frame.
+            let n =
+                normal.map(|n| (poses[joint.parent].r * joint.parent_frame.matrix).transpose() * n);
+            Ok(CutJoint {
+                name: joint.name.clone(),
+                parent: tree.index_of_body[joint.parent],
+                child: tree.index_of_body[joint.child],
+                frame_parent: low.frame(&joint.parent_frame)?,
+                frame_child: low.frame(&joint.child_frame)?,
+                equations: equations(&joint.kind, n),
+            })
+        })
+        .collect()
+}
+
+/// The common plane normal (world axes) of a planar system.
+fn planar_normal(sys: &System) -> Option<Vector3<f64>> {
+    if !sys.grubler.planar {
+        return None;
+    }
+    let poses = crate::model::initial_poses(sys);
+    sys.joints.iter().find_map(|j| match &j.kind {
+        JointType::Revolute(a) => Some(poses[j.parent].r * j.parent_frame.matrix * a.unit),
+        JointType::Planar => Some(poses[j.parent].r * j.parent_frame.matrix * Vector3::z()),
+        _ => None,
+    })
+}
+
+/// `Φ` of every cut joint, in order, at the kinematics `k`.
+pub fn phi<S: Scalar>(k: &Kinematics<S>, cuts: &[CutJoint<S>]) -> Vec<S> {
+    let world = |b: Option<usize>| b.map_or_else(Pose::identity, |i| k.world[i]);
+    let v = |a: [f64; 3]| Vec3::from_f64(a);
+    let mut out = Vec::new();
+    for c in cuts {
+        let p = world(c.parent).then(&c.frame_parent);
+        let ch = world(c.child).then(&c.frame_child);
+        let d = p.e.tr_mul_vec(ch.r - p.r);
+        let m = p.e.transpose() * ch.e;
+        for e in &c.equations {
+            out.push(match *e {
+                Equation::Offset(a) => v(a).dot(d),
+                Equation::Align(a, b) => v(a).dot(m.mul_vec(v(b))),
+            });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn completing_triads_are_orthonormal_and_right_handed() {
+        for a in [
+            Vector3::x(),
+            Vector3::y(),
+            Vector3::z(),
+            Vector3::new(1.0, -2.0, 0.5),
+        ] {
+            let (b1, b2) = complete(a);
+            let a = a.normalize();
+            assert!(
+                a.dot(&b1).abs() < 1e-15 && a.dot(&b2).abs() < 1e-15 && b1.dot(&b2).abs() < 1e-15
+            );
+            assert!((a.cross(&b1) - b2).norm() < 1e-15);
+        }
+    }
+}
