@@ -58,3 +58,109 @@ fn jacobian_rank_gives_the_true_mobility() {
         );
     }
 }
+
+/// Runs the generated closure program at (q, u, t): (Φ, Φ̇, γ, J).
+type Closure = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
+
+fn closure(p: &eom_gen::sym::Program, sys: &System, q: &[f64], u: &[f64], t: f64) -> Closure {
+    let x = eom_gen::interpret::Point {
+        sys,
+        q,
+        u,
+        udot: &[],
+        tau: &[],
+        inputs: &[],
+        params: &[],
+        t,
+    };
+    let values = eom_gen::interpret::run(p, &x);
+    let mut out: Closure = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for ((name, _), v) in p.outputs.iter().zip(values) {
+        if name.starts_with("phidot") {
+            out.1.push(v);
+        } else if name.starts_with("phi") {
+            out.0.push(v);
+        } else if name.starts_with("gamma") {
+            out.2.push(v);
+        } else if let Some(rest) = name.strip_prefix("J_") {
+            let i: usize = rest
+                .split('_')
+                .next()
+                .and_then(|s| s.parse().ok())
+                .unwrap_or(0);
+            if out.3.len() <= i {
+                out.3.resize(i + 1, Vec::new());
+            }
+            out.3[i].push(v);
+        }
+    }
+    out
+}
+
+#[test]
+fn generated_closure_conditions_and_their_derivatives_are_consistent() {
+    // Φ equals the f64 algorithm; Φ̇ is the derivative of Φ along
+    // q̇ = N(q) u (and t); J u + Φ_t = Φ̇ with Φ_t = Φ̇ at u = 0; and
+    // γ = −dΦ̇/dt at fixed u, all by central differences.
+    use eom_gen::mech::{Request, formulate};
+    use eom_gen::testkit::{Rng, random_state};
+    let mut rng = Rng(0xABCD_EF01_2345_6789);
+    for name in [
+        "fourbar",
+        "slider_crank_driven",
+        "andrews",
+        "bricard",
+        "stewart",
+    ] {
+        let sys = system(name);
+        let f = formulate(&sys, Request::default()).expect("formulates");
+        let p = f
+            .constraints
+            .as_ref()
+            .expect("loops give closure conditions");
+        let num = Numeric::new(&sys).expect("numeric");
+        for _ in 0..3 {
+            let (q, u) = random_state(&sys, &mut rng);
+            let t = 0.3;
+            let (phi, phidot, gamma, jac) = closure(p, &sys, &q, &u, t);
+            let want = num.constraints(&q, t).expect("phi");
+            for (a, b) in phi.iter().zip(&want) {
+                assert!((a - b).abs() < 1e-12, "{name}: Φ generated {a}, f64 {b}");
+            }
+            let h = 1e-6;
+            let qd = num.qdot(&q, &u);
+            let moved =
+                |s: f64| -> Vec<f64> { q.iter().zip(&qd).map(|(q, d)| q + s * d).collect() };
+            let (pp, pm) = (
+                num.constraints(&moved(h), t + h).expect("phi"),
+                num.constraints(&moved(-h), t - h).expect("phi"),
+            );
+            let zero = vec![0.0; u.len()];
+            let (_, phi_t, _, _) = closure(p, &sys, &q, &zero, t);
+            for i in 0..phi.len() {
+                let fd = (pp[i] - pm[i]) / (2.0 * h);
+                assert!(
+                    (phidot[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+                    "{name}: Φ̇[{i}] {} vs differences {fd}",
+                    phidot[i]
+                );
+                let ju: f64 = jac[i].iter().zip(&u).map(|(j, u)| j * u).sum::<f64>() + phi_t[i];
+                assert!(
+                    (ju - phidot[i]).abs() < 1e-9 * (1.0 + ju.abs()),
+                    "{name}: J u + Φ_t = {ju}, Φ̇ = {}",
+                    phidot[i]
+                );
+            }
+            let (_, dp, _, _) = closure(p, &sys, &moved(h), &u, t + h);
+            let (_, dm, _, _) = closure(p, &sys, &moved(-h), &u, t - h);
+            for i in 0..phi.len() {
+                let fd = -(dp[i] - dm[i]) / (2.0 * h);
+                assert!(
+                    (gamma[i] - fd).abs() < 1e-5 * (1.0 + fd.abs()),
+                    "{name}: γ[{i}] {} vs differences {fd}",
+                    gamma[i]
+                );
+            }
+        }
+    }
+}

@@ -124,6 +124,11 @@ pub struct Formulation {
     /// Partial velocities of the requested marker positions: outputs
     /// `J_<body>_<marker>_<axis>_<k>` = ∂v/∂u_k.
     pub jacobians: Option<Program>,
+    /// Closure conditions of the cut joints, `None` without loops: outputs
+    /// `phi<i>` (`Φ`), `phidot<i>` (`Φ̇ = J u + Φ_t`), `gamma<i>`
+    /// (`γ = −Φ̈` at `u̇ = 0`, so that `J u̇ = γ`), and `J_<i>_<k>`
+    /// (`∂Φ̇/∂u_k`).
+    pub constraints: Option<Program>,
     /// Wall time of formulation and lowering, seconds.
     pub seconds: f64,
 }
@@ -293,6 +298,8 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         cx.lower(&outs, opts)
     });
     let (outputs, jacobians) = outputs(sys, &cx, &ev, &tree, &k, &fext, opts)?;
+    let qdot_exprs = ev.qdot(&st);
+    let constraints = closure(sys, &cx, &tree, &env, &k, &q, &u, &qdot_exprs, opts)?;
     Ok(Formulation {
         qdot,
         forward_dynamics,
@@ -305,6 +312,7 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         momentum,
         outputs,
         jacobians,
+        constraints,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -396,4 +404,62 @@ fn outputs<'cx>(
         })
     };
     Ok((lower(&names, &values), lower(&jac_names, &jac_values)))
+}
+
+/// `Φ`, `Φ̇`, `γ` and `J` of the cut joints (see [`Formulation::constraints`]).
+#[allow(clippy::too_many_arguments)]
+fn closure<'cx>(
+    sys: &System,
+    cx: &'cx Context,
+    tree: &TreeModel<Expr<'cx>>,
+    env: &dyn Env<Expr<'cx>>,
+    k: &Kinematics<Expr<'cx>>,
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Result<Option<Program>, FormulateError> {
+    use crate::sym::TimeDerivative;
+    let cuts = super::constraints::cut_joints(sys, tree, env)?;
+    let phi = super::constraints::phi(k, &cuts);
+    if phi.is_empty() {
+        return Ok(None);
+    }
+    // q̇ along the motion: q_i → (N(q) u)_i; for γ also u̇ = 0.
+    let mut first = TimeDerivative::new();
+    let mut second = TimeDerivative::new();
+    for (qi, qd) in q.iter().zip(qdot) {
+        if let Some(s) = cx.sym_id(*qi) {
+            first.rate(s, cx.id(*qd));
+            second.rate(s, cx.id(*qd));
+        }
+    }
+    let zero = cx.id(Expr::zero());
+    for ui in u {
+        if let Some(s) = cx.sym_id(*ui) {
+            second.rate(s, zero);
+        }
+    }
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    let mut phidots = Vec::new();
+    for (i, &p) in phi.iter().enumerate() {
+        let pd = cx.time_derivative(&mut first, p)?;
+        let pdd = cx.time_derivative(&mut second, pd)?;
+        names.push(format!("phi{i}"));
+        values.push(p);
+        names.push(format!("phidot{i}"));
+        values.push(pd);
+        names.push(format!("gamma{i}"));
+        values.push(-pdd);
+        phidots.push(pd);
+    }
+    for (i, &pd) in phidots.iter().enumerate() {
+        for (kk, &uk) in u.iter().enumerate() {
+            names.push(format!("J_{i}_{kk}"));
+            values.push(cx.diff(pd, uk));
+        }
+    }
+    let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
+    Ok(Some(cx.lower(&outs, opts)))
 }
