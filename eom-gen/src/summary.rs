@@ -57,13 +57,15 @@ pub fn json(checked: &Checked) -> Value {
     })
 }
 
-/// Rank of the closure conditions at the initial state, if there are loops.
+/// Rank of the closure conditions at the assembled initial state, if there
+/// are loops.
 fn mobility(sys: &System) -> Option<crate::mech::numeric::Mobility> {
     if sys.graph.cut_joints().is_empty() {
         return None;
     }
     let num = crate::mech::Numeric::new(sys).ok()?;
-    num.mobility(&sys.q0(), 0.0).ok()
+    let assembled = num.assemble(&sys.q0(), &sys.u0(), 0.0).ok()?;
+    num.mobility(&assembled.q, 0.0).ok()
 }
 
 /// A few lines for people.
@@ -130,7 +132,7 @@ pub fn human(checked: &Checked) -> String {
     );
     if let Some(m) = mobility(sys) {
         out += &format!(
-            "  mobility     {} (rank {} of {} closure equations at the initial state)\n",
+            "  mobility     {} (rank {} of {} closure equations, assembled initial state)\n",
             m.dof, m.rank, m.equations
         );
     }

@@ -16,6 +16,21 @@ pub struct Numeric {
     cuts: Vec<super::constraints::CutJoint<f64>>,
 }
 
+/// The result of [`Numeric::assemble`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Assembly {
+    /// Positions satisfying the closure conditions.
+    pub q: Vec<f64>,
+    /// Speeds satisfying their time derivative.
+    pub u: Vec<f64>,
+    /// `max |Φ|` at `q`.
+    pub residual: f64,
+    /// `max |J u + Φ_t|` at `(q, u)`.
+    pub velocity_residual: f64,
+    /// Newton iterations used.
+    pub iterations: usize,
+}
+
 /// The rank of the constraint Jacobian and what it implies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Mobility {
@@ -287,5 +302,101 @@ impl Numeric {
             rank,
             dof: nu - rank,
         })
+    }
+
+    /// `∂Φ/∂t` by central differences (nonzero with prescribed motion).
+    fn constraint_rate(&self, q: &[f64], t: f64) -> Result<Vec<f64>, MechError> {
+        let h = 1e-6;
+        let (p, m) = (self.constraints(q, t + h)?, self.constraints(q, t - h)?);
+        Ok(p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * h)).collect())
+    }
+
+    /// Minimum-norm least-squares solution of `J x = r` (SVD; redundant
+    /// closure equations, as in Bricard's loop, are handled by the rank
+    /// cut-off 1e-10 relative to the largest singular value).
+    fn min_norm_solve(j: &[Vec<f64>], r: &[f64], n: usize) -> Vec<f64> {
+        if j.is_empty() {
+            return vec![0.0; n];
+        }
+        let m = nalgebra::DMatrix::from_fn(j.len(), n, |a, b| j[a][b]);
+        let svd = m.svd(true, true);
+        let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
+        let rhs = nalgebra::DVector::from_column_slice(r);
+        match svd.solve(&rhs, 1e-10 * largest.max(1e-300)) {
+            Ok(x) => x.iter().copied().collect(),
+            Err(_) => vec![0.0; n],
+        }
+    }
+
+    /// Assembly (Wittenburg 5.6; Haug 1989 ch. 7): from an initial guess,
+    /// Newton's method with backtracking on `max |Φ|` moves the positions
+    /// onto `Φ(q, t) = 0` along `q̇ = N(q) Δu` with minimum-norm `Δu`; then
+    /// the speeds are projected onto `J u + Φ_t = 0` with the smallest
+    /// change. Quaternions stay unit.
+    pub fn assemble(&self, q0: &[f64], u0: &[f64], t: f64) -> Result<Assembly, MechError> {
+        let norm = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let nu = self.tree.nu;
+        let mut q = q0.to_vec();
+        self.normalize(&mut q);
+        let mut phi = self.constraints(&q, t)?;
+        let mut iterations = 0;
+        while norm(&phi) > 1e-13 && iterations < 50 {
+            iterations += 1;
+            let j = self.constraint_jacobian(&q, t)?;
+            let minus_phi: Vec<f64> = phi.iter().map(|x| -x).collect();
+            let du = Self::min_norm_solve(&j, &minus_phi, nu);
+            let dq = self.qdot(&q, &du);
+            let mut step = 1.0;
+            let mut improved = false;
+            while step > 1e-6 {
+                let mut trial: Vec<f64> = q.iter().zip(&dq).map(|(q, d)| q + step * d).collect();
+                self.normalize(&mut trial);
+                let p = self.constraints(&trial, t)?;
+                if norm(&p) < norm(&phi) {
+                    q = trial;
+                    phi = p;
+                    improved = true;
+                    break;
+                }
+                step /= 2.0;
+            }
+            if !improved {
+                break;
+            }
+        }
+        let j = self.constraint_jacobian(&q, t)?;
+        let phi_t = self.constraint_rate(&q, t)?;
+        let violation: Vec<f64> = (0..j.len())
+            .map(|i| -(j[i].iter().zip(u0).map(|(a, b)| a * b).sum::<f64>() + phi_t[i]))
+            .collect();
+        let du = Self::min_norm_solve(&j, &violation, nu);
+        let u: Vec<f64> = u0.iter().zip(&du).map(|(u, d)| u + d).collect();
+        let velocity_residual = norm(
+            &(0..j.len())
+                .map(|i| j[i].iter().zip(&u).map(|(a, b)| a * b).sum::<f64>() + phi_t[i])
+                .collect::<Vec<f64>>(),
+        );
+        Ok(Assembly {
+            residual: norm(&phi),
+            q,
+            u,
+            velocity_residual,
+            iterations,
+        })
+    }
+
+    /// Normalises the unit quaternions of `q`.
+    fn normalize(&self, q: &mut [f64]) {
+        for b in &self.tree.bodies {
+            if let (super::tree::Coords::Free { q: at, .. }, Some(k)) =
+                (&b.coords, b.kind.quaternion_at())
+            {
+                let a = at + k;
+                let n = q[a..a + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
+                if n > 0.0 {
+                    q[a..a + 4].iter_mut().for_each(|x| *x /= n);
+                }
+            }
+        }
     }
 }
