@@ -284,6 +284,8 @@ pub struct SimOptions {
     pub every: f64,
     /// CSV file to write, if any.
     pub csv: Option<String>,
+    /// Closed loops: `multipliers` (Baumgarte) or `projection`.
+    pub constraints: String,
 }
 
 /// Integrates the compiled model from its initial state; returns the JSON

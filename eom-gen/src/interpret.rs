@@ -205,70 +205,84 @@ fn simulate_n<const N: usize>(
         quaternions,
     };
     let mut y0 = [0.0; N];
-    for (d, v) in y0.iter_mut().zip(sys.q0().iter().chain(&sys.u0())) {
+    let (mut q0, mut u0) = (sys.q0(), sys.u0());
+    if f.constraints.is_some() {
+        // Start from a consistent state (assembly).
+        let num = crate::mech::Numeric::new(sys).map_err(|e| e.to_string())?;
+        let a = num.assemble(&q0, &u0, 0.0).map_err(|e| e.to_string())?;
+        (q0, u0) = (a.q, a.u);
+    }
+    for (d, v) in y0.iter_mut().zip(q0.iter().chain(&u0)) {
         *d = *v;
     }
+    let mode = if o.constraints == "multipliers" {
+        crate::constrained::Stabilization::Baumgarte
+    } else {
+        crate::constrained::Stabilization::Projection
+    };
+    let constrained = crate::constrained::Constrained::<N>::new(f, sys, mode);
+
     let opts = if o.every > 0.0 {
         SolveOptions::every(0.0, o.t_end, o.every)
     } else {
         SolveOptions::default()
     };
     let start = std::time::Instant::now();
-    let sol = match o.integrator.as_str() {
-        "euler" => integrate(
-            &mut Euler::new(o.dt),
-            &model,
-            0.0,
-            y0,
-            o.t_end,
-            &opts,
-            &mut [],
-        ),
-        "rk4" => integrate(
-            &mut Rk4::new(o.dt),
-            &model,
-            0.0,
-            y0,
-            o.t_end,
-            &opts,
-            &mut [],
-        ),
-        "midpoint" => integrate(
-            &mut ImplicitMidpoint::new(o.dt),
-            &model,
-            0.0,
-            y0,
-            o.t_end,
-            &opts,
-            &mut [],
-        ),
-        "dop853" => integrate(
-            &mut Dop853::new(o.rtol, o.atol),
-            &model,
-            0.0,
-            y0,
-            o.t_end,
-            &opts,
-            &mut [],
-        ),
-        "radau5" => integrate(
-            &mut Radau5::new(o.rtol, o.atol),
-            &model,
-            0.0,
-            y0,
-            o.t_end,
-            &opts,
-            &mut [],
-        ),
-        _ => integrate(
-            &mut Dopri5::new(o.rtol, o.atol),
-            &model,
-            0.0,
-            y0,
-            o.t_end,
-            &opts,
-            &mut [],
-        ),
+    macro_rules! with_system {
+        ($sys:expr) => {
+            match o.integrator.as_str() {
+                "euler" => integrate(
+                    &mut Euler::new(o.dt),
+                    $sys,
+                    0.0,
+                    y0,
+                    o.t_end,
+                    &opts,
+                    &mut [],
+                ),
+                "rk4" => integrate(&mut Rk4::new(o.dt), $sys, 0.0, y0, o.t_end, &opts, &mut []),
+                "midpoint" => integrate(
+                    &mut ImplicitMidpoint::new(o.dt),
+                    $sys,
+                    0.0,
+                    y0,
+                    o.t_end,
+                    &opts,
+                    &mut [],
+                ),
+                "dop853" => integrate(
+                    &mut Dop853::new(o.rtol, o.atol),
+                    $sys,
+                    0.0,
+                    y0,
+                    o.t_end,
+                    &opts,
+                    &mut [],
+                ),
+                "radau5" => integrate(
+                    &mut Radau5::new(o.rtol, o.atol),
+                    $sys,
+                    0.0,
+                    y0,
+                    o.t_end,
+                    &opts,
+                    &mut [],
+                ),
+                _ => integrate(
+                    &mut Dopri5::new(o.rtol, o.atol),
+                    $sys,
+                    0.0,
+                    y0,
+                    o.t_end,
+                    &opts,
+                    &mut [],
+                ),
+            }
+        };
+    }
+    let sol = match &constrained {
+        Some(c) => with_system!(c),
+        None => with_system!(&model),
     };
     let cpu = start.elapsed().as_secs_f64();
     let names: Vec<&str> = sys
@@ -358,5 +372,8 @@ fn simulate_n<const N: usize>(
             "newton_iterations": s.newton_iters, "stiffness_detections": s.stiffness_detections,
         },
         "cpu_s": cpu,
+        "max_constraint_residual": constrained.as_ref().map(|c| c.max_residual.get()),
+        "constraint_rank": constrained.as_ref().map(|c| c.rank.get()),
+        "constraints": constrained.as_ref().map(|_| o.constraints.as_str()),
     }))
 }

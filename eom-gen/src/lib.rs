@@ -7,6 +7,7 @@
 
 pub mod builder;
 pub mod compiled;
+pub mod constrained;
 pub mod emit;
 pub mod generate;
 pub mod graph;

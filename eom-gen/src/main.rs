@@ -86,6 +86,10 @@ enum Command {
         /// Run the programs in the evaluator instead of compiled code.
         #[arg(long)]
         interpret: bool,
+        /// Closed loops (with --interpret): `projection` (of positions and
+        /// speeds after each step) or `multipliers` (Baumgarte).
+        #[arg(long, default_value = "projection")]
+        constraints: String,
         /// Print one JSON object instead of the summary.
         #[arg(long)]
         json: bool,
@@ -116,6 +120,7 @@ fn main() -> ExitCode {
             csv,
             every,
             interpret,
+            constraints,
             json,
         } => {
             let o = eom_gen::compiled::SimOptions {
@@ -126,6 +131,7 @@ fn main() -> ExitCode {
                 t_end,
                 every: every.unwrap_or(0.0),
                 csv,
+                constraints,
             };
             simulate(&model, &o, json, interpret)
         }
@@ -425,9 +431,18 @@ fn simulate(
         Err(code) => return code,
     };
     let sys = &g.checked.system;
-    if !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty() {
+    if !["projection", "multipliers"].contains(&o.constraints.as_str()) {
         eprintln!(
-            "error: `{}` has closed loops or constraints ({}); simulating them needs the constraint solvers, which are not built yet",
+            "error: unknown --constraints `{}`; choose `projection` or `multipliers`",
+            o.constraints
+        );
+        return ExitCode::from(2);
+    }
+    let loops_interpreted =
+        interpret && !sys.graph.cut_joints().is_empty() && sys.constraints.is_empty();
+    if !loops_interpreted && (!sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty()) {
+        eprintln!(
+            "error: `{}` has closed loops or constraints ({}); closed loops simulate with --interpret for now (compiled constraint solvers and rolling constraints are not built yet)",
             sys.name,
             sys.cut_joint_names()
                 .iter()
