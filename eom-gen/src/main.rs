@@ -308,6 +308,7 @@ fn stats(path: &str) -> ExitCode {
             "bias": ops(&f.bias),
             "energy": ops(&f.energy),
             "momentum": ops(&f.momentum),
+            "constraints": ops(&f.constraints),
         },
         "generation_ms": f.seconds * 1e3,
         "source_bytes": g.source.len(),
