@@ -11,7 +11,7 @@
 //! and in the crate: `include!(concat!(env!("OUT_DIR"), "/double_pendulum.rs"));`
 //! (see `examples/build_rs`).
 
-use crate::model::load;
+use crate::urdf::load_model as load;
 use crate::{GenerateError, generate_with};
 use std::fmt;
 use std::path::PathBuf;

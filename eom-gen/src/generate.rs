@@ -74,7 +74,7 @@ pub fn generate_with(src: &Source, opts: &emit::EmitOptions) -> Result<Generated
 
 /// Reads and generates a model file.
 pub fn generate_file(path: &str) -> Result<Generated, GenerateError> {
-    let src = crate::model::load(path).map_err(GenerateError::Model)?;
+    let src = crate::urdf::load_model(path).map_err(GenerateError::Model)?;
     generate(&src)
 }
 

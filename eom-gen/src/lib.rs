@@ -18,6 +18,7 @@ pub mod summary;
 pub mod sym;
 pub mod system;
 pub mod testkit;
+pub mod urdf;
 
 pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;
@@ -26,3 +27,4 @@ pub use generate::{
 };
 pub use model::{Checked, Diagnostic, Report, Source, Spec, check, check_file};
 pub use system::System;
+pub use urdf::{Import, import_file, load_model};

@@ -1,0 +1,1101 @@
+//! URDF import: a URDF robot description → an eom model ([`Spec`]).
+//!
+//! The XML is read with `roxmltree`, which is small, has no dependencies,
+//! and keeps the byte range of every element and attribute, so each problem
+//! in a URDF is reported at its `file:line:col` exactly as for RON models.
+//! (`urdf-rs` deserialises into plain structs and loses those positions.)
+//!
+//! The mapping (see `docs/model-format.md`, "URDF"):
+//!
+//! - each URDF link frame is the frame of an eom body; a joint's `origin`
+//!   is the joint frame on the parent (`parent_frame`), the child frame is
+//!   the child link frame (`child_frame` identity);
+//! - `revolute` and `continuous` → `Revolute`, `prismatic` → `Prismatic`,
+//!   `floating` → `Free`, `planar` → `Planar` (joint frames turned so that
+//!   their z axis is the URDF `axis`, the plane normal), `fixed` → merged:
+//!   links joined by fixed joints become one rigid body with the composite
+//!   inertia, so the generated code does no work for them;
+//! - the link that is never a child (the root) is welded to `ground`: it and
+//!   the links fixed to it are part of the ground. A link named `world` is
+//!   the ground itself, so `world` → `floating` → `base` is a free base;
+//! - `inertial`: mass, centre of mass from `origin xyz`, the tensor turned
+//!   into link axes (`R I Rᵀ`) when the `origin rpy` is not zero;
+//! - `mimic` → a holonomic constraint `q - multiplier·q_other - offset = 0`;
+//! - `dynamics damping` → a `JointSpringDamper` with zero stiffness;
+//!   Coulomb `friction` and `limit`s have no place in the model format and
+//!   are listed in the notes (and in the header comment of the RON text);
+//! - gravity is `(0, 0, -9.81)` (URDF has none), initial state zero.
+//!
+//! Every problem is reported at once: XML syntax, unknown joint types,
+//! missing or duplicate links and joints, links with two parents, cycles,
+//! several roots, bad numbers, inertia that is not positive definite, and
+//! massless links that move.
+
+use crate::model::diag::did_you_mean;
+use crate::model::expr::Func;
+use crate::model::spec::{
+    Body, Constraint, Force, Frame, Inertia, Joint, JointKind, Num, Orientation, Spec, V3,
+};
+use crate::model::{Diagnostic, Report, Source, Span};
+use nalgebra::{Matrix3, Rotation3, SymmetricEigen, Vector3};
+use roxmltree::Node;
+use std::collections::HashMap;
+
+/// Gravity given to imported models (URDF has none), m/s².
+pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
+
+/// A converted URDF.
+#[derive(Clone, Debug)]
+pub struct Import {
+    /// The model.
+    pub spec: Spec,
+    /// The model as RON text (with the notes as a header comment), with the
+    /// path `<urdf path> (converted)`.
+    pub source: Source,
+    /// What the conversion did that the user should know: merged links,
+    /// ignored geometry, limits and friction that were dropped, renamed items.
+    pub notes: Vec<String>,
+}
+
+/// True if `path` ends in `.urdf` (any case).
+pub fn is_urdf(path: &str) -> bool {
+    std::path::Path::new(path)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+}
+
+/// Reads a model file: a `.urdf` is converted and the RON text returned
+/// (URDF errors are reported against the URDF); anything else is read as is.
+pub fn load_model(path: &str) -> Result<Source, Report> {
+    let src = crate::model::load(path)?;
+    if is_urdf(path) {
+        Ok(convert(&src)?.source)
+    } else {
+        Ok(src)
+    }
+}
+
+/// Reads and converts a URDF file.
+pub fn import_file(path: &str) -> Result<Import, Report> {
+    convert(&crate::model::load(path)?)
+}
+
+/// A rigid transform, remembering the URDF `rpy` when the rotation is
+/// exactly one (so that simple files convert to exact numbers).
+#[derive(Clone, Debug)]
+struct Pose {
+    rot: Matrix3<f64>,
+    pos: Vector3<f64>,
+    rpy: Option<[f64; 3]>,
+}
+
+impl Pose {
+    fn identity() -> Self {
+        Pose {
+            rot: Matrix3::identity(),
+            pos: Vector3::zeros(),
+            rpy: Some([0.0; 3]),
+        }
+    }
+
+    fn is_rot_identity(&self) -> bool {
+        self.rpy == Some([0.0; 3])
+    }
+
+    /// `self ∘ other`: `other` is expressed in `self`'s frame.
+    fn then(&self, other: &Pose) -> Pose {
+        let rpy = if other.is_rot_identity() {
+            self.rpy
+        } else if self.is_rot_identity() {
+            other.rpy
+        } else {
+            None
+        };
+        Pose {
+            rot: self.rot * other.rot,
+            pos: self.pos + self.rot * other.pos,
+            rpy,
+        }
+    }
+
+    fn frame(&self) -> Frame {
+        let orientation = match self.rpy {
+            Some([0.0, 0.0, 0.0]) => Orientation::Identity,
+            Some([r, p, y]) => Orientation::Rpy(r.into(), p.into(), y.into()),
+            None => {
+                let m = &self.rot;
+                let row = |i: usize| V3(m[(i, 0)].into(), m[(i, 1)].into(), m[(i, 2)].into());
+                Orientation::Matrix(row(0), row(1), row(2))
+            }
+        };
+        Frame {
+            position: v3(&self.pos),
+            orientation,
+        }
+    }
+}
+
+fn v3(v: &Vector3<f64>) -> V3 {
+    V3(v.x.into(), v.y.into(), v.z.into())
+}
+
+fn rpy_matrix(r: f64, p: f64, y: f64) -> Matrix3<f64> {
+    Rotation3::from_euler_angles(r, p, y).into_inner()
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Revolute,
+    Continuous,
+    Prismatic,
+    Fixed,
+    Floating,
+    Planar,
+}
+
+impl Kind {
+    fn parse(s: &str) -> Option<Kind> {
+        Some(match s {
+            "revolute" => Kind::Revolute,
+            "continuous" => Kind::Continuous,
+            "prismatic" => Kind::Prismatic,
+            "fixed" => Kind::Fixed,
+            "floating" => Kind::Floating,
+            "planar" => Kind::Planar,
+            _ => return None,
+        })
+    }
+
+    fn one_dof(self) -> bool {
+        matches!(self, Kind::Revolute | Kind::Continuous | Kind::Prismatic)
+    }
+}
+
+const KINDS: &str = "`revolute`, `continuous`, `prismatic`, `fixed`, `floating` or `planar`";
+
+struct Inertial {
+    mass: f64,
+    origin: Pose,
+    /// About the centre of mass, in the inertial frame.
+    inertia: Matrix3<f64>,
+}
+
+struct Link {
+    raw: String,
+    name: String,
+    span: Span,
+    inertial: Option<Inertial>,
+}
+
+struct Mimic {
+    joint: String,
+    span: Span,
+    multiplier: f64,
+    offset: f64,
+}
+
+struct UJoint {
+    raw: String,
+    name: String,
+    span: Span,
+    kind: Option<Kind>,
+    parent: Option<(String, Span)>,
+    child: Option<(String, Span)>,
+    origin: Pose,
+    axis: Vector3<f64>,
+    mimic: Option<Mimic>,
+    damping: f64,
+    friction: f64,
+    limit: Vec<(String, f64)>,
+}
+
+struct Ctx {
+    diags: Vec<Diagnostic>,
+    notes: Vec<String>,
+}
+
+fn span(r: std::ops::Range<usize>) -> Span {
+    Span::new(r.start, r.end)
+}
+
+/// The span of an element's tag name (`<link` → `link`).
+fn tag_span(n: Node<'_, '_>) -> Span {
+    let s = n.range().start;
+    Span::new(s + 1, s + 1 + n.tag_name().name().len())
+}
+
+fn child<'a, 'i>(n: Node<'a, 'i>, tag: &str) -> Option<Node<'a, 'i>> {
+    n.children().find(|c| c.is_element() && c.tag_name().name() == tag)
+}
+
+impl Ctx {
+    fn error(&mut self, at: Span, msg: String, help: impl Into<String>) {
+        self.diags.push(Diagnostic::error(at, msg).with_help(help));
+    }
+
+    fn attr_span(&self, n: Node<'_, '_>, name: &str) -> Span {
+        n.attribute_node(name)
+            .map_or_else(|| tag_span(n), |a| span(a.range_value()))
+    }
+
+    fn numbers(&mut self, n: Node<'_, '_>, name: &str, count: usize) -> Option<Vec<f64>> {
+        let text = n.attribute(name)?;
+        let at = self.attr_span(n, name);
+        let parsed: Result<Vec<f64>, _> = text.split_whitespace().map(str::parse::<f64>).collect();
+        match parsed {
+            Ok(v) if v.len() == count && v.iter().all(|x| x.is_finite()) => Some(v),
+            Ok(v) if v.len() == count => {
+                self.error(
+                    at,
+                    format!("`{name}` has a value that is not finite: `{text}`"),
+                    "write finite numbers",
+                );
+                None
+            }
+            _ => {
+                let what = if count == 1 {
+                    "a number".to_string()
+                } else {
+                    format!("{count} numbers separated by spaces")
+                };
+                self.error(
+                    at,
+                    format!("`{name}` must be {what}, found `{text}`"),
+                    format!("write e.g. `{name}=\"{}\"`", vec!["0"; count].join(" ")),
+                );
+                None
+            }
+        }
+    }
+
+    fn number(&mut self, n: Node<'_, '_>, name: &str, default: f64) -> f64 {
+        self.numbers(n, name, 1).map_or(default, |v| v[0])
+    }
+
+    fn vec3(&mut self, n: Node<'_, '_>, name: &str, default: Vector3<f64>) -> Vector3<f64> {
+        self.numbers(n, name, 3)
+            .map_or(default, |v| Vector3::new(v[0], v[1], v[2]))
+    }
+
+    /// The `<origin xyz rpy>` child of `n` (identity if absent).
+    fn origin(&mut self, n: Node<'_, '_>) -> Pose {
+        let Some(o) = child(n, "origin") else {
+            return Pose::identity();
+        };
+        let pos = self.vec3(o, "xyz", Vector3::zeros());
+        let rpy = self.vec3(o, "rpy", Vector3::zeros());
+        Pose {
+            rot: rpy_matrix(rpy.x, rpy.y, rpy.z),
+            pos,
+            rpy: Some([rpy.x, rpy.y, rpy.z]),
+        }
+    }
+
+    fn required(&mut self, n: Node<'_, '_>, name: &str, what: &str) -> Option<String> {
+        match n.attribute(name) {
+            Some(v) if !v.trim().is_empty() => Some(v.to_string()),
+            _ => {
+                self.error(
+                    tag_span(n),
+                    format!("`<{}>` has no `{name}`", n.tag_name().name()),
+                    format!("add `{name}=\"…\"` ({what})"),
+                );
+                None
+            }
+        }
+    }
+
+    fn inertial(&mut self, link: &str, n: Node<'_, '_>) -> Option<Inertial> {
+        let origin = self.origin(n);
+        let mass = match child(n, "mass") {
+            Some(m) if m.attribute("value").is_some() => {
+                let v = self.number(m, "value", 0.0);
+                if v < 0.0 {
+                    self.error(
+                        self.attr_span(m, "value"),
+                        format!("mass of link `{link}` is negative ({v})"),
+                        "a mass is zero or positive, in kg",
+                    );
+                }
+                v
+            }
+            Some(m) => {
+                self.error(
+                    tag_span(m),
+                    format!("`<mass>` of link `{link}` has no `value`"),
+                    "write `<mass value=\"1.0\"/>` (kg)",
+                );
+                0.0
+            }
+            None => {
+                self.error(
+                    tag_span(n),
+                    format!("`<inertial>` of link `{link}` has no `<mass>`"),
+                    "add `<mass value=\"1.0\"/>` (kg)",
+                );
+                0.0
+            }
+        };
+        let mut inertia = Matrix3::zeros();
+        if let Some(i) = child(n, "inertia") {
+            let mut g = |name: &str| self.number(i, name, 0.0);
+            let (xx, xy, xz, yy, yz, zz) = (g("ixx"), g("ixy"), g("ixz"), g("iyy"), g("iyz"), g("izz"));
+            inertia = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
+            if inertia != Matrix3::zeros() && mass > 0.0 {
+                let e = SymmetricEigen::new(inertia).eigenvalues;
+                let scale = e.amax();
+                if e.min() <= 1e-12 * scale {
+                    self.error(
+                        tag_span(i),
+                        format!(
+                            "inertia of link `{link}` is not positive definite (principal moments {:.6}, {:.6}, {:.6})",
+                            e[0], e[1], e[2]
+                        ),
+                        "ixx, iyy, izz are the moments and ixy, ixz, iyz the tensor entries about the centre of mass; all principal moments must be positive (all zero for a point mass)",
+                    );
+                }
+            }
+        }
+        Some(Inertial {
+            mass,
+            origin,
+            inertia,
+        })
+    }
+}
+
+/// Turns `name` into an identifier usable in eom models (letters, digits,
+/// `_`; not `t`, `pi`, a function name or `ground`).
+fn identifier(name: &str) -> String {
+    let mut s: String = name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
+        s.insert(0, '_');
+    }
+    let reserved =
+        ["t", "pi", "ground"].contains(&s.as_str()) || Func::ALL.iter().any(|f| f.name() == s);
+    if reserved {
+        s.push('_');
+    }
+    s
+}
+
+/// Unique identifiers for `raw` names (later duplicates get `_2`, `_3`…).
+fn unique_names<'a>(raws: impl Iterator<Item = &'a str>, taken: &mut Vec<String>) -> Vec<String> {
+    raws.map(|raw| {
+        let base = identifier(raw);
+        let mut name = base.clone();
+        let mut k = 2;
+        while taken.contains(&name) {
+            name = format!("{base}_{k}");
+            k += 1;
+        }
+        taken.push(name.clone());
+        name
+    })
+    .collect()
+}
+
+fn fmt_num(x: f64) -> String {
+    if x < 0.0 {
+        format!("({x:?})")
+    } else {
+        format!("{x:?}")
+    }
+}
+
+/// Converts URDF text into an eom model, reporting every problem at once.
+pub fn convert(src: &Source) -> Result<Import, Report> {
+    let fail = |diagnostics: Vec<Diagnostic>| Report {
+        source: src.clone(),
+        diagnostics,
+    };
+    let doc = roxmltree::Document::parse(&src.text).map_err(|e| {
+        let p = e.pos();
+        let at = src.offset_of(p.row as usize, p.col as usize);
+        fail(vec![
+            Diagnostic::error(Span::new(at, at + 1), format!("invalid XML: {e}"))
+                .with_help("a URDF is an XML file with a `<robot>` root element"),
+        ])
+    })?;
+    let root = doc.root_element();
+    let mut cx = Ctx {
+        diags: Vec::new(),
+        notes: Vec::new(),
+    };
+    if root.tag_name().name() != "robot" {
+        cx.error(
+            tag_span(root),
+            format!("the root element is `<{}>`, not `<robot>`", root.tag_name().name()),
+            "a URDF file is `<robot name=\"…\"> <link …/> <joint …/> … </robot>`",
+        );
+        return Err(fail(cx.diags));
+    }
+    let robot_raw = root.attribute("name").unwrap_or("robot");
+    let robot = identifier(robot_raw);
+
+    // Links.
+    let mut links: Vec<Link> = Vec::new();
+    let mut link_nodes = Vec::new();
+    let mut ignored: HashMap<String, usize> = HashMap::new();
+    let mut joint_nodes = Vec::new();
+    for n in root.children().filter(|n| n.is_element()) {
+        match n.tag_name().name() {
+            "link" => link_nodes.push(n),
+            "joint" => joint_nodes.push(n),
+            other => *ignored.entry(format!("<{other}>")).or_default() += 1,
+        }
+    }
+    let mut taken = Vec::new();
+    let mut link_index: HashMap<String, usize> = HashMap::new();
+    let mut seen_links = Vec::new();
+    for n in &link_nodes {
+        let Some(raw) = cx.required(*n, "name", "the link's name") else {
+            continue;
+        };
+        if link_index.contains_key(&raw) {
+            cx.error(
+                cx.attr_span(*n, "name"),
+                format!("link `{raw}` is defined twice"),
+                "give each link a unique name",
+            );
+            continue;
+        }
+        for g in ["visual", "collision"] {
+            let count = n
+                .children()
+                .filter(|c| c.is_element() && c.tag_name().name() == g)
+                .count();
+            if count > 0 {
+                *ignored.entry(format!("<{g}>")).or_default() += count;
+            }
+        }
+        let inertial = child(*n, "inertial").and_then(|i| cx.inertial(&raw, i));
+        link_index.insert(raw.clone(), links.len());
+        seen_links.push(raw.clone());
+        links.push(Link {
+            raw,
+            name: String::new(),
+            span: cx.attr_span(*n, "name"),
+            inertial,
+        });
+    }
+    let names = unique_names(links.iter().map(|l| l.raw.as_str()), &mut taken);
+    for (l, name) in links.iter_mut().zip(names) {
+        if name != l.raw {
+            cx.notes
+                .push(format!("link `{}` is named `{name}` (not an identifier)", l.raw));
+        }
+        l.name = name;
+    }
+
+    // Joints.
+    let mut joints: Vec<UJoint> = Vec::new();
+    let mut joint_index: HashMap<String, usize> = HashMap::new();
+    for n in &joint_nodes {
+        let raw = cx.required(*n, "name", "the joint's name");
+        let kind = match n.attribute("type") {
+            None => {
+                cx.error(
+                    tag_span(*n),
+                    "`<joint>` has no `type`".to_string(),
+                    format!("add `type=\"…\"`: one of {KINDS}"),
+                );
+                None
+            }
+            Some(t) => {
+                let k = Kind::parse(t);
+                if k.is_none() {
+                    let known = [
+                        "revolute",
+                        "continuous",
+                        "prismatic",
+                        "fixed",
+                        "floating",
+                        "planar",
+                    ];
+                    let help = match did_you_mean(t, known) {
+                        Some(b) => format!("did you mean `{b}`? URDF joint types are {KINDS}"),
+                        None => format!("URDF joint types are {KINDS}"),
+                    };
+                    cx.error(
+                        cx.attr_span(*n, "type"),
+                        format!("unknown joint type `{t}`"),
+                        help,
+                    );
+                }
+                k
+            }
+        };
+        let link_ref = |tag: &str, cx: &mut Ctx| -> Option<(String, Span)> {
+            let Some(e) = child(*n, tag) else {
+                cx.error(
+                    tag_span(*n),
+                    format!(
+                        "joint `{}` has no `<{tag}>`",
+                        raw.as_deref().unwrap_or("?")
+                    ),
+                    format!("add `<{tag} link=\"…\"/>`"),
+                );
+                return None;
+            };
+            let l = cx.required(e, "link", "a link name")?;
+            let at = cx.attr_span(e, "link");
+            if l != "world" && !link_index.contains_key(&l) {
+                let help = match did_you_mean(&l, seen_links.iter().map(String::as_str)) {
+                    Some(b) => format!("did you mean `{b}`?"),
+                    None => "define it with `<link name=\"…\"/>`".to_string(),
+                };
+                cx.error(at, format!("link `{l}` is not defined"), help);
+                return None;
+            }
+            Some((l, at))
+        };
+        let parent = link_ref("parent", &mut cx);
+        let child_link = link_ref("child", &mut cx);
+        let origin = cx.origin(*n);
+        let mut axis = Vector3::x();
+        if let Some(a) = child(*n, "axis") {
+            axis = cx.vec3(a, "xyz", Vector3::x());
+            if axis.norm() < 1e-12 && kind.is_some_and(|k| k != Kind::Fixed && k != Kind::Floating) {
+                cx.error(
+                    cx.attr_span(a, "xyz"),
+                    "the joint axis is zero".to_string(),
+                    "give a direction, e.g. `xyz=\"0 0 1\"`",
+                );
+                axis = Vector3::x();
+            }
+        }
+        let mimic = child(*n, "mimic").and_then(|m| {
+            let j = cx.required(m, "joint", "the name of the joint to follow")?;
+            Some(Mimic {
+                span: cx.attr_span(m, "joint"),
+                joint: j,
+                multiplier: cx.number(m, "multiplier", 1.0),
+                offset: cx.number(m, "offset", 0.0),
+            })
+        });
+        let (mut damping, mut friction) = (0.0, 0.0);
+        if let Some(d) = child(*n, "dynamics") {
+            damping = cx.number(d, "damping", 0.0);
+            friction = cx.number(d, "friction", 0.0);
+            if damping < 0.0 {
+                cx.error(
+                    cx.attr_span(d, "damping"),
+                    format!("negative damping ({damping})"),
+                    "damping is zero or positive (N m s/rad or N s/m)",
+                );
+            }
+        }
+        let mut limit = Vec::new();
+        if let Some(l) = child(*n, "limit") {
+            for a in ["lower", "upper", "effort", "velocity"] {
+                if l.attribute(a).is_some() {
+                    limit.push((a.to_string(), cx.number(l, a, 0.0)));
+                }
+            }
+        }
+        let Some(raw) = raw else { continue };
+        if joint_index.contains_key(&raw) {
+            cx.error(
+                cx.attr_span(*n, "name"),
+                format!("joint `{raw}` is defined twice"),
+                "give each joint a unique name",
+            );
+            continue;
+        }
+        joint_index.insert(raw.clone(), joints.len());
+        joints.push(UJoint {
+            span: cx.attr_span(*n, "name"),
+            raw,
+            name: String::new(),
+            kind,
+            parent,
+            child: child_link,
+            origin,
+            axis,
+            mimic,
+            damping,
+            friction,
+            limit,
+        });
+    }
+    let names = unique_names(joints.iter().map(|j| j.raw.as_str()), &mut taken);
+    for (j, name) in joints.iter_mut().zip(names) {
+        if name != j.raw {
+            cx.notes
+                .push(format!("joint `{}` is named `{name}` (not an identifier)", j.raw));
+        }
+        j.name = name;
+    }
+
+    // Tree: each link has at most one parent joint; one root.
+    let world = usize::MAX;
+    let link_id = |l: &str| -> usize {
+        if l == "world" {
+            world
+        } else {
+            link_index.get(l).copied().unwrap_or(world)
+        }
+    };
+    let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
+    let mut children: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (k, j) in joints.iter().enumerate() {
+        let (Some((p, _)), Some((c, cs))) = (&j.parent, &j.child) else {
+            continue;
+        };
+        let (p, c) = (link_id(p), link_id(c));
+        if c == world {
+            cx.error(
+                *cs,
+                format!("joint `{}` has `world` as its child", j.raw),
+                "`world` is the fixed ground: it can only be a parent",
+            );
+            continue;
+        }
+        if p == c {
+            cx.error(
+                *cs,
+                format!("joint `{}` joins link `{}` to itself", j.raw, links[c].raw),
+                "parent and child must be different links",
+            );
+            continue;
+        }
+        if let Some(first) = parent_joint[c] {
+            cx.error(
+                *cs,
+                format!(
+                    "link `{}` is the child of both `{}` and `{}`",
+                    links[c].raw, joints[first].raw, j.raw
+                ),
+                "a URDF is a tree: each link has one parent joint (closed loops cannot be written in URDF)",
+            );
+            continue;
+        }
+        parent_joint[c] = Some(k);
+        children.entry(p).or_default().push(k);
+    }
+    let world_used = link_index.contains_key("world") || children.contains_key(&world);
+    let roots: Vec<usize> = (0..links.len())
+        .filter(|&l| parent_joint[l].is_none() && links[l].raw != "world")
+        .collect();
+    let mut root = world;
+    if world_used {
+        for &l in &roots {
+            cx.error(
+                links[l].span,
+                format!("link `{}` is not connected to `world`", links[l].raw),
+                "join it to the tree with a `<joint>`, or remove it (a URDF has one root)",
+            );
+        }
+    } else if roots.len() > 1 {
+        let list: Vec<String> = roots.iter().map(|&l| format!("`{}`", links[l].raw)).collect();
+        for &l in &roots {
+            cx.error(
+                links[l].span,
+                format!(
+                    "the URDF has {} roots ({}); link `{}` is never a child",
+                    roots.len(),
+                    list.join(", "),
+                    links[l].raw
+                ),
+                "join the roots with joints so that exactly one link is never a child",
+            );
+        }
+    } else if let Some(&r) = roots.first() {
+        root = r;
+    } else if !links.is_empty() {
+        cx.error(
+            tag_span(root_elem(&doc)),
+            "every link is a child: the joints form a cycle".to_string(),
+            "a URDF is a tree with one root link that is never a child",
+        );
+    } else {
+        cx.error(
+            tag_span(root_elem(&doc)),
+            "the URDF has no links".to_string(),
+            "add `<link name=\"…\">` elements",
+        );
+    }
+
+    // Depth-first from the root, children in document order; assign each
+    // link to a body (None = ground) and its pose in that body.
+    let mut assign: Vec<Option<(Option<usize>, Pose)>> = vec![None; links.len()];
+    let mut order: Vec<usize> = Vec::new(); // movable joints in tree order
+    let mut bodies: Vec<usize> = Vec::new(); // head link of each body
+    let mut merged: Vec<(String, String)> = Vec::new();
+    let mut stack: Vec<usize> = Vec::new();
+    let push_children = |p: usize, stack: &mut Vec<usize>| {
+        if let Some(ks) = children.get(&p) {
+            stack.extend(ks.iter().rev());
+        }
+    };
+    if root != world {
+        assign[root] = Some((None, Pose::identity()));
+        cx.notes.push(format!(
+            "root link `{}` is fixed to the ground; it and the links fixed to it do not move (for a free base add `<link name=\"world\"/>` and a `floating` joint from it)",
+            links[root].raw
+        ));
+    }
+    if root != world || world_used {
+        push_children(root, &mut stack);
+    }
+    while let Some(k) = stack.pop() {
+        let j = &joints[k];
+        let (Some((p, _)), Some((c, _))) = (&j.parent, &j.child) else {
+            continue;
+        };
+        let (p, c) = (link_id(p), link_id(c));
+        let (pb, pose) = if p == world {
+            (None, Pose::identity())
+        } else {
+            match &assign[p] {
+                Some(a) => a.clone(),
+                None => continue,
+            }
+        };
+        let at = pose.then(&j.origin);
+        if j.kind == Some(Kind::Fixed) || j.kind.is_none() {
+            merged.push((
+                links[c].raw.clone(),
+                pb.map_or("ground".to_string(), |b| links[bodies[b]].raw.clone()),
+            ));
+            assign[c] = Some((pb, at));
+        } else {
+            assign[c] = Some((Some(bodies.len()), Pose::identity()));
+            bodies.push(c);
+            order.push(k);
+        }
+        push_children(c, &mut stack);
+    }
+    // Links that no root reaches hang on a cycle.
+    let mut reached = vec![false; links.len()];
+    let mut todo: Vec<usize> = roots.clone();
+    todo.push(world);
+    while let Some(l) = todo.pop() {
+        if l != world {
+            reached[l] = true;
+        }
+        for &k in children.get(&l).map_or(&[][..], Vec::as_slice) {
+            if let Some((c, _)) = &joints[k].child {
+                let c = link_id(c);
+                if c != world && !reached[c] {
+                    todo.push(c);
+                }
+            }
+        }
+    }
+    {
+        for (k, j) in joints.iter().enumerate() {
+            if let Some((c, _)) = &j.child
+                && let Some(&c) = link_index.get(c)
+                && !reached[c]
+                && parent_joint[c] == Some(k)
+            {
+                cx.error(
+                    j.span,
+                    format!(
+                        "joint `{}` is part of a cycle: link `{}` cannot be reached from the root",
+                        j.raw, links[c].raw
+                    ),
+                    "a URDF is a tree; remove one joint of the cycle",
+                );
+            }
+        }
+    }
+
+    // Composite inertia of each body.
+    struct Part {
+        mass: f64,
+        com: Vector3<f64>,
+        inertia: Matrix3<f64>,
+    }
+    let mut parts: Vec<Vec<Part>> = (0..bodies.len()).map(|_| Vec::new()).collect();
+    let mut ground_mass = 0.0;
+    for (l, link) in links.iter().enumerate() {
+        let (Some((b, pose)), Some(i)) = (&assign[l], &link.inertial) else {
+            continue;
+        };
+        if i.mass <= 0.0 {
+            continue;
+        }
+        let Some(b) = b else {
+            ground_mass += i.mass;
+            continue;
+        };
+        let frame = pose.then(&i.origin);
+        parts[*b].push(Part {
+            mass: i.mass,
+            com: frame.pos,
+            inertia: frame.rot * i.inertia * frame.rot.transpose(),
+        });
+    }
+    if ground_mass > 0.0 {
+        cx.notes.push(format!(
+            "{ground_mass} kg of links fixed to the ground do not enter the dynamics"
+        ));
+    }
+    let mut spec_bodies = Vec::new();
+    for (b, &l) in bodies.iter().enumerate() {
+        let ps = &parts[b];
+        let mass: f64 = ps.iter().map(|p| p.mass).sum();
+        if mass <= 0.0 {
+            let k = parent_joint[l].unwrap_or(0);
+            let j = &joints[k];
+            cx.error(
+                links[l].span,
+                format!(
+                    "link `{}` has no mass but moves (joint `{}` is {})",
+                    links[l].raw,
+                    j.raw,
+                    j.kind.map_or("?", kind_name)
+                ),
+                format!(
+                    "give link `{}` an `<inertial>` with a positive mass and inertia, or make joint `{}` `fixed` to merge the link into its parent",
+                    links[l].raw, j.raw
+                ),
+            );
+            continue;
+        }
+        let (com, inertia) = if ps.len() == 1 {
+            (ps[0].com, ps[0].inertia)
+        } else {
+            let com = ps.iter().map(|p| p.com * p.mass).sum::<Vector3<f64>>() / mass;
+            let mut i = Matrix3::zeros();
+            for p in ps {
+                let d = p.com - com;
+                i += p.inertia + p.mass * (Matrix3::identity() * d.dot(&d) - d * d.transpose());
+            }
+            (com, i)
+        };
+        let diagonal = [(0, 1), (0, 2), (1, 2)]
+            .iter()
+            .all(|&(r, c)| inertia[(r, c)] == 0.0);
+        let inertia = if inertia == Matrix3::zeros() {
+            None
+        } else if diagonal {
+            Some(Inertia::Diag(
+                inertia[(0, 0)].into(),
+                inertia[(1, 1)].into(),
+                inertia[(2, 2)].into(),
+            ))
+        } else {
+            Some(matrix_inertia(&inertia))
+        };
+        spec_bodies.push(Body {
+            name: links[l].name.clone(),
+            mass: mass.into(),
+            com: v3(&com),
+            inertia,
+            markers: Vec::new(),
+        });
+    }
+
+    // Joints, forces, constraints.
+    let body_name = |b: Option<usize>| b.map_or("ground".to_string(), |b| links[bodies[b]].name.clone());
+    let mut spec_joints = Vec::new();
+    let mut forces = Vec::new();
+    let mut constraints = Vec::new();
+    let mut limits = Vec::new();
+    for &k in &order {
+        let j = &joints[k];
+        let (Some((p, _)), Some((c, _)), Some(kind)) = (&j.parent, &j.child, j.kind) else {
+            continue;
+        };
+        let (p, c) = (link_id(p), link_id(c));
+        let (pb, pose) = if p == world {
+            (None, Pose::identity())
+        } else {
+            match &assign[p] {
+                Some(a) => a.clone(),
+                None => continue,
+            }
+        };
+        let mut parent_frame = pose.then(&j.origin);
+        let mut child_frame = Pose::identity();
+        let axis = if j.axis.norm() > 0.0 {
+            j.axis / j.axis.norm()
+        } else {
+            Vector3::x()
+        };
+        let kind_spec = match kind {
+            Kind::Revolute | Kind::Continuous => JointKind::Revolute { axis: v3(&axis) },
+            Kind::Prismatic => JointKind::Prismatic { axis: v3(&axis) },
+            Kind::Floating => JointKind::Free,
+            Kind::Planar => {
+                if axis != Vector3::z() {
+                    let r = Rotation3::rotation_between(&Vector3::z(), &axis)
+                        .unwrap_or_else(|| {
+                            Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+                        })
+                        .into_inner();
+                    let turn = Pose {
+                        rot: r,
+                        pos: Vector3::zeros(),
+                        rpy: None,
+                    };
+                    parent_frame = parent_frame.then(&turn);
+                    child_frame = turn;
+                }
+                JointKind::Planar
+            }
+            Kind::Fixed => continue,
+        };
+        spec_joints.push(Joint {
+            name: j.name.clone(),
+            kind: kind_spec,
+            parent: body_name(pb),
+            child: links[c].name.clone(),
+            parent_frame: parent_frame.frame(),
+            child_frame: child_frame.frame(),
+            coordinates: None,
+            speeds: None,
+            q0: None,
+            u0: None,
+            locked: false,
+            prescribed: None,
+            cut: false,
+        });
+        if j.damping > 0.0 {
+            if kind.one_dof() {
+                forces.push(Force::JointSpringDamper {
+                    name: format!("{}_damping", j.name),
+                    joint: j.name.clone(),
+                    stiffness: 0.0.into(),
+                    damping: j.damping.into(),
+                    rest: Num::default(),
+                });
+            } else {
+                cx.notes.push(format!(
+                    "damping of {} joint `{}` is ignored (only 1-DOF joints carry URDF damping)",
+                    kind_name(kind),
+                    j.raw
+                ));
+            }
+        }
+        if j.friction != 0.0 {
+            cx.notes.push(format!(
+                "friction {} of joint `{}` is ignored (the model format has no Coulomb friction)",
+                j.friction, j.raw
+            ));
+        }
+        if !j.limit.is_empty() {
+            let l: Vec<String> = j.limit.iter().map(|(a, v)| format!("{a} {v}")).collect();
+            limits.push(format!("`{}`: {}", j.raw, l.join(", ")));
+        }
+        if let Some(m) = &j.mimic {
+            match joint_index.get(&m.joint).map(|&o| &joints[o]) {
+                None => {
+                    let help = match did_you_mean(&m.joint, joints.iter().map(|j| j.raw.as_str())) {
+                        Some(b) => format!("did you mean `{b}`?"),
+                        None => "name a revolute, continuous or prismatic joint".to_string(),
+                    };
+                    cx.error(m.span, format!("mimic of joint `{}` names unknown joint `{}`", j.raw, m.joint), help);
+                }
+                Some(o) if !o.kind.is_some_and(Kind::one_dof) || !kind.one_dof() || o.raw == j.raw => {
+                    cx.error(
+                        m.span,
+                        format!("joint `{}` cannot mimic joint `{}`", j.raw, o.raw),
+                        "mimic couples two different revolute, continuous or prismatic joints",
+                    );
+                }
+                Some(o) => constraints.push(Constraint::Holonomic {
+                    name: format!("{}_mimic", j.name),
+                    expr: format!(
+                        "{} - {}*{} - {}",
+                        j.name,
+                        fmt_num(m.multiplier),
+                        o.name,
+                        fmt_num(m.offset)
+                    ),
+                }),
+            }
+        }
+    }
+    for j in &joints {
+        if j.kind == Some(Kind::Fixed) && j.mimic.is_some() {
+            cx.notes.push(format!("mimic of fixed joint `{}` is ignored", j.raw));
+        }
+    }
+
+    if cx.diags.iter().any(Diagnostic::is_error) {
+        return Err(fail(cx.diags));
+    }
+
+    // Notes.
+    let mut notes = Vec::new();
+    if !merged.is_empty() {
+        let list: Vec<String> = merged.iter().map(|(c, p)| format!("`{c}` into `{p}`")).collect();
+        notes.push(format!(
+            "{} link(s) joined by fixed joints merged into one rigid body each (composite inertia; no work for them in the generated code): {}",
+            merged.len(),
+            list.join(", ")
+        ));
+    }
+    notes.append(&mut cx.notes);
+    if !constraints.is_empty() {
+        notes.push(format!(
+            "{} mimic joint(s) became holonomic constraints",
+            constraints.len()
+        ));
+    }
+    if !limits.is_empty() {
+        notes.push(format!(
+            "joint limits are not part of the model format and are ignored: {}",
+            limits.join("; ")
+        ));
+    }
+    let mut ign: Vec<_> = ignored.into_iter().collect();
+    ign.sort();
+    if !ign.is_empty() {
+        let list: Vec<String> = ign.iter().map(|(t, n)| format!("{n} {t}")).collect();
+        notes.push(format!("ignored (no dynamics): {}", list.join(", ")));
+    }
+    notes.push("gravity (0, 0, -9.81) m/s² (URDF has none); initial state zero".to_string());
+
+    let spec = Spec {
+        name: robot.clone(),
+        gravity: Some(V3(GRAVITY[0].into(), GRAVITY[1].into(), GRAVITY[2].into())),
+        parameters: Vec::new(),
+        bodies: spec_bodies,
+        joints: spec_joints,
+        forces,
+        constraints,
+        outputs: Vec::new(),
+    };
+    let mut text = format!("// Converted by eom-gen from the URDF `{}`.\n", src.path);
+    for n in &notes {
+        text += &format!("// - {n}\n");
+    }
+    text += &spec.to_ron();
+    if !text.ends_with('\n') {
+        text.push('\n');
+    }
+    Ok(Import {
+        spec,
+        source: Source::new(format!("{} (converted)", src.path), text),
+        notes,
+    })
+}
+
+fn root_elem<'a, 'i>(doc: &'a roxmltree::Document<'i>) -> Node<'a, 'i> {
+    doc.root_element()
+}
+
+fn kind_name(k: Kind) -> &'static str {
+    match k {
+        Kind::Revolute => "revolute",
+        Kind::Continuous => "continuous",
+        Kind::Prismatic => "prismatic",
+        Kind::Fixed => "fixed",
+        Kind::Floating => "floating",
+        Kind::Planar => "planar",
+    }
+}
+
+fn matrix_inertia(i: &Matrix3<f64>) -> Inertia {
+    let row = |r: usize| V3(i[(r, 0)].into(), i[(r, 1)].into(), i[(r, 2)].into());
+    Inertia::Matrix(row(0), row(1), row(2))
+}
