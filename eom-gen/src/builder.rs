@@ -56,7 +56,7 @@ impl Builder {
         Builder::default()
     }
 
-    /// Adds a model file (path relative to the crate being built).
+    /// Adds a model file, `.ron` or `.urdf` (path relative to the crate being built).
     pub fn model(mut self, path: impl Into<String>) -> Self {
         self.models.push(path.into());
         self

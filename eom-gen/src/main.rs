@@ -17,7 +17,7 @@ enum Command {
     /// Validate a model and print a summary (bodies, joints, coordinates,
     /// cut joints, Grübler count). Exit 0 if valid, 1 if not.
     Check {
-        /// The model file (`.ron`).
+        /// The model file (`.ron`, or `.urdf` converted on the fly).
         model: String,
         /// Print one JSON object instead of the summary.
         #[arg(long)]
@@ -25,7 +25,7 @@ enum Command {
     },
     /// Print the generated Rust source of a model.
     Dump {
-        /// The model file (`.ron`).
+        /// The model file (`.ron`, or `.urdf` converted on the fly).
         model: String,
         /// Write to this file instead of standard output.
         #[arg(short, long)]
@@ -37,7 +37,7 @@ enum Command {
     /// Evaluate the equations of motion at a state (default: the model's
     /// initial state), compiled (built once, cached) or interpreted.
     Eval {
-        /// The model file (`.ron`).
+        /// The model file (`.ron`, or `.urdf` converted on the fly).
         model: String,
         /// Positions, comma-separated (default: the model's q0).
         #[arg(long, allow_hyphen_values = true)]
@@ -60,7 +60,7 @@ enum Command {
     },
     /// Integrate the compiled model from its initial state.
     Simulate {
-        /// The model file (`.ron`).
+        /// The model file (`.ron`, or `.urdf` converted on the fly).
         model: String,
         /// End time, s.
         #[arg(long)]
@@ -94,9 +94,17 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Convert a URDF robot description into an eom model (RON).
+    Import {
+        /// The URDF file.
+        urdf: String,
+        /// Write the model to this file instead of standard output.
+        #[arg(short, long)]
+        output: Option<String>,
+    },
     /// Operation counts of the generated functions and generation time.
     Stats {
-        /// The model file (`.ron`).
+        /// The model file (`.ron`, or `.urdf` converted on the fly).
         model: String,
         /// Print one JSON object (the only format).
         #[arg(long)]
@@ -108,6 +116,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
         Command::Check { model, json } => check(&model, json),
+        Command::Import { urdf, output } => import(&urdf, output.as_deref()),
         Command::Dump { model, output, fma } => dump(&model, output.as_deref(), fma),
         Command::Stats { model, json: _ } => stats(&model),
         Command::Simulate {
@@ -155,13 +164,32 @@ fn main() -> ExitCode {
 }
 
 fn check(path: &str, json: bool) -> ExitCode {
-    match eom_gen::check_file(path) {
+    let mut notes = Vec::new();
+    let checked = if eom_gen::urdf::is_urdf(path) {
+        eom_gen::urdf::import_file(path).and_then(|i| {
+            notes = i.notes;
+            eom_gen::check(&i.source)
+        })
+    } else {
+        eom_gen::check_file(path)
+    };
+    match checked {
         Ok(checked) => {
             eprint!("{}", checked.source.render_all(&checked.warnings));
             if json {
-                println!("{}", eom_gen::summary::json(&checked));
+                let mut v = eom_gen::summary::json(&checked);
+                if eom_gen::urdf::is_urdf(path) {
+                    v["urdf_notes"] = serde_json::json!(notes);
+                }
+                println!("{v}");
             } else {
                 print!("{}", eom_gen::summary::human(&checked));
+                if !notes.is_empty() {
+                    println!("  urdf import:");
+                    for n in &notes {
+                        println!("    - {n}");
+                    }
+                }
             }
             ExitCode::SUCCESS
         }
@@ -174,6 +202,53 @@ fn check(path: &str, json: bool) -> ExitCode {
             eprintln!("error: `{path}` has {errors} error(s)");
             ExitCode::from(1)
         }
+    }
+}
+
+fn import(path: &str, output: Option<&str>) -> ExitCode {
+    let import = match eom_gen::urdf::import_file(path) {
+        Ok(i) => i,
+        Err(report) => {
+            eprint!("{report}");
+            let errors = report.diagnostics.iter().filter(|d| d.is_error()).count();
+            eprintln!("error: `{path}` has {errors} error(s)");
+            return ExitCode::from(1);
+        }
+    };
+    // The converted model must itself be valid; report it if not.
+    let checked = match eom_gen::check(&import.source) {
+        Ok(c) => c,
+        Err(report) => {
+            eprint!("{report}");
+            eprintln!("error: the model converted from `{path}` is invalid");
+            return ExitCode::from(1);
+        }
+    };
+    eprint!("{}", checked.source.render_all(&checked.warnings));
+    let sys = &checked.system;
+    eprintln!(
+        "imported `{path}`: model `{}`, {} bodies, {} joints, nq = {} ({})",
+        sys.name,
+        sys.bodies.len() - 1,
+        sys.joints.len(),
+        sys.nq(),
+        sys.coordinate_names().join(", ")
+    );
+    for n in &import.notes {
+        eprintln!("  - {n}");
+    }
+    match output {
+        None => {
+            print!("{}", import.source.text);
+            ExitCode::SUCCESS
+        }
+        Some(file) => match std::fs::write(file, &import.source.text) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: cannot write `{file}`: {e}");
+                ExitCode::from(1)
+            }
+        },
     }
 }
 
@@ -252,7 +327,7 @@ fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
             type_name: None,
             fma,
         };
-        match eom_gen::model::load(path)
+        match eom_gen::urdf::load_model(path)
             .map_err(eom_gen::GenerateError::Model)
             .and_then(|src| eom_gen::generate_with(&src, &opts))
         {

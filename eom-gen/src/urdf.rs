@@ -353,6 +353,19 @@ impl Ctx {
                         ),
                         "ixx, iyy, izz are the moments and ixy, ixz, iyz the tensor entries about the centre of mass; all principal moments must be positive (all zero for a point mass)",
                     );
+                } else {
+                    let mut p = [e[0], e[1], e[2]];
+                    p.sort_by(f64::total_cmp);
+                    if p[0] + p[1] < p[2] * (1.0 - 1e-9) {
+                        self.error(
+                            tag_span(i),
+                            format!(
+                                "inertia of link `{link}` violates the triangle inequality (principal moments {:.6} + {:.6} < {:.6})",
+                                p[0], p[1], p[2]
+                            ),
+                            "no mass distribution has these principal moments: each must be at most the sum of the other two",
+                        );
+                    }
                 }
             }
         }
@@ -1021,6 +1034,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     }
 
     if cx.diags.iter().any(Diagnostic::is_error) {
+        cx.diags.sort_by_key(|d| d.span.map(|s| s.start));
         return Err(fail(cx.diags));
     }
 

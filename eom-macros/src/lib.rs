@@ -4,6 +4,8 @@
 //! model errors become compile errors carrying the model's own
 //! `file:line:col` diagnostics. The expansion implements `eom_sim::Model`
 //! and `eom_sim::OdeSystem` on the struct, so the crate depends on `eom-sim`.
+//! A `.urdf` file is converted first (`eom_gen::urdf`); URDF errors carry the
+//! URDF's `file:line:col`.
 
 use proc_macro::TokenStream;
 use proc_macro2::TokenStream as Tokens;
@@ -61,7 +63,14 @@ fn expand(attr: Tokens, item: &ItemStruct) -> syn::Result<Tokens> {
     let text = std::fs::read_to_string(&full).map_err(|e| {
         syn::Error::new_spanned(&args.path, format!("cannot read model `{rel}`: {e}\n  = help: the path is relative to the directory of the crate's Cargo.toml"))
     })?;
-    let src = eom_gen::Source::new(rel.clone(), text);
+    let mut src = eom_gen::Source::new(rel.clone(), text);
+    if eom_gen::urdf::is_urdf(&rel) {
+        src = eom_gen::urdf::convert(&src)
+            .map_err(|e| {
+                syn::Error::new_spanned(&args.path, format!("URDF `{rel}` is invalid:\n{e}"))
+            })?
+            .source;
+    }
     let tokens = eom_gen::generate_tokens(&src, &item.ident.to_string()).map_err(|e| {
         syn::Error::new_spanned(&args.path, format!("model `{rel}` is invalid:\n{e}"))
     })?;
