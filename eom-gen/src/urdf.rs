@@ -41,6 +41,9 @@ use nalgebra::{Matrix3, Rotation3, SymmetricEigen, Vector3};
 use roxmltree::Node;
 use std::collections::HashMap;
 
+/// Suffix of the path of a converted model's [`Source`]: `robot.urdf (converted)`.
+pub const CONVERTED: &str = " (converted)";
+
 /// Gravity given to imported models (URDF has none), m/s².
 pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
 
@@ -225,7 +228,8 @@ fn tag_span(n: Node<'_, '_>) -> Span {
 }
 
 fn child<'a, 'i>(n: Node<'a, 'i>, tag: &str) -> Option<Node<'a, 'i>> {
-    n.children().find(|c| c.is_element() && c.tag_name().name() == tag)
+    n.children()
+        .find(|c| c.is_element() && c.tag_name().name() == tag)
 }
 
 impl Ctx {
@@ -339,7 +343,8 @@ impl Ctx {
         let mut inertia = Matrix3::zeros();
         if let Some(i) = child(n, "inertia") {
             let mut g = |name: &str| self.number(i, name, 0.0);
-            let (xx, xy, xz, yy, yz, zz) = (g("ixx"), g("ixy"), g("ixz"), g("iyy"), g("iyz"), g("izz"));
+            let (xx, xy, xz, yy, yz, zz) =
+                (g("ixx"), g("ixy"), g("ixz"), g("iyy"), g("iyz"), g("izz"));
             inertia = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
             if inertia != Matrix3::zeros() && mass > 0.0 {
                 let e = SymmetricEigen::new(inertia).eigenvalues;
@@ -441,7 +446,10 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     if root.tag_name().name() != "robot" {
         cx.error(
             tag_span(root),
-            format!("the root element is `<{}>`, not `<robot>`", root.tag_name().name()),
+            format!(
+                "the root element is `<{}>`, not `<robot>`",
+                root.tag_name().name()
+            ),
             "a URDF file is `<robot name=\"…\"> <link …/> <joint …/> … </robot>`",
         );
         return Err(fail(cx.diags));
@@ -498,8 +506,10 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     let names = unique_names(links.iter().map(|l| l.raw.as_str()), &mut taken);
     for (l, name) in links.iter_mut().zip(names) {
         if name != l.raw {
-            cx.notes
-                .push(format!("link `{}` is named `{name}` (not an identifier)", l.raw));
+            cx.notes.push(format!(
+                "link `{}` is named `{name}` (not an identifier)",
+                l.raw
+            ));
         }
         l.name = name;
     }
@@ -546,10 +556,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
             let Some(e) = child(*n, tag) else {
                 cx.error(
                     tag_span(*n),
-                    format!(
-                        "joint `{}` has no `<{tag}>`",
-                        raw.as_deref().unwrap_or("?")
-                    ),
+                    format!("joint `{}` has no `<{tag}>`", raw.as_deref().unwrap_or("?")),
                     format!("add `<{tag} link=\"…\"/>`"),
                 );
                 return None;
@@ -572,7 +579,8 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         let mut axis = Vector3::x();
         if let Some(a) = child(*n, "axis") {
             axis = cx.vec3(a, "xyz", Vector3::x());
-            if axis.norm() < 1e-12 && kind.is_some_and(|k| k != Kind::Fixed && k != Kind::Floating) {
+            if axis.norm() < 1e-12 && kind.is_some_and(|k| k != Kind::Fixed && k != Kind::Floating)
+            {
                 cx.error(
                     cx.attr_span(a, "xyz"),
                     "the joint axis is zero".to_string(),
@@ -638,8 +646,10 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     let names = unique_names(joints.iter().map(|j| j.raw.as_str()), &mut taken);
     for (j, name) in joints.iter_mut().zip(names) {
         if name != j.raw {
-            cx.notes
-                .push(format!("joint `{}` is named `{name}` (not an identifier)", j.raw));
+            cx.notes.push(format!(
+                "joint `{}` is named `{name}` (not an identifier)",
+                j.raw
+            ));
         }
         j.name = name;
     }
@@ -704,7 +714,10 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
             );
         }
     } else if roots.len() > 1 {
-        let list: Vec<String> = roots.iter().map(|&l| format!("`{}`", links[l].raw)).collect();
+        let list: Vec<String> = roots
+            .iter()
+            .map(|&l| format!("`{}`", links[l].raw))
+            .collect();
         for &l in &roots {
             cx.error(
                 links[l].span,
@@ -907,7 +920,8 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     }
 
     // Joints, forces, constraints.
-    let body_name = |b: Option<usize>| b.map_or("ground".to_string(), |b| links[bodies[b]].name.clone());
+    let body_name =
+        |b: Option<usize>| b.map_or("ground".to_string(), |b| links[bodies[b]].name.clone());
     let mut spec_joints = Vec::new();
     let mut forces = Vec::new();
     let mut constraints = Vec::new();
@@ -1005,9 +1019,18 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
                         Some(b) => format!("did you mean `{b}`?"),
                         None => "name a revolute, continuous or prismatic joint".to_string(),
                     };
-                    cx.error(m.span, format!("mimic of joint `{}` names unknown joint `{}`", j.raw, m.joint), help);
+                    cx.error(
+                        m.span,
+                        format!(
+                            "mimic of joint `{}` names unknown joint `{}`",
+                            j.raw, m.joint
+                        ),
+                        help,
+                    );
                 }
-                Some(o) if !o.kind.is_some_and(Kind::one_dof) || !kind.one_dof() || o.raw == j.raw => {
+                Some(o)
+                    if !o.kind.is_some_and(Kind::one_dof) || !kind.one_dof() || o.raw == j.raw =>
+                {
                     cx.error(
                         m.span,
                         format!("joint `{}` cannot mimic joint `{}`", j.raw, o.raw),
@@ -1029,7 +1052,8 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     }
     for j in &joints {
         if j.kind == Some(Kind::Fixed) && j.mimic.is_some() {
-            cx.notes.push(format!("mimic of fixed joint `{}` is ignored", j.raw));
+            cx.notes
+                .push(format!("mimic of fixed joint `{}` is ignored", j.raw));
         }
     }
 
@@ -1041,7 +1065,10 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     // Notes.
     let mut notes = Vec::new();
     if !merged.is_empty() {
-        let list: Vec<String> = merged.iter().map(|(c, p)| format!("`{c}` into `{p}`")).collect();
+        let list: Vec<String> = merged
+            .iter()
+            .map(|(c, p)| format!("`{c}` into `{p}`"))
+            .collect();
         notes.push(format!(
             "{} link(s) joined by fixed joints merged into one rigid body each (composite inertia; no work for them in the generated code): {}",
             merged.len(),
@@ -1089,7 +1116,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     }
     Ok(Import {
         spec,
-        source: Source::new(format!("{} (converted)", src.path), text),
+        source: Source::new(format!("{}{CONVERTED}", src.path), text),
         notes,
     })
 }

@@ -55,7 +55,13 @@ fn two_link_arm_mass_matrix_by_hand() {
         Force::JointSpringDamper { joint, stiffness, damping, .. }
             if joint == "elbow" && stiffness.is_zero() && val(damping) == 0.1)));
     let notes = imp.notes.join("\n");
-    for needle in ["limits", "friction 0.05", "1 <visual>", "1 <collision>", "-9.81"] {
+    for needle in [
+        "limits",
+        "friction 0.05",
+        "1 <visual>",
+        "1 <collision>",
+        "-9.81",
+    ] {
         assert!(notes.contains(needle), "notes lack `{needle}`:\n{notes}");
     }
     // The link-2 inertial is turned 0.3 rad about z: I = R diag Rᵀ.
@@ -179,7 +185,9 @@ fn floating_base() {
     let sys = &c.system;
     assert_eq!(
         sys.coordinate_names(),
-        ["base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz", "swing"]
+        [
+            "base_x", "base_y", "base_z", "base_qw", "base_qx", "base_qy", "base_qz", "swing"
+        ]
     );
     assert_eq!((sys.nq(), sys.nu()), (8, 7));
     assert!(matches!(imp.spec.joints[0].kind, JointKind::Free));
@@ -213,7 +221,9 @@ fn mimic_joint_is_a_constraint() {
 }
 
 fn line_col(text: &str, needle: &str) -> String {
-    let at = text.find(needle).unwrap_or_else(|| panic!("`{needle}` not in file"));
+    let at = text
+        .find(needle)
+        .unwrap_or_else(|| panic!("`{needle}` not in file"));
     let line = 1 + text[..at].matches('\n').count();
     let col = 1 + at - text[..at].rfind('\n').map_or(0, |i| i + 1);
     format!("{line}:{col}")
@@ -230,7 +240,11 @@ fn bad_urdf_reports_everything_with_positions() {
     };
     let out = report.to_string();
     let expect = [
-        ("inertia ixx=\"0.1\" ixy=\"0.5\"", 0, "not positive definite"),
+        (
+            "inertia ixx=\"0.1\" ixy=\"0.5\"",
+            0,
+            "not positive definite",
+        ),
         ("revolut\"", 0, "unknown joint type `revolut`"),
         ("gohst", 0, "link `gohst` is not defined"),
         ("base\"/>\n  <link name=\"arm\"", 0, "2 roots"),
@@ -307,7 +321,11 @@ fn more_diagnostics() {
     let c = check(&i.source).unwrap_or_else(|r| panic!("{r}"));
     assert_eq!(c.system.name, "my_robot");
     assert_eq!(c.system.coordinate_names(), ["sin_"]);
-    assert!(i.notes.iter().any(|n| n.contains("`arm/1` is named `arm_1`")));
+    assert!(
+        i.notes
+            .iter()
+            .any(|n| n.contains("`arm/1` is named `arm_1`"))
+    );
 }
 
 /// arm7 written as URDF: the same generated dynamics as `models/arm7.ron`
@@ -377,7 +395,11 @@ fn cli_import_and_check() {
         v["coordinate_names"],
         serde_json::json!(["hip", "shoulder_r", "shoulder_l", "elbow_l"])
     );
-    assert!(v["urdf_notes"][0].as_str().is_some_and(|n| n.contains("merged")));
+    assert!(
+        v["urdf_notes"][0]
+            .as_str()
+            .is_some_and(|n| n.contains("merged"))
+    );
 
     let o = eom_gen_cli(&["eval", "--interpret", &path("arm2.urdf"), "--q", "0,0"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -385,6 +407,81 @@ fn cli_import_and_check() {
     let o = eom_gen_cli(&["check", &path("bad.urdf")]);
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("bad.urdf:14:26: error: unknown joint type"), "{err}");
+    assert!(
+        err.contains("bad.urdf:14:26: error: unknown joint type"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `planar` moves in the plane normal to `axis` (here y: the x-z plane).
+#[test]
+fn planar_joint_about_its_axis() {
+    let text = "<robot name='slab'><link name='world'/>
+        <link name='slab'><inertial><mass value='2'/>
+        <inertia ixx='0.1' iyy='0.2' izz='0.3'/></inertial></link>
+        <joint name='p' type='planar'><parent link='world'/><child link='slab'/>
+        <origin xyz='0 0 1'/><axis xyz='0 1 0'/></joint></robot>";
+    let i = convert(&Source::new("slab.urdf", text)).unwrap_or_else(|r| panic!("{r}"));
+    let c = check(&i.source).unwrap_or_else(|r| panic!("{r}\n{}", i.source.text));
+    let sys = &c.system;
+    assert_eq!(sys.coordinate_names(), ["p_x", "p_y", "p_angle"]);
+    let num = Numeric::new(sys).expect("numeric");
+    let t = num
+        .terms(&[0.3, -0.2, 0.7], &[0.0; 3], 0.0, &[])
+        .expect("terms");
+    // Two translations (mass 2) and the rotation about y (iyy = 0.2).
+    assert_matrix_eq(
+        &t.mass_matrix,
+        &[
+            vec![2.0, 0.0, 0.0],
+            vec![0.0, 2.0, 0.0],
+            vec![0.0, 0.0, 0.2],
+        ],
+        1e-12,
+        "M",
+    );
+    // Gravity (−z) lies in the plane: it acts on one translation only.
+    let weight = 2.0 * 9.81;
+    let b: f64 = t.bias.iter().map(|b| b * b).sum::<f64>().sqrt();
+    assert!(close(b, weight, 1e-12), "{:?}", t.bias);
+    assert!(t.bias[2].abs() < 1e-12);
+}
+
+/// No input makes the importer panic: every truncation and many byte
+/// changes of the test files are either converted or reported.
+#[test]
+fn no_panics_on_broken_files() {
+    let mut rng = Rng(99);
+    for name in [
+        "arm2.urdf",
+        "tree.urdf",
+        "floating.urdf",
+        "mimic.urdf",
+        "bad.urdf",
+    ] {
+        let text = std::fs::read_to_string(path(name)).expect("read");
+        let mut variants: Vec<String> = (0..text.len())
+            .step_by(7)
+            .filter(|&k| text.is_char_boundary(k))
+            .map(|k| text[..k].to_string())
+            .collect();
+        let swaps = [
+            "\"", "<", ">", "/", "0", "-1", "nan", "x", " ", "world", "fixed",
+        ];
+        for _ in 0..300 {
+            let at = ((rng.uniform() + 1.0) / 2.0 * text.len() as f64) as usize;
+            let s =
+                swaps[((rng.uniform() + 1.0) / 2.0 * swaps.len() as f64) as usize % swaps.len()];
+            if text.is_char_boundary(at) && text.is_char_boundary((at + 1).min(text.len())) {
+                let end = (at + 1).min(text.len());
+                variants.push(format!("{}{s}{}", &text[..at], &text[end..]));
+            }
+        }
+        for v in variants {
+            if let Ok(i) = convert(&Source::new(name, v.as_str())) {
+                let _ = check(&i.source);
+            }
+        }
+    }
 }
