@@ -855,7 +855,10 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         parts[*b].push(Part {
             mass: i.mass,
             com: frame.pos,
-            inertia: frame.rot * i.inertia * frame.rot.transpose(),
+            inertia: {
+                let turned = frame.rot * i.inertia * frame.rot.transpose();
+                (turned + turned.transpose()) / 2.0
+            },
         });
     }
     if ground_mass > 0.0 {
