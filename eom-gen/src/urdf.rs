@@ -643,7 +643,8 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
             limit,
         });
     }
-    let names = unique_names(joints.iter().map(|j| j.raw.as_str()), &mut taken);
+    // Joint names are a namespace of their own (a joint may share a link's name).
+    let names = unique_names(joints.iter().map(|j| j.raw.as_str()), &mut Vec::new());
     for (j, name) in joints.iter_mut().zip(names) {
         if name != j.raw {
             cx.notes.push(format!(

@@ -326,6 +326,14 @@ fn more_diagnostics() {
             .iter()
             .any(|n| n.contains("`arm/1` is named `arm_1`"))
     );
+    // Links and joints are separate namespaces: a shared name is kept.
+    let text = "<robot name='r'><link name='a'/><link name='b'><inertial><mass value='1'/>
+        <inertia ixx='1' iyy='1' izz='1'/></inertial></link>
+        <joint name='b' type='prismatic'><parent link='a'/><child link='b'/></joint></robot>";
+    let i = convert(&Source::new("s.urdf", text)).unwrap_or_else(|r| panic!("{r}"));
+    let c = check(&i.source).unwrap_or_else(|r| panic!("{r}"));
+    assert_eq!(c.system.coordinate_names(), ["b"]);
+    assert_eq!(i.spec.bodies[0].name, "b");
 }
 
 /// arm7 written as URDF: the same generated dynamics as `models/arm7.ron`
