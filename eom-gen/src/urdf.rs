@@ -17,7 +17,8 @@
 //!   inertia, so the generated code does no work for them;
 //! - the link that is never a child (the root) is welded to `ground`: it and
 //!   the links fixed to it are part of the ground. A link named `world` is
-//!   the ground itself, so `world` → `floating` → `base` is a free base;
+//!   the ground itself, so `world` → `floating` → `base` is a free base,
+//!   and so is a `floating` joint without `<parent>`;
 //! - `inertial`: mass, centre of mass from `origin xyz`, the tensor turned
 //!   into link axes (`R I Rᵀ`) when the `origin rpy` is not zero;
 //! - `mimic` → a holonomic constraint `q - multiplier·q_other - offset = 0`;
@@ -573,7 +574,12 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
             }
             Some((l, at))
         };
-        let parent = link_ref("parent", &mut cx);
+        // A `floating` joint without `<parent>` hangs off the ground (free base).
+        let parent = if kind == Some(Kind::Floating) && child(*n, "parent").is_none() {
+            Some(("world".to_string(), tag_span(*n)))
+        } else {
+            link_ref("parent", &mut cx)
+        };
         let child_link = link_ref("child", &mut cx);
         let origin = cx.origin(*n);
         let mut axis = Vector3::x();

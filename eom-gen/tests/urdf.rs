@@ -493,3 +493,16 @@ fn no_panics_on_broken_files() {
         }
     }
 }
+
+/// A `floating` joint without `<parent>` (no `world` link) is a free base too.
+#[test]
+fn parentless_floating_root() {
+    let text = "<robot name='drone'><link name='frame'><inertial><mass value='1.2'/>
+        <inertia ixx='0.01' iyy='0.01' izz='0.02'/></inertial></link>
+        <joint name='fly' type='floating'><child link='frame'/></joint></robot>";
+    let i = convert(&Source::new("drone.urdf", text)).unwrap_or_else(|r| panic!("{r}"));
+    let c = check(&i.source).unwrap_or_else(|r| panic!("{r}"));
+    assert!(matches!(i.spec.joints[0].kind, JointKind::Free));
+    assert_eq!(i.spec.joints[0].parent, "ground");
+    assert_eq!((c.system.nq(), c.system.nu()), (7, 6));
+}
