@@ -472,7 +472,6 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     }
     let mut taken = Vec::new();
     let mut link_index: HashMap<String, usize> = HashMap::new();
-    let mut seen_links = Vec::new();
     for n in &link_nodes {
         let Some(raw) = cx.required(*n, "name", "the link's name") else {
             continue;
@@ -496,7 +495,6 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         }
         let inertial = child(*n, "inertial").and_then(|i| cx.inertial(&raw, i));
         link_index.insert(raw.clone(), links.len());
-        seen_links.push(raw.clone());
         links.push(Link {
             raw,
             name: String::new(),
@@ -519,112 +517,10 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     let mut joints: Vec<UJoint> = Vec::new();
     let mut joint_index: HashMap<String, usize> = HashMap::new();
     for n in &joint_nodes {
-        let raw = cx.required(*n, "name", "the joint's name");
-        let kind = match n.attribute("type") {
-            None => {
-                cx.error(
-                    tag_span(*n),
-                    "`<joint>` has no `type`".to_string(),
-                    format!("add `type=\"…\"`: one of {KINDS}"),
-                );
-                None
-            }
-            Some(t) => {
-                let k = Kind::parse(t);
-                if k.is_none() {
-                    let known = [
-                        "revolute",
-                        "continuous",
-                        "prismatic",
-                        "fixed",
-                        "floating",
-                        "planar",
-                    ];
-                    let help = match did_you_mean(t, known) {
-                        Some(b) => format!("did you mean `{b}`? URDF joint types are {KINDS}"),
-                        None => format!("URDF joint types are {KINDS}"),
-                    };
-                    cx.error(
-                        cx.attr_span(*n, "type"),
-                        format!("unknown joint type `{t}`"),
-                        help,
-                    );
-                }
-                k
-            }
+        let Some(joint) = read_joint(&mut cx, *n, &links, &link_index) else {
+            continue;
         };
-        let link_ref = |tag: &str, cx: &mut Ctx| -> Option<(String, Span)> {
-            let Some(e) = child(*n, tag) else {
-                cx.error(
-                    tag_span(*n),
-                    format!("joint `{}` has no `<{tag}>`", raw.as_deref().unwrap_or("?")),
-                    format!("add `<{tag} link=\"…\"/>`"),
-                );
-                return None;
-            };
-            let l = cx.required(e, "link", "a link name")?;
-            let at = cx.attr_span(e, "link");
-            if l != "world" && !link_index.contains_key(&l) {
-                let help = match did_you_mean(&l, seen_links.iter().map(String::as_str)) {
-                    Some(b) => format!("did you mean `{b}`?"),
-                    None => "define it with `<link name=\"…\"/>`".to_string(),
-                };
-                cx.error(at, format!("link `{l}` is not defined"), help);
-                return None;
-            }
-            Some((l, at))
-        };
-        // A `floating` joint without `<parent>` hangs off the ground (free base).
-        let parent = if kind == Some(Kind::Floating) && child(*n, "parent").is_none() {
-            Some(("world".to_string(), tag_span(*n)))
-        } else {
-            link_ref("parent", &mut cx)
-        };
-        let child_link = link_ref("child", &mut cx);
-        let origin = cx.origin(*n);
-        let mut axis = Vector3::x();
-        if let Some(a) = child(*n, "axis") {
-            axis = cx.vec3(a, "xyz", Vector3::x());
-            if axis.norm() < 1e-12 && kind.is_some_and(|k| k != Kind::Fixed && k != Kind::Floating)
-            {
-                cx.error(
-                    cx.attr_span(a, "xyz"),
-                    "the joint axis is zero".to_string(),
-                    "give a direction, e.g. `xyz=\"0 0 1\"`",
-                );
-                axis = Vector3::x();
-            }
-        }
-        let mimic = child(*n, "mimic").and_then(|m| {
-            let j = cx.required(m, "joint", "the name of the joint to follow")?;
-            Some(Mimic {
-                span: cx.attr_span(m, "joint"),
-                joint: j,
-                multiplier: cx.number(m, "multiplier", 1.0),
-                offset: cx.number(m, "offset", 0.0),
-            })
-        });
-        let (mut damping, mut friction) = (0.0, 0.0);
-        if let Some(d) = child(*n, "dynamics") {
-            damping = cx.number(d, "damping", 0.0);
-            friction = cx.number(d, "friction", 0.0);
-            if damping < 0.0 {
-                cx.error(
-                    cx.attr_span(d, "damping"),
-                    format!("negative damping ({damping})"),
-                    "damping is zero or positive (N m s/rad or N s/m)",
-                );
-            }
-        }
-        let mut limit = Vec::new();
-        if let Some(l) = child(*n, "limit") {
-            for a in ["lower", "upper", "effort", "velocity"] {
-                if l.attribute(a).is_some() {
-                    limit.push((a.to_string(), cx.number(l, a, 0.0)));
-                }
-            }
-        }
-        let Some(raw) = raw else { continue };
+        let raw = joint.raw.clone();
         if joint_index.contains_key(&raw) {
             cx.error(
                 cx.attr_span(*n, "name"),
@@ -633,21 +529,8 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
             );
             continue;
         }
-        joint_index.insert(raw.clone(), joints.len());
-        joints.push(UJoint {
-            span: cx.attr_span(*n, "name"),
-            raw,
-            name: String::new(),
-            kind,
-            parent,
-            child: child_link,
-            origin,
-            axis,
-            mimic,
-            damping,
-            friction,
-            limit,
-        });
+        joint_index.insert(raw, joints.len());
+        joints.push(joint);
     }
     // Joint names are a namespace of their own (a joint may share a link's name).
     let names = unique_names(joints.iter().map(|j| j.raw.as_str()), &mut Vec::new());
@@ -840,11 +723,6 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     }
 
     // Composite inertia of each body.
-    struct Part {
-        mass: f64,
-        com: Vector3<f64>,
-        inertia: Matrix3<f64>,
-    }
     let mut parts: Vec<Vec<Part>> = (0..bodies.len()).map(|_| Vec::new()).collect();
     let mut ground_mass = 0.0;
     for (l, link) in links.iter().enumerate() {
@@ -895,36 +773,12 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
             );
             continue;
         }
-        let (com, inertia) = if ps.len() == 1 {
-            (ps[0].com, ps[0].inertia)
-        } else {
-            let com = ps.iter().map(|p| p.com * p.mass).sum::<Vector3<f64>>() / mass;
-            let mut i = Matrix3::zeros();
-            for p in ps {
-                let d = p.com - com;
-                i += p.inertia + p.mass * (Matrix3::identity() * d.dot(&d) - d * d.transpose());
-            }
-            (com, i)
-        };
-        let diagonal = [(0, 1), (0, 2), (1, 2)]
-            .iter()
-            .all(|&(r, c)| inertia[(r, c)] == 0.0);
-        let inertia = if inertia == Matrix3::zeros() {
-            None
-        } else if diagonal {
-            Some(Inertia::Diag(
-                inertia[(0, 0)].into(),
-                inertia[(1, 1)].into(),
-                inertia[(2, 2)].into(),
-            ))
-        } else {
-            Some(matrix_inertia(&inertia))
-        };
+        let (com, inertia) = composite(ps, mass);
         spec_bodies.push(Body {
             name: links[l].name.clone(),
             mass: mass.into(),
             com: v3(&com),
-            inertia,
+            inertia: inertia_spec(&inertia),
             markers: Vec::new(),
         });
     }
@@ -1131,6 +985,133 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     })
 }
 
+/// Reads one `<joint>` (None without a name; every problem is reported).
+fn read_joint(
+    cx: &mut Ctx,
+    n: Node<'_, '_>,
+    links: &[Link],
+    link_index: &HashMap<String, usize>,
+) -> Option<UJoint> {
+    let raw = cx.required(n, "name", "the joint's name");
+    let kind = match n.attribute("type") {
+        None => {
+            cx.error(
+                tag_span(n),
+                "`<joint>` has no `type`".to_string(),
+                format!("add `type=\"…\"`: one of {KINDS}"),
+            );
+            None
+        }
+        Some(t) => {
+            let k = Kind::parse(t);
+            if k.is_none() {
+                let known = [
+                    "revolute",
+                    "continuous",
+                    "prismatic",
+                    "fixed",
+                    "floating",
+                    "planar",
+                ];
+                let help = match did_you_mean(t, known) {
+                    Some(b) => format!("did you mean `{b}`? URDF joint types are {KINDS}"),
+                    None => format!("URDF joint types are {KINDS}"),
+                };
+                cx.error(
+                    cx.attr_span(n, "type"),
+                    format!("unknown joint type `{t}`"),
+                    help,
+                );
+            }
+            k
+        }
+    };
+    let link_ref = |tag: &str, cx: &mut Ctx| -> Option<(String, Span)> {
+        let Some(e) = child(n, tag) else {
+            cx.error(
+                tag_span(n),
+                format!("joint `{}` has no `<{tag}>`", raw.as_deref().unwrap_or("?")),
+                format!("add `<{tag} link=\"…\"/>`"),
+            );
+            return None;
+        };
+        let l = cx.required(e, "link", "a link name")?;
+        let at = cx.attr_span(e, "link");
+        if l != "world" && !link_index.contains_key(&l) {
+            let help = match did_you_mean(&l, links.iter().map(|l| l.raw.as_str())) {
+                Some(b) => format!("did you mean `{b}`?"),
+                None => "define it with `<link name=\"…\"/>`".to_string(),
+            };
+            cx.error(at, format!("link `{l}` is not defined"), help);
+            return None;
+        }
+        Some((l, at))
+    };
+    // A `floating` joint without `<parent>` hangs off the ground (free base).
+    let parent = if kind == Some(Kind::Floating) && child(n, "parent").is_none() {
+        Some(("world".to_string(), tag_span(n)))
+    } else {
+        link_ref("parent", cx)
+    };
+    let child_link = link_ref("child", cx);
+    let origin = cx.origin(n);
+    let mut axis = Vector3::x();
+    if let Some(a) = child(n, "axis") {
+        axis = cx.vec3(a, "xyz", Vector3::x());
+        if axis.norm() < 1e-12 && kind.is_some_and(|k| k != Kind::Fixed && k != Kind::Floating) {
+            cx.error(
+                cx.attr_span(a, "xyz"),
+                "the joint axis is zero".to_string(),
+                "give a direction, e.g. `xyz=\"0 0 1\"`",
+            );
+            axis = Vector3::x();
+        }
+    }
+    let mimic = child(n, "mimic").and_then(|m| {
+        let j = cx.required(m, "joint", "the name of the joint to follow")?;
+        Some(Mimic {
+            span: cx.attr_span(m, "joint"),
+            joint: j,
+            multiplier: cx.number(m, "multiplier", 1.0),
+            offset: cx.number(m, "offset", 0.0),
+        })
+    });
+    let (mut damping, mut friction) = (0.0, 0.0);
+    if let Some(d) = child(n, "dynamics") {
+        damping = cx.number(d, "damping", 0.0);
+        friction = cx.number(d, "friction", 0.0);
+        if damping < 0.0 {
+            cx.error(
+                cx.attr_span(d, "damping"),
+                format!("negative damping ({damping})"),
+                "damping is zero or positive (N m s/rad or N s/m)",
+            );
+        }
+    }
+    let mut limit = Vec::new();
+    if let Some(l) = child(n, "limit") {
+        for a in ["lower", "upper", "effort", "velocity"] {
+            if l.attribute(a).is_some() {
+                limit.push((a.to_string(), cx.number(l, a, 0.0)));
+            }
+        }
+    }
+    Some(UJoint {
+        span: cx.attr_span(n, "name"),
+        raw: raw?,
+        name: String::new(),
+        kind,
+        parent,
+        child: child_link,
+        origin,
+        axis,
+        mimic,
+        damping,
+        friction,
+        limit,
+    })
+}
+
 fn root_elem<'a, 'i>(doc: &'a roxmltree::Document<'i>) -> Node<'a, 'i> {
     doc.root_element()
 }
@@ -1146,7 +1127,44 @@ fn kind_name(k: Kind) -> &'static str {
     }
 }
 
-fn matrix_inertia(i: &Matrix3<f64>) -> Inertia {
-    let row = |r: usize| V3(i[(r, 0)].into(), i[(r, 1)].into(), i[(r, 2)].into());
-    Inertia::Matrix(row(0), row(1), row(2))
+/// A link's mass, centre of mass and inertia about it, in body axes.
+struct Part {
+    mass: f64,
+    com: Vector3<f64>,
+    inertia: Matrix3<f64>,
+}
+
+/// Centre of mass and inertia about it of rigidly joined parts of total
+/// mass `mass > 0` (parallel-axis theorem; one part is copied exactly).
+fn composite(parts: &[Part], mass: f64) -> (Vector3<f64>, Matrix3<f64>) {
+    if let [p] = parts {
+        return (p.com, p.inertia);
+    }
+    let com = parts.iter().map(|p| p.com * p.mass).sum::<Vector3<f64>>() / mass;
+    let mut i = Matrix3::zeros();
+    for p in parts {
+        let d = p.com - com;
+        i += p.inertia + p.mass * (Matrix3::identity() * d.dot(&d) - d * d.transpose());
+    }
+    (com, i)
+}
+
+/// `Diag` when the products of inertia vanish, `Matrix` otherwise, `None`
+/// (a point mass) for the zero tensor.
+fn inertia_spec(i: &Matrix3<f64>) -> Option<Inertia> {
+    let diagonal = [(0, 1), (0, 2), (1, 2)]
+        .iter()
+        .all(|&(r, c)| i[(r, c)] == 0.0);
+    if *i == Matrix3::zeros() {
+        None
+    } else if diagonal {
+        Some(Inertia::Diag(
+            i[(0, 0)].into(),
+            i[(1, 1)].into(),
+            i[(2, 2)].into(),
+        ))
+    } else {
+        let row = |r: usize| V3(i[(r, 0)].into(), i[(r, 1)].into(), i[(r, 2)].into());
+        Some(Inertia::Matrix(row(0), row(1), row(2)))
+    }
 }
