@@ -439,23 +439,23 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
                 .with_help("a URDF is an XML file with a `<robot>` root element"),
         ])
     })?;
-    let root = doc.root_element();
+    let robot_el = doc.root_element();
     let mut cx = Ctx {
         diags: Vec::new(),
         notes: Vec::new(),
     };
-    if root.tag_name().name() != "robot" {
+    if robot_el.tag_name().name() != "robot" {
         cx.error(
-            tag_span(root),
+            tag_span(robot_el),
             format!(
                 "the root element is `<{}>`, not `<robot>`",
-                root.tag_name().name()
+                robot_el.tag_name().name()
             ),
             "a URDF file is `<robot name=\"…\"> <link …/> <joint …/> … </robot>`",
         );
         return Err(fail(cx.diags));
     }
-    let robot_raw = root.attribute("name").unwrap_or("robot");
+    let robot_raw = robot_el.attribute("name").unwrap_or("robot");
     let robot = identifier(robot_raw);
 
     // Links.
@@ -463,7 +463,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     let mut link_nodes = Vec::new();
     let mut ignored: HashMap<String, usize> = HashMap::new();
     let mut joint_nodes = Vec::new();
-    for n in root.children().filter(|n| n.is_element()) {
+    for n in robot_el.children().filter(|n| n.is_element()) {
         match n.tag_name().name() {
             "link" => link_nodes.push(n),
             "joint" => joint_nodes.push(n),
@@ -624,13 +624,13 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         root = r;
     } else if !links.is_empty() {
         cx.error(
-            tag_span(root_elem(&doc)),
+            tag_span(robot_el),
             "every link is a child: the joints form a cycle".to_string(),
             "a URDF is a tree with one root link that is never a child",
         );
     } else {
         cx.error(
-            tag_span(root_elem(&doc)),
+            tag_span(robot_el),
             "the URDF has no links".to_string(),
             "add `<link name=\"…\">` elements",
         );
@@ -1110,10 +1110,6 @@ fn read_joint(
         friction,
         limit,
     })
-}
-
-fn root_elem<'a, 'i>(doc: &'a roxmltree::Document<'i>) -> Node<'a, 'i> {
-    doc.root_element()
 }
 
 fn kind_name(k: Kind) -> &'static str {
