@@ -412,6 +412,15 @@ fn cli_import_and_check() {
     let o = eom_gen_cli(&["eval", "--interpret", &path("arm2.urdf"), "--q", "0,0"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 
+    let o = eom_gen_cli(&["dump", &path("arm2.urdf")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let head = String::from_utf8_lossy(&o.stdout);
+    let first = head.lines().next().unwrap_or_default();
+    assert!(
+        first.contains("arm2.urdf`") && !first.contains("(converted)"),
+        "{first}"
+    );
+
     let o = eom_gen_cli(&["check", &path("bad.urdf")]);
     assert_eq!(o.status.code(), Some(1));
     let err = String::from_utf8_lossy(&o.stderr);
