@@ -13,7 +13,7 @@
 use crate::interpret::{Point, run};
 use crate::mech::Formulation;
 use crate::sym::Program;
-use crate::system::{JointType, System};
+use crate::system::System;
 use nalgebra::{DMatrix, DVector};
 use std::cell::Cell;
 
@@ -55,14 +55,7 @@ impl<'a, const N: usize> Constrained<'a, N> {
     /// The constrained system of `f` (which must have closure conditions).
     pub fn new(f: &'a Formulation, sys: &'a System, mode: Stabilization) -> Option<Self> {
         let closure = f.constraints.as_ref()?;
-        let quaternions = sys
-            .free_joints()
-            .filter_map(|j| match j.kind {
-                JointType::Spherical => Some(j.q_index),
-                JointType::Free => Some(j.q_index + 3),
-                _ => None,
-            })
-            .collect();
+        let quaternions = sys.quaternion_indices();
         Some(Constrained {
             f,
             sys,

@@ -190,14 +190,7 @@ fn simulate_n<const N: usize>(
         Dop853, Dopri5, Euler, ImplicitMidpoint, Radau5, Rk4, SolveOptions, StopReason, integrate,
     };
     let nq = sys.nq();
-    let quaternions = sys
-        .free_joints()
-        .filter_map(|j| match j.kind {
-            crate::system::JointType::Spherical => Some(j.q_index),
-            crate::system::JointType::Free => Some(j.q_index + 3),
-            _ => None,
-        })
-        .collect();
+    let quaternions = sys.quaternion_indices();
     let model = Interpreted::<N> {
         f,
         sys,

@@ -399,6 +399,18 @@ impl System {
         self.free_joints().map(|j| j.kind.nu()).sum()
     }
 
+    /// Index in `q` of the first entry (`w`) of every unit quaternion
+    /// (spherical and free joints), in coordinate order.
+    pub fn quaternion_indices(&self) -> Vec<usize> {
+        self.free_joints()
+            .filter_map(|j| match j.kind {
+                JointType::Spherical => Some(j.q_index),
+                JointType::Free => Some(j.q_index + 3),
+                _ => None,
+            })
+            .collect()
+    }
+
     /// Initial `q` at the default parameters.
     pub fn q0(&self) -> Vec<f64> {
         self.free_joints()

@@ -1,7 +1,7 @@
 //! Helpers for tests of generated models: a small deterministic random
 //! generator and random states that respect unit quaternions.
 
-use crate::system::{JointType, System};
+use crate::system::System;
 
 /// xorshift64* — deterministic, seedable, no dependencies; uniform in
 /// [−1, 1) from [`Rng::uniform`].
@@ -28,16 +28,9 @@ impl Rng {
 /// speeds in ±1.5.
 pub fn random_state(sys: &System, rng: &mut Rng) -> (Vec<f64>, Vec<f64>) {
     let mut q: Vec<f64> = sys.q0().iter().map(|q| q + 0.8 * rng.uniform()).collect();
-    for j in sys.free_joints() {
-        let at = match j.kind {
-            JointType::Spherical => Some(j.q_index),
-            JointType::Free => Some(j.q_index + 3),
-            _ => None,
-        };
-        if let Some(a) = at {
-            let n = q[a..a + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
-            q[a..a + 4].iter_mut().for_each(|x| *x /= n);
-        }
+    for a in sys.quaternion_indices() {
+        let n = q[a..a + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
+        q[a..a + 4].iter_mut().for_each(|x| *x /= n);
     }
     let u = rng.vec(sys.nu(), 1.5);
     (q, u)

@@ -59,40 +59,21 @@ fn random_point(sys: &System, rng: &mut Rng) -> Point {
     }
 }
 
-/// Runs a program with its inputs taken from the state.
+/// Runs a program with its inputs taken from the state (the evaluator of
+/// `eom-gen eval --interpret`).
 fn run(p: &Program, sys: &System, x: &Point) -> Vec<f64> {
-    let inputs: Vec<f64> = p
-        .inputs
-        .iter()
-        .map(|s| match s.kind {
-            SymKind::Coord(i) => x.q[i as usize],
-            SymKind::Speed(i) => x.u[i as usize],
-            SymKind::SpeedRate(i) => x.ud[i as usize],
-            SymKind::Time => x.t,
-            SymKind::Input => match sys.inputs.iter().position(|n| *n == s.name) {
-                Some(k) => input_value(k),
-                None => s
-                    .name
-                    .strip_prefix("tau")
-                    .and_then(|k| k.parse::<usize>().ok())
-                    .map_or(f64::NAN, |k| x.tau[k]),
-            },
-            SymKind::Param => x
-                .params
-                .iter()
-                .find(|(n, _)| *n == s.name)
-                .map(|(_, v)| *v)
-                .or_else(|| {
-                    sys.parameters
-                        .iter()
-                        .find(|p| p.name == s.name)
-                        .map(|p| p.value.value)
-                })
-                .unwrap_or(f64::NAN),
-            SymKind::CoordRate(_) => f64::NAN,
-        })
-        .collect();
-    p.eval(&inputs)
+    let inputs: Vec<f64> = (0..sys.inputs.len()).map(input_value).collect();
+    let point = eom_gen::interpret::Point {
+        sys,
+        q: &x.q,
+        u: &x.u,
+        udot: &x.ud,
+        tau: &x.tau,
+        inputs: &inputs,
+        params: &x.params,
+        t: x.t,
+    };
+    eom_gen::interpret::run(p, &point)
 }
 
 fn assert_close(what: &str, got: &[f64], want: &[f64]) {

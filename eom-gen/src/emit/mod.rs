@@ -16,7 +16,7 @@ use crate::sym::{SymKind, Symbol};
 use split::{Arg, lower};
 
 mod split;
-use crate::system::{JointType, Motion, System};
+use crate::system::{Motion, System};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
 
@@ -214,14 +214,7 @@ pub fn emit_tokens(
     let coords = sys.coordinate_names();
     let speeds = sys.speed_names();
     let inputs: Vec<&str> = sys.inputs.iter().map(String::as_str).collect();
-    let quats: Vec<usize> = sys
-        .free_joints()
-        .filter_map(|j| match j.kind {
-            JointType::Spherical => Some(j.q_index),
-            JointType::Free => Some(j.q_index + 3),
-            _ => None,
-        })
-        .collect();
+    let quats: Vec<usize> = sys.quaternion_indices();
     let quats_l = quats.iter().map(|&k| Literal::usize_unsuffixed(k));
     let q0 = sys.q0().into_iter().map(float);
     let u0 = sys.u0().into_iter().map(float);
