@@ -36,6 +36,36 @@ fn eom_sim_dependency() -> String {
     }
 }
 
+/// A hash of the local runtime's sources (empty without a checkout), so a
+/// changed `eom-sim` rebuilds the cached crates.
+fn runtime_fingerprint() -> String {
+    fn walk(dir: &std::path::Path, out: &mut Vec<(PathBuf, Vec<u8>)>) {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
+        for e in entries.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                out.push((p.clone(), std::fs::read(&p).unwrap_or_default()));
+            }
+        }
+    }
+    let mut files = Vec::new();
+    walk(
+        &PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../eom-sim/src")),
+        &mut files,
+    );
+    files.sort();
+    let mut bytes = Vec::new();
+    for (p, text) in files {
+        bytes.extend(p.to_string_lossy().as_bytes());
+        bytes.extend(text);
+    }
+    format!("{:016x}", fnv1a(&bytes))
+}
+
 const MAIN: &str = r#"//! Evaluates the generated model at a state given on the command line and
 //! prints JSON: `eval Q U TAU T` with comma-separated lists.
 mod model;
@@ -58,29 +88,81 @@ fn json(v: &[f64]) -> String {
     format!("[{}]", items.join(","))
 }
 
-/// `sim INTEGRATOR RTOL ATOL DT T_END EVERY CSV`: integrate from the model's
-/// initial state and print JSON; `EVERY` 0 records the accepted steps.
+/// `sim INTEGRATOR RTOL ATOL DT T_END EVERY CSV CONSTRAINTS`: integrate from
+/// the model's initial state (assembled, for constrained models) and print
+/// JSON; `EVERY` 0 records the accepted steps.
 fn simulate(args: &[String]) {
-    use eom_sim::{Dop853, Dopri5, Euler, ImplicitMidpoint, Radau5, Rk4, SolveOptions, StopReason, integrate};
+    use eom_sim::{ConstrainedModel, ConstrainedSystem, Generated, Index3System, Method, Settings, SolveOptions, solve};
     let arg = |k: usize| args.get(k).map(String::as_str).unwrap_or("");
     let num = |k: usize, d: f64| arg(k).parse::<f64>().unwrap_or(d);
-    let (rtol, atol, dt, t_end, every) = (num(3, 1e-8), num(4, 1e-10), num(5, 1e-3), num(6, 1.0), num(7, 0.0));
+    let settings = Settings {
+        integrator: arg(2).to_string(),
+        rtol: num(3, 1e-8),
+        atol: num(4, 1e-10),
+        dt: num(5, 1e-3),
+        index_vars: (0, 0),
+    };
+    let (t_end, every) = (num(6, 1.0), num(7, 0.0));
     let m = model::MODEL::default();
     let (q0, u0) = (m.q0(), m.u0());
     let mut y0 = [0.0; model::NY];
     y0[..model::NQ].copy_from_slice(q0.as_ref());
     y0[model::NQ..].copy_from_slice(u0.as_ref());
     let opts = if every > 0.0 { SolveOptions::every(0.0, t_end, every) } else { SolveOptions::default() };
-    let start = std::time::Instant::now();
-    let sol = match arg(2) {
-        "euler" => integrate(&mut Euler::new(dt), &m, 0.0, y0, t_end, &opts, &mut []),
-        "rk4" => integrate(&mut Rk4::new(dt), &m, 0.0, y0, t_end, &opts, &mut []),
-        "midpoint" => integrate(&mut ImplicitMidpoint::new(dt), &m, 0.0, y0, t_end, &opts, &mut []),
-        "dop853" => integrate(&mut Dop853::new(rtol, atol), &m, 0.0, y0, t_end, &opts, &mut []),
-        "radau5" => integrate(&mut Radau5::new(rtol, atol), &m, 0.0, y0, t_end, &opts, &mut []),
-        _ => integrate(&mut Dopri5::new(rtol, atol), &m, 0.0, y0, t_end, &opts, &mut []),
+    let fail = |msg: &str| -> ! {
+        eprintln!("{msg}");
+        std::process::exit(1)
     };
-    let cpu = start.elapsed().as_secs_f64();
+    let start = std::time::Instant::now();
+    if <model::MODEL as ConstrainedModel>::NC == 0 {
+        let sol = solve(&settings, &m, 0.0, y0, t_end, &opts).unwrap_or_else(|| fail("unknown integrator"));
+        report(&sol, &m, every, arg(8), start.elapsed().as_secs_f64(), &y0, "");
+        return;
+    }
+    let g = Generated(&m);
+    let a = eom_sim::constrained::assemble(&g, q0.as_ref(), u0.as_ref(), 0.0);
+    y0[..model::NQ].copy_from_slice(&a.q);
+    y0[model::NQ..].copy_from_slice(&a.u);
+    let method = Method::from_name(arg(9)).unwrap_or(Method::Projection);
+    let start = std::time::Instant::now();
+    let stats_json = |s: eom_sim::ConstraintStats, lambda: &[f64]| {
+        format!(
+            ",\"constraints\":\"{}\",\"max_constraint_residual\":{:?},\"max_velocity_residual\":{:?},\"constraint_rank\":{},\"min_constraint_rank\":{},\"repartitions\":{},\"lambda\":{},\"constraint_names\":[{}],\"assembly\":{{\"residual\":{:?},\"velocity_residual\":{:?},\"iterations\":{}}}",
+            arg(9), s.max_position_residual, s.max_velocity_residual, s.rank, s.min_rank, s.repartitions, json(lambda),
+            <model::MODEL as ConstrainedModel>::CONSTRAINT_NAMES.iter().map(|n| format!("{n:?}")).collect::<Vec<_>>().join(","),
+            a.residual, a.velocity_residual, a.iterations
+        )
+    };
+    if method == Method::Index3 {
+        let sys = Index3System::new(&g);
+        let y0c = sys.initial::<{ model::NYC }>(0.0, &a.q, &a.u).unwrap_or_else(|| fail("the mass matrix is singular at the initial state"));
+        let s = Settings { index_vars: sys.index_vars(), ..settings };
+        let sol = solve(&s, &sys, 0.0, y0c, t_end, &opts).unwrap_or_else(|| fail("unknown integrator"));
+        let cpu = start.elapsed().as_secs_f64();
+        let extra = stats_json(sys.stats(), &sys.multipliers(&sol.y_final));
+        report(&sol, &m, every, arg(8), cpu, &y0, &extra);
+    } else {
+        let sys = ConstrainedSystem::new(&g, method);
+        let sol = solve(&settings, &sys, 0.0, y0, t_end, &opts).unwrap_or_else(|| fail("unknown integrator"));
+        let cpu = start.elapsed().as_secs_f64();
+        let (q, u) = sol.y_final.split_at(model::NQ);
+        let lambda = sys.accelerations(sol.t_final, q, u).map(|(_, l)| l.as_slice().to_vec()).unwrap_or_default();
+        let extra = stats_json(sys.stats(), &lambda);
+        report(&sol, &m, every, arg(8), cpu, &y0, &extra);
+    }
+}
+
+fn state(y: &[f64]) -> (<model::MODEL as Model>::Q, <model::MODEL as Model>::U) {
+    let mut q = <model::MODEL as Model>::Q::ZERO;
+    let mut u = <model::MODEL as Model>::U::ZERO;
+    q.as_mut().copy_from_slice(&y[..model::NQ]);
+    u.as_mut().copy_from_slice(&y[model::NQ..model::NY]);
+    (q, u)
+}
+
+/// Prints the run's JSON (and writes the CSV) from the `(q, u)` part of its states.
+fn report<const N: usize>(sol: &eom_sim::Solution<N>, m: &model::MODEL, every: f64, csv: &str, cpu: f64, y0: &[f64], extra: &str) {
+    use eom_sim::StopReason;
     let names: Vec<&str> = <model::MODEL as Model>::COORDINATE_NAMES
         .iter()
         .chain(<model::MODEL as Model>::SPEED_NAMES)
@@ -90,24 +172,20 @@ fn simulate(args: &[String]) {
         StopReason::Finished => "\"finished\"".to_string(),
         StopReason::NonFinite { t, component } => format!(
             "{{\"reason\":\"non-finite state\",\"t\":{t:?},\"coordinate\":\"{}\"}}",
-            names.get(component).copied().unwrap_or("?")
+            names.get(component).copied().unwrap_or("multiplier")
         ),
         other => format!("\"{other:?}\""),
     };
-    let csv = arg(8);
     if !csv.is_empty() && csv != "-" {
         let (ts, ys) = if every > 0.0 { (&sol.t_out, &sol.y_out) } else { (&sol.t, &sol.y) };
         let outputs = <model::MODEL as Model>::OUTPUT_NAMES;
         let header: Vec<&str> = names.iter().chain(outputs).copied().collect();
         let mut text = format!("t,{}\n", header.join(","));
         for (t, y) in ts.iter().zip(ys) {
-            let mut row: Vec<String> = y.iter().map(|x| format!("{x:?}")).collect();
+            let mut row: Vec<String> = y[..model::NY].iter().map(|x| format!("{x:?}")).collect();
             if !outputs.is_empty() {
                 // Outputs at the sample; reactions need u̇ from forward dynamics.
-                let mut q = <model::MODEL as Model>::Q::ZERO;
-                let mut u = <model::MODEL as Model>::U::ZERO;
-                q.as_mut().copy_from_slice(&y[..model::NQ]);
-                u.as_mut().copy_from_slice(&y[model::NQ..]);
+                let (q, u) = state(y);
                 let mut udot = <model::MODEL as Model>::U::ZERO;
                 m.forward_dynamics(*t, &q, &u, &<model::MODEL as Model>::U::ZERO, &mut udot);
                 let mut out = <model::MODEL as Model>::Outputs::ZERO;
@@ -122,19 +200,16 @@ fn simulate(args: &[String]) {
         }
     }
     let s = &sol.stats;
-    let energy = |y: &[f64; model::NY]| -> f64 {
-        let mut q = <model::MODEL as Model>::Q::ZERO;
-        let mut u = <model::MODEL as Model>::U::ZERO;
-        q.as_mut().copy_from_slice(&y[..model::NQ]);
-        u.as_mut().copy_from_slice(&y[model::NQ..]);
-        m.energy(sol.t_final, &q, &u).iter().sum()
+    let energy = |y: &[f64], t: f64| -> f64 {
+        let (q, u) = state(y);
+        m.energy(t, &q, &u).iter().sum()
     };
-    let (e0, e1) = (energy(&y0), energy(&sol.y_final));
+    let (e0, e1) = (energy(y0, 0.0), energy(&sol.y_final, sol.t_final));
     println!(
-        "{{\"t\":{:?},\"q\":{},\"u\":{},\"energy\":[{e0:?},{e1:?}],\"stop\":{stop},\"stats\":{{\"steps\":{},\"accepted\":{},\"rejected\":{},\"rhs_evals\":{},\"jacobian_evals\":{},\"lu_decompositions\":{},\"newton_iterations\":{},\"stiffness_detections\":{}}},\"cpu_s\":{cpu:?}}}",
+        "{{\"t\":{:?},\"q\":{},\"u\":{},\"energy\":[{e0:?},{e1:?}],\"stop\":{stop},\"stats\":{{\"steps\":{},\"accepted\":{},\"rejected\":{},\"rhs_evals\":{},\"jacobian_evals\":{},\"lu_decompositions\":{},\"newton_iterations\":{},\"stiffness_detections\":{}}},\"cpu_s\":{cpu:?}{extra}}}",
         sol.t_final,
         json(&sol.y_final[..model::NQ]),
-        json(&sol.y_final[model::NQ..]),
+        json(&sol.y_final[model::NQ..model::NY]),
         s.steps, s.accepted, s.rejected, s.rhs_evals, s.jac_evals, s.lu_decomps, s.newton_iters, s.stiffness_detections
     );
 }
@@ -168,13 +243,33 @@ fn main() {
 }
 "#;
 
+/// A model without constraint equations, as a constrained one with none
+/// (so that one simulator template serves both).
+const UNCONSTRAINED: &str = "
+impl ::eom_sim::ConstrainedModel for MODEL_TYPE {
+    const NC: usize = 0;
+    const NHOLONOMIC: usize = 0;
+    const CONSTRAINT_NAMES: &'static [&'static str] = &[];
+    type Constraints = [f64; 0];
+    type ConstraintJacobian = [f64; 0];
+    fn constraints(&self, _: f64, _: &[f64; NQ], _: &[f64; NY - NQ], _: &mut [f64; 0], _: &mut [f64; 0], _: &mut [f64; 0], _: &mut [f64; 0]) {}
+}
+";
+
 /// Builds (once) the cached crate of a model and returns its executable.
 pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<PathBuf, String> {
     let root = cache_root();
     // The key covers the model source, this template and the runtime used.
     let key = format!(
         "{:016x}",
-        fnv1a(format!("{source}{MAIN}{}", eom_sim_dependency()).as_bytes())
+        fnv1a(
+            format!(
+                "{source}{MAIN}{UNCONSTRAINED}{}{}",
+                eom_sim_dependency(),
+                runtime_fingerprint()
+            )
+            .as_bytes()
+        )
     );
     let dir = root.join(format!("{name}-{key}"));
     let exe_name = format!("eom-eval-{name}-{key}");
@@ -188,9 +283,14 @@ pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<Path
             eom_sim_dependency()
         );
         let model = format!(
-            "{source}\npub type MODEL = {};\npub const NQ: usize = {nq};\npub const NY: usize = {};\n",
+            "{source}\npub type MODEL = {};\npub const NQ: usize = {nq};\npub const NY: usize = {};\npub const NYC: usize = NY + <MODEL as ::eom_sim::ConstrainedModel>::NC;\n{}",
             camel(name),
-            nq + nu
+            nq + nu,
+            if source.contains("impl ::eom_sim::ConstrainedModel for") {
+                String::new()
+            } else {
+                UNCONSTRAINED.replace("MODEL_TYPE", &camel(name))
+            }
         );
         for (file, text) in [
             ("Cargo.toml", manifest.as_str()),
@@ -284,7 +384,8 @@ pub struct SimOptions {
     pub every: f64,
     /// CSV file to write, if any.
     pub csv: Option<String>,
-    /// Closed loops: `multipliers` (Baumgarte) or `projection`.
+    /// Constraints: `multipliers` (Baumgarte), `projection`, `partitioning`
+    /// or `index3` (RADAU5 only).
     pub constraints: String,
 }
 
@@ -308,6 +409,7 @@ pub fn simulate(
             format!("{:?}", o.t_end),
             format!("{:?}", o.every),
             o.csv.clone().unwrap_or_else(|| "-".into()),
+            o.constraints.clone(),
         ])
         .output()
         .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;

@@ -108,29 +108,126 @@ pub fn evaluate(f: &Formulation, x: &Point<'_>) -> Evaluation {
     }
 }
 
-/// The equations of motion run by the evaluator, as a first-order system
-/// `y = (q, u)` of `N` states.
-struct Interpreted<'a, const N: usize> {
+/// The equations of motion run by the evaluator: a first-order system
+/// `y = (q, u)` and, for the constraint solvers, [`eom_sim::Dynamics`].
+pub struct Interpreted<'a> {
     f: &'a Formulation,
     sys: &'a System,
     nq: usize,
+    nu: usize,
     quaternions: Vec<usize>,
 }
 
-impl<const N: usize> eom_sim::OdeSystem<N> for Interpreted<'_, N> {
-    fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
-        let (q, u) = y.split_at(self.nq);
-        let zero = vec![0.0; u.len()];
-        let x = Point {
+impl<'a> Interpreted<'a> {
+    /// The evaluator's view of `f`.
+    pub fn new(f: &'a Formulation, sys: &'a System) -> Self {
+        Interpreted {
+            f,
+            sys,
+            nq: sys.nq(),
+            nu: sys.nu(),
+            quaternions: sys.quaternion_indices(),
+        }
+    }
+
+    fn point<'p>(&'p self, q: &'p [f64], u: &'p [f64], t: f64) -> Point<'p> {
+        Point {
             sys: self.sys,
             q,
             u,
             udot: &[],
-            tau: &zero,
+            tau: &[],
             inputs: &[],
             params: &[],
             t,
+        }
+    }
+}
+
+impl eom_sim::Dynamics for Interpreted<'_> {
+    fn nq(&self) -> usize {
+        self.nq
+    }
+    fn nu(&self) -> usize {
+        self.nu
+    }
+    fn nc(&self) -> usize {
+        self.f.constraint_names.len()
+    }
+    fn n_holonomic(&self) -> usize {
+        self.f.n_holonomic
+    }
+    fn quaternions(&self) -> &[usize] {
+        &self.quaternions
+    }
+    fn qdot(&self, q: &[f64], u: &[f64], qdot: &mut [f64]) {
+        let v = run(&self.f.qdot, &self.point(q, u, 0.0));
+        qdot.iter_mut().zip(v).for_each(|(d, s)| *d = s);
+    }
+    fn mass_matrix(&self, t: f64, q: &[f64], m: &mut nalgebra::DMatrix<f64>) {
+        let lower = self
+            .f
+            .mass_matrix
+            .as_ref()
+            .map(|p| run(p, &self.point(q, &[], t)))
+            .unwrap_or_default();
+        let mut k = 0;
+        for i in 0..self.nu.min(m.nrows()) {
+            for j in 0..=i {
+                let v = lower.get(k).copied().unwrap_or(f64::NAN);
+                m[(i, j)] = v;
+                m[(j, i)] = v;
+                k += 1;
+            }
+        }
+    }
+    fn bias(&self, t: f64, q: &[f64], u: &[f64], b: &mut nalgebra::DVector<f64>) {
+        let v = self
+            .f
+            .bias
+            .as_ref()
+            .map(|p| run(p, &self.point(q, u, t)))
+            .unwrap_or_default();
+        b.iter_mut().zip(v).for_each(|(d, s)| *d = s);
+    }
+    fn constraints(&self, t: f64, q: &[f64], u: &[f64], c: &mut eom_sim::ConstraintValues) {
+        let Some(p) = &self.f.constraints else {
+            return;
         };
+        let values = run(p, &self.point(q, u, t));
+        for ((name, _), v) in p.outputs.iter().zip(values) {
+            if let Some(rest) = name.strip_prefix("J_") {
+                let mut it = rest.split('_').filter_map(|s| s.parse::<usize>().ok());
+                if let (Some(r), Some(k)) = (it.next(), it.next())
+                    && r < c.jacobian.nrows()
+                    && k < c.jacobian.ncols()
+                {
+                    c.jacobian[(r, k)] = v;
+                }
+                continue;
+            }
+            for (prefix, target) in [
+                ("phidot", &mut c.phidot),
+                ("phi", &mut c.phi),
+                ("gamma", &mut c.gamma),
+            ] {
+                if let Some(i) = name.strip_prefix(prefix).and_then(|k| k.parse::<usize>().ok()) {
+                    if let Some(slot) = target.get_mut(i) {
+                        *slot = v;
+                    }
+                    break;
+                }
+            }
+        }
+    }
+}
+
+impl<const N: usize> eom_sim::OdeSystem<N> for Interpreted<'_> {
+    fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        let (q, u) = y.split_at(self.nq);
+        let zero = vec![0.0; u.len()];
+        let mut x = self.point(q, u, t);
+        x.tau = &zero;
         let qdot = run(&self.f.qdot, &x);
         let udot = self
             .f
@@ -144,32 +241,48 @@ impl<const N: usize> eom_sim::OdeSystem<N> for Interpreted<'_, N> {
     }
 
     fn project(&self, _t: f64, y: &mut [f64; N]) -> bool {
-        for &a in &self.quaternions {
-            if let Some(quat) = y.get_mut(a..a + 4) {
-                let n = quat.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if n > 0.0 && n.is_finite() {
-                    quat.iter_mut().for_each(|x| *x /= n);
-                }
-            }
-        }
+        eom_sim::Dynamics::normalize(self, &mut y[..self.nq]);
         !self.quaternions.is_empty()
     }
 }
 
-/// Largest state (`nq + nu`) the interpreter integrates; the integrators
-/// are sized at compile time, one instance per size.
+/// Largest state (`nq + nu`, plus the multipliers for `index3`) the
+/// interpreter integrates; the integrators are sized at compile time, one
+/// instance per size.
 pub const MAX_STATES: usize = 32;
 
-/// Integrates the formulation with the evaluator from the initial state;
-/// the JSON matches `eom-gen simulate --json` on compiled code.
+/// The constraint method named in `o` (`None` without constraints).
+fn method(f: &Formulation, o: &crate::compiled::SimOptions) -> Result<Option<eom_sim::Method>, String> {
+    if f.constraints.is_none() {
+        return Ok(None);
+    }
+    let m = eom_sim::Method::from_name(&o.constraints).ok_or_else(|| {
+        format!(
+            "unknown --constraints `{}`; choose multipliers, projection, partitioning or index3",
+            o.constraints
+        )
+    })?;
+    if m == eom_sim::Method::Index3 && o.integrator != "radau5" {
+        return Err("--constraints index3 solves the index-3 DAE with --integrator radau5".into());
+    }
+    Ok(Some(m))
+}
+
+/// Integrates the formulation with the evaluator from the initial state
+/// (assembled, for constrained models); the JSON matches
+/// `eom-gen simulate --json` on compiled code.
 pub fn simulate(
     f: &Formulation,
     sys: &System,
     o: &crate::compiled::SimOptions,
 ) -> Result<serde_json::Value, String> {
+    let extra = match method(f, o)? {
+        Some(eom_sim::Method::Index3) => f.constraint_names.len(),
+        _ => 0,
+    };
     macro_rules! sized {
         ($($n:literal)*) => {
-            match sys.nq() + sys.nu() {
+            match sys.nq() + sys.nu() + extra {
                 $($n => simulate_n::<$n>(f, sys, o),)*
                 n => Err(format!(
                     "the interpreter integrates up to {MAX_STATES} states, `{}` has {n}; run it compiled (without --interpret)",
@@ -186,98 +299,96 @@ fn simulate_n<const N: usize>(
     sys: &System,
     o: &crate::compiled::SimOptions,
 ) -> Result<serde_json::Value, String> {
-    use eom_sim::{
-        Dop853, Dopri5, Euler, ImplicitMidpoint, Radau5, Rk4, SolveOptions, StopReason, integrate,
+    use eom_sim::{ConstrainedSystem, Dynamics, Index3System, Method, Settings, SolveOptions, solve};
+    let (nq, nu) = (sys.nq(), sys.nu());
+    let model = Interpreted::new(f, sys);
+    let mut settings = Settings {
+        integrator: o.integrator.clone(),
+        rtol: o.rtol,
+        atol: o.atol,
+        dt: o.dt,
+        index_vars: (0, 0),
     };
-    let nq = sys.nq();
-    let quaternions = sys.quaternion_indices();
-    let model = Interpreted::<N> {
-        f,
-        sys,
-        nq,
-        quaternions,
-    };
-    let mut y0 = [0.0; N];
-    let (mut q0, mut u0) = (sys.q0(), sys.u0());
-    if f.constraints.is_some() {
-        // Start from a consistent state (assembly).
-        let num = crate::mech::Numeric::new(sys).map_err(|e| e.to_string())?;
-        let a = num.assemble(&q0, &u0, 0.0).map_err(|e| e.to_string())?;
-        (q0, u0) = (a.q, a.u);
-    }
-    for (d, v) in y0.iter_mut().zip(q0.iter().chain(&u0)) {
-        *d = *v;
-    }
-    let mode = if o.constraints == "multipliers" {
-        crate::constrained::Stabilization::Baumgarte
-    } else {
-        crate::constrained::Stabilization::Projection
-    };
-    let constrained = crate::constrained::Constrained::<N>::new(f, sys, mode);
-
     let opts = if o.every > 0.0 {
         SolveOptions::every(0.0, o.t_end, o.every)
     } else {
         SolveOptions::default()
     };
-    let start = std::time::Instant::now();
-    macro_rules! with_system {
-        ($sys:expr) => {
-            match o.integrator.as_str() {
-                "euler" => integrate(
-                    &mut Euler::new(o.dt),
-                    $sys,
-                    0.0,
-                    y0,
-                    o.t_end,
-                    &opts,
-                    &mut [],
-                ),
-                "rk4" => integrate(&mut Rk4::new(o.dt), $sys, 0.0, y0, o.t_end, &opts, &mut []),
-                "midpoint" => integrate(
-                    &mut ImplicitMidpoint::new(o.dt),
-                    $sys,
-                    0.0,
-                    y0,
-                    o.t_end,
-                    &opts,
-                    &mut [],
-                ),
-                "dop853" => integrate(
-                    &mut Dop853::new(o.rtol, o.atol),
-                    $sys,
-                    0.0,
-                    y0,
-                    o.t_end,
-                    &opts,
-                    &mut [],
-                ),
-                "radau5" => integrate(
-                    &mut Radau5::new(o.rtol, o.atol),
-                    $sys,
-                    0.0,
-                    y0,
-                    o.t_end,
-                    &opts,
-                    &mut [],
-                ),
-                _ => integrate(
-                    &mut Dopri5::new(o.rtol, o.atol),
-                    $sys,
-                    0.0,
-                    y0,
-                    o.t_end,
-                    &opts,
-                    &mut [],
-                ),
-            }
-        };
-    }
-    let sol = match &constrained {
-        Some(c) => with_system!(c),
-        None => with_system!(&model),
+    let unknown = || format!("unknown integrator `{}`", o.integrator);
+    let (q0, u0) = (sys.q0(), sys.u0());
+    let Some(method) = method(f, o)? else {
+        let mut y0 = [0.0; N];
+        for (d, v) in y0.iter_mut().zip(q0.iter().chain(&u0)) {
+            *d = *v;
+        }
+        let start = std::time::Instant::now();
+        let sol = solve(&settings, &model, 0.0, y0, o.t_end, &opts).ok_or_else(unknown)?;
+        let cpu = start.elapsed().as_secs_f64();
+        return report(f, sys, o, &sol, &y0[..nq + nu], cpu, serde_json::Map::new());
     };
-    let cpu = start.elapsed().as_secs_f64();
+    let a = eom_sim::constrained::assemble(&model, &q0, &u0, 0.0);
+    let mut info = serde_json::Map::new();
+    info.insert("constraints".into(), serde_json::json!(o.constraints));
+    info.insert(
+        "constraint_names".into(),
+        serde_json::json!(f.constraint_names),
+    );
+    info.insert(
+        "assembly".into(),
+        serde_json::json!({"residual": a.residual, "velocity_residual": a.velocity_residual, "iterations": a.iterations}),
+    );
+    let put = |info: &mut serde_json::Map<String, serde_json::Value>,
+               s: eom_sim::ConstraintStats,
+               lambda: Vec<f64>| {
+        info.insert("max_constraint_residual".into(), serde_json::json!(s.max_position_residual));
+        info.insert("max_velocity_residual".into(), serde_json::json!(s.max_velocity_residual));
+        info.insert("constraint_rank".into(), serde_json::json!(s.rank));
+        info.insert("min_constraint_rank".into(), serde_json::json!(s.min_rank));
+        info.insert("repartitions".into(), serde_json::json!(s.repartitions));
+        info.insert("lambda".into(), serde_json::json!(lambda));
+    };
+    let start = std::time::Instant::now();
+    if method == Method::Index3 {
+        let dae = Index3System::new(&model);
+        let y0 = dae
+            .initial::<N>(0.0, &a.q, &a.u)
+            .ok_or("the mass matrix is singular at the initial state")?;
+        settings.index_vars = dae.index_vars();
+        let sol = solve(&settings, &dae, 0.0, y0, o.t_end, &opts).ok_or_else(unknown)?;
+        let cpu = start.elapsed().as_secs_f64();
+        put(&mut info, dae.stats(), dae.multipliers(&sol.y_final));
+        report(f, sys, o, &sol, &y0[..nq + nu], cpu, info)
+    } else {
+        let cs = ConstrainedSystem::new(&model, method);
+        let mut y0 = [0.0; N];
+        for (d, v) in y0.iter_mut().zip(a.q.iter().chain(&a.u)) {
+            *d = *v;
+        }
+        let sol = solve(&settings, &cs, 0.0, y0, o.t_end, &opts).ok_or_else(unknown)?;
+        let cpu = start.elapsed().as_secs_f64();
+        let (q, u) = sol.y_final[..nq + nu].split_at(nq);
+        let lambda = cs
+            .accelerations(sol.t_final, q, u)
+            .map(|(_, l)| l.as_slice().to_vec())
+            .unwrap_or_default();
+        put(&mut info, cs.stats(), lambda);
+        debug_assert_eq!(model.nc(), f.constraint_names.len());
+        report(f, sys, o, &sol, &y0[..nq + nu], cpu, info)
+    }
+}
+
+/// The JSON of a run (and its CSV) from the `(q, u)` part of its states.
+fn report<const N: usize>(
+    f: &Formulation,
+    sys: &System,
+    o: &crate::compiled::SimOptions,
+    sol: &eom_sim::Solution<N>,
+    y0: &[f64],
+    cpu: f64,
+    extra: serde_json::Map<String, serde_json::Value>,
+) -> Result<serde_json::Value, String> {
+    use eom_sim::StopReason;
+    let (nq, nu) = (sys.nq(), sys.nu());
     let names: Vec<&str> = sys
         .coordinate_names()
         .into_iter()
@@ -301,6 +412,7 @@ fn simulate_n<const N: usize>(
             .collect();
         let mut text = format!("t,{}\n", header.join(","));
         for (t, y) in ts.iter().zip(ys) {
+            let y = &y[..nq + nu];
             let mut row: Vec<String> = y.iter().map(|x| format!("{x:?}")).collect();
             if let Some(p) = &f.outputs {
                 // Outputs at the sample; reactions need u̇ from forward dynamics.
@@ -328,8 +440,8 @@ fn simulate_n<const N: usize>(
         }
         std::fs::write(csv, text).map_err(|e| format!("cannot write {csv}: {e}"))?;
     }
-    let energy = |y: &[f64; N], t: f64| -> f64 {
-        let (q, u) = y.split_at(nq);
+    let energy = |y: &[f64], t: f64| -> f64 {
+        let (q, u) = y[..nq + nu].split_at(nq);
         let x = Point {
             sys,
             q,
@@ -348,16 +460,16 @@ fn simulate_n<const N: usize>(
     let stop = match sol.stop {
         StopReason::Finished => serde_json::json!("finished"),
         StopReason::NonFinite { t, component } => serde_json::json!({
-            "reason": "non-finite state", "t": t, "coordinate": names.get(component).copied().unwrap_or("?"),
+            "reason": "non-finite state", "t": t, "coordinate": names.get(component).copied().unwrap_or("multiplier"),
         }),
         other => serde_json::json!(format!("{other:?}")),
     };
     let s = &sol.stats;
-    Ok(serde_json::json!({
+    let mut v = serde_json::json!({
         "t": sol.t_final,
         "q": &sol.y_final[..nq],
-        "u": &sol.y_final[nq..],
-        "energy": [energy(&y0, 0.0), energy(&sol.y_final, sol.t_final)],
+        "u": &sol.y_final[nq..nq + nu],
+        "energy": [energy(y0, 0.0), energy(&sol.y_final, sol.t_final)],
         "stop": stop,
         "stats": {
             "steps": s.steps, "accepted": s.accepted, "rejected": s.rejected, "rhs_evals": s.rhs_evals,
@@ -365,8 +477,9 @@ fn simulate_n<const N: usize>(
             "newton_iterations": s.newton_iters, "stiffness_detections": s.stiffness_detections,
         },
         "cpu_s": cpu,
-        "max_constraint_residual": constrained.as_ref().map(|c| c.max_residual.get()),
-        "constraint_rank": constrained.as_ref().map(|c| c.rank.get()),
-        "constraints": constrained.as_ref().map(|_| o.constraints.as_str()),
-    }))
+    });
+    if let Some(obj) = v.as_object_mut() {
+        obj.extend(extra);
+    }
+    Ok(v)
 }

@@ -7,7 +7,6 @@
 
 pub mod builder;
 pub mod compiled;
-pub mod constrained;
 pub mod emit;
 pub mod generate;
 pub mod graph;

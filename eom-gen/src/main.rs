@@ -86,8 +86,10 @@ enum Command {
         /// Run the programs in the evaluator instead of compiled code.
         #[arg(long)]
         interpret: bool,
-        /// Closed loops (with --interpret): `projection` (of positions and
-        /// speeds after each step) or `multipliers` (Baumgarte).
+        /// Closed loops and constraints: `projection` (of positions and
+        /// speeds after each step), `multipliers` (Baumgarte, α = β = 10/s),
+        /// `partitioning` (dependent coordinates from independent ones,
+        /// Wehage–Haug) or `index3` (the index-3 DAE, with radau5).
         #[arg(long, default_value = "projection")]
         constraints: String,
         /// Print one JSON object instead of the summary.
@@ -482,7 +484,7 @@ fn eval(
     }
 }
 
-const INTEGRATORS: [&str; 6] = ["euler", "rk4", "midpoint", "dopri5", "dop853", "radau5"];
+use eom_sim::INTEGRATORS;
 
 fn simulate(
     path: &str,
@@ -507,33 +509,19 @@ fn simulate(
         Err(code) => return code,
     };
     let sys = &g.checked.system;
-    if !["projection", "multipliers"].contains(&o.constraints.as_str()) {
+    let Some(method) = eom_sim::Method::from_name(&o.constraints) else {
         eprintln!(
-            "error: unknown --constraints `{}`; choose `projection` or `multipliers`",
+            "error: unknown --constraints `{}`; choose multipliers, projection, partitioning or index3",
             o.constraints
         );
         return ExitCode::from(2);
-    }
-    let loops_interpreted =
-        interpret && !sys.graph.cut_joints().is_empty() && sys.constraints.is_empty();
-    if !loops_interpreted && (!sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty()) {
+    };
+    let constrained = !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty();
+    if constrained && method == eom_sim::Method::Index3 && o.integrator != "radau5" {
         eprintln!(
-            "error: `{}` has closed loops or constraints ({}); closed loops simulate with --interpret for now (compiled constraint solvers and rolling constraints are not built yet)",
-            sys.name,
-            sys.cut_joint_names()
-                .iter()
-                .chain(
-                    sys.constraints
-                        .iter()
-                        .map(|c| c.name.as_str())
-                        .collect::<Vec<_>>()
-                        .iter()
-                )
-                .map(|n| format!("`{n}`"))
-                .collect::<Vec<_>>()
-                .join(", ")
+            "error: --constraints index3 integrates the index-3 DAE and needs --integrator radau5"
         );
-        return ExitCode::from(1);
+        return ExitCode::from(2);
     }
     let result = if interpret {
         eom_gen::interpret::simulate(&g.formulation, sys, o)

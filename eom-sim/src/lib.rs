@@ -48,11 +48,19 @@
 //! println!("{:?}", sol.stats);
 //! ```
 
+pub mod constrained;
 mod integrate;
 mod model;
 
+pub use constrained::{
+    Assembly, ConstrainedModel, ConstrainedSystem, ConstraintStats, ConstraintValues, Dynamics,
+    Generated, Index3System, Method,
+};
 pub use model::{Model, Vector};
+/// Fixed-size matrices of the integrators' Jacobians and mass matrices.
+pub use nalgebra::SMatrix;
 
+pub use integrate::by_name::{INTEGRATORS, Settings, solve};
 pub use integrate::dop853::Dop853;
 pub use integrate::dopri5::Dopri5;
 pub use integrate::driver::{

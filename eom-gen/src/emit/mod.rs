@@ -419,6 +419,64 @@ pub fn emit_tokens(
             fn outputs(&self, _t: f64, _q: &[f64; #nq_l], _u: &[f64; #nu_l], _udot: &[f64; #nu_l], _out: &mut [f64; 0]) {}
         },
     };
+    let constrained_impl = f.constraints.as_ref().map(|p| {
+        let args = [arg_t(), arg_q(), arg_u()];
+        let l = lower(&b, p, "constraints", &args);
+        parts.extend(l.parts.clone());
+        let params = l.params(&args);
+        let body = &l.body;
+        let nc = f.constraint_names.len();
+        let mut assign = TokenStream::new();
+        for ((name, _), v) in p.outputs.iter().zip(&l.outputs) {
+            let target = if let Some(rest) = name.strip_prefix("J_") {
+                let mut it = rest.split('_').filter_map(|x| x.parse::<usize>().ok());
+                match (it.next(), it.next()) {
+                    (Some(r), Some(c)) => {
+                        let k = idx(r * nu + c);
+                        quote!(jacobian[#k])
+                    }
+                    _ => continue,
+                }
+            } else {
+                let found = ["phidot", "phi", "gamma"].iter().find_map(|a| {
+                    name.strip_prefix(a)
+                        .and_then(|k| k.parse::<usize>().ok())
+                        .map(|k| (format_ident!("{a}"), idx(k)))
+                });
+                let Some((array, k)) = found else { continue };
+                quote!(#array[#k])
+            };
+            assign.extend(quote!(#target = #v;));
+        }
+        let (nc_l, nh_l, ncj_l) = (idx(nc), idx(f.n_holonomic), idx(nc * nu));
+        let names = f.constraint_names.iter();
+        let doc = format!(
+            " {nc} constraint equation(s), the first {} holonomic: {}. `J` is by rows ({nc} × {nu}).",
+            f.n_holonomic,
+            list(&f.constraint_names.iter().map(String::as_str).collect::<Vec<_>>())
+        );
+        quote! {
+            #[doc = #doc]
+            impl ::eom_sim::ConstrainedModel for #ty {
+                const NC: usize = #nc_l;
+                const NHOLONOMIC: usize = #nh_l;
+                const CONSTRAINT_NAMES: &'static [&'static str] = &[#(#names),*];
+                type Constraints = [f64; #nc_l];
+                type ConstraintJacobian = [f64; #ncj_l];
+                fn constraints(
+                    &self,
+                    #params,
+                    phi: &mut [f64; #nc_l],
+                    phidot: &mut [f64; #nc_l],
+                    gamma: &mut [f64; #nc_l],
+                    jacobian: &mut [f64; #ncj_l],
+                ) {
+                    #body
+                    #assign
+                }
+            }
+        }
+    });
     let output_names_l = output_names.iter();
     let parts_impl = if parts.is_empty() {
         TokenStream::new()
@@ -567,6 +625,8 @@ pub fn emit_tokens(
             #momentum_fn
             #outputs_fn
         }
+
+        #constrained_impl
 
         #parts_impl
 

@@ -213,6 +213,72 @@ pub fn phi<S: Scalar>(k: &Kinematics<S>, cuts: &[CutJoint<S>]) -> Vec<S> {
     out
 }
 
+/// The model's own constraints (not joints) at the kinematics `k`:
+/// holonomic conditions `Φ(q, t)` and nonholonomic speed conditions
+/// `A(q) u + b(q, t)`, each with its name.
+///
+/// A disk of radius `R` with unit axis `n` (world axes) and centre `c`
+/// rolls on the plane `z = 0`: its lowest point is `p = c − R ê` with
+/// `ê = (e_z − n_z n) / √(1 − n_z²)`, so the contact condition is
+/// `c_z − R √(1 − n_z²) = 0`, and the material point at `p` is at rest in
+/// the plane: the x and y components of `v_c + ω × (p − c)` vanish.
+#[allow(clippy::type_complexity)]
+pub fn user_constraints<S: Scalar>(
+    sys: &System,
+    tree: &TreeModel<S>,
+    env: &dyn Env<S>,
+    ev: &super::dynamics::Evaluator<'_, S>,
+    k: &Kinematics<S>,
+    q: &[S],
+    t: S,
+) -> Result<(Vec<(String, S)>, Vec<(String, S)>), MechError> {
+    use crate::system::ConstraintKind;
+    let low = Lowering::new(env);
+    let names = sys.coordinate_names();
+    let lookup = |n: &str| -> Option<S> {
+        if n == "t" {
+            return Some(t);
+        }
+        names
+            .iter()
+            .position(|c| *c == n)
+            .and_then(|i| q.get(i).copied())
+    };
+    let (mut holonomic, mut nonholonomic) = (Vec::new(), Vec::new());
+    for c in &sys.constraints {
+        match &c.kind {
+            ConstraintKind::Holonomic(expr) => {
+                holonomic.push((c.name.clone(), low.expr(&expr.expr, &lookup)?));
+            }
+            ConstraintKind::RollingDisk {
+                body,
+                radius,
+                axis,
+                center,
+            } => {
+                let Some(i) = tree.index_of_body.get(*body).copied().flatten() else {
+                    continue;
+                };
+                let r = low.quantity(radius)?;
+                let centre = low.vec3(center)?;
+                let pose = &k.world[i];
+                let n = pose.e.mul_vec(Vec3::from_f64(unit(axis.unit)));
+                let (c_pos, c_vel) = ev.point(k, Some(i), centre);
+                let omega = pose.e.mul_vec(k.v[i].w);
+                let nz = n.0[2];
+                let s = (S::one() - nz * nz).sqrt();
+                let down = Vec3::new(-nz * n.0[0], -nz * n.0[1], S::one() - nz * n.0[2]);
+                let to_contact = down.scale(-r / s);
+                let slip = c_vel + omega.cross(to_contact);
+                holonomic.push((format!("{}.contact", c.name), c_pos.0[2] - r * s));
+                nonholonomic.push((format!("{}.slip_x", c.name), slip.0[0]));
+                nonholonomic.push((format!("{}.slip_y", c.name), slip.0[1]));
+            }
+        }
+    }
+    Ok((holonomic, nonholonomic))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

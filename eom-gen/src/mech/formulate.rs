@@ -124,13 +124,25 @@ pub struct Formulation {
     /// Partial velocities of the requested marker positions: outputs
     /// `J_<body>_<marker>_<axis>_<k>` = ∂v/∂u_k.
     pub jacobians: Option<Program>,
-    /// Closure conditions of the cut joints, `None` without loops: outputs
-    /// `phi<i>` (`Φ`), `phidot<i>` (`Φ̇ = J u + Φ_t`), `gamma<i>`
-    /// (`γ = −Φ̈` at `u̇ = 0`, so that `J u̇ = γ`), and `J_<i>_<k>`
-    /// (`∂Φ̇/∂u_k`).
+    /// Closure conditions of the cut joints and the model's constraints,
+    /// `None` without: outputs `phi<i>` (`Φ`; zero for nonholonomic rows),
+    /// `phidot<i>` (`Φ̇ = J u + Φ_t`), `gamma<i>` (`γ = −Φ̈` at `u̇ = 0`, so
+    /// that `J u̇ = γ`), and `J_<i>_<k>` (`∂Φ̇/∂u_k`).
     pub constraints: Option<Program>,
+    /// Names of the constraint equations (`joint.k`, the constraint's name,
+    /// `disk.contact` / `disk.slip_x` / `disk.slip_y`); holonomic first.
+    pub constraint_names: Vec<String>,
+    /// How many of them are holonomic.
+    pub n_holonomic: usize,
     /// Wall time of formulation and lowering, seconds.
     pub seconds: f64,
+}
+
+/// The constraint program with its equation names.
+struct ConstraintProgram {
+    program: Program,
+    names: Vec<String>,
+    n_holonomic: usize,
 }
 
 struct SymEnv<'cx> {
@@ -299,7 +311,11 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
     });
     let (outputs, jacobians) = outputs(sys, &cx, &ev, &tree, &k, &fext, opts)?;
     let qdot_exprs = ev.qdot(&st);
-    let constraints = closure(sys, &cx, &tree, &env, &k, &q, &u, &qdot_exprs, opts)?;
+    let closure = closure(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
+    let (constraints, constraint_names, n_holonomic) = match closure {
+        Some(c) => (Some(c.program), c.names, c.n_holonomic),
+        None => (None, Vec::new(), 0),
+    };
     Ok(Formulation {
         qdot,
         forward_dynamics,
@@ -313,6 +329,8 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         outputs,
         jacobians,
         constraints,
+        constraint_names,
+        n_holonomic,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -406,23 +424,36 @@ fn outputs<'cx>(
     Ok((lower(&names, &values), lower(&jac_names, &jac_values)))
 }
 
-/// `Φ`, `Φ̇`, `γ` and `J` of the cut joints (see [`Formulation::constraints`]).
+/// `Φ`, `Φ̇`, `γ` and `J` of the cut joints and the model's constraints
+/// (see [`Formulation::constraints`]), with the equation names and the
+/// number of holonomic equations.
 #[allow(clippy::too_many_arguments)]
 fn closure<'cx>(
     sys: &System,
     cx: &'cx Context,
     tree: &TreeModel<Expr<'cx>>,
     env: &dyn Env<Expr<'cx>>,
+    ev: &Evaluator<'_, Expr<'cx>>,
     k: &Kinematics<Expr<'cx>>,
     q: &[Expr<'cx>],
     u: &[Expr<'cx>],
     qdot: &[Expr<'cx>],
     opts: LowerOptions,
-) -> Result<Option<Program>, FormulateError> {
+) -> Result<Option<ConstraintProgram>, FormulateError> {
     use crate::sym::TimeDerivative;
     let cuts = super::constraints::cut_joints(sys, tree, env)?;
     let phi = super::constraints::phi(k, &cuts);
-    if phi.is_empty() {
+    let mut holonomic: Vec<(String, Expr<'cx>)> = Vec::new();
+    let mut row = 0;
+    for c in &cuts {
+        for e in 0..c.equations.len() {
+            holonomic.push((format!("{}.{e}", c.name), phi[row + e]));
+        }
+        row += c.equations.len();
+    }
+    let (user_h, user_nh) = super::constraints::user_constraints(sys, tree, env, ev, k, q, cx.t())?;
+    holonomic.extend(user_h);
+    if holonomic.is_empty() && user_nh.is_empty() {
         return Ok(None);
     }
     // q̇ along the motion: q_i → (N(q) u)_i; for γ also u̇ = 0.
@@ -443,8 +474,14 @@ fn closure<'cx>(
     let mut names = Vec::new();
     let mut values = Vec::new();
     let mut phidots = Vec::new();
-    for (i, &p) in phi.iter().enumerate() {
-        let pd = cx.time_derivative(&mut first, p)?;
+    let n_holonomic = holonomic.len();
+    let mut equation_names = Vec::new();
+    for (i, (name, p)) in holonomic.iter().chain(&user_nh).enumerate() {
+        let (p, pd) = if i < n_holonomic {
+            (*p, cx.time_derivative(&mut first, *p)?)
+        } else {
+            (Expr::zero(), *p)
+        };
         let pdd = cx.time_derivative(&mut second, pd)?;
         names.push(format!("phi{i}"));
         values.push(p);
@@ -453,6 +490,7 @@ fn closure<'cx>(
         names.push(format!("gamma{i}"));
         values.push(-pdd);
         phidots.push(pd);
+        equation_names.push(name.clone());
     }
     for (i, &pd) in phidots.iter().enumerate() {
         for (kk, &uk) in u.iter().enumerate() {
@@ -461,5 +499,9 @@ fn closure<'cx>(
         }
     }
     let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
-    Ok(Some(cx.lower(&outs, opts)))
+    Ok(Some(ConstraintProgram {
+        program: cx.lower(&outs, opts),
+        names: equation_names,
+        n_holonomic,
+    }))
 }

@@ -5,6 +5,7 @@
 // as the formulas do; iterator chains would obscure them.
 #![allow(clippy::needless_range_loop)]
 
+pub mod by_name;
 pub mod dop853;
 pub mod dopri5;
 pub mod driver;

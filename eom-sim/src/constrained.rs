@@ -1,0 +1,756 @@
+//! Constrained multibody systems: closed loops and user constraints.
+//!
+//! A model with constraints has, besides `q̇ = N(q) u` and
+//! `M(q) u̇ = τ − b(q, u, t)`, `m` constraint equations on the speeds
+//!
+//! ```text
+//! Φ̇(q, u, t) = J(q, t) u + Φ_t(q, t) = 0,      J u̇ = γ(q, u, t),
+//! ```
+//!
+//! of which the first `m_h` are time derivatives of position-level
+//! (holonomic) conditions `Φ(q, t) = 0` (cut joints, user expressions) and
+//! the rest are nonholonomic (rolling without slipping). The constraint
+//! forces are `Jᵀλ`: `M u̇ = τ − b + Jᵀλ` (Wittenburg 5.6, Shabana 5.9–5.12).
+//!
+//! Four ways to integrate them are built here ([`Method`]):
+//!
+//! | method | unknowns | drift |
+//! |---|---|---|
+//! | [`Method::Baumgarte`] | `(q, u)`, `λ` eliminated per right-hand side | Baumgarte terms `γ − 2α Φ̇ − β² Φ` |
+//! | [`Method::Projection`] | `(q, u)`, as above | Newton onto `Φ = 0`, then `u` onto `Φ̇ = 0`, minimum-norm steps after every step |
+//! | [`Method::Partitioning`] | `(q, u)`, as above | dependent coordinates from the independent ones (Wehage–Haug) after every step |
+//! | [`Method::Index3`] | `(q, u, λ)`: the index-3 DAE for [`Radau5`](crate::Radau5) | none: `Φ = 0` is an equation |
+//!
+//! `λ` comes from the Schur complement `J M⁻¹ Jᵀ λ = γ − J M⁻¹ (τ − b)`,
+//! solved through its symmetric eigendecomposition with eigenvalues below
+//! `1e-10` of the largest dropped: redundant equations (Bricard's loop)
+//! give the minimum-norm `λ` and the numerical rank is reported.
+
+use crate::model::{Model, Vector};
+use crate::{OdeSystem, SMatrix};
+use nalgebra::{DMatrix, DVector};
+use std::cell::{Cell, RefCell};
+
+/// A generated model with constraint equations (see the module docs).
+pub trait ConstrainedModel: Model {
+    /// Number of constraint equations `m`.
+    const NC: usize;
+    /// Number of holonomic equations `m_h` (they come first).
+    const NHOLONOMIC: usize;
+    /// Names of the equations (`joint.k` for cut joints, the constraint's
+    /// name for user constraints).
+    const CONSTRAINT_NAMES: &'static [&'static str];
+    /// `[f64; NC]`.
+    type Constraints: Vector;
+    /// `J`, `[f64; NC * NU]`, by rows.
+    type ConstraintJacobian: Vector;
+    /// `Φ` (zero for nonholonomic rows), `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`)
+    /// and `J`.
+    #[allow(clippy::too_many_arguments)]
+    fn constraints(
+        &self,
+        t: f64,
+        q: &Self::Q,
+        u: &Self::U,
+        phi: &mut Self::Constraints,
+        phidot: &mut Self::Constraints,
+        gamma: &mut Self::Constraints,
+        jacobian: &mut Self::ConstraintJacobian,
+    );
+}
+
+/// Constraint values at one state.
+#[derive(Clone, Debug)]
+pub struct ConstraintValues {
+    /// `Φ` (holonomic rows; zero for nonholonomic ones).
+    pub phi: DVector<f64>,
+    /// `Φ̇ = J u + Φ_t`.
+    pub phidot: DVector<f64>,
+    /// `γ` with `J u̇ = γ`.
+    pub gamma: DVector<f64>,
+    /// `J`, `m × n_u`.
+    pub jacobian: DMatrix<f64>,
+}
+
+impl ConstraintValues {
+    /// Zeros for `m` equations and `nu` speeds.
+    pub fn zeros(m: usize, nu: usize) -> Self {
+        ConstraintValues {
+            phi: DVector::zeros(m),
+            phidot: DVector::zeros(m),
+            gamma: DVector::zeros(m),
+            jacobian: DMatrix::zeros(m, nu),
+        }
+    }
+}
+
+/// A constrained model seen through slices: what the solvers need. It is
+/// implemented for generated code through [`Generated`] and by `eom-gen`'s
+/// interpreter.
+pub trait Dynamics {
+    /// Number of positions.
+    fn nq(&self) -> usize;
+    /// Number of speeds.
+    fn nu(&self) -> usize;
+    /// Number of constraint equations.
+    fn nc(&self) -> usize;
+    /// Number of holonomic equations (the first ones).
+    fn n_holonomic(&self) -> usize;
+    /// Positions of unit quaternions in `q`.
+    fn quaternions(&self) -> &[usize];
+    /// `q̇ = N(q) u`.
+    fn qdot(&self, q: &[f64], u: &[f64], qdot: &mut [f64]);
+    /// `M(q)`.
+    fn mass_matrix(&self, t: f64, q: &[f64], m: &mut DMatrix<f64>);
+    /// `b(q, u, t)`.
+    fn bias(&self, t: f64, q: &[f64], u: &[f64], b: &mut DVector<f64>);
+    /// The constraint values.
+    fn constraints(&self, t: f64, q: &[f64], u: &[f64], c: &mut ConstraintValues);
+
+    /// Normalises the unit quaternions in `q`.
+    fn normalize(&self, q: &mut [f64]) {
+        for &a in self.quaternions() {
+            if let Some(quat) = q.get_mut(a..a + 4) {
+                let n = quat.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if n > 0.0 && n.is_finite() {
+                    quat.iter_mut().for_each(|x| *x /= n);
+                }
+            }
+        }
+    }
+}
+
+/// Generated code as [`Dynamics`].
+pub struct Generated<'a, M>(pub &'a M);
+
+fn load<V: Vector>(src: &[f64]) -> V {
+    let mut v = V::ZERO;
+    for (d, s) in v.as_mut().iter_mut().zip(src) {
+        *d = *s;
+    }
+    v
+}
+
+impl<M: ConstrainedModel> Dynamics for Generated<'_, M> {
+    fn nq(&self) -> usize {
+        M::NQ
+    }
+    fn nu(&self) -> usize {
+        M::NU
+    }
+    fn nc(&self) -> usize {
+        M::NC
+    }
+    fn n_holonomic(&self) -> usize {
+        M::NHOLONOMIC
+    }
+    fn quaternions(&self) -> &[usize] {
+        M::QUATERNIONS
+    }
+    fn qdot(&self, q: &[f64], u: &[f64], qdot: &mut [f64]) {
+        let mut out = M::Q::ZERO;
+        self.0.qdot(&load(q), &load(u), &mut out);
+        for (d, s) in qdot.iter_mut().zip(out.as_ref()) {
+            *d = *s;
+        }
+    }
+    fn mass_matrix(&self, t: f64, q: &[f64], m: &mut DMatrix<f64>) {
+        let mut out = M::MASS_ZERO;
+        self.0.mass_matrix(t, &load(q), &mut out);
+        for (i, row) in out.as_ref().iter().enumerate() {
+            for (j, v) in row.as_ref().iter().enumerate() {
+                if i < m.nrows() && j < m.ncols() {
+                    m[(i, j)] = *v;
+                }
+            }
+        }
+    }
+    fn bias(&self, t: f64, q: &[f64], u: &[f64], b: &mut DVector<f64>) {
+        let mut out = M::U::ZERO;
+        self.0.bias(t, &load(q), &load(u), &mut out);
+        for (d, s) in b.iter_mut().zip(out.as_ref()) {
+            *d = *s;
+        }
+    }
+    fn constraints(&self, t: f64, q: &[f64], u: &[f64], c: &mut ConstraintValues) {
+        let (mut phi, mut phidot, mut gamma) = (
+            M::Constraints::ZERO,
+            M::Constraints::ZERO,
+            M::Constraints::ZERO,
+        );
+        let mut jac = M::ConstraintJacobian::ZERO;
+        self.0.constraints(
+            t,
+            &load(q),
+            &load(u),
+            &mut phi,
+            &mut phidot,
+            &mut gamma,
+            &mut jac,
+        );
+        for (d, s) in c.phi.iter_mut().zip(phi.as_ref()) {
+            *d = *s;
+        }
+        for (d, s) in c.phidot.iter_mut().zip(phidot.as_ref()) {
+            *d = *s;
+        }
+        for (d, s) in c.gamma.iter_mut().zip(gamma.as_ref()) {
+            *d = *s;
+        }
+        let nu = M::NU;
+        for (k, v) in jac.as_ref().iter().enumerate() {
+            let (r, col) = (k / nu.max(1), k % nu.max(1));
+            if r < c.jacobian.nrows() && col < c.jacobian.ncols() {
+                c.jacobian[(r, col)] = *v;
+            }
+        }
+    }
+}
+
+/// How constraints are kept (see the module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Method {
+    /// Multipliers with Baumgarte stabilisation `γ − 2α Φ̇ − β² Φ`.
+    Baumgarte {
+        /// `α`, s⁻¹.
+        alpha: f64,
+        /// `β`, s⁻¹.
+        beta: f64,
+    },
+    /// Multipliers, then projection of `q` and `u` after every step.
+    Projection,
+    /// Multipliers, then the dependent coordinates and speeds recomputed
+    /// from the independent ones after every step.
+    Partitioning,
+    /// The index-3 DAE in `(q, u, λ)`.
+    Index3,
+}
+
+impl Method {
+    /// Baumgarte with `α = β = 10 s⁻¹`, the default of `eom-gen simulate`.
+    pub const BAUMGARTE: Method = Method::Baumgarte {
+        alpha: 10.0,
+        beta: 10.0,
+    };
+
+    /// The method named `multipliers`, `projection`, `partitioning` or
+    /// `index3` (as `eom-gen simulate --constraints` takes them).
+    pub fn from_name(name: &str) -> Option<Method> {
+        match name {
+            "multipliers" | "baumgarte" => Some(Method::BAUMGARTE),
+            "projection" => Some(Method::Projection),
+            "partitioning" => Some(Method::Partitioning),
+            "index3" => Some(Method::Index3),
+            _ => None,
+        }
+    }
+}
+
+/// What the solver saw along a run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ConstraintStats {
+    /// Largest `|Φ|` (holonomic rows) at the accepted states.
+    pub max_position_residual: f64,
+    /// Largest `|Φ̇|` at the accepted states.
+    pub max_velocity_residual: f64,
+    /// Numerical rank of `J` (at the last accepted state).
+    pub rank: usize,
+    /// Smallest rank seen.
+    pub min_rank: usize,
+    /// Changes of the coordinate partition ([`Method::Partitioning`]).
+    pub repartitions: usize,
+}
+
+/// Minimum-norm solution of `a x = r` via the SVD, and the numerical rank
+/// (singular values below `1e-10` of the largest dropped).
+pub fn min_norm_solve(a: &DMatrix<f64>, r: &DVector<f64>) -> (DVector<f64>, usize) {
+    if a.nrows() == 0 || a.ncols() == 0 {
+        return (DVector::zeros(a.ncols()), 0);
+    }
+    let svd = a.clone().svd(true, true);
+    let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
+    let eps = 1e-10 * largest.max(1e-300);
+    let rank = svd.singular_values.iter().filter(|&&s| s > eps).count();
+    match svd.solve(r, eps) {
+        Ok(x) => (x, rank),
+        Err(_) => (DVector::zeros(a.ncols()), rank),
+    }
+}
+
+/// `u̇` and `λ` of `M u̇ = −b + Jᵀλ + τ`, `J u̇ = γ`, and the rank of the
+/// Schur complement; `None` if `M` is not positive definite.
+pub fn accelerations(
+    m: &DMatrix<f64>,
+    force: &DVector<f64>,
+    jacobian: &DMatrix<f64>,
+    gamma: &DVector<f64>,
+) -> Option<(DVector<f64>, DVector<f64>, usize)> {
+    let chol = m.clone().cholesky()?;
+    let free = chol.solve(force);
+    if jacobian.nrows() == 0 {
+        return Some((free, DVector::zeros(0), 0));
+    }
+    let minv_jt = chol.solve(&jacobian.transpose());
+    let schur = jacobian * &minv_jt;
+    let rhs = gamma - jacobian * &free;
+    let eig = nalgebra::SymmetricEigen::new(schur);
+    let largest = eig.eigenvalues.iter().map(|x| x.abs()).fold(0.0, f64::max);
+    let eps = 1e-10 * largest.max(1e-300);
+    let mut lambda = DVector::zeros(rhs.len());
+    let mut rank = 0;
+    for (k, &ev) in eig.eigenvalues.iter().enumerate() {
+        if ev > eps {
+            rank += 1;
+            let v = eig.eigenvectors.column(k);
+            lambda += v * (v.dot(&rhs) / ev);
+        }
+    }
+    let udot = free + minv_jt * &lambda;
+    Some((udot, lambda, rank))
+}
+
+/// A consistent state near a guess.
+#[derive(Clone, Debug)]
+pub struct Assembly {
+    /// Positions with `Φ(q, t) = 0`.
+    pub q: Vec<f64>,
+    /// Speeds with `J u + Φ_t = 0`.
+    pub u: Vec<f64>,
+    /// `max |Φ|` reached.
+    pub residual: f64,
+    /// `max |J u + Φ_t|` reached.
+    pub velocity_residual: f64,
+    /// Newton iterations on the positions.
+    pub iterations: usize,
+}
+
+fn max_abs<'a>(v: impl IntoIterator<Item = &'a f64>) -> f64 {
+    v.into_iter().fold(0.0f64, |m, x| m.max(x.abs()))
+}
+
+/// Assembly: Newton with minimum-norm steps and backtracking onto the
+/// holonomic equations `Φ = 0`, then the smallest change of the speeds that
+/// satisfies every speed equation `J u + Φ_t = 0`.
+pub fn assemble<D: Dynamics + ?Sized>(d: &D, q0: &[f64], u0: &[f64], t: f64) -> Assembly {
+    let (nu, nh) = (d.nu(), d.n_holonomic());
+    let mut c = ConstraintValues::zeros(d.nc(), nu);
+    let zero = vec![0.0; nu];
+    let mut q = q0.to_vec();
+    d.normalize(&mut q);
+    let holonomic_residual = |q: &[f64], c: &mut ConstraintValues| {
+        d.constraints(t, q, &zero, c);
+        max_abs(c.phi.iter().take(nh))
+    };
+    let mut residual = holonomic_residual(&q, &mut c);
+    let mut iterations = 0;
+    let mut dq = vec![0.0; q.len()];
+    while residual > 1e-13 && iterations < 50 {
+        iterations += 1;
+        let jh = c.jacobian.rows(0, nh).into_owned();
+        let minus_phi = -c.phi.rows(0, nh).into_owned();
+        let (du, _) = min_norm_solve(&jh, &minus_phi);
+        d.qdot(&q, du.as_slice(), &mut dq);
+        let mut step = 1.0;
+        let mut improved = false;
+        while step > 1e-6 {
+            let mut trial: Vec<f64> = q.iter().zip(&dq).map(|(q, d)| q + step * d).collect();
+            d.normalize(&mut trial);
+            let r = holonomic_residual(&trial, &mut c);
+            if r < residual {
+                q = trial;
+                residual = r;
+                improved = true;
+                break;
+            }
+            step /= 2.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    d.constraints(t, &q, u0, &mut c);
+    let (du, _) = min_norm_solve(&c.jacobian, &-c.phidot.clone());
+    let u: Vec<f64> = u0.iter().zip(du.iter()).map(|(u, d)| u + d).collect();
+    d.constraints(t, &q, &u, &mut c);
+    Assembly {
+        velocity_residual: max_abs(c.phidot.iter()),
+        residual: max_abs(c.phi.iter().take(nh)),
+        q,
+        u,
+        iterations,
+    }
+}
+
+/// A choice of dependent speeds: `rows` of `J` solved for the speeds
+/// `cols` (Wehage–Haug), with the pivot ratio it was chosen at.
+#[derive(Clone, Debug, Default)]
+struct Partition {
+    rows: Vec<usize>,
+    cols: Vec<usize>,
+    quality: f64,
+}
+
+/// Gaussian elimination with complete pivoting on `a`: the pivot rows and
+/// columns in order of elimination (the numerical rank many of them, pivots
+/// below `1e-10` of the first dropped) and `min |pivot| / max |pivot|`.
+fn complete_pivoting(a: &DMatrix<f64>) -> Partition {
+    let mut a = a.clone();
+    let (m, n) = a.shape();
+    let mut rows: Vec<usize> = (0..m).collect();
+    let mut cols: Vec<usize> = (0..n).collect();
+    let mut first = 0.0;
+    let mut smallest = f64::INFINITY;
+    let mut rank = 0;
+    for k in 0..m.min(n) {
+        let (mut pi, mut pj, mut best) = (k, k, 0.0);
+        for i in k..m {
+            for j in k..n {
+                if a[(i, j)].abs() > best {
+                    (pi, pj, best) = (i, j, a[(i, j)].abs());
+                }
+            }
+        }
+        if k == 0 {
+            first = best;
+        }
+        if best <= 1e-10 * first || best == 0.0 {
+            break;
+        }
+        a.swap_rows(k, pi);
+        a.swap_columns(k, pj);
+        rows.swap(k, pi);
+        cols.swap(k, pj);
+        for i in k + 1..m {
+            let f = a[(i, k)] / a[(k, k)];
+            for j in k..n {
+                a[(i, j)] -= f * a[(k, j)];
+            }
+        }
+        smallest = smallest.min(best);
+        rank += 1;
+    }
+    rows.truncate(rank);
+    cols.truncate(rank);
+    Partition {
+        rows,
+        cols,
+        quality: if rank == 0 { 1.0 } else { smallest / first },
+    }
+}
+
+/// `min |pivot| / max |pivot|` of `J[rows, cols]` by partial pivoting.
+fn pivot_quality(j: &DMatrix<f64>, p: &Partition) -> f64 {
+    let r = p.rows.len();
+    let sub = DMatrix::from_fn(r, r, |a, b| j[(p.rows[a], p.cols[b])]);
+    let lu = sub.lu();
+    let d = lu.u().diagonal();
+    let largest = max_abs(d.iter());
+    let smallest = d.iter().fold(f64::INFINITY, |m, x| m.min(x.abs()));
+    if r == 0 { 1.0 } else { smallest / largest.max(1e-300) }
+}
+
+/// `J[rows, cols] x = r[rows]`, by LU.
+fn solve_partition(j: &DMatrix<f64>, p: &Partition, r: &DVector<f64>) -> Option<DVector<f64>> {
+    let n = p.rows.len();
+    let sub = DMatrix::from_fn(n, n, |a, b| j[(p.rows[a], p.cols[b])]);
+    let rhs = DVector::from_fn(n, |a, _| r[p.rows[a]]);
+    sub.lu().solve(&rhs)
+}
+
+/// Integration of a constrained model with [`Method::Baumgarte`],
+/// [`Method::Projection`] or [`Method::Partitioning`] as an [`OdeSystem`]
+/// on `y = (q, u)`; `N = n_q + n_u`.
+pub struct ConstrainedSystem<'a, D: ?Sized> {
+    d: &'a D,
+    method: Method,
+    stats: RefCell<ConstraintStats>,
+    partitions: RefCell<Option<(Partition, Partition)>>,
+    started: Cell<bool>,
+}
+
+impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
+    /// The system of `d` kept by `method` (not [`Method::Index3`], which is
+    /// [`Index3System`]).
+    pub fn new(d: &'a D, method: Method) -> Self {
+        ConstrainedSystem {
+            d,
+            method,
+            stats: RefCell::new(ConstraintStats {
+                min_rank: usize::MAX,
+                ..ConstraintStats::default()
+            }),
+            partitions: RefCell::new(None),
+            started: Cell::new(false),
+        }
+    }
+
+    /// What was seen along the run so far.
+    pub fn stats(&self) -> ConstraintStats {
+        let mut s = self.stats.borrow().clone();
+        if s.min_rank == usize::MAX {
+            s.min_rank = s.rank;
+        }
+        s
+    }
+
+    /// `u̇` and `λ` at a state (with this method's stabilisation).
+    pub fn accelerations(&self, t: f64, q: &[f64], u: &[f64]) -> Option<(DVector<f64>, DVector<f64>)> {
+        let (nu, nc) = (self.d.nu(), self.d.nc());
+        let mut m = DMatrix::zeros(nu, nu);
+        let mut b = DVector::zeros(nu);
+        let mut c = ConstraintValues::zeros(nc, nu);
+        self.d.mass_matrix(t, q, &mut m);
+        self.d.bias(t, q, u, &mut b);
+        self.d.constraints(t, q, u, &mut c);
+        let mut gamma = c.gamma;
+        if let Method::Baumgarte { alpha, beta } = self.method {
+            gamma -= c.phidot * (2.0 * alpha) + c.phi * (beta * beta);
+        }
+        accelerations(&m, &-b, &c.jacobian, &gamma).map(|(a, l, _)| (a, l))
+    }
+
+    fn record(&self, c: &ConstraintValues) {
+        let nh = self.d.n_holonomic();
+        let (_, rank) = min_norm_solve(&c.jacobian, &DVector::zeros(c.jacobian.nrows()));
+        let mut s = self.stats.borrow_mut();
+        s.max_position_residual = s.max_position_residual.max(max_abs(c.phi.iter().take(nh)));
+        s.max_velocity_residual = s.max_velocity_residual.max(max_abs(c.phidot.iter()));
+        s.rank = rank;
+        s.min_rank = s.min_rank.min(rank);
+    }
+
+    /// Minimum-norm Newton steps onto `Φ = 0`, then the speeds onto `Φ̇ = 0`.
+    fn project_min_norm(&self, t: f64, q: &mut [f64], u: &mut [f64]) {
+        let d = self.d;
+        let (nu, nh) = (d.nu(), d.n_holonomic());
+        let mut c = ConstraintValues::zeros(d.nc(), nu);
+        let zero = vec![0.0; nu];
+        let mut dq = vec![0.0; q.len()];
+        for _ in 0..10 {
+            d.constraints(t, q, &zero, &mut c);
+            if max_abs(c.phi.iter().take(nh)) < 1e-13 {
+                break;
+            }
+            let jh = c.jacobian.rows(0, nh).into_owned();
+            let (du, _) = min_norm_solve(&jh, &-c.phi.rows(0, nh).into_owned());
+            d.qdot(q, du.as_slice(), &mut dq);
+            q.iter_mut().zip(&dq).for_each(|(q, d)| *q += d);
+            d.normalize(q);
+        }
+        d.constraints(t, q, u, &mut c);
+        let (du, _) = min_norm_solve(&c.jacobian, &-c.phidot.clone());
+        u.iter_mut().zip(du.iter()).for_each(|(u, d)| *u += d);
+    }
+
+    /// Dependent coordinates by Newton with the independent ones held, then
+    /// the dependent speeds; re-partitions when the pivot ratio of the
+    /// dependent block fell below a tenth of what it was chosen at.
+    fn project_partitioned(&self, t: f64, q: &mut [f64], u: &mut [f64]) {
+        let d = self.d;
+        let (nu, nh) = (d.nu(), d.n_holonomic());
+        let mut c = ConstraintValues::zeros(d.nc(), nu);
+        let zero = vec![0.0; nu];
+        d.constraints(t, q, u, &mut c);
+        let jh = c.jacobian.rows(0, nh).into_owned();
+        let mut parts = self.partitions.borrow_mut();
+        let renew = match parts.as_ref() {
+            None => true,
+            Some((ph, pa)) => {
+                pivot_quality(&jh, ph) < 0.1 * ph.quality
+                    || pivot_quality(&c.jacobian, pa) < 0.1 * pa.quality
+            }
+        };
+        if renew {
+            if parts.is_some() {
+                self.stats.borrow_mut().repartitions += 1;
+            }
+            *parts = Some((complete_pivoting(&jh), complete_pivoting(&c.jacobian)));
+        }
+        let Some((ph, pa)) = parts.as_ref() else {
+            return;
+        };
+        let mut dq = vec![0.0; q.len()];
+        let mut du = vec![0.0; nu];
+        for _ in 0..10 {
+            d.constraints(t, q, &zero, &mut c);
+            if max_abs(c.phi.iter().take(nh)) < 1e-13 {
+                break;
+            }
+            let jh = c.jacobian.rows(0, nh).into_owned();
+            let phi = c.phi.rows(0, nh).into_owned();
+            let Some(x) = solve_partition(&jh, ph, &-phi) else {
+                break;
+            };
+            du.iter_mut().for_each(|v| *v = 0.0);
+            for (k, &col) in ph.cols.iter().enumerate() {
+                du[col] = x[k];
+            }
+            d.qdot(q, &du, &mut dq);
+            q.iter_mut().zip(&dq).for_each(|(q, d)| *q += d);
+            d.normalize(q);
+        }
+        d.constraints(t, q, u, &mut c);
+        if let Some(x) = solve_partition(&c.jacobian, pa, &-c.phidot.clone()) {
+            for (k, &col) in pa.cols.iter().enumerate() {
+                u[col] += x[k];
+            }
+        }
+    }
+}
+
+impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for ConstrainedSystem<'_, D> {
+    fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        let nq = self.d.nq();
+        let (q, u) = y.split_at(nq);
+        let (qd, ud) = dy.split_at_mut(nq);
+        self.d.qdot(q, u, qd);
+        match self.accelerations(t, q, u) {
+            Some((a, _)) => ud.iter_mut().zip(a.iter()).for_each(|(d, s)| *d = *s),
+            None => ud.iter_mut().for_each(|d| *d = f64::NAN),
+        }
+    }
+
+    fn project(&self, t: f64, y: &mut [f64; N]) -> bool {
+        let (nq, nu) = (self.d.nq(), self.d.nu());
+        let (q, u) = y.split_at_mut(nq);
+        self.d.normalize(q);
+        match self.method {
+            Method::Projection => self.project_min_norm(t, q, u),
+            Method::Partitioning => self.project_partitioned(t, q, u),
+            Method::Baumgarte { .. } | Method::Index3 => {}
+        }
+        let mut c = ConstraintValues::zeros(self.d.nc(), nu);
+        self.d.constraints(t, q, u, &mut c);
+        self.record(&c);
+        self.started.set(true);
+        true
+    }
+}
+
+/// The index-3 DAE `q̇ = N(q) u`, `u̇ = M⁻¹(Jᵀλ − b)`, `0 = Φ(q, t)` (and
+/// `0 = Φ̇` for nonholonomic rows) for [`Radau5`](crate::Radau5) with the
+/// mass matrix `diag(I, I, 0)`, on `y = (q, u, λ_nonholonomic, λ_holonomic)`;
+/// `N = n_q + n_u + m`. Set the integrator's index variables with
+/// [`Index3System::index_vars`]. Redundant equations make its Newton
+/// matrix singular: use a multiplier method for them.
+pub struct Index3System<'a, D: ?Sized> {
+    d: &'a D,
+    stats: RefCell<ConstraintStats>,
+}
+
+impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
+    /// The DAE of `d`.
+    pub fn new(d: &'a D) -> Self {
+        Index3System {
+            d,
+            stats: RefCell::new(ConstraintStats {
+                min_rank: usize::MAX,
+                ..ConstraintStats::default()
+            }),
+        }
+    }
+
+    /// (index-2 variables, index-3 variables) for
+    /// [`Radau5::index2_vars`](crate::Radau5::index2_vars) and
+    /// [`Radau5::index3_vars`](crate::Radau5::index3_vars).
+    pub fn index_vars(&self) -> (usize, usize) {
+        let (nu, nc, nh) = (self.d.nu(), self.d.nc(), self.d.n_holonomic());
+        let speeds = if nh > 0 { nu } else { 0 };
+        (speeds + nc - nh, nh)
+    }
+
+    /// The initial state `(q, u, λ)` from a consistent `(q, u)`, with `λ`
+    /// from the multipliers; `None` if `N` is not `n_q + n_u + m` or `M` is
+    /// singular.
+    pub fn initial<const N: usize>(&self, t: f64, q: &[f64], u: &[f64]) -> Option<[f64; N]> {
+        let (nq, nu, nc, nh) = (self.d.nq(), self.d.nu(), self.d.nc(), self.d.n_holonomic());
+        if N != nq + nu + nc {
+            return None;
+        }
+        let sys = ConstrainedSystem::new(self.d, Method::Projection);
+        let (_, lambda) = sys.accelerations(t, q, u)?;
+        let mut y = [0.0; N];
+        y[..nq].copy_from_slice(q.get(..nq)?);
+        y[nq..nq + nu].copy_from_slice(u.get(..nu)?);
+        for (k, l) in lambda.iter().enumerate() {
+            y[self.slot(k, nq + nu, nc, nh)] = *l;
+        }
+        Some(y)
+    }
+
+    /// Where `λ_k` sits in `y`.
+    fn slot(&self, k: usize, base: usize, nc: usize, nh: usize) -> usize {
+        if k < nh { base + nc - nh + k } else { base + k - nh }
+    }
+
+    /// `λ` in the model's equation order from a state.
+    pub fn multipliers<const N: usize>(&self, y: &[f64; N]) -> Vec<f64> {
+        let (nq, nu, nc, nh) = (self.d.nq(), self.d.nu(), self.d.nc(), self.d.n_holonomic());
+        (0..nc)
+            .map(|k| y.get(self.slot(k, nq + nu, nc, nh)).copied().unwrap_or(f64::NAN))
+            .collect()
+    }
+
+    /// What was seen along the run so far.
+    pub fn stats(&self) -> ConstraintStats {
+        let mut s = self.stats.borrow().clone();
+        if s.min_rank == usize::MAX {
+            s.min_rank = s.rank;
+        }
+        s
+    }
+}
+
+impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for Index3System<'_, D> {
+    fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        let d = self.d;
+        let (nq, nu, nc, nh) = (d.nq(), d.nu(), d.nc(), d.n_holonomic());
+        let q = &y[..nq];
+        let u = &y[nq..nq + nu];
+        let lambda = DVector::from_iterator(nc, self.multipliers(y));
+        let mut m = DMatrix::zeros(nu, nu);
+        let mut b = DVector::zeros(nu);
+        let mut c = ConstraintValues::zeros(nc, nu);
+        d.mass_matrix(t, q, &mut m);
+        d.bias(t, q, u, &mut b);
+        d.constraints(t, q, u, &mut c);
+        d.qdot(q, u, &mut dy[..nq]);
+        let force = c.jacobian.transpose() * lambda - b;
+        match m.cholesky() {
+            Some(chol) => {
+                let a = chol.solve(&force);
+                dy[nq..nq + nu].iter_mut().zip(a.iter()).for_each(|(d, s)| *d = *s);
+            }
+            None => dy[nq..nq + nu].iter_mut().for_each(|d| *d = f64::NAN),
+        }
+        for k in 0..nc {
+            let residual = if k < nh { c.phi[k] } else { c.phidot[k] };
+            dy[self.slot(k, nq + nu, nc, nh)] = residual;
+        }
+    }
+
+    fn mass_matrix(&self, m: &mut SMatrix<f64, N, N>) -> bool {
+        let n = self.d.nq() + self.d.nu();
+        m.fill(0.0);
+        for i in 0..n.min(N) {
+            m[(i, i)] = 1.0;
+        }
+        true
+    }
+
+    fn project(&self, t: f64, y: &mut [f64; N]) -> bool {
+        let d = self.d;
+        let (nq, nu) = (d.nq(), d.nu());
+        d.normalize(&mut y[..nq]);
+        let mut c = ConstraintValues::zeros(d.nc(), nu);
+        d.constraints(t, &y[..nq], &y[nq..nq + nu], &mut c);
+        let nh = d.n_holonomic();
+        let (_, rank) = min_norm_solve(&c.jacobian, &DVector::zeros(c.jacobian.nrows()));
+        let mut s = self.stats.borrow_mut();
+        s.max_position_residual = s.max_position_residual.max(max_abs(c.phi.iter().take(nh)));
+        s.max_velocity_residual = s.max_velocity_residual.max(max_abs(c.phidot.iter()));
+        s.rank = rank;
+        s.min_rank = s.min_rank.min(rank);
+        !d.quaternions().is_empty()
+    }
+}

@@ -1,0 +1,73 @@
+//! Choosing an integrator by name, as `eom-gen simulate --integrator` does.
+
+use super::driver::{Solution, SolveOptions, integrate};
+use super::system::OdeSystem;
+use crate::{Dop853, Dopri5, Euler, ImplicitMidpoint, Radau5, Rk4};
+
+/// The integrators [`solve`] knows, by name.
+pub const INTEGRATORS: [&str; 6] = ["euler", "rk4", "midpoint", "dopri5", "dop853", "radau5"];
+
+/// How to integrate: method name, tolerances (adaptive methods), step
+/// (fixed-step methods) and RADAU5's DAE index variables.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// One of [`INTEGRATORS`].
+    pub integrator: String,
+    /// Relative tolerance.
+    pub rtol: f64,
+    /// Absolute tolerance.
+    pub atol: f64,
+    /// Step size of the fixed-step methods.
+    pub dt: f64,
+    /// RADAU5's index-2 and index-3 variable counts (the last components).
+    pub index_vars: (usize, usize),
+}
+
+/// Integrates `sys` from `(t0, y0)` to `t_end` with the integrator named in
+/// `s`; `None` for an unknown name.
+pub fn solve<const N: usize, S: OdeSystem<N>>(
+    s: &Settings,
+    sys: &S,
+    t0: f64,
+    y0: [f64; N],
+    t_end: f64,
+    opts: &SolveOptions,
+) -> Option<Solution<N>> {
+    Some(match s.integrator.as_str() {
+        "euler" => integrate(&mut Euler::new(s.dt), sys, t0, y0, t_end, opts, &mut []),
+        "rk4" => integrate(&mut Rk4::new(s.dt), sys, t0, y0, t_end, opts, &mut []),
+        "midpoint" => integrate(
+            &mut ImplicitMidpoint::new(s.dt),
+            sys,
+            t0,
+            y0,
+            t_end,
+            opts,
+            &mut [],
+        ),
+        "dopri5" => integrate(
+            &mut Dopri5::new(s.rtol, s.atol),
+            sys,
+            t0,
+            y0,
+            t_end,
+            opts,
+            &mut [],
+        ),
+        "dop853" => integrate(
+            &mut Dop853::new(s.rtol, s.atol),
+            sys,
+            t0,
+            y0,
+            t_end,
+            opts,
+            &mut [],
+        ),
+        "radau5" => {
+            let mut r = Radau5::new(s.rtol, s.atol);
+            (r.index2_vars, r.index3_vars) = s.index_vars;
+            integrate(&mut r, sys, t0, y0, t_end, opts, &mut [])
+        }
+        _ => return None,
+    })
+}
