@@ -211,7 +211,10 @@ impl eom_sim::Dynamics for Interpreted<'_> {
                 ("phi", &mut c.phi),
                 ("gamma", &mut c.gamma),
             ] {
-                if let Some(i) = name.strip_prefix(prefix).and_then(|k| k.parse::<usize>().ok()) {
+                if let Some(i) = name
+                    .strip_prefix(prefix)
+                    .and_then(|k| k.parse::<usize>().ok())
+                {
                     if let Some(slot) = target.get_mut(i) {
                         *slot = v;
                     }
@@ -252,7 +255,10 @@ impl<const N: usize> eom_sim::OdeSystem<N> for Interpreted<'_> {
 pub const MAX_STATES: usize = 32;
 
 /// The constraint method named in `o` (`None` without constraints).
-fn method(f: &Formulation, o: &crate::compiled::SimOptions) -> Result<Option<eom_sim::Method>, String> {
+fn method(
+    f: &Formulation,
+    o: &crate::compiled::SimOptions,
+) -> Result<Option<eom_sim::Method>, String> {
     if f.constraints.is_none() {
         return Ok(None);
     }
@@ -299,7 +305,9 @@ fn simulate_n<const N: usize>(
     sys: &System,
     o: &crate::compiled::SimOptions,
 ) -> Result<serde_json::Value, String> {
-    use eom_sim::{ConstrainedSystem, Dynamics, Index3System, Method, Settings, SolveOptions, solve};
+    use eom_sim::{
+        ConstrainedSystem, Dynamics, Index3System, Method, Settings, SolveOptions, solve,
+    };
     let (nq, nu) = (sys.nq(), sys.nu());
     let model = Interpreted::new(f, sys);
     let mut settings = Settings {
@@ -340,8 +348,14 @@ fn simulate_n<const N: usize>(
     let put = |info: &mut serde_json::Map<String, serde_json::Value>,
                s: eom_sim::ConstraintStats,
                lambda: Vec<f64>| {
-        info.insert("max_constraint_residual".into(), serde_json::json!(s.max_position_residual));
-        info.insert("max_velocity_residual".into(), serde_json::json!(s.max_velocity_residual));
+        info.insert(
+            "max_constraint_residual".into(),
+            serde_json::json!(s.max_position_residual),
+        );
+        info.insert(
+            "max_velocity_residual".into(),
+            serde_json::json!(s.max_velocity_residual),
+        );
         info.insert("constraint_rank".into(), serde_json::json!(s.rank));
         info.insert("min_constraint_rank".into(), serde_json::json!(s.min_rank));
         info.insert("repartitions".into(), serde_json::json!(s.repartitions));

@@ -275,14 +275,27 @@ fn simulate_runs_the_compiled_model_and_reports_statistics() {
     );
     assert!(first[7].abs() < 1e-12, "tension at release: {}", lines[1]);
     assert_eq!(lines.len(), 1 + 5, "samples at 0, 0.5, …, 2: {text}");
-    // Closed loops need the constraint solvers: a clear error, exit 1.
-    let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
-        .args(["simulate", "models/fourbar.ron", "--t-end", "1"])
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-        .output()
-        .expect("eom-gen runs");
-    assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("closed loops"));
+    // Constraint methods: an unknown one, or the index-3 DAE with an
+    // explicit integrator, is a usage error (exit 2) that says what works.
+    for (method, integrator, says) in [
+        ("lagrange", "dopri5", "partitioning"),
+        ("index3", "dopri5", "radau5"),
+    ] {
+        let out = eom_gen(&[
+            "simulate",
+            "models/fourbar.ron",
+            "--constraints",
+            method,
+            "--integrator",
+            integrator,
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{method}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(says),
+            "{method}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
     assert_eq!(
         eom_gen(&[
             "simulate",

@@ -446,7 +446,11 @@ fn pivot_quality(j: &DMatrix<f64>, p: &Partition) -> f64 {
     let d = lu.u().diagonal();
     let largest = max_abs(d.iter());
     let smallest = d.iter().fold(f64::INFINITY, |m, x| m.min(x.abs()));
-    if r == 0 { 1.0 } else { smallest / largest.max(1e-300) }
+    if r == 0 {
+        1.0
+    } else {
+        smallest / largest.max(1e-300)
+    }
 }
 
 /// `J[rows, cols] x = r[rows]`, by LU.
@@ -494,7 +498,12 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
     }
 
     /// `u̇` and `λ` at a state (with this method's stabilisation).
-    pub fn accelerations(&self, t: f64, q: &[f64], u: &[f64]) -> Option<(DVector<f64>, DVector<f64>)> {
+    pub fn accelerations(
+        &self,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+    ) -> Option<(DVector<f64>, DVector<f64>)> {
         let (nu, nc) = (self.d.nu(), self.d.nc());
         let mut m = DMatrix::zeros(nu, nu);
         let mut b = DVector::zeros(nu);
@@ -680,14 +689,22 @@ impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
 
     /// Where `λ_k` sits in `y`.
     fn slot(&self, k: usize, base: usize, nc: usize, nh: usize) -> usize {
-        if k < nh { base + nc - nh + k } else { base + k - nh }
+        if k < nh {
+            base + nc - nh + k
+        } else {
+            base + k - nh
+        }
     }
 
     /// `λ` in the model's equation order from a state.
     pub fn multipliers<const N: usize>(&self, y: &[f64; N]) -> Vec<f64> {
         let (nq, nu, nc, nh) = (self.d.nq(), self.d.nu(), self.d.nc(), self.d.n_holonomic());
         (0..nc)
-            .map(|k| y.get(self.slot(k, nq + nu, nc, nh)).copied().unwrap_or(f64::NAN))
+            .map(|k| {
+                y.get(self.slot(k, nq + nu, nc, nh))
+                    .copied()
+                    .unwrap_or(f64::NAN)
+            })
             .collect()
     }
 
@@ -719,7 +736,10 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for Index3System<'_, D> 
         match m.cholesky() {
             Some(chol) => {
                 let a = chol.solve(&force);
-                dy[nq..nq + nu].iter_mut().zip(a.iter()).for_each(|(d, s)| *d = *s);
+                dy[nq..nq + nu]
+                    .iter_mut()
+                    .zip(a.iter())
+                    .for_each(|(d, s)| *d = *s);
             }
             None => dy[nq..nq + nu].iter_mut().for_each(|d| *d = f64::NAN),
         }

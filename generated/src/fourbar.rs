@@ -481,6 +481,212 @@ impl ::eom_sim::Model for Fourbar {
         _out: &mut [f64; 0],
     ) {}
 }
+/// 2 constraint equation(s), the first 2 holonomic: `c.0`, `c.1`. `J` is by rows (2 × 3).
+impl ::eom_sim::ConstrainedModel for Fourbar {
+    const NC: usize = 2;
+    const NHOLONOMIC: usize = 2;
+    const CONSTRAINT_NAMES: &'static [&'static str] = &["c.0", "c.1"];
+    type Constraints = [f64; 2];
+    type ConstraintJacobian = [f64; 6];
+    fn constraints(
+        &self,
+        _t: f64,
+        q: &[f64; 3],
+        u: &[f64; 3],
+        phi: &mut [f64; 2],
+        phidot: &mut [f64; 2],
+        gamma: &mut [f64; 2],
+        jacobian: &mut [f64; 6],
+    ) {
+        let (x0, x1) = f64::sin_cos(q[0]);
+        let x2 = 0.5 * x1;
+        let (x3, x4) = f64::sin_cos(q[1]);
+        let x5 = 0.5 * x3;
+        let x6 = 0.5 + x5;
+        let x7 = u[0] + u[1];
+        let x8 = q[0] + q[1];
+        let (x9, x10) = f64::sin_cos(x8);
+        let x11 = x0 * x4;
+        let x12 = 0.5 * x11;
+        let x13 = x1 * x6;
+        let (x14, x15) = f64::sin_cos(q[2]);
+        let x16 = u[0] * u[0];
+        let x17 = u[2] * u[2];
+        let x18 = 0.5 * x9;
+        let x19 = x12 + x13;
+        let x20 = x2 + x19;
+        let x21 = x18 + x20;
+        let x22 = x0 * x6;
+        let x23 = 0.5 * x0;
+        let x24 = x1 * x4;
+        let x25 = 0.5 * x10;
+        let x26 = 0.5 * x24;
+        let x27 = x22 + x23;
+        let x28 = x27 - x25;
+        let x29 = x28 - x26;
+        let x30 = 1.0 + x22;
+        let x31 = x23 + x30;
+        let x32 = x31 - x25;
+        let x33 = x32 - x14;
+        let x34 = x33 - x26;
+        let x35 = x15 - x13;
+        let x36 = x35 - x2;
+        let x37 = x36 - x12;
+        let x38 = x37 - x18;
+        let x39 = x10 * x34;
+        let x40 = x9 * x38;
+        let x41 = x39 + x40;
+        let x42 = x9 * x34;
+        let x43 = x10 * x38;
+        let x44 = x43 - x42;
+        let x45 = q[2] - q[1];
+        let x46 = x45 - q[0];
+        let (x47, x48) = f64::sin_cos(x46);
+        let x49 = -x47;
+        let x50 = u[2] * x14;
+        let x51 = u[2] * x15;
+        let x52 = u[0] * x6;
+        let x53 = x1 * x52;
+        let x54 = u[0] * x1;
+        let x55 = 0.5 * x54;
+        let x56 = u[0] * x0;
+        let x57 = x4 * x56;
+        let x58 = 0.5 * x57;
+        let x59 = x7 * x9;
+        let x60 = 0.5 * x59;
+        let x61 = u[1] * x9;
+        let x62 = 0.5 * x61;
+        let x63 = x53 + x55;
+        let x64 = x58 + x63;
+        let x65 = x62 + x64;
+        let x66 = x60 + x65;
+        let x67 = x66 - x51;
+        let x68 = x0 * x52;
+        let x69 = x4 * x54;
+        let x70 = 0.5 * x56;
+        let x71 = x7 * x10;
+        let x72 = u[1] * x10;
+        let x73 = 0.5 * x69;
+        let x74 = 0.5 * x72;
+        let x75 = 0.5 * x71;
+        let x76 = x68 + x70;
+        let x77 = x76 - x73;
+        let x78 = x77 - x50;
+        let x79 = x78 - x74;
+        let x80 = x79 - x75;
+        let x81 = x7 * x34;
+        let x82 = x9 * x81;
+        let x83 = x10 * x67;
+        let x84 = x9 * x80;
+        let x85 = x7 * x38;
+        let x86 = x10 * x85;
+        let x87 = x83 + x86;
+        let x88 = x84 + x87;
+        let x89 = x88 - x82;
+        let x90 = x15 * x17;
+        let x91 = x14 * x17;
+        let x92 = x16 * x22;
+        let x93 = x0 * x16;
+        let x94 = x1 * x16;
+        let x95 = x4 * x94;
+        let x96 = 0.5 * x95;
+        let x97 = x7 * x7;
+        let x98 = x10 * x97;
+        let x99 = 0.5 * x98;
+        let x100 = u[1] * x71;
+        let x101 = 0.5 * x100;
+        let x102 = u[0] * x10;
+        let x103 = u[1] * x102;
+        let x104 = 0.5 * x103;
+        let x105 = 0.5 * x93;
+        let x106 = x101 + x104;
+        let x107 = x99 + x106;
+        let x108 = x96 + x107;
+        let x109 = x91 + x108;
+        let x110 = x109 - x105;
+        let x111 = x110 - x92;
+        let x112 = x13 * x16;
+        let x113 = x4 * x93;
+        let x114 = 0.5 * x113;
+        let x115 = 0.5 * x94;
+        let x116 = x9 * x97;
+        let x117 = 0.5 * x116;
+        let x118 = u[1] * x59;
+        let x119 = 0.5 * x118;
+        let x120 = u[0] * x9;
+        let x121 = u[1] * x120;
+        let x122 = 0.5 * x121;
+        let x123 = x114 + x122;
+        let x124 = x115 + x123;
+        let x125 = x119 + x124;
+        let x126 = x117 + x125;
+        let x127 = x112 + x126;
+        let x128 = x127 - x90;
+        let x129 = x38 * x97;
+        let x130 = x9 * x129;
+        let x131 = x7 * x67;
+        let x132 = x9 * x131;
+        let x133 = 2.0 * x132;
+        let x134 = x9 * x128;
+        let x135 = x10 * x111;
+        let x136 = x34 * x98;
+        let x137 = x71 * x80;
+        let x138 = 2.0 * x137;
+        let x139 = x130 + x136;
+        let x140 = x133 + x139;
+        let x141 = x140 - x138;
+        let x142 = x141 - x134;
+        let x143 = x142 - x135;
+        let x144 = x9 * x67;
+        let x145 = x34 * x71;
+        let x146 = x10 * x80;
+        let x147 = x9 * x85;
+        let x148 = x146 - x147;
+        let x149 = x148 - x144;
+        let x150 = x149 - x145;
+        let x151 = x10 * x128;
+        let x152 = x7 * x80;
+        let x153 = x9 * x152;
+        let x154 = 2.0 * x153;
+        let x155 = x10 * x129;
+        let x156 = x9 * x111;
+        let x157 = x10 * x131;
+        let x158 = 2.0 * x157;
+        let x159 = x34 * x97;
+        let x160 = x9 * x159;
+        let x161 = x155 + x158;
+        let x162 = x154 + x161;
+        let x163 = x156 + x162;
+        let x164 = x163 - x160;
+        let x165 = x164 - x151;
+        let x166 = x10 * x21;
+        let x167 = x9 * x29;
+        let x168 = x43 + x167;
+        let x169 = x166 + x168;
+        let x170 = x169 - x42;
+        let x171 = -x48;
+        let x172 = x9 * x21;
+        let x173 = x10 * x29;
+        let x174 = x173 - x40;
+        let x175 = x174 - x172;
+        let x176 = x175 - x39;
+        let x177 = 1.0 + x40;
+        let x178 = x39 + x177;
+        let x179 = -x178;
+        phi[0] = x41;
+        phidot[0] = x89;
+        gamma[0] = x143;
+        phi[1] = x44;
+        phidot[1] = x150;
+        gamma[1] = x165;
+        jacobian[0] = x170;
+        jacobian[1] = x44;
+        jacobian[2] = x171;
+        jacobian[3] = x176;
+        jacobian[4] = x179;
+        jacobian[5] = x49;
+    }
+}
 /// The first-order system `y = (q, u)` of `fourbar` (6 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<6> for Fourbar {
     fn rhs(&self, t: f64, y: &[f64; 6], dy: &mut [f64; 6]) {

@@ -380,6 +380,141 @@ impl ::eom_sim::Model for SliderCrank {
         _out: &mut [f64; 0],
     ) {}
 }
+/// 2 constraint equation(s), the first 2 holonomic: `slider_pin.0`, `slider_pin.1`. `J` is by rows (2 × 3).
+impl ::eom_sim::ConstrainedModel for SliderCrank {
+    const NC: usize = 2;
+    const NHOLONOMIC: usize = 2;
+    const CONSTRAINT_NAMES: &'static [&'static str] = &["slider_pin.0", "slider_pin.1"];
+    type Constraints = [f64; 2];
+    type ConstraintJacobian = [f64; 6];
+    fn constraints(
+        &self,
+        _t: f64,
+        q: &[f64; 3],
+        u: &[f64; 3],
+        phi: &mut [f64; 2],
+        phidot: &mut [f64; 2],
+        gamma: &mut [f64; 2],
+        jacobian: &mut [f64; 6],
+    ) {
+        let (x0, x1) = f64::sin_cos(q[0]);
+        let x2 = u[0] + u[1];
+        let x3 = q[0] + q[1];
+        let (x4, x5) = f64::sin_cos(x3);
+        let x6 = -x4;
+        let x7 = 0.1 * x0;
+        let x8 = u[0] * u[0];
+        let x9 = 0.3 * x4;
+        let x10 = x7 + x9;
+        let x11 = 0.3 * x5;
+        let x12 = 0.1 * x1;
+        let x13 = x11 + x12;
+        let x14 = -x13;
+        let x15 = q[2] - x11;
+        let x16 = x15 - x12;
+        let x17 = -x10;
+        let x18 = x5 * x16;
+        let x19 = x4 * x17;
+        let x20 = x18 + x19;
+        let x21 = x4 * x16;
+        let x22 = x5 * x17;
+        let x23 = x22 - x21;
+        let x24 = u[0] * x0;
+        let x25 = 0.1 * x24;
+        let x26 = x2 * x4;
+        let x27 = 0.3 * x26;
+        let x28 = u[2] + x25;
+        let x29 = x27 + x28;
+        let x30 = x2 * x5;
+        let x31 = u[0] * x1;
+        let x32 = 0.1 * x31;
+        let x33 = 0.3 * x30;
+        let x34 = x32 + x33;
+        let x35 = -x34;
+        let x36 = x2 * x16;
+        let x37 = x4 * x36;
+        let x38 = x5 * x29;
+        let x39 = x4 * x35;
+        let x40 = x2 * x17;
+        let x41 = x5 * x40;
+        let x42 = x38 + x41;
+        let x43 = x39 + x42;
+        let x44 = x43 - x37;
+        let x45 = x1 * x8;
+        let x46 = 0.1 * x45;
+        let x47 = x2 * x2;
+        let x48 = x5 * x47;
+        let x49 = 0.3 * x48;
+        let x50 = x46 + x49;
+        let x51 = x4 * x47;
+        let x52 = 0.3 * x51;
+        let x53 = x0 * x8;
+        let x54 = 0.1 * x53;
+        let x55 = x52 + x54;
+        let x56 = x17 * x47;
+        let x57 = x4 * x56;
+        let x58 = x16 * x48;
+        let x59 = x2 * x35;
+        let x60 = x5 * x59;
+        let x61 = x5 * x50;
+        let x62 = x4 * x55;
+        let x63 = x2 * x29;
+        let x64 = x4 * x63;
+        let x65 = 2.0 * x64;
+        let x66 = 2.0 * x60;
+        let x67 = x57 + x65;
+        let x68 = x58 + x67;
+        let x69 = x68 - x66;
+        let x70 = x69 - x62;
+        let x71 = x70 - x61;
+        let x72 = x4 * x29;
+        let x73 = x16 * x30;
+        let x74 = x5 * x35;
+        let x75 = x4 * x40;
+        let x76 = x74 - x73;
+        let x77 = x76 - x75;
+        let x78 = x77 - x72;
+        let x79 = x5 * x55;
+        let x80 = x4 * x50;
+        let x81 = x5 * x63;
+        let x82 = 2.0 * x81;
+        let x83 = x16 * x47;
+        let x84 = x4 * x83;
+        let x85 = x5 * x56;
+        let x86 = x4 * x59;
+        let x87 = 2.0 * x86;
+        let x88 = x82 + x85;
+        let x89 = x87 + x88;
+        let x90 = x80 + x89;
+        let x91 = x90 - x84;
+        let x92 = x91 - x79;
+        let x93 = x5 * x10;
+        let x94 = x4 * x14;
+        let x95 = x93 + x94;
+        let x96 = x22 + x95;
+        let x97 = x96 - x21;
+        let x98 = x4 * x10;
+        let x99 = x5 * x14;
+        let x100 = x99 - x19;
+        let x101 = x100 - x18;
+        let x102 = x101 - x98;
+        let x103 = 0.3 + x19;
+        let x104 = x18 + x103;
+        let x105 = -x104;
+        phi[0] = x20;
+        phidot[0] = x44;
+        gamma[0] = x71;
+        phi[1] = x23;
+        phidot[1] = x78;
+        gamma[1] = x92;
+        jacobian[0] = x97;
+        jacobian[1] = x23;
+        jacobian[2] = x5;
+        jacobian[3] = x102;
+        jacobian[4] = x105;
+        jacobian[5] = x6;
+    }
+}
 /// The first-order system `y = (q, u)` of `slider_crank` (6 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<6> for SliderCrank {
     fn rhs(&self, t: f64, y: &[f64; 6], dy: &mut [f64; 6]) {

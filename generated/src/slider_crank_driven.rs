@@ -225,6 +225,124 @@ impl ::eom_sim::Model for SliderCrankDriven {
         _out: &mut [f64; 0],
     ) {}
 }
+/// 2 constraint equation(s), the first 2 holonomic: `slider_pin.0`, `slider_pin.1`. `J` is by rows (2 × 2).
+impl ::eom_sim::ConstrainedModel for SliderCrankDriven {
+    const NC: usize = 2;
+    const NHOLONOMIC: usize = 2;
+    const CONSTRAINT_NAMES: &'static [&'static str] = &["slider_pin.0", "slider_pin.1"];
+    type Constraints = [f64; 2];
+    type ConstraintJacobian = [f64; 4];
+    fn constraints(
+        &self,
+        t: f64,
+        q: &[f64; 2],
+        u: &[f64; 2],
+        phi: &mut [f64; 2],
+        phidot: &mut [f64; 2],
+        gamma: &mut [f64; 2],
+        jacobian: &mut [f64; 4],
+    ) {
+        let x0 = ::core::f64::consts::TAU * t;
+        let x1 = ::core::f64::consts::FRAC_PI_2 + x0;
+        let (x2, x3) = f64::sin_cos(x1);
+        let x4 = ::core::f64::consts::TAU + u[0];
+        let x5 = q[0] + x1;
+        let (x6, x7) = f64::sin_cos(x5);
+        let x8 = -x6;
+        let x9 = 0.3 * x7;
+        let x10 = 0.1 * x3;
+        let x11 = q[1] - x9;
+        let x12 = x11 - x10;
+        let x13 = 0.3 * x6;
+        let x14 = 0.1 * x2;
+        let x15 = x13 + x14;
+        let x16 = -x15;
+        let x17 = x7 * x12;
+        let x18 = x6 * x16;
+        let x19 = x17 + x18;
+        let x20 = x6 * x12;
+        let x21 = x7 * x16;
+        let x22 = x21 - x20;
+        let x23 = 0.6283185307179586 * x2;
+        let x24 = x4 * x6;
+        let x25 = 0.3 * x24;
+        let x26 = u[1] + x23;
+        let x27 = x25 + x26;
+        let x28 = x4 * x7;
+        let x29 = 0.6283185307179586 * x3;
+        let x30 = 0.3 * x28;
+        let x31 = x29 + x30;
+        let x32 = -x31;
+        let x33 = x7 * x27;
+        let x34 = x4 * x12;
+        let x35 = x6 * x34;
+        let x36 = x6 * x32;
+        let x37 = x4 * x16;
+        let x38 = x7 * x37;
+        let x39 = x33 + x36;
+        let x40 = x38 + x39;
+        let x41 = x40 - x35;
+        let x42 = 3.947841760435743 * x3;
+        let x43 = x4 * x4;
+        let x44 = x7 * x43;
+        let x45 = 0.3 * x44;
+        let x46 = x42 + x45;
+        let x47 = 3.947841760435743 * x2;
+        let x48 = x6 * x43;
+        let x49 = 0.3 * x48;
+        let x50 = x47 + x49;
+        let x51 = x7 * x46;
+        let x52 = x16 * x43;
+        let x53 = x6 * x52;
+        let x54 = x4 * x27;
+        let x55 = x6 * x54;
+        let x56 = 2.0 * x55;
+        let x57 = x4 * x32;
+        let x58 = x7 * x57;
+        let x59 = x6 * x50;
+        let x60 = x12 * x43;
+        let x61 = x7 * x60;
+        let x62 = 2.0 * x58;
+        let x63 = x53 + x61;
+        let x64 = x56 + x63;
+        let x65 = x64 - x59;
+        let x66 = x65 - x62;
+        let x67 = x66 - x51;
+        let x68 = x6 * x27;
+        let x69 = x7 * x34;
+        let x70 = x7 * x32;
+        let x71 = x6 * x37;
+        let x72 = x70 - x68;
+        let x73 = x72 - x71;
+        let x74 = x73 - x69;
+        let x75 = x6 * x57;
+        let x76 = 2.0 * x75;
+        let x77 = x7 * x52;
+        let x78 = x6 * x60;
+        let x79 = x6 * x46;
+        let x80 = x7 * x50;
+        let x81 = x7 * x54;
+        let x82 = 2.0 * x81;
+        let x83 = x76 + x82;
+        let x84 = x77 + x83;
+        let x85 = x79 + x84;
+        let x86 = x85 - x80;
+        let x87 = x86 - x78;
+        let x88 = 0.3 + x18;
+        let x89 = x17 + x88;
+        let x90 = -x89;
+        phi[0] = x19;
+        phidot[0] = x41;
+        gamma[0] = x67;
+        phi[1] = x22;
+        phidot[1] = x74;
+        gamma[1] = x87;
+        jacobian[0] = x22;
+        jacobian[1] = x7;
+        jacobian[2] = x90;
+        jacobian[3] = x8;
+    }
+}
 /// The first-order system `y = (q, u)` of `slider_crank_driven` (4 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<4> for SliderCrankDriven {
     fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) {
