@@ -486,6 +486,33 @@ fn eval(
 
 use eom_sim::INTEGRATORS;
 
+/// Adds the cut joints' reaction forces and torques at the end of a run
+/// (from its multipliers `lambda`) to the JSON as `cut_joint_reactions`.
+fn add_cut_reactions(sys: &eom_gen::System, v: &mut serde_json::Value) {
+    let list = |k: &str| -> Vec<f64> {
+        v[k].as_array()
+            .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect())
+            .unwrap_or_default()
+    };
+    let (q, lambda) = (list("q"), list("lambda"));
+    if lambda.is_empty() || sys.graph.cut_joints().is_empty() {
+        return;
+    }
+    let t = v["t"].as_f64().unwrap_or(0.0);
+    let Ok(reactions) =
+        eom_gen::mech::Numeric::new(sys).and_then(|n| n.cut_reactions(&q, t, &lambda))
+    else {
+        return;
+    };
+    let map: serde_json::Map<String, serde_json::Value> = reactions
+        .into_iter()
+        .map(|(name, f, m)| (name, serde_json::json!({"force": f, "torque": m})))
+        .collect();
+    if let Some(obj) = v.as_object_mut() {
+        obj.insert("cut_joint_reactions".into(), serde_json::Value::Object(map));
+    }
+}
+
 fn simulate(
     path: &str,
     o: &eom_gen::compiled::SimOptions,
@@ -529,7 +556,8 @@ fn simulate(
         eom_gen::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o)
     };
     match result {
-        Ok(v) => {
+        Ok(mut v) => {
+            add_cut_reactions(sys, &mut v);
             if json {
                 println!("{v}");
             } else {

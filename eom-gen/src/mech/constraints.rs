@@ -213,6 +213,35 @@ pub fn phi<S: Scalar>(k: &Kinematics<S>, cuts: &[CutJoint<S>]) -> Vec<S> {
     out
 }
 
+/// The force and torque a cut joint's multipliers `λ` (its rows, in
+/// order) apply to the joint's child body at the child joint frame's
+/// origin, in parent-joint-frame axes; the parent gets the opposite.
+///
+/// An offset row `a · d` contributes the force `λ a`; an orientation row
+/// `v · M w` (relative rotation `M`) the torque `λ (M w) × v`: both are the
+/// rows of `Jᵀ` read as a spatial force on the child.
+pub fn cut_reaction<S: Scalar>(
+    k: &Kinematics<S>,
+    cut: &CutJoint<S>,
+    lambda: &[S],
+) -> (Vec3<S>, Vec3<S>) {
+    let world = |b: Option<usize>| b.map_or_else(Pose::identity, |i| k.world[i]);
+    let p = world(cut.parent).then(&cut.frame_parent);
+    let ch = world(cut.child).then(&cut.frame_child);
+    let m = p.e.transpose() * ch.e;
+    let (mut force, mut torque) = (Vec3::zero(), Vec3::zero());
+    for (e, &l) in cut.equations.iter().zip(lambda) {
+        match *e {
+            Equation::Offset(a) => force = force + Vec3::from_f64(a).scale(l),
+            Equation::Align(v, w) => {
+                let mw = m.mul_vec(Vec3::from_f64(w));
+                torque = torque + mw.cross(Vec3::from_f64(v)).scale(l);
+            }
+        }
+    }
+    (force, torque)
+}
+
 /// The model's own constraints (not joints) at the kinematics `k`:
 /// holonomic conditions `Φ(q, t)` and nonholonomic speed conditions
 /// `A(q) u + b(q, t)`, each with its name.

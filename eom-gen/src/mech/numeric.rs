@@ -243,6 +243,37 @@ impl Numeric {
         }))
     }
 
+    /// Force and torque on each cut joint's child (parent-joint-frame
+    /// axes) from the multipliers `lambda` of the constraint equations
+    /// (the cut joints' rows come first, as `eom-gen` orders them).
+    #[allow(clippy::type_complexity)]
+    pub fn cut_reactions(
+        &self,
+        q: &[f64],
+        t: f64,
+        lambda: &[f64],
+    ) -> Result<Vec<(String, [f64; 3], [f64; 3])>, MechError> {
+        let zero = vec![0.0; self.tree.nu];
+        let k = self.eval().kinematics(&State {
+            q,
+            u: &zero,
+            t,
+            inputs: &[],
+        })?;
+        let mut row = 0;
+        let mut out = Vec::new();
+        for c in &self.cuts {
+            let n = c.equations.len();
+            let l: Vec<f64> = (row..row + n)
+                .map(|r| lambda.get(r).copied().unwrap_or(f64::NAN))
+                .collect();
+            row += n;
+            let (f, m) = super::constraints::cut_reaction(&k, c, &l);
+            out.push((c.name.clone(), f.0, m.0));
+        }
+        Ok(out)
+    }
+
     /// Closure conditions `Φ(q, t)` of the cut joints.
     pub fn constraints(&self, q: &[f64], t: f64) -> Result<Vec<f64>, MechError> {
         let zero = vec![0.0; self.tree.nu];
