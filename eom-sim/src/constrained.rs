@@ -293,6 +293,20 @@ pub fn accelerations(
     let minv_jt = chol.solve(&jacobian.transpose());
     let schur = jacobian * &minv_jt;
     let rhs = gamma - jacobian * &free;
+    // Well-conditioned (the usual case): Cholesky. Its pivots bound the
+    // eigenvalues' spread from below, so a pivot ratio above the cut means
+    // full rank and the eigendecomposition would give the same λ.
+    if let Some(chol) = schur.clone().cholesky() {
+        let d = chol.l_dirty().diagonal();
+        let (lo, hi) = d.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
+            (lo.min(x * x), hi.max(x * x))
+        });
+        if lo > 1e-8 * hi {
+            let lambda = chol.solve(&rhs);
+            let udot = free + minv_jt * &lambda;
+            return Some((udot, lambda, jacobian.nrows()));
+        }
+    }
     let eig = nalgebra::SymmetricEigen::new(schur);
     let largest = eig.eigenvalues.iter().map(|x| x.abs()).fold(0.0, f64::max);
     let eps = 1e-10 * largest.max(1e-300);
