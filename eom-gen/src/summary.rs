@@ -57,10 +57,11 @@ pub fn json(checked: &Checked) -> Value {
     })
 }
 
-/// Rank of the closure conditions at the assembled initial state, if there
-/// are loops.
+/// Rank of the constraint equations (closure conditions, the model's own
+/// holonomic and nonholonomic constraints) at the assembled initial state,
+/// if there are any: the speeds' degrees of freedom.
 fn mobility(sys: &System) -> Option<crate::mech::numeric::Mobility> {
-    if sys.graph.cut_joints().is_empty() {
+    if sys.graph.cut_joints().is_empty() && sys.constraints.is_empty() {
         return None;
     }
     let num = crate::mech::Numeric::new(sys).ok()?;
@@ -132,8 +133,19 @@ pub fn human(checked: &Checked) -> String {
     );
     if let Some(m) = mobility(sys) {
         out += &format!(
-            "  mobility     {} (rank {} of {} closure equations, assembled initial state)\n",
-            m.dof, m.rank, m.equations
+            "  mobility     {} (rank {} of {} constraint equations{}, assembled initial state)\n",
+            m.dof,
+            m.rank,
+            m.equations,
+            match sys
+                .constraints
+                .iter()
+                .map(|c| c.equations().1)
+                .sum::<usize>()
+            {
+                0 => String::new(),
+                n => format!(", {n} of them nonholonomic"),
+            }
         );
     }
     out

@@ -284,6 +284,8 @@ fn simulate_runs_the_compiled_model_and_reports_statistics() {
         let out = eom_gen(&[
             "simulate",
             "models/fourbar.ron",
+            "--t-end",
+            "1",
             "--constraints",
             method,
             "--integrator",

@@ -253,7 +253,8 @@ pub fn cut_reaction<S: Scalar>(
 /// the plane: the x and y components of `v_c + ω × (p − c)` vanish.
 #[allow(clippy::type_complexity)]
 pub fn user_constraints<S: Scalar>(
-    sys: &System,
+    constraints: &[crate::system::Constraint],
+    coordinate_names: &[String],
     tree: &TreeModel<S>,
     env: &dyn Env<S>,
     ev: &super::dynamics::Evaluator<'_, S>,
@@ -263,18 +264,17 @@ pub fn user_constraints<S: Scalar>(
 ) -> Result<(Vec<(String, S)>, Vec<(String, S)>), MechError> {
     use crate::system::ConstraintKind;
     let low = Lowering::new(env);
-    let names = sys.coordinate_names();
     let lookup = |n: &str| -> Option<S> {
         if n == "t" {
             return Some(t);
         }
-        names
+        coordinate_names
             .iter()
-            .position(|c| *c == n)
+            .position(|c| c == n)
             .and_then(|i| q.get(i).copied())
     };
     let (mut holonomic, mut nonholonomic) = (Vec::new(), Vec::new());
-    for c in &sys.constraints {
+    for c in constraints {
         match &c.kind {
             ConstraintKind::Holonomic(expr) => {
                 holonomic.push((c.name.clone(), low.expr(&expr.expr, &lookup)?));

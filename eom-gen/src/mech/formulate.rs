@@ -138,6 +138,14 @@ pub struct Formulation {
     pub seconds: f64,
 }
 
+/// The names of `sys`'s coordinates, owned.
+fn coordinate_names(sys: &System) -> Vec<String> {
+    sys.coordinate_names()
+        .into_iter()
+        .map(String::from)
+        .collect()
+}
+
 /// The constraint program with its equation names.
 struct ConstraintProgram {
     program: Program,
@@ -451,7 +459,16 @@ fn closure<'cx>(
         }
         row += c.equations.len();
     }
-    let (user_h, user_nh) = super::constraints::user_constraints(sys, tree, env, ev, k, q, cx.t())?;
+    let (user_h, user_nh) = super::constraints::user_constraints(
+        &sys.constraints,
+        &coordinate_names(sys),
+        tree,
+        env,
+        ev,
+        k,
+        q,
+        cx.t(),
+    )?;
     holonomic.extend(user_h);
     if holonomic.is_empty() && user_nh.is_empty() {
         return Ok(None);

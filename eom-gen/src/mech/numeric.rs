@@ -14,6 +14,8 @@ pub struct Numeric {
     tree: TreeModel<f64>,
     applied: Applied<f64>,
     cuts: Vec<super::constraints::CutJoint<f64>>,
+    sys_constraints: Vec<crate::system::Constraint>,
+    coordinate_names: Vec<String>,
 }
 
 /// The result of [`Numeric::assemble`].
@@ -67,6 +69,12 @@ impl Numeric {
             tree,
             applied,
             cuts,
+            sys_constraints: sys.constraints.clone(),
+            coordinate_names: sys
+                .coordinate_names()
+                .into_iter()
+                .map(String::from)
+                .collect(),
         })
     }
 
@@ -284,10 +292,48 @@ impl Numeric {
             t,
             inputs: &[],
         })?;
-        Ok(super::constraints::phi(&k, &self.cuts))
+        let mut phi = super::constraints::phi(&k, &self.cuts);
+        let (holonomic, _) = self.user(q, &zero, t)?;
+        phi.extend(holonomic);
+        Ok(phi)
     }
 
-    /// `J = ∂Φ̇/∂u` by central differences of `Φ` along `q̇ = N(q) e_k`.
+    /// The model's own constraints at `(q, u, t)`: holonomic `Φ` and
+    /// nonholonomic `A u + b` values.
+    fn user(&self, q: &[f64], u: &[f64], t: f64) -> Result<(Vec<f64>, Vec<f64>), MechError> {
+        if self.sys_constraints.is_empty() {
+            return Ok((Vec::new(), Vec::new()));
+        }
+        let ev = self.eval();
+        let k = ev.kinematics(&State {
+            q,
+            u,
+            t,
+            inputs: &[],
+        })?;
+        let (h, nh) = super::constraints::user_constraints(
+            &self.sys_constraints,
+            &self.coordinate_names,
+            &self.tree,
+            &self.env,
+            &ev,
+            &k,
+            q,
+            t,
+        )?;
+        Ok((
+            h.into_iter().map(|(_, v)| v).collect(),
+            nh.into_iter().map(|(_, v)| v).collect(),
+        ))
+    }
+
+    /// Nonholonomic constraint values `A(q) u + b(q, t)`.
+    pub fn speed_constraints(&self, q: &[f64], u: &[f64], t: f64) -> Result<Vec<f64>, MechError> {
+        Ok(self.user(q, u, t)?.1)
+    }
+
+    /// `J = ∂Φ̇/∂u`: the holonomic rows by central differences of `Φ` along
+    /// `q̇ = N(q) e_k`, then the nonholonomic rows `A`.
     pub fn constraint_jacobian(&self, q: &[f64], t: f64) -> Result<Vec<Vec<f64>>, MechError> {
         let h = 1e-7;
         let nu = self.tree.nu;
@@ -309,9 +355,22 @@ impl Numeric {
             );
         }
         let rows = cols.first().map_or(0, Vec::len);
-        Ok((0..rows)
+        let mut j: Vec<Vec<f64>> = (0..rows)
             .map(|i| cols.iter().map(|c| c[i]).collect())
-            .collect())
+            .collect();
+        // Nonholonomic rows are linear in u: A e_k = (A e_k + b) − b.
+        let zero = vec![0.0; nu];
+        let b = self.speed_constraints(q, &zero, t)?;
+        let mut a = vec![vec![0.0; nu]; b.len()];
+        for k in 0..nu {
+            let mut e = vec![0.0; nu];
+            e[k] = 1.0;
+            for (r, v) in self.speed_constraints(q, &e, t)?.iter().enumerate() {
+                a[r][k] = v - b[r];
+            }
+        }
+        j.extend(a);
+        Ok(j)
     }
 
     /// Rank of the constraint Jacobian at `q` and the true mobility.
@@ -339,7 +398,9 @@ impl Numeric {
     fn constraint_rate(&self, q: &[f64], t: f64) -> Result<Vec<f64>, MechError> {
         let h = 1e-6;
         let (p, m) = (self.constraints(q, t + h)?, self.constraints(q, t - h)?);
-        Ok(p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * h)).collect())
+        let mut rate: Vec<f64> = p.iter().zip(&m).map(|(a, b)| (a - b) / (2.0 * h)).collect();
+        rate.extend(self.speed_constraints(q, &vec![0.0; self.tree.nu], t)?);
+        Ok(rate)
     }
 
     /// Minimum-norm least-squares solution of `J x = r` (SVD; redundant
@@ -373,7 +434,8 @@ impl Numeric {
         let mut iterations = 0;
         while norm(&phi) > 1e-13 && iterations < 50 {
             iterations += 1;
-            let j = self.constraint_jacobian(&q, t)?;
+            let mut j = self.constraint_jacobian(&q, t)?;
+            j.truncate(phi.len());
             let minus_phi: Vec<f64> = phi.iter().map(|x| -x).collect();
             let du = Self::min_norm_solve(&j, &minus_phi, nu);
             let dq = self.qdot(&q, &du);
