@@ -159,6 +159,7 @@ fn projection_and_partitioning_hold_the_constraints() {
     check!(g::andrews::Andrews, 14, "radau5", 0.03);
     check!(g::rolling_disk::RollingDisk, 13, "dop853", 2.0);
     check!(g::stewart::Stewart, 43, "dop853", 0.5);
+    check!(g::stewart_driven::StewartDriven, 31, "dop853", 0.5);
 }
 
 #[test]

@@ -558,6 +558,21 @@ fn simulate(
     match result {
         Ok(mut v) => {
             add_cut_reactions(sys, &mut v);
+            // The constraint statistics also under `stats`.
+            for key in [
+                "max_constraint_residual",
+                "max_velocity_residual",
+                "constraint_rank",
+                "min_constraint_rank",
+                "repartitions",
+            ] {
+                let value = v[key].clone();
+                if !value.is_null()
+                    && let Some(stats) = v["stats"].as_object_mut()
+                {
+                    stats.insert(key.into(), value);
+                }
+            }
             if json {
                 println!("{v}");
             } else {
@@ -596,6 +611,16 @@ fn simulate(
                     e(1),
                     ((e(1) - e(0)) / e(0).abs().max(1e-300)).abs()
                 );
+                if let Some(method) = v["constraints"].as_str() {
+                    let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
+                    println!(
+                        "  constraints ({method}): max |Φ| {:.1e}, max |Φ̇| {:.1e}, rank {} of {}",
+                        f("max_constraint_residual"),
+                        f("max_velocity_residual"),
+                        v["constraint_rank"],
+                        v["constraint_names"].as_array().map_or(0, Vec::len)
+                    );
+                }
                 if let Some(csv) = &o.csv {
                     println!("  trajectory written to {csv}");
                 }

@@ -251,7 +251,7 @@ pub fn cut_reaction<S: Scalar>(
 /// `ê = (e_z − n_z n) / √(1 − n_z²)`, so the contact condition is
 /// `c_z − R √(1 − n_z²) = 0`, and the material point at `p` is at rest in
 /// the plane: the x and y components of `v_c + ω × (p − c)` vanish.
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 pub fn user_constraints<S: Scalar>(
     constraints: &[crate::system::Constraint],
     coordinate_names: &[String],
