@@ -4,6 +4,7 @@
 //! the generator emits.
 
 pub mod constraints;
+pub mod count;
 pub mod dynamics;
 pub mod formulate;
 pub mod joint;
