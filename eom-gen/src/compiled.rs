@@ -258,22 +258,66 @@ impl ::eom_sim::ConstrainedModel for MODEL_TYPE {
 
 /// Builds (once) the cached crate of a model and returns its executable.
 pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<PathBuf, String> {
+    let model = format!(
+        "{source}\npub type MODEL = {};\npub const NQ: usize = {nq};\npub const NY: usize = {};\npub const NYC: usize = NY + <MODEL as ::eom_sim::ConstrainedModel>::NC;\n{}",
+        camel(name),
+        nq + nu,
+        if source.contains("impl ::eom_sim::ConstrainedModel for") {
+            String::new()
+        } else {
+            UNCONSTRAINED.replace("MODEL_TYPE", &camel(name))
+        }
+    );
+    build_cached(&CachedCrate {
+        prefix: "eom-eval",
+        name,
+        main: MAIN,
+        model: &model,
+        rustflags: None,
+    })
+}
+
+/// A binary crate around a model's generated source, built in the cache.
+pub(crate) struct CachedCrate<'a> {
+    /// First part of the binary's name (`eom-eval`, `eom-bench`).
+    pub prefix: &'a str,
+    /// The model's name.
+    pub name: &'a str,
+    /// `src/main.rs`; it declares `mod model;`.
+    pub main: &'a str,
+    /// `src/model.rs`: the generated source and whatever `main` needs.
+    pub model: &'a str,
+    /// Extra `rustc` flags (e.g. `-C target-cpu=native`); such builds use
+    /// their own target directory so the default one is not rebuilt.
+    pub rustflags: Option<&'a str>,
+}
+
+/// Builds (once) a cached crate in release mode and returns its executable.
+/// The cache key covers the sources, the flags and the runtime used.
+pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, String> {
     let root = cache_root();
-    // The key covers the model source, this template and the runtime used.
     let key = format!(
         "{:016x}",
         fnv1a(
             format!(
-                "{source}{MAIN}{UNCONSTRAINED}{}{}",
+                "{}{}{}{}{}",
+                c.model,
+                c.main,
                 eom_sim_dependency(),
-                runtime_fingerprint()
+                runtime_fingerprint(),
+                c.rustflags.unwrap_or("")
             )
             .as_bytes()
         )
     );
+    let name = c.name;
     let dir = root.join(format!("{name}-{key}"));
-    let exe_name = format!("eom-eval-{name}-{key}");
-    let target = root.join("target");
+    let exe_name = format!("{}-{name}-{key}", c.prefix);
+    let target = root.join(if c.rustflags.is_some() {
+        "target-flags"
+    } else {
+        "target"
+    });
     let exe = target.join("release").join(&exe_name);
     if !exe.exists() {
         std::fs::create_dir_all(dir.join("src"))
@@ -282,30 +326,28 @@ pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<Path
             "[package]\nname = \"{exe_name}\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n[dependencies]\n{}\n\n[workspace]\n",
             eom_sim_dependency()
         );
-        let model = format!(
-            "{source}\npub type MODEL = {};\npub const NQ: usize = {nq};\npub const NY: usize = {};\npub const NYC: usize = NY + <MODEL as ::eom_sim::ConstrainedModel>::NC;\n{}",
-            camel(name),
-            nq + nu,
-            if source.contains("impl ::eom_sim::ConstrainedModel for") {
-                String::new()
-            } else {
-                UNCONSTRAINED.replace("MODEL_TYPE", &camel(name))
-            }
-        );
         for (file, text) in [
             ("Cargo.toml", manifest.as_str()),
-            ("src/main.rs", MAIN),
-            ("src/model.rs", model.as_str()),
+            ("src/main.rs", c.main),
+            ("src/model.rs", c.model),
         ] {
             std::fs::write(dir.join(file), text)
                 .map_err(|e| format!("cannot write {file}: {e}"))?;
         }
         eprintln!("compiling the generated code of `{name}` in release mode (first time only) …");
-        let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        let mut cargo = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
+        cargo
             .args(["build", "--release", "--manifest-path"])
             .arg(dir.join("Cargo.toml"))
             .arg("--target-dir")
-            .arg(&target)
+            .arg(&target);
+        if let Some(flags) = c.rustflags {
+            cargo.env_remove("RUSTFLAGS").env(
+                "CARGO_ENCODED_RUSTFLAGS",
+                flags.split_whitespace().collect::<Vec<_>>().join("\u{1f}"),
+            );
+        }
+        let status = cargo
             .status()
             .map_err(|e| format!("cannot run cargo: {e}"))?;
         if !status.success() {

@@ -5,6 +5,7 @@
 //! [`graph`]: spanning tree and cut joints) → `mech` (kinematics and
 //! dynamics as [`sym`] expressions) → `emit` (Rust source).
 
+pub mod bench;
 pub mod builder;
 pub mod compiled;
 pub mod emit;

@@ -104,6 +104,30 @@ enum Command {
         #[arg(short, long)]
         output: Option<String>,
     },
+    /// Time the compiled functions: `--per-call` gives ns per call of
+    /// forward dynamics, mass matrix and inverse dynamics over random states.
+    Bench {
+        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        model: String,
+        /// Per-call cost (the only benchmark so far).
+        #[arg(long)]
+        per_call: bool,
+        /// Random states per repetition.
+        #[arg(long, default_value_t = 1024)]
+        states: usize,
+        /// Timed repetitions; the median is reported.
+        #[arg(long, default_value_t = 31)]
+        reps: usize,
+        /// Seed of the random states.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Build the timing program with `-C target-cpu=native`.
+        #[arg(long)]
+        native: bool,
+        /// Print one JSON object instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
     /// Operation counts of the generated functions and generation time.
     Stats {
         /// The model file (`.ron`, or `.urdf` converted on the fly).
@@ -121,6 +145,23 @@ fn main() -> ExitCode {
         Command::Import { urdf, output } => import(&urdf, output.as_deref()),
         Command::Dump { model, output, fma } => dump(&model, output.as_deref(), fma),
         Command::Stats { model, json: _ } => stats(&model),
+        Command::Bench {
+            model,
+            per_call,
+            states,
+            reps,
+            seed,
+            native,
+            json,
+        } => {
+            let o = eom_gen::bench::PerCallOptions {
+                states,
+                reps,
+                seed,
+                native,
+            };
+            bench(&model, per_call, &o, json)
+        }
         Command::Simulate {
             model,
             t_end,
@@ -392,6 +433,36 @@ fn stats(path: &str) -> ExitCode {
     });
     println!("{v}");
     ExitCode::SUCCESS
+}
+
+fn bench(path: &str, per_call: bool, o: &eom_gen::bench::PerCallOptions, json: bool) -> ExitCode {
+    if !per_call {
+        eprintln!("error: say what to measure: --per-call (the only benchmark built so far)");
+        return ExitCode::from(2);
+    }
+    if o.states == 0 || o.reps == 0 {
+        eprintln!("error: --states and --reps must be at least 1");
+        return ExitCode::from(2);
+    }
+    let g = match generated(path) {
+        Ok(g) => g,
+        Err(code) => return code,
+    };
+    eprint!("{}", g.checked.source.render_all(&g.checked.warnings));
+    match eom_gen::bench::per_call(&g, o) {
+        Ok(r) if json => {
+            println!("{}", eom_gen::bench::json(&g, o, &r));
+            ExitCode::SUCCESS
+        }
+        Ok(r) => {
+            print!("{}", eom_gen::bench::table(&g, o, &r));
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(1)
+        }
+    }
 }
 
 fn op_json(c: &eom_gen::sym::OpCount) -> serde_json::Value {

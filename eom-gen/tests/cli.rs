@@ -365,3 +365,68 @@ fn simulate_interpreted_and_compiled_agree() {
         }
     }
 }
+
+#[test]
+fn bench_per_call_reports_positive_times_and_op_counts() {
+    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+            .args(args)
+            .env("EOM_CACHE_DIR", cache)
+            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+            .output()
+            .expect("eom-gen runs")
+    };
+    let out = run(&[
+        "bench",
+        "models/pendulum.ron",
+        "--per-call",
+        "--states",
+        "16",
+        "--reps",
+        "3",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["model"], "pendulum");
+    assert_eq!(v["fd_form"], "Aba", "{v}");
+    assert_eq!(
+        (v["states"].as_u64(), v["reps"].as_u64()),
+        (Some(16), Some(3))
+    );
+    for f in ["forward_dynamics", "mass_matrix", "inverse_dynamics"] {
+        let ns = v[format!("{f}_ns")].as_f64();
+        assert!(
+            ns.is_some_and(|x| x.is_finite() && x > 0.0),
+            "{f}_ns in {v}"
+        );
+        assert!(v["ops"][f].as_u64().is_some(), "ops.{f} in {v}");
+        let s = &v["spread"][f];
+        let get = |k: &str| s[k].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            get("min") <= get("q1") && get("q1") <= get("q3") && get("q3") <= get("max"),
+            "spread of {f} in {v}"
+        );
+    }
+    // The pendulum's forward dynamics is `τ − 9.81 sin θ`: 3 operations.
+    assert_eq!(v["ops"]["forward_dynamics"], 3, "{v}");
+    // Invalid models give the usual diagnostics and exit 1; usage errors 2.
+    let out = run(&["bench", "models/nope.ron", "--per-call", "--json"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("nope.ron"));
+    assert_eq!(
+        run(&["bench", "models/pendulum.ron"]).status.code(),
+        Some(2)
+    );
+    assert_eq!(
+        run(&["bench", "models/pendulum.ron", "--per-call", "--reps", "0"])
+            .status
+            .code(),
+        Some(2)
+    );
+}

@@ -1,0 +1,186 @@
+"""eom against Pinocchio and MuJoCo: accelerations and ns per call.
+
+Run by run.sh (which installs the peers, builds eom-gen, the chain models
+and the C++ timing program); see README.md. For each model:
+
+1. writes its URDF and MJCF (models.py);
+2. runs the C++ program: Pinocchio ABA/RNEA/CRBA and MuJoCo mj_forward over
+   the same random states as `eom-gen bench` (same generator and seed), and
+   the accelerations of both at the first few states;
+3. checks those accelerations against `eom-gen eval` (compiled) at the same
+   states: max |difference| / max |eom's accelerations| <= 1e-10;
+4. runs `eom-gen bench MODEL --per-call --json` (and `--native`);
+5. prints a table and writes a CSV.
+
+Besides the standard library, Pinocchio's Python bindings are used once per
+model to check that the C++ program's model (built from the URDF with
+urdfdom, see peers.cpp) gives the same accelerations as Pinocchio's own URDF
+parser. Nothing of this is timed.
+"""
+
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+
+import models
+
+TOLERANCE = 1e-10
+
+
+def run(cmd, **kw):
+    out = subprocess.run(cmd, capture_output=True, text=True, **kw)
+    if out.returncode != 0:
+        sys.exit(f"failed ({out.returncode}): {' '.join(cmd)}\n{out.stderr}")
+    return out.stdout
+
+
+def eom_json(eom, args, env):
+    return json.loads(run([eom, *args], env=env))
+
+
+def ratio(a, b):
+    return a / b if b > 0 else float("nan")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--eom", required=True, help="the eom-gen binary")
+    ap.add_argument("--peers", required=True, help="the C++ timing program")
+    ap.add_argument("--models-dir", required=True, help="where the chain RONs are; URDF/MJCF go there")
+    ap.add_argument("--root", required=True, help="the repository root")
+    ap.add_argument("--states", type=int, default=1024)
+    ap.add_argument("--reps", type=int, default=31)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--check", type=int, default=5, help="states whose accelerations are compared")
+    ap.add_argument("--only", nargs="*", help="model names (default: all)")
+    ap.add_argument("--csv", required=True)
+    a = ap.parse_args()
+
+    env = dict(os.environ)
+    table = models.models()
+    names = a.only or list(table)
+    rows = []
+    failures = []
+    for name in names:
+        links = table[name]
+        base = os.path.join(a.models_dir, name)
+        with open(base + ".urdf", "w") as f:
+            f.write(models.urdf(name, links))
+        with open(base + ".xml", "w") as f:
+            f.write(models.mjcf(name, links))
+        ron = os.path.join(a.root, "models", "arm7.ron") if name == "arm7" else base + ".ron"
+
+        info = eom_json(a.eom, ["check", ron, "--json"], env)
+        peer = json.loads(
+            run([a.peers, base + ".urdf", base + ".xml", str(a.states), str(a.reps), str(a.seed), str(a.check)])
+        )
+        # The peers' models are what we meant them to be.
+        assert peer["nq"] == info["nq"] == len(links) and peer["nv"] == info["nu"], (name, peer["nq"], info["nq"])
+        assert peer["mujoco_gravity"] == [0, 0, -9.81] and peer["pinocchio_gravity"] == [0, 0, -9.81], peer
+        assert peer["mujoco_max_armature"] == 0 and peer["mujoco_max_damping"] == 0, peer
+
+        # Pinocchio's own URDF parser agrees with the C++ program's model.
+        import numpy as np
+        import pinocchio as pin
+
+        pmodel = pin.buildModelFromUrdf(base + ".urdf")
+        pdata = pmodel.createData()
+        parser_diff = 0.0
+        for s in peer["check"]:
+            ref = pin.aba(pmodel, pdata, np.array(s["q"]), np.array(s["u"]), np.array(s["tau"]))
+            scale = max(abs(x) for x in ref)
+            parser_diff = max(parser_diff, max(abs(x - y) for x, y in zip(ref, s["pinocchio"])) / scale)
+        if not parser_diff <= TOLERANCE:
+            failures.append(f"{name}: the C++ Pinocchio model differs from Pinocchio's URDF parser by {parser_diff:.2e}")
+
+        # Accelerations at the check states.
+        err = {"pinocchio": 0.0, "mujoco": 0.0}
+        for s in peer["check"]:
+            join = lambda v: ",".join(repr(x) for x in v)  # noqa: E731
+            e = eom_json(
+                a.eom,
+                ["eval", ron, "--q", join(s["q"]), "--u", join(s["u"]), "--tau", join(s["tau"]), "--json"],
+                env,
+            )
+            ours = e["udot"]
+            scale = max(abs(x) for x in ours)
+            for tool in err:
+                diff = max(abs(x - y) for x, y in zip(ours, s[tool]))
+                err[tool] = max(err[tool], diff / scale)
+        for tool, x in err.items():
+            if not x <= TOLERANCE:
+                failures.append(f"{name}: {tool} accelerations differ from eom's by {x:.2e} (relative)")
+
+        bench = {}
+        for flavour, extra in [("native", ["--native"]), ("generic", [])]:
+            bench[flavour] = eom_json(
+                a.eom,
+                ["bench", ron, "--per-call", "--json", "--states", str(a.states), "--reps", str(a.reps),
+                 "--seed", str(a.seed), *extra],
+                env,
+            )
+        eom_fd = bench["native"]["forward_dynamics_ns"]
+        row = {
+            "model": name,
+            "dof": peer["nv"],
+            "eom_fd_ns": eom_fd,
+            "eom_fd_ns_generic": bench["generic"]["forward_dynamics_ns"],
+            "eom_fd_ops": bench["native"]["ops"]["forward_dynamics"],
+            "eom_fd_form": bench["native"]["fd_form"],
+            "pinocchio_aba_ns": peer["pinocchio_aba"]["median"],
+            "mujoco_forward_ns": peer["mujoco_forward"]["median"],
+            "pinocchio_aba_over_eom": ratio(peer["pinocchio_aba"]["median"], eom_fd),
+            "mujoco_forward_over_eom": ratio(peer["mujoco_forward"]["median"], eom_fd),
+            "eom_id_ns": bench["native"]["inverse_dynamics_ns"],
+            "pinocchio_rnea_ns": peer["pinocchio_rnea"]["median"],
+            "eom_mass_matrix_ns": bench["native"]["mass_matrix_ns"],
+            "pinocchio_crba_ns": peer["pinocchio_crba"]["median"],
+            "max_rel_diff_pinocchio": err["pinocchio"],
+            "max_rel_diff_mujoco": err["mujoco"],
+            "max_rel_diff_pinocchio_parser": parser_diff,
+            "pinocchio_version": peer["pinocchio_version"],
+            "mujoco_version": peer["mujoco_version"],
+            "states": a.states,
+            "reps": a.reps,
+            "seed": a.seed,
+        }
+        rows.append(row)
+        print(
+            f"{name}: eom FD {eom_fd:.0f} ns, Pinocchio ABA {row['pinocchio_aba_ns']:.0f} ns, "
+            f"MuJoCo mj_forward {row['mujoco_forward_ns']:.0f} ns; "
+            f"max relative difference {err['pinocchio']:.1e} / {err['mujoco']:.1e}",
+            file=sys.stderr,
+        )
+
+    os.makedirs(os.path.dirname(a.csv) or ".", exist_ok=True)
+    with open(a.csv, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+
+    print(
+        "| model | dof | eom FD ns (native / generic) | Pinocchio ABA ns | MuJoCo mj_forward ns "
+        "| ABA / eom | mj_forward / eom | eom ID ns | Pinocchio RNEA ns | eom M ns | Pinocchio CRBA ns "
+        "| max rel. diff (Pin / MuJoCo) |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(
+            f"| {r['model']} | {r['dof']} | {r['eom_fd_ns']:.0f} / {r['eom_fd_ns_generic']:.0f} "
+            f"| {r['pinocchio_aba_ns']:.0f} | {r['mujoco_forward_ns']:.0f} "
+            f"| {r['pinocchio_aba_over_eom']:.1f}× | {r['mujoco_forward_over_eom']:.1f}× "
+            f"| {r['eom_id_ns']:.0f} | {r['pinocchio_rnea_ns']:.0f} "
+            f"| {r['eom_mass_matrix_ns']:.0f} | {r['pinocchio_crba_ns']:.0f} "
+            f"| {r['max_rel_diff_pinocchio']:.1e} / {r['max_rel_diff_mujoco']:.1e} |"
+        )
+    print(f"\nwritten {a.csv}", file=sys.stderr)
+    if failures:
+        sys.exit("accelerations disagree:\n  " + "\n  ".join(failures))
+
+
+if __name__ == "__main__":
+    main()

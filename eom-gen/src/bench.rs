@@ -1,0 +1,277 @@
+//! `eom-gen bench MODEL --per-call`: the cost of one call of the compiled
+//! forward dynamics, mass matrix and inverse dynamics, next to their
+//! operation counts.
+//!
+//! A timing program is written around the model's generated source and
+//! built in release mode in the same cache as `eom-gen eval` (see
+//! [`crate::compiled`]). It draws `states` random states with a fixed seed
+//! (every position uniform in `[-π, π]`, then unit quaternions normalised;
+//! speeds, generalised forces and accelerations uniform in `[-1, 1]`), calls
+//! each function once per state in a loop (`std::hint::black_box` on inputs
+//! and outputs so nothing is hoisted or removed), and repeats the loop
+//! `reps` times after one warm-up pass. Each repetition gives one figure,
+//! total time / `states`; the report is the median over repetitions with
+//! the quartiles and the extremes.
+
+use crate::compiled::{CachedCrate, build_cached};
+use crate::emit::camel;
+use crate::generate::Generated;
+
+/// How to measure.
+#[derive(Clone, Debug)]
+pub struct PerCallOptions {
+    /// Number of random states per repetition.
+    pub states: usize,
+    /// Number of timed repetitions (after one warm-up pass).
+    pub reps: usize,
+    /// Seed of the state generator (SplitMix64).
+    pub seed: u64,
+    /// Build with `-C target-cpu=native` (a separate target directory).
+    pub native: bool,
+}
+
+impl Default for PerCallOptions {
+    fn default() -> Self {
+        PerCallOptions {
+            states: 1024,
+            reps: 31,
+            seed: 1,
+            native: false,
+        }
+    }
+}
+
+/// Nanoseconds per call over the repetitions.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Timing {
+    /// Median over repetitions.
+    pub median: f64,
+    /// Lower quartile.
+    pub q1: f64,
+    /// Upper quartile.
+    pub q3: f64,
+    /// Fastest repetition.
+    pub min: f64,
+    /// Slowest repetition.
+    pub max: f64,
+}
+
+/// The per-call times of the three functions.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PerCall {
+    /// `forward_dynamics`.
+    pub forward_dynamics: Timing,
+    /// `mass_matrix`.
+    pub mass_matrix: Timing,
+    /// `inverse_dynamics`.
+    pub inverse_dynamics: Timing,
+}
+
+const MAIN: &str = r#"//! Times the generated model's forward dynamics, mass matrix and inverse
+//! dynamics over random states and prints JSON: `bench STATES REPS SEED`.
+mod model;
+use eom_sim::{Model, Vector};
+use std::hint::black_box;
+use std::time::Instant;
+
+type Q = <model::MODEL as Model>::Q;
+type U = <model::MODEL as Model>::U;
+
+/// SplitMix64, mapped to a uniform number in [-1, 1).
+struct Rng(u64);
+
+impl Rng {
+    fn uniform(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^= z >> 31;
+        (z >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    }
+
+    fn vector<V: Vector>(&mut self, scale: f64) -> V {
+        let mut v = V::ZERO;
+        for x in v.as_mut() {
+            *x = scale * self.uniform();
+        }
+        v
+    }
+}
+
+/// One warm-up pass, then `reps` timed passes over `n` states; ns per call.
+fn time(n: usize, reps: usize, mut f: impl FnMut(usize)) -> String {
+    for k in 0..n {
+        f(k);
+    }
+    let mut ns: Vec<f64> = (0..reps)
+        .map(|_| {
+            let start = Instant::now();
+            for k in 0..n {
+                f(k);
+            }
+            start.elapsed().as_secs_f64() * 1e9 / n as f64
+        })
+        .collect();
+    ns.sort_by(f64::total_cmp);
+    let at = |p: f64| {
+        let x = p * (ns.len() - 1) as f64;
+        let (lo, hi) = (x.floor() as usize, x.ceil() as usize);
+        ns[lo] + (ns[hi] - ns[lo]) * (x - lo as f64)
+    };
+    format!(
+        "{{\"median\":{:?},\"q1\":{:?},\"q3\":{:?},\"min\":{:?},\"max\":{:?}}}",
+        at(0.5), at(0.25), at(0.75), at(0.0), at(1.0)
+    )
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let arg = |k: usize, d: u64| args.get(k).and_then(|a| a.parse().ok()).unwrap_or(d);
+    let (n, reps, seed) = (arg(1, 1024).max(1) as usize, arg(2, 31).max(1) as usize, arg(3, 1));
+    let m = model::MODEL::default();
+    let mut rng = Rng(seed);
+    let states: Vec<(Q, U, U, U)> = (0..n)
+        .map(|_| {
+            let mut q: Q = rng.vector(std::f64::consts::PI);
+            m.normalize(&mut q);
+            (q, rng.vector(1.0), rng.vector(1.0), rng.vector(1.0))
+        })
+        .collect();
+    let mut udot = U::ZERO;
+    let fd = time(n, reps, |k| {
+        let (q, u, tau, _) = &states[k];
+        m.forward_dynamics(0.0, black_box(q), black_box(u), black_box(tau), &mut udot);
+        black_box(&mut udot);
+    });
+    let mut mm = <model::MODEL as Model>::MASS_ZERO;
+    let mass = time(n, reps, |k| {
+        m.mass_matrix(0.0, black_box(&states[k].0), &mut mm);
+        black_box(&mut mm);
+    });
+    let mut tau = U::ZERO;
+    let id = time(n, reps, |k| {
+        let (q, u, _, a) = &states[k];
+        m.inverse_dynamics(0.0, black_box(q), black_box(u), black_box(a), &mut tau);
+        black_box(&mut tau);
+    });
+    println!("{{\"forward_dynamics\":{fd},\"mass_matrix\":{mass},\"inverse_dynamics\":{id}}}");
+}
+"#;
+
+/// Builds (once, cached) the timing program of a generated model and runs it.
+pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, String> {
+    let name = &g.checked.system.name;
+    let model = format!("{}\npub type MODEL = {};\n", g.source, camel(name));
+    let exe = build_cached(&CachedCrate {
+        prefix: "eom-bench",
+        name,
+        main: MAIN,
+        model: &model,
+        rustflags: o.native.then_some("-C target-cpu=native"),
+    })?;
+    let out = std::process::Command::new(&exe)
+        .args([o.states.to_string(), o.reps.to_string(), o.seed.to_string()])
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;
+    if !out.status.success() {
+        return Err(format!(
+            "{} failed ({}): {}",
+            exe.display(),
+            out.status,
+            String::from_utf8_lossy(&out.stderr)
+        ));
+    }
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout)
+        .map_err(|e| format!("unexpected output of {}: {e}", exe.display()))?;
+    let timing = |f: &str| -> Result<Timing, String> {
+        let x = |k: &str| {
+            v[f][k]
+                .as_f64()
+                .ok_or_else(|| format!("{} printed no `{f}.{k}`", exe.display()))
+        };
+        Ok(Timing {
+            median: x("median")?,
+            q1: x("q1")?,
+            q3: x("q3")?,
+            min: x("min")?,
+            max: x("max")?,
+        })
+    };
+    Ok(PerCall {
+        forward_dynamics: timing("forward_dynamics")?,
+        mass_matrix: timing("mass_matrix")?,
+        inverse_dynamics: timing("inverse_dynamics")?,
+    })
+}
+
+/// Total operation counts of forward dynamics, mass matrix and inverse
+/// dynamics (as `eom-gen stats` counts them), `None` where not generated.
+pub fn op_totals(g: &Generated) -> [Option<usize>; 3] {
+    let f = &g.formulation;
+    [&f.forward_dynamics, &f.mass_matrix, &f.inverse_dynamics]
+        .map(|p| p.as_ref().map(|p| p.op_count().total()))
+}
+
+/// The JSON report: `{"model", "forward_dynamics_ns", "mass_matrix_ns",
+/// "inverse_dynamics_ns", "ops": {…}, "fd_form", "spread", "states",
+/// "reps", "seed", "target_cpu_native"}`.
+pub fn json(g: &Generated, o: &PerCallOptions, r: &PerCall) -> serde_json::Value {
+    let [fd, mm, id] = op_totals(g);
+    let spread =
+        |t: &Timing| serde_json::json!({"q1": t.q1, "q3": t.q3, "min": t.min, "max": t.max});
+    serde_json::json!({
+        "model": g.checked.system.name,
+        "forward_dynamics_ns": r.forward_dynamics.median,
+        "mass_matrix_ns": r.mass_matrix.median,
+        "inverse_dynamics_ns": r.inverse_dynamics.median,
+        "ops": {"forward_dynamics": fd, "mass_matrix": mm, "inverse_dynamics": id},
+        "fd_form": format!("{:?}", g.formulation.fd_form),
+        "spread": {
+            "forward_dynamics": spread(&r.forward_dynamics),
+            "mass_matrix": spread(&r.mass_matrix),
+            "inverse_dynamics": spread(&r.inverse_dynamics),
+        },
+        "states": o.states,
+        "reps": o.reps,
+        "seed": o.seed,
+        "target_cpu_native": o.native,
+    })
+}
+
+/// The human report: one row per function.
+pub fn table(g: &Generated, o: &PerCallOptions, r: &PerCall) -> String {
+    let sys = &g.checked.system;
+    let mut s = format!(
+        "{}: ns per call, median of {} repetitions over {} random states{}\n",
+        sys.name,
+        o.reps,
+        o.states,
+        if o.native { " (target-cpu=native)" } else { "" }
+    );
+    s += &format!(
+        "  {:<18} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>7}\n",
+        "function", "median", "q1", "q3", "min", "max", "ops", "ops/ns"
+    );
+    let ops = op_totals(g);
+    let rows = [
+        ("forward_dynamics", &r.forward_dynamics, ops[0]),
+        ("mass_matrix", &r.mass_matrix, ops[1]),
+        ("inverse_dynamics", &r.inverse_dynamics, ops[2]),
+    ];
+    for (f, t, n) in rows {
+        let (n, rate) = match n {
+            Some(n) => (n.to_string(), format!("{:.2}", n as f64 / t.median)),
+            None => ("-".into(), "-".into()),
+        };
+        s += &format!(
+            "  {f:<18} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {n:>8} {rate:>7}\n",
+            t.median, t.q1, t.q3, t.min, t.max
+        );
+    }
+    s += &format!("  forward dynamics: {}\n", g.formulation.fd_form);
+    if !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty() {
+        s += "  note: closed loops or constraints; these are the spanning tree's functions\n";
+    }
+    s
+}
