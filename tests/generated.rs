@@ -102,6 +102,7 @@ fn compare<M: Model + Default>(name: &str) {
                 tau: &[],
                 inputs: &[],
                 params: &[],
+                multipliers: &[],
                 t,
             };
             close(

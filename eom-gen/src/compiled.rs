@@ -116,7 +116,7 @@ fn simulate(args: &[String]) {
     let start = std::time::Instant::now();
     if <model::MODEL as ConstrainedModel>::NC == 0 {
         let sol = solve(&settings, &m, 0.0, y0, t_end, &opts).unwrap_or_else(|| fail("unknown integrator"));
-        report(&sol, &m, every, arg(8), start.elapsed().as_secs_f64(), &y0, "");
+        report(&sol, &m, every, arg(8), start.elapsed().as_secs_f64(), &y0, "", &|_, _| None);
         return;
     }
     let g = Generated(&m);
@@ -140,7 +140,8 @@ fn simulate(args: &[String]) {
         let sol = solve(&s, &sys, 0.0, y0c, t_end, &opts).unwrap_or_else(|| fail("unknown integrator"));
         let cpu = start.elapsed().as_secs_f64();
         let extra = stats_json(sys.stats(), &sys.multipliers(&sol.y_final));
-        report(&sol, &m, every, arg(8), cpu, &y0, &extra);
+        let outputs_at = ConstrainedSystem::new(&g, Method::Projection);
+        report(&sol, &m, every, arg(8), cpu, &y0, &extra, &|t, y| outputs_at.accelerations(t, &y[..model::NQ], &y[model::NQ..model::NY]));
     } else {
         let sys = ConstrainedSystem::new(&g, method);
         let sol = solve(&settings, &sys, 0.0, y0, t_end, &opts).unwrap_or_else(|| fail("unknown integrator"));
@@ -148,7 +149,7 @@ fn simulate(args: &[String]) {
         let (q, u) = sol.y_final.split_at(model::NQ);
         let lambda = sys.accelerations(sol.t_final, q, u).map(|(_, l)| l.as_slice().to_vec()).unwrap_or_default();
         let extra = stats_json(sys.stats(), &lambda);
-        report(&sol, &m, every, arg(8), cpu, &y0, &extra);
+        report(&sol, &m, every, arg(8), cpu, &y0, &extra, &|t, y| sys.accelerations(t, &y[..model::NQ], &y[model::NQ..model::NY]));
     }
 }
 
@@ -160,8 +161,14 @@ fn state(y: &[f64]) -> (<model::MODEL as Model>::Q, <model::MODEL as Model>::U) 
     (q, u)
 }
 
-/// Prints the run's JSON (and writes the CSV) from the `(q, u)` part of its states.
-fn report<const N: usize>(sol: &eom_sim::Solution<N>, m: &model::MODEL, every: f64, csv: &str, cpu: f64, y0: &[f64], extra: &str) {
+/// `u̇` and `λ` of a constrained model at a state, for the outputs.
+type Accelerations<'a> = dyn Fn(f64, &[f64]) -> Option<(eom_sim::constrained::DVector<f64>, eom_sim::constrained::DVector<f64>)> + 'a;
+
+/// Prints the run's JSON (and writes the CSV) from the `(q, u)` part of its
+/// states; outputs use the constrained accelerations and multipliers when
+/// `constrained` gives them.
+#[allow(clippy::too_many_arguments)]
+fn report<const N: usize>(sol: &eom_sim::Solution<N>, m: &model::MODEL, every: f64, csv: &str, cpu: f64, y0: &[f64], extra: &str, constrained: &Accelerations<'_>) {
     use eom_sim::StopReason;
     let names: Vec<&str> = <model::MODEL as Model>::COORDINATE_NAMES
         .iter()
@@ -187,9 +194,18 @@ fn report<const N: usize>(sol: &eom_sim::Solution<N>, m: &model::MODEL, every: f
                 // Outputs at the sample; reactions need u̇ from forward dynamics.
                 let (q, u) = state(y);
                 let mut udot = <model::MODEL as Model>::U::ZERO;
-                m.forward_dynamics(*t, &q, &u, &<model::MODEL as Model>::U::ZERO, &mut udot);
+                let mut at = *m;
+                match constrained(*t, y) {
+                    Some((a, lambda)) => {
+                        udot.as_mut().iter_mut().zip(a.iter()).for_each(|(d, s)| *d = *s);
+                        let mut l = <<model::MODEL as eom_sim::ConstrainedModel>::Constraints as Vector>::ZERO;
+                        l.as_mut().iter_mut().zip(lambda.iter()).for_each(|(d, s)| *d = *s);
+                        eom_sim::ConstrainedModel::set_multipliers(&mut at, &l);
+                    }
+                    None => m.forward_dynamics(*t, &q, &u, &<model::MODEL as Model>::U::ZERO, &mut udot),
+                }
                 let mut out = <model::MODEL as Model>::Outputs::ZERO;
-                m.outputs(*t, &q, &u, &udot, &mut out);
+                at.outputs(*t, &q, &u, &udot, &mut out);
                 row.extend(out.as_ref().iter().map(|x| format!("{x:?}")));
             }
             text += &format!("{t:?},{}\n", row.join(","));
@@ -252,6 +268,7 @@ impl ::eom_sim::ConstrainedModel for MODEL_TYPE {
     const CONSTRAINT_NAMES: &'static [&'static str] = &[];
     type Constraints = [f64; 0];
     type ConstraintJacobian = [f64; 0];
+    fn set_multipliers(&mut self, _: &[f64; 0]) {}
     fn constraints(&self, _: f64, _: &[f64; NQ], _: &[f64; NY - NQ], _: &mut [f64; 0], _: &mut [f64; 0], _: &mut [f64; 0], _: &mut [f64; 0]) {}
 }
 ";

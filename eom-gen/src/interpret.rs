@@ -22,6 +22,8 @@ pub struct Point<'a> {
     pub inputs: &'a [f64],
     /// Tunable parameters set away from their defaults.
     pub params: &'a [(String, f64)],
+    /// Constraint multipliers `λ` (joint reactions in closed loops).
+    pub multipliers: &'a [f64],
     /// Time.
     pub t: f64,
 }
@@ -40,6 +42,11 @@ pub fn run(p: &Program, x: &Point<'_>) -> Vec<f64> {
             SymKind::Time => x.t,
             SymKind::Input => match x.sys.inputs.iter().position(|n| *n == s.name) {
                 Some(k) => x.inputs.get(k).copied().unwrap_or(0.0),
+                None if s.name.starts_with(crate::mech::formulate::MULTIPLIER) => s
+                    .name
+                    .strip_prefix(crate::mech::formulate::MULTIPLIER)
+                    .and_then(|k| k.parse::<usize>().ok())
+                    .map_or(f64::NAN, |k| x.multipliers.get(k).copied().unwrap_or(0.0)),
                 None => s
                     .name
                     .strip_prefix("tau")
@@ -139,6 +146,7 @@ impl<'a> Interpreted<'a> {
             tau: &[],
             inputs: &[],
             params: &[],
+            multipliers: &[],
             t,
         }
     }
@@ -332,7 +340,16 @@ fn simulate_n<const N: usize>(
         let start = std::time::Instant::now();
         let sol = solve(&settings, &model, 0.0, y0, o.t_end, &opts).ok_or_else(unknown)?;
         let cpu = start.elapsed().as_secs_f64();
-        return report(f, sys, o, &sol, &y0[..nq + nu], cpu, serde_json::Map::new());
+        return report(
+            f,
+            sys,
+            o,
+            &sol,
+            &y0[..nq + nu],
+            cpu,
+            serde_json::Map::new(),
+            &|_, _| None,
+        );
     };
     let a = eom_sim::constrained::assemble(&model, &q0, &u0, 0.0);
     let mut info = serde_json::Map::new();
@@ -371,7 +388,10 @@ fn simulate_n<const N: usize>(
         let sol = solve(&settings, &dae, 0.0, y0, o.t_end, &opts).ok_or_else(unknown)?;
         let cpu = start.elapsed().as_secs_f64();
         put(&mut info, dae.stats(), dae.multipliers(&sol.y_final));
-        report(f, sys, o, &sol, &y0[..nq + nu], cpu, info)
+        let outputs_at = ConstrainedSystem::new(&model, Method::Projection);
+        report(f, sys, o, &sol, &y0[..nq + nu], cpu, info, &|t, y| {
+            outputs_at.accelerations(t, &y[..nq], &y[nq..nq + nu])
+        })
     } else {
         let cs = ConstrainedSystem::new(&model, method);
         let mut y0 = [0.0; N];
@@ -387,11 +407,20 @@ fn simulate_n<const N: usize>(
             .unwrap_or_default();
         put(&mut info, cs.stats(), lambda);
         debug_assert_eq!(model.nc(), f.constraint_names.len());
-        report(f, sys, o, &sol, &y0[..nq + nu], cpu, info)
+        report(f, sys, o, &sol, &y0[..nq + nu], cpu, info, &|t, y| {
+            cs.accelerations(t, &y[..nq], &y[nq..nq + nu])
+        })
     }
 }
 
-/// The JSON of a run (and its CSV) from the `(q, u)` part of its states.
+/// `u̇` and `λ` of a constrained model at a state `(q, u, …)`.
+type Accelerations<'a> =
+    dyn Fn(f64, &[f64]) -> Option<(nalgebra::DVector<f64>, nalgebra::DVector<f64>)> + 'a;
+
+/// The JSON of a run (and its CSV) from the `(q, u)` part of its states;
+/// outputs use the constrained accelerations and multipliers when
+/// `constrained` gives them.
+#[allow(clippy::too_many_arguments)]
 fn report<const N: usize>(
     f: &Formulation,
     sys: &System,
@@ -400,6 +429,7 @@ fn report<const N: usize>(
     y0: &[f64],
     cpu: f64,
     extra: serde_json::Map<String, serde_json::Value>,
+    constrained: &Accelerations<'_>,
 ) -> Result<serde_json::Value, String> {
     use eom_sim::StopReason;
     let (nq, nu) = (sys.nq(), sys.nu());
@@ -440,14 +470,21 @@ fn report<const N: usize>(
                     tau: &zero,
                     inputs: &[],
                     params: &[],
+                    multipliers: &[],
                     t: *t,
                 };
-                let udot = f
-                    .forward_dynamics
-                    .as_ref()
-                    .map(|fd| run(fd, &x))
-                    .unwrap_or_default();
+                let (udot, lambda) = match constrained(*t, y) {
+                    Some((a, l)) => (a.as_slice().to_vec(), l.as_slice().to_vec()),
+                    None => (
+                        f.forward_dynamics
+                            .as_ref()
+                            .map(|fd| run(fd, &x))
+                            .unwrap_or_default(),
+                        Vec::new(),
+                    ),
+                };
                 x.udot = &udot;
+                x.multipliers = &lambda;
                 row.extend(run(p, &x).iter().map(|v| format!("{v:?}")));
             }
             text += &format!("{t:?},{}\n", row.join(","));
@@ -464,6 +501,7 @@ fn report<const N: usize>(
             tau: &[],
             inputs: &[],
             params: &[],
+            multipliers: &[],
             t,
         };
         f.energy

@@ -528,6 +528,7 @@ fn eval(
             tau: &tau,
             inputs: &[],
             params: &[],
+            multipliers: &[],
             t,
         };
         Ok(eom_gen::interpret::evaluate(&g.formulation, &point))

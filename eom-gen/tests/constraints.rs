@@ -72,6 +72,7 @@ fn closure(p: &eom_gen::sym::Program, sys: &System, q: &[f64], u: &[f64], t: f64
         tau: &[],
         inputs: &[],
         params: &[],
+        multipliers: &[],
         t,
     };
     let values = eom_gen::interpret::run(p, &x);
@@ -438,5 +439,71 @@ fn cut_joint_reaction_of_the_parallelogram_at_the_top() {
     for k in 0..3 {
         assert!((force[k] - want[k]).abs() < 1e-12, "force {force:?}");
         assert!(torque[k].abs() < 1e-15, "torque {torque:?}");
+    }
+}
+
+#[test]
+fn tree_joint_reactions_in_a_loop_carry_the_constraint_forces() {
+    // The parallelogram at t = 0 (see above): the second crank (1 kg, centre
+    // 0.5 m above its pivot, turning at 1 rad/s without angular
+    // acceleration) accelerates at 0.5 m/s² towards the pivot and is pushed
+    // down by the cut pin with 4.405 N, so its ground hinge `d` carries
+    // m (g − 0.5) + 4.405 = 13.715 N upwards; by symmetry so does `a`.
+    // Without the multipliers' forces it would be 9.31 N.
+    use eom_gen::mech::{Request, formulate};
+    let text = std::fs::read_to_string(format!(
+        "{}/../models/fourbar.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("reads the four-bar")
+    .replace(
+        "outputs: [Energy]",
+        r#"outputs: [Energy, JointReaction(joint: "d"), JointReaction(joint: "a")]"#,
+    );
+    let dir = env!("CARGO_TARGET_TMPDIR");
+    let path = format!("{dir}/fourbar_reactions.ron");
+    std::fs::write(&path, text).expect("writes the model");
+    let sys = check_file(&path).unwrap_or_else(|r| panic!("{r}")).system;
+    let f = formulate(&sys, Request::default()).expect("formulates");
+    let csv = format!("{dir}/fourbar_reactions.csv");
+    for method in ["projection", "index3"] {
+        let o = eom_gen::compiled::SimOptions {
+            integrator: "radau5".into(),
+            rtol: 1e-10,
+            atol: 1e-10,
+            dt: 1e-3,
+            t_end: 0.1,
+            every: 0.05,
+            csv: Some(csv.clone()),
+            constraints: method.into(),
+        };
+        let v = eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(v["stop"], "finished", "{v}");
+        let text = std::fs::read_to_string(&csv).expect("csv");
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+        let first: Vec<f64> = lines
+            .next()
+            .unwrap_or("")
+            .split(',')
+            .filter_map(|x| x.parse().ok())
+            .collect();
+        let col = |name: &str| {
+            header
+                .iter()
+                .position(|h| *h == name)
+                .unwrap_or_else(|| panic!("no column {name} in {header:?}"))
+        };
+        for joint in ["d", "a"] {
+            let (fx, fy, fz) = (
+                first[col(&format!("{joint}_fx"))],
+                first[col(&format!("{joint}_fy"))],
+                first[col(&format!("{joint}_fz"))],
+            );
+            assert!(
+                fx.abs() < 1e-9 && (fy - 13.715).abs() < 1e-9 && fz.abs() < 1e-12,
+                "{method}: reaction at {joint}: ({fx}, {fy}, {fz})"
+            );
+        }
     }
 }

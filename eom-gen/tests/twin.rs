@@ -71,6 +71,7 @@ fn run(p: &Program, sys: &System, x: &Point) -> Vec<f64> {
         tau: &x.tau,
         inputs: &inputs,
         params: &x.params,
+        multipliers: &[],
         t: x.t,
     };
     eom_gen::interpret::run(p, &point)

@@ -363,6 +363,7 @@ fn arm7_urdf_matches_arm7_ron() {
                     tau: &tau,
                     inputs: &[],
                     params: &[],
+                    multipliers: &[],
                     t: 0.0,
                 },
             )

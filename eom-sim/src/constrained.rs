@@ -28,7 +28,7 @@
 
 use crate::model::{Model, Vector};
 use crate::{OdeSystem, SMatrix};
-use nalgebra::{DMatrix, DVector};
+pub use nalgebra::{DMatrix, DVector};
 use std::cell::{Cell, RefCell};
 
 /// A generated model with constraint equations (see the module docs).
@@ -44,6 +44,9 @@ pub trait ConstrainedModel: Model {
     type Constraints: Vector;
     /// `J`, `[f64; NC * NU]`, by rows.
     type ConstraintJacobian: Vector;
+    /// Sets the multipliers `λ` that [`Model::outputs`] uses for joint
+    /// reactions (the constraint forces `Jᵀλ` act on the bodies).
+    fn set_multipliers(&mut self, lambda: &Self::Constraints);
     /// `Φ` (zero for nonholonomic rows), `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`)
     /// and `J`.
     #[allow(clippy::too_many_arguments)]

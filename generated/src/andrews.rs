@@ -13,12 +13,17 @@ pub struct Andrews {
     pub params: AndrewsParams,
     /// Runtime inputs (actuator commands), in `INPUT_NAMES` order.
     pub inputs: [f64; 0],
+    /// Constraint multipliers `λ` (`CONSTRAINT_NAMES` order) that
+    /// `outputs` uses for joint reactions in closed loops; the
+    /// constraint solvers' `accelerations` give them.
+    pub multipliers: [f64; 6],
 }
 impl Default for Andrews {
     fn default() -> Self {
         Andrews {
             params: AndrewsParams::default(),
             inputs: [0.0; 0],
+            multipliers: [0.0; 6],
         }
     }
 }
@@ -1035,6 +1040,9 @@ impl ::eom_sim::ConstrainedModel for Andrews {
     ];
     type Constraints = [f64; 6];
     type ConstraintJacobian = [f64; 42];
+    fn set_multipliers(&mut self, lambda: &[f64; 6]) {
+        self.multipliers = *lambda;
+    }
     fn constraints(
         &self,
         _t: f64,

@@ -13,12 +13,17 @@ pub struct Bricard {
     pub params: BricardParams,
     /// Runtime inputs (actuator commands), in `INPUT_NAMES` order.
     pub inputs: [f64; 0],
+    /// Constraint multipliers `λ` (`CONSTRAINT_NAMES` order) that
+    /// `outputs` uses for joint reactions in closed loops; the
+    /// constraint solvers' `accelerations` give them.
+    pub multipliers: [f64; 5],
 }
 impl Default for Bricard {
     fn default() -> Self {
         Bricard {
             params: BricardParams::default(),
             inputs: [0.0; 0],
+            multipliers: [0.0; 5],
         }
     }
 }
@@ -3374,6 +3379,9 @@ impl ::eom_sim::ConstrainedModel for Bricard {
     ];
     type Constraints = [f64; 5];
     type ConstraintJacobian = [f64; 25];
+    fn set_multipliers(&mut self, lambda: &[f64; 5]) {
+        self.multipliers = *lambda;
+    }
     fn constraints(
         &self,
         _t: f64,

@@ -13,12 +13,17 @@ pub struct Fourbar {
     pub params: FourbarParams,
     /// Runtime inputs (actuator commands), in `INPUT_NAMES` order.
     pub inputs: [f64; 0],
+    /// Constraint multipliers `λ` (`CONSTRAINT_NAMES` order) that
+    /// `outputs` uses for joint reactions in closed loops; the
+    /// constraint solvers' `accelerations` give them.
+    pub multipliers: [f64; 2],
 }
 impl Default for Fourbar {
     fn default() -> Self {
         Fourbar {
             params: FourbarParams::default(),
             inputs: [0.0; 0],
+            multipliers: [0.0; 2],
         }
     }
 }
@@ -488,6 +493,9 @@ impl ::eom_sim::ConstrainedModel for Fourbar {
     const CONSTRAINT_NAMES: &'static [&'static str] = &["c.0", "c.1"];
     type Constraints = [f64; 2];
     type ConstraintJacobian = [f64; 6];
+    fn set_multipliers(&mut self, lambda: &[f64; 2]) {
+        self.multipliers = *lambda;
+    }
     fn constraints(
         &self,
         _t: f64,

@@ -13,12 +13,17 @@ pub struct RollingDisk {
     pub params: RollingDiskParams,
     /// Runtime inputs (actuator commands), in `INPUT_NAMES` order.
     pub inputs: [f64; 0],
+    /// Constraint multipliers `λ` (`CONSTRAINT_NAMES` order) that
+    /// `outputs` uses for joint reactions in closed loops; the
+    /// constraint solvers' `accelerations` give them.
+    pub multipliers: [f64; 3],
 }
 impl Default for RollingDisk {
     fn default() -> Self {
         RollingDisk {
             params: RollingDiskParams::default(),
             inputs: [0.0; 0],
+            multipliers: [0.0; 3],
         }
     }
 }
@@ -472,6 +477,9 @@ impl ::eom_sim::ConstrainedModel for RollingDisk {
     ];
     type Constraints = [f64; 3];
     type ConstraintJacobian = [f64; 18];
+    fn set_multipliers(&mut self, lambda: &[f64; 3]) {
+        self.multipliers = *lambda;
+    }
     fn constraints(
         &self,
         _t: f64,

@@ -13,12 +13,17 @@ pub struct SliderCrankDriven {
     pub params: SliderCrankDrivenParams,
     /// Runtime inputs (actuator commands), in `INPUT_NAMES` order.
     pub inputs: [f64; 0],
+    /// Constraint multipliers `λ` (`CONSTRAINT_NAMES` order) that
+    /// `outputs` uses for joint reactions in closed loops; the
+    /// constraint solvers' `accelerations` give them.
+    pub multipliers: [f64; 2],
 }
 impl Default for SliderCrankDriven {
     fn default() -> Self {
         SliderCrankDriven {
             params: SliderCrankDrivenParams::default(),
             inputs: [0.0; 0],
+            multipliers: [0.0; 2],
         }
     }
 }
@@ -232,6 +237,9 @@ impl ::eom_sim::ConstrainedModel for SliderCrankDriven {
     const CONSTRAINT_NAMES: &'static [&'static str] = &["slider_pin.0", "slider_pin.1"];
     type Constraints = [f64; 2];
     type ConstraintJacobian = [f64; 4];
+    fn set_multipliers(&mut self, lambda: &[f64; 2]) {
+        self.multipliers = *lambda;
+    }
     fn constraints(
         &self,
         t: f64,

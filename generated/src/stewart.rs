@@ -13,12 +13,17 @@ pub struct Stewart {
     pub params: StewartParams,
     /// Runtime inputs (actuator commands), in `INPUT_NAMES` order.
     pub inputs: [f64; 0],
+    /// Constraint multipliers `λ` (`CONSTRAINT_NAMES` order) that
+    /// `outputs` uses for joint reactions in closed loops; the
+    /// constraint solvers' `accelerations` give them.
+    pub multipliers: [f64; 15],
 }
 impl Default for Stewart {
     fn default() -> Self {
         Stewart {
             params: StewartParams::default(),
             inputs: [0.0; 0],
+            multipliers: [0.0; 15],
         }
     }
 }
@@ -6311,6 +6316,9 @@ impl ::eom_sim::ConstrainedModel for Stewart {
     ];
     type Constraints = [f64; 15];
     type ConstraintJacobian = [f64; 315];
+    fn set_multipliers(&mut self, lambda: &[f64; 15]) {
+        self.multipliers = *lambda;
+    }
     fn constraints(
         &self,
         t: f64,

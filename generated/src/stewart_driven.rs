@@ -13,12 +13,17 @@ pub struct StewartDriven {
     pub params: StewartDrivenParams,
     /// Runtime inputs (actuator commands), in `INPUT_NAMES` order.
     pub inputs: [f64; 0],
+    /// Constraint multipliers `λ` (`CONSTRAINT_NAMES` order) that
+    /// `outputs` uses for joint reactions in closed loops; the
+    /// constraint solvers' `accelerations` give them.
+    pub multipliers: [f64; 15],
 }
 impl Default for StewartDriven {
     fn default() -> Self {
         StewartDriven {
             params: StewartDrivenParams::default(),
             inputs: [0.0; 0],
+            multipliers: [0.0; 15],
         }
     }
 }
@@ -6018,6 +6023,9 @@ impl ::eom_sim::ConstrainedModel for StewartDriven {
     ];
     type Constraints = [f64; 15];
     type ConstraintJacobian = [f64; 225];
+    fn set_multipliers(&mut self, lambda: &[f64; 15]) {
+        self.multipliers = *lambda;
+    }
     fn constraints(
         &self,
         t: f64,

@@ -12,6 +12,7 @@
 //! identical input.
 
 use crate::mech::Formulation;
+use crate::mech::formulate::MULTIPLIER;
 use crate::sym::{SymKind, Symbol};
 use split::{Arg, lower};
 
@@ -74,6 +75,11 @@ impl Binding<'_> {
                 Some(k) => {
                     let k = Literal::usize_unsuffixed(k);
                     quote!(self.inputs[#k])
+                }
+                None if s.name.starts_with(MULTIPLIER) => {
+                    let k: usize = s.name[MULTIPLIER.len()..].parse().unwrap_or(0);
+                    let k = Literal::usize_unsuffixed(k);
+                    quote!(self.multipliers[#k])
                 }
                 None => {
                     // `tau<k>`: the extra generalised forces.
@@ -463,6 +469,9 @@ pub fn emit_tokens(
                 const CONSTRAINT_NAMES: &'static [&'static str] = &[#(#names),*];
                 type Constraints = [f64; #nc_l];
                 type ConstraintJacobian = [f64; #ncj_l];
+                fn set_multipliers(&mut self, lambda: &[f64; #nc_l]) {
+                    self.multipliers = *lambda;
+                }
                 fn constraints(
                     &self,
                     #params,
@@ -477,6 +486,20 @@ pub fn emit_tokens(
             }
         }
     });
+    let (multipliers_field, multipliers_default) = if f.constraint_names.is_empty() {
+        (TokenStream::new(), TokenStream::new())
+    } else {
+        let nc_l = idx(f.constraint_names.len());
+        (
+            quote! {
+                /// Constraint multipliers `λ` (`CONSTRAINT_NAMES` order) that
+                /// `outputs` uses for joint reactions in closed loops; the
+                /// constraint solvers' `accelerations` give them.
+                pub multipliers: [f64; #nc_l],
+            },
+            quote!(multipliers: [0.0; #nc_l],),
+        )
+    };
     let output_names_l = output_names.iter();
     let parts_impl = if parts.is_empty() {
         TokenStream::new()
@@ -585,11 +608,12 @@ pub fn emit_tokens(
             pub params: #params_ty,
             /// Runtime inputs (actuator commands), in `INPUT_NAMES` order.
             pub inputs: [f64; #ni_l],
+            #multipliers_field
         }
 
         impl Default for #ty {
             fn default() -> Self {
-                #ty { params: #params_ty::default(), inputs: [0.0; #ni_l] }
+                #ty { params: #params_ty::default(), inputs: [0.0; #ni_l], #multipliers_default }
             }
         }
 

@@ -242,6 +242,85 @@ pub fn cut_reaction<S: Scalar>(
     (force, torque)
 }
 
+/// The constraint forces `Jᵀλ` as spatial forces on the tree's bodies
+/// (body axes, at the body origin), for joint reactions in closed loops:
+/// each cut joint's force and torque ([`cut_reaction`]) on its child and
+/// their opposite on its parent, and each rolling disk's contact force
+/// `(λ_slip_x, λ_slip_y, λ_contact)` (world axes) at its lowest point.
+/// `lambda` is in the order of [`Formulation::constraint_names`](super::Formulation):
+/// cut-joint rows, the model's holonomic rows, then its nonholonomic rows.
+#[allow(clippy::too_many_arguments)]
+pub fn constraint_body_forces<S: Scalar>(
+    constraints: &[crate::system::Constraint],
+    tree: &TreeModel<S>,
+    env: &dyn Env<S>,
+    k: &Kinematics<S>,
+    cuts: &[CutJoint<S>],
+    lambda: &[S],
+) -> Result<Vec<super::spatial::Force<S>>, MechError> {
+    use super::spatial::Force;
+    use crate::system::ConstraintKind;
+    let mut out = vec![Force::zero(); tree.bodies.len()];
+    let at = |i: usize| lambda.get(i).copied().unwrap_or(S::zero());
+    // A world-axes force `fw` and torque `nw` at world point `x` on body `b`.
+    let mut apply = |b: Option<usize>, x: Vec3<S>, fw: Vec3<S>, nw: Vec3<S>| {
+        if let Some(i) = b {
+            let pose = &k.world[i];
+            let (f, n) = (pose.e.tr_mul_vec(fw), pose.e.tr_mul_vec(nw));
+            let r = pose.e.tr_mul_vec(x - pose.r);
+            out[i] = out[i]
+                + Force {
+                    n: r.cross(f) + n,
+                    f,
+                };
+        }
+    };
+    let world = |b: Option<usize>| b.map_or_else(Pose::identity, |i| k.world[i]);
+    let mut row = 0;
+    for c in cuts {
+        let n = c.equations.len();
+        let l: Vec<S> = (row..row + n).map(at).collect();
+        row += n;
+        let (f, m) = cut_reaction(k, c, &l);
+        let p = world(c.parent).then(&c.frame_parent);
+        let ch = world(c.child).then(&c.frame_child);
+        let (fw, mw) = (p.e.mul_vec(f), p.e.mul_vec(m));
+        apply(c.child, ch.r, fw, mw);
+        apply(c.parent, ch.r, -fw, -mw);
+    }
+    let n_holonomic = row + constraints.iter().map(|c| c.equations().0).sum::<usize>();
+    let mut nonholonomic = n_holonomic;
+    let low = Lowering::new(env);
+    for c in constraints {
+        match &c.kind {
+            ConstraintKind::Holonomic(_) => row += 1,
+            ConstraintKind::RollingDisk {
+                body,
+                radius,
+                axis,
+                center,
+            } => {
+                let contact = at(row);
+                let (sx, sy) = (at(nonholonomic), at(nonholonomic + 1));
+                row += 1;
+                nonholonomic += 2;
+                let Some(i) = tree.index_of_body.get(*body).copied().flatten() else {
+                    continue;
+                };
+                let r = low.quantity(radius)?;
+                let pose = &k.world[i];
+                let n = pose.e.mul_vec(Vec3::from_f64(unit(axis.unit)));
+                let nz = n.0[2];
+                let s = (S::one() - nz * nz).sqrt();
+                let down = Vec3::new(-nz * n.0[0], -nz * n.0[1], S::one() - nz * n.0[2]);
+                let point = pose.point(low.vec3(center)?) + down.scale(-r / s);
+                apply(Some(i), point, Vec3::new(sx, sy, contact), Vec3::zero());
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// The model's own constraints (not joints) at the kinematics `k`:
 /// holonomic conditions `Φ(q, t)` and nonholonomic speed conditions
 /// `A(q) u + b(q, t)`, each with its name.

@@ -146,6 +146,10 @@ fn coordinate_names(sys: &System) -> Vec<String> {
         .collect()
 }
 
+/// Prefix of the constraint multipliers' input symbols in output programs
+/// (`λ0`, `λ1`, …; not a valid model name, so no input can clash).
+pub const MULTIPLIER: &str = "λ";
+
 /// The constraint program with its equation names.
 struct ConstraintProgram {
     program: Program,
@@ -317,13 +321,36 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         ];
         cx.lower(&outs, opts)
     });
-    let (outputs, jacobians) = outputs(sys, &cx, &ev, &tree, &k, &fext, opts)?;
     let qdot_exprs = ev.qdot(&st);
     let closure = closure(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
     let (constraints, constraint_names, n_holonomic) = match closure {
         Some(c) => (Some(c.program), c.names, c.n_holonomic),
         None => (None, Vec::new(), 0),
     };
+    // In closed loops the joint reactions include the constraint forces
+    // Jᵀλ; the multipliers enter the outputs as inputs `λ<i>`.
+    let reactions = sys
+        .outputs
+        .iter()
+        .any(|o| matches!(o, OutputKind::JointReaction(_)));
+    let fext_outputs = if reactions && !constraint_names.is_empty() {
+        let lambda: Vec<Expr> = (0..constraint_names.len())
+            .map(|i| cx.input(&format!("{MULTIPLIER}{i}")))
+            .collect::<Result<_, _>>()?;
+        let cuts = super::constraints::cut_joints(sys, &tree, &env)?;
+        let loads = super::constraints::constraint_body_forces(
+            &sys.constraints,
+            &tree,
+            &env,
+            &k,
+            &cuts,
+            &lambda,
+        )?;
+        fext.iter().zip(loads).map(|(&a, b)| a + b).collect()
+    } else {
+        fext.clone()
+    };
+    let (outputs, jacobians) = outputs(sys, &cx, &ev, &tree, &k, &fext_outputs, opts)?;
     Ok(Formulation {
         qdot,
         forward_dynamics,
