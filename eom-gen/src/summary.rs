@@ -51,22 +51,28 @@ pub fn json(checked: &Checked) -> Value {
             "joint": sys.joints[j].name, "position_gap": g.position, "angle_gap": g.angle,
         })).collect::<Vec<_>>(),
         "warnings": checked.warnings.len(),
-        "constraint_equations": mobility.map(|m| m.equations),
-        "constraint_rank": mobility.map(|m| m.rank),
-        "mobility": mobility.map_or(sys.grubler.dof, |m| m.dof as i64),
+        "constraint_equations": mobility.map(|(m, _)| m.equations),
+        "constraint_rank": mobility.map(|(m, _)| m.rank),
+        "mobility": mobility.map_or(sys.grubler.dof, |(m, _)| m.dof as i64),
+        "assembly": mobility.map(|(_, a)| json!({
+            "residual": a.0, "velocity_residual": a.1, "iterations": a.2,
+        })),
     })
 }
 
 /// Rank of the constraint equations (closure conditions, the model's own
 /// holonomic and nonholonomic constraints) at the assembled initial state,
 /// if there are any: the speeds' degrees of freedom.
-fn mobility(sys: &System) -> Option<crate::mech::numeric::Mobility> {
+/// With it, the assembly's `max |Φ|`, `max |J u + Φ_t|` and Newton
+/// iterations.
+fn mobility(sys: &System) -> Option<(crate::mech::numeric::Mobility, (f64, f64, usize))> {
     if sys.graph.cut_joints().is_empty() && sys.constraints.is_empty() {
         return None;
     }
     let num = crate::mech::Numeric::new(sys).ok()?;
-    let assembled = num.assemble(&sys.q0(), &sys.u0(), 0.0).ok()?;
-    num.mobility(&assembled.q, 0.0).ok()
+    let a = num.assemble(&sys.q0(), &sys.u0(), 0.0).ok()?;
+    let m = num.mobility(&a.q, 0.0).ok()?;
+    Some((m, (a.residual, a.velocity_residual, a.iterations)))
 }
 
 /// A few lines for people.
@@ -131,7 +137,7 @@ pub fn human(checked: &Checked) -> String {
         },
         sys.grubler.dof
     );
-    if let Some(m) = mobility(sys) {
+    if let Some((m, (residual, velocity_residual, iterations))) = mobility(sys) {
         out += &format!(
             "  mobility     {} (rank {} of {} constraint equations{}, assembled initial state)\n",
             m.dof,
@@ -146,6 +152,9 @@ pub fn human(checked: &Checked) -> String {
                 0 => String::new(),
                 n => format!(", {n} of them nonholonomic"),
             }
+        );
+        out += &format!(
+            "  assembly     max |Φ| {residual:.1e}, max |J u + Φ_t| {velocity_residual:.1e} after {iterations} Newton step(s)\n"
         );
     }
     out
