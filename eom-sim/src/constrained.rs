@@ -310,18 +310,7 @@ pub fn accelerations(
             return Some((udot, lambda, jacobian.nrows()));
         }
     }
-    let eig = nalgebra::SymmetricEigen::new(schur);
-    let largest = eig.eigenvalues.iter().map(|x| x.abs()).fold(0.0, f64::max);
-    let eps = 1e-10 * largest.max(1e-300);
-    let mut lambda = DVector::zeros(rhs.len());
-    let mut rank = 0;
-    for (k, &ev) in eig.eigenvalues.iter().enumerate() {
-        if ev > eps {
-            rank += 1;
-            let v = eig.eigenvectors.column(k);
-            lambda += v * (v.dot(&rhs) / ev);
-        }
-    }
+    let (_, lambda, rank) = pinv_lambda(&schur, &rhs)?;
     let udot = free + minv_jt * &lambda;
     Some((udot, lambda, rank))
 }
@@ -478,6 +467,119 @@ fn solve_partition(j: &DMatrix<f64>, p: &Partition, r: &DVector<f64>) -> Option<
     sub.lu().solve(&rhs)
 }
 
+/// Buffers of the per-right-hand-side solve, allocated once per run.
+struct Workspace {
+    m: DMatrix<f64>,
+    b: DVector<f64>,
+    c: ConstraintValues,
+    minv_jt: DMatrix<f64>,
+    schur: DMatrix<f64>,
+    rhs: DVector<f64>,
+}
+
+impl Workspace {
+    fn new(nu: usize, nc: usize) -> Self {
+        Workspace {
+            m: DMatrix::zeros(nu, nu),
+            b: DVector::zeros(nu),
+            c: ConstraintValues::zeros(nc, nu),
+            minv_jt: DMatrix::zeros(nu, nc),
+            schur: DMatrix::zeros(nc, nc),
+            rhs: DVector::zeros(nc),
+        }
+    }
+
+    /// `u̇` into `b` (and `λ` into `rhs`) without allocating when `M` and
+    /// the Schur complement are well conditioned; otherwise through
+    /// [`accelerations`]. `false` if `M` is not positive definite.
+    fn solve<D: Dynamics + ?Sized>(
+        &mut self,
+        d: &D,
+        method: Method,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+    ) -> bool {
+        let (nu, nc) = (d.nu(), d.nc());
+        d.mass_matrix(t, q, &mut self.m);
+        d.bias(t, q, u, &mut self.b);
+        d.constraints(t, q, u, &mut self.c);
+        if let Method::Baumgarte { alpha, beta } = method {
+            for i in 0..nc {
+                self.c.gamma[i] -= 2.0 * alpha * self.c.phidot[i] + beta * beta * self.c.phi[i];
+            }
+        }
+        self.b.neg_mut();
+        let m = std::mem::replace(&mut self.m, DMatrix::zeros(0, 0));
+        let Some(chol) = m.cholesky() else {
+            self.m = DMatrix::zeros(nu, nu);
+            return false;
+        };
+        chol.solve_mut(&mut self.b);
+        self.c.jacobian.transpose_to(&mut self.minv_jt);
+        chol.solve_mut(&mut self.minv_jt);
+        self.m = chol.unpack_dirty();
+        if nc == 0 {
+            return true;
+        }
+        self.schur.gemm(1.0, &self.c.jacobian, &self.minv_jt, 0.0);
+        self.rhs.copy_from(&self.c.gamma);
+        self.rhs.gemv(-1.0, &self.c.jacobian, &self.b, 1.0);
+        let schur = std::mem::replace(&mut self.schur, DMatrix::zeros(0, 0));
+        let fast = match schur.cholesky() {
+            Some(chol) => {
+                let d = chol.l_dirty().diagonal();
+                let (lo, hi) = d.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
+                    (lo.min(x * x), hi.max(x * x))
+                });
+                let ok = lo > 1e-8 * hi;
+                if ok {
+                    chol.solve_mut(&mut self.rhs);
+                }
+                self.schur = chol.unpack_dirty();
+                ok
+            }
+            None => {
+                self.schur = DMatrix::zeros(nc, nc);
+                false
+            }
+        };
+        if !fast {
+            // Rank-deficient or nearly so: the minimum-norm λ from the
+            // Schur complement, formed again (the factorisation overwrote it).
+            self.schur.gemm(1.0, &self.c.jacobian, &self.minv_jt, 0.0);
+            let Some((_, lambda, _)) = pinv_lambda(&self.schur, &self.rhs) else {
+                return false;
+            };
+            self.rhs.copy_from(&lambda);
+        }
+        self.b.gemv(1.0, &self.minv_jt, &self.rhs, 1.0);
+        true
+    }
+}
+
+/// `λ = S⁺ r` for the symmetric positive semi-definite `S` through its
+/// eigendecomposition (eigenvalues below `1e-10` of the largest dropped),
+/// and the rank.
+fn pinv_lambda(schur: &DMatrix<f64>, rhs: &DVector<f64>) -> Option<((), DVector<f64>, usize)> {
+    let eig = nalgebra::SymmetricEigen::new(schur.clone());
+    let largest = eig.eigenvalues.iter().map(|x| x.abs()).fold(0.0, f64::max);
+    let eps = 1e-10 * largest.max(1e-300);
+    let mut lambda = DVector::zeros(rhs.len());
+    let mut rank = 0;
+    for (k, &ev) in eig.eigenvalues.iter().enumerate() {
+        if ev > eps {
+            rank += 1;
+            let v = eig.eigenvectors.column(k);
+            lambda += v * (v.dot(rhs) / ev);
+        }
+    }
+    lambda
+        .iter()
+        .all(|x| x.is_finite())
+        .then_some(((), lambda, rank))
+}
+
 /// Integration of a constrained model with [`Method::Baumgarte`],
 /// [`Method::Projection`] or [`Method::Partitioning`] as an [`OdeSystem`]
 /// on `y = (q, u)`; `N = n_q + n_u`.
@@ -487,6 +589,7 @@ pub struct ConstrainedSystem<'a, D: ?Sized> {
     stats: RefCell<ConstraintStats>,
     partitions: RefCell<Option<(Partition, Partition)>>,
     started: Cell<bool>,
+    work: RefCell<Workspace>,
 }
 
 impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
@@ -502,6 +605,7 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
             }),
             partitions: RefCell::new(None),
             started: Cell::new(false),
+            work: RefCell::new(Workspace::new(d.nu(), d.nc())),
         }
     }
 
@@ -630,9 +734,11 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for ConstrainedSystem<'_
         let (q, u) = y.split_at(nq);
         let (qd, ud) = dy.split_at_mut(nq);
         self.d.qdot(q, u, qd);
-        match self.accelerations(t, q, u) {
-            Some((a, _)) => ud.iter_mut().zip(a.iter()).for_each(|(d, s)| *d = *s),
-            None => ud.iter_mut().for_each(|d| *d = f64::NAN),
+        let mut w = self.work.borrow_mut();
+        if w.solve(self.d, self.method, t, q, u) {
+            ud.iter_mut().zip(w.b.iter()).for_each(|(d, s)| *d = *s);
+        } else {
+            ud.iter_mut().for_each(|d| *d = f64::NAN);
         }
     }
 
