@@ -507,3 +507,63 @@ fn tree_joint_reactions_in_a_loop_carry_the_constraint_forces() {
         }
     }
 }
+
+#[test]
+fn a_holonomic_coupling_gears_the_double_pendulum() {
+    // `q2 = −q1/2` as a user constraint (as URDF's mimic becomes): assembly
+    // moves the start onto it, the run keeps it to 1e-10 and the energy of
+    // the now one-degree-of-freedom pendulum stays constant (the coupling
+    // does no work).
+    use eom_gen::mech::{Request, formulate};
+    let text = std::fs::read_to_string(format!(
+        "{}/../models/double_pendulum.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("reads the double pendulum")
+    .replace(
+        "outputs: [",
+        r#"constraints: [Holonomic(name: "gear", expr: "q2 + q1/2")],
+    outputs: ["#,
+    );
+    let dir = env!("CARGO_TARGET_TMPDIR");
+    let path = format!("{dir}/geared_pendulum.ron");
+    std::fs::write(&path, text).expect("writes the model");
+    let sys = check_file(&path).unwrap_or_else(|r| panic!("{r}")).system;
+    let f = formulate(&sys, Request::default()).expect("formulates");
+    assert_eq!(f.constraint_names, ["gear"]);
+    for method in ["projection", "partitioning", "index3"] {
+        let o = eom_gen::compiled::SimOptions {
+            integrator: if method == "index3" {
+                "radau5"
+            } else {
+                "dop853"
+            }
+            .into(),
+            rtol: 1e-10,
+            atol: 1e-10,
+            dt: 1e-3,
+            t_end: 3.0,
+            every: 0.0,
+            csv: None,
+            constraints: method.into(),
+        };
+        let v = eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(v["stop"], "finished", "{method}: {v}");
+        let q: Vec<f64> = v["q"]
+            .as_array()
+            .map(|a| a.iter().filter_map(|x| x.as_f64()).collect())
+            .unwrap_or_default();
+        assert!((q[1] + q[0] / 2.0).abs() < 1e-9, "{method}: q = {q:?}");
+        let e = |k: usize| v["energy"][k].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            (e(1) - e(0)).abs() < 1e-7 * e(0).abs().max(1.0),
+            "{method}: energy {} → {}",
+            e(0),
+            e(1)
+        );
+        assert!(
+            v["max_constraint_residual"].as_f64().unwrap_or(1.0) < 1e-9,
+            "{method}: {v}"
+        );
+    }
+}
