@@ -250,3 +250,62 @@ fn chain_program_matches_expressions() {
     // Every rotation angle needs exactly one sin_cos.
     assert_eq!(p.op_count().trig, 6, "got {}", p.op_count());
 }
+
+#[test]
+fn divisions_by_one_value_share_its_reciprocal() {
+    // a/d, b/d, (a+b)/d → r = 1/d and three products; a/e alone stays.
+    let (a, b, d, e) = (
+        Operand::Var(0),
+        Operand::Var(1),
+        Operand::Var(2),
+        Operand::Var(3),
+    );
+    let t = Operand::Tmp;
+    let sym = |name: &str| Symbol {
+        kind: SymKind::Param,
+        name: name.into(),
+    };
+    let mut p = Program {
+        inputs: vec![sym("a"), sym("b"), sym("d"), sym("e")],
+        instrs: vec![
+            Instr {
+                dst: 0,
+                op: Op::Div(a, d),
+            },
+            Instr {
+                dst: 1,
+                op: Op::Div(b, d),
+            },
+            Instr {
+                dst: 2,
+                op: Op::Add(a, b),
+            },
+            Instr {
+                dst: 3,
+                op: Op::Div(t(2), d),
+            },
+            Instr {
+                dst: 4,
+                op: Op::Div(a, e),
+            },
+        ],
+        outputs: vec![
+            ("p".into(), t(0)),
+            ("q".into(), t(1)),
+            ("r".into(), t(3)),
+            ("s".into(), t(4)),
+        ],
+        n_tmps: 5,
+    };
+    let x = [1.5, -2.25, 3.0, 7.0];
+    let before = p.eval(&x);
+    assert_eq!(p.share_reciprocals(), 3);
+    let c = p.op_count();
+    assert_eq!((c.divs, c.muls, c.adds), (2, 3, 1), "got\n{p}");
+    for (got, want) in p.eval(&x).iter().zip(&before) {
+        assert!(
+            (got - want).abs() <= 2.0 * f64::EPSILON * want.abs(),
+            "{got} vs {want}"
+        );
+    }
+}

@@ -242,6 +242,36 @@ proptest! {
         }
     }
 
+    /// Sharing reciprocals keeps every value (up to one rounding per
+    /// division) and leaves at most one division per divisor: each
+    /// expression divided by the same random divisor `d`, plus the
+    /// expressions themselves.
+    #[test]
+    fn shared_reciprocals_preserve_value(srcs in vec(expr(false), 1..4), d in expr(false), p in point()) {
+        let mut a = Arena::new();
+        let mut ids: Vec<_> = srcs.iter().map(|s| a.parse(s).unwrap()).collect();
+        let den = a.parse(&d).unwrap();
+        let quotients: Vec<_> = ids.iter().map(|&e| a.div(e, den)).collect();
+        ids.extend(quotients);
+        let vals = values(&a, &p);
+        let want = a.eval_many(&ids, &vals);
+        prop_assume!(want.iter().all(|w| w.is_finite() && w.abs() < 1e6));
+        let names: Vec<String> = (0..ids.len()).map(|i| format!("out{i}")).collect();
+        let outs: Vec<(&str, _)> = names.iter().map(|n| n.as_str()).zip(ids.iter().copied()).collect();
+        let mut p0 = a.lower(&outs, LowerOptions { optimize: false, ..LowerOptions::default() });
+        p0.optimize();
+        let divisions = p0.op_count().divs;
+        let mut shared = p0.clone();
+        let replaced = shared.share_reciprocals();
+        // Each shared divisor had two or more divisions and keeps one.
+        prop_assert!(shared.op_count().divs <= divisions);
+        prop_assert!(replaced == 0 || shared.op_count().divs < divisions);
+        let got = shared.eval_arena_values(&a, &vals);
+        for i in 0..ids.len() {
+            prop_assert!(close(got[i], want[i], TOL), "got {} want {}\n{shared}", got[i], want[i]);
+        }
+    }
+
     /// ∂e/∂v against a central difference with step 1e-5 (error ~1e-10
     /// truncation + 1e-11 rounding); tolerance 1e-5 relative.
     #[test]

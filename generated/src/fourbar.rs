@@ -54,7 +54,7 @@ impl ::eom_sim::Model for Fourbar {
         qdot[1] = u[1];
         qdot[2] = u[2];
     }
-    /// Forward dynamics by the mass matrix + tree-sparse LTDL (96 operations): `u̇ = M⁻¹ (τ − b)`.
+    /// Forward dynamics by the mass matrix + tree-sparse LTDL (97 operations): `u̇ = M⁻¹ (τ − b)`.
     fn forward_dynamics(
         &self,
         _t: f64,
@@ -150,17 +150,18 @@ impl ::eom_sim::Model for Fourbar {
         let x86 = x85 - x81;
         let x87 = x86 - x82;
         let x88 = x87 - x80;
-        let x89 = x88 / x71;
-        let x90 = x66 * x88;
-        let x91 = x90 / x71;
-        let x92 = 1.5 * x41;
-        let x93 = 14.715 * x24;
-        let x94 = x56 + x58;
-        let x95 = x94 - x92;
+        let x89 = 1.0 / x71;
+        let x90 = x88 * x89;
+        let x91 = x66 * x88;
+        let x92 = x91 * x89;
+        let x93 = 1.5 * x41;
+        let x94 = 14.715 * x24;
+        let x95 = x56 + x58;
         let x96 = x95 - x93;
-        let x97 = x96 - x91;
-        udot[0] = x89;
-        udot[1] = x97;
+        let x97 = x96 - x94;
+        let x98 = x97 - x92;
+        udot[0] = x90;
+        udot[1] = x98;
         udot[2] = x60;
     }
     fn mass_matrix(&self, _t: f64, q: &[f64; 3], m: &mut [[f64; 3]; 3]) {

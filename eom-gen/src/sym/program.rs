@@ -536,6 +536,7 @@ impl Arena {
         };
         if opts.optimize {
             p.optimize();
+            p.share_reciprocals();
         } else {
             p.remove_dead();
         }
@@ -659,6 +660,56 @@ impl Program {
         }
         self.instrs = out;
         changed
+    }
+
+    /// Divisions by one value, used at least twice, become one reciprocal
+    /// and multiplications: `a/d, b/d, c/d` → `r = 1/d; a·r, b·r, c·r`. A
+    /// division costs several multiplications' time (the articulated-body
+    /// algorithm divides every column of `U` by the same `D`); the result
+    /// differs from the quotient by at most one rounding (`a·fl(1/d)` against
+    /// `fl(a/d)`). Returns the number of divisions replaced.
+    pub fn share_reciprocals(&mut self) -> usize {
+        let mut uses: FxHashMap<Operand, usize> = FxHashMap::default();
+        for ins in &self.instrs {
+            if let Op::Div(a, b) = ins.op
+                && !matches!(b, Operand::Const(_))
+                && a != Operand::Const(Num::ONE)
+            {
+                *uses.entry(b).or_default() += 1;
+            }
+        }
+        let mut recip: FxHashMap<Operand, Operand> = FxHashMap::default();
+        let mut out = Vec::with_capacity(self.instrs.len() + uses.len());
+        let mut replaced = 0;
+        for ins in &self.instrs {
+            match ins.op {
+                Op::Div(a, b)
+                    if a != Operand::Const(Num::ONE) && uses.get(&b).is_some_and(|&n| n >= 2) =>
+                {
+                    let r = *recip.entry(b).or_insert_with(|| {
+                        let t = self.n_tmps;
+                        self.n_tmps += 1;
+                        out.push(Instr {
+                            dst: t,
+                            op: Op::Div(Operand::Const(Num::ONE), b),
+                        });
+                        Operand::Tmp(t)
+                    });
+                    out.push(Instr {
+                        dst: ins.dst,
+                        op: Op::Mul(a, r),
+                    });
+                    replaced += 1;
+                }
+                _ => out.push(*ins),
+            }
+        }
+        self.instrs = out;
+        if replaced > 0 {
+            // An existing `1/d` further down now repeats the new one.
+            self.optimize();
+        }
+        replaced
     }
 
     /// Remove instructions whose results are unused, turn a `SinCos` with
