@@ -218,7 +218,7 @@ fn check(path: &str, json: bool) -> ExitCode {
     };
     match checked {
         Ok(checked) => {
-            eprint!("{}", checked.source.render_all(&checked.warnings));
+            eprint!("{}", checked.render_warnings());
             if json {
                 let mut v = eom_gen::summary::json(&checked);
                 if eom_gen::urdf::is_urdf(path) {
@@ -267,7 +267,7 @@ fn import(path: &str, output: Option<&str>) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    eprint!("{}", checked.source.render_all(&checked.warnings));
+    eprint!("{}", checked.render_warnings());
     let sys = &checked.system;
     eprintln!(
         "imported `{path}`: model `{}`, {} bodies, {} joints, nq = {} ({})",
@@ -386,7 +386,7 @@ fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
             Err(code) => return code,
         }
     };
-    eprint!("{}", g.checked.source.render_all(&g.checked.warnings));
+    eprint!("{}", g.checked.render_warnings());
     match output {
         None => {
             print!("{}", g.source);
@@ -427,7 +427,12 @@ fn stats(path: &str) -> ExitCode {
             "energy": ops(&f.energy),
             "momentum": ops(&f.momentum),
             "constraints": ops(&f.constraints),
+            "outputs": ops(&f.outputs),
+            "jacobians": ops(&f.jacobians),
         },
+        "nq": g.checked.system.nq(),
+        "nu": g.checked.system.nu(),
+        "output_names": f.outputs.as_ref().map_or_else(Vec::new, |p| p.outputs.iter().map(|(n, _)| n.clone()).collect()),
         "generation_ms": f.seconds * 1e3,
         "source_bytes": g.source.len(),
     });
@@ -448,7 +453,7 @@ fn bench(path: &str, per_call: bool, o: &eom_gen::bench::PerCallOptions, json: b
         Ok(g) => g,
         Err(code) => return code,
     };
-    eprint!("{}", g.checked.source.render_all(&g.checked.warnings));
+    eprint!("{}", g.checked.render_warnings());
     match eom_gen::bench::per_call(&g, o) {
         Ok(r) if json => {
             println!("{}", eom_gen::bench::json(&g, o, &r));
