@@ -426,11 +426,10 @@ impl Ctx<'_> {
                 );
                 continue;
             }
-            if let Some(values) = &lock.at {
-                match self.values(values, &at(&path, &[f("at")]), j, sys) {
-                    Some(q0) => sys.joints[j].q0 = q0,
-                    None => continue,
-                }
+            if let Some(values) = &lock.at
+                && let Some(q0) = self.values(values, &at(&path, &[f("at")]), j, sys)
+            {
+                sys.joints[j].q0 = q0;
             }
             locked.push(j);
         }
@@ -612,7 +611,7 @@ impl Ctx<'_> {
             self.error(
                 &path,
                 format!(
-                    "joint `{}` cannot be locked: {} of the model use(s) its coordinates",
+                    "joint `{}` cannot be locked: the model's {} need(s) its coordinates",
                     joint.name,
                     users.join(", ")
                 ),
