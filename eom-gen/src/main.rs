@@ -17,7 +17,7 @@ enum Command {
     /// Validate a model and print a summary (bodies, joints, coordinates,
     /// cut joints, Grübler count). Exit 0 if valid, 1 if not.
     Check {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Print one JSON object instead of the summary.
         #[arg(long)]
@@ -25,7 +25,7 @@ enum Command {
     },
     /// Print the generated Rust source of a model.
     Dump {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Write to this file instead of standard output.
         #[arg(short, long)]
@@ -37,7 +37,7 @@ enum Command {
     /// Evaluate the equations of motion at a state (default: the model's
     /// initial state), compiled (built once, cached) or interpreted.
     Eval {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Positions, comma-separated (default: the model's q0).
         #[arg(long, allow_hyphen_values = true)]
@@ -60,7 +60,7 @@ enum Command {
     },
     /// Integrate the compiled model from its initial state.
     Simulate {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// End time, s.
         #[arg(long)]
@@ -107,7 +107,7 @@ enum Command {
     /// Time the compiled functions: `--per-call` gives ns per call of
     /// forward dynamics, mass matrix and inverse dynamics over random states.
     Bench {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Per-call cost (the only benchmark so far).
         #[arg(long)]
@@ -130,7 +130,7 @@ enum Command {
     },
     /// Operation counts of the generated functions and generation time.
     Stats {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Print one JSON object (the only format).
         #[arg(long)]
@@ -224,9 +224,18 @@ fn check(path: &str, json: bool) -> ExitCode {
                 if eom_gen::urdf::is_urdf(path) {
                     v["urdf_notes"] = serde_json::json!(notes);
                 }
+                if let Some(s) = &checked.scene {
+                    v["scene"] = serde_json::json!({
+                        "path": s.source.path,
+                        "model": s.model_path.display().to_string(),
+                    });
+                }
                 println!("{v}");
             } else {
                 print!("{}", eom_gen::summary::human(&checked));
+                if let Some(s) = &checked.scene {
+                    println!("  scene        {}", s.source.path);
+                }
                 if !notes.is_empty() {
                     println!("  urdf import:");
                     for n in &notes {
