@@ -231,11 +231,11 @@ impl Ctx<'_> {
             }
         }
         self.parameters(scene, sys);
-        if let Some(outputs) = &scene.outputs {
-            if let Some(kinds) = self.outputs(outputs, sys) {
-                sys.outputs = kinds;
-                checked.spec.outputs = outputs.clone();
-            }
+        if let Some(outputs) = &scene.outputs
+            && let Some(kinds) = self.outputs(outputs, sys)
+        {
+            sys.outputs = kinds;
+            checked.spec.outputs = outputs.clone();
         }
         self.locks(scene, sys);
         for lock in &scene.lock {
