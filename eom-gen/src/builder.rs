@@ -56,7 +56,8 @@ impl Builder {
         Builder::default()
     }
 
-    /// Adds a model file, `.ron` or `.urdf` (path relative to the crate being built).
+    /// Adds a model file, `.ron` or `.urdf`, or a scene file (`.scene.ron`,
+    /// whose model is relative to it); paths relative to the crate being built.
     pub fn model(mut self, path: impl Into<String>) -> Self {
         self.models.push(path.into());
         self
@@ -75,7 +76,7 @@ impl Builder {
     }
 
     /// Generates every model into `<out_dir>/<model name>.rs` and prints
-    /// `cargo:rerun-if-changed=<model>` for each. Reports the first model
+    /// `cargo:rerun-if-changed=<model>` for each (and for a scene's model). Reports the first model
     /// that fails, with all of its diagnostics.
     pub fn compile(self) -> Result<Vec<PathBuf>, BuildError> {
         let dir = match self.out_dir {
@@ -91,6 +92,9 @@ impl Builder {
                 fma: self.fma,
             };
             let g = generate_with(&src, &opts).map_err(BuildError::Generate)?;
+            if let Some(scene) = &g.checked.scene {
+                println!("cargo:rerun-if-changed={}", scene.model_path.display());
+            }
             let file = dir.join(format!("{}.rs", g.checked.system.name));
             std::fs::write(&file, &g.source)
                 .map_err(|e| BuildError::Io(file.display().to_string(), e))?;

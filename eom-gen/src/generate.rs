@@ -58,7 +58,7 @@ pub fn generate_with(src: &Source, opts: &emit::EmitOptions) -> Result<Generated
             error,
         }
     })?;
-    let body = emit::emit_with(&checked.system, &formulation, &src.text, opts);
+    let body = emit::emit_with(&checked.system, &formulation, &checked.content(), opts);
     // A converted URDF is named `robot.urdf (converted)`; regenerate from the URDF.
     let path = src
         .path
@@ -89,7 +89,23 @@ pub fn generate_tokens(
     src: &Source,
     type_name: &str,
 ) -> Result<proc_macro2::TokenStream, GenerateError> {
-    let checked = check(src).map_err(GenerateError::Model)?;
+    generate_tokens_in(src, std::path::Path::new(""), type_name)
+}
+
+/// [`generate_tokens`] for a source whose path is relative to `root`
+/// (the crate's manifest directory in `#[multibody]`): a scene's model is
+/// read from there.
+pub fn generate_tokens_in(
+    src: &Source,
+    root: &std::path::Path,
+    type_name: &str,
+) -> Result<proc_macro2::TokenStream, GenerateError> {
+    let checked = if crate::model::scene::is_scene(&src.path, &src.text) {
+        crate::model::scene::check_in(src, root)
+    } else {
+        check(src)
+    }
+    .map_err(GenerateError::Model)?;
     let formulation = formulate(&checked.system, Request::default()).map_err(|error| {
         GenerateError::Formulate {
             path: src.path.clone(),
@@ -99,7 +115,7 @@ pub fn generate_tokens(
     Ok(emit::emit_tokens(
         &checked.system,
         &formulation,
-        &src.text,
+        &checked.content(),
         &emit::EmitOptions {
             type_name: Some(type_name.to_string()),
             fma: false,

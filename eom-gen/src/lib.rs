@@ -23,7 +23,8 @@ pub mod urdf;
 pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;
 pub use generate::{
-    GenerateError, Generated, generate, generate_file, generate_tokens, generate_with,
+    GenerateError, Generated, generate, generate_file, generate_tokens, generate_tokens_in,
+    generate_with,
 };
 pub use model::{Checked, Diagnostic, Report, Source, Spec, check, check_file};
 pub use system::System;

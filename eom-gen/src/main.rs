@@ -17,7 +17,7 @@ enum Command {
     /// Validate a model and print a summary (bodies, joints, coordinates,
     /// cut joints, Grübler count). Exit 0 if valid, 1 if not.
     Check {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Print one JSON object instead of the summary.
         #[arg(long)]
@@ -25,7 +25,7 @@ enum Command {
     },
     /// Print the generated Rust source of a model.
     Dump {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Write to this file instead of standard output.
         #[arg(short, long)]
@@ -37,7 +37,7 @@ enum Command {
     /// Evaluate the equations of motion at a state (default: the model's
     /// initial state), compiled (built once, cached) or interpreted.
     Eval {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Positions, comma-separated (default: the model's q0).
         #[arg(long, allow_hyphen_values = true)]
@@ -60,7 +60,7 @@ enum Command {
     },
     /// Integrate the compiled model from its initial state.
     Simulate {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// End time, s.
         #[arg(long)]
@@ -107,7 +107,7 @@ enum Command {
     /// Time the compiled functions: `--per-call` gives ns per call of
     /// forward dynamics, mass matrix and inverse dynamics over random states.
     Bench {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Per-call cost (the only benchmark so far).
         #[arg(long)]
@@ -130,7 +130,7 @@ enum Command {
     },
     /// Operation counts of the generated functions and generation time.
     Stats {
-        /// The model file (`.ron`, or `.urdf` converted on the fly).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
         /// Print one JSON object (the only format).
         #[arg(long)]
@@ -218,15 +218,24 @@ fn check(path: &str, json: bool) -> ExitCode {
     };
     match checked {
         Ok(checked) => {
-            eprint!("{}", checked.source.render_all(&checked.warnings));
+            eprint!("{}", checked.render_warnings());
             if json {
                 let mut v = eom_gen::summary::json(&checked);
                 if eom_gen::urdf::is_urdf(path) {
                     v["urdf_notes"] = serde_json::json!(notes);
                 }
+                if let Some(s) = &checked.scene {
+                    v["scene"] = serde_json::json!({
+                        "path": s.source.path,
+                        "model": s.model_path.display().to_string(),
+                    });
+                }
                 println!("{v}");
             } else {
                 print!("{}", eom_gen::summary::human(&checked));
+                if let Some(s) = &checked.scene {
+                    println!("  scene        {}", s.source.path);
+                }
                 if !notes.is_empty() {
                     println!("  urdf import:");
                     for n in &notes {
@@ -267,7 +276,7 @@ fn import(path: &str, output: Option<&str>) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    eprint!("{}", checked.source.render_all(&checked.warnings));
+    eprint!("{}", checked.render_warnings());
     let sys = &checked.system;
     eprintln!(
         "imported `{path}`: model `{}`, {} bodies, {} joints, nq = {} ({})",
@@ -386,7 +395,7 @@ fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
             Err(code) => return code,
         }
     };
-    eprint!("{}", g.checked.source.render_all(&g.checked.warnings));
+    eprint!("{}", g.checked.render_warnings());
     match output {
         None => {
             print!("{}", g.source);
@@ -427,7 +436,12 @@ fn stats(path: &str) -> ExitCode {
             "energy": ops(&f.energy),
             "momentum": ops(&f.momentum),
             "constraints": ops(&f.constraints),
+            "outputs": ops(&f.outputs),
+            "jacobians": ops(&f.jacobians),
         },
+        "nq": g.checked.system.nq(),
+        "nu": g.checked.system.nu(),
+        "output_names": f.outputs.as_ref().map_or_else(Vec::new, |p| p.outputs.iter().map(|(n, _)| n.clone()).collect()),
         "generation_ms": f.seconds * 1e3,
         "source_bytes": g.source.len(),
     });
@@ -448,7 +462,7 @@ fn bench(path: &str, per_call: bool, o: &eom_gen::bench::PerCallOptions, json: b
         Ok(g) => g,
         Err(code) => return code,
     };
-    eprint!("{}", g.checked.source.render_all(&g.checked.warnings));
+    eprint!("{}", g.checked.render_warnings());
     match eom_gen::bench::per_call(&g, o) {
         Ok(r) if json => {
             println!("{}", eom_gen::bench::json(&g, o, &r));

@@ -430,3 +430,42 @@ fn bench_per_call_reports_positive_times_and_op_counts() {
         Some(2)
     );
 }
+
+#[test]
+fn scenes_are_accepted_wherever_a_model_is() {
+    let v = json(&["check", "models/scenes/arm7_ee.scene.ron", "--json"]);
+    assert_eq!(v["name"], "arm7_ee");
+    assert_eq!(v["nq"], 5);
+    assert_eq!(v["locked_joints"], serde_json::json!(["j5", "j7"]));
+    assert_eq!(v["scene"]["model"], "models/arm7.ron");
+    let full = json(&["stats", "models/scenes/arm7_full.scene.ron", "--json"]);
+    let ee = json(&["stats", "models/scenes/arm7_ee.scene.ron", "--json"]);
+    for f in ["forward_dynamics", "outputs"] {
+        let (a, b) = (&full["ops"][f]["total"], &ee["ops"][f]["total"]);
+        assert!(
+            b.as_u64() < a.as_u64(),
+            "{f}: got {b} ops in arm7_ee, want fewer than arm7_full's {a}"
+        );
+    }
+    assert_eq!(ee["output_names"].as_array().map(Vec::len), Some(3));
+}
+
+#[test]
+fn a_bad_scene_exits_1_with_its_location() {
+    let dir = std::env::temp_dir().join(format!("eom-cli-scene-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let models = concat!(env!("CARGO_MANIFEST_DIR"), "/../models");
+    let scene = dir.join("bad.scene.ron");
+    let text =
+        format!("Scene(\n    model: \"{models}/arm7.ron\",\n    lock: [(joint: \"j8\")],\n)\n");
+    std::fs::write(&scene, text).expect("write");
+    let path = scene.display().to_string();
+    let out = eom_gen(&["check", &path]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!("{path}:3:20: error: unknown joint `j8`")),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -121,3 +121,92 @@ pin!(
     "Revolute(axis: (0, 0, 1))" => "Revolute(axis: (0, 0, 0))",
     "marker: \"tip\"" => "marker: \"top\"",
 );
+
+// Scenes: checked against the base model (written to a temporary directory
+// as `two_link.ron`); every problem of the scene at once, in the scene file.
+
+const SCENE: &str = r#"// A valid scene of the base model; each test breaks it.
+Scene(
+    model: "../two_link.ron",
+    name: "two_link_tip",
+    outputs: [Position(body: "link2", marker: "tip"), JointReaction(joint: "j1")],
+    lock: [(joint: "j1", at: ["l/3"])],
+    fixed: ["g"],
+    tunable: ["m"],
+)
+"#;
+
+/// The rendered diagnostics of `SCENE` with each `(from, to)` replaced.
+fn diagnose_scene(edits: &[(&str, &str)]) -> String {
+    let mut text = SCENE.to_string();
+    for (from, to) in edits {
+        assert!(
+            text.contains(from),
+            "test setup: `{from}` is not in the base scene"
+        );
+        text = text.replacen(from, to, 1);
+    }
+    let root = std::env::temp_dir().join(format!(
+        "eom-scene-diagnostics-{}-{:x}",
+        std::process::id(),
+        eom_gen::emit::fnv1a(text.as_bytes())
+    ));
+    let _ = std::fs::create_dir_all(&root);
+    std::fs::write(root.join("two_link.ron"), BASE).expect("write the base model");
+    let broken = BASE
+        .replacen("(name: \"m\", value: 1.5)", "(name: \"m\", value: -1.5)", 1)
+        .replacen("child: \"link2\"", "child: \"lnk2\"", 1);
+    std::fs::write(root.join("broken.ron"), broken).expect("write the broken model");
+    let _ = std::fs::create_dir_all(root.join("scenes"));
+    std::fs::write(root.join("scenes/tip.scene.ron"), &text).expect("write the scene");
+    let src = Source::new("scenes/tip.scene.ron", text);
+    let out = match eom_gen::model::scene::check_in(&src, &root) {
+        Ok(c) => format!("valid\n{}", c.render_warnings()),
+        Err(report) => {
+            assert!(
+                report.diagnostics.iter().all(|d| d.span.is_some()),
+                "every diagnostic has a location"
+            );
+            report.to_string()
+        }
+    };
+    let _ = std::fs::remove_dir_all(&root);
+    out
+}
+
+#[test]
+fn base_scene_is_valid() {
+    assert_eq!(diagnose_scene(&[]), "valid\n");
+}
+
+macro_rules! pin_scene {
+    ($name:ident, $($from:expr => $to:expr),+ $(,)?) => {
+        #[test]
+        fn $name() {
+            insta::assert_snapshot!(diagnose_scene(&[$(($from, $to)),+]));
+        }
+    };
+}
+
+pin_scene!(scene_unknown_field, "fixed: [\"g\"]" => "fixd: [\"g\"]");
+pin_scene!(scene_missing_model, "../two_link.ron" => "../two_lnk.ron");
+pin_scene!(scene_model_with_errors, "../two_link.ron" => "../broken.ron");
+pin_scene!(scene_model_is_a_scene, "../two_link.ron" => "tip.scene.ron");
+pin_scene!(scene_unknown_lock_joint, "(joint: \"j1\", at" => "(joint: \"j11\", at");
+pin_scene!(scene_wrong_number_of_lock_values, "at: [\"l/3\"]" => "at: [0.1, 0.2]");
+pin_scene!(scene_unknown_name_in_lock_value, "at: [\"l/3\"]" => "at: [\"L/3\"]");
+pin_scene!(scene_lock_joint_with_spring, "(joint: \"j1\", at: [\"l/3\"])" => "(joint: \"j2\")");
+pin_scene!(scene_lock_twice, "(joint: \"j1\", at: [\"l/3\"])" => "(joint: \"j1\"), (joint: \"j1\", at: [0])");
+pin_scene!(scene_unknown_parameter, "fixed: [\"g\"]" => "fixed: [\"gg\"]");
+pin_scene!(scene_fixed_and_tunable, "fixed: [\"g\"]" => "fixed: [\"g\", \"m\"]");
+pin_scene!(scene_unknown_marker, "marker: \"tip\"" => "marker: \"tpi\"");
+pin_scene!(scene_marker_on_body_without_markers, "body: \"link2\"" => "body: \"link1\"");
+pin_scene!(scene_name_not_identifier, "\"two_link_tip\"" => "\"two-link tip\"");
+pin_scene!(
+    scene_every_error_at_once,
+    "\"two_link_tip\"" => "\"two-link tip\"",
+    "marker: \"tip\"" => "marker: \"tpi\"",
+    "JointReaction(joint: \"j1\")" => "JointReaction(joint: \"j3\")",
+    "(joint: \"j1\", at: [\"l/3\"])" => "(joint: \"j2\", at: [\"L/3\"])",
+    "fixed: [\"g\"]" => "fixed: [\"g\", \"m\", \"k\"]",
+);

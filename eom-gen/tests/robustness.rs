@@ -4,7 +4,7 @@
 //! values replaced by hostile ones (`inf`, `NaN`, huge exponents, unknown
 //! names, unbalanced brackets).
 
-use eom_gen::model::{Source, check, load};
+use eom_gen::model::{Source, check, load, scene};
 use proptest::prelude::*;
 
 fn bundled() -> Vec<String> {
@@ -17,6 +17,27 @@ fn bundled() -> Vec<String> {
         .into_iter()
         .filter(|p| p.extension().is_some_and(|e| e == "ron"))
         .filter_map(|p| std::fs::read_to_string(p).ok())
+        .collect()
+}
+
+/// The bundled scenes, as (path relative to the repository, text).
+fn bundled_scenes() -> Vec<(String, String)> {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/scenes");
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .map(|d| {
+            d.filter_map(|e| e.ok())
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .filter(|n| n.ends_with(".scene.ron"))
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    names
+        .into_iter()
+        .filter_map(|n| {
+            let text = std::fs::read_to_string(format!("{dir}/{n}")).ok()?;
+            Some((format!("models/scenes/{n}"), text))
+        })
         .collect()
 }
 
@@ -156,6 +177,33 @@ proptest! {
     }
 
     #[test]
+    fn mutated_scenes_never_panic_and_errors_have_locations(
+        which in any::<usize>(),
+        mutations in proptest::collection::vec(mutation(), 1..4),
+    ) {
+        let scenes = bundled_scenes();
+        prop_assume!(!scenes.is_empty());
+        let (path, mut text) = scenes[which % scenes.len()].clone();
+        for m in &mutations {
+            text = apply(&text, m);
+        }
+        let root = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
+        match scene::check_in(&Source::new(path, text), root) {
+            Ok(_) => {}
+            Err(report) => {
+                prop_assert!(!report.diagnostics.is_empty());
+                for d in &report.diagnostics {
+                    let span = d
+                        .span
+                        .ok_or_else(|| TestCaseError::fail(format!("no location: {d:?}")))?;
+                    prop_assert!(span.start <= report.source.text.len(), "span {span:?} beyond the text");
+                }
+                let _ = report.to_string();
+            }
+        }
+    }
+
+    #[test]
     fn arbitrary_text_never_panics(text in "\\PC{0,200}") {
         assert_located(&text)?;
     }
@@ -164,6 +212,10 @@ proptest! {
 #[test]
 fn bundled_models_are_found() {
     assert!(bundled().len() >= 11, "models/ holds the bundled models");
+    assert!(
+        bundled_scenes().len() >= 2,
+        "models/scenes/ holds the arm7 scenes"
+    );
 }
 
 #[test]

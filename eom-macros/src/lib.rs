@@ -5,7 +5,8 @@
 //! `file:line:col` diagnostics. The expansion implements `eom_sim::Model`
 //! and `eom_sim::OdeSystem` on the struct, so the crate depends on `eom-sim`.
 //! A `.urdf` file is converted first (`eom_gen::urdf`); URDF errors carry the
-//! URDF's `file:line:col`.
+//! URDF's `file:line:col`. A scene (`.scene.ron`) is applied to its model
+//! (relative to the scene), and both files are tracked.
 
 use proc_macro::TokenStream;
 use proc_macro2::TokenStream as Tokens;
@@ -71,12 +72,25 @@ fn expand(attr: Tokens, item: &ItemStruct) -> syn::Result<Tokens> {
             })?
             .source;
     }
-    let tokens = eom_gen::generate_tokens(&src, &item.ident.to_string()).map_err(|e| {
+    let root = std::path::Path::new(&dir);
+    let tokens = eom_gen::generate_tokens_in(&src, root, &item.ident.to_string()).map_err(|e| {
         syn::Error::new_spanned(&args.path, format!("model `{rel}` is invalid:\n{e}"))
     })?;
     let tracked = full.display().to_string();
+    // A scene's model is tracked too.
+    let model = eom_gen::model::scene::is_scene(&rel, &src.text)
+        .then(|| eom_gen::model::scene::parse(&src).ok())
+        .flatten()
+        .map(|s| {
+            let path = root.join(eom_gen::model::scene::model_path(&rel, &s.model));
+            let path = path.display().to_string();
+            quote!(
+                const _: &[u8] = include_bytes!(#path);
+            )
+        });
     Ok(quote! {
         #tokens
         const _: &[u8] = include_bytes!(#tracked);
+        #model
     })
 }

@@ -10,6 +10,7 @@ pub mod diag;
 pub mod expr;
 pub mod locate;
 pub mod rotation;
+pub mod scene;
 pub mod spec;
 mod validate;
 
@@ -30,8 +31,30 @@ pub struct Checked {
     pub spec: Spec,
     /// Warnings (never errors).
     pub warnings: Vec<Diagnostic>,
-    /// The source, for rendering the warnings.
+    /// The model source, for rendering the warnings.
     pub source: Source,
+    /// The scene applied to the model, if it was read through one.
+    pub scene: Option<scene::SceneInfo>,
+}
+
+impl Checked {
+    /// The model's warnings and then the scene's, rendered.
+    pub fn render_warnings(&self) -> String {
+        let mut out = self.source.render_all(&self.warnings);
+        if let Some(s) = &self.scene {
+            out += &s.source.render_all(&s.warnings);
+        }
+        out
+    }
+
+    /// The text the generated code is derived from, for its content hash:
+    /// the model's, after the scene's when there is one.
+    pub fn content(&self) -> String {
+        match &self.scene {
+            Some(s) => format!("{}\n{}", s.source.text, self.source.text),
+            None => self.source.text.clone(),
+        }
+    }
 }
 
 /// Reads a model file. `path` is kept exactly as given for diagnostics.
@@ -76,8 +99,12 @@ pub fn parse(src: &Source) -> Result<Spec, Report> {
         })
 }
 
-/// Parses and validates model text.
+/// Parses and validates model text; a scene (see [`scene::is_scene`]) is
+/// checked with its model, relative to the working directory.
 pub fn check(src: &Source) -> Result<Checked, Report> {
+    if scene::is_scene(&src.path, &src.text) {
+        return scene::check(src);
+    }
     let spec = parse(src)?;
     check_spec(src, spec)
 }
@@ -92,6 +119,7 @@ pub fn check_spec(src: &Source, spec: Spec) -> Result<Checked, Report> {
             spec,
             warnings: diagnostics,
             source: src.clone(),
+            scene: None,
         }),
         None => Err(Report {
             source: src.clone(),
@@ -100,7 +128,7 @@ pub fn check_spec(src: &Source, spec: Spec) -> Result<Checked, Report> {
     }
 }
 
-/// Loads, parses and validates a model file.
+/// Loads, parses and validates a model file (or a scene file).
 pub fn check_file(path: &str) -> Result<Checked, Report> {
     check(&load(path)?)
 }

@@ -82,7 +82,7 @@ struct Ctx<'a> {
     failed_params: HashSet<String>,
 }
 
-fn is_ident(s: &str) -> bool {
+pub(crate) fn is_ident(s: &str) -> bool {
     let mut chars = s.chars();
     chars
         .next()
@@ -1641,7 +1641,7 @@ pub fn closure_gaps(sys: &System, poses: &[Pose]) -> Vec<Gap> {
 
 /// Grübler–Kutzbach count, planar (λ = 3) if every joint keeps the motion
 /// in planes normal to one direction, else spatial (λ = 6).
-fn grubler(sys: &System, poses: &[Pose]) -> Grubler {
+pub(crate) fn grubler(sys: &System, poses: &[Pose]) -> Grubler {
     let planar_normal = planar_normal(sys, poses);
     let lambda: i64 = if planar_normal.is_some() { 3 } else { 6 };
     let n = (sys.bodies.len() - 1) as i64;

@@ -1,0 +1,661 @@
+//! Scenes: what one simulation needs from a model.
+//!
+//! A scene file names a model and says which outputs to generate, which
+//! joints to hold still (and where), and which parameters to inline
+//! (`fixed`) or keep as runtime fields (`tunable`). [`check`] validates the
+//! model, then the scene against it — every problem of the scene at once,
+//! each at its `file:line:col` in the scene file — and returns the model's
+//! [`System`] with the scene applied, so formulation, emission, the compiled
+//! and interpreted runs, the [`Builder`](crate::Builder) and `#[multibody]`
+//! all see only what the scene asks for. The format is in
+//! `docs/model-format.md` ("Scenes").
+
+use super::diag::{Diagnostic, Report, Source, Span, did_you_mean, list_names};
+use super::expr::Ast;
+use super::locate::{self, Node, Seg, string_contents_start};
+use super::spec::{Num, Output};
+use super::{Checked, ron_diagnostic, ron_options};
+use crate::graph::JointId;
+use crate::system::{
+    ConstraintKind, ForceElement, JointType, Motion, OutputKind, Parameter, Quantity, System,
+};
+use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
+use std::path::{Component, Path, PathBuf};
+
+/// A scene file, as written.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename = "Scene", deny_unknown_fields)]
+pub struct SceneSpec {
+    /// The model file (`.ron` or `.urdf`), relative to the scene file.
+    pub model: String,
+    /// Name of the generated model (default: the model's name).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Free text: what the scene is for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub doc: Option<String>,
+    /// The outputs to generate, replacing the model's (absent: the model's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub outputs: Option<Vec<Output>>,
+    /// Joints held still.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub lock: Vec<Lock>,
+    /// Parameters inlined as constants (overrides the model's `tunable`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fixed: Vec<String>,
+    /// Parameters kept as runtime fields (overrides the model's `tunable`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tunable: Vec<String>,
+}
+
+/// A joint held at fixed coordinates.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Lock {
+    /// The joint.
+    pub joint: String,
+    /// Its coordinates, one per coordinate (parameters allowed);
+    /// default: the joint's `q0`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub at: Option<Vec<Num>>,
+}
+
+/// The scene part of a [`Checked`] model: the scene file and its warnings.
+#[derive(Clone, Debug)]
+pub struct SceneInfo {
+    /// The scene file.
+    pub source: Source,
+    /// The parsed scene.
+    pub spec: SceneSpec,
+    /// Warnings found in the scene file (never errors).
+    pub warnings: Vec<Diagnostic>,
+    /// The model file as read (the scene's directory joined with `model`).
+    pub model_path: PathBuf,
+}
+
+/// True if `path`/`text` is a scene rather than a model: the file name
+/// ends in `.scene.ron`, or the text's top-level value is `Scene(…)`.
+pub fn is_scene(path: &str, text: &str) -> bool {
+    path.ends_with(".scene.ron")
+        || locate::parse(text).is_some_and(|n| n.name.as_deref() == Some("Scene"))
+}
+
+/// Parses scene text: syntax and type errors only.
+pub fn parse(src: &Source) -> Result<SceneSpec, Report> {
+    ron_options()
+        .from_str::<SceneSpec>(&src.text)
+        .map_err(|e| Report {
+            source: src.clone(),
+            diagnostics: vec![ron_diagnostic(src, &e)],
+        })
+}
+
+/// Checks a scene whose path is relative to the working directory: reads
+/// and validates its model, validates the scene against it and applies it.
+pub fn check(src: &Source) -> Result<Checked, Report> {
+    check_in(src, Path::new(""))
+}
+
+/// [`check`] for a scene whose `path` is relative to `root` (as in a
+/// proc macro, where paths are relative to the crate's manifest directory).
+/// Diagnostics name the paths relative to `root`.
+pub fn check_in(src: &Source, root: &Path) -> Result<Checked, Report> {
+    let spec = parse(src)?;
+    let tree = locate::parse(&src.text);
+    let span = |path: &[Seg<'static>]| tree.as_ref().map_or(Span::default(), |r| r.span_of(path));
+    let shown = model_path(&src.path, &spec.model);
+    let fail = |message: String, help: &str| Report {
+        source: src.clone(),
+        diagnostics: vec![Diagnostic::error(span(&[Seg::Field("model")]), message).with_help(help)],
+    };
+    let text = std::fs::read(root.join(&shown)).map_err(|e| {
+        fail(
+            format!(
+                "cannot read model `{}` (`{}`): {e}",
+                spec.model,
+                shown.display()
+            ),
+            "`model` is the path of a `.ron` model or `.urdf` file, relative to this scene file",
+        )
+    })?;
+    let shown_str = shown.display().to_string();
+    let text = String::from_utf8_lossy(&text).into_owned();
+    if is_scene(&shown_str, &text) {
+        return Err(fail(
+            format!("model `{}` is itself a scene", spec.model),
+            "a scene names a model file; copy what the other scene selects into this one",
+        ));
+    }
+    let model_src = if crate::urdf::is_urdf(&shown_str) {
+        crate::urdf::convert(&Source::new(shown_str.clone(), text))?.source
+    } else {
+        Source::new(shown_str, text)
+    };
+    let mut checked = super::check(&model_src)?;
+    let mut cx = Ctx {
+        root: tree.as_ref(),
+        src,
+        diags: Vec::new(),
+    };
+    cx.apply(&spec, &mut checked);
+    let mut diags = cx.diags;
+    diags.sort_by_key(|d| (d.span.map(|s| s.start), d.severity));
+    if diags.iter().any(Diagnostic::is_error) {
+        return Err(Report {
+            source: src.clone(),
+            diagnostics: diags,
+        });
+    }
+    checked.scene = Some(SceneInfo {
+        source: src.clone(),
+        spec,
+        warnings: diags,
+        model_path: shown,
+    });
+    Ok(checked)
+}
+
+/// The model's path as seen from the working directory: the scene's
+/// directory joined with `model`, with `.` and `dir/..` removed.
+pub fn model_path(scene: &str, model: &str) -> PathBuf {
+    let joined = Path::new(scene)
+        .parent()
+        .unwrap_or(Path::new(""))
+        .join(model);
+    let mut out: Vec<Component<'_>> = Vec::new();
+    for c in joined.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir if matches!(out.last(), Some(Component::Normal(_))) => {
+                out.pop();
+            }
+            c => out.push(c),
+        }
+    }
+    out.iter().collect()
+}
+
+struct Ctx<'a> {
+    root: Option<&'a Node>,
+    src: &'a Source,
+    diags: Vec<Diagnostic>,
+}
+
+type Path0 = Vec<Seg<'static>>;
+
+fn f(name: &'static str) -> Seg<'static> {
+    Seg::Field(name)
+}
+
+fn at(path: &[Seg<'static>], more: &[Seg<'static>]) -> Path0 {
+    path.iter().chain(more).copied().collect()
+}
+
+fn suggest<'n>(name: &str, names: impl Iterator<Item = &'n str> + Clone, what: &str) -> String {
+    match did_you_mean(name, names.clone()) {
+        Some(best) => format!("did you mean `{best}`?"),
+        None => format!("{what} are {}", list_names(names)),
+    }
+}
+
+impl Ctx<'_> {
+    fn span(&self, path: &[Seg<'static>]) -> Span {
+        self.root.map_or(Span::default(), |r| r.span_of(path))
+    }
+
+    fn error(&mut self, path: &[Seg<'static>], message: String, help: impl Into<String>) {
+        let d = Diagnostic::error(self.span(path), message).with_help(help);
+        self.diags.push(d);
+    }
+
+    fn warning(&mut self, path: &[Seg<'static>], message: String, help: impl Into<String>) {
+        let d = Diagnostic::warning(self.span(path), message).with_help(help);
+        self.diags.push(d);
+    }
+
+    /// Validates `scene` against the checked model and applies it; on any
+    /// error the model is left in an unspecified state.
+    fn apply(&mut self, scene: &SceneSpec, checked: &mut Checked) {
+        let sys = &mut checked.system;
+        if let Some(name) = &scene.name {
+            if super::validate::is_ident(name) {
+                sys.name = name.clone();
+                checked.spec.name = name.clone();
+            } else {
+                self.error(
+                    &[f("name")],
+                    format!("scene name `{name}` is not an identifier"),
+                    "generated code is named after it: use letters, digits and `_`",
+                );
+            }
+        }
+        self.parameters(scene, sys);
+        if let Some(outputs) = &scene.outputs
+            && let Some(kinds) = self.outputs(outputs, sys)
+        {
+            sys.outputs = kinds;
+            checked.spec.outputs = outputs.clone();
+        }
+        self.locks(scene, sys);
+        for lock in &scene.lock {
+            if let Some(j) = checked
+                .spec
+                .joints
+                .iter_mut()
+                .find(|j| j.name == lock.joint)
+            {
+                j.locked = true;
+                if let Some(values) = &lock.at {
+                    j.q0 = Some(values.clone());
+                }
+            }
+        }
+        for p in &mut checked.spec.parameters {
+            if let Some(sp) = sys.parameters.iter().find(|x| x.name == p.name) {
+                p.tunable = sp.tunable;
+            }
+        }
+    }
+
+    fn parameters(&mut self, scene: &SceneSpec, sys: &mut System) {
+        let mut seen: HashSet<&str> = HashSet::new();
+        let lists = [
+            (&scene.fixed, "fixed", false),
+            (&scene.tunable, "tunable", true),
+        ];
+        for (list, field, tunable) in lists {
+            for (k, name) in list.iter().enumerate() {
+                let path = [f(field), Seg::Index(k)];
+                if !seen.insert(name) {
+                    let both = scene.fixed.contains(name) && scene.tunable.contains(name);
+                    self.error(
+                        &path,
+                        if both {
+                            format!("parameter `{name}` is both fixed and tunable")
+                        } else {
+                            format!("parameter `{name}` is listed twice")
+                        },
+                        if both {
+                            "a parameter is either inlined (`fixed`) or a runtime field (`tunable`): remove it from one list"
+                        } else {
+                            "remove one of them"
+                        },
+                    );
+                    continue;
+                }
+                let Some(p) = sys.parameters.iter_mut().find(|p| p.name == *name) else {
+                    let names = sys.parameters.iter().map(|p| p.name.as_str());
+                    let help = suggest(name, names, "the model's parameters");
+                    self.error(&path, format!("unknown parameter `{name}`"), help);
+                    continue;
+                };
+                if tunable && !p.tunable && !matches!(p.value.expr, Ast::Num(_)) {
+                    let message = format!(
+                        "parameter `{name}` is given by an expression in the model and becomes tunable"
+                    );
+                    self.warning(
+                        &path,
+                        message,
+                        "its default is the expression's value; at run time it is set directly",
+                    );
+                }
+                p.tunable = tunable;
+            }
+        }
+    }
+
+    fn outputs(&mut self, outputs: &[Output], sys: &System) -> Option<Vec<OutputKind>> {
+        let mut kinds = Vec::new();
+        let mut ok = true;
+        for (k, o) in outputs.iter().enumerate() {
+            let path = [f("outputs"), Seg::Index(k)];
+            let kind = match o {
+                Output::Position { body, marker } | Output::Velocity { body, marker } => {
+                    self.marker(sys, body, marker, &path).map(|(b, m)| match o {
+                        Output::Position { .. } => OutputKind::Position(b, m),
+                        _ => OutputKind::Velocity(b, m),
+                    })
+                }
+                Output::JointReaction { joint } => self
+                    .joint(sys, joint, &at(&path, &[f("joint")]))
+                    .map(OutputKind::JointReaction),
+                Output::Energy => Some(OutputKind::Energy),
+                Output::Momentum => Some(OutputKind::Momentum),
+            };
+            match kind {
+                Some(kind) if kinds.contains(&kind) => self.warning(
+                    &path,
+                    "this output is requested twice".into(),
+                    "remove one of them",
+                ),
+                Some(kind) => kinds.push(kind),
+                None => ok = false,
+            }
+        }
+        ok.then_some(kinds)
+    }
+
+    fn marker(
+        &mut self,
+        sys: &System,
+        body: &str,
+        marker: &str,
+        path: &[Seg<'static>],
+    ) -> Option<(usize, usize)> {
+        let Some(b) = sys.body_id(body) else {
+            let names = sys.bodies.iter().map(|b| b.name.as_str());
+            let help = suggest(body, names, "bodies");
+            self.error(
+                &at(path, &[f("body")]),
+                format!("unknown output body `{body}`"),
+                help,
+            );
+            return None;
+        };
+        let markers = &sys.bodies[b].markers;
+        match markers.iter().position(|m| m.name == marker) {
+            Some(m) => Some((b, m)),
+            None => {
+                let names = markers.iter().map(|m| m.name.as_str());
+                let help = match did_you_mean(marker, names.clone()) {
+                    Some(best) => format!("did you mean `{best}`?"),
+                    None if markers.is_empty() => format!(
+                        "body `{body}` has no markers: add `markers: [(name: \"{marker}\", position: (x, y, z))]` to it in the model"
+                    ),
+                    None => format!("its markers are {}", list_names(names)),
+                };
+                self.error(
+                    &at(path, &[f("marker")]),
+                    format!("body `{body}` has no marker `{marker}`"),
+                    help,
+                );
+                None
+            }
+        }
+    }
+
+    fn joint(&mut self, sys: &System, name: &str, path: &[Seg<'static>]) -> Option<JointId> {
+        let found = sys.joint_id(name);
+        if found.is_none() {
+            let names = sys.joints.iter().map(|j| j.name.as_str());
+            let help = suggest(name, names, "joints");
+            self.error(path, format!("unknown joint `{name}`"), help);
+        }
+        found
+    }
+
+    fn locks(&mut self, scene: &SceneSpec, sys: &mut System) {
+        let mut seen: HashSet<&str> = HashSet::new();
+        let mut locked: Vec<JointId> = Vec::new();
+        for (k, lock) in scene.lock.iter().enumerate() {
+            let path = [f("lock"), Seg::Index(k)];
+            let jpath = at(&path, &[f("joint")]);
+            let Some(j) = self.joint(sys, &lock.joint, &jpath) else {
+                continue;
+            };
+            if !seen.insert(&lock.joint) {
+                self.error(
+                    &jpath,
+                    format!("joint `{}` is locked twice", lock.joint),
+                    "remove one of the two entries",
+                );
+                continue;
+            }
+            let joint = &sys.joints[j];
+            let problem = match joint.motion {
+                Motion::Cut => Some((
+                    "closes a loop and is cut, so it has no coordinates to lock",
+                    "lock a tree joint of the loop instead, or mark another joint `cut: true` in the model",
+                )),
+                Motion::Prescribed(_) => Some((
+                    "has prescribed motion in the model",
+                    "remove `prescribed` from the model, or leave the joint out of `lock`",
+                )),
+                _ => None,
+            };
+            if let Some((what, help)) = problem {
+                self.error(&jpath, format!("joint `{}` {what}", lock.joint), help);
+                continue;
+            }
+            if joint.kind.nq() == 0 {
+                self.warning(
+                    &jpath,
+                    format!("joint `{}` is fixed: there is nothing to lock", lock.joint),
+                    "remove it from `lock`",
+                );
+                continue;
+            }
+            if let Some(values) = &lock.at
+                && let Some(q0) = self.values(values, &at(&path, &[f("at")]), j, sys)
+            {
+                sys.joints[j].q0 = q0;
+            }
+            locked.push(j);
+        }
+        for &j in &locked {
+            self.uses_of_locked(scene, sys, j);
+        }
+        for &j in &locked {
+            sys.joints[j].motion = Motion::Locked;
+        }
+        renumber(sys);
+        let poses = super::validate::initial_poses(sys);
+        sys.grubler = super::validate::grubler(sys, &poses);
+    }
+
+    /// The `at` values of a lock: one per coordinate, parameters only,
+    /// unit quaternions for spherical and free joints.
+    fn values(
+        &mut self,
+        values: &[Num],
+        path: &[Seg<'static>],
+        j: JointId,
+        sys: &System,
+    ) -> Option<Vec<Quantity>> {
+        let joint = &sys.joints[j];
+        let nq = joint.kind.nq();
+        if values.len() != nq {
+            self.error(
+                path,
+                format!(
+                    "joint `{}` has {nq} coordinate(s) but `at` has {} value(s)",
+                    joint.name,
+                    values.len()
+                ),
+                format!(
+                    "give one value per coordinate: {}",
+                    list_names(joint.coordinate_names.iter().map(String::as_str))
+                ),
+            );
+            return None;
+        }
+        let mut out = Vec::new();
+        for (k, v) in values.iter().enumerate() {
+            out.push(self.quantity(v, &at(path, &[Seg::Index(k)]), sys));
+        }
+        let out: Vec<Quantity> = out.into_iter().collect::<Option<_>>()?;
+        let quaternion_at = match joint.kind {
+            JointType::Spherical => Some(0),
+            JointType::Free => Some(3),
+            _ => None,
+        };
+        if let Some(k) = quaternion_at {
+            let norm = out[k..k + 4]
+                .iter()
+                .map(|q| q.value * q.value)
+                .sum::<f64>()
+                .sqrt();
+            if (norm - 1.0).abs() > 1e-9 {
+                self.error(
+                    &at(path, &[Seg::Index(k)]),
+                    format!(
+                        "quaternion of locked joint `{}` has norm {norm:.12}, not 1",
+                        joint.name
+                    ),
+                    "write a unit quaternion (w, x, y, z), e.g. (1, 0, 0, 0)",
+                );
+                return None;
+            }
+        }
+        Some(out)
+    }
+
+    /// A number or expression over the model's parameters.
+    fn quantity(&mut self, num: &Num, path: &[Seg<'static>], sys: &System) -> Option<Quantity> {
+        let span = self.span(path);
+        let (expr, base) = match num {
+            Num::Value(v) => (Ast::Num(*v), span.start),
+            Num::Expr(text) => {
+                let base = string_contents_start(&self.src.text, span);
+                match Ast::parse(text) {
+                    Ok(ast) => (ast, base),
+                    Err(e) => {
+                        let at = Span::new(base + e.offset, base + e.offset + 1);
+                        self.diags.push(
+                            Diagnostic::error(at, format!("in expression `{text}`: {}", e.message))
+                                .with_help(e.help),
+                        );
+                        return None;
+                    }
+                }
+            }
+        };
+        let value = |n: &str| -> Option<f64> {
+            sys.parameters
+                .iter()
+                .find(|p| p.name == n)
+                .map(|p| p.value.value)
+        };
+        let mut ok = true;
+        for (name, offset) in expr.names() {
+            if name == "pi" || value(name).is_some() {
+                continue;
+            }
+            ok = false;
+            let names = sys.parameters.iter().map(|p: &Parameter| p.name.as_str());
+            let help = match did_you_mean(name, names.clone()) {
+                Some(best) => format!("did you mean `{best}`?"),
+                None => format!(
+                    "a locked position may use the model's parameters and `pi`; parameters: {}",
+                    list_names(names)
+                ),
+            };
+            let at = Span::new(base + offset, base + offset + name.len());
+            self.diags.push(
+                Diagnostic::error(at, format!("unknown name `{name}` in expression"))
+                    .with_help(help),
+            );
+        }
+        if !ok {
+            return None;
+        }
+        match expr.eval(&value) {
+            Ok(v) => Some(Quantity {
+                expr,
+                value: v,
+                span,
+            }),
+            Err(_) => {
+                self.error(
+                    path,
+                    "this value is not a finite number at the default parameters".into(),
+                    "check for division by zero, `sqrt` or `ln` of a negative value",
+                );
+                None
+            }
+        }
+    }
+
+    /// Reports forces, constraints and outputs of the model that need the
+    /// coordinates of joint `j`, which the scene locks.
+    fn uses_of_locked(&mut self, scene: &SceneSpec, sys: &System, j: JointId) {
+        let joint = &sys.joints[j];
+        let k = scene
+            .lock
+            .iter()
+            .position(|l| l.joint == joint.name)
+            .unwrap_or(0);
+        let path = [f("lock"), Seg::Index(k), f("joint")];
+        let names: HashSet<&str> = joint
+            .coordinate_names
+            .iter()
+            .chain(&joint.speed_names)
+            .map(String::as_str)
+            .collect();
+        let mut users: Vec<String> = Vec::new();
+        for force in &sys.forces {
+            let acts_on = match &force.element {
+                ForceElement::JointSpringDamper { joint, .. }
+                | ForceElement::Actuator { joint, .. } => *joint == j,
+                ForceElement::JointForce { joint, values } => {
+                    *joint == j
+                        || values
+                            .iter()
+                            .any(|v| v.expr.names().iter().any(|(n, _)| names.contains(n)))
+                }
+                ForceElement::SpringDamper { .. } => false,
+            };
+            if acts_on {
+                users.push(format!("force `{}`", force.name));
+            }
+        }
+        for c in &sys.constraints {
+            if let ConstraintKind::Holonomic(q) = &c.kind
+                && q.expr.names().iter().any(|(n, _)| names.contains(n))
+            {
+                users.push(format!("constraint `{}`", c.name));
+            }
+        }
+        if !users.is_empty() {
+            self.error(
+                &path,
+                format!(
+                    "joint `{}` cannot be locked: the model's {} need(s) its coordinates",
+                    joint.name,
+                    users.join(", ")
+                ),
+                "a locked joint has no coordinates; lock another joint, or remove these from the model",
+            );
+        }
+    }
+}
+
+/// Numbers the coordinates along the tree again after a change of motions.
+fn renumber(sys: &mut System) {
+    let (mut q, mut u) = (0, 0);
+    for &j in sys.graph.tree_joints() {
+        let joint = &mut sys.joints[j];
+        joint.q_index = q;
+        joint.u_index = u;
+        if joint.motion == Motion::Free {
+            q += joint.kind.nq();
+            u += joint.kind.nu();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn model_paths_are_relative_to_the_scene() {
+        assert_eq!(
+            model_path("models/scenes/a.scene.ron", "../arm7.ron"),
+            PathBuf::from("models/arm7.ron")
+        );
+        assert_eq!(model_path("a.scene.ron", "./m.ron"), PathBuf::from("m.ron"));
+        assert_eq!(
+            model_path("../x/a.scene.ron", "../../m.ron"),
+            PathBuf::from("../../m.ron")
+        );
+    }
+
+    #[test]
+    fn scenes_are_recognised_by_name_or_content() {
+        assert!(is_scene("a.scene.ron", ""));
+        assert!(is_scene("a.ron", "// c\nScene(model: \"m.ron\")"));
+        assert!(!is_scene("a.ron", "Model(name: \"m\")"));
+    }
+}

@@ -1,0 +1,225 @@
+//! Scenes: a scene selects outputs, locks joints and overrides which
+//! parameters are inlined. The two arm7 scenes in `models/scenes/` are
+//! pinned here: the end-effector scene is strictly cheaper than the full
+//! one, and its forward dynamics is the full model's restricted to the
+//! free joints (rows and columns of `M` and rows of `b` of the free speeds,
+//! with the locked joints at their lock values and at rest).
+
+use eom_gen::interpret::{Point, evaluate, run};
+use eom_gen::mech::Numeric;
+use eom_gen::model::{Source, check};
+use eom_gen::{Generated, generate, generate_file};
+use nalgebra::{DMatrix, DVector};
+
+const MODELS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../models");
+
+fn scene(name: &str) -> Generated {
+    let path = format!("{MODELS}/scenes/{name}.scene.ron");
+    generate_file(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
+}
+
+fn total(p: &Option<eom_gen::sym::Program>) -> usize {
+    p.as_ref().map_or(0, |p| p.op_count().total())
+}
+
+#[test]
+fn end_effector_scene_is_strictly_cheaper_than_the_full_scene() {
+    let (full, ee) = (scene("arm7_full"), scene("arm7_ee"));
+    let (ff, fe) = (&full.formulation, &ee.formulation);
+    assert_eq!(full.checked.system.nu(), 7);
+    assert_eq!(ee.checked.system.nu(), 5);
+    let (a, b) = (total(&ff.forward_dynamics), total(&fe.forward_dynamics));
+    assert!(
+        b < a,
+        "forward dynamics: got {b} ops with j5, j7 locked, want < {a}"
+    );
+    let (a, b) = (total(&ff.outputs), total(&fe.outputs));
+    assert!(
+        b < a,
+        "outputs: got {b} ops for the tip position, want < {a}"
+    );
+    let (a, b) = (total(&ff.mass_matrix), total(&fe.mass_matrix));
+    assert!(b < a, "mass matrix: got {b}, want < {a}");
+    let names = |g: &Generated| -> Vec<String> {
+        g.formulation
+            .outputs
+            .as_ref()
+            .map(|p| p.outputs.iter().map(|(n, _)| n.clone()).collect())
+            .unwrap_or_default()
+    };
+    assert_eq!(names(&ee), ["link7_tip_x", "link7_tip_y", "link7_tip_z"]);
+    assert_eq!(names(&full).len(), 6 + 7 * 6, "tip x, v and 7 reactions");
+}
+
+/// Solves `A x = b` (small dense systems).
+fn solve(a: Vec<Vec<f64>>, b: Vec<f64>) -> Vec<f64> {
+    let n = b.len();
+    let m = DMatrix::from_fn(n, n, |i, j| a[i][j]);
+    let x = m
+        .lu()
+        .solve(&DVector::from_vec(b))
+        .expect("mass matrix is regular");
+    x.iter().copied().collect()
+}
+
+#[test]
+fn locked_scene_forward_dynamics_is_the_full_models_restricted_to_the_free_joints() {
+    let ee = scene("arm7_ee");
+    let full = eom_gen::check_file(&format!("{MODELS}/arm7.ron")).expect("arm7 is valid");
+    let numeric = Numeric::new(&full.system).expect("numeric model");
+    // Free speeds of the scene in the full model: q1, q2, q3, q4, q6.
+    let free = [0usize, 1, 2, 3, 5];
+    let sys = &ee.checked.system;
+    assert_eq!(sys.coordinate_names(), ["q1", "q2", "q3", "q4", "q6"]);
+    let mut seed = 7u64;
+    let mut rnd = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    for _ in 0..20 {
+        let q: Vec<f64> = (0..5).map(|_| 3.0 * rnd()).collect();
+        let u: Vec<f64> = (0..5).map(|_| 2.0 * rnd()).collect();
+        let tau: Vec<f64> = (0..5).map(|_| rnd()).collect();
+        // The full model with j5 and j7 at their lock values (0) and at rest.
+        let mut qf = vec![0.0; 7];
+        let mut uf = vec![0.0; 7];
+        for (k, &i) in free.iter().enumerate() {
+            qf[i] = q[k];
+            uf[i] = u[k];
+        }
+        let terms = numeric.terms(&qf, &uf, 0.0, &[]).expect("terms");
+        let m: Vec<Vec<f64>> = free
+            .iter()
+            .map(|&i| free.iter().map(|&j| terms.mass_matrix[i][j]).collect())
+            .collect();
+        let rhs: Vec<f64> = free
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| tau[k] - terms.bias[i])
+            .collect();
+        let want = solve(m, rhs);
+        let point = Point {
+            sys,
+            q: &q,
+            u: &u,
+            udot: &[],
+            tau: &tau,
+            inputs: &[],
+            params: &[],
+            t: 0.0,
+        };
+        let got = evaluate(&ee.formulation, &point).udot;
+        for k in 0..5 {
+            assert!(
+                (got[k] - want[k]).abs() <= 1e-9 * (1.0 + want[k].abs()),
+                "u̇[{k}] at q = {q:?}: got {} want {}",
+                got[k],
+                want[k]
+            );
+        }
+        // The tip position agrees with the full model's kinematics too.
+        let tip = run(ee.formulation.outputs.as_ref().expect("outputs"), &point);
+        let link7 = full.system.body_id("link7").expect("link7");
+        let (x, _) = numeric
+            .point(link7, [0.0, 0.0, 0.3], &qf, &uf, 0.0)
+            .expect("point");
+        for a in 0..3 {
+            assert!(
+                (tip[a] - x[a]).abs() < 1e-12,
+                "tip[{a}]: got {} want {}",
+                tip[a],
+                x[a]
+            );
+        }
+    }
+}
+
+#[test]
+fn a_lock_without_at_holds_the_joint_at_its_initial_value() {
+    let text = r#"Scene(model: "../arm7.ron", lock: [(joint: "j7")])"#;
+    let c = check(&Source::new(format!("{MODELS}/scenes/x.scene.ron"), text)).expect("valid");
+    let j7 = &c.system.joints[c.system.joint_id("j7").expect("j7")];
+    assert_eq!(j7.motion, eom_gen::system::Motion::Locked);
+    assert_eq!(j7.q0[0].value, 0.05, "arm7's q0 of j7");
+    assert_eq!(c.system.nq(), 6);
+    assert_eq!(c.system.name, "arm7", "the model's name by default");
+    // Coordinates after the locked joint are numbered again.
+    assert_eq!(c.system.q0().len(), 6);
+}
+
+#[test]
+fn tunable_and_fixed_override_the_model() {
+    let path = format!("{MODELS}/scenes/pendulum_tunable.scene.ron");
+    let text = r#"Scene(model: "../pendulum.ron", name: "pendulum_l", tunable: ["l", "m"])"#;
+    let g = generate(&Source::new(path.clone(), text)).expect("valid scene");
+    assert!(
+        g.source.contains("pub l: f64") && g.source.contains("pub m: f64"),
+        "tunable parameters are fields of the parameter struct"
+    );
+    assert!(g.source.contains("pub struct PendulumL"));
+    let params = &g.checked.system.parameters;
+    assert!(
+        params
+            .iter()
+            .find(|p| p.name == "g")
+            .is_some_and(|p| !p.tunable)
+    );
+    // And back: a parameter the model makes tunable is inlined by `fixed`,
+    // giving the same code as the model with `tunable: false`.
+    let dir = std::env::temp_dir().join(format!("eom-scene-fixed-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let pendulum = std::fs::read_to_string(format!("{MODELS}/pendulum.ron")).expect("pendulum");
+    let tunable = pendulum.replacen(
+        "(name: \"l\", value: 1.0",
+        "(name: \"l\", value: 1.0, tunable: true",
+        1,
+    );
+    assert_ne!(tunable, pendulum, "test setup: `l` made tunable");
+    let model_path = dir.join("p.ron");
+    std::fs::write(&model_path, &tunable).expect("write");
+    let scene_path = dir.join("p.scene.ron").display().to_string();
+    let fixed = generate(&Source::new(
+        scene_path,
+        r#"Scene(model: "p.ron", fixed: ["l"])"#,
+    ))
+    .expect("valid scene");
+    let as_tunable = generate_file(&model_path.display().to_string()).expect("model");
+    let as_fixed = generate_file(&format!("{MODELS}/pendulum.ron")).expect("pendulum");
+    assert!(as_tunable.source.contains("pub l: f64"));
+    assert!(!fixed.source.contains("pub l: f64"));
+    let ops = |g: &Generated| total(&g.formulation.forward_dynamics);
+    assert_eq!(ops(&fixed), ops(&as_fixed), "inlined again");
+    assert!(ops(&fixed) <= ops(&as_tunable));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_content_hash_covers_scene_and_model() {
+    let a = scene("arm7_ee");
+    let text =
+        std::fs::read_to_string(format!("{MODELS}/scenes/arm7_ee.scene.ron")).expect("scene");
+    let b = generate(&Source::new(
+        format!("{MODELS}/scenes/arm7_ee.scene.ron"),
+        text.replace("doc: \"", "doc: \"(edited) "),
+    ))
+    .expect("valid");
+    assert_ne!(a.source, b.source, "an edit of the scene changes the hash");
+}
+
+#[test]
+fn builder_takes_scene_files() {
+    let dir = std::env::temp_dir().join(format!("eom-scene-builder-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let written = eom_gen::Builder::new()
+        .model(format!("{MODELS}/scenes/arm7_ee.scene.ron"))
+        .out_dir(&dir)
+        .compile()
+        .expect("builds");
+    assert_eq!(written, [dir.join("arm7_ee.rs")]);
+    let text = std::fs::read_to_string(&written[0]).expect("written");
+    assert!(text.contains("pub struct Arm7Ee"));
+    assert!(text.contains("Locked joints: `j5`, `j7`"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
