@@ -40,6 +40,7 @@ fn macro_scene_matches_the_interpreted_scene() {
         tau: &tau,
         inputs: &[],
         params: &[],
+        multipliers: &[],
         t: 0.0,
     };
     let want = evaluate(&g.formulation, &point).udot;

@@ -108,6 +108,7 @@ fn locked_scene_forward_dynamics_is_the_full_models_restricted_to_the_free_joint
             tau: &tau,
             inputs: &[],
             params: &[],
+            multipliers: &[],
             t: 0.0,
         };
         let got = evaluate(&ee.formulation, &point).udot;
