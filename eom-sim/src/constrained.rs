@@ -29,7 +29,7 @@
 use crate::model::{Model, Vector};
 use crate::{OdeSystem, SMatrix};
 pub use nalgebra::{DMatrix, DVector};
-use std::cell::{Cell, RefCell};
+use std::cell::RefCell;
 
 /// A generated model with constraint equations (see the module docs).
 pub trait ConstrainedModel: Model {
@@ -262,6 +262,41 @@ pub struct ConstraintStats {
     pub min_rank: usize,
     /// Changes of the coordinate partition ([`Method::Partitioning`]).
     pub repartitions: usize,
+}
+
+/// [`ConstraintStats`] gathered at the accepted states of a run.
+struct Recorder(RefCell<ConstraintStats>);
+
+impl Recorder {
+    fn new() -> Self {
+        Recorder(RefCell::new(ConstraintStats {
+            min_rank: usize::MAX,
+            ..ConstraintStats::default()
+        }))
+    }
+
+    /// Residuals of the first `nh` (holonomic) rows and of all speed rows,
+    /// and the rank of `J`, at an accepted state.
+    fn record(&self, nh: usize, c: &ConstraintValues) {
+        let (_, rank) = min_norm_solve(&c.jacobian, &DVector::zeros(c.jacobian.nrows()));
+        let mut s = self.0.borrow_mut();
+        s.max_position_residual = s.max_position_residual.max(max_abs(c.phi.iter().take(nh)));
+        s.max_velocity_residual = s.max_velocity_residual.max(max_abs(c.phidot.iter()));
+        s.rank = rank;
+        s.min_rank = s.min_rank.min(rank);
+    }
+
+    fn stats(&self) -> ConstraintStats {
+        let mut s = self.0.borrow().clone();
+        if s.min_rank == usize::MAX {
+            s.min_rank = s.rank;
+        }
+        s
+    }
+
+    fn repartitioned(&self) {
+        self.0.borrow_mut().repartitions += 1;
+    }
 }
 
 /// Minimum-norm solution of `a x = r` via the SVD, and the numerical rank
@@ -586,9 +621,8 @@ fn pinv_lambda(schur: &DMatrix<f64>, rhs: &DVector<f64>) -> Option<((), DVector<
 pub struct ConstrainedSystem<'a, D: ?Sized> {
     d: &'a D,
     method: Method,
-    stats: RefCell<ConstraintStats>,
+    stats: Recorder,
     partitions: RefCell<Option<(Partition, Partition)>>,
-    started: Cell<bool>,
     work: RefCell<Workspace>,
 }
 
@@ -599,23 +633,15 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
         ConstrainedSystem {
             d,
             method,
-            stats: RefCell::new(ConstraintStats {
-                min_rank: usize::MAX,
-                ..ConstraintStats::default()
-            }),
+            stats: Recorder::new(),
             partitions: RefCell::new(None),
-            started: Cell::new(false),
             work: RefCell::new(Workspace::new(d.nu(), d.nc())),
         }
     }
 
     /// What was seen along the run so far.
     pub fn stats(&self) -> ConstraintStats {
-        let mut s = self.stats.borrow().clone();
-        if s.min_rank == usize::MAX {
-            s.min_rank = s.rank;
-        }
-        s
+        self.stats.stats()
     }
 
     /// `u̇` and `λ` at a state (with this method's stabilisation).
@@ -637,16 +663,6 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
             gamma -= c.phidot * (2.0 * alpha) + c.phi * (beta * beta);
         }
         accelerations(&m, &-b, &c.jacobian, &gamma).map(|(a, l, _)| (a, l))
-    }
-
-    fn record(&self, c: &ConstraintValues) {
-        let nh = self.d.n_holonomic();
-        let (_, rank) = min_norm_solve(&c.jacobian, &DVector::zeros(c.jacobian.nrows()));
-        let mut s = self.stats.borrow_mut();
-        s.max_position_residual = s.max_position_residual.max(max_abs(c.phi.iter().take(nh)));
-        s.max_velocity_residual = s.max_velocity_residual.max(max_abs(c.phidot.iter()));
-        s.rank = rank;
-        s.min_rank = s.min_rank.min(rank);
     }
 
     /// Minimum-norm Newton steps onto `Φ = 0`, then the speeds onto `Φ̇ = 0`.
@@ -692,7 +708,7 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
         };
         if renew {
             if parts.is_some() {
-                self.stats.borrow_mut().repartitions += 1;
+                self.stats.repartitioned();
             }
             *parts = Some((complete_pivoting(&jh), complete_pivoting(&c.jacobian)));
         }
@@ -753,8 +769,7 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for ConstrainedSystem<'_
         }
         let mut c = ConstraintValues::zeros(self.d.nc(), nu);
         self.d.constraints(t, q, u, &mut c);
-        self.record(&c);
-        self.started.set(true);
+        self.stats.record(self.d.n_holonomic(), &c);
         true
     }
 }
@@ -767,7 +782,7 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for ConstrainedSystem<'_
 /// matrix singular: use a multiplier method for them.
 pub struct Index3System<'a, D: ?Sized> {
     d: &'a D,
-    stats: RefCell<ConstraintStats>,
+    stats: Recorder,
 }
 
 impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
@@ -775,10 +790,7 @@ impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
     pub fn new(d: &'a D) -> Self {
         Index3System {
             d,
-            stats: RefCell::new(ConstraintStats {
-                min_rank: usize::MAX,
-                ..ConstraintStats::default()
-            }),
+            stats: Recorder::new(),
         }
     }
 
@@ -833,11 +845,7 @@ impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
 
     /// What was seen along the run so far.
     pub fn stats(&self) -> ConstraintStats {
-        let mut s = self.stats.borrow().clone();
-        if s.min_rank == usize::MAX {
-            s.min_rank = s.rank;
-        }
-        s
+        self.stats.stats()
     }
 }
 
@@ -887,13 +895,7 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for Index3System<'_, D> 
         d.normalize(&mut y[..nq]);
         let mut c = ConstraintValues::zeros(d.nc(), nu);
         d.constraints(t, &y[..nq], &y[nq..nq + nu], &mut c);
-        let nh = d.n_holonomic();
-        let (_, rank) = min_norm_solve(&c.jacobian, &DVector::zeros(c.jacobian.nrows()));
-        let mut s = self.stats.borrow_mut();
-        s.max_position_residual = s.max_position_residual.max(max_abs(c.phi.iter().take(nh)));
-        s.max_velocity_residual = s.max_velocity_residual.max(max_abs(c.phidot.iter()));
-        s.rank = rank;
-        s.min_rank = s.min_rank.min(rank);
+        self.stats.record(d.n_holonomic(), &c);
         !d.quaternions().is_empty()
     }
 }

@@ -307,18 +307,28 @@ pub fn constraint_body_forces<S: Scalar>(
                 let Some(i) = tree.index_of_body.get(*body).copied().flatten() else {
                     continue;
                 };
-                let r = low.quantity(radius)?;
-                let pose = &k.world[i];
-                let n = pose.e.mul_vec(Vec3::from_f64(unit(axis.unit)));
-                let nz = n.0[2];
-                let s = (S::one() - nz * nz).sqrt();
-                let down = Vec3::new(-nz * n.0[0], -nz * n.0[1], S::one() - nz * n.0[2]);
-                let point = pose.point(low.vec3(center)?) + down.scale(-r / s);
+                let (to_contact, _) = disk_contact(k, i, axis, low.quantity(radius)?);
+                let point = k.world[i].point(low.vec3(center)?) + to_contact;
                 apply(Some(i), point, Vec3::new(sx, sy, contact), Vec3::zero());
             }
         }
     }
     Ok(out)
+}
+
+/// From a disk's centre to its lowest point (world axes), `−R ê`, and
+/// `√(1 − n_z²)` (see [`user_constraints`]); the disk is tree body `i`.
+fn disk_contact<S: Scalar>(
+    k: &Kinematics<S>,
+    i: usize,
+    axis: &crate::system::Axis,
+    r: S,
+) -> (Vec3<S>, S) {
+    let n = k.world[i].e.mul_vec(Vec3::from_f64(unit(axis.unit)));
+    let nz = n.0[2];
+    let s = (S::one() - nz * nz).sqrt();
+    let down = Vec3::new(-nz * n.0[0], -nz * n.0[1], S::one() - nz * n.0[2]);
+    (down.scale(-r / s), s)
 }
 
 /// The model's own constraints (not joints) at the kinematics `k`:
@@ -367,17 +377,12 @@ pub fn user_constraints<S: Scalar>(
                 let Some(i) = tree.index_of_body.get(*body).copied().flatten() else {
                     continue;
                 };
-                let r = low.quantity(radius)?;
                 let centre = low.vec3(center)?;
-                let pose = &k.world[i];
-                let n = pose.e.mul_vec(Vec3::from_f64(unit(axis.unit)));
+                let (to_contact, s) = disk_contact(k, i, axis, low.quantity(radius)?);
                 let (c_pos, c_vel) = ev.point(k, Some(i), centre);
-                let omega = pose.e.mul_vec(k.v[i].w);
-                let nz = n.0[2];
-                let s = (S::one() - nz * nz).sqrt();
-                let down = Vec3::new(-nz * n.0[0], -nz * n.0[1], S::one() - nz * n.0[2]);
-                let to_contact = down.scale(-r / s);
+                let omega = k.world[i].e.mul_vec(k.v[i].w);
                 let slip = c_vel + omega.cross(to_contact);
+                let r = low.quantity(radius)?;
                 holonomic.push((format!("{}.contact", c.name), c_pos.0[2] - r * s));
                 nonholonomic.push((format!("{}.slip_x", c.name), slip.0[0]));
                 nonholonomic.push((format!("{}.slip_y", c.name), slip.0[1]));
