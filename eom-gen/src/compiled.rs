@@ -259,6 +259,10 @@ fn main() {
 }
 "#;
 
+/// The release profile of the cached crates: one codegen unit, so the
+/// generated functions and the loops that call them are optimised together.
+const PROFILE: &str = "[profile.release]\ncodegen-units = 1\n";
+
 /// A model without constraint equations, as a constrained one with none
 /// (so that one simulator template serves both).
 const UNCONSTRAINED: &str = "
@@ -317,7 +321,7 @@ pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, String> {
         "{:016x}",
         fnv1a(
             format!(
-                "{}{}{}{}{}",
+                "{}{}{PROFILE}{}{}{}",
                 c.model,
                 c.main,
                 eom_sim_dependency(),
@@ -340,7 +344,7 @@ pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, String> {
         std::fs::create_dir_all(dir.join("src"))
             .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
         let manifest = format!(
-            "[package]\nname = \"{exe_name}\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n[dependencies]\n{}\n\n[workspace]\n",
+            "[package]\nname = \"{exe_name}\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n[dependencies]\n{}\n\n[workspace]\n\n{PROFILE}",
             eom_sim_dependency()
         );
         for (file, text) in [
