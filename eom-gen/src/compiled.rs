@@ -277,9 +277,11 @@ impl ::eom_sim::ConstrainedModel for MODEL_TYPE {
 }
 ";
 
-/// Builds (once) the cached crate of a model and returns its executable.
-pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<PathBuf, String> {
-    let model = format!(
+/// The `model` module of a cached crate: the generated source, `MODEL`
+/// (its type), `NQ`, `NY = NQ + NU`, `NYC = NY + NC`, and an empty
+/// `ConstrainedModel` impl for a model without constraints.
+pub(crate) fn model_module(name: &str, source: &str, nq: usize, nu: usize) -> String {
+    format!(
         "{source}\npub type MODEL = {};\npub const NQ: usize = {nq};\npub const NY: usize = {};\npub const NYC: usize = NY + <MODEL as ::eom_sim::ConstrainedModel>::NC;\n{}",
         camel(name),
         nq + nu,
@@ -288,7 +290,12 @@ pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<Path
         } else {
             UNCONSTRAINED.replace("MODEL_TYPE", &camel(name))
         }
-    );
+    )
+}
+
+/// Builds (once) the cached crate of a model and returns its executable.
+pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<PathBuf, String> {
+    let model = model_module(name, source, nq, nu);
     build_cached(&CachedCrate {
         prefix: "eom-eval",
         name,

@@ -14,11 +14,13 @@ pub mod graph;
 pub mod interpret;
 pub mod mech;
 pub mod model;
+pub mod plot;
 pub mod summary;
 pub mod sym;
 pub mod system;
 pub mod testkit;
 pub mod urdf;
+pub mod work_precision;
 
 pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;

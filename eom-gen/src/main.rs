@@ -104,26 +104,73 @@ enum Command {
         #[arg(short, long)]
         output: Option<String>,
     },
-    /// Time the compiled functions: `--per-call` gives ns per call of
-    /// forward dynamics, mass matrix and inverse dynamics over random states.
+    /// Measure the compiled model: `--per-call` gives ns per call of
+    /// forward dynamics, mass matrix and inverse dynamics over random states;
+    /// `--work-precision` gives error against CPU time per integrator (and
+    /// constraint solver) over a sweep of tolerances or step sizes;
+    /// `--suite` runs the work-precision sweep on every bundled model.
     Bench {
-        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
-        model: String,
-        /// Per-call cost (the only benchmark so far).
+        /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`); not with `--suite`.
+        model: Option<String>,
+        /// Per-call cost of the generated functions.
         #[arg(long)]
         per_call: bool,
-        /// Random states per repetition.
+        /// Work-precision: error against CPU time over a sweep.
+        #[arg(long)]
+        work_precision: bool,
+        /// Work-precision of every model in `--models`, written to `--out`.
+        #[arg(long)]
+        suite: bool,
+        /// Random states per repetition (`--per-call`).
         #[arg(long, default_value_t = 1024)]
         states: usize,
-        /// Timed repetitions; the median is reported.
+        /// Timed repetitions; the median is reported (`--per-call`).
         #[arg(long, default_value_t = 31)]
         reps: usize,
-        /// Seed of the random states.
+        /// Seed of the random states (`--per-call`).
         #[arg(long, default_value_t = 1)]
         seed: u64,
-        /// Build the timing program with `-C target-cpu=native`.
+        /// Build the timing program with `-C target-cpu=native` (`--per-call`).
         #[arg(long)]
         native: bool,
+        /// Integrators to sweep, comma-separated (default rk4,dopri5,dop853,radau5).
+        #[arg(long, value_delimiter = ',')]
+        integrators: Vec<String>,
+        /// Constraint solvers to sweep for models with constraints
+        /// (default projection,partitioning,multipliers,index3).
+        #[arg(long, value_delimiter = ',')]
+        constraints: Vec<String>,
+        /// End time, s (`--work-precision`; default 10).
+        #[arg(long, allow_hyphen_values = true)]
+        t_end: Option<f64>,
+        /// Tolerances rtol = atol of the adaptive methods, comma-separated
+        /// (default 1e-4,1e-5,…,1e-12).
+        #[arg(long, value_delimiter = ',')]
+        tols: Vec<f64>,
+        /// Fixed-step methods: step t_end/N for N doubling from the first to the second number.
+        #[arg(long, value_delimiter = ',', num_args = 1)]
+        steps: Vec<usize>,
+        /// Tolerance of the reference run (DOP853) and its check (DOPRI5).
+        #[arg(long, default_value_t = 1e-13)]
+        ref_tol: f64,
+        /// Dense-output samples along the path for the path error.
+        #[arg(long, default_value_t = 200)]
+        samples: usize,
+        /// Repeat each timed run until this much CPU time per point, s (at least 3 runs).
+        #[arg(long, default_value_t = 0.2)]
+        min_time: f64,
+        /// Write the points as CSV to this file (`--work-precision`).
+        #[arg(long)]
+        csv: Option<String>,
+        /// Write the log-log work-precision diagram as SVG to this file (`--work-precision`).
+        #[arg(long)]
+        svg: Option<String>,
+        /// The models of `--suite`.
+        #[arg(long, default_value = "models")]
+        models: String,
+        /// Where `--suite` writes `MODEL.csv`, `MODEL.svg` and `suite.md`.
+        #[arg(long, default_value = "bench/results")]
+        out: String,
         /// Print one JSON object instead of the table.
         #[arg(long)]
         json: bool,
@@ -148,12 +195,74 @@ fn main() -> ExitCode {
         Command::Bench {
             model,
             per_call,
+            work_precision,
+            suite,
             states,
             reps,
             seed,
             native,
+            integrators,
+            constraints,
+            t_end,
+            tols,
+            steps,
+            ref_tol,
+            samples,
+            min_time,
+            csv,
+            svg,
+            models,
+            out,
             json,
         } => {
+            let mut wp = eom_gen::work_precision::WpOptions {
+                ref_tol,
+                samples,
+                min_total_s: min_time,
+                ..Default::default()
+            };
+            if !integrators.is_empty() {
+                wp.integrators = integrators;
+            }
+            if !constraints.is_empty() {
+                wp.constraints = constraints;
+            }
+            if let Some(t) = t_end {
+                wp.t_end = t;
+            }
+            if !tols.is_empty() {
+                wp.tols = tols;
+            }
+            match steps.as_slice() {
+                [] => {}
+                [a, b] => wp.fixed_steps = (*a, *b),
+                _ => {
+                    eprintln!("error: --steps takes two numbers, N0,N1");
+                    return ExitCode::from(2);
+                }
+            }
+            if suite {
+                if model.is_some() || per_call || work_precision {
+                    eprintln!(
+                        "error: --suite runs every model in --models; give no MODEL, --per-call or --work-precision"
+                    );
+                    return ExitCode::from(2);
+                }
+                return bench_suite(&models, &out, &wp, t_end.is_some());
+            }
+            let Some(model) = model else {
+                eprintln!(
+                    "error: which model? `eom-gen bench MODEL --per-call|--work-precision`, or `eom-gen bench --suite`"
+                );
+                return ExitCode::from(2);
+            };
+            if work_precision {
+                if per_call {
+                    eprintln!("error: choose one of --per-call and --work-precision");
+                    return ExitCode::from(2);
+                }
+                return bench_work_precision(&model, &wp, csv.as_deref(), svg.as_deref(), json);
+            }
             let o = eom_gen::bench::PerCallOptions {
                 states,
                 reps,
@@ -451,7 +560,7 @@ fn stats(path: &str) -> ExitCode {
 
 fn bench(path: &str, per_call: bool, o: &eom_gen::bench::PerCallOptions, json: bool) -> ExitCode {
     if !per_call {
-        eprintln!("error: say what to measure: --per-call (the only benchmark built so far)");
+        eprintln!("error: say what to measure: --per-call, --work-precision or --suite");
         return ExitCode::from(2);
     }
     if o.states == 0 || o.reps == 0 {
@@ -717,5 +826,208 @@ fn simulate(
             eprintln!("error: {e}");
             ExitCode::from(1)
         }
+    }
+}
+
+/// A progress bar over the points of one sweep (hidden when stderr is not
+/// a terminal).
+fn wp_progress(label: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(0);
+    let style = indicatif::ProgressStyle::with_template(
+        "{prefix} [{bar:30}] {pos}/{len} points, {elapsed} {msg}",
+    )
+    .map(|s| s.progress_chars("=> "))
+    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    bar.set_style(style);
+    bar.set_prefix(label.to_string());
+    bar
+}
+
+fn wp_sweep(
+    g: &eom_gen::Generated,
+    o: &eom_gen::work_precision::WpOptions,
+    bar: &indicatif::ProgressBar,
+) -> Result<eom_gen::work_precision::WorkPrecision, String> {
+    eom_gen::work_precision::run(g, o, &mut |done, total, p| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+        if let Some(p) = p {
+            bar.set_message(format!(
+                "{} {:.0e}: {}",
+                p.integrator,
+                p.setting,
+                p.digits
+                    .map_or_else(|| p.stop.clone(), |d| format!("{d:.1} digits"))
+            ));
+        }
+    })
+}
+
+fn write_file(path: &str, text: &str) -> Result<(), ExitCode> {
+    if let Some(dir) = std::path::Path::new(path).parent()
+        && !dir.as_os_str().is_empty()
+        && let Err(e) = std::fs::create_dir_all(dir)
+    {
+        eprintln!("error: cannot create `{}`: {e}", dir.display());
+        return Err(ExitCode::from(1));
+    }
+    std::fs::write(path, text).map_err(|e| {
+        eprintln!("error: cannot write `{path}`: {e}");
+        ExitCode::from(1)
+    })
+}
+
+fn bench_work_precision(
+    path: &str,
+    o: &eom_gen::work_precision::WpOptions,
+    csv: Option<&str>,
+    svg: Option<&str>,
+    json: bool,
+) -> ExitCode {
+    use eom_gen::work_precision as wp;
+    if let Err(errors) = wp::validate(o) {
+        for e in errors {
+            eprintln!("error: {e}");
+        }
+        return ExitCode::from(2);
+    }
+    let g = match generated(path) {
+        Ok(g) => g,
+        Err(code) => return code,
+    };
+    eprint!("{}", g.checked.render_warnings());
+    let bar = wp_progress(&g.checked.system.name);
+    let result = wp_sweep(&g, o, &bar);
+    bar.finish_and_clear();
+    let w = match result {
+        Ok(w) => w,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    if let Some(f) = csv
+        && let Err(code) = write_file(f, &wp::csv(&w))
+    {
+        return code;
+    }
+    if let Some(f) = svg {
+        match wp::svg(&w) {
+            Ok(text) => {
+                if let Err(code) = write_file(f, &text) {
+                    return code;
+                }
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(1);
+            }
+        }
+    }
+    if json {
+        println!("{}", wp::json(&w));
+    } else {
+        print!("{}", wp::table(&w));
+    }
+    ExitCode::SUCCESS
+}
+
+/// Every model in `dir` (`*.ron`, sorted), swept with its suite settings;
+/// `MODEL.csv`, `MODEL.svg` and a summary `suite.md` in `out`.
+fn bench_suite(
+    dir: &str,
+    out: &str,
+    o: &eom_gen::work_precision::WpOptions,
+    t_end_given: bool,
+) -> ExitCode {
+    use eom_gen::work_precision as wp;
+    let mut models: Vec<std::path::PathBuf> = match std::fs::read_dir(dir) {
+        Ok(entries) => entries
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.extension().is_some_and(|x| x == "ron"))
+            .collect(),
+        Err(e) => {
+            eprintln!("error: cannot read `{dir}`: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    models.sort();
+    let bars = indicatif::MultiProgress::new();
+    let overall = bars.add(indicatif::ProgressBar::new(models.len() as u64));
+    if let Ok(s) = indicatif::ProgressStyle::with_template(
+        "suite [{bar:30}] {pos}/{len} models, {elapsed} {msg}",
+    ) {
+        overall.set_style(s.progress_chars("=> "));
+    }
+    let mut summary =
+        format!("# Work-precision suite\n\n`eom-gen bench --suite --models {dir} --out {out}`\n\n");
+    let mut failed = Vec::new();
+    for path in &models {
+        let p = path.display().to_string();
+        let g = match generate_with_progress(&p) {
+            Ok(g) => g,
+            Err(e) => {
+                bars.suspend(|| eprint!("{e}"));
+                failed.push(p);
+                overall.inc(1);
+                continue;
+            }
+        };
+        let name = g.checked.system.name.clone();
+        overall.set_message(name.clone());
+        let mut opts = wp::suite_options(&name, o);
+        if t_end_given {
+            opts.t_end = o.t_end;
+        }
+        let bar = bars.add(wp_progress(&name));
+        let result = wp_sweep(&g, &opts, &bar);
+        bar.finish_and_clear();
+        overall.inc(1);
+        let w = match result {
+            Ok(w) => w,
+            Err(e) => {
+                bars.suspend(|| eprintln!("error: {name}: {e}"));
+                failed.push(p);
+                continue;
+            }
+        };
+        let base = std::path::Path::new(out).join(&name);
+        let svg = match wp::svg(&w) {
+            Ok(s) => s,
+            Err(e) => {
+                bars.suspend(|| eprintln!("error: {e}"));
+                failed.push(p);
+                continue;
+            }
+        };
+        for (ext, text) in [("csv", wp::csv(&w)), ("svg", svg)] {
+            if write_file(&format!("{}.{ext}", base.display()), &text).is_err() {
+                return ExitCode::from(1);
+            }
+        }
+        bars.suspend(|| {
+            eprintln!(
+                "{name}: {} points → {}.{{csv,svg}}",
+                w.points.len(),
+                base.display()
+            )
+        });
+        summary += &format!("## {name}\n\n![{name}]({name}.svg)\n\n{}\n", wp::table(&w));
+    }
+    overall.finish_and_clear();
+    if write_file(&format!("{out}/suite.md"), &summary).is_err() {
+        return ExitCode::from(1);
+    }
+    if failed.is_empty() {
+        println!("suite: {} models → {out}/suite.md", models.len());
+        ExitCode::SUCCESS
+    } else {
+        eprintln!(
+            "error: {} model(s) failed: {}",
+            failed.len(),
+            failed.join(", ")
+        );
+        ExitCode::from(1)
     }
 }

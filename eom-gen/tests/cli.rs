@@ -469,3 +469,167 @@ fn a_bad_scene_exits_1_with_its_location() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn bench_work_precision_sweeps_and_writes_csv_and_svg() {
+    // The pendulum to t = 2 s: RK4's error falls 16-fold per halved step
+    // (order 4), DOP853's with the tolerance, and the reference (DOP853 at
+    // 1e-13) agrees with its check (DOPRI5 at 1e-13) far below every point.
+    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/wp-test");
+    let (csv, svg) = (format!("{dir}/pendulum.csv"), format!("{dir}/pendulum.svg"));
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+            .args(args)
+            .env("EOM_CACHE_DIR", cache)
+            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+            .output()
+            .expect("eom-gen runs")
+    };
+    let out = run(&[
+        "bench",
+        "models/pendulum.ron",
+        "--work-precision",
+        "--t-end",
+        "2",
+        "--integrators",
+        "rk4,dop853",
+        "--tols",
+        "1e-5,1e-8,1e-11",
+        "--steps",
+        "50,400",
+        "--min-time",
+        "0",
+        "--csv",
+        &csv,
+        "--svg",
+        &svg,
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["model"], "pendulum");
+    assert_eq!(v["constrained"], false);
+    let check = v["reference"]["check_end_error"].as_f64().unwrap_or(1.0);
+    assert!(
+        check < 1e-11,
+        "reference check: got {check:e}, want < 1e-11"
+    );
+    let points = v["points"].as_array().cloned().unwrap_or_default();
+    // rk4 at 50, 100, 200, 400 steps; dop853 at three tolerances.
+    assert_eq!(points.len(), 7, "{v}");
+    let err = |p: &serde_json::Value| p["end_error"].as_f64().unwrap_or(f64::NAN);
+    for w in points[..4].windows(2) {
+        let ratio = err(&w[0]) / err(&w[1]);
+        assert!(
+            (10.0..25.0).contains(&ratio),
+            "RK4 error ratio per halved step: got {ratio}, want ≈ 16 (order 4): {v}"
+        );
+    }
+    for w in points[4..].windows(2) {
+        assert!(
+            err(&w[1]) < err(&w[0]) * 0.1,
+            "DOP853 errors must fall: {v}"
+        );
+    }
+    for p in &points {
+        assert_eq!(p["stop"], "finished");
+        assert!(p["cpu_s"].as_f64().is_some_and(|t| t > 0.0), "{p}");
+        assert!(err(p) > check, "every point above the reference floor: {p}");
+        let digits = p["digits"].as_f64().unwrap_or(f64::NAN);
+        assert!((digits + err(p).log10()).abs() < 1e-9, "{p}");
+    }
+    let csv = std::fs::read_to_string(&csv).expect("CSV written");
+    assert_eq!(csv.lines().count(), 8, "header + 7 points:\n{csv}");
+    assert!(csv.starts_with("model,integrator,constraints,setting_kind,setting,cpu_ms"));
+    let svg = std::fs::read_to_string(&svg).expect("SVG written");
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    for label in [
+        "rk4",
+        "dop853",
+        "error at the end time",
+        "largest error along the path",
+    ] {
+        assert!(svg.contains(label), "SVG lacks `{label}`");
+    }
+    // Usage errors exit 2, with every problem named.
+    let out = run(&[
+        "bench",
+        "models/pendulum.ron",
+        "--work-precision",
+        "--integrators",
+        "rk5,dop853",
+        "--t-end",
+        "-1",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("`rk5`") && err.contains("--t-end"), "{err}");
+    assert_eq!(
+        run(&["bench", "models/pendulum.ron", "--suite"])
+            .status
+            .code(),
+        Some(2)
+    );
+}
+
+#[test]
+fn bench_work_precision_sweeps_constraint_solvers_of_a_loop() {
+    // The four-bar to 0.5 s (before its singular position): projection and
+    // partitioning keep the same constraint manifold, so at one tolerance
+    // their errors agree in magnitude, and both fall with the tolerance.
+    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
+    let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+        .args([
+            "bench",
+            "models/fourbar.ron",
+            "--work-precision",
+            "--t-end",
+            "0.5",
+            "--integrators",
+            "dop853",
+            "--constraints",
+            "projection,partitioning",
+            "--tols",
+            "1e-6,1e-10",
+            "--min-time",
+            "0",
+            "--json",
+        ])
+        .env("EOM_CACHE_DIR", cache)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .output()
+        .expect("eom-gen runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(v["constrained"], true);
+    assert_eq!(v["reference"]["constraints"], "projection");
+    let points = v["points"].as_array().cloned().unwrap_or_default();
+    let solvers: Vec<&str> = points
+        .iter()
+        .filter_map(|p| p["constraints"].as_str())
+        .collect();
+    assert_eq!(
+        solvers,
+        ["projection", "projection", "partitioning", "partitioning"]
+    );
+    let err = |k: usize| points[k]["end_error"].as_f64().unwrap_or(f64::NAN);
+    assert!(err(1) < err(0) * 1e-2 && err(3) < err(2) * 1e-2, "{v}");
+    for k in [0, 1] {
+        let ratio = err(k) / err(k + 2);
+        assert!(
+            (0.1..10.0).contains(&ratio),
+            "projection vs partitioning at one tolerance: {} vs {}",
+            err(k),
+            err(k + 2)
+        );
+    }
+}

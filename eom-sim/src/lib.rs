@@ -51,6 +51,7 @@
 pub mod constrained;
 mod integrate;
 mod model;
+pub mod work_precision;
 
 pub use constrained::{
     Assembly, ConstrainedModel, ConstrainedSystem, ConstraintStats, ConstraintValues, Dynamics,

@@ -1,0 +1,506 @@
+//! `eom-gen bench MODEL --work-precision` and `eom-gen bench --suite`:
+//! error against CPU time of the compiled model, per integrator and
+//! constraint solver, over a sweep of tolerances (adaptive methods) or step
+//! sizes (fixed-step methods).
+//!
+//! A runner program is written around the model's generated source and
+//! built in release mode in the cache shared with `eom-gen eval` (see
+//! [`crate::compiled`]); the sweep itself is
+//! [`eom_sim::work_precision`]: a reference by DOP853 at a much tighter
+//! tolerance checked by DOPRI5, then per point one run with dense output for
+//! the errors (at the end time and the largest along the path) and repeated
+//! runs without output for the CPU time (median). The runner prints one
+//! JSON line per point as it goes, which drives the progress bar; the
+//! results are written as a table, JSON, CSV and a log-log SVG plot.
+
+use crate::compiled::{CachedCrate, build_cached, model_module};
+use crate::generate::Generated;
+use serde::Deserialize;
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Stdio};
+
+/// What to sweep.
+#[derive(Clone, Debug)]
+pub struct WpOptions {
+    /// Integrators (names as `simulate --integrator` takes them).
+    pub integrators: Vec<String>,
+    /// Constraint solvers (`projection`, `partitioning`, `multipliers`,
+    /// `index3`); only used for models with constraints.
+    pub constraints: Vec<String>,
+    /// End time, s.
+    pub t_end: f64,
+    /// Tolerances `rtol = atol` of the adaptive methods.
+    pub tols: Vec<f64>,
+    /// Fixed-step methods: `t_end / n` for `n` doubling from the first to
+    /// the second number.
+    pub fixed_steps: (usize, usize),
+    /// Tolerance of the reference (DOP853) and of its check (DOPRI5).
+    pub ref_tol: f64,
+    /// Dense-output samples along the path (for the path error).
+    pub samples: usize,
+    /// At least this many timed runs per point.
+    pub min_repeats: usize,
+    /// Repeat (up to 51 runs) until this much CPU time per point, s.
+    pub min_total_s: f64,
+}
+
+impl Default for WpOptions {
+    fn default() -> Self {
+        WpOptions {
+            integrators: ["rk4", "dopri5", "dop853", "radau5"]
+                .map(String::from)
+                .to_vec(),
+            constraints: ["projection", "partitioning", "multipliers", "index3"]
+                .map(String::from)
+                .to_vec(),
+            t_end: 10.0,
+            tols: (4..=12).map(|k| 10f64.powi(-k)).collect(),
+            fixed_steps: (250, 32_000),
+            ref_tol: 1e-13,
+            samples: 200,
+            min_repeats: 3,
+            min_total_s: 0.2,
+        }
+    }
+}
+
+/// The reference solution as the runner reports it.
+#[derive(Clone, Debug, Deserialize)]
+pub struct WpReference {
+    /// Reference integrator (`dop853`).
+    pub integrator: String,
+    /// Check integrator (`dopri5`).
+    pub check: String,
+    /// `rtol = atol` of both.
+    pub tol: f64,
+    /// Constraint solver of both (constrained models).
+    pub constraints: String,
+    /// End time reached.
+    pub t_end: f64,
+    /// Number of dense samples along the path.
+    pub samples: usize,
+    /// Right-hand sides of the reference run.
+    pub rhs_evals: usize,
+    /// Positions at the end.
+    pub q_final: Vec<f64>,
+    /// End error of the check against the reference.
+    pub check_end_error: f64,
+    /// Path error of the check against the reference.
+    pub check_path_error: f64,
+}
+
+/// One point of the diagram.
+#[derive(Clone, Debug, Deserialize)]
+pub struct WpPoint {
+    /// Integrator.
+    pub integrator: String,
+    /// Constraint solver (meaningful for constrained models only).
+    pub constraints: String,
+    /// True if `setting` is a step size.
+    pub fixed_step: bool,
+    /// Tolerance or step size.
+    pub setting: f64,
+    /// Median CPU time of one run, s.
+    pub cpu_s: f64,
+    /// Timed runs behind the median.
+    pub repeats: usize,
+    /// Right-hand sides of one run.
+    pub rhs_evals: usize,
+    /// Accepted steps.
+    pub accepted: usize,
+    /// Rejected steps.
+    pub rejected: usize,
+    /// Relative error of the positions at the end (`null`: did not finish).
+    pub end_error: Option<f64>,
+    /// Largest relative error along the path.
+    pub path_error: Option<f64>,
+    /// Significant correct digits at the end.
+    pub digits: Option<f64>,
+    /// `finished` or why the run stopped.
+    pub stop: String,
+}
+
+impl WpPoint {
+    /// The series the point belongs to: the integrator, and the
+    /// constraint solver for constrained models.
+    pub fn series(&self, constrained: bool) -> String {
+        if constrained {
+            format!("{} + {}", self.integrator, self.constraints)
+        } else {
+            self.integrator.clone()
+        }
+    }
+}
+
+/// A whole sweep of one model.
+#[derive(Clone, Debug)]
+pub struct WorkPrecision {
+    /// The model's name.
+    pub model: String,
+    /// True if the model has constraints.
+    pub constrained: bool,
+    /// End time, s.
+    pub t_end: f64,
+    /// The reference.
+    pub reference: WpReference,
+    /// The points, in sweep order.
+    pub points: Vec<WpPoint>,
+}
+
+const MAIN: &str = r#"//! Work-precision sweep of the generated model (eom-gen bench
+//! --work-precision): `wp T_END REF_TOL SAMPLES MIN_REPEATS MIN_TOTAL_S
+//! CASE...` with CASE = `integrator:constraints:setting`. Prints the
+//! reference, then one JSON line per point as it is measured.
+mod model;
+use eom_sim::work_precision::{self as wp, Case, ModelRunner, Timing};
+use eom_sim::Method;
+use std::io::Write;
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let num = |k: usize, d: f64| args.get(k).and_then(|a| a.parse::<f64>().ok()).unwrap_or(d);
+    let (t_end, ref_tol) = (num(1, 1.0), num(2, 1e-13));
+    let samples = num(3, 100.0).max(1.0) as usize;
+    let timing = Timing { min_repeats: num(4, 3.0).max(1.0) as usize, max_repeats: 51, min_total_s: num(5, 0.2) };
+    let cases: Vec<Case> = args.iter().skip(6).filter_map(|c| {
+        let mut it = c.split(':');
+        let (i, m, s) = (it.next()?, it.next()?, it.next()?.parse::<f64>().ok()?);
+        Some(Case { integrator: i.to_string(), method: Method::from_name(m)?, setting: s })
+    }).collect();
+    let m = model::MODEL::default();
+    let r = ModelRunner::<model::MODEL, { model::NY }, { model::NYC }>::new(&m);
+    let out = std::io::stdout();
+    let Some(reference) = wp::reference(&r, t_end, ref_tol, samples) else {
+        eprintln!("the reference run (dop853 at rtol = atol = {ref_tol:e}) or its check (dopri5) did not reach t = {t_end}");
+        std::process::exit(1);
+    };
+    let _ = writeln!(out.lock(), "{{\"reference\":{}}}", reference.to_json());
+    for case in &cases {
+        let line = match wp::point(&r, case, &reference, &timing) {
+            Some(p) => format!("{{\"point\":{}}}", p.to_json()),
+            None => format!("{{\"skipped\":\"{}:{}\"}}", case.integrator, wp::method_name(case.method)),
+        };
+        let _ = writeln!(out.lock(), "{line}");
+    }
+}
+"#;
+
+/// The cases of a sweep, as the runner takes them (`integrator:solver:setting`).
+fn case_args(o: &WpOptions, constrained: bool) -> Vec<String> {
+    let methods: Vec<eom_sim::Method> = if constrained {
+        o.constraints
+            .iter()
+            .filter_map(|c| eom_sim::Method::from_name(c))
+            .collect()
+    } else {
+        vec![eom_sim::Method::Projection]
+    };
+    let integrators: Vec<&str> = o.integrators.iter().map(String::as_str).collect();
+    eom_sim::work_precision::cases(&integrators, &methods, &o.tols, o.t_end, o.fixed_steps)
+        .iter()
+        .map(|c| {
+            format!(
+                "{}:{}:{:?}",
+                c.integrator,
+                eom_sim::work_precision::method_name(c.method),
+                c.setting
+            )
+        })
+        .collect()
+}
+
+/// Checks the options: known integrators and solvers, positive times and
+/// tolerances. Every problem at once.
+pub fn validate(o: &WpOptions) -> Result<(), Vec<String>> {
+    let mut errors = Vec::new();
+    for i in &o.integrators {
+        if !eom_sim::INTEGRATORS.contains(&i.as_str()) {
+            errors.push(format!(
+                "unknown integrator `{i}`; choose from {}",
+                eom_sim::INTEGRATORS.join(", ")
+            ));
+        }
+    }
+    for c in &o.constraints {
+        if eom_sim::Method::from_name(c).is_none() {
+            errors.push(format!(
+                "unknown constraint solver `{c}`; choose from projection, partitioning, multipliers, index3"
+            ));
+        }
+    }
+    if !(o.t_end.is_finite() && o.t_end > 0.0) {
+        errors.push("--t-end must be a positive number of seconds".into());
+    }
+    if o.tols.iter().any(|t| !(t.is_finite() && *t > 0.0)) {
+        errors.push("--tols must be positive numbers".into());
+    }
+    if !(o.ref_tol.is_finite() && o.ref_tol > 0.0) {
+        errors.push("--ref-tol must be a positive number".into());
+    }
+    if o.integrators.is_empty() {
+        errors.push("--integrators is empty".into());
+    }
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(errors)
+    }
+}
+
+/// Builds (once, cached) the runner of a generated model and sweeps;
+/// `progress(done, total, point)` is called after every point.
+pub fn run(
+    g: &Generated,
+    o: &WpOptions,
+    progress: &mut dyn FnMut(usize, usize, Option<&WpPoint>),
+) -> Result<WorkPrecision, String> {
+    let sys = &g.checked.system;
+    let constrained = !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty();
+    let model = model_module(&sys.name, &g.source, sys.nq(), sys.nu());
+    let exe = build_cached(&CachedCrate {
+        prefix: "eom-wp",
+        name: &sys.name,
+        main: MAIN,
+        model: &model,
+        rustflags: None,
+    })?;
+    let cases = case_args(o, constrained);
+    let total = cases.len();
+    let mut child = Command::new(&exe)
+        .arg(format!("{:?}", o.t_end))
+        .arg(format!("{:?}", o.ref_tol))
+        .arg(o.samples.to_string())
+        .arg(o.min_repeats.to_string())
+        .arg(format!("{:?}", o.min_total_s))
+        .args(&cases)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;
+    let stdout = child
+        .stdout
+        .take()
+        .ok_or_else(|| format!("no output from {}", exe.display()))?;
+    let mut reference = None;
+    let mut points = Vec::new();
+    let mut done = 0;
+    progress(0, total, None);
+    for line in BufReader::new(stdout).lines() {
+        let line = line.map_err(|e| format!("reading {}: {e}", exe.display()))?;
+        let v: serde_json::Value = serde_json::from_str(&line)
+            .map_err(|e| format!("unexpected output of {}: {e}: {line}", exe.display()))?;
+        if let Some(r) = v.get("reference") {
+            reference = Some(
+                WpReference::deserialize(r)
+                    .map_err(|e| format!("unexpected reference from {}: {e}", exe.display()))?,
+            );
+        } else if let Some(p) = v.get("point") {
+            let p = WpPoint::deserialize(p)
+                .map_err(|e| format!("unexpected point from {}: {e}", exe.display()))?;
+            done += 1;
+            progress(done, total, Some(&p));
+            points.push(p);
+        } else {
+            done += 1;
+            progress(done, total, None);
+        }
+    }
+    let out = child
+        .wait_with_output()
+        .map_err(|e| format!("waiting for {}: {e}", exe.display()))?;
+    if !out.status.success() {
+        return Err(format!(
+            "the work-precision runner failed ({}): {}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr).trim()
+        ));
+    }
+    let reference = reference.ok_or_else(|| format!("{} printed no reference", exe.display()))?;
+    Ok(WorkPrecision {
+        model: sys.name.clone(),
+        constrained,
+        t_end: o.t_end,
+        reference,
+        points,
+    })
+}
+
+fn fmt_opt(x: Option<f64>, f: impl Fn(f64) -> String) -> String {
+    x.map_or_else(|| "-".into(), f)
+}
+
+/// CSV, one row per point:
+/// `model,integrator,constraints,setting_kind,setting,cpu_ms,repeats,rhs_evals,accepted,rejected,end_error,path_error,digits,stop`.
+pub fn csv(w: &WorkPrecision) -> String {
+    let mut s = String::from(
+        "model,integrator,constraints,setting_kind,setting,cpu_ms,repeats,rhs_evals,accepted,rejected,end_error,path_error,digits,stop\n",
+    );
+    for p in &w.points {
+        let e = |x: Option<f64>| x.map_or_else(String::new, |x| format!("{x:e}"));
+        s += &format!(
+            "{},{},{},{},{:e},{:.6},{},{},{},{},{},{},{},{}\n",
+            w.model,
+            p.integrator,
+            if w.constrained { &p.constraints } else { "" },
+            if p.fixed_step { "step" } else { "tol" },
+            p.setting,
+            p.cpu_s * 1e3,
+            p.repeats,
+            p.rhs_evals,
+            p.accepted,
+            p.rejected,
+            e(p.end_error),
+            e(p.path_error),
+            p.digits.map_or_else(String::new, |d| format!("{d:.2}")),
+            p.stop.replace(',', ";"),
+        );
+    }
+    s
+}
+
+/// A Markdown table of the points with the reference's line above it.
+pub fn table(w: &WorkPrecision) -> String {
+    let r = &w.reference;
+    let mut s = format!(
+        "{}: work-precision to t = {} s; reference {} at rtol = atol = {:e} ({} rhs{}), checked by {}: end {:.1e}, path {:.1e}\n\n",
+        w.model,
+        w.t_end,
+        r.integrator,
+        r.tol,
+        r.rhs_evals,
+        if w.constrained {
+            format!(", {}", r.constraints)
+        } else {
+            String::new()
+        },
+        r.check,
+        r.check_end_error,
+        r.check_path_error
+    );
+    s += "| method | tol / step | rhs | CPU ms | end error | path error | digits | stop |\n";
+    s += "|---|---|---:|---:|---:|---:|---:|---|\n";
+    for p in &w.points {
+        s += &format!(
+            "| {} | {} | {} | {:.3} | {} | {} | {} | {} |\n",
+            p.series(w.constrained),
+            if p.fixed_step {
+                format!("h = {:.2e}", p.setting)
+            } else {
+                format!("{:.0e}", p.setting)
+            },
+            p.rhs_evals,
+            p.cpu_s * 1e3,
+            fmt_opt(p.end_error, |x| format!("{x:.1e}")),
+            fmt_opt(p.path_error, |x| format!("{x:.1e}")),
+            fmt_opt(p.digits, |x| format!("{x:.1}")),
+            p.stop
+        );
+    }
+    s
+}
+
+/// The whole sweep as one JSON object:
+/// `{"model", "constrained", "t_end", "reference": {…}, "points": [{…}]}`.
+pub fn json(w: &WorkPrecision) -> serde_json::Value {
+    let r = &w.reference;
+    let points: Vec<serde_json::Value> = w
+        .points
+        .iter()
+        .map(|p| {
+            serde_json::json!({
+                "integrator": p.integrator,
+                "constraints": if w.constrained { Some(&p.constraints) } else { None },
+                "fixed_step": p.fixed_step,
+                "setting": p.setting,
+                "cpu_s": p.cpu_s,
+                "repeats": p.repeats,
+                "rhs_evals": p.rhs_evals,
+                "accepted": p.accepted,
+                "rejected": p.rejected,
+                "end_error": p.end_error,
+                "path_error": p.path_error,
+                "digits": p.digits,
+                "stop": p.stop,
+            })
+        })
+        .collect();
+    serde_json::json!({
+        "model": w.model,
+        "constrained": w.constrained,
+        "t_end": w.t_end,
+        "reference": {
+            "integrator": r.integrator, "check": r.check, "tol": r.tol,
+            "constraints": if w.constrained { Some(&r.constraints) } else { None },
+            "samples": r.samples, "rhs_evals": r.rhs_evals, "q_final": r.q_final,
+            "check_end_error": r.check_end_error, "check_path_error": r.check_path_error,
+        },
+        "points": points,
+    })
+}
+
+pub use crate::plot::svg;
+
+/// The suite's settings for a bundled model (end time, integrators,
+/// constraint solvers), the rest from `base`; models not in the table get
+/// `base` as it is.
+///
+/// | model | t_end | integrators | constraint solvers |
+/// |---|---|---|---|
+/// | pendulum, double_pendulum, arm7, heavy_top | 10 s | rk4, dopri5, dop853, radau5 | — |
+/// | free_body | 25 s (one Dzhanibekov flip) | rk4, dopri5, dop853, radau5 | — |
+/// | fourbar | 0.5 s (before the first singular position) | dopri5, dop853, radau5 | all four |
+/// | slider_crank, slider_crank_driven | 2 s | dopri5, dop853, radau5 | all four |
+/// | andrews | 0.03 s (the IVP test set's end) | dop853, radau5 | all four |
+/// | bricard | 2 s | dop853 | projection, partitioning, multipliers (redundant: no index-3) |
+/// | stewart, stewart_driven | 1 s | dop853 | projection, partitioning, multipliers |
+/// | rolling_disk | 5 s | dopri5, dop853 | projection, partitioning, multipliers |
+pub fn suite_options(model: &str, base: &WpOptions) -> WpOptions {
+    let list = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let (t_end, integrators, constraints): (f64, &[&str], &[&str]) = match model {
+        "pendulum" | "double_pendulum" | "arm7" | "heavy_top" => {
+            (10.0, &["rk4", "dopri5", "dop853", "radau5"], &[])
+        }
+        "free_body" => (25.0, &["rk4", "dopri5", "dop853", "radau5"], &[]),
+        "fourbar" => (
+            0.5,
+            &["dopri5", "dop853", "radau5"],
+            &["projection", "partitioning", "multipliers", "index3"],
+        ),
+        "slider_crank" | "slider_crank_driven" => (
+            2.0,
+            &["dopri5", "dop853", "radau5"],
+            &["projection", "partitioning", "multipliers", "index3"],
+        ),
+        "andrews" => (
+            0.03,
+            &["dop853", "radau5"],
+            &["projection", "partitioning", "multipliers", "index3"],
+        ),
+        "bricard" => (
+            2.0,
+            &["dop853"],
+            &["projection", "partitioning", "multipliers"],
+        ),
+        "stewart" | "stewart_driven" => (
+            1.0,
+            &["dop853"],
+            &["projection", "partitioning", "multipliers"],
+        ),
+        "rolling_disk" => (
+            5.0,
+            &["dopri5", "dop853"],
+            &["projection", "partitioning", "multipliers"],
+        ),
+        _ => return base.clone(),
+    };
+    WpOptions {
+        t_end,
+        integrators: list(integrators),
+        constraints: if constraints.is_empty() {
+            base.constraints.clone()
+        } else {
+            list(constraints)
+        },
+        ..base.clone()
+    }
+}
