@@ -145,11 +145,14 @@ struct GimbalRun {
     stop: StopReason,
     stats: Stats,
     t_final: f64,
-    /// Largest marker-position difference up to `t_check`, and over the run.
+    /// Largest marker-position difference at the samples up to `t_check`,
+    /// and over the whole (Bryan) run.
     err_before: f64,
     err_all: f64,
-    /// Largest |ȧ|, |ċ| seen at the samples.
+    /// Largest |ȧ|, |ċ| and smallest |cos b| at the accepted Bryan steps.
     max_rate: f64,
+    min_cos: f64,
+    quat_steps: usize,
     quat_energy: f64,
     quat_momentum: f64,
     quat_norm: f64,
@@ -160,18 +163,25 @@ fn gimbal_run(w0: [f64; 3], tol: f64, t_end: f64, t_check: f64) -> GimbalRun {
     // At a = b = c = 0 the Bryan rates are the body angular velocity.
     let yb = [0.0, 0.0, 0.0, w0[0], w0[1], w0[2]];
     let yq = [1.0, 0.0, 0.0, 0.0, w0[0], w0[1], w0[2]];
-    let opts = sampled(0.0, t_end, 0.01);
+    let opts = SolveOptions {
+        record_steps: true,
+        ..sampled(0.0, t_end, 0.01)
+    };
     let sb = integrate(&mut Dop853::new(tol, tol), &mb, 0.0, yb, t_end, &opts, &mut []);
     let sq = integrate(&mut Dop853::new(tol, tol), &mq, 0.0, yq, t_end, &opts, &mut []);
     assert_eq!(sq.stop, StopReason::Finished, "quaternion model: {:?}", sq.stop);
-    let (mut err_before, mut err_all, mut max_rate) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut err_before, mut err_all) = (0.0f64, 0.0f64);
     for (k, (t, y)) in sb.t_out.iter().zip(&sb.y_out).enumerate() {
         let e = max_abs_diff(&outputs(&mb, y), &outputs(&mq, &sq.y_out[k]));
         if *t <= t_check {
             err_before = err_before.max(e);
         }
         err_all = err_all.max(e);
+    }
+    let (mut max_rate, mut min_cos) = (0.0f64, f64::INFINITY);
+    for y in &sb.y {
         max_rate = max_rate.max(y[3].abs()).max(y[5].abs());
+        min_cos = min_cos.min(y[1].cos().abs());
     }
     let (e0, e1) = (total_energy(&mq, &yq), total_energy(&mq, &sq.y_final));
     let (l0, l1) = (angular_momentum(&mq, &yq), angular_momentum(&mq, &sq.y_final));
@@ -183,6 +193,8 @@ fn gimbal_run(w0: [f64; 3], tol: f64, t_end: f64, t_check: f64) -> GimbalRun {
         err_before,
         err_all,
         max_rate,
+        min_cos,
+        quat_steps: sq.stats.steps,
         quat_energy: (e1 - e0).abs() / e0,
         quat_momentum: norm(&dl) / norm(&l0),
         quat_norm: (norm(&sq.y_final[..4]) - 1.0).abs(),
@@ -191,37 +203,108 @@ fn gimbal_run(w0: [f64; 3], tol: f64, t_end: f64, t_check: f64) -> GimbalRun {
 
 #[test]
 fn gimbal_lock_bryan_angles_against_the_quaternion() {
-    // The body starts at the identity spinning at 1 rad/s about body y with a
-    // small component δ about body x; b ≈ t reaches the lock b = π/2 near
-    // t = π/2. The quaternion model has no singular orientation: it keeps
-    // energy and |L| (torque-free about the centre of mass) to 1e-10 and its
-    // norm to round-off (projection hook). The Bryan model is the same ODE in
-    // other coordinates: before the lock both give the same marker positions
-    // to the integration tolerance; through the lock ȧ and ċ grow like
-    // 1/(distance to the lock), so the Bryan run must either follow (same
-    // markers afterwards) or stop with a reason near the lock — never finish
-    // with different markers.
+    // The body (I = 1, 2, 3 kg m², torque-free about its fixed centre of
+    // mass) starts at the identity spinning at 1 rad/s about body y with a
+    // small component δ about body x; b ≈ t nears the lock b = π/2 at
+    // t ≈ π/2, passing it at a distance |cos b|_min ≈ 1.4 δ.
+    //
+    // Quaternion model: no singular orientation. It keeps energy and |L|
+    // (exact invariants) to 1e-10 and its norm to round-off (projection
+    // hook), with the same number of steps whatever δ.
+    //
+    // Bryan model: the same motion in other coordinates. Before the lock both
+    // give the same marker positions (the columns of R) to ~100 tol. Through
+    // it, ȧ and ċ peak at |ω⊥|/|cos b|_min ≈ 1/|cos b|_min (|ω⊥| ≈ 1 rad/s, the
+    // spin across the aligned axes) while a and c turn by about π. The
+    // distance to the lock, cos b ≈ π/2 − b, is only known to ulp(π/2) ≈ 2e-16,
+    // so the rates carry a relative error ulp/|cos b|_min which a and c
+    // integrate over their half turn: a finished run may differ from the
+    // quaternion run by 100 tol + 100 π ulp/|cos b|_min, no more. When the
+    // pass is too close for that, the run must stop with StepSizeTooSmall or
+    // NonFinite at the lock — never finish silently wrong.
     let tol = 1e-12;
     let lock = std::f64::consts::FRAC_PI_2;
+    let ulp = lock.next_up() - lock;
     println!("gimbal lock, DOP853 rtol = atol = {tol:e}, 3 s, lock near t = {lock:.4}");
-    for delta in [0.0, 1e-2, 1e-4, 1e-6, 1e-8] {
+    let (mut passed_near, mut stopped) = (0, 0);
+    let mut quat_steps = Vec::new();
+    for delta in [0.0, 1e-2, 1e-5, 1e-8, 1e-11] {
         let r = gimbal_run([delta, 1.0, 0.0], tol, 3.0, lock - 0.1);
+        let bound = 100.0 * tol + 100.0 * std::f64::consts::PI * ulp / r.min_cos;
         println!(
-            "  δ = {delta:.0e}: {:?} at t = {:.6}, {} steps ({} rejected), max |ȧ|,|ċ| = {:.3e}, \
-             marker error before the lock {:.2e}, over the run {:.2e}; quaternion: ΔE/E {:.1e}, \
-             |ΔL|/|L| {:.1e}, |‖q‖−1| {:.1e}",
+            "  δ = {delta:.0e}: {:?} at t = {:.10}, {} steps ({} rejected), min |cos b| = {:.2e}, \
+             max |ȧ|,|ċ| = {:.3e}; marker error before the lock {:.2e}, over the run {:.2e} \
+             (bound {bound:.1e}); quaternion: {} steps, ΔE/E {:.1e}, |ΔL|/|L| {:.1e}, |‖q‖−1| {:.1e}",
             r.stop,
             r.t_final,
             r.stats.steps,
             r.stats.rejected,
+            r.min_cos,
             r.max_rate,
             r.err_before,
             r.err_all,
+            r.quat_steps,
             r.quat_energy,
             r.quat_momentum,
             r.quat_norm
         );
+        assert!(
+            r.quat_energy < 1e-10 && r.quat_momentum < 1e-10 && r.quat_norm < 1e-15,
+            "δ = {delta:e}: quaternion model ΔE/E {:e}, |ΔL|/|L| {:e}, norm error {:e}, want < 1e-10, 1e-10, 1e-15",
+            r.quat_energy,
+            r.quat_momentum,
+            r.quat_norm
+        );
+        quat_steps.push(r.quat_steps);
+        assert!(
+            r.err_before < 100.0 * tol,
+            "δ = {delta:e}: before the lock the markers differ by {:e}, want < 100 tol",
+            r.err_before
+        );
+        match r.stop {
+            StopReason::Finished => {
+                assert!(
+                    r.err_all <= bound,
+                    "δ = {delta:e}: finished, but the markers differ by {:e} > {bound:e}",
+                    r.err_all
+                );
+                if r.min_cos < 0.1 {
+                    passed_near += 1;
+                    let peak = r.max_rate * r.min_cos;
+                    assert!(
+                        (0.5..2.0).contains(&peak),
+                        "δ = {delta:e}: max rate × |cos b|_min got {peak} want ≈ |ω⊥| = 1"
+                    );
+                }
+            }
+            StopReason::StepSizeTooSmall { t, .. } | StopReason::NonFinite { t, .. } => {
+                stopped += 1;
+                assert!(
+                    (t - lock).abs() < 1e-2,
+                    "δ = {delta:e}: stopped at t = {t}, away from the lock at {lock}"
+                );
+                assert!(
+                    r.err_all < 100.0 * tol,
+                    "δ = {delta:e}: the markers up to the stop differ by {:e}",
+                    r.err_all
+                );
+            }
+            other => panic!("δ = {delta:e}: unclear stop {other:?}"),
+        }
     }
+    // Both branches must be exercised, or the test checks less than it says.
+    assert!(
+        passed_near >= 2 && stopped >= 1,
+        "near passes followed: {passed_near}, clear stops: {stopped}"
+    );
+    let (lo, hi) = (
+        quat_steps.iter().min().copied().unwrap_or(0),
+        quat_steps.iter().max().copied().unwrap_or(0),
+    );
+    assert!(
+        hi <= lo + lo / 5,
+        "quaternion step counts {quat_steps:?} should not depend on the distance to the lock"
+    );
 }
 
 // ---------------------------------------------------------------------------
