@@ -418,37 +418,110 @@ fn first_above(t: &[f64], err: &[f64], level: f64) -> Option<f64> {
     t.iter().zip(err).find(|(_, e)| **e > level).map(|(t, _)| *t)
 }
 
+/// Least-squares slope of `ln e` against `t` over the samples in `[t0, t1]`.
+fn log_slope(t: &[f64], e: &[f64], t0: f64, t1: f64) -> f64 {
+    let pts: Vec<(f64, f64)> = t
+        .iter()
+        .zip(e)
+        .filter(|(t, e)| **t >= t0 && **t <= t1 && **e > 0.0)
+        .map(|(t, e)| (*t, e.ln()))
+        .collect();
+    let n = pts.len() as f64;
+    let (mt, my) = (
+        pts.iter().map(|p| p.0).sum::<f64>() / n,
+        pts.iter().map(|p| p.1).sum::<f64>() / n,
+    );
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mt) * (p.1 - my)).sum();
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mt).powi(2)).sum();
+    sxy / sxx
+}
+
 #[test]
 fn chaotic_double_pendulum_error_growth_and_predictability_horizon() {
-    let (t_end, dt) = (20.0, 0.05);
+    // models/double_pendulum.ron released from θ1 = 120°, θ2 = −10°: chaotic,
+    // nearby solutions separate like e^(λt). An adaptive code at tolerance tol
+    // makes local errors of about tol, so its global error is ~tol while the
+    // motion is regular and then grows like tol e^(λt): it agrees with the
+    // exact solution to a fixed level ε only up to a horizon
+    // T(tol) ≈ ln(ε/tol)/λ, which grows by ln(100)/λ per two decades of
+    // tolerance. Checked here:
+    // - the reference (DOP853 at 1e-13) against a second method (DOPRI5 at
+    //   1e-13): their difference stays below 1e-4 rad over 20 s, so errors
+    //   above ε = 1e-3 rad measured against it are real; its exponential
+    //   growth gives λ;
+    // - DOP853 and DOPRI5 at 1e-5 … 1e-11 agree with the reference to 50 tol
+    //   over the first 2 s (before the chaotic amplification sets in);
+    // - their horizons never shrink as the tolerance tightens, and from 1e-7
+    //   to 1e-11 they grow by at least half of ln(1e4)/λ.
+    let (t_end, dt, level) = (20.0, 0.05, 1e-3);
     let (t, reference, rs) = double_pendulum("dop853", 1e-13, t_end, dt);
     let (_, check, cs) = double_pendulum("dopri5", 1e-13, t_end, dt);
     let d_ref = angle_errors(&reference, &check);
+    let at = |e: &[f64], s: f64| e[(s / dt).round() as usize];
+    let lambda = log_slope(&t, &d_ref, 5.0, t_end);
     println!(
-        "double pendulum: reference DOP853 1e-13 ({} steps) vs DOPRI5 1e-13 ({} steps)",
-        rs.steps, cs.steps
+        "double pendulum: reference DOP853 1e-13 ({} steps) vs DOPRI5 1e-13 ({} steps), \
+         |Δθ| at 1, 2, 5, 10, 15, 20 s: {:.1e} {:.1e} {:.1e} {:.1e} {:.1e} {:.1e}; \
+         growth rate over 5–20 s λ = {lambda:.3}/s",
+        rs.steps,
+        cs.steps,
+        at(&d_ref, 1.0),
+        at(&d_ref, 2.0),
+        at(&d_ref, 5.0),
+        at(&d_ref, 10.0),
+        at(&d_ref, 15.0),
+        at(&d_ref, 20.0)
     );
-    for s in [1.0, 2.0, 5.0, 10.0, 15.0, 20.0] {
-        let k = (s / dt).round() as usize;
-        println!("  t = {s:4}: |Δθ| = {:.2e}", d_ref[k]);
-    }
+    let worst_ref = d_ref.iter().copied().fold(0.0, f64::max);
+    assert!(worst_ref < 1e-4, "reference vs check: |Δθ| up to {worst_ref:e}, want < 1e-4");
+    assert!(
+        (0.3..3.0).contains(&lambda),
+        "growth rate of the reference-vs-check difference got {lambda}/s, want a positive \
+         O(1)/s exponent (chaos)"
+    );
     for method in ["dop853", "dopri5"] {
+        let mut horizons = Vec::new();
         for tol in [1e-5, 1e-7, 1e-9, 1e-11] {
             let (_, y, st) = double_pendulum(method, tol, t_end, dt);
             let e = angle_errors(&y, &reference);
-            let at = |s: f64| e[(s / dt).round() as usize];
+            let early = e[..=(2.0 / dt).round() as usize].iter().copied().fold(0.0, f64::max);
+            let horizon = first_above(&t, &e, level);
             println!(
-                "  {method} {tol:.0e} ({} steps): |Δθ| at 1 s {:.1e}, 2 s {:.1e}, 5 s {:.1e}, 10 s {:.1e}, 15 s {:.1e}; > 1e-3 at {:?}, > 0.1 at {:?}",
+                "  {method} {tol:.0e}: {} steps, |Δθ| at 1, 2, 5, 10, 15, 20 s: {:.1e} {:.1e} \
+                 {:.1e} {:.1e} {:.1e} {:.1e}; horizon (|Δθ| > {level:e}) {}",
                 st.steps,
-                at(1.0),
-                at(2.0),
-                at(5.0),
-                at(10.0),
-                at(15.0),
-                first_above(&t, &e, 1e-3),
-                first_above(&t, &e, 0.1)
+                at(&e, 1.0),
+                at(&e, 2.0),
+                at(&e, 5.0),
+                at(&e, 10.0),
+                at(&e, 15.0),
+                at(&e, 20.0),
+                horizon.map_or(format!("beyond {t_end} s"), |h| format!("{h:.2} s"))
+            );
+            assert!(
+                early < 50.0 * tol,
+                "{method} {tol:e}: |Δθ| over the first 2 s got {early:e}, want < 50 tol"
+            );
+            horizons.push((tol, horizon.unwrap_or(f64::INFINITY)));
+        }
+        for w in horizons.windows(2) {
+            assert!(
+                w[1].1 >= w[0].1,
+                "{method}: horizon at {:e} ({} s) shorter than at {:e} ({} s)",
+                w[1].0,
+                w[1].1,
+                w[0].0,
+                w[0].1
             );
         }
+        let (t7, t11) = (horizons[1].1, horizons[3].1.min(t_end));
+        assert!(t7.is_finite(), "{method}: the 1e-7 run must lose the reference within {t_end} s");
+        let want = 0.5 * (1e4f64).ln() / lambda;
+        assert!(
+            t11 - t7 >= want,
+            "{method}: horizon grows by {} s from 1e-7 to 1e-11, want ≥ ½ ln(1e4)/λ = {want} s",
+            t11 - t7
+        );
     }
 }
 
