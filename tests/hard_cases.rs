@@ -539,11 +539,20 @@ pub struct StiffChainRigid;
 
 #[test]
 fn stiff_joint_springs_radau5_steps_over_what_the_explicit_codes_must_resolve() {
+    // The chain swings as one compound pendulum (period ~1.4 s) while the
+    // elbow and wrist springs have eigenvalues of order 1e4/s, excited only to
+    // their static deflection. An explicit code is stable only for
+    // h |λ| ≲ 3, so DOPRI5 and DOP853 need tens of thousands of steps in 1 s
+    // whatever the tolerance, and Hairer's stiffness test (h λ on the
+    // boundary of the stability region, 15 times in a row) fires; RADAU5 is
+    // L-stable and takes the steps the slow motion allows. All three must
+    // agree with the k → ∞ limit (the welded chain) to the tolerance: the
+    // joint deflections are at most the elbow torque over k, about
+    // (2 kg · 9.81 m/s² · 0.5 m + swing inertia terms)/1e8 ≲ 1e-7 rad.
     let m = StiffChain::default();
     let y0: [f64; 6] = initial(&m);
-    let t_end = 1.0;
-    let tol = 1e-6;
-    let opts = sampled(0.0, t_end, 0.1);
+    let (t_end, tol) = (1.0, 1e-6);
+    let opts = sampled(0.0, t_end, 0.05);
     let runs = [
         ("radau5", integrate(&mut Radau5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut [])),
         ("dopri5", integrate(&mut Dopri5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut [])),
@@ -551,26 +560,55 @@ fn stiff_joint_springs_radau5_steps_over_what_the_explicit_codes_must_resolve() 
     ];
     let rigid = StiffChainRigid::default();
     let r0: [f64; 2] = initial(&rigid);
-    let rr = integrate(&mut Dop853::new(1e-10, 1e-10), &rigid, 0.0, r0, t_end, &opts, &mut []);
+    let rr = integrate(&mut Dop853::new(1e-12, 1e-12), &rigid, 0.0, r0, t_end, &opts, &mut []);
+    assert_eq!(rr.stop, StopReason::Finished);
     println!("stiff chain (k = 1e8 N m/rad), rtol = atol = {tol:e}, {t_end} s:");
+    let mut steps = Vec::new();
     for (name, s) in &runs {
+        assert_eq!(s.stop, StopReason::Finished, "{name}: {:?}", s.stop);
         let dq = s
             .y_out
             .iter()
             .zip(&rr.y_out)
             .map(|(a, b)| (a[0] - b[0]).abs())
             .fold(0.0, f64::max);
+        let bend = s.y_out.iter().map(|y| y[1].abs().max(y[2].abs())).fold(0.0, f64::max);
         println!(
-            "  {name}: {:?}, {} steps ({} rejected), {} rhs, {} Jacobians, {} LU; stiffness detections {} (first at {:?}); max |q1 − q1_rigid| = {dq:.2e}, max |q2|,|q3| = {:.2e}",
-            s.stop,
+            "  {name}: {} steps ({} rejected), {} rhs, {} Jacobians, {} LU; stiffness \
+             detections {} (first at {:?}); max |q1 − q1_rigid| = {dq:.2e}, max |q2|, |q3| = {bend:.2e}",
             s.stats.steps,
             s.stats.rejected,
             s.stats.rhs_evals,
             s.stats.jac_evals,
             s.stats.lu_decomps,
             s.stats.stiffness_detections,
-            s.stats.stiff_at,
-            s.y_out.iter().map(|y| y[1].abs().max(y[2].abs())).fold(0.0, f64::max)
+            s.stats.stiff_at
+        );
+        assert!(dq < 100.0 * tol, "{name}: q1 differs from the rigid chain by {dq:e}, want < 100 tol");
+        assert!(bend < 1e-7, "{name}: joint deflection {bend:e}, want ≲ τ/k < 1e-7 rad");
+        steps.push(s.stats.steps);
+    }
+    // Stability, not accuracy, limits the explicit step: a thousand times
+    // looser a tolerance saves DOPRI5 few steps.
+    let loose = integrate(&mut Dopri5::new(1e-3, 1e-3), &m, 0.0, y0, t_end, &opts, &mut []);
+    println!("  dopri5 at 1e-3: {} steps", loose.stats.steps);
+    assert!(
+        2 * loose.stats.steps > runs[1].1.stats.steps,
+        "DOPRI5 steps at 1e-3: {} vs {} at 1e-6; want the stability limit to dominate",
+        loose.stats.steps,
+        runs[1].1.stats.steps
+    );
+    for (name, s) in &runs[1..] {
+        assert!(
+            s.stats.stiffness_detections > 0 && s.stats.stiff_at.is_some_and(|t| t < t_end),
+            "{name} must report stiffness: {:?}",
+            s.stats
+        );
+        assert!(
+            100 * runs[0].1.stats.steps < s.stats.steps,
+            "RADAU5 {} steps vs {name} {}: want a hundredfold fewer",
+            runs[0].1.stats.steps,
+            s.stats.steps
         );
     }
 }
