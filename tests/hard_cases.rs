@@ -619,11 +619,25 @@ fn stiff_joint_springs_radau5_steps_over_what_the_explicit_codes_must_resolve() 
 
 #[test]
 fn slider_crank_passes_its_dead_centres() {
+    // models/slider_crank.ron with the crank spun up to 15 rad/s so it
+    // revolves. At a dead centre crank and rod are collinear (sin ψ = 0), the
+    // slider stands still at s = l + r cos ψ (0.4 m or 0.2 m) and the
+    // input–output map s(φ) has a vanishing derivative — but the constraint
+    // Jacobian of the cut pin, [[−r sin φ − l sin(φ+ψ), −l sin(φ+ψ), −1],
+    // [r cos φ + l cos(φ+ψ), l cos(φ+ψ), 0]], keeps rank 2 there (its last
+    // column alone is independent of the second row). So, unlike the
+    // four-bar's change point (tests/loops.rs, where the index-3 DAE stops),
+    // every method must pass every dead centre: projection with |Φ| < 1e-10,
+    // rank 2 throughout, finite multipliers and energy kept to 1e-8 relative
+    // (the projections' O(|Φ|) corrections accumulate, as in loops.rs), and
+    // the index-3 DAE with RADAU5 with the same motion.
     use eom_sim::constrained::assemble;
-    use eom_sim::{ConstrainedSystem, Direction, Event, EventAction, Generated, Index3System, Method};
+    use eom_sim::{
+        ConstrainedSystem, Direction, Event, EventAction, Generated, Index3System, Method,
+    };
+    let (r_crank, l_rod) = (0.1, 0.3);
     let m = g::slider_crank::SliderCrank::default();
     let d = Generated(&m);
-    // Crank spun up so it revolves fully through both dead centres.
     let mut u0 = m.u0();
     u0[0] = 15.0;
     let a = assemble(&d, m.q0().as_ref(), u0.as_ref(), 0.0);
@@ -644,21 +658,69 @@ fn slider_crank_passes_its_dead_centres() {
     let t_end = 3.0;
     let sol = integrate(&mut Dop853::new(1e-11, 1e-11), &sys, 0.0, y0, t_end, &opts, &mut events);
     let st = sys.stats();
-    let e0 = total_energy(&m, &y0);
-    let e1 = total_energy(&m, &sol.y_final);
+    let (e0, e1) = (total_energy(&m, &y0), total_energy(&m, &sol.y_final));
     println!(
-        "slider-crank, projection, DOP853 1e-11: {:?}, {} dead centres at {:.4?}; {:?}; energy {e0} → {e1}",
+        "slider-crank from 15 rad/s, projection, DOP853 1e-11, {t_end} s: {:?}, {} steps, {} dead \
+         centres; max |Φ| = {:.1e}, max |Φ̇| = {:.1e}, rank {}..{}; energy {e0:.12} → {e1:.12}",
         sol.stop,
+        sol.stats.steps,
         sol.events.len(),
-        sol.events.iter().map(|e| e.t).collect::<Vec<_>>(),
-        st
+        st.max_position_residual,
+        st.max_velocity_residual,
+        st.min_rank,
+        st.rank
+    );
+    assert_eq!(sol.stop, StopReason::Finished, "{:?}", sol.stop);
+    assert!(sol.events.len() >= 10, "dead centres passed: {}, want ≥ 10", sol.events.len());
+    assert!(
+        st.max_position_residual < 1e-10 && st.max_velocity_residual < 1e-10,
+        "constraint residuals {st:?}"
+    );
+    assert_eq!((st.min_rank, st.rank), (2, 2), "J keeps full rank at dead centre: {st:?}");
+    assert!(
+        (e1 - e0).abs() < 1e-8 * e0.abs(),
+        "energy {e0} → {e1}, want relative change < 1e-8"
+    );
+    let mut worst = (0.0f64, 0.0f64, 0.0f64);
+    for ev in &sol.events {
+        let (q, u) = ev.y.split_at(3);
+        let s_want = l_rod + r_crank * q[1].cos().signum();
+        let lambda = sys.accelerations(ev.t, q, u).map(|(_, l)| l.amax());
+        let lambda = lambda.unwrap_or(f64::NAN);
+        assert!(
+            (q[2] - s_want).abs() < 1e-9 && u[2].abs() < 1e-8 && u[0].abs() > 1.0,
+            "dead centre at t = {}: s got {} want {s_want}, ṡ {} want 0, φ̇ {}",
+            ev.t,
+            q[2],
+            u[2],
+            u[0]
+        );
+        assert!(lambda.is_finite(), "multipliers at the dead centre t = {}: {lambda}", ev.t);
+        worst = (worst.0.max((q[2] - s_want).abs()), worst.1.max(u[2].abs()), worst.2.max(lambda));
+    }
+    println!(
+        "  at the dead centres: |s − (l ± r)| ≤ {:.1e} m, |ṡ| ≤ {:.1e} m/s, |λ| ≤ {:.2} N",
+        worst.0, worst.1, worst.2
     );
     let dae = Index3System::new(&d);
     let z0: [f64; 8] = dae.initial(0.0, &a.q, &a.u).expect("consistent start");
-    let mut r = Radau5::new(1e-9, 1e-9);
-    (r.index2_vars, r.index3_vars) = dae.index_vars();
-    let sd = integrate(&mut r, &dae, 0.0, z0, t_end, &opts, &mut []);
-    println!("  index-3 RADAU5 1e-9: {:?}, {} steps, {:?}; final q {:?} vs projection {:?}", sd.stop, sd.stats.steps, dae.stats(), &sd.y_final[..3], &sol.y_final[..3]);
+    let mut radau = Radau5::new(1e-9, 1e-9);
+    (radau.index2_vars, radau.index3_vars) = dae.index_vars();
+    let sd = integrate(&mut radau, &dae, 0.0, z0, t_end, &opts, &mut []);
+    let dq = max_abs_diff(&sd.y_final[..3], &sol.y_final[..3]);
+    println!(
+        "  index-3 RADAU5 1e-9: {:?}, {} steps, {:?}; final |Δq| against projection {dq:.1e} \
+         (after {:.1} rad of crank travel)",
+        sd.stop,
+        sd.stats.steps,
+        dae.stats(),
+        sol.y_final[0] - y0[0]
+    );
+    assert_eq!(sd.stop, StopReason::Finished, "index-3 DAE: {:?}", sd.stop);
+    assert_eq!(dae.stats().min_rank, 2, "{:?}", dae.stats());
+    // The index-3 DAE controls u only to within h⁻¹ tol (tests/loops.rs);
+    // over ~40 rad of travel that leaves ~1e-5 rad of phase.
+    assert!(dq < 1e-3, "index-3 vs projection: |Δq| = {dq:e}");
 }
 
 // ---------------------------------------------------------------------------
