@@ -13,8 +13,7 @@
 use eom_generated as g;
 use eom_macros::multibody;
 use eom_sim::{
-    Dop853, Dopri5, Model, Radau5, SMatrix, SolveOptions, Stats, StopReason, Vector,
-    integrate,
+    Dop853, Dopri5, Model, Radau5, SMatrix, SolveOptions, Stats, StopReason, Vector, integrate,
 };
 
 /// Bryan angles `R = Rx(a) Ry(b) Rz(c)` through three revolute joints.
@@ -119,7 +118,10 @@ fn bryan_angle_mass_matrix_is_singular_at_gimbal_lock() {
             (det - det_want).abs() <= det_tol,
             "ε = {eps:e}: det M got {det:e} want 6 cos² b = {det_want:e} (± {det_tol:e})"
         );
-        assert!(lo > 0.0, "ε = {eps:e}: M must stay positive definite off the lock, λ_min {lo:e}");
+        assert!(
+            lo > 0.0,
+            "ε = {eps:e}: M must stay positive definite off the lock, λ_min {lo:e}"
+        );
         if k <= 5 {
             // λ_min is computed to about eps λ_max: trust cond up to ~1e10.
             scaled.push((eps, cond * b.cos().powi(2)));
@@ -167,9 +169,30 @@ fn gimbal_run(w0: [f64; 3], tol: f64, t_end: f64, t_check: f64) -> GimbalRun {
         record_steps: true,
         ..sampled(0.0, t_end, 0.01)
     };
-    let sb = integrate(&mut Dop853::new(tol, tol), &mb, 0.0, yb, t_end, &opts, &mut []);
-    let sq = integrate(&mut Dop853::new(tol, tol), &mq, 0.0, yq, t_end, &opts, &mut []);
-    assert_eq!(sq.stop, StopReason::Finished, "quaternion model: {:?}", sq.stop);
+    let sb = integrate(
+        &mut Dop853::new(tol, tol),
+        &mb,
+        0.0,
+        yb,
+        t_end,
+        &opts,
+        &mut [],
+    );
+    let sq = integrate(
+        &mut Dop853::new(tol, tol),
+        &mq,
+        0.0,
+        yq,
+        t_end,
+        &opts,
+        &mut [],
+    );
+    assert_eq!(
+        sq.stop,
+        StopReason::Finished,
+        "quaternion model: {:?}",
+        sq.stop
+    );
     let (mut err_before, mut err_all) = (0.0f64, 0.0f64);
     for (k, (t, y)) in sb.t_out.iter().zip(&sb.y_out).enumerate() {
         let e = max_abs_diff(&outputs(&mb, y), &outputs(&mq, &sq.y_out[k]));
@@ -184,7 +207,10 @@ fn gimbal_run(w0: [f64; 3], tol: f64, t_end: f64, t_check: f64) -> GimbalRun {
         min_cos = min_cos.min(y[1].cos().abs());
     }
     let (e0, e1) = (total_energy(&mq, &yq), total_energy(&mq, &sq.y_final));
-    let (l0, l1) = (angular_momentum(&mq, &yq), angular_momentum(&mq, &sq.y_final));
+    let (l0, l1) = (
+        angular_momentum(&mq, &yq),
+        angular_momentum(&mq, &sq.y_final),
+    );
     let dl: Vec<f64> = l0.iter().zip(&l1).map(|(a, b)| a - b).collect();
     GimbalRun {
         stop: sb.stop,
@@ -360,10 +386,21 @@ fn dzhanibekov_flips_keep_energy_and_momentum_to_1e_10_over_100_s() {
         max_steps: 10_000_000,
         ..SolveOptions::default()
     };
-    let sol = integrate(&mut Dop853::new(1e-12, 1e-12), &m, 0.0, y0, 100.0, &opts, &mut events);
+    let sol = integrate(
+        &mut Dop853::new(1e-12, 1e-12),
+        &m,
+        0.0,
+        y0,
+        100.0,
+        &opts,
+        &mut events,
+    );
     assert_eq!(sol.stop, StopReason::Finished, "{:?}", sol.stop);
     let (e_0, e_1) = (total_energy(&m, &y0), total_energy(&m, &sol.y_final));
-    let (h0, h1) = (angular_momentum(&m, &y0), angular_momentum(&m, &sol.y_final));
+    let (h0, h1) = (
+        angular_momentum(&m, &y0),
+        angular_momentum(&m, &sol.y_final),
+    );
     let de = (e_1 - e_0).abs() / e_0;
     let dl = (norm(&h1) - norm(&h0)).abs() / norm(&h0);
     let dlv = norm(&[h1[0] - h0[0], h1[1] - h0[1], h1[2] - h0[2]]) / norm(&h0);
@@ -378,9 +415,16 @@ fn dzhanibekov_flips_keep_energy_and_momentum_to_1e_10_over_100_s() {
     println!("  closed form (2n+1) K/ν with K = {kk:.12}, ν = {nu:.12}");
     assert!(de < 1e-10, "energy: relative drift got {de:e} want < 1e-10");
     assert!(dl < 1e-10, "|L|: relative drift got {dl:e} want < 1e-10");
-    assert!(dlv < 1e-10, "L (world vector): relative change got {dlv:e} want < 1e-10");
+    assert!(
+        dlv < 1e-10,
+        "L (world vector): relative change got {dlv:e} want < 1e-10"
+    );
     assert!(qn < 1e-14, "quaternion norm off by {qn:e}");
-    assert_eq!(flips.len(), 5, "ω_y must change sign five times in 100 s, got {flips:?}");
+    assert_eq!(
+        flips.len(),
+        5,
+        "ω_y must change sign five times in 100 s, got {flips:?}"
+    );
     for (n, t) in flips.iter().enumerate() {
         let want = (2 * n + 1) as f64 * kk / nu;
         assert!(
@@ -395,27 +439,67 @@ fn dzhanibekov_flips_keep_energy_and_momentum_to_1e_10_over_100_s() {
 // ---------------------------------------------------------------------------
 
 /// The double pendulum sampled every `dt` up to `t_end`.
-fn double_pendulum(method: &str, tol: f64, t_end: f64, dt: f64) -> (Vec<f64>, Vec<[f64; 4]>, Stats) {
+fn double_pendulum(
+    method: &str,
+    tol: f64,
+    t_end: f64,
+    dt: f64,
+) -> (Vec<f64>, Vec<[f64; 4]>, Stats) {
     let m = g::double_pendulum::DoublePendulum::default();
     let y0: [f64; 4] = initial(&m);
     let opts = sampled(0.0, t_end, dt);
     let sol = match method {
-        "dop853" => integrate(&mut Dop853::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut []),
-        "dopri5" => integrate(&mut Dopri5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut []),
-        _ => integrate(&mut Radau5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut []),
+        "dop853" => integrate(
+            &mut Dop853::new(tol, tol),
+            &m,
+            0.0,
+            y0,
+            t_end,
+            &opts,
+            &mut [],
+        ),
+        "dopri5" => integrate(
+            &mut Dopri5::new(tol, tol),
+            &m,
+            0.0,
+            y0,
+            t_end,
+            &opts,
+            &mut [],
+        ),
+        _ => integrate(
+            &mut Radau5::new(tol, tol),
+            &m,
+            0.0,
+            y0,
+            t_end,
+            &opts,
+            &mut [],
+        ),
     };
-    assert_eq!(sol.stop, StopReason::Finished, "{method} {tol:e}: {:?}", sol.stop);
+    assert_eq!(
+        sol.stop,
+        StopReason::Finished,
+        "{method} {tol:e}: {:?}",
+        sol.stop
+    );
     (sol.t_out, sol.y_out, sol.stats)
 }
 
 /// Largest angle difference (rad) at each sample.
 fn angle_errors(a: &[[f64; 4]], b: &[[f64; 4]]) -> Vec<f64> {
-    a.iter().zip(b).map(|(x, y)| max_abs_diff(&x[..2], &y[..2])).collect()
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| max_abs_diff(&x[..2], &y[..2]))
+        .collect()
 }
 
 /// First sample time where `err` exceeds `level` (`None`: never).
 fn first_above(t: &[f64], err: &[f64], level: f64) -> Option<f64> {
-    t.iter().zip(err).find(|(_, e)| **e > level).map(|(t, _)| *t)
+    t.iter()
+        .zip(err)
+        .find(|(_, e)| **e > level)
+        .map(|(t, _)| *t)
 }
 
 /// Least-squares slope of `ln e` against `t` over the samples in `[t0, t1]`.
@@ -473,7 +557,10 @@ fn chaotic_double_pendulum_error_growth_and_predictability_horizon() {
         at(&d_ref, 20.0)
     );
     let worst_ref = d_ref.iter().copied().fold(0.0, f64::max);
-    assert!(worst_ref < 1e-4, "reference vs check: |Δθ| up to {worst_ref:e}, want < 1e-4");
+    assert!(
+        worst_ref < 1e-4,
+        "reference vs check: |Δθ| up to {worst_ref:e}, want < 1e-4"
+    );
     assert!(
         (0.3..3.0).contains(&lambda),
         "growth rate of the reference-vs-check difference got {lambda}/s, want a positive \
@@ -484,7 +571,10 @@ fn chaotic_double_pendulum_error_growth_and_predictability_horizon() {
         for tol in [1e-5, 1e-7, 1e-9, 1e-11] {
             let (_, y, st) = double_pendulum(method, tol, t_end, dt);
             let e = angle_errors(&y, &reference);
-            let early = e[..=(2.0 / dt).round() as usize].iter().copied().fold(0.0, f64::max);
+            let early = e[..=(2.0 / dt).round() as usize]
+                .iter()
+                .copied()
+                .fold(0.0, f64::max);
             let horizon = first_above(&t, &e, level);
             println!(
                 "  {method} {tol:.0e}: {} steps, |Δθ| at 1, 2, 5, 10, 15, 20 s: {:.1e} {:.1e} \
@@ -515,7 +605,10 @@ fn chaotic_double_pendulum_error_growth_and_predictability_horizon() {
             );
         }
         let (t7, t11) = (horizons[1].1, horizons[3].1.min(t_end));
-        assert!(t7.is_finite(), "{method}: the 1e-7 run must lose the reference within {t_end} s");
+        assert!(
+            t7.is_finite(),
+            "{method}: the 1e-7 run must lose the reference within {t_end} s"
+        );
         let want = 0.5 * (1e4f64).ln() / lambda;
         assert!(
             t11 - t7 >= want,
@@ -554,13 +647,54 @@ fn stiff_joint_springs_radau5_steps_over_what_the_explicit_codes_must_resolve() 
     let (t_end, tol) = (1.0, 1e-6);
     let opts = sampled(0.0, t_end, 0.05);
     let runs = [
-        ("radau5", integrate(&mut Radau5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut [])),
-        ("dopri5", integrate(&mut Dopri5::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut [])),
-        ("dop853", integrate(&mut Dop853::new(tol, tol), &m, 0.0, y0, t_end, &opts, &mut [])),
+        (
+            "radau5",
+            integrate(
+                &mut Radau5::new(tol, tol),
+                &m,
+                0.0,
+                y0,
+                t_end,
+                &opts,
+                &mut [],
+            ),
+        ),
+        (
+            "dopri5",
+            integrate(
+                &mut Dopri5::new(tol, tol),
+                &m,
+                0.0,
+                y0,
+                t_end,
+                &opts,
+                &mut [],
+            ),
+        ),
+        (
+            "dop853",
+            integrate(
+                &mut Dop853::new(tol, tol),
+                &m,
+                0.0,
+                y0,
+                t_end,
+                &opts,
+                &mut [],
+            ),
+        ),
     ];
     let rigid = StiffChainRigid::default();
     let r0: [f64; 2] = initial(&rigid);
-    let rr = integrate(&mut Dop853::new(1e-12, 1e-12), &rigid, 0.0, r0, t_end, &opts, &mut []);
+    let rr = integrate(
+        &mut Dop853::new(1e-12, 1e-12),
+        &rigid,
+        0.0,
+        r0,
+        t_end,
+        &opts,
+        &mut [],
+    );
     assert_eq!(rr.stop, StopReason::Finished);
     println!("stiff chain (k = 1e8 N m/rad), rtol = atol = {tol:e}, {t_end} s:");
     let mut steps = Vec::new();
@@ -572,7 +706,11 @@ fn stiff_joint_springs_radau5_steps_over_what_the_explicit_codes_must_resolve() 
             .zip(&rr.y_out)
             .map(|(a, b)| (a[0] - b[0]).abs())
             .fold(0.0, f64::max);
-        let bend = s.y_out.iter().map(|y| y[1].abs().max(y[2].abs())).fold(0.0, f64::max);
+        let bend = s
+            .y_out
+            .iter()
+            .map(|y| y[1].abs().max(y[2].abs()))
+            .fold(0.0, f64::max);
         println!(
             "  {name}: {} steps ({} rejected), {} rhs, {} Jacobians, {} LU; stiffness \
              detections {} (first at {:?}); max |q1 − q1_rigid| = {dq:.2e}, max |q2|, |q3| = {bend:.2e}",
@@ -584,13 +722,27 @@ fn stiff_joint_springs_radau5_steps_over_what_the_explicit_codes_must_resolve() 
             s.stats.stiffness_detections,
             s.stats.stiff_at
         );
-        assert!(dq < 100.0 * tol, "{name}: q1 differs from the rigid chain by {dq:e}, want < 100 tol");
-        assert!(bend < 1e-7, "{name}: joint deflection {bend:e}, want ≲ τ/k < 1e-7 rad");
+        assert!(
+            dq < 100.0 * tol,
+            "{name}: q1 differs from the rigid chain by {dq:e}, want < 100 tol"
+        );
+        assert!(
+            bend < 1e-7,
+            "{name}: joint deflection {bend:e}, want ≲ τ/k < 1e-7 rad"
+        );
         steps.push(s.stats.steps);
     }
     // Stability, not accuracy, limits the explicit step: a thousand times
     // looser a tolerance saves DOPRI5 few steps.
-    let loose = integrate(&mut Dopri5::new(1e-3, 1e-3), &m, 0.0, y0, t_end, &opts, &mut []);
+    let loose = integrate(
+        &mut Dopri5::new(1e-3, 1e-3),
+        &m,
+        0.0,
+        y0,
+        t_end,
+        &opts,
+        &mut [],
+    );
     println!("  dopri5 at 1e-3: {} steps", loose.stats.steps);
     assert!(
         2 * loose.stats.steps > runs[1].1.stats.steps,
@@ -656,7 +808,15 @@ fn slider_crank_passes_its_dead_centres() {
         ..SolveOptions::default()
     };
     let t_end = 3.0;
-    let sol = integrate(&mut Dop853::new(1e-11, 1e-11), &sys, 0.0, y0, t_end, &opts, &mut events);
+    let sol = integrate(
+        &mut Dop853::new(1e-11, 1e-11),
+        &sys,
+        0.0,
+        y0,
+        t_end,
+        &opts,
+        &mut events,
+    );
     let st = sys.stats();
     let (e0, e1) = (total_energy(&m, &y0), total_energy(&m, &sol.y_final));
     println!(
@@ -671,12 +831,20 @@ fn slider_crank_passes_its_dead_centres() {
         st.rank
     );
     assert_eq!(sol.stop, StopReason::Finished, "{:?}", sol.stop);
-    assert!(sol.events.len() >= 10, "dead centres passed: {}, want ≥ 10", sol.events.len());
+    assert!(
+        sol.events.len() >= 10,
+        "dead centres passed: {}, want ≥ 10",
+        sol.events.len()
+    );
     assert!(
         st.max_position_residual < 1e-10 && st.max_velocity_residual < 1e-10,
         "constraint residuals {st:?}"
     );
-    assert_eq!((st.min_rank, st.rank), (2, 2), "J keeps full rank at dead centre: {st:?}");
+    assert_eq!(
+        (st.min_rank, st.rank),
+        (2, 2),
+        "J keeps full rank at dead centre: {st:?}"
+    );
     assert!(
         (e1 - e0).abs() < 1e-8 * e0.abs(),
         "energy {e0} → {e1}, want relative change < 1e-8"
@@ -695,8 +863,16 @@ fn slider_crank_passes_its_dead_centres() {
             u[2],
             u[0]
         );
-        assert!(lambda.is_finite(), "multipliers at the dead centre t = {}: {lambda}", ev.t);
-        worst = (worst.0.max((q[2] - s_want).abs()), worst.1.max(u[2].abs()), worst.2.max(lambda));
+        assert!(
+            lambda.is_finite(),
+            "multipliers at the dead centre t = {}: {lambda}",
+            ev.t
+        );
+        worst = (
+            worst.0.max((q[2] - s_want).abs()),
+            worst.1.max(u[2].abs()),
+            worst.2.max(lambda),
+        );
     }
     println!(
         "  at the dead centres: |s − (l ± r)| ≤ {:.1e} m, |ṡ| ≤ {:.1e} m/s, |λ| ≤ {:.2} N",
@@ -761,7 +937,9 @@ where
     // |M u̇ + b − τ| relative to |M| |u̇| + |b| (backward error, < 1e-14).
     use eom_gen::mech::Numeric;
     let path = format!("{}/tests/models/{file}", env!("CARGO_MANIFEST_DIR"));
-    let sys = eom_gen::check_file(&path).unwrap_or_else(|r| panic!("{r}")).system;
+    let sys = eom_gen::check_file(&path)
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
     let num = Numeric::new(&sys).expect("numeric");
     let m = M::default();
     let mut seed = 7u64;
@@ -817,7 +995,15 @@ where
     let y0: [f64; 10] = initial(&m);
     let t_end = 1.0;
     let opts = sampled(0.0, t_end, 0.05);
-    let sol = integrate(&mut Dop853::new(1e-10, 1e-10), &m, 0.0, y0, t_end, &opts, &mut []);
+    let sol = integrate(
+        &mut Dop853::new(1e-10, 1e-10),
+        &m,
+        0.0,
+        y0,
+        t_end,
+        &opts,
+        &mut [],
+    );
     let reference = eom_sim::FnSystem(|_t: f64, y: &[f64; 10], dy: &mut [f64; 10]| {
         let zero = [0.0; 5];
         dy[..5].copy_from_slice(&y[5..]);
@@ -826,9 +1012,29 @@ where
             Err(_) => dy[5..].fill(f64::NAN),
         }
     });
-    let sr = integrate(&mut Dop853::new(1e-10, 1e-10), &reference, 0.0, y0, t_end, &opts, &mut []);
-    assert_eq!(sol.stop, StopReason::Finished, "{}: {:?}", M::NAME, sol.stop);
-    assert_eq!(sr.stop, StopReason::Finished, "{} reference: {:?}", M::NAME, sr.stop);
+    let sr = integrate(
+        &mut Dop853::new(1e-10, 1e-10),
+        &reference,
+        0.0,
+        y0,
+        t_end,
+        &opts,
+        &mut [],
+    );
+    assert_eq!(
+        sol.stop,
+        StopReason::Finished,
+        "{}: {:?}",
+        M::NAME,
+        sol.stop
+    );
+    assert_eq!(
+        sr.stop,
+        StopReason::Finished,
+        "{} reference: {:?}",
+        M::NAME,
+        sr.stop
+    );
     let mut worst = [0.0f64; 5];
     for (a, b) in sol.y_out.iter().zip(&sr.y_out) {
         for k in 0..5 {
@@ -846,7 +1052,12 @@ where
         worst.map(|w| format!("{w:.1e}"))
     );
     for (k, w) in worst.iter().enumerate() {
-        assert!(*w < 1e-6, "{}: q{} differs from the reference run by {w:e} rad", M::NAME, k + 1);
+        assert!(
+            *w < 1e-6,
+            "{}: q{} differs from the reference run by {w:e} rad",
+            M::NAME,
+            k + 1
+        );
     }
     assert!(de < 1e-8, "{}: relative energy change {de:e}", M::NAME);
 }
