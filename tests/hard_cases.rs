@@ -1,14 +1,24 @@
 //! The hard cases of issue 8 (numerical stability). Each test states what
 //! the method promises and checks it on the compiled models:
 //!
-//! - gimbal lock: Bryan angles vs a quaternion for one rigid body;
-//! - the torque-free asymmetric body spinning near its intermediate axis;
-//! - the chaotic double pendulum: error growth against a checked reference;
-//! - stiff joint springs: RADAU5 against the explicit codes;
-//! - closed loops through singular positions (slider-crank dead centre);
-//! - badly scaled masses (1e-6 … 1e6 kg in one chain).
+//! 1. gimbal lock: Bryan angles against a quaternion for one rigid body
+//!    (`tests/models/gimbal_*.ron`), and the singular Bryan mass matrix;
+//! 2. the torque-free asymmetric body spinning near its intermediate axis
+//!    (energy and |L| to 1e-10 over 100 s, flip times against the closed form);
+//! 3. the chaotic double pendulum: error growth against a checked reference
+//!    and the predictability horizon against the tolerance;
+//! 4. stiff joint springs (`tests/models/stiff_chain*.ron`): RADAU5 against
+//!    the explicit codes and their stiffness detection;
+//! 5. closed loops through singular positions: slider-crank dead centres,
+//!    the four-bar's change point;
+//! 6. redundant constraints: Bricard's symmetric path and the index-3 DAE's
+//!    clear refusal (the rest is in eom-gen/tests/constraints.rs and
+//!    tests/loops.rs);
+//! 7. badly scaled masses, 1e-6 … 1e6 kg in one chain
+//!    (`tests/models/mass_scaled_chain*.ron`).
 //!
-//! `cargo test -p eom --test hard_cases -- --nocapture` prints the figures.
+//! (The 200-link chain is in its own test.) Run with
+//! `cargo test -p eom --test hard_cases -- --nocapture` to see the figures.
 
 use eom_generated as g;
 use eom_macros::multibody;
@@ -412,7 +422,14 @@ fn dzhanibekov_flips_keep_energy_and_momentum_to_1e_10_over_100_s() {
         sol.stats.steps
     );
     println!("  ω_y sign changes at {flips:.6?} s");
-    println!("  closed form (2n+1) K/ν with K = {kk:.12}, ν = {nu:.12}");
+    let worst = flips
+        .iter()
+        .enumerate()
+        .map(|(n, t)| (t - (2 * n + 1) as f64 * kk / nu).abs())
+        .fold(0.0, f64::max);
+    println!(
+        "  closed form (2n+1) K/ν with K = {kk:.12}, ν = {nu:.12}: largest difference {worst:.1e} s"
+    );
     assert!(de < 1e-10, "energy: relative drift got {de:e} want < 1e-10");
     assert!(dl < 1e-10, "|L|: relative drift got {dl:e} want < 1e-10");
     assert!(
@@ -897,6 +914,165 @@ fn slider_crank_passes_its_dead_centres() {
     // The index-3 DAE controls u only to within h⁻¹ tol (tests/loops.rs);
     // over ~40 rad of travel that leaves ~1e-5 rad of phase.
     assert!(dq < 1e-3, "index-3 vs projection: |Δq| = {dq:e}");
+}
+
+#[test]
+fn fourbar_keeps_its_parallelogram_branch_through_the_change_point() {
+    // models/fourbar.ron is a parallelogram: on its branch the cranks stay
+    // parallel (φ3 = φ1) and the coupler level (φ1 + φ2 = 0). At the change
+    // point (cranks horizontal, φ1 = −π/2 + kπ) all links are collinear, J
+    // loses rank and a second branch (the anti-parallelogram) crosses this
+    // one. tests/loops.rs checks that the index-3 DAE stops there and that
+    // projection keeps the energy; here, projection with DOP853 passes the
+    // change point repeatedly and must (i) report the rank loss of J at the
+    // located crossing, (ii) stay on the parallelogram branch (a switch
+    // would be silently wrong motion), to 1e-6 rad.
+    use eom_sim::constrained::{DVector, Dynamics, assemble, min_norm_solve};
+    use eom_sim::{
+        ConstrainedSystem, ConstraintValues, Direction, Event, EventAction, Generated, Method,
+    };
+    let m = g::fourbar::Fourbar::default();
+    let d = Generated(&m);
+    let a = assemble(&d, m.q0().as_ref(), m.u0().as_ref(), 0.0);
+    let mut y0 = [0.0; 6];
+    y0[..3].copy_from_slice(&a.q);
+    y0[3..].copy_from_slice(&a.u);
+    let sys = ConstrainedSystem::new(&d, Method::Projection);
+    let mut events = [Event::new(
+        |_t, y: &[f64; 6]| y[0].cos(),
+        Direction::Both,
+        EventAction::Record,
+    )];
+    let t_end = 2.0;
+    let opts = SolveOptions {
+        max_steps: 2_000_000,
+        ..sampled(0.0, t_end, 0.01)
+    };
+    let sol = integrate(
+        &mut Dop853::new(1e-9, 1e-9),
+        &sys,
+        0.0,
+        y0,
+        t_end,
+        &opts,
+        &mut events,
+    );
+    assert_eq!(sol.stop, StopReason::Finished, "{:?}", sol.stop);
+    let rank_at = |t: f64, y: &[f64; 6]| {
+        let mut c = ConstraintValues::zeros(d.nc(), d.nu());
+        d.constraints(t, &y[..3], &y[3..], &mut c);
+        min_norm_solve(&c.jacobian, &DVector::zeros(d.nc())).1
+    };
+    let generic = rank_at(0.0, &y0);
+    let ranks: Vec<usize> = sol.events.iter().map(|e| rank_at(e.t, &e.y)).collect();
+    let branch = sol
+        .y_out
+        .iter()
+        .map(|y| (y[2] - y[0]).abs().max((y[0] + y[1]).abs()))
+        .fold(0.0, f64::max);
+    let st = sys.stats();
+    println!(
+        "four-bar, projection, DOP853 1e-9, {t_end} s: change points at {:.4?} s, rank of J there \
+         {ranks:?} (generic {generic}); max |φ3 − φ1|, |φ1 + φ2| = {branch:.1e}; {st:?}",
+        sol.events.iter().map(|e| e.t).collect::<Vec<_>>()
+    );
+    assert!(
+        sol.events.len() >= 2,
+        "change points passed: {}",
+        sol.events.len()
+    );
+    assert!(
+        ranks.iter().all(|&r| r < generic),
+        "J must lose rank at the located change points: {ranks:?}, generic {generic}"
+    );
+    assert!(
+        branch < 1e-6,
+        "left the parallelogram branch by {branch:e} rad"
+    );
+    assert!(st.max_position_residual < 1e-10, "{st:?}");
+}
+
+// ---------------------------------------------------------------------------
+// 6. Redundant constraints (Bricard)
+// ---------------------------------------------------------------------------
+
+#[test]
+fn bricard_stays_on_its_symmetric_path_and_index3_refuses_clearly() {
+    // Covered elsewhere: eom-gen/tests/constraints.rs (true mobility 1 from
+    // the rank of J although Grübler–Kutzbach says 0; assembly with the
+    // redundant equation; projection moves it, rank 4 of 5, energy kept),
+    // tests/loops.rs (|Φ|, |Φ̇| < 1e-10 with projection and partitioning,
+    // energy to 1e-8 over 5 s). Added here:
+    // - the path: the loop of six cube edges is invariant under the cube's
+    //   threefold rotation about its diagonal, which shifts the joint labels
+    //   by two, so the one-degree-of-freedom path through the symmetric start
+    //   consists of states with θ1 = θ3 = θ5 and θ2 = θ4 (gravity only sets
+    //   the speed along it). The minimum-norm multipliers must keep the run on
+    //   it, to 1e-8 rad over 2 s;
+    // - the index-3 DAE needs a regular J (README): on Bricard its Newton
+    //   matrix is singular from the start, and RADAU5 must stop with a
+    //   convergence or step-size failure near t = 0, never a non-finite state
+    //   or a finished wrong run.
+    use eom_sim::constrained::assemble;
+    use eom_sim::{ConstrainedSystem, Generated, Index3System, Method};
+    let m = g::bricard::Bricard::default();
+    let d = Generated(&m);
+    let a = assemble(&d, m.q0().as_ref(), m.u0().as_ref(), 0.0);
+    let mut y0 = [0.0; 10];
+    y0[..5].copy_from_slice(&a.q);
+    y0[5..].copy_from_slice(&a.u);
+    let sys = ConstrainedSystem::new(&d, Method::Projection);
+    let t_end = 2.0;
+    let opts = sampled(0.0, t_end, 0.02);
+    let sp = integrate(
+        &mut Dop853::new(1e-11, 1e-11),
+        &sys,
+        0.0,
+        y0,
+        t_end,
+        &opts,
+        &mut [],
+    );
+    assert_eq!(sp.stop, StopReason::Finished, "{:?}", sp.stop);
+    let asym = sp
+        .y_out
+        .iter()
+        .map(|y| {
+            (y[0] - y[2])
+                .abs()
+                .max((y[2] - y[4]).abs())
+                .max((y[1] - y[3]).abs())
+        })
+        .fold(0.0, f64::max);
+    let travel = sp.y_out.iter().map(|y| y[0].abs()).fold(0.0, f64::max);
+    let st = sys.stats();
+    println!(
+        "bricard, projection, DOP853 1e-11, {t_end} s: θ1 travels up to {travel:.3} rad; \
+         max |θ1 − θ3|, |θ3 − θ5|, |θ2 − θ4| = {asym:.1e}; rank {}..{}",
+        st.min_rank, st.rank
+    );
+    assert!(
+        travel > 0.1,
+        "Bricard must move under gravity: max |θ1| = {travel}"
+    );
+    assert!(asym < 1e-8, "left the symmetric path by {asym:e} rad");
+    assert_eq!((st.min_rank, st.rank), (4, 4), "{st:?}");
+    let dae = Index3System::new(&d);
+    let z0: [f64; 15] = dae.initial(0.0, &a.q, &a.u).expect("consistent start");
+    let mut radau = Radau5::new(1e-9, 1e-9);
+    (radau.index2_vars, radau.index3_vars) = dae.index_vars();
+    let sd = integrate(&mut radau, &dae, 0.0, z0, t_end, &opts, &mut []);
+    println!(
+        "  index-3 RADAU5 1e-9: {:?} after {} steps",
+        sd.stop, sd.stats.steps
+    );
+    match sd.stop {
+        StopReason::ConvergenceFailure { t } | StopReason::StepSizeTooSmall { t, .. } => {
+            assert!(t < 1e-3, "index-3 stopped at t = {t}, want at the start");
+        }
+        other => panic!("index-3 DAE on a redundant loop: want a clear failure, got {other:?}"),
+    }
+    assert!(sd.y_final.iter().all(|x| x.is_finite()), "{:?}", sd.y_final);
 }
 
 // ---------------------------------------------------------------------------
