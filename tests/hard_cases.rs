@@ -101,7 +101,9 @@ fn bryan_angle_mass_matrix_is_singular_at_gimbal_lock() {
     // pivot and add nothing), and one eigenvalue vanishes like cos² b while
     // the others stay O(1): cond(M) cos² b tends to a constant as b → π/2.
     // The determinant of a nearly singular 3×3 matrix is computed with an
-    // absolute error of a few eps ‖M‖³, which sets the tolerance.
+    // absolute error of a few eps ‖M‖³ (4 eps ‖M‖³ ≈ 2e-13 here), which sets
+    // the tolerance; it is checked while that is below 4 % of det M
+    // (ε ≥ 1e-6).
     let m = GimbalBryan::default();
     assert_eq!(GimbalBryan::COORDINATE_NAMES, ["a", "b", "c"]);
     let (a, c) = (0.3, -0.7);
@@ -115,7 +117,7 @@ fn bryan_angle_mass_matrix_is_singular_at_gimbal_lock() {
         let mat = SMatrix::<f64, 3, 3>::from_fn(|i, j| mm[i][j]);
         let det_want = 6.0 * b.cos().powi(2);
         let det = mat.determinant();
-        let det_tol = 20.0 * f64::EPSILON * mat.norm().powi(3);
+        let det_tol = 4.0 * f64::EPSILON * mat.norm().powi(3);
         let ev = mat.symmetric_eigenvalues();
         let (lo, hi) = (ev.min(), ev.max());
         let cond = hi / lo;
@@ -125,7 +127,7 @@ fn bryan_angle_mass_matrix_is_singular_at_gimbal_lock() {
             det / det_want
         );
         assert!(
-            (det - det_want).abs() <= det_tol,
+            k > 6 || (det - det_want).abs() <= det_tol,
             "ε = {eps:e}: det M got {det:e} want 6 cos² b = {det_want:e} (± {det_tol:e})"
         );
         assert!(
