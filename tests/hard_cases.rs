@@ -652,7 +652,7 @@ pub struct StiffChainRigid;
 
 #[test]
 fn stiff_joint_springs_radau5_steps_over_what_the_explicit_codes_must_resolve() {
-    // The chain swings as one compound pendulum (period ~1.4 s) while the
+    // The chain swings as one compound pendulum (period ~2 s) while the
     // elbow and wrist springs have eigenvalues of order 1e4/s, excited only to
     // their static deflection. An explicit code is stable only for
     // h |λ| ≲ 3, so DOPRI5 and DOP853 need tens of thousands of steps in 1 s
@@ -794,10 +794,10 @@ fn slider_crank_passes_its_dead_centres() {
     // models/slider_crank.ron with the crank spun up to 15 rad/s so it
     // revolves. At a dead centre crank and rod are collinear (sin ψ = 0), the
     // slider stands still at s = l + r cos ψ (0.4 m or 0.2 m) and the
-    // input–output map s(φ) has a vanishing derivative — but the constraint
-    // Jacobian of the cut pin, [[−r sin φ − l sin(φ+ψ), −l sin(φ+ψ), −1],
-    // [r cos φ + l cos(φ+ψ), l cos(φ+ψ), 0]], keeps rank 2 there (its last
-    // column alone is independent of the second row). So, unlike the
+    // input–output map s(φ) has a vanishing derivative — but the closure of
+    // the cut pin (r cos φ + l cos(φ+ψ) = s, r sin φ + l sin(φ+ψ) = 0) keeps a
+    // Jacobian of rank 2 there: with sin φ = sin(φ+ψ) = 0 it is
+    // [[0, 0, −1], [±r ± l, ±l, 0]]. So, unlike the
     // four-bar's change point (tests/loops.rs, where the index-3 DAE stops),
     // every method must pass every dead centre: projection with |Φ| < 1e-10,
     // rank 2 throughout, finite multipliers and energy kept to 1e-8 relative
