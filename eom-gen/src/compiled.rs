@@ -282,7 +282,7 @@ impl ::eom_sim::ConstrainedModel for MODEL_TYPE {
 /// `ConstrainedModel` impl for a model without constraints.
 pub(crate) fn model_module(name: &str, source: &str, nq: usize, nu: usize) -> String {
     format!(
-        "{source}\npub type MODEL = {};\npub const NQ: usize = {nq};\npub const NY: usize = {};\npub const NYC: usize = NY + <MODEL as ::eom_sim::ConstrainedModel>::NC;\n{}",
+        "{source}\npub type MODEL = {};\n#[allow(dead_code)]\npub const NQ: usize = {nq};\npub const NY: usize = {};\npub const NYC: usize = NY + <MODEL as ::eom_sim::ConstrainedModel>::NC;\n{}",
         camel(name),
         nq + nu,
         if source.contains("impl ::eom_sim::ConstrainedModel for") {

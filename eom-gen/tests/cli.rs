@@ -633,3 +633,51 @@ fn bench_work_precision_sweeps_constraint_solvers_of_a_loop() {
         );
     }
 }
+
+#[test]
+fn bench_suite_writes_a_csv_and_svg_per_model_and_a_summary() {
+    // A models directory with the pendulum and a broken model: the
+    // pendulum's results are written, the broken one is named and the
+    // suite exits 1.
+    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/wp-suite-test");
+    let (models, out) = (format!("{root}/models"), format!("{root}/out"));
+    let _ = std::fs::remove_dir_all(root);
+    std::fs::create_dir_all(&models).expect("temp dir");
+    let pendulum = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/pendulum.ron");
+    std::fs::copy(pendulum, format!("{models}/pendulum.ron")).expect("copy");
+    std::fs::write(format!("{models}/broken.ron"), "Model(name: \"broken\"").expect("write");
+    let out_run = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+        .args([
+            "bench",
+            "--suite",
+            "--models",
+            &models,
+            "--out",
+            &out,
+            "--t-end",
+            "1",
+            "--tols",
+            "1e-6,1e-9",
+            "--steps",
+            "100,200",
+            "--min-time",
+            "0",
+        ])
+        .env("EOM_CACHE_DIR", cache)
+        .output()
+        .expect("eom-gen runs");
+    let stderr = String::from_utf8_lossy(&out_run.stderr);
+    assert_eq!(out_run.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("broken.ron"), "{stderr}");
+    let csv = std::fs::read_to_string(format!("{out}/pendulum.csv")).expect("pendulum.csv");
+    // rk4 at two steps, dopri5, dop853 and radau5 at two tolerances each.
+    assert_eq!(csv.lines().count(), 1 + 8, "{csv}");
+    let svg = std::fs::read_to_string(format!("{out}/pendulum.svg")).expect("pendulum.svg");
+    assert!(svg.contains("radau5"));
+    let md = std::fs::read_to_string(format!("{out}/suite.md")).expect("suite.md");
+    assert!(
+        md.contains("## pendulum") && md.contains("![pendulum](pendulum.svg)"),
+        "{md}"
+    );
+}
