@@ -963,6 +963,8 @@ fn bench_suite(
     let mut summary =
         format!("# Work-precision suite\n\n`eom-gen bench --suite --models {dir} --out {out}`\n\n");
     let mut failed = Vec::new();
+    let mut rows = String::new();
+    let mut sections = String::new();
     for path in &models {
         let p = path.display().to_string();
         let g = match generate_with_progress(&p) {
@@ -1013,9 +1015,15 @@ fn bench_suite(
                 base.display()
             )
         });
-        summary += &format!("## {name}\n\n![{name}]({name}.svg)\n\n{}\n", wp::table(&w));
+        rows += &wp::summary_rows(&w);
+        sections += &format!("## {name}\n\n![{name}]({name}.svg)\n\n{}\n", wp::table(&w));
     }
     overall.finish_and_clear();
+    summary += "CPU time of one run (median) of the cheapest setting whose end error is at most 1e-6 and 1e-9, and the most significant digits reached, per method:\n\n";
+    summary += "| model | t_end | method | ≤ 1e-6: CPU ms | ≤ 1e-9: CPU ms | best digits |\n|---|---|---|---|---|---|\n";
+    summary += &rows;
+    summary += "\n";
+    summary += &sections;
     if write_file(&format!("{out}/suite.md"), &summary).is_err() {
         return ExitCode::from(1);
     }

@@ -504,3 +504,56 @@ pub fn suite_options(model: &str, base: &WpOptions) -> WpOptions {
         ..base.clone()
     }
 }
+
+/// Per series, the cheapest finished run (least CPU time) whose end error
+/// is at most `threshold`, in series order; `None` where no run reached it.
+pub fn cheapest(w: &WorkPrecision, threshold: f64) -> Vec<(String, Option<&WpPoint>)> {
+    let mut out: Vec<(String, Option<&WpPoint>)> = Vec::new();
+    for p in &w.points {
+        let name = p.series(w.constrained);
+        let ok = p.end_error.is_some_and(|e| e <= threshold);
+        let slot = match out.iter_mut().find(|(n, _)| *n == name) {
+            Some(s) => s,
+            None => {
+                out.push((name, None));
+                let k = out.len() - 1;
+                &mut out[k]
+            }
+        };
+        if ok && slot.1.is_none_or(|b| p.cpu_s < b.cpu_s) {
+            slot.1 = Some(p);
+        }
+    }
+    out
+}
+
+/// One Markdown row per model for the suite summary: for each series the
+/// CPU time (ms) of the cheapest run reaching an end error of 1e-6 and of
+/// 1e-9, and the most digits reached.
+pub fn summary_rows(w: &WorkPrecision) -> String {
+    let at = |t: f64| cheapest(w, t);
+    let (six, nine) = (at(1e-6), at(1e-9));
+    let mut s = String::new();
+    for ((name, a), (_, b)) in six.iter().zip(&nine) {
+        let best = w
+            .points
+            .iter()
+            .filter(|p| p.series(w.constrained) == *name)
+            .filter_map(|p| p.digits)
+            .fold(0.0, f64::max);
+        let cell = |p: &Option<&WpPoint>| {
+            p.map_or_else(
+                || "—".to_string(),
+                |p| format!("{:.3} ({} rhs)", p.cpu_s * 1e3, p.rhs_evals),
+            )
+        };
+        s += &format!(
+            "| {} | {} s | {name} | {} | {} | {best:.1} |\n",
+            w.model,
+            w.t_end,
+            cell(a),
+            cell(b)
+        );
+    }
+    s
+}

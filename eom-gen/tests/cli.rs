@@ -680,4 +680,12 @@ fn bench_suite_writes_a_csv_and_svg_per_model_and_a_summary() {
         md.contains("## pendulum") && md.contains("![pendulum](pendulum.svg)"),
         "{md}"
     );
+    // The summary: one row per method, the cheapest run to 1e-6 found.
+    for method in ["rk4", "dopri5", "dop853", "radau5"] {
+        let row = md
+            .lines()
+            .find(|l| l.starts_with(&format!("| pendulum | 1 s | {method} |")))
+            .unwrap_or_else(|| panic!("no summary row for {method}:\n{md}"));
+        assert!(row.contains(" rhs)"), "{row}");
+    }
 }
