@@ -71,7 +71,10 @@ where
                 ("ID", got_id[i], want_id[i]),
                 ("FD", got_fd[i], want_fd[i]),
             ] {
-                assert!(close(got, want), "{label}: {what}[{i}] got {got} want {want}");
+                assert!(
+                    close(got, want),
+                    "{label}: {what}[{i}] got {got} want {want}"
+                );
             }
         }
     }

@@ -48,7 +48,10 @@ fn chain_text() -> String {
 /// Writes model and scene to a fixed directory (a stable path keeps the
 /// generated source, and so the cached build, the same between runs).
 fn files() -> (PathBuf, PathBuf) {
-    let dir = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache/chain200"));
+    let dir = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../target/eom-cache/chain200"
+    ));
     std::fs::create_dir_all(&dir).expect("create the chain's directory");
     let model = dir.join("chain200.ron");
     let scene = dir.join("chain200.scene.ron");
@@ -171,7 +174,12 @@ fn chain_of_200_links_generates_compiles_and_simulates() {
             terms.bias[i]
         );
         let lhs: f64 = m[i].iter().zip(&udot).map(|(a, b)| a * b).sum::<f64>() + bias[i];
-        let size = m[i].iter().zip(&udot).map(|(a, b)| (a * b).abs()).sum::<f64>() + bias[i].abs();
+        let size = m[i]
+            .iter()
+            .zip(&udot)
+            .map(|(a, b)| (a * b).abs())
+            .sum::<f64>()
+            + bias[i].abs();
         assert!(
             (lhs - tau[i]).abs() <= 1e-8 * size.max(1.0),
             "row {i} of M u̇ + b: got {lhs} want τ = {}",
@@ -181,15 +189,35 @@ fn chain_of_200_links_generates_compiles_and_simulates() {
 
     // Falling from the bent pose: DOPRI5 keeps the energy.
     let s = eom_gen(&[
-        "simulate", &scene, "--t-end", "0.3", "--integrator", "dopri5", "--rtol", "1e-10",
-        "--atol", "1e-10", "--json",
+        "simulate",
+        &scene,
+        "--t-end",
+        "0.3",
+        "--integrator",
+        "dopri5",
+        "--rtol",
+        "1e-10",
+        "--atol",
+        "1e-10",
+        "--json",
     ]);
     assert_eq!(s["stop"], "finished", "{s}");
     let energy = floats(&s["energy"]);
     let (qf, uf) = (floats(&s["q"]), floats(&s["u"]));
-    let end = eom_gen(&["eval", &scene, "--q", &join(&qf), "--u", &join(&uf), "--json"]);
+    let end = eom_gen(&[
+        "eval",
+        &scene,
+        "--q",
+        &join(&qf),
+        "--u",
+        &join(&uf),
+        "--json",
+    ]);
     let kinetic = end["kinetic_energy"].as_f64().unwrap_or(f64::NAN);
-    assert!(kinetic > 1.0, "the chain falls: kinetic energy {kinetic} J at t = 0.3 s");
+    assert!(
+        kinetic > 1.0,
+        "the chain falls: kinetic energy {kinetic} J at t = 0.3 s"
+    );
     let drift = (energy[1] - energy[0]).abs();
     assert!(
         drift <= 1e-6 * kinetic,

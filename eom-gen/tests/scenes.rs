@@ -228,9 +228,8 @@ fn builder_takes_scene_files() {
 /// The generated code of a virtual scene of `model` (in `models/`) that
 /// asks for `functions` only.
 fn functions_scene(model: &str, functions: &str) -> Generated {
-    let text = format!(
-        "Scene(model: \"../{model}.ron\", name: \"{model}_f\", functions: [{functions}])"
-    );
+    let text =
+        format!("Scene(model: \"../{model}.ron\", name: \"{model}_f\", functions: [{functions}])");
     generate(&Source::new(
         format!("{MODELS}/scenes/virtual.scene.ron"),
         text,

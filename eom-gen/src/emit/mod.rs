@@ -8,8 +8,10 @@
 //! instruction, constants inlined as unsuffixed literals (or `std` float
 //! constants where they match one exactly), `sin_cos` for paired trig, and
 //! array indices that are compile-time constants into fixed-size arrays,
-//! so nothing can panic or allocate. Output is byte-identical for
-//! identical input.
+//! so nothing can panic or allocate. Functions a scene leaves out (mass
+//! matrix, bias, inverse dynamics; see `model::scene::Function`) are
+//! short loops over the generated ones on fixed-size arrays instead.
+//! Output is byte-identical for identical input.
 
 use crate::mech::Formulation;
 use crate::mech::formulate::MULTIPLIER;
@@ -385,7 +387,7 @@ pub fn emit_tokens(
         );
         quote! {
             #[doc = #doc]
-            #[allow(clippy::needless_range_loop)]
+            #[allow(clippy::needless_range_loop, clippy::reversed_empty_ranges)]
             fn mass_matrix(&self, t: f64, q: &[f64; #nq_l], m: &mut [[f64; #nu_l]; #nu_l]) {
                 let zero = [0.0; #nu_l];
                 let mut tau0 = [0.0; #nu_l];

@@ -292,7 +292,10 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         if ltdl_flops(&lambda) >= aba.op_count().total() {
             (Some(aba), FdForm::Aba, candidates)
         } else {
-            let (mut m, b) = (mass.get_or_insert_with(crba).clone(), bias.get_or_insert_with(rnea_bias).clone());
+            let (mut m, b) = (
+                mass.get_or_insert_with(crba).clone(),
+                bias.get_or_insert_with(rnea_bias).clone(),
+            );
             ltdl(&mut m, &lambda);
             let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
             let sparse = lower("udot", &ltdl_solve(&m, &lambda, rhs));

@@ -323,11 +323,14 @@ impl Ctx<'_> {
         if has(Function::InverseDynamics) {
             return;
         }
-        let missing: Vec<&str> = [(Function::MassMatrix, "`MassMatrix`"), (Function::Bias, "`Bias`")]
-            .into_iter()
-            .filter(|(f, _)| !has(*f))
-            .map(|(_, n)| n)
-            .collect();
+        let missing: Vec<&str> = [
+            (Function::MassMatrix, "`MassMatrix`"),
+            (Function::Bias, "`Bias`"),
+        ]
+        .into_iter()
+        .filter(|(f, _)| !has(*f))
+        .map(|(_, n)| n)
+        .collect();
         if missing.is_empty() {
             return;
         }
