@@ -120,24 +120,23 @@ pub fn mass_matrix(f: &Formulation, x: &Point<'_>) -> Vec<Vec<f64>> {
         run(id, &y)
     };
     let tau0 = at(&zero);
-    let mut m = vec![vec![f64::NAN; nu]; nu];
-    let mut e = zero.clone();
-    for i in 0..nu {
-        e[i] = 1.0;
-        let column = at(&e);
-        e[i] = 0.0;
-        for (r, (c, c0)) in column.iter().zip(&tau0).enumerate().take(nu) {
-            m[r][i] = c - c0;
-        }
-    }
-    for i in 0..nu {
-        for j in 0..i {
-            let s = 0.5 * (m[i][j] + m[j][i]);
-            m[i][j] = s;
-            m[j][i] = s;
-        }
-    }
-    m
+    let columns: Vec<Vec<f64>> = (0..nu)
+        .map(|i| {
+            let mut e = zero.clone();
+            e[i] = 1.0;
+            at(&e).iter().zip(&tau0).map(|(c, c0)| c - c0).collect()
+        })
+        .collect();
+    let entry = |i: usize, j: usize| -> f64 {
+        columns
+            .get(j)
+            .and_then(|c| c.get(i))
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
+    (0..nu)
+        .map(|i| (0..nu).map(|j| 0.5 * (entry(i, j) + entry(j, i))).collect())
+        .collect()
 }
 
 /// The bias at `x`: from its program, or `ID(q, u, 0)`.

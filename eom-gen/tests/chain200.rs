@@ -159,8 +159,7 @@ fn chain_of_200_links_generates_compiles_and_simulates() {
         .flatten()
         .fold(0.0f64, |a, x| a.max(x.abs()));
     for i in 0..LINKS {
-        for j in 0..LINKS {
-            let (got, want) = (m[i][j], terms.mass_matrix[i][j]);
+        for (j, (&got, &want)) in m[i].iter().zip(&terms.mass_matrix[i]).enumerate() {
             assert!(
                 (got - want).abs() <= 1e-10 * m_scale,
                 "M[{i}][{j}]: got {got} (derived from ID) want {want} (reference CRBA)"
