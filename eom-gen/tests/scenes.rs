@@ -247,7 +247,9 @@ fn functions_a_scene_leaves_out_are_derived_and_equal_the_generated_ones() {
     // inverse dynamics at zero acceleration, inverse dynamics as M u̇ + b:
     // all three identities of M u̇ + b = ID(q, u, u̇), checked against the
     // full model's symbolic programs at random states (times, prescribed
-    // motion, springs, quaternions and loops' tree dynamics included).
+    // motion, springs, quaternions and loops' tree dynamics included;
+    // fourbar's forward dynamics is M with LᵀDL, built although the ID
+    // scene does not emit M).
     let mut seed = 11u64;
     let mut rnd = || {
         seed = seed
@@ -261,6 +263,7 @@ fn functions_a_scene_leaves_out_are_derived_and_equal_the_generated_ones() {
         "arm7",
         "slider_crank_driven",
         "andrews",
+        "fourbar",
     ] {
         let full = eom_gen::generate_file(&format!("{MODELS}/{model}.ron"))
             .unwrap_or_else(|e| panic!("{model}: {e}"));
@@ -279,6 +282,11 @@ fn functions_a_scene_leaves_out_are_derived_and_equal_the_generated_ones() {
         assert!(
             f.energy.is_some() && f.momentum.is_some() && g.energy.is_some(),
             "{model}: energy and momentum are always generated"
+        );
+        assert_eq!(
+            (f.fd_form, g.fd_form),
+            (full.formulation.fd_form, full.formulation.fd_form),
+            "{model}: forward dynamics chooses its form as the full model does"
         );
         let sys = &full.checked.system;
         let (nq, nu) = (sys.nq(), sys.nu());
