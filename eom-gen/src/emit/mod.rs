@@ -383,7 +383,8 @@ pub fn emit_tokens(
     // (formulate guarantees inverse dynamics, or both M and b).
     let mm_fn = mm_fn.unwrap_or_else(|| {
         let doc = format!(
-            " Mass matrix, derived (not generated symbolically: the scene leaves it out): column `i` is `ID(q, 0, e_i) − ID(q, 0, 0)`, {nu} inverse-dynamics call(s) at zero speed and one at zero acceleration, then symmetrised."
+            " Mass matrix, derived (not generated symbolically: the scene leaves it out): column `i` is `ID(q, 0, e_i) − ID(q, 0, 0)` ({} inverse-dynamics calls at zero speed), then symmetrised.",
+            nu + 1
         );
         quote! {
             #[doc = #doc]
