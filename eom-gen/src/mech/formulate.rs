@@ -128,11 +128,14 @@ pub struct Formulation {
     pub fd_form: FdForm,
     /// Operation counts of both forward-dynamics forms.
     pub fd_candidates: Vec<(FdForm, OpCount)>,
-    /// Mass matrix, lower triangle row by row: outputs `m_i_j`, `j ≤ i`.
+    /// Mass matrix, lower triangle row by row: outputs `m_i_j`, `j ≤ i`;
+    /// `None` when the request leaves it out (derived from inverse dynamics).
     pub mass_matrix: Option<Program>,
-    /// Bias `b` with `M u̇ = τ − b`: outputs `b0 …`.
+    /// Bias `b` with `M u̇ = τ − b`: outputs `b0 …`; `None` when the
+    /// request leaves it out (`ID(q, u, 0)`).
     pub bias: Option<Program>,
-    /// Inverse dynamics: outputs `tau0 …`; inputs include `ud0 …`.
+    /// Inverse dynamics: outputs `tau0 …`; inputs include `ud0 …`;
+    /// `None` when the request leaves it out (`M u̇ + b`).
     pub inverse_dynamics: Option<Program>,
     /// Outputs `kinetic`, `potential`.
     pub energy: Option<Program>,
