@@ -2,7 +2,7 @@
 //! → formatted Rust source.
 
 use crate::emit;
-use crate::mech::{Formulation, Request, formulate};
+use crate::mech::{Formulation, formulate};
 use crate::model::{Checked, Report, Source, check};
 use std::fmt;
 
@@ -52,7 +52,7 @@ pub fn generate(src: &Source) -> Result<Generated, GenerateError> {
 /// comments, so the file can be `include!`d anywhere).
 pub fn generate_with(src: &Source, opts: &emit::EmitOptions) -> Result<Generated, GenerateError> {
     let checked = check(src).map_err(GenerateError::Model)?;
-    let formulation = formulate(&checked.system, Request::default()).map_err(|error| {
+    let formulation = formulate(&checked.system, checked.request()).map_err(|error| {
         GenerateError::Formulate {
             path: src.path.clone(),
             error,
@@ -106,7 +106,7 @@ pub fn generate_tokens_in(
         check(src)
     }
     .map_err(GenerateError::Model)?;
-    let formulation = formulate(&checked.system, Request::default()).map_err(|error| {
+    let formulation = formulate(&checked.system, checked.request()).map_err(|error| {
         GenerateError::Formulate {
             path: src.path.clone(),
             error,

@@ -88,28 +88,107 @@ pub struct Evaluation {
     pub potential_energy: f64,
 }
 
-/// Evaluates every program of `f` at `x` (forward dynamics with `x.tau`).
-pub fn evaluate(f: &Formulation, x: &Point<'_>) -> Evaluation {
-    let nu = x.u.len();
-    let get = |p: &Option<Program>| p.as_ref().map(|p| run(p, x)).unwrap_or_default();
-    let lower = get(&f.mass_matrix);
-    // Lower triangle row by row: entry (i, j), j ≤ i, is at i(i+1)/2 + j.
-    let m: Vec<Vec<f64>> = (0..nu)
+/// The mass matrix at `x.q`, `x.t`, full: from its program, or (when the
+/// scene leaves it out) column `i` = `ID(q, 0, e_i) − ID(q, 0, 0)`,
+/// symmetrised — as the generated code derives it. NaN without either.
+pub fn mass_matrix(f: &Formulation, x: &Point<'_>) -> Vec<Vec<f64>> {
+    let nu = x.sys.nu();
+    if let Some(p) = &f.mass_matrix {
+        let lower = run(p, x);
+        // Lower triangle row by row: entry (i, j), j ≤ i, is at i(i+1)/2 + j.
+        return (0..nu)
+            .map(|i| {
+                (0..nu)
+                    .map(|j| {
+                        let (r, c) = if j <= i { (i, j) } else { (j, i) };
+                        lower.get(r * (r + 1) / 2 + c).copied().unwrap_or(f64::NAN)
+                    })
+                    .collect()
+            })
+            .collect();
+    }
+    let Some(id) = &f.inverse_dynamics else {
+        return vec![vec![f64::NAN; nu]; nu];
+    };
+    let zero = vec![0.0; nu];
+    let at = |udot: &[f64]| {
+        let y = Point {
+            u: &zero,
+            udot,
+            ..x.clone()
+        };
+        run(id, &y)
+    };
+    let tau0 = at(&zero);
+    let columns: Vec<Vec<f64>> = (0..nu)
         .map(|i| {
-            (0..nu)
-                .map(|j| {
-                    let (r, c) = if j <= i { (i, j) } else { (j, i) };
-                    lower.get(r * (r + 1) / 2 + c).copied().unwrap_or(f64::NAN)
-                })
-                .collect()
+            let mut e = zero.clone();
+            e[i] = 1.0;
+            at(&e).iter().zip(&tau0).map(|(c, c0)| c - c0).collect()
         })
         .collect();
+    let entry = |i: usize, j: usize| -> f64 {
+        columns
+            .get(j)
+            .and_then(|c| c.get(i))
+            .copied()
+            .unwrap_or(f64::NAN)
+    };
+    (0..nu)
+        .map(|i| (0..nu).map(|j| 0.5 * (entry(i, j) + entry(j, i))).collect())
+        .collect()
+}
+
+/// The bias at `x`: from its program, or `ID(q, u, 0)`.
+pub fn bias(f: &Formulation, x: &Point<'_>) -> Vec<f64> {
+    if let Some(p) = &f.bias {
+        return run(p, x);
+    }
+    let zero = vec![0.0; x.sys.nu()];
+    match &f.inverse_dynamics {
+        Some(id) => run(
+            id,
+            &Point {
+                udot: &zero,
+                ..x.clone()
+            },
+        ),
+        None => vec![f64::NAN; zero.len()],
+    }
+}
+
+/// Inverse dynamics at `x` (accelerations `x.udot`): from its program, or
+/// `M u̇ + b`.
+pub fn inverse_dynamics(f: &Formulation, x: &Point<'_>) -> Vec<f64> {
+    if let Some(p) = &f.inverse_dynamics {
+        return run(p, x);
+    }
+    let m = mass_matrix(f, x);
+    let b = bias(f, x);
+    let at = |v: &[f64], i: usize| v.get(i).copied().unwrap_or(f64::NAN);
+    m.iter()
+        .enumerate()
+        .map(|(i, row)| {
+            at(&b, i)
+                + row
+                    .iter()
+                    .enumerate()
+                    .map(|(j, mij)| mij * at(x.udot, j))
+                    .sum::<f64>()
+        })
+        .collect()
+}
+
+/// Evaluates every program of `f` at `x` (forward dynamics with `x.tau`);
+/// functions the scene leaves out are derived as the generated code does.
+pub fn evaluate(f: &Formulation, x: &Point<'_>) -> Evaluation {
+    let get = |p: &Option<Program>| p.as_ref().map(|p| run(p, x)).unwrap_or_default();
     let energy = get(&f.energy);
     Evaluation {
         qdot: run(&f.qdot, x),
         udot: get(&f.forward_dynamics),
-        mass_matrix: m,
-        bias: get(&f.bias),
+        mass_matrix: mass_matrix(f, x),
+        bias: bias(f, x),
         kinetic_energy: energy.first().copied().unwrap_or(f64::NAN),
         potential_energy: energy.get(1).copied().unwrap_or(f64::NAN),
     }
@@ -173,29 +252,15 @@ impl eom_sim::Dynamics for Interpreted<'_> {
         qdot.iter_mut().zip(v).for_each(|(d, s)| *d = s);
     }
     fn mass_matrix(&self, t: f64, q: &[f64], m: &mut nalgebra::DMatrix<f64>) {
-        let lower = self
-            .f
-            .mass_matrix
-            .as_ref()
-            .map(|p| run(p, &self.point(q, &[], t)))
-            .unwrap_or_default();
-        let mut k = 0;
-        for i in 0..self.nu.min(m.nrows()) {
-            for j in 0..=i {
-                let v = lower.get(k).copied().unwrap_or(f64::NAN);
-                m[(i, j)] = v;
-                m[(j, i)] = v;
-                k += 1;
+        let full = mass_matrix(self.f, &self.point(q, &[], t));
+        for (i, row) in full.iter().enumerate().take(m.nrows()) {
+            for (j, v) in row.iter().enumerate().take(m.ncols()) {
+                m[(i, j)] = *v;
             }
         }
     }
     fn bias(&self, t: f64, q: &[f64], u: &[f64], b: &mut nalgebra::DVector<f64>) {
-        let v = self
-            .f
-            .bias
-            .as_ref()
-            .map(|p| run(p, &self.point(q, u, t)))
-            .unwrap_or_default();
+        let v = bias(self.f, &self.point(q, u, t));
         b.iter_mut().zip(v).for_each(|(d, s)| *d = s);
     }
     fn constraints(&self, t: f64, q: &[f64], u: &[f64], c: &mut eom_sim::ConstraintValues) {

@@ -337,6 +337,7 @@ fn check(path: &str, json: bool) -> ExitCode {
                     v["scene"] = serde_json::json!({
                         "path": s.source.path,
                         "model": s.model_path.display().to_string(),
+                        "functions": generated_functions(&checked.request()),
                     });
                 }
                 println!("{v}");
@@ -344,6 +345,12 @@ fn check(path: &str, json: bool) -> ExitCode {
                 print!("{}", eom_gen::summary::human(&checked));
                 if let Some(s) = &checked.scene {
                     println!("  scene        {}", s.source.path);
+                    if s.spec.functions.is_some() {
+                        println!(
+                            "  generated    {} (the others derived)",
+                            generated_functions(&checked.request()).join(", ")
+                        );
+                    }
                 }
                 if !notes.is_empty() {
                     println!("  urdf import:");
@@ -518,6 +525,23 @@ fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
             }
         },
     }
+}
+
+/// The names of the functions a request generates symbolically.
+fn generated_functions(r: &eom_gen::mech::Request) -> Vec<&'static str> {
+    [
+        ("qdot", true),
+        ("forward_dynamics", r.forward_dynamics),
+        ("mass_matrix", r.mass_matrix),
+        ("bias", r.bias),
+        ("inverse_dynamics", r.inverse_dynamics),
+        ("energy", r.energy),
+        ("momentum", r.momentum),
+    ]
+    .into_iter()
+    .filter(|(_, on)| *on)
+    .map(|(n, _)| n)
+    .collect()
 }
 
 fn stats(path: &str) -> ExitCode {

@@ -451,6 +451,32 @@ fn scenes_are_accepted_wherever_a_model_is() {
 }
 
 #[test]
+fn stats_print_null_for_functions_a_scene_leaves_out() {
+    let v = json(&["stats", "models/scenes/arm7_dynamics.scene.ron", "--json"]);
+    for f in ["mass_matrix", "bias", "outputs"] {
+        assert!(v["ops"][f].is_null(), "{f}: got {}, want null", v["ops"][f]);
+    }
+    for f in ["forward_dynamics", "inverse_dynamics", "energy", "momentum"] {
+        assert!(
+            v["ops"][f]["total"].as_u64().is_some_and(|n| n > 0),
+            "{f}: got {}, want an operation count",
+            v["ops"][f]
+        );
+    }
+    let c = json(&["check", "models/scenes/arm7_dynamics.scene.ron", "--json"]);
+    assert_eq!(
+        c["scene"]["functions"],
+        serde_json::json!([
+            "qdot",
+            "forward_dynamics",
+            "inverse_dynamics",
+            "energy",
+            "momentum"
+        ])
+    );
+}
+
+#[test]
 fn a_bad_scene_exits_1_with_its_location() {
     let dir = std::env::temp_dir().join(format!("eom-cli-scene-{}", std::process::id()));
     let _ = std::fs::create_dir_all(&dir);

@@ -203,6 +203,27 @@ pin_scene!(scene_unknown_marker, "marker: \"tip\"" => "marker: \"tpi\"");
 pin_scene!(scene_marker_on_body_without_markers, "body: \"link2\"" => "body: \"link1\"");
 pin_scene!(scene_name_not_identifier, "\"two_link_tip\"" => "\"two-link tip\"");
 pin_scene!(
+    scene_functions_without_inverse_dynamics,
+    "tunable: [\"m\"]," => "tunable: [\"m\"],\n    functions: [ForwardDynamics, MassMatrix, Energy],"
+);
+pin_scene!(
+    scene_functions_none_derivable,
+    "tunable: [\"m\"]," => "tunable: [\"m\"],\n    functions: [],"
+);
+pin_scene!(
+    scene_functions_listed_twice,
+    "tunable: [\"m\"]," => "tunable: [\"m\"],\n    functions: [InverseDynamics, InverseDynamics],"
+);
+pin_scene!(
+    scene_unknown_function,
+    "tunable: [\"m\"]," => "tunable: [\"m\"],\n    functions: [MassMatrx],"
+);
+pin_scene!(
+    scene_functions_error_with_others,
+    "fixed: [\"g\"]" => "fixed: [\"gg\"]",
+    "tunable: [\"m\"]," => "tunable: [\"m\"],\n    functions: [Bias],"
+);
+pin_scene!(
     scene_every_error_at_once,
     "\"two_link_tip\"" => "\"two-link tip\"",
     "marker: \"tip\"" => "marker: \"tpi\"",

@@ -80,6 +80,10 @@ const TOKENS: &[&str] = &[
     "\"pi\"",
     "[]",
     "()",
+    "InverseDynamics",
+    "MassMatrix",
+    "functions: [],",
+    "functions: [Bias, MassMatrix],",
 ];
 
 #[derive(Clone, Debug)]
@@ -189,7 +193,9 @@ proptest! {
         }
         let root = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
         match scene::check_in(&Source::new(path, text), root) {
-            Ok(_) => {}
+            // An accepted scene asks for functions from which every other
+            // one can be computed.
+            Ok(c) => prop_assert_eq!(c.request(), c.request().derivable()),
             Err(report) => {
                 prop_assert!(!report.diagnostics.is_empty());
                 for d in &report.diagnostics {

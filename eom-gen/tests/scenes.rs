@@ -224,3 +224,148 @@ fn builder_takes_scene_files() {
     assert!(text.contains("Locked joints: `j5`, `j7`"));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The generated code of a virtual scene of `model` (in `models/`) that
+/// asks for `functions` only.
+fn functions_scene(model: &str, functions: &str) -> Generated {
+    let text =
+        format!("Scene(model: \"../{model}.ron\", name: \"{model}_f\", functions: [{functions}])");
+    generate(&Source::new(
+        format!("{MODELS}/scenes/virtual.scene.ron"),
+        text,
+    ))
+    .unwrap_or_else(|e| panic!("{model} [{functions}]: {e}"))
+}
+
+fn close(got: f64, want: f64) -> bool {
+    (got - want).abs() <= 1e-9 * (1.0 + want.abs())
+}
+
+#[test]
+fn functions_a_scene_leaves_out_are_derived_and_equal_the_generated_ones() {
+    // Mass matrix by columns of inverse dynamics at zero speed, bias as
+    // inverse dynamics at zero acceleration, inverse dynamics as M u̇ + b:
+    // all three identities of M u̇ + b = ID(q, u, u̇), checked against the
+    // full model's symbolic programs at random states (times, prescribed
+    // motion, springs, quaternions and loops' tree dynamics included;
+    // fourbar's forward dynamics is M with LᵀDL, built although the ID
+    // scene does not emit M).
+    let mut seed = 11u64;
+    let mut rnd = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    for model in [
+        "double_pendulum",
+        "heavy_top",
+        "arm7",
+        "slider_crank_driven",
+        "andrews",
+        "fourbar",
+    ] {
+        let full = eom_gen::generate_file(&format!("{MODELS}/{model}.ron"))
+            .unwrap_or_else(|e| panic!("{model}: {e}"));
+        let id_only = functions_scene(model, "ForwardDynamics, InverseDynamics");
+        let mb_only = functions_scene(model, "ForwardDynamics, MassMatrix, Bias");
+        let f = &id_only.formulation;
+        assert!(
+            f.mass_matrix.is_none() && f.bias.is_none() && f.inverse_dynamics.is_some(),
+            "{model}: the ID scene generates ID only"
+        );
+        let g = &mb_only.formulation;
+        assert!(
+            g.mass_matrix.is_some() && g.bias.is_some() && g.inverse_dynamics.is_none(),
+            "{model}: the M, b scene generates M and b only"
+        );
+        assert!(
+            f.energy.is_some() && f.momentum.is_some() && g.energy.is_some(),
+            "{model}: energy and momentum are always generated"
+        );
+        assert_eq!(
+            (f.fd_form, g.fd_form),
+            (full.formulation.fd_form, full.formulation.fd_form),
+            "{model}: forward dynamics chooses its form as the full model does"
+        );
+        let sys = &full.checked.system;
+        let (nq, nu) = (sys.nq(), sys.nu());
+        for _ in 0..5 {
+            let mut q: Vec<f64> = (0..nq).map(|_| rnd()).collect();
+            for &a in &sys.quaternion_indices() {
+                let n = q[a..a + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
+                q[a..a + 4].iter_mut().for_each(|x| *x /= n);
+            }
+            let u: Vec<f64> = (0..nu).map(|_| 2.0 * rnd()).collect();
+            let udot: Vec<f64> = (0..nu).map(|_| 3.0 * rnd()).collect();
+            let tau: Vec<f64> = (0..nu).map(|_| rnd()).collect();
+            let t = rnd().abs();
+            let point = |sys| Point {
+                sys,
+                q: &q,
+                u: &u,
+                udot: &udot,
+                tau: &tau,
+                inputs: &[],
+                params: &[],
+                multipliers: &[],
+                t,
+            };
+            let x = point(sys);
+            let want_m = eom_gen::interpret::mass_matrix(&full.formulation, &x);
+            let want_b = eom_gen::interpret::bias(&full.formulation, &x);
+            let want_id = eom_gen::interpret::inverse_dynamics(&full.formulation, &x);
+            let want_fd = evaluate(&full.formulation, &x).udot;
+            for (name, s) in [("ID", &id_only), ("M, b", &mb_only)] {
+                let y = point(&s.checked.system);
+                let got_m = eom_gen::interpret::mass_matrix(&s.formulation, &y);
+                let got_b = eom_gen::interpret::bias(&s.formulation, &y);
+                let got_id = eom_gen::interpret::inverse_dynamics(&s.formulation, &y);
+                let got_fd = evaluate(&s.formulation, &y).udot;
+                for i in 0..nu {
+                    for j in 0..nu {
+                        assert!(
+                            close(got_m[i][j], want_m[i][j]),
+                            "{model} [{name}]: M[{i}][{j}] got {} want {}",
+                            got_m[i][j],
+                            want_m[i][j]
+                        );
+                    }
+                    for (what, got, want) in [
+                        ("b", &got_b, &want_b),
+                        ("ID", &got_id, &want_id),
+                        ("FD", &got_fd, &want_fd),
+                    ] {
+                        assert!(
+                            close(got[i], want[i]),
+                            "{model} [{name}]: {what}[{i}] got {} want {}",
+                            got[i],
+                            want[i]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn the_dynamics_scene_generates_less_code_than_the_full_model() {
+    let full = eom_gen::generate_file(&format!("{MODELS}/arm7.ron")).expect("arm7");
+    let dynamics = scene("arm7_dynamics");
+    let f = &dynamics.formulation;
+    assert!(f.mass_matrix.is_none() && f.bias.is_none());
+    assert!(f.outputs.is_none(), "the scene asks for no outputs");
+    assert!(
+        dynamics.source.len() < full.source.len(),
+        "source: got {} bytes, want < {} (the full model's)",
+        dynamics.source.len(),
+        full.source.len()
+    );
+    assert!(
+        dynamics
+            .source
+            .contains("column `i` is `ID(q, 0, e_i) − ID(q, 0, 0)`"),
+        "the derived mass matrix says how it is computed"
+    );
+}

@@ -8,8 +8,10 @@
 //! instruction, constants inlined as unsuffixed literals (or `std` float
 //! constants where they match one exactly), `sin_cos` for paired trig, and
 //! array indices that are compile-time constants into fixed-size arrays,
-//! so nothing can panic or allocate. Output is byte-identical for
-//! identical input.
+//! so nothing can panic or allocate. Functions a scene leaves out (mass
+//! matrix, bias, inverse dynamics; see `model::scene::Function`) are
+//! short loops over the generated ones on fixed-size arrays instead.
+//! Output is byte-identical for identical input.
 
 use crate::mech::Formulation;
 use crate::mech::formulate::MULTIPLIER;
@@ -374,6 +376,63 @@ pub fn emit_tokens(
             fn inverse_dynamics(&self, #params, tau: &mut [f64; #nu_l]) {
                 #body
                 #assign
+            }
+        }
+    });
+    // Functions the scene leaves out, computed from the generated ones
+    // (formulate guarantees inverse dynamics, or both M and b).
+    let mm_fn = mm_fn.unwrap_or_else(|| {
+        let doc = format!(
+            " Mass matrix, derived (not generated symbolically: the scene leaves it out): column `i` is `ID(q, 0, e_i) − ID(q, 0, 0)` ({} inverse-dynamics calls at zero speed), then symmetrised.",
+            nu + 1
+        );
+        quote! {
+            #[doc = #doc]
+            #[allow(clippy::needless_range_loop, clippy::reversed_empty_ranges)]
+            fn mass_matrix(&self, t: f64, q: &[f64; #nq_l], m: &mut [[f64; #nu_l]; #nu_l]) {
+                let zero = [0.0; #nu_l];
+                let mut tau0 = [0.0; #nu_l];
+                self.inverse_dynamics(t, q, &zero, &zero, &mut tau0);
+                let mut e = [0.0; #nu_l];
+                let mut column = [0.0; #nu_l];
+                for i in 0..#nu_l {
+                    e[i] = 1.0;
+                    self.inverse_dynamics(t, q, &zero, &e, &mut column);
+                    e[i] = 0.0;
+                    for r in 0..#nu_l {
+                        m[r][i] = column[r] - tau0[r];
+                    }
+                }
+                for i in 0..#nu_l {
+                    for j in 0..i {
+                        let s = 0.5 * (m[i][j] + m[j][i]);
+                        m[i][j] = s;
+                        m[j][i] = s;
+                    }
+                }
+            }
+        }
+    });
+    let bias_fn = bias_fn.unwrap_or_else(|| {
+        quote! {
+            /// Bias, derived (not generated symbolically: the scene leaves it
+            /// out): inverse dynamics at zero acceleration, `b = ID(q, u, 0)`.
+            fn bias(&self, t: f64, q: &[f64; #nq_l], u: &[f64; #nu_l], b: &mut [f64; #nu_l]) {
+                self.inverse_dynamics(t, q, u, &[0.0; #nu_l], b);
+            }
+        }
+    });
+    let id_fn = id_fn.unwrap_or_else(|| {
+        quote! {
+            /// Inverse dynamics, derived (not generated symbolically: the
+            /// scene leaves it out): `τ = M(q) u̇ + b(q, u, t)`.
+            fn inverse_dynamics(&self, t: f64, q: &[f64; #nq_l], u: &[f64; #nu_l], udot: &[f64; #nu_l], tau: &mut [f64; #nu_l]) {
+                let mut m = [[0.0; #nu_l]; #nu_l];
+                self.mass_matrix(t, q, &mut m);
+                self.bias(t, q, u, tau);
+                for (tau_i, row) in tau.iter_mut().zip(&m) {
+                    *tau_i += row.iter().zip(udot).map(|(a, b)| a * b).sum::<f64>();
+                }
             }
         }
     });

@@ -35,7 +35,13 @@ impl fmt::Display for FdForm {
 }
 
 /// Which functions to generate (model only what a scene needs).
-#[derive(Clone, Copy, Debug)]
+///
+/// Forward dynamics, energy and momentum cannot be computed from the other
+/// functions; the mass matrix and the bias can (from inverse dynamics at
+/// zero speed or zero acceleration), and inverse dynamics from them
+/// (`M u̇ + b`). [`formulate`] generates [`Request::derivable`], so the
+/// emitted model implements every function of `eom_sim::Model`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Request {
     /// `u̇ = FD(q, u, t, τ)`.
     pub forward_dynamics: bool,
@@ -60,6 +66,21 @@ impl Default for Request {
             inverse_dynamics: true,
             energy: true,
             momentum: true,
+        }
+    }
+}
+
+impl Request {
+    /// This request with what the other functions cannot be derived
+    /// without: forward dynamics, energy and momentum always, and inverse
+    /// dynamics unless both the mass matrix and the bias are generated.
+    pub fn derivable(self) -> Request {
+        Request {
+            forward_dynamics: true,
+            energy: true,
+            momentum: true,
+            inverse_dynamics: self.inverse_dynamics || !(self.mass_matrix && self.bias),
+            ..self
         }
     }
 }
@@ -107,11 +128,14 @@ pub struct Formulation {
     pub fd_form: FdForm,
     /// Operation counts of both forward-dynamics forms.
     pub fd_candidates: Vec<(FdForm, OpCount)>,
-    /// Mass matrix, lower triangle row by row: outputs `m_i_j`, `j ≤ i`.
+    /// Mass matrix, lower triangle row by row: outputs `m_i_j`, `j ≤ i`;
+    /// `None` when the request leaves it out (derived from inverse dynamics).
     pub mass_matrix: Option<Program>,
-    /// Bias `b` with `M u̇ = τ − b`: outputs `b0 …`.
+    /// Bias `b` with `M u̇ = τ − b`: outputs `b0 …`; `None` when the
+    /// request leaves it out (`ID(q, u, 0)`).
     pub bias: Option<Program>,
-    /// Inverse dynamics: outputs `tau0 …`; inputs include `ud0 …`.
+    /// Inverse dynamics: outputs `tau0 …`; inputs include `ud0 …`;
+    /// `None` when the request leaves it out (`M u̇ + b`).
     pub inverse_dynamics: Option<Program>,
     /// Outputs `kinetic`, `potential`.
     pub energy: Option<Program>,
@@ -200,8 +224,12 @@ pub fn ltdl_flops(lambda: &[Option<usize>]) -> usize {
         .sum()
 }
 
-/// Builds the programs `request` asks for.
+/// Builds the programs `request` asks for, completed by
+/// [`Request::derivable`]; programs not asked for are `None`. The mass
+/// matrix and bias are built symbolically only when asked for or when
+/// forward dynamics may use them (the `LᵀDL` form).
 pub fn formulate(sys: &System, request: Request) -> Result<Formulation, FormulateError> {
+    let request = request.derivable();
     let start = Instant::now();
     let cx = Context::new();
     let env = SymEnv {
@@ -246,13 +274,15 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
 
     let qdot = lower("qdot", &ev.qdot(&st));
     let zero = vec![Expr::zero(); nu];
-    let need_mm = request.mass_matrix || request.forward_dynamics;
-    let need_bias = request.bias || request.forward_dynamics;
-    let mass = need_mm.then(|| ev.crba(&k));
-    let bias: Option<Vec<Expr>> = need_bias.then(|| {
+    // Built here when asked for (first, as the arena numbers them in
+    // order), else on demand for the `LᵀDL` form only.
+    let crba = || ev.crba(&k);
+    let rnea_bias = || -> Vec<Expr> {
         let (c, _) = ev.rnea(&k, &zero, &fext);
         c.iter().zip(&generalized).map(|(&c, &g)| c - g).collect()
-    });
+    };
+    let mut mass = request.mass_matrix.then(crba);
+    let mut bias = request.bias.then(rnea_bias);
 
     let (forward_dynamics, fd_form, fd_candidates) = if request.forward_dynamics {
         let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
@@ -266,8 +296,8 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
             (Some(aba), FdForm::Aba, candidates)
         } else {
             let (mut m, b) = (
-                mass.clone().unwrap_or_default(),
-                bias.clone().unwrap_or_default(),
+                mass.get_or_insert_with(crba).clone(),
+                bias.get_or_insert_with(rnea_bias).clone(),
             );
             ltdl(&mut m, &lambda);
             let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
@@ -284,7 +314,7 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
     };
 
     let mass_matrix = (request.mass_matrix).then(|| {
-        let m = mass.clone().unwrap_or_default();
+        let m = mass.get_or_insert_with(crba).clone();
         let names: Vec<String> = (0..nu)
             .flat_map(|i| (0..=i).map(move |j| format!("m_{i}_{j}")))
             .collect();
@@ -297,7 +327,7 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
     });
     let bias_program = request
         .bias
-        .then(|| lower("b", &bias.clone().unwrap_or_default()));
+        .then(|| lower("b", &bias.get_or_insert_with(rnea_bias).clone()));
     let inverse_dynamics = request.inverse_dynamics.then(|| {
         let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
         let (t, _) = ev.rnea(&k, &ud, &fext);

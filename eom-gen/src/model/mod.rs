@@ -47,6 +47,14 @@ impl Checked {
         out
     }
 
+    /// The functions to generate symbolically: the scene's `functions`
+    /// (completed by what cannot be derived), else all of them.
+    pub fn request(&self) -> crate::mech::Request {
+        self.scene
+            .as_ref()
+            .map_or_else(crate::mech::Request::default, |s| s.spec.request())
+    }
+
     /// The text the generated code is derived from, for its content hash:
     /// the model's, after the scene's when there is one.
     pub fn content(&self) -> String {

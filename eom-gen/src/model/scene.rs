@@ -47,6 +47,51 @@ pub struct SceneSpec {
     /// Parameters kept as runtime fields (overrides the model's `tunable`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub tunable: Vec<String>,
+    /// The functions generated symbolically (absent: all of them); the
+    /// others are computed from these (see [`Function`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub functions: Option<Vec<Function>>,
+}
+
+/// A function of the generated model that a scene can ask to be generated
+/// symbolically (`functions`). `q̇`, forward dynamics, energy and momentum
+/// cannot be computed from the others and are always generated (listing
+/// them is allowed); the mass matrix and the bias are derived from inverse
+/// dynamics when left out, and inverse dynamics from them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Function {
+    /// `u̇ = FD(q, u, t, τ)` (always generated).
+    ForwardDynamics,
+    /// `M(q)`; left out: column `i` is `ID(q, 0, e_i) − ID(q, 0, 0)`.
+    MassMatrix,
+    /// `b(q, u, t)`; left out: `ID(q, u, 0)`.
+    Bias,
+    /// `τ = ID(q, u, u̇, t)`; left out: `M u̇ + b`.
+    InverseDynamics,
+    /// Kinetic and potential energy (always generated).
+    Energy,
+    /// Linear and angular momentum (always generated).
+    Momentum,
+}
+
+impl SceneSpec {
+    /// What to formulate for this scene: the listed functions, and those
+    /// that cannot be derived.
+    pub fn request(&self) -> crate::mech::Request {
+        let Some(list) = &self.functions else {
+            return crate::mech::Request::default();
+        };
+        let has = |f: Function| list.contains(&f);
+        crate::mech::Request {
+            forward_dynamics: true,
+            mass_matrix: has(Function::MassMatrix),
+            bias: has(Function::Bias),
+            inverse_dynamics: has(Function::InverseDynamics),
+            energy: true,
+            momentum: true,
+        }
+        .derivable()
+    }
 }
 
 /// A joint held at fixed coordinates.
@@ -238,6 +283,9 @@ impl Ctx<'_> {
             checked.spec.outputs = outputs.clone();
         }
         self.locks(scene, sys);
+        if let Some(list) = &scene.functions {
+            self.functions(list);
+        }
         for lock in &scene.lock {
             if let Some(j) = checked
                 .spec
@@ -256,6 +304,54 @@ impl Ctx<'_> {
                 p.tunable = sp.tunable;
             }
         }
+    }
+
+    /// Checks that every function of the trait can be computed from the
+    /// listed ones: inverse dynamics gives the mass matrix and the bias,
+    /// and they give it.
+    fn functions(&mut self, list: &[Function]) {
+        for (k, func) in list.iter().enumerate() {
+            if list[..k].contains(func) {
+                self.warning(
+                    &[f("functions"), Seg::Index(k)],
+                    format!("function `{func:?}` is listed twice"),
+                    "remove one of them",
+                );
+            }
+        }
+        let has = |f: Function| list.contains(&f);
+        if has(Function::InverseDynamics) {
+            return;
+        }
+        let missing: Vec<&str> = [
+            (Function::MassMatrix, "`MassMatrix`"),
+            (Function::Bias, "`Bias`"),
+        ]
+        .into_iter()
+        .filter(|(f, _)| !has(*f))
+        .map(|(_, n)| n)
+        .collect();
+        if missing.is_empty() {
+            return;
+        }
+        let what = if missing.len() == 2 {
+            "the mass matrix and the bias are"
+        } else if !has(Function::MassMatrix) {
+            "the mass matrix is"
+        } else {
+            "the bias is"
+        };
+        self.error(
+            &[f("functions")],
+            format!(
+                "{what} left out, and so is `InverseDynamics`, from which {} would be derived",
+                if missing.len() == 2 { "they" } else { "it" }
+            ),
+            format!(
+                "add `InverseDynamics` (then the mass matrix and the bias can be left out), or add {} (then inverse dynamics is `M u̇ + b`)",
+                missing.join(" and ")
+            ),
+        );
     }
 
     fn parameters(&mut self, scene: &SceneSpec, sys: &mut System) {
