@@ -6,7 +6,8 @@
 #
 # Installs the peers, builds eom-gen and the chain models (setup.sh),
 # compiles peers_wp.cpp, and runs peers_wp.py, which prints a table per
-# model and writes bench/results/peers_wp.csv. The runs are niced.
+# case (also into bench/results/peers_wp.md) and writes
+# bench/results/peers_wp.csv. The runs are niced.
 set -euo pipefail
 source "$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)/setup.sh"
 
@@ -15,4 +16,5 @@ compile_peer "$here/peers_wp.cpp" "$exe"
 
 cd "$here"
 nice -n 10 "$out/venv/bin/python" peers_wp.py --eom "$bin/eom-gen" --peers-wp "$exe" \
-    --models-dir "$out/models" --root "$root" --csv "$root/bench/results/peers_wp.csv" "$@"
+    --models-dir "$out/models" --root "$root" --csv "$root/bench/results/peers_wp.csv" "$@" \
+    | tee "$root/bench/results/peers_wp.md"
