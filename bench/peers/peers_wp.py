@@ -254,6 +254,17 @@ def main():
         finest_pin = min((r for r in rows if r["tool"] == "pinocchio"), key=lambda r: r["setting"])
         print(f"- MuJoCo RK4, h = {finest_mj['dt']:.1e} s: {finest_mj['err_q']:.1e}")
         print(f"- Pinocchio + DOP853 at {finest_pin['setting']:.0e}: {finest_pin['err_q']:.1e}")
+        # The same method on both sides: same initial state and dynamics.
+        for peer, label in (("mujoco", "MuJoCo RK4 against eom RK4 at the same step"),
+                            ("pinocchio", "Pinocchio DOP853 against eom DOP853 at the same tolerance")):
+            pairs = [(r, o) for r in rows if r["tool"] == peer for o in rows
+                     if o["tool"] == "eom" and o["method"] == r["method"] and o["setting"] == r["setting"]
+                     and r["ok"] and o["ok"]]
+            if pairs:
+                same = sum(r["accepted"] == o["accepted"] and r["rejected"] == o["rejected"] for r, o in pairs)
+                diff = max(max_diff(r["q"], o["q"]) for r, o in pairs)
+                print(f"\n{label}: max |q - q_eom| {diff:.1e} over {len(pairs)} runs, "
+                      f"the same accepted and rejected steps in {same} of them")
         all_rows += rows
 
         # 4. Table and ratios.
