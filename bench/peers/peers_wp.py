@@ -17,7 +17,8 @@ speeds, which the acceleration check of peers.py proves):
 3. error = max over coordinates of |q(T) - q_ref(T)| (and the same for the
    speeds); CPU = median over repetitions of the integration time of one run
    (eom: `cpu_s` of separate runs of the cached compiled simulator; the
-   peers: timed in the C++ program), no Python in any timed loop; the finest
+   peers: timed in the C++ program), over ROUNDS sweeps, the median of the
+   rounds' medians; no Python in any timed loop; the finest
    MuJoCo and Pinocchio runs are the third and fourth checks of the
    reference;
 4. prints a Markdown table per case and the CPU ratios between the cheapest
@@ -168,9 +169,10 @@ def main():
     ap.add_argument("--csv", required=True)
     ap.add_argument("--only", nargs="*", choices=list(CASES),
                     help=f"cases (default: {' '.join(DEFAULT_CASES)})")
-    ap.add_argument("--reps", type=int, default=11, help="repetitions per run (median)")
-    ap.add_argument("--budget", type=float, default=2.0,
-                    help="seconds per run after which repetitions stop (at least 3)")
+    ap.add_argument("--reps", type=int, default=5, help="repetitions per run and round (median)")
+    ap.add_argument("--rounds", type=int, default=3, help="sweeps per case (median of their medians)")
+    ap.add_argument("--budget", type=float, default=1.0,
+                    help="seconds per run and round after which repetitions stop (at least 3)")
     ap.add_argument("--ref-tol", type=float, default=1e-14,
                     help="tolerance of the reference (eom DOP853)")
     ap.add_argument("--check-tol", type=float, default=1e-13,
@@ -228,20 +230,31 @@ def main():
                   f"errors of {a.target:.0e} cannot be measured over {t_end:g} s here; no sweep.")
             continue
 
-        # 2. The sweeps.
-        rows = []
-        for t in tols:
-            rows.append(eom_run(a, ron, t_end, "dop853", t, a.reps, a.budget))
-        for t in dopri5_tols:
-            rows.append(eom_run(a, ron, t_end, "dopri5", t, a.reps, a.budget))
-        for n in steps:
-            if n <= EOM_MAX_STEPS:
-                rows.append(eom_run(a, ron, t_end, "rk4", n, a.reps, a.budget))
-        print(f"{case}: eom done", file=sys.stderr)
-        specs = [f"mujoco-rk4:{n}" for n in steps] + [f"pinocchio-dop853:{t!r}" for t in tols]
-        peers = peer_runs(a, base, t_end, q0, u0, specs)
-        versions = peers[0]["versions"]
-        rows += peers
+        # 2. The sweeps, ROUNDS times over (eom's, then the peers'), so that a
+        # neighbour's build slows some of each tool's repetitions rather than
+        # all of one tool's; per run the median of the rounds' medians.
+        rounds = []
+        for k in range(a.rounds):
+            rows = []
+            for t in tols:
+                rows.append(eom_run(a, ron, t_end, "dop853", t, a.reps, a.budget))
+            for t in dopri5_tols:
+                rows.append(eom_run(a, ron, t_end, "dopri5", t, a.reps, a.budget))
+            for n in steps:
+                if n <= EOM_MAX_STEPS:
+                    rows.append(eom_run(a, ron, t_end, "rk4", n, a.reps, a.budget))
+            specs = [f"mujoco-rk4:{n}" for n in steps] + [f"pinocchio-dop853:{t!r}" for t in tols]
+            peers = peer_runs(a, base, t_end, q0, u0, specs)
+            versions = peers[0]["versions"]
+            rounds.append(rows + peers)
+            print(f"{case}: round {k + 1} of {a.rounds} done", file=sys.stderr)
+        rows = rounds[0]
+        for i, r in enumerate(rows):
+            same = [rr[i] for rr in rounds]
+            # The runs are deterministic: every round ends in the same state.
+            assert all(x["q"] == r["q"] and x["rhs_evals"] == r["rhs_evals"] for x in same), (case, i)
+            r["cpu_s"] = statistics.median(x["cpu_s"] for x in same)
+            r["reps"] = sum(x["reps"] for x in same)
 
         # 3. Errors against the reference.
         for r in rows:
