@@ -241,9 +241,11 @@ impl Joint {
 }
 
 /// An n-link chain of uniform rods (1 kg, 0.5 m, centre of mass mid-link)
-/// hanging from ground under gravity along −z; `spatial` alternates the
-/// joint axes z, y, z, … (as in arm7), otherwise all hinge about y
-/// (planar). Links are numbered from 1; coordinates are `q1 … qn`.
+/// standing on ground: at `q = 0` the links point along +z and gravity
+/// along −z, so from its initial state (every joint at 0.1 rad) the chain
+/// falls over and swings chaotically. `spatial` alternates the joint axes
+/// z, y, z, … (as in arm7), otherwise all hinge about y (planar). Links are
+/// numbered from 1; coordinates are `q1 … qn`.
 pub fn n_link_chain(n: usize, spatial: bool) -> Spec {
     let mut b = ModelBuilder::new(if spatial {
         "spatial_chain"
