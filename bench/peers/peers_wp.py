@@ -322,6 +322,22 @@ def main():
             out.update(ref_tol=a.ref_tol, pinocchio_version=versions[0], mujoco_version=versions[1])
             w.writerow(out)
     print(f"\nwritten {a.csv}", file=sys.stderr)
+    # The same points in the format of `eom-gen bench --work-precision --csv`,
+    # for `eom-gen bench --plot` (series "tool method"; the error is the
+    # largest |q - q_ref| at the end, absolute, in rad).
+    plot_csv = os.path.splitext(a.csv)[0] + "_plot.csv"
+    with open(plot_csv, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["model", "integrator", "setting_kind", "setting", "cpu_ms", "rhs_evals",
+                    "accepted", "rejected", "repeats", "end_error", "stop"])
+        for r in all_rows:
+            rk4 = r["method"] == "rk4"
+            w.writerow([r['case'], f"{r['tool']} {r['method']}",
+                        "step" if rk4 else "tol", f"{r['dt'] if rk4 else r['setting']:.6g}",
+                        f"{r['cpu_s'] * 1e3:.6g}", r["rhs_evals"], r["accepted"], r["rejected"],
+                        r["reps"], f"{r['err_q']:.6g}" if r["ok"] else "",
+                        "finished" if r["ok"] else "failed"])
+    print(f"written {plot_csv}", file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -171,6 +171,13 @@ enum Command {
         /// Where `--suite` writes `MODEL.csv`, `MODEL.svg` and `suite.md`.
         #[arg(long, default_value = "bench/results")]
         out: String,
+        /// Plot work-precision CSV files (comma-separated; the format
+        /// `--csv` writes) to `--svg`, one diagram per model.
+        #[arg(long, value_delimiter = ',')]
+        plot: Vec<String>,
+        /// The error axis label of `--plot`.
+        #[arg(long)]
+        error_label: Option<String>,
         /// Print one JSON object instead of the table.
         #[arg(long)]
         json: bool,
@@ -213,8 +220,21 @@ fn main() -> ExitCode {
             svg,
             models,
             out,
+            plot,
+            error_label,
             json,
         } => {
+            if !plot.is_empty() {
+                if model.is_some() || per_call || work_precision || suite {
+                    eprintln!("error: --plot draws CSV files; give no MODEL, --per-call, --work-precision or --suite");
+                    return ExitCode::from(2);
+                }
+                let Some(svg) = svg else {
+                    eprintln!("error: --plot needs --svg FILE");
+                    return ExitCode::from(2);
+                };
+                return bench_plot(&plot, &svg, error_label.as_deref());
+            }
             let mut wp = eom_gen::work_precision::WpOptions {
                 ref_tol,
                 samples,
@@ -1062,4 +1082,64 @@ fn bench_suite(
         );
         ExitCode::from(1)
     }
+}
+
+/// Plots work-precision CSV files: one SVG per model (`FILE.svg`, or
+/// `FILE-MODEL.svg` when the files hold several models).
+fn bench_plot(files: &[String], svg: &str, error_label: Option<&str>) -> ExitCode {
+    use eom_gen::work_precision as wp;
+    let mut all: Vec<wp::WorkPrecision> = Vec::new();
+    let mut errors = Vec::new();
+    for f in files {
+        match std::fs::read_to_string(f)
+            .map_err(|e| format!("cannot read `{f}`: {e}"))
+            .and_then(|text| wp::from_csv(&text, f))
+        {
+            Ok(models) => {
+                for m in models {
+                    match all.iter_mut().find(|w| w.model == m.model) {
+                        Some(w) => {
+                            w.constrained |= m.constrained;
+                            w.points.extend(m.points);
+                        }
+                        None => all.push(m),
+                    }
+                }
+            }
+            Err(e) => errors.push(e),
+        }
+    }
+    if !errors.is_empty() {
+        for e in errors {
+            eprintln!("error: {e}");
+        }
+        return ExitCode::from(1);
+    }
+    let path = std::path::Path::new(svg);
+    let stem = path.with_extension("");
+    for w in &mut all {
+        if let Some(label) = error_label {
+            w.error_label = label.to_string();
+        }
+    }
+    let several = all.len() > 1;
+    for w in &all {
+        let file = if several {
+            format!("{}-{}.svg", stem.display(), w.model)
+        } else {
+            svg.to_string()
+        };
+        let text = match wp::svg(w) {
+            Ok(t) => t,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(1);
+            }
+        };
+        if let Err(code) = write_file(&file, &text) {
+            return code;
+        }
+        eprintln!("{}: {} points → {file}", w.model, w.points.len());
+    }
+    ExitCode::SUCCESS
 }

@@ -76,18 +76,29 @@ fn draw(w: &WorkPrecision, out: &mut String) -> Result<(), Box<dyn std::error::E
     let (y0, y1) = range(all.iter().map(|p| p.cpu_s * 1e3).filter(|t| *t > 0.0));
     let root = SVGBackend::with_string(out, (1100, 520)).into_drawing_area();
     root.fill(&WHITE)?;
-    let title = format!(
-        "{}: work-precision to t = {} s (reference {} at {:.0e}, checked by {} to {:.1e})",
-        w.model,
-        w.t_end,
-        w.reference.integrator,
-        w.reference.tol,
-        w.reference.check,
-        w.reference.check_end_error
-    );
+    let title = if w.reference.tol.is_finite() {
+        format!(
+            "{}: work-precision to t = {} s (reference {} at {:.0e}, checked by {} to {:.1e})",
+            w.model,
+            w.t_end,
+            w.reference.integrator,
+            w.reference.tol,
+            w.reference.check,
+            w.reference.check_end_error
+        )
+    } else {
+        format!("{}: work-precision", w.model)
+    };
     let root = root.titled(&title, ("sans-serif", 18))?;
-    let (left, right) = root.split_horizontally(550);
-    for (area, path) in [(left, false), (right, true)] {
+    // The path panel only where path errors were measured.
+    let panels: Vec<(DrawingArea<SVGBackend, plotters::coord::Shift>, bool)> =
+        if w.points.iter().any(|p| p.path_error.is_some()) {
+            let (left, right) = root.split_horizontally(550);
+            vec![(left, false), (right, true)]
+        } else {
+            vec![(root.clone(), false)]
+        };
+    for (area, path) in panels {
         let mut chart = ChartBuilder::on(&area)
             .caption(
                 if path {
@@ -103,7 +114,7 @@ fn draw(w: &WorkPrecision, out: &mut String) -> Result<(), Box<dyn std::error::E
             .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())?;
         chart
             .configure_mesh()
-            .x_desc("relative error of the positions")
+            .x_desc(w.error_label.as_str())
             .y_desc("CPU time per run, ms")
             .x_label_formatter(&|x| format!("{x:.0e}"))
             .y_label_formatter(&|y| format!("{y:.0e}"))

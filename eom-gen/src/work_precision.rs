@@ -145,7 +145,12 @@ pub struct WorkPrecision {
     pub reference: WpReference,
     /// The points, in sweep order.
     pub points: Vec<WpPoint>,
+    /// What the errors measure (the plots' axis label).
+    pub error_label: String,
 }
+
+/// The error of [`run`]'s points.
+pub const RELATIVE_ERROR: &str = "relative error of the positions";
 
 const MAIN: &str = r#"//! Work-precision sweep of the generated model (eom-gen bench
 //! --work-precision): `wp T_END REF_TOL SAMPLES MIN_REPEATS MIN_TOTAL_S
@@ -322,7 +327,103 @@ pub fn run(
         t_end: o.t_end,
         reference,
         points,
+        error_label: RELATIVE_ERROR.into(),
     })
+}
+
+/// Work-precision points read back from CSV files in the format [`csv`]
+/// writes (so results of several runs, or of other tools, can be plotted
+/// together), one [`WorkPrecision`] per `model` in order of appearance.
+/// Needed columns: `model`, `integrator`, `setting_kind` (`tol` or
+/// `step`), `setting`, `cpu_ms`, `end_error`; optional: `constraints`,
+/// `path_error`, `rhs_evals`, `accepted`, `rejected`, `repeats`, `stop`.
+/// Empty errors mean the run did not finish. The reference is unknown
+/// (its fields are NaN).
+pub fn from_csv(text: &str, file: &str) -> Result<Vec<WorkPrecision>, String> {
+    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let Some((_, header)) = lines.next() else {
+        return Err(format!("{file}: empty"));
+    };
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let col = |n: &str| names.iter().position(|c| *c == n);
+    let need = ["model", "integrator", "setting_kind", "setting", "cpu_ms", "end_error"];
+    let missing: Vec<&str> = need.iter().copied().filter(|n| col(n).is_none()).collect();
+    if !missing.is_empty() {
+        return Err(format!(
+            "{file}:1: missing column(s) {}; the header needs {}",
+            missing.join(", "),
+            need.join(", ")
+        ));
+    }
+    let mut out: Vec<WorkPrecision> = Vec::new();
+    for (k, line) in lines {
+        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+        let get = |n: &str| col(n).and_then(|i| cells.get(i)).copied().unwrap_or("");
+        let num = |n: &str| -> Result<Option<f64>, String> {
+            let c = get(n);
+            if c.is_empty() {
+                return Ok(None);
+            }
+            c.parse::<f64>()
+                .map(Some)
+                .map_err(|_| format!("{file}:{}: `{n}` is `{c}`, not a number", k + 1))
+        };
+        let count = |n: &str| get(n).parse::<usize>().unwrap_or(0);
+        let setting = num("setting")?.ok_or_else(|| format!("{file}:{}: no `setting`", k + 1))?;
+        let cpu_ms = num("cpu_ms")?.ok_or_else(|| format!("{file}:{}: no `cpu_ms`", k + 1))?;
+        let end_error = num("end_error")?;
+        let point = WpPoint {
+            integrator: get("integrator").to_string(),
+            constraints: get("constraints").to_string(),
+            fixed_step: get("setting_kind") == "step",
+            setting,
+            cpu_s: cpu_ms * 1e-3,
+            repeats: count("repeats"),
+            rhs_evals: count("rhs_evals"),
+            accepted: count("accepted"),
+            rejected: count("rejected"),
+            end_error,
+            path_error: num("path_error")?,
+            digits: end_error.map(|e| eom_sim::work_precision::digits(e)),
+            stop: match get("stop") {
+                "" => "finished".to_string(),
+                s => s.to_string(),
+            },
+        };
+        let model = get("model");
+        let w = match out.iter_mut().find(|w| w.model == model) {
+            Some(w) => w,
+            None => {
+                out.push(WorkPrecision {
+                    model: model.to_string(),
+                    constrained: false,
+                    t_end: f64::NAN,
+                    reference: WpReference {
+                        integrator: String::new(),
+                        check: String::new(),
+                        tol: f64::NAN,
+                        constraints: String::new(),
+                        t_end: f64::NAN,
+                        samples: 0,
+                        rhs_evals: 0,
+                        q_final: Vec::new(),
+                        check_end_error: f64::NAN,
+                        check_path_error: f64::NAN,
+                    },
+                    points: Vec::new(),
+                    error_label: RELATIVE_ERROR.into(),
+                });
+                let n = out.len() - 1;
+                &mut out[n]
+            }
+        };
+        w.constrained |= !point.constraints.is_empty();
+        w.points.push(point);
+    }
+    if out.is_empty() {
+        return Err(format!("{file}: no points"));
+    }
+    Ok(out)
 }
 
 fn fmt_opt(x: Option<f64>, f: impl Fn(f64) -> String) -> String {

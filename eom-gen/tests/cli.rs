@@ -582,6 +582,31 @@ fn bench_work_precision_sweeps_and_writes_csv_and_svg() {
     ] {
         assert!(svg.contains(label), "SVG lacks `{label}`");
     }
+    // The CSV plots again (`--plot`), with a label of our choosing; a file
+    // without the needed columns is an error naming them.
+    let replot = format!("{dir}/replot.svg");
+    let out = run(&[
+        "bench",
+        "--plot",
+        &format!("{dir}/pendulum.csv"),
+        "--svg",
+        &replot,
+        "--error-label",
+        "my error",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let svg = std::fs::read_to_string(&replot).expect("re-plotted SVG");
+    assert!(svg.contains("my error") && svg.contains("dop853") && svg.contains("rk4"));
+    let bad = format!("{dir}/bad.csv");
+    std::fs::write(&bad, "model,integrator,setting\npendulum,rk4,0.1\n").expect("write");
+    let out = run(&["bench", "--plot", &bad, "--svg", &replot]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("setting_kind") && err.contains("end_error"), "{err}");
     // Usage errors exit 2, with every problem named.
     let out = run(&[
         "bench",
