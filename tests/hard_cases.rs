@@ -23,7 +23,8 @@
 use eom_generated as g;
 use eom_macros::multibody;
 use eom_sim::{
-    Dop853, Dopri5, Model, Radau5, SMatrix, SolveOptions, Stats, StopReason, Vector, integrate,
+    Dop853, Dopri5, Model, Radau5, SMatrix, Settings, SolveOptions, Stats, StopReason, Vector,
+    integrate, solve,
 };
 
 /// Bryan angles `R = Rx(a) Ry(b) Rz(c)` through three revolute joints.
@@ -468,34 +469,15 @@ fn double_pendulum(
     let m = g::double_pendulum::DoublePendulum::default();
     let y0: [f64; 4] = initial(&m);
     let opts = sampled(0.0, t_end, dt);
-    let sol = match method {
-        "dop853" => integrate(
-            &mut Dop853::new(tol, tol),
-            &m,
-            0.0,
-            y0,
-            t_end,
-            &opts,
-            &mut [],
-        ),
-        "dopri5" => integrate(
-            &mut Dopri5::new(tol, tol),
-            &m,
-            0.0,
-            y0,
-            t_end,
-            &opts,
-            &mut [],
-        ),
-        _ => integrate(
-            &mut Radau5::new(tol, tol),
-            &m,
-            0.0,
-            y0,
-            t_end,
-            &opts,
-            &mut [],
-        ),
+    let settings = Settings {
+        integrator: method.into(),
+        rtol: tol,
+        atol: tol,
+        dt: 0.0,
+        index_vars: (0, 0),
+    };
+    let Some(sol) = solve(&settings, &m, 0.0, y0, t_end, &opts) else {
+        panic!("unknown integrator {method}")
     };
     assert_eq!(
         sol.stop,

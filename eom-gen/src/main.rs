@@ -226,7 +226,9 @@ fn main() -> ExitCode {
         } => {
             if !plot.is_empty() {
                 if model.is_some() || per_call || work_precision || suite {
-                    eprintln!("error: --plot draws CSV files; give no MODEL, --per-call, --work-precision or --suite");
+                    eprintln!(
+                        "error: --plot draws CSV files; give no MODEL, --per-call, --work-precision or --suite"
+                    );
                     return ExitCode::from(2);
                 }
                 let Some(svg) = svg else {

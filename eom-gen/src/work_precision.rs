@@ -340,13 +340,23 @@ pub fn run(
 /// Empty errors mean the run did not finish. The reference is unknown
 /// (its fields are NaN).
 pub fn from_csv(text: &str, file: &str) -> Result<Vec<WorkPrecision>, String> {
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
     let Some((_, header)) = lines.next() else {
         return Err(format!("{file}: empty"));
     };
     let names: Vec<&str> = header.split(',').map(str::trim).collect();
     let col = |n: &str| names.iter().position(|c| *c == n);
-    let need = ["model", "integrator", "setting_kind", "setting", "cpu_ms", "end_error"];
+    let need = [
+        "model",
+        "integrator",
+        "setting_kind",
+        "setting",
+        "cpu_ms",
+        "end_error",
+    ];
     let missing: Vec<&str> = need.iter().copied().filter(|n| col(n).is_none()).collect();
     if !missing.is_empty() {
         return Err(format!(

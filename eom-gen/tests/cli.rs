@@ -21,6 +21,20 @@ fn json(args: &[&str]) -> serde_json::Value {
     serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
 }
 
+/// `eom-gen ARGS` from the workspace root with the test cache of compiled
+/// models (`target/eom-cache`, shared by the tests that compile).
+fn cached(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+        .args(args)
+        .env(
+            "EOM_CACHE_DIR",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache"),
+        )
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .output()
+        .expect("eom-gen runs")
+}
+
 #[test]
 fn check_json_has_the_documented_keys() {
     let v = json(&["check", "models/heavy_top.ron", "--json"]);
@@ -368,15 +382,7 @@ fn simulate_interpreted_and_compiled_agree() {
 
 #[test]
 fn bench_per_call_reports_positive_times_and_op_counts() {
-    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
-    let run = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_eom-gen"))
-            .args(args)
-            .env("EOM_CACHE_DIR", cache)
-            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-            .output()
-            .expect("eom-gen runs")
-    };
+    let run = cached;
     let out = run(&[
         "bench",
         "models/pendulum.ron",
@@ -501,17 +507,9 @@ fn bench_work_precision_sweeps_and_writes_csv_and_svg() {
     // The pendulum to t = 2 s: RK4's error falls 16-fold per halved step
     // (order 4), DOP853's with the tolerance, and the reference (DOP853 at
     // 1e-13) agrees with its check (DOPRI5 at 1e-13) far below every point.
-    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/wp-test");
     let (csv, svg) = (format!("{dir}/pendulum.csv"), format!("{dir}/pendulum.svg"));
-    let run = |args: &[&str]| {
-        Command::new(env!("CARGO_BIN_EXE_eom-gen"))
-            .args(args)
-            .env("EOM_CACHE_DIR", cache)
-            .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-            .output()
-            .expect("eom-gen runs")
-    };
+    let run = cached;
     let out = run(&[
         "bench",
         "models/pendulum.ron",
@@ -606,7 +604,10 @@ fn bench_work_precision_sweeps_and_writes_csv_and_svg() {
     let out = run(&["bench", "--plot", &bad, "--svg", &replot]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("setting_kind") && err.contains("end_error"), "{err}");
+    assert!(
+        err.contains("setting_kind") && err.contains("end_error"),
+        "{err}"
+    );
     // Usage errors exit 2, with every problem named.
     let out = run(&[
         "bench",
@@ -633,28 +634,22 @@ fn bench_work_precision_sweeps_constraint_solvers_of_a_loop() {
     // The four-bar to 0.5 s (before its singular position): projection and
     // partitioning keep the same constraint manifold, so at one tolerance
     // their errors agree in magnitude, and both fall with the tolerance.
-    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
-    let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
-        .args([
-            "bench",
-            "models/fourbar.ron",
-            "--work-precision",
-            "--t-end",
-            "0.5",
-            "--integrators",
-            "dop853",
-            "--constraints",
-            "projection,partitioning",
-            "--tols",
-            "1e-6,1e-10",
-            "--min-time",
-            "0",
-            "--json",
-        ])
-        .env("EOM_CACHE_DIR", cache)
-        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
-        .output()
-        .expect("eom-gen runs");
+    let out = cached(&[
+        "bench",
+        "models/fourbar.ron",
+        "--work-precision",
+        "--t-end",
+        "0.5",
+        "--integrators",
+        "dop853",
+        "--constraints",
+        "projection,partitioning",
+        "--tols",
+        "1e-6,1e-10",
+        "--min-time",
+        "0",
+        "--json",
+    ]);
     assert!(
         out.status.success(),
         "{}",
@@ -690,7 +685,6 @@ fn bench_suite_writes_a_csv_and_svg_per_model_and_a_summary() {
     // A models directory with the pendulum and a broken model: the
     // pendulum's results are written, the broken one is named and the
     // suite exits 1.
-    let cache = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache");
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/wp-suite-test");
     let (models, out) = (format!("{root}/models"), format!("{root}/out"));
     let _ = std::fs::remove_dir_all(root);
@@ -698,26 +692,22 @@ fn bench_suite_writes_a_csv_and_svg_per_model_and_a_summary() {
     let pendulum = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/pendulum.ron");
     std::fs::copy(pendulum, format!("{models}/pendulum.ron")).expect("copy");
     std::fs::write(format!("{models}/broken.ron"), "Model(name: \"broken\"").expect("write");
-    let out_run = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
-        .args([
-            "bench",
-            "--suite",
-            "--models",
-            &models,
-            "--out",
-            &out,
-            "--t-end",
-            "1",
-            "--tols",
-            "1e-6,1e-9",
-            "--steps",
-            "100,200",
-            "--min-time",
-            "0",
-        ])
-        .env("EOM_CACHE_DIR", cache)
-        .output()
-        .expect("eom-gen runs");
+    let out_run = cached(&[
+        "bench",
+        "--suite",
+        "--models",
+        &models,
+        "--out",
+        &out,
+        "--t-end",
+        "1",
+        "--tols",
+        "1e-6,1e-9",
+        "--steps",
+        "100,200",
+        "--min-time",
+        "0",
+    ]);
     let stderr = String::from_utf8_lossy(&out_run.stderr);
     assert_eq!(out_run.status.code(), Some(1), "{stderr}");
     assert!(stderr.contains("broken.ron"), "{stderr}");
