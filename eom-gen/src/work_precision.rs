@@ -394,7 +394,7 @@ pub fn from_csv(text: &str, file: &str) -> Result<Vec<WorkPrecision>, String> {
             rejected: count("rejected"),
             end_error,
             path_error: num("path_error")?,
-            digits: end_error.map(|e| eom_sim::work_precision::digits(e)),
+            digits: end_error.map(eom_sim::work_precision::digits),
             stop: match get("stop") {
                 "" => "finished".to_string(),
                 s => s.to_string(),
