@@ -847,6 +847,13 @@ fn slider_crank_passes_its_dead_centres() {
         (2, 2),
         "J keeps full rank at dead centre: {st:?}"
     );
+    // Far from singular all along: its two singular values stay comparable
+    // (the four-bar's below fall towards zero).
+    assert!(
+        st.min_singular_ratio > 0.1,
+        "slider-crank: smallest σ₂/σ₁ of J {:.2e}, want > 0.1",
+        st.min_singular_ratio
+    );
     assert!(
         (e1 - e0).abs() < 1e-8 * e0.abs(),
         "energy {e0} → {e1}, want relative change < 1e-8"
@@ -975,6 +982,15 @@ fn fourbar_keeps_its_parallelogram_branch_through_the_change_point() {
         "left the parallelogram branch by {branch:e} rad"
     );
     assert!(st.max_position_residual < 1e-10, "{st:?}");
+    // No accepted step lands on a change point, so the rank the solver
+    // records stays generic; how near the steps come shows in the smallest
+    // σ₂/σ₁ of J, which the run reports.
+    assert_eq!(st.min_rank, generic, "{st:?}");
+    assert!(
+        st.min_singular_ratio < 1e-2,
+        "four-bar: smallest σ₂/σ₁ of J {:.2e}, want < 1e-2 near its change points",
+        st.min_singular_ratio
+    );
 }
 
 // ---------------------------------------------------------------------------

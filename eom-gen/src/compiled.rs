@@ -127,8 +127,8 @@ fn simulate(args: &[String]) {
     let start = std::time::Instant::now();
     let stats_json = |s: eom_sim::ConstraintStats, lambda: &[f64]| {
         format!(
-            ",\"constraints\":\"{}\",\"max_constraint_residual\":{:?},\"max_velocity_residual\":{:?},\"constraint_rank\":{},\"min_constraint_rank\":{},\"repartitions\":{},\"lambda\":{},\"constraint_names\":[{}],\"assembly\":{{\"residual\":{:?},\"velocity_residual\":{:?},\"iterations\":{}}}",
-            arg(9), s.max_position_residual, s.max_velocity_residual, s.rank, s.min_rank, s.repartitions, json(lambda),
+            ",\"constraints\":\"{}\",\"max_constraint_residual\":{:?},\"max_velocity_residual\":{:?},\"constraint_rank\":{},\"min_constraint_rank\":{},\"min_singular_ratio\":{:?},\"repartitions\":{},\"lambda\":{},\"constraint_names\":[{}],\"assembly\":{{\"residual\":{:?},\"velocity_residual\":{:?},\"iterations\":{}}}",
+            arg(9), s.max_position_residual, s.max_velocity_residual, s.rank, s.min_rank, s.min_singular_ratio, s.repartitions, json(lambda),
             <model::MODEL as ConstrainedModel>::CONSTRAINT_NAMES.iter().map(|n| format!("{n:?}")).collect::<Vec<_>>().join(","),
             a.residual, a.velocity_residual, a.iterations
         )

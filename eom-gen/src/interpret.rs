@@ -440,6 +440,10 @@ fn simulate_n<const N: usize>(
         );
         info.insert("constraint_rank".into(), serde_json::json!(s.rank));
         info.insert("min_constraint_rank".into(), serde_json::json!(s.min_rank));
+        info.insert(
+            "min_singular_ratio".into(),
+            serde_json::json!(s.min_singular_ratio),
+        );
         info.insert("repartitions".into(), serde_json::json!(s.repartitions));
         info.insert("lambda".into(), serde_json::json!(lambda));
     };

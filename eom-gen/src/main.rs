@@ -805,6 +805,7 @@ fn simulate(
                 "max_velocity_residual",
                 "constraint_rank",
                 "min_constraint_rank",
+                "min_singular_ratio",
                 "repartitions",
             ] {
                 let value = v[key].clone();
@@ -855,11 +856,12 @@ fn simulate(
                 if let Some(method) = v["constraints"].as_str() {
                     let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
                     println!(
-                        "  constraints ({method}): max |Φ| {:.1e}, max |Φ̇| {:.1e}, rank {} of {}",
+                        "  constraints ({method}): max |Φ| {:.1e}, max |Φ̇| {:.1e}, rank {} of {}, smallest σ_r/σ_1 of J {:.1e}",
                         f("max_constraint_residual"),
                         f("max_velocity_residual"),
                         v["constraint_rank"],
-                        v["constraint_names"].as_array().map_or(0, Vec::len)
+                        v["constraint_names"].as_array().map_or(0, Vec::len),
+                        f("min_singular_ratio")
                     );
                 }
                 if let Some(csv) = &o.csv {

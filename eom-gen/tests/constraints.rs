@@ -260,6 +260,13 @@ fn fourbar_stays_a_parallelogram_and_keeps_its_energy() {
         let bound = if mode == "projection" { 1e-12 } else { 1e-9 };
         assert!(r < bound, "{mode}: max |Φ| = {r:e}");
         assert_eq!(v["constraint_rank"], 2);
+        // The cranks pass the collinear change points, where J loses rank
+        // between two accepted steps: the run reports how near it came.
+        let ratio = v["min_singular_ratio"].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            ratio > 0.0 && ratio < 0.1,
+            "{mode}: smallest σ₂/σ₁ of J {ratio:e}, want in (0, 0.1)"
+        );
     }
 }
 

@@ -262,26 +262,48 @@ pub struct ConstraintStats {
     pub min_rank: usize,
     /// Changes of the coordinate partition ([`Method::Partitioning`]).
     pub repartitions: usize,
+    /// Smallest `σ_r / σ_1` of `J` at the accepted states, `r` the rank at
+    /// the first of them: how near the run came to a singular
+    /// configuration (of order 1 far from one, towards 0 at one, such as
+    /// the four-bar's change point, where the rank drops between steps
+    /// without any step landing on it); 1 if nothing was recorded.
+    pub min_singular_ratio: f64,
 }
 
 /// [`ConstraintStats`] gathered at the accepted states of a run.
-struct Recorder(RefCell<ConstraintStats>);
+struct Recorder(RefCell<ConstraintStats>, std::cell::Cell<Option<usize>>);
 
 impl Recorder {
     fn new() -> Self {
-        Recorder(RefCell::new(ConstraintStats {
-            min_rank: usize::MAX,
-            ..ConstraintStats::default()
-        }))
+        Recorder(
+            RefCell::new(ConstraintStats {
+                min_rank: usize::MAX,
+                min_singular_ratio: f64::INFINITY,
+                ..ConstraintStats::default()
+            }),
+            std::cell::Cell::new(None),
+        )
     }
 
     /// Residuals of the first `nh` (holonomic) rows and of all speed rows,
-    /// and the rank of `J`, at an accepted state.
+    /// the rank of `J` and how near it is to losing it, at an accepted state.
     fn record(&self, nh: usize, c: &ConstraintValues) {
-        let (_, rank) = min_norm_solve(&c.jacobian, &DVector::zeros(c.jacobian.nrows()));
+        let sigma = singular_values(&c.jacobian);
+        let largest = sigma.first().copied().unwrap_or(0.0);
+        let rank = sigma
+            .iter()
+            .filter(|&&x| x > 1e-10 * largest.max(1e-300))
+            .count();
         let mut s = self.0.borrow_mut();
         s.max_position_residual = s.max_position_residual.max(max_abs(c.phi.iter().take(nh)));
         s.max_velocity_residual = s.max_velocity_residual.max(max_abs(c.phidot.iter()));
+        // The rank the run started with fixes which singular value to watch.
+        let watched = *self.1.get().get_or_insert(rank);
+        self.1.set(Some(watched));
+        if watched > 0 && largest > 0.0 {
+            let ratio = sigma.get(watched - 1).copied().unwrap_or(0.0) / largest;
+            s.min_singular_ratio = s.min_singular_ratio.min(ratio);
+        }
         s.rank = rank;
         s.min_rank = s.min_rank.min(rank);
     }
@@ -291,12 +313,25 @@ impl Recorder {
         if s.min_rank == usize::MAX {
             s.min_rank = s.rank;
         }
+        if !s.min_singular_ratio.is_finite() {
+            s.min_singular_ratio = 1.0;
+        }
         s
     }
 
     fn repartitioned(&self) {
         self.0.borrow_mut().repartitions += 1;
     }
+}
+
+/// Singular values of `a`, largest first (none for an empty matrix).
+fn singular_values(a: &DMatrix<f64>) -> Vec<f64> {
+    if a.nrows() == 0 || a.ncols() == 0 {
+        return Vec::new();
+    }
+    let mut s: Vec<f64> = a.clone().singular_values().iter().copied().collect();
+    s.sort_by(|x, y| y.total_cmp(x));
+    s
 }
 
 /// Minimum-norm solution of `a x = r` via the SVD, and the numerical rank
