@@ -863,6 +863,13 @@ fn simulate(
                         v["constraint_names"].as_array().map_or(0, Vec::len),
                         f("min_singular_ratio")
                     );
+                    if f("min_singular_ratio") < 1e-2 {
+                        println!(
+                            "  note: J came near losing rank: the run passed close to a singular configuration, \
+                             where the constraint forces are ill-conditioned and accuracy is limited; compare \
+                             with a tighter tolerance or another --constraints method"
+                        );
+                    }
                 }
                 if let Some(csv) = &o.csv {
                     println!("  trajectory written to {csv}");

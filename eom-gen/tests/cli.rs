@@ -730,3 +730,57 @@ fn bench_suite_writes_a_csv_and_svg_per_model_and_a_summary() {
         assert!(row.contains(" rhs)"), "{row}");
     }
 }
+
+#[test]
+fn simulate_says_when_a_loop_passed_near_a_singular_configuration() {
+    // The four-bar passes its collinear change points (J loses rank there)
+    // within 2 s; the slider-crank's dead centres leave J regular. The
+    // smallest σ₂/σ₁ of J at the accepted steps shows it (how near depends
+    // on where the steps fall: 4e-3 to 6e-2 for the four-bar at 1e-8 to
+    // 1e-11, 0.36 for the slider-crank), and the summary adds a note when it
+    // fell below 1e-2.
+    let run = |model: &str, json: bool| {
+        let mut args = vec![
+            "simulate",
+            model,
+            "--t-end",
+            "2",
+            "--integrator",
+            "dop853",
+            "--rtol",
+            "1e-10",
+            "--atol",
+            "1e-10",
+        ];
+        if json {
+            args.push("--json");
+        }
+        let out = cached(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    for (model, near) in [
+        ("models/fourbar.ron", true),
+        ("models/slider_crank.ron", false),
+    ] {
+        let v: serde_json::Value = serde_json::from_str(&run(model, true)).expect("JSON");
+        let ratio = v["min_singular_ratio"].as_f64().unwrap_or(f64::NAN);
+        assert_eq!(v["stats"]["min_singular_ratio"], v["min_singular_ratio"]);
+        if near {
+            assert!(ratio < 0.1, "{model}: smallest σ₂/σ₁ {ratio:e}, want < 0.1");
+        } else {
+            assert!(ratio > 0.1, "{model}: smallest σ₂/σ₁ {ratio:e}, want > 0.1");
+        }
+        let text = run(model, false);
+        assert!(text.contains("smallest σ_r/σ_1 of J"), "{text}");
+        assert_eq!(
+            text.contains("singular configuration"),
+            ratio < 1e-2,
+            "{model}: the note goes with a ratio below 1e-2 ({ratio:e}):\n{text}"
+        );
+    }
+}
