@@ -16,18 +16,9 @@
 //! `bench/results/loops.csv`).
 
 use eom_generated as g;
-use eom_sim::{
-    ConstrainedModel, ConstrainedSystem, Generated, Index3System, Method, Settings, SolveOptions,
-    StopReason, constrained::assemble, solve,
-};
+use eom_sim::work_precision::{ModelRunner, Runner, Trajectory, end_error, method_name};
+use eom_sim::{ConstrainedModel, Method, OdeSystem, Settings, StopReason};
 use std::time::Instant;
-
-/// One run's end state (positions), right-hand sides and outcome.
-struct End {
-    q: Vec<f64>,
-    rhs: usize,
-    stop: StopReason,
-}
 
 fn settings(integrator: &str, tol: f64) -> Settings {
     Settings {
@@ -39,79 +30,22 @@ fn settings(integrator: &str, tol: f64) -> Settings {
     }
 }
 
-fn opts() -> SolveOptions {
-    SolveOptions {
-        record_steps: false,
-        max_steps: 5_000_000,
-        ..SolveOptions::default()
-    }
-}
-
-/// `N = n_q + n_u`, `NC = N + m`.
-fn once<M: ConstrainedModel + Default, const N: usize, const NC: usize>(
+/// One run from the assembled initial state (assembly included, as it is
+/// part of what a run costs); `N = n_q + n_u`, `NC = N + m`.
+fn once<M: ConstrainedModel + OdeSystem<N> + Default, const N: usize, const NC: usize>(
     method: Method,
     integrator: &str,
     tol: f64,
     t_end: f64,
-) -> End {
+) -> Trajectory {
     let m = M::default();
-    let d = Generated(&m);
-    let a = assemble(&d, m.q0().as_ref(), m.u0().as_ref(), 0.0);
-    if method == Method::Index3 {
-        let dae = Index3System::new(&d);
-        let Some(y0) = dae.initial::<NC>(0.0, &a.q, &a.u) else {
-            return End {
-                q: Vec::new(),
-                rhs: 0,
-                stop: StopReason::NonFinite {
-                    t: 0.0,
-                    component: 0,
-                },
-            };
-        };
-        let s = Settings {
-            index_vars: dae.index_vars(),
-            ..settings("radau5", tol)
-        };
-        let sol = solve(&s, &dae, 0.0, y0, t_end, &opts()).expect("radau5");
-        return End {
-            q: sol.y_final[..M::NQ].to_vec(),
-            rhs: sol.stats.rhs_evals,
-            stop: sol.stop,
-        };
-    }
-    let mut y0 = [0.0; N];
-    y0[..M::NQ].copy_from_slice(&a.q);
-    y0[M::NQ..].copy_from_slice(&a.u);
-    let sys = ConstrainedSystem::new(&d, method);
-    let sol = solve(&settings(integrator, tol), &sys, 0.0, y0, t_end, &opts()).expect("known");
-    End {
-        q: sol.y_final[..M::NQ].to_vec(),
-        rhs: sol.stats.rhs_evals,
-        stop: sol.stop,
-    }
-}
-
-fn error(q: &[f64], reference: &[f64]) -> f64 {
-    let scale = reference.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    q.iter()
-        .zip(reference)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max)
-        / scale
-}
-
-fn name(m: Method) -> &'static str {
-    match m {
-        Method::Baumgarte { .. } => "multipliers",
-        Method::Projection => "projection",
-        Method::Partitioning => "partitioning",
-        Method::Index3 => "index3",
-    }
+    ModelRunner::<M, N, NC>::new(&m)
+        .run(&settings(integrator, tol), method, t_end, &[])
+        .expect("a known integrator, and RADAU5 for the index-3 DAE")
 }
 
 #[allow(clippy::too_many_arguments)]
-fn sweep<M: ConstrainedModel + Default, const N: usize, const NC: usize>(
+fn sweep<M: ConstrainedModel + OdeSystem<N> + Default, const N: usize, const NC: usize>(
     label: &str,
     t_end: f64,
     reference: &[f64],
@@ -133,21 +67,21 @@ fn sweep<M: ConstrainedModel + Default, const N: usize, const NC: usize>(
             let Some(end) = end else { continue };
             let (err, digits, outcome) = match end.stop {
                 StopReason::Finished => {
-                    let e = error(&end.q, reference);
+                    let e = end_error(&end.q_final, reference);
                     (e, -e.max(1e-17).log10(), "finished".to_string())
                 }
                 other => (f64::NAN, f64::NAN, format!("{other:?}")),
             };
             println!(
                 "| {label} | {} | {integrator} | {tol:.0e} | {} | {:.3} | {err:.1e} | {digits:.1} | {outcome} |",
-                name(method),
-                end.rhs,
+                method_name(method),
+                end.stats.rhs_evals,
                 times[2] * 1e3
             );
             *csv += &format!(
                 "{label},{},{integrator},{tol:e},{},{:e},{err:e},{digits},{outcome}\n",
-                name(method),
-                end.rhs,
+                method_name(method),
+                end.stats.rhs_evals,
                 times[2]
             );
         }
@@ -169,13 +103,13 @@ fn main() {
     let check = once::<A, 14, 20>(Method::Projection, "dop853", 1e-13, 0.03);
     eprintln!(
         "andrews reference (projection RADAU5, 1e-13) against projection DOP853 at 1e-13: {:.1e}; q(0.03) = {:?}",
-        error(&check.q, &reference.q),
-        reference.q
+        end_error(&check.q_final, &reference.q_final),
+        reference.q_final
     );
     sweep::<A, 14, 20>(
         "andrews",
         0.03,
-        &reference.q,
+        &reference.q_final,
         &[
             (Method::Index3, "radau5"),
             (Method::Projection, "radau5"),
@@ -193,12 +127,12 @@ fn main() {
         let check = once::<F, 6, 8>(Method::Partitioning, "dop853", 1e-13, t_end);
         eprintln!(
             "fourbar to {t_end} s reference (projection DOP853, 1e-13) against partitioning DOP853 at 1e-13: {:.1e}",
-            error(&check.q, &reference.q)
+            end_error(&check.q_final, &reference.q_final)
         );
         sweep::<F, 6, 8>(
             &format!("fourbar_{t_end}s"),
             t_end,
-            &reference.q,
+            &reference.q_final,
             &[
                 (Method::Projection, "dop853"),
                 (Method::Partitioning, "dop853"),

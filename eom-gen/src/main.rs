@@ -432,12 +432,9 @@ fn import(path: &str, output: Option<&str>) -> ExitCode {
             print!("{}", import.source.text);
             ExitCode::SUCCESS
         }
-        Some(file) => match std::fs::write(file, &import.source.text) {
+        Some(file) => match write_file(file, &import.source.text) {
             Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("error: cannot write `{file}`: {e}");
-                ExitCode::from(1)
-            }
+            Err(code) => code,
         },
     }
 }
@@ -539,12 +536,9 @@ fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
             print!("{}", g.source);
             ExitCode::SUCCESS
         }
-        Some(file) => match std::fs::write(file, &g.source) {
+        Some(file) => match write_file(file, &g.source) {
             Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("error: cannot write `{file}`: {e}");
-                ExitCode::from(1)
-            }
+            Err(code) => code,
         },
     }
 }
@@ -918,6 +912,8 @@ fn wp_sweep(
     })
 }
 
+/// Writes `text` to `path`, creating its directory; the error is printed
+/// and the exit status returned.
 fn write_file(path: &str, text: &str) -> Result<(), ExitCode> {
     if let Some(dir) = std::path::Path::new(path).parent()
         && !dir.as_os_str().is_empty()

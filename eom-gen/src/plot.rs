@@ -3,7 +3,7 @@
 //! constraint solver), the error at the end time on the left and the
 //! largest error along the path on the right.
 
-use crate::work_precision::{WorkPrecision, WpPoint};
+use crate::work_precision::WorkPrecision;
 use plotters::prelude::*;
 
 /// Errors below this are drawn at it (round-off level).
@@ -65,15 +65,15 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 fn draw(w: &WorkPrecision, out: &mut String) -> Result<(), Box<dyn std::error::Error>> {
-    let all: Vec<&WpPoint> = w.points.iter().collect();
-    let errors = all
+    let errors = w
+        .points
         .iter()
         .flat_map(|p| [p.end_error, p.path_error])
         .flatten()
         .filter(|e| e.is_finite())
         .map(|e| e.max(ERROR_FLOOR));
     let (x0, x1) = range(errors);
-    let (y0, y1) = range(all.iter().map(|p| p.cpu_s * 1e3).filter(|t| *t > 0.0));
+    let (y0, y1) = range(w.points.iter().map(|p| p.cpu_s * 1e3).filter(|t| *t > 0.0));
     let root = SVGBackend::with_string(out, (1100, 520)).into_drawing_area();
     root.fill(&WHITE)?;
     let title = if w.reference.tol.is_finite() {

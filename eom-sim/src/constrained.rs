@@ -270,19 +270,20 @@ pub struct ConstraintStats {
     pub min_singular_ratio: f64,
 }
 
-/// [`ConstraintStats`] gathered at the accepted states of a run.
-struct Recorder(RefCell<ConstraintStats>, std::cell::Cell<Option<usize>>);
+/// [`ConstraintStats`] gathered at the accepted states of a run, and the
+/// rank of `J` at the first of them (which singular value to watch).
+struct Recorder(RefCell<(ConstraintStats, Option<usize>)>);
 
 impl Recorder {
     fn new() -> Self {
-        Recorder(
-            RefCell::new(ConstraintStats {
+        Recorder(RefCell::new((
+            ConstraintStats {
                 min_rank: usize::MAX,
-                min_singular_ratio: f64::INFINITY,
+                min_singular_ratio: 1.0,
                 ..ConstraintStats::default()
-            }),
-            std::cell::Cell::new(None),
-        )
+            },
+            None,
+        )))
     }
 
     /// Residuals of the first `nh` (holonomic) rows and of all speed rows,
@@ -290,16 +291,11 @@ impl Recorder {
     fn record(&self, nh: usize, c: &ConstraintValues) {
         let sigma = singular_values(&c.jacobian);
         let largest = sigma.first().copied().unwrap_or(0.0);
-        let rank = sigma
-            .iter()
-            .filter(|&&x| x > 1e-10 * largest.max(1e-300))
-            .count();
-        let mut s = self.0.borrow_mut();
+        let rank = numerical_rank(&sigma);
+        let (s, first_rank) = &mut *self.0.borrow_mut();
         s.max_position_residual = s.max_position_residual.max(max_abs(c.phi.iter().take(nh)));
         s.max_velocity_residual = s.max_velocity_residual.max(max_abs(c.phidot.iter()));
-        // The rank the run started with fixes which singular value to watch.
-        let watched = *self.1.get().get_or_insert(rank);
-        self.1.set(Some(watched));
+        let watched = *first_rank.get_or_insert(rank);
         if watched > 0 && largest > 0.0 {
             let ratio = sigma.get(watched - 1).copied().unwrap_or(0.0) / largest;
             s.min_singular_ratio = s.min_singular_ratio.min(ratio);
@@ -309,19 +305,29 @@ impl Recorder {
     }
 
     fn stats(&self) -> ConstraintStats {
-        let mut s = self.0.borrow().clone();
+        let mut s = self.0.borrow().0.clone();
         if s.min_rank == usize::MAX {
             s.min_rank = s.rank;
-        }
-        if !s.min_singular_ratio.is_finite() {
-            s.min_singular_ratio = 1.0;
         }
         s
     }
 
     fn repartitioned(&self) {
-        self.0.borrow_mut().repartitions += 1;
+        self.0.borrow_mut().0.repartitions += 1;
     }
+}
+
+/// Singular values below this fraction of the largest count as zero.
+const RANK_TOL: f64 = 1e-10;
+
+/// How many singular values (largest first) are above [`RANK_TOL`] of the
+/// largest.
+fn numerical_rank(sigma: &[f64]) -> usize {
+    let largest = sigma.first().copied().unwrap_or(0.0);
+    sigma
+        .iter()
+        .filter(|&&x| x > RANK_TOL * largest.max(1e-300))
+        .count()
 }
 
 /// Singular values of `a`, largest first (none for an empty matrix).
@@ -342,7 +348,7 @@ pub fn min_norm_solve(a: &DMatrix<f64>, r: &DVector<f64>) -> (DVector<f64>, usiz
     }
     let svd = a.clone().svd(true, true);
     let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
-    let eps = 1e-10 * largest.max(1e-300);
+    let eps = RANK_TOL * largest.max(1e-300);
     let rank = svd.singular_values.iter().filter(|&&s| s > eps).count();
     match svd.solve(r, eps) {
         Ok(x) => (x, rank),

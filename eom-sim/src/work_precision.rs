@@ -52,9 +52,6 @@ pub trait Runner {
         t_end: f64,
         t_eval: &[f64],
     ) -> Option<Trajectory>;
-
-    /// True if the system has constraints (the `method` matters).
-    fn constrained(&self) -> bool;
 }
 
 /// The positions part of a solution.
@@ -98,10 +95,6 @@ impl<S: OdeSystem<N>, const N: usize> Runner for OdeRunner<'_, S, N> {
         solve(settings, self.sys, 0.0, self.y0, t_end, &options(t_eval))
             .map(|sol| trajectory(sol, self.nq))
     }
-
-    fn constrained(&self) -> bool {
-        false
-    }
 }
 
 /// A generated model from its initial state; `N = n_q + n_u` and
@@ -128,8 +121,8 @@ impl<'a, M: ConstrainedModel + OdeSystem<N>, const N: usize, const NC: usize>
         ModelRunner { model, q0, u0 }
     }
 
-    fn y0<const K: usize>(&self) -> [f64; K] {
-        let mut y = [0.0; K];
+    fn y0(&self) -> [f64; N] {
+        let mut y = [0.0; N];
         for (d, s) in y.iter_mut().zip(self.q0.iter().chain(&self.u0)) {
             *d = *s;
         }
@@ -176,14 +169,9 @@ impl<M: ConstrainedModel + OdeSystem<N>, const N: usize, const NC: usize> Runner
         let sys = ConstrainedSystem::new(&d, method);
         solve(settings, &sys, 0.0, self.y0(), t_end, &options(t_eval)).map(finish)
     }
-
-    fn constrained(&self) -> bool {
-        M::NC > 0
-    }
 }
 
-/// `‖a − b‖∞ / scale` over the common length; infinite if a value is not
-/// finite or the lengths differ.
+/// `‖a − b‖∞`; infinite if a difference is NaN or the lengths differ.
 fn difference(a: &[f64], b: &[f64]) -> f64 {
     if a.len() != b.len() {
         return f64::INFINITY;
