@@ -41,7 +41,8 @@ fn compare<M: Model + Default>(name: &str) {
     let sys = system(name);
     let num = Numeric::new(&sys).expect("numeric");
     let formulation =
-        eom_gen::mech::formulate(&sys, eom_gen::mech::Request::default()).expect("formulates");
+        eom_gen::mech::formulate(&sys, eom_gen::functions::FunctionSet::all_requested())
+            .expect("formulates");
     let model = M::default();
     assert_eq!((M::NQ, M::NU), (sys.nq(), sys.nu()), "{name}: sizes");
     assert_eq!(M::COORDINATE_NAMES, sys.coordinate_names().as_slice());
@@ -93,7 +94,7 @@ fn compare<M: Model + Default>(name: &str) {
         // evaluator (which the numeric twins check against the f64 algorithms).
         let mut out = M::Outputs::ZERO;
         model.outputs(t, &q, &u, &vector::<M::U>(&fd), &mut out);
-        if let Some(p) = &formulation.outputs {
+        if let Some(p) = formulation.program(eom_gen::functions::Function::Outputs) {
             let x = eom_gen::interpret::Point {
                 sys: &sys,
                 q: &qv,
@@ -182,4 +183,128 @@ fn generation_is_deterministic() {
             .source;
         assert!(a == b, "{name}: two generations differ");
     }
+}
+
+/// Every function the compiled model offers through `Model::evaluate`
+/// (the table of generated functions) against the evaluator running the
+/// same programs, and the two functions only the table adds against
+/// independent numerics: the marker Jacobians against central differences
+/// of the marker positions along `q̇ = N(q) e_k`, the cut joints'
+/// reactions against the `f64` reference algorithm (`Numeric::cut_reactions`).
+fn evaluate_matches<M: Model + Default>(name: &str) {
+    use eom_gen::functions::Function;
+    let sys = system(name);
+    let num = Numeric::new(&sys).expect("numeric");
+    let f = eom_gen::mech::formulate(&sys, eom_gen::functions::FunctionSet::all_requested())
+        .expect("formulates");
+    let model = M::default();
+    let mut rng = Rng(0x5EED_0000_0000_0019);
+    for _ in 0..3 {
+        let mut q: M::Q = vector(
+            &sys.q0()
+                .iter()
+                .map(|q| q + 0.5 * rng.uniform())
+                .collect::<Vec<_>>(),
+        );
+        model.normalize(&mut q);
+        let qv = q.as_ref().to_vec();
+        let uv = rng.vec(M::NU, 1.0);
+        let udot = rng.vec(M::NU, 1.0);
+        let tau = rng.vec(M::NU, 1.0);
+        let lambda = rng.vec(f.constraint_names.len(), 1.0);
+        let t = 0.25;
+        let at = eom_sim::Point {
+            t,
+            q: &qv,
+            u: &uv,
+            udot: &udot,
+            tau: &tau,
+            lambda: &lambda,
+        };
+        let x = eom_gen::interpret::Point {
+            sys: &sys,
+            q: &qv,
+            u: &uv,
+            udot: &udot,
+            tau: &tau,
+            inputs: &[],
+            params: &[],
+            multipliers: &lambda,
+            t,
+        };
+        assert!(!M::FUNCTIONS.is_empty());
+        for info in M::FUNCTIONS {
+            let mut got = vec![f64::NAN; info.len];
+            assert!(
+                model.evaluate(info.name, &at, &mut got),
+                "{name}: {}",
+                info.name
+            );
+            let function: Function = info.name.parse().expect("a function of the table");
+            let want = eom_gen::interpret::evaluate_function(&f, function, &x)
+                .unwrap_or_else(|| panic!("{name}: the evaluator has no {}", info.name));
+            close(&format!("{name} {}", info.name), &got, &want);
+        }
+        // A wrong length is refused, not a panic.
+        assert!(!model.evaluate("qdot", &at, &mut [0.0; 0][..]) || M::NQ == 0);
+        assert!(!model.evaluate("no_such_function", &at, &mut []));
+        if let Some(info) = M::FUNCTIONS.iter().find(|i| i.name == "marker_jacobians") {
+            let mut jac = vec![0.0; info.len];
+            model.evaluate("marker_jacobians", &at, &mut jac);
+            let positions = |q: &[f64]| -> Vec<f64> {
+                let mut out = vec![0.0; M::OUTPUT_NAMES.len()];
+                let at = eom_sim::Point { q, u: &uv, ..at };
+                model.evaluate("outputs", &at, &mut out);
+                // The rows of the Jacobian are the marker positions' outputs.
+                M::OUTPUT_NAMES
+                    .iter()
+                    .zip(out)
+                    .filter(|(n, _)| info.labels.contains(n))
+                    .map(|(_, v)| v)
+                    .collect()
+            };
+            let h = 1e-6;
+            for k in 0..M::NU {
+                let mut e = vec![0.0; M::NU];
+                e[k] = 1.0;
+                let qd = num.qdot(&qv, &e);
+                let step =
+                    |s: f64| -> Vec<f64> { qv.iter().zip(&qd).map(|(q, d)| q + s * d).collect() };
+                let (p, m) = (positions(&step(h)), positions(&step(-h)));
+                for (r, (a, b)) in p.iter().zip(&m).enumerate() {
+                    let want = (a - b) / (2.0 * h);
+                    let got = jac[r * M::NU + k];
+                    assert!(
+                        (got - want).abs() < 1e-7,
+                        "{name}: ∂x/∂u of row {} along u_{k}: got {got}, central difference {want}",
+                        info.labels[r]
+                    );
+                }
+            }
+        }
+        if M::FUNCTIONS.iter().any(|i| i.name == "cut_joint_reactions") {
+            let want: Vec<f64> = num
+                .cut_reactions(&qv, t, &lambda)
+                .expect("reactions")
+                .into_iter()
+                .flat_map(|(_, f, n)| f.into_iter().chain(n))
+                .collect();
+            let mut got = vec![0.0; want.len()];
+            assert!(model.evaluate("cut_joint_reactions", &at, &mut got));
+            close(&format!("{name} cut joint reactions"), &got, &want);
+        }
+    }
+}
+
+#[test]
+fn every_function_of_the_table_is_offered_and_right() {
+    evaluate_matches::<g::pendulum::Pendulum>("pendulum");
+    evaluate_matches::<g::double_pendulum::DoublePendulum>("double_pendulum");
+    evaluate_matches::<g::heavy_top::HeavyTop>("heavy_top");
+    evaluate_matches::<g::arm7::Arm7>("arm7");
+    evaluate_matches::<g::fourbar::Fourbar>("fourbar");
+    evaluate_matches::<g::andrews::Andrews>("andrews");
+    evaluate_matches::<g::bricard::Bricard>("bricard");
+    evaluate_matches::<g::stewart::Stewart>("stewart");
+    evaluate_matches::<g::rolling_disk::RollingDisk>("rolling_disk");
 }

@@ -29,7 +29,7 @@ struct Run {
 
 fn settings(integrator: &str, tol: f64) -> Settings {
     Settings {
-        integrator: integrator.into(),
+        integrator: integrator.parse().expect("a known integrator"),
         rtol: tol,
         atol: tol,
         dt: 1e-3,
@@ -70,7 +70,7 @@ fn run<M: ConstrainedModel + Default, const N: usize>(
         max_steps: 2_000_000,
         ..SolveOptions::default()
     };
-    let sol = solve(&settings(integrator, tol), &sys, 0.0, y0, t_end, &opts).expect("integrator");
+    let sol = solve(&settings(integrator, tol), &sys, 0.0, y0, t_end, &opts);
     let (q, u) = sol.y_final.split_at(M::NQ);
     let lambda = sys
         .accelerations(sol.t_final, q, u)
@@ -103,7 +103,7 @@ fn run_dae<M: ConstrainedModel + Default, const N: usize>(tol: f64, t_end: f64) 
         max_steps: 2_000_000,
         ..SolveOptions::default()
     };
-    let sol = solve(&s, &dae, 0.0, y0, t_end, &opts).expect("radau5");
+    let sol = solve(&s, &dae, 0.0, y0, t_end, &opts);
     let (q, rest) = sol.y_final.split_at(M::NQ);
     let u = &rest[..M::NU];
     Run {

@@ -124,8 +124,13 @@ fn macro_scene_matches_the_interpreted_scene() {
         multipliers: &[],
         t: 0.0,
     };
-    let want = evaluate(&g.formulation, &point).udot;
-    let want_out = run(g.formulation.outputs.as_ref().expect("outputs"), &point);
+    let want = evaluate(&g.formulation, &point).udot();
+    let want_out = run(
+        g.formulation
+            .program(eom_gen::functions::Function::Outputs)
+            .expect("outputs"),
+        &point,
+    );
     for k in 0..5 {
         assert!(
             (udot[k] - want[k]).abs() < 1e-10,

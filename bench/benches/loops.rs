@@ -16,13 +16,13 @@
 //! `bench/results/loops.csv`).
 
 use eom_generated as g;
-use eom_sim::work_precision::{ModelRunner, Runner, Trajectory, end_error, method_name};
+use eom_sim::work_precision::{ModelRunner, Runner, Trajectory, end_error};
 use eom_sim::{ConstrainedModel, Method, OdeSystem, Settings, StopReason};
 use std::time::Instant;
 
 fn settings(integrator: &str, tol: f64) -> Settings {
     Settings {
-        integrator: integrator.into(),
+        integrator: integrator.parse().expect("a known integrator"),
         rtol: tol,
         atol: tol,
         dt: 1e-3,
@@ -74,13 +74,13 @@ fn sweep<M: ConstrainedModel + OdeSystem<N> + Default, const N: usize, const NC:
             };
             println!(
                 "| {label} | {} | {integrator} | {tol:.0e} | {} | {:.3} | {err:.1e} | {digits:.1} | {outcome} |",
-                method_name(method),
+                method.name(),
                 end.stats.rhs_evals,
                 times[2] * 1e3
             );
             *csv += &format!(
                 "{label},{},{integrator},{tol:e},{},{:e},{err:e},{digits},{outcome}\n",
-                method_name(method),
+                method.name(),
                 end.stats.rhs_evals,
                 times[2]
             );

@@ -4,7 +4,8 @@
 //! `cargo bench -p eom-gen --bench generation` prints a Markdown table
 //! (medians of 5 runs; the machine is shared, so read ratios, not digits).
 
-use eom_gen::mech::{Formulation, Request, formulate};
+use eom_gen::functions::{Function, FunctionSet};
+use eom_gen::mech::{Formulation, formulate};
 use eom_gen::model::builder::n_link_chain;
 use eom_gen::model::{Source, check};
 use std::time::Instant;
@@ -21,7 +22,7 @@ fn median_formulation(sys: &eom_gen::System, runs: usize) -> (f64, Formulation) 
     let mut last = None;
     for _ in 0..runs {
         let start = Instant::now();
-        let f = formulate(sys, Request::default()).unwrap_or_else(|e| panic!("{e}"));
+        let f = formulate(sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
         times.push(start.elapsed().as_secs_f64());
         last = Some(f);
     }
@@ -32,9 +33,8 @@ fn median_formulation(sys: &eom_gen::System, runs: usize) -> (f64, Formulation) 
     )
 }
 
-fn ops(p: &Option<eom_gen::sym::Program>) -> String {
-    p.as_ref()
-        .map_or("—".into(), |p| p.op_count().total().to_string())
+fn ops(p: Option<&eom_gen::sym::Program>) -> String {
+    p.map_or("—".into(), |p| p.op_count().total().to_string())
 }
 
 fn row(name: &str, nu: usize, secs: f64, f: &Formulation) {
@@ -46,12 +46,12 @@ fn row(name: &str, nu: usize, secs: f64, f: &Formulation) {
     println!(
         "| {name} | {nu} | {:.1} | {} ({:?}) | {} | {} | {} | {} |",
         secs * 1e3,
-        ops(&f.forward_dynamics),
+        ops(f.program(Function::ForwardDynamics)),
         f.fd_form,
         cand.join(", "),
-        ops(&f.inverse_dynamics),
-        ops(&f.mass_matrix),
-        ops(&f.bias),
+        ops(f.program(Function::InverseDynamics)),
+        ops(f.program(Function::MassMatrix)),
+        ops(f.program(Function::Bias)),
     );
 }
 

@@ -5,8 +5,9 @@
 //!
 //! `cargo bench -p eom-gen --bench op_counts` prints Markdown tables.
 
+use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::mech::count::{AlgorithmCounts, textbook_counts};
-use eom_gen::mech::{Formulation, Request, formulate};
+use eom_gen::mech::{Formulation, formulate};
 use eom_gen::model::builder::n_link_chain;
 use eom_gen::model::{Source, check};
 
@@ -17,13 +18,13 @@ fn system_from(text: String, name: &str) -> eom_gen::System {
     }
 }
 
-fn ops(p: &Option<eom_gen::sym::Program>) -> u64 {
-    p.as_ref().map_or(0, |p| p.op_count().total() as u64)
+fn ops(p: Option<&eom_gen::sym::Program>) -> u64 {
+    p.map_or(0, |p| p.op_count().total() as u64)
 }
 
 fn measure(sys: &eom_gen::System) -> (AlgorithmCounts, Formulation) {
     let counts = textbook_counts(sys).unwrap_or_else(|e| panic!("{e}"));
-    let f = formulate(sys, Request::default()).unwrap_or_else(|e| panic!("{e}"));
+    let f = formulate(sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
     (counts, f)
 }
 
@@ -49,9 +50,9 @@ fn main() {
         eprintln!("… {name}");
         let (c, f) = measure(sys);
         let (fd, id, m) = (
-            ops(&f.forward_dynamics),
-            ops(&f.inverse_dynamics),
-            ops(&f.mass_matrix),
+            ops(f.program(Function::ForwardDynamics)),
+            ops(f.program(Function::InverseDynamics)),
+            ops(f.program(Function::MassMatrix)),
         );
         let ratio = |a: u64, b: u64| a as f64 / b.max(1) as f64;
         println!(

@@ -209,8 +209,12 @@ pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, String> {
 /// dynamics (as `eom-gen stats` counts them), `None` where not generated.
 pub fn op_totals(g: &Generated) -> [Option<usize>; 3] {
     let f = &g.formulation;
-    [&f.forward_dynamics, &f.mass_matrix, &f.inverse_dynamics]
-        .map(|p| p.as_ref().map(|p| p.op_count().total()))
+    [
+        f.program(crate::functions::Function::ForwardDynamics),
+        f.program(crate::functions::Function::MassMatrix),
+        f.program(crate::functions::Function::InverseDynamics),
+    ]
+    .map(|p| p.as_ref().map(|p| p.op_count().total()))
 }
 
 /// The JSON report: `{"model", "forward_dynamics_ns", "mass_matrix_ns",

@@ -9,6 +9,7 @@ pub mod bench;
 pub mod builder;
 pub mod compiled;
 pub mod emit;
+pub mod functions;
 pub mod generate;
 pub mod graph;
 pub mod interpret;

@@ -1,7 +1,9 @@
 //! The `eom-gen` command-line tool.
 
 use clap::{Parser, Subcommand};
+use eom_gen::functions::{Function, Layout, TABLE};
 use eom_gen::model::{Report, Severity};
+use eom_sim::{Integrator, Method, RunOptions, RunReport};
 use std::process::ExitCode;
 
 /// Symbolic equation-of-motion generator for multibody systems.
@@ -67,31 +69,41 @@ enum Command {
         t_end: f64,
         /// rk4, dopri5, dop853, radau5, midpoint or euler.
         #[arg(long, default_value = "dopri5")]
-        integrator: String,
+        integrator: Integrator,
         /// Relative tolerance (adaptive methods).
-        #[arg(long, default_value_t = 1e-8)]
+        #[arg(long, default_value_t = 1e-8, allow_hyphen_values = true)]
         rtol: f64,
         /// Absolute tolerance (adaptive methods).
-        #[arg(long, default_value_t = 1e-10)]
+        #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
         atol: f64,
         /// Step size (fixed-step methods).
-        #[arg(long, default_value_t = 1e-3)]
+        #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
         dt: f64,
+        /// Most attempted steps; a run that needs more stops (exit 3).
+        #[arg(long, default_value_t = 100_000)]
+        max_steps: usize,
+        /// Initial positions, comma-separated (default: the model's q0).
+        #[arg(long, allow_hyphen_values = true)]
+        q0: Option<String>,
+        /// Initial speeds, comma-separated (default: the model's u0).
+        #[arg(long, allow_hyphen_values = true)]
+        u0: Option<String>,
         /// Write the trajectory (t, q, u) to this CSV file.
         #[arg(long)]
         csv: Option<String>,
         /// Output interval of the CSV, using dense output (default: every step).
-        #[arg(long)]
+        #[arg(long, allow_hyphen_values = true)]
         every: Option<f64>,
         /// Run the programs in the evaluator instead of compiled code.
         #[arg(long)]
         interpret: bool,
         /// Closed loops and constraints: `projection` (of positions and
-        /// speeds after each step), `multipliers` (Baumgarte, α = β = 10/s),
-        /// `partitioning` (dependent coordinates from independent ones,
-        /// Wehage–Haug) or `index3` (the index-3 DAE, with radau5).
+        /// speeds after each step), `baumgarte` (multipliers with Baumgarte
+        /// stabilisation, α = β = 10/s), `partitioning` (dependent
+        /// coordinates from independent ones, Wehage–Haug) or `index3` (the
+        /// index-3 DAE, with radau5).
         #[arg(long, default_value = "projection")]
-        constraints: String,
+        constraints: Method,
         /// Print one JSON object instead of the summary.
         #[arg(long)]
         json: bool,
@@ -135,11 +147,11 @@ enum Command {
         native: bool,
         /// Integrators to sweep, comma-separated (default rk4,dopri5,dop853,radau5).
         #[arg(long, value_delimiter = ',')]
-        integrators: Vec<String>,
-        /// Constraint solvers to sweep for models with constraints
-        /// (default projection,partitioning,multipliers,index3).
+        integrators: Vec<Integrator>,
+        /// Constraint methods to sweep for models with constraints
+        /// (default projection,partitioning,baumgarte,index3).
         #[arg(long, value_delimiter = ',')]
-        constraints: Vec<String>,
+        constraints: Vec<Method>,
         /// End time, s (`--work-precision`; default 10).
         #[arg(long, allow_hyphen_values = true)]
         t_end: Option<f64>,
@@ -300,21 +312,46 @@ fn main() -> ExitCode {
             rtol,
             atol,
             dt,
+            max_steps,
+            q0,
+            u0,
             csv,
             every,
             interpret,
             constraints,
             json,
         } => {
-            let o = eom_gen::compiled::SimOptions {
+            let list = |what: &str, text: Option<String>| -> Result<Option<Vec<f64>>, String> {
+                text.map(|t| {
+                    t.split(',')
+                        .map(|x| {
+                            x.trim()
+                                .parse::<f64>()
+                                .map_err(|e| format!("--{what}: `{}`: {e}", x.trim()))
+                        })
+                        .collect()
+                })
+                .transpose()
+            };
+            let (q0, u0) = match (list("q0", q0), list("u0", u0)) {
+                (Ok(q), Ok(u)) => (q, u),
+                (Err(e), _) | (_, Err(e)) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let o = RunOptions {
                 integrator,
                 rtol,
                 atol,
                 dt,
                 t_end,
-                every: every.unwrap_or(0.0),
+                max_steps,
+                method: constraints,
+                q0,
+                u0,
                 csv,
-                constraints,
+                every,
             };
             simulate(&model, &o, json, interpret)
         }
@@ -544,20 +581,10 @@ fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
 }
 
 /// The names of the functions a request generates symbolically.
-fn generated_functions(r: &eom_gen::mech::Request) -> Vec<&'static str> {
-    [
-        ("qdot", true),
-        ("forward_dynamics", r.forward_dynamics),
-        ("mass_matrix", r.mass_matrix),
-        ("bias", r.bias),
-        ("inverse_dynamics", r.inverse_dynamics),
-        ("energy", r.energy),
-        ("momentum", r.momentum),
-    ]
-    .into_iter()
-    .filter(|(_, on)| *on)
-    .map(|(n, _)| n)
-    .collect()
+fn generated_functions(r: &eom_gen::functions::FunctionSet) -> Vec<&'static str> {
+    std::iter::once(Function::Qdot.name())
+        .chain(r.iter().map(Function::name))
+        .collect()
 }
 
 fn stats(path: &str) -> ExitCode {
@@ -566,7 +593,16 @@ fn stats(path: &str) -> ExitCode {
         Err(code) => return code,
     };
     let f = &g.formulation;
-    let ops = |p: &Option<eom_gen::sym::Program>| p.as_ref().map(|p| op_json(&p.op_count()));
+    // Every function of the table, `null` where not generated.
+    let ops: serde_json::Map<String, serde_json::Value> = TABLE
+        .iter()
+        .map(|e| {
+            let v = f
+                .program(e.function)
+                .map_or(serde_json::Value::Null, |p| op_json(&p.op_count()));
+            (e.name.to_string(), v)
+        })
+        .collect();
     let candidates: serde_json::Map<String, serde_json::Value> = f
         .fd_candidates
         .iter()
@@ -576,21 +612,10 @@ fn stats(path: &str) -> ExitCode {
         "name": g.checked.system.name,
         "formulation": format!("{}", f.fd_form),
         "forward_dynamics_candidates": candidates,
-        "ops": {
-            "qdot": op_json(&f.qdot.op_count()),
-            "forward_dynamics": ops(&f.forward_dynamics),
-            "inverse_dynamics": ops(&f.inverse_dynamics),
-            "mass_matrix": ops(&f.mass_matrix),
-            "bias": ops(&f.bias),
-            "energy": ops(&f.energy),
-            "momentum": ops(&f.momentum),
-            "constraints": ops(&f.constraints),
-            "outputs": ops(&f.outputs),
-            "jacobians": ops(&f.jacobians),
-        },
+        "ops": ops,
         "nq": g.checked.system.nq(),
         "nu": g.checked.system.nu(),
-        "output_names": f.outputs.as_ref().map_or_else(Vec::new, |p| p.outputs.iter().map(|(n, _)| n.clone()).collect()),
+        "output_names": f.output_names,
         "generation_ms": f.seconds * 1e3,
         "source_bytes": g.source.len(),
     });
@@ -645,6 +670,9 @@ fn parse_list(
     let Some(text) = text else { return Ok(default) };
     let values: Result<Vec<f64>, _> = text.split(',').map(|x| x.trim().parse::<f64>()).collect();
     match values {
+        Ok(v) if v.iter().any(|x| !x.is_finite()) => {
+            Err(format!("--{what} must be finite numbers, got `{text}`"))
+        }
         Ok(v) if v.len() == n => Ok(v),
         Ok(v) => Err(format!(
             "--{what} has {} value(s), the model has {n}",
@@ -697,18 +725,19 @@ fn eval(
         Ok(eom_gen::interpret::evaluate(&g.formulation, &point))
     } else {
         eom_gen::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t)
+            .map_err(|e| e.to_string())
     };
     match result {
         Ok(e) => {
-            let v = serde_json::json!({
+            let mut v = serde_json::json!({
                 "coordinate_names": sys.coordinate_names(),
                 "speed_names": sys.speed_names(),
                 "q": q, "u": u, "t": t,
-                "qdot": e.qdot, "udot": e.udot,
-                "mass_matrix": e.mass_matrix, "bias": e.bias,
-                "kinetic_energy": e.kinetic_energy, "potential_energy": e.potential_energy,
                 "mode": if interpret { "interpreted" } else { "compiled" },
             });
+            for (key, value) in evaluation_json(&e, nu) {
+                v[key] = value;
+            }
             println!("{v}");
             ExitCode::SUCCESS
         }
@@ -719,51 +748,50 @@ fn eval(
     }
 }
 
-use eom_sim::INTEGRATORS;
-
-/// Adds the cut joints' reaction forces and torques at the end of a run
-/// (from its multipliers `lambda`) to the JSON as `cut_joint_reactions`.
-fn add_cut_reactions(sys: &eom_gen::System, v: &mut serde_json::Value) {
-    let list = |k: &str| -> Vec<f64> {
-        v[k].as_array()
-            .map(|a| a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect())
-            .unwrap_or_default()
-    };
-    let (q, lambda) = (list("q"), list("lambda"));
-    if lambda.is_empty() || sys.graph.cut_joints().is_empty() {
-        return;
+/// How `eval` prints the functions: `qdot`, `udot` (forward dynamics),
+/// `mass_matrix` (rows), `bias`, `kinetic_energy` and `potential_energy`,
+/// and every function of the table, flat, under `functions`.
+fn evaluation_json(
+    e: &eom_gen::interpret::Evaluation,
+    nu: usize,
+) -> Vec<(String, serde_json::Value)> {
+    let mut out = Vec::new();
+    let mut all = serde_json::Map::new();
+    for (name, values) in &e.functions {
+        all.insert(name.clone(), serde_json::json!(values));
+        let Ok(f) = name.parse::<Function>() else {
+            continue;
+        };
+        match (f, f.entry().layout) {
+            (Function::ForwardDynamics, _) => out.push(("udot".into(), serde_json::json!(values))),
+            (Function::Energy, _) => {
+                let at = |k: usize| values.get(k).copied().unwrap_or(f64::NAN);
+                out.push(("kinetic_energy".into(), serde_json::json!(at(0))));
+                out.push(("potential_energy".into(), serde_json::json!(at(1))));
+            }
+            (_, Layout::LowerTriangle) => {
+                let rows: Vec<&[f64]> = values.chunks(nu.max(1)).collect();
+                out.push((name.clone(), serde_json::json!(rows)));
+            }
+            (Function::Qdot | Function::Bias, _) => {
+                out.push((name.clone(), serde_json::json!(values)))
+            }
+            _ => {}
+        }
     }
-    let t = v["t"].as_f64().unwrap_or(0.0);
-    let Ok(reactions) =
-        eom_gen::mech::Numeric::new(sys).and_then(|n| n.cut_reactions(&q, t, &lambda))
-    else {
-        return;
-    };
-    let map: serde_json::Map<String, serde_json::Value> = reactions
-        .into_iter()
-        .map(|(name, f, m)| (name, serde_json::json!({"force": f, "torque": m})))
-        .collect();
-    if let Some(obj) = v.as_object_mut() {
-        obj.insert("cut_joint_reactions".into(), serde_json::Value::Object(map));
-    }
+    out.push(("functions".into(), serde_json::Value::Object(all)));
+    out
 }
 
-fn simulate(
-    path: &str,
-    o: &eom_gen::compiled::SimOptions,
-    json: bool,
-    interpret: bool,
-) -> ExitCode {
-    if !INTEGRATORS.contains(&o.integrator.as_str()) {
-        eprintln!(
-            "error: unknown integrator `{}`; choose one of {}",
-            o.integrator,
-            INTEGRATORS.join(", ")
-        );
-        return ExitCode::from(2);
-    }
-    if !(o.t_end.is_finite() && o.t_end > 0.0) {
-        eprintln!("error: --t-end must be a positive number of seconds");
+/// A run that did not reach its end time: exit status 3.
+const EXIT_RUN_STOPPED: u8 = 3;
+
+fn simulate(path: &str, o: &RunOptions, json: bool, interpret: bool) -> ExitCode {
+    let problems = o.problems();
+    if !problems.is_empty() {
+        for p in problems {
+            eprintln!("error: {p}");
+        }
         return ExitCode::from(2);
     }
     let g = match generated(path) {
@@ -771,111 +799,105 @@ fn simulate(
         Err(code) => return code,
     };
     let sys = &g.checked.system;
-    let Some(method) = eom_sim::Method::from_name(&o.constraints) else {
-        eprintln!(
-            "error: unknown --constraints `{}`; choose multipliers, projection, partitioning or index3",
-            o.constraints
-        );
-        return ExitCode::from(2);
-    };
-    let constrained = !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty();
-    if constrained && method == eom_sim::Method::Index3 && o.integrator != "radau5" {
-        eprintln!(
-            "error: --constraints index3 integrates the index-3 DAE and needs --integrator radau5"
-        );
-        return ExitCode::from(2);
-    }
     let result = if interpret {
-        eom_gen::interpret::simulate(&g.formulation, sys, o)
+        eom_gen::interpret::simulate(&g.formulation, sys, o).map_err(|e| e.to_string())
     } else {
         eom_gen::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o)
+            .map_err(|e| e.to_string())
     };
-    match result {
-        Ok(mut v) => {
-            add_cut_reactions(sys, &mut v);
-            // The constraint statistics also under `stats`.
-            for key in [
-                "max_constraint_residual",
-                "max_velocity_residual",
-                "constraint_rank",
-                "min_constraint_rank",
-                "min_singular_ratio",
-                "repartitions",
-            ] {
-                let value = v[key].clone();
-                if !value.is_null()
-                    && let Some(stats) = v["stats"].as_object_mut()
-                {
-                    stats.insert(key.into(), value);
-                }
-            }
-            if json {
-                println!("{v}");
-            } else {
-                let adaptive = matches!(o.integrator.as_str(), "dopri5" | "dop853" | "radau5");
-                let setting = if adaptive {
-                    format!("rtol {:e}, atol {:e}", o.rtol, o.atol)
-                } else {
-                    format!("step {:e} s", o.dt)
-                };
-                let e = |k: usize| v["energy"][k].as_f64().unwrap_or(f64::NAN);
-                println!(
-                    "{}: {} to t = {} s ({setting}): {}",
-                    sys.name, o.integrator, v["t"], v["stop"]
-                );
-                println!(
-                    "  {} steps ({} rejected), {} right-hand sides, {:.3} ms",
-                    v["stats"]["steps"],
-                    v["stats"]["rejected"],
-                    v["stats"]["rhs_evals"],
-                    v["cpu_s"].as_f64().unwrap_or(f64::NAN) * 1e3
-                );
-                let names = sys.coordinate_names();
-                let q: Vec<String> = v["q"]
-                    .as_array()
-                    .map(|a| {
-                        a.iter()
-                            .zip(&names)
-                            .map(|(x, n)| format!("{n} = {:.6}", x.as_f64().unwrap_or(f64::NAN)))
-                            .collect()
-                    })
-                    .unwrap_or_default();
-                println!("  final {}", q.join(", "));
-                println!(
-                    "  energy {:.9} → {:.9} (relative change {:.1e})",
-                    e(0),
-                    e(1),
-                    ((e(1) - e(0)) / e(0).abs().max(1e-300)).abs()
-                );
-                if let Some(method) = v["constraints"].as_str() {
-                    let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-                    println!(
-                        "  constraints ({method}): max |Φ| {:.1e}, max |Φ̇| {:.1e}, rank {} of {}, smallest σ_r/σ_1 of J {:.1e}",
-                        f("max_constraint_residual"),
-                        f("max_velocity_residual"),
-                        v["constraint_rank"],
-                        v["constraint_names"].as_array().map_or(0, Vec::len),
-                        f("min_singular_ratio")
-                    );
-                    if f("min_singular_ratio") < 1e-2 {
-                        println!(
-                            "  note: J came near losing rank: the run passed close to a singular configuration, \
-                             where the constraint forces are ill-conditioned and accuracy is limited; compare \
-                             with a tighter tolerance or another --constraints method"
-                        );
-                    }
-                }
-                if let Some(csv) = &o.csv {
-                    println!("  trajectory written to {csv}");
-                }
-            }
-            ExitCode::SUCCESS
-        }
+    let r: RunReport = match result {
+        Ok(r) => r,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::from(1)
+            return ExitCode::from(1);
+        }
+    };
+    if json {
+        match serde_json::to_string(&r) {
+            Ok(text) => println!("{text}"),
+            Err(e) => {
+                eprintln!("error: cannot encode the report: {e}");
+                return ExitCode::from(1);
+            }
+        }
+    } else {
+        print!(
+            "{}",
+            simulate_summary(&sys.name, &sys.coordinate_names(), o, &r)
+        );
+    }
+    if r.stop.is_finished() {
+        ExitCode::SUCCESS
+    } else {
+        eprintln!("error: the run stopped before t = {}: {}", o.t_end, r.stop);
+        ExitCode::from(EXIT_RUN_STOPPED)
+    }
+}
+
+/// The human summary of a run.
+fn simulate_summary(name: &str, coordinates: &[&str], o: &RunOptions, r: &RunReport) -> String {
+    use std::fmt::Write;
+    let mut s = String::new();
+    let setting = if o.integrator.is_adaptive() {
+        format!("rtol {:e}, atol {:e}", o.rtol, o.atol)
+    } else {
+        format!("step {:e} s", o.dt)
+    };
+    let stop = if r.stop.is_finished() {
+        "\"finished\"".to_string()
+    } else {
+        r.stop.to_string()
+    };
+    let _ = writeln!(
+        s,
+        "{name}: {} to t = {:?} s ({setting}): {stop}",
+        o.integrator, r.t
+    );
+    let _ = writeln!(
+        s,
+        "  {} steps ({} rejected), {} right-hand sides, {:.3} ms",
+        r.stats.steps,
+        r.stats.rejected,
+        r.stats.rhs_evals,
+        r.cpu_s * 1e3
+    );
+    let q: Vec<String> =
+        r.q.iter()
+            .zip(coordinates)
+            .map(|(x, n)| format!("{n} = {x:.6}"))
+            .collect();
+    let _ = writeln!(s, "  final {}", q.join(", "));
+    let [e0, e1] = r.energy;
+    let _ = writeln!(
+        s,
+        "  energy {e0:.9} → {e1:.9} (relative change {:.1e})",
+        ((e1 - e0) / e0.abs().max(1e-300)).abs()
+    );
+    if let Some(c) = &r.constrained {
+        let m = &c.summary;
+        let _ = writeln!(
+            s,
+            "  constraints ({}): max |Φ| {:.1e}, max |Φ̇| {:.1e}, rank {} of {}, smallest σ_r/σ_1 of J {:.1e}",
+            c.constraints,
+            m.max_constraint_residual,
+            m.max_velocity_residual,
+            m.constraint_rank,
+            c.constraint_names.len(),
+            m.min_singular_ratio
+        );
+        if m.min_singular_ratio < 1e-2 {
+            let _ = writeln!(
+                s,
+                "  note: J came near losing rank: the run passed close to a singular configuration, \
+                 where the constraint forces are ill-conditioned and accuracy is limited; compare \
+                 with a tighter tolerance or another --constraints method"
+            );
         }
     }
+    if let Some(csv) = &o.csv {
+        let _ = writeln!(s, "  trajectory written to {csv}");
+    }
+    s
 }
 
 /// A progress bar over the points of one sweep (hidden when stderr is not

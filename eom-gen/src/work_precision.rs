@@ -15,6 +15,8 @@
 
 use crate::compiled::{CachedCrate, build_cached, model_module};
 use crate::generate::Generated;
+use eom_sim::work_precision::{PointSummary, ReferenceSummary};
+use eom_sim::{Integrator, Method};
 use serde::Deserialize;
 use std::io::{BufRead, BufReader};
 use std::process::{Command, Stdio};
@@ -22,11 +24,10 @@ use std::process::{Command, Stdio};
 /// What to sweep.
 #[derive(Clone, Debug)]
 pub struct WpOptions {
-    /// Integrators (names as `simulate --integrator` takes them).
-    pub integrators: Vec<String>,
-    /// Constraint solvers (`projection`, `partitioning`, `multipliers`,
-    /// `index3`); only used for models with constraints.
-    pub constraints: Vec<String>,
+    /// Integrators.
+    pub integrators: Vec<Integrator>,
+    /// Constraint methods; only used for models with constraints.
+    pub constraints: Vec<Method>,
     /// End time, s.
     pub t_end: f64,
     /// Tolerances `rtol = atol` of the adaptive methods.
@@ -47,12 +48,18 @@ pub struct WpOptions {
 impl Default for WpOptions {
     fn default() -> Self {
         WpOptions {
-            integrators: ["rk4", "dopri5", "dop853", "radau5"]
-                .map(String::from)
-                .to_vec(),
-            constraints: ["projection", "partitioning", "multipliers", "index3"]
-                .map(String::from)
-                .to_vec(),
+            integrators: vec![
+                Integrator::Rk4,
+                Integrator::Dopri5,
+                Integrator::Dop853,
+                Integrator::Radau5,
+            ],
+            constraints: vec![
+                Method::Projection,
+                Method::Partitioning,
+                Method::BAUMGARTE,
+                Method::Index3,
+            ],
             t_end: 10.0,
             tols: (4..=12).map(|k| 10f64.powi(-k)).collect(),
             fixed_steps: (250, 32_000),
@@ -153,86 +160,107 @@ pub struct WorkPrecision {
 pub const RELATIVE_ERROR: &str = "relative error of the positions";
 
 const MAIN: &str = r#"//! Work-precision sweep of the generated model (eom-gen bench
-//! --work-precision): `wp T_END REF_TOL SAMPLES MIN_REPEATS MIN_TOTAL_S
-//! CASE...` with CASE = `integrator:constraints:setting`. Prints the
-//! reference, then one JSON line per point as it is measured.
+//! --work-precision): one JSON request `{t_end, ref_tol, samples, timing,
+//! cases}` on the command line; prints the reference, then one JSON line
+//! per point as it is measured.
 mod model;
 use eom_sim::work_precision::{self as wp, Case, ModelRunner, Timing};
-use eom_sim::Method;
 use std::io::Write;
 
+#[derive(serde::Deserialize)]
+struct Request {
+    t_end: f64,
+    ref_tol: f64,
+    samples: usize,
+    min_repeats: usize,
+    min_total_s: f64,
+    cases: Vec<(eom_sim::Integrator, eom_sim::Method, f64)>,
+}
+
 fn main() {
-    let args: Vec<String> = std::env::args().collect();
-    let num = |k: usize, d: f64| args.get(k).and_then(|a| a.parse::<f64>().ok()).unwrap_or(d);
-    let (t_end, ref_tol) = (num(1, 1.0), num(2, 1e-13));
-    let samples = num(3, 100.0).max(1.0) as usize;
-    let timing = Timing { min_repeats: num(4, 3.0).max(1.0) as usize, max_repeats: 51, min_total_s: num(5, 0.2) };
-    let cases: Vec<Case> = args.iter().skip(6).filter_map(|c| {
-        let mut it = c.split(':');
-        let (i, m, s) = (it.next()?, it.next()?, it.next()?.parse::<f64>().ok()?);
-        Some(Case { integrator: i.to_string(), method: Method::from_name(m)?, setting: s })
-    }).collect();
+    let arg = std::env::args().nth(1).unwrap_or_default();
+    let r: Request = match serde_json::from_str(&arg) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("bad request: {e}");
+            std::process::exit(2);
+        }
+    };
+    let timing = Timing { min_repeats: r.min_repeats.max(1), max_repeats: 51, min_total_s: r.min_total_s };
     let m = model::MODEL::default();
-    let r = ModelRunner::<model::MODEL, { model::NY }, { model::NYC }>::new(&m);
+    let runner = ModelRunner::<model::MODEL, { model::NY }, { model::NYC }>::new(&m);
     let out = std::io::stdout();
-    let Some(reference) = wp::reference(&r, t_end, ref_tol, samples) else {
-        eprintln!("the reference run (dop853 at rtol = atol = {ref_tol:e}) or its check (dopri5) did not reach t = {t_end}");
+    let Some(reference) = wp::reference(&runner, r.t_end, r.ref_tol, r.samples.max(1)) else {
+        eprintln!("the reference run (dop853 at rtol = atol = {:e}) or its check (dopri5) did not reach t = {}", r.ref_tol, r.t_end);
         std::process::exit(1);
     };
-    let _ = writeln!(out.lock(), "{{\"reference\":{}}}", reference.to_json());
-    for case in &cases {
-        let line = match wp::point(&r, case, &reference, &timing) {
-            Some(p) => format!("{{\"point\":{}}}", p.to_json()),
-            None => format!("{{\"skipped\":\"{}:{}\"}}", case.integrator, wp::method_name(case.method)),
+    let line = serde_json::json!({ "reference": reference.summary() });
+    let _ = writeln!(out.lock(), "{line}");
+    for (integrator, method, setting) in r.cases {
+        let case = Case { integrator, method, setting };
+        let line = match wp::point(&runner, &case, &reference, &timing) {
+            Some(p) => serde_json::json!({ "point": p.summary() }),
+            None => serde_json::json!({ "skipped": [integrator, method] }),
         };
         let _ = writeln!(out.lock(), "{line}");
     }
 }
 "#;
 
-/// The cases of a sweep, as the runner takes them (`integrator:solver:setting`).
-fn case_args(o: &WpOptions, constrained: bool) -> Vec<String> {
-    let methods: Vec<eom_sim::Method> = if constrained {
-        o.constraints
-            .iter()
-            .filter_map(|c| eom_sim::Method::from_name(c))
-            .collect()
+/// The cases of a sweep.
+fn cases(o: &WpOptions, constrained: bool) -> Vec<(Integrator, Method, f64)> {
+    let methods = if constrained {
+        o.constraints.clone()
     } else {
-        vec![eom_sim::Method::Projection]
+        vec![Method::Projection]
     };
-    let integrators: Vec<&str> = o.integrators.iter().map(String::as_str).collect();
-    eom_sim::work_precision::cases(&integrators, &methods, &o.tols, o.t_end, o.fixed_steps)
-        .iter()
-        .map(|c| {
-            format!(
-                "{}:{}:{:?}",
-                c.integrator,
-                eom_sim::work_precision::method_name(c.method),
-                c.setting
-            )
-        })
+    eom_sim::work_precision::cases(&o.integrators, &methods, &o.tols, o.t_end, o.fixed_steps)
+        .into_iter()
+        .map(|c| (c.integrator, c.method, c.setting))
         .collect()
+}
+
+impl From<ReferenceSummary> for WpReference {
+    fn from(r: ReferenceSummary) -> Self {
+        WpReference {
+            integrator: r.integrator.to_string(),
+            check: r.check.to_string(),
+            tol: r.tol,
+            constraints: r.constraints.to_string(),
+            t_end: r.t_end,
+            samples: r.samples,
+            rhs_evals: r.rhs_evals,
+            q_final: r.q_final,
+            check_end_error: r.check_end_error,
+            check_path_error: r.check_path_error,
+        }
+    }
+}
+
+impl From<PointSummary> for WpPoint {
+    fn from(p: PointSummary) -> Self {
+        WpPoint {
+            integrator: p.integrator.to_string(),
+            constraints: p.constraints.to_string(),
+            fixed_step: p.fixed_step,
+            setting: p.setting,
+            cpu_s: p.cpu_s,
+            repeats: p.repeats,
+            rhs_evals: p.rhs_evals,
+            accepted: p.accepted,
+            rejected: p.rejected,
+            end_error: p.end_error,
+            path_error: p.path_error,
+            digits: p.digits,
+            stop: p.stop,
+        }
+    }
 }
 
 /// Checks the options: known integrators and solvers, positive times and
 /// tolerances. Every problem at once.
 pub fn validate(o: &WpOptions) -> Result<(), Vec<String>> {
     let mut errors = Vec::new();
-    for i in &o.integrators {
-        if !eom_sim::INTEGRATORS.contains(&i.as_str()) {
-            errors.push(format!(
-                "unknown integrator `{i}`; choose from {}",
-                eom_sim::INTEGRATORS.join(", ")
-            ));
-        }
-    }
-    for c in &o.constraints {
-        if eom_sim::Method::from_name(c).is_none() {
-            errors.push(format!(
-                "unknown constraint solver `{c}`; choose from projection, partitioning, multipliers, index3"
-            ));
-        }
-    }
     if !(o.t_end.is_finite() && o.t_end > 0.0) {
         errors.push("--t-end must be a positive number of seconds".into());
     }
@@ -269,15 +297,14 @@ pub fn run(
         model: &model,
         rustflags: None,
     })?;
-    let cases = case_args(o, constrained);
+    let cases = cases(o, constrained);
     let total = cases.len();
+    let request = serde_json::json!({
+        "t_end": o.t_end, "ref_tol": o.ref_tol, "samples": o.samples,
+        "min_repeats": o.min_repeats, "min_total_s": o.min_total_s, "cases": cases,
+    });
     let mut child = Command::new(&exe)
-        .arg(format!("{:?}", o.t_end))
-        .arg(format!("{:?}", o.ref_tol))
-        .arg(o.samples.to_string())
-        .arg(o.min_repeats.to_string())
-        .arg(format!("{:?}", o.min_total_s))
-        .args(&cases)
+        .arg(request.to_string())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -295,13 +322,15 @@ pub fn run(
         let v: serde_json::Value = serde_json::from_str(&line)
             .map_err(|e| format!("unexpected output of {}: {e}: {line}", exe.display()))?;
         if let Some(r) = v.get("reference") {
-            reference = Some(
-                WpReference::deserialize(r)
+            reference = Some(WpReference::from(
+                ReferenceSummary::deserialize(r)
                     .map_err(|e| format!("unexpected reference from {}: {e}", exe.display()))?,
-            );
+            ));
         } else if let Some(p) = v.get("point") {
-            let p = WpPoint::deserialize(p)
-                .map_err(|e| format!("unexpected point from {}: {e}", exe.display()))?;
+            let p = WpPoint::from(
+                PointSummary::deserialize(p)
+                    .map_err(|e| format!("unexpected point from {}: {e}", exe.display()))?,
+            );
             done += 1;
             progress(done, total, Some(&p));
             points.push(p);
@@ -562,55 +591,49 @@ pub use crate::plot::svg;
 /// | fourbar | 0.5 s (before the first singular position) | dopri5, dop853, radau5 | all four |
 /// | slider_crank, slider_crank_driven | 2 s | dopri5, dop853, radau5 | all four |
 /// | andrews | 0.03 s (the IVP test set's end) | dop853, radau5 | all four |
-/// | bricard | 2 s | dop853 | projection, partitioning, multipliers (redundant: no index-3) |
-/// | stewart, stewart_driven | 1 s | dop853 | projection, partitioning, multipliers |
-/// | rolling_disk | 5 s | dopri5, dop853 | projection, partitioning, multipliers |
+/// | bricard | 2 s | dop853 | projection, partitioning, baumgarte (redundant: no index-3) |
+/// | stewart, stewart_driven | 1 s | dop853 | projection, partitioning, baumgarte |
+/// | rolling_disk | 5 s | dopri5, dop853 | projection, partitioning, baumgarte |
 pub fn suite_options(model: &str, base: &WpOptions) -> WpOptions {
-    let list = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
-    let (t_end, integrators, constraints): (f64, &[&str], &[&str]) = match model {
+    use Integrator::{Dop853, Dopri5, Radau5, Rk4};
+    use Method::{Index3, Partitioning, Projection};
+    const BAUMGARTE: Method = Method::BAUMGARTE;
+    let (t_end, integrators, constraints): (f64, &[Integrator], &[Method]) = match model {
         "pendulum" | "double_pendulum" | "arm7" | "heavy_top" => {
-            (10.0, &["rk4", "dopri5", "dop853", "radau5"], &[])
+            (10.0, &[Rk4, Dopri5, Dop853, Radau5], &[])
         }
-        "free_body" => (25.0, &["rk4", "dopri5", "dop853", "radau5"], &[]),
+        "free_body" => (25.0, &[Rk4, Dopri5, Dop853, Radau5], &[]),
         "fourbar" => (
             0.5,
-            &["dopri5", "dop853", "radau5"],
-            &["projection", "partitioning", "multipliers", "index3"],
+            &[Dopri5, Dop853, Radau5],
+            &[Projection, Partitioning, BAUMGARTE, Index3],
         ),
         "slider_crank" | "slider_crank_driven" => (
             2.0,
-            &["dopri5", "dop853", "radau5"],
-            &["projection", "partitioning", "multipliers", "index3"],
+            &[Dopri5, Dop853, Radau5],
+            &[Projection, Partitioning, BAUMGARTE, Index3],
         ),
         "andrews" => (
             0.03,
-            &["dop853", "radau5"],
-            &["projection", "partitioning", "multipliers", "index3"],
+            &[Dop853, Radau5],
+            &[Projection, Partitioning, BAUMGARTE, Index3],
         ),
-        "bricard" => (
-            2.0,
-            &["dop853"],
-            &["projection", "partitioning", "multipliers"],
-        ),
-        "stewart" | "stewart_driven" => (
-            1.0,
-            &["dop853"],
-            &["projection", "partitioning", "multipliers"],
-        ),
+        "bricard" => (2.0, &[Dop853], &[Projection, Partitioning, BAUMGARTE]),
+        "stewart" | "stewart_driven" => (1.0, &[Dop853], &[Projection, Partitioning, BAUMGARTE]),
         "rolling_disk" => (
             5.0,
-            &["dopri5", "dop853"],
-            &["projection", "partitioning", "multipliers"],
+            &[Dopri5, Dop853],
+            &[Projection, Partitioning, BAUMGARTE],
         ),
         _ => return base.clone(),
     };
     WpOptions {
         t_end,
-        integrators: list(integrators),
+        integrators: integrators.to_vec(),
         constraints: if constraints.is_empty() {
             base.constraints.clone()
         } else {
-            list(constraints)
+            constraints.to_vec()
         },
         ..base.clone()
     }

@@ -103,10 +103,17 @@ fn chain_of_200_links_generates_compiles_and_simulates() {
     let g = eom_gen::generate(&Source::new(scene.clone(), text)).unwrap_or_else(|e| panic!("{e}"));
     let f = &g.formulation;
     assert!(
-        f.mass_matrix.is_none() && f.bias.is_none(),
+        f.program(eom_gen::functions::Function::MassMatrix)
+            .is_none()
+            && f.program(eom_gen::functions::Function::Bias).is_none(),
         "the scene leaves the mass matrix and the bias out"
     );
-    assert!(f.forward_dynamics.is_some() && f.inverse_dynamics.is_some());
+    assert!(
+        f.program(eom_gen::functions::Function::ForwardDynamics)
+            .is_some()
+            && f.program(eom_gen::functions::Function::InverseDynamics)
+                .is_some()
+    );
     eprintln!(
         "chain200 scene: {} bytes of source, generated in {:.2} s",
         g.source.len(),

@@ -104,7 +104,8 @@ fn generated_closure_conditions_and_their_derivatives_are_consistent() {
     // Φ equals the f64 algorithm; Φ̇ is the derivative of Φ along
     // q̇ = N(q) u (and t); J u + Φ_t = Φ̇ with Φ_t = Φ̇ at u = 0; and
     // γ = −dΦ̇/dt at fixed u, all by central differences.
-    use eom_gen::mech::{Request, formulate};
+    use eom_gen::functions::FunctionSet;
+    use eom_gen::mech::formulate;
     use eom_gen::testkit::{Rng, random_state};
     let mut rng = Rng(0xABCD_EF01_2345_6789);
     for name in [
@@ -115,10 +116,9 @@ fn generated_closure_conditions_and_their_derivatives_are_consistent() {
         "stewart",
     ] {
         let sys = system(name);
-        let f = formulate(&sys, Request::default()).expect("formulates");
+        let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
         let p = f
-            .constraints
-            .as_ref()
+            .program(eom_gen::functions::Function::Constraints)
             .expect("loops give closure conditions");
         let num = Numeric::new(&sys).expect("numeric");
         for _ in 0..3 {
@@ -214,20 +214,25 @@ fn assembly_closes_perturbed_loops_and_makes_speeds_consistent() {
 }
 
 fn simulate_loop(name: &str, constraints: &str, t_end: f64, integrator: &str) -> serde_json::Value {
-    use eom_gen::mech::{Request, formulate};
+    use eom_gen::functions::FunctionSet;
+    use eom_gen::mech::formulate;
     let sys = system(name);
-    let f = formulate(&sys, Request::default()).expect("formulates");
-    let o = eom_gen::compiled::SimOptions {
-        integrator: integrator.into(),
+    let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
+    let o = eom_sim::RunOptions {
+        integrator: integrator.parse().expect("a known integrator"),
         rtol: 1e-9,
         atol: 1e-9,
         dt: 1e-3,
         t_end,
-        every: 0.0,
+        every: None,
         csv: None,
-        constraints: constraints.into(),
+        method: constraints.parse().expect("a known method"),
+        ..Default::default()
     };
-    eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{name}: {e}"))
+    serde_json::to_value(
+        eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{name}: {e}")),
+    )
+    .expect("JSON")
 }
 
 #[test]
@@ -236,7 +241,7 @@ fn fourbar_stays_a_parallelogram_and_keeps_its_energy() {
     // the coupler stays parallel to ground (φ2 = −φ1) and the cranks turn
     // together (φ3 = φ1), through the singular collinear positions, for
     // either way of holding the constraints.
-    for mode in ["projection", "multipliers"] {
+    for mode in ["projection", "baumgarte"] {
         let v = simulate_loop("fourbar", mode, 5.0, "dopri5");
         assert_eq!(v["stop"], "finished", "{mode}: {v}");
         let q: Vec<f64> = v["q"]
@@ -304,11 +309,12 @@ fn andrews_initial_accelerations_match_the_literature() {
     // Θ̈ = −10666.8329399655854029433719415, the other five zero. They
     // come out of M u̇ = −b + Jᵀλ, J u̇ = γ with our tree, spring, drive
     // torque and closure conditions.
+    use eom_gen::functions::FunctionSet;
     use eom_gen::interpret::Interpreted;
-    use eom_gen::mech::{Request, formulate};
+    use eom_gen::mech::formulate;
     use eom_sim::{ConstrainedSystem, Method, OdeSystem};
     let sys = system("andrews");
-    let f = formulate(&sys, Request::default()).expect("formulates");
+    let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
     let model = Interpreted::new(&f, &sys);
     let c = ConstrainedSystem::new(&model, Method::Projection);
     let mut y = [0.0; 14];
@@ -373,25 +379,30 @@ fn crank_rocker_follows_freudensteins_equation() {
     //   K1 cos θ4 − K2 cos θ2 + K3 = cos(θ2 − θ4),
     //   K1 = d/a, K2 = d/c, K3 = (a² − b² + c² + d²) / (2ac).
     // Our cranks lie along local y, so θ = φ + π/2.
-    use eom_gen::mech::{Request, formulate};
+    use eom_gen::functions::FunctionSet;
+    use eom_gen::mech::formulate;
     let dir = env!("CARGO_TARGET_TMPDIR");
     let path = format!("{dir}/crank_rocker.ron");
     std::fs::write(&path, CRANK_ROCKER).expect("writes the model");
     let sys = check_file(&path).unwrap_or_else(|r| panic!("{r}")).system;
-    let f = formulate(&sys, Request::default()).expect("formulates");
+    let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
     let csv = format!("{dir}/crank_rocker.csv");
     for method in ["projection", "partitioning"] {
-        let o = eom_gen::compiled::SimOptions {
-            integrator: "dop853".into(),
+        let o = eom_sim::RunOptions {
+            integrator: "dop853".parse().expect("a known integrator"),
             rtol: 1e-10,
             atol: 1e-10,
             dt: 1e-3,
             t_end: 3.0,
-            every: 0.05,
+            every: Some(0.05),
             csv: Some(csv.clone()),
-            constraints: method.into(),
+            method: method.parse().expect("a known method"),
+            ..Default::default()
         };
-        let v = eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{e}"));
+        let v = serde_json::to_value(
+            eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{e}")),
+        )
+        .expect("JSON");
         assert_eq!(v["stop"], "finished", "{v}");
         let (a, b, c, d) = (0.4f64, 1.0f64, 0.8f64, 1.0f64);
         let (k1, k2, k3) = (
@@ -427,11 +438,12 @@ fn cut_joint_reaction_of_the_parallelogram_at_the_top() {
     // m (g − 1) = 8.81 N between them, equally (it does not rotate) and
     // vertically (the cranks' tips have no tangential acceleration). The
     // cut pin pushes the second crank down by 4.405 N.
+    use eom_gen::functions::FunctionSet;
     use eom_gen::interpret::Interpreted;
-    use eom_gen::mech::{Request, formulate};
+    use eom_gen::mech::formulate;
     use eom_sim::{ConstrainedSystem, Method};
     let sys = system("fourbar");
-    let f = formulate(&sys, Request::default()).expect("formulates");
+    let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
     let model = Interpreted::new(&f, &sys);
     let c = ConstrainedSystem::new(&model, Method::Projection);
     let (q, u) = (sys.q0(), sys.u0());
@@ -457,7 +469,8 @@ fn tree_joint_reactions_in_a_loop_carry_the_constraint_forces() {
     // down by the cut pin with 4.405 N, so its ground hinge `d` carries
     // m (g − 0.5) + 4.405 = 13.715 N upwards; by symmetry so does `a`.
     // Without the multipliers' forces it would be 9.31 N.
-    use eom_gen::mech::{Request, formulate};
+    use eom_gen::functions::FunctionSet;
+    use eom_gen::mech::formulate;
     let text = std::fs::read_to_string(format!(
         "{}/../models/fourbar.ron",
         env!("CARGO_MANIFEST_DIR")
@@ -471,20 +484,24 @@ fn tree_joint_reactions_in_a_loop_carry_the_constraint_forces() {
     let path = format!("{dir}/fourbar_reactions.ron");
     std::fs::write(&path, text).expect("writes the model");
     let sys = check_file(&path).unwrap_or_else(|r| panic!("{r}")).system;
-    let f = formulate(&sys, Request::default()).expect("formulates");
+    let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
     let csv = format!("{dir}/fourbar_reactions.csv");
     for method in ["projection", "index3"] {
-        let o = eom_gen::compiled::SimOptions {
-            integrator: "radau5".into(),
+        let o = eom_sim::RunOptions {
+            integrator: "radau5".parse().expect("a known integrator"),
             rtol: 1e-10,
             atol: 1e-10,
             dt: 1e-3,
             t_end: 0.1,
-            every: 0.05,
+            every: Some(0.05),
             csv: Some(csv.clone()),
-            constraints: method.into(),
+            method: method.parse().expect("a known method"),
+            ..Default::default()
         };
-        let v = eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{e}"));
+        let v = serde_json::to_value(
+            eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{e}")),
+        )
+        .expect("JSON");
         assert_eq!(v["stop"], "finished", "{v}");
         let text = std::fs::read_to_string(&csv).expect("csv");
         let mut lines = text.lines();
@@ -521,7 +538,8 @@ fn a_holonomic_coupling_gears_the_double_pendulum() {
     // moves the start onto it, the run keeps it to 1e-10 and the energy of
     // the now one-degree-of-freedom pendulum stays constant (the coupling
     // does no work).
-    use eom_gen::mech::{Request, formulate};
+    use eom_gen::functions::FunctionSet;
+    use eom_gen::mech::formulate;
     let text = std::fs::read_to_string(format!(
         "{}/../models/double_pendulum.ron",
         env!("CARGO_MANIFEST_DIR")
@@ -536,25 +554,30 @@ fn a_holonomic_coupling_gears_the_double_pendulum() {
     let path = format!("{dir}/geared_pendulum.ron");
     std::fs::write(&path, text).expect("writes the model");
     let sys = check_file(&path).unwrap_or_else(|r| panic!("{r}")).system;
-    let f = formulate(&sys, Request::default()).expect("formulates");
+    let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
     assert_eq!(f.constraint_names, ["gear"]);
     for method in ["projection", "partitioning", "index3"] {
-        let o = eom_gen::compiled::SimOptions {
+        let o = eom_sim::RunOptions {
             integrator: if method == "index3" {
                 "radau5"
             } else {
                 "dop853"
             }
-            .into(),
+            .parse()
+            .expect("a known integrator"),
             rtol: 1e-10,
             atol: 1e-10,
             dt: 1e-3,
             t_end: 3.0,
-            every: 0.0,
+            every: None,
             csv: None,
-            constraints: method.into(),
+            method: method.parse().expect("a known method"),
+            ..Default::default()
         };
-        let v = eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{e}"));
+        let v = serde_json::to_value(
+            eom_gen::interpret::simulate(&f, &sys, &o).unwrap_or_else(|e| panic!("{e}")),
+        )
+        .expect("JSON");
         assert_eq!(v["stop"], "finished", "{method}: {v}");
         let q: Vec<f64> = v["q"]
             .as_array()

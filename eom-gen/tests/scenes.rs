@@ -18,8 +18,8 @@ fn scene(name: &str) -> Generated {
     generate_file(&path).unwrap_or_else(|e| panic!("{path}: {e}"))
 }
 
-fn total(p: &Option<eom_gen::sym::Program>) -> usize {
-    p.as_ref().map_or(0, |p| p.op_count().total())
+fn total(p: Option<&eom_gen::sym::Program>) -> usize {
+    p.map_or(0, |p| p.op_count().total())
 }
 
 #[test]
@@ -28,25 +28,28 @@ fn end_effector_scene_is_strictly_cheaper_than_the_full_scene() {
     let (ff, fe) = (&full.formulation, &ee.formulation);
     assert_eq!(full.checked.system.nu(), 7);
     assert_eq!(ee.checked.system.nu(), 5);
-    let (a, b) = (total(&ff.forward_dynamics), total(&fe.forward_dynamics));
+    let (a, b) = (
+        total(ff.program(eom_gen::functions::Function::ForwardDynamics)),
+        total(fe.program(eom_gen::functions::Function::ForwardDynamics)),
+    );
     assert!(
         b < a,
         "forward dynamics: got {b} ops with j5, j7 locked, want < {a}"
     );
-    let (a, b) = (total(&ff.outputs), total(&fe.outputs));
+    let (a, b) = (
+        total(ff.program(eom_gen::functions::Function::Outputs)),
+        total(fe.program(eom_gen::functions::Function::Outputs)),
+    );
     assert!(
         b < a,
         "outputs: got {b} ops for the tip position, want < {a}"
     );
-    let (a, b) = (total(&ff.mass_matrix), total(&fe.mass_matrix));
+    let (a, b) = (
+        total(ff.program(eom_gen::functions::Function::MassMatrix)),
+        total(fe.program(eom_gen::functions::Function::MassMatrix)),
+    );
     assert!(b < a, "mass matrix: got {b}, want < {a}");
-    let names = |g: &Generated| -> Vec<String> {
-        g.formulation
-            .outputs
-            .as_ref()
-            .map(|p| p.outputs.iter().map(|(n, _)| n.clone()).collect())
-            .unwrap_or_default()
-    };
+    let names = |g: &Generated| -> Vec<String> { g.formulation.output_names.clone() };
     assert_eq!(names(&ee), ["link7_tip_x", "link7_tip_y", "link7_tip_z"]);
     assert_eq!(names(&full).len(), 6 + 7 * 6, "tip x, v and 7 reactions");
 }
@@ -111,7 +114,7 @@ fn locked_scene_forward_dynamics_is_the_full_models_restricted_to_the_free_joint
             multipliers: &[],
             t: 0.0,
         };
-        let got = evaluate(&ee.formulation, &point).udot;
+        let got = evaluate(&ee.formulation, &point).udot();
         for k in 0..5 {
             assert!(
                 (got[k] - want[k]).abs() <= 1e-9 * (1.0 + want[k].abs()),
@@ -121,7 +124,12 @@ fn locked_scene_forward_dynamics_is_the_full_models_restricted_to_the_free_joint
             );
         }
         // The tip position agrees with the full model's kinematics too.
-        let tip = run(ee.formulation.outputs.as_ref().expect("outputs"), &point);
+        let tip = run(
+            ee.formulation
+                .program(eom_gen::functions::Function::Outputs)
+                .expect("outputs"),
+            &point,
+        );
         let link7 = full.system.body_id("link7").expect("link7");
         let (x, _) = numeric
             .point(link7, [0.0, 0.0, 0.3], &qf, &uf, 0.0)
@@ -190,7 +198,12 @@ fn tunable_and_fixed_override_the_model() {
     let as_fixed = generate_file(&format!("{MODELS}/pendulum.ron")).expect("pendulum");
     assert!(as_tunable.source.contains("pub l: f64"));
     assert!(!fixed.source.contains("pub l: f64"));
-    let ops = |g: &Generated| total(&g.formulation.forward_dynamics);
+    let ops = |g: &Generated| {
+        total(
+            g.formulation
+                .program(eom_gen::functions::Function::ForwardDynamics),
+        )
+    };
     assert_eq!(ops(&fixed), ops(&as_fixed), "inlined again");
     assert!(ops(&fixed) <= ops(&as_tunable));
     let _ = std::fs::remove_dir_all(&dir);
@@ -271,16 +284,26 @@ fn functions_a_scene_leaves_out_are_derived_and_equal_the_generated_ones() {
         let mb_only = functions_scene(model, "ForwardDynamics, MassMatrix, Bias");
         let f = &id_only.formulation;
         assert!(
-            f.mass_matrix.is_none() && f.bias.is_none() && f.inverse_dynamics.is_some(),
+            f.program(eom_gen::functions::Function::MassMatrix)
+                .is_none()
+                && f.program(eom_gen::functions::Function::Bias).is_none()
+                && f.program(eom_gen::functions::Function::InverseDynamics)
+                    .is_some(),
             "{model}: the ID scene generates ID only"
         );
         let g = &mb_only.formulation;
         assert!(
-            g.mass_matrix.is_some() && g.bias.is_some() && g.inverse_dynamics.is_none(),
+            g.program(eom_gen::functions::Function::MassMatrix)
+                .is_some()
+                && g.program(eom_gen::functions::Function::Bias).is_some()
+                && g.program(eom_gen::functions::Function::InverseDynamics)
+                    .is_none(),
             "{model}: the M, b scene generates M and b only"
         );
         assert!(
-            f.energy.is_some() && f.momentum.is_some() && g.energy.is_some(),
+            f.program(eom_gen::functions::Function::Energy).is_some()
+                && f.program(eom_gen::functions::Function::Momentum).is_some()
+                && g.program(eom_gen::functions::Function::Energy).is_some(),
             "{model}: energy and momentum are always generated"
         );
         assert_eq!(
@@ -315,13 +338,13 @@ fn functions_a_scene_leaves_out_are_derived_and_equal_the_generated_ones() {
             let want_m = eom_gen::interpret::mass_matrix(&full.formulation, &x);
             let want_b = eom_gen::interpret::bias(&full.formulation, &x);
             let want_id = eom_gen::interpret::inverse_dynamics(&full.formulation, &x);
-            let want_fd = evaluate(&full.formulation, &x).udot;
+            let want_fd = evaluate(&full.formulation, &x).udot();
             for (name, s) in [("ID", &id_only), ("M, b", &mb_only)] {
                 let y = point(&s.checked.system);
                 let got_m = eom_gen::interpret::mass_matrix(&s.formulation, &y);
                 let got_b = eom_gen::interpret::bias(&s.formulation, &y);
                 let got_id = eom_gen::interpret::inverse_dynamics(&s.formulation, &y);
-                let got_fd = evaluate(&s.formulation, &y).udot;
+                let got_fd = evaluate(&s.formulation, &y).udot();
                 for i in 0..nu {
                     for j in 0..nu {
                         assert!(
@@ -354,8 +377,15 @@ fn the_dynamics_scene_generates_less_code_than_the_full_model() {
     let full = eom_gen::generate_file(&format!("{MODELS}/arm7.ron")).expect("arm7");
     let dynamics = scene("arm7_dynamics");
     let f = &dynamics.formulation;
-    assert!(f.mass_matrix.is_none() && f.bias.is_none());
-    assert!(f.outputs.is_none(), "the scene asks for no outputs");
+    assert!(
+        f.program(eom_gen::functions::Function::MassMatrix)
+            .is_none()
+            && f.program(eom_gen::functions::Function::Bias).is_none()
+    );
+    assert!(
+        f.program(eom_gen::functions::Function::Outputs).is_none(),
+        "the scene asks for no outputs"
+    );
     assert!(
         dynamics.source.len() < full.source.len(),
         "source: got {} bytes, want < {} (the full model's)",

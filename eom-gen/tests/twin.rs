@@ -4,7 +4,8 @@
 //! dynamics form is the cheaper one, and op counts grow linearly with the
 //! number of bodies.
 
-use eom_gen::mech::{FdForm, Numeric, Request, formulate};
+use eom_gen::functions::FunctionSet;
+use eom_gen::mech::{FdForm, Numeric, formulate};
 use eom_gen::model::builder::n_link_chain;
 use eom_gen::model::{Source, check};
 use eom_gen::sym::{Program, SymKind};
@@ -93,7 +94,8 @@ fn generated_programs_equal_the_f64_algorithms() {
     let mut rng = Rng(0x1234_5678_9ABC_DEF1);
     for name in MODELS {
         let sys = system(name);
-        let f = formulate(&sys, Request::default()).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let f =
+            formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{name}: {e}"));
         let num = Numeric::new(&sys).expect("numeric");
         for _ in 0..4 {
             let x = random_point(&sys, &mut rng);
@@ -103,7 +105,12 @@ fn generated_programs_equal_the_f64_algorithms() {
                 .expect("fd");
             assert_close(
                 &what("forward dynamics"),
-                &run(f.forward_dynamics.as_ref().expect("fd"), &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::ForwardDynamics)
+                        .expect("fd"),
+                    &sys,
+                    &x,
+                ),
                 &fd,
             );
             let terms = num.terms(&x.q, &x.u, x.t, &[]).expect("terms");
@@ -113,12 +120,21 @@ fn generated_programs_equal_the_f64_algorithms() {
                 .collect();
             assert_close(
                 &what("mass matrix"),
-                &run(f.mass_matrix.as_ref().expect("M"), &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::MassMatrix)
+                        .expect("M"),
+                    &sys,
+                    &x,
+                ),
                 &lower,
             );
             assert_close(
                 &what("bias"),
-                &run(f.bias.as_ref().expect("b"), &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::Bias).expect("b"),
+                    &sys,
+                    &x,
+                ),
                 &terms.bias,
             );
             let id = num
@@ -126,25 +142,43 @@ fn generated_programs_equal_the_f64_algorithms() {
                 .expect("id");
             assert_close(
                 &what("inverse dynamics"),
-                &run(f.inverse_dynamics.as_ref().expect("id"), &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::InverseDynamics)
+                        .expect("id"),
+                    &sys,
+                    &x,
+                ),
                 &id,
             );
             assert_close(
                 &what("qdot"),
-                &run(&f.qdot, &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::Qdot).expect("qdot"),
+                    &sys,
+                    &x,
+                ),
                 &num.qdot(&x.q, &x.u),
             );
             let (t, v) = num.energy(&x.q, &x.u, x.t).expect("energy");
             assert_close(
                 &what("energy"),
-                &run(f.energy.as_ref().expect("E"), &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::Energy).expect("E"),
+                    &sys,
+                    &x,
+                ),
                 &[t, v],
             );
             let h = num.momentum(&x.q, &x.u, x.t).expect("momentum");
             let want = [h.n.0[0], h.n.0[1], h.n.0[2], h.f.0[0], h.f.0[1], h.f.0[2]];
             assert_close(
                 &what("momentum"),
-                &run(f.momentum.as_ref().expect("h"), &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::Momentum)
+                        .expect("h"),
+                    &sys,
+                    &x,
+                ),
                 &want,
             );
         }
@@ -154,7 +188,7 @@ fn generated_programs_equal_the_f64_algorithms() {
 #[test]
 fn the_cheaper_forward_dynamics_form_is_chosen() {
     for name in ["pendulum", "arm7", "heavy_top", "stewart"] {
-        let f = formulate(&system(name), Request::default()).expect("formulates");
+        let f = formulate(&system(name), FunctionSet::all_requested()).expect("formulates");
         let chosen = f
             .fd_candidates
             .iter()
@@ -174,9 +208,11 @@ fn requested_outputs_equal_the_f64_kinematics() {
     let mut rng = Rng(0x0F0F_1234_ABCD_9876);
     for name in ["pendulum", "double_pendulum", "heavy_top", "rolling_disk"] {
         let sys = system(name);
-        let f = formulate(&sys, Request::default()).expect("formulates");
+        let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
         let num = Numeric::new(&sys).expect("numeric");
-        let outputs = f.outputs.as_ref().expect("the model requests outputs");
+        let outputs = f
+            .program(eom_gen::functions::Function::Outputs)
+            .expect("the model requests outputs");
         for _ in 0..3 {
             let mut x = random_point(&sys, &mut rng);
             x.tau = vec![0.0; sys.nu()];
@@ -208,7 +244,12 @@ fn requested_outputs_equal_the_f64_kinematics() {
                 }
             }
             assert_close(&format!("{name} outputs"), &got, &want);
-            let jac = run(f.jacobians.as_ref().expect("jacobians"), &sys, &x);
+            let jac = run(
+                f.program(eom_gen::functions::Function::MarkerJacobians)
+                    .expect("jacobians"),
+                &sys,
+                &x,
+            );
             let nu = sys.nu();
             let jv: Vec<f64> = jac
                 .chunks(nu)
@@ -225,7 +266,7 @@ fn pendulum_hinge_carries_the_tension_m_l_thetadot2_plus_m_g_cos_theta() {
     // A massless link transmits only tension along itself (body y here):
     // f = (0, m (l θ̇² + g cos θ), 0), no moment.
     let sys = system("pendulum");
-    let f = formulate(&sys, Request::default()).expect("formulates");
+    let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
     let num = Numeric::new(&sys).expect("numeric");
     for (th, w) in [(0.3, 1.2), (2.0, -0.5), (-1.0, 3.0)] {
         let ud = num
@@ -239,7 +280,12 @@ fn pendulum_hinge_carries_the_tension_m_l_thetadot2_plus_m_g_cos_theta() {
             tau: vec![0.0],
             t: 0.0,
         };
-        let got = run(f.outputs.as_ref().expect("outputs"), &sys, &x);
+        let got = run(
+            f.program(eom_gen::functions::Function::Outputs)
+                .expect("outputs"),
+            &sys,
+            &x,
+        );
         // Outputs: tip position (3), hinge force (3), hinge moment (3).
         let want = [0.0, w * w + 9.81 * f64::cos(th), 0.0, 0.0, 0.0, 0.0];
         for (k, (g, w)) in got[3..].iter().zip(want).enumerate() {
@@ -308,7 +354,8 @@ fn tunable_parameters_locked_joints_springs_and_inputs_agree_with_f64() {
     ];
     let mut rng = Rng(0x5555_AAAA_3333_CCCC);
     for (what, sys, params) in cases {
-        let f = formulate(&sys, Request::default()).unwrap_or_else(|e| panic!("{what}: {e}"));
+        let f =
+            formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{what}: {e}"));
         let num = Numeric::with_env(&sys, NumericEnv::with(&sys, &params)).expect("numeric");
         let inputs: Vec<f64> = (0..sys.inputs.len()).map(input_value).collect();
         for _ in 0..3 {
@@ -319,24 +366,39 @@ fn tunable_parameters_locked_joints_springs_and_inputs_agree_with_f64() {
                 .expect("fd");
             assert_close(
                 &format!("{what} forward dynamics"),
-                &run(f.forward_dynamics.as_ref().expect("fd"), &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::ForwardDynamics)
+                        .expect("fd"),
+                    &sys,
+                    &x,
+                ),
                 &fd,
             );
             let terms = num.terms(&x.q, &x.u, x.t, &inputs).expect("terms");
             assert_close(
                 &format!("{what} bias"),
-                &run(f.bias.as_ref().expect("b"), &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::Bias).expect("b"),
+                    &sys,
+                    &x,
+                ),
                 &terms.bias,
             );
             let (t, v) = num.energy(&x.q, &x.u, x.t).expect("energy");
             assert_close(
                 &format!("{what} energy"),
-                &run(f.energy.as_ref().expect("E"), &sys, &x),
+                &run(
+                    f.program(eom_gen::functions::Function::Energy).expect("E"),
+                    &sys,
+                    &x,
+                ),
                 &[t, v],
             );
         }
         if what == "tunable" {
-            let fd = f.forward_dynamics.as_ref().expect("fd");
+            let fd = f
+                .program(eom_gen::functions::Function::ForwardDynamics)
+                .expect("fd");
             let params: Vec<&str> = fd
                 .inputs
                 .iter()
@@ -356,20 +418,15 @@ fn chain_fd(n: usize, spatial: bool) -> eom_gen::mech::Formulation {
     let sys = check(&Source::new("chain", text))
         .unwrap_or_else(|r| panic!("{r}"))
         .system;
-    let request = Request {
-        mass_matrix: false,
-        bias: false,
-        inverse_dynamics: false,
-        energy: false,
-        momentum: false,
-        ..Request::default()
-    };
+    let request: FunctionSet = [eom_gen::functions::Function::ForwardDynamics]
+        .into_iter()
+        .collect();
     formulate(&sys, request).expect("formulates")
 }
 
 fn chain_ops(n: usize, spatial: bool) -> usize {
     chain_fd(n, spatial)
-        .forward_dynamics
+        .program(eom_gen::functions::Function::ForwardDynamics)
         .map_or(0, |p| p.op_count().total())
 }
 

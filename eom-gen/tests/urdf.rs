@@ -369,9 +369,19 @@ fn arm7_urdf_matches_arm7_ron() {
             )
         };
         let (eu, er) = (at(&gu), at(&gr));
-        assert_matrix_eq(&eu.mass_matrix, &er.mass_matrix, 1e-12, "M");
-        assert_matrix_eq(&[eu.bias], &[er.bias], 1e-12, "bias");
-        assert_matrix_eq(&[eu.udot], &[er.udot], 1e-10, "udot");
+        assert_matrix_eq(
+            &[eu.get("mass_matrix").to_vec()],
+            &[er.get("mass_matrix").to_vec()],
+            1e-12,
+            "M",
+        );
+        assert_matrix_eq(
+            &[eu.get("bias").to_vec()],
+            &[er.get("bias").to_vec()],
+            1e-12,
+            "bias",
+        );
+        assert_matrix_eq(&[eu.udot()], &[er.udot()], 1e-10, "udot");
     }
 }
 

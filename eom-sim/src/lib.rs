@@ -51,17 +51,22 @@
 pub mod constrained;
 mod integrate;
 mod model;
+pub mod run;
 pub mod work_precision;
 
 pub use constrained::{
     Assembly, ConstrainedModel, ConstrainedSystem, ConstraintStats, ConstraintValues, Dynamics,
     Generated, Index3System, Method,
 };
-pub use model::{Model, Vector};
+pub use model::{__private, FunctionInfo, Model, Point, Vector};
 /// Fixed-size matrices of the integrators' Jacobians and mass matrices.
 pub use nalgebra::SMatrix;
+pub use run::{
+    Integrator, RunError, RunOptions, RunReport, Simulate, Stop, UnknownName, simulate,
+    simulate_generated,
+};
 
-pub use integrate::by_name::{INTEGRATORS, Settings, solve};
+pub use integrate::by_name::{Settings, solve};
 pub use integrate::dop853::Dop853;
 pub use integrate::dopri5::Dopri5;
 pub use integrate::driver::{

@@ -21,6 +21,39 @@ impl<const N: usize> Vector for [f64; N] {
     const ZERO: Self = [0.0; N];
 }
 
+/// Where a generated function is evaluated: every argument any of them
+/// takes (a function reads only its own; see [`Model::FUNCTIONS`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Point<'a> {
+    /// Time.
+    pub t: f64,
+    /// Positions `q`.
+    pub q: &'a [f64],
+    /// Speeds `u`.
+    pub u: &'a [f64],
+    /// Speed rates `u̇` (inverse dynamics, joint reactions).
+    pub udot: &'a [f64],
+    /// Extra generalised forces `τ` (forward dynamics).
+    pub tau: &'a [f64],
+    /// Constraint multipliers `λ` (reactions in closed loops).
+    pub lambda: &'a [f64],
+}
+
+/// One generated function as [`Model::evaluate`] offers it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FunctionInfo {
+    /// Its name (as in scenes and `eom-gen eval`).
+    pub name: &'static str,
+    /// Length of its flat result.
+    pub len: usize,
+    /// What it computes and how the result is laid out.
+    pub doc: &'static str,
+    /// Names of the result's groups, in order (the cut joints of
+    /// `cut_joint_reactions`, six numbers each; the outputs of `outputs`,
+    /// one each); empty where the result has no named groups.
+    pub labels: &'static [&'static str],
+}
+
 /// A generated multibody model.
 pub trait Model {
     /// The model's name.
@@ -76,6 +109,15 @@ pub trait Model {
     /// The requested outputs; joint reactions need the accelerations `udot`.
     fn outputs(&self, t: f64, q: &Self::Q, u: &Self::U, udot: &Self::U, out: &mut Self::Outputs);
 
+    /// Every function of this model that [`Model::evaluate`] runs, in
+    /// the generator's order.
+    const FUNCTIONS: &'static [FunctionInfo];
+
+    /// Evaluates the generated function `name` at `at` into `out` (its flat
+    /// result, `FunctionInfo::len` long). `false`, leaving `out` untouched,
+    /// for an unknown name or a slice of the wrong length.
+    fn evaluate(&self, name: &str, at: &Point<'_>, out: &mut [f64]) -> bool;
+
     /// Normalises the unit quaternions in `q` (after an integration step).
     fn normalize(&self, q: &mut Self::Q) {
         let q = q.as_mut();
@@ -87,5 +129,18 @@ pub trait Model {
                 }
             }
         }
+    }
+}
+
+/// Helpers of generated code; not a public API.
+#[doc(hidden)]
+pub mod __private {
+    /// An argument of [`super::Model::evaluate`] as an array: `None` if its
+    /// length is wrong; an empty slice is zeros when `optional`.
+    pub fn arg<const N: usize>(v: &[f64], optional: bool) -> Option<[f64; N]> {
+        if optional && v.is_empty() {
+            return Some([0.0; N]);
+        }
+        v.try_into().ok()
     }
 }

@@ -22,6 +22,9 @@ use crate::integrate::by_name::{Settings, solve};
 use crate::integrate::driver::SolveOptions;
 use crate::integrate::system::OdeSystem;
 use crate::integrate::{Stats, StopReason};
+use crate::run::Integrator;
+#[cfg(feature = "serde")]
+use serde::Serialize;
 use std::time::Instant;
 
 /// The positions of one run at its end and at the sample times.
@@ -92,8 +95,10 @@ impl<S: OdeSystem<N>, const N: usize> Runner for OdeRunner<'_, S, N> {
         t_end: f64,
         t_eval: &[f64],
     ) -> Option<Trajectory> {
-        solve(settings, self.sys, 0.0, self.y0, t_end, &options(t_eval))
-            .map(|sol| trajectory(sol, self.nq))
+        Some(trajectory(
+            solve(settings, self.sys, 0.0, self.y0, t_end, &options(t_eval)),
+            self.nq,
+        ))
     }
 }
 
@@ -142,19 +147,18 @@ impl<M: ConstrainedModel + OdeSystem<N>, const N: usize, const NC: usize> Runner
     ) -> Option<Trajectory> {
         let finish = |sol: crate::Solution<N>| trajectory(sol, M::NQ);
         if M::NC == 0 {
-            return solve(
+            return Some(finish(solve(
                 settings,
                 self.model,
                 0.0,
                 self.y0(),
                 t_end,
                 &options(t_eval),
-            )
-            .map(finish);
+            )));
         }
         let d = Generated(self.model);
         if method == Method::Index3 {
-            if settings.integrator != "radau5" {
+            if settings.integrator != Integrator::Radau5 {
                 return None;
             }
             let dae = Index3System::new(&d);
@@ -163,11 +167,20 @@ impl<M: ConstrainedModel + OdeSystem<N>, const N: usize, const NC: usize> Runner
                 index_vars: dae.index_vars(),
                 ..settings.clone()
             };
-            return solve(&s, &dae, 0.0, y0, t_end, &options(t_eval))
-                .map(|sol| trajectory(sol, M::NQ));
+            return Some(trajectory(
+                solve(&s, &dae, 0.0, y0, t_end, &options(t_eval)),
+                M::NQ,
+            ));
         }
         let sys = ConstrainedSystem::new(&d, method);
-        solve(settings, &sys, 0.0, self.y0(), t_end, &options(t_eval)).map(finish)
+        Some(finish(solve(
+            settings,
+            &sys,
+            0.0,
+            self.y0(),
+            t_end,
+            &options(t_eval),
+        )))
     }
 }
 
@@ -249,27 +262,52 @@ pub struct Reference {
 }
 
 impl Reference {
-    /// One JSON object: the methods, tolerance, the reference's counters,
-    /// final positions and the check's agreement.
-    pub fn to_json(&self) -> String {
-        let q: Vec<String> = self.run.q_final.iter().map(|x| format!("{x:?}")).collect();
-        format!(
-            "{{\"integrator\":\"dop853\",\"check\":\"dopri5\",\"tol\":{:?},\"constraints\":\"{}\",\"t_end\":{:?},\"samples\":{},\"rhs_evals\":{},\"q_final\":[{}],\"check_end_error\":{:?},\"check_path_error\":{:?}}}",
-            self.tol,
-            method_name(self.method),
-            self.run.t_final,
-            self.t_eval.len(),
-            self.run.stats.rhs_evals,
-            q.join(","),
-            self.check_end_error,
-            self.check_path_error,
-        )
+    /// What a report shows of the reference.
+    pub fn summary(&self) -> ReferenceSummary {
+        ReferenceSummary {
+            integrator: Integrator::Dop853,
+            check: Integrator::Dopri5,
+            tol: self.tol,
+            constraints: self.method,
+            t_end: self.run.t_final,
+            samples: self.t_eval.len(),
+            rhs_evals: self.run.stats.rhs_evals,
+            q_final: self.run.q_final.clone(),
+            check_end_error: self.check_end_error,
+            check_path_error: self.check_path_error,
+        }
     }
 }
 
-fn adaptive(integrator: &str, tol: f64) -> Settings {
+/// The reference as a report shows it.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, serde::Deserialize))]
+pub struct ReferenceSummary {
+    /// The reference's integrator (DOP853).
+    pub integrator: Integrator,
+    /// The check's integrator (DOPRI5).
+    pub check: Integrator,
+    /// `rtol = atol` of both.
+    pub tol: f64,
+    /// Constraint method of both (constrained models).
+    pub constraints: Method,
+    /// End time reached.
+    pub t_end: f64,
+    /// Dense samples along the path.
+    pub samples: usize,
+    /// Right-hand sides of the reference run.
+    pub rhs_evals: usize,
+    /// Positions at the end.
+    pub q_final: Vec<f64>,
+    /// End error of the check against the reference.
+    pub check_end_error: f64,
+    /// Path error of the check against the reference.
+    pub check_path_error: f64,
+}
+
+fn adaptive(integrator: Integrator, tol: f64) -> Settings {
     Settings {
-        integrator: integrator.into(),
+        integrator,
         rtol: tol,
         atol: tol,
         dt: 0.0,
@@ -288,8 +326,8 @@ pub fn reference<R: Runner + ?Sized>(
 ) -> Option<Reference> {
     let t_eval = sample_times(t_end, samples);
     let method = Method::Projection;
-    let run = r.run(&adaptive("dop853", tol), method, t_end, &t_eval)?;
-    let check = r.run(&adaptive("dopri5", tol), method, t_end, &t_eval)?;
+    let run = r.run(&adaptive(Integrator::Dop853, tol), method, t_end, &t_eval)?;
+    let check = r.run(&adaptive(Integrator::Dopri5, tol), method, t_end, &t_eval)?;
     if run.stop != StopReason::Finished || check.stop != StopReason::Finished {
         return None;
     }
@@ -307,8 +345,8 @@ pub fn reference<R: Runner + ?Sized>(
 /// size for the fixed-step ones.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Case {
-    /// Integrator name (one of [`crate::INTEGRATORS`]).
-    pub integrator: String,
+    /// The integrator.
+    pub integrator: Integrator,
     /// Constraint method (ignored for unconstrained systems).
     pub method: Method,
     /// `rtol = atol` (adaptive) or the step size (fixed-step).
@@ -318,28 +356,18 @@ pub struct Case {
 impl Case {
     /// True for the fixed-step methods (the setting is a step size).
     pub fn fixed_step(&self) -> bool {
-        matches!(self.integrator.as_str(), "euler" | "rk4" | "midpoint")
+        !self.integrator.is_adaptive()
     }
 
     fn settings(&self) -> Settings {
         if self.fixed_step() {
             Settings {
                 dt: self.setting,
-                ..adaptive(&self.integrator, 0.0)
+                ..adaptive(self.integrator, 0.0)
             }
         } else {
-            adaptive(&self.integrator, self.setting)
+            adaptive(self.integrator, self.setting)
         }
-    }
-}
-
-/// The name of a constraint method as `--constraints` takes it.
-pub fn method_name(m: Method) -> &'static str {
-    match m {
-        Method::Baumgarte { .. } => "multipliers",
-        Method::Projection => "projection",
-        Method::Partitioning => "partitioning",
-        Method::Index3 => "index3",
     }
 }
 
@@ -372,34 +400,72 @@ impl Point {
         digits(self.end_error)
     }
 
-    /// One JSON object (no external serialiser in the runtime).
-    pub fn to_json(&self) -> String {
-        let num = |x: f64| {
-            if x.is_finite() {
-                format!("{x:?}")
-            } else {
-                "null".into()
-            }
-        };
-        let stop = match self.stop {
-            StopReason::Finished => "finished".to_string(),
-            other => format!("{other:?}").replace('"', "'"),
-        };
-        format!(
-            "{{\"integrator\":\"{}\",\"constraints\":\"{}\",\"fixed_step\":{},\"setting\":{},\"cpu_s\":{},\"repeats\":{},\"rhs_evals\":{},\"accepted\":{},\"rejected\":{},\"end_error\":{},\"path_error\":{},\"digits\":{},\"stop\":\"{stop}\"}}",
-            self.case.integrator,
-            method_name(self.case.method),
-            self.case.fixed_step(),
-            num(self.case.setting),
-            num(self.cpu_s),
-            self.repeats,
-            self.rhs_evals,
-            self.accepted,
-            self.rejected,
-            num(self.end_error),
-            num(self.path_error),
-            num(self.digits()),
-        )
+    /// What a report shows of the point.
+    pub fn summary(&self) -> PointSummary {
+        let finite = |x: f64| x.is_finite().then_some(x);
+        PointSummary {
+            integrator: self.case.integrator,
+            constraints: self.case.method,
+            fixed_step: self.case.fixed_step(),
+            setting: self.case.setting,
+            cpu_s: self.cpu_s,
+            repeats: self.repeats,
+            rhs_evals: self.rhs_evals,
+            accepted: self.accepted,
+            rejected: self.rejected,
+            end_error: finite(self.end_error),
+            path_error: finite(self.path_error),
+            digits: finite(self.end_error).map(digits),
+            stop: match self.stop {
+                StopReason::Finished => "finished".to_string(),
+                other => format!("{other:?}"),
+            },
+        }
+    }
+}
+
+/// One point as a report shows it; errors are `None` for a run that did
+/// not finish.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, serde::Deserialize))]
+pub struct PointSummary {
+    /// Integrator.
+    pub integrator: Integrator,
+    /// Constraint method (meaningful for constrained models only).
+    pub constraints: Method,
+    /// True if `setting` is a step size.
+    pub fixed_step: bool,
+    /// Tolerance or step size.
+    pub setting: f64,
+    /// Median CPU time of one run, s.
+    pub cpu_s: f64,
+    /// Timed runs behind the median.
+    pub repeats: usize,
+    /// Right-hand sides of one run.
+    pub rhs_evals: usize,
+    /// Accepted steps.
+    pub accepted: usize,
+    /// Rejected steps.
+    pub rejected: usize,
+    /// Relative error of the positions at the end.
+    pub end_error: Option<f64>,
+    /// Largest relative error along the path.
+    pub path_error: Option<f64>,
+    /// Significant correct digits at the end.
+    pub digits: Option<f64>,
+    /// `finished` or why the run stopped.
+    pub stop: String,
+}
+
+impl PointSummary {
+    /// The series the point belongs to: the integrator, and the
+    /// constraint method for constrained models.
+    pub fn series(&self, constrained: bool) -> String {
+        if constrained {
+            format!("{} + {}", self.integrator, self.constraints)
+        } else {
+            self.integrator.to_string()
+        }
     }
 }
 
@@ -475,7 +541,7 @@ pub fn point<R: Runner + ?Sized>(
 /// `t_end / n` for the fixed-step methods with `n` doubling from
 /// `fixed_steps.0` to `fixed_steps.1`.
 pub fn cases(
-    integrators: &[&str],
+    integrators: &[Integrator],
     methods: &[Method],
     tols: &[f64],
     t_end: f64,
@@ -484,15 +550,14 @@ pub fn cases(
     let mut out = Vec::new();
     for &m in methods {
         for &i in integrators {
-            if m == Method::Index3 && i != "radau5" {
+            if m == Method::Index3 && i != Integrator::Radau5 {
                 continue;
             }
-            let fixed = matches!(i, "euler" | "rk4" | "midpoint");
-            if fixed {
+            if !i.is_adaptive() {
                 let mut n = fixed_steps.0.max(1);
                 while n <= fixed_steps.1.max(fixed_steps.0) {
                     out.push(Case {
-                        integrator: i.into(),
+                        integrator: i,
                         method: m,
                         setting: t_end / n as f64,
                     });
@@ -501,7 +566,7 @@ pub fn cases(
             } else {
                 for &tol in tols {
                     out.push(Case {
-                        integrator: i.into(),
+                        integrator: i,
                         method: m,
                         setting: tol,
                     });
@@ -549,7 +614,7 @@ mod tests {
             min_total_s: 0.0,
         };
         let pts: Vec<Point> = cases(
-            &["dop853", "rk4"],
+            &[Integrator::Dop853, Integrator::Rk4],
             &[Method::Projection],
             &[1e-4, 1e-8],
             t_end,
@@ -572,7 +637,7 @@ mod tests {
             );
         }
         assert!(pts.iter().all(|p| p.cpu_s > 0.0 && p.rhs_evals > 0));
-        assert!(pts[2].to_json().contains("\"integrator\":\"rk4\""));
+        assert_eq!(pts[2].summary().integrator, Integrator::Rk4);
     }
 
     #[test]

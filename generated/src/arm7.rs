@@ -4929,6 +4929,171 @@ impl ::eom_sim::Model for Arm7 {
         _udot: &[f64; 7],
         _out: &mut [f64; 0],
     ) {}
+    const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
+        ::eom_sim::FunctionInfo {
+            name: "qdot",
+            len: 7,
+            doc: "`q\u{307} = N(q) u`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "forward_dynamics",
+            len: 7,
+            doc: "forward dynamics `u\u{307} = M⁻¹ (τ − b)`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "mass_matrix",
+            len: 49,
+            doc: "mass matrix `M(q)`, by rows",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "bias",
+            len: 7,
+            doc: "bias `b(q, u, t)` of `M u\u{307} = τ − b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "inverse_dynamics",
+            len: 7,
+            doc: "inverse dynamics `τ = M u\u{307} + b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "energy",
+            len: 2,
+            doc: "kinetic and potential energy",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "momentum",
+            len: 6,
+            doc: "angular momentum about the world origin, then linear momentum, world axes",
+            labels: &[],
+        },
+    ];
+    fn evaluate(&self, name: &str, at: &::eom_sim::Point<'_>, out: &mut [f64]) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<7>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 7]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::qdot(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<7>(at.u, false) else {
+                    return false
+                };
+                let Some(tau) = ::eom_sim::__private::arg::<7>(at.tau, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 7]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::forward_dynamics(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 49]>::try_from(out) else { return false };
+                let this = self;
+                let mut m = [[0.0; 7]; 7];
+                ::eom_sim::Model::mass_matrix(this, t, &q, &mut m);
+                for (o, v) in out.iter_mut().zip(m.iter().flatten()) {
+                    *o = *v;
+                }
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<7>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 7]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::bias(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<7>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<7>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 7]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::inverse_dynamics(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<7>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::energy(this, t, &q, &u);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<7>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::momentum(this, t, &q, &u);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// No constraint equations.
+impl ::eom_sim::ConstrainedModel for Arm7 {
+    const NC: usize = 0;
+    const NHOLONOMIC: usize = 0;
+    const CONSTRAINT_NAMES: &'static [&'static str] = &[];
+    type Constraints = [f64; 0];
+    type ConstraintJacobian = [f64; 0];
+    fn set_multipliers(&mut self, _lambda: &[f64; 0]) {}
+    fn constraints(
+        &self,
+        _t: f64,
+        _q: &[f64; 7],
+        _u: &[f64; 7],
+        _phi: &mut [f64; 0],
+        _phidot: &mut [f64; 0],
+        _gamma: &mut [f64; 0],
+        _jacobian: &mut [f64; 0],
+    ) {}
 }
 /// The first-order system `y = (q, u)` of `arm7` (14 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<14> for Arm7 {

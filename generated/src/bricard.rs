@@ -3369,6 +3369,213 @@ impl ::eom_sim::Model for Bricard {
         _udot: &[f64; 5],
         _out: &mut [f64; 0],
     ) {}
+    const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
+        ::eom_sim::FunctionInfo {
+            name: "qdot",
+            len: 5,
+            doc: "`q\u{307} = N(q) u`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "forward_dynamics",
+            len: 5,
+            doc: "forward dynamics `u\u{307} = M⁻¹ (τ − b)`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "mass_matrix",
+            len: 25,
+            doc: "mass matrix `M(q)`, by rows",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "bias",
+            len: 5,
+            doc: "bias `b(q, u, t)` of `M u\u{307} = τ − b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "inverse_dynamics",
+            len: 5,
+            doc: "inverse dynamics `τ = M u\u{307} + b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "energy",
+            len: 2,
+            doc: "kinetic and potential energy",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "momentum",
+            len: 6,
+            doc: "angular momentum about the world origin, then linear momentum, world axes",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "constraints",
+            len: 40,
+            doc: "constraint equations: `Φ`, `Φ\u{307} = J u + Φ_t`, `γ` (`J u\u{307} = γ`) and `J`",
+            labels: &["J6.0", "J6.1", "J6.2", "J6.3", "J6.4"],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "cut_joint_reactions",
+            len: 6,
+            doc: "force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint",
+            labels: &["J6"],
+        },
+    ];
+    fn evaluate(&self, name: &str, at: &::eom_sim::Point<'_>, out: &mut [f64]) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::__private::arg::<5>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<5>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 5]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::qdot(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<5>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<5>(at.u, false) else {
+                    return false
+                };
+                let Some(tau) = ::eom_sim::__private::arg::<5>(at.tau, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 5]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::forward_dynamics(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<5>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 25]>::try_from(out) else { return false };
+                let this = self;
+                let mut m = [[0.0; 5]; 5];
+                ::eom_sim::Model::mass_matrix(this, t, &q, &mut m);
+                for (o, v) in out.iter_mut().zip(m.iter().flatten()) {
+                    *o = *v;
+                }
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<5>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<5>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 5]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::bias(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<5>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<5>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<5>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 5]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::inverse_dynamics(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<5>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<5>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::energy(this, t, &q, &u);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<5>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<5>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::momentum(this, t, &q, &u);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<5>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<5>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 40]>::try_from(out) else { return false };
+                let this = self;
+                let (mut phi, mut phidot, mut gamma, mut jacobian) = (
+                    [0.0; 5],
+                    [0.0; 5],
+                    [0.0; 5],
+                    [0.0; 25],
+                );
+                ::eom_sim::ConstrainedModel::constraints(
+                    this,
+                    t,
+                    &q,
+                    &u,
+                    &mut phi,
+                    &mut phidot,
+                    &mut gamma,
+                    &mut jacobian,
+                );
+                for (o, v) in out
+                    .iter_mut()
+                    .zip(phi.iter().chain(&phidot).chain(&gamma).chain(&jacobian))
+                {
+                    *o = *v;
+                }
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<5>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let Some(lambda) = ::eom_sim::__private::arg::<5>(at.lambda, true) else {
+                    return false
+                };
+                let mut with_lambda = *self;
+                with_lambda.multipliers = lambda;
+                let this = &with_lambda;
+                this.cut_joint_reactions(t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
 }
 /// 5 constraint equation(s), the first 5 holonomic: `J6.0`, `J6.1`, `J6.2`, `J6.3`, `J6.4`. `J` is by rows (5 × 5).
 impl ::eom_sim::ConstrainedModel for Bricard {
@@ -4857,6 +5064,53 @@ impl ::eom_sim::ConstrainedModel for Bricard {
         jacobian[22] = x1394;
         jacobian[23] = x39;
         jacobian[24] = 0.0;
+    }
+}
+/// Generated functions beyond the model trait's.
+impl Bricard {
+    /// Force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint (34 operations); `J6`.
+    /// Reads the multipliers `λ` from the `multipliers` field.
+    pub fn cut_joint_reactions(&self, _t: f64, q: &[f64; 5], out: &mut [f64; 6]) {
+        let (x0, x1) = f64::sin_cos(q[0]);
+        let (x2, x3) = f64::sin_cos(q[1]);
+        let (x4, x5) = f64::sin_cos(q[2]);
+        let x6 = x1 * x5;
+        let x7 = x2 * x6;
+        let x8 = x0 * x4;
+        let x9 = x8 - x7;
+        let x10 = x1 * x4;
+        let x11 = x2 * x10;
+        let x12 = x0 * x5;
+        let x13 = x11 + x12;
+        let (x14, x15) = f64::sin_cos(q[3]);
+        let x16 = x1 * x15;
+        let x17 = x3 * x16;
+        let x18 = x13 * x14;
+        let x19 = x17 - x18;
+        let (x20, x21) = f64::sin_cos(q[4]);
+        let x22 = x19 * x21;
+        let x23 = x9 * x20;
+        let x24 = x22 + x23;
+        let x25 = x19 * x20;
+        let x26 = x9 * x21;
+        let x27 = x26 - x25;
+        let x28 = x1 * x14;
+        let x29 = x3 * x28;
+        let x30 = x13 * x15;
+        let x31 = x29 + x30;
+        let x32 = -x31;
+        let x33 = -x24;
+        let x34 = self.multipliers[3] * x32;
+        let x35 = self.multipliers[3] * x24;
+        let x36 = self.multipliers[4] * x27;
+        let x37 = self.multipliers[4] * x33;
+        let x38 = x34 + x36;
+        out[0] = self.multipliers[0];
+        out[1] = self.multipliers[1];
+        out[2] = self.multipliers[2];
+        out[3] = x38;
+        out[4] = x37;
+        out[5] = x35;
     }
 }
 /// The first-order system `y = (q, u)` of `bricard` (10 states) with `τ = 0`.

@@ -297,6 +297,231 @@ impl ::eom_sim::Model for DoublePendulum {
         out[1] = x7;
         out[2] = 0.0;
     }
+    const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
+        ::eom_sim::FunctionInfo {
+            name: "qdot",
+            len: 2,
+            doc: "`q\u{307} = N(q) u`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "forward_dynamics",
+            len: 2,
+            doc: "forward dynamics `u\u{307} = M⁻¹ (τ − b)`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "mass_matrix",
+            len: 4,
+            doc: "mass matrix `M(q)`, by rows",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "bias",
+            len: 2,
+            doc: "bias `b(q, u, t)` of `M u\u{307} = τ − b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "inverse_dynamics",
+            len: 2,
+            doc: "inverse dynamics `τ = M u\u{307} + b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "energy",
+            len: 2,
+            doc: "kinetic and potential energy",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "momentum",
+            len: 6,
+            doc: "angular momentum about the world origin, then linear momentum, world axes",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "outputs",
+            len: 3,
+            doc: "the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame)",
+            labels: &["lower_tip_x", "lower_tip_y", "lower_tip_z"],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "marker_jacobians",
+            len: 6,
+            doc: "partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed",
+            labels: &["lower_tip_x", "lower_tip_y", "lower_tip_z"],
+        },
+    ];
+    fn evaluate(&self, name: &str, at: &::eom_sim::Point<'_>, out: &mut [f64]) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::qdot(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Some(tau) = ::eom_sim::__private::arg::<2>(at.tau, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::forward_dynamics(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 4]>::try_from(out) else { return false };
+                let this = self;
+                let mut m = [[0.0; 2]; 2];
+                ::eom_sim::Model::mass_matrix(this, t, &q, &mut m);
+                for (o, v) in out.iter_mut().zip(m.iter().flatten()) {
+                    *o = *v;
+                }
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::bias(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<2>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::inverse_dynamics(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::energy(this, t, &q, &u);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::momentum(this, t, &q, &u);
+                true
+            }
+            "outputs" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<2>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 3]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::outputs(this, t, &q, &u, &udot, out);
+                true
+            }
+            "marker_jacobians" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                this.marker_jacobians(t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// No constraint equations.
+impl ::eom_sim::ConstrainedModel for DoublePendulum {
+    const NC: usize = 0;
+    const NHOLONOMIC: usize = 0;
+    const CONSTRAINT_NAMES: &'static [&'static str] = &[];
+    type Constraints = [f64; 0];
+    type ConstraintJacobian = [f64; 0];
+    fn set_multipliers(&mut self, _lambda: &[f64; 0]) {}
+    fn constraints(
+        &self,
+        _t: f64,
+        _q: &[f64; 2],
+        _u: &[f64; 2],
+        _phi: &mut [f64; 0],
+        _phidot: &mut [f64; 0],
+        _gamma: &mut [f64; 0],
+        _jacobian: &mut [f64; 0],
+    ) {}
+}
+/// Generated functions beyond the model trait's.
+impl DoublePendulum {
+    /// Partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed (10 operations); `lower_tip_x`, `lower_tip_y`, `lower_tip_z`.
+    pub fn marker_jacobians(&self, _t: f64, q: &[f64; 2], out: &mut [f64; 6]) {
+        let (x0, x1) = f64::sin_cos(q[1]);
+        let x2 = q[0] + q[1];
+        let (x3, x4) = f64::sin_cos(x2);
+        let x5 = 1.0 + x1;
+        let x6 = x4 * x5;
+        let x7 = x0 * x3;
+        let x8 = x6 + x7;
+        let x9 = x3 * x5;
+        let x10 = x0 * x4;
+        let x11 = x9 - x10;
+        out[0] = x8;
+        out[1] = x4;
+        out[2] = x11;
+        out[3] = x3;
+        out[4] = 0.0;
+        out[5] = 0.0;
+    }
 }
 /// The first-order system `y = (q, u)` of `double_pendulum` (4 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<4> for DoublePendulum {

@@ -304,6 +304,251 @@ impl ::eom_sim::Model for HeavyTop {
         out[1] = x10;
         out[2] = x15;
     }
+    const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
+        ::eom_sim::FunctionInfo {
+            name: "qdot",
+            len: 4,
+            doc: "`q\u{307} = N(q) u`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "forward_dynamics",
+            len: 3,
+            doc: "forward dynamics `u\u{307} = M⁻¹ (τ − b)`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "mass_matrix",
+            len: 9,
+            doc: "mass matrix `M(q)`, by rows",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "bias",
+            len: 3,
+            doc: "bias `b(q, u, t)` of `M u\u{307} = τ − b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "inverse_dynamics",
+            len: 3,
+            doc: "inverse dynamics `τ = M u\u{307} + b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "energy",
+            len: 2,
+            doc: "kinetic and potential energy",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "momentum",
+            len: 6,
+            doc: "angular momentum about the world origin, then linear momentum, world axes",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "outputs",
+            len: 3,
+            doc: "the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame)",
+            labels: &["top_tip_x", "top_tip_y", "top_tip_z"],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "marker_jacobians",
+            len: 9,
+            doc: "partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed",
+            labels: &["top_tip_x", "top_tip_y", "top_tip_z"],
+        },
+    ];
+    fn evaluate(&self, name: &str, at: &::eom_sim::Point<'_>, out: &mut [f64]) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::__private::arg::<4>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<3>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 4]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::qdot(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<4>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<3>(at.u, false) else {
+                    return false
+                };
+                let Some(tau) = ::eom_sim::__private::arg::<3>(at.tau, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 3]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::forward_dynamics(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<4>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 9]>::try_from(out) else { return false };
+                let this = self;
+                let mut m = [[0.0; 3]; 3];
+                ::eom_sim::Model::mass_matrix(this, t, &q, &mut m);
+                for (o, v) in out.iter_mut().zip(m.iter().flatten()) {
+                    *o = *v;
+                }
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<4>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<3>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 3]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::bias(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<4>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<3>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<3>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 3]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::inverse_dynamics(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<4>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<3>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::energy(this, t, &q, &u);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<4>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<3>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::momentum(this, t, &q, &u);
+                true
+            }
+            "outputs" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<4>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<3>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<3>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 3]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::outputs(this, t, &q, &u, &udot, out);
+                true
+            }
+            "marker_jacobians" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<4>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 9]>::try_from(out) else { return false };
+                let this = self;
+                this.marker_jacobians(t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// No constraint equations.
+impl ::eom_sim::ConstrainedModel for HeavyTop {
+    const NC: usize = 0;
+    const NHOLONOMIC: usize = 0;
+    const CONSTRAINT_NAMES: &'static [&'static str] = &[];
+    type Constraints = [f64; 0];
+    type ConstraintJacobian = [f64; 0];
+    fn set_multipliers(&mut self, _lambda: &[f64; 0]) {}
+    fn constraints(
+        &self,
+        _t: f64,
+        _q: &[f64; 4],
+        _u: &[f64; 3],
+        _phi: &mut [f64; 0],
+        _phidot: &mut [f64; 0],
+        _gamma: &mut [f64; 0],
+        _jacobian: &mut [f64; 0],
+    ) {}
+}
+/// Generated functions beyond the model trait's.
+impl HeavyTop {
+    /// Partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed (27 operations); `top_tip_x`, `top_tip_y`, `top_tip_z`.
+    pub fn marker_jacobians(&self, _t: f64, q: &[f64; 4], out: &mut [f64; 9]) {
+        let x0 = q[1] * q[1];
+        let x1 = q[2] * q[2];
+        let x2 = q[3] * q[3];
+        let x3 = 2.0 * x2;
+        let x4 = 2.0 * x1;
+        let x5 = q[0] * q[3];
+        let x6 = q[0] * q[2];
+        let x7 = 2.0 * x6;
+        let x8 = q[1] * q[3];
+        let x9 = 2.0 * x8;
+        let x10 = x7 + x9;
+        let x11 = q[0] * q[1];
+        let x12 = q[2] * q[3];
+        let x13 = 2.0 * x12;
+        let x14 = 2.0 * x11;
+        let x15 = x13 - x14;
+        let x16 = 2.0 * x0;
+        let x17 = 1.0 - x16;
+        let x18 = x17 - x4;
+        let x19 = x3 + x4;
+        let x20 = x19 - 1.0;
+        let x21 = q[1] * q[2];
+        let x22 = 2.0 * x21;
+        let x23 = 2.0 * x5;
+        let x24 = x22 + x23;
+        let x25 = -x24;
+        let x26 = x7 - x9;
+        out[0] = x10;
+        out[1] = 0.0;
+        out[2] = x20;
+        out[3] = x15;
+        out[4] = 0.0;
+        out[5] = x25;
+        out[6] = x18;
+        out[7] = 0.0;
+        out[8] = x26;
+    }
 }
 /// The first-order system `y = (q, u)` of `heavy_top` (7 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<7> for HeavyTop {

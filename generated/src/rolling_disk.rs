@@ -465,6 +465,235 @@ impl ::eom_sim::Model for RollingDisk {
         out[1] = q[1];
         out[2] = q[2];
     }
+    const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
+        ::eom_sim::FunctionInfo {
+            name: "qdot",
+            len: 7,
+            doc: "`q\u{307} = N(q) u`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "forward_dynamics",
+            len: 6,
+            doc: "forward dynamics `u\u{307} = M⁻¹ (τ − b)`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "mass_matrix",
+            len: 36,
+            doc: "mass matrix `M(q)`, by rows",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "bias",
+            len: 6,
+            doc: "bias `b(q, u, t)` of `M u\u{307} = τ − b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "inverse_dynamics",
+            len: 6,
+            doc: "inverse dynamics `τ = M u\u{307} + b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "energy",
+            len: 2,
+            doc: "kinetic and potential energy",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "momentum",
+            len: 6,
+            doc: "angular momentum about the world origin, then linear momentum, world axes",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "outputs",
+            len: 3,
+            doc: "the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame)",
+            labels: &["disk_center_x", "disk_center_y", "disk_center_z"],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "marker_jacobians",
+            len: 18,
+            doc: "partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed",
+            labels: &["disk_center_x", "disk_center_y", "disk_center_z"],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "constraints",
+            len: 27,
+            doc: "constraint equations: `Φ`, `Φ\u{307} = J u + Φ_t`, `γ` (`J u\u{307} = γ`) and `J`",
+            labels: &["rolling.contact", "rolling.slip_x", "rolling.slip_y"],
+        },
+    ];
+    fn evaluate(&self, name: &str, at: &::eom_sim::Point<'_>, out: &mut [f64]) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<6>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 7]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::qdot(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<6>(at.u, false) else {
+                    return false
+                };
+                let Some(tau) = ::eom_sim::__private::arg::<6>(at.tau, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::forward_dynamics(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 36]>::try_from(out) else { return false };
+                let this = self;
+                let mut m = [[0.0; 6]; 6];
+                ::eom_sim::Model::mass_matrix(this, t, &q, &mut m);
+                for (o, v) in out.iter_mut().zip(m.iter().flatten()) {
+                    *o = *v;
+                }
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<6>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::bias(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<6>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<6>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::inverse_dynamics(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<6>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::energy(this, t, &q, &u);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<6>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::momentum(this, t, &q, &u);
+                true
+            }
+            "outputs" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<6>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<6>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 3]>::try_from(out) else { return false };
+                let Some(lambda) = ::eom_sim::__private::arg::<3>(at.lambda, true) else {
+                    return false
+                };
+                let mut with_lambda = *self;
+                with_lambda.multipliers = lambda;
+                let this = &with_lambda;
+                ::eom_sim::Model::outputs(this, t, &q, &u, &udot, out);
+                true
+            }
+            "marker_jacobians" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 18]>::try_from(out) else { return false };
+                let this = self;
+                this.marker_jacobians(t, &q, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<7>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<6>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 27]>::try_from(out) else { return false };
+                let this = self;
+                let (mut phi, mut phidot, mut gamma, mut jacobian) = (
+                    [0.0; 3],
+                    [0.0; 3],
+                    [0.0; 3],
+                    [0.0; 18],
+                );
+                ::eom_sim::ConstrainedModel::constraints(
+                    this,
+                    t,
+                    &q,
+                    &u,
+                    &mut phi,
+                    &mut phidot,
+                    &mut gamma,
+                    &mut jacobian,
+                );
+                for (o, v) in out
+                    .iter_mut()
+                    .zip(phi.iter().chain(&phidot).chain(&gamma).chain(&jacobian))
+                {
+                    *o = *v;
+                }
+                true
+            }
+            _ => false,
+        }
+    }
 }
 /// 3 constraint equation(s), the first 1 holonomic: `rolling.contact`, `rolling.slip_x`, `rolling.slip_y`. `J` is by rows (3 × 6).
 impl ::eom_sim::ConstrainedModel for RollingDisk {
@@ -906,6 +1135,59 @@ impl ::eom_sim::ConstrainedModel for RollingDisk {
         jacobian[15] = x373;
         jacobian[16] = x381;
         jacobian[17] = x388;
+    }
+}
+/// Generated functions beyond the model trait's.
+impl RollingDisk {
+    /// Partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed (29 operations); `disk_center_x`, `disk_center_y`, `disk_center_z`.
+    pub fn marker_jacobians(&self, _t: f64, q: &[f64; 7], out: &mut [f64; 18]) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = q[6] * q[6];
+        let x3 = 2.0 * x2;
+        let x4 = 2.0 * x1;
+        let x5 = 1.0 - x3;
+        let x6 = x5 - x4;
+        let x7 = q[3] * q[6];
+        let x8 = q[4] * q[5];
+        let x9 = 2.0 * x8;
+        let x10 = 2.0 * x7;
+        let x11 = x9 - x10;
+        let x12 = q[4] * q[6];
+        let x13 = 2.0 * x12;
+        let x14 = q[3] * q[5];
+        let x15 = 2.0 * x14;
+        let x16 = x13 + x15;
+        let x17 = x9 + x10;
+        let x18 = 2.0 * x0;
+        let x19 = x5 - x18;
+        let x20 = q[3] * q[4];
+        let x21 = q[5] * q[6];
+        let x22 = 2.0 * x21;
+        let x23 = 2.0 * x20;
+        let x24 = x22 - x23;
+        let x25 = x13 - x15;
+        let x26 = x22 + x23;
+        let x27 = 1.0 - x4;
+        let x28 = x27 - x18;
+        out[0] = x6;
+        out[1] = x11;
+        out[2] = x16;
+        out[3] = 0.0;
+        out[4] = 0.0;
+        out[5] = 0.0;
+        out[6] = x17;
+        out[7] = x19;
+        out[8] = x24;
+        out[9] = 0.0;
+        out[10] = 0.0;
+        out[11] = 0.0;
+        out[12] = x25;
+        out[13] = x26;
+        out[14] = x28;
+        out[15] = 0.0;
+        out[16] = 0.0;
+        out[17] = 0.0;
     }
 }
 /// The first-order system `y = (q, u)` of `rolling_disk` (13 states) with `τ = 0`.

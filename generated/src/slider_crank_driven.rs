@@ -229,6 +229,213 @@ impl ::eom_sim::Model for SliderCrankDriven {
         _udot: &[f64; 2],
         _out: &mut [f64; 0],
     ) {}
+    const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
+        ::eom_sim::FunctionInfo {
+            name: "qdot",
+            len: 2,
+            doc: "`q\u{307} = N(q) u`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "forward_dynamics",
+            len: 2,
+            doc: "forward dynamics `u\u{307} = M⁻¹ (τ − b)`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "mass_matrix",
+            len: 4,
+            doc: "mass matrix `M(q)`, by rows",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "bias",
+            len: 2,
+            doc: "bias `b(q, u, t)` of `M u\u{307} = τ − b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "inverse_dynamics",
+            len: 2,
+            doc: "inverse dynamics `τ = M u\u{307} + b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "energy",
+            len: 2,
+            doc: "kinetic and potential energy",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "momentum",
+            len: 6,
+            doc: "angular momentum about the world origin, then linear momentum, world axes",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "constraints",
+            len: 10,
+            doc: "constraint equations: `Φ`, `Φ\u{307} = J u + Φ_t`, `γ` (`J u\u{307} = γ`) and `J`",
+            labels: &["slider_pin.0", "slider_pin.1"],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "cut_joint_reactions",
+            len: 6,
+            doc: "force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint",
+            labels: &["slider_pin"],
+        },
+    ];
+    fn evaluate(&self, name: &str, at: &::eom_sim::Point<'_>, out: &mut [f64]) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::qdot(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Some(tau) = ::eom_sim::__private::arg::<2>(at.tau, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::forward_dynamics(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 4]>::try_from(out) else { return false };
+                let this = self;
+                let mut m = [[0.0; 2]; 2];
+                ::eom_sim::Model::mass_matrix(this, t, &q, &mut m);
+                for (o, v) in out.iter_mut().zip(m.iter().flatten()) {
+                    *o = *v;
+                }
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::bias(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<2>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::inverse_dynamics(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::energy(this, t, &q, &u);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::momentum(this, t, &q, &u);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<2>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 10]>::try_from(out) else { return false };
+                let this = self;
+                let (mut phi, mut phidot, mut gamma, mut jacobian) = (
+                    [0.0; 2],
+                    [0.0; 2],
+                    [0.0; 2],
+                    [0.0; 4],
+                );
+                ::eom_sim::ConstrainedModel::constraints(
+                    this,
+                    t,
+                    &q,
+                    &u,
+                    &mut phi,
+                    &mut phidot,
+                    &mut gamma,
+                    &mut jacobian,
+                );
+                for (o, v) in out
+                    .iter_mut()
+                    .zip(phi.iter().chain(&phidot).chain(&gamma).chain(&jacobian))
+                {
+                    *o = *v;
+                }
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<2>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let Some(lambda) = ::eom_sim::__private::arg::<2>(at.lambda, true) else {
+                    return false
+                };
+                let mut with_lambda = *self;
+                with_lambda.multipliers = lambda;
+                let this = &with_lambda;
+                this.cut_joint_reactions(t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
 }
 /// 2 constraint equation(s), the first 2 holonomic: `slider_pin.0`, `slider_pin.1`. `J` is by rows (2 × 2).
 impl ::eom_sim::ConstrainedModel for SliderCrankDriven {
@@ -349,6 +556,19 @@ impl ::eom_sim::ConstrainedModel for SliderCrankDriven {
         jacobian[1] = x7;
         jacobian[2] = x90;
         jacobian[3] = x8;
+    }
+}
+/// Generated functions beyond the model trait's.
+impl SliderCrankDriven {
+    /// Force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint (0 operations); `slider_pin`.
+    /// Reads the multipliers `λ` from the `multipliers` field.
+    pub fn cut_joint_reactions(&self, _t: f64, _q: &[f64; 2], out: &mut [f64; 6]) {
+        out[0] = self.multipliers[0];
+        out[1] = self.multipliers[1];
+        out[2] = 0.0;
+        out[3] = 0.0;
+        out[4] = 0.0;
+        out[5] = 0.0;
     }
 }
 /// The first-order system `y = (q, u)` of `slider_crank_driven` (4 states) with `τ = 0`.

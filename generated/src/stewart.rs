@@ -6292,6 +6292,229 @@ impl ::eom_sim::Model for Stewart {
         _udot: &[f64; 21],
         _out: &mut [f64; 0],
     ) {}
+    const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
+        ::eom_sim::FunctionInfo {
+            name: "qdot",
+            len: 22,
+            doc: "`q\u{307} = N(q) u`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "forward_dynamics",
+            len: 21,
+            doc: "forward dynamics `u\u{307} = M⁻¹ (τ − b)`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "mass_matrix",
+            len: 441,
+            doc: "mass matrix `M(q)`, by rows",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "bias",
+            len: 21,
+            doc: "bias `b(q, u, t)` of `M u\u{307} = τ − b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "inverse_dynamics",
+            len: 21,
+            doc: "inverse dynamics `τ = M u\u{307} + b`",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "energy",
+            len: 2,
+            doc: "kinetic and potential energy",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "momentum",
+            len: 6,
+            doc: "angular momentum about the world origin, then linear momentum, world axes",
+            labels: &[],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "constraints",
+            len: 360,
+            doc: "constraint equations: `Φ`, `Φ\u{307} = J u + Φ_t`, `γ` (`J u\u{307} = γ`) and `J`",
+            labels: &[
+                "S2.0",
+                "S2.1",
+                "S2.2",
+                "S3.0",
+                "S3.1",
+                "S3.2",
+                "S4.0",
+                "S4.1",
+                "S4.2",
+                "S5.0",
+                "S5.1",
+                "S5.2",
+                "S6.0",
+                "S6.1",
+                "S6.2",
+            ],
+        },
+        ::eom_sim::FunctionInfo {
+            name: "cut_joint_reactions",
+            len: 30,
+            doc: "force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint",
+            labels: &["S2", "S3", "S4", "S5", "S6"],
+        },
+    ];
+    fn evaluate(&self, name: &str, at: &::eom_sim::Point<'_>, out: &mut [f64]) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::__private::arg::<22>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<21>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 22]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::qdot(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<22>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<21>(at.u, false) else {
+                    return false
+                };
+                let Some(tau) = ::eom_sim::__private::arg::<21>(at.tau, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 21]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::forward_dynamics(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<22>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 441]>::try_from(out) else { return false };
+                let this = self;
+                let mut m = [[0.0; 21]; 21];
+                ::eom_sim::Model::mass_matrix(this, t, &q, &mut m);
+                for (o, v) in out.iter_mut().zip(m.iter().flatten()) {
+                    *o = *v;
+                }
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<22>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<21>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 21]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::bias(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<22>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<21>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<21>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 21]>::try_from(out) else { return false };
+                let this = self;
+                ::eom_sim::Model::inverse_dynamics(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<22>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<21>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 2]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::energy(this, t, &q, &u);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<22>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<21>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 6]>::try_from(out) else { return false };
+                let this = self;
+                *out = ::eom_sim::Model::momentum(this, t, &q, &u);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<22>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<21>(at.u, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 360]>::try_from(out) else { return false };
+                let this = self;
+                let (mut phi, mut phidot, mut gamma, mut jacobian) = (
+                    [0.0; 15],
+                    [0.0; 15],
+                    [0.0; 15],
+                    [0.0; 315],
+                );
+                ::eom_sim::ConstrainedModel::constraints(
+                    this,
+                    t,
+                    &q,
+                    &u,
+                    &mut phi,
+                    &mut phidot,
+                    &mut gamma,
+                    &mut jacobian,
+                );
+                for (o, v) in out
+                    .iter_mut()
+                    .zip(phi.iter().chain(&phidot).chain(&gamma).chain(&jacobian))
+                {
+                    *o = *v;
+                }
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<22>(at.q, false) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 30]>::try_from(out) else { return false };
+                let Some(lambda) = ::eom_sim::__private::arg::<15>(at.lambda, true) else {
+                    return false
+                };
+                let mut with_lambda = *self;
+                with_lambda.multipliers = lambda;
+                let this = &with_lambda;
+                this.cut_joint_reactions(t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
 }
 /// 15 constraint equation(s), the first 15 holonomic: `S2.0`, `S2.1`, `S2.2`, `S3.0`, `S3.1`, `S3.2`, `S4.0`, `S4.1`, `S4.2`, `S5.0`, `S5.1`, `S5.2`, `S6.0`, `S6.1`, `S6.2`. `J` is by rows (15 × 21).
 impl ::eom_sim::ConstrainedModel for Stewart {
@@ -6698,6 +6921,43 @@ impl ::eom_sim::ConstrainedModel for Stewart {
         jacobian[312] = s[1209];
         jacobian[313] = s[1210];
         jacobian[314] = s[1211];
+    }
+}
+/// Generated functions beyond the model trait's.
+impl Stewart {
+    /// Force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint (0 operations); `S2`, `S3`, `S4`, `S5`, `S6`.
+    /// Reads the multipliers `λ` from the `multipliers` field.
+    pub fn cut_joint_reactions(&self, _t: f64, _q: &[f64; 22], out: &mut [f64; 30]) {
+        out[0] = self.multipliers[0];
+        out[1] = self.multipliers[1];
+        out[2] = self.multipliers[2];
+        out[3] = 0.0;
+        out[4] = 0.0;
+        out[5] = 0.0;
+        out[6] = self.multipliers[3];
+        out[7] = self.multipliers[4];
+        out[8] = self.multipliers[5];
+        out[9] = 0.0;
+        out[10] = 0.0;
+        out[11] = 0.0;
+        out[12] = self.multipliers[6];
+        out[13] = self.multipliers[7];
+        out[14] = self.multipliers[8];
+        out[15] = 0.0;
+        out[16] = 0.0;
+        out[17] = 0.0;
+        out[18] = self.multipliers[9];
+        out[19] = self.multipliers[10];
+        out[20] = self.multipliers[11];
+        out[21] = 0.0;
+        out[22] = 0.0;
+        out[23] = 0.0;
+        out[24] = self.multipliers[12];
+        out[25] = self.multipliers[13];
+        out[26] = self.multipliers[14];
+        out[27] = 0.0;
+        out[28] = 0.0;
+        out[29] = 0.0;
     }
 }
 /// Parts of the long generated functions (see `eom_gen::emit`).

@@ -13,8 +13,8 @@
 //! short loops over the generated ones on fixed-size arrays instead.
 //! Output is byte-identical for identical input.
 
+use crate::functions::{Arg as FnArg, Function, Layout, TABLE};
 use crate::mech::Formulation;
-use crate::mech::formulate::MULTIPLIER;
 use crate::sym::{SymKind, Symbol};
 use split::{Arg, lower};
 
@@ -73,23 +73,25 @@ impl Binding<'_> {
                 let name = format_ident!("{}", s.name);
                 quote!(self.params.#name)
             }
-            SymKind::Input => match self.sys.inputs.iter().position(|n| *n == s.name) {
-                Some(k) => {
-                    let k = Literal::usize_unsuffixed(k);
-                    quote!(self.inputs[#k])
-                }
-                None if s.name.starts_with(MULTIPLIER) => {
-                    let k: usize = s.name[MULTIPLIER.len()..].parse().unwrap_or(0);
-                    let k = Literal::usize_unsuffixed(k);
-                    quote!(self.multipliers[#k])
-                }
-                None => {
-                    // `tau<k>`: the extra generalised forces.
-                    let k: usize = s.name.trim_start_matches("tau").parse().unwrap_or(0);
-                    let k = Literal::usize_unsuffixed(k);
-                    quote!(tau[#k])
-                }
-            },
+            SymKind::Input => {
+                // Validation declares only the model's inputs as inputs.
+                let k = self
+                    .sys
+                    .inputs
+                    .iter()
+                    .position(|n| *n == s.name)
+                    .unwrap_or(0);
+                let k = Literal::usize_unsuffixed(k);
+                quote!(self.inputs[#k])
+            }
+            SymKind::Multiplier(i) => {
+                let i = idx(i);
+                quote!(self.multipliers[#i])
+            }
+            SymKind::Tau(i) => {
+                let i = idx(i);
+                quote!(tau[#i])
+            }
         }
     }
 }
@@ -257,7 +259,6 @@ pub fn emit_tokens(
     };
     let q_doc = format!("`q` = ({})", list(&coords));
     let u_doc = format!("`u` = ({})", list(&speeds));
-    let model_inputs: Vec<String> = sys.inputs.clone();
     let arg_t = || Arg {
         name: "t",
         ty: quote!(f64),
@@ -273,15 +274,10 @@ pub fn emit_tokens(
         ty: quote!(&[f64; #nu_l]),
         carries: Box::new(|s: &Symbol| matches!(s.kind, SymKind::Speed(_))),
     };
-    let arg_tau = || {
-        let inputs = model_inputs.clone();
-        Arg {
-            name: "tau",
-            ty: quote!(&[f64; #nu_l]),
-            carries: Box::new(move |s: &Symbol| {
-                s.kind == SymKind::Input && !inputs.contains(&s.name)
-            }),
-        }
+    let arg_tau = || Arg {
+        name: "tau",
+        ty: quote!(&[f64; #nu_l]),
+        carries: Box::new(|s: &Symbol| matches!(s.kind, SymKind::Tau(_))),
     };
     let arg_udot = || Arg {
         name: "udot",
@@ -302,7 +298,10 @@ pub fn emit_tokens(
 
     // q̇ = N(q) u
     let args = [arg_q(), arg_u()];
-    let l = lower(&b, &f.qdot, "qdot", &args);
+    let Some(qdot_program) = f.program(Function::Qdot) else {
+        return quote!(::core::compile_error!("eom-gen: the formulation has no q̇ program"););
+    };
+    let l = lower(&b, qdot_program, "qdot", &args);
     parts.extend(l.parts.clone());
     let (params, body, assign) = (l.params(&args), &l.body, assign_all("qdot", &l.outputs));
     let qdot_fn = quote! {
@@ -312,7 +311,7 @@ pub fn emit_tokens(
         }
     };
 
-    let fd_fn = f.forward_dynamics.as_ref().map(|p| {
+    let fd_fn = f.program(Function::ForwardDynamics).map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
         let l = lower(&b, p, "forward_dynamics", &args);
         parts.extend(l.parts.clone());
@@ -330,7 +329,7 @@ pub fn emit_tokens(
             }
         }
     });
-    let mm_fn = f.mass_matrix.as_ref().map(|p| {
+    let mm_fn = f.program(Function::MassMatrix).map(|p| {
         let args = [arg_t(), arg_q()];
         let l = lower(&b, p, "mass_matrix", &args);
         parts.extend(l.parts.clone());
@@ -355,7 +354,7 @@ pub fn emit_tokens(
             }
         }
     });
-    let bias_fn = f.bias.as_ref().map(|p| {
+    let bias_fn = f.program(Function::Bias).map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
         let l = lower(&b, p, "bias", &args);
         parts.extend(l.parts.clone());
@@ -367,7 +366,7 @@ pub fn emit_tokens(
             }
         }
     });
-    let id_fn = f.inverse_dynamics.as_ref().map(|p| {
+    let id_fn = f.program(Function::InverseDynamics).map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
         let l = lower(&b, p, "inverse_dynamics", &args);
         parts.extend(l.parts.clone());
@@ -436,7 +435,7 @@ pub fn emit_tokens(
             }
         }
     });
-    let energy_fn = f.energy.as_ref().map(|p| {
+    let energy_fn = f.program(Function::Energy).map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
         let l = lower(&b, p, "energy", &args);
         parts.extend(l.parts.clone());
@@ -449,7 +448,7 @@ pub fn emit_tokens(
             }
         }
     });
-    let momentum_fn = f.momentum.as_ref().map(|p| {
+    let momentum_fn = f.program(Function::Momentum).map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
         let l = lower(&b, p, "momentum", &args);
         parts.extend(l.parts.clone());
@@ -461,13 +460,9 @@ pub fn emit_tokens(
             }
         }
     });
-    let output_names: Vec<String> = f
-        .outputs
-        .as_ref()
-        .map(|p| p.outputs.iter().map(|(n, _)| n.clone()).collect())
-        .unwrap_or_default();
+    let output_names: Vec<String> = f.output_names.clone();
     let nout_l = idx(output_names.len());
-    let outputs_fn = match f.outputs.as_ref() {
+    let outputs_fn = match f.program(Function::Outputs) {
         Some(p) => {
             let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
             let l = lower(&b, p, "outputs", &args);
@@ -484,7 +479,7 @@ pub fn emit_tokens(
             fn outputs(&self, _t: f64, _q: &[f64; #nq_l], _u: &[f64; #nu_l], _udot: &[f64; #nu_l], _out: &mut [f64; 0]) {}
         },
     };
-    let constrained_impl = f.constraints.as_ref().map(|p| {
+    let constrained_impl = f.program(Function::Constraints).map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
         let l = lower(&b, p, "constraints", &args);
         parts.extend(l.parts.clone());
@@ -492,24 +487,15 @@ pub fn emit_tokens(
         let body = &l.body;
         let nc = f.constraint_names.len();
         let mut assign = TokenStream::new();
-        for ((name, _), v) in p.outputs.iter().zip(&l.outputs) {
-            let target = if let Some(rest) = name.strip_prefix("J_") {
-                let mut it = rest.split('_').filter_map(|x| x.parse::<usize>().ok());
-                match (it.next(), it.next()) {
-                    (Some(r), Some(c)) => {
-                        let k = idx(r * nu + c);
-                        quote!(jacobian[#k])
-                    }
-                    _ => continue,
-                }
+        // Layout::Constraints: Φ_i, Φ̇_i, γ_i per equation, then J by rows.
+        for (k, v) in l.outputs.iter().enumerate() {
+            let target = if k < 3 * nc {
+                let array = format_ident!("{}", ["phi", "phidot", "gamma"][k % 3]);
+                let i = idx(k / 3);
+                quote!(#array[#i])
             } else {
-                let found = ["phidot", "phi", "gamma"].iter().find_map(|a| {
-                    name.strip_prefix(a)
-                        .and_then(|k| k.parse::<usize>().ok())
-                        .map(|k| (format_ident!("{a}"), idx(k)))
-                });
-                let Some((array, k)) = found else { continue };
-                quote!(#array[#k])
+                let j = idx(k - 3 * nc);
+                quote!(jacobian[#j])
             };
             assign.extend(quote!(#target = #v;));
         }
@@ -545,6 +531,97 @@ pub fn emit_tokens(
             }
         }
     });
+    // A model without constraint equations is a constrained one with none,
+    // so that one runner serves every model.
+    let constrained_impl = constrained_impl.unwrap_or_else(|| {
+        quote! {
+            /// No constraint equations.
+            impl ::eom_sim::ConstrainedModel for #ty {
+                const NC: usize = 0;
+                const NHOLONOMIC: usize = 0;
+                const CONSTRAINT_NAMES: &'static [&'static str] = &[];
+                type Constraints = [f64; 0];
+                type ConstraintJacobian = [f64; 0];
+                fn set_multipliers(&mut self, _lambda: &[f64; 0]) {}
+                fn constraints(
+                    &self,
+                    _t: f64,
+                    _q: &[f64; #nq_l],
+                    _u: &[f64; #nu_l],
+                    _phi: &mut [f64; 0],
+                    _phidot: &mut [f64; 0],
+                    _gamma: &mut [f64; 0],
+                    _jacobian: &mut [f64; 0],
+                ) {
+                }
+            }
+        }
+    });
+    // The functions without a method of their own in the model trait, as
+    // inherent methods (see `crate::functions::TABLE`).
+    let mut inherent = TokenStream::new();
+    for e in TABLE.iter().filter(|e| !e.in_trait) {
+        let Some(p) = f.program(e.function) else {
+            continue;
+        };
+        let args: Vec<Arg> = e
+            .args
+            .iter()
+            .map(|a| match a {
+                FnArg::T => arg_t(),
+                FnArg::Q => arg_q(),
+                FnArg::U => arg_u(),
+                FnArg::Udot => arg_udot(),
+                FnArg::Tau => arg_tau(),
+            })
+            .collect();
+        let l = lower(&b, p, e.name, &args);
+        parts.extend(l.parts.clone());
+        let (params, body, assign) = (l.params(&args), &l.body, assign_all("out", &l.outputs));
+        let n = format_ident!("{}", e.name);
+        let len = idx(l.outputs.len());
+        let labels = list(
+            &f.labels(e.function)
+                .iter()
+                .map(String::as_str)
+                .collect::<Vec<_>>(),
+        );
+        let doc = format!(
+            " {}{} ({} operations){}.",
+            e.doc[..1].to_uppercase(),
+            &e.doc[1..],
+            p.op_count().total(),
+            if labels.is_empty() {
+                String::new()
+            } else {
+                format!("; {labels}")
+            }
+        );
+        let lambda_doc = if e.uses_multipliers {
+            quote!(#[doc = " Reads the multipliers `λ` from the `multipliers` field."])
+        } else {
+            TokenStream::new()
+        };
+        inherent.extend(quote! {
+            #[doc = #doc]
+            #lambda_doc
+            pub fn #n(&self, #params, out: &mut [f64; #len]) {
+                #body
+                #assign
+            }
+        });
+    }
+    let inherent_impl = if inherent.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! {
+            /// Generated functions beyond the model trait's.
+            impl #ty {
+                #inherent
+            }
+        }
+    };
+    let (functions_const, evaluate_fn) = evaluate_dispatch(sys, f);
     let (multipliers_field, multipliers_default) = if f.constraint_names.is_empty() {
         (TokenStream::new(), TokenStream::new())
     } else {
@@ -707,9 +784,13 @@ pub fn emit_tokens(
             #energy_fn
             #momentum_fn
             #outputs_fn
+            #functions_const
+            #evaluate_fn
         }
 
         #constrained_impl
+
+        #inherent_impl
 
         #parts_impl
 
@@ -731,4 +812,120 @@ pub fn emit_tokens(
             }
         }
     }
+}
+
+/// Every function the model offers through `eom_sim::Model::evaluate`:
+/// those generated and those derived from them, with their result lengths.
+fn offered(sys: &System, f: &Formulation) -> Vec<(&'static crate::functions::Entry, usize)> {
+    use crate::functions::When;
+    let nu = sys.nu();
+    TABLE
+        .iter()
+        .filter_map(|e| {
+            let len = match f.program(e.function) {
+                Some(_) => f.result_len(e.function, nu),
+                // Derived from the generated ones (see `emit_tokens`).
+                None if e.when == When::Requested => match e.layout {
+                    Layout::LowerTriangle => nu * nu,
+                    _ => nu,
+                },
+                None => return None,
+            };
+            Some((e, len))
+        })
+        .collect()
+}
+
+/// `const FUNCTIONS` and `fn evaluate` of the model trait, from the table.
+fn evaluate_dispatch(sys: &System, f: &Formulation) -> (TokenStream, TokenStream) {
+    let (nq, nu, nc) = (sys.nq(), sys.nu(), f.constraint_names.len());
+    let idx = Literal::usize_unsuffixed;
+    let (nq_l, nu_l) = (idx(nq), idx(nu));
+    let offered = offered(sys, f);
+    let infos = offered.iter().map(|(e, len)| {
+        let (name, len, doc) = (e.name, idx(*len), e.doc);
+        let labels = f.labels(e.function).iter();
+        quote!(::eom_sim::FunctionInfo { name: #name, len: #len, doc: #doc, labels: &[#(#labels),*] })
+    });
+    let functions_const = quote! {
+        const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[#(#infos),*];
+    };
+    let arms = offered.iter().map(|(e, len)| {
+        let name = e.name;
+        let n = format_ident!("{}", e.name);
+        let len_l = idx(*len);
+        let fetch = e.args.iter().map(|a| match a {
+            FnArg::T => quote!(let t = at.t;),
+            FnArg::Q => quote!(let Some(q) = ::eom_sim::__private::arg::<#nq_l>(at.q, false) else { return false };),
+            FnArg::U => quote!(let Some(u) = ::eom_sim::__private::arg::<#nu_l>(at.u, false) else { return false };),
+            FnArg::Udot => quote!(let Some(udot) = ::eom_sim::__private::arg::<#nu_l>(at.udot, true) else { return false };),
+            FnArg::Tau => quote!(let Some(tau) = ::eom_sim::__private::arg::<#nu_l>(at.tau, true) else { return false };),
+        });
+        let call_args: Vec<TokenStream> = e
+            .args
+            .iter()
+            .map(|a| match a {
+                FnArg::T => quote!(t),
+                other => {
+                    let i = format_ident!("{}", other.name());
+                    quote!(&#i)
+                }
+            })
+            .collect();
+        let this = if e.uses_multipliers && nc > 0 {
+            let nc_l = idx(nc);
+            quote! {
+                let Some(lambda) = ::eom_sim::__private::arg::<#nc_l>(at.lambda, true) else { return false };
+                let mut with_lambda = *self;
+                with_lambda.multipliers = lambda;
+                let this = &with_lambda;
+            }
+        } else {
+            quote!(let this = self;)
+        };
+        let call = match (e.function, e.in_trait) {
+            (Function::MassMatrix, _) => quote! {
+                let mut m = [[0.0; #nu_l]; #nu_l];
+                ::eom_sim::Model::mass_matrix(this, #(#call_args),*, &mut m);
+                for (o, v) in out.iter_mut().zip(m.iter().flatten()) {
+                    *o = *v;
+                }
+            },
+            (Function::Energy | Function::Momentum, _) => quote! {
+                *out = ::eom_sim::Model::#n(this, #(#call_args),*);
+            },
+            (Function::Constraints, _) => {
+                let nc_l = idx(nc);
+                let ncj_l = idx(nc * nu);
+                quote! {
+                    let (mut phi, mut phidot, mut gamma, mut jacobian) =
+                        ([0.0; #nc_l], [0.0; #nc_l], [0.0; #nc_l], [0.0; #ncj_l]);
+                    ::eom_sim::ConstrainedModel::constraints(this, #(#call_args),*, &mut phi, &mut phidot, &mut gamma, &mut jacobian);
+                    for (o, v) in out.iter_mut().zip(phi.iter().chain(&phidot).chain(&gamma).chain(&jacobian)) {
+                        *o = *v;
+                    }
+                }
+            }
+            (_, true) => quote!(::eom_sim::Model::#n(this, #(#call_args),*, out);),
+            (_, false) => quote!(this.#n(#(#call_args),*, out);),
+        };
+        quote! {
+            #name => {
+                #(#fetch)*
+                let Ok(out) = <&mut [f64; #len_l]>::try_from(out) else { return false };
+                #this
+                #call
+                true
+            }
+        }
+    });
+    let evaluate_fn = quote! {
+        fn evaluate(&self, name: &str, at: &::eom_sim::Point<'_>, out: &mut [f64]) -> bool {
+            match name {
+                #(#arms)*
+                _ => false,
+            }
+        }
+    };
+    (functions_const, evaluate_fn)
 }

@@ -10,8 +10,10 @@
 use super::dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
 use super::spatial::Force;
 use super::tree::{Env, MechError, NumericEnv, TreeModel};
+use crate::functions::{Function, FunctionSet, Layout};
 use crate::sym::{Context, Expr, LowerOptions, OpCount, Program, Scalar, SymError};
 use crate::system::{OutputKind, System};
+use std::collections::BTreeMap;
 use std::fmt;
 use std::time::Instant;
 
@@ -31,57 +33,6 @@ impl fmt::Display for FdForm {
             FdForm::Aba => "articulated-body algorithm",
             FdForm::MassMatrix => "mass matrix + tree-sparse LTDL",
         })
-    }
-}
-
-/// Which functions to generate (model only what a scene needs).
-///
-/// Forward dynamics, energy and momentum cannot be computed from the other
-/// functions; the mass matrix and the bias can (from inverse dynamics at
-/// zero speed or zero acceleration), and inverse dynamics from them
-/// (`M u̇ + b`). [`formulate`] generates [`Request::derivable`], so the
-/// emitted model implements every function of `eom_sim::Model`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Request {
-    /// `u̇ = FD(q, u, t, τ)`.
-    pub forward_dynamics: bool,
-    /// `M(q)`.
-    pub mass_matrix: bool,
-    /// `b(q, u, t)`.
-    pub bias: bool,
-    /// `τ = ID(q, u, u̇, t)`.
-    pub inverse_dynamics: bool,
-    /// Kinetic and potential energy.
-    pub energy: bool,
-    /// Linear and angular momentum.
-    pub momentum: bool,
-}
-
-impl Default for Request {
-    fn default() -> Self {
-        Request {
-            forward_dynamics: true,
-            mass_matrix: true,
-            bias: true,
-            inverse_dynamics: true,
-            energy: true,
-            momentum: true,
-        }
-    }
-}
-
-impl Request {
-    /// This request with what the other functions cannot be derived
-    /// without: forward dynamics, energy and momentum always, and inverse
-    /// dynamics unless both the mass matrix and the bias are generated.
-    pub fn derivable(self) -> Request {
-        Request {
-            forward_dynamics: true,
-            energy: true,
-            momentum: true,
-            inverse_dynamics: self.inverse_dynamics || !(self.mass_matrix && self.bias),
-            ..self
-        }
     }
 }
 
@@ -117,49 +68,68 @@ impl From<SymError> for FormulateError {
     }
 }
 
-/// Generated straight-line programs of one system.
+/// Generated straight-line programs of one system, one per generated
+/// function (see [`crate::functions`]); each program's outputs are in the
+/// order of its function's [`Layout`](crate::functions::Layout).
 #[derive(Clone, Debug)]
 pub struct Formulation {
-    /// `q̇ = N(q) u`: outputs `qdot0 …`.
-    pub qdot: Program,
-    /// Forward dynamics: outputs `udot0 …`; inputs include `tau0 …`.
-    pub forward_dynamics: Option<Program>,
+    /// The programs, by function; functions the request leaves out (and
+    /// those the model has nothing for) have none.
+    pub programs: BTreeMap<Function, Program>,
     /// The form chosen for forward dynamics.
     pub fd_form: FdForm,
     /// Operation counts of both forward-dynamics forms.
     pub fd_candidates: Vec<(FdForm, OpCount)>,
-    /// Mass matrix, lower triangle row by row: outputs `m_i_j`, `j ≤ i`;
-    /// `None` when the request leaves it out (derived from inverse dynamics).
-    pub mass_matrix: Option<Program>,
-    /// Bias `b` with `M u̇ = τ − b`: outputs `b0 …`; `None` when the
-    /// request leaves it out (`ID(q, u, 0)`).
-    pub bias: Option<Program>,
-    /// Inverse dynamics: outputs `tau0 …`; inputs include `ud0 …`;
-    /// `None` when the request leaves it out (`M u̇ + b`).
-    pub inverse_dynamics: Option<Program>,
-    /// Outputs `kinetic`, `potential`.
-    pub energy: Option<Program>,
-    /// Outputs `lx, ly, lz` (angular, about the world origin) and `px, py, pz`.
-    pub momentum: Option<Program>,
-    /// The model's requested outputs (marker positions and velocities in
-    /// world axes, joint reactions in the child joint frame); inputs may
-    /// include `ud0 …` for reactions. `None` if the model requests none.
-    pub outputs: Option<Program>,
-    /// Partial velocities of the requested marker positions: outputs
-    /// `J_<body>_<marker>_<axis>_<k>` = ∂v/∂u_k.
-    pub jacobians: Option<Program>,
-    /// Closure conditions of the cut joints and the model's constraints,
-    /// `None` without: outputs `phi<i>` (`Φ`; zero for nonholonomic rows),
-    /// `phidot<i>` (`Φ̇ = J u + Φ_t`), `gamma<i>` (`γ = −Φ̈` at `u̇ = 0`, so
-    /// that `J u̇ = γ`), and `J_<i>_<k>` (`∂Φ̇/∂u_k`).
-    pub constraints: Option<Program>,
     /// Names of the constraint equations (`joint.k`, the constraint's name,
     /// `disk.contact` / `disk.slip_x` / `disk.slip_y`); holonomic first.
     pub constraint_names: Vec<String>,
     /// How many of them are holonomic.
     pub n_holonomic: usize,
+    /// Names of the model's requested outputs, in order.
+    pub output_names: Vec<String>,
+    /// Names of the marker Jacobians' rows (`body_marker_axis`).
+    pub jacobian_rows: Vec<String>,
+    /// The cut joints, in the order of `cut_joint_reactions`.
+    pub cut_joints: Vec<String>,
     /// Wall time of formulation and lowering, seconds.
     pub seconds: f64,
+}
+
+impl Formulation {
+    /// The program of `f`, if generated.
+    pub fn program(&self, f: Function) -> Option<&Program> {
+        self.programs.get(&f)
+    }
+
+    /// The functions generated, in table order.
+    pub fn functions(&self) -> impl Iterator<Item = Function> + '_ {
+        self.programs.keys().copied()
+    }
+
+    /// Length of the flat result of `f` for a system with `nu` speeds.
+    pub fn result_len(&self, f: Function, nu: usize) -> usize {
+        let outputs = self.program(f).map_or(0, |p| p.outputs.len());
+        match f.entry().layout {
+            Layout::Vector => outputs,
+            Layout::LowerTriangle => nu * nu,
+            Layout::Constraints => {
+                let nc = self.constraint_names.len();
+                3 * nc + nc * nu
+            }
+        }
+    }
+
+    /// The names of the groups of the flat result of `f` (see
+    /// `eom_sim::FunctionInfo::labels`).
+    pub fn labels(&self, f: Function) -> &[String] {
+        match f {
+            Function::Outputs => &self.output_names,
+            Function::MarkerJacobians => &self.jacobian_rows,
+            Function::CutJointReactions => &self.cut_joints,
+            Function::Constraints => &self.constraint_names,
+            _ => &[],
+        }
+    }
 }
 
 /// The names of `sys`'s coordinates, owned.
@@ -169,10 +139,6 @@ fn coordinate_names(sys: &System) -> Vec<String> {
         .map(String::from)
         .collect()
 }
-
-/// Prefix of the constraint multipliers' input symbols in output programs
-/// (`λ0`, `λ1`, …; not a valid model name, so no input can clash).
-pub const MULTIPLIER: &str = "λ";
 
 /// The constraint program with its equation names.
 struct ConstraintProgram {
@@ -225,10 +191,11 @@ pub fn ltdl_flops(lambda: &[Option<usize>]) -> usize {
 }
 
 /// Builds the programs `request` asks for, completed by
-/// [`Request::derivable`]; programs not asked for are `None`. The mass
+/// [`FunctionSet::derivable`], and those the model needs (outputs,
+/// constraints, reactions); programs not asked for are absent. The mass
 /// matrix and bias are built symbolically only when asked for or when
 /// forward dynamics may use them (the `LᵀDL` form).
-pub fn formulate(sys: &System, request: Request) -> Result<Formulation, FormulateError> {
+pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, FormulateError> {
     let request = request.derivable();
     let start = Instant::now();
     let cx = Context::new();
@@ -250,9 +217,7 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         .iter()
         .map(|n| cx.input(n))
         .collect::<Result<_, _>>()?;
-    let tau: Vec<Expr> = (0..nu)
-        .map(|i| cx.input(&format!("tau{i}")))
-        .collect::<Result<_, _>>()?;
+    let tau: Vec<Expr> = (0..nu).map(|i| cx.tau(i as u32)).collect();
     let st = State {
         q: &q,
         u: &u,
@@ -281,10 +246,11 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         let (c, _) = ev.rnea(&k, &zero, &fext);
         c.iter().zip(&generalized).map(|(&c, &g)| c - g).collect()
     };
-    let mut mass = request.mass_matrix.then(crba);
-    let mut bias = request.bias.then(rnea_bias);
+    let mut mass = request.contains(Function::MassMatrix).then(crba);
+    let mut bias = request.contains(Function::Bias).then(rnea_bias);
 
-    let (forward_dynamics, fd_form, fd_candidates) = if request.forward_dynamics {
+    let (forward_dynamics, fd_form, fd_candidates) = if request.contains(Function::ForwardDynamics)
+    {
         let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
         let aba = lower("udot", &ev.aba(&k, &drive, &fext));
         let lambda = ev.speed_parents();
@@ -313,7 +279,7 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         (None, FdForm::Aba, Vec::new())
     };
 
-    let mass_matrix = (request.mass_matrix).then(|| {
+    let mass_matrix = request.contains(Function::MassMatrix).then(|| {
         let m = mass.get_or_insert_with(crba).clone();
         let names: Vec<String> = (0..nu)
             .flat_map(|i| (0..=i).map(move |j| format!("m_{i}_{j}")))
@@ -326,20 +292,20 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         cx.lower(&outs, opts)
     });
     let bias_program = request
-        .bias
+        .contains(Function::Bias)
         .then(|| lower("b", &bias.get_or_insert_with(rnea_bias).clone()));
-    let inverse_dynamics = request.inverse_dynamics.then(|| {
+    let inverse_dynamics = request.contains(Function::InverseDynamics).then(|| {
         let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
         let (t, _) = ev.rnea(&k, &ud, &fext);
         let tau: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
         lower("tau", &tau)
     });
-    let energy = request.energy.then(|| {
+    let energy = request.contains(Function::Energy).then(|| {
         let kinetic = ev.kinetic_energy(&k);
         let potential = ev.gravity_potential(&k) + spring_energy + joint_spring_energy;
         cx.lower(&[("kinetic", kinetic), ("potential", potential)], opts)
     });
-    let momentum = request.momentum.then(|| {
+    let momentum = request.contains(Function::Momentum).then(|| {
         let h = ev.momentum(&k);
         let outs = [
             ("lx", h.n.0[0]),
@@ -365,8 +331,8 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         .any(|o| matches!(o, OutputKind::JointReaction(_)));
     let fext_outputs = if reactions && !constraint_names.is_empty() {
         let lambda: Vec<Expr> = (0..constraint_names.len())
-            .map(|i| cx.input(&format!("{MULTIPLIER}{i}")))
-            .collect::<Result<_, _>>()?;
+            .map(|i| cx.multiplier(i as u32))
+            .collect();
         let cuts = super::constraints::cut_joints(sys, &tree, &env)?;
         let loads = super::constraints::constraint_body_forces(
             &sys.constraints,
@@ -380,24 +346,70 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
     } else {
         fext.clone()
     };
-    let (outputs, jacobians) = outputs(sys, &cx, &ev, &tree, &k, &fext_outputs, opts)?;
+    let out = outputs(sys, &cx, &ev, &tree, &k, &fext_outputs, opts)?;
+    // The cut joints' reactions from the multipliers of their rows (the
+    // cut joints' equations come first).
+    let cuts = super::constraints::cut_joints(sys, &tree, &env)?;
+    let (cut_reactions, cut_joints) = if cuts.is_empty() {
+        (None, Vec::new())
+    } else {
+        let mut names = Vec::new();
+        let mut values = Vec::new();
+        let mut row = 0;
+        for c in &cuts {
+            let n = c.equations.len();
+            let lambda: Vec<Expr> = (row..row + n).map(|r| cx.multiplier(r as u32)).collect();
+            row += n;
+            let (f, m) = super::constraints::cut_reaction(&k, c, &lambda);
+            for (a, &e) in ["fx", "fy", "fz", "nx", "ny", "nz"]
+                .iter()
+                .zip(f.0.iter().chain(&m.0))
+            {
+                names.push(format!("{}_{a}", c.name));
+                values.push(e);
+            }
+        }
+        let outs: Vec<(&str, Expr<'_>)> = names.iter().map(String::as_str).zip(values).collect();
+        (
+            Some(cx.lower(&outs, opts)),
+            cuts.iter().map(|c| c.name.clone()).collect(),
+        )
+    };
+    let programs: BTreeMap<Function, Program> = [
+        (Function::Qdot, Some(qdot)),
+        (Function::ForwardDynamics, forward_dynamics),
+        (Function::MassMatrix, mass_matrix),
+        (Function::Bias, bias_program),
+        (Function::InverseDynamics, inverse_dynamics),
+        (Function::Energy, energy),
+        (Function::Momentum, momentum),
+        (Function::Outputs, out.outputs),
+        (Function::MarkerJacobians, out.jacobians),
+        (Function::Constraints, constraints),
+        (Function::CutJointReactions, cut_reactions),
+    ]
+    .into_iter()
+    .filter_map(|(f, p)| p.map(|p| (f, p)))
+    .collect();
     Ok(Formulation {
-        qdot,
-        forward_dynamics,
+        programs,
         fd_form,
         fd_candidates,
-        mass_matrix,
-        bias: bias_program,
-        inverse_dynamics,
-        energy,
-        momentum,
-        outputs,
-        jacobians,
-        constraints,
         constraint_names,
         n_holonomic,
+        output_names: out.names,
+        jacobian_rows: out.jacobian_rows,
+        cut_joints,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The programs of the outputs and marker Jacobians, with their names.
+struct OutputPrograms {
+    outputs: Option<Program>,
+    jacobians: Option<Program>,
+    names: Vec<String>,
+    jacobian_rows: Vec<String>,
 }
 
 /// Programs for the model's requested outputs and marker Jacobians.
@@ -409,15 +421,21 @@ fn outputs<'cx>(
     k: &Kinematics<Expr<'cx>>,
     fext: &[Force<Expr<'cx>>],
     opts: LowerOptions,
-) -> Result<(Option<Program>, Option<Program>), FormulateError> {
+) -> Result<OutputPrograms, FormulateError> {
     if sys.outputs.is_empty() {
-        return Ok((None, None));
+        return Ok(OutputPrograms {
+            outputs: None,
+            jacobians: None,
+            names: Vec::new(),
+            jacobian_rows: Vec::new(),
+        });
     }
     let low = super::tree::Lowering::new(ev.env);
     let mut names: Vec<String> = Vec::new();
     let mut values: Vec<Expr<'cx>> = Vec::new();
     let mut jac_names: Vec<String> = Vec::new();
     let mut jac_values: Vec<Expr<'cx>> = Vec::new();
+    let mut jac_rows: Vec<String> = Vec::new();
     let mut reactions: Option<Vec<Force<Expr<'cx>>>> = None;
     let axes = ["x", "y", "z"];
     for out in &sys.outputs {
@@ -433,6 +451,7 @@ fn outputs<'cx>(
                         values.push(e);
                     }
                     for (a, &e) in axes.iter().zip(&v.0) {
+                        jac_rows.push(format!("{tag}_{a}"));
                         for kk in 0..tree.nu {
                             jac_names.push(format!("J_{tag}_{a}_{kk}"));
                             jac_values.push(cx.diff(e, cx.u(kk as u32)));
@@ -486,7 +505,12 @@ fn outputs<'cx>(
             cx.lower(&outs, opts)
         })
     };
-    Ok((lower(&names, &values), lower(&jac_names, &jac_values)))
+    Ok(OutputPrograms {
+        outputs: lower(&names, &values),
+        jacobians: lower(&jac_names, &jac_values),
+        names,
+        jacobian_rows: jac_rows,
+    })
 }
 
 /// `Φ`, `Φ̇`, `γ` and `J` of the cut joints and the model's constraints

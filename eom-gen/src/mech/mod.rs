@@ -13,7 +13,7 @@ pub mod spatial;
 pub mod tree;
 
 pub use dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
-pub use formulate::{FdForm, Formulation, Request, formulate};
+pub use formulate::{FdForm, Formulation, formulate};
 pub use joint::JointModel;
 pub use numeric::Numeric;
 pub use spatial::{Force, Motion, Pose, RigidInertia};

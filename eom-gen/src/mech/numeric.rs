@@ -18,20 +18,8 @@ pub struct Numeric {
     coordinate_names: Vec<String>,
 }
 
-/// The result of [`Numeric::assemble`].
-#[derive(Clone, Debug, PartialEq)]
-pub struct Assembly {
-    /// Positions satisfying the closure conditions.
-    pub q: Vec<f64>,
-    /// Speeds satisfying their time derivative.
-    pub u: Vec<f64>,
-    /// `max |Φ|` at `q`.
-    pub residual: f64,
-    /// `max |J u + Φ_t|` at `(q, u)`.
-    pub velocity_residual: f64,
-    /// Newton iterations used.
-    pub iterations: usize,
-}
+/// The result of [`Numeric::assemble`]: the runtime's assembly.
+pub use eom_sim::constrained::Assembly;
 
 /// The rank of the constraint Jacobian and what it implies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -403,79 +391,13 @@ impl Numeric {
         Ok(rate)
     }
 
-    /// Minimum-norm least-squares solution of `J x = r` (SVD; redundant
-    /// closure equations, as in Bricard's loop, are handled by the rank
-    /// cut-off 1e-10 relative to the largest singular value).
-    fn min_norm_solve(j: &[Vec<f64>], r: &[f64], n: usize) -> Vec<f64> {
-        if j.is_empty() {
-            return vec![0.0; n];
-        }
-        let m = nalgebra::DMatrix::from_fn(j.len(), n, |a, b| j[a][b]);
-        let svd = m.svd(true, true);
-        let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
-        let rhs = nalgebra::DVector::from_column_slice(r);
-        match svd.solve(&rhs, 1e-10 * largest.max(1e-300)) {
-            Ok(x) => x.iter().copied().collect(),
-            Err(_) => vec![0.0; n],
-        }
-    }
-
-    /// Assembly (Wittenburg 5.6; Haug 1989 ch. 7): from an initial guess,
-    /// Newton's method with backtracking on `max |Φ|` moves the positions
-    /// onto `Φ(q, t) = 0` along `q̇ = N(q) Δu` with minimum-norm `Δu`; then
-    /// the speeds are projected onto `J u + Φ_t = 0` with the smallest
-    /// change. Quaternions stay unit.
+    /// Assembly (Wittenburg 5.6; Haug 1989 ch. 7) with the reference
+    /// algorithms: the runtime's [`eom_sim::constrained::assemble`] on
+    /// these `f64` closure conditions.
     pub fn assemble(&self, q0: &[f64], u0: &[f64], t: f64) -> Result<Assembly, MechError> {
-        let norm = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let nu = self.tree.nu;
-        let mut q = q0.to_vec();
-        self.normalize(&mut q);
-        let mut phi = self.constraints(&q, t)?;
-        let mut iterations = 0;
-        while norm(&phi) > 1e-13 && iterations < 50 {
-            iterations += 1;
-            let mut j = self.constraint_jacobian(&q, t)?;
-            j.truncate(phi.len());
-            let minus_phi: Vec<f64> = phi.iter().map(|x| -x).collect();
-            let du = Self::min_norm_solve(&j, &minus_phi, nu);
-            let dq = self.qdot(&q, &du);
-            let mut step = 1.0;
-            let mut improved = false;
-            while step > 1e-6 {
-                let mut trial: Vec<f64> = q.iter().zip(&dq).map(|(q, d)| q + step * d).collect();
-                self.normalize(&mut trial);
-                let p = self.constraints(&trial, t)?;
-                if norm(&p) < norm(&phi) {
-                    q = trial;
-                    phi = p;
-                    improved = true;
-                    break;
-                }
-                step /= 2.0;
-            }
-            if !improved {
-                break;
-            }
-        }
-        let j = self.constraint_jacobian(&q, t)?;
-        let phi_t = self.constraint_rate(&q, t)?;
-        let violation: Vec<f64> = (0..j.len())
-            .map(|i| -(j[i].iter().zip(u0).map(|(a, b)| a * b).sum::<f64>() + phi_t[i]))
-            .collect();
-        let du = Self::min_norm_solve(&j, &violation, nu);
-        let u: Vec<f64> = u0.iter().zip(&du).map(|(u, d)| u + d).collect();
-        let velocity_residual = norm(
-            &(0..j.len())
-                .map(|i| j[i].iter().zip(&u).map(|(a, b)| a * b).sum::<f64>() + phi_t[i])
-                .collect::<Vec<f64>>(),
-        );
-        Ok(Assembly {
-            residual: norm(&phi),
-            q,
-            u,
-            velocity_residual,
-            iterations,
-        })
+        // Surface a mechanics error here rather than as NaN inside.
+        self.constraints(q0, t)?;
+        Ok(eom_sim::constrained::assemble(self, q0, u0, t))
     }
 
     /// Normalises the unit quaternions of `q`.
@@ -491,5 +413,51 @@ impl Numeric {
                 }
             }
         }
+    }
+}
+
+/// The reference algorithms as the runtime's assembly sees them: `Φ`,
+/// `Φ̇ = J u + Φ_t` and `J` (central differences), no `γ`.
+impl eom_sim::constrained::Assemble for Numeric {
+    fn speeds(&self) -> usize {
+        self.tree.nu
+    }
+    fn equations(&self) -> usize {
+        self.cuts.iter().map(|c| c.equations.len()).sum::<usize>()
+            + self
+                .user(&vec![0.0; self.tree.nq], &vec![0.0; self.tree.nu], 0.0)
+                .map_or(0, |(h, nh)| h.len() + nh.len())
+    }
+    fn holonomic(&self) -> usize {
+        self.constraints(&vec![0.0; self.tree.nq], 0.0)
+            .map_or(0, |phi| phi.len())
+    }
+    fn rates(&self, q: &[f64], u: &[f64], qdot: &mut [f64]) {
+        qdot.iter_mut()
+            .zip(self.qdot(q, u))
+            .for_each(|(d, s)| *d = s);
+    }
+    fn closure(&self, t: f64, q: &[f64], u: &[f64], c: &mut eom_sim::ConstraintValues) {
+        let nan = |n: usize| vec![f64::NAN; n];
+        let phi = self.constraints(q, t).unwrap_or_else(|_| nan(c.phi.len()));
+        let j = self.constraint_jacobian(q, t).unwrap_or_default();
+        let rate = self.constraint_rate(q, t).unwrap_or_else(|_| nan(j.len()));
+        for (i, row) in j.iter().enumerate().take(c.jacobian.nrows()) {
+            for (k, v) in row.iter().enumerate().take(c.jacobian.ncols()) {
+                c.jacobian[(i, k)] = *v;
+            }
+            let ju: f64 = row.iter().zip(u).map(|(a, b)| a * b).sum();
+            c.phidot[i] = ju + rate.get(i).copied().unwrap_or(f64::NAN);
+        }
+        for (d, s) in c
+            .phi
+            .iter_mut()
+            .zip(phi.iter().chain(std::iter::repeat(&0.0)))
+        {
+            *d = *s;
+        }
+    }
+    fn unit_quaternions(&self, q: &mut [f64]) {
+        self.normalize(q);
     }
 }

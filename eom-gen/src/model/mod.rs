@@ -49,10 +49,12 @@ impl Checked {
 
     /// The functions to generate symbolically: the scene's `functions`
     /// (completed by what cannot be derived), else all of them.
-    pub fn request(&self) -> crate::mech::Request {
+    pub fn request(&self) -> crate::functions::FunctionSet {
         self.scene
             .as_ref()
-            .map_or_else(crate::mech::Request::default, |s| s.spec.request())
+            .map_or_else(crate::functions::FunctionSet::all_requested, |s| {
+                s.spec.request()
+            })
     }
 
     /// The text the generated code is derived from, for its content hash:

@@ -15,6 +15,8 @@ use super::expr::Ast;
 use super::locate::{self, Node, Seg, string_contents_start};
 use super::spec::{Num, Output};
 use super::{Checked, ron_diagnostic, ron_options};
+pub use crate::functions::Function;
+use crate::functions::{FunctionSet, When};
 use crate::graph::JointId;
 use crate::system::{
     ConstraintKind, ForceElement, JointType, Motion, OutputKind, Parameter, Quantity, System,
@@ -53,44 +55,15 @@ pub struct SceneSpec {
     pub functions: Option<Vec<Function>>,
 }
 
-/// A function of the generated model that a scene can ask to be generated
-/// symbolically (`functions`). `q̇`, forward dynamics, energy and momentum
-/// cannot be computed from the others and are always generated (listing
-/// them is allowed); the mass matrix and the bias are derived from inverse
-/// dynamics when left out, and inverse dynamics from them.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-pub enum Function {
-    /// `u̇ = FD(q, u, t, τ)` (always generated).
-    ForwardDynamics,
-    /// `M(q)`; left out: column `i` is `ID(q, 0, e_i) − ID(q, 0, 0)`.
-    MassMatrix,
-    /// `b(q, u, t)`; left out: `ID(q, u, 0)`.
-    Bias,
-    /// `τ = ID(q, u, u̇, t)`; left out: `M u̇ + b`.
-    InverseDynamics,
-    /// Kinetic and potential energy (always generated).
-    Energy,
-    /// Linear and angular momentum (always generated).
-    Momentum,
-}
-
 impl SceneSpec {
     /// What to formulate for this scene: the listed functions, and those
-    /// that cannot be derived.
-    pub fn request(&self) -> crate::mech::Request {
-        let Some(list) = &self.functions else {
-            return crate::mech::Request::default();
-        };
-        let has = |f: Function| list.contains(&f);
-        crate::mech::Request {
-            forward_dynamics: true,
-            mass_matrix: has(Function::MassMatrix),
-            bias: has(Function::Bias),
-            inverse_dynamics: has(Function::InverseDynamics),
-            energy: true,
-            momentum: true,
+    /// that cannot be derived (see [`crate::functions`]); without a list,
+    /// every function.
+    pub fn request(&self) -> FunctionSet {
+        match &self.functions {
+            None => FunctionSet::all_requested(),
+            Some(list) => list.iter().copied().collect::<FunctionSet>().derivable(),
         }
-        .derivable()
     }
 }
 
@@ -316,6 +289,17 @@ impl Ctx<'_> {
                     &[f("functions"), Seg::Index(k)],
                     format!("function `{func:?}` is listed twice"),
                     "remove one of them",
+                );
+            }
+        }
+        for (k, func) in list.iter().enumerate() {
+            if func.entry().when != When::Requested {
+                let choices: Vec<String> =
+                    Function::selectable().map(|f| format!("`{f:?}`")).collect();
+                self.error(
+                    &[f("functions"), Seg::Index(k)],
+                    format!("function `{func:?}` is not chosen by a scene: it is generated whenever the model needs it"),
+                    format!("list only {}", choices.join(", ")),
                 );
             }
         }

@@ -422,6 +422,14 @@ impl Arena {
     pub fn ud(&mut self, i: u32) -> Id {
         self.indexed(SymKind::SpeedRate(i))
     }
+    /// Extra generalised force `τ_i`.
+    pub fn tau(&mut self, i: u32) -> Id {
+        self.indexed(SymKind::Tau(i))
+    }
+    /// Constraint multiplier `λ_i`.
+    pub fn multiplier(&mut self, i: u32) -> Id {
+        self.indexed(SymKind::Multiplier(i))
+    }
     /// Time `t`.
     pub fn t(&mut self) -> Id {
         self.indexed(SymKind::Time)

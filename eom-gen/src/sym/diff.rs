@@ -196,7 +196,9 @@ impl TimeDerivative {
                 SymKind::Coord(i) => a.qd(i),
                 SymKind::Speed(i) => a.ud(i),
                 SymKind::Time => a.num_node(Num::ONE),
-                SymKind::Param | SymKind::Input => a.num_node(Num::ZERO),
+                SymKind::Param | SymKind::Input | SymKind::Tau(_) | SymKind::Multiplier(_) => {
+                    a.num_node(Num::ZERO)
+                }
                 SymKind::CoordRate(_) | SymKind::SpeedRate(_) => {
                     return Err(SymError::NoRate(a.symbol(s).name.clone()));
                 }

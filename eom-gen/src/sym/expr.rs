@@ -105,6 +105,16 @@ impl Context {
         let id = self.arena_mut().ud(i);
         self.expr(id)
     }
+    /// Extra generalised force `τ_i`.
+    pub fn tau(&self, i: u32) -> Expr<'_> {
+        let id = self.arena_mut().tau(i);
+        self.expr(id)
+    }
+    /// Constraint multiplier `λ_i`.
+    pub fn multiplier(&self, i: u32) -> Expr<'_> {
+        let id = self.arena_mut().multiplier(i);
+        self.expr(id)
+    }
     /// Time `t`.
     pub fn t(&self) -> Expr<'_> {
         let id = self.arena_mut().t();

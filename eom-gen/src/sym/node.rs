@@ -48,6 +48,10 @@ pub enum SymKind {
     CoordRate(u32),
     /// Speed rate `u̇_i` (printed `ud_i`).
     SpeedRate(u32),
+    /// Extra generalised force `τ_i` on speed `i` (printed `tau_i`).
+    Tau(u32),
+    /// Constraint multiplier `λ_i` (printed `λ_i`).
+    Multiplier(u32),
 }
 
 /// A named variable: a leaf of the expression graph.
@@ -70,11 +74,14 @@ impl Symbol {
             SymKind::Speed(i) => Some(format!("u{i}")),
             SymKind::CoordRate(i) => Some(format!("qd{i}")),
             SymKind::SpeedRate(i) => Some(format!("ud{i}")),
+            SymKind::Tau(i) => Some(format!("tau{i}")),
+            SymKind::Multiplier(i) => Some(format!("λ{i}")),
         }
     }
 
     /// The kind implied by a name under the naming convention: `t`, `q<i>`,
-    /// `u<i>`, `qd<i>`, `ud<i>`; anything else is a parameter.
+    /// `u<i>`, `qd<i>`, `ud<i>`, `tau<i>`, `λ<i>`; anything else is a
+    /// parameter.
     pub fn kind_from_name(name: &str) -> SymKind {
         let idx = |prefix: &str| -> Option<u32> {
             let rest = name.strip_prefix(prefix)?;
@@ -96,6 +103,10 @@ impl Symbol {
             SymKind::Coord(i)
         } else if let Some(i) = idx("u") {
             SymKind::Speed(i)
+        } else if let Some(i) = idx("tau") {
+            SymKind::Tau(i)
+        } else if let Some(i) = idx("λ") {
+            SymKind::Multiplier(i)
         } else {
             SymKind::Param
         }

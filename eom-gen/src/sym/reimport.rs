@@ -23,6 +23,8 @@ impl Arena {
             SymKind::Speed(i) => self.u(i),
             SymKind::CoordRate(i) => self.qd(i),
             SymKind::SpeedRate(i) => self.ud(i),
+            SymKind::Tau(i) => self.tau(i),
+            SymKind::Multiplier(i) => self.multiplier(i),
         })
     }
 }

@@ -1,18 +1,16 @@
-//! Choosing an integrator by name, as `eom-gen simulate --integrator` does.
+//! Running the integrator an [`Integrator`] names.
 
 use super::driver::{Solution, SolveOptions, integrate};
 use super::system::OdeSystem;
+use crate::run::Integrator;
 use crate::{Dop853, Dopri5, Euler, ImplicitMidpoint, Radau5, Rk4};
-
-/// The integrators [`solve`] knows, by name.
-pub const INTEGRATORS: [&str; 6] = ["euler", "rk4", "midpoint", "dopri5", "dop853", "radau5"];
 
 /// How to integrate: method name, tolerances (adaptive methods), step
 /// (fixed-step methods) and RADAU5's DAE index variables.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
-    /// One of [`INTEGRATORS`].
-    pub integrator: String,
+    /// The integrator.
+    pub integrator: Integrator,
     /// Relative tolerance.
     pub rtol: f64,
     /// Absolute tolerance.
@@ -23,8 +21,7 @@ pub struct Settings {
     pub index_vars: (usize, usize),
 }
 
-/// Integrates `sys` from `(t0, y0)` to `t_end` with the integrator named in
-/// `s`; `None` for an unknown name.
+/// Integrates `sys` from `(t0, y0)` to `t_end` with the integrator of `s`.
 pub fn solve<const N: usize, S: OdeSystem<N>>(
     s: &Settings,
     sys: &S,
@@ -32,11 +29,11 @@ pub fn solve<const N: usize, S: OdeSystem<N>>(
     y0: [f64; N],
     t_end: f64,
     opts: &SolveOptions,
-) -> Option<Solution<N>> {
-    Some(match s.integrator.as_str() {
-        "euler" => integrate(&mut Euler::new(s.dt), sys, t0, y0, t_end, opts, &mut []),
-        "rk4" => integrate(&mut Rk4::new(s.dt), sys, t0, y0, t_end, opts, &mut []),
-        "midpoint" => integrate(
+) -> Solution<N> {
+    match s.integrator {
+        Integrator::Euler => integrate(&mut Euler::new(s.dt), sys, t0, y0, t_end, opts, &mut []),
+        Integrator::Rk4 => integrate(&mut Rk4::new(s.dt), sys, t0, y0, t_end, opts, &mut []),
+        Integrator::Midpoint => integrate(
             &mut ImplicitMidpoint::new(s.dt),
             sys,
             t0,
@@ -45,7 +42,7 @@ pub fn solve<const N: usize, S: OdeSystem<N>>(
             opts,
             &mut [],
         ),
-        "dopri5" => integrate(
+        Integrator::Dopri5 => integrate(
             &mut Dopri5::new(s.rtol, s.atol),
             sys,
             t0,
@@ -54,7 +51,7 @@ pub fn solve<const N: usize, S: OdeSystem<N>>(
             opts,
             &mut [],
         ),
-        "dop853" => integrate(
+        Integrator::Dop853 => integrate(
             &mut Dop853::new(s.rtol, s.atol),
             sys,
             t0,
@@ -63,11 +60,10 @@ pub fn solve<const N: usize, S: OdeSystem<N>>(
             opts,
             &mut [],
         ),
-        "radau5" => {
+        Integrator::Radau5 => {
             let mut r = Radau5::new(s.rtol, s.atol);
             (r.index2_vars, r.index3_vars) = s.index_vars;
             integrate(&mut r, sys, t0, y0, t_end, opts, &mut [])
         }
-        _ => return None,
-    })
+    }
 }
