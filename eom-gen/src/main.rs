@@ -69,7 +69,7 @@ enum Command {
         t_end: f64,
         /// rk4, dopri5, dop853, radau5, midpoint or euler.
         #[arg(long, default_value = "dopri5")]
-        integrator: Integrator,
+        integrator: String,
         /// Relative tolerance (adaptive methods).
         #[arg(long, default_value_t = 1e-8, allow_hyphen_values = true)]
         rtol: f64,
@@ -103,7 +103,7 @@ enum Command {
         /// coordinates from independent ones, Wehage–Haug) or `index3` (the
         /// index-3 DAE, with radau5).
         #[arg(long, default_value = "projection")]
-        constraints: Method,
+        constraints: String,
         /// Print one JSON object instead of the summary.
         #[arg(long)]
         json: bool,
@@ -147,11 +147,11 @@ enum Command {
         native: bool,
         /// Integrators to sweep, comma-separated (default rk4,dopri5,dop853,radau5).
         #[arg(long, value_delimiter = ',')]
-        integrators: Vec<Integrator>,
+        integrators: Vec<String>,
         /// Constraint methods to sweep for models with constraints
         /// (default projection,partitioning,baumgarte,index3).
         #[arg(long, value_delimiter = ',')]
-        constraints: Vec<Method>,
+        constraints: Vec<String>,
         /// End time, s (`--work-precision`; default 10).
         #[arg(long, allow_hyphen_values = true)]
         t_end: Option<f64>,
@@ -255,11 +255,12 @@ fn main() -> ExitCode {
                 min_total_s: min_time,
                 ..Default::default()
             };
+            let mut problems = Vec::new();
             if !integrators.is_empty() {
-                wp.integrators = integrators;
+                wp.integrators = parse_names(&integrators, &mut problems);
             }
             if !constraints.is_empty() {
-                wp.constraints = constraints;
+                wp.constraints = parse_names(&constraints, &mut problems);
             }
             if let Some(t) = t_end {
                 wp.t_end = t;
@@ -274,6 +275,17 @@ fn main() -> ExitCode {
                     eprintln!("error: --steps takes two numbers, N0,N1");
                     return ExitCode::from(2);
                 }
+            }
+            if work_precision || suite {
+                if let Err(e) = eom_gen::work_precision::validate(&wp) {
+                    problems.extend(e);
+                }
+            }
+            if !problems.is_empty() {
+                for p in problems {
+                    eprintln!("error: {p}");
+                }
+                return ExitCode::from(2);
             }
             if suite {
                 if model.is_some() || per_call || work_precision {
@@ -340,6 +352,19 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
+            let mut problems = Vec::new();
+            let integrator = parse_names(&[integrator], &mut problems)
+                .pop()
+                .unwrap_or(Integrator::Dopri5);
+            let constraints = parse_names(&[constraints], &mut problems)
+                .pop()
+                .unwrap_or(Method::Projection);
+            if !problems.is_empty() {
+                for p in problems {
+                    eprintln!("error: {p}");
+                }
+                return ExitCode::from(2);
+            }
             let o = RunOptions {
                 integrator,
                 rtol,
@@ -781,6 +806,23 @@ fn evaluation_json(
     }
     out.push(("functions".into(), serde_json::Value::Object(all)));
     out
+}
+
+/// The names parsed (integrators, constraint methods); each unknown one
+/// is a problem.
+fn parse_names<T: std::str::FromStr>(names: &[String], problems: &mut Vec<String>) -> Vec<T>
+where
+    T::Err: std::fmt::Display,
+{
+    names
+        .iter()
+        .filter_map(|n| {
+            n.trim()
+                .parse()
+                .map_err(|e: T::Err| problems.push(e.to_string()))
+                .ok()
+        })
+        .collect()
 }
 
 /// A run that did not reach its end time: exit status 3.
