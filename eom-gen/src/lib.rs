@@ -8,7 +8,9 @@
 pub mod bench;
 pub mod builder;
 pub mod compiled;
+pub mod diag;
 pub mod emit;
+pub mod expr;
 pub mod generate;
 pub mod graph;
 pub mod interpret;

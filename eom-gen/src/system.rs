@@ -8,8 +8,8 @@
 //! problem).
 
 use crate::graph::{BodyId, Graph, JointId};
-use crate::model::diag::Span;
-use crate::model::expr::Ast;
+use crate::diag::Span;
+use crate::expr::Ast;
 use nalgebra::{Matrix3, Vector3};
 
 /// An expression from the model with its value at the default parameters.

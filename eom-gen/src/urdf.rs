@@ -32,8 +32,8 @@
 //! several roots, bad numbers, inertia that is not positive definite, and
 //! massless links that move.
 
-use crate::model::diag::did_you_mean;
-use crate::model::expr::Func;
+use crate::diag::did_you_mean;
+use crate::expr::Func;
 use crate::model::spec::{
     Body, Constraint, Force, Frame, Inertia, Joint, JointKind, Num, Orientation, Spec, V3,
 };

@@ -68,7 +68,7 @@ pub enum GenForce<S> {
         /// Speed index.
         u: usize,
         /// The expression.
-        expr: crate::model::expr::Ast,
+        expr: crate::expr::Ast,
     },
     /// A runtime input.
     Input {
@@ -231,7 +231,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             ),
             Coords::Prescribed { q, qd, qdd } => {
                 let tl = self.time_lookup(st.t);
-                let lower = |v: &Vec<crate::model::expr::Ast>| -> Result<Vec<S>, MechError> {
+                let lower = |v: &Vec<crate::expr::Ast>| -> Result<Vec<S>, MechError> {
                     v.iter().map(|a| low.expr(a, &tl)).collect()
                 };
                 (lower(q)?, lower(qd)?, Some(lower(qdd)?))

@@ -6,14 +6,16 @@
 //! `file:line:col`. The [`builder`] constructs the same [`Spec`] in code.
 
 pub mod builder;
-pub mod diag;
-pub mod expr;
 pub mod locate;
 pub mod rotation;
 pub mod scene;
 pub mod spec;
 mod validate;
 
+// The diagnostics and the expression language sit below the pipeline
+// (the validated `System` and the formulation use them too); they are
+// re-exported here under their old paths.
+pub use crate::{diag, expr};
 pub use diag::{Diagnostic, Report, Severity, Source, Span};
 pub use spec::Spec;
 pub use validate::{Gap, closure_gaps, initial_poses};

@@ -110,8 +110,8 @@ pub fn orthonormality(r: &Matrix3<f64>) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::diag::Span;
-    use crate::model::expr::Ast;
+    use crate::diag::Span;
+    use crate::expr::Ast;
     use crate::system::{Axis, Quantity};
     use std::f64::consts::FRAC_PI_2;
 

@@ -10,8 +10,8 @@
 //! all see only what the scene asks for. The format is in
 //! `docs/model-format.md` ("Scenes").
 
-use super::diag::{Diagnostic, Report, Source, Span, did_you_mean, list_names};
-use super::expr::Ast;
+use crate::diag::{Diagnostic, Report, Source, Span, did_you_mean, list_names};
+use crate::expr::Ast;
 use super::locate::{self, Node, Seg, string_contents_start};
 use super::spec::{Num, Output};
 use super::{Checked, ron_diagnostic, ron_options};

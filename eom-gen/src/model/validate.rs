@@ -5,8 +5,8 @@
 //! and says what would be right. Checks go on after a failure wherever the
 //! remaining ones still make sense, so one run reports everything.
 
-use super::diag::{Diagnostic, Source, Span, did_you_mean, list_names};
-use super::expr::{Ast, EvalError, Func};
+use crate::diag::{Diagnostic, Source, Span, did_you_mean, list_names};
+use crate::expr::{Ast, EvalError, Func};
 use super::locate::{Node, Seg, string_contents_start};
 use super::rotation::{self, Pose};
 use super::spec::{self, Num, Orientation, Spec, V3};

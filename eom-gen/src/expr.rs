@@ -13,6 +13,10 @@
 //! ```
 //! Names are parameters, coordinates, `t` or the constant `pi`, depending
 //! on where the expression stands; functions are listed in [`Func`].
+//!
+//! A leaf module below the pipeline: the validator parses the expressions,
+//! the validated [`crate::System`] keeps them as [`Ast`]s, and the
+//! formulation lowers them to scalars.
 
 use std::fmt;
 
@@ -544,7 +548,7 @@ impl Parser<'_> {
                     let names: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
                     return Err(self.error(
                         format!("unknown function `{name}`"),
-                        format!("functions are {}", super::diag::list_names(names)),
+                        format!("functions are {}", crate::diag::list_names(names)),
                     ));
                 };
                 self.i += 1;
