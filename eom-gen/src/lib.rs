@@ -21,15 +21,16 @@ pub mod summary;
 pub mod sym;
 pub mod system;
 pub mod testkit;
-pub mod urdf;
 pub mod work_precision;
 
 pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;
 pub use generate::{
-    GenerateError, Generated, generate, generate_file, generate_tokens, generate_tokens_in,
-    generate_with,
+    GenerateError, Generated, generate, generate_checked, generate_file, generate_file_with,
+    generate_tokens, generate_tokens_checked, generate_tokens_in, generate_with,
 };
-pub use model::{Checked, Diagnostic, Report, Source, Spec, check, check_file};
+pub use model::{
+    Checked, Diagnostic, Format, Loaded, Report, Source, Spec, check, check_file, load, urdf,
+};
 pub use system::System;
 pub use urdf::{Import, import_file, load_model};

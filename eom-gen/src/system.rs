@@ -7,9 +7,9 @@
 //! model file (so later stages can still point at the line that caused a
 //! problem).
 
-use crate::graph::{BodyId, Graph, JointId};
 use crate::diag::Span;
 use crate::expr::Ast;
+use crate::graph::{BodyId, Graph, JointId};
 use nalgebra::{Matrix3, Vector3};
 
 /// An expression from the model with its value at the default parameters.

@@ -11,8 +11,8 @@
 
 use super::joint::JointModel;
 use super::spatial::{Pose, RigidInertia};
-use crate::graph::{BodyId, JointId};
 use crate::expr::{Ast, BinOp, Func};
+use crate::graph::{BodyId, JointId};
 use crate::sym::{Mat3, Scalar, Vec3};
 use crate::system::{
     FrameInfo, JointType, Motion as JointMotion, Quantity, Rotation, System, Vec3Q,
