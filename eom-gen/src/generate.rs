@@ -2,6 +2,7 @@
 //! → formatted Rust source.
 
 use crate::emit;
+use crate::mech::formulate::FormulateError;
 use crate::mech::{Formulation, formulate};
 use crate::model::{Checked, Report, Source, check, check_file, check_in, urdf};
 use std::fmt;
@@ -24,23 +25,36 @@ pub enum GenerateError {
     Model(Report),
     /// The model is valid but cannot be formulated.
     Formulate {
-        /// Model path.
-        path: String,
+        /// The error as a diagnostic in the model file (`file:line:col`).
+        report: Report,
         /// What went wrong.
-        error: crate::mech::formulate::FormulateError,
+        error: FormulateError,
     },
 }
 
-impl fmt::Display for GenerateError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl GenerateError {
+    /// Every diagnostic, with the source they point into.
+    pub fn report(&self) -> &Report {
         match self {
-            GenerateError::Model(r) => write!(f, "{r}"),
-            GenerateError::Formulate { path, error } => write!(f, "{path}: error: {error}"),
+            GenerateError::Model(report) | GenerateError::Formulate { report, .. } => report,
         }
     }
 }
 
-impl std::error::Error for GenerateError {}
+impl fmt::Display for GenerateError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.report())
+    }
+}
+
+impl std::error::Error for GenerateError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            GenerateError::Model(r) => Some(r),
+            GenerateError::Formulate { error, .. } => Some(error),
+        }
+    }
+}
 
 /// Generates the Rust source of the model in `src` with default options.
 pub fn generate(src: &Source) -> Result<Generated, GenerateError> {
@@ -135,12 +149,13 @@ pub fn generate_tokens_checked(
 }
 
 fn formulate_checked(checked: &Checked) -> Result<Formulation, GenerateError> {
+    // Spans in the system point into the model's source (for a scene, its
+    // model; for a URDF, the converted text).
     formulate(&checked.system, checked.request()).map_err(|error| GenerateError::Formulate {
-        path: checked
-            .scene
-            .as_ref()
-            .map_or(&checked.source.path, |s| &s.source.path)
-            .clone(),
+        report: Report {
+            source: checked.source.clone(),
+            diagnostics: vec![error.diagnostic()],
+        },
         error,
     })
 }

@@ -371,7 +371,7 @@ pub fn user_constraints<S: Scalar>(
     for c in constraints {
         match &c.kind {
             ConstraintKind::Holonomic(expr) => {
-                holonomic.push((c.name.clone(), low.expr(&expr.expr, &lookup)?));
+                holonomic.push((c.name.clone(), low.expr(&expr.expr, expr.span, &lookup)?));
             }
             ConstraintKind::RollingDisk {
                 body,

@@ -10,8 +10,9 @@
 use super::dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
 use super::spatial::Force;
 use super::tree::{Env, MechError, NumericEnv, TreeModel};
+use crate::diag::{Diagnostic, Span};
 use crate::sym::{Context, Expr, LowerOptions, OpCount, Program, Scalar, SymError};
-use crate::system::{OutputKind, System};
+use crate::system::{ForceElement, OutputKind, System};
 use std::fmt;
 use std::time::Instant;
 
@@ -88,22 +89,59 @@ impl Request {
 /// Why formulation failed.
 #[derive(Debug)]
 pub enum FormulateError {
-    /// A mechanics problem.
+    /// A mechanics problem (with its span).
     Mech(MechError),
-    /// A symbol could not be created (a parameter named like a state symbol).
-    Sym(SymError),
+    /// A symbol could not be created (a parameter or input named like a
+    /// state symbol).
+    Sym {
+        /// What went wrong.
+        error: SymError,
+        /// Where the name is defined in the model file, when known.
+        span: Option<Span>,
+    },
+}
+
+impl FormulateError {
+    /// Where in the model file, when known.
+    pub fn span(&self) -> Option<Span> {
+        match self {
+            FormulateError::Mech(e) => Some(e.span()),
+            FormulateError::Sym { span, .. } => *span,
+        }
+    }
+
+    /// The error as a diagnostic at its span (without one: about the file).
+    pub fn diagnostic(&self) -> Diagnostic {
+        match self {
+            FormulateError::Mech(e) => e.diagnostic(),
+            FormulateError::Sym { error, span } => {
+                let d = match span {
+                    Some(s) => Diagnostic::error(*s, error.to_string()),
+                    None => Diagnostic::file_error(error.to_string()),
+                };
+                d.with_help("rename it in the model file")
+            }
+        }
+    }
 }
 
 impl fmt::Display for FormulateError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             FormulateError::Mech(e) => write!(f, "{e}"),
-            FormulateError::Sym(e) => write!(f, "{e:?}"),
+            FormulateError::Sym { error, .. } => write!(f, "{error}"),
         }
     }
 }
 
-impl std::error::Error for FormulateError {}
+impl std::error::Error for FormulateError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            FormulateError::Mech(e) => Some(e),
+            FormulateError::Sym { error, .. } => Some(error),
+        }
+    }
+}
 
 impl From<MechError> for FormulateError {
     fn from(e: MechError) -> Self {
@@ -112,8 +150,8 @@ impl From<MechError> for FormulateError {
 }
 
 impl From<SymError> for FormulateError {
-    fn from(e: SymError) -> Self {
-        FormulateError::Sym(e)
+    fn from(error: SymError) -> Self {
+        FormulateError::Sym { error, span: None }
     }
 }
 
@@ -224,6 +262,14 @@ pub fn ltdl_flops(lambda: &[Option<usize>]) -> usize {
         .sum()
 }
 
+/// Where runtime input `k` is defined: its actuator.
+fn input_span(sys: &System, k: usize) -> Option<Span> {
+    sys.forces.iter().find_map(|f| match &f.element {
+        ForceElement::Actuator { inputs, .. } if inputs.contains(&k) => Some(f.span),
+        _ => None,
+    })
+}
+
 /// Builds the programs `request` asks for, completed by
 /// [`Request::derivable`]; programs not asked for are `None`. The mass
 /// matrix and bias are built symbolically only when asked for or when
@@ -237,7 +283,10 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
         numeric: NumericEnv::defaults(sys),
     };
     for p in sys.parameters.iter().filter(|p| p.tunable) {
-        cx.param(&p.name)?;
+        cx.param(&p.name).map_err(|error| FormulateError::Sym {
+            error,
+            span: Some(p.span),
+        })?;
     }
     let tree = TreeModel::new(sys, &env)?;
     let applied = Applied::new(sys, &tree, &env)?;
@@ -248,7 +297,13 @@ pub fn formulate(sys: &System, request: Request) -> Result<Formulation, Formulat
     let inputs: Vec<Expr> = sys
         .inputs
         .iter()
-        .map(|n| cx.input(n))
+        .enumerate()
+        .map(|(k, n)| {
+            cx.input(n).map_err(|error| FormulateError::Sym {
+                error,
+                span: input_span(sys, k),
+            })
+        })
         .collect::<Result<_, _>>()?;
     let tau: Vec<Expr> = (0..nu)
         .map(|i| cx.input(&format!("tau{i}")))

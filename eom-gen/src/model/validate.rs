@@ -445,6 +445,7 @@ impl Ctx<'_> {
                         name: p.name.clone(),
                         value,
                         tunable: p.tunable,
+                        span: self.span(&join(&path, &[f("name")])),
                     });
                 }
                 None => {
@@ -1311,6 +1312,7 @@ impl Ctx<'_> {
                 Some(element) => out.push(Force {
                     name: name.clone(),
                     element,
+                    span: self.span(&path),
                 }),
                 None => ok = false,
             }
@@ -1466,6 +1468,7 @@ impl Ctx<'_> {
                 Some(kind) => out.push(Constraint {
                     name: name.clone(),
                     kind,
+                    span: self.span(&path),
                 }),
                 None => ok = false,
             }
