@@ -143,6 +143,31 @@ pub enum EvalError {
     NotFinite,
 }
 
+impl fmt::Display for ParseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "at byte {}: {} ({})",
+            self.offset, self.message, self.help
+        )
+    }
+}
+
+impl std::error::Error for ParseError {}
+
+impl fmt::Display for EvalError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EvalError::Unknown(name, offset) => {
+                write!(f, "`{name}` (at byte {offset}) has no value here")
+            }
+            EvalError::NotFinite => write!(f, "the value is not a finite number"),
+        }
+    }
+}
+
+impl std::error::Error for EvalError {}
+
 impl Ast {
     /// Parses an expression.
     pub fn parse(text: &str) -> Result<Ast, ParseError> {

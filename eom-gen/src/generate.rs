@@ -28,7 +28,7 @@ pub enum GenerateError {
         /// The error as a diagnostic in the model file (`file:line:col`).
         report: Report,
         /// What went wrong.
-        error: FormulateError,
+        error: Box<FormulateError>,
     },
 }
 
@@ -51,7 +51,7 @@ impl std::error::Error for GenerateError {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
         match self {
             GenerateError::Model(r) => Some(r),
-            GenerateError::Formulate { error, .. } => Some(error),
+            GenerateError::Formulate { error, .. } => Some(error.as_ref()),
         }
     }
 }
@@ -156,6 +156,6 @@ fn formulate_checked(checked: &Checked) -> Result<Formulation, GenerateError> {
             source: checked.source.clone(),
             diagnostics: vec![error.diagnostic()],
         },
-        error,
+        error: Box::new(error),
     })
 }

@@ -1,9 +1,16 @@
 //! eom-gen: a symbolic equation-of-motion generator for multibody systems.
 //!
 //! The pipeline runs one way (see `DESIGN.md`):
-//! [`model`] (parse and check a RON file) → [`System`] (validated, with its
-//! [`graph`]: spanning tree and cut joints) → `mech` (kinematics and
-//! dynamics as [`sym`] expressions) → `emit` (Rust source).
+//! [`model`] (load a RON model, scene or URDF with [`load`], parse and
+//! check it) → [`System`] (validated, with its [`graph`]: spanning tree and
+//! cut joints) → [`mech`] (kinematics and dynamics as [`sym`] expressions)
+//! → [`emit`] (Rust source); [`generate`] runs it all.
+//!
+//! Each stage imports only the ones after it and the leaf modules below
+//! them all: [`diag`] (spans, diagnostics, reports) and [`expr`] (the
+//! arithmetic of model files). So [`System`] and [`mech`] never import
+//! [`model`], yet an error found while formulating still names its
+//! `file:line:col` ([`GenerateError`] renders a [`Report`]).
 
 pub mod bench;
 pub mod builder;
