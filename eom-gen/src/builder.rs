@@ -11,8 +11,7 @@
 //! and in the crate: `include!(concat!(env!("OUT_DIR"), "/double_pendulum.rs"));`
 //! (see `examples/build_rs`).
 
-use crate::urdf::load_model as load;
-use crate::{GenerateError, generate_with};
+use crate::{GenerateError, generate_file_with};
 use std::fmt;
 use std::path::PathBuf;
 
@@ -86,12 +85,11 @@ impl Builder {
         let mut written = Vec::new();
         for path in &self.models {
             println!("cargo:rerun-if-changed={path}");
-            let src = load(path).map_err(|r| BuildError::Generate(GenerateError::Model(r)))?;
             let opts = crate::EmitOptions {
                 type_name: None,
                 fma: self.fma,
             };
-            let g = generate_with(&src, &opts).map_err(BuildError::Generate)?;
+            let g = generate_file_with(path, &opts).map_err(BuildError::Generate)?;
             if let Some(scene) = &g.checked.scene {
                 println!("cargo:rerun-if-changed={}", scene.model_path.display());
             }

@@ -41,6 +41,21 @@ pub enum GraphError {
     SelfLoop(JointId),
 }
 
+impl std::fmt::Display for GraphError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            GraphError::Disconnected(b) => write!(f, "body {b} is not connected to ground"),
+            GraphError::OnlyReversed { body, joint } => write!(
+                f,
+                "body {body} is reached from ground only against the direction of joint {joint}"
+            ),
+            GraphError::SelfLoop(j) => write!(f, "joint {j} joins a body to itself"),
+        }
+    }
+}
+
+impl std::error::Error for GraphError {}
+
 /// The system graph with its spanning tree. Immutable once built.
 #[derive(Clone, Debug)]
 pub struct Graph {

@@ -1,14 +1,23 @@
 //! eom-gen: a symbolic equation-of-motion generator for multibody systems.
 //!
 //! The pipeline runs one way (see `DESIGN.md`):
-//! [`model`] (parse and check a RON file) → [`System`] (validated, with its
-//! [`graph`]: spanning tree and cut joints) → `mech` (kinematics and
-//! dynamics as [`sym`] expressions) → `emit` (Rust source).
+//! [`model`] (load a RON model, scene or URDF with [`load`], parse and
+//! check it) → [`System`] (validated, with its [`graph`]: spanning tree and
+//! cut joints) → [`mech`] (kinematics and dynamics as [`sym`] expressions)
+//! → [`emit`] (Rust source); [`generate`] runs it all.
+//!
+//! Each stage imports only the ones after it and the leaf modules below
+//! them all: [`diag`] (spans, diagnostics, reports) and [`expr`] (the
+//! arithmetic of model files). So [`System`] and [`mech`] never import
+//! [`model`], yet an error found while formulating still names its
+//! `file:line:col` ([`GenerateError`] renders a [`Report`]).
 
 pub mod bench;
 pub mod builder;
 pub mod compiled;
+pub mod diag;
 pub mod emit;
+pub mod expr;
 pub mod functions;
 pub mod generate;
 pub mod graph;
@@ -20,15 +29,16 @@ pub mod summary;
 pub mod sym;
 pub mod system;
 pub mod testkit;
-pub mod urdf;
 pub mod work_precision;
 
 pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;
 pub use generate::{
-    GenerateError, Generated, generate, generate_file, generate_tokens, generate_tokens_in,
-    generate_with,
+    GenerateError, Generated, generate, generate_checked, generate_file, generate_file_with,
+    generate_tokens, generate_tokens_checked, generate_tokens_in, generate_with,
 };
-pub use model::{Checked, Diagnostic, Report, Source, Spec, check, check_file};
+pub use model::{
+    Checked, Diagnostic, Format, Loaded, Report, Source, Spec, check, check_file, load, urdf,
+};
 pub use system::System;
 pub use urdf::{Import, import_file, load_model};

@@ -400,21 +400,13 @@ fn main() -> ExitCode {
 }
 
 fn check(path: &str, json: bool) -> ExitCode {
-    let mut notes = Vec::new();
-    let checked = if eom_gen::urdf::is_urdf(path) {
-        eom_gen::urdf::import_file(path).and_then(|i| {
-            notes = i.notes;
-            eom_gen::check(&i.source)
-        })
-    } else {
-        eom_gen::check_file(path)
-    };
-    match checked {
+    match eom_gen::check_file(path) {
         Ok(checked) => {
             eprint!("{}", checked.render_warnings());
+            let notes = checked.urdf_notes.clone().unwrap_or_default();
             if json {
                 let mut v = eom_gen::summary::json(&checked);
-                if eom_gen::urdf::is_urdf(path) {
+                if let Some(notes) = &checked.urdf_notes {
                     v["urdf_notes"] = serde_json::json!(notes);
                 }
                 if let Some(s) = &checked.scene {
@@ -576,10 +568,7 @@ fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
             type_name: None,
             fma,
         };
-        match eom_gen::urdf::load_model(path)
-            .map_err(eom_gen::GenerateError::Model)
-            .and_then(|src| eom_gen::generate_with(&src, &opts))
-        {
+        match eom_gen::generate_file_with(path, &opts) {
             Ok(g) => g,
             Err(e) => {
                 eprint!("{e}");

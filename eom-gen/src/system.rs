@@ -4,12 +4,17 @@
 //! number is finite, and the graph has a spanning tree. Quantities keep
 //! their expression (tunable parameters stay symbolic for the formulation
 //! stage), their value at the parameters' defaults, and their span in the
-//! model file (so later stages can still point at the line that caused a
-//! problem).
+//! model file; parameters, bodies, joints, forces and constraints keep the
+//! span of their definition (so later stages can still point at the line
+//! that caused a problem).
+//!
+//! Below the model in the pipeline: it uses only the leaf modules
+//! [`crate::diag`] (spans) and [`crate::expr`] (expressions) and the
+//! [`crate::graph`].
 
+use crate::diag::Span;
+use crate::expr::Ast;
 use crate::graph::{BodyId, Graph, JointId};
-use crate::model::diag::Span;
-use crate::model::expr::Ast;
 use nalgebra::{Matrix3, Vector3};
 
 /// An expression from the model with its value at the default parameters.
@@ -42,6 +47,8 @@ pub struct Parameter {
     pub value: Quantity,
     /// A runtime field (`true`) or inlined (`false`).
     pub tunable: bool,
+    /// Where its name is written.
+    pub span: Span,
 }
 
 /// An orientation as written, with its rotation matrix at the defaults.
@@ -274,6 +281,8 @@ pub struct Force {
     pub name: String,
     /// What it does.
     pub element: ForceElement,
+    /// Where it is defined.
+    pub span: Span,
 }
 
 /// A constraint that is not a joint.
@@ -302,6 +311,8 @@ pub struct Constraint {
     pub name: String,
     /// What it constrains.
     pub kind: ConstraintKind,
+    /// Where it is defined.
+    pub span: Span,
 }
 
 impl Constraint {

@@ -231,3 +231,57 @@ pin_scene!(
     "(joint: \"j1\", at: [\"l/3\"])" => "(joint: \"j2\", at: [\"L/3\"])",
     "fixed: [\"g\"]" => "fixed: [\"g\", \"m\", \"k\"]",
 );
+
+/// The rendered error of generating `BASE` with the edits: problems that
+/// only formulation finds.
+fn generate_error(edits: &[(&str, &str)]) -> String {
+    let mut text = BASE.to_string();
+    for (from, to) in edits {
+        assert!(
+            text.contains(from),
+            "test setup: `{from}` is not in the base model"
+        );
+        text = text.replacen(from, to, 1);
+    }
+    match eom_gen::generate(&Source::new("models/two_link.ron", text)) {
+        Ok(_) => panic!("the model generated, but should fail to formulate"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn formulation_error_names_the_axis_at_its_location() {
+    // Valid to the checker; joint axes are inlined, so formulation refuses.
+    let got = generate_error(&[
+        (
+            "(name: \"l\", value: 0.3),",
+            "(name: \"l\", value: 0.3),\n        (name: \"ay\", value: 1.0, tunable: true),",
+        ),
+        (
+            "Revolute(axis: (0, 1, 0))",
+            "Revolute(axis: (0, \"ay\", 0))",
+        ),
+    ]);
+    assert!(
+        got.starts_with("models/two_link.ron:17:47: error: the axis of joint `j2` depends on a tunable parameter"),
+        "got:\n{got}"
+    );
+    assert!(
+        got.contains("= help: make the parameters in the axis fixed"),
+        "got:\n{got}"
+    );
+}
+
+#[test]
+fn formulation_error_names_a_parameter_named_like_a_state_symbol() {
+    // `q7` is no coordinate of the model, but the generated code names its
+    // coordinates `q0`, `q1`, …: a tunable parameter cannot be called that.
+    let got = generate_error(&[(
+        "(name: \"l\", value: 0.3),",
+        "(name: \"l\", value: 0.3),\n        (name: \"q7\", value: 1.0, tunable: true),",
+    )]);
+    assert!(
+        got.starts_with("models/two_link.ron:9:16: error: name `q7` is reserved"),
+        "got:\n{got}"
+    );
+}

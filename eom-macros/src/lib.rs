@@ -4,8 +4,9 @@
 //! model errors become compile errors carrying the model's own
 //! `file:line:col` diagnostics. The expansion implements `eom_sim::Model`
 //! and `eom_sim::OdeSystem` on the struct, so the crate depends on `eom-sim`.
-//! A `.urdf` file is converted first (`eom_gen::urdf`); URDF errors carry the
-//! URDF's `file:line:col`. A scene (`.scene.ron`) is applied to its model
+//! The file goes through eom-gen's one loader (`eom_gen::model::check_in`):
+//! a `.urdf` file is converted first (URDF errors carry the URDF's
+//! `file:line:col`), a scene (`.scene.ron`) is applied to its model
 //! (relative to the scene), and both files are tracked.
 
 use proc_macro::TokenStream;
@@ -64,30 +65,23 @@ fn expand(attr: Tokens, item: &ItemStruct) -> syn::Result<Tokens> {
     let text = std::fs::read_to_string(&full).map_err(|e| {
         syn::Error::new_spanned(&args.path, format!("cannot read model `{rel}`: {e}\n  = help: the path is relative to the directory of the crate's Cargo.toml"))
     })?;
-    let mut src = eom_gen::Source::new(rel.clone(), text);
-    if eom_gen::urdf::is_urdf(&rel) {
-        src = eom_gen::urdf::convert(&src)
-            .map_err(|e| {
-                syn::Error::new_spanned(&args.path, format!("URDF `{rel}` is invalid:\n{e}"))
-            })?
-            .source;
-    }
+    // `eom_gen::model::check_in` tells a model, a scene and a URDF apart.
+    let src = eom_gen::Source::new(rel.clone(), text);
     let root = std::path::Path::new(&dir);
-    let tokens = eom_gen::generate_tokens_in(&src, root, &item.ident.to_string()).map_err(|e| {
+    let invalid = |e: &dyn std::fmt::Display| {
         syn::Error::new_spanned(&args.path, format!("model `{rel}` is invalid:\n{e}"))
-    })?;
+    };
+    let checked = eom_gen::model::check_in(&src, root).map_err(|e| invalid(&e))?;
+    let tokens = eom_gen::generate_tokens_checked(&checked, &item.ident.to_string())
+        .map_err(|e| invalid(&e))?;
     let tracked = full.display().to_string();
     // A scene's model is tracked too.
-    let model = eom_gen::model::scene::is_scene(&rel, &src.text)
-        .then(|| eom_gen::model::scene::parse(&src).ok())
-        .flatten()
-        .map(|s| {
-            let path = root.join(eom_gen::model::scene::model_path(&rel, &s.model));
-            let path = path.display().to_string();
-            quote!(
-                const _: &[u8] = include_bytes!(#path);
-            )
-        });
+    let model = checked.scene.as_ref().map(|s| {
+        let path = root.join(&s.model_path).display().to_string();
+        quote!(
+            const _: &[u8] = include_bytes!(#path);
+        )
+    });
     Ok(quote! {
         #tokens
         const _: &[u8] = include_bytes!(#tracked);

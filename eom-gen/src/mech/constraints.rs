@@ -29,7 +29,7 @@ use super::spatial::Pose;
 use super::tree::{Env, Lowering, MechError, TreeModel, snap};
 use crate::sym::{Scalar, Vec3};
 use crate::system::{JointType, System};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 /// A cut joint as the constraint equations see it.
 #[derive(Clone, Debug)]
@@ -158,7 +158,7 @@ pub fn cut_joints<S: Scalar>(
     env: &dyn Env<S>,
 ) -> Result<Vec<CutJoint<S>>, MechError> {
     let low = Lowering::new(env);
-    let poses = crate::model::initial_poses(sys);
+    let poses = super::initial::initial_poses(sys);
     let normal = planar_normal(sys);
     sys.graph
         .cut_joints()
@@ -166,8 +166,9 @@ pub fn cut_joints<S: Scalar>(
         .map(|&j| {
             let joint = &sys.joints[j];
             // The plane normal in this joint's parent frame.
-            let n =
-                normal.map(|n| (poses[joint.parent].r * joint.parent_frame.matrix).transpose() * n);
+            let n = normal.map(|n| {
+                (Matrix3::from(poses[joint.parent].e) * joint.parent_frame.matrix).transpose() * n
+            });
             Ok(CutJoint {
                 name: joint.name.clone(),
                 parent: tree.index_of_body[joint.parent],
@@ -185,10 +186,14 @@ fn planar_normal(sys: &System) -> Option<Vector3<f64>> {
     if !sys.grubler.planar {
         return None;
     }
-    let poses = crate::model::initial_poses(sys);
+    let poses = super::initial::initial_poses(sys);
     sys.joints.iter().find_map(|j| match &j.kind {
-        JointType::Revolute(a) => Some(poses[j.parent].r * j.parent_frame.matrix * a.unit),
-        JointType::Planar => Some(poses[j.parent].r * j.parent_frame.matrix * Vector3::z()),
+        JointType::Revolute(a) => {
+            Some(Matrix3::from(poses[j.parent].e) * j.parent_frame.matrix * a.unit)
+        }
+        JointType::Planar => {
+            Some(Matrix3::from(poses[j.parent].e) * j.parent_frame.matrix * Vector3::z())
+        }
         _ => None,
     })
 }
@@ -366,7 +371,7 @@ pub fn user_constraints<S: Scalar>(
     for c in constraints {
         match &c.kind {
             ConstraintKind::Holonomic(expr) => {
-                holonomic.push((c.name.clone(), low.expr(&expr.expr, &lookup)?));
+                holonomic.push((c.name.clone(), low.expr(&expr.expr, expr.span, &lookup)?));
             }
             ConstraintKind::RollingDisk {
                 body,

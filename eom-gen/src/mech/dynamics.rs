@@ -68,7 +68,9 @@ pub enum GenForce<S> {
         /// Speed index.
         u: usize,
         /// The expression.
-        expr: crate::model::expr::Ast,
+        expr: crate::expr::Ast,
+        /// Where it is written.
+        span: crate::diag::Span,
     },
     /// A runtime input.
     Input {
@@ -138,6 +140,7 @@ impl<S: Scalar> Applied<S> {
                         generalized.push(GenForce::Value {
                             u: j.u_index + k,
                             expr: v.expr.clone(),
+                            span: v.span,
                         });
                     }
                 }
@@ -229,10 +232,13 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 vec![S::zero(); nu],
                 Some(vec![S::zero(); nu]),
             ),
-            Coords::Prescribed { q, qd, qdd } => {
+            Coords::Prescribed { q, qd, qdd, spans } => {
                 let tl = self.time_lookup(st.t);
-                let lower = |v: &Vec<crate::model::expr::Ast>| -> Result<Vec<S>, MechError> {
-                    v.iter().map(|a| low.expr(a, &tl)).collect()
+                let lower = |v: &Vec<crate::expr::Ast>| -> Result<Vec<S>, MechError> {
+                    v.iter()
+                        .zip(spans)
+                        .map(|(a, &span)| low.expr(a, span, &tl))
+                        .collect()
                 };
                 (lower(q)?, lower(qd)?, Some(lower(qdd)?))
             }
@@ -381,7 +387,9 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                     q_out[*u] = q_out[*u] - *k * stretch - *c * st.u[*u];
                     energy = energy + S::from_ratio(1, 2) * *k * stretch * stretch;
                 }
-                GenForce::Value { u, expr } => q_out[*u] = q_out[*u] + low.expr(expr, &lookup)?,
+                GenForce::Value { u, expr, span } => {
+                    q_out[*u] = q_out[*u] + low.expr(expr, *span, &lookup)?
+                }
                 GenForce::Input { u, input } => {
                     q_out[*u] = q_out[*u] + st.inputs.get(*input).copied().unwrap_or(S::zero())
                 }

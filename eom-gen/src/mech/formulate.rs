@@ -10,9 +10,10 @@
 use super::dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
 use super::spatial::Force;
 use super::tree::{Env, MechError, NumericEnv, TreeModel};
+use crate::diag::{Diagnostic, Span};
 use crate::functions::{Function, FunctionSet, Layout};
 use crate::sym::{Context, Expr, LowerOptions, OpCount, Program, Scalar, SymError};
-use crate::system::{OutputKind, System};
+use crate::system::{ForceElement, OutputKind, System};
 use std::collections::BTreeMap;
 use std::fmt;
 use std::time::Instant;
@@ -39,22 +40,59 @@ impl fmt::Display for FdForm {
 /// Why formulation failed.
 #[derive(Debug)]
 pub enum FormulateError {
-    /// A mechanics problem.
+    /// A mechanics problem (with its span).
     Mech(MechError),
-    /// A symbol could not be created (a parameter named like a state symbol).
-    Sym(SymError),
+    /// A symbol could not be created (a parameter or input named like a
+    /// state symbol).
+    Sym {
+        /// What went wrong.
+        error: SymError,
+        /// Where the name is defined in the model file, when known.
+        span: Option<Span>,
+    },
+}
+
+impl FormulateError {
+    /// Where in the model file, when known.
+    pub fn span(&self) -> Option<Span> {
+        match self {
+            FormulateError::Mech(e) => Some(e.span()),
+            FormulateError::Sym { span, .. } => *span,
+        }
+    }
+
+    /// The error as a diagnostic at its span (without one: about the file).
+    pub fn diagnostic(&self) -> Diagnostic {
+        match self {
+            FormulateError::Mech(e) => e.diagnostic(),
+            FormulateError::Sym { error, span } => {
+                let d = match span {
+                    Some(s) => Diagnostic::error(*s, error.to_string()),
+                    None => Diagnostic::file_error(error.to_string()),
+                };
+                d.with_help("rename it in the model file")
+            }
+        }
+    }
 }
 
 impl fmt::Display for FormulateError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             FormulateError::Mech(e) => write!(f, "{e}"),
-            FormulateError::Sym(e) => write!(f, "{e:?}"),
+            FormulateError::Sym { error, .. } => write!(f, "{error}"),
         }
     }
 }
 
-impl std::error::Error for FormulateError {}
+impl std::error::Error for FormulateError {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        match self {
+            FormulateError::Mech(e) => Some(e),
+            FormulateError::Sym { error, .. } => Some(error),
+        }
+    }
+}
 
 impl From<MechError> for FormulateError {
     fn from(e: MechError) -> Self {
@@ -63,8 +101,8 @@ impl From<MechError> for FormulateError {
 }
 
 impl From<SymError> for FormulateError {
-    fn from(e: SymError) -> Self {
-        FormulateError::Sym(e)
+    fn from(error: SymError) -> Self {
+        FormulateError::Sym { error, span: None }
     }
 }
 
@@ -190,6 +228,14 @@ pub fn ltdl_flops(lambda: &[Option<usize>]) -> usize {
         .sum()
 }
 
+/// Where runtime input `k` is defined: its actuator.
+fn input_span(sys: &System, k: usize) -> Option<Span> {
+    sys.forces.iter().find_map(|f| match &f.element {
+        ForceElement::Actuator { inputs, .. } if inputs.contains(&k) => Some(f.span),
+        _ => None,
+    })
+}
+
 /// Builds the programs `request` asks for, completed by
 /// [`FunctionSet::derivable`], and those the model needs (outputs,
 /// constraints, reactions); programs not asked for are absent. The mass
@@ -204,7 +250,10 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         numeric: NumericEnv::defaults(sys),
     };
     for p in sys.parameters.iter().filter(|p| p.tunable) {
-        cx.param(&p.name)?;
+        cx.param(&p.name).map_err(|error| FormulateError::Sym {
+            error,
+            span: Some(p.span),
+        })?;
     }
     let tree = TreeModel::new(sys, &env)?;
     let applied = Applied::new(sys, &tree, &env)?;
@@ -215,7 +264,13 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     let inputs: Vec<Expr> = sys
         .inputs
         .iter()
-        .map(|n| cx.input(n))
+        .enumerate()
+        .map(|(k, n)| {
+            cx.input(n).map_err(|error| FormulateError::Sym {
+                error,
+                span: input_span(sys, k),
+            })
+        })
         .collect::<Result<_, _>>()?;
     let tau: Vec<Expr> = (0..nu).map(|i| cx.tau(i as u32)).collect();
     let st = State {

@@ -7,6 +7,7 @@ pub mod constraints;
 pub mod count;
 pub mod dynamics;
 pub mod formulate;
+pub mod initial;
 pub mod joint;
 pub mod numeric;
 pub mod spatial;

@@ -11,8 +11,9 @@
 
 use super::joint::JointModel;
 use super::spatial::{Pose, RigidInertia};
+use crate::diag::{Diagnostic, Span};
+use crate::expr::{Ast, BinOp, Func};
 use crate::graph::{BodyId, JointId};
-use crate::model::expr::{Ast, BinOp, Func};
 use crate::sym::{Mat3, Scalar, Vec3};
 use crate::system::{
     FrameInfo, JointType, Motion as JointMotion, Quantity, Rotation, System, Vec3Q,
@@ -77,22 +78,61 @@ impl Env<f64> for NumericEnv {
     }
 }
 
-/// Why a system cannot be formulated.
+/// Why a system cannot be formulated, with the span in the model file of
+/// what caused it.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MechError {
     /// An expression uses a name with no value here.
-    UnknownName(String),
+    UnknownName {
+        /// The name.
+        name: String,
+        /// The expression that uses it.
+        span: Span,
+    },
     /// A joint axis depends on a tunable parameter (axes are inlined).
-    TunableAxis(String),
+    TunableAxis {
+        /// The joint.
+        joint: String,
+        /// The axis component that uses a tunable parameter.
+        span: Span,
+    },
+}
+
+impl MechError {
+    /// Where in the model file.
+    pub fn span(&self) -> Span {
+        match self {
+            MechError::UnknownName { span, .. } | MechError::TunableAxis { span, .. } => *span,
+        }
+    }
+
+    /// What would be right.
+    pub fn help(&self) -> &'static str {
+        match self {
+            MechError::UnknownName { .. } => {
+                "this field may use parameters, and where the field allows them `t`, coordinates and speeds"
+            }
+            MechError::TunableAxis { .. } => {
+                "make the parameters in the axis fixed (`tunable: false`, or `fixed` in a scene)"
+            }
+        }
+    }
+
+    /// The error as a diagnostic at its span.
+    pub fn diagnostic(&self) -> Diagnostic {
+        Diagnostic::error(self.span(), self.to_string()).with_help(self.help())
+    }
 }
 
 impl fmt::Display for MechError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            MechError::UnknownName(n) => write!(f, "`{n}` has no value in this expression"),
-            MechError::TunableAxis(j) => write!(
+            MechError::UnknownName { name, .. } => {
+                write!(f, "`{name}` has no value in this expression")
+            }
+            MechError::TunableAxis { joint, .. } => write!(
                 f,
-                "the axis of joint `{j}` depends on a tunable parameter; joint axes must be fixed"
+                "the axis of joint `{joint}` depends on a tunable parameter; joint axes must be fixed"
             ),
         }
     }
@@ -100,24 +140,32 @@ impl fmt::Display for MechError {
 
 impl std::error::Error for MechError {}
 
-/// Turns a model expression into a scalar; `lookup` gives every name but
-/// `pi`. `asin`, `acos` and `atan` become `atan2`, non-integer powers
-/// `exp(b ln a)`.
-pub fn lower_ast<S: Scalar>(ast: &Ast, lookup: &dyn Fn(&str) -> Option<S>) -> Result<S, MechError> {
+/// Turns a model expression written at `span` into a scalar; `lookup`
+/// gives every name but `pi`. `asin`, `acos` and `atan` become `atan2`,
+/// non-integer powers `exp(b ln a)`.
+pub fn lower_ast<S: Scalar>(
+    ast: &Ast,
+    span: Span,
+    lookup: &dyn Fn(&str) -> Option<S>,
+) -> Result<S, MechError> {
+    let lower = |a: &Ast| lower_ast(a, span, lookup);
     Ok(match ast {
         Ast::Num(v) => S::from_f64(*v),
         Ast::Var(name, _) if name == "pi" => S::from_f64(std::f64::consts::PI),
-        Ast::Var(name, _) => lookup(name).ok_or_else(|| MechError::UnknownName(name.clone()))?,
-        Ast::Neg(a) => -lower_ast(a, lookup)?,
+        Ast::Var(name, _) => lookup(name).ok_or_else(|| MechError::UnknownName {
+            name: name.clone(),
+            span,
+        })?,
+        Ast::Neg(a) => -lower(a)?,
         Ast::Bin(op, a, b) => {
-            let x = lower_ast(a, lookup)?;
+            let x = lower(a)?;
             if let (BinOp::Pow, Ast::Num(n)) = (op, &**b)
                 && n.fract() == 0.0
                 && n.abs() <= 64.0
             {
                 return Ok(x.powi(*n as i32));
             }
-            let y = lower_ast(b, lookup)?;
+            let y = lower(b)?;
             match op {
                 BinOp::Add => x + y,
                 BinOp::Sub => x - y,
@@ -127,7 +175,7 @@ pub fn lower_ast<S: Scalar>(ast: &Ast, lookup: &dyn Fn(&str) -> Option<S>) -> Re
             }
         }
         Ast::Call(f, args, _) => {
-            let x = lower_ast(&args[0], lookup)?;
+            let x = lower(&args[0])?;
             let one = S::one();
             match f {
                 Func::Sin => x.sin(),
@@ -138,7 +186,7 @@ pub fn lower_ast<S: Scalar>(ast: &Ast, lookup: &dyn Fn(&str) -> Option<S>) -> Re
                 Func::Atan => x.atan2(one),
                 Func::Atan2 => {
                     let y = match args.get(1) {
-                        Some(a) => lower_ast(a, lookup)?,
+                        Some(a) => lower(a)?,
                         None => one,
                     };
                     x.atan2(y)
@@ -172,6 +220,8 @@ pub enum Coords {
         qd: Vec<Ast>,
         /// `q̈(t)`.
         qdd: Vec<Ast>,
+        /// Where each `q(t)` is written.
+        spans: Vec<Span>,
     },
 }
 
@@ -233,12 +283,18 @@ impl<'a, S: Scalar> Lowering<'a, S> {
         if !self.uses_tunable(&q.expr) && q.value.is_finite() {
             return Ok(S::from_f64(q.value));
         }
-        lower_ast(&q.expr, &|n| self.env.param(n))
+        lower_ast(&q.expr, q.span, &|n| self.env.param(n))
     }
 
-    /// An expression that may use `extra` names besides parameters.
-    pub fn expr(&self, ast: &Ast, extra: &dyn Fn(&str) -> Option<S>) -> Result<S, MechError> {
-        lower_ast(ast, &|n| extra(n).or_else(|| self.env.param(n)))
+    /// An expression written at `span` that may use `extra` names besides
+    /// parameters.
+    pub fn expr(
+        &self,
+        ast: &Ast,
+        span: Span,
+        extra: &dyn Fn(&str) -> Option<S>,
+    ) -> Result<S, MechError> {
+        lower_ast(ast, span, &|n| extra(n).or_else(|| self.env.param(n)))
     }
 
     /// A vector of quantities.
@@ -313,8 +369,11 @@ impl<S: Scalar> TreeModel<S> {
         for &j in sys.graph.tree_joints() {
             let joint = &sys.joints[j];
             let axis = |a: &crate::system::Axis| -> Result<Vec3<S>, MechError> {
-                if a.written.iter().any(|x| low.uses_tunable(&x.expr)) {
-                    return Err(MechError::TunableAxis(joint.name.clone()));
+                if let Some(x) = a.written.iter().find(|x| low.uses_tunable(&x.expr)) {
+                    return Err(MechError::TunableAxis {
+                        joint: joint.name.clone(),
+                        span: x.span,
+                    });
                 }
                 Ok(Vec3::from_f64([
                     snap(a.unit.x),
@@ -360,7 +419,8 @@ impl<S: Scalar> TreeModel<S> {
                     let q: Vec<Ast> = p.iter().map(|x| x.expr.clone()).collect();
                     let qd: Vec<Ast> = q.iter().map(|a| a.diff("t")).collect();
                     let qdd: Vec<Ast> = qd.iter().map(|a| a.diff("t")).collect();
-                    Coords::Prescribed { q, qd, qdd }
+                    let spans = p.iter().map(|x| x.span).collect();
+                    Coords::Prescribed { q, qd, qdd, spans }
                 }
                 JointMotion::Cut => continue,
             };

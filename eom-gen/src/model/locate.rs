@@ -8,7 +8,7 @@
 //! `joints[2].kind.axis`. The reader never panics: on anything it does not
 //! understand it stops, and lookups fall back to the nearest ancestor found.
 
-use super::diag::Span;
+use crate::diag::Span;
 
 /// Deepest nesting the reader descends into (`ron` stops at 128 too).
 const MAX_DEPTH: usize = 256;

@@ -1,22 +1,36 @@
-//! Model files: RON schema ([`spec`]), parsing, validation and diagnostics.
+//! Model files: RON schema ([`spec`]), parsing, validation and diagnostics,
+//! scenes ([`scene`]) and URDF import ([`urdf`]).
 //!
-//! [`load`] reads a file, [`parse`] turns text into a [`Spec`] (syntax and
-//! type errors, from `ron`), and [`check`] turns text into a validated
-//! [`System`] reporting every problem at once, each at its
-//! `file:line:col`. The [`builder`] constructs the same [`Spec`] in code.
+//! [`load`] reads any model file — a RON model, a scene or a URDF (see
+//! [`Format`]) — and is the only place that tells them apart. [`parse`]
+//! turns RON text into a [`Spec`] (syntax and type errors, from `ron`),
+//! and [`check`] turns text into a validated [`System`] reporting every
+//! problem at once, each at its `file:line:col`; [`check_file`] does both.
+//! The [`builder`] constructs the same [`Spec`] in code.
+//!
+//! The model sits at the top of the pipeline: it builds the [`System`] and
+//! uses the initial state of [`crate::mech::initial`]; nothing below it
+//! imports from here.
 
 pub mod builder;
-pub mod diag;
-pub mod expr;
+mod load;
 pub mod locate;
 pub mod rotation;
 pub mod scene;
 pub mod spec;
+pub mod urdf;
 mod validate;
 
+// The diagnostics and the expression language sit below the pipeline
+// (the validated `System` and the formulation use them too); they are
+// re-exported here under their old paths.
+pub use crate::{diag, expr};
 pub use diag::{Diagnostic, Report, Severity, Source, Span};
+pub use load::{Format, Loaded, load, load_in, read, read_in};
 pub use spec::Spec;
-pub use validate::{Gap, closure_gaps, initial_poses};
+// The initial state is computed below the model (the constraint formulation
+// needs it too); re-exported for the validator's users.
+pub use crate::mech::initial::{Gap, closure_gaps, initial_poses};
 
 use crate::system::System;
 use diag::{did_you_mean, list_names};
@@ -35,6 +49,8 @@ pub struct Checked {
     pub source: Source,
     /// The scene applied to the model, if it was read through one.
     pub scene: Option<scene::SceneInfo>,
+    /// What the conversion did, when the model was imported from a URDF.
+    pub urdf_notes: Option<Vec<String>>,
 }
 
 impl Checked {
@@ -67,34 +83,6 @@ impl Checked {
     }
 }
 
-/// Reads a model file. `path` is kept exactly as given for diagnostics.
-pub fn load(path: &str) -> Result<Source, Report> {
-    let fail = |d: Diagnostic| Report {
-        source: Source::new(path, ""),
-        diagnostics: vec![d],
-    };
-    let bytes = std::fs::read(path).map_err(|e| {
-        fail(
-            Diagnostic::file_error(format!("cannot read model file: {e}"))
-                .with_help("give the path of a `.ron` model file, e.g. `models/pendulum.ron`"),
-        )
-    })?;
-    match String::from_utf8(bytes) {
-        Ok(text) => Ok(Source::new(path, text)),
-        Err(e) => {
-            let at = e.utf8_error().valid_up_to();
-            let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
-            Err(Report {
-                source: Source::new(path, text),
-                diagnostics: vec![
-                    Diagnostic::error(Span::new(at, at + 1), "model file is not valid UTF-8")
-                        .with_help("save the file as UTF-8 text"),
-                ],
-            })
-        }
-    }
-}
-
 fn ron_options() -> ron::Options {
     ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
 }
@@ -109,12 +97,21 @@ pub fn parse(src: &Source) -> Result<Spec, Report> {
         })
 }
 
-/// Parses and validates model text; a scene (see [`scene::is_scene`]) is
-/// checked with its model, relative to the working directory.
+/// Parses and validates model text of any [`Format`]: a scene is checked
+/// with its model, relative to the working directory; a URDF is converted
+/// first.
 pub fn check(src: &Source) -> Result<Checked, Report> {
-    if scene::is_scene(&src.path, &src.text) {
-        return scene::check(src);
-    }
+    check_in(src, std::path::Path::new(""))
+}
+
+/// [`check`] for a source whose path is relative to `root` (as in a proc
+/// macro, where paths are relative to the crate's manifest directory).
+pub fn check_in(src: &Source, root: &std::path::Path) -> Result<Checked, Report> {
+    Loaded::from_source(src.clone())?.check_in(root)
+}
+
+/// Parses and validates the text of a RON model (not a scene).
+fn check_model(src: &Source) -> Result<Checked, Report> {
     let spec = parse(src)?;
     check_spec(src, spec)
 }
@@ -130,6 +127,7 @@ pub fn check_spec(src: &Source, spec: Spec) -> Result<Checked, Report> {
             warnings: diagnostics,
             source: src.clone(),
             scene: None,
+            urdf_notes: None,
         }),
         None => Err(Report {
             source: src.clone(),
@@ -138,9 +136,9 @@ pub fn check_spec(src: &Source, spec: Spec) -> Result<Checked, Report> {
     }
 }
 
-/// Loads, parses and validates a model file (or a scene file).
+/// Loads, parses and validates a model file of any [`Format`].
 pub fn check_file(path: &str) -> Result<Checked, Report> {
-    check(&load(path)?)
+    load(path)?.check()
 }
 
 fn ron_diagnostic(src: &Source, e: &ron::error::SpannedError) -> Diagnostic {

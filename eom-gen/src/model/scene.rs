@@ -10,11 +10,11 @@
 //! all see only what the scene asks for. The format is in
 //! `docs/model-format.md` ("Scenes").
 
-use super::diag::{Diagnostic, Report, Source, Span, did_you_mean, list_names};
-use super::expr::Ast;
 use super::locate::{self, Node, Seg, string_contents_start};
 use super::spec::{Num, Output};
-use super::{Checked, ron_diagnostic, ron_options};
+use super::{Checked, Format, Loaded, ron_diagnostic, ron_options};
+use crate::diag::{Diagnostic, Report, Source, Span, did_you_mean, list_names};
+use crate::expr::Ast;
 pub use crate::functions::Function;
 use crate::functions::{FunctionSet, When};
 use crate::graph::JointId;
@@ -92,11 +92,11 @@ pub struct SceneInfo {
     pub model_path: PathBuf,
 }
 
-/// True if `path`/`text` is a scene rather than a model: the file name
-/// ends in `.scene.ron`, or the text's top-level value is `Scene(…)`.
+/// True if `path`/`text` is a scene rather than a model (see
+/// [`Format::of`]): the file name ends in `.scene.ron`, or the text's
+/// top-level value is `Scene(…)`.
 pub fn is_scene(path: &str, text: &str) -> bool {
-    path.ends_with(".scene.ron")
-        || locate::parse(text).is_some_and(|n| n.name.as_deref() == Some("Scene"))
+    Format::of(path, text) == Format::Scene
 }
 
 /// Parses scene text: syntax and type errors only.
@@ -127,7 +127,8 @@ pub fn check_in(src: &Source, root: &Path) -> Result<Checked, Report> {
         source: src.clone(),
         diagnostics: vec![Diagnostic::error(span(&[Seg::Field("model")]), message).with_help(help)],
     };
-    let text = std::fs::read(root.join(&shown)).map_err(|e| {
+    let shown_str = shown.display().to_string();
+    let read = super::load::read_text(root, &shown_str).map_err(|e| {
         fail(
             format!(
                 "cannot read model `{}` (`{}`): {e}",
@@ -137,20 +138,14 @@ pub fn check_in(src: &Source, root: &Path) -> Result<Checked, Report> {
             "`model` is the path of a `.ron` model or `.urdf` file, relative to this scene file",
         )
     })?;
-    let shown_str = shown.display().to_string();
-    let text = String::from_utf8_lossy(&text).into_owned();
-    if is_scene(&shown_str, &text) {
+    let model = Loaded::from_source(read?)?;
+    if model.format == Format::Scene {
         return Err(fail(
             format!("model `{}` is itself a scene", spec.model),
             "a scene names a model file; copy what the other scene selects into this one",
         ));
     }
-    let model_src = if crate::urdf::is_urdf(&shown_str) {
-        crate::urdf::convert(&Source::new(shown_str.clone(), text))?.source
-    } else {
-        Source::new(shown_str, text)
-    };
-    let mut checked = super::check(&model_src)?;
+    let mut checked = model.check_in(root)?;
     let mut cx = Ctx {
         root: tree.as_ref(),
         src,
@@ -520,7 +515,7 @@ impl Ctx<'_> {
             sys.joints[j].motion = Motion::Locked;
         }
         renumber(sys);
-        let poses = super::validate::initial_poses(sys);
+        let poses = crate::mech::initial::initial_poses(sys);
         sys.grubler = super::validate::grubler(sys, &poses);
     }
 

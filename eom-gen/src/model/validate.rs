@@ -5,12 +5,13 @@
 //! and says what would be right. Checks go on after a failure wherever the
 //! remaining ones still make sense, so one run reports everything.
 
-use super::diag::{Diagnostic, Source, Span, did_you_mean, list_names};
-use super::expr::{Ast, EvalError, Func};
 use super::locate::{Node, Seg, string_contents_start};
-use super::rotation::{self, Pose};
+use super::rotation;
 use super::spec::{self, Num, Orientation, Spec, V3};
+use crate::diag::{Diagnostic, Source, Span, did_you_mean, list_names};
+use crate::expr::{Ast, EvalError, Func};
 use crate::graph::{Arc, Graph, GraphError, JointId};
+use crate::mech::initial::{Pose, closure_gaps, initial_poses};
 use crate::system::*;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use std::collections::{HashMap, HashSet};
@@ -444,6 +445,7 @@ impl Ctx<'_> {
                         name: p.name.clone(),
                         value,
                         tunable: p.tunable,
+                        span: self.span(&join(&path, &[f("name")])),
                     });
                 }
                 None => {
@@ -1310,6 +1312,7 @@ impl Ctx<'_> {
                 Some(element) => out.push(Force {
                     name: name.clone(),
                     element,
+                    span: self.span(&path),
                 }),
                 None => ok = false,
             }
@@ -1465,6 +1468,7 @@ impl Ctx<'_> {
                 Some(kind) => out.push(Constraint {
                     name: name.clone(),
                     kind,
+                    span: self.span(&path),
                 }),
                 None => ok = false,
             }
@@ -1521,7 +1525,7 @@ impl Ctx<'_> {
     }
 
     /// Warns about cut joints whose two frames do not meet at the initial state.
-    fn check_closure(&mut self, sys: &System, poses: &[Pose]) {
+    fn check_closure(&mut self, sys: &System, poses: &[Pose<f64>]) {
         for (&j, gap) in sys.graph.cut_joints().iter().zip(closure_gaps(sys, poses)) {
             let joint = &sys.joints[j];
             if gap.position > CLOSURE_TOL || gap.angle > CLOSURE_TOL {
@@ -1554,94 +1558,9 @@ fn default_coordinate_names(joint: &str, kind: &spec::JointKind) -> Vec<String> 
     suffixes.iter().map(|s| format!("{joint}_{s}")).collect()
 }
 
-/// World pose of every body at the initial state (locked joints at `q0`,
-/// prescribed ones at `t = 0`).
-pub fn initial_poses(sys: &System) -> Vec<Pose> {
-    let mut poses = vec![Pose::identity(); sys.bodies.len()];
-    for &j in sys.graph.tree_joints() {
-        let joint = &sys.joints[j];
-        let q: Vec<f64> = match &joint.motion {
-            Motion::Prescribed(p) => p.iter().map(|x| x.value).collect(),
-            _ => joint.q0.iter().map(|x| x.value).collect(),
-        };
-        let fp = frame_pose(&joint.parent_frame);
-        let fc = frame_pose(&joint.child_frame);
-        let jt = rotation::joint_transform(&joint.kind, &q);
-        poses[joint.child] = poses[joint.parent].then(&fp).then(&jt).then(&fc.inverse());
-    }
-    poses
-}
-
-fn frame_pose(frame: &FrameInfo) -> Pose {
-    Pose {
-        r: frame.matrix,
-        p: values(&frame.position),
-    }
-}
-
-/// How far a cut joint is from closing.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Gap {
-    /// Distance between the two joint frames' origins, in the directions
-    /// the joint does not allow, m.
-    pub position: f64,
-    /// Angle between the constrained axes, rad.
-    pub angle: f64,
-}
-
-/// Gaps of every cut joint at the given poses, in cut-joint order.
-pub fn closure_gaps(sys: &System, poses: &[Pose]) -> Vec<Gap> {
-    sys.graph
-        .cut_joints()
-        .iter()
-        .map(|&j| {
-            let joint = &sys.joints[j];
-            let on_parent = poses[joint.parent].then(&frame_pose(&joint.parent_frame));
-            let on_child = poses[joint.child].then(&frame_pose(&joint.child_frame));
-            let d = on_child.p - on_parent.p;
-            let angle_between = |a: &Vector3<f64>| {
-                let (wa, wb) = (on_parent.r * a, on_child.r * a);
-                wa.cross(&wb).norm().atan2(wa.dot(&wb))
-            };
-            let along = |a: &Vector3<f64>| d - (on_parent.r * a) * (on_parent.r * a).dot(&d);
-            match &joint.kind {
-                JointType::Revolute(a) => Gap {
-                    position: d.norm(),
-                    angle: angle_between(&a.unit),
-                },
-                JointType::Prismatic(a) | JointType::Cylindrical(a) | JointType::Screw(a, _) => {
-                    Gap {
-                        position: along(&a.unit).norm(),
-                        angle: angle_between(&a.unit),
-                    }
-                }
-                JointType::Planar => Gap {
-                    position: (on_parent.r * Vector3::z()).dot(&d).abs(),
-                    angle: angle_between(&Vector3::z()),
-                },
-                JointType::Universal(..) | JointType::Spherical => Gap {
-                    position: d.norm(),
-                    angle: 0.0,
-                },
-                JointType::Fixed => {
-                    let rel = on_parent.r.transpose() * on_child.r;
-                    Gap {
-                        position: d.norm(),
-                        angle: ((rel.trace() - 1.0) / 2.0).clamp(-1.0, 1.0).acos(),
-                    }
-                }
-                JointType::Free => Gap {
-                    position: 0.0,
-                    angle: 0.0,
-                },
-            }
-        })
-        .collect()
-}
-
 /// Grübler–Kutzbach count, planar (λ = 3) if every joint keeps the motion
 /// in planes normal to one direction, else spatial (λ = 6).
-pub(crate) fn grubler(sys: &System, poses: &[Pose]) -> Grubler {
+pub(crate) fn grubler(sys: &System, poses: &[Pose<f64>]) -> Grubler {
     let planar_normal = planar_normal(sys, poses);
     let lambda: i64 = if planar_normal.is_some() { 3 } else { 6 };
     let n = (sys.bodies.len() - 1) as i64;
@@ -1668,7 +1587,7 @@ pub(crate) fn grubler(sys: &System, poses: &[Pose]) -> Grubler {
 }
 
 /// The common normal of a planar system, if it is one.
-fn planar_normal(sys: &System, poses: &[Pose]) -> Option<Vector3<f64>> {
+fn planar_normal(sys: &System, poses: &[Pose<f64>]) -> Option<Vector3<f64>> {
     if sys
         .constraints
         .iter()
@@ -1679,7 +1598,7 @@ fn planar_normal(sys: &System, poses: &[Pose]) -> Option<Vector3<f64>> {
     let mut normal: Option<Vector3<f64>> = None;
     let mut in_plane: Vec<Vector3<f64>> = Vec::new();
     for j in &sys.joints {
-        let frame = poses[j.parent].r * j.parent_frame.matrix;
+        let frame = Matrix3::from(poses[j.parent].e) * j.parent_frame.matrix;
         let n = match &j.kind {
             JointType::Revolute(a) => frame * a.unit,
             JointType::Planar => frame * Vector3::z(),

@@ -49,7 +49,7 @@ impl fmt::Display for SymError {
             SymError::NameClash { name, existing } => {
                 write!(
                     f,
-                    "name `{name}` is already a {existing:?}; choose another name"
+                    "name `{name}` is already a {existing}; choose another name"
                 )
             }
             SymError::ReservedName(name) => write!(

@@ -122,6 +122,24 @@ impl<S: Scalar> Neg for Vec3<S> {
     }
 }
 
+impl From<Vec3<f64>> for nalgebra::Vector3<f64> {
+    fn from(v: Vec3<f64>) -> Self {
+        nalgebra::Vector3::new(v.0[0], v.0[1], v.0[2])
+    }
+}
+
+impl From<nalgebra::Vector3<f64>> for Vec3<f64> {
+    fn from(v: nalgebra::Vector3<f64>) -> Self {
+        Vec3([v.x, v.y, v.z])
+    }
+}
+
+impl From<Mat3<f64>> for nalgebra::Matrix3<f64> {
+    fn from(m: Mat3<f64>) -> Self {
+        nalgebra::Matrix3::from_fn(|i, j| m.0[i][j])
+    }
+}
+
 impl<S: Scalar> Mat3<S> {
     /// The zero matrix.
     pub fn zero() -> Self {

@@ -54,6 +54,22 @@ pub enum SymKind {
     Multiplier(u32),
 }
 
+impl std::fmt::Display for SymKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SymKind::Param => write!(f, "parameter"),
+            SymKind::Input => write!(f, "input"),
+            SymKind::Time => write!(f, "time"),
+            SymKind::Coord(i) => write!(f, "coordinate q{i}"),
+            SymKind::Speed(i) => write!(f, "speed u{i}"),
+            SymKind::CoordRate(i) => write!(f, "coordinate rate qd{i}"),
+            SymKind::SpeedRate(i) => write!(f, "speed rate ud{i}"),
+            SymKind::Tau(i) => write!(f, "generalised force tau{i}"),
+            SymKind::Multiplier(i) => write!(f, "multiplier λ{i}"),
+        }
+    }
+}
+
 /// A named variable: a leaf of the expression graph.
 #[derive(Clone, PartialEq, Eq, Hash, Debug)]
 pub struct Symbol {

@@ -13,6 +13,10 @@
 //! ```
 //! Names are parameters, coordinates, `t` or the constant `pi`, depending
 //! on where the expression stands; functions are listed in [`Func`].
+//!
+//! A leaf module below the pipeline: the validator parses the expressions,
+//! the validated [`crate::System`] keeps them as [`Ast`]s, and the
+//! formulation lowers them to scalars.
 
 use std::fmt;
 
@@ -138,6 +142,31 @@ pub enum EvalError {
     /// The result is NaN or infinite (e.g. `sqrt(-1)`, `1/0`).
     NotFinite,
 }
+
+impl fmt::Display for ParseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "at byte {}: {} ({})",
+            self.offset, self.message, self.help
+        )
+    }
+}
+
+impl std::error::Error for ParseError {}
+
+impl fmt::Display for EvalError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            EvalError::Unknown(name, offset) => {
+                write!(f, "`{name}` (at byte {offset}) has no value here")
+            }
+            EvalError::NotFinite => write!(f, "the value is not a finite number"),
+        }
+    }
+}
+
+impl std::error::Error for EvalError {}
 
 impl Ast {
     /// Parses an expression.
@@ -544,7 +573,7 @@ impl Parser<'_> {
                     let names: Vec<&str> = Func::ALL.iter().map(|f| f.name()).collect();
                     return Err(self.error(
                         format!("unknown function `{name}`"),
-                        format!("functions are {}", super::diag::list_names(names)),
+                        format!("functions are {}", crate::diag::list_names(names)),
                     ));
                 };
                 self.i += 1;

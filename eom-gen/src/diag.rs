@@ -4,6 +4,11 @@
 //! Positions are byte ranges into the model source; they are turned into
 //! 1-based line and column numbers (columns count characters, as `ron` and
 //! rustc do) only when a diagnostic is rendered.
+//!
+//! A leaf module below the whole pipeline: the parser and validator
+//! ([`crate::model`]) report with it, the validated [`crate::System`]
+//! keeps a [`Span`] for each of its named entities, and errors found while
+//! formulating ([`crate::mech`]) become [`Diagnostic`]s at those spans.
 
 use std::fmt;
 

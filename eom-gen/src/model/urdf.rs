@@ -32,12 +32,12 @@
 //! several roots, bad numbers, inertia that is not positive definite, and
 //! massless links that move.
 
-use crate::model::diag::did_you_mean;
-use crate::model::expr::Func;
-use crate::model::spec::{
+use super::spec::{
     Body, Constraint, Force, Frame, Inertia, Joint, JointKind, Num, Orientation, Spec, V3,
 };
-use crate::model::{Diagnostic, Report, Source, Span};
+use crate::diag::did_you_mean;
+use crate::diag::{Diagnostic, Report, Source, Span};
+use crate::expr::Func;
 use nalgebra::{Matrix3, Rotation3, SymmetricEigen, Vector3};
 use roxmltree::Node;
 use std::collections::HashMap;
@@ -61,41 +61,38 @@ pub struct Import {
     pub notes: Vec<String>,
 }
 
-/// True if `path` ends in `.urdf` (any case).
+/// True if `path` ends in `.urdf` (any case; see [`Format::of`](super::Format::of)).
 pub fn is_urdf(path: &str) -> bool {
-    std::path::Path::new(path)
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+    super::Format::of(path, "") == super::Format::Urdf
 }
 
-/// Reads a model file: a `.urdf` is converted and the RON text returned
-/// (URDF errors are reported against the URDF); anything else is read as is.
+/// Reads a model file of any format and returns the RON text to check: a
+/// `.urdf` converted (URDF errors are reported against the URDF), anything
+/// else as is. The same as [`super::load`]`(path)?.source`.
 pub fn load_model(path: &str) -> Result<Source, Report> {
-    let src = crate::model::load(path)?;
-    if is_urdf(path) {
-        Ok(convert(&src)?.source)
-    } else {
-        Ok(src)
-    }
+    Ok(super::load(path)?.source)
 }
 
-/// Reads and converts a URDF file.
+/// Reads and converts a URDF file (whatever its name), with the notes of
+/// the conversion; [`super::load`] does the same for a `.urdf` file.
 pub fn import_file(path: &str) -> Result<Import, Report> {
-    convert(&crate::model::load(path)?)
+    convert(&super::read(path)?)
 }
 
-/// A rigid transform, remembering the URDF `rpy` when the rotation is
-/// exactly one (so that simple files convert to exact numbers).
+/// Where a URDF `<origin>` (or a chain of them) puts a frame: a rigid
+/// transform that remembers the URDF `rpy` when the rotation is exactly one
+/// (so that simple files convert to exact numbers). Not a kinematic pose:
+/// those are [`crate::mech::Pose`].
 #[derive(Clone, Debug)]
-struct Pose {
+struct Placement {
     rot: Matrix3<f64>,
     pos: Vector3<f64>,
     rpy: Option<[f64; 3]>,
 }
 
-impl Pose {
+impl Placement {
     fn identity() -> Self {
-        Pose {
+        Placement {
             rot: Matrix3::identity(),
             pos: Vector3::zeros(),
             rpy: Some([0.0; 3]),
@@ -107,7 +104,7 @@ impl Pose {
     }
 
     /// `self ∘ other`: `other` is expressed in `self`'s frame.
-    fn then(&self, other: &Pose) -> Pose {
+    fn then(&self, other: &Placement) -> Placement {
         let rpy = if other.is_rot_identity() {
             self.rpy
         } else if self.is_rot_identity() {
@@ -115,7 +112,7 @@ impl Pose {
         } else {
             None
         };
-        Pose {
+        Placement {
             rot: self.rot * other.rot,
             pos: self.pos + self.rot * other.pos,
             rpy,
@@ -179,7 +176,7 @@ const KINDS: &str = "`revolute`, `continuous`, `prismatic`, `fixed`, `floating` 
 
 struct Inertial {
     mass: f64,
-    origin: Pose,
+    origin: Placement,
     /// About the centre of mass, in the inertial frame.
     inertia: Matrix3<f64>,
 }
@@ -205,7 +202,7 @@ struct UJoint {
     kind: Option<Kind>,
     parent: Option<(String, Span)>,
     child: Option<(String, Span)>,
-    origin: Pose,
+    origin: Placement,
     axis: Vector3<f64>,
     mimic: Option<Mimic>,
     damping: f64,
@@ -283,13 +280,13 @@ impl Ctx {
     }
 
     /// The `<origin xyz rpy>` child of `n` (identity if absent).
-    fn origin(&mut self, n: Node<'_, '_>) -> Pose {
+    fn origin(&mut self, n: Node<'_, '_>) -> Placement {
         let Some(o) = child(n, "origin") else {
-            return Pose::identity();
+            return Placement::identity();
         };
         let pos = self.vec3(o, "xyz", Vector3::zeros());
         let rpy = self.vec3(o, "rpy", Vector3::zeros());
-        Pose {
+        Placement {
             rot: rpy_matrix(rpy.x, rpy.y, rpy.z),
             pos,
             rpy: Some([rpy.x, rpy.y, rpy.z]),
@@ -638,7 +635,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
 
     // Depth-first from the root, children in document order; assign each
     // link to a body (None = ground) and its pose in that body.
-    let mut assign: Vec<Option<(Option<usize>, Pose)>> = vec![None; links.len()];
+    let mut assign: Vec<Option<(Option<usize>, Placement)>> = vec![None; links.len()];
     let mut order: Vec<usize> = Vec::new(); // movable joints in tree order
     let mut bodies: Vec<usize> = Vec::new(); // head link of each body
     let mut merged: Vec<(String, String)> = Vec::new();
@@ -649,7 +646,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         }
     };
     if root != world {
-        assign[root] = Some((None, Pose::identity()));
+        assign[root] = Some((None, Placement::identity()));
         cx.notes.push(format!(
             "root link `{}` is fixed to the ground; it and the links fixed to it do not move (for a free base add `<link name=\"world\"/>` and a `floating` joint from it)",
             links[root].raw
@@ -665,7 +662,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         };
         let (p, c) = (link_id(p), link_id(c));
         let (pb, pose) = if p == world {
-            (None, Pose::identity())
+            (None, Placement::identity())
         } else {
             match &assign[p] {
                 Some(a) => a.clone(),
@@ -680,7 +677,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
             ));
             assign[c] = Some((pb, at));
         } else {
-            assign[c] = Some((Some(bodies.len()), Pose::identity()));
+            assign[c] = Some((Some(bodies.len()), Placement::identity()));
             bodies.push(c);
             order.push(k);
         }
@@ -797,7 +794,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         };
         let (p, c) = (link_id(p), link_id(c));
         let (pb, pose) = if p == world {
-            (None, Pose::identity())
+            (None, Placement::identity())
         } else {
             match &assign[p] {
                 Some(a) => a.clone(),
@@ -805,7 +802,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
             }
         };
         let mut parent_frame = pose.then(&j.origin);
-        let mut child_frame = Pose::identity();
+        let mut child_frame = Placement::identity();
         let axis = if j.axis.norm() > 0.0 {
             j.axis / j.axis.norm()
         } else {
@@ -822,7 +819,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
                             Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
                         })
                         .into_inner();
-                    let turn = Pose {
+                    let turn = Placement {
                         rot: r,
                         pos: Vector3::zeros(),
                         rpy: None,
