@@ -10,11 +10,11 @@
 //! all see only what the scene asks for. The format is in
 //! `docs/model-format.md` ("Scenes").
 
+use super::Checked;
 use super::diag::{Diagnostic, Report, Source, Span, did_you_mean, list_names};
 use super::expr::Ast;
 use super::locate::{self, Node, Seg, string_contents_start};
 use super::spec::{Num, Output};
-use super::{Checked, ron_diagnostic, ron_options};
 use crate::graph::JointId;
 use crate::system::{
     ConstraintKind, ForceElement, JointType, Motion, OutputKind, Parameter, Quantity, System,
@@ -126,14 +126,10 @@ pub fn is_scene(path: &str, text: &str) -> bool {
         || locate::parse(text).is_some_and(|n| n.name.as_deref() == Some("Scene"))
 }
 
-/// Parses scene text: syntax and type errors only.
+/// Parses scene text: syntax and type errors only (the first one), or
+/// every unknown field at once.
 pub fn parse(src: &Source) -> Result<SceneSpec, Report> {
-    ron_options()
-        .from_str::<SceneSpec>(&src.text)
-        .map_err(|e| Report {
-            source: src.clone(),
-            diagnostics: vec![ron_diagnostic(src, &e)],
-        })
+    super::fields::read(src)
 }
 
 /// Checks a scene whose path is relative to the working directory: reads
