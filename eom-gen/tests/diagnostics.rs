@@ -140,6 +140,8 @@ pin!(wrong_number_of_coordinate_names, "coordinates: [\"q1\"]" => "coordinates: 
 pin!(prescribed_and_locked, "q0: [0.1])" => "q0: [0.1], locked: true, prescribed: [\"sin(t)\"])");
 pin!(non_unit_quaternion, "Revolute(axis: (0, 0, 1)), parent: \"ground\", child: \"link1\", coordinates: [\"q1\"], q0: [0.1]" => "Spherical, parent: \"ground\", child: \"link1\", q0: [1, 0, 0, 0.1]");
 pin!(parallel_universal_axes, "Revolute(axis: (0, 1, 0))" => "Universal(axis1: (0, 1, 0), axis2: (0, 2, 0))");
+pin!(speeds_of_locked_joint_ignored, "coordinates: [\"q2\"])" => "coordinates: [\"q2\"], locked: true, u0: [1])", "forces: [JointSpringDamper(name: \"spring\", joint: \"j2\", stiffness: 10, damping: 0.1)]," => "");
+pin!(initial_values_of_prescribed_joint_ignored, "q0: [0.1])" => "q0: [0.1], prescribed: [\"sin(t)\"])");
 pin!(spring_on_locked_joint, "coordinates: [\"q2\"])" => "coordinates: [\"q2\"], locked: true)");
 
 // An unknown body and an unknown parameter (in a force, checked after the

@@ -73,7 +73,10 @@ fn field_named_at(node: &Node, at: usize) -> Option<&Field> {
 /// Replaces `name: value` and a comma after it by spaces (newlines kept);
 /// false if the range is not a clean cut of the text.
 fn blank(text: &mut String, field: &Field) -> bool {
-    let start = field.name_span.start;
+    let mut start = field.name_span.start;
+    if start >= 2 && text.as_bytes().get(start - 2..start) == Some(b"r#") {
+        start -= 2; // a raw identifier
+    }
     let mut end = field.value.span.end;
     let bytes = text.as_bytes();
     let mut k = end;

@@ -816,6 +816,23 @@ impl Ctx<'_> {
         } else if j.locked {
             motion = Motion::Locked;
         }
+        // Values that would be dropped without a word.
+        let ignored = match motion {
+            Motion::Locked if j.u0.is_some() => Some(("u0", "locked", "it does not move")),
+            Motion::Prescribed(_) if j.q0.is_some() || j.u0.is_some() => Some((
+                if j.q0.is_some() { "q0" } else { "u0" },
+                "prescribed",
+                "its position and speed follow `prescribed` from t = 0",
+            )),
+            _ => None,
+        };
+        if let Some((field, what, why)) = ignored {
+            self.warning(
+                &join(path, &[f(field)]),
+                format!("`{field}` of {what} joint `{}` is ignored", j.name),
+                format!("{why}; remove `{field}`"),
+            );
+        }
         Some(JointInfo {
             name: j.name.clone(),
             kind: kind?,
