@@ -71,6 +71,35 @@ pin!(unknown_joint_kind, "Revolute(axis: (0, 1, 0))" => "Revolve(axis: (0, 1, 0)
 pin!(wrong_type, "value: 1.5" => "value: [1.5]");
 pin!(vector_of_two, "com: (0, 0, \"l/2\"), inertia" => "com: (0, 0), inertia");
 
+// Unknown fields inside enum variants (issue #14): each one at its name,
+// all of them at once.
+pin!(
+    spring_damper_rest_len,
+    "forces: [" => "forces: [SpringDamper(name: \"cord\", a: (body: \"ground\"), b: (body: \"link2\", marker: \"tip\"), stiffness: 5, rest_len: 1.0), "
+);
+pin!(joint_spring_damper_misspelled_fields, "damping: 0.1" => "dampnig: 1.0, rest_angle: 0.3");
+pin!(revolute_misspelled_axis, "Revolute(axis: (0, 1, 0))" => "Revolute(axis: (0, 1, 0), axsi: (1, 0, 0))");
+pin!(
+    rolling_disk_centre,
+    "    outputs:" => "    constraints: [RollingDisk(name: \"wheel\", body: \"link2\", radius: 0.1, axis: (0, 1, 0), centre: (0, 0, \"l\"))],\n    outputs:"
+);
+
+/// Issue #14: `rest_len` for `rest_length` was accepted, and the spring's
+/// rest length silently became 0 (a wrong bias force).
+#[test]
+fn regression_spring_damper_rest_len_is_rejected_not_a_zero_rest_length() {
+    let out = diagnose(&[(
+        "forces: [",
+        "forces: [SpringDamper(name: \"cord\", a: (body: \"ground\"), b: (body: \"link2\", marker: \"tip\"), stiffness: 5, rest_len: 1.0), ",
+    )]);
+    let first = out.lines().next().unwrap_or("");
+    assert_eq!(
+        first, "models/two_link.ron:18:111: error: unknown field `rest_len` of `SpringDamper`",
+        "got:\n{out}"
+    );
+    assert!(out.contains("did you mean `rest_length`?"), "got:\n{out}");
+}
+
 // Names.
 pin!(unknown_body, "child: \"link2\"" => "child: \"lnk2\"");
 pin!(duplicate_body, "(name: \"link2\", mass" => "(name: \"link1\", mass");
@@ -111,7 +140,17 @@ pin!(wrong_number_of_coordinate_names, "coordinates: [\"q1\"]" => "coordinates: 
 pin!(prescribed_and_locked, "q0: [0.1])" => "q0: [0.1], locked: true, prescribed: [\"sin(t)\"])");
 pin!(non_unit_quaternion, "Revolute(axis: (0, 0, 1)), parent: \"ground\", child: \"link1\", coordinates: [\"q1\"], q0: [0.1]" => "Spherical, parent: \"ground\", child: \"link1\", q0: [1, 0, 0, 0.1]");
 pin!(parallel_universal_axes, "Revolute(axis: (0, 1, 0))" => "Universal(axis1: (0, 1, 0), axis2: (0, 2, 0))");
+pin!(speeds_of_locked_joint_ignored, "coordinates: [\"q2\"])" => "coordinates: [\"q2\"], locked: true, u0: [1])", "forces: [JointSpringDamper(name: \"spring\", joint: \"j2\", stiffness: 10, damping: 0.1)]," => "");
+pin!(initial_values_of_prescribed_joint_ignored, "q0: [0.1])" => "q0: [0.1], prescribed: [\"sin(t)\"])");
 pin!(spring_on_locked_joint, "coordinates: [\"q2\"])" => "coordinates: [\"q2\"], locked: true)");
+
+// An unknown body and an unknown parameter (in a force, checked after the
+// joints) in one report, not one run after the other.
+pin!(
+    unknown_body_and_unknown_parameter,
+    "child: \"link2\"" => "child: \"lnk2\"",
+    "stiffness: 10" => "stiffness: \"k\"",
+);
 
 // Several problems at once: all of them are reported, in file order.
 pin!(

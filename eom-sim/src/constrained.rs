@@ -375,6 +375,10 @@ fn singular_values(a: &DMatrix<f64>) -> Vec<f64> {
     if a.nrows() == 0 || a.ncols() == 0 {
         return Vec::new();
     }
+    // nalgebra's SVD panics on NaN; a non-finite J has no singular values.
+    if !a.iter().all(|x| x.is_finite()) {
+        return vec![f64::NAN; a.nrows().min(a.ncols())];
+    }
     let mut s: Vec<f64> = a.clone().singular_values().iter().copied().collect();
     s.sort_by(|x, y| y.total_cmp(x));
     s
@@ -385,6 +389,10 @@ fn singular_values(a: &DMatrix<f64>) -> Vec<f64> {
 pub fn min_norm_solve(a: &DMatrix<f64>, r: &DVector<f64>) -> (DVector<f64>, usize) {
     if a.nrows() == 0 || a.ncols() == 0 {
         return (DVector::zeros(a.ncols()), 0);
+    }
+    // nalgebra's SVD panics on NaN: a non-finite system has no solution.
+    if !(a.iter().all(|x| x.is_finite()) && r.iter().all(|x| x.is_finite())) {
+        return (DVector::from_element(a.ncols(), f64::NAN), 0);
     }
     let svd = a.clone().svd(true, true);
     let largest = svd.singular_values.iter().copied().fold(0.0, f64::max);
@@ -678,6 +686,9 @@ impl Workspace {
 /// eigendecomposition (eigenvalues below `1e-10` of the largest dropped),
 /// and the rank.
 fn pinv_lambda(schur: &DMatrix<f64>, rhs: &DVector<f64>) -> Option<((), DVector<f64>, usize)> {
+    if !(schur.iter().all(|x| x.is_finite()) && rhs.iter().all(|x| x.is_finite())) {
+        return None;
+    }
     let eig = nalgebra::SymmetricEigen::new(schur.clone());
     let largest = eig.eigenvalues.iter().map(|x| x.abs()).fold(0.0, f64::max);
     let eps = 1e-10 * largest.max(1e-300);

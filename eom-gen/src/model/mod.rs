@@ -13,6 +13,7 @@
 //! imports from here.
 
 pub mod builder;
+mod fields;
 mod load;
 pub mod locate;
 pub mod rotation;
@@ -87,14 +88,10 @@ fn ron_options() -> ron::Options {
     ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
 }
 
-/// Parses model text into a [`Spec`]: syntax and type errors only.
+/// Parses model text into a [`Spec`]: syntax and type errors only (the
+/// first one), or every unknown field at once.
 pub fn parse(src: &Source) -> Result<Spec, Report> {
-    ron_options()
-        .from_str::<Spec>(&src.text)
-        .map_err(|e| Report {
-            source: src.clone(),
-            diagnostics: vec![ron_diagnostic(src, &e)],
-        })
+    fields::read(src)
 }
 
 /// Parses and validates model text of any [`Format`]: a scene is checked
@@ -155,7 +152,7 @@ fn ron_diagnostic(src: &Source, e: &ron::error::SpannedError) -> Diagnostic {
             outer: o,
         } => (
             format!("unknown field `{found}`{}", outer(o)),
-            suggest(found, expected, "fields"),
+            suggest_field(found, expected, o.as_deref()),
         ),
         RonError::MissingStructField { field, outer: o } => (
             format!("missing field `{field}`{}", outer(o)),
@@ -197,5 +194,28 @@ fn suggest(found: &str, expected: &[&str], what: &str) -> String {
     match did_you_mean(found, expected.iter().copied()) {
         Some(best) => format!("did you mean `{best}`?"),
         None => format!("{what} are {}", list_names(expected.iter().copied())),
+    }
+}
+
+/// Did-you-mean and the list of valid fields, e.g. "did you mean
+/// `rest_length`? `SpringDamper` has the fields `name`, `a`, …".
+fn suggest_field(found: &str, expected: &[&str], outer: Option<&str>) -> String {
+    let list = match outer {
+        Some(o) => format!("`{o}` has the fields "),
+        None => "the fields are ".to_string(),
+    } + &list_names(expected.iter().copied());
+    // A typo, else a shortened or lengthened name (`rest_len`, `rest_angle`).
+    let best = did_you_mean(found, expected.iter().copied()).or_else(|| {
+        let mut prefixed = expected.iter().copied().filter(|e| {
+            e.len().min(found.len()) >= 3 && (e.starts_with(found) || found.starts_with(e))
+        });
+        match (prefixed.next(), prefixed.next()) {
+            (Some(only), None) => Some(only),
+            _ => None,
+        }
+    });
+    match best {
+        Some(best) => format!("did you mean `{best}`? {list}"),
+        None => list,
     }
 }

@@ -12,7 +12,7 @@
 
 use super::locate::{self, Node, Seg, string_contents_start};
 use super::spec::{Num, Output};
-use super::{Checked, Format, Loaded, ron_diagnostic, ron_options};
+use super::{Checked, Format, Loaded};
 use crate::diag::{Diagnostic, Report, Source, Span, did_you_mean, list_names};
 use crate::expr::Ast;
 pub use crate::functions::Function;
@@ -99,14 +99,10 @@ pub fn is_scene(path: &str, text: &str) -> bool {
     Format::of(path, text) == Format::Scene
 }
 
-/// Parses scene text: syntax and type errors only.
+/// Parses scene text: syntax and type errors only (the first one), or
+/// every unknown field at once.
 pub fn parse(src: &Source) -> Result<SceneSpec, Report> {
-    ron_options()
-        .from_str::<SceneSpec>(&src.text)
-        .map_err(|e| Report {
-            source: src.clone(),
-            diagnostics: vec![ron_diagnostic(src, &e)],
-        })
+    super::fields::read(src)
 }
 
 /// Checks a scene whose path is relative to the working directory: reads

@@ -166,6 +166,7 @@ pub struct Body {
 
 /// An inertia tensor about the centre of mass, in body axes, kg m².
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Inertia {
     /// Principal moments `(Ixx, Iyy, Izz)` along the body axes.
     Diag(Num, Num, Num),
@@ -190,6 +191,7 @@ pub struct Marker {
 
 /// A rotation: how a frame's axes sit in its reference frame's axes.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Orientation {
     /// No rotation.
     #[default]
@@ -237,6 +239,7 @@ impl Frame {
 
 /// The kind of a joint, with its axes in joint-frame axes.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum JointKind {
     /// Rotation about `axis`: one coordinate, the angle (rad).
     Revolute {
@@ -368,6 +371,7 @@ pub struct Anchor {
 
 /// A force element.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Force {
     /// Linear spring and damper between two points:
     /// `F = k (L - rest_length) + c dL/dt` along the line.
@@ -427,6 +431,7 @@ pub enum Force {
 
 /// A constraint that is not a joint.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Constraint {
     /// A thin disk or wheel rolling without slipping on the ground plane
     /// `z = 0` (world +z up): contact point at rest (nonholonomic).
@@ -454,6 +459,7 @@ pub enum Constraint {
 
 /// A quantity the scene wants computed.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub enum Output {
     /// Position of a marker in world axes.
     Position {

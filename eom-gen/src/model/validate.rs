@@ -56,6 +56,8 @@ pub fn check(src: &Source, spec: &Spec, root: Option<&Node>) -> (Option<System>,
         state_names: HashMap::new(),
         later_params: Vec::new(),
         failed_params: HashSet::new(),
+        failed_joints: HashSet::new(),
+        failed_markers: HashSet::new(),
     };
     let system = cx.system(spec);
     let mut diags = cx.diags;
@@ -81,6 +83,11 @@ struct Ctx<'a> {
     /// Parameters whose value was wrong (already reported): uses of them
     /// fail silently rather than as unknown names.
     failed_params: HashSet<String>,
+    /// Joints with an error (already reported): references to them fail
+    /// silently rather than as unknown joints.
+    failed_joints: HashSet<String>,
+    /// Markers `(body, marker)` with an error (already reported), likewise.
+    failed_markers: HashSet<(String, String)>,
 }
 
 pub(crate) fn is_ident(s: &str) -> bool {
@@ -383,15 +390,21 @@ impl Ctx<'_> {
             .as_ref()
             .and_then(|g| self.vec3(g, &[f("gravity")], Scope::Params));
         let bodies = self.bodies(spec);
-        let joints = self.joints(spec, &bodies);
+        let (mut joints, joints_ok) = self.joints(spec, &bodies);
         let graph = self.graph(spec, &bodies);
-        let (Some(graph), Some(mut joints)) = (graph, joints) else {
-            return None;
-        };
-        self.assign_coordinates(spec, &graph, &mut joints);
+        if let (Some(graph), true) = (&graph, joints_ok) {
+            self.assign_coordinates(spec, graph, &mut joints);
+        }
+        // Forces, constraints and outputs are checked even when a joint or
+        // the graph is wrong, against the joints that are right (without
+        // the checks that need the tree: forces on cut joints), so that
+        // one run reports every independent error.
         let (forces, inputs) = self.forces(spec, &bodies, &joints);
         let constraints = self.constraints(spec, &bodies);
         let outputs = self.outputs(spec, &bodies, &joints);
+        let (Some(graph), true) = (graph, joints_ok) else {
+            return None;
+        };
         let mut system = System {
             name: spec.name.clone(),
             gravity,
@@ -526,11 +539,15 @@ impl Ctx<'_> {
                     position: marker.position.clone(),
                     orientation: marker.orientation.clone(),
                 };
-                if let Some(frame) = self.frame(&frame, &mpath) {
-                    markers.push(MarkerInfo {
+                match self.frame(&frame, &mpath) {
+                    Some(frame) => markers.push(MarkerInfo {
                         name: marker.name.clone(),
                         frame,
-                    });
+                    }),
+                    None => {
+                        self.failed_markers
+                            .insert((b.name.clone(), marker.name.clone()));
+                    }
                 }
             }
             bodies.push(BodyInfo {
@@ -623,7 +640,8 @@ impl Ctx<'_> {
         Some(rows)
     }
 
-    fn joints(&mut self, spec: &Spec, bodies: &[BodyInfo]) -> Option<Vec<JointInfo>> {
+    /// The joints that are right, and whether all are.
+    fn joints(&mut self, spec: &Spec, bodies: &[BodyInfo]) -> (Vec<JointInfo>, bool) {
         let mut seen: HashMap<&str, usize> = HashMap::new();
         let mut out = Vec::new();
         let mut ok = true;
@@ -647,10 +665,13 @@ impl Ctx<'_> {
             let child = self.body_ref(bodies, &j.child, &join(&path, &[f("child")]), "child");
             match self.joint(j, &path, parent, child) {
                 Some(info) => out.push(info),
-                None => ok = false,
+                None => {
+                    self.failed_joints.insert(j.name.clone());
+                    ok = false;
+                }
             }
         }
-        ok.then_some(out)
+        (out, ok)
     }
 
     fn body_ref(
@@ -797,6 +818,23 @@ impl Ctx<'_> {
         } else if j.locked {
             motion = Motion::Locked;
         }
+        // Values that would be dropped without a word.
+        let ignored = match motion {
+            Motion::Locked if j.u0.is_some() => Some(("u0", "locked", "it does not move")),
+            Motion::Prescribed(_) if j.q0.is_some() || j.u0.is_some() => Some((
+                if j.q0.is_some() { "q0" } else { "u0" },
+                "prescribed",
+                "its position and speed follow `prescribed` from t = 0",
+            )),
+            _ => None,
+        };
+        if let Some((field, what, why)) = ignored {
+            self.warning(
+                &join(path, &[f(field)]),
+                format!("`{field}` of {what} joint `{}` is ignored", j.name),
+                format!("{why}; remove `{field}`"),
+            );
+        }
         Some(JointInfo {
             name: j.name.clone(),
             kind: kind?,
@@ -838,6 +876,10 @@ impl Ctx<'_> {
                         list_names(default.iter().map(String::as_str))
                     ),
                 );
+                // Still names: their uses are not unknown names.
+                for name in names.iter().filter(|n| is_ident(n)) {
+                    self.state_names.entry(name.clone()).or_insert(what);
+                }
                 return None;
             }
             Some(names) => names.clone(),
@@ -1052,6 +1094,9 @@ impl Ctx<'_> {
         if let Some(j) = joints.iter().position(|j| j.name == name) {
             return Some(j);
         }
+        if self.failed_joints.contains(name) {
+            return None;
+        }
         let names = joints.iter().map(|j| j.name.as_str());
         let help = match did_you_mean(name, names.clone()) {
             Some(best) => format!("did you mean `{best}`?"),
@@ -1117,6 +1162,9 @@ impl Ctx<'_> {
             }),
             (None, Some(m)) => {
                 let Some(marker) = bodies[body].markers.iter().find(|x| &x.name == m) else {
+                    if self.failed_markers.contains(&(a.body.clone(), m.clone())) {
+                        return None;
+                    }
                     let names = bodies[body].markers.iter().map(|x| x.name.as_str());
                     self.error(
                         &join(path, &[f("marker")]),
@@ -1492,7 +1540,10 @@ impl Ctx<'_> {
                     let b = self.body_ref(bodies, body, &join(&path, &[f("body")]), "output");
                     let m = b.and_then(|b| {
                         let found = bodies[b].markers.iter().position(|x| &x.name == marker);
-                        if found.is_none() {
+                        let failed = self
+                            .failed_markers
+                            .contains(&(body.clone(), marker.clone()));
+                        if found.is_none() && !failed {
                             let names = bodies[b].markers.iter().map(|x| x.name.as_str());
                             self.error(
                                 &join(&path, &[f("marker")]),
