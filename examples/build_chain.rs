@@ -31,7 +31,17 @@ fn main() -> ExitCode {
     };
     let text = n_link_chain(n, !planar).to_ron();
     match check(&Source::new("<builder>", text.clone())) {
-        Ok(checked) => eprint!("{}", eom_gen::summary::human(&checked)),
+        Ok(checked) => {
+            let sys = &checked.system;
+            eprintln!(
+                "{}: {} bodies, nq = {}, nu = {} ({})",
+                sys.name,
+                sys.bodies.len() - 1,
+                sys.nq(),
+                sys.nu(),
+                sys.coordinate_names().join(", ")
+            );
+        }
         Err(report) => {
             eprint!("{report}");
             return ExitCode::from(1);

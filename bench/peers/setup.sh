@@ -28,7 +28,7 @@ for need in "$prefix/include/pinocchio/algorithm/aba.hpp" "$prefix/include/eigen
 done
 
 # 2. eom-gen and the chains (eom_gen::model::builder::n_link_chain).
-(cd "$root" && nice -n 10 cargo build -q --release -p eom-gen --bin eom-gen \
+(cd "$root" && nice -n 10 cargo build -q --release -p eom-cli --bin eom-gen \
     && nice -n 10 cargo build -q --release -p eom --example build_chain)
 for n in 5 10 50; do
     "$bin/examples/build_chain" "$n" "$out/models/planar_chain$n.ron" --planar 2>/dev/null

@@ -20,7 +20,7 @@ export CARGO_BUILD_JOBS="${CARGO_BUILD_JOBS:-1}"
 sizes=("$@")
 [ ${#sizes[@]} -gt 0 ] || sizes=(5 10 20 50 100 200)
 
-(cd "$root" && nice -n 10 cargo build -q --release -p eom-gen --bin eom-gen \
+(cd "$root" && nice -n 10 cargo build -q --release -p eom-cli --bin eom-gen \
     && nice -n 10 cargo build -q --release -p eom --example build_chain)
 gen="$root/target/release/eom-gen"
 chain="$root/target/release/examples/build_chain"

@@ -1,6 +1,9 @@
 //! eom-gen: a symbolic equation-of-motion generator for multibody systems.
 //!
-//! The pipeline runs one way (see `DESIGN.md`):
+//! This crate is the generator only; the `eom-gen` command line is the
+//! `eom-cli` crate, and `docs/ARCHITECTURE.md` maps the whole.
+//!
+//! The pipeline runs one way:
 //! [`model`] (load a RON model, scene or URDF with [`load`], parse and
 //! check it) → [`System`] (validated, with its [`graph`]: spanning tree and
 //! cut joints) → [`mech`] (kinematics and dynamics as [`sym`] expressions)
@@ -12,9 +15,7 @@
 //! [`model`], yet an error found while formulating still names its
 //! `file:line:col` ([`GenerateError`] renders a [`Report`]).
 
-pub mod bench;
 pub mod builder;
-pub mod compiled;
 pub mod diag;
 pub mod emit;
 pub mod expr;
@@ -24,12 +25,9 @@ pub mod graph;
 pub mod interpret;
 pub mod mech;
 pub mod model;
-pub mod plot;
-pub mod summary;
 pub mod sym;
 pub mod system;
 pub mod testkit;
-pub mod work_precision;
 
 pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;

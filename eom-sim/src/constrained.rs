@@ -250,8 +250,8 @@ impl<M: ConstrainedModel> Dynamics for Generated<'_, M> {
     }
 }
 
-/// How constraints are kept (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// How constraints are kept (see the module docs); projection by default.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Method {
     /// Multipliers with Baumgarte stabilisation `γ − 2α Φ̇ − β² Φ`.
     Baumgarte {
@@ -261,6 +261,7 @@ pub enum Method {
         beta: f64,
     },
     /// Multipliers, then projection of `q` and `u` after every step.
+    #[default]
     Projection,
     /// Multipliers, then the dependent coordinates and speeds recomputed
     /// from the independent ones after every step.

@@ -655,12 +655,6 @@ pub struct ConstraintReport {
     pub cut_joint_reactions: std::collections::BTreeMap<String, Reaction>,
 }
 
-impl Default for Method {
-    fn default() -> Self {
-        Method::Projection
-    }
-}
-
 /// What a run did.
 #[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]

@@ -3,7 +3,7 @@
 //! constraint solver), the error at the end time on the left and the
 //! largest error along the path on the right.
 
-use crate::work_precision::WorkPrecision;
+use crate::sweep::WorkPrecision;
 use plotters::prelude::*;
 
 /// Errors below this are drawn at it (round-off level).

@@ -1,4 +1,11 @@
-//! The `eom-gen` command-line tool.
+//! The `eom-gen` command-line tool: the application on top of the
+//! generator library (`eom_gen`) and the runtime (`eom_sim`).
+
+mod bench;
+mod compiled;
+mod plot;
+mod summary;
+mod sweep;
 
 use clap::{Parser, Subcommand};
 use eom_gen::functions::{Function, Layout, TABLE};
@@ -249,7 +256,7 @@ fn main() -> ExitCode {
                 };
                 return bench_plot(&plot, &svg, error_label.as_deref());
             }
-            let mut wp = eom_gen::work_precision::WpOptions {
+            let mut wp = crate::sweep::WpOptions {
                 ref_tol,
                 samples,
                 min_total_s: min_time,
@@ -276,10 +283,10 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             }
-            if work_precision || suite {
-                if let Err(e) = eom_gen::work_precision::validate(&wp) {
-                    problems.extend(e);
-                }
+            if (work_precision || suite)
+                && let Err(e) = crate::sweep::validate(&wp)
+            {
+                problems.extend(e);
             }
             if !problems.is_empty() {
                 for p in problems {
@@ -309,7 +316,7 @@ fn main() -> ExitCode {
                 }
                 return bench_work_precision(&model, &wp, csv.as_deref(), svg.as_deref(), json);
             }
-            let o = eom_gen::bench::PerCallOptions {
+            let o = crate::bench::PerCallOptions {
                 states,
                 reps,
                 seed,
@@ -405,7 +412,7 @@ fn check(path: &str, json: bool) -> ExitCode {
             eprint!("{}", checked.render_warnings());
             let notes = checked.urdf_notes.clone().unwrap_or_default();
             if json {
-                let mut v = eom_gen::summary::json(&checked);
+                let mut v = crate::summary::json(&checked);
                 if let Some(notes) = &checked.urdf_notes {
                     v["urdf_notes"] = serde_json::json!(notes);
                 }
@@ -418,7 +425,7 @@ fn check(path: &str, json: bool) -> ExitCode {
                 }
                 println!("{v}");
             } else {
-                print!("{}", eom_gen::summary::human(&checked));
+                print!("{}", crate::summary::human(&checked));
                 if let Some(s) = &checked.scene {
                     println!("  scene        {}", s.source.path);
                     if s.spec.functions.is_some() {
@@ -637,7 +644,7 @@ fn stats(path: &str) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-fn bench(path: &str, per_call: bool, o: &eom_gen::bench::PerCallOptions, json: bool) -> ExitCode {
+fn bench(path: &str, per_call: bool, o: &crate::bench::PerCallOptions, json: bool) -> ExitCode {
     if !per_call {
         eprintln!("error: say what to measure: --per-call, --work-precision or --suite");
         return ExitCode::from(2);
@@ -651,13 +658,13 @@ fn bench(path: &str, per_call: bool, o: &eom_gen::bench::PerCallOptions, json: b
         Err(code) => return code,
     };
     eprint!("{}", g.checked.render_warnings());
-    match eom_gen::bench::per_call(&g, o) {
+    match crate::bench::per_call(&g, o) {
         Ok(r) if json => {
-            println!("{}", eom_gen::bench::json(&g, o, &r));
+            println!("{}", crate::bench::json(&g, o, &r));
             ExitCode::SUCCESS
         }
         Ok(r) => {
-            print!("{}", eom_gen::bench::table(&g, o, &r));
+            print!("{}", crate::bench::table(&g, o, &r));
             ExitCode::SUCCESS
         }
         Err(e) => {
@@ -738,8 +745,7 @@ fn eval(
         };
         Ok(eom_gen::interpret::evaluate(&g.formulation, &point))
     } else {
-        eom_gen::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t)
-            .map_err(|e| e.to_string())
+        crate::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t).map_err(|e| e.to_string())
     };
     match result {
         Ok(e) => {
@@ -833,7 +839,7 @@ fn simulate(path: &str, o: &RunOptions, json: bool, interpret: bool) -> ExitCode
     let result = if interpret {
         eom_gen::interpret::simulate(&g.formulation, sys, o).map_err(|e| e.to_string())
     } else {
-        eom_gen::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o)
+        crate::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o)
             .map_err(|e| e.to_string())
     };
     let r: RunReport = match result {
@@ -947,10 +953,10 @@ fn wp_progress(label: &str) -> indicatif::ProgressBar {
 
 fn wp_sweep(
     g: &eom_gen::Generated,
-    o: &eom_gen::work_precision::WpOptions,
+    o: &crate::sweep::WpOptions,
     bar: &indicatif::ProgressBar,
-) -> Result<eom_gen::work_precision::WorkPrecision, String> {
-    eom_gen::work_precision::run(g, o, &mut |done, total, p| {
+) -> Result<crate::sweep::WorkPrecision, String> {
+    crate::sweep::run(g, o, &mut |done, total, p| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
         if let Some(p) = p {
@@ -983,12 +989,12 @@ fn write_file(path: &str, text: &str) -> Result<(), ExitCode> {
 
 fn bench_work_precision(
     path: &str,
-    o: &eom_gen::work_precision::WpOptions,
+    o: &crate::sweep::WpOptions,
     csv: Option<&str>,
     svg: Option<&str>,
     json: bool,
 ) -> ExitCode {
-    use eom_gen::work_precision as wp;
+    use crate::sweep as wp;
     if let Err(errors) = wp::validate(o) {
         for e in errors {
             eprintln!("error: {e}");
@@ -1038,13 +1044,8 @@ fn bench_work_precision(
 
 /// Every model in `dir` (`*.ron`, sorted), swept with its suite settings;
 /// `MODEL.csv`, `MODEL.svg` and a summary `suite.md` in `out`.
-fn bench_suite(
-    dir: &str,
-    out: &str,
-    o: &eom_gen::work_precision::WpOptions,
-    t_end_given: bool,
-) -> ExitCode {
-    use eom_gen::work_precision as wp;
+fn bench_suite(dir: &str, out: &str, o: &crate::sweep::WpOptions, t_end_given: bool) -> ExitCode {
+    use crate::sweep as wp;
     let mut models: Vec<std::path::PathBuf> = match std::fs::read_dir(dir) {
         Ok(entries) => entries
             .flatten()
@@ -1147,7 +1148,7 @@ fn bench_suite(
 /// Plots work-precision CSV files: one SVG per model (`FILE.svg`, or
 /// `FILE-MODEL.svg` when the files hold several models).
 fn bench_plot(files: &[String], svg: &str, error_label: Option<&str>) -> ExitCode {
-    use eom_gen::work_precision as wp;
+    use crate::sweep as wp;
     let mut all: Vec<wp::WorkPrecision> = Vec::new();
     let mut errors = Vec::new();
     for f in files {

@@ -14,7 +14,7 @@
 //! results are written as a table, JSON, CSV and a log-log SVG plot.
 
 use crate::compiled::{CachedCrate, build_cached, model_module};
-use crate::generate::Generated;
+use eom_gen::generate::Generated;
 use eom_sim::work_precision::{PointSummary, ReferenceSummary};
 use eom_sim::{Integrator, Method};
 use serde::Deserialize;
@@ -571,7 +571,7 @@ pub fn json(w: &WorkPrecision) -> serde_json::Value {
         "reference": {
             "integrator": r.integrator, "check": r.check, "tol": r.tol,
             "constraints": if w.constrained { Some(&r.constraints) } else { None },
-            "samples": r.samples, "rhs_evals": r.rhs_evals, "q_final": r.q_final,
+            "t_end": r.t_end, "samples": r.samples, "rhs_evals": r.rhs_evals, "q_final": r.q_final,
             "check_end_error": r.check_end_error, "check_path_error": r.check_path_error,
         },
         "points": points,

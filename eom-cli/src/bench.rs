@@ -14,8 +14,8 @@
 //! the quartiles and the extremes.
 
 use crate::compiled::{CachedCrate, build_cached};
-use crate::emit::camel;
-use crate::generate::Generated;
+use eom_gen::emit::camel;
+use eom_gen::generate::Generated;
 
 /// How to measure.
 #[derive(Clone, Debug)]
@@ -210,9 +210,9 @@ pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, String> {
 pub fn op_totals(g: &Generated) -> [Option<usize>; 3] {
     let f = &g.formulation;
     [
-        f.program(crate::functions::Function::ForwardDynamics),
-        f.program(crate::functions::Function::MassMatrix),
-        f.program(crate::functions::Function::InverseDynamics),
+        f.program(eom_gen::functions::Function::ForwardDynamics),
+        f.program(eom_gen::functions::Function::MassMatrix),
+        f.program(eom_gen::functions::Function::InverseDynamics),
     ]
     .map(|p| p.as_ref().map(|p| p.op_count().total()))
 }

@@ -6,8 +6,8 @@
 //! The cache is `$EOM_CACHE_DIR`, else `$XDG_CACHE_HOME/eom`, else
 //! `~/.cache/eom`; all cached crates share one target directory there.
 
-use crate::emit::{camel, fnv1a};
-use crate::interpret::Evaluation;
+use eom_gen::emit::{camel, fnv1a};
+use eom_gen::interpret::Evaluation;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

@@ -1,7 +1,7 @@
 //! What `eom-gen check` prints: a human summary and a JSON object.
 
-use crate::model::{Checked, closure_gaps, initial_poses};
-use crate::system::{Motion, System};
+use eom_gen::model::{Checked, closure_gaps, initial_poses};
+use eom_gen::system::{Motion, System};
 use serde_json::{Value, json};
 
 /// The `check --json` object.
@@ -65,11 +65,11 @@ pub fn json(checked: &Checked) -> Value {
 /// if there are any: the speeds' degrees of freedom.
 /// With it, the assembly's `max |Φ|`, `max |J u + Φ_t|` and Newton
 /// iterations.
-fn mobility(sys: &System) -> Option<(crate::mech::numeric::Mobility, (f64, f64, usize))> {
+fn mobility(sys: &System) -> Option<(eom_gen::mech::numeric::Mobility, (f64, f64, usize))> {
     if sys.graph.cut_joints().is_empty() && sys.constraints.is_empty() {
         return None;
     }
-    let num = crate::mech::Numeric::new(sys).ok()?;
+    let num = eom_gen::mech::Numeric::new(sys).ok()?;
     let a = num.assemble(&sys.q0(), &sys.u0(), 0.0).ok()?;
     let m = num.mobility(&a.q, 0.0).ok()?;
     Some((m, (a.residual, a.velocity_residual, a.iterations)))

@@ -1,0 +1,68 @@
+//! The command line on URDF files: `import`, and every command taking a
+//! `.urdf` directly.
+
+use std::process::Command;
+
+fn path(name: &str) -> String {
+    format!(
+        "{}/../eom-gen/tests/urdf/{name}",
+        env!("CARGO_MANIFEST_DIR")
+    )
+}
+
+fn eom_gen_cli(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+        .args(args)
+        .output()
+        .expect("run eom-gen")
+}
+
+/// `import` writes a RON model that checks on its own; `check --json` takes
+/// the URDF directly and lists the coordinates.
+#[test]
+fn cli_import_and_check() {
+    let dir = std::env::temp_dir().join(format!("eom-urdf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let out_file = dir.join("tree.ron");
+    let out_path = out_file.to_string_lossy().to_string();
+    let o = eom_gen_cli(&["import", &path("tree.urdf"), "-o", &out_path]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("merged"), "{err}");
+    let o = eom_gen_cli(&["check", "--json", &out_path]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let o = eom_gen_cli(&["check", "--json", &path("tree.urdf")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(
+        v["coordinate_names"],
+        serde_json::json!(["hip", "shoulder_r", "shoulder_l", "elbow_l"])
+    );
+    assert!(
+        v["urdf_notes"][0]
+            .as_str()
+            .is_some_and(|n| n.contains("merged"))
+    );
+
+    let o = eom_gen_cli(&["eval", "--interpret", &path("arm2.urdf"), "--q", "0,0"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+
+    let o = eom_gen_cli(&["dump", &path("arm2.urdf")]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let head = String::from_utf8_lossy(&o.stdout);
+    let first = head.lines().next().unwrap_or_default();
+    assert!(
+        first.contains("arm2.urdf`") && !first.contains("(converted)"),
+        "{first}"
+    );
+
+    let o = eom_gen_cli(&["check", &path("bad.urdf")]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("bad.urdf:14:26: error: unknown joint type"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
