@@ -35,8 +35,9 @@ pub use generate::{
     GenerateError, Generated, generate, generate_checked, generate_file, generate_file_with,
     generate_tokens, generate_tokens_checked, generate_tokens_in, generate_with,
 };
+pub use model::load_model;
 pub use model::{
     Checked, Diagnostic, Format, Loaded, Report, Source, Spec, check, check_file, load, urdf,
 };
 pub use system::System;
-pub use urdf::{Import, import_file, load_model};
+pub use urdf::{Import, import_file};

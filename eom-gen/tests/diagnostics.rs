@@ -199,7 +199,7 @@ fn diagnose_scene(edits: &[(&str, &str)]) -> String {
     let _ = std::fs::create_dir_all(root.join("scenes"));
     std::fs::write(root.join("scenes/tip.scene.ron"), &text).expect("write the scene");
     let src = Source::new("scenes/tip.scene.ron", text);
-    let out = match eom_gen::model::scene::check_in(&src, &root) {
+    let out = match eom_gen::model::check_in(&src, &root) {
         Ok(c) => format!("valid\n{}", c.render_warnings()),
         Err(report) => {
             assert!(

@@ -4,7 +4,7 @@
 //! values replaced by hostile ones (`inf`, `NaN`, huge exponents, unknown
 //! names, unbalanced brackets).
 
-use eom_gen::model::{Source, check, load, scene};
+use eom_gen::model::{Source, check, load};
 use proptest::prelude::*;
 
 fn bundled() -> Vec<String> {
@@ -192,7 +192,7 @@ proptest! {
             text = apply(&text, m);
         }
         let root = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/.."));
-        match scene::check_in(&Source::new(path, text), root) {
+        match eom_gen::model::check_in(&Source::new(path, text), root) {
             // An accepted scene asks for functions from which every other
             // one can be computed.
             Ok(c) => prop_assert_eq!(c.request(), c.request().derivable()),

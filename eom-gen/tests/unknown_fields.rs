@@ -26,7 +26,7 @@ fn workspace() -> PathBuf {
 fn check_text(path: &str, text: &str) -> Result<(), Report> {
     let src = Source::new(path, text);
     if scene::is_scene(path, text) {
-        scene::check_in(&src, &workspace()).map(|_| ())
+        eom_gen::model::check_in(&src, &workspace()).map(|_| ())
     } else {
         check(&src).map(|_| ())
     }

@@ -73,17 +73,18 @@ impl Binding<'_> {
                 let name = format_ident!("{}", s.name);
                 quote!(self.params.#name)
             }
-            SymKind::Input => {
-                // Validation declares only the model's inputs as inputs.
-                let k = self
-                    .sys
-                    .inputs
-                    .iter()
-                    .position(|n| *n == s.name)
-                    .unwrap_or(0);
-                let k = Literal::usize_unsuffixed(k);
-                quote!(self.inputs[#k])
-            }
+            // Formulation declares only the model's inputs as inputs; any
+            // other would be a generator bug, and fails to compile loudly.
+            SymKind::Input => match self.sys.inputs.iter().position(|n| *n == s.name) {
+                Some(k) => {
+                    let k = Literal::usize_unsuffixed(k);
+                    quote!(self.inputs[#k])
+                }
+                None => {
+                    let msg = format!("eom-gen: `{}` is not an input of the model", s.name);
+                    quote!(::core::compile_error!(#msg))
+                }
+            },
             SymKind::Multiplier(i) => {
                 let i = idx(i);
                 quote!(self.multipliers[#i])

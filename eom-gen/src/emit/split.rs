@@ -101,10 +101,16 @@ fn statements(
                 let t = tmp(t);
                 quote!(#t)
             }
-            Operand::Tmp(t) => {
-                let k = Literal::usize_unsuffixed(slots.get(&t).copied().unwrap_or(0));
-                quote!(s[#k])
-            }
+            // Every temporary read across parts has a slot (see `lower`).
+            Operand::Tmp(t) => match slots.get(&t) {
+                Some(&k) => {
+                    let k = Literal::usize_unsuffixed(k);
+                    quote!(s[#k])
+                }
+                None => quote!(::core::compile_error!(
+                    "eom-gen: a temporary read across parts has no slot"
+                )),
+            },
         }
     };
     // Products used once, by an addition in this part: fused into it.

@@ -7,38 +7,10 @@
 //! [`generate_file`](crate::generate_file), the [`Builder`](crate::Builder),
 //! the CLI and `#[multibody]` all go through here.
 
+use super::read::{Format, read_in, read_text};
 use super::{Checked, check_model, scene, urdf};
-use crate::diag::{Diagnostic, Report, Source, Span};
+use crate::diag::{Report, Source};
 use std::path::Path;
-
-/// What a model file holds.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
-    /// A RON model, `Model(…)`.
-    Ron,
-    /// A scene, `Scene(model: "…", …)`, naming a RON or URDF model.
-    Scene,
-    /// A URDF robot description, converted to a RON model when loaded.
-    Urdf,
-}
-
-impl Format {
-    /// The format of the file `path` with contents `text`: `.urdf` (any
-    /// case) is URDF; a name ending in `.scene.ron`, or text whose
-    /// top-level value is `Scene(…)`, is a scene; anything else a RON model.
-    pub fn of(path: &str, text: &str) -> Format {
-        let ext = Path::new(path).extension();
-        if ext.is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
-            Format::Urdf
-        } else if path.ends_with(".scene.ron")
-            || super::locate::parse(text).is_some_and(|n| n.name.as_deref() == Some("Scene"))
-        {
-            Format::Scene
-        } else {
-            Format::Ron
-        }
-    }
-}
 
 /// A model file, read and (for a URDF) converted.
 #[derive(Clone, Debug)]
@@ -84,7 +56,7 @@ impl Loaded {
     /// scene's model is read from there).
     pub fn check_in(&self, root: &Path) -> Result<Checked, Report> {
         match self.format {
-            Format::Scene => scene::check_in(&self.source, root),
+            Format::Scene => check_scene(&self.source, root),
             Format::Ron | Format::Urdf => {
                 let mut checked = check_model(&self.source)?;
                 checked.urdf_notes = self.urdf_notes.clone();
@@ -105,61 +77,38 @@ pub fn load_in(root: &Path, path: &str) -> Result<Loaded, Report> {
     Loaded::from_source(read_in(root, path)?)
 }
 
-/// Reads a file as text, without looking at what it is.
-pub fn read(path: &str) -> Result<Source, Report> {
-    read_in(Path::new(""), path)
+/// Reads a model file of any format and returns the RON text to check: a
+/// `.urdf` converted (URDF errors are reported against the URDF), anything
+/// else as is. The same as [`load`]`(path)?.source`.
+pub fn load_model(path: &str) -> Result<Source, Report> {
+    Ok(load(path)?.source)
 }
 
-/// [`read`] for a `path` relative to `root` (diagnostics name `path`).
-pub fn read_in(root: &Path, path: &str) -> Result<Source, Report> {
-    read_text(root, path).map_err(|e| Report {
-        source: Source::new(path, ""),
-        diagnostics: vec![
-            Diagnostic::file_error(format!("cannot read model file: {e}"))
-                .with_help("give the path of a `.ron` model file, e.g. `models/pendulum.ron`"),
-        ],
-    })?
-}
-
-/// The file's text; an I/O error apart (a scene reports it at its `model`
-/// field), invalid UTF-8 as a diagnostic at its first bad byte.
-pub(crate) fn read_text(root: &Path, path: &str) -> std::io::Result<Result<Source, Report>> {
-    let bytes = std::fs::read(root.join(path))?;
-    Ok(match String::from_utf8(bytes) {
-        Ok(text) => Ok(Source::new(path, text)),
-        Err(e) => {
-            let at = e.utf8_error().valid_up_to();
-            let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
-            Err(Report {
-                source: Source::new(path, text),
-                diagnostics: vec![
-                    Diagnostic::error(Span::new(at, at + 1), "model file is not valid UTF-8")
-                        .with_help("save the file as UTF-8 text"),
-                ],
-            })
-        }
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn format_is_told_by_name_then_text() {
-        assert_eq!(
-            Format::of("r.URDF", "Scene(model: \"m.ron\")"),
-            Format::Urdf
-        );
-        assert_eq!(Format::of("a.scene.ron", ""), Format::Scene);
-        assert_eq!(
-            Format::of("a.ron", "// c\nScene(model: \"m.ron\")"),
-            Format::Scene
-        );
-        assert_eq!(Format::of("a.ron", "Model(name: \"m\")"), Format::Ron);
-        assert_eq!(
-            Format::of("robot.urdf (converted)", "Model(name: \"m\")"),
-            Format::Ron
-        );
+/// A scene: reads and validates its model (RON or URDF, relative to
+/// `root`), then validates the scene against it and applies it.
+fn check_scene(src: &Source, root: &Path) -> Result<Checked, Report> {
+    let spec = scene::parse(src)?;
+    let shown = scene::model_path(&src.path, &spec.model);
+    let shown_str = shown.display().to_string();
+    let read = read_text(root, &shown_str).map_err(|e| {
+        scene::model_error(
+            src,
+            format!(
+                "cannot read model `{}` (`{}`): {e}",
+                spec.model,
+                shown.display()
+            ),
+            "`model` is the path of a `.ron` model or `.urdf` file, relative to this scene file",
+        )
+    })?;
+    let model = Loaded::from_source(read?)?;
+    if model.format == Format::Scene {
+        return Err(scene::model_error(
+            src,
+            format!("model `{}` is itself a scene", spec.model),
+            "a scene names a model file; copy what the other scene selects into this one",
+        ));
     }
+    let checked = model.check_in(root)?;
+    scene::apply(src, spec, shown, checked)
 }

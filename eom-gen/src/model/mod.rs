@@ -16,6 +16,7 @@ pub mod builder;
 mod fields;
 mod load;
 pub mod locate;
+mod read;
 pub mod rotation;
 pub mod scene;
 pub mod spec;
@@ -27,7 +28,8 @@ mod validate;
 // re-exported here under their old paths.
 pub use crate::{diag, expr};
 pub use diag::{Diagnostic, Report, Severity, Source, Span};
-pub use load::{Format, Loaded, load, load_in, read, read_in};
+pub use load::{Loaded, load, load_in, load_model};
+pub use read::{Format, read, read_in};
 pub use spec::Spec;
 // The initial state is computed below the model (the constraint formulation
 // needs it too); re-exported for the validator's users.

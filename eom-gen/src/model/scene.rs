@@ -10,9 +10,10 @@
 //! all see only what the scene asks for. The format is in
 //! `docs/model-format.md` ("Scenes").
 
+use super::Checked;
 use super::locate::{self, Node, Seg, string_contents_start};
+use super::read::Format;
 use super::spec::{Num, Output};
-use super::{Checked, Format, Loaded};
 use crate::diag::{Diagnostic, Report, Source, Span, did_you_mean, list_names};
 use crate::expr::Ast;
 pub use crate::functions::Function;
@@ -105,43 +106,26 @@ pub fn parse(src: &Source) -> Result<SceneSpec, Report> {
     super::fields::read(src)
 }
 
-/// Checks a scene whose path is relative to the working directory: reads
-/// and validates its model, validates the scene against it and applies it.
-pub fn check(src: &Source) -> Result<Checked, Report> {
-    check_in(src, Path::new(""))
+/// A located error at the scene's `model` field.
+pub(crate) fn model_error(src: &Source, message: String, help: &str) -> Report {
+    let span =
+        locate::parse(&src.text).map_or(Span::default(), |r| r.span_of(&[Seg::Field("model")]));
+    Report {
+        source: src.clone(),
+        diagnostics: vec![Diagnostic::error(span, message).with_help(help)],
+    }
 }
 
-/// [`check`] for a scene whose `path` is relative to `root` (as in a
-/// proc macro, where paths are relative to the crate's manifest directory).
-/// Diagnostics name the paths relative to `root`.
-pub fn check_in(src: &Source, root: &Path) -> Result<Checked, Report> {
-    let spec = parse(src)?;
+/// Validates a parsed scene against its checked model and applies it
+/// (locks, parameters, outputs, functions); `model_path` is where the model
+/// was read from.
+pub(crate) fn apply(
+    src: &Source,
+    spec: SceneSpec,
+    model_path: PathBuf,
+    mut checked: Checked,
+) -> Result<Checked, Report> {
     let tree = locate::parse(&src.text);
-    let span = |path: &[Seg<'static>]| tree.as_ref().map_or(Span::default(), |r| r.span_of(path));
-    let shown = model_path(&src.path, &spec.model);
-    let fail = |message: String, help: &str| Report {
-        source: src.clone(),
-        diagnostics: vec![Diagnostic::error(span(&[Seg::Field("model")]), message).with_help(help)],
-    };
-    let shown_str = shown.display().to_string();
-    let read = super::load::read_text(root, &shown_str).map_err(|e| {
-        fail(
-            format!(
-                "cannot read model `{}` (`{}`): {e}",
-                spec.model,
-                shown.display()
-            ),
-            "`model` is the path of a `.ron` model or `.urdf` file, relative to this scene file",
-        )
-    })?;
-    let model = Loaded::from_source(read?)?;
-    if model.format == Format::Scene {
-        return Err(fail(
-            format!("model `{}` is itself a scene", spec.model),
-            "a scene names a model file; copy what the other scene selects into this one",
-        ));
-    }
-    let mut checked = model.check_in(root)?;
     let mut cx = Ctx {
         root: tree.as_ref(),
         src,
@@ -160,7 +144,7 @@ pub fn check_in(src: &Source, root: &Path) -> Result<Checked, Report> {
         source: src.clone(),
         spec,
         warnings: diags,
-        model_path: shown,
+        model_path,
     });
     Ok(checked)
 }

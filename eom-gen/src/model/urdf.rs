@@ -32,6 +32,7 @@
 //! several roots, bad numbers, inertia that is not positive definite, and
 //! massless links that move.
 
+use super::read::Format;
 use super::spec::{
     Body, Constraint, Force, Frame, Inertia, Joint, JointKind, Num, Orientation, Spec, V3,
 };
@@ -61,22 +62,15 @@ pub struct Import {
     pub notes: Vec<String>,
 }
 
-/// True if `path` ends in `.urdf` (any case; see [`Format::of`](super::Format::of)).
+/// True if `path` ends in `.urdf` (any case; see [`Format::of`]).
 pub fn is_urdf(path: &str) -> bool {
-    super::Format::of(path, "") == super::Format::Urdf
-}
-
-/// Reads a model file of any format and returns the RON text to check: a
-/// `.urdf` converted (URDF errors are reported against the URDF), anything
-/// else as is. The same as [`super::load`]`(path)?.source`.
-pub fn load_model(path: &str) -> Result<Source, Report> {
-    Ok(super::load(path)?.source)
+    Format::of(path, "") == Format::Urdf
 }
 
 /// Reads and converts a URDF file (whatever its name), with the notes of
-/// the conversion; [`super::load`] does the same for a `.urdf` file.
+/// the conversion; `model::load` does the same for a `.urdf` file.
 pub fn import_file(path: &str) -> Result<Import, Report> {
-    convert(&super::read(path)?)
+    convert(&super::read::read(path)?)
 }
 
 /// Where a URDF `<origin>` (or a chain of them) puts a frame: a rigid

@@ -82,4 +82,4 @@ pub use num::Num;
 pub use program::{Instr, LowerOptions, Op, OpCount, Operand, Program};
 pub use scalar::Scalar;
 pub use sexpr::{Display, MAX_DEPTH, SExpr};
-pub use simplify::{Report, Rewrite, Runner, StopReason, Uses, factor_common, rewrites};
+pub use simplify::{Rewrite, Runner, SimplifyReport, StopReason, Uses, factor_common, rewrites};

@@ -115,7 +115,7 @@ impl Default for Runner {
 
 /// What a run did.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Report {
+pub struct SimplifyReport {
     /// The simplified roots, in the order given.
     pub roots: Vec<Id>,
     /// Why it stopped.
@@ -139,7 +139,7 @@ impl Runner {
     }
 
     /// Simplify `roots` in `arena`. The arena's own rules are restored afterwards.
-    pub fn run(&self, arena: &mut Arena, roots: &[Id]) -> Report {
+    pub fn run(&self, arena: &mut Arena, roots: &[Id]) -> SimplifyReport {
         let start = Instant::now();
         let saved = arena.rules();
         // Nodes built under the runner's own rules are already canonical:
@@ -217,7 +217,7 @@ impl Runner {
         };
         arena.set_rules(saved);
         let after = arena.dag_size(&cur);
-        Report {
+        SimplifyReport {
             roots: cur,
             stop,
             iterations,
