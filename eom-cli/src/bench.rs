@@ -14,6 +14,7 @@
 //! the quartiles and the extremes.
 
 use crate::compiled::{CachedCrate, build_cached};
+use crate::error::Error;
 use eom_gen::emit::camel;
 use eom_gen::generate::Generated;
 
@@ -160,7 +161,7 @@ fn main() {
 "#;
 
 /// Builds (once, cached) the timing program of a generated model and runs it.
-pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, String> {
+pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, Error> {
     let name = &g.checked.system.name;
     let model = format!("{}\npub type MODEL = {};\n", g.source, camel(name));
     let exe = build_cached(&CachedCrate {
@@ -173,22 +174,22 @@ pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, String> {
     let out = std::process::Command::new(&exe)
         .args([o.states.to_string(), o.reps.to_string(), o.seed.to_string()])
         .output()
-        .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;
+        .map_err(|e| Error::Program(format!("cannot run {}: {e}", exe.display())))?;
     if !out.status.success() {
-        return Err(format!(
+        return Err(Error::Program(format!(
             "{} failed ({}): {}",
             exe.display(),
             out.status,
             String::from_utf8_lossy(&out.stderr)
-        ));
+        )));
     }
     let v: serde_json::Value = serde_json::from_slice(&out.stdout)
-        .map_err(|e| format!("unexpected output of {}: {e}", exe.display()))?;
-    let timing = |f: &str| -> Result<Timing, String> {
+        .map_err(|e| Error::Program(format!("unexpected output of {}: {e}", exe.display())))?;
+    let timing = |f: &str| -> Result<Timing, Error> {
         let x = |k: &str| {
             v[f][k]
                 .as_f64()
-                .ok_or_else(|| format!("{} printed no `{f}.{k}`", exe.display()))
+                .ok_or_else(|| Error::Program(format!("{} printed no `{f}.{k}`", exe.display())))
         };
         Ok(Timing {
             median: x("median")?,

@@ -6,6 +6,7 @@
 //! The cache is `$EOM_CACHE_DIR`, else `$XDG_CACHE_HOME/eom`, else
 //! `~/.cache/eom`; all cached crates share one target directory there.
 
+use crate::error::Error;
 use eom_gen::emit::{camel, fnv1a};
 use eom_gen::interpret::Evaluation;
 use std::path::{Path, PathBuf};
@@ -133,7 +134,7 @@ pub(crate) fn model_module(name: &str, source: &str, nq: usize, nu: usize) -> St
 }
 
 /// Builds (once) the cached crate of a model and returns its executable.
-pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<PathBuf, String> {
+pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<PathBuf, Error> {
     let model = model_module(name, source, nq, nu);
     build_cached(&CachedCrate {
         prefix: "eom-eval",
@@ -161,7 +162,7 @@ pub(crate) struct CachedCrate<'a> {
 
 /// Builds (once) a cached crate in release mode and returns its executable.
 /// The cache key covers the sources, the flags and the runtime used.
-pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, String> {
+pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, Error> {
     let root = cache_root();
     let key = format!(
         "{:016x}",
@@ -188,7 +189,7 @@ pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, String> {
     let exe = target.join("release").join(&exe_name);
     if !exe.exists() {
         std::fs::create_dir_all(dir.join("src"))
-            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+            .map_err(|e| Error::io(dir.display(), format!("cannot create the directory: {e}")))?;
         let manifest = format!(
             "[package]\nname = \"{exe_name}\"\nversion = \"0.0.0\"\nedition = \"2024\"\npublish = false\n\n[dependencies]\n{}\n\n[workspace]\n\n{PROFILE}",
             eom_sim_dependency()
@@ -199,7 +200,7 @@ pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, String> {
             ("src/model.rs", c.model),
         ] {
             std::fs::write(dir.join(file), text)
-                .map_err(|e| format!("cannot write {file}: {e}"))?;
+                .map_err(|e| Error::io(dir.join(file).display(), e))?;
         }
         eprintln!("compiling the generated code of `{name}` in release mode (first time only) …");
         let mut cargo = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
@@ -216,12 +217,12 @@ pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, String> {
         }
         let status = cargo
             .status()
-            .map_err(|e| format!("cannot run cargo: {e}"))?;
+            .map_err(|e| Error::Build(format!("cannot run cargo: {e}")))?;
         if !status.success() {
-            return Err(format!(
+            return Err(Error::Build(format!(
                 "building the generated code failed ({status}); the crate is in {}",
                 dir.display()
-            ));
+            )));
         }
     }
     Ok(exe)
@@ -229,13 +230,13 @@ pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, String> {
 
 /// Runs the cached executable of a model with one request and decodes
 /// its reply.
-fn request<T: serde::de::DeserializeOwned>(exe: &Path, request: &str) -> Result<T, RunError> {
+fn request<T: serde::de::DeserializeOwned>(exe: &Path, request: &str) -> Result<T, Error> {
     let out = Command::new(exe)
         .arg(request)
         .output()
-        .map_err(|e| RunError::Spawn(format!("cannot run {}: {e}", exe.display())))?;
+        .map_err(|e| Error::Program(format!("cannot run {}: {e}", exe.display())))?;
     if !out.status.success() {
-        return Err(RunError::Crashed(format!(
+        return Err(Error::Program(format!(
             "{} exited with {}: {}",
             exe.display(),
             out.status,
@@ -243,38 +244,9 @@ fn request<T: serde::de::DeserializeOwned>(exe: &Path, request: &str) -> Result<
         )));
     }
     let reply: Result<T, String> = serde_json::from_slice(&out.stdout)
-        .map_err(|e| RunError::Reply(format!("unexpected reply of {}: {e}", exe.display())))?;
-    reply.map_err(RunError::Refused)
+        .map_err(|e| Error::Program(format!("unexpected reply of {}: {e}", exe.display())))?;
+    reply.map_err(Error::Refused)
 }
-
-/// Why a compiled run failed.
-#[derive(Clone, Debug, PartialEq)]
-pub enum RunError {
-    /// Building the generated code failed.
-    Build(String),
-    /// The executable could not be started.
-    Spawn(String),
-    /// It stopped abnormally.
-    Crashed(String),
-    /// Its reply could not be read.
-    Reply(String),
-    /// It refused the request (the runner's message).
-    Refused(String),
-}
-
-impl std::fmt::Display for RunError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            RunError::Build(m)
-            | RunError::Spawn(m)
-            | RunError::Crashed(m)
-            | RunError::Reply(m)
-            | RunError::Refused(m) => f.write_str(m),
-        }
-    }
-}
-
-impl std::error::Error for RunError {}
 
 /// Builds (once) and runs the compiled model at a state: every function it
 /// offers, as [`Evaluation`].
@@ -285,12 +257,12 @@ pub fn evaluate(
     u: &[f64],
     tau: &[f64],
     t: f64,
-) -> Result<Evaluation, RunError> {
+) -> Result<Evaluation, Error> {
     #[derive(serde::Deserialize)]
     struct Reply {
         functions: Vec<(String, Vec<Option<f64>>)>,
     }
-    let exe = executable(name, source, q.len(), u.len()).map_err(RunError::Build)?;
+    let exe = executable(name, source, q.len(), u.len())?;
     let req = serde_json::json!({ "Eval": { "t": t, "q": q, "u": u, "tau": tau } });
     let reply: Reply = request(&exe, &req.to_string())?;
     Ok(Evaluation {
@@ -309,8 +281,8 @@ pub fn simulate(
     nq: usize,
     nu: usize,
     options: &eom_sim::RunOptions,
-) -> Result<eom_sim::RunReport, RunError> {
-    let exe = executable(name, source, nq, nu).map_err(RunError::Build)?;
+) -> Result<eom_sim::RunReport, Error> {
+    let exe = executable(name, source, nq, nu)?;
     let req = serde_json::json!({ "Run": options });
     request(&exe, &req.to_string())
 }

@@ -3,6 +3,7 @@
 
 mod bench;
 mod compiled;
+mod error;
 mod plot;
 mod summary;
 mod sweep;
@@ -11,6 +12,7 @@ use clap::{Parser, Subcommand};
 use eom_gen::functions::{Function, Layout, TABLE};
 use eom_gen::model::{Report, Severity};
 use eom_sim::{Integrator, Method, RunOptions, RunReport};
+use error::Error;
 use std::process::ExitCode;
 
 /// Symbolic equation-of-motion generator for multibody systems.
@@ -289,10 +291,7 @@ fn main() -> ExitCode {
                 problems.extend(e);
             }
             if !problems.is_empty() {
-                for p in problems {
-                    eprintln!("error: {p}");
-                }
-                return ExitCode::from(2);
+                return fail(&Error::Usage(problems));
             }
             if suite {
                 if model.is_some() || per_call || work_precision {
@@ -367,10 +366,7 @@ fn main() -> ExitCode {
                 .pop()
                 .unwrap_or(Method::Projection);
             if !problems.is_empty() {
-                for p in problems {
-                    eprintln!("error: {p}");
-                }
-                return ExitCode::from(2);
+                return fail(&Error::Usage(problems));
             }
             let o = RunOptions {
                 integrator,
@@ -745,7 +741,7 @@ fn eval(
         };
         Ok(eom_gen::interpret::evaluate(&g.formulation, &point))
     } else {
-        crate::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t).map_err(|e| e.to_string())
+        crate::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t)
     };
     match result {
         Ok(e) => {
@@ -803,6 +799,16 @@ fn evaluation_json(
     out
 }
 
+/// Prints an error (each usage problem on its own line) and gives its
+/// exit status.
+fn fail(e: &Error) -> ExitCode {
+    match e {
+        Error::Usage(problems) => problems.iter().for_each(|p| eprintln!("error: {p}")),
+        e => eprintln!("error: {e}"),
+    }
+    ExitCode::from(e.exit_code())
+}
+
 /// The names parsed (integrators, constraint methods); each unknown one
 /// is a problem.
 fn parse_names<T: std::str::FromStr>(names: &[String], problems: &mut Vec<String>) -> Vec<T>
@@ -826,10 +832,7 @@ const EXIT_RUN_STOPPED: u8 = 3;
 fn simulate(path: &str, o: &RunOptions, json: bool, interpret: bool) -> ExitCode {
     let problems = o.problems();
     if !problems.is_empty() {
-        for p in problems {
-            eprintln!("error: {p}");
-        }
-        return ExitCode::from(2);
+        return fail(&Error::Usage(problems));
     }
     let g = match generated(path) {
         Ok(g) => g,
@@ -837,17 +840,14 @@ fn simulate(path: &str, o: &RunOptions, json: bool, interpret: bool) -> ExitCode
     };
     let sys = &g.checked.system;
     let result = if interpret {
-        eom_gen::interpret::simulate(&g.formulation, sys, o).map_err(|e| e.to_string())
+        eom_gen::interpret::simulate(&g.formulation, sys, o)
+            .map_err(|e| Error::Refused(e.to_string()))
     } else {
         crate::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o)
-            .map_err(|e| e.to_string())
     };
     let r: RunReport = match result {
         Ok(r) => r,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(1);
-        }
+        Err(e) => return fail(&e),
     };
     if json {
         match serde_json::to_string(&r) {
@@ -955,7 +955,7 @@ fn wp_sweep(
     g: &eom_gen::Generated,
     o: &crate::sweep::WpOptions,
     bar: &indicatif::ProgressBar,
-) -> Result<crate::sweep::WorkPrecision, String> {
+) -> Result<crate::sweep::WorkPrecision, crate::error::Error> {
     crate::sweep::run(g, o, &mut |done, total, p| {
         bar.set_length(total as u64);
         bar.set_position(done as u64);
@@ -1153,7 +1153,7 @@ fn bench_plot(files: &[String], svg: &str, error_label: Option<&str>) -> ExitCod
     let mut errors = Vec::new();
     for f in files {
         match std::fs::read_to_string(f)
-            .map_err(|e| format!("cannot read `{f}`: {e}"))
+            .map_err(|e| crate::error::Error::io(f, e))
             .and_then(|text| wp::from_csv(&text, f))
         {
             Ok(models) => {

@@ -10,9 +10,10 @@ use plotters::prelude::*;
 const ERROR_FLOOR: f64 = 1e-16;
 
 /// The diagram of a sweep as an SVG document.
-pub fn svg(w: &WorkPrecision) -> Result<String, String> {
+pub fn svg(w: &WorkPrecision) -> Result<String, crate::error::Error> {
     let mut out = String::new();
-    draw(w, &mut out).map_err(|e| format!("plotting {}: {e}", w.model))?;
+    draw(w, &mut out)
+        .map_err(|e| crate::error::Error::Plot(format!("plotting {}: {e}", w.model)))?;
     Ok(out)
 }
 

@@ -14,6 +14,7 @@
 //! results are written as a table, JSON, CSV and a log-log SVG plot.
 
 use crate::compiled::{CachedCrate, build_cached, model_module};
+use crate::error::Error;
 use eom_gen::generate::Generated;
 use eom_sim::work_precision::{PointSummary, ReferenceSummary};
 use eom_sim::{Integrator, Method};
@@ -286,7 +287,7 @@ pub fn run(
     g: &Generated,
     o: &WpOptions,
     progress: &mut dyn FnMut(usize, usize, Option<&WpPoint>),
-) -> Result<WorkPrecision, String> {
+) -> Result<WorkPrecision, Error> {
     let sys = &g.checked.system;
     let constrained = !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty();
     let model = model_module(&sys.name, &g.source, sys.nq(), sys.nu());
@@ -308,29 +309,33 @@ pub fn run(
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;
+        .map_err(|e| Error::Program(format!("cannot run {}: {e}", exe.display())))?;
     let stdout = child
         .stdout
         .take()
-        .ok_or_else(|| format!("no output from {}", exe.display()))?;
+        .ok_or_else(|| Error::Program(format!("no output from {}", exe.display())))?;
     let mut reference = None;
     let mut points = Vec::new();
     let mut done = 0;
     progress(0, total, None);
     for line in BufReader::new(stdout).lines() {
-        let line = line.map_err(|e| format!("reading {}: {e}", exe.display()))?;
-        let v: serde_json::Value = serde_json::from_str(&line)
-            .map_err(|e| format!("unexpected output of {}: {e}: {line}", exe.display()))?;
+        let line = line.map_err(|e| Error::Program(format!("reading {}: {e}", exe.display())))?;
+        let v: serde_json::Value = serde_json::from_str(&line).map_err(|e| {
+            Error::Program(format!(
+                "unexpected output of {}: {e}: {line}",
+                exe.display()
+            ))
+        })?;
         if let Some(r) = v.get("reference") {
             reference = Some(WpReference::from(
-                ReferenceSummary::deserialize(r)
-                    .map_err(|e| format!("unexpected reference from {}: {e}", exe.display()))?,
+                ReferenceSummary::deserialize(r).map_err(|e| {
+                    Error::Program(format!("unexpected reference from {}: {e}", exe.display()))
+                })?,
             ));
         } else if let Some(p) = v.get("point") {
-            let p = WpPoint::from(
-                PointSummary::deserialize(p)
-                    .map_err(|e| format!("unexpected point from {}: {e}", exe.display()))?,
-            );
+            let p = WpPoint::from(PointSummary::deserialize(p).map_err(|e| {
+                Error::Program(format!("unexpected point from {}: {e}", exe.display()))
+            })?);
             done += 1;
             progress(done, total, Some(&p));
             points.push(p);
@@ -341,15 +346,16 @@ pub fn run(
     }
     let out = child
         .wait_with_output()
-        .map_err(|e| format!("waiting for {}: {e}", exe.display()))?;
+        .map_err(|e| Error::Program(format!("waiting for {}: {e}", exe.display())))?;
     if !out.status.success() {
-        return Err(format!(
+        return Err(Error::Program(format!(
             "the work-precision runner failed ({}): {}",
             out.status,
             String::from_utf8_lossy(&out.stderr).trim()
-        ));
+        )));
     }
-    let reference = reference.ok_or_else(|| format!("{} printed no reference", exe.display()))?;
+    let reference = reference
+        .ok_or_else(|| Error::Program(format!("{} printed no reference", exe.display())))?;
     Ok(WorkPrecision {
         model: sys.name.clone(),
         constrained,
@@ -368,7 +374,11 @@ pub fn run(
 /// `path_error`, `rhs_evals`, `accepted`, `rejected`, `repeats`, `stop`.
 /// Empty errors mean the run did not finish. The reference is unknown
 /// (its fields are NaN).
-pub fn from_csv(text: &str, file: &str) -> Result<Vec<WorkPrecision>, String> {
+pub fn from_csv(text: &str, file: &str) -> Result<Vec<WorkPrecision>, Error> {
+    read_csv(text, file).map_err(Error::Format)
+}
+
+fn read_csv(text: &str, file: &str) -> Result<Vec<WorkPrecision>, String> {
     let mut lines = text
         .lines()
         .enumerate()
