@@ -784,3 +784,225 @@ fn simulate_says_when_a_loop_passed_near_a_singular_configuration() {
         );
     }
 }
+
+/// A fresh path in the temporary directory, unique to this test process.
+fn temp_path(name: &str) -> String {
+    std::env::temp_dir()
+        .join(format!("eom-cli-{}-{name}", std::process::id()))
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// The `t` column of a CSV written by `simulate --csv`.
+fn csv_times(path: &str) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    text.lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').next()?.parse().ok())
+        .collect()
+}
+
+#[test]
+fn simulate_rejects_bad_numbers_up_front_with_exit_2() {
+    // Each is a usage error (exit 2) whose message names the option, and
+    // nothing runs: no model is compiled (the model path does not exist).
+    for (args, says) in [
+        (&["--rtol=-1"][..], "--rtol"),
+        (&["--atol=-1e-3"], "--atol"),
+        (&["--rtol", "nan"], "--rtol"),
+        (&["--dt=-0.1", "--integrator", "rk4"], "--dt"),
+        (&["--dt=-0.1"], "--dt"),
+        (&["--dt", "0", "--integrator", "rk4"], "--dt"),
+        (&["--every", "0"], "--every"),
+        (&["--every", "-1"], "--every"),
+        (&["--rtol", "0", "--atol", "0"], "cannot both be zero"),
+        (&["--max-steps", "0"], "--max-steps"),
+        (&["--t-end", "0"], "--t-end"),
+        (&["--q0", "1,x"], "--q0"),
+        (&["--u0", "nan"], "--u0"),
+    ] {
+        let mut all = vec!["simulate", "models/pendulum.ron", "--t-end", "1"];
+        all.extend_from_slice(args);
+        let out = eom_gen(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?} should name `{says}`: {err}");
+    }
+    // Several problems are reported together.
+    let out = eom_gen(&[
+        "simulate",
+        "models/pendulum.ron",
+        "--t-end",
+        "1",
+        "--rtol=-1",
+        "--every",
+        "0",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(err.contains("--rtol") && err.contains("--every"), "{err}");
+}
+
+#[test]
+fn simulate_csv_always_ends_with_the_final_state() {
+    let csv = temp_path("final.csv");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "simulate",
+            "models/pendulum.ron",
+            "--t-end",
+            "1",
+            "--interpret",
+            "--csv",
+            &csv,
+        ];
+        args.extend_from_slice(extra);
+        let out = eom_gen(&args);
+        assert!(
+            out.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        csv_times(&csv)
+    };
+    // An interval longer than the run: the start and the end.
+    assert_eq!(run(&["--every", "5"]), vec![0.0, 1.0]);
+    // An interval that does not divide the run: …, 0.9, then t = 1 itself.
+    let t = run(&["--every", "0.3"]);
+    assert_eq!(t.len(), 5, "{t:?}");
+    assert!((t[3] - 0.9).abs() < 1e-12, "{t:?}");
+    assert_eq!(t.last().copied(), Some(1.0), "{t:?}");
+    // Every step: the last one is the end time.
+    let t = run(&[]);
+    assert!(t.len() > 3 && t[0] == 0.0, "{t:?}");
+    assert_eq!(t.last().copied(), Some(1.0), "{t:?}");
+    let _ = std::fs::remove_file(&csv);
+}
+
+#[test]
+fn a_run_that_stops_early_exits_3_with_a_structured_stop() {
+    let csv = temp_path("stopped.csv");
+    let args = |interpret: bool| {
+        let mut a = vec![
+            "simulate",
+            "models/double_pendulum.ron",
+            "--t-end",
+            "10",
+            "--max-steps",
+            "10",
+            "--json",
+            "--csv",
+            csv.as_str(),
+        ];
+        if interpret {
+            a.push("--interpret");
+        }
+        a
+    };
+    for interpret in [true, false] {
+        let out = cached(&args(interpret));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "interpret {interpret}: {err}");
+        assert!(err.contains("stopped before t = 10"), "{err}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        let stop = &v["stop"];
+        assert_eq!(stop["reason"], "max_steps", "{v}");
+        let t = stop["t"].as_f64().unwrap_or(f64::NAN);
+        assert!(t > 0.0 && t < 10.0, "{stop}");
+        assert!(
+            stop["message"]
+                .as_str()
+                .is_some_and(|m| m.contains("--max-steps"))
+        );
+        assert_eq!(v["t"].as_f64(), Some(t));
+        assert_eq!(v["stats"]["steps"], 10);
+        // The CSV ends where the run stopped.
+        assert_eq!(csv_times(&csv).last().copied(), Some(t));
+    }
+    // The summary (no --json) says the same.
+    let out = eom_gen(&[
+        "simulate",
+        "models/pendulum.ron",
+        "--t-end",
+        "10",
+        "--max-steps",
+        "5",
+        "--interpret",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("step limit"));
+    let _ = std::fs::remove_file(&csv);
+}
+
+#[test]
+fn simulate_starts_from_q0_and_u0() {
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "simulate",
+            "models/pendulum.ron",
+            "--t-end",
+            "0.001",
+            "--interpret",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        json(&args)
+    };
+    // At the bottom at rest it stays there; pushed, it moves.
+    let v = run(&["--q0", "0", "--u0", "0"]);
+    assert!(v["q"][0].as_f64().is_some_and(|q| q.abs() < 1e-15), "{v}");
+    let v = run(&["--q0", "0", "--u0", "1"]);
+    let q = v["q"][0].as_f64().unwrap_or(f64::NAN);
+    assert!((q - 0.001).abs() < 1e-6, "{v}");
+    // The wrong number of values is a usage error naming the counts.
+    let out = eom_gen(&[
+        "simulate",
+        "models/pendulum.ron",
+        "--t-end",
+        "1",
+        "--interpret",
+        "--q0",
+        "1,2",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("--q0 has 2 value(s)"), "{err}");
+}
+
+#[test]
+fn eval_rejects_non_finite_numbers() {
+    for args in [
+        &["--q", "1,nan"][..],
+        &["--u", "inf,0"],
+        &["--tau", "0,NaN"],
+        &["--q", "1"],
+    ] {
+        let mut all = vec!["eval", "models/double_pendulum.ron", "--interpret"];
+        all.extend_from_slice(args);
+        let out = eom_gen(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(args[0]), "{args:?}: {err}");
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
+}
+
+#[test]
+fn unknown_fields_are_all_reported_at_once() {
+    let path = temp_path("typos.ron");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/pendulum.ron"
+    ))
+    .unwrap_or_default()
+    .replacen("com:", "cmo:", 1)
+    .replacen("axis:", "axsi:", 1);
+    let _ = std::fs::write(&path, text);
+    let out = eom_gen(&["check", &path]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("`cmo`") && err.contains("`axsi`"), "{err}");
+    assert!(err.contains("has 2 error(s)"), "{err}");
+    assert!(err.contains("did you mean"), "{err}");
+    let _ = std::fs::remove_file(&path);
+}

@@ -273,7 +273,10 @@ impl RunOptions {
                     self.rtol
                 ));
             }
-        } else if !(self.dt.is_finite() && self.dt > 0.0) {
+        }
+        // Checked even where the integrator has its own steps: a step that
+        // is not positive is a mistake in any case.
+        if !(self.dt.is_finite() && self.dt > 0.0) {
             p.push(format!(
                 "--dt must be a positive step size in seconds, not {}",
                 self.dt
