@@ -205,7 +205,7 @@ enum Command {
     Stats {
         /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
-        /// Print one JSON object (the only format).
+        /// Print one JSON object instead of the table.
         #[arg(long)]
         json: bool,
     },
@@ -217,7 +217,7 @@ fn main() -> ExitCode {
         Command::Check { model, json } => check(&model, json),
         Command::Import { urdf, output } => import(&urdf, output.as_deref()),
         Command::Dump { model, output, fma } => dump(&model, output.as_deref(), fma),
-        Command::Stats { model, json: _ } => stats(&model),
+        Command::Stats { model, json } => stats(&model, json),
         Command::Bench {
             model,
             per_call,
@@ -608,7 +608,7 @@ fn generated_functions(r: &eom_gen::functions::FunctionSet) -> Vec<&'static str>
         .collect()
 }
 
-fn stats(path: &str) -> ExitCode {
+fn stats(path: &str, json: bool) -> ExitCode {
     let g = match generated(path) {
         Ok(g) => g,
         Err(code) => return code,
@@ -640,8 +640,62 @@ fn stats(path: &str) -> ExitCode {
         "generation_ms": f.seconds * 1e3,
         "source_bytes": g.source.len(),
     });
-    println!("{v}");
+    if json {
+        println!("{v}");
+    } else {
+        print!("{}", stats_table(&g));
+    }
     ExitCode::SUCCESS
+}
+
+/// `stats` for people: one row of operation counts per generated function.
+fn stats_table(g: &eom_gen::Generated) -> String {
+    use std::fmt::Write;
+    let f = &g.formulation;
+    let sys = &g.checked.system;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: nq = {}, nu = {}, forward dynamics by {}; generated in {:.1} ms, {} bytes of source",
+        sys.name,
+        sys.nq(),
+        sys.nu(),
+        f.fd_form,
+        f.seconds * 1e3,
+        g.source.len()
+    );
+    let _ = writeln!(
+        s,
+        "  {:<20} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
+        "function", "add", "mul", "div", "neg", "sqrt", "trig", "other", "total"
+    );
+    for e in TABLE {
+        match f.program(e.function) {
+            Some(p) => {
+                let c = p.op_count();
+                let _ = writeln!(
+                    s,
+                    "  {:<20} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
+                    e.name,
+                    c.adds,
+                    c.muls,
+                    c.divs,
+                    c.negs,
+                    c.sqrts,
+                    c.trig,
+                    c.other,
+                    c.total()
+                );
+            }
+            None => {
+                let _ = writeln!(s, "  {:<20} {:>8}", e.name, "—");
+            }
+        }
+    }
+    if !f.output_names.is_empty() {
+        let _ = writeln!(s, "  outputs: {}", f.output_names.join(", "));
+    }
+    s
 }
 
 fn bench(path: &str, per_call: bool, o: &crate::bench::PerCallOptions, json: bool) -> ExitCode {
@@ -971,18 +1025,30 @@ fn wp_sweep(
     })
 }
 
-/// Writes `text` to `path`, creating its directory; the error is printed
+/// Writes `text` to `path`; its directory must exist (nothing is created
+/// that the user did not name). The error, naming the path, is printed
 /// and the exit status returned.
 fn write_file(path: &str, text: &str) -> Result<(), ExitCode> {
+    let fail = |why: String| {
+        eprintln!("error: cannot write `{path}`: {why}");
+        ExitCode::from(1)
+    };
     if let Some(dir) = std::path::Path::new(path).parent()
         && !dir.as_os_str().is_empty()
-        && let Err(e) = std::fs::create_dir_all(dir)
+        && !dir.is_dir()
     {
-        eprintln!("error: cannot create `{}`: {e}", dir.display());
-        return Err(ExitCode::from(1));
+        return Err(fail(format!(
+            "the directory `{}` does not exist",
+            dir.display()
+        )));
     }
-    std::fs::write(path, text).map_err(|e| {
-        eprintln!("error: cannot write `{path}`: {e}");
+    std::fs::write(path, text).map_err(|e| fail(e.to_string()))
+}
+
+/// Creates the output directory the user named (`bench --suite --out`).
+fn create_out_dir(dir: &str) -> Result<(), ExitCode> {
+    std::fs::create_dir_all(dir).map_err(|e| {
+        eprintln!("error: cannot create the output directory `{dir}`: {e}");
         ExitCode::from(1)
     })
 }
@@ -1058,6 +1124,9 @@ fn bench_suite(dir: &str, out: &str, o: &crate::sweep::WpOptions, t_end_given: b
         }
     };
     models.sort();
+    if let Err(code) = create_out_dir(out) {
+        return code;
+    }
     let bars = indicatif::MultiProgress::new();
     let overall = bars.add(indicatif::ProgressBar::new(models.len() as u64));
     if let Ok(s) = indicatif::ProgressStyle::with_template(

@@ -1006,3 +1006,84 @@ fn unknown_fields_are_all_reported_at_once() {
     assert!(err.contains("did you mean"), "{err}");
     let _ = std::fs::remove_file(&path);
 }
+
+#[test]
+fn output_paths_are_never_created_silently_and_errors_name_them() {
+    let dir = temp_path("no-such-dir");
+    let file = format!("{dir}/x.rs");
+    for args in [
+        vec!["dump", "models/pendulum.ron", "-o", file.as_str()],
+        vec![
+            "import",
+            "eom-gen/tests/urdf/arm2.urdf",
+            "-o",
+            file.as_str(),
+        ],
+    ] {
+        let out = eom_gen(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains(&format!("cannot write `{file}`")) && err.contains("does not exist"),
+            "{args:?}: {err}"
+        );
+        assert!(!std::path::Path::new(&dir).exists(), "{dir} was created");
+    }
+    // Into a directory that exists, it writes.
+    let ok = temp_path("dump.rs");
+    let out = eom_gen(&["dump", "models/pendulum.ron", "-o", &ok]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::read_to_string(&ok).is_ok_and(|t| t.contains("impl ::eom_sim::Model")));
+    let _ = std::fs::remove_file(&ok);
+}
+
+#[test]
+fn a_binary_file_is_named_not_echoed() {
+    let path = temp_path("binary.ron");
+    let mut bytes = b"Model(\x00\x01\x02\x1b[31m".to_vec();
+    bytes.extend([0xff, 0xfe, 0x00, 0x7f, 0x1b, b'c']);
+    let _ = std::fs::write(&path, &bytes);
+    let out = eom_gen(&["check", &path]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&path) && err.contains("not a text file"),
+        "{err}"
+    );
+    assert!(
+        !out.stderr.iter().any(|b| *b == 0x1b || *b == 0),
+        "raw bytes reached the terminal: {err:?}"
+    );
+    // A text file with one stray byte is shown where it is.
+    let _ = std::fs::write(&path, b"Model(name: \"p\xe9\")\n");
+    let err = String::from_utf8_lossy(&eom_gen(&["check", &path]).stderr).into_owned();
+    assert!(
+        err.contains(&format!("{path}:1:15")) && err.contains("not valid UTF-8"),
+        "{err}"
+    );
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn stats_prints_a_table_without_json() {
+    let out = eom_gen(&["stats", "models/pendulum.ron"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.trim_start().starts_with('{'), "{text}");
+    assert!(
+        text.contains("function") && text.contains("total"),
+        "{text}"
+    );
+    assert!(
+        text.contains("forward_dynamics") && text.contains("mass_matrix"),
+        "{text}"
+    );
+}
