@@ -384,6 +384,8 @@ fn main() -> ExitCode {
                 u0,
                 csv,
                 every,
+                energy_columns: false,
+                momentum_columns: false,
             };
             simulate(&model, &o, json, interpret)
         }
@@ -890,6 +892,12 @@ fn simulate(path: &str, o: &RunOptions, json: bool, interpret: bool) -> ExitCode
         Err(code) => return code,
     };
     let sys = &g.checked.system;
+    let mut o = o.clone();
+    // Every requested output goes into the CSV: energy and momentum
+    // next to the marker and reaction outputs.
+    o.energy_columns = sys.outputs.contains(&eom_gen::system::OutputKind::Energy);
+    o.momentum_columns = sys.outputs.contains(&eom_gen::system::OutputKind::Momentum);
+    let o = &o;
     let result = if interpret {
         eom_gen::interpret::simulate(&g.formulation, sys, o).map_err(|e| e.to_string())
     } else {

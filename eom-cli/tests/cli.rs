@@ -273,11 +273,12 @@ fn simulate_runs_the_compiled_model_and_reports_statistics() {
     assert!((e1 - e0).abs() < 1e-8, "energy {e0} → {e1}");
     let text = std::fs::read_to_string(&csv).unwrap_or_default();
     let lines: Vec<&str> = text.lines().collect();
-    // Coordinates, speeds, then the model's outputs (tip position, hinge reaction).
+    // Coordinates, speeds, then the model's outputs (tip position, hinge
+    // reaction, and the energies it requests with `Energy`).
     assert_eq!(
         lines.first().copied(),
         Some(
-            "t,theta,theta_dot,bob_tip_x,bob_tip_y,bob_tip_z,hinge_fx,hinge_fy,hinge_fz,hinge_nx,hinge_ny,hinge_nz"
+            "t,theta,theta_dot,bob_tip_x,bob_tip_y,bob_tip_z,hinge_fx,hinge_fy,hinge_fz,hinge_nx,hinge_ny,hinge_nz,kinetic_energy,potential_energy"
         )
     );
     // At t = 0 (horizontal, at rest) the tip is at (1, 0, 0) and the link is slack.
@@ -1086,4 +1087,85 @@ fn stats_prints_a_table_without_json() {
         text.contains("forward_dynamics") && text.contains("mass_matrix"),
         "{text}"
     );
+}
+
+#[test]
+fn requested_energy_and_momentum_are_in_the_csv() {
+    let csv = temp_path("energy.csv");
+    for (model, has_momentum) in [
+        ("models/pendulum.ron", false),
+        ("models/heavy_top.ron", true),
+    ] {
+        let out = eom_gen(&[
+            "simulate",
+            model,
+            "--t-end",
+            "0.5",
+            "--interpret",
+            "--csv",
+            &csv,
+            "--every",
+            "0.1",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = std::fs::read_to_string(&csv).unwrap_or_default();
+        let header: Vec<&str> = text.lines().next().unwrap_or("").split(',').collect();
+        let col = |name: &str| header.iter().position(|h| *h == name);
+        let (Some(k), Some(p)) = (col("kinetic_energy"), col("potential_energy")) else {
+            panic!("{model}: no energy columns in {header:?}");
+        };
+        assert_eq!(
+            col("linear_momentum_z").is_some(),
+            has_momentum,
+            "{header:?}"
+        );
+        // Conserved: the total is the same on every row.
+        let totals: Vec<f64> = text
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let v: Vec<f64> = l.split(',').filter_map(|x| x.parse().ok()).collect();
+                v[k] + v[p]
+            })
+            .collect();
+        assert_eq!(totals.len(), 6, "{text}");
+        for e in &totals {
+            assert!(
+                (e - totals[0]).abs() < 1e-6 * totals[0].abs().max(1.0),
+                "{model}: {totals:?}"
+            );
+        }
+    }
+    // A model without `Energy` among its outputs has no such columns.
+    let plain = temp_path("plain.ron");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/pendulum.ron"
+    ))
+    .unwrap_or_default()
+    .replace(", Energy]", "]");
+    let _ = std::fs::write(&plain, text);
+    let out = eom_gen(&[
+        "simulate",
+        &plain,
+        "--t-end",
+        "0.1",
+        "--interpret",
+        "--csv",
+        &csv,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&csv).unwrap_or_default();
+    let header = text.lines().next().unwrap_or("");
+    assert!(header.ends_with("hinge_nz"), "{header}");
+    let _ = std::fs::remove_file(&plain);
+    let _ = std::fs::remove_file(&csv);
 }
