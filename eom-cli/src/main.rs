@@ -60,6 +60,14 @@ enum Command {
         /// Time.
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
         t: f64,
+        /// Set a parameter of the model: `NAME=VALUE` (repeatable); the
+        /// code is regenerated with the value.
+        #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        params: Vec<String>,
+        /// Hold a runtime input of the model at a value: `NAME=VALUE`
+        /// (repeatable; default zero).
+        #[arg(long = "input", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        inputs: Vec<String>,
         /// Use the evaluator instead of compiled code (no compiler needed).
         #[arg(long)]
         interpret: bool,
@@ -95,6 +103,14 @@ enum Command {
         /// Initial speeds, comma-separated (default: the model's u0).
         #[arg(long, allow_hyphen_values = true)]
         u0: Option<String>,
+        /// Set a parameter of the model: `NAME=VALUE` (repeatable); the
+        /// code is regenerated with the value.
+        #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        params: Vec<String>,
+        /// Hold a runtime input of the model at a value: `NAME=VALUE`
+        /// (repeatable; default zero).
+        #[arg(long = "input", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        inputs: Vec<String>,
         /// Write the trajectory (t, q, u) to this CSV file.
         #[arg(long)]
         csv: Option<String>,
@@ -131,6 +147,10 @@ enum Command {
     Bench {
         /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`); not with `--suite`.
         model: Option<String>,
+        /// Set a parameter of the model: `NAME=VALUE` (repeatable); the
+        /// code is regenerated with the value.
+        #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        params: Vec<String>,
         /// Per-call cost of the generated functions.
         #[arg(long)]
         per_call: bool,
@@ -242,6 +262,7 @@ fn main() -> ExitCode {
             plot,
             error_label,
             json,
+            params,
         } => {
             if !plot.is_empty() {
                 if model.is_some() || per_call || work_precision || suite {
@@ -288,12 +309,27 @@ fn main() -> ExitCode {
             {
                 problems.extend(e);
             }
+            let params = match parse_assignments("param", &params) {
+                Ok(p) => p,
+                Err(e) => {
+                    problems.extend(e);
+                    Vec::new()
+                }
+            };
             if !problems.is_empty() {
                 for p in problems {
                     eprintln!("error: {p}");
                 }
                 return ExitCode::from(2);
             }
+            if suite && !params.is_empty() {
+                eprintln!("error: --param sets a parameter of one model; not with --suite");
+                return ExitCode::from(2);
+            }
+            let vary = Vary {
+                params,
+                inputs: Vec::new(),
+            };
             if suite {
                 if model.is_some() || per_call || work_precision {
                     eprintln!(
@@ -314,7 +350,14 @@ fn main() -> ExitCode {
                     eprintln!("error: choose one of --per-call and --work-precision");
                     return ExitCode::from(2);
                 }
-                return bench_work_precision(&model, &wp, csv.as_deref(), svg.as_deref(), json);
+                return bench_work_precision(
+                    &model,
+                    &vary,
+                    &wp,
+                    csv.as_deref(),
+                    svg.as_deref(),
+                    json,
+                );
             }
             let o = crate::bench::PerCallOptions {
                 states,
@@ -322,7 +365,7 @@ fn main() -> ExitCode {
                 seed,
                 native,
             };
-            bench(&model, per_call, &o, json)
+            bench(&model, &vary, per_call, &o, json)
         }
         Command::Simulate {
             model,
@@ -339,7 +382,13 @@ fn main() -> ExitCode {
             interpret,
             constraints,
             json,
+            params,
+            inputs,
         } => {
+            let vary = match Vary::parse(&params, &inputs) {
+                Ok(v) => v,
+                Err(code) => return code,
+            };
             let list = |what: &str, text: Option<String>| -> Result<Option<Vec<f64>>, String> {
                 text.map(|t| {
                     t.split(',')
@@ -387,7 +436,7 @@ fn main() -> ExitCode {
                 energy_columns: false,
                 momentum_columns: false,
             };
-            simulate(&model, &o, json, interpret)
+            simulate(&model, &vary, &o, json, interpret)
         }
         Command::Eval {
             model,
@@ -397,8 +446,14 @@ fn main() -> ExitCode {
             t,
             interpret,
             json: _,
+            params,
+            inputs,
         } => eval(
             &model,
+            &match Vary::parse(&params, &inputs) {
+                Ok(v) => v,
+                Err(code) => return code,
+            },
             q.as_deref(),
             u.as_deref(),
             tau.as_deref(),
@@ -522,12 +577,17 @@ fn diagnostics_json(report: &Report) -> serde_json::Value {
 
 /// Generates with a progress line on a terminal when it takes longer
 /// than half a second (large models).
-fn generate_with_progress(path: &str) -> Result<eom_gen::Generated, eom_gen::GenerateError> {
+fn generate_with_progress(
+    path: &str,
+    params: &[(String, f64)],
+) -> Result<eom_gen::Generated, eom_gen::GenerateError> {
     use std::io::{IsTerminal, Write};
     use std::sync::mpsc;
     use std::time::{Duration, Instant};
+    let generate =
+        || eom_gen::generate_file_with_values(path, params, &eom_gen::EmitOptions::default());
     if !std::io::stderr().is_terminal() {
-        return eom_gen::generate_file(path);
+        return generate();
     }
     let (done, wait) = mpsc::channel::<()>();
     let label = path.to_string();
@@ -555,14 +615,125 @@ fn generate_with_progress(path: &str) -> Result<eom_gen::Generated, eom_gen::Gen
             );
         }
     });
-    let result = eom_gen::generate_file(path);
+    let result = generate();
     let _ = done.send(());
     let _ = spinner.join();
     result
 }
 
 fn generated(path: &str) -> Result<eom_gen::Generated, ExitCode> {
-    generate_with_progress(path).map_err(|e| {
+    generated_with(path, &Vary::default())
+}
+
+/// What `--param` and `--input` set.
+#[derive(Clone, Debug, Default)]
+struct Vary {
+    /// Parameter values, by name.
+    params: Vec<(String, f64)>,
+    /// Input values, by name.
+    inputs: Vec<(String, f64)>,
+}
+
+impl Vary {
+    /// Both lists of `NAME=VALUE`; every malformed one is a usage error.
+    fn parse(params: &[String], inputs: &[String]) -> Result<Vary, ExitCode> {
+        let p = parse_assignments("param", params);
+        let i = parse_assignments("input", inputs);
+        match (p, i) {
+            (Ok(params), Ok(inputs)) => Ok(Vary { params, inputs }),
+            (p, i) => {
+                for e in p.err().into_iter().chain(i.err()).flatten() {
+                    eprintln!("error: {e}");
+                }
+                Err(ExitCode::from(2))
+            }
+        }
+    }
+
+    /// The input values in the model's order (zero where not set), after
+    /// checking every name against the model: an unknown parameter or
+    /// input is a usage error (exit 2) with the closest name.
+    fn resolve(&self, path: &str) -> Result<Vec<f64>, ExitCode> {
+        if self.params.is_empty() && self.inputs.is_empty() {
+            return Ok(Vec::new());
+        }
+        // An invalid model is reported by the generation that follows.
+        let Ok(checked) = eom_gen::check_file(path) else {
+            return Ok(Vec::new());
+        };
+        let sys = &checked.system;
+        let params: Vec<&str> = sys.parameters.iter().map(|p| p.name.as_str()).collect();
+        let inputs: Vec<&str> = sys.inputs.iter().map(String::as_str).collect();
+        let mut problems = Vec::new();
+        for (what, given, known) in [
+            ("parameter", &self.params, &params),
+            ("input", &self.inputs, &inputs),
+        ] {
+            for (name, _) in given {
+                if known.contains(&name.as_str()) {
+                    continue;
+                }
+                let hint = match eom_gen::diag::did_you_mean(name, known.iter().copied()) {
+                    Some(m) => format!(" (did you mean `{m}`?)"),
+                    None if known.is_empty() => format!("; `{}` has none", sys.name),
+                    None => format!(
+                        "; its {what}s: {}",
+                        known
+                            .iter()
+                            .map(|n| format!("`{n}`"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                };
+                problems.push(format!("`{path}` has no {what} `{name}`{hint}"));
+            }
+        }
+        if !problems.is_empty() {
+            for p in problems {
+                eprintln!("error: {p}");
+            }
+            return Err(ExitCode::from(2));
+        }
+        Ok(sys
+            .inputs
+            .iter()
+            .map(|n| {
+                self.inputs
+                    .iter()
+                    .rev()
+                    .find(|(m, _)| m == n)
+                    .map_or(0.0, |(_, v)| *v)
+            })
+            .collect())
+    }
+}
+
+/// `NAME=VALUE` pairs of `--what`; every malformed one is a problem.
+fn parse_assignments(what: &str, items: &[String]) -> Result<Vec<(String, f64)>, Vec<String>> {
+    let mut out = Vec::new();
+    let mut problems = Vec::new();
+    for item in items {
+        let parsed = item.split_once('=').and_then(|(n, v)| {
+            let v: f64 = v.trim().parse().ok()?;
+            (!n.trim().is_empty() && v.is_finite()).then(|| (n.trim().to_string(), v))
+        });
+        match parsed {
+            Some(p) => out.push(p),
+            None => problems.push(format!(
+                "--{what} `{item}`: expected NAME=VALUE with a finite number, e.g. `--{what} m=2.5`"
+            )),
+        }
+    }
+    if problems.is_empty() {
+        Ok(out)
+    } else {
+        Err(problems)
+    }
+}
+
+/// Generates `path` with the parameter values of `vary`.
+fn generated_with(path: &str, vary: &Vary) -> Result<eom_gen::Generated, ExitCode> {
+    generate_with_progress(path, &vary.params).map_err(|e| {
         eprint!("{e}");
         if !e.to_string().ends_with('\n') {
             eprintln!();
@@ -700,7 +871,13 @@ fn stats_table(g: &eom_gen::Generated) -> String {
     s
 }
 
-fn bench(path: &str, per_call: bool, o: &crate::bench::PerCallOptions, json: bool) -> ExitCode {
+fn bench(
+    path: &str,
+    vary: &Vary,
+    per_call: bool,
+    o: &crate::bench::PerCallOptions,
+    json: bool,
+) -> ExitCode {
     if !per_call {
         eprintln!("error: say what to measure: --per-call, --work-precision or --suite");
         return ExitCode::from(2);
@@ -709,7 +886,10 @@ fn bench(path: &str, per_call: bool, o: &crate::bench::PerCallOptions, json: boo
         eprintln!("error: --states and --reps must be at least 1");
         return ExitCode::from(2);
     }
-    let g = match generated(path) {
+    if let Err(code) = vary.resolve(path) {
+        return code;
+    }
+    let g = match generated_with(path, vary) {
         Ok(g) => g,
         Err(code) => return code,
     };
@@ -761,13 +941,18 @@ fn parse_list(
 
 fn eval(
     path: &str,
+    vary: &Vary,
     q: Option<&str>,
     u: Option<&str>,
     tau: Option<&str>,
     t: f64,
     interpret: bool,
 ) -> ExitCode {
-    let g = match generated(path) {
+    let inputs = match vary.resolve(path) {
+        Ok(i) => i,
+        Err(code) => return code,
+    };
+    let g = match generated_with(path, vary) {
         Ok(g) => g,
         Err(code) => return code,
     };
@@ -794,14 +979,15 @@ fn eval(
             u: &u,
             udot: &[],
             tau: &tau,
-            inputs: &[],
+            inputs: &inputs,
             params: &[],
             multipliers: &[],
             t,
         };
         Ok(eom_gen::interpret::evaluate(&g.formulation, &point))
     } else {
-        crate::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t).map_err(|e| e.to_string())
+        crate::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t, &inputs)
+            .map_err(|e| e.to_string())
     };
     match result {
         Ok(e) => {
@@ -879,7 +1065,7 @@ where
 /// A run that did not reach its end time: exit status 3.
 const EXIT_RUN_STOPPED: u8 = 3;
 
-fn simulate(path: &str, o: &RunOptions, json: bool, interpret: bool) -> ExitCode {
+fn simulate(path: &str, vary: &Vary, o: &RunOptions, json: bool, interpret: bool) -> ExitCode {
     let problems = o.problems();
     if !problems.is_empty() {
         for p in problems {
@@ -887,7 +1073,11 @@ fn simulate(path: &str, o: &RunOptions, json: bool, interpret: bool) -> ExitCode
         }
         return ExitCode::from(2);
     }
-    let g = match generated(path) {
+    let inputs = match vary.resolve(path) {
+        Ok(i) => i,
+        Err(code) => return code,
+    };
+    let g = match generated_with(path, vary) {
         Ok(g) => g,
         Err(code) => return code,
     };
@@ -899,9 +1089,10 @@ fn simulate(path: &str, o: &RunOptions, json: bool, interpret: bool) -> ExitCode
     o.momentum_columns = sys.outputs.contains(&eom_gen::system::OutputKind::Momentum);
     let o = &o;
     let result = if interpret {
-        eom_gen::interpret::simulate(&g.formulation, sys, o).map_err(|e| e.to_string())
+        eom_gen::interpret::simulate_with_inputs(&g.formulation, sys, o, &inputs)
+            .map_err(|e| e.to_string())
     } else {
-        crate::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o)
+        crate::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o, &inputs)
             .map_err(|e| e.to_string())
     };
     let r: RunReport = match result {
@@ -1063,6 +1254,7 @@ fn create_out_dir(dir: &str) -> Result<(), ExitCode> {
 
 fn bench_work_precision(
     path: &str,
+    vary: &Vary,
     o: &crate::sweep::WpOptions,
     csv: Option<&str>,
     svg: Option<&str>,
@@ -1075,7 +1267,10 @@ fn bench_work_precision(
         }
         return ExitCode::from(2);
     }
-    let g = match generated(path) {
+    if let Err(code) = vary.resolve(path) {
+        return code;
+    }
+    let g = match generated_with(path, vary) {
         Ok(g) => g,
         Err(code) => return code,
     };
@@ -1149,7 +1344,7 @@ fn bench_suite(dir: &str, out: &str, o: &crate::sweep::WpOptions, t_end_given: b
     let mut sections = String::new();
     for path in &models {
         let p = path.display().to_string();
-        let g = match generate_with_progress(&p) {
+        let g = match generate_with_progress(&p, &[]) {
             Ok(g) => g,
             Err(e) => {
                 bars.suspend(|| eprint!("{e}"));

@@ -1169,3 +1169,115 @@ fn requested_energy_and_momentum_are_in_the_csv() {
     let _ = std::fs::remove_file(&plain);
     let _ = std::fs::remove_file(&csv);
 }
+
+/// The pendulum with an actuator `motor` at the hinge and `l` tunable.
+fn actuated_pendulum() -> String {
+    let path = temp_path("actuated.ron");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/pendulum.ron"
+    ))
+    .unwrap_or_default()
+    .replace(
+        "(name: \"l\", value: 1.0,",
+        "(name: \"l\", value: 1.0, tunable: true,",
+    )
+    .replace(
+        "    outputs:",
+        "    forces: [Actuator(name: \"motor\", joint: \"hinge\")],\n    outputs:",
+    );
+    let _ = std::fs::write(&path, text);
+    path
+}
+
+/// `udot` of `eval` with `args`.
+fn udot(args: &[&str]) -> f64 {
+    let v = json(args);
+    v["udot"][0].as_f64().unwrap_or(f64::NAN)
+}
+
+#[test]
+fn params_and_inputs_are_set_from_the_command_line() {
+    let model = actuated_pendulum();
+    let eval = |extra: &[&str]| {
+        let mut args = vec!["eval", model.as_str(), "--interpret"];
+        args.extend_from_slice(extra);
+        udot(&args)
+    };
+    // Horizontal at rest: u̇ = (τ − m g l)/(m l²).
+    assert!((eval(&[]) + 9.81).abs() < 1e-12);
+    // A fixed parameter (regenerated) and a tunable one.
+    assert!((eval(&["--param", "g=1.5"]) + 1.5).abs() < 1e-12);
+    assert!((eval(&["--param", "l=2"]) + 9.81 / 2.0).abs() < 1e-12);
+    assert!((eval(&["--param", "l=2", "--param", "g=4"]) + 2.0).abs() < 1e-12);
+    // The input: a torque at the hinge.
+    assert!((eval(&["--input", "motor=2"]) + 7.81).abs() < 1e-12);
+    assert!((eval(&["--input", "motor=9.81"])).abs() < 1e-12);
+    // A simulation held by the motor stays where it is.
+    for interpret in [true, false] {
+        let mut args = vec![
+            "simulate",
+            model.as_str(),
+            "--t-end",
+            "1",
+            "--input",
+            "motor=4.905",
+            "--param",
+            "m=0.5",
+            "--json",
+        ];
+        if interpret {
+            args.push("--interpret");
+        }
+        let out = cached(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        let q = v["q"][0].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            (q - std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+            "interpret {interpret}: {v}"
+        );
+    }
+    // Compiled eval agrees.
+    let out = cached(&["eval", &model, "--input", "motor=2", "--param", "l=2"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let a = v["udot"][0].as_f64().unwrap_or(f64::NAN);
+    assert!((a - (2.0 - 9.81 * 2.0) / 4.0).abs() < 1e-12, "{v}");
+    // Unknown names and malformed values are usage errors.
+    for (args, says) in [
+        (&["--param", "G=1"][..], "did you mean `g`"),
+        (&["--param", "length=1"], "has no parameter `length`"),
+        (&["--input", "motr=1"], "did you mean `motor`"),
+        (&["--param", "g"], "NAME=VALUE"),
+        (&["--param", "g=nan"], "NAME=VALUE"),
+        (&["--input", "motor=x"], "NAME=VALUE"),
+    ] {
+        let mut all = vec!["eval", model.as_str(), "--interpret"];
+        all.extend_from_slice(args);
+        let out = eom_gen(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+    let out = eom_gen(&[
+        "simulate",
+        "models/pendulum.ron",
+        "--t-end",
+        "1",
+        "--input",
+        "u=1",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("has none"), "{err}");
+    let _ = std::fs::remove_file(&model);
+}

@@ -138,6 +138,68 @@ pub fn check_file(path: &str) -> Result<Checked, Report> {
     load(path)?.check()
 }
 
+/// [`check_file`] with parameter values replaced (`eom-gen simulate
+/// --param NAME=VALUE`): each named parameter of the model (a scene's
+/// model) takes the value instead of what the file says, before
+/// validation, so fixed parameters are inlined with it and tunable ones
+/// default to it. A name the model does not have is an error with the
+/// closest name.
+pub fn check_file_with_values(path: &str, values: &[(String, f64)]) -> Result<Checked, Report> {
+    let loaded = load(path)?;
+    check_loaded_with(&loaded, std::path::Path::new(""), values)
+}
+
+/// Validates a loaded file (a scene with its model) with parameter values
+/// replaced.
+pub(crate) fn check_loaded_with(
+    loaded: &Loaded,
+    root: &std::path::Path,
+    values: &[(String, f64)],
+) -> Result<Checked, Report> {
+    if values.is_empty() {
+        return loaded.check_in(root);
+    }
+    match loaded.format {
+        Format::Scene => scene::check_in_with(&loaded.source, root, values),
+        Format::Ron | Format::Urdf => {
+            let src = &loaded.source;
+            let mut spec = parse(src)?;
+            let mut unknown = Vec::new();
+            for (name, value) in values {
+                match spec.parameters.iter_mut().find(|p| p.name == *name) {
+                    Some(p) => p.value = spec::Num::Value(*value),
+                    None => {
+                        let names = spec.parameters.iter().map(|p| p.name.as_str());
+                        let mut d =
+                            Diagnostic::file_error(format!("the model has no parameter `{name}`"));
+                        d = match did_you_mean(name, names) {
+                            Some(m) => d.with_help(format!("did you mean `{m}`?")),
+                            None => d.with_help(format!(
+                                "its parameters: {}",
+                                spec.parameters
+                                    .iter()
+                                    .map(|p| format!("`{}`", p.name))
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            )),
+                        };
+                        unknown.push(d);
+                    }
+                }
+            }
+            if !unknown.is_empty() {
+                return Err(Report {
+                    source: src.clone(),
+                    diagnostics: unknown,
+                });
+            }
+            let mut checked = check_spec(src, spec)?;
+            checked.urdf_notes = loaded.urdf_notes.clone();
+            Ok(checked)
+        }
+    }
+}
+
 fn ron_diagnostic(src: &Source, e: &ron::error::SpannedError) -> Diagnostic {
     let start = src.offset_of(e.span.start.line, e.span.start.col);
     let end = src

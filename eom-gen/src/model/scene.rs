@@ -115,6 +115,16 @@ pub fn check(src: &Source) -> Result<Checked, Report> {
 /// proc macro, where paths are relative to the crate's manifest directory).
 /// Diagnostics name the paths relative to `root`.
 pub fn check_in(src: &Source, root: &Path) -> Result<Checked, Report> {
+    check_in_with(src, root, &[])
+}
+
+/// [`check_in`] with parameter values of the model replaced (see
+/// [`super::check_file_with_values`]).
+pub(crate) fn check_in_with(
+    src: &Source,
+    root: &Path,
+    values: &[(String, f64)],
+) -> Result<Checked, Report> {
     let spec = parse(src)?;
     let tree = locate::parse(&src.text);
     let span = |path: &[Seg<'static>]| tree.as_ref().map_or(Span::default(), |r| r.span_of(path));
@@ -141,7 +151,7 @@ pub fn check_in(src: &Source, root: &Path) -> Result<Checked, Report> {
             "a scene names a model file; copy what the other scene selects into this one",
         ));
     }
-    let mut checked = model.check_in(root)?;
+    let mut checked = super::check_loaded_with(&model, root, values)?;
     let mut cx = Ctx {
         root: tree.as_ref(),
         src,
