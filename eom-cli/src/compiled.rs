@@ -82,20 +82,34 @@ mod model;
 use eom_sim::Model;
 
 #[derive(serde::Deserialize)]
-enum Request {
+struct Request {
+    /// The model's runtime inputs, held constant (default: zero).
+    #[serde(default)]
+    inputs: Vec<f64>,
+    what: What,
+}
+
+#[derive(serde::Deserialize)]
+enum What {
     Run(eom_sim::RunOptions),
     Eval { t: f64, q: Vec<f64>, u: Vec<f64>, tau: Vec<f64> },
 }
 
 fn main() {
     let arg = std::env::args().nth(1).unwrap_or_default();
-    let m = model::MODEL::default();
-    let reply = match serde_json::from_str::<Request>(&arg) {
-        Ok(Request::Run(o)) => serde_json::to_string(
+    let mut m = model::MODEL::default();
+    let request = serde_json::from_str::<Request>(&arg);
+    if let Ok(r) = &request {
+        for (d, s) in m.inputs.iter_mut().zip(&r.inputs) {
+            *d = *s;
+        }
+    }
+    let reply = match request.map(|r| r.what) {
+        Ok(What::Run(o)) => serde_json::to_string(
             &eom_sim::simulate_generated::<model::MODEL, { model::NY }, { model::NYC }>(&m, &o)
                 .map_err(|e| e.to_string()),
         ),
-        Ok(Request::Eval { t, q, u, tau }) => {
+        Ok(What::Eval { t, q, u, tau }) => {
             let at = eom_sim::Point { t, q: &q, u: &u, tau: &tau, ..Default::default() };
             let functions: Vec<(&str, Vec<f64>)> = model::MODEL::FUNCTIONS
                 .iter()
@@ -257,13 +271,17 @@ pub fn evaluate(
     u: &[f64],
     tau: &[f64],
     t: f64,
+    inputs: &[f64],
 ) -> Result<Evaluation, Error> {
     #[derive(serde::Deserialize)]
     struct Reply {
         functions: Vec<(String, Vec<Option<f64>>)>,
     }
     let exe = executable(name, source, q.len(), u.len())?;
-    let req = serde_json::json!({ "Eval": { "t": t, "q": q, "u": u, "tau": tau } });
+    let req = serde_json::json!({
+        "inputs": inputs,
+        "what": { "Eval": { "t": t, "q": q, "u": u, "tau": tau } },
+    });
     let reply: Reply = request(&exe, &req.to_string())?;
     Ok(Evaluation {
         functions: reply
@@ -281,8 +299,9 @@ pub fn simulate(
     nq: usize,
     nu: usize,
     options: &eom_sim::RunOptions,
+    inputs: &[f64],
 ) -> Result<eom_sim::RunReport, Error> {
     let exe = executable(name, source, nq, nu)?;
-    let req = serde_json::json!({ "Run": options });
+    let req = serde_json::json!({ "inputs": inputs, "what": { "Run": options } });
     request(&exe, &req.to_string())
 }

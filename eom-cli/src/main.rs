@@ -62,6 +62,14 @@ enum Command {
         /// Time.
         #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
         t: f64,
+        /// Set a parameter of the model: `NAME=VALUE` (repeatable); the
+        /// code is regenerated with the value.
+        #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        params: Vec<String>,
+        /// Hold a runtime input of the model at a value: `NAME=VALUE`
+        /// (repeatable; default zero).
+        #[arg(long = "input", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        inputs: Vec<String>,
         /// Use the evaluator instead of compiled code (no compiler needed).
         #[arg(long)]
         interpret: bool,
@@ -97,6 +105,14 @@ enum Command {
         /// Initial speeds, comma-separated (default: the model's u0).
         #[arg(long, allow_hyphen_values = true)]
         u0: Option<String>,
+        /// Set a parameter of the model: `NAME=VALUE` (repeatable); the
+        /// code is regenerated with the value.
+        #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        params: Vec<String>,
+        /// Hold a runtime input of the model at a value: `NAME=VALUE`
+        /// (repeatable; default zero).
+        #[arg(long = "input", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        inputs: Vec<String>,
         /// Write the trajectory (t, q, u) to this CSV file.
         #[arg(long)]
         csv: Option<String>,
@@ -133,6 +149,10 @@ enum Command {
     Bench {
         /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`); not with `--suite`.
         model: Option<String>,
+        /// Set a parameter of the model: `NAME=VALUE` (repeatable); the
+        /// code is regenerated with the value.
+        #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        params: Vec<String>,
         /// Per-call cost of the generated functions.
         #[arg(long)]
         per_call: bool,
@@ -207,7 +227,7 @@ enum Command {
     Stats {
         /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
         model: String,
-        /// Print one JSON object (the only format).
+        /// Print one JSON object instead of the table.
         #[arg(long)]
         json: bool,
     },
@@ -219,7 +239,7 @@ fn main() -> ExitCode {
         Command::Check { model, json } => check(&model, json),
         Command::Import { urdf, output } => import(&urdf, output.as_deref()),
         Command::Dump { model, output, fma } => dump(&model, output.as_deref(), fma),
-        Command::Stats { model, json: _ } => stats(&model),
+        Command::Stats { model, json } => stats(&model, json),
         Command::Bench {
             model,
             per_call,
@@ -244,6 +264,7 @@ fn main() -> ExitCode {
             plot,
             error_label,
             json,
+            params,
         } => {
             if !plot.is_empty() {
                 if model.is_some() || per_call || work_precision || suite {
@@ -290,9 +311,24 @@ fn main() -> ExitCode {
             {
                 problems.extend(e);
             }
+            let params = match parse_assignments("param", &params) {
+                Ok(p) => p,
+                Err(e) => {
+                    problems.extend(e);
+                    Vec::new()
+                }
+            };
             if !problems.is_empty() {
                 return fail(&Error::Usage(problems));
             }
+            if suite && !params.is_empty() {
+                eprintln!("error: --param sets a parameter of one model; not with --suite");
+                return ExitCode::from(2);
+            }
+            let vary = Vary {
+                params,
+                inputs: Vec::new(),
+            };
             if suite {
                 if model.is_some() || per_call || work_precision {
                     eprintln!(
@@ -313,7 +349,14 @@ fn main() -> ExitCode {
                     eprintln!("error: choose one of --per-call and --work-precision");
                     return ExitCode::from(2);
                 }
-                return bench_work_precision(&model, &wp, csv.as_deref(), svg.as_deref(), json);
+                return bench_work_precision(
+                    &model,
+                    &vary,
+                    &wp,
+                    csv.as_deref(),
+                    svg.as_deref(),
+                    json,
+                );
             }
             let o = crate::bench::PerCallOptions {
                 states,
@@ -321,7 +364,7 @@ fn main() -> ExitCode {
                 seed,
                 native,
             };
-            bench(&model, per_call, &o, json)
+            bench(&model, &vary, per_call, &o, json)
         }
         Command::Simulate {
             model,
@@ -338,7 +381,13 @@ fn main() -> ExitCode {
             interpret,
             constraints,
             json,
+            params,
+            inputs,
         } => {
+            let vary = match Vary::parse(&params, &inputs) {
+                Ok(v) => v,
+                Err(code) => return code,
+            };
             let list = |what: &str, text: Option<String>| -> Result<Option<Vec<f64>>, String> {
                 text.map(|t| {
                     t.split(',')
@@ -380,8 +429,10 @@ fn main() -> ExitCode {
                 u0,
                 csv,
                 every,
+                energy_columns: false,
+                momentum_columns: false,
             };
-            simulate(&model, &o, json, interpret)
+            simulate(&model, &vary, &o, json, interpret)
         }
         Command::Eval {
             model,
@@ -391,8 +442,14 @@ fn main() -> ExitCode {
             t,
             interpret,
             json: _,
+            params,
+            inputs,
         } => eval(
             &model,
+            &match Vary::parse(&params, &inputs) {
+                Ok(v) => v,
+                Err(code) => return code,
+            },
             q.as_deref(),
             u.as_deref(),
             tau.as_deref(),
@@ -516,12 +573,17 @@ fn diagnostics_json(report: &Report) -> serde_json::Value {
 
 /// Generates with a progress line on a terminal when it takes longer
 /// than half a second (large models).
-fn generate_with_progress(path: &str) -> Result<eom_gen::Generated, eom_gen::GenerateError> {
+fn generate_with_progress(
+    path: &str,
+    params: &[(String, f64)],
+) -> Result<eom_gen::Generated, eom_gen::GenerateError> {
     use std::io::{IsTerminal, Write};
     use std::sync::mpsc;
     use std::time::{Duration, Instant};
+    let generate =
+        || eom_gen::generate_file_with_values(path, params, &eom_gen::EmitOptions::default());
     if !std::io::stderr().is_terminal() {
-        return eom_gen::generate_file(path);
+        return generate();
     }
     let (done, wait) = mpsc::channel::<()>();
     let label = path.to_string();
@@ -549,14 +611,125 @@ fn generate_with_progress(path: &str) -> Result<eom_gen::Generated, eom_gen::Gen
             );
         }
     });
-    let result = eom_gen::generate_file(path);
+    let result = generate();
     let _ = done.send(());
     let _ = spinner.join();
     result
 }
 
 fn generated(path: &str) -> Result<eom_gen::Generated, ExitCode> {
-    generate_with_progress(path).map_err(|e| {
+    generated_with(path, &Vary::default())
+}
+
+/// What `--param` and `--input` set.
+#[derive(Clone, Debug, Default)]
+struct Vary {
+    /// Parameter values, by name.
+    params: Vec<(String, f64)>,
+    /// Input values, by name.
+    inputs: Vec<(String, f64)>,
+}
+
+impl Vary {
+    /// Both lists of `NAME=VALUE`; every malformed one is a usage error.
+    fn parse(params: &[String], inputs: &[String]) -> Result<Vary, ExitCode> {
+        let p = parse_assignments("param", params);
+        let i = parse_assignments("input", inputs);
+        match (p, i) {
+            (Ok(params), Ok(inputs)) => Ok(Vary { params, inputs }),
+            (p, i) => {
+                for e in p.err().into_iter().chain(i.err()).flatten() {
+                    eprintln!("error: {e}");
+                }
+                Err(ExitCode::from(2))
+            }
+        }
+    }
+
+    /// The input values in the model's order (zero where not set), after
+    /// checking every name against the model: an unknown parameter or
+    /// input is a usage error (exit 2) with the closest name.
+    fn resolve(&self, path: &str) -> Result<Vec<f64>, ExitCode> {
+        if self.params.is_empty() && self.inputs.is_empty() {
+            return Ok(Vec::new());
+        }
+        // An invalid model is reported by the generation that follows.
+        let Ok(checked) = eom_gen::check_file(path) else {
+            return Ok(Vec::new());
+        };
+        let sys = &checked.system;
+        let params: Vec<&str> = sys.parameters.iter().map(|p| p.name.as_str()).collect();
+        let inputs: Vec<&str> = sys.inputs.iter().map(String::as_str).collect();
+        let mut problems = Vec::new();
+        for (what, given, known) in [
+            ("parameter", &self.params, &params),
+            ("input", &self.inputs, &inputs),
+        ] {
+            for (name, _) in given {
+                if known.contains(&name.as_str()) {
+                    continue;
+                }
+                let hint = match eom_gen::diag::did_you_mean(name, known.iter().copied()) {
+                    Some(m) => format!(" (did you mean `{m}`?)"),
+                    None if known.is_empty() => format!("; `{}` has none", sys.name),
+                    None => format!(
+                        "; its {what}s: {}",
+                        known
+                            .iter()
+                            .map(|n| format!("`{n}`"))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                };
+                problems.push(format!("`{path}` has no {what} `{name}`{hint}"));
+            }
+        }
+        if !problems.is_empty() {
+            for p in problems {
+                eprintln!("error: {p}");
+            }
+            return Err(ExitCode::from(2));
+        }
+        Ok(sys
+            .inputs
+            .iter()
+            .map(|n| {
+                self.inputs
+                    .iter()
+                    .rev()
+                    .find(|(m, _)| m == n)
+                    .map_or(0.0, |(_, v)| *v)
+            })
+            .collect())
+    }
+}
+
+/// `NAME=VALUE` pairs of `--what`; every malformed one is a problem.
+fn parse_assignments(what: &str, items: &[String]) -> Result<Vec<(String, f64)>, Vec<String>> {
+    let mut out = Vec::new();
+    let mut problems = Vec::new();
+    for item in items {
+        let parsed = item.split_once('=').and_then(|(n, v)| {
+            let v: f64 = v.trim().parse().ok()?;
+            (!n.trim().is_empty() && v.is_finite()).then(|| (n.trim().to_string(), v))
+        });
+        match parsed {
+            Some(p) => out.push(p),
+            None => problems.push(format!(
+                "--{what} `{item}`: expected NAME=VALUE with a finite number, e.g. `--{what} m=2.5`"
+            )),
+        }
+    }
+    if problems.is_empty() {
+        Ok(out)
+    } else {
+        Err(problems)
+    }
+}
+
+/// Generates `path` with the parameter values of `vary`.
+fn generated_with(path: &str, vary: &Vary) -> Result<eom_gen::Generated, ExitCode> {
+    generate_with_progress(path, &vary.params).map_err(|e| {
         eprint!("{e}");
         if !e.to_string().ends_with('\n') {
             eprintln!();
@@ -604,7 +777,7 @@ fn generated_functions(r: &eom_gen::functions::FunctionSet) -> Vec<&'static str>
         .collect()
 }
 
-fn stats(path: &str) -> ExitCode {
+fn stats(path: &str, json: bool) -> ExitCode {
     let g = match generated(path) {
         Ok(g) => g,
         Err(code) => return code,
@@ -636,11 +809,71 @@ fn stats(path: &str) -> ExitCode {
         "generation_ms": f.seconds * 1e3,
         "source_bytes": g.source.len(),
     });
-    println!("{v}");
+    if json {
+        println!("{v}");
+    } else {
+        print!("{}", stats_table(&g));
+    }
     ExitCode::SUCCESS
 }
 
-fn bench(path: &str, per_call: bool, o: &crate::bench::PerCallOptions, json: bool) -> ExitCode {
+/// `stats` for people: one row of operation counts per generated function.
+fn stats_table(g: &eom_gen::Generated) -> String {
+    use std::fmt::Write;
+    let f = &g.formulation;
+    let sys = &g.checked.system;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: nq = {}, nu = {}, forward dynamics by {}; generated in {:.1} ms, {} bytes of source",
+        sys.name,
+        sys.nq(),
+        sys.nu(),
+        f.fd_form,
+        f.seconds * 1e3,
+        g.source.len()
+    );
+    let _ = writeln!(
+        s,
+        "  {:<20} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
+        "function", "add", "mul", "div", "neg", "sqrt", "trig", "other", "total"
+    );
+    for e in TABLE {
+        match f.program(e.function) {
+            Some(p) => {
+                let c = p.op_count();
+                let _ = writeln!(
+                    s,
+                    "  {:<20} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
+                    e.name,
+                    c.adds,
+                    c.muls,
+                    c.divs,
+                    c.negs,
+                    c.sqrts,
+                    c.trig,
+                    c.other,
+                    c.total()
+                );
+            }
+            None => {
+                let _ = writeln!(s, "  {:<20} {:>8}", e.name, "—");
+            }
+        }
+    }
+    if !f.output_names.is_empty() {
+        let _ = writeln!(s, "  outputs: {}", f.output_names.join(", "));
+    }
+    s
+}
+
+fn bench(
+    path: &str,
+    vary: &Vary,
+    per_call: bool,
+    o: &crate::bench::PerCallOptions,
+    json: bool,
+) -> ExitCode {
     if !per_call {
         eprintln!("error: say what to measure: --per-call, --work-precision or --suite");
         return ExitCode::from(2);
@@ -649,7 +882,10 @@ fn bench(path: &str, per_call: bool, o: &crate::bench::PerCallOptions, json: boo
         eprintln!("error: --states and --reps must be at least 1");
         return ExitCode::from(2);
     }
-    let g = match generated(path) {
+    if let Err(code) = vary.resolve(path) {
+        return code;
+    }
+    let g = match generated_with(path, vary) {
         Ok(g) => g,
         Err(code) => return code,
     };
@@ -701,13 +937,18 @@ fn parse_list(
 
 fn eval(
     path: &str,
+    vary: &Vary,
     q: Option<&str>,
     u: Option<&str>,
     tau: Option<&str>,
     t: f64,
     interpret: bool,
 ) -> ExitCode {
-    let g = match generated(path) {
+    let inputs = match vary.resolve(path) {
+        Ok(i) => i,
+        Err(code) => return code,
+    };
+    let g = match generated_with(path, vary) {
         Ok(g) => g,
         Err(code) => return code,
     };
@@ -734,14 +975,14 @@ fn eval(
             u: &u,
             udot: &[],
             tau: &tau,
-            inputs: &[],
+            inputs: &inputs,
             params: &[],
             multipliers: &[],
             t,
         };
         Ok(eom_gen::interpret::evaluate(&g.formulation, &point))
     } else {
-        crate::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t)
+        crate::compiled::evaluate(&sys.name, &g.source, &q, &u, &tau, t, &inputs)
     };
     match result {
         Ok(e) => {
@@ -829,21 +1070,31 @@ where
 /// A run that did not reach its end time: exit status 3.
 const EXIT_RUN_STOPPED: u8 = 3;
 
-fn simulate(path: &str, o: &RunOptions, json: bool, interpret: bool) -> ExitCode {
+fn simulate(path: &str, vary: &Vary, o: &RunOptions, json: bool, interpret: bool) -> ExitCode {
     let problems = o.problems();
     if !problems.is_empty() {
         return fail(&Error::Usage(problems));
     }
-    let g = match generated(path) {
+    let inputs = match vary.resolve(path) {
+        Ok(i) => i,
+        Err(code) => return code,
+    };
+    let g = match generated_with(path, vary) {
         Ok(g) => g,
         Err(code) => return code,
     };
     let sys = &g.checked.system;
+    let mut o = o.clone();
+    // Every requested output goes into the CSV: energy and momentum
+    // next to the marker and reaction outputs.
+    o.energy_columns = sys.outputs.contains(&eom_gen::system::OutputKind::Energy);
+    o.momentum_columns = sys.outputs.contains(&eom_gen::system::OutputKind::Momentum);
+    let o = &o;
     let result = if interpret {
-        eom_gen::interpret::simulate(&g.formulation, sys, o)
+        eom_gen::interpret::simulate_with_inputs(&g.formulation, sys, o, &inputs)
             .map_err(|e| Error::Refused(e.to_string()))
     } else {
-        crate::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o)
+        crate::compiled::simulate(&sys.name, &g.source, sys.nq(), sys.nu(), o, &inputs)
     };
     let r: RunReport = match result {
         Ok(r) => r,
@@ -971,24 +1222,37 @@ fn wp_sweep(
     })
 }
 
-/// Writes `text` to `path`, creating its directory; the error is printed
+/// Writes `text` to `path`; its directory must exist (nothing is created
+/// that the user did not name). The error, naming the path, is printed
 /// and the exit status returned.
 fn write_file(path: &str, text: &str) -> Result<(), ExitCode> {
+    let fail = |why: String| {
+        eprintln!("error: cannot write `{path}`: {why}");
+        ExitCode::from(1)
+    };
     if let Some(dir) = std::path::Path::new(path).parent()
         && !dir.as_os_str().is_empty()
-        && let Err(e) = std::fs::create_dir_all(dir)
+        && !dir.is_dir()
     {
-        eprintln!("error: cannot create `{}`: {e}", dir.display());
-        return Err(ExitCode::from(1));
+        return Err(fail(format!(
+            "the directory `{}` does not exist",
+            dir.display()
+        )));
     }
-    std::fs::write(path, text).map_err(|e| {
-        eprintln!("error: cannot write `{path}`: {e}");
+    std::fs::write(path, text).map_err(|e| fail(e.to_string()))
+}
+
+/// Creates the output directory the user named (`bench --suite --out`).
+fn create_out_dir(dir: &str) -> Result<(), ExitCode> {
+    std::fs::create_dir_all(dir).map_err(|e| {
+        eprintln!("error: cannot create the output directory `{dir}`: {e}");
         ExitCode::from(1)
     })
 }
 
 fn bench_work_precision(
     path: &str,
+    vary: &Vary,
     o: &crate::sweep::WpOptions,
     csv: Option<&str>,
     svg: Option<&str>,
@@ -1001,7 +1265,10 @@ fn bench_work_precision(
         }
         return ExitCode::from(2);
     }
-    let g = match generated(path) {
+    if let Err(code) = vary.resolve(path) {
+        return code;
+    }
+    let g = match generated_with(path, vary) {
         Ok(g) => g,
         Err(code) => return code,
     };
@@ -1058,6 +1325,9 @@ fn bench_suite(dir: &str, out: &str, o: &crate::sweep::WpOptions, t_end_given: b
         }
     };
     models.sort();
+    if let Err(code) = create_out_dir(out) {
+        return code;
+    }
     let bars = indicatif::MultiProgress::new();
     let overall = bars.add(indicatif::ProgressBar::new(models.len() as u64));
     if let Ok(s) = indicatif::ProgressStyle::with_template(
@@ -1072,7 +1342,7 @@ fn bench_suite(dir: &str, out: &str, o: &crate::sweep::WpOptions, t_end_given: b
     let mut sections = String::new();
     for path in &models {
         let p = path.display().to_string();
-        let g = match generate_with_progress(&p) {
+        let g = match generate_with_progress(&p, &[]) {
             Ok(g) => g,
             Err(e) => {
                 bars.suspend(|| eprint!("{e}"));

@@ -273,11 +273,12 @@ fn simulate_runs_the_compiled_model_and_reports_statistics() {
     assert!((e1 - e0).abs() < 1e-8, "energy {e0} → {e1}");
     let text = std::fs::read_to_string(&csv).unwrap_or_default();
     let lines: Vec<&str> = text.lines().collect();
-    // Coordinates, speeds, then the model's outputs (tip position, hinge reaction).
+    // Coordinates, speeds, then the model's outputs (tip position, hinge
+    // reaction, and the energies it requests with `Energy`).
     assert_eq!(
         lines.first().copied(),
         Some(
-            "t,theta,theta_dot,bob_tip_x,bob_tip_y,bob_tip_z,hinge_fx,hinge_fy,hinge_fz,hinge_nx,hinge_ny,hinge_nz"
+            "t,theta,theta_dot,bob_tip_x,bob_tip_y,bob_tip_z,hinge_fx,hinge_fy,hinge_fz,hinge_nx,hinge_ny,hinge_nz,kinetic_energy,potential_energy"
         )
     );
     // At t = 0 (horizontal, at rest) the tip is at (1, 0, 0) and the link is slack.
@@ -783,4 +784,500 @@ fn simulate_says_when_a_loop_passed_near_a_singular_configuration() {
             "{model}: the note goes with a ratio below 1e-2 ({ratio:e}):\n{text}"
         );
     }
+}
+
+/// A fresh path in the temporary directory, unique to this test process.
+fn temp_path(name: &str) -> String {
+    std::env::temp_dir()
+        .join(format!("eom-cli-{}-{name}", std::process::id()))
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// The `t` column of a CSV written by `simulate --csv`.
+fn csv_times(path: &str) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    text.lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').next()?.parse().ok())
+        .collect()
+}
+
+#[test]
+fn simulate_rejects_bad_numbers_up_front_with_exit_2() {
+    // Each is a usage error (exit 2) whose message names the option, and
+    // nothing runs: no model is compiled (the model path does not exist).
+    for (args, says) in [
+        (&["--rtol=-1"][..], "--rtol"),
+        (&["--atol=-1e-3"], "--atol"),
+        (&["--rtol", "nan"], "--rtol"),
+        (&["--dt=-0.1", "--integrator", "rk4"], "--dt"),
+        (&["--dt=-0.1"], "--dt"),
+        (&["--dt", "0", "--integrator", "rk4"], "--dt"),
+        (&["--every", "0"], "--every"),
+        (&["--every", "-1"], "--every"),
+        (&["--rtol", "0", "--atol", "0"], "cannot both be zero"),
+        (&["--max-steps", "0"], "--max-steps"),
+        (&["--t-end", "0"], "--t-end"),
+        (&["--q0", "1,x"], "--q0"),
+        (&["--u0", "nan"], "--u0"),
+    ] {
+        let mut all = vec!["simulate", "models/pendulum.ron", "--t-end", "1"];
+        all.extend_from_slice(args);
+        let out = eom_gen(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?} should name `{says}`: {err}");
+    }
+    // Several problems are reported together.
+    let out = eom_gen(&[
+        "simulate",
+        "models/pendulum.ron",
+        "--t-end",
+        "1",
+        "--rtol=-1",
+        "--every",
+        "0",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(err.contains("--rtol") && err.contains("--every"), "{err}");
+}
+
+#[test]
+fn simulate_csv_always_ends_with_the_final_state() {
+    let csv = temp_path("final.csv");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "simulate",
+            "models/pendulum.ron",
+            "--t-end",
+            "1",
+            "--interpret",
+            "--csv",
+            &csv,
+        ];
+        args.extend_from_slice(extra);
+        let out = eom_gen(&args);
+        assert!(
+            out.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        csv_times(&csv)
+    };
+    // An interval longer than the run: the start and the end.
+    assert_eq!(run(&["--every", "5"]), vec![0.0, 1.0]);
+    // An interval that does not divide the run: …, 0.9, then t = 1 itself.
+    let t = run(&["--every", "0.3"]);
+    assert_eq!(t.len(), 5, "{t:?}");
+    assert!((t[3] - 0.9).abs() < 1e-12, "{t:?}");
+    assert_eq!(t.last().copied(), Some(1.0), "{t:?}");
+    // Every step: the last one is the end time.
+    let t = run(&[]);
+    assert!(t.len() > 3 && t[0] == 0.0, "{t:?}");
+    assert_eq!(t.last().copied(), Some(1.0), "{t:?}");
+    let _ = std::fs::remove_file(&csv);
+}
+
+#[test]
+fn a_run_that_stops_early_exits_3_with_a_structured_stop() {
+    let csv = temp_path("stopped.csv");
+    let args = |interpret: bool| {
+        let mut a = vec![
+            "simulate",
+            "models/double_pendulum.ron",
+            "--t-end",
+            "10",
+            "--max-steps",
+            "10",
+            "--json",
+            "--csv",
+            csv.as_str(),
+        ];
+        if interpret {
+            a.push("--interpret");
+        }
+        a
+    };
+    for interpret in [true, false] {
+        let out = cached(&args(interpret));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "interpret {interpret}: {err}");
+        assert!(err.contains("stopped before t = 10"), "{err}");
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        let stop = &v["stop"];
+        assert_eq!(stop["reason"], "max_steps", "{v}");
+        let t = stop["t"].as_f64().unwrap_or(f64::NAN);
+        assert!(t > 0.0 && t < 10.0, "{stop}");
+        assert!(
+            stop["message"]
+                .as_str()
+                .is_some_and(|m| m.contains("--max-steps"))
+        );
+        assert_eq!(v["t"].as_f64(), Some(t));
+        assert_eq!(v["stats"]["steps"], 10);
+        // The CSV ends where the run stopped.
+        assert_eq!(csv_times(&csv).last().copied(), Some(t));
+    }
+    // The summary (no --json) says the same.
+    let out = eom_gen(&[
+        "simulate",
+        "models/pendulum.ron",
+        "--t-end",
+        "10",
+        "--max-steps",
+        "5",
+        "--interpret",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("step limit"));
+    let _ = std::fs::remove_file(&csv);
+}
+
+#[test]
+fn simulate_starts_from_q0_and_u0() {
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "simulate",
+            "models/pendulum.ron",
+            "--t-end",
+            "0.001",
+            "--interpret",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        json(&args)
+    };
+    // At the bottom at rest it stays there; pushed, it moves.
+    let v = run(&["--q0", "0", "--u0", "0"]);
+    assert!(v["q"][0].as_f64().is_some_and(|q| q.abs() < 1e-15), "{v}");
+    let v = run(&["--q0", "0", "--u0", "1"]);
+    let q = v["q"][0].as_f64().unwrap_or(f64::NAN);
+    assert!((q - 0.001).abs() < 1e-6, "{v}");
+    // The wrong number of values is a usage error naming the counts.
+    let out = eom_gen(&[
+        "simulate",
+        "models/pendulum.ron",
+        "--t-end",
+        "1",
+        "--interpret",
+        "--q0",
+        "1,2",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("--q0 has 2 value(s)"), "{err}");
+}
+
+#[test]
+fn eval_rejects_non_finite_numbers() {
+    for args in [
+        &["--q", "1,nan"][..],
+        &["--u", "inf,0"],
+        &["--tau", "0,NaN"],
+        &["--q", "1"],
+    ] {
+        let mut all = vec!["eval", "models/double_pendulum.ron", "--interpret"];
+        all.extend_from_slice(args);
+        let out = eom_gen(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(args[0]), "{args:?}: {err}");
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
+}
+
+#[test]
+fn unknown_fields_are_all_reported_at_once() {
+    let path = temp_path("typos.ron");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/pendulum.ron"
+    ))
+    .unwrap_or_default()
+    .replacen("com:", "cmo:", 1)
+    .replacen("axis:", "axsi:", 1);
+    let _ = std::fs::write(&path, text);
+    let out = eom_gen(&["check", &path]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("`cmo`") && err.contains("`axsi`"), "{err}");
+    assert!(err.contains("has 2 error(s)"), "{err}");
+    assert!(err.contains("did you mean"), "{err}");
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn output_paths_are_never_created_silently_and_errors_name_them() {
+    let dir = temp_path("no-such-dir");
+    let file = format!("{dir}/x.rs");
+    for args in [
+        vec!["dump", "models/pendulum.ron", "-o", file.as_str()],
+        vec![
+            "import",
+            "eom-gen/tests/urdf/arm2.urdf",
+            "-o",
+            file.as_str(),
+        ],
+    ] {
+        let out = eom_gen(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains(&format!("cannot write `{file}`")) && err.contains("does not exist"),
+            "{args:?}: {err}"
+        );
+        assert!(!std::path::Path::new(&dir).exists(), "{dir} was created");
+    }
+    // Into a directory that exists, it writes.
+    let ok = temp_path("dump.rs");
+    let out = eom_gen(&["dump", "models/pendulum.ron", "-o", &ok]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::read_to_string(&ok).is_ok_and(|t| t.contains("impl ::eom_sim::Model")));
+    let _ = std::fs::remove_file(&ok);
+}
+
+#[test]
+fn a_binary_file_is_named_not_echoed() {
+    let path = temp_path("binary.ron");
+    let mut bytes = b"Model(\x00\x01\x02\x1b[31m".to_vec();
+    bytes.extend([0xff, 0xfe, 0x00, 0x7f, 0x1b, b'c']);
+    let _ = std::fs::write(&path, &bytes);
+    let out = eom_gen(&["check", &path]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&path) && err.contains("not a text file"),
+        "{err}"
+    );
+    assert!(
+        !out.stderr.iter().any(|b| *b == 0x1b || *b == 0),
+        "raw bytes reached the terminal: {err:?}"
+    );
+    // A text file with one stray byte is shown where it is.
+    let _ = std::fs::write(&path, b"Model(name: \"p\xe9\")\n");
+    let err = String::from_utf8_lossy(&eom_gen(&["check", &path]).stderr).into_owned();
+    assert!(
+        err.contains(&format!("{path}:1:15")) && err.contains("not valid UTF-8"),
+        "{err}"
+    );
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn stats_prints_a_table_without_json() {
+    let out = eom_gen(&["stats", "models/pendulum.ron"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.trim_start().starts_with('{'), "{text}");
+    assert!(
+        text.contains("function") && text.contains("total"),
+        "{text}"
+    );
+    assert!(
+        text.contains("forward_dynamics") && text.contains("mass_matrix"),
+        "{text}"
+    );
+}
+
+#[test]
+fn requested_energy_and_momentum_are_in_the_csv() {
+    let csv = temp_path("energy.csv");
+    for (model, has_momentum) in [
+        ("models/pendulum.ron", false),
+        ("models/heavy_top.ron", true),
+    ] {
+        let out = eom_gen(&[
+            "simulate",
+            model,
+            "--t-end",
+            "0.5",
+            "--interpret",
+            "--csv",
+            &csv,
+            "--every",
+            "0.1",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = std::fs::read_to_string(&csv).unwrap_or_default();
+        let header: Vec<&str> = text.lines().next().unwrap_or("").split(',').collect();
+        let col = |name: &str| header.iter().position(|h| *h == name);
+        let (Some(k), Some(p)) = (col("kinetic_energy"), col("potential_energy")) else {
+            panic!("{model}: no energy columns in {header:?}");
+        };
+        assert_eq!(
+            col("linear_momentum_z").is_some(),
+            has_momentum,
+            "{header:?}"
+        );
+        // Conserved: the total is the same on every row.
+        let totals: Vec<f64> = text
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let v: Vec<f64> = l.split(',').filter_map(|x| x.parse().ok()).collect();
+                v[k] + v[p]
+            })
+            .collect();
+        assert_eq!(totals.len(), 6, "{text}");
+        for e in &totals {
+            assert!(
+                (e - totals[0]).abs() < 1e-6 * totals[0].abs().max(1.0),
+                "{model}: {totals:?}"
+            );
+        }
+    }
+    // A model without `Energy` among its outputs has no such columns.
+    let plain = temp_path("plain.ron");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/pendulum.ron"
+    ))
+    .unwrap_or_default()
+    .replace(", Energy]", "]");
+    let _ = std::fs::write(&plain, text);
+    let out = eom_gen(&[
+        "simulate",
+        &plain,
+        "--t-end",
+        "0.1",
+        "--interpret",
+        "--csv",
+        &csv,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&csv).unwrap_or_default();
+    let header = text.lines().next().unwrap_or("");
+    assert!(header.ends_with("hinge_nz"), "{header}");
+    let _ = std::fs::remove_file(&plain);
+    let _ = std::fs::remove_file(&csv);
+}
+
+/// The pendulum with an actuator `motor` at the hinge and `l` tunable.
+fn actuated_pendulum() -> String {
+    let path = temp_path("actuated.ron");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/pendulum.ron"
+    ))
+    .unwrap_or_default()
+    .replace(
+        "(name: \"l\", value: 1.0,",
+        "(name: \"l\", value: 1.0, tunable: true,",
+    )
+    .replace(
+        "    outputs:",
+        "    forces: [Actuator(name: \"motor\", joint: \"hinge\")],\n    outputs:",
+    );
+    let _ = std::fs::write(&path, text);
+    path
+}
+
+/// `udot` of `eval` with `args`.
+fn udot(args: &[&str]) -> f64 {
+    let v = json(args);
+    v["udot"][0].as_f64().unwrap_or(f64::NAN)
+}
+
+#[test]
+fn params_and_inputs_are_set_from_the_command_line() {
+    let model = actuated_pendulum();
+    let eval = |extra: &[&str]| {
+        let mut args = vec!["eval", model.as_str(), "--interpret"];
+        args.extend_from_slice(extra);
+        udot(&args)
+    };
+    // Horizontal at rest: u̇ = (τ − m g l)/(m l²).
+    assert!((eval(&[]) + 9.81).abs() < 1e-12);
+    // A fixed parameter (regenerated) and a tunable one.
+    assert!((eval(&["--param", "g=1.5"]) + 1.5).abs() < 1e-12);
+    assert!((eval(&["--param", "l=2"]) + 9.81 / 2.0).abs() < 1e-12);
+    assert!((eval(&["--param", "l=2", "--param", "g=4"]) + 2.0).abs() < 1e-12);
+    // The input: a torque at the hinge.
+    assert!((eval(&["--input", "motor=2"]) + 7.81).abs() < 1e-12);
+    assert!((eval(&["--input", "motor=9.81"])).abs() < 1e-12);
+    // A simulation held by the motor stays where it is.
+    for interpret in [true, false] {
+        let mut args = vec![
+            "simulate",
+            model.as_str(),
+            "--t-end",
+            "1",
+            "--input",
+            "motor=4.905",
+            "--param",
+            "m=0.5",
+            "--json",
+        ];
+        if interpret {
+            args.push("--interpret");
+        }
+        let out = cached(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        let q = v["q"][0].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            (q - std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+            "interpret {interpret}: {v}"
+        );
+    }
+    // Compiled eval agrees.
+    let out = cached(&["eval", &model, "--input", "motor=2", "--param", "l=2"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let a = v["udot"][0].as_f64().unwrap_or(f64::NAN);
+    assert!((a - (2.0 - 9.81 * 2.0) / 4.0).abs() < 1e-12, "{v}");
+    // Unknown names and malformed values are usage errors.
+    for (args, says) in [
+        (&["--param", "G=1"][..], "did you mean `g`"),
+        (&["--param", "length=1"], "has no parameter `length`"),
+        (&["--input", "motr=1"], "did you mean `motor`"),
+        (&["--param", "g"], "NAME=VALUE"),
+        (&["--param", "g=nan"], "NAME=VALUE"),
+        (&["--input", "motor=x"], "NAME=VALUE"),
+    ] {
+        let mut all = vec!["eval", model.as_str(), "--interpret"];
+        all.extend_from_slice(args);
+        let out = eom_gen(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+    let out = eom_gen(&[
+        "simulate",
+        "models/pendulum.ron",
+        "--t-end",
+        "1",
+        "--input",
+        "u=1",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("has none"), "{err}");
+    let _ = std::fs::remove_file(&model);
 }

@@ -82,6 +82,19 @@ pub fn generate_file_with(
     generate_checked(check_file(path).map_err(GenerateError::Model)?, opts)
 }
 
+/// [`generate_file`] with parameter values replaced (see
+/// [`crate::model::check_file_with_values`]).
+pub fn generate_file_with_values(
+    path: &str,
+    values: &[(String, f64)],
+    opts: &emit::EmitOptions,
+) -> Result<Generated, GenerateError> {
+    generate_checked(
+        crate::model::check_file_with_values(path, values).map_err(GenerateError::Model)?,
+        opts,
+    )
+}
+
 /// Formulates and emits a checked model.
 pub fn generate_checked(
     checked: Checked,

@@ -240,6 +240,7 @@ pub struct Interpreted<'a> {
     nq: usize,
     nu: usize,
     quaternions: Vec<usize>,
+    inputs: Vec<f64>,
 }
 
 impl<'a> Interpreted<'a> {
@@ -251,7 +252,17 @@ impl<'a> Interpreted<'a> {
             nq: sys.nq(),
             nu: sys.nu(),
             quaternions: sys.quaternion_indices(),
+            inputs: vec![0.0; sys.inputs.len()],
         }
+    }
+
+    /// The same with the model's runtime inputs set (in `System::inputs`
+    /// order; missing ones are zero).
+    pub fn with_inputs(mut self, inputs: &[f64]) -> Self {
+        for (d, s) in self.inputs.iter_mut().zip(inputs) {
+            *d = *s;
+        }
+        self
     }
 
     fn point<'p>(&'p self, q: &'p [f64], u: &'p [f64], t: f64) -> Point<'p> {
@@ -261,7 +272,7 @@ impl<'a> Interpreted<'a> {
             u,
             udot: &[],
             tau: &[],
-            inputs: &[],
+            inputs: &self.inputs,
             params: &[],
             multipliers: &[],
             t,
@@ -355,7 +366,7 @@ impl eom_sim::Simulate for Interpreted<'_> {
             u: at.u,
             udot: at.udot,
             tau: at.tau,
-            inputs: &[],
+            inputs: &self.inputs,
             params: &[],
             multipliers: at.lambda,
             t: at.t,
@@ -396,7 +407,18 @@ pub fn simulate(
     sys: &System,
     options: &eom_sim::RunOptions,
 ) -> Result<eom_sim::RunReport, InterpretError> {
-    let model = Interpreted::new(f, sys);
+    simulate_with_inputs(f, sys, options, &[])
+}
+
+/// [`simulate`] with the model's runtime inputs held at `inputs` (in
+/// `System::inputs` order).
+pub fn simulate_with_inputs(
+    f: &Formulation,
+    sys: &System,
+    options: &eom_sim::RunOptions,
+    inputs: &[f64],
+) -> Result<eom_sim::RunReport, InterpretError> {
+    let model = Interpreted::new(f, sys).with_inputs(inputs);
     let n = eom_sim::run::state_len(&model, options);
     macro_rules! sized {
         ($($n:literal)*) => {

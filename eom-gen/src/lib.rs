@@ -33,7 +33,8 @@ pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;
 pub use generate::{
     GenerateError, Generated, generate, generate_checked, generate_file, generate_file_with,
-    generate_tokens, generate_tokens_checked, generate_tokens_in, generate_with,
+    generate_file_with_values, generate_tokens, generate_tokens_checked, generate_tokens_in,
+    generate_with,
 };
 pub use model::load_model;
 pub use model::{

@@ -52,6 +52,7 @@ pub mod constrained;
 mod integrate;
 mod model;
 pub mod run;
+pub mod state;
 pub mod work_precision;
 
 pub use constrained::{

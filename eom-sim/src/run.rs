@@ -221,6 +221,16 @@ pub struct RunOptions {
     /// Rows of the CSV every this many seconds by dense output (the final
     /// state always included); `None`: every accepted step.
     pub every: Option<f64>,
+    /// Add `kinetic_energy` and `potential_energy` columns to the CSV
+    /// (`eom-gen simulate` sets it when the model requests the `Energy`
+    /// output).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub energy_columns: bool,
+    /// Add the momentum columns `angular_momentum_{x,y,z}` (about the world
+    /// origin) and `linear_momentum_{x,y,z}` (world axes) to the CSV (set
+    /// when the model requests the `Momentum` output).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub momentum_columns: bool,
 }
 
 impl Default for RunOptions {
@@ -237,6 +247,8 @@ impl Default for RunOptions {
             u0: None,
             csv: None,
             every: None,
+            energy_columns: false,
+            momentum_columns: false,
         }
     }
 }
@@ -273,7 +285,10 @@ impl RunOptions {
                     self.rtol
                 ));
             }
-        } else if !(self.dt.is_finite() && self.dt > 0.0) {
+        }
+        // Checked even where the integrator has its own steps: a step that
+        // is not positive is a mistake in any case.
+        if !(self.dt.is_finite() && self.dt > 0.0) {
             p.push(format!(
                 "--dt must be a positive step size in seconds, not {}",
                 self.dt
@@ -1058,12 +1073,24 @@ fn write_csv<const N: usize, S: Simulate + ?Sized>(
     if rows.last().is_none_or(|(t, _)| *t < sol.t_final) {
         rows.push((sol.t_final, &sol.y_final));
     }
+    let energy_names = if options.energy_columns {
+        &["kinetic_energy", "potential_energy"][..]
+    } else {
+        &[]
+    };
+    let momentum_names = if options.momentum_columns {
+        &MOMENTUM_COLUMNS[..]
+    } else {
+        &[]
+    };
     let header: Vec<&str> = names
         .coordinates
         .iter()
         .chain(&names.speeds)
         .chain(&names.outputs)
         .map(String::as_str)
+        .chain(energy_names.iter().copied())
+        .chain(momentum_names.iter().copied())
         .collect();
     let mut text = format!("t,{}\n", header.join(","));
     let mut out = vec![0.0; names.outputs.len()];
@@ -1095,10 +1122,38 @@ fn write_csv<const N: usize, S: Simulate + ?Sized>(
             }
             row.extend(out.iter().map(|x| format!("{x:?}")));
         }
+        let at = Point {
+            t,
+            q,
+            u,
+            ..Point::default()
+        };
+        for (on, name, len) in [
+            (options.energy_columns, "energy", 2),
+            (options.momentum_columns, "momentum", 6),
+        ] {
+            if on {
+                let mut v = vec![f64::NAN; len];
+                if !model.evaluate(name, &at, &mut v) {
+                    v.iter_mut().for_each(|x| *x = f64::NAN);
+                }
+                row.extend(v.iter().map(|x| format!("{x:?}")));
+            }
+        }
         text += &format!("{t:?},{}\n", row.join(","));
     }
     std::fs::write(path, text).map_err(|e| RunError::Csv(format!("cannot write `{path}`: {e}")))
 }
+
+/// The CSV columns of [`RunOptions::momentum_columns`].
+const MOMENTUM_COLUMNS: [&str; 6] = [
+    "angular_momentum_x",
+    "angular_momentum_y",
+    "angular_momentum_z",
+    "linear_momentum_x",
+    "linear_momentum_y",
+    "linear_momentum_z",
+];
 
 /// Runs a generated model: [`simulate`] with the state size its method
 /// needs (`NY = n_q + n_u`, `NYC = NY + n_c`).

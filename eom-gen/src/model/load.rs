@@ -8,7 +8,7 @@
 //! the CLI and `#[multibody]` all go through here.
 
 use super::read::{Format, read_in, read_text};
-use super::{Checked, check_model, scene, urdf};
+use super::{Checked, check_model_with, scene, urdf};
 use crate::diag::{Report, Source};
 use std::path::Path;
 
@@ -55,10 +55,20 @@ impl Loaded {
     /// [`Loaded::check`] for a file whose path is relative to `root` (a
     /// scene's model is read from there).
     pub fn check_in(&self, root: &Path) -> Result<Checked, Report> {
+        self.check_with(root, &[])
+    }
+
+    /// [`Loaded::check_in`] with parameter values replaced (`eom-gen
+    /// simulate --param NAME=VALUE`): each named parameter of the model (a
+    /// scene's model) takes the value instead of what the file says, before
+    /// validation, so fixed parameters are inlined with it and tunable ones
+    /// default to it. A name the model does not have is an error with the
+    /// closest name.
+    pub fn check_with(&self, root: &Path, values: &[(String, f64)]) -> Result<Checked, Report> {
         match self.format {
-            Format::Scene => check_scene(&self.source, root),
+            Format::Scene => check_scene(&self.source, root, values),
             Format::Ron | Format::Urdf => {
-                let mut checked = check_model(&self.source)?;
+                let mut checked = check_model_with(&self.source, values)?;
                 checked.urdf_notes = self.urdf_notes.clone();
                 Ok(checked)
             }
@@ -86,7 +96,7 @@ pub fn load_model(path: &str) -> Result<Source, Report> {
 
 /// A scene: reads and validates its model (RON or URDF, relative to
 /// `root`), then validates the scene against it and applies it.
-fn check_scene(src: &Source, root: &Path) -> Result<Checked, Report> {
+fn check_scene(src: &Source, root: &Path, values: &[(String, f64)]) -> Result<Checked, Report> {
     let spec = scene::parse(src)?;
     let shown = scene::model_path(&src.path, &spec.model);
     let shown_str = shown.display().to_string();
@@ -109,6 +119,6 @@ fn check_scene(src: &Source, root: &Path) -> Result<Checked, Report> {
             "a scene names a model file; copy what the other scene selects into this one",
         ));
     }
-    let checked = model.check_in(root)?;
+    let checked = model.check_with(root, values)?;
     scene::apply(src, spec, shown, checked)
 }

@@ -109,12 +109,6 @@ pub fn check_in(src: &Source, root: &std::path::Path) -> Result<Checked, Report>
     Loaded::from_source(src.clone())?.check_in(root)
 }
 
-/// Parses and validates the text of a RON model (not a scene).
-fn check_model(src: &Source) -> Result<Checked, Report> {
-    let spec = parse(src)?;
-    check_spec(src, spec)
-}
-
 /// Validates an already parsed [`Spec`] whose text is `src`.
 pub fn check_spec(src: &Source, spec: Spec) -> Result<Checked, Report> {
     let root = locate::parse(&src.text);
@@ -138,6 +132,47 @@ pub fn check_spec(src: &Source, spec: Spec) -> Result<Checked, Report> {
 /// Loads, parses and validates a model file of any [`Format`].
 pub fn check_file(path: &str) -> Result<Checked, Report> {
     load(path)?.check()
+}
+
+/// [`check_file`] with parameter values replaced (see
+/// [`Loaded::check_with`]).
+pub fn check_file_with_values(path: &str, values: &[(String, f64)]) -> Result<Checked, Report> {
+    load(path)?.check_with(std::path::Path::new(""), values)
+}
+
+/// Parses and validates a RON model with the named parameters' values
+/// replaced; a name the model does not have is an error with the closest
+/// name.
+fn check_model_with(src: &Source, values: &[(String, f64)]) -> Result<Checked, Report> {
+    let mut spec = parse(src)?;
+    let mut unknown = Vec::new();
+    for (name, value) in values {
+        match spec.parameters.iter_mut().find(|p| p.name == *name) {
+            Some(p) => p.value = spec::Num::Value(*value),
+            None => {
+                let names = spec.parameters.iter().map(|p| p.name.as_str());
+                let d = Diagnostic::file_error(format!("the model has no parameter `{name}`"));
+                unknown.push(match did_you_mean(name, names) {
+                    Some(m) => d.with_help(format!("did you mean `{m}`?")),
+                    None => d.with_help(format!(
+                        "its parameters: {}",
+                        spec.parameters
+                            .iter()
+                            .map(|p| format!("`{}`", p.name))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )),
+                });
+            }
+        }
+    }
+    if !unknown.is_empty() {
+        return Err(Report {
+            source: src.clone(),
+            diagnostics: unknown,
+        });
+    }
+    check_spec(src, spec)
 }
 
 fn ron_diagnostic(src: &Source, e: &ron::error::SpannedError) -> Diagnostic {

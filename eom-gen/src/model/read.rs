@@ -58,7 +58,25 @@ pub(crate) fn read_text(root: &Path, path: &str) -> std::io::Result<Result<Sourc
         Ok(text) => Ok(Source::new(path, text)),
         Err(e) => {
             let at = e.utf8_error().valid_up_to();
-            let text = String::from_utf8_lossy(e.as_bytes()).into_owned();
+            let bytes = e.as_bytes();
+            let control = |b: &u8| *b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r');
+            // A binary file (an executable, an image, a compressed file)
+            // is named, never echoed to the terminal.
+            if bytes.iter().any(control) {
+                return Ok(Err(Report {
+                    source: Source::new(path, ""),
+                    diagnostics: vec![
+                        Diagnostic::file_error(format!(
+                            "not a text file (byte {at} is not UTF-8, and it holds control characters)"
+                        ))
+                        .with_help(
+                            "give a model (`.ron`), a scene (`.scene.ron`) or a URDF (`.urdf`) file, saved as UTF-8 text",
+                        ),
+                    ],
+                }));
+            }
+            // Text with a stray byte: shown where it is.
+            let text = String::from_utf8_lossy(bytes).into_owned();
             Err(Report {
                 source: Source::new(path, text),
                 diagnostics: vec![
