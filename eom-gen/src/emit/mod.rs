@@ -18,8 +18,10 @@ use crate::mech::Formulation;
 use crate::sym::{SymKind, Symbol};
 use split::{Arg, lower};
 
+mod names;
 mod split;
 use crate::system::{Motion, System};
+pub use names::{is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
 
@@ -33,6 +35,8 @@ struct Binding<'a> {
     speed_rate: &'a str,
     /// Fuse `a·b + c` into `f64::mul_add`.
     fma: bool,
+    /// Field of each tunable parameter in the parameter struct.
+    fields: std::collections::HashMap<&'a str, Ident>,
 }
 
 /// Emission options.
@@ -70,7 +74,11 @@ impl Binding<'_> {
             }
             SymKind::Time => quote!(t),
             SymKind::Param => {
-                let name = format_ident!("{}", s.name);
+                let name = self
+                    .fields
+                    .get(s.name.as_str())
+                    .cloned()
+                    .unwrap_or_else(|| names::ident(&names::field_names([s.name.as_str()])[0]));
                 quote!(self.params.#name)
             }
             SymKind::Input => {
@@ -152,17 +160,11 @@ fn tmp(i: u32) -> Ident {
     format_ident!("x{i}")
 }
 
-/// `Name` from `snake_name`.
+/// The model struct's name for the model name `name`: `Name` from
+/// `snake_name`, always a valid non-keyword identifier (see
+/// [`type_name`]).
 pub fn camel(name: &str) -> String {
-    name.split('_')
-        .filter(|s| !s.is_empty())
-        .map(|s| {
-            let mut c = s.chars();
-            c.next().map_or(String::new(), |f| {
-                f.to_ascii_uppercase().to_string() + c.as_str()
-            })
-        })
-        .collect()
+    type_name(name)
 }
 
 /// A 64-bit FNV-1a hash, for the content hash in the header.
@@ -208,6 +210,13 @@ pub fn emit_tokens(
     let type_name = opts.type_name.as_deref();
     let name = &sys.name;
     let base = type_name.map_or_else(|| camel(name), str::to_string);
+    // `type_name` comes from the user's struct (`#[multibody]`); anything
+    // else from the model name, made an identifier.
+    let base = if syn::parse_str::<syn::Ident>(&base).is_ok() {
+        base
+    } else {
+        names::type_name(&base)
+    };
     let ty = format_ident!("{base}");
     let params_ty = format_ident!("{base}Params");
     let (nq, nu, ni) = (sys.nq(), sys.nu(), sys.inputs.len());
@@ -229,13 +238,20 @@ pub fn emit_tokens(
     let q0 = sys.q0().into_iter().map(float);
     let u0 = sys.u0().into_iter().map(float);
     let tunable: Vec<_> = sys.parameters.iter().filter(|p| p.tunable).collect();
-    let param_fields = tunable.iter().map(|p| {
-        let n = format_ident!("{}", p.name);
+    let field_idents: Vec<Ident> = names::field_names(tunable.iter().map(|p| p.name.as_str()))
+        .iter()
+        .map(|n| names::ident(n))
+        .collect();
+    let fields: std::collections::HashMap<&str, Ident> = tunable
+        .iter()
+        .zip(&field_idents)
+        .map(|(p, i)| (p.name.as_str(), i.clone()))
+        .collect();
+    let param_fields = tunable.iter().zip(&field_idents).map(|(p, n)| {
         let doc = format!(" `{}` (default {}).", p.name, p.value.value);
         quote!(#[doc = #doc] pub #n: f64,)
     });
-    let param_defaults = tunable.iter().map(|p| {
-        let n = format_ident!("{}", p.name);
+    let param_defaults = tunable.iter().zip(&field_idents).map(|(p, n)| {
         let v = float(p.value.value);
         quote!(#n: #v,)
     });
@@ -256,6 +272,7 @@ pub fn emit_tokens(
         sys,
         speed_rate: "udot",
         fma: opts.fma,
+        fields,
     };
     let q_doc = format!("`q` = ({})", list(&coords));
     let u_doc = format!("`u` = ({})", list(&speeds));
