@@ -102,3 +102,58 @@ fn keyword_and_digit_led_names_generate_parsable_code() {
         );
     }
 }
+
+fn fixture(name: &str) -> String {
+    format!("{}/tests/fixtures/urdf/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Checks a fixture, panicking with the report on an error.
+fn check_ok(name: &str) -> eom_gen::Checked {
+    eom_gen::check_file(&fixture(name)).unwrap_or_else(|r| panic!("{name}:\n{r}"))
+}
+
+/// The rendered errors of a fixture that must not load.
+fn check_err(name: &str) -> String {
+    match eom_gen::check_file(&fixture(name)) {
+        Ok(_) => panic!("{name} loaded"),
+        Err(r) => r.to_string(),
+    }
+}
+
+#[test]
+fn xml_declaration_after_a_leading_comment_is_accepted() {
+    let c = check_ok("leading_comment.urdf");
+    assert_eq!(c.system.coordinate_names(), ["shoulder"]);
+}
+
+#[test]
+fn numbers_separated_by_commas_are_located_errors() {
+    let r = check_err("commas.urdf");
+    assert!(
+        r.contains("commas.urdf:6:20: error: `xyz` has numbers separated by commas"),
+        "{r}"
+    );
+    assert!(
+        r.contains("commas.urdf:14:16: error: `xyz` has numbers separated by commas"),
+        "{r}"
+    );
+    assert!(r.contains("write `xyz=\"0 0 1\"`"), "{r}");
+}
+
+#[test]
+fn unexpanded_xacro_is_a_located_error() {
+    let r = check_err("xacro.urdf");
+    assert!(
+        r.contains("xacro.urdf:3:4: error: unexpanded xacro element `<xacro:property>`"),
+        "{r}"
+    );
+    assert!(
+        r.contains("xacro.urdf:7:24: error: unexpanded xacro expression in `xyz`"),
+        "{r}"
+    );
+    assert!(
+        r.contains("xacro.urdf:8:20: error: unexpanded xacro expression in `value`"),
+        "{r}"
+    );
+    assert!(r.contains("expand it first"), "{r}");
+}

@@ -254,6 +254,17 @@ impl Ctx {
                 );
                 None
             }
+            _ if text.contains(',') => {
+                self.error(
+                    at,
+                    format!("`{name}` has numbers separated by commas: `{text}`"),
+                    format!(
+                        "URDF numbers are separated by spaces (urdfdom rejects commas too): write `{name}=\"{}\"`",
+                        text.split(',').map(str::trim).collect::<Vec<_>>().join(" ")
+                    ),
+                );
+                None
+            }
             _ => {
                 let what = if count == 1 {
                     "a number".to_string()
@@ -380,6 +391,87 @@ impl Ctx {
     }
 }
 
+/// The text with an XML declaration that follows leading blank lines or
+/// comments replaced by spaces (byte offsets unchanged). XML wants the
+/// declaration first; urdfdom (TinyXML) and so ROS and Pinocchio accept it
+/// after a comment, so eom does too. The declaration says nothing eom
+/// needs: the text is already UTF-8.
+fn blank_xml_declaration(text: &str) -> std::borrow::Cow<'_, str> {
+    let mut at = 0;
+    loop {
+        let rest = &text[at..];
+        let trimmed = rest.trim_start();
+        at += rest.len() - trimmed.len();
+        if trimmed.starts_with("<!--") {
+            match trimmed.find("-->") {
+                Some(end) => at += end + 3,
+                None => return text.into(),
+            }
+        } else if trimmed.starts_with("<?xml")
+            && trimmed[5..].starts_with(|c: char| c.is_whitespace() || c == '?')
+        {
+            let Some(end) = trimmed.find("?>") else {
+                return text.into();
+            };
+            let mut out = String::with_capacity(text.len());
+            out.push_str(&text[..at]);
+            // One space per byte (newlines kept): offsets and lines unchanged.
+            for c in trimmed[..end + 2].chars() {
+                if c == '\n' {
+                    out.push('\n');
+                } else {
+                    out.extend(std::iter::repeat_n(' ', c.len_utf8()));
+                }
+            }
+            out.push_str(&trimmed[end + 2..]);
+            return out.into();
+        } else {
+            return text.into();
+        }
+    }
+}
+
+/// Reports xacro that was not expanded (`${…}`, `$(…)` in attributes,
+/// `xacro:` elements), each at its place; false if there is any.
+fn xacro_leftovers(cx: &mut Ctx, robot: Node<'_, '_>) -> bool {
+    let before = cx.diags.len();
+    let help = "this is a xacro file: expand it first, e.g. `xacro robot.urdf.xacro > robot.urdf` (ROS: `ros2 run xacro xacro …`), and load the result";
+    for n in robot.descendants().filter(|n| n.is_element()) {
+        let ns = n.tag_name().namespace().unwrap_or("");
+        if ns.contains("xacro") {
+            cx.error(
+                tag_span(n),
+                format!("unexpanded xacro element `<xacro:{}>`", n.tag_name().name()),
+                help,
+            );
+            continue;
+        }
+        for a in n.attributes() {
+            let v = a.value();
+            if let Some(k) = v.find("${").or_else(|| v.find("$(")) {
+                let start = a.range_value().start;
+                // Offsets within the value hold when it has no entities.
+                let end = if a.range_value().len() == v.len() {
+                    start + k + v[k..].find(['}', ')']).map_or(2, |e| e + 1)
+                } else {
+                    a.range_value().end
+                };
+                let from = if a.range_value().len() == v.len() {
+                    start + k
+                } else {
+                    start
+                };
+                cx.error(
+                    Span::new(from, end.max(from + 1)),
+                    format!("unexpanded xacro expression in `{}`: `{v}`", a.name()),
+                    help,
+                );
+            }
+        }
+    }
+    cx.diags.len() == before
+}
+
 /// Turns `name` into an identifier usable in eom models (letters, digits,
 /// `_`; not `t`, `pi`, a function name or `ground`).
 fn identifier(name: &str) -> String {
@@ -428,7 +520,8 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         source: src.clone(),
         diagnostics,
     };
-    let doc = roxmltree::Document::parse(&src.text).map_err(|e| {
+    let text = blank_xml_declaration(&src.text);
+    let doc = roxmltree::Document::parse(&text).map_err(|e| {
         let p = e.pos();
         let at = src.offset_of(p.row as usize, p.col as usize);
         fail(vec![
@@ -441,6 +534,9 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         diags: Vec::new(),
         notes: Vec::new(),
     };
+    if !xacro_leftovers(&mut cx, robot_el) {
+        return Err(fail(cx.diags));
+    }
     if robot_el.tag_name().name() != "robot" {
         cx.error(
             tag_span(robot_el),
