@@ -38,7 +38,8 @@ pub use generate::{
     generate_tokens, generate_tokens_checked, generate_tokens_in, generate_with,
 };
 pub use model::{
-    Checked, Diagnostic, Format, Loaded, Report, Source, Spec, check, check_file, load, urdf,
+    Checked, Diagnostic, Format, Loaded, Report, Source, Spec, check, check_file, load, load_with,
+    urdf,
 };
 pub use system::System;
 pub use urdf::{Import, import_file, load_model};

@@ -157,3 +157,133 @@ fn unexpanded_xacro_is_a_located_error() {
     );
     assert!(r.contains("expand it first"), "{r}");
 }
+
+fn mass_matrix(c: &eom_gen::Checked, q: &[f64]) -> Vec<Vec<f64>> {
+    let num = eom_gen::mech::Numeric::new(&c.system).expect("numeric");
+    let u = vec![0.0; c.system.nu()];
+    let inputs = vec![0.0; c.system.inputs.len()];
+    num.terms(q, &u, 0.0, &inputs).expect("terms").mass_matrix
+}
+
+fn close(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-12 * (1.0 + a.abs().max(b.abs()))
+}
+
+#[test]
+fn placeholder_inertia_of_the_ground_link_is_not_checked() {
+    let c = check_ok("placeholder_base.urdf");
+    assert!(c.render_warnings().is_empty(), "{}", c.render_warnings());
+    let notes = c.urdf_notes.clone().unwrap_or_default();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("inertia of link `base`") && n.contains("not checked")),
+        "{notes:?}"
+    );
+    let m = mass_matrix(&c, &[0.0]);
+    assert!(close(m[0][0], 0.05 + 2.0 * 0.25 * 0.25), "{m:?}");
+}
+
+#[test]
+fn massless_virtual_links_load_when_the_mass_matrix_is_positive_definite() {
+    let c = check_ok("virtual_links.urdf");
+    assert_eq!(c.system.coordinate_names(), ["hip_x", "hip_y", "hip_z"]);
+    assert_eq!(
+        c.spec.inertia_policy,
+        eom_gen::model::spec::InertiaPolicy::Lenient
+    );
+    let m = mass_matrix(&c, &[0.0; 3]);
+    assert!(close(m[0][0], 0.12 + 8.0 * 0.04), "{m:?}");
+    assert!(close(m[2][2], 0.03), "{m:?}");
+    assert_eq!(eom_gen::mech::numeric::singular_speed(&m), None);
+    // The pipeline generates it, and the dynamics are finite.
+    let g =
+        eom_gen::generate_file(&fixture("virtual_links.urdf")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(syn::parse_file(&g.source).is_ok());
+    let num = eom_gen::mech::Numeric::new(&c.system).expect("numeric");
+    let udot = num
+        .forward_dynamics(&[0.1, 0.2, 0.3], &[0.0; 3], 0.0, &[0.0; 3], &[])
+        .expect("forward dynamics");
+    assert!(udot.iter().all(|x| x.is_finite()), "{udot:?}");
+}
+
+#[test]
+fn a_massless_leaf_that_moves_is_an_error_naming_link_and_joint() {
+    let r = check_err("massless_leaf.urdf");
+    assert!(r.contains("massless_leaf.urdf:11:15: error: link `tool` has no mass but moves (joint `wrist` is revolute)"), "{r}");
+    assert!(r.contains("mass matrix is singular"), "{r}");
+}
+
+#[test]
+fn a_massless_fixed_link_keeps_its_rotational_inertia() {
+    let c = check_ok("massless_fixed_link.urdf");
+    // Like Pinocchio: the foot's 0.004 adds to the shin's 0.01 about z.
+    let m = mass_matrix(&c, &[0.0]);
+    assert!(close(m[0][0], 0.014), "{m:?}");
+}
+
+#[test]
+fn inconsistent_inertia_is_a_located_warning_an_error_when_strict_and_balanced_on_request() {
+    use eom_gen::urdf::Options;
+    let c = check_ok("inconsistent_inertia.urdf");
+    let w = c.render_warnings();
+    assert!(
+        w.contains("inconsistent_inertia.urdf:8:8: warning: inertia of link `finger` violates the triangle inequality"),
+        "{w}"
+    );
+    assert_eq!(w.matches("warning:").count(), 1, "reported once:\n{w}");
+    // Strict: an error.
+    let strict = Options {
+        strict: true,
+        ..Options::default()
+    };
+    let r = match eom_gen::load_with(&fixture("inconsistent_inertia.urdf"), &strict) {
+        Ok(_) => panic!("accepted in strict mode"),
+        Err(r) => r.to_string(),
+    };
+    assert!(
+        r.contains("inconsistent_inertia.urdf:8:8: error: inertia of link `finger` violates"),
+        "{r}"
+    );
+    // Balanced: the smallest principal moment raised, a note, no warning.
+    let balance = Options {
+        balance_inertia: true,
+        ..Options::default()
+    };
+    let loaded = eom_gen::load_with(&fixture("inconsistent_inertia.urdf"), &balance)
+        .unwrap_or_else(|r| panic!("{r}"));
+    let c = loaded.check().unwrap_or_else(|r| panic!("{r}"));
+    assert!(c.render_warnings().is_empty(), "{}", c.render_warnings());
+    assert!(
+        c.urdf_notes
+            .clone()
+            .unwrap_or_default()
+            .iter()
+            .any(|n| n.contains("balanced"))
+    );
+    let m = mass_matrix(&c, &[0.0]);
+    // About z through the joint 0.1 m from... the centre of mass is on the axis.
+    assert!(close(m[0][0], 2.1e-6), "{m:?}");
+    let i = &c
+        .system
+        .bodies
+        .iter()
+        .find(|b| b.name == "finger")
+        .expect("finger")
+        .inertia;
+    let d: Vec<f64> = (0..3)
+        .map(|k| i.as_ref().expect("inertia")[k][k].value)
+        .collect();
+    assert!(close(d[0] + d[1], 2.1e-6) && close(d[2], 2.1e-6), "{d:?}");
+}
+
+#[test]
+fn a_digit_led_robot_name_generates_a_valid_struct() {
+    let g = eom_gen::generate_file(&fixture("digit_name.urdf")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(syn::parse_file(&g.source).is_ok());
+    assert!(
+        g.source.contains("pub struct Model2dofPlanar "),
+        "{}",
+        g.source
+    );
+}
