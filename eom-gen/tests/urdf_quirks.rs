@@ -287,3 +287,46 @@ fn a_digit_led_robot_name_generates_a_valid_struct() {
         g.source
     );
 }
+
+#[test]
+fn zero_dof_robots_generate_evaluate_and_simulate() {
+    let g = eom_gen::generate_file(&fixture("zero_dof.urdf")).unwrap_or_else(|e| panic!("{e}"));
+    let sys = &g.checked.system;
+    assert_eq!((sys.nq(), sys.nu()), (0, 0));
+    assert!(syn::parse_file(&g.source).is_ok());
+    assert!(g.source.contains("const NQ: usize = 0;"), "{}", g.source);
+    // Every function evaluates on empty vectors.
+    let at = eom_gen::interpret::Point {
+        sys,
+        q: &[],
+        u: &[],
+        udot: &[],
+        tau: &[],
+        inputs: &[],
+        params: &[],
+        multipliers: &[],
+        t: 0.0,
+    };
+    let e = eom_gen::interpret::evaluate(&g.formulation, &at);
+    let energy = e
+        .functions
+        .iter()
+        .find(|(n, _)| n == "energy")
+        .map(|(_, v)| v.clone())
+        .expect("energy");
+    assert_eq!(energy, [0.0, 0.0]);
+    // The interpreter and the runtime's runner take zero states.
+    let options = eom_sim::RunOptions::default();
+    let report = eom_gen::interpret::simulate(&g.formulation, sys, &options)
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(report.q.is_empty() && report.u.is_empty(), "{report:?}");
+    let model = eom_gen::interpret::Interpreted::new(&g.formulation, sys);
+    for integrator in eom_sim::Integrator::ALL {
+        let options = eom_sim::RunOptions {
+            integrator,
+            ..eom_sim::RunOptions::default()
+        };
+        let report = eom_sim::simulate::<0, _>(&model, &options).unwrap_or_else(|e| panic!("{integrator:?}: {e}"));
+        assert_eq!(report.t, 1.0, "{integrator:?}: {report:?}");
+    }
+}

@@ -303,6 +303,22 @@ pub fn emit_tokens(
     };
     let mut parts = TokenStream::new();
     let idx = Literal::usize_unsuffixed;
+    // An output array of length zero (a model without coordinates) is
+    // never written: its name gets a `_` prefix.
+    let out_arg = |name: &str, len: usize| {
+        if len == 0 {
+            format_ident!("_{name}")
+        } else {
+            format_ident!("{name}")
+        }
+    };
+    let (qdot_out, udot_out, m_out, b_out, tau_out) = (
+        out_arg("qdot", nq),
+        out_arg("udot", nu),
+        out_arg("m", nu),
+        out_arg("b", nu),
+        out_arg("tau", nu),
+    );
     // Assignments `out[k] = value;` for the outputs of a lowered program.
     let assign_all = |out: &str, values: &[TokenStream]| -> TokenStream {
         let out = format_ident!("{out}");
@@ -322,7 +338,7 @@ pub fn emit_tokens(
     parts.extend(l.parts.clone());
     let (params, body, assign) = (l.params(&args), &l.body, assign_all("qdot", &l.outputs));
     let qdot_fn = quote! {
-        fn qdot(&self, #params, qdot: &mut [f64; #nq_l]) {
+        fn qdot(&self, #params, #qdot_out: &mut [f64; #nq_l]) {
             #body
             #assign
         }
@@ -340,7 +356,7 @@ pub fn emit_tokens(
         );
         quote! {
             #[doc = #doc]
-            fn forward_dynamics(&self, #params, udot: &mut [f64; #nu_l]) {
+            fn forward_dynamics(&self, #params, #udot_out: &mut [f64; #nu_l]) {
                 #body
                 #assign
             }
@@ -365,7 +381,7 @@ pub fn emit_tokens(
             }
         }
         quote! {
-            fn mass_matrix(&self, #params, m: &mut [[f64; #nu_l]; #nu_l]) {
+            fn mass_matrix(&self, #params, #m_out: &mut [[f64; #nu_l]; #nu_l]) {
                 #body
                 #assign
             }
@@ -377,7 +393,7 @@ pub fn emit_tokens(
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("b", &l.outputs));
         quote! {
-            fn bias(&self, #params, b: &mut [f64; #nu_l]) {
+            fn bias(&self, #params, #b_out: &mut [f64; #nu_l]) {
                 #body
                 #assign
             }
@@ -389,7 +405,7 @@ pub fn emit_tokens(
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("tau", &l.outputs));
         quote! {
-            fn inverse_dynamics(&self, #params, tau: &mut [f64; #nu_l]) {
+            fn inverse_dynamics(&self, #params, #tau_out: &mut [f64; #nu_l]) {
                 #body
                 #assign
             }
@@ -596,6 +612,7 @@ pub fn emit_tokens(
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("out", &l.outputs));
         let n = format_ident!("{}", e.name);
+        let out = out_arg("out", l.outputs.len());
         let len = idx(l.outputs.len());
         let labels = list(
             &f.labels(e.function)
@@ -622,7 +639,7 @@ pub fn emit_tokens(
         inherent.extend(quote! {
             #[doc = #doc]
             #lambda_doc
-            pub fn #n(&self, #params, out: &mut [f64; #len]) {
+            pub fn #n(&self, #params, #out: &mut [f64; #len]) {
                 #body
                 #assign
             }
@@ -725,6 +742,7 @@ pub fn emit_tokens(
         });
         quote!(#(#norms)* true)
     };
+    let (y_in, dy_out) = (out_arg("y", nq + nu), out_arg("dy", nq + nu));
     let coords_l = coords.iter();
     let speeds_l = speeds.iter();
     let inputs_l = inputs.iter();
@@ -813,7 +831,7 @@ pub fn emit_tokens(
 
         #[doc = #ode_doc]
         impl ::eom_sim::OdeSystem<#ny_l> for #ty {
-            fn rhs(&self, t: f64, y: &[f64; #ny_l], dy: &mut [f64; #ny_l]) {
+            fn rhs(&self, t: f64, #y_in: &[f64; #ny_l], #dy_out: &mut [f64; #ny_l]) {
                 use ::eom_sim::Model as _;
                 let q: [f64; #nq_l] = [#(#q_split),*];
                 let u: [f64; #nu_l] = [#(#u_split),*];
