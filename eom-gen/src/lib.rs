@@ -38,7 +38,8 @@ pub use generate::{
 };
 pub use model::load_model;
 pub use model::{
-    Checked, Diagnostic, Format, Loaded, Report, Source, Spec, check, check_file, load, urdf,
+    Checked, Diagnostic, Format, Loaded, Report, Source, Spec, check, check_file, load, load_with,
+    urdf,
 };
 pub use system::System;
 pub use urdf::{Import, import_file};

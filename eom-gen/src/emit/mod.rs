@@ -18,8 +18,10 @@ use crate::mech::Formulation;
 use crate::sym::{SymKind, Symbol};
 use split::{Arg, lower};
 
+mod names;
 mod split;
 use crate::system::{Motion, System};
+pub use names::{is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
 
@@ -33,6 +35,8 @@ struct Binding<'a> {
     speed_rate: &'a str,
     /// Fuse `a·b + c` into `f64::mul_add`.
     fma: bool,
+    /// Field of each tunable parameter in the parameter struct.
+    fields: std::collections::HashMap<&'a str, Ident>,
 }
 
 /// Emission options.
@@ -70,7 +74,11 @@ impl Binding<'_> {
             }
             SymKind::Time => quote!(t),
             SymKind::Param => {
-                let name = format_ident!("{}", s.name);
+                let name = self
+                    .fields
+                    .get(s.name.as_str())
+                    .cloned()
+                    .unwrap_or_else(|| names::ident(&names::field_names([s.name.as_str()])[0]));
                 quote!(self.params.#name)
             }
             // Formulation declares only the model's inputs as inputs; any
@@ -153,17 +161,11 @@ fn tmp(i: u32) -> Ident {
     format_ident!("x{i}")
 }
 
-/// `Name` from `snake_name`.
+/// The model struct's name for the model name `name`: `Name` from
+/// `snake_name`, always a valid non-keyword identifier (see
+/// [`type_name`]).
 pub fn camel(name: &str) -> String {
-    name.split('_')
-        .filter(|s| !s.is_empty())
-        .map(|s| {
-            let mut c = s.chars();
-            c.next().map_or(String::new(), |f| {
-                f.to_ascii_uppercase().to_string() + c.as_str()
-            })
-        })
-        .collect()
+    type_name(name)
 }
 
 /// A 64-bit FNV-1a hash, for the content hash in the header.
@@ -209,6 +211,13 @@ pub fn emit_tokens(
     let type_name = opts.type_name.as_deref();
     let name = &sys.name;
     let base = type_name.map_or_else(|| camel(name), str::to_string);
+    // `type_name` comes from the user's struct (`#[multibody]`); anything
+    // else from the model name, made an identifier.
+    let base = if syn::parse_str::<syn::Ident>(&base).is_ok() {
+        base
+    } else {
+        names::type_name(&base)
+    };
     let ty = format_ident!("{base}");
     let params_ty = format_ident!("{base}Params");
     let (nq, nu, ni) = (sys.nq(), sys.nu(), sys.inputs.len());
@@ -230,13 +239,20 @@ pub fn emit_tokens(
     let q0 = sys.q0().into_iter().map(float);
     let u0 = sys.u0().into_iter().map(float);
     let tunable: Vec<_> = sys.parameters.iter().filter(|p| p.tunable).collect();
-    let param_fields = tunable.iter().map(|p| {
-        let n = format_ident!("{}", p.name);
+    let field_idents: Vec<Ident> = names::field_names(tunable.iter().map(|p| p.name.as_str()))
+        .iter()
+        .map(|n| names::ident(n))
+        .collect();
+    let fields: std::collections::HashMap<&str, Ident> = tunable
+        .iter()
+        .zip(&field_idents)
+        .map(|(p, i)| (p.name.as_str(), i.clone()))
+        .collect();
+    let param_fields = tunable.iter().zip(&field_idents).map(|(p, n)| {
         let doc = format!(" `{}` (default {}).", p.name, p.value.value);
         quote!(#[doc = #doc] pub #n: f64,)
     });
-    let param_defaults = tunable.iter().map(|p| {
-        let n = format_ident!("{}", p.name);
+    let param_defaults = tunable.iter().zip(&field_idents).map(|(p, n)| {
         let v = float(p.value.value);
         quote!(#n: #v,)
     });
@@ -257,6 +273,7 @@ pub fn emit_tokens(
         sys,
         speed_rate: "udot",
         fma: opts.fma,
+        fields,
     };
     let q_doc = format!("`q` = ({})", list(&coords));
     let u_doc = format!("`u` = ({})", list(&speeds));
@@ -287,6 +304,22 @@ pub fn emit_tokens(
     };
     let mut parts = TokenStream::new();
     let idx = Literal::usize_unsuffixed;
+    // An output array of length zero (a model without coordinates) is
+    // never written: its name gets a `_` prefix.
+    let out_arg = |name: &str, len: usize| {
+        if len == 0 {
+            format_ident!("_{name}")
+        } else {
+            format_ident!("{name}")
+        }
+    };
+    let (qdot_out, udot_out, m_out, b_out, tau_out) = (
+        out_arg("qdot", nq),
+        out_arg("udot", nu),
+        out_arg("m", nu),
+        out_arg("b", nu),
+        out_arg("tau", nu),
+    );
     // Assignments `out[k] = value;` for the outputs of a lowered program.
     let assign_all = |out: &str, values: &[TokenStream]| -> TokenStream {
         let out = format_ident!("{out}");
@@ -306,7 +339,7 @@ pub fn emit_tokens(
     parts.extend(l.parts.clone());
     let (params, body, assign) = (l.params(&args), &l.body, assign_all("qdot", &l.outputs));
     let qdot_fn = quote! {
-        fn qdot(&self, #params, qdot: &mut [f64; #nq_l]) {
+        fn qdot(&self, #params, #qdot_out: &mut [f64; #nq_l]) {
             #body
             #assign
         }
@@ -324,7 +357,7 @@ pub fn emit_tokens(
         );
         quote! {
             #[doc = #doc]
-            fn forward_dynamics(&self, #params, udot: &mut [f64; #nu_l]) {
+            fn forward_dynamics(&self, #params, #udot_out: &mut [f64; #nu_l]) {
                 #body
                 #assign
             }
@@ -349,7 +382,7 @@ pub fn emit_tokens(
             }
         }
         quote! {
-            fn mass_matrix(&self, #params, m: &mut [[f64; #nu_l]; #nu_l]) {
+            fn mass_matrix(&self, #params, #m_out: &mut [[f64; #nu_l]; #nu_l]) {
                 #body
                 #assign
             }
@@ -361,7 +394,7 @@ pub fn emit_tokens(
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("b", &l.outputs));
         quote! {
-            fn bias(&self, #params, b: &mut [f64; #nu_l]) {
+            fn bias(&self, #params, #b_out: &mut [f64; #nu_l]) {
                 #body
                 #assign
             }
@@ -373,7 +406,7 @@ pub fn emit_tokens(
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("tau", &l.outputs));
         quote! {
-            fn inverse_dynamics(&self, #params, tau: &mut [f64; #nu_l]) {
+            fn inverse_dynamics(&self, #params, #tau_out: &mut [f64; #nu_l]) {
                 #body
                 #assign
             }
@@ -580,6 +613,7 @@ pub fn emit_tokens(
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("out", &l.outputs));
         let n = format_ident!("{}", e.name);
+        let out = out_arg("out", l.outputs.len());
         let len = idx(l.outputs.len());
         let labels = list(
             &f.labels(e.function)
@@ -606,7 +640,7 @@ pub fn emit_tokens(
         inherent.extend(quote! {
             #[doc = #doc]
             #lambda_doc
-            pub fn #n(&self, #params, out: &mut [f64; #len]) {
+            pub fn #n(&self, #params, #out: &mut [f64; #len]) {
                 #body
                 #assign
             }
@@ -709,6 +743,7 @@ pub fn emit_tokens(
         });
         quote!(#(#norms)* true)
     };
+    let (y_in, dy_out) = (out_arg("y", nq + nu), out_arg("dy", nq + nu));
     let coords_l = coords.iter();
     let speeds_l = speeds.iter();
     let inputs_l = inputs.iter();
@@ -797,7 +832,7 @@ pub fn emit_tokens(
 
         #[doc = #ode_doc]
         impl ::eom_sim::OdeSystem<#ny_l> for #ty {
-            fn rhs(&self, t: f64, y: &[f64; #ny_l], dy: &mut [f64; #ny_l]) {
+            fn rhs(&self, t: f64, #y_in: &[f64; #ny_l], #dy_out: &mut [f64; #ny_l]) {
                 use ::eom_sim::Model as _;
                 let q: [f64; #nq_l] = [#(#q_split),*];
                 let u: [f64; #nu_l] = [#(#u_split),*];

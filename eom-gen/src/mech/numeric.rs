@@ -7,6 +7,32 @@ use super::spatial::Force;
 use super::tree::{MechError, NumericEnv, TreeModel};
 use crate::system::System;
 
+/// The first speed whose motion has no inertia: the first zero pivot
+/// (at most `1e-12` times the largest diagonal entry, or not finite) of
+/// `M = L D Lᵀ` without pivoting, i.e. the first column of `M` that is a
+/// combination of the ones before it. `None` when `M` is positive definite.
+pub fn singular_speed(m: &[Vec<f64>]) -> Option<usize> {
+    let n = m.len();
+    let scale = (0..n)
+        .map(|i| m[i].get(i).copied().unwrap_or(f64::NAN).abs())
+        .fold(0.0, f64::max);
+    let tol = 1e-12 * scale;
+    let mut l = vec![vec![0.0; n]; n];
+    let mut d = vec![0.0; n];
+    for j in 0..n {
+        let dj = m[j][j] - (0..j).map(|k| l[j][k] * l[j][k] * d[k]).sum::<f64>();
+        if !(dj > tol) || !dj.is_finite() {
+            return Some(j);
+        }
+        d[j] = dj;
+        for i in j + 1..n {
+            let s = m[i][j] - (0..j).map(|k| l[i][k] * l[j][k] * d[k]).sum::<f64>();
+            l[i][j] = s / dj;
+        }
+    }
+    None
+}
+
 /// A system ready for numeric evaluation.
 #[derive(Clone, Debug)]
 pub struct Numeric {

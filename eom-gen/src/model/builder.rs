@@ -36,6 +36,7 @@ impl ModelBuilder {
                 forces: Vec::new(),
                 constraints: Vec::new(),
                 outputs: Vec::new(),
+                inertia_policy: Default::default(),
             },
         }
     }

@@ -23,25 +23,38 @@ pub struct Loaded {
     pub source: Source,
     /// For a URDF, what the conversion did that the user should know.
     pub urdf_notes: Option<Vec<String>>,
+    /// For a URDF, the conversion's warnings, located in the URDF.
+    pub urdf_warnings: Option<Report>,
 }
 
 impl Loaded {
     /// Classifies `src` (see [`Format::of`]) and converts a URDF; URDF
     /// errors are reported against the URDF.
     pub fn from_source(src: Source) -> Result<Loaded, Report> {
+        Self::from_source_with(src, &urdf::Options::default())
+    }
+
+    /// [`Loaded::from_source`] with the URDF import [`urdf::Options`]
+    /// (`balance_inertia`, `strict`; ignored for other formats).
+    pub fn from_source_with(src: Source, options: &urdf::Options) -> Result<Loaded, Report> {
         match Format::of(&src.path, &src.text) {
             Format::Urdf => {
-                let import = urdf::convert(&src)?;
+                let import = urdf::convert_with(&src, options)?;
                 Ok(Loaded {
                     format: Format::Urdf,
                     source: import.source,
                     urdf_notes: Some(import.notes),
+                    urdf_warnings: Some(Report {
+                        source: src,
+                        diagnostics: import.warnings,
+                    }),
                 })
             }
             format => Ok(Loaded {
                 format,
                 source: src,
                 urdf_notes: None,
+                urdf_warnings: None,
             }),
         }
     }
@@ -70,6 +83,14 @@ impl Loaded {
             Format::Ron | Format::Urdf => {
                 let mut checked = check_model_with(&self.source, values)?;
                 checked.urdf_notes = self.urdf_notes.clone();
+                if let Some(w) = &self.urdf_warnings {
+                    // The importer reported inconsistent inertias at their
+                    // place in the URDF; not again in the converted text.
+                    checked
+                        .warnings
+                        .retain(|d| !d.message.starts_with("inertia of body"));
+                    checked.urdf_warnings = Some(w.clone());
+                }
                 Ok(checked)
             }
         }
@@ -92,6 +113,12 @@ pub fn load_in(root: &Path, path: &str) -> Result<Loaded, Report> {
 /// else as is. The same as [`load`]`(path)?.source`.
 pub fn load_model(path: &str) -> Result<Source, Report> {
     Ok(load(path)?.source)
+}
+
+/// [`load`] with the URDF import [`urdf::Options`] (`balance_inertia`,
+/// `strict`).
+pub fn load_with(path: &str, options: &urdf::Options) -> Result<Loaded, Report> {
+    Loaded::from_source_with(super::read::read(path)?, options)
 }
 
 /// A scene: reads and validates its model (RON or URDF, relative to

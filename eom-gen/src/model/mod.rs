@@ -28,7 +28,7 @@ mod validate;
 // re-exported here under their old paths.
 pub use crate::{diag, expr};
 pub use diag::{Diagnostic, Report, Severity, Source, Span};
-pub use load::{Loaded, load, load_in, load_model};
+pub use load::{Loaded, load, load_in, load_model, load_with};
 pub use read::{Format, read, read_in};
 pub use spec::Spec;
 // The initial state is computed below the model (the constraint formulation
@@ -54,12 +54,19 @@ pub struct Checked {
     pub scene: Option<scene::SceneInfo>,
     /// What the conversion did, when the model was imported from a URDF.
     pub urdf_notes: Option<Vec<String>>,
+    /// The import's warnings (located in the URDF), when the model was
+    /// imported from a URDF.
+    pub urdf_warnings: Option<Report>,
 }
 
 impl Checked {
     /// The model's warnings and then the scene's, rendered.
     pub fn render_warnings(&self) -> String {
-        let mut out = self.source.render_all(&self.warnings);
+        let mut out = String::new();
+        if let Some(w) = &self.urdf_warnings {
+            out += &w.source.render_all(&w.diagnostics);
+        }
+        out += &self.source.render_all(&self.warnings);
         if let Some(s) = &self.scene {
             out += &s.source.render_all(&s.warnings);
         }
@@ -121,6 +128,7 @@ pub fn check_spec(src: &Source, spec: Spec) -> Result<Checked, Report> {
             source: src.clone(),
             scene: None,
             urdf_notes: None,
+            urdf_warnings: None,
         }),
         None => Err(Report {
             source: src.clone(),

@@ -125,6 +125,32 @@ pub struct Spec {
     /// What the scene wants computed besides the equations of motion.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub outputs: Vec<Output>,
+    /// How masses and inertia tensors are checked (default `Strict`).
+    #[serde(default, skip_serializing_if = "InertiaPolicy::is_strict")]
+    pub inertia_policy: InertiaPolicy,
+}
+
+/// How a model's masses and inertia tensors are checked (see
+/// `docs/model-format.md`, "Inertia policy").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum InertiaPolicy {
+    /// Every body has a positive mass; a tensor that is not positive
+    /// semi-definite or violates the triangle inequality is an error. The
+    /// default, for models written by hand.
+    #[default]
+    Strict,
+    /// As measured data comes (the URDF importer writes it): a physically
+    /// inconsistent tensor is a warning, a body may have zero mass, and
+    /// what must hold — a positive definite mass matrix at the initial
+    /// state — is checked numerically.
+    Lenient,
+}
+
+impl InertiaPolicy {
+    /// True for [`InertiaPolicy::Strict`].
+    pub fn is_strict(&self) -> bool {
+        *self == InertiaPolicy::Strict
+    }
 }
 
 /// A named constant.

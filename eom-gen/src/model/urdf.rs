@@ -34,7 +34,8 @@
 
 use super::read::Format;
 use super::spec::{
-    Body, Constraint, Force, Frame, Inertia, Joint, JointKind, Num, Orientation, Spec, V3,
+    Body, Constraint, Force, Frame, Inertia, InertiaPolicy, Joint, JointKind, Num, Orientation,
+    Spec, V3,
 };
 use crate::diag::did_you_mean;
 use crate::diag::{Diagnostic, Report, Source, Span};
@@ -60,6 +61,21 @@ pub struct Import {
     /// What the conversion did that the user should know: merged links,
     /// ignored geometry, limits and friction that were dropped, renamed items.
     pub notes: Vec<String>,
+    /// Warnings, located in the URDF: physically inconsistent inertias of
+    /// moving links, kept as written (see [`Options`]).
+    pub warnings: Vec<Diagnostic>,
+}
+
+/// How a URDF is imported (see `docs/model-format.md`, "Inertia policy").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Options {
+    /// Fix physically inconsistent inertias of moving links instead of
+    /// warning (like MuJoCo's `balanceinertia`): negative principal moments
+    /// become zero, then the smallest is raised until each is at most the
+    /// sum of the other two. Each fix is listed in the notes.
+    pub balance_inertia: bool,
+    /// Turn the warnings into errors.
+    pub strict: bool,
 }
 
 /// True if `path` ends in `.urdf` (any case; see [`Format::of`]).
@@ -71,6 +87,11 @@ pub fn is_urdf(path: &str) -> bool {
 /// the conversion; `model::load` does the same for a `.urdf` file.
 pub fn import_file(path: &str) -> Result<Import, Report> {
     convert(&super::read::read(path)?)
+}
+
+/// [`import_file`] with [`Options`].
+pub fn import_file_with(path: &str, options: &Options) -> Result<Import, Report> {
+    convert_with(&super::read(path)?, options)
 }
 
 /// Where a URDF `<origin>` (or a chain of them) puts a frame: a rigid
@@ -169,6 +190,8 @@ impl Kind {
 const KINDS: &str = "`revolute`, `continuous`, `prismatic`, `fixed`, `floating` or `planar`";
 
 struct Inertial {
+    /// Where the tensor is written (`<inertia>`, else `<inertial>`).
+    span: Span,
     mass: f64,
     origin: Placement,
     /// About the centre of mass, in the inertial frame.
@@ -207,6 +230,7 @@ struct UJoint {
 struct Ctx {
     diags: Vec<Diagnostic>,
     notes: Vec<String>,
+    warnings: Vec<Diagnostic>,
 }
 
 fn span(r: std::ops::Range<usize>) -> Span {
@@ -245,6 +269,17 @@ impl Ctx {
                     at,
                     format!("`{name}` has a value that is not finite: `{text}`"),
                     "write finite numbers",
+                );
+                None
+            }
+            _ if text.contains(',') => {
+                self.error(
+                    at,
+                    format!("`{name}` has numbers separated by commas: `{text}`"),
+                    format!(
+                        "URDF numbers are separated by spaces (urdfdom rejects commas too): write `{name}=\"{}\"`",
+                        text.split(',').map(str::trim).collect::<Vec<_>>().join(" ")
+                    ),
                 );
                 None
             }
@@ -338,40 +373,95 @@ impl Ctx {
             let (xx, xy, xz, yy, yz, zz) =
                 (g("ixx"), g("ixy"), g("ixz"), g("iyy"), g("iyz"), g("izz"));
             inertia = Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
-            if inertia != Matrix3::zeros() && mass > 0.0 {
-                let e = SymmetricEigen::new(inertia).eigenvalues;
-                let scale = e.amax();
-                if e.min() <= 1e-12 * scale {
-                    self.error(
-                        tag_span(i),
-                        format!(
-                            "inertia of link `{link}` is not positive definite (principal moments {:.6}, {:.6}, {:.6})",
-                            e[0], e[1], e[2]
-                        ),
-                        "ixx, iyy, izz are the moments and ixy, ixz, iyz the tensor entries about the centre of mass; all principal moments must be positive (all zero for a point mass)",
-                    );
-                } else {
-                    let mut p = [e[0], e[1], e[2]];
-                    p.sort_by(f64::total_cmp);
-                    if p[0] + p[1] < p[2] * (1.0 - 1e-9) {
-                        self.error(
-                            tag_span(i),
-                            format!(
-                                "inertia of link `{link}` violates the triangle inequality (principal moments {:.6} + {:.6} < {:.6})",
-                                p[0], p[1], p[2]
-                            ),
-                            "no mass distribution has these principal moments: each must be at most the sum of the other two",
-                        );
-                    }
-                }
-            }
         }
         Some(Inertial {
+            span: child(n, "inertia").map_or_else(|| tag_span(n), tag_span),
             mass,
             origin,
             inertia,
         })
     }
+}
+
+/// The text with an XML declaration that follows leading blank lines or
+/// comments replaced by spaces (byte offsets unchanged). XML wants the
+/// declaration first; urdfdom (TinyXML) and so ROS and Pinocchio accept it
+/// after a comment, so eom does too. The declaration says nothing eom
+/// needs: the text is already UTF-8.
+fn blank_xml_declaration(text: &str) -> std::borrow::Cow<'_, str> {
+    let mut at = 0;
+    loop {
+        let rest = &text[at..];
+        let trimmed = rest.trim_start();
+        at += rest.len() - trimmed.len();
+        if trimmed.starts_with("<!--") {
+            match trimmed.find("-->") {
+                Some(end) => at += end + 3,
+                None => return text.into(),
+            }
+        } else if trimmed.starts_with("<?xml")
+            && trimmed[5..].starts_with(|c: char| c.is_whitespace() || c == '?')
+        {
+            let Some(end) = trimmed.find("?>") else {
+                return text.into();
+            };
+            let mut out = String::with_capacity(text.len());
+            out.push_str(&text[..at]);
+            // One space per byte (newlines kept): offsets and lines unchanged.
+            for c in trimmed[..end + 2].chars() {
+                if c == '\n' {
+                    out.push('\n');
+                } else {
+                    out.extend(std::iter::repeat_n(' ', c.len_utf8()));
+                }
+            }
+            out.push_str(&trimmed[end + 2..]);
+            return out.into();
+        } else {
+            return text.into();
+        }
+    }
+}
+
+/// Reports xacro that was not expanded (`${…}`, `$(…)` in attributes,
+/// `xacro:` elements), each at its place; false if there is any.
+fn xacro_leftovers(cx: &mut Ctx, robot: Node<'_, '_>) -> bool {
+    let before = cx.diags.len();
+    let help = "this is a xacro file: expand it first, e.g. `xacro robot.urdf.xacro > robot.urdf` (ROS: `ros2 run xacro xacro …`), and load the result";
+    for n in robot.descendants().filter(|n| n.is_element()) {
+        let ns = n.tag_name().namespace().unwrap_or("");
+        if ns.contains("xacro") {
+            cx.error(
+                tag_span(n),
+                format!("unexpanded xacro element `<xacro:{}>`", n.tag_name().name()),
+                help,
+            );
+            continue;
+        }
+        for a in n.attributes() {
+            let v = a.value();
+            if let Some(k) = v.find("${").or_else(|| v.find("$(")) {
+                let start = a.range_value().start;
+                // Offsets within the value hold when it has no entities.
+                let end = if a.range_value().len() == v.len() {
+                    start + k + v[k..].find(['}', ')']).map_or(2, |e| e + 1)
+                } else {
+                    a.range_value().end
+                };
+                let from = if a.range_value().len() == v.len() {
+                    start + k
+                } else {
+                    start
+                };
+                cx.error(
+                    Span::new(from, end.max(from + 1)),
+                    format!("unexpanded xacro expression in `{}`: `{v}`", a.name()),
+                    help,
+                );
+            }
+        }
+    }
+    cx.diags.len() == before
 }
 
 /// Turns `name` into an identifier usable in eom models (letters, digits,
@@ -418,11 +508,17 @@ fn fmt_num(x: f64) -> String {
 
 /// Converts URDF text into an eom model, reporting every problem at once.
 pub fn convert(src: &Source) -> Result<Import, Report> {
+    convert_with(src, &Options::default())
+}
+
+/// [`convert`] with [`Options`].
+pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
     let fail = |diagnostics: Vec<Diagnostic>| Report {
         source: src.clone(),
         diagnostics,
     };
-    let doc = roxmltree::Document::parse(&src.text).map_err(|e| {
+    let text = blank_xml_declaration(&src.text);
+    let doc = roxmltree::Document::parse(&text).map_err(|e| {
         let p = e.pos();
         let at = src.offset_of(p.row as usize, p.col as usize);
         fail(vec![
@@ -434,7 +530,11 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     let mut cx = Ctx {
         diags: Vec::new(),
         notes: Vec::new(),
+        warnings: Vec::new(),
     };
+    if !xacro_leftovers(&mut cx, robot_el) {
+        return Err(fail(cx.diags));
+    }
     if robot_el.tag_name().name() != "robot" {
         cx.error(
             tag_span(robot_el),
@@ -713,6 +813,12 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         }
     }
 
+    // The inertia policy: links fixed to the ground are not checked.
+    for l in 0..links.len() {
+        let on_ground = matches!(assign[l], Some((None, _)));
+        check_inertia(&mut cx, &mut links[l], on_ground, options);
+    }
+
     // Composite inertia of each body.
     let mut parts: Vec<Vec<Part>> = (0..bodies.len()).map(|_| Vec::new()).collect();
     let mut ground_mass = 0.0;
@@ -720,11 +826,12 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         let (Some((b, pose)), Some(i)) = (&assign[l], &link.inertial) else {
             continue;
         };
-        if i.mass <= 0.0 {
+        // A massless link keeps its rotational inertia (as in Pinocchio).
+        if i.mass <= 0.0 && i.inertia == Matrix3::zeros() {
             continue;
         }
         let Some(b) = b else {
-            ground_mass += i.mass;
+            ground_mass += i.mass.max(0.0);
             continue;
         };
         let frame = pose.then(&i.origin);
@@ -746,24 +853,9 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     for (b, &l) in bodies.iter().enumerate() {
         let ps = &parts[b];
         let mass: f64 = ps.iter().map(|p| p.mass).sum();
-        if mass <= 0.0 {
-            let k = parent_joint[l].unwrap_or(0);
-            let j = &joints[k];
-            cx.error(
-                links[l].span,
-                format!(
-                    "link `{}` has no mass but moves (joint `{}` is {})",
-                    links[l].raw,
-                    j.raw,
-                    j.kind.map_or("?", kind_name)
-                ),
-                format!(
-                    "give link `{}` an `<inertial>` with a positive mass and inertia, or make joint `{}` `fixed` to merge the link into its parent",
-                    links[l].raw, j.raw
-                ),
-            );
-            continue;
-        }
+        // A massless moving link (a virtual link of a multi-DOF joint) is
+        // fine when the mass matrix stays positive definite: checked below.
+        let mass = if mass > 0.0 { mass } else { 0.0 };
         let (com, inertia) = composite(ps, mass);
         spec_bodies.push(Body {
             name: links[l].name.clone(),
@@ -917,6 +1009,29 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         return Err(fail(cx.diags));
     }
 
+    let lenient = !cx.warnings.is_empty() || spec_bodies.iter().any(|b| b.mass == Num::Value(0.0));
+    let spec = Spec {
+        name: robot.clone(),
+        gravity: Some(V3(GRAVITY[0].into(), GRAVITY[1].into(), GRAVITY[2].into())),
+        parameters: Vec::new(),
+        bodies: spec_bodies,
+        joints: spec_joints,
+        forces,
+        constraints,
+        outputs: Vec::new(),
+        inertia_policy: if lenient {
+            InertiaPolicy::Lenient
+        } else {
+            InertiaPolicy::Strict
+        },
+    };
+    if lenient {
+        check_mass_matrix(&mut cx, src, &spec, &links, &joints);
+        if cx.diags.iter().any(Diagnostic::is_error) {
+            return Err(fail(cx.diags));
+        }
+    }
+
     // Notes.
     let mut notes = Vec::new();
     if !merged.is_empty() {
@@ -931,10 +1046,10 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         ));
     }
     notes.append(&mut cx.notes);
-    if !constraints.is_empty() {
+    if !spec.constraints.is_empty() {
         notes.push(format!(
             "{} mimic joint(s) became holonomic constraints",
-            constraints.len()
+            spec.constraints.len()
         ));
     }
     if !limits.is_empty() {
@@ -951,16 +1066,6 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
     }
     notes.push("gravity (0, 0, -9.81) m/s² (URDF has none); initial state zero".to_string());
 
-    let spec = Spec {
-        name: robot.clone(),
-        gravity: Some(V3(GRAVITY[0].into(), GRAVITY[1].into(), GRAVITY[2].into())),
-        parameters: Vec::new(),
-        bodies: spec_bodies,
-        joints: spec_joints,
-        forces,
-        constraints,
-        outputs: Vec::new(),
-    };
     let mut text = format!("// Converted by eom-gen from the URDF `{}`.\n", src.path);
     for n in &notes {
         text += &format!("// - {n}\n");
@@ -973,6 +1078,7 @@ pub fn convert(src: &Source) -> Result<Import, Report> {
         spec,
         source: Source::new(format!("{}{CONVERTED}", src.path), text),
         notes,
+        warnings: cx.warnings,
     })
 }
 
@@ -1103,6 +1209,144 @@ fn read_joint(
     })
 }
 
+/// Principal moments (ascending) and axes of a symmetric tensor.
+fn principal(i: &Matrix3<f64>) -> ([f64; 3], Matrix3<f64>) {
+    let e = SymmetricEigen::new(*i);
+    let mut order = [0, 1, 2];
+    order.sort_by(|&a, &b| e.eigenvalues[a].total_cmp(&e.eigenvalues[b]));
+    let p = order.map(|k| e.eigenvalues[k]);
+    let v = Matrix3::from_columns(&order.map(|k| e.eigenvectors.column(k).into_owned()));
+    (p, v)
+}
+
+/// The inertia policy for one link's tensor (see `docs/model-format.md`,
+/// "Inertia policy"): a principal moment negative by more than 1 % of the
+/// largest is an error; a slightly negative one or a violated triangle
+/// inequality a warning at the `<inertia>`, an error in strict mode, fixed
+/// with `balance_inertia`; links fixed to the ground are not checked (a
+/// note says so when their tensor is inconsistent).
+fn check_inertia(cx: &mut Ctx, link: &mut Link, on_ground: bool, options: &Options) {
+    let Some(i) = link.inertial.as_mut() else {
+        return;
+    };
+    if i.inertia == Matrix3::zeros() {
+        return;
+    }
+    let (p, v) = principal(&i.inertia);
+    let scale = p[0].abs().max(p[2].abs());
+    let negative = p[0] < -1e-12 * scale;
+    let triangle = p[0] + p[1] < p[2] * (1.0 - 1e-9);
+    if !negative && !triangle {
+        return;
+    }
+    let what = if negative {
+        format!(
+            "is not positive definite (principal moments {:.6e}, {:.6e}, {:.6e})",
+            p[0], p[1], p[2]
+        )
+    } else {
+        format!(
+            "violates the triangle inequality (principal moments {:.6e} + {:.6e} < {:.6e})",
+            p[0], p[1], p[2]
+        )
+    };
+    if on_ground {
+        cx.notes.push(format!(
+            "inertia of link `{}` {what}; not checked: the link is fixed to the ground and does not enter the dynamics",
+            link.raw
+        ));
+        return;
+    }
+    let help = "ixx, iyy, izz are the moments and ixy, ixz, iyz the tensor entries about the centre of mass; no mass distribution has a negative principal moment or one larger than the sum of the other two";
+    if p[0] < -0.01 * scale {
+        cx.error(
+            i.span,
+            format!("inertia of link `{}` {what}", link.raw),
+            help,
+        );
+        return;
+    }
+    if options.balance_inertia {
+        let mut q = p.map(|x| x.max(0.0));
+        if q[0] + q[1] < q[2] {
+            q[0] = q[2] - q[1];
+        }
+        let fixed = v * Matrix3::from_diagonal(&Vector3::from(q)) * v.transpose();
+        i.inertia = (fixed + fixed.transpose()) / 2.0;
+        cx.notes.push(format!(
+            "inertia of link `{}` {what}; balanced (balance_inertia): principal moments {:.6e}, {:.6e}, {:.6e}",
+            link.raw, q[0], q[1], q[2]
+        ));
+        return;
+    }
+    let message = format!("inertia of link `{}` {what}", link.raw);
+    if options.strict {
+        cx.error(
+            i.span,
+            message,
+            format!("{help} (strict mode; `balance_inertia` fixes it)"),
+        );
+    } else {
+        cx.warnings.push(
+            Diagnostic::warning(i.span, message).with_help(format!(
+                "kept as written (the mass matrix is checked instead); import with `balance_inertia` to fix it, or `strict` to reject it. {help}"
+            )),
+        );
+    }
+}
+
+/// The mass matrix of the converted model must be positive definite at the
+/// initial state: otherwise an error at the URDF link whose joint's motion
+/// has no inertia.
+fn check_mass_matrix(cx: &mut Ctx, src: &Source, spec: &Spec, links: &[Link], joints: &[UJoint]) {
+    let text = Source::new(format!("{}{CONVERTED}", src.path), spec.to_ron());
+    let (Some(system), _) = super::validate::check_with(&text, spec, None, false) else {
+        // Reported when the converted model is checked.
+        return;
+    };
+    let Some((_, j)) = super::validate::singular_joint(&system) else {
+        return;
+    };
+    let name = &system.joints[j].name;
+    let Some(uj) = joints.iter().find(|u| &u.name == name) else {
+        return;
+    };
+    let child = uj
+        .child
+        .as_ref()
+        .and_then(|(c, _)| links.iter().find(|l| &l.raw == c));
+    let kind = uj.kind.map_or("?", kind_name);
+    let body_mass = spec
+        .bodies
+        .iter()
+        .find(|b| child.is_some_and(|c| c.name == b.name))
+        .map(|b| b.mass == Num::Value(0.0));
+    let (at, message) = match (child, body_mass) {
+        (Some(c), Some(true)) => (
+            c.span,
+            format!(
+                "link `{}` has no mass but moves (joint `{}` is {kind}), and nothing it carries gives that motion inertia: the mass matrix is singular at the initial state",
+                c.raw, uj.raw
+            ),
+        ),
+        _ => (
+            uj.span,
+            format!(
+                "the motion of joint `{}` ({kind}) has no inertia: the mass matrix is singular at the initial state",
+                uj.raw
+            ),
+        ),
+    };
+    cx.error(
+        at,
+        message,
+        format!(
+            "give the link that joint `{}` moves (or the links below it) an `<inertial>` with mass and inertia for this motion, or make the joint `fixed` to merge the link into its parent",
+            uj.raw
+        ),
+    );
+}
+
 fn kind_name(k: Kind) -> &'static str {
     match k {
         Kind::Revolute => "revolute",
@@ -1127,7 +1371,16 @@ fn composite(parts: &[Part], mass: f64) -> (Vector3<f64>, Matrix3<f64>) {
     if let [p] = parts {
         return (p.com, p.inertia);
     }
-    let com = parts.iter().map(|p| p.com * p.mass).sum::<Vector3<f64>>() / mass;
+    if parts.is_empty() {
+        return (Vector3::zeros(), Matrix3::zeros());
+    }
+    // Massless parts add their rotational inertia only; without any mass
+    // the centre of mass is the first part's (it carries no weight).
+    let com = if mass > 0.0 {
+        parts.iter().map(|p| p.com * p.mass).sum::<Vector3<f64>>() / mass
+    } else {
+        parts[0].com
+    };
     let mut i = Matrix3::zeros();
     for p in parts {
         let d = p.com - com;

@@ -48,9 +48,22 @@ enum Scope {
 /// Validates `spec` (read from `src`, whose span tree is `root`).
 /// Returns the system when there is no error, and every diagnostic.
 pub fn check(src: &Source, spec: &Spec, root: Option<&Node>) -> (Option<System>, Vec<Diagnostic>) {
+    check_with(src, spec, root, true)
+}
+
+/// [`check`], with or without the check of the mass matrix (which a
+/// lenient inertia policy asks for).
+pub fn check_with(
+    src: &Source,
+    spec: &Spec,
+    root: Option<&Node>,
+    mass_matrix: bool,
+) -> (Option<System>, Vec<Diagnostic>) {
     let mut cx = Ctx {
+        mass_matrix,
         src,
         root,
+        lenient: !spec.inertia_policy.is_strict(),
         diags: Vec::new(),
         params: Vec::new(),
         state_names: HashMap::new(),
@@ -73,6 +86,11 @@ pub fn check(src: &Source, spec: &Spec, root: Option<&Node>) -> (Option<System>,
 struct Ctx<'a> {
     src: &'a Source,
     root: Option<&'a Node>,
+    /// `inertia_policy: Lenient`: inconsistent tensors are warnings and
+    /// masses may be zero.
+    lenient: bool,
+    /// Check the mass matrix (when lenient).
+    mass_matrix: bool,
     diags: Vec<Diagnostic>,
     /// Parameters defined so far, with their default values.
     params: Vec<(String, f64)>,
@@ -88,6 +106,25 @@ struct Ctx<'a> {
     failed_joints: HashSet<String>,
     /// Markers `(body, marker)` with an error (already reported), likewise.
     failed_markers: HashSet<(String, String)>,
+}
+
+/// The first speed (and its joint) whose motion has no inertia at the
+/// initial state: a zero pivot of `M = L D Lᵀ` (see
+/// [`crate::mech::numeric::singular_speed`]). `None` when `M` is positive
+/// definite or cannot be evaluated.
+pub(crate) fn singular_joint(system: &System) -> Option<(usize, usize)> {
+    let num = crate::mech::Numeric::new(system).ok()?;
+    let q0 = system.q0();
+    let u0 = vec![0.0; system.nu()];
+    let inputs = vec![0.0; system.inputs.len()];
+    let terms = num.terms(&q0, &u0, 0.0, &inputs).ok()?;
+    let k = crate::mech::numeric::singular_speed(&terms.mass_matrix)?;
+    let joint = system.graph.tree_joints().iter().copied().find(|&j| {
+        let j = &system.joints[j];
+        j.motion == crate::system::Motion::Free
+            && (j.u_index..j.u_index + j.speed_names.len()).contains(&k)
+    })?;
+    Some((k, joint))
 }
 
 pub(crate) fn is_ident(s: &str) -> bool {
@@ -427,7 +464,33 @@ impl Ctx<'_> {
         let poses = initial_poses(&system);
         system.grubler = grubler(&system, &poses);
         self.check_closure(&system, &poses);
+        if self.lenient && self.mass_matrix {
+            self.check_mass_matrix(&system);
+        }
         Some(system)
+    }
+
+    /// The mass matrix at the initial state must be positive definite:
+    /// otherwise the first joint whose motion has no inertia is an error.
+    fn check_mass_matrix(&mut self, system: &System) {
+        let Some((k, joint)) = singular_joint(system) else {
+            return;
+        };
+        let j = &system.joints[joint];
+        let body = system.bodies.get(j.child).map_or("?", |b| b.name.as_str());
+        let speed = j.speed_names.get(k - j.u_index).map_or("?", String::as_str);
+        self.diags.push(
+            Diagnostic::error(
+                j.span,
+                format!(
+                    "the mass matrix is singular at the initial state: the motion of joint `{}` (speed `{speed}`) has no inertia",
+                    j.name
+                ),
+            )
+            .with_help(format!(
+                "give body `{body}` or the bodies it carries mass and inertia for this motion, or lock or remove the joint"
+            )),
+        );
     }
 
     fn parameters(&mut self, spec: &Spec) -> Option<Vec<Parameter>> {
@@ -508,7 +571,7 @@ impl Ctx<'_> {
             }
             let mass = self.quantity(&b.mass, &join(&path, &[f("mass")]), Scope::Params);
             if let Some(m) = &mass
-                && m.value <= 0.0
+                && (m.value < 0.0 || (m.value == 0.0 && !self.lenient))
             {
                 self.error(
                     &join(&path, &[f("mass")]),
@@ -616,6 +679,17 @@ impl Ctx<'_> {
         let mut eig: Vec<f64> = SymmetricEigen::new(m).eigenvalues.iter().copied().collect();
         eig.sort_by(f64::total_cmp);
         if eig[0] < -TOL * scale {
+            if self.lenient {
+                self.warning(
+                    path,
+                    format!(
+                        "inertia of body `{body}` is not positive semi-definite (principal moments {:.6}, {:.6}, {:.6})",
+                        eig[0], eig[1], eig[2]
+                    ),
+                    "kept as written (`inertia_policy: Lenient`): the mass matrix is checked instead; principal moments of inertia cannot be negative",
+                );
+                return Some(rows);
+            }
             self.error(
                 path,
                 format!(
@@ -627,6 +701,17 @@ impl Ctx<'_> {
             return None;
         }
         if eig[0] + eig[1] < eig[2] - TOL * scale {
+            if self.lenient {
+                self.warning(
+                    path,
+                    format!(
+                        "inertia of body `{body}` violates the triangle inequality: {:.6} + {:.6} < {:.6}",
+                        eig[0], eig[1], eig[2]
+                    ),
+                    "kept as written (`inertia_policy: Lenient`): no mass distribution has these principal moments",
+                );
+                return Some(rows);
+            }
             self.error(
                 path,
                 format!(

@@ -380,7 +380,7 @@ impl<const N: usize> Stepper<N> for Dop853<N> {
             if deno <= 0.0 {
                 deno = 1.0;
             }
-            let mut err = h.abs() * err * (1.0 / (N as f64 * deno)).sqrt();
+            let mut err = h.abs() * err * (1.0 / (N.max(1) as f64 * deno)).sqrt();
             stats.rhs_evals += 11;
             if let Some(i) = first_non_finite(&y1) {
                 self.ctl.nonfinite = Some(i);

@@ -373,7 +373,7 @@ impl<const N: usize> Stepper<N> for Dopri5<N> {
                     * (E1 * k1[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * k7[i]);
                 err += (e / weight(cfg.atol, cfg.rtol, y[i], y1[i])).powi(2);
             }
-            let mut err = (err / N as f64).sqrt();
+            let mut err = (err / N.max(1) as f64).sqrt();
             if let Some(i) = first_non_finite(&y1).or_else(|| first_non_finite(&k7)) {
                 self.ctl.nonfinite = Some(i);
                 err = f64::INFINITY;

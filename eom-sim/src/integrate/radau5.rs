@@ -334,7 +334,7 @@ impl<const N: usize> Work<N> {
         for i in 0..N {
             s += (v[i] / self.scal[i]).powi(2);
         }
-        (s / N as f64).sqrt()
+        (s / N.max(1) as f64).sqrt()
     }
 
     /// Hairer's ESTRAD: `err = ‖(I - h γ0 J)^{-1}-filtered (γ0 h f(y0) +
@@ -451,7 +451,7 @@ impl<const N: usize> Work<N> {
                 dyno +=
                     (self.z1[i] / d).powi(2) + (self.z2[i] / d).powi(2) + (self.z3[i] / d).powi(2);
             }
-            let dyno = (dyno / (3 * N) as f64).sqrt();
+            let dyno = (dyno / (3 * N).max(1) as f64).sqrt();
             if !dyno.is_finite() {
                 return Newton::Fail;
             }
