@@ -340,6 +340,7 @@ pub fn method_name(m: Method) -> &'static str {
         Method::Projection => "projection",
         Method::Partitioning => "partitioning",
         Method::Index3 => "index3",
+        Method::AugmentedLagrangian { .. } => "augmented-lagrangian",
     }
 }
 
