@@ -268,6 +268,20 @@ pub enum Method {
     Partitioning,
     /// The index-3 DAE in `(q, u, λ)`.
     Index3,
+    /// Augmented Lagrangian (Bayo and Ledesma 1996; García de Jalón and
+    /// Bayo 1994): every constrained solve — the accelerations at each
+    /// right-hand side and the mass-orthogonal projections of `q` and `u`
+    /// after every step — minimises `½ xᵀMx − fᵀx` subject to `J x = r` by
+    /// iterating `(M + αJᵀJ) x_{k+1} = f + Jᵀ(λ_k + α r)`,
+    /// `λ_{k+1} = λ_k + α (r − J x_{k+1})` from `λ_0 = 0`. The leading
+    /// matrix stays positive definite when `J` is singular or redundant.
+    AugmentedLagrangian {
+        /// `α` relative to `max diag M / max diag JᵀJ` (dimensionless).
+        penalty: f64,
+        /// Most iterations per solve (it stops earlier once `J x = r`
+        /// holds to round-off).
+        iterations: usize,
+    },
 }
 
 impl Method {
@@ -277,17 +291,13 @@ impl Method {
         beta: 10.0,
     };
 
-    /// The method named `multipliers`, `projection`, `partitioning` or
-    /// `index3` (as `eom-gen simulate --constraints` takes them).
-    pub fn from_name(name: &str) -> Option<Method> {
-        match name {
-            "multipliers" | "baumgarte" => Some(Method::BAUMGARTE),
-            "projection" => Some(Method::Projection),
-            "partitioning" => Some(Method::Partitioning),
-            "index3" => Some(Method::Index3),
-            _ => None,
-        }
-    }
+    /// The augmented Lagrangian with `α = 1e5` (relative) and at most 20
+    /// iterations per solve, the default of `--constraints
+    /// augmented-lagrangian`.
+    pub const AUGMENTED_LAGRANGIAN: Method = Method::AugmentedLagrangian {
+        penalty: 1e5,
+        iterations: 20,
+    };
 }
 
 /// What the solver saw along a run.
@@ -309,6 +319,47 @@ pub struct ConstraintStats {
     /// the four-bar's change point, where the rank drops between steps
     /// without any step landing on it); 1 if nothing was recorded.
     pub min_singular_ratio: f64,
+    /// Why the method stopped the run, if it refused to go on (the
+    /// right-hand side is NaN from then on, so the integrator stops with
+    /// [`StopReason::NonFinite`](crate::StopReason::NonFinite)).
+    pub refusal: Option<Refusal>,
+}
+
+/// A method's refusal to continue a run it cannot get right.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Refusal {
+    /// Near a singular configuration (a rank drop of `J`, where the
+    /// mobility changes: the four-bar's collinear change point).
+    SingularConfiguration {
+        /// The method's `--constraints` name.
+        method: &'static str,
+        /// Time of the state that came too near.
+        t: f64,
+        /// `σ_r / σ_1` of `J M^{-1/2}` there, `r` the rank at the start.
+        singular_ratio: f64,
+        /// Methods that pass such configurations.
+        recommended: &'static str,
+    },
+}
+
+impl std::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Refusal::SingularConfiguration {
+                method,
+                t,
+                singular_ratio,
+                recommended,
+            } => write!(
+                f,
+                "--constraints {method} stopped at t = {t} s near a singular configuration: the \
+                 constraint Jacobian is losing rank (σ_r/σ_1 = {singular_ratio:.1e}; links \
+                 aligned, the mobility changes there), where its stabilisation terms divided by \
+                 the vanishing singular value would corrupt the motion; use --constraints \
+                 {recommended}"
+            ),
+        }
+    }
 }
 
 /// [`ConstraintStats`] gathered at the accepted states of a run, and the
@@ -423,21 +474,144 @@ pub fn accelerations(
     let rhs = gamma - jacobian * &free;
     // Well-conditioned (the usual case): Cholesky. Its pivots bound the
     // eigenvalues' spread from below, so a pivot ratio above the cut means
-    // full rank and the eigendecomposition would give the same λ.
+    // the Schur complement is far from a rank drop and the weighted SVD
+    // would give the same λ.
     if let Some(chol) = schur.clone().cholesky() {
         let d = chol.l_dirty().diagonal();
         let (lo, hi) = d.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
             (lo.min(x * x), hi.max(x * x))
         });
-        if lo > 1e-8 * hi {
+        if lo > FAST_PIVOT_RATIO * hi {
             let lambda = chol.solve(&rhs);
             let udot = free + minv_jt * &lambda;
             return Some((udot, lambda, jacobian.nrows()));
         }
     }
-    let (_, lambda, rank) = pinv_lambda(&schur, &rhs)?;
-    let udot = free + minv_jt * &lambda;
-    Some((udot, lambda, rank))
+    let l = m.clone().cholesky()?.l();
+    let (x, lambda, rank) = weighted_min_norm(&l, jacobian, &rhs, RANK_TOL)?;
+    Some((free + x, lambda, rank))
+}
+
+/// The Schur complement's Cholesky factor is used when its smallest squared
+/// pivot is above this fraction of the largest (singular-value ratio of
+/// `J M^{-1/2}` above about 1e-2); nearer a rank drop, the weighted SVD.
+const FAST_PIVOT_RATIO: f64 = 1e-4;
+
+/// Damping of the accelerations' solve near a rank drop of `J` (relative
+/// to `σ₁` of `J M^{-1/2}`, see [`weighted_min_norm`]): the off-manifold
+/// sensitivity of the accelerations, `1/σ` at a change point, is capped at
+/// `1/μ`, and what is damped is the acceleration normal to the motion,
+/// which the projections restore.
+const ACC_DAMPING: f64 = 1e-3;
+
+/// Pivot ratio of the dependent block below which [`Method::Partitioning`]
+/// projects mass-orthogonally instead.
+const SINGULAR_BLOCK: f64 = 0.3;
+
+/// Damping of the projections' Newton and speed solves.
+const PROJ_DAMPING: f64 = 1e-5;
+
+/// Singular values of `J L⁻ᵀ` below this fraction of the largest are
+/// round-off of exactly redundant equations and dropped.
+const NOISE_TOL: f64 = 1e-13;
+
+/// The mass-weighted minimum-norm solution of `J x = r`: `x` minimises
+/// `xᵀ M x` (`M = L Lᵀ`, `l` the lower Cholesky factor), `x = M⁻¹ Jᵀ y`
+/// with `y = (J M⁻¹ Jᵀ)⁺ r`; and the numerical rank.
+///
+/// It goes through the SVD `J L⁻ᵀ = U Σ Vᵀ`: `x = L⁻ᵀ V Σ⁺ Uᵀ r`, one
+/// division by each `σ` (the Schur complement's eigendecomposition divides
+/// by `σ²` and needs the cut-off at `σ ≈ 1e-5 σ₁`). The pseudo-inverse is
+/// damped (Tikhonov) with `μ = RANK_TOL σ₁`: `σ⁺ = σ / (σ² + μ²)`, so `x`
+/// is continuous through a rank drop (the four-bar's change point, where
+/// `Uᵀ r` and `σ` vanish together and their ratio is the finite
+/// acceleration that keeps the branch) and equal to the exact solution to
+/// `(μ/σ)²` away from it; singular values at round-off (`NOISE_TOL σ₁`,
+/// exactly redundant equations) are dropped, which gives the minimum-norm
+/// `y` there. The rank counts `σ > μ`.
+pub fn weighted_min_norm(
+    l: &DMatrix<f64>,
+    j: &DMatrix<f64>,
+    r: &DVector<f64>,
+    damping: f64,
+) -> Option<(DVector<f64>, DVector<f64>, usize)> {
+    let (m, n) = j.shape();
+    if m == 0 || n == 0 {
+        return Some((DVector::zeros(n), DVector::zeros(m), 0));
+    }
+    let at = l.solve_lower_triangular(&j.transpose())?;
+    let svd = at.transpose().svd(true, true);
+    let (u, vt) = (svd.u?, svd.v_t?);
+    let s = &svd.singular_values;
+    let largest = s.iter().copied().fold(0.0, f64::max);
+    if !(largest > 0.0 && largest.is_finite()) {
+        return Some((DVector::zeros(n), DVector::zeros(m), 0));
+    }
+    let mu = damping.max(RANK_TOL) * largest;
+    let mu4 = mu.powi(4);
+    let mut w = DVector::zeros(n);
+    let mut y = DVector::zeros(m);
+    let mut rank = 0;
+    for (k, &sk) in s.iter().enumerate() {
+        if sk > RANK_TOL * largest {
+            rank += 1;
+        }
+        if sk <= NOISE_TOL * largest {
+            continue;
+        }
+        let c = u.column(k).dot(r);
+        let s2 = sk * sk;
+        let den = s2 * s2 + mu4;
+        w += vt.row(k).transpose() * (c * sk * s2 / den);
+        y += u.column(k) * (c * s2 / den);
+    }
+    let x = l.tr_solve_lower_triangular(&w)?;
+    (x.iter().chain(y.iter()).all(|v| v.is_finite())).then_some((x, y, rank))
+}
+
+/// `min ½ xᵀMx − fᵀx` subject to `J x = r` by the augmented Lagrangian
+/// iteration of [`Method::AugmentedLagrangian`]: `x` and `λ` (`M x = f +
+/// Jᵀλ`), or `None` if `M + αJᵀJ` is not positive definite. With `f = 0`
+/// it is the mass-orthogonal projection `x = M⁻¹Jᵀ(JM⁻¹Jᵀ)⁻¹r`. Each
+/// iteration contracts the error along an eigenvector of `J M⁻¹ Jᵀ` with
+/// eigenvalue `e` by `1/(1 + αe)`: at once where `J` is regular, and not
+/// at all in a direction that a rank drop of `J` takes away (the four-bar's
+/// change point), so `x` stays bounded and continuous through it.
+pub fn al_solve(
+    m: &DMatrix<f64>,
+    f: &DVector<f64>,
+    j: &DMatrix<f64>,
+    r: &DVector<f64>,
+    penalty: f64,
+    iterations: usize,
+) -> Option<(DVector<f64>, DVector<f64>)> {
+    let (nc, nu) = j.shape();
+    let mut lambda = DVector::zeros(nc);
+    if nc == 0 {
+        return Some((m.clone().cholesky()?.solve(f), lambda));
+    }
+    let jtj = j.transpose() * j;
+    let mmax = m.diagonal().iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let jmax = jtj.diagonal().iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let alpha = if jmax > 0.0 {
+        penalty * mmax / jmax
+    } else {
+        0.0
+    };
+    let chol = (m + &jtj * alpha).cholesky()?;
+    let scale = max_abs(r.iter()).max(f64::MIN_POSITIVE);
+    let mut x = DVector::zeros(nu);
+    for _ in 0..iterations.max(1) {
+        let rhs = f + j.transpose() * (&lambda + r * alpha);
+        x = chol.solve(&rhs);
+        let res = r - j * &x;
+        lambda += &res * alpha;
+        let xs = max_abs(x.iter());
+        if max_abs(res.iter()) <= 1e-15 * (scale + jmax.sqrt() * xs) {
+            break;
+        }
+    }
+    Some((x, lambda))
 }
 
 /// A consistent state near a guess.
@@ -584,12 +758,24 @@ fn pivot_quality(j: &DMatrix<f64>, p: &Partition) -> f64 {
     }
 }
 
-/// `J[rows, cols] x = r[rows]`, by LU.
-fn solve_partition(j: &DMatrix<f64>, p: &Partition, r: &DVector<f64>) -> Option<DVector<f64>> {
+/// `J[rows, cols] x = r[rows]` for the dependent speeds `cols`, as the
+/// smallest change in the metric of `M[cols, cols]` ([`weighted_min_norm`],
+/// damped): the exact solution while the dependent block is regular, and
+/// bounded and continuous where it goes singular with `J` (at the
+/// four-bar's change point every 2×2 block of `J` is singular, whatever
+/// the partition, while the crank stays a valid independent coordinate).
+fn solve_partition(
+    j: &DMatrix<f64>,
+    p: &Partition,
+    r: &DVector<f64>,
+    m: &DMatrix<f64>,
+) -> Option<DVector<f64>> {
     let n = p.rows.len();
-    let sub = DMatrix::from_fn(n, n, |a, b| j[(p.rows[a], p.cols[b])]);
+    let sub = DMatrix::from_fn(n, p.cols.len(), |a, b| j[(p.rows[a], p.cols[b])]);
+    let mdd = DMatrix::from_fn(p.cols.len(), p.cols.len(), |a, b| m[(p.cols[a], p.cols[b])]);
     let rhs = DVector::from_fn(n, |a, _| r[p.rows[a]]);
-    sub.lu().solve(&rhs)
+    let l = mdd.cholesky()?.l();
+    weighted_min_norm(&l, &sub, &rhs, PROJ_DAMPING).map(|(x, _, _)| x)
 }
 
 /// Buffers of the per-right-hand-side solve, allocated once per run.
@@ -635,6 +821,25 @@ impl Workspace {
             }
         }
         self.b.neg_mut();
+        if let Method::AugmentedLagrangian {
+            penalty,
+            iterations,
+        } = method
+        {
+            let Some((x, lambda)) = al_solve(
+                &self.m,
+                &self.b,
+                &self.c.jacobian,
+                &self.c.gamma,
+                penalty,
+                iterations,
+            ) else {
+                return false;
+            };
+            self.b.copy_from(&x);
+            self.rhs.copy_from(&lambda);
+            return true;
+        }
         let m = std::mem::replace(&mut self.m, DMatrix::zeros(0, 0));
         let Some(chol) = m.cholesky() else {
             self.m = DMatrix::zeros(nu, nu);
@@ -657,7 +862,7 @@ impl Workspace {
                 let (lo, hi) = d.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
                     (lo.min(x * x), hi.max(x * x))
                 });
-                let ok = lo > 1e-8 * hi;
+                let ok = lo > FAST_PIVOT_RATIO * hi;
                 if ok {
                     chol.solve_mut(&mut self.rhs);
                 }
@@ -670,42 +875,21 @@ impl Workspace {
             }
         };
         if !fast {
-            // Rank-deficient or nearly so: the minimum-norm λ from the
-            // Schur complement, formed again (the factorisation overwrote it).
-            self.schur.gemm(1.0, &self.c.jacobian, &self.minv_jt, 0.0);
-            let Some((_, lambda, _)) = pinv_lambda(&self.schur, &self.rhs) else {
+            // Near a rank drop (or redundant): the damped mass-weighted
+            // minimum-norm solve (`weighted_min_norm`) on `M`'s factor.
+            let l = self.m.lower_triangle();
+            let Some((x, lambda, _)) =
+                weighted_min_norm(&l, &self.c.jacobian, &self.rhs, ACC_DAMPING)
+            else {
                 return false;
             };
+            self.b += x;
             self.rhs.copy_from(&lambda);
+            return true;
         }
         self.b.gemv(1.0, &self.minv_jt, &self.rhs, 1.0);
         true
     }
-}
-
-/// `λ = S⁺ r` for the symmetric positive semi-definite `S` through its
-/// eigendecomposition (eigenvalues below `1e-10` of the largest dropped),
-/// and the rank.
-fn pinv_lambda(schur: &DMatrix<f64>, rhs: &DVector<f64>) -> Option<((), DVector<f64>, usize)> {
-    if !(schur.iter().all(|x| x.is_finite()) && rhs.iter().all(|x| x.is_finite())) {
-        return None;
-    }
-    let eig = nalgebra::SymmetricEigen::new(schur.clone());
-    let largest = eig.eigenvalues.iter().map(|x| x.abs()).fold(0.0, f64::max);
-    let eps = 1e-10 * largest.max(1e-300);
-    let mut lambda = DVector::zeros(rhs.len());
-    let mut rank = 0;
-    for (k, &ev) in eig.eigenvalues.iter().enumerate() {
-        if ev > eps {
-            rank += 1;
-            let v = eig.eigenvectors.column(k);
-            lambda += v * (v.dot(rhs) / ev);
-        }
-    }
-    lambda
-        .iter()
-        .all(|x| x.is_finite())
-        .then_some(((), lambda, rank))
 }
 
 /// Integration of a constrained model with [`Method::Baumgarte`],
@@ -717,7 +901,14 @@ pub struct ConstrainedSystem<'a, D: ?Sized> {
     stats: Recorder,
     partitions: RefCell<Option<(Partition, Partition)>>,
     work: RefCell<Workspace>,
+    start_rank: std::cell::Cell<Option<usize>>,
 }
+
+/// [`Method::Baumgarte`] refuses to go on when `σ_r/σ_1` of `J M^{-1/2}`
+/// (`r` the rank at the start) falls below this: its terms `−2αΦ̇ − β²Φ`
+/// have components along the vanishing singular direction, which the
+/// multipliers divide by `σ_r`.
+pub const BAUMGARTE_SINGULAR_LIMIT: f64 = 5e-2;
 
 impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
     /// The system of `d` kept by `method` (not [`Method::Index3`], which is
@@ -729,12 +920,66 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
             stats: Recorder::new(),
             partitions: RefCell::new(None),
             work: RefCell::new(Workspace::new(d.nu(), d.nc())),
+            start_rank: std::cell::Cell::new(None),
         }
     }
 
     /// What was seen along the run so far.
     pub fn stats(&self) -> ConstraintStats {
         self.stats.stats()
+    }
+
+    /// `σ_r / σ_1` of `J M^{-1/2}` at a state, `r` the rank at the first
+    /// state asked about; 1 without constraints.
+    fn singular_ratio(&self, t: f64, q: &[f64]) -> f64 {
+        let (nu, nc) = (self.d.nu(), self.d.nc());
+        let mut m = DMatrix::zeros(nu, nu);
+        let mut c = ConstraintValues::zeros(nc, nu);
+        self.d.mass_matrix(t, q, &mut m);
+        self.d.constraints(t, q, &vec![0.0; nu], &mut c);
+        let Some(l) = m.cholesky().map(|c| c.l()) else {
+            return 0.0;
+        };
+        let Some(at) = l.solve_lower_triangular(&c.jacobian.transpose()) else {
+            return 0.0;
+        };
+        let sigma = singular_values(&at);
+        let r = match self.start_rank.get() {
+            Some(r) => r,
+            None => {
+                let r = numerical_rank(&sigma);
+                self.start_rank.set(Some(r));
+                r
+            }
+        };
+        match (r, sigma.first()) {
+            (0, _) | (_, None) => 1.0,
+            (r, Some(&s1)) => sigma.get(r - 1).copied().unwrap_or(0.0) / s1.max(f64::MIN_POSITIVE),
+        }
+    }
+
+    /// Refuses (see [`Refusal`]) when `self.method` cannot go on at `(t, q)`.
+    fn check_refusal(&self, t: f64, q: &[f64]) {
+        if !matches!(self.method, Method::Baumgarte { .. }) || self.d.nc() == 0 {
+            return;
+        }
+        if self.stats.0.borrow().0.refusal.is_some() {
+            return;
+        }
+        let ratio = self.singular_ratio(t, q);
+        if ratio < BAUMGARTE_SINGULAR_LIMIT {
+            self.stats.0.borrow_mut().0.refusal = Some(Refusal::SingularConfiguration {
+                method: "baumgarte",
+                t,
+                singular_ratio: ratio,
+                recommended: "augmented-lagrangian or projection",
+            });
+        }
+    }
+
+    /// Why the run was stopped, if the method refused to go on.
+    pub fn refusal(&self) -> Option<Refusal> {
+        self.stats.0.borrow().0.refusal.clone()
     }
 
     /// `u̇` and `λ` at a state (with this method's stabilisation).
@@ -758,27 +1003,92 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
         accelerations(&m, &-b, &c.jacobian, &gamma).map(|(a, l, _)| (a, l))
     }
 
-    /// Minimum-norm Newton steps onto `Φ = 0`, then the speeds onto `Φ̇ = 0`.
-    fn project_min_norm(&self, t: f64, q: &mut [f64], u: &mut [f64]) {
+    /// Mass-orthogonal projection: Newton steps `Δ = −M⁻¹Jᵀ(JM⁻¹Jᵀ)⁺Φ`
+    /// onto `Φ = 0` (the smallest change in the kinetic-energy metric, so
+    /// the correction is normal to the motion and the steps from the
+    /// predicted state stay on its assembly branch), then the speeds by
+    /// `Δu = −M⁻¹Jᵀ(JM⁻¹Jᵀ)⁺Φ̇`, which leaves the momentum along the
+    /// admissible motions unchanged ([`weighted_min_norm`], continuous
+    /// through rank drops of `J`).
+    fn project_mass_orthogonal(&self, t: f64, q: &mut [f64], u: &mut [f64]) {
         let d = self.d;
         let (nu, nh) = (d.nu(), d.n_holonomic());
         let mut c = ConstraintValues::zeros(d.nc(), nu);
+        let mut m = DMatrix::zeros(nu, nu);
         let zero = vec![0.0; nu];
+        let mut dq = vec![0.0; q.len()];
+        let factor = |q: &[f64], m: &mut DMatrix<f64>| {
+            d.mass_matrix(t, q, m);
+            m.clone().cholesky().map(|c| c.l())
+        };
+        for _ in 0..10 {
+            d.constraints(t, q, &zero, &mut c);
+            if max_abs(c.phi.iter().take(nh)) < 1e-13 {
+                break;
+            }
+            let Some(l) = factor(q, &mut m) else {
+                return;
+            };
+            let jh = c.jacobian.rows(0, nh).into_owned();
+            let Some((du, _, _)) =
+                weighted_min_norm(&l, &jh, &-c.phi.rows(0, nh).into_owned(), PROJ_DAMPING)
+            else {
+                break;
+            };
+            d.qdot(q, du.as_slice(), &mut dq);
+            q.iter_mut().zip(&dq).for_each(|(q, d)| *q += d);
+            d.normalize(q);
+        }
+        d.constraints(t, q, u, &mut c);
+        let Some(l) = factor(q, &mut m) else {
+            return;
+        };
+        if let Some((du, _, _)) =
+            weighted_min_norm(&l, &c.jacobian, &-c.phidot.clone(), PROJ_DAMPING)
+        {
+            u.iter_mut().zip(du.iter()).for_each(|(u, d)| *u += d);
+        }
+    }
+
+    /// Mass-orthogonal projections of `q` (Newton) and `u` as in
+    /// [`Self::project_mass_orthogonal`], each step by [`al_solve`].
+    fn project_augmented(
+        &self,
+        t: f64,
+        q: &mut [f64],
+        u: &mut [f64],
+        penalty: f64,
+        iterations: usize,
+    ) {
+        let d = self.d;
+        let (nu, nh) = (d.nu(), d.n_holonomic());
+        let mut c = ConstraintValues::zeros(d.nc(), nu);
+        let mut m = DMatrix::zeros(nu, nu);
+        let zero = vec![0.0; nu];
+        let f = DVector::zeros(nu);
         let mut dq = vec![0.0; q.len()];
         for _ in 0..10 {
             d.constraints(t, q, &zero, &mut c);
             if max_abs(c.phi.iter().take(nh)) < 1e-13 {
                 break;
             }
+            d.mass_matrix(t, q, &mut m);
             let jh = c.jacobian.rows(0, nh).into_owned();
-            let (du, _) = min_norm_solve(&jh, &-c.phi.rows(0, nh).into_owned());
+            let r = -c.phi.rows(0, nh).into_owned();
+            let Some((du, _)) = al_solve(&m, &f, &jh, &r, penalty, iterations) else {
+                return;
+            };
             d.qdot(q, du.as_slice(), &mut dq);
             q.iter_mut().zip(&dq).for_each(|(q, d)| *q += d);
             d.normalize(q);
         }
         d.constraints(t, q, u, &mut c);
-        let (du, _) = min_norm_solve(&c.jacobian, &-c.phidot.clone());
-        u.iter_mut().zip(du.iter()).for_each(|(u, d)| *u += d);
+        d.mass_matrix(t, q, &mut m);
+        if let Some((du, _)) =
+            al_solve(&m, &f, &c.jacobian, &-c.phidot.clone(), penalty, iterations)
+        {
+            u.iter_mut().zip(du.iter()).for_each(|(u, d)| *u += d);
+        }
     }
 
     /// Dependent coordinates by Newton with the independent ones held, then
@@ -808,6 +1118,18 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
         let Some((ph, pa)) = parts.as_ref() else {
             return;
         };
+        if pivot_quality(&jh, ph) < SINGULAR_BLOCK
+            || pivot_quality(&c.jacobian, pa) < SINGULAR_BLOCK
+        {
+            // Near a rank drop of J every dependent block is nearly
+            // singular (the four-bar's change point): the dependent
+            // coordinates are ill-determined by the independent ones there,
+            // so this step is projected mass-orthogonally instead.
+            drop(parts);
+            self.project_mass_orthogonal(t, q, u);
+            return;
+        }
+        let mut m = DMatrix::zeros(nu, nu);
         let mut dq = vec![0.0; q.len()];
         let mut du = vec![0.0; nu];
         for _ in 0..10 {
@@ -817,7 +1139,8 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
             }
             let jh = c.jacobian.rows(0, nh).into_owned();
             let phi = c.phi.rows(0, nh).into_owned();
-            let Some(x) = solve_partition(&jh, ph, &-phi) else {
+            d.mass_matrix(t, q, &mut m);
+            let Some(x) = solve_partition(&jh, ph, &-phi, &m) else {
                 break;
             };
             du.iter_mut().for_each(|v| *v = 0.0);
@@ -829,7 +1152,8 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
             d.normalize(q);
         }
         d.constraints(t, q, u, &mut c);
-        if let Some(x) = solve_partition(&c.jacobian, pa, &-c.phidot.clone()) {
+        d.mass_matrix(t, q, &mut m);
+        if let Some(x) = solve_partition(&c.jacobian, pa, &-c.phidot.clone(), &m) {
             for (k, &col) in pa.cols.iter().enumerate() {
                 u[col] += x[k];
             }
@@ -843,8 +1167,10 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for ConstrainedSystem<'_
         let (q, u) = y.split_at(nq);
         let (qd, ud) = dy.split_at_mut(nq);
         self.d.qdot(q, u, qd);
+        self.check_refusal(t, q);
+        let refused = self.stats.0.borrow().0.refusal.is_some();
         let mut w = self.work.borrow_mut();
-        if w.solve(self.d, self.method, t, q, u) {
+        if !refused && w.solve(self.d, self.method, t, q, u) {
             ud.iter_mut().zip(w.b.iter()).for_each(|(d, s)| *d = *s);
         } else {
             ud.iter_mut().for_each(|d| *d = f64::NAN);
@@ -856,8 +1182,12 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for ConstrainedSystem<'_
         let (q, u) = y.split_at_mut(nq);
         self.d.normalize(q);
         match self.method {
-            Method::Projection => self.project_min_norm(t, q, u),
+            Method::Projection => self.project_mass_orthogonal(t, q, u),
             Method::Partitioning => self.project_partitioned(t, q, u),
+            Method::AugmentedLagrangian {
+                penalty,
+                iterations,
+            } => self.project_augmented(t, q, u, penalty, iterations),
             Method::Baumgarte { .. } | Method::Index3 => {}
         }
         let mut c = ConstraintValues::zeros(self.d.nc(), nu);

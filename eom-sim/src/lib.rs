@@ -57,7 +57,7 @@ pub mod work_precision;
 
 pub use constrained::{
     Assembly, ConstrainedModel, ConstrainedSystem, ConstraintStats, ConstraintValues, Dynamics,
-    Generated, Index3System, Method,
+    Generated, Index3System, Method, Refusal,
 };
 pub use model::{__private, FunctionInfo, Model, Point, Vector};
 /// Fixed-size matrices of the integrators' Jacobians and mass matrices.

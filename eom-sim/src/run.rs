@@ -135,11 +135,12 @@ impl FromStr for Integrator {
 
 impl Method {
     /// The methods with their default settings, in the order of the docs.
-    pub const ALL: [Method; 4] = [
+    pub const ALL: [Method; 5] = [
         Method::Projection,
         Method::BAUMGARTE,
         Method::Partitioning,
         Method::Index3,
+        Method::AUGMENTED_LAGRANGIAN,
     ];
 
     /// Its name (as `eom-gen simulate --constraints` takes it).
@@ -149,6 +150,7 @@ impl Method {
             Method::Projection => "projection",
             Method::Partitioning => "partitioning",
             Method::Index3 => "index3",
+            Method::AugmentedLagrangian { .. } => "augmented-lagrangian",
         }
     }
 }
@@ -978,7 +980,16 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         .map(|(_, l)| l.as_slice().to_vec())
         .unwrap_or_else(|| vec![f64::NAN; nc]);
     let c = constrained(cs.stats(), lambda, q, sol.t_final);
-    let report = finish(model, &names, &state_names, &sol, &y0, cpu, Some(c));
+    let mut report = finish(model, &names, &state_names, &sol, &y0, cpu, Some(c));
+    if let Some(r) = cs.refusal() {
+        // The method stopped the run on purpose (its right-hand side is NaN
+        // from there on): its reason, not the NaN it left behind.
+        let super::constrained::Refusal::SingularConfiguration { t, .. } = r;
+        report.stop = Stop::Failed {
+            t,
+            message: r.to_string(),
+        };
+    }
     write_csv(model, &names, options, &sol, &|t, y| {
         cs.accelerations(t, &y[..nq], &y[nq..nq + nu])
     })?;

@@ -17,6 +17,12 @@ pub mod double_pendulum;
 /// Model `fourbar`, generated from `models/fourbar.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod fourbar;
+/// Model `fourbar_n2`, generated from `models/fourbar_n2.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod fourbar_n2;
+/// Model `fourbar_n4`, generated from `models/fourbar_n4.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod fourbar_n4;
 /// Model `free_body`, generated from `models/free_body.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod free_body;

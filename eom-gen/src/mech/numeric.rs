@@ -21,7 +21,7 @@ pub fn singular_speed(m: &[Vec<f64>]) -> Option<usize> {
     let mut d = vec![0.0; n];
     for j in 0..n {
         let dj = m[j][j] - (0..j).map(|k| l[j][k] * l[j][k] * d[k]).sum::<f64>();
-        if !(dj > tol) || !dj.is_finite() {
+        if dj.is_nan() || dj <= tol || !dj.is_finite() {
             return Some(j);
         }
         d[j] = dj;

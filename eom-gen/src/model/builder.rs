@@ -289,6 +289,83 @@ pub fn n_link_chain(n: usize, spatial: bool) -> Spec {
     b.build()
 }
 
+/// The N-four-bar of IFToMM benchmark A02: `n + 1` cranks pinned to ground
+/// one link length apart along +x and `n` couplers joining their tips; all
+/// rods uniform, 1 kg and 1 m (`m`, `L`; inertia `m L²/12` about the
+/// centre, none about the rod's axis); hinges about z; gravity `g` along
+/// −y. It starts with the cranks vertical and every crank tip moving at
+/// `v0` along +x (cranks at `−v0/L`, couplers at `+v0/L` relative to their
+/// crank). Tree: ground → `crank0` → `coupler1`, ground → `crank1` →
+/// `coupler2`, …, ground → `crankN`; the joint between `coupler{j}` and the
+/// tip of `crank{j}` is cut (`n` loops). Coordinates in tree order:
+/// `crank0, coupler1, crank1, …, crankN` (`n = 1` has the layout of
+/// `models/fourbar.ron`). Grübler–Kutzbach counts `3(2n + 1) − 2(3n + 1)
+/// = 1`, the rank of `J` gives mobility 1 too, but twice a turn all
+/// `2n + 1` links are collinear and the mobility jumps to `n + 1`.
+pub fn n_fourbar(n: usize) -> Spec {
+    let mut b = ModelBuilder::new(format!("fourbar_n{n}"))
+        .gravity((0.0, "-g", 0.0))
+        .parameter("g", 9.81)
+        .parameter("m", 1.0)
+        .parameter("L", 1.0)
+        .parameter("v0", 1.0);
+    let crank = |k: usize| format!("crank{k}");
+    let coupler = |j: usize| format!("coupler{j}");
+    for k in 0..=n {
+        b = b.body(Body::new(crank(k), "m").inertia_diag("m*L^2/12", 0.0, "m*L^2/12"));
+        if k < n {
+            b = b.body(Body::new(coupler(k + 1), "m").inertia_diag(0.0, "m*L^2/12", "m*L^2/12"));
+        }
+    }
+    for k in 0..=n {
+        let x = if k == 0 {
+            Num::Value(0.0)
+        } else {
+            Num::from(format!("{k}*L").as_str())
+        };
+        b = b.joint(
+            Joint::new(
+                format!("a{k}"),
+                JointKind::revolute((0.0, 0.0, 1.0)),
+                "ground",
+                crank(k),
+            )
+            .at_parent((x, 0.0, 0.0))
+            .at_child((0.0, "-L/2", 0.0))
+            .coordinates([crank(k)])
+            .u0(["-v0/L"]),
+        );
+        if k < n {
+            b = b.joint(
+                Joint::new(
+                    format!("b{}", k + 1),
+                    JointKind::revolute((0.0, 0.0, 1.0)),
+                    crank(k),
+                    coupler(k + 1),
+                )
+                .at_parent((0.0, "L/2", 0.0))
+                .at_child(("-L/2", 0.0, 0.0))
+                .coordinates([coupler(k + 1)])
+                .u0(["v0/L"]),
+            );
+        }
+    }
+    for j in 1..=n {
+        b = b.joint(
+            Joint::new(
+                format!("c{j}"),
+                JointKind::revolute((0.0, 0.0, 1.0)),
+                coupler(j),
+                crank(j),
+            )
+            .at_parent(("L/2", 0.0, 0.0))
+            .at_child((0.0, "L/2", 0.0))
+            .cut(),
+        );
+    }
+    b.output(Output::Energy).build()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -301,6 +378,19 @@ mod tests {
         let back = parse(&Source::new("chain.ron", text.clone()))
             .unwrap_or_else(|r| panic!("{r}\n{text}"));
         assert_eq!(back, spec, "RON text:\n{text}");
+    }
+
+    #[test]
+    fn n_fourbar_has_n_loops_and_mobility_one() {
+        // 2n + 1 rods, 3n + 1 hinges in the plane: Grübler 3(2n+1) − 2(3n+1) = 1.
+        for n in [1, 2, 4] {
+            let text = n_fourbar(n).to_ron();
+            let checked =
+                check(&Source::new("fourbar_n.ron", text)).unwrap_or_else(|r| panic!("{r}"));
+            let sys = &checked.system;
+            assert_eq!((sys.nq(), sys.nu()), (2 * n + 1, 2 * n + 1), "N = {n}");
+            assert_eq!(sys.graph.cut_joints().len(), n, "N = {n}");
+        }
     }
 
     #[test]
