@@ -27,3 +27,15 @@ for kind in macro build; do
         *) echo "newcomer: unexpected output of the $kind crate" >&2; exit 1 ;;
     esac
 done
+# Without eom-sim in its Cargo.toml, the macro says what to add instead of
+# rustc's bare "could not find `eom_sim`".
+mkdir -p "$work/missing"
+cp -r "$work/macro/src" "$work/macro/models" "$work/missing/"
+grep -v '^eom-sim' "$work/macro/Cargo.toml" > "$work/missing/Cargo.toml"
+if out=$(cd "$work/missing" && cargo build -q 2>&1); then
+    echo "newcomer: a crate without eom-sim built" >&2; exit 1
+fi
+case "$out" in
+    *"uses the \`eom-sim\` runtime"*"add \`eom-sim = "*) echo "missing eom-sim: the macro says what to add" ;;
+    *) echo "$out" >&2; echo "newcomer: no helpful error without eom-sim" >&2; exit 1 ;;
+esac

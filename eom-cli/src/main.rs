@@ -125,8 +125,9 @@ enum Command {
         /// Closed loops and constraints: `projection` (of positions and
         /// speeds after each step), `baumgarte` (multipliers with Baumgarte
         /// stabilisation, α = β = 10/s), `partitioning` (dependent
-        /// coordinates from independent ones, Wehage–Haug) or `index3` (the
-        /// index-3 DAE, with radau5).
+        /// coordinates from independent ones, Wehage–Haug), `index3` (the
+        /// index-3 DAE, with radau5) or `augmented-lagrangian` (Bayo and
+        /// Ledesma; well-posed through singular and redundant constraints).
         #[arg(long, default_value = "projection")]
         constraints: String,
         /// Print one JSON object instead of the summary.

@@ -240,8 +240,8 @@ fn fourbar_stays_a_parallelogram_and_keeps_its_energy() {
     // Cranks pinned at (0,0) and (1,0), coupler of the ground link's length:
     // the coupler stays parallel to ground (φ2 = −φ1) and the cranks turn
     // together (φ3 = φ1), through the singular collinear positions, for
-    // either way of holding the constraints.
-    for mode in ["projection", "baumgarte"] {
+    // the methods that pass them (Baumgarte refuses, below).
+    for mode in ["projection", "augmented-lagrangian"] {
         let v = simulate_loop("fourbar", mode, 5.0, "dopri5");
         assert_eq!(v["stop"], "finished", "{mode}: {v}");
         let q: Vec<f64> = v["q"]
@@ -273,6 +273,22 @@ fn fourbar_stays_a_parallelogram_and_keeps_its_energy() {
             "{mode}: smallest σ₂/σ₁ of J {ratio:e}, want in (0, 0.1)"
         );
     }
+}
+
+#[test]
+fn baumgarte_refuses_the_fourbar_at_its_first_singular_position() {
+    // Its stabilisation terms −2αΦ̇ − β²Φ, divided by the singular value
+    // that vanishes where the links line up, throw the four-bar off its
+    // branch: the run stops there with its reason (exit 3 in the CLI).
+    let v = simulate_loop("fourbar", "baumgarte", 5.0, "dopri5");
+    assert_eq!(v["stop"]["reason"], "failed", "{v}");
+    let t = v["stop"]["t"].as_f64().unwrap_or(f64::NAN);
+    assert!((t - 0.71).abs() < 0.1, "refused at t = {t}");
+    let message = v["stop"]["message"].as_str().unwrap_or_default();
+    assert!(
+        message.contains("singular configuration") && message.contains("augmented-lagrangian"),
+        "{message}"
+    );
 }
 
 #[test]

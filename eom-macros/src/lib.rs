@@ -61,6 +61,20 @@ fn expand(attr: Tokens, item: &ItemStruct) -> syn::Result<Tokens> {
     })?;
     let rel = args.path.value();
     let dir = std::env::var("CARGO_MANIFEST_DIR").unwrap_or_default();
+    // The expansion names `::eom_sim`; without that dependency rustc's
+    // "could not find `eom_sim`" would say nothing of what to add.
+    let manifest = std::path::Path::new(&dir).join("Cargo.toml");
+    if let Ok(text) = std::fs::read_to_string(&manifest) {
+        if !depends_on_eom_sim(&text) {
+            return Err(syn::Error::new_spanned(
+                &args.path,
+                format!(
+                    "the code #[multibody] generates uses the `eom-sim` runtime, which `{}` does not depend on\n  = help: add `eom-sim = {{ git = \"…\" }}` (or `{{ path = \"…/eom-sim\" }}`) under [dependencies]; README \"Use eom in your own crate\" has the lines",
+                    manifest.display()
+                ),
+            ));
+        }
+    }
     let full = std::path::Path::new(&dir).join(&rel);
     let text = std::fs::read_to_string(&full).map_err(|e| {
         syn::Error::new_spanned(&args.path, format!("cannot read model `{rel}`: {e}\n  = help: the path is relative to the directory of the crate's Cargo.toml"))
@@ -87,4 +101,55 @@ fn expand(attr: Tokens, item: &ItemStruct) -> syn::Result<Tokens> {
         const _: &[u8] = include_bytes!(#tracked);
         #model
     })
+}
+
+/// Whether a `Cargo.toml` text declares the `eom-sim` crate as a
+/// dependency of any kind: a key `eom-sim` (or `eom_sim`) in a table, a
+/// dotted `eom-sim.workspace = true`, or a `[dependencies.eom-sim]` table.
+/// A renamed dependency (`package = "eom-sim"`) counts too, though the
+/// generated `::eom_sim` paths then need the name `eom_sim`.
+fn depends_on_eom_sim(manifest: &str) -> bool {
+    manifest.lines().any(|line| {
+        let line = line.split('#').next().unwrap_or("").trim();
+        let key = |k: &str| {
+            let k = k.trim().trim_matches('"');
+            k == "eom-sim" || k == "eom_sim"
+        };
+        if let Some(header) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            return header.split('.').any(key);
+        }
+        match line.split_once('=') {
+            Some((k, v)) => {
+                k.split('.').next().is_some_and(key)
+                    || v.replace(' ', "").contains("package=\"eom-sim\"")
+            }
+            None => false,
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::depends_on_eom_sim;
+
+    #[test]
+    fn the_eom_sim_dependency_is_found_in_every_spelling() {
+        for yes in [
+            "[dependencies]\neom-sim = { path = \"../eom-sim\" }\n",
+            "[dependencies]\neom_sim = \"0.1\"\n",
+            "[dependencies]\neom-sim.workspace = true\n",
+            "[dependencies.eom-sim]\npath = \"x\"\n",
+            "[dependencies]\nsim = { package = \"eom-sim\", path = \"x\" }\n",
+            "[target.'cfg(unix)'.dependencies]\n\"eom-sim\" = \"0.1\"\n",
+        ] {
+            assert!(depends_on_eom_sim(yes), "{yes}");
+        }
+        for no in [
+            "[dependencies]\neom-macros = { path = \"../eom-macros\" }\n",
+            "[package]\nname = \"x\"\n# eom-sim = \"0.1\"\n",
+            "[dependencies]\neom-simulator = \"1\"\n",
+        ] {
+            assert!(!depends_on_eom_sim(no), "{no}");
+        }
+    }
 }

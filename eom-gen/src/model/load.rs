@@ -146,6 +146,15 @@ fn check_scene(src: &Source, root: &Path, values: &[(String, f64)]) -> Result<Ch
             "a scene names a model file; copy what the other scene selects into this one",
         ));
     }
-    let checked = model.check_with(root, values)?;
+    // The scene's parameter values, then the caller's (which win).
+    let mut all: Vec<(String, f64)> = spec
+        .parameters
+        .iter()
+        .filter(|(n, _)| !values.iter().any(|(m, _)| m == *n))
+        .map(|(n, v)| (n.clone(), *v))
+        .collect();
+    all.extend(values.iter().cloned());
+    scene::check_parameter_values(src, &spec, &model.source)?;
+    let checked = model.check_with(root, &all)?;
     scene::apply(src, spec, shown, checked)
 }

@@ -23,7 +23,7 @@ use crate::system::{
     ConstraintKind, ForceElement, JointType, Motion, OutputKind, Parameter, Quantity, System,
 };
 use serde::{Deserialize, Serialize};
-use std::collections::HashSet;
+use std::collections::{BTreeMap, HashSet};
 use std::path::{Component, Path, PathBuf};
 
 /// A scene file, as written.
@@ -54,6 +54,17 @@ pub struct SceneSpec {
     /// others are computed from these (see [`Function`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub functions: Option<Vec<Function>>,
+    /// Parameter values replacing the model's before it is checked, as
+    /// `eom-gen simulate --param NAME=VALUE` does (a fixed parameter is
+    /// inlined with the value, a tunable one defaults to it).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub parameters: BTreeMap<String, f64>,
+    /// Initial positions by coordinate name, replacing the model's `q0`.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub q0: BTreeMap<String, f64>,
+    /// Initial speeds by speed name, replacing the model's `u0`.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub u0: BTreeMap<String, f64>,
 }
 
 impl SceneSpec {
@@ -149,6 +160,54 @@ pub(crate) fn apply(
     Ok(checked)
 }
 
+/// The scene's `parameters` against the model's (`model` the model's RON
+/// text): every unknown name, located at the scene's `parameters` field,
+/// and every non-finite value.
+pub(crate) fn check_parameter_values(
+    src: &Source,
+    scene: &SceneSpec,
+    model: &Source,
+) -> Result<(), Report> {
+    if scene.parameters.is_empty() {
+        return Ok(());
+    }
+    // A model that does not parse is reported by its own check.
+    let Ok(spec) = super::parse(model) else {
+        return Ok(());
+    };
+    let tree = locate::parse(&src.text);
+    let mut cx = Ctx {
+        root: tree.as_ref(),
+        src,
+        diags: Vec::new(),
+    };
+    let names = || spec.parameters.iter().map(|p| p.name.as_str());
+    for (name, value) in &scene.parameters {
+        if !names().any(|n| n == name) {
+            let help = suggest(name, names(), "the model's parameters");
+            cx.error(
+                &[f("parameters")],
+                format!("unknown parameter `{name}`"),
+                help,
+            );
+        } else if !value.is_finite() {
+            cx.error(
+                &[f("parameters")],
+                format!("parameter `{name}` is set to {value}"),
+                "give a finite number",
+            );
+        }
+    }
+    if cx.diags.is_empty() {
+        Ok(())
+    } else {
+        Err(Report {
+            source: src.clone(),
+            diagnostics: cx.diags,
+        })
+    }
+}
+
 /// The model's path as seen from the working directory: the scene's
 /// directory joined with `model`, with `.` and `dir/..` removed.
 pub fn model_path(scene: &str, model: &str) -> PathBuf {
@@ -231,6 +290,7 @@ impl Ctx<'_> {
             checked.spec.outputs = outputs.clone();
         }
         self.locks(scene, sys);
+        self.initial(scene, sys);
         if let Some(list) = &scene.functions {
             self.functions(list);
         }
@@ -250,6 +310,58 @@ impl Ctx<'_> {
         for p in &mut checked.spec.parameters {
             if let Some(sp) = sys.parameters.iter().find(|x| x.name == p.name) {
                 p.tunable = sp.tunable;
+            }
+        }
+    }
+
+    /// `q0` and `u0`: initial values by coordinate and speed name, of the
+    /// joints that keep their coordinates (not locked or prescribed).
+    fn initial(&mut self, scene: &SceneSpec, sys: &mut System) {
+        for (field, map, speeds) in [("q0", &scene.q0, false), ("u0", &scene.u0, true)] {
+            for (name, &value) in map {
+                let path = [f(field)];
+                let found = sys.joints.iter_mut().find_map(|j| {
+                    let names = if speeds {
+                        &j.speed_names
+                    } else {
+                        &j.coordinate_names
+                    };
+                    let k = names.iter().position(|n| n == name)?;
+                    Some((
+                        j.motion == Motion::Free,
+                        if speeds { &mut j.u0 } else { &mut j.q0 },
+                        k,
+                    ))
+                });
+                let what = if speeds { "speed" } else { "coordinate" };
+                match found {
+                    _ if !value.is_finite() => self.error(
+                        &path,
+                        format!("{field} of `{name}` is {value}"),
+                        "give a finite number",
+                    ),
+                    Some((true, values, k)) if k < values.len() => {
+                        values[k] = Quantity {
+                            expr: Ast::Num(value),
+                            value,
+                            span: values[k].span,
+                        };
+                    }
+                    Some(_) => self.error(
+                        &path,
+                        format!("{what} `{name}` belongs to a locked, prescribed or cut joint"),
+                        "only the coordinates and speeds of the generated model have initial values",
+                    ),
+                    None => {
+                        let names: Vec<&str> = if speeds {
+                            sys.speed_names()
+                        } else {
+                            sys.coordinate_names()
+                        };
+                        let help = suggest(name, names.iter().copied(), &format!("the model's {what}s"));
+                        self.error(&path, format!("unknown {what} `{name}` in `{field}`"), help);
+                    }
+                }
             }
         }
     }
