@@ -77,18 +77,12 @@ fn draw(w: &WorkPrecision, out: &mut String) -> Result<(), Box<dyn std::error::E
     let (y0, y1) = range(w.points.iter().map(|p| p.cpu_s * 1e3).filter(|t| *t > 0.0));
     let root = SVGBackend::with_string(out, (1100, 520)).into_drawing_area();
     root.fill(&WHITE)?;
-    let title = if w.reference.tol.is_finite() {
-        format!(
+    let title = match &w.reference {
+        Some(r) => format!(
             "{}: work-precision to t = {} s (reference {} at {:.0e}, checked by {} to {:.1e})",
-            w.model,
-            w.t_end,
-            w.reference.integrator,
-            w.reference.tol,
-            w.reference.check,
-            w.reference.check_end_error
-        )
-    } else {
-        format!("{}: work-precision", w.model)
+            w.model, w.t_end, r.integrator, r.tol, r.check, r.check_end_error
+        ),
+        None => format!("{}: work-precision", w.model),
     };
     let root = root.titled(&title, ("sans-serif", 18))?;
     // The path panel only where path errors were measured.
@@ -122,10 +116,10 @@ fn draw(w: &WorkPrecision, out: &mut String) -> Result<(), Box<dyn std::error::E
             .draw()?;
         // How far the reference is confirmed: errors left of this line
         // are below the agreement of the two reference methods.
-        let floor = if path {
-            w.reference.check_path_error
-        } else {
-            w.reference.check_end_error
+        let floor = match &w.reference {
+            Some(r) if path => r.check_path_error,
+            Some(r) => r.check_end_error,
+            None => f64::NAN,
         };
         if floor.is_finite() && floor > x0 && floor < x1 {
             chart

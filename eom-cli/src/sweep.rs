@@ -72,74 +72,6 @@ impl Default for WpOptions {
     }
 }
 
-/// The reference solution as the runner reports it.
-#[derive(Clone, Debug, Deserialize)]
-pub struct WpReference {
-    /// Reference integrator (`dop853`).
-    pub integrator: String,
-    /// Check integrator (`dopri5`).
-    pub check: String,
-    /// `rtol = atol` of both.
-    pub tol: f64,
-    /// Constraint solver of both (constrained models).
-    pub constraints: String,
-    /// End time reached.
-    pub t_end: f64,
-    /// Number of dense samples along the path.
-    pub samples: usize,
-    /// Right-hand sides of the reference run.
-    pub rhs_evals: usize,
-    /// Positions at the end.
-    pub q_final: Vec<f64>,
-    /// End error of the check against the reference.
-    pub check_end_error: f64,
-    /// Path error of the check against the reference.
-    pub check_path_error: f64,
-}
-
-/// One point of the diagram.
-#[derive(Clone, Debug, Deserialize)]
-pub struct WpPoint {
-    /// Integrator.
-    pub integrator: String,
-    /// Constraint solver (meaningful for constrained models only).
-    pub constraints: String,
-    /// True if `setting` is a step size.
-    pub fixed_step: bool,
-    /// Tolerance or step size.
-    pub setting: f64,
-    /// Median CPU time of one run, s.
-    pub cpu_s: f64,
-    /// Timed runs behind the median.
-    pub repeats: usize,
-    /// Right-hand sides of one run.
-    pub rhs_evals: usize,
-    /// Accepted steps.
-    pub accepted: usize,
-    /// Rejected steps.
-    pub rejected: usize,
-    /// Relative error of the positions at the end (`null`: did not finish).
-    pub end_error: Option<f64>,
-    /// Largest relative error along the path.
-    pub path_error: Option<f64>,
-    /// Significant correct digits at the end.
-    pub digits: Option<f64>,
-    /// `finished` or why the run stopped.
-    pub stop: String,
-}
-
-impl WpPoint {
-    /// The series the point belongs to: the integrator, and the
-    /// constraint solver for constrained models.
-    pub fn series(&self, constrained: bool) -> String {
-        if constrained {
-            format!("{} + {}", self.integrator, self.constraints)
-        } else {
-            self.integrator.clone()
-        }
-    }
-}
-
 /// A whole sweep of one model.
 #[derive(Clone, Debug)]
 pub struct WorkPrecision {
@@ -149,10 +81,10 @@ pub struct WorkPrecision {
     pub constrained: bool,
     /// End time, s.
     pub t_end: f64,
-    /// The reference.
-    pub reference: WpReference,
+    /// The reference (none for points read back from a CSV file).
+    pub reference: Option<ReferenceSummary>,
     /// The points, in sweep order.
-    pub points: Vec<WpPoint>,
+    pub points: Vec<PointSummary>,
     /// What the errors measure (the plots' axis label).
     pub error_label: String,
 }
@@ -221,43 +153,6 @@ fn cases(o: &WpOptions, constrained: bool) -> Vec<(Integrator, Method, f64)> {
         .collect()
 }
 
-impl From<ReferenceSummary> for WpReference {
-    fn from(r: ReferenceSummary) -> Self {
-        WpReference {
-            integrator: r.integrator.to_string(),
-            check: r.check.to_string(),
-            tol: r.tol,
-            constraints: r.constraints.to_string(),
-            t_end: r.t_end,
-            samples: r.samples,
-            rhs_evals: r.rhs_evals,
-            q_final: r.q_final,
-            check_end_error: r.check_end_error,
-            check_path_error: r.check_path_error,
-        }
-    }
-}
-
-impl From<PointSummary> for WpPoint {
-    fn from(p: PointSummary) -> Self {
-        WpPoint {
-            integrator: p.integrator.to_string(),
-            constraints: p.constraints.to_string(),
-            fixed_step: p.fixed_step,
-            setting: p.setting,
-            cpu_s: p.cpu_s,
-            repeats: p.repeats,
-            rhs_evals: p.rhs_evals,
-            accepted: p.accepted,
-            rejected: p.rejected,
-            end_error: p.end_error,
-            path_error: p.path_error,
-            digits: p.digits,
-            stop: p.stop,
-        }
-    }
-}
-
 /// Checks the options: known integrators and solvers, positive times and
 /// tolerances. Every problem at once.
 pub fn validate(o: &WpOptions) -> Result<(), Vec<String>> {
@@ -286,7 +181,7 @@ pub fn validate(o: &WpOptions) -> Result<(), Vec<String>> {
 pub fn run(
     g: &Generated,
     o: &WpOptions,
-    progress: &mut dyn FnMut(usize, usize, Option<&WpPoint>),
+    progress: &mut dyn FnMut(usize, usize, Option<&PointSummary>),
 ) -> Result<WorkPrecision, Error> {
     let sys = &g.checked.system;
     let constrained = !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty();
@@ -327,15 +222,13 @@ pub fn run(
             ))
         })?;
         if let Some(r) = v.get("reference") {
-            reference = Some(WpReference::from(
-                ReferenceSummary::deserialize(r).map_err(|e| {
-                    Error::Program(format!("unexpected reference from {}: {e}", exe.display()))
-                })?,
-            ));
-        } else if let Some(p) = v.get("point") {
-            let p = WpPoint::from(PointSummary::deserialize(p).map_err(|e| {
-                Error::Program(format!("unexpected point from {}: {e}", exe.display()))
+            reference = Some(ReferenceSummary::deserialize(r).map_err(|e| {
+                Error::Program(format!("unexpected reference from {}: {e}", exe.display()))
             })?);
+        } else if let Some(p) = v.get("point") {
+            let p = PointSummary::deserialize(p).map_err(|e| {
+                Error::Program(format!("unexpected point from {}: {e}", exe.display()))
+            })?;
             done += 1;
             progress(done, total, Some(&p));
             points.push(p);
@@ -354,8 +247,10 @@ pub fn run(
             String::from_utf8_lossy(&out.stderr).trim()
         )));
     }
-    let reference = reference
-        .ok_or_else(|| Error::Program(format!("{} printed no reference", exe.display())))?;
+    let reference = Some(
+        reference
+            .ok_or_else(|| Error::Program(format!("{} printed no reference", exe.display())))?,
+    );
     Ok(WorkPrecision {
         model: sys.name.clone(),
         constrained,
@@ -421,9 +316,17 @@ fn read_csv(text: &str, file: &str) -> Result<Vec<WorkPrecision>, String> {
         let setting = num("setting")?.ok_or_else(|| format!("{file}:{}: no `setting`", k + 1))?;
         let cpu_ms = num("cpu_ms")?.ok_or_else(|| format!("{file}:{}: no `cpu_ms`", k + 1))?;
         let end_error = num("end_error")?;
-        let point = WpPoint {
-            integrator: get("integrator").to_string(),
-            constraints: get("constraints").to_string(),
+        let line_no = k + 1;
+        let integrator = get("integrator")
+            .parse()
+            .map_err(|e| format!("{file}:{line_no}: {e}"))?;
+        let constraints = match get("constraints") {
+            "" => None,
+            c => Some(c.parse().map_err(|e| format!("{file}:{line_no}: {e}"))?),
+        };
+        let point = PointSummary {
+            integrator,
+            constraints: constraints.unwrap_or_default(),
             fixed_step: get("setting_kind") == "step",
             setting,
             cpu_s: cpu_ms * 1e-3,
@@ -447,18 +350,7 @@ fn read_csv(text: &str, file: &str) -> Result<Vec<WorkPrecision>, String> {
                     model: model.to_string(),
                     constrained: false,
                     t_end: f64::NAN,
-                    reference: WpReference {
-                        integrator: String::new(),
-                        check: String::new(),
-                        tol: f64::NAN,
-                        constraints: String::new(),
-                        t_end: f64::NAN,
-                        samples: 0,
-                        rhs_evals: 0,
-                        q_final: Vec::new(),
-                        check_end_error: f64::NAN,
-                        check_path_error: f64::NAN,
-                    },
+                    reference: None,
                     points: Vec::new(),
                     error_label: RELATIVE_ERROR.into(),
                 });
@@ -466,7 +358,7 @@ fn read_csv(text: &str, file: &str) -> Result<Vec<WorkPrecision>, String> {
                 &mut out[n]
             }
         };
-        w.constrained |= !point.constraints.is_empty();
+        w.constrained |= constraints.is_some();
         w.points.push(point);
     }
     if out.is_empty() {
@@ -491,7 +383,11 @@ pub fn csv(w: &WorkPrecision) -> String {
             "{},{},{},{},{:e},{:.6},{},{},{},{},{},{},{},{}\n",
             w.model,
             p.integrator,
-            if w.constrained { &p.constraints } else { "" },
+            if w.constrained {
+                p.constraints.name()
+            } else {
+                ""
+            },
             if p.fixed_step { "step" } else { "tol" },
             p.setting,
             p.cpu_s * 1e3,
@@ -510,23 +406,25 @@ pub fn csv(w: &WorkPrecision) -> String {
 
 /// A Markdown table of the points with the reference's line above it.
 pub fn table(w: &WorkPrecision) -> String {
-    let r = &w.reference;
-    let mut s = format!(
-        "{}: work-precision to t = {} s; reference {} at rtol = atol = {:e} ({} rhs{}), checked by {}: end {:.1e}, path {:.1e}\n\n",
-        w.model,
-        w.t_end,
-        r.integrator,
-        r.tol,
-        r.rhs_evals,
-        if w.constrained {
-            format!(", {}", r.constraints)
-        } else {
-            String::new()
-        },
-        r.check,
-        r.check_end_error,
-        r.check_path_error
-    );
+    let mut s = match &w.reference {
+        Some(r) => format!(
+            "{}: work-precision to t = {} s; reference {} at rtol = atol = {:e} ({} rhs{}), checked by {}: end {:.1e}, path {:.1e}\n\n",
+            w.model,
+            w.t_end,
+            r.integrator,
+            r.tol,
+            r.rhs_evals,
+            if w.constrained {
+                format!(", {}", r.constraints)
+            } else {
+                String::new()
+            },
+            r.check,
+            r.check_end_error,
+            r.check_path_error
+        ),
+        None => format!("{}: work-precision\n\n", w.model),
+    };
     s += "| method | tol / step | rhs | CPU ms | end error | path error | digits | stop |\n";
     s += "|---|---|---:|---:|---:|---:|---:|---|\n";
     for p in &w.points {
@@ -552,39 +450,24 @@ pub fn table(w: &WorkPrecision) -> String {
 /// The whole sweep as one JSON object:
 /// `{"model", "constrained", "t_end", "reference": {…}, "points": [{…}]}`.
 pub fn json(w: &WorkPrecision) -> serde_json::Value {
-    let r = &w.reference;
-    let points: Vec<serde_json::Value> = w
-        .points
-        .iter()
-        .map(|p| {
-            serde_json::json!({
-                "integrator": p.integrator,
-                "constraints": if w.constrained { Some(&p.constraints) } else { None },
-                "fixed_step": p.fixed_step,
-                "setting": p.setting,
-                "cpu_s": p.cpu_s,
-                "repeats": p.repeats,
-                "rhs_evals": p.rhs_evals,
-                "accepted": p.accepted,
-                "rejected": p.rejected,
-                "end_error": p.end_error,
-                "path_error": p.path_error,
-                "digits": p.digits,
-                "stop": p.stop,
-            })
-        })
-        .collect();
+    // The constraint method means something for constrained models only.
+    let strip = |mut v: serde_json::Value| {
+        if !w.constrained
+            && let Some(o) = v.as_object_mut()
+        {
+            o.insert("constraints".into(), serde_json::Value::Null);
+        }
+        v
+    };
+    fn value<T: serde::Serialize>(x: &T) -> serde_json::Value {
+        serde_json::to_value(x).unwrap_or_default()
+    }
     serde_json::json!({
         "model": w.model,
         "constrained": w.constrained,
         "t_end": w.t_end,
-        "reference": {
-            "integrator": r.integrator, "check": r.check, "tol": r.tol,
-            "constraints": if w.constrained { Some(&r.constraints) } else { None },
-            "t_end": r.t_end, "samples": r.samples, "rhs_evals": r.rhs_evals, "q_final": r.q_final,
-            "check_end_error": r.check_end_error, "check_path_error": r.check_path_error,
-        },
-        "points": points,
+        "reference": w.reference.as_ref().map(|r| strip(value(r))),
+        "points": w.points.iter().map(|p| strip(value(p))).collect::<Vec<_>>(),
     })
 }
 
@@ -651,8 +534,8 @@ pub fn suite_options(model: &str, base: &WpOptions) -> WpOptions {
 
 /// Per series, the cheapest finished run (least CPU time) whose end error
 /// is at most `threshold`, in series order; `None` where no run reached it.
-pub fn cheapest(w: &WorkPrecision, threshold: f64) -> Vec<(String, Option<&WpPoint>)> {
-    let mut out: Vec<(String, Option<&WpPoint>)> = Vec::new();
+pub fn cheapest(w: &WorkPrecision, threshold: f64) -> Vec<(String, Option<&PointSummary>)> {
+    let mut out: Vec<(String, Option<&PointSummary>)> = Vec::new();
     for p in &w.points {
         let name = p.series(w.constrained);
         let ok = p.end_error.is_some_and(|e| e <= threshold);
@@ -685,7 +568,7 @@ pub fn summary_rows(w: &WorkPrecision) -> String {
             .filter(|p| p.series(w.constrained) == *name)
             .filter_map(|p| p.digits)
             .fold(0.0, f64::max);
-        let cell = |p: &Option<&WpPoint>| {
+        let cell = |p: &Option<&PointSummary>| {
             p.map_or_else(
                 || "—".to_string(),
                 |p| format!("{:.3} ({} rhs)", p.cpu_s * 1e3, p.rhs_evals),
