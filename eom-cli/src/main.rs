@@ -66,9 +66,14 @@ enum Command {
         /// code is regenerated with the value.
         #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
         params: Vec<String>,
-        /// Hold a runtime input of the model at a value: `NAME=VALUE`
-        /// (repeatable; default zero).
-        #[arg(long = "input", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        /// Hold a runtime input of the model at a value, `NAME=VALUE`, or
+        /// drive it by an expression of parameters, `t`, coordinates and
+        /// speeds, `NAME=EXPR` (regenerates; repeatable; default zero).
+        #[arg(
+            long = "input",
+            value_name = "NAME=VALUE|EXPR",
+            allow_hyphen_values = true
+        )]
         inputs: Vec<String>,
         /// Use the evaluator instead of compiled code (no compiler needed).
         #[arg(long)]
@@ -109,9 +114,14 @@ enum Command {
         /// code is regenerated with the value.
         #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
         params: Vec<String>,
-        /// Hold a runtime input of the model at a value: `NAME=VALUE`
-        /// (repeatable; default zero).
-        #[arg(long = "input", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        /// Hold a runtime input of the model at a value, `NAME=VALUE`, or
+        /// drive it by an expression of parameters, `t`, coordinates and
+        /// speeds, `NAME=EXPR` (regenerates; repeatable; default zero).
+        #[arg(
+            long = "input",
+            value_name = "NAME=VALUE|EXPR",
+            allow_hyphen_values = true
+        )]
         inputs: Vec<String>,
         /// Write the trajectory (t, q, u) to this CSV file.
         #[arg(long)]
@@ -328,7 +338,7 @@ fn main() -> ExitCode {
             }
             let vary = Vary {
                 params,
-                inputs: Vec::new(),
+                ..Vary::default()
             };
             if suite {
                 if model.is_some() || per_call || work_precision {
@@ -577,12 +587,30 @@ fn diagnostics_json(report: &Report) -> serde_json::Value {
 fn generate_with_progress(
     path: &str,
     params: &[(String, f64)],
+    drives: &[(String, String)],
 ) -> Result<eom_gen::Generated, eom_gen::GenerateError> {
     use std::io::{IsTerminal, Write};
     use std::sync::mpsc;
     use std::time::{Duration, Instant};
-    let generate =
-        || eom_gen::generate_file_with_values(path, params, &eom_gen::EmitOptions::default());
+    let generate = || {
+        let options = eom_gen::EmitOptions::default();
+        if drives.is_empty() {
+            return eom_gen::generate_file_with_values(path, params, &options);
+        }
+        let mut checked = eom_gen::model::check_file_with_values(path, params)
+            .map_err(eom_gen::GenerateError::Model)?;
+        // Checked by `Vary::resolve` before (exit 2), reported again here.
+        if let Err(errors) = eom_gen::model::drive_inputs(&mut checked, drives) {
+            return Err(eom_gen::GenerateError::Model(eom_gen::Report {
+                source: checked.source.clone(),
+                diagnostics: errors
+                    .into_iter()
+                    .map(|e| eom_gen::Diagnostic::file_error(e.message).with_help(e.help))
+                    .collect(),
+            }));
+        }
+        eom_gen::generate_checked(checked, &options)
+    };
     if !std::io::stderr().is_terminal() {
         return generate();
     }
@@ -629,17 +657,45 @@ struct Vary {
     params: Vec<(String, f64)>,
     /// Input values, by name.
     inputs: Vec<(String, f64)>,
+    /// Inputs driven by expressions (`--input NAME=EXPR`), by name.
+    drives: Vec<(String, String)>,
 }
 
 impl Vary {
-    /// Both lists of `NAME=VALUE`; every malformed one is a usage error.
+    /// Both lists of `NAME=VALUE`; an input's value may be an expression
+    /// (`NAME=EXPR`, which drives it); every malformed one is a usage error.
     fn parse(params: &[String], inputs: &[String]) -> Result<Vary, ExitCode> {
         let p = parse_assignments("param", params);
-        let i = parse_assignments("input", inputs);
+        let (constant, driven): (Vec<String>, Vec<String>) =
+            inputs.iter().cloned().partition(|i| {
+                i.split_once('=')
+                    .is_none_or(|(_, v)| v.trim().parse::<f64>().is_ok())
+            });
+        let i = parse_assignments("input", &constant);
+        let drives: Vec<(String, String)> = driven
+            .iter()
+            .filter_map(|i| i.split_once('='))
+            .map(|(n, v)| (n.trim().to_string(), v.trim().to_string()))
+            .collect();
+        let mut empty: Vec<String> = drives
+            .iter()
+            .filter(|(n, v)| n.is_empty() || v.is_empty())
+            .map(|(n, v)| format!("--input `{n}={v}`: expected NAME=VALUE or NAME=EXPR, e.g. `--input motor=\"2*sin(3*t)\"`"))
+            .collect();
         match (p, i) {
-            (Ok(params), Ok(inputs)) => Ok(Vary { params, inputs }),
+            (Ok(params), Ok(inputs)) if empty.is_empty() => Ok(Vary {
+                params,
+                inputs,
+                drives,
+            }),
             (p, i) => {
-                for e in p.err().into_iter().chain(i.err()).flatten() {
+                for e in p
+                    .err()
+                    .into_iter()
+                    .chain(i.err())
+                    .flatten()
+                    .chain(empty.drain(..))
+                {
                     eprintln!("error: {e}");
                 }
                 Err(ExitCode::from(2))
@@ -651,17 +707,28 @@ impl Vary {
     /// checking every name against the model: an unknown parameter or
     /// input is a usage error (exit 2) with the closest name.
     fn resolve(&self, path: &str) -> Result<Vec<f64>, ExitCode> {
-        if self.params.is_empty() && self.inputs.is_empty() {
+        if self.params.is_empty() && self.inputs.is_empty() && self.drives.is_empty() {
             return Ok(Vec::new());
         }
         // An invalid model is reported by the generation that follows.
-        let Ok(checked) = eom_gen::check_file(path) else {
+        let Ok(mut checked) = eom_gen::check_file(path) else {
             return Ok(Vec::new());
         };
+        let mut problems: Vec<String> = Vec::new();
+        for (name, _) in &self.inputs {
+            if self.drives.iter().any(|(d, _)| d == name) {
+                problems.push(format!(
+                    "input `{name}` is given a value and an expression; give one"
+                ));
+            }
+        }
+        // The driven inputs leave the model; the others keep their order.
+        if let Err(errors) = eom_gen::model::drive_inputs(&mut checked, &self.drives) {
+            problems.extend(errors.iter().map(|e| format!("--input {}: {e}", e.input)));
+        }
         let sys = &checked.system;
         let params: Vec<&str> = sys.parameters.iter().map(|p| p.name.as_str()).collect();
         let inputs: Vec<&str> = sys.inputs.iter().map(String::as_str).collect();
-        let mut problems = Vec::new();
         for (what, given, known) in [
             ("parameter", &self.params, &params),
             ("input", &self.inputs, &inputs),
@@ -728,9 +795,9 @@ fn parse_assignments(what: &str, items: &[String]) -> Result<Vec<(String, f64)>,
     }
 }
 
-/// Generates `path` with the parameter values of `vary`.
+/// Generates `path` with the parameter values and driven inputs of `vary`.
 fn generated_with(path: &str, vary: &Vary) -> Result<eom_gen::Generated, ExitCode> {
-    generate_with_progress(path, &vary.params).map_err(|e| {
+    generate_with_progress(path, &vary.params, &vary.drives).map_err(|e| {
         eprint!("{e}");
         if !e.to_string().ends_with('\n') {
             eprintln!();
@@ -1343,7 +1410,7 @@ fn bench_suite(dir: &str, out: &str, o: &crate::sweep::WpOptions, t_end_given: b
     let mut sections = String::new();
     for path in &models {
         let p = path.display().to_string();
-        let g = match generate_with_progress(&p, &[]) {
+        let g = match generate_with_progress(&p, &[], &[]) {
             Ok(g) => g,
             Err(e) => {
                 bars.suspend(|| eprint!("{e}"));

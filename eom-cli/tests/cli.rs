@@ -1171,8 +1171,8 @@ fn requested_energy_and_momentum_are_in_the_csv() {
 }
 
 /// The pendulum with an actuator `motor` at the hinge and `l` tunable.
-fn actuated_pendulum() -> String {
-    let path = temp_path("actuated.ron");
+fn actuated_pendulum(file: &str) -> String {
+    let path = temp_path(file);
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../models/pendulum.ron"
@@ -1198,7 +1198,7 @@ fn udot(args: &[&str]) -> f64 {
 
 #[test]
 fn params_and_inputs_are_set_from_the_command_line() {
-    let model = actuated_pendulum();
+    let model = actuated_pendulum("actuated.ron");
     let eval = |extra: &[&str]| {
         let mut args = vec!["eval", model.as_str(), "--interpret"];
         args.extend_from_slice(extra);
@@ -1259,7 +1259,18 @@ fn params_and_inputs_are_set_from_the_command_line() {
         (&["--input", "motr=1"], "did you mean `motor`"),
         (&["--param", "g"], "NAME=VALUE"),
         (&["--param", "g=nan"], "NAME=VALUE"),
-        (&["--input", "motor=x"], "NAME=VALUE"),
+        (
+            &["--input", "motor=x"],
+            "unknown name `x` in the expression for input `motor`",
+        ),
+        (
+            &["--input", "motor=2*"],
+            "in expression `2*` for input `motor`",
+        ),
+        (
+            &["--input", "motor=1", "--input", "motor=t"],
+            "a value and an expression",
+        ),
     ] {
         let mut all = vec!["eval", model.as_str(), "--interpret"];
         all.extend_from_slice(args);
@@ -1279,5 +1290,44 @@ fn params_and_inputs_are_set_from_the_command_line() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("has none"), "{err}");
+    let _ = std::fs::remove_file(&model);
+}
+
+#[test]
+fn an_input_driven_by_an_expression_of_time_and_state() {
+    // `--input motor=EXPR` replaces the runtime input by a known torque:
+    // here one that cancels gravity, m g l sin θ, plus 6 m l² t, so that
+    // θ̈ = 6 t and θ(t) = π/2 + t³ from rest at θ = π/2 (a cubic, which
+    // DOPRI5 integrates exactly). Compiled and interpreted.
+    let model = actuated_pendulum("driven.ron");
+    let law = "motor=g*m*l*sin(theta) + 6*m*l*l*t";
+    for interpret in [true, false] {
+        let mut args = vec![
+            "simulate",
+            model.as_str(),
+            "--t-end",
+            "1",
+            "--input",
+            law,
+            "--param",
+            "m=2",
+            "--json",
+        ];
+        if interpret {
+            args.push("--interpret");
+        }
+        let out = cached(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+        let q = v["q"][0].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            (q - std::f64::consts::FRAC_PI_2 - 1.0).abs() < 1e-9,
+            "interpret {interpret}: {v}"
+        );
+    }
     let _ = std::fs::remove_file(&model);
 }

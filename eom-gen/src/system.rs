@@ -269,8 +269,10 @@ pub enum ForceElement {
     Actuator {
         /// The joint.
         joint: JointId,
-        /// Indices into the system's inputs.
-        inputs: Vec<usize>,
+        /// Indices into the system's inputs, one per speed; `None` where
+        /// the input is driven by an expression instead (see
+        /// [`crate::model::drive_inputs`]; a `JointForce` carries it).
+        inputs: Vec<Option<usize>>,
     },
 }
 

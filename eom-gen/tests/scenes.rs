@@ -461,3 +461,53 @@ fn a_scene_sets_parameter_values_and_the_initial_state() {
         "{text}"
     );
 }
+
+#[test]
+fn a_scene_drives_an_input_by_an_expression() {
+    // The pendulum with a motor at its hinge whose torque is given by the
+    // scene as m g l sin θ: gravity is cancelled at every angle (θ̈ = 0),
+    // and the motor's input leaves the model.
+    let dir = std::env::temp_dir().join(format!("eom-scene-drive-{}", std::process::id()));
+    let _ = std::fs::create_dir_all(&dir);
+    let pendulum = std::fs::read_to_string(format!("{MODELS}/pendulum.ron")).expect("pendulum");
+    let actuated = pendulum.replacen(
+        "    outputs:",
+        "    forces: [Actuator(name: \"motor\", joint: \"hinge\")],\n    outputs:",
+        1,
+    );
+    std::fs::write(dir.join("p.ron"), &actuated).expect("write");
+    let scene = dir.join("p.scene.ron").display().to_string();
+    let text = r#"Scene(model: "p.ron", inputs: {"motor": "g*m*l*sin(theta)"})"#;
+    let g = generate(&Source::new(scene.clone(), text)).expect("valid scene");
+    let sys = &g.checked.system;
+    assert!(sys.inputs.is_empty(), "{:?}", sys.inputs);
+    for theta in [0.3, 1.2, std::f64::consts::FRAC_PI_2] {
+        let e = evaluate(
+            &g.formulation,
+            &Point {
+                sys,
+                q: &[theta],
+                u: &[0.7],
+                udot: &[],
+                tau: &[0.0],
+                inputs: &[],
+                params: &[],
+                multipliers: &[],
+                t: 0.0,
+            },
+        );
+        assert!(e.udot()[0].abs() < 1e-12, "θ = {theta}: {:?}", e.udot());
+    }
+    // Unknown inputs and names, at the scene's `inputs`.
+    let bad = r#"Scene(model: "p.ron", inputs: {"motr": 1.0})"#;
+    let r = check(&Source::new(scene.clone(), bad)).expect_err("unknown input");
+    assert!(r.to_string().contains("did you mean `motor`?"), "{r}");
+    let bad = r#"Scene(model: "p.ron", inputs: {"motor": "k*theta"})"#;
+    let r = check(&Source::new(scene, bad)).expect_err("unknown name");
+    assert!(
+        r.to_string()
+            .contains("unknown name `k` in the expression for input `motor`"),
+        "{r}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -64,16 +64,16 @@ fn expand(attr: Tokens, item: &ItemStruct) -> syn::Result<Tokens> {
     // The expansion names `::eom_sim`; without that dependency rustc's
     // "could not find `eom_sim`" would say nothing of what to add.
     let manifest = std::path::Path::new(&dir).join("Cargo.toml");
-    if let Ok(text) = std::fs::read_to_string(&manifest) {
-        if !depends_on_eom_sim(&text) {
-            return Err(syn::Error::new_spanned(
-                &args.path,
-                format!(
-                    "the code #[multibody] generates uses the `eom-sim` runtime, which `{}` does not depend on\n  = help: add `eom-sim = {{ git = \"…\" }}` (or `{{ path = \"…/eom-sim\" }}`) under [dependencies]; README \"Use eom in your own crate\" has the lines",
-                    manifest.display()
-                ),
-            ));
-        }
+    if let Ok(text) = std::fs::read_to_string(&manifest)
+        && !depends_on_eom_sim(&text)
+    {
+        return Err(syn::Error::new_spanned(
+            &args.path,
+            format!(
+                "the code #[multibody] generates uses the `eom-sim` runtime, which `{}` does not depend on\n  = help: add `eom-sim = {{ git = \"…\" }}` (or `{{ path = \"…/eom-sim\" }}`) under [dependencies]; README \"Use eom in your own crate\" has the lines",
+                manifest.display()
+            ),
+        ));
     }
     let full = std::path::Path::new(&dir).join(&rel);
     let text = std::fs::read_to_string(&full).map_err(|e| {

@@ -146,7 +146,8 @@ impl<S: Scalar> Applied<S> {
                 }
                 ForceElement::Actuator { joint, inputs } => {
                     let j = &sys.joints[*joint];
-                    for (k, &input) in inputs.iter().enumerate() {
+                    for (k, input) in inputs.iter().enumerate() {
+                        let Some(input) = *input else { continue };
                         generalized.push(GenForce::Input {
                             u: j.u_index + k,
                             input,

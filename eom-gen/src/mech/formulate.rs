@@ -231,7 +231,7 @@ pub fn ltdl_flops(lambda: &[Option<usize>]) -> usize {
 /// Where runtime input `k` is defined: its actuator.
 fn input_span(sys: &System, k: usize) -> Option<Span> {
     sys.forces.iter().find_map(|f| match &f.element {
-        ForceElement::Actuator { inputs, .. } if inputs.contains(&k) => Some(f.span),
+        ForceElement::Actuator { inputs, .. } if inputs.contains(&Some(k)) => Some(f.span),
         _ => None,
     })
 }

@@ -13,6 +13,7 @@
 //! imports from here.
 
 pub mod builder;
+mod drive;
 mod fields;
 mod load;
 pub mod locate;
@@ -28,6 +29,7 @@ mod validate;
 // re-exported here under their old paths.
 pub use crate::{diag, expr};
 pub use diag::{Diagnostic, Report, Severity, Source, Span};
+pub use drive::{DriveError, drive_inputs};
 pub use load::{Loaded, load, load_in, load_model, load_with};
 pub use read::{Format, read, read_in};
 pub use spec::Spec;

@@ -65,6 +65,12 @@ pub struct SceneSpec {
     /// Initial speeds by speed name, replacing the model's `u0`.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub u0: BTreeMap<String, f64>,
+    /// Actuator inputs driven by a number or an expression of parameters,
+    /// `pi`, `t`, coordinates and speeds (see
+    /// [`drive_inputs`](super::drive_inputs)); they leave the model's
+    /// runtime inputs.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub inputs: BTreeMap<String, Num>,
 }
 
 impl SceneSpec {
@@ -310,6 +316,22 @@ impl Ctx<'_> {
         for p in &mut checked.spec.parameters {
             if let Some(sp) = sys.parameters.iter().find(|x| x.name == p.name) {
                 p.tunable = sp.tunable;
+            }
+        }
+        let drives: Vec<(String, String)> = scene
+            .inputs
+            .iter()
+            .map(|(name, value)| {
+                let text = match value {
+                    Num::Value(v) => format!("{v:?}"),
+                    Num::Expr(e) => e.clone(),
+                };
+                (name.clone(), text)
+            })
+            .collect();
+        if let Err(errors) = super::drive_inputs(checked, &drives) {
+            for e in errors {
+                self.error(&[f("inputs")], e.message, e.help);
             }
         }
     }

@@ -1433,7 +1433,7 @@ impl Ctx<'_> {
                                 inputs.extend(names);
                                 ForceElement::Actuator {
                                     joint: j,
-                                    inputs: (first..inputs.len()).collect(),
+                                    inputs: (first..inputs.len()).map(Some).collect(),
                                 }
                             })
                         }
