@@ -19,6 +19,7 @@ pub mod builder;
 pub mod diag;
 pub mod emit;
 pub mod expr;
+pub mod flex;
 pub mod functions;
 pub mod generate;
 pub mod graph;
