@@ -526,6 +526,25 @@ fn ffr_without_modes_is_the_rigid_body() {
             "Q_v,θ[{i}]"
         );
     }
+    // With modes but q_f and q̇_f locked at zero, the reference block is the same.
+    let modes = normal_modes(&beam, &Reference::Clamped, 4).unwrap();
+    let inv = Invariants::new(&beam, &modes);
+    let (q0, qd0) = (DVector::zeros(4), DVector::zeros(4));
+    let got = ffr::mass_matrix(&inv, &a, &q0)
+        .view((0, 0), (6, 6))
+        .into_owned();
+    assert!(rel(&got, &want) < 1e-14, "locked M got {got}, want {want}");
+    let qv = ffr::quadratic_velocity(&inv, &a, &q0, &w, &qd0);
+    for i in 0..3 {
+        assert!(
+            (qv[i] - want_r[i]).abs() < 1e-12 * m * l,
+            "locked Q_v,R[{i}]"
+        );
+        assert!(
+            (qv[3 + i] - want_t[i]).abs() < 1e-12 * m * l * l,
+            "locked Q_v,θ[{i}]"
+        );
+    }
 }
 
 // ---------- Craig–Bampton and geometric stiffness ----------

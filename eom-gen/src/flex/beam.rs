@@ -499,6 +499,31 @@ mod tests {
     }
 
     #[test]
+    fn flex_section_interpolates_nodal_values_and_classifies() {
+        // At a node the interpolation returns that node's six values; a
+        // nodal vector with only u_y and θ_z is bending in x–y.
+        let b = beam();
+        let shapes = DMatrix::from_fn(b.dofs(), 2, |i, j| (i * 7 + j * 3) as f64 * 0.01);
+        for node in 0..b.nodes() {
+            let s = b.section(b.node_x(node), &shapes);
+            for c in 0..2 {
+                for r in 0..3 {
+                    let (t, q) = (shapes[(6 * node + r, c)], shapes[(6 * node + 3 + r, c)]);
+                    assert!(
+                        (s.translation[(r, c)] - t).abs() < 1e-12,
+                        "node {node} u[{r}]"
+                    );
+                    assert!((s.rotation[(r, c)] - q).abs() < 1e-12, "node {node} θ[{r}]");
+                }
+            }
+        }
+        let mut v = DVector::zeros(b.dofs());
+        v[b.dof(2, NodeDof::Uy)] = 1.0;
+        v[b.dof(2, NodeDof::Rz)] = 0.3;
+        assert_eq!(b.classify(&v), Deformation::BendingXy);
+    }
+
+    #[test]
     fn flex_beam_reports_every_problem() {
         let err = Beam::new(-1.0, 0.0, 1.0, 1.0, 1.0, f64::NAN, 1.0, 0).unwrap_err();
         let FlexError::InvalidBeam(problems) = err else {

@@ -11,7 +11,10 @@
 //! of `K = L Lᵀ` and the symmetric eigenproblem `L⁻¹ M L⁻ᵀ v = μ v`,
 //! `μ = 1/ω²`: the lowest frequencies are the largest `μ`, found to full
 //! relative precision however stiff the axial modes are (the idea of shift
-//! and invert). Shapes are mass-normalised, `φᵀ M φ = 1`, `φᵀ K φ = ω²`.
+//! and invert). Shapes are mass-normalised, `φᵀ M φ = 1`, `φᵀ K φ = ω²`,
+//! with their largest entry positive. The solves are dense (`O(N³)` in the
+//! `N = 6(n+1)` nodal degrees of freedom), meant for beams of up to a few
+//! hundred elements.
 
 use nalgebra::{Cholesky, DMatrix, SymmetricEigen};
 
@@ -222,7 +225,11 @@ fn lowest(
         let y = l
             .tr_solve_lower_triangular(&eig.eigenvectors.column(j).into_owned())
             .ok_or_else(not_pd)?;
-        shapes.set_column(col, &(y / mu.sqrt()));
+        // Sign convention (for reproducible output): the largest entry is positive.
+        let big = y
+            .iter()
+            .fold(0.0_f64, |a, &b| if b.abs() > a.abs() { b } else { a });
+        shapes.set_column(col, &(y * (big.signum() / mu.sqrt())));
         omega2.push(1.0 / mu);
     }
     Ok((shapes, omega2))
