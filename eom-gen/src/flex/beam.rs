@@ -236,7 +236,7 @@ impl Beam {
     pub fn locate(&self, x: f64) -> (usize, f64) {
         let l = self.element_length();
         let x = x.clamp(0.0, self.length);
-        let e = ((x / l).floor() as usize).min(self.elements - 1);
+        let e = ((x / l).floor() as usize).min(self.elements.saturating_sub(1));
         (e, (x - e as f64 * l) / l)
     }
 

@@ -165,24 +165,37 @@ fn fixed_mask(beam: &Beam, fixed: &[Dof]) -> Result<Vec<bool>, FlexError> {
     }
 }
 
-/// A rigid motion in words: `rotation about x`, or a combination.
+/// A rigid motion in words: `rotation about x`, or a signed combination
+/// scaled so its largest part is 1 and its first is positive (rotations in
+/// units of `1/L`).
 fn describe(v: impl Iterator<Item = f64>) -> String {
     let v: Vec<f64> = v.collect();
-    let big = v.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
-    let terms: Vec<String> = v
+    let top = v.iter().fold(0.0_f64, |a, &b| a.max(b.abs()));
+    // A motion and its opposite are the same line: lead with a positive term.
+    let lead = v
         .iter()
-        .zip(MOTIONS)
-        .filter(|(c, _)| c.abs() > 1e-6 * big)
-        .map(|(c, name)| (c / big, name))
-        .map(|(c, name)| {
-            if (c.abs() - 1.0).abs() < 1e-9 {
-                name.to_string()
-            } else {
-                format!("{:.3} {name}", c.abs())
-            }
-        })
-        .collect();
-    format!("`{}`", terms.join(" + "))
+        .find(|c| c.abs() > 1e-6 * top)
+        .copied()
+        .unwrap_or(1.0);
+    let big = top.copysign(lead);
+    let mut out = String::new();
+    for (c, name) in v.iter().map(|c| c / big).zip(MOTIONS) {
+        if c.abs() <= 1e-6 {
+            continue;
+        }
+        let sign = match (out.is_empty(), c < 0.0) {
+            (true, false) => "",
+            (true, true) => "−",
+            (false, false) => " + ",
+            (false, true) => " − ",
+        };
+        if (c.abs() - 1.0).abs() < 1e-9 {
+            out += &format!("{sign}{name}");
+        } else {
+            out += &format!("{sign}{:.3} {name}", c.abs());
+        }
+    }
+    format!("`{out}`")
 }
 
 /// Symmetric part, to keep round-off from breaking symmetry.
@@ -404,6 +417,24 @@ mod tests {
             FlexError::FrameUndefined(vec!["`rotation about x`".to_string()])
         );
         assert!(err.to_string().contains("rotation about x"), "{err}");
+    }
+
+    #[test]
+    fn flex_free_combination_is_named_with_signs() {
+        // Node 0 fixed except u_y and θ_z, the tip fixed in u_y: a rigid turn
+        // about z through the tip (u_y = θ_z (x − L)) is still free.
+        let b = beam(3);
+        let at = |node, dof| Dof { node, dof };
+        let mut dofs: Vec<Dof> = [NodeDof::Ux, NodeDof::Uz, NodeDof::Rx, NodeDof::Ry]
+            .iter()
+            .map(|&d| at(0, d))
+            .collect();
+        dofs.push(at(3, NodeDof::Uy));
+        let err = normal_modes(&b, &Reference::Fixed(dofs), 1).unwrap_err();
+        assert_eq!(
+            err,
+            FlexError::FrameUndefined(vec!["`translation along y − rotation about z`".to_string()])
+        );
     }
 
     #[test]
