@@ -310,7 +310,7 @@ fn pose(p: &Particle, st: &State, u: &DVector<f64>, t: f64) -> (Vector3<f64>, Ma
     )
 }
 
-/// Sixth-order central differences: first and second derivative at 0.
+/// Sixth-order central difference: the first derivative at 0.
 fn d1<F: Fn(f64) -> V, V: std::ops::Mul<f64, Output = V> + std::ops::Add<Output = V>>(
     f: F,
     h: f64,
@@ -329,6 +329,8 @@ fn d1<F: Fn(f64) -> V, V: std::ops::Mul<f64, Output = V> + std::ops::Add<Output 
     }
     acc
 }
+
+/// Sixth-order central difference: the second derivative at 0.
 fn d2<F: Fn(f64) -> V, V: std::ops::Mul<f64, Output = V> + std::ops::Add<Output = V>>(
     f: F,
     h: f64,
