@@ -9,6 +9,10 @@
 //! cut joints) → [`mech`] (kinematics and dynamics as [`sym`] expressions)
 //! → [`emit`] (Rust source); [`generate`] runs it all.
 //!
+//! [`flex`] holds the numeric foundation of flexible bodies (FE beam, modes,
+//! inertia shape integrals, the floating-frame mass matrix), not yet part of
+//! the pipeline.
+//!
 //! Each stage imports only the ones after it and the leaf modules below
 //! them all: [`diag`] (spans, diagnostics, reports) and [`expr`] (the
 //! arithmetic of model files). So [`System`] and [`mech`] never import
@@ -19,6 +23,7 @@ pub mod builder;
 pub mod diag;
 pub mod emit;
 pub mod expr;
+pub mod flex;
 pub mod functions;
 pub mod generate;
 pub mod graph;
