@@ -498,11 +498,22 @@ pub fn accelerations(
 const FAST_PIVOT_RATIO: f64 = 1e-4;
 
 /// Damping of the accelerations' solve near a rank drop of `J` (relative
-/// to `σ₁` of `J M^{-1/2}`, see [`weighted_min_norm`]): the off-manifold
-/// sensitivity of the accelerations, `1/σ` at a change point, is capped at
-/// `1/μ`, and what is damped is the acceleration normal to the motion,
-/// which the projections restore.
-const ACC_DAMPING: f64 = 1e-3;
+/// to `σ₁` of `J M^{-1/2}`, see [`weighted_min_norm`]).
+///
+/// It trades two errors (issue 16, measured on the N-four-bar, N = 1 and
+/// 2, over 10 s; tests/singular_loops.rs). Off the constraint manifold
+/// the component of `u̇` along the vanishing singular direction is
+/// `(uₖᵀr)/σₖ` with `uₖᵀr` no longer vanishing with `σₖ`: the Runge–Kutta
+/// stages, which are off the manifold by about the local error, see a
+/// right-hand side amplified by `1/σₖ`, which the damping caps at `1/(2μ)`;
+/// below `μ ≈ 1e-6 σ₁` that noise dominates (DOP853 leaves the branch or
+/// shrinks its step to nothing at `1e-7`). On the manifold the damping
+/// biases that component by `(μ/σₖ)²` over the window `σₖ ≲ μ`, a
+/// motion error that does not depend on the tolerance: at `1e-3` (the
+/// earlier value) it left the error of the crank at a few 1e-8 rad
+/// whatever the tolerance. Between, at `3e-5`, the error falls with the
+/// tolerance (about 5e-9 rad at 1e-10, 5e-11 at 1e-12 with DOP853).
+const ACC_DAMPING: f64 = 3e-5;
 
 /// Pivot ratio of the dependent block below which [`Method::Partitioning`]
 /// projects mass-orthogonally instead.
@@ -585,10 +596,23 @@ pub fn al_solve(
     penalty: f64,
     iterations: usize,
 ) -> Option<(DVector<f64>, DVector<f64>)> {
+    al_iterate(m, f, j, r, penalty, iterations).map(|(x, lambda, _)| (x, lambda))
+}
+
+/// [`al_solve`], and whether `J x = r` was reached to round-off within
+/// `iterations`.
+fn al_iterate(
+    m: &DMatrix<f64>,
+    f: &DVector<f64>,
+    j: &DMatrix<f64>,
+    r: &DVector<f64>,
+    penalty: f64,
+    iterations: usize,
+) -> Option<(DVector<f64>, DVector<f64>, bool)> {
     let (nc, nu) = j.shape();
     let mut lambda = DVector::zeros(nc);
     if nc == 0 {
-        return Some((m.clone().cholesky()?.solve(f), lambda));
+        return Some((m.clone().cholesky()?.solve(f), lambda, true));
     }
     let jtj = j.transpose() * j;
     let mmax = m.diagonal().iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -608,10 +632,10 @@ pub fn al_solve(
         lambda += &res * alpha;
         let xs = max_abs(x.iter());
         if max_abs(res.iter()) <= 1e-15 * (scale + jmax.sqrt() * xs) {
-            break;
+            return Some((x, lambda, true));
         }
     }
-    Some((x, lambda))
+    Some((x, lambda, false))
 }
 
 /// A consistent state near a guess.
@@ -778,6 +802,90 @@ fn solve_partition(
     weighted_min_norm(&l, &sub, &rhs, PROJ_DAMPING).map(|(x, _, _)| x)
 }
 
+/// Most Newton iterations of a projection onto `Φ(q, t) = 0`.
+const NEWTON_ITERATIONS: usize = 40;
+
+/// Newton onto the holonomic equations `Φ(q, t) = 0` from `q`: each step
+/// `Δu = step(q, J_h, −Φ)`, mapped to `Δq` by `q̇ = N(q) Δu`, for as long as
+/// `max |Φ|` falls — to round-off — and then the best iterate.
+///
+/// A fixed stop such as `|Φ| < 1e-13` is not enough near a rank drop of
+/// `J` (issue 16): at the four-bar's change point the two assembly branches
+/// cross, `Φ` is quadratic along the direction that leads from one to the
+/// other, `Φ ≈ ½ κ δ²`, and Newton converges only linearly there (`δ`
+/// halves per step). Stopping at `|Φ| < 1e-13` left `δ ≈ 3e-7`, and the
+/// mass-orthogonal projections after the change point turned that into an
+/// error of the motion along the branch of up to 6e-7 rad that did not fall
+/// with the tolerance. Iterating while `|Φ|` falls takes `δ` to the
+/// round-off of `Φ` (`√ε` at the crossing itself, far less a step away).
+fn newton_onto_positions<D: Dynamics + ?Sized>(
+    d: &D,
+    t: f64,
+    q: &mut [f64],
+    mut step: impl FnMut(&[f64], &DMatrix<f64>, &DVector<f64>) -> Option<DVector<f64>>,
+) {
+    let (nu, nh) = (d.nu(), d.n_holonomic());
+    let mut c = ConstraintValues::zeros(d.nc(), nu);
+    let zero = vec![0.0; nu];
+    let mut dq = vec![0.0; q.len()];
+    let mut best = q.to_vec();
+    let mut best_residual = f64::INFINITY;
+    for k in 0..=NEWTON_ITERATIONS {
+        d.constraints(t, q, &zero, &mut c);
+        let residual = max_abs(c.phi.iter().take(nh));
+        if !(residual < best_residual) {
+            // No progress (round-off reached) or not finite: the best.
+            q.copy_from_slice(&best);
+            return;
+        }
+        best.copy_from_slice(q);
+        best_residual = residual;
+        if residual == 0.0 || k == NEWTON_ITERATIONS {
+            return;
+        }
+        let jh = c.jacobian.rows(0, nh).into_owned();
+        let minus_phi = -c.phi.rows(0, nh).into_owned();
+        let Some(du) = step(q, &jh, &minus_phi) else {
+            return;
+        };
+        d.qdot(q, du.as_slice(), &mut dq);
+        q.iter_mut().zip(&dq).for_each(|(q, d)| *q += d);
+        d.normalize(q);
+    }
+}
+
+/// [`al_solve`] where its iteration converges; where it does not within
+/// `iterations` (near a rank drop of `J`, the only place: the error along
+/// an eigenvector of `J M⁻¹ Jᵀ` with eigenvalue `e` contracts by
+/// `1/(1 + αe)` per iteration, `e → 0` there), the damped mass-weighted
+/// minimum-norm solve ([`weighted_min_norm`], `damping`) instead.
+///
+/// The truncated iteration is itself a regularisation of the vanishing
+/// direction, with the filter `1 − (1 + ασ²)^{−k}` in place of Tikhonov's
+/// `σ²/(σ² + μ²)`; its window is wide (`σ² ≲ 35/(kα)`, about 4e-3 σ₁ with
+/// the defaults) and its edge steep, and it left the four-bar's crank with
+/// an error of about 1e-8 rad that did not fall with the tolerance
+/// (issue 16; no choice of penalty and iteration count from 20 to 1000
+/// removed it). `None` if `M` (or `M + αJᵀJ`) is not positive definite.
+fn al_or_weighted(
+    m: &DMatrix<f64>,
+    f: &DVector<f64>,
+    j: &DMatrix<f64>,
+    r: &DVector<f64>,
+    (penalty, iterations): (f64, usize),
+    damping: f64,
+) -> Option<(DVector<f64>, DVector<f64>)> {
+    let (x, lambda, converged) = al_iterate(m, f, j, r, penalty, iterations)?;
+    if converged {
+        return Some((x, lambda));
+    }
+    let chol = m.clone().cholesky()?;
+    let free = chol.solve(f);
+    let rhs = r - j * &free;
+    let (x, lambda, _) = weighted_min_norm(&chol.l(), j, &rhs, damping)?;
+    Some((free + x, lambda))
+}
+
 /// Buffers of the per-right-hand-side solve, allocated once per run.
 struct Workspace {
     m: DMatrix<f64>,
@@ -826,13 +934,13 @@ impl Workspace {
             iterations,
         } = method
         {
-            let Some((x, lambda)) = al_solve(
+            let Some((x, lambda)) = al_or_weighted(
                 &self.m,
                 &self.b,
                 &self.c.jacobian,
                 &self.c.gamma,
-                penalty,
-                iterations,
+                (penalty, iterations),
+                ACC_DAMPING,
             ) else {
                 return false;
             };
@@ -1012,33 +1120,18 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
     /// through rank drops of `J`).
     fn project_mass_orthogonal(&self, t: f64, q: &mut [f64], u: &mut [f64]) {
         let d = self.d;
-        let (nu, nh) = (d.nu(), d.n_holonomic());
+        let nu = d.nu();
         let mut c = ConstraintValues::zeros(d.nc(), nu);
         let mut m = DMatrix::zeros(nu, nu);
-        let zero = vec![0.0; nu];
-        let mut dq = vec![0.0; q.len()];
         let factor = |q: &[f64], m: &mut DMatrix<f64>| {
             d.mass_matrix(t, q, m);
             m.clone().cholesky().map(|c| c.l())
         };
-        for _ in 0..10 {
-            d.constraints(t, q, &zero, &mut c);
-            if max_abs(c.phi.iter().take(nh)) < 1e-13 {
-                break;
-            }
-            let Some(l) = factor(q, &mut m) else {
-                return;
-            };
-            let jh = c.jacobian.rows(0, nh).into_owned();
-            let Some((du, _, _)) =
-                weighted_min_norm(&l, &jh, &-c.phi.rows(0, nh).into_owned(), PROJ_DAMPING)
-            else {
-                break;
-            };
-            d.qdot(q, du.as_slice(), &mut dq);
-            q.iter_mut().zip(&dq).for_each(|(q, d)| *q += d);
-            d.normalize(q);
-        }
+        newton_onto_positions(d, t, q, |q, jh, r| {
+            let mut m = DMatrix::zeros(nu, nu);
+            let l = factor(q, &mut m)?;
+            weighted_min_norm(&l, jh, r, PROJ_DAMPING).map(|(x, _, _)| x)
+        });
         d.constraints(t, q, u, &mut c);
         let Some(l) = factor(q, &mut m) else {
             return;
@@ -1061,32 +1154,26 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
         iterations: usize,
     ) {
         let d = self.d;
-        let (nu, nh) = (d.nu(), d.n_holonomic());
+        let nu = d.nu();
         let mut c = ConstraintValues::zeros(d.nc(), nu);
         let mut m = DMatrix::zeros(nu, nu);
-        let zero = vec![0.0; nu];
         let f = DVector::zeros(nu);
-        let mut dq = vec![0.0; q.len()];
-        for _ in 0..10 {
-            d.constraints(t, q, &zero, &mut c);
-            if max_abs(c.phi.iter().take(nh)) < 1e-13 {
-                break;
-            }
+        let settings = (penalty, iterations);
+        newton_onto_positions(d, t, q, |q, jh, r| {
+            let mut m = DMatrix::zeros(nu, nu);
             d.mass_matrix(t, q, &mut m);
-            let jh = c.jacobian.rows(0, nh).into_owned();
-            let r = -c.phi.rows(0, nh).into_owned();
-            let Some((du, _)) = al_solve(&m, &f, &jh, &r, penalty, iterations) else {
-                return;
-            };
-            d.qdot(q, du.as_slice(), &mut dq);
-            q.iter_mut().zip(&dq).for_each(|(q, d)| *q += d);
-            d.normalize(q);
-        }
+            al_or_weighted(&m, &f, jh, r, settings, PROJ_DAMPING).map(|(x, _)| x)
+        });
         d.constraints(t, q, u, &mut c);
         d.mass_matrix(t, q, &mut m);
-        if let Some((du, _)) =
-            al_solve(&m, &f, &c.jacobian, &-c.phidot.clone(), penalty, iterations)
-        {
+        if let Some((du, _)) = al_or_weighted(
+            &m,
+            &f,
+            &c.jacobian,
+            &-c.phidot.clone(),
+            settings,
+            PROJ_DAMPING,
+        ) {
             u.iter_mut().zip(du.iter()).for_each(|(u, d)| *u += d);
         }
     }
@@ -1098,7 +1185,6 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
         let d = self.d;
         let (nu, nh) = (d.nu(), d.n_holonomic());
         let mut c = ConstraintValues::zeros(d.nc(), nu);
-        let zero = vec![0.0; nu];
         d.constraints(t, q, u, &mut c);
         let jh = c.jacobian.rows(0, nh).into_owned();
         let mut parts = self.partitions.borrow_mut();
@@ -1130,27 +1216,16 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
             return;
         }
         let mut m = DMatrix::zeros(nu, nu);
-        let mut dq = vec![0.0; q.len()];
-        let mut du = vec![0.0; nu];
-        for _ in 0..10 {
-            d.constraints(t, q, &zero, &mut c);
-            if max_abs(c.phi.iter().take(nh)) < 1e-13 {
-                break;
-            }
-            let jh = c.jacobian.rows(0, nh).into_owned();
-            let phi = c.phi.rows(0, nh).into_owned();
+        newton_onto_positions(d, t, q, |q, jh, r| {
+            let mut m = DMatrix::zeros(nu, nu);
             d.mass_matrix(t, q, &mut m);
-            let Some(x) = solve_partition(&jh, ph, &-phi, &m) else {
-                break;
-            };
-            du.iter_mut().for_each(|v| *v = 0.0);
+            let x = solve_partition(jh, ph, r, &m)?;
+            let mut du = DVector::zeros(nu);
             for (k, &col) in ph.cols.iter().enumerate() {
                 du[col] = x[k];
             }
-            d.qdot(q, &du, &mut dq);
-            q.iter_mut().zip(&dq).for_each(|(q, d)| *q += d);
-            d.normalize(q);
-        }
+            Some(du)
+        });
         d.constraints(t, q, u, &mut c);
         d.mass_matrix(t, q, &mut m);
         if let Some(x) = solve_partition(&c.jacobian, pa, &-c.phidot.clone(), &m) {
