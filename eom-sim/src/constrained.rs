@@ -833,7 +833,7 @@ fn newton_onto_positions<D: Dynamics + ?Sized>(
     for k in 0..=NEWTON_ITERATIONS {
         d.constraints(t, q, &zero, &mut c);
         let residual = max_abs(c.phi.iter().take(nh));
-        if !(residual < best_residual) {
+        if residual.is_nan() || residual >= best_residual {
             // No progress (round-off reached) or not finite: the best.
             q.copy_from_slice(&best);
             return;
