@@ -9,6 +9,7 @@
 //! symbols. Quantities that use only fixed parameters are taken at their
 //! value, so the symbolic graph never sees their arithmetic.
 
+use super::flexible::FlexModel;
 use super::joint::JointModel;
 use super::spatial::{Pose, RigidInertia};
 use crate::diag::{Diagnostic, Span};
@@ -240,10 +241,13 @@ pub struct TreeBody<S> {
     pub frame_parent: Pose<S>,
     /// Joint frame on the child, in child body coordinates.
     pub frame_child: Pose<S>,
-    /// Inertia about the body origin in body coordinates.
+    /// Inertia about the body origin in body coordinates (of a flexible
+    /// body: the rigid part its frame carries).
     pub inertia: RigidInertia<S>,
     /// How its coordinates are known.
     pub coords: Coords,
+    /// The deformable part of a flexible body.
+    pub flex: Option<FlexModel<S>>,
 }
 
 /// The tree over scalar `S`.
@@ -435,6 +439,11 @@ impl<S: Scalar> TreeModel<S> {
                 frame_child: low.frame(&joint.child_frame)?,
                 inertia: RigidInertia::from_com(mass, com, ic),
                 coords,
+                flex: body
+                    .flexible
+                    .as_deref()
+                    .map(|f| FlexModel::new(f, &low))
+                    .transpose()?,
             });
         }
         let gravity = match &sys.gravity {
