@@ -626,3 +626,47 @@ fn flex_generated_programs_equal_the_f64_algorithms() {
         );
     }
 }
+
+/// The modes are computed once at the defaults: a beam whose data use a
+/// tunable parameter is refused (at the field), not silently frozen; a
+/// tunable damping ratio is fine.
+#[test]
+fn flex_tunable_beam_data_are_refused_at_the_field() {
+    let text = model(HUB_BEAM).replace(
+        "(name: \"L\", value: 2)",
+        "(name: \"L\", value: 2, tunable: true)",
+    );
+    assert!(text.contains("tunable: true"), "test setup");
+    let src = Source::new("hub_beam.ron", text);
+    let sys = check(&src).unwrap_or_else(|r| panic!("{r}")).system;
+    let err = Numeric::new(&sys).expect_err("a tunable length is refused");
+    let at = src.line_col(err.span().start);
+    // At `length: "L"` on the beam's line.
+    assert_eq!((at.line, at.col), (7, 47), "{err}");
+    assert!(err.to_string().contains("flexible body `beam`"), "{err}");
+
+    let damped = model(HUB_BEAM)
+        .replace(
+            "(name: \"rho_a\", value: 1.5)",
+            "(name: \"rho_a\", value: 1.5), (name: \"zeta\", value: 0.02, tunable: true)",
+        )
+        .replace("modes: 4)", "modes: 4, damping: \"zeta\")");
+    let sys = check(&Source::new("hub_beam.ron", damped))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    // −D q̇ = −2 ζ ω₁ q̇₁ on the first elastic speed.
+    let num = Numeric::new(&sys).unwrap();
+    let w1 = sys.bodies[2].flexible.as_deref().unwrap().modes.frequencies[0];
+    let zero = [0.0; 5];
+    let u = [0.0, 1.0, 0.0, 0.0, 0.0];
+    let (b0, b1) = (
+        num.terms(&zero, &zero, 0.0, &[]).unwrap().bias[1],
+        num.terms(&zero, &u, 0.0, &[]).unwrap().bias[1],
+    );
+    let want = 2.0 * 0.02 * w1;
+    assert!(
+        (b1 - b0 - want).abs() < 1e-12 * want,
+        "damping force {}, want {want}",
+        b1 - b0
+    );
+}

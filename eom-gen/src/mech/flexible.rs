@@ -133,8 +133,17 @@ fn axpy<S: Scalar>(out: &mut [S], k: S, x: &[S]) {
 }
 
 impl<S: Scalar> FlexModel<S> {
-    /// The constants of `flex` (its damping ratio may be tunable).
-    pub fn new(flex: &FlexInfo, low: &Lowering<'_, S>) -> Result<Self, MechError> {
+    /// The constants of `flex` on body `body` (its damping ratio may be
+    /// tunable, its beam data may not).
+    pub fn new(flex: &FlexInfo, body: &str, low: &Lowering<'_, S>) -> Result<Self, MechError> {
+        // The modes are computed once, at the defaults: beam data may not
+        // change at run time.
+        if let Some(q) = flex.written.iter().find(|q| low.uses_tunable(&q.expr)) {
+            return Err(MechError::TunableBeam {
+                body: body.to_string(),
+                span: q.span,
+            });
+        }
         let inv = &flex.invariants;
         let k = flex.count();
         let cs = clean_block(inv.s_bar.as_slice());

@@ -97,13 +97,23 @@ pub enum MechError {
         /// The axis component that uses a tunable parameter.
         span: Span,
     },
+    /// A flexible body's beam data depend on a tunable parameter (its
+    /// modes and inertia shape integrals are computed once and inlined).
+    TunableBeam {
+        /// The body.
+        body: String,
+        /// The beam field that uses a tunable parameter.
+        span: Span,
+    },
 }
 
 impl MechError {
     /// Where in the model file.
     pub fn span(&self) -> Span {
         match self {
-            MechError::UnknownName { span, .. } | MechError::TunableAxis { span, .. } => *span,
+            MechError::UnknownName { span, .. }
+            | MechError::TunableAxis { span, .. }
+            | MechError::TunableBeam { span, .. } => *span,
         }
     }
 
@@ -115,6 +125,9 @@ impl MechError {
             }
             MechError::TunableAxis { .. } => {
                 "make the parameters in the axis fixed (`tunable: false`, or `fixed` in a scene)"
+            }
+            MechError::TunableBeam { .. } => {
+                "make the beam's parameters fixed (`tunable: false`, or `fixed` in a scene); only its `damping` may be tunable"
             }
         }
     }
@@ -134,6 +147,10 @@ impl fmt::Display for MechError {
             MechError::TunableAxis { joint, .. } => write!(
                 f,
                 "the axis of joint `{joint}` depends on a tunable parameter; joint axes must be fixed"
+            ),
+            MechError::TunableBeam { body, .. } => write!(
+                f,
+                "the beam of flexible body `{body}` depends on a tunable parameter; its modes are computed once, so its data must be fixed"
             ),
         }
     }
@@ -442,7 +459,7 @@ impl<S: Scalar> TreeModel<S> {
                 flex: body
                     .flexible
                     .as_deref()
-                    .map(|f| FlexModel::new(f, &low))
+                    .map(|f| FlexModel::new(f, &body.name, &low))
                     .transpose()?,
             });
         }
