@@ -9,11 +9,13 @@
 //! that caused a problem).
 //!
 //! Below the model in the pipeline: it uses only the leaf modules
-//! [`crate::diag`] (spans) and [`crate::expr`] (expressions) and the
+//! [`crate::diag`] (spans), [`crate::expr`] (expressions), [`crate::flex`]
+//! (the numeric beam, modes and invariants of flexible bodies) and the
 //! [`crate::graph`].
 
 use crate::diag::Span;
 use crate::expr::Ast;
+use crate::flex::{Beam, Invariants, Modes, Reference};
 use crate::graph::{BodyId, Graph, JointId};
 use nalgebra::{Matrix3, Vector3};
 
@@ -87,6 +89,47 @@ pub struct MarkerInfo {
     pub name: String,
     /// The frame.
     pub frame: FrameInfo,
+    /// On a flexible body, the beam node it is attached to.
+    pub node: Option<usize>,
+}
+
+/// The deformable part of a flexible body (floating frame of reference,
+/// Shabana ch. 5–6): the beam, its reduced modes and their inertia shape
+/// integrals, all computed at the parameters' defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlexInfo {
+    /// The beam's data as written (length, `ρA`, `ρI_p`, `EA`, `EI_y`,
+    /// `EI_z`, `GJ`), in that order.
+    pub written: [Quantity; 7],
+    /// The beam at the defaults.
+    pub beam: Beam,
+    /// Its reference conditions.
+    pub reference: Reference,
+    /// The reduced basis (normal modes).
+    pub modes: Modes,
+    /// The inertia shape integrals of the reduced body.
+    pub invariants: Invariants,
+    /// Modal damping ratio `ζ`: `D_ff = 2 ζ diag(ω_i)` (mass-normalised modes).
+    pub damping: Quantity,
+    /// Geometric stiffening by the centrifugal axial load.
+    pub stiffening: bool,
+    /// Names of the elastic coordinates (`<body>_f1 …`).
+    pub coordinate_names: Vec<String>,
+    /// Names of their rates (`<body>_f1_dot …`).
+    pub speed_names: Vec<String>,
+    /// First index into the system's `q`.
+    pub q_index: usize,
+    /// First index into the system's `u`.
+    pub u_index: usize,
+    /// Where `flexible` is written.
+    pub span: Span,
+}
+
+impl FlexInfo {
+    /// Number of elastic coordinates `k`.
+    pub fn count(&self) -> usize {
+        self.modes.count()
+    }
 }
 
 /// A body; index 0 is ground.
@@ -102,6 +145,9 @@ pub struct BodyInfo {
     pub inertia: Option<[Vec3Q; 3]>,
     /// Markers.
     pub markers: Vec<MarkerInfo>,
+    /// The deformable part of a flexible body; `None` for a rigid one
+    /// (whose `mass`, `com` and `inertia` are then the whole body).
+    pub flexible: Option<Box<FlexInfo>>,
     /// Where the body is defined.
     pub span: Span,
 }
@@ -388,28 +434,52 @@ impl System {
             .filter(|j| j.motion == Motion::Free)
     }
 
+    /// The blocks of `q` and `u` in order: each free tree joint's
+    /// coordinates, and right after the tree joint above a flexible body
+    /// (free or not), that body's elastic coordinates.
+    pub fn coordinate_blocks(&self) -> impl Iterator<Item = Block<'_>> {
+        self.graph.tree_joints().iter().flat_map(move |&j| {
+            let joint = &self.joints[j];
+            let rigid = (joint.motion == Motion::Free).then_some(Block::Joint(joint));
+            let elastic = self.bodies[joint.child]
+                .flexible
+                .as_deref()
+                .filter(|_| joint.motion != Motion::Cut)
+                .map(Block::Elastic);
+            rigid.into_iter().chain(elastic)
+        })
+    }
+
+    /// Flexible bodies of the tree, with their body indices, in coordinate order.
+    pub fn flexible_bodies(&self) -> impl Iterator<Item = (BodyId, &FlexInfo)> {
+        self.graph.tree_joints().iter().filter_map(move |&j| {
+            let child = self.joints[j].child;
+            self.bodies[child].flexible.as_deref().map(|f| (child, f))
+        })
+    }
+
     /// Names of the position coordinates `q`, in order.
     pub fn coordinate_names(&self) -> Vec<&str> {
-        self.free_joints()
-            .flat_map(|j| j.coordinate_names.iter().map(String::as_str))
+        self.coordinate_blocks()
+            .flat_map(|b| b.coordinate_names().iter().map(String::as_str))
             .collect()
     }
 
     /// Names of the speeds `u`, in order.
     pub fn speed_names(&self) -> Vec<&str> {
-        self.free_joints()
-            .flat_map(|j| j.speed_names.iter().map(String::as_str))
+        self.coordinate_blocks()
+            .flat_map(|b| b.speed_names().iter().map(String::as_str))
             .collect()
     }
 
     /// Number of position coordinates.
     pub fn nq(&self) -> usize {
-        self.free_joints().map(|j| j.kind.nq()).sum()
+        self.coordinate_blocks().map(|b| b.nq()).sum()
     }
 
     /// Number of speeds.
     pub fn nu(&self) -> usize {
-        self.free_joints().map(|j| j.kind.nu()).sum()
+        self.coordinate_blocks().map(|b| b.nu()).sum()
     }
 
     /// Index in `q` of the first entry (`w`) of every unit quaternion
@@ -424,17 +494,23 @@ impl System {
             .collect()
     }
 
-    /// Initial `q` at the default parameters.
+    /// Initial `q` at the default parameters (elastic coordinates zero).
     pub fn q0(&self) -> Vec<f64> {
-        self.free_joints()
-            .flat_map(|j| j.q0.iter().map(|q| q.value))
+        self.coordinate_blocks()
+            .flat_map(|b| match b {
+                Block::Joint(j) => j.q0.iter().map(|q| q.value).collect(),
+                Block::Elastic(f) => vec![0.0; f.count()],
+            })
             .collect()
     }
 
-    /// Initial `u` at the default parameters.
+    /// Initial `u` at the default parameters (elastic rates zero).
     pub fn u0(&self) -> Vec<f64> {
-        self.free_joints()
-            .flat_map(|j| j.u0.iter().map(|u| u.value))
+        self.coordinate_blocks()
+            .flat_map(|b| match b {
+                Block::Joint(j) => j.u0.iter().map(|u| u.value).collect(),
+                Block::Elastic(f) => vec![0.0; f.count()],
+            })
             .collect()
     }
 
@@ -455,5 +531,49 @@ impl System {
     /// Index of the joint called `name`.
     pub fn joint_id(&self, name: &str) -> Option<JointId> {
         self.joints.iter().position(|j| j.name == name)
+    }
+}
+
+/// A block of consecutive coordinates: a free tree joint's, or the elastic
+/// coordinates of a flexible body.
+#[derive(Clone, Copy, Debug)]
+pub enum Block<'a> {
+    /// A free tree joint.
+    Joint(&'a JointInfo),
+    /// A flexible body's elastic coordinates.
+    Elastic(&'a FlexInfo),
+}
+
+impl<'a> Block<'a> {
+    /// Names of its position coordinates.
+    pub fn coordinate_names(&self) -> &'a [String] {
+        match self {
+            Block::Joint(j) => &j.coordinate_names,
+            Block::Elastic(f) => &f.coordinate_names,
+        }
+    }
+
+    /// Names of its speeds.
+    pub fn speed_names(&self) -> &'a [String] {
+        match self {
+            Block::Joint(j) => &j.speed_names,
+            Block::Elastic(f) => &f.speed_names,
+        }
+    }
+
+    /// Number of position coordinates.
+    pub fn nq(&self) -> usize {
+        match self {
+            Block::Joint(j) => j.kind.nq(),
+            Block::Elastic(f) => f.count(),
+        }
+    }
+
+    /// Number of speeds.
+    pub fn nu(&self) -> usize {
+        match self {
+            Block::Joint(j) => j.kind.nu(),
+            Block::Elastic(f) => f.count(),
+        }
     }
 }

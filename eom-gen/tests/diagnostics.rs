@@ -67,6 +67,7 @@ macro_rules! pin {
 pin!(syntax_error, "(name: \"l\", value: 0.3)," => "(name: \"l\" value: 0.3),");
 pin!(unknown_field, "com: (0, 0, \"l/2\"), inertia" => "cmo: (0, 0, \"l/2\"), inertia");
 pin!(missing_field, "(name: \"link1\", mass: \"m\", " => "(name: \"link1\", ");
+pin!(missing_field_of_joint, "kind: Revolute(axis: (0, 0, 1)), parent" => "parent");
 pin!(unknown_joint_kind, "Revolute(axis: (0, 1, 0))" => "Revolve(axis: (0, 1, 0))");
 pin!(wrong_type, "value: 1.5" => "value: [1.5]");
 pin!(vector_of_two, "com: (0, 0, \"l/2\"), inertia" => "com: (0, 0), inertia");

@@ -114,7 +114,7 @@ fn misspellings(name: &str) -> Vec<String> {
 
 /// Every struct and struct-like variant of the two formats: each must
 /// appear in the corpus, with each of its fields.
-const STRUCTS: [&str; 24] = [
+const STRUCTS: [&str; 25] = [
     "Model",
     "Parameter",
     "Body",
@@ -134,6 +134,7 @@ const STRUCTS: [&str; 24] = [
     "Actuator",
     "RollingDisk",
     "Holonomic",
+    "Beam",
     "Position",
     "Velocity",
     "JointReaction",

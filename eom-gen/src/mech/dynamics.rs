@@ -21,8 +21,9 @@
 // Index loops over small dense matrices read like the textbook formulas.
 #![allow(clippy::needless_range_loop)]
 
+use super::flexible::FlexState;
 use super::joint::JointModel;
-use super::spatial::{Force, Inertia6, Motion, Pose};
+use super::spatial::{Force, Inertia6, Motion, Pose, RigidInertia};
 use super::tree::{Coords, Env, Lowering, MechError, TreeModel};
 use crate::sym::{Mat3, Scalar, Vec3};
 use crate::system::{ForceElement, System};
@@ -30,6 +31,10 @@ use std::ops::{Add, Sub};
 
 /// Base rotation, axis and summed angle of a run of revolute joints.
 type AngleChain<S> = (Mat3<S>, Vec3<S>, S);
+
+/// A flexible body's elastic equations in the articulated-body algorithm:
+/// `M_ff⁻¹` and `τ_f − b_f`.
+type Elimination<S> = (Vec<Vec<S>>, Vec<S>);
 
 /// A joint's positions, speeds and (if known) accelerations.
 type JointValues<S> = (Vec<S>, Vec<S>, Option<Vec<S>>);
@@ -199,6 +204,11 @@ pub struct Kinematics<S> {
     pub v: Vec<Motion<S>>,
     /// Known joint accelerations (locked and prescribed joints).
     pub known_ud: Vec<Option<Vec<S>>>,
+    /// Inertia of each body about its origin at this state (a flexible
+    /// body's depends on its deformation).
+    pub inertia: Vec<RigidInertia<S>>,
+    /// The deformable part of each flexible body at this state.
+    pub flex: Vec<Option<FlexState<S>>>,
 }
 
 /// Runs the algorithms of one tree.
@@ -257,6 +267,8 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             vj: Vec::with_capacity(n),
             v: Vec::with_capacity(n),
             known_ud: Vec::with_capacity(n),
+            inertia: Vec::with_capacity(n),
+            flex: Vec::with_capacity(n),
         };
         // Per body: (base rotation, axis, summed angle) of a run of revolute
         // joints about one axis ending at it.
@@ -308,6 +320,17 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 world.e = *base * Mat3::from_axis_angle(*axis, *angle);
             }
             chain.push(summed);
+            // A flexible body's inertia and velocity terms at its deformation.
+            let (inertia, flex) = match &body.flex {
+                Some(fm) => {
+                    let m = fm.count();
+                    let fs = fm.state(&st.q[fm.q..fm.q + m], &st.u[fm.u..fm.u + m], v);
+                    (body.inertia.add(fs.inertia), Some(fs))
+                }
+                None => (body.inertia, None),
+            };
+            k.inertia.push(inertia);
+            k.flex.push(flex);
             k.x.push(x);
             k.world.push(world);
             k.s.push(s);
@@ -396,6 +419,15 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 }
             }
         }
+        // Elastic forces −K_ff q_f − D_ff q̇_f of flexible bodies.
+        for fm in self.tree.bodies.iter().filter_map(|b| b.flex.as_ref()) {
+            let m = fm.count();
+            let (qf, strain) = fm.elastic_forces(&st.q[fm.q..fm.q + m], &st.u[fm.u..fm.u + m]);
+            for (j, x) in qf.into_iter().enumerate() {
+                q_out[fm.u + j] = q_out[fm.u + j] + x;
+            }
+            energy = energy + strain;
+        }
         Ok((q_out, energy))
     }
 
@@ -412,6 +444,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         };
         let mut a: Vec<Motion<S>> = Vec::with_capacity(n);
         let mut f: Vec<Force<S>> = Vec::with_capacity(n);
+        let mut tau = vec![S::zero(); self.tree.nu];
         // Forward pass over bodies: accelerations and net forces.
         for (i, body) in self.tree.bodies.iter().enumerate() {
             let ap = body.parent.map_or(base, |p| a[p]);
@@ -423,16 +456,25 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             for (col, &x) in k.s[i].iter().zip(&udj) {
                 ai = ai.add(col.scale(x));
             }
-            let inertia = &body.inertia;
-            let fi = inertia
+            let inertia = &k.inertia[i];
+            let mut fi = inertia
                 .mul_motion(ai)
                 .add(k.v[i].cross_force(inertia.mul_motion(k.v[i])))
                 .sub(fext[i]);
+            // A flexible body: f += b + P q̈_f, τ_f = Pᵀ a + M_ff q̈_f + b_f.
+            if let (Some(fm), Some(fs)) = (&body.flex, &k.flex[i]) {
+                let qdd = &ud[fm.u..fm.u + fm.count()];
+                fi = fi.add(fs.bias);
+                let mq = fm.modal_mass_times(qdd);
+                for (j, p) in fs.coupling.iter().enumerate() {
+                    fi = fi.add(p.scale(qdd[j]));
+                    tau[fm.u + j] = ai.dot(*p) + mq[j] + fs.elastic_bias[j];
+                }
+            }
             a.push(ai);
             f.push(fi);
         }
         // Backward pass over bodies: project on the joints, pass to parents.
-        let mut tau = vec![S::zero(); self.tree.nu];
         for i in (0..n).rev() {
             if let Coords::Free { u, .. } = self.tree.bodies[i].coords {
                 for (kk, col) in k.s[i].iter().enumerate() {
@@ -461,12 +503,44 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         let n = self.tree.bodies.len();
         let nu = self.tree.nu;
         let mut m = vec![vec![S::zero(); nu]; nu];
-        let mut ic: Vec<_> = self.tree.bodies.iter().map(|b| b.inertia).collect();
+        let mut ic: Vec<_> = k.inertia.clone();
         // Backward pass over bodies: composite inertias.
         for i in (0..n).rev() {
             if let Some(p) = self.tree.bodies[i].parent {
                 let moved = ic[i].to_parent(&k.x[i]);
                 ic[p] = ic[p].add(moved);
+            }
+        }
+        // Elastic columns of flexible bodies: M_ff, and the momentum P of
+        // unit q̇_f carried up the tree (bodies below ride the frame, so
+        // their rows are zero).
+        for i in 0..n {
+            let (Some(fm), Some(fs)) = (&self.tree.bodies[i].flex, &k.flex[i]) else {
+                continue;
+            };
+            let uf = fm.u;
+            for (a, row) in fm.modal_mass.iter().enumerate() {
+                for (b, x) in row.iter().enumerate() {
+                    m[uf + a][uf + b] = *x;
+                }
+            }
+            for (a, p) in fs.coupling.iter().enumerate() {
+                let mut force = *p;
+                let mut j = i;
+                loop {
+                    if let Coords::Free { u: uj, .. } = self.tree.bodies[j].coords {
+                        for (b, col2) in k.s[j].iter().enumerate() {
+                            let x = col2.dot(force);
+                            m[uj + b][uf + a] = x;
+                            m[uf + a][uj + b] = x;
+                        }
+                    }
+                    let Some(p) = self.tree.bodies[j].parent else {
+                        break;
+                    };
+                    force = k.x[j].force_to_parent(force);
+                    j = p;
+                }
             }
         }
         for i in 0..n {
@@ -501,18 +575,20 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
     /// Locked and prescribed joints move with their known accelerations.
     pub fn aba(&self, k: &Kinematics<S>, tau: &[S], fext: &[Force<S>]) -> Vec<S> {
         let n = self.tree.bodies.len();
-        let mut ia: Vec<Inertia6<S>> = self
-            .tree
-            .bodies
-            .iter()
-            .map(|b| Inertia6::from_rigid(&b.inertia))
-            .collect();
+        let mut ia: Vec<Inertia6<S>> = k.inertia.iter().map(Inertia6::from_rigid).collect();
         let mut pa: Vec<Force<S>> = (0..n)
             .map(|i| {
-                let inertia = &self.tree.bodies[i].inertia;
-                k.v[i].cross_force(inertia.mul_motion(k.v[i])).sub(fext[i])
+                let inertia = &k.inertia[i];
+                let p = k.v[i].cross_force(inertia.mul_motion(k.v[i])).sub(fext[i]);
+                match &k.flex[i] {
+                    Some(fs) => p.add(fs.bias),
+                    None => p,
+                }
             })
             .collect();
+        // Flexible bodies: M_ff⁻¹ and the elastic equations' known part
+        // τ_f − b_f, kept for the last pass.
+        let mut elastic: Vec<Option<Elimination<S>>> = vec![None; n];
         // U_i, D_i⁻¹ and u_i of the free joints, kept for the last pass.
         let mut uu: Vec<Vec<Force<S>>> = vec![Vec::new(); n];
         let mut dinv: Vec<Vec<Vec<S>>> = vec![Vec::new(); n];
@@ -524,6 +600,23 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         // Backward pass over bodies: articulated inertias and bias forces.
         for i in (0..n).rev() {
             let s = &k.s[i];
+            // Eliminate a flexible body's elastic coordinates first:
+            // q̈_f = M_ff⁻¹ (τ_f − b_f − Pᵀ a), so IA −= P M_ff⁻¹ Pᵀ and
+            // pA += P M_ff⁻¹ (τ_f − b_f).
+            if let (Some(fm), Some(fs)) = (&self.tree.bodies[i].flex, &k.flex[i]) {
+                let minv = invert_spd(fm.modal_mass.clone());
+                let rhs: Vec<S> = (0..fm.count())
+                    .map(|j| tau[fm.u + j] - fs.elastic_bias[j])
+                    .collect();
+                for (r, pr) in fs.coupling.iter().enumerate() {
+                    for (c, pc) in fs.coupling.iter().enumerate() {
+                        ia[i] = ia[i].sub_outer(pr, pc, minv[r][c]);
+                    }
+                    let w = (0..rhs.len()).fold(S::zero(), |acc, c| acc + minv[r][c] * rhs[c]);
+                    pa[i] = pa[i].add(pr.scale(w));
+                }
+                elastic[i] = Some((minv, rhs));
+            }
             let (ia_a, pa_a) = match (&self.tree.bodies[i].coords, &k.known_ud[i]) {
                 (Coords::Free { u, .. }, _) => {
                     let ucols: Vec<Force<S>> = s.iter().map(|col| ia[i].mul_motion(*col)).collect();
@@ -599,32 +692,43 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 }
                 _ => {}
             }
+            if let (Some(fm), Some(fs), Some((minv, rhs))) =
+                (&self.tree.bodies[i].flex, &k.flex[i], &elastic[i])
+            {
+                let r: Vec<S> = (0..rhs.len())
+                    .map(|j| rhs[j] - ai.dot(fs.coupling[j]))
+                    .collect();
+                for j in 0..r.len() {
+                    ud[fm.u + j] = (0..r.len()).fold(S::zero(), |acc, c| acc + minv[j][c] * r[c]);
+                }
+            }
             a.push(ai);
         }
         ud
     }
 
-    /// Kinetic energy `½ Σ vᵢᵀ Iᵢ vᵢ`.
+    /// Kinetic energy `½ Σ vᵢᵀ Iᵢ vᵢ` (of a flexible body plus
+    /// `vᵀ P q̇_f + ½ q̇_fᵀ M_ff q̇_f`).
     pub fn kinetic_energy(&self, k: &Kinematics<S>) -> S {
         let half = S::from_ratio(1, 2);
-        self.tree
-            .bodies
-            .iter()
-            .zip(&k.v)
-            .fold(S::zero(), |acc, (b, v)| {
-                acc + half * v.dot(b.inertia.mul_motion(*v))
-            })
+        (0..self.tree.bodies.len()).fold(S::zero(), |acc, i| {
+            let v = k.v[i];
+            let rigid = acc + half * v.dot(k.inertia[i].mul_motion(v));
+            match (&self.tree.bodies[i].flex, &k.flex[i]) {
+                (Some(fm), Some(fs)) => rigid + fm.elastic_kinetic(fs, v),
+                _ => rigid,
+            }
+        })
     }
 
     /// Gravitational potential energy `−Σ mᵢ g · cᵢ` (world origin at zero).
     pub fn gravity_potential(&self, k: &Kinematics<S>) -> S {
-        self.tree
-            .bodies
+        k.inertia
             .iter()
             .zip(&k.world)
-            .fold(S::zero(), |acc, (b, w)| {
+            .fold(S::zero(), |acc, (inertia, w)| {
                 // m c in world coordinates: E h + m r.
-                let mc = w.e.mul_vec(b.inertia.h) + w.r.scale(b.inertia.m);
+                let mc = w.e.mul_vec(inertia.h) + w.r.scale(inertia.m);
                 acc - self.tree.gravity.dot(mc)
             })
     }
@@ -632,13 +736,13 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
     /// Spatial momentum about the world origin, in world coordinates:
     /// `(angular, linear)`.
     pub fn momentum(&self, k: &Kinematics<S>) -> Force<S> {
-        self.tree
-            .bodies
-            .iter()
-            .enumerate()
-            .fold(Force::zero(), |acc, (i, b)| {
-                acc.add(k.world[i].force_to_parent(b.inertia.mul_motion(k.v[i])))
-            })
+        (0..self.tree.bodies.len()).fold(Force::zero(), |acc, i| {
+            let mut h = k.inertia[i].mul_motion(k.v[i]);
+            if let (Some(fm), Some(fs)) = (&self.tree.bodies[i].flex, &k.flex[i]) {
+                h = h.add(fm.elastic_momentum(fs));
+            }
+            acc.add(k.world[i].force_to_parent(h))
+        })
     }
 
     /// `q̇ = N(q) u` for the whole system.
@@ -649,6 +753,10 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 let (nq, nu) = (b.kind.nq(), b.kind.nu());
                 let d = b.kind.qdot(&st.q[q..q + nq], &st.u[u..u + nu]);
                 out[q..q + nq].copy_from_slice(&d);
+            }
+            if let Some(fm) = &b.flex {
+                let m = fm.count();
+                out[fm.q..fm.q + m].copy_from_slice(&st.u[fm.u..fm.u + m]);
             }
         }
         out
@@ -668,6 +776,13 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 }
                 if b.kind.nu() > 0 {
                     last[i] = Some(u + b.kind.nu() - 1);
+                }
+            }
+            // Elastic speeds: a branch of their own below the joint's
+            // (bodies carried by the frame do not couple to them).
+            if let Some(fm) = &b.flex {
+                for j in 0..fm.count() {
+                    lambda[fm.u + j] = if j == 0 { last[i] } else { Some(fm.u + j - 1) };
                 }
             }
         }

@@ -9,6 +9,7 @@
 //! symbols. Quantities that use only fixed parameters are taken at their
 //! value, so the symbolic graph never sees their arithmetic.
 
+use super::flexible::FlexModel;
 use super::joint::JointModel;
 use super::spatial::{Pose, RigidInertia};
 use crate::diag::{Diagnostic, Span};
@@ -96,13 +97,23 @@ pub enum MechError {
         /// The axis component that uses a tunable parameter.
         span: Span,
     },
+    /// A flexible body's beam data depend on a tunable parameter (its
+    /// modes and inertia shape integrals are computed once and inlined).
+    TunableBeam {
+        /// The body.
+        body: String,
+        /// The beam field that uses a tunable parameter.
+        span: Span,
+    },
 }
 
 impl MechError {
     /// Where in the model file.
     pub fn span(&self) -> Span {
         match self {
-            MechError::UnknownName { span, .. } | MechError::TunableAxis { span, .. } => *span,
+            MechError::UnknownName { span, .. }
+            | MechError::TunableAxis { span, .. }
+            | MechError::TunableBeam { span, .. } => *span,
         }
     }
 
@@ -114,6 +125,9 @@ impl MechError {
             }
             MechError::TunableAxis { .. } => {
                 "make the parameters in the axis fixed (`tunable: false`, or `fixed` in a scene)"
+            }
+            MechError::TunableBeam { .. } => {
+                "make the beam's parameters fixed (`tunable: false`, or `fixed` in a scene); only its `damping` may be tunable"
             }
         }
     }
@@ -133,6 +147,10 @@ impl fmt::Display for MechError {
             MechError::TunableAxis { joint, .. } => write!(
                 f,
                 "the axis of joint `{joint}` depends on a tunable parameter; joint axes must be fixed"
+            ),
+            MechError::TunableBeam { body, .. } => write!(
+                f,
+                "the beam of flexible body `{body}` depends on a tunable parameter; its modes are computed once, so its data must be fixed"
             ),
         }
     }
@@ -240,10 +258,13 @@ pub struct TreeBody<S> {
     pub frame_parent: Pose<S>,
     /// Joint frame on the child, in child body coordinates.
     pub frame_child: Pose<S>,
-    /// Inertia about the body origin in body coordinates.
+    /// Inertia about the body origin in body coordinates (of a flexible
+    /// body: the rigid part its frame carries).
     pub inertia: RigidInertia<S>,
     /// How its coordinates are known.
     pub coords: Coords,
+    /// The deformable part of a flexible body.
+    pub flex: Option<FlexModel<S>>,
 }
 
 /// The tree over scalar `S`.
@@ -435,6 +456,11 @@ impl<S: Scalar> TreeModel<S> {
                 frame_child: low.frame(&joint.child_frame)?,
                 inertia: RigidInertia::from_com(mass, com, ic),
                 coords,
+                flex: body
+                    .flexible
+                    .as_deref()
+                    .map(|f| FlexModel::new(f, &body.name, &low))
+                    .transpose()?,
             });
         }
         let gravity = match &sys.gravity {

@@ -120,10 +120,11 @@ impl Body {
     pub fn new(name: impl Into<String>, mass: impl Into<Num>) -> Self {
         Body {
             name: name.into(),
-            mass: mass.into(),
+            mass: Some(mass.into()),
             com: V3::default(),
             inertia: None,
             markers: Vec::new(),
+            flexible: None,
         }
     }
 
@@ -150,7 +151,15 @@ impl Body {
             name: name.into(),
             position: position.into(),
             orientation: Orientation::Identity,
+            node: None,
         });
+        self
+    }
+
+    /// Make the body flexible; its `mass`, `com` and `inertia` are then a
+    /// rigid part carried by its frame.
+    pub fn flexible(mut self, flexible: Flexible) -> Self {
+        self.flexible = Some(flexible);
         self
     }
 }

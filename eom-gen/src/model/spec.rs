@@ -170,14 +170,16 @@ pub struct Parameter {
     pub doc: Option<String>,
 }
 
-/// A rigid body.
+/// A body: rigid, or flexible with a rigid part carried by its frame.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Body {
     /// Unique name (`ground` is reserved).
     pub name: String,
-    /// Mass, kg (> 0).
-    pub mass: Num,
+    /// Mass, kg (> 0); required for a rigid body, for a flexible one the
+    /// mass of a rigid part fixed to its frame (default none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mass: Option<Num>,
     /// Centre of mass in body axes, m.
     #[serde(default, skip_serializing_if = "V3::is_zero")]
     pub com: V3,
@@ -188,6 +190,59 @@ pub struct Body {
     /// Named points and frames on the body.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub markers: Vec<Marker>,
+    /// The body deforms: a floating frame of reference with elastic
+    /// coordinates (issue #17); absent = rigid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flexible: Option<Flexible>,
+}
+
+/// How a flexible body deforms (floating frame of reference, Shabana ch. 5–6).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Flexible {
+    /// A straight Euler–Bernoulli beam along the body `x` axis from the
+    /// origin to `x = length`, discretised by `elements` finite elements and
+    /// reduced to its `modes` lowest normal modes under `reference`.
+    Beam {
+        /// Length `L`, m.
+        length: Num,
+        /// Mass per length `ρA`, kg/m.
+        rho_a: Num,
+        /// Polar mass moment per length `ρI_p`, kg m (torsion inertia).
+        rho_ip: Num,
+        /// Axial stiffness `EA`, N.
+        ea: Num,
+        /// Bending stiffness about `y` (bending in the `x–z` plane), N m².
+        ei_y: Num,
+        /// Bending stiffness about `z` (bending in the `x–y` plane), N m².
+        ei_z: Num,
+        /// Torsional stiffness `GJ`, N m².
+        gj: Num,
+        /// Number of finite elements (nodes `0..=elements`).
+        elements: usize,
+        /// What fixes the body frame in the deforming beam.
+        reference: BeamReference,
+        /// Number of elastic coordinates `k` (lowest modes kept).
+        modes: usize,
+        /// Geometric stiffening by the centrifugal axial load.
+        #[serde(default, skip_serializing_if = "is_false")]
+        stiffening: bool,
+        /// Modal damping ratio `ζ` of every mode (dimensionless).
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        damping: Num,
+    },
+}
+
+/// Reference conditions of a built-in beam (Shabana 6.2).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BeamReference {
+    /// The tangent frame: node 0 neither moves nor rotates (clamped–free modes).
+    Clamped,
+    /// The chord frame: both ends pinned, node 0 fixed axially and in torsion.
+    PinnedPinned,
+    /// The mean axis: the deformation carries no linear or angular momentum
+    /// (free–free modes).
+    MeanAxis,
 }
 
 /// An inertia tensor about the centre of mass, in body axes, kg m².
@@ -213,6 +268,11 @@ pub struct Marker {
     /// Orientation of the marker frame relative to the body.
     #[serde(default, skip_serializing_if = "Orientation::is_identity")]
     pub orientation: Orientation,
+    /// On a flexible body: the beam node the marker is attached to (it will
+    /// move with that node's deformation); `position` is then relative to
+    /// the node's undeformed place.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub node: Option<usize>,
 }
 
 /// A rotation: how a frame's axes sit in its reference frame's axes.

@@ -859,10 +859,11 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         let (com, inertia) = composite(ps, mass);
         spec_bodies.push(Body {
             name: links[l].name.clone(),
-            mass: mass.into(),
+            mass: Some(mass.into()),
             com: v3(&com),
             inertia: inertia_spec(&inertia),
             markers: Vec::new(),
+            flexible: None,
         });
     }
 
@@ -1009,7 +1010,8 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         return Err(fail(cx.diags));
     }
 
-    let lenient = !cx.warnings.is_empty() || spec_bodies.iter().any(|b| b.mass == Num::Value(0.0));
+    let lenient =
+        !cx.warnings.is_empty() || spec_bodies.iter().any(|b| b.mass == Some(Num::Value(0.0)));
     let spec = Spec {
         name: robot.clone(),
         gravity: Some(V3(GRAVITY[0].into(), GRAVITY[1].into(), GRAVITY[2].into())),
@@ -1320,7 +1322,7 @@ fn check_mass_matrix(cx: &mut Ctx, src: &Source, spec: &Spec, links: &[Link], jo
         .bodies
         .iter()
         .find(|b| child.is_some_and(|c| c.name == b.name))
-        .map(|b| b.mass == Num::Value(0.0));
+        .map(|b| b.mass == Some(Num::Value(0.0)));
     let (at, message) = match (child, body_mass) {
         (Some(c), Some(true)) => (
             c.span,

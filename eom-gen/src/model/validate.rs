@@ -426,11 +426,23 @@ impl Ctx<'_> {
             .gravity
             .as_ref()
             .and_then(|g| self.vec3(g, &[f("gravity")], Scope::Params));
-        let bodies = self.bodies(spec);
+        let mut bodies = self.bodies(spec);
         let (mut joints, joints_ok) = self.joints(spec, &bodies);
         let graph = self.graph(spec, &bodies);
         if let (Some(graph), true) = (&graph, joints_ok) {
-            self.assign_coordinates(spec, graph, &mut joints);
+            self.assign_coordinates(spec, graph, &mut joints, &mut bodies);
+            for (k, j) in joints.iter().enumerate() {
+                if bodies[j.parent].flexible.is_some() {
+                    self.warning(
+                        &[f("joints"), i(k), f("parent")],
+                        format!(
+                            "joint `{}` is attached to the reference frame of flexible body `{}`: it does not move with the deformation",
+                            j.name, bodies[j.parent].name
+                        ),
+                        "attachments to the nodes of a flexible body are not supported yet (#17); this is exact only where the reference conditions hold the beam (node 0 when clamped)",
+                    );
+                }
+            }
         }
         // Forces, constraints and outputs are checked even when a joint or
         // the graph is wrong, against the joints that are right (without
@@ -541,6 +553,7 @@ impl Ctx<'_> {
             com: None,
             inertia: None,
             markers: Vec::new(),
+            flexible: None,
             span: Span::default(),
         }];
         let mut seen: HashMap<&str, usize> = HashMap::new();
@@ -569,9 +582,24 @@ impl Ctx<'_> {
                     ),
                 );
             }
-            let mass = self.quantity(&b.mass, &join(&path, &[f("mass")]), Scope::Params);
+            let flexible = b
+                .flexible
+                .as_ref()
+                .and_then(|fl| self.flexible(fl, &b.name, &path));
+            let mass = match &b.mass {
+                Some(m) => self.quantity(m, &join(&path, &[f("mass")]), Scope::Params),
+                None if b.flexible.is_none() => {
+                    self.error(
+                        &path,
+                        format!("body `{}` has no `mass`", b.name),
+                        "give a rigid body its mass in kg (`mass: 1.0`); only a flexible body may leave it out",
+                    );
+                    None
+                }
+                None => None,
+            };
             if let Some(m) = &mass
-                && (m.value < 0.0 || (m.value == 0.0 && !self.lenient))
+                && (m.value < 0.0 || (m.value == 0.0 && !self.lenient && b.flexible.is_none()))
             {
                 self.error(
                     &join(&path, &[f("mass")]),
@@ -602,10 +630,40 @@ impl Ctx<'_> {
                     position: marker.position.clone(),
                     orientation: marker.orientation.clone(),
                 };
+                if let Some(node) = marker.node {
+                    let npath = join(&mpath, &[f("node")]);
+                    match &b.flexible {
+                        None => self.error(
+                            &npath,
+                            format!(
+                                "marker `{}` names node {node}, but body `{}` is rigid",
+                                marker.name, b.name
+                            ),
+                            "only markers on a flexible body attach to nodes; leave `node` out",
+                        ),
+                        Some(spec::Flexible::Beam { elements, .. }) if node > *elements => self
+                            .error(
+                                &npath,
+                                format!(
+                                    "marker `{}`: {}",
+                                    marker.name,
+                                    crate::flex::FlexError::UnknownNode {
+                                        node,
+                                        nodes: elements + 1
+                                    }
+                                ),
+                                format!(
+                                    "node i sits at x = i·length/{elements}; use a node from 0 to {elements}"
+                                ),
+                            ),
+                        Some(_) => {}
+                    }
+                }
                 match self.frame(&frame, &mpath) {
                     Some(frame) => markers.push(MarkerInfo {
                         name: marker.name.clone(),
                         frame,
+                        node: marker.node,
                     }),
                     None => {
                         self.failed_markers
@@ -619,10 +677,159 @@ impl Ctx<'_> {
                 com,
                 inertia,
                 markers,
+                flexible,
                 span: self.span(&path),
             });
         }
         bodies
+    }
+
+    /// A flexible body's beam: its numbers checked, its modes and inertia
+    /// shape integrals computed at the defaults, its elastic coordinates
+    /// named (`<body>_f1 …`, rates `<body>_f1_dot …`).
+    fn flexible(
+        &mut self,
+        flex: &spec::Flexible,
+        body: &str,
+        path: &[Seg<'static>],
+    ) -> Option<Box<FlexInfo>> {
+        let spec::Flexible::Beam {
+            length,
+            rho_a,
+            rho_ip,
+            ea,
+            ei_y,
+            ei_z,
+            gj,
+            elements,
+            reference,
+            modes,
+            stiffening,
+            damping,
+        } = flex;
+        let fpath = join(path, &[f("flexible")]);
+        let fields: [(&'static str, &Num, &str, &str); 7] = [
+            ("length", length, "m", "length"),
+            ("rho_a", rho_a, "kg/m", "mass per length"),
+            ("rho_ip", rho_ip, "kg m", "polar mass moment per length"),
+            ("ea", ea, "N", "axial stiffness"),
+            ("ei_y", ei_y, "N m²", "bending stiffness"),
+            ("ei_z", ei_z, "N m²", "bending stiffness"),
+            ("gj", gj, "N m²", "torsional stiffness"),
+        ];
+        let mut written = Vec::new();
+        for (name, num, unit, what) in fields {
+            let at = join(&fpath, &[f(name)]);
+            let q = self.quantity(num, &at, Scope::Params);
+            if let Some(q) = &q
+                && q.value <= 0.0
+            {
+                self.error(
+                    &at,
+                    format!(
+                        "{what} `{name}` of flexible body `{body}` is {} {unit}",
+                        q.value
+                    ),
+                    format!("a beam needs a positive {what} ({unit})"),
+                );
+                continue;
+            }
+            written.extend(q);
+        }
+        if *elements == 0 {
+            self.error(
+                &join(&fpath, &[f("elements")]),
+                format!("flexible body `{body}` has no elements"),
+                "a beam needs at least one finite element; a few per mode kept is typical",
+            );
+        }
+        if *modes == 0 {
+            self.error(
+                &join(&fpath, &[f("modes")]),
+                format!("flexible body `{body}` keeps no modes"),
+                "keep at least one mode, or leave out `flexible` to make the body rigid",
+            );
+        }
+        let damping = self.nonnegative(
+            damping,
+            &join(&fpath, &[f("damping")]),
+            "damping ratio",
+            body,
+        );
+        let (Ok(written), Some(damping)) = (<[Quantity; 7]>::try_from(written), damping) else {
+            return None;
+        };
+        if *elements == 0 || *modes == 0 {
+            return None;
+        }
+        let beam = crate::flex::Beam {
+            length: written[0].value,
+            rho_a: written[1].value,
+            rho_ip: written[2].value,
+            ea: written[3].value,
+            ei_y: written[4].value,
+            ei_z: written[5].value,
+            gj: written[6].value,
+            elements: *elements,
+        };
+        let reference = match reference {
+            spec::BeamReference::Clamped => crate::flex::Reference::Clamped,
+            spec::BeamReference::PinnedPinned => crate::flex::Reference::PinnedPinned,
+            spec::BeamReference::MeanAxis => crate::flex::Reference::MeanAxis,
+        };
+        let reduced = match crate::flex::normal_modes(&beam, &reference, *modes) {
+            Ok(m) => m,
+            Err(e) => {
+                use crate::flex::FlexError;
+                let (field, help) = match &e {
+                    FlexError::TooManyModes { .. } => (
+                        "modes",
+                        "each element adds six nodal degrees of freedom".to_string(),
+                    ),
+                    FlexError::FrameUndefined(_) | FlexError::NeedsNodalReference => (
+                        "reference",
+                        "`Clamped`, `PinnedPinned` and `MeanAxis` each fix the frame".to_string(),
+                    ),
+                    _ => ("elements", "check the beam's data".to_string()),
+                };
+                self.error(
+                    &join(&fpath, &[f(field)]),
+                    format!("flexible body `{body}`: {e}"),
+                    help,
+                );
+                return None;
+            }
+        };
+        let invariants = crate::flex::Invariants::new(&beam, &reduced);
+        let k = reduced.count();
+        let mut names = |suffix: &str, what: &'static str| -> Option<Vec<String>> {
+            let names: Vec<String> = (1..=k).map(|n| format!("{body}_f{n}{suffix}")).collect();
+            let mut ok = true;
+            for name in &names {
+                if self.check_symbol_name(name, path, what) {
+                    self.state_names.insert(name.clone(), what);
+                } else {
+                    ok = false;
+                }
+            }
+            ok.then_some(names)
+        };
+        let coordinate_names = names("", "elastic coordinate")?;
+        let speed_names = names("_dot", "elastic speed")?;
+        Some(Box::new(FlexInfo {
+            written,
+            beam,
+            reference,
+            modes: reduced,
+            invariants,
+            damping,
+            stiffening: *stiffening,
+            coordinate_names,
+            speed_names,
+            q_index: 0,
+            u_index: 0,
+            span: self.span(&fpath),
+        }))
     }
 
     fn inertia(
@@ -1118,9 +1325,16 @@ impl Ctx<'_> {
         }
     }
 
-    /// Numbers coordinates along the tree; reports cut joints that were
+    /// Numbers coordinates along the tree (a flexible body's elastic
+    /// coordinates right after its joint's); reports cut joints that were
     /// locked, prescribed or given initial values.
-    fn assign_coordinates(&mut self, spec: &Spec, graph: &Graph, joints: &mut [JointInfo]) {
+    fn assign_coordinates(
+        &mut self,
+        spec: &Spec,
+        graph: &Graph,
+        joints: &mut [JointInfo],
+        bodies: &mut [BodyInfo],
+    ) {
         let (mut q, mut u) = (0, 0);
         for &j in graph.tree_joints() {
             let joint = &mut joints[j];
@@ -1129,6 +1343,12 @@ impl Ctx<'_> {
             if joint.motion == Motion::Free {
                 q += joint.kind.nq();
                 u += joint.kind.nu();
+            }
+            if let Some(flex) = bodies[joint.child].flexible.as_deref_mut() {
+                flex.q_index = q;
+                flex.u_index = u;
+                q += flex.count();
+                u += flex.count();
             }
         }
         for &j in graph.cut_joints() {

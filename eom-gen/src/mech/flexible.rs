@@ -1,0 +1,331 @@
+//! Flexible bodies inside the recursive algorithms (floating frame of
+//! reference; Shabana 5.2–5.5), over any [`Scalar`].
+//!
+//! A flexible body's frame moves through its joint like a rigid body; its
+//! elastic coordinates `q_f` (`k` of them, rates `q̇_f`) are speeds of their
+//! own. In the body's coordinates, with the frame's spatial velocity
+//! `v = (ω, v_O)` and acceleration `a` (Featherstone's, so `a` is the
+//! derivative of the body-coordinate components of `v`), the body's
+//! equations are those of [`crate::flex::ffr`] with `Ṙ = A v_O`,
+//! `R̈ = A (v̇_O + ω × v_O)`:
+//!
+//! ```text
+//! f   = I(q_f) a + v ×* I(q_f) v + b(q_f, ω, q̇_f) + P(q_f) q̈_f − f_ext
+//! τ_f = P(q_f)ᵀ a + M_ff q̈_f + b_f(q_f, ω, v_O, q̇_f) + K_ff q_f + D_ff q̇_f
+//! ```
+//!
+//! - `I(q_f)`: a rigid inertia with the deformed body's mass `m`, first
+//!   moment `h = I₁ + S̄ q_f` and inertia tensor `Ī_θθ(q_f)` about the origin;
+//! - `P(q_f)`: `k` spatial forces, the momentum of unit `q̇_f`, moment
+//!   `Ī_θf(q_f)` and force `S̄`;
+//! - `b`: the velocity terms `v ×* I v` does not hold, force
+//!   `2 ω × S̄ q̇_f`, moment `2 (tr C_v 1 − C_vᵀ) ω + ω × e_x (c_p · q̇_f)`
+//!   with `C_v = ∫ρ ū (S q̇_f)ᵀ dV`;
+//! - `b_f = S̄ᵀ (ω × v_O) + ∫ρ Sᵀ ω̃ω̃ ū dV + 2 ∫ρ Sᵀ ω̃ S dV q̇_f`, plus
+//!   with stiffening `(ω_y² + ω_z²) K_G1 q_f`, the geometric stiffness of
+//!   the centrifugal axial load `P(x) = (ω_y² + ω_z²) ρA (L² − x²)/2`
+//!   (Kane, Ryan and Banerjee 1987).
+//!
+//! Gravity enters through the base acceleration as for rigid bodies
+//! (`P ᵀ a` holds `−S̄ᵀ g`, `I a` the deformed first moment). The elastic
+//! force `−K_ff q_f − D_ff q̇_f` is a generalised force
+//! ([`super::dynamics::Evaluator::generalized_forces`]), with potential
+//! `½ q_fᵀ K_ff q_f`. Bodies carried by a flexible body are attached to its
+//! frame (not yet to nodes), so `q̈_f` couples only to the frame's
+//! acceleration: the composite-rigid-body and articulated-body recursions
+//! stay exact with the elastic columns `P` added at their own body.
+
+use super::spatial::{Force, Motion, RigidInertia};
+use super::tree::{Lowering, MechError};
+use crate::flex::invariants::modal_geometric_stiffness;
+use crate::sym::{Mat3, Scalar, Vec3};
+use crate::system::FlexInfo;
+use std::ops::Add;
+
+/// The constants of a flexible body: its inertia shape integrals and modal
+/// matrices, inlined (entries below `1e-13` of their block's largest are
+/// exact zeros, so the symbolic terms drop them).
+#[derive(Clone, Debug)]
+pub struct FlexModel<S> {
+    /// First index of `q_f` in `q`.
+    pub q: usize,
+    /// First index of `q̇_f` in `u`.
+    pub u: usize,
+    /// `m`.
+    pub mass: S,
+    /// `I₁`.
+    pub first_moment: Vec3<S>,
+    /// `Ī` of the undeformed body (with the sections' spin inertia).
+    pub inertia: Mat3<S>,
+    /// Columns of `S̄` (k).
+    pub s_bar: Vec<Vec3<S>>,
+    /// `S̄_ij` (k×k), indexed `[i][j]`.
+    pub s_ij: [[Vec<Vec<S>>; 3]; 3],
+    /// `X_ij` (k), indexed `[i][j]`.
+    pub x_s: [[Vec<S>; 3]; 3],
+    /// `c_p` (k).
+    pub spin: Vec<S>,
+    /// `M_ff`.
+    pub modal_mass: Vec<Vec<S>>,
+    /// `K_ff`.
+    pub stiffness: Vec<Vec<S>>,
+    /// `D_ff = 2 ζ diag(ω_i)`.
+    pub damping: Vec<Vec<S>>,
+    /// `K_G1`, the geometric stiffness per `(ω_y² + ω_z²)`, if stiffening.
+    pub stiffening: Option<Vec<Vec<S>>>,
+}
+
+/// A flexible body at one state.
+#[derive(Clone, Debug)]
+pub struct FlexState<S> {
+    /// `q_f`.
+    pub q: Vec<S>,
+    /// `q̇_f`.
+    pub qd: Vec<S>,
+    /// The deformed body's inertia about the frame origin (without the
+    /// rigid part the body may carry).
+    pub inertia: RigidInertia<S>,
+    /// `P`: the spatial momentum of each unit `q̇_f` (body coordinates).
+    pub coupling: Vec<Force<S>>,
+    /// `b`: velocity terms of the frame's force beyond `v ×* I v`.
+    pub bias: Force<S>,
+    /// `b_f`: velocity (and stiffening) terms of the elastic equations.
+    pub elastic_bias: Vec<S>,
+}
+
+fn clean_block(values: &[f64]) -> impl Fn(f64) -> f64 {
+    let top = values.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
+    move |x| if x.abs() <= 1e-13 * top { 0.0 } else { x }
+}
+
+fn matrix<S: Scalar>(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<S>> {
+    let c = clean_block(m.as_slice());
+    (0..m.nrows())
+        .map(|r| (0..m.ncols()).map(|j| S::from_f64(c(m[(r, j)]))).collect())
+        .collect()
+}
+
+fn vector<S: Scalar>(v: &nalgebra::DVector<f64>, c: &dyn Fn(f64) -> f64) -> Vec<S> {
+    v.iter().map(|&x| S::from_f64(c(x))).collect()
+}
+
+/// `Σ a_i b_i`, skipping exact zeros.
+fn dot<S: Scalar>(a: &[S], b: &[S]) -> S {
+    a.iter()
+        .zip(b)
+        .filter(|(x, y)| !x.is_zero() && !y.is_zero())
+        .fold(S::zero(), |acc, (&x, &y)| acc + x * y)
+}
+
+fn mat_vec<S: Scalar>(m: &[Vec<S>], x: &[S]) -> Vec<S> {
+    m.iter().map(|row| dot(row, x)).collect()
+}
+
+fn axpy<S: Scalar>(out: &mut [S], k: S, x: &[S]) {
+    if k.is_zero() {
+        return;
+    }
+    for (o, &v) in out.iter_mut().zip(x) {
+        if !v.is_zero() {
+            *o = *o + k * v;
+        }
+    }
+}
+
+impl<S: Scalar> FlexModel<S> {
+    /// The constants of `flex` on body `body` (its damping ratio may be
+    /// tunable, its beam data may not).
+    pub fn new(flex: &FlexInfo, body: &str, low: &Lowering<'_, S>) -> Result<Self, MechError> {
+        // The modes are computed once, at the defaults: beam data may not
+        // change at run time.
+        if let Some(q) = flex.written.iter().find(|q| low.uses_tunable(&q.expr)) {
+            return Err(MechError::TunableBeam {
+                body: body.to_string(),
+                span: q.span,
+            });
+        }
+        let inv = &flex.invariants;
+        let k = flex.count();
+        let cs = clean_block(inv.s_bar.as_slice());
+        let s_bar = (0..k)
+            .map(|j| Vec3(std::array::from_fn(|r| S::from_f64(cs(inv.s_bar[(r, j)])))))
+            .collect();
+        let s_ij = std::array::from_fn(|i| std::array::from_fn(|j| matrix(&inv.s_ij[i][j])));
+        let all_x: Vec<f64> = inv
+            .x_s
+            .iter()
+            .flatten()
+            .flat_map(|v| v.iter().copied())
+            .collect();
+        let cx = clean_block(&all_x);
+        let x_s = std::array::from_fn(|i| std::array::from_fn(|j| vector(&inv.x_s[i][j], &cx)));
+        let cp = clean_block(inv.spin_modes.as_slice());
+        let zeta = low.quantity(&flex.damping)?;
+        let damping = (0..k)
+            .map(|r| {
+                (0..k)
+                    .map(|c| {
+                        if r == c && !zeta.is_zero() {
+                            S::from_f64(2.0 * flex.modes.frequencies[r]) * zeta
+                        } else {
+                            S::zero()
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let stiffening = flex.stiffening.then(|| {
+            let beam = &flex.beam;
+            matrix(&modal_geometric_stiffness(beam, &flex.modes, &|x| {
+                beam.centrifugal_force(0.0, x)
+            }))
+        });
+        let ci = clean_block(inv.inertia.as_slice());
+        let c1 = clean_block(inv.first_moment.as_slice());
+        Ok(FlexModel {
+            q: flex.q_index,
+            u: flex.u_index,
+            mass: S::from_f64(inv.mass),
+            first_moment: Vec3(std::array::from_fn(|r| {
+                S::from_f64(c1(inv.first_moment[r]))
+            })),
+            inertia: Mat3(std::array::from_fn(|r| {
+                std::array::from_fn(|c| S::from_f64(ci(inv.inertia[(r, c)])))
+            })),
+            s_bar,
+            s_ij,
+            x_s,
+            spin: vector(&inv.spin_modes, &cp),
+            modal_mass: matrix(&inv.modal_mass),
+            stiffness: matrix(&inv.modal_stiffness),
+            damping,
+            stiffening,
+        })
+    }
+
+    /// Number of elastic coordinates.
+    pub fn count(&self) -> usize {
+        self.s_bar.len()
+    }
+
+    /// `S̄ x` for `x` in mode space.
+    fn s_bar_times(&self, x: &[S]) -> Vec3<S> {
+        let mut out = Vec3::zero();
+        for (col, &xj) in self.s_bar.iter().zip(x) {
+            for r in 0..3 {
+                if !col.0[r].is_zero() {
+                    out.0[r] = out.0[r] + col.0[r] * xj;
+                }
+            }
+        }
+        out
+    }
+
+    /// The body at elastic coordinates `q`, rates `qd`, frame velocity `v`
+    /// (body coordinates).
+    pub fn state(&self, q: &[S], qd: &[S], v: Motion<S>) -> FlexState<S> {
+        let k = self.count();
+        let w = v.w;
+        // S̄_ab q and S̄_ab q̇ (k each).
+        let sq: [[Vec<S>; 3]; 3] =
+            std::array::from_fn(|a| std::array::from_fn(|b| mat_vec(&self.s_ij[a][b], q)));
+        let sqd: [[Vec<S>; 3]; 3] =
+            std::array::from_fn(|a| std::array::from_fn(|b| mat_vec(&self.s_ij[a][b], qd)));
+        // ∫ρūūᵀ = J₀ + ΔJ, ΔJ_ab = (X_ab + X_ba)·q + qᵀ S̄_ab q;  Ī = tr(J) 1 − J (+ spin).
+        let dj = Mat3(std::array::from_fn(|a| {
+            std::array::from_fn(|b| {
+                dot(&self.x_s[a][b], q) + dot(&self.x_s[b][a], q) + dot(q, &sq[a][b])
+            })
+        }));
+        let inertia_q = self.inertia + Mat3::identity().scale(dj.trace()) - dj;
+        let h = self.first_moment + self.s_bar_times(q);
+        // Ī_θf column j: ∫ρ ũ S_j dV + e_x c_p,j with ∫ρ ū_b S_c = X_bc + S̄_cb q.
+        let us = |b: usize, c: usize, j: usize| self.x_s[b][c][j] + sq[c][b][j];
+        let coupling = (0..k)
+            .map(|j| Force {
+                n: Vec3::new(
+                    us(1, 2, j) - us(2, 1, j) + self.spin[j],
+                    us(2, 0, j) - us(0, 2, j),
+                    us(0, 1, j) - us(1, 0, j),
+                ),
+                f: self.s_bar[j],
+            })
+            .collect();
+        // C_v = ∫ρ ū (S q̇)ᵀ dV: (C_v)_ab = X_ab · q̇ + qᵀ S̄_ab q̇.
+        let cv = Mat3(std::array::from_fn(|a| {
+            std::array::from_fn(|b| dot(&self.x_s[a][b], qd) + dot(q, &sqd[a][b]))
+        }));
+        let two = S::from_f64(2.0);
+        let sqdot = self.s_bar_times(qd);
+        let spin_rate = dot(&self.spin, qd);
+        let bias = Force {
+            n: (Mat3::identity().scale(cv.trace()) - cv.transpose())
+                .mul_vec(w)
+                .scale(two)
+                + w.cross(Vec3::new(spin_rate, S::zero(), S::zero())),
+            f: w.cross(sqdot).scale(two),
+        };
+        // b_f = S̄ᵀ(ω × v) + Σ_ab W_ab (X_ba + S̄_ab q) + 2 Σ_ab ω̃_ab S̄_ab q̇,  W = ω̃ω̃.
+        let wv = w.cross(v.v);
+        let ww = w.skew() * w.skew();
+        let wt = w.skew();
+        let mut elastic_bias: Vec<S> = self.s_bar.iter().map(|c| c.dot(wv)).collect();
+        for a in 0..3 {
+            for b in 0..3 {
+                let wab = ww.0[a][b];
+                axpy(&mut elastic_bias, wab, &self.x_s[b][a]);
+                axpy(&mut elastic_bias, wab, &sq[a][b]);
+                axpy(&mut elastic_bias, two * wt.0[a][b], &sqd[a][b]);
+            }
+        }
+        if let Some(kg) = &self.stiffening {
+            let spin2 = w.0[1] * w.0[1] + w.0[2] * w.0[2];
+            let g = mat_vec(kg, q);
+            axpy(&mut elastic_bias, spin2, &g);
+        }
+        FlexState {
+            q: q.to_vec(),
+            qd: qd.to_vec(),
+            inertia: RigidInertia {
+                m: self.mass,
+                h,
+                i: inertia_q,
+            },
+            coupling,
+            bias,
+            elastic_bias,
+        }
+    }
+
+    /// `M_ff x`.
+    pub fn modal_mass_times(&self, x: &[S]) -> Vec<S> {
+        mat_vec(&self.modal_mass, x)
+    }
+
+    /// The elastic forces `−K_ff q_f − D_ff q̇_f` and the strain energy `½ q_fᵀ K_ff q_f`.
+    pub fn elastic_forces(&self, q: &[S], qd: &[S]) -> (Vec<S>, S) {
+        let kq = mat_vec(&self.stiffness, q);
+        let dq = mat_vec(&self.damping, qd);
+        let energy = S::from_f64(0.5) * dot(q, &kq);
+        (kq.iter().zip(&dq).map(|(&a, &b)| -a - b).collect(), energy)
+    }
+
+    /// `½ q̇ᵀ M_ff q̇ + vᵀ P q̇`: the kinetic energy of the deformation rate.
+    pub fn elastic_kinetic(&self, st: &FlexState<S>, v: Motion<S>) -> S {
+        let mqd = self.modal_mass_times(&st.qd);
+        let pqd = st
+            .coupling
+            .iter()
+            .zip(&st.qd)
+            .fold(Force::zero(), |acc, (p, &x)| acc.add(p.scale(x)));
+        S::from_f64(0.5) * dot(&st.qd, &mqd) + v.dot(pqd)
+    }
+
+    /// `P q̇`: the momentum of the deformation rate (body coordinates).
+    pub fn elastic_momentum(&self, st: &FlexState<S>) -> Force<S> {
+        st.coupling
+            .iter()
+            .zip(&st.qd)
+            .fold(Force::zero(), |acc, (p, &x)| acc.add(p.scale(x)))
+    }
+}
