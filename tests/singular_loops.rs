@@ -252,6 +252,12 @@ fn table() {
     let integrators = std::env::var("INTS").unwrap_or("dop853,radau5".into());
     let only = std::env::var("METHODS")
         .unwrap_or("projection,partitioning,augmented-lagrangian,baumgarte".into());
+    // With `CSV=FILE`, the points in `eom-gen bench --work-precision`'s
+    // CSV format (error: the crank's relative error against the reduced
+    // ODE), for `eom-gen bench --plot FILE --svg OUT`.
+    let mut csv = String::from(
+        "model,integrator,constraints,setting_kind,setting,cpu_ms,repeats,rhs_evals,accepted,rejected,end_error,path_error,digits,stop\n",
+    );
     println!(
         "| N | method | integrator | tol | crank error at 10 s (rad) | energy (rel.) | max abs Φ | steps | CPU (s) |"
     );
@@ -279,7 +285,19 @@ fn table() {
                     r.steps,
                     r.cpu
                 );
+                let finished = r.stop == StopReason::Finished && r.stats.refusal.is_none();
+                let rel = (r.q[0] - want).abs() / want.abs();
+                csv += &format!(
+                    "fourbar_n{n},{integrator},{name},tol,{tol:e},{:.6},1,0,{},0,{},,,{}\n",
+                    r.cpu * 1e3,
+                    r.steps,
+                    if finished { format!("{rel:e}") } else { String::new() },
+                    if finished { "" } else { "refused" },
+                );
             }
         }
+    }
+    if let Ok(path) = std::env::var("CSV") {
+        std::fs::write(&path, csv).expect("write CSV");
     }
 }
