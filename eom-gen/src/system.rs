@@ -49,6 +49,8 @@ pub struct Parameter {
     pub value: Quantity,
     /// A runtime field (`true`) or inlined (`false`).
     pub tunable: bool,
+    /// The model's `doc` text (for the generated field's doc comment).
+    pub doc: Option<String>,
     /// Where its name is written.
     pub span: Span,
 }

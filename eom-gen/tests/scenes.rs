@@ -167,6 +167,12 @@ fn tunable_and_fixed_override_the_model() {
         g.source.contains("pub l: f64") && g.source.contains("pub m: f64"),
         "tunable parameters are fields of the parameter struct"
     );
+    // Each field carries the model's `doc` text of the parameter.
+    assert!(
+        g.source.contains("/// `l` (default 1): length of the link, m"),
+        "{}",
+        g.source
+    );
     assert!(g.source.contains("pub struct PendulumL"));
     let params = &g.checked.system.parameters;
     assert!(

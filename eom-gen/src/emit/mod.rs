@@ -249,7 +249,10 @@ pub fn emit_tokens(
         .map(|(p, i)| (p.name.as_str(), i.clone()))
         .collect();
     let param_fields = tunable.iter().zip(&field_idents).map(|(p, n)| {
-        let doc = format!(" `{}` (default {}).", p.name, p.value.value);
+        let doc = match &p.doc {
+            Some(text) => format!(" `{}` (default {}): {text}", p.name, p.value.value),
+            None => format!(" `{}` (default {}).", p.name, p.value.value),
+        };
         quote!(#[doc = #doc] pub #n: f64,)
     });
     let param_defaults = tunable.iter().zip(&field_idents).map(|(p, n)| {

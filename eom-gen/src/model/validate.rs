@@ -533,6 +533,7 @@ impl Ctx<'_> {
                         name: p.name.clone(),
                         value,
                         tunable: p.tunable,
+                        doc: p.doc.clone(),
                         span: self.span(&join(&path, &[f("name")])),
                     });
                 }
