@@ -80,21 +80,49 @@ fn zero_dof_robot_takes_empty_lists() {
     );
     for args in [
         &["eval", "--interpret", &zero, "--json"][..],
-        &["eval", "--interpret", &zero, "--q", "", "--u", "", "--tau", " ", "--json"],
+        &[
+            "eval",
+            "--interpret",
+            &zero,
+            "--q",
+            "",
+            "--u",
+            "",
+            "--tau",
+            " ",
+            "--json",
+        ],
     ] {
         let o = eom_gen_cli(args);
-        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
         assert_eq!(v["udot"], serde_json::json!([]), "{v}");
         assert_eq!(v["mass_matrix"], serde_json::json!([]), "{v}");
         assert_eq!(v["kinetic_energy"], serde_json::json!(0.0), "{v}");
     }
     let o = eom_gen_cli(&[
-        "simulate", "--interpret", &zero, "--t-end", "1", "--q0", "", "--u0", "", "--json",
+        "simulate",
+        "--interpret",
+        &zero,
+        "--t-end",
+        "1",
+        "--q0",
+        "",
+        "--u0",
+        "",
+        "--json",
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
-    assert_eq!((v["t"].as_f64(), &v["q"]), (Some(1.0), &serde_json::json!([])), "{v}");
+    assert_eq!(
+        (v["t"].as_f64(), &v["q"]),
+        (Some(1.0), &serde_json::json!([])),
+        "{v}"
+    );
 
     let o = eom_gen_cli(&["eval", "--interpret", &path("arm2.urdf"), "--q", ""]);
     let err = String::from_utf8_lossy(&o.stderr);

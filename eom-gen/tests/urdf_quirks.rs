@@ -358,7 +358,9 @@ fn a_tensor_that_is_not_positive_definite_is_a_warning_while_the_mass_matrix_is(
     let c = check_ok("negative_inertia.urdf");
     let w = c.render_warnings();
     assert!(
-        w.contains("negative_inertia.urdf:9:8: warning: inertia of link `thigh` is not positive definite"),
+        w.contains(
+            "negative_inertia.urdf:9:8: warning: inertia of link `thigh` is not positive definite"
+        ),
         "{w}"
     );
     assert_eq!(w.matches("warning:").count(), 1, "reported once:\n{w}");
@@ -374,7 +376,9 @@ fn a_tensor_that_is_not_positive_definite_is_a_warning_while_the_mass_matrix_is(
         Err(r) => r.to_string(),
     };
     assert!(
-        r.contains("negative_inertia.urdf:9:8: error: inertia of link `thigh` is not positive definite"),
+        r.contains(
+            "negative_inertia.urdf:9:8: error: inertia of link `thigh` is not positive definite"
+        ),
         "{r}"
     );
 }
@@ -428,11 +432,7 @@ fn a_mass_matrix_singular_only_at_the_initial_state_is_a_warning() {
     );
     assert_eq!(w.matches("warning:").count(), 1, "reported once:\n{w}");
     let m = mass_matrix(&c, &[0.0; 3]);
-    assert_eq!(
-        eom_gen::mech::numeric::singular_speed(&m),
-        Some(2),
-        "{m:?}"
-    );
+    assert_eq!(eom_gen::mech::numeric::singular_speed(&m), Some(2), "{m:?}");
     let m = mass_matrix(&c, &[0.1, 0.5, -0.2]);
     assert_eq!(eom_gen::mech::numeric::singular_speed(&m), None, "{m:?}");
     let strict = Options {
@@ -444,10 +444,15 @@ fn a_mass_matrix_singular_only_at_the_initial_state_is_a_warning() {
         Err(r) => r.to_string(),
     };
     assert!(
-        r.contains("aligned_axes.urdf:24:16: error: the mass matrix is singular at the initial state"),
+        r.contains(
+            "aligned_axes.urdf:24:16: error: the mass matrix is singular at the initial state"
+        ),
         "{r}"
     );
     // A motion without inertia anywhere stays an error (the massless leaf).
     let r = check_err("massless_leaf.urdf");
-    assert!(r.contains("error: link `tool` has no mass but moves"), "{r}");
+    assert!(
+        r.contains("error: link `tool` has no mass but moves"),
+        "{r}"
+    );
 }

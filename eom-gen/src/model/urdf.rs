@@ -980,7 +980,9 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
                                 m.span,
                                 format!("{message}; ignored: `{}` moves on its own", j.raw),
                             )
-                            .with_help(format!("{help} (urdfdom ignores it too; `strict` rejects it)")),
+                            .with_help(format!(
+                                "{help} (urdfdom ignores it too; `strict` rejects it)"
+                            )),
                         );
                     }
                 }
