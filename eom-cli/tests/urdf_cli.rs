@@ -129,3 +129,19 @@ fn zero_dof_robot_takes_empty_lists() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("--q has 0 value(s), the model has 2"), "{err}");
 }
+
+/// `check --json` counts the URDF importer's warnings (an inconsistent
+/// inertia of a moving link) with the model's.
+#[test]
+fn check_json_counts_urdf_warnings() {
+    let file = format!(
+        "{}/../eom-gen/tests/fixtures/urdf/negative_inertia.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let o = eom_gen_cli(&["check", "--json", &file]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["warnings"], serde_json::json!(1), "{v}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("warning: inertia of link `thigh`"), "{err}");
+}
