@@ -400,16 +400,7 @@ fn main() -> ExitCode {
                 Err(code) => return code,
             };
             let list = |what: &str, text: Option<String>| -> Result<Option<Vec<f64>>, String> {
-                text.map(|t| {
-                    t.split(',')
-                        .map(|x| {
-                            x.trim()
-                                .parse::<f64>()
-                                .map_err(|e| format!("--{what}: `{}`: {e}", x.trim()))
-                        })
-                        .collect()
-                })
-                .transpose()
+                text.map(|t| numbers(what, &t)).transpose()
             };
             let (q0, u0) = match (list("q0", q0), list("u0", u0)) {
                 (Ok(q), Ok(u)) => (q, u),
@@ -989,8 +980,7 @@ fn parse_list(
     default: Vec<f64>,
 ) -> Result<Vec<f64>, String> {
     let Some(text) = text else { return Ok(default) };
-    let values: Result<Vec<f64>, _> = text.split(',').map(|x| x.trim().parse::<f64>()).collect();
-    match values {
+    match numbers(what, text) {
         Ok(v) if v.iter().any(|x| !x.is_finite()) => {
             Err(format!("--{what} must be finite numbers, got `{text}`"))
         }
@@ -999,8 +989,23 @@ fn parse_list(
             "--{what} has {} value(s), the model has {n}",
             v.len()
         )),
-        Err(e) => Err(format!("--{what}: {e}")),
+        Err(e) => Err(e),
     }
+}
+
+/// The numbers of a comma-separated list; an empty (or blank) list has
+/// none, which is what a model without coordinates takes (`--q ""`).
+fn numbers(what: &str, text: &str) -> Result<Vec<f64>, String> {
+    if text.trim().is_empty() {
+        return Ok(Vec::new());
+    }
+    text.split(',')
+        .map(|x| {
+            x.trim()
+                .parse::<f64>()
+                .map_err(|e| format!("--{what}: `{}`: {e}", x.trim()))
+        })
+        .collect()
 }
 
 fn eval(

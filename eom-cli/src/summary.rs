@@ -50,7 +50,9 @@ pub fn json(checked: &Checked) -> Value {
         "loop_closure": sys.graph.cut_joints().iter().zip(&gaps).map(|(&j, g)| json!({
             "joint": sys.joints[j].name, "position_gap": g.position, "angle_gap": g.angle,
         })).collect::<Vec<_>>(),
-        "warnings": checked.warnings.len(),
+        // The URDF importer's warnings (inconsistent inertias, …) count too.
+        "warnings": checked.warnings.len()
+            + checked.urdf_warnings.as_ref().map_or(0, |w| w.diagnostics.len()),
         "constraint_equations": mobility.map(|(m, _)| m.equations),
         "constraint_rank": mobility.map(|(m, _)| m.rank),
         "mobility": mobility.map_or(sys.grubler.dof, |(m, _)| m.dof as i64),

@@ -66,3 +66,82 @@ fn cli_import_and_check() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A robot whose joints are all fixed has no coordinates: `eval` and
+/// `simulate` take empty lists (`--q ""`) as well as the defaults, and an
+/// empty list for a model with coordinates names the counts (issue 15:
+/// quadrotor_base and iris_simple of example-robot-data failed with
+/// "cannot parse float from empty string").
+#[test]
+fn zero_dof_robot_takes_empty_lists() {
+    let zero = format!(
+        "{}/../eom-gen/tests/fixtures/urdf/zero_dof.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    for args in [
+        &["eval", "--interpret", &zero, "--json"][..],
+        &[
+            "eval",
+            "--interpret",
+            &zero,
+            "--q",
+            "",
+            "--u",
+            "",
+            "--tau",
+            " ",
+            "--json",
+        ],
+    ] {
+        let o = eom_gen_cli(args);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+        assert_eq!(v["udot"], serde_json::json!([]), "{v}");
+        assert_eq!(v["mass_matrix"], serde_json::json!([]), "{v}");
+        assert_eq!(v["kinetic_energy"], serde_json::json!(0.0), "{v}");
+    }
+    let o = eom_gen_cli(&[
+        "simulate",
+        "--interpret",
+        &zero,
+        "--t-end",
+        "1",
+        "--q0",
+        "",
+        "--u0",
+        "",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(
+        (v["t"].as_f64(), &v["q"]),
+        (Some(1.0), &serde_json::json!([])),
+        "{v}"
+    );
+
+    let o = eom_gen_cli(&["eval", "--interpret", &path("arm2.urdf"), "--q", ""]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--q has 0 value(s), the model has 2"), "{err}");
+}
+
+/// `check --json` counts the URDF importer's warnings (an inconsistent
+/// inertia of a moving link) with the model's.
+#[test]
+fn check_json_counts_urdf_warnings() {
+    let file = format!(
+        "{}/../eom-gen/tests/fixtures/urdf/negative_inertia.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let o = eom_gen_cli(&["check", "--json", &file]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["warnings"], serde_json::json!(1), "{v}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("warning: inertia of link `thigh`"), "{err}");
+}

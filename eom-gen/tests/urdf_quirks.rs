@@ -331,3 +331,128 @@ fn zero_dof_robots_generate_evaluate_and_simulate() {
         assert_eq!(report.t, 1.0, "{integrator:?}: {report:?}");
     }
 }
+
+#[test]
+fn a_point_mass_with_rounding_noise_in_its_tensor_loads_without_a_warning() {
+    // icub: `ixz="2.40741e-35"`, all else zero; Pinocchio takes it as it is.
+    let c = check_ok("noise_inertia.urdf");
+    assert!(c.render_warnings().is_empty(), "{}", c.render_warnings());
+    let notes = c.urdf_notes.clone().unwrap_or_default();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.contains("inertia of link `head` is rounding noise")),
+        "{notes:?}"
+    );
+    let m = mass_matrix(&c, &[0.0]);
+    let want = 1.33687 * (0.0185f64.powi(2) + 0.1108f64.powi(2));
+    assert!(close(m[0][0], want), "got {m:?}, want {want}");
+}
+
+#[test]
+fn a_tensor_that_is_not_positive_definite_is_a_warning_while_the_mass_matrix_is() {
+    use eom_gen::urdf::Options;
+    // romeo_laas_small's hip: one principal moment is -2.7e-3 kg m². Kept
+    // as written (as Pinocchio keeps it); about the pitch axis y the link
+    // still has inertia, so the mass matrix is positive definite.
+    let c = check_ok("negative_inertia.urdf");
+    let w = c.render_warnings();
+    assert!(
+        w.contains(
+            "negative_inertia.urdf:9:8: warning: inertia of link `thigh` is not positive definite"
+        ),
+        "{w}"
+    );
+    assert_eq!(w.matches("warning:").count(), 1, "reported once:\n{w}");
+    let m = mass_matrix(&c, &[0.0]);
+    let want = 0.0395116 + 4.71096 * (0.02138f64.powi(2) + 0.14577f64.powi(2));
+    assert!(close(m[0][0], want), "got {m:?}, want {want}");
+    let strict = Options {
+        strict: true,
+        ..Options::default()
+    };
+    let r = match eom_gen::load_with(&fixture("negative_inertia.urdf"), &strict) {
+        Ok(_) => panic!("accepted in strict mode"),
+        Err(r) => r.to_string(),
+    };
+    assert!(
+        r.contains(
+            "negative_inertia.urdf:9:8: error: inertia of link `thigh` is not positive definite"
+        ),
+        "{r}"
+    );
+}
+
+#[test]
+fn a_mimic_of_an_unknown_joint_is_ignored_with_a_warning() {
+    use eom_gen::urdf::Options;
+    // alex_psyonic_hands: `<mimic joint="index_q1">` where the joint is
+    // `Left_index_q1`. urdfdom (so Pinocchio and ROS) loads the file and
+    // ignores the mimic; so does eom, with a warning.
+    let c = check_ok("mimic_unknown.urdf");
+    let w = c.render_warnings();
+    assert!(
+        w.contains("mimic_unknown.urdf:28:")
+            && w.contains(
+                "warning: mimic of joint `Left_index_q2` names unknown joint `index_q1`; ignored"
+            ),
+        "{w}"
+    );
+    assert_eq!(
+        c.system.coordinate_names(),
+        ["Left_index_q1", "Left_index_q2"]
+    );
+    assert!(c.spec.constraints.is_empty(), "{:?}", c.spec.constraints);
+    let strict = Options {
+        strict: true,
+        ..Options::default()
+    };
+    let r = match eom_gen::load_with(&fixture("mimic_unknown.urdf"), &strict) {
+        Ok(_) => panic!("accepted in strict mode"),
+        Err(r) => r.to_string(),
+    };
+    assert!(
+        r.contains("error: mimic of joint `Left_index_q2` names unknown joint `index_q1`"),
+        "{r}"
+    );
+}
+
+#[test]
+fn a_mass_matrix_singular_only_at_the_initial_state_is_a_warning() {
+    use eom_gen::urdf::Options;
+    // icub's neck: at zero, `neck_yaw` turns the head about the axis of
+    // `neck_pitch` (Pinocchio: smallest eigenvalue 4e-18 of 0.6, ABA 2e9);
+    // anywhere else the three axes are independent. Loads with a warning at
+    // the joint, once; strict rejects it.
+    let c = check_ok("aligned_axes.urdf");
+    let w = c.render_warnings();
+    assert!(
+        w.contains("aligned_axes.urdf:24:16: warning: the mass matrix is singular at the initial state: the motion of joint `neck_yaw` (revolute) has no inertia there"),
+        "{w}"
+    );
+    assert_eq!(w.matches("warning:").count(), 1, "reported once:\n{w}");
+    let m = mass_matrix(&c, &[0.0; 3]);
+    assert_eq!(eom_gen::mech::numeric::singular_speed(&m), Some(2), "{m:?}");
+    let m = mass_matrix(&c, &[0.1, 0.5, -0.2]);
+    assert_eq!(eom_gen::mech::numeric::singular_speed(&m), None, "{m:?}");
+    let strict = Options {
+        strict: true,
+        ..Options::default()
+    };
+    let r = match eom_gen::load_with(&fixture("aligned_axes.urdf"), &strict) {
+        Ok(_) => panic!("accepted in strict mode"),
+        Err(r) => r.to_string(),
+    };
+    assert!(
+        r.contains(
+            "aligned_axes.urdf:24:16: error: the mass matrix is singular at the initial state"
+        ),
+        "{r}"
+    );
+    // A motion without inertia anywhere stays an error (the massless leaf).
+    let r = check_err("massless_leaf.urdf");
+    assert!(
+        r.contains("error: link `tool` has no mass but moves"),
+        "{r}"
+    );
+}

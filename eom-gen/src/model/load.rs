@@ -86,9 +86,10 @@ impl Loaded {
                 if let Some(w) = &self.urdf_warnings {
                     // The importer reported inconsistent inertias at their
                     // place in the URDF; not again in the converted text.
-                    checked
-                        .warnings
-                        .retain(|d| !d.message.starts_with("inertia of body"));
+                    checked.warnings.retain(|d| {
+                        !d.message.starts_with("inertia of body")
+                            && !d.message.starts_with("the mass matrix is singular")
+                    });
                     checked.urdf_warnings = Some(w.clone());
                 }
                 Ok(checked)

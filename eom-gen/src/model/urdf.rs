@@ -963,18 +963,29 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         if let Some(m) = &j.mimic {
             match joint_index.get(&m.joint).map(|&o| &joints[o]) {
                 None => {
+                    // urdfdom (and so Pinocchio and ROS) load such a file and
+                    // ignore the mimic: a warning, an error when strict.
                     let help = match did_you_mean(&m.joint, joints.iter().map(|j| j.raw.as_str())) {
                         Some(b) => format!("did you mean `{b}`?"),
                         None => "name a revolute, continuous or prismatic joint".to_string(),
                     };
-                    cx.error(
-                        m.span,
-                        format!(
-                            "mimic of joint `{}` names unknown joint `{}`",
-                            j.raw, m.joint
-                        ),
-                        help,
+                    let message = format!(
+                        "mimic of joint `{}` names unknown joint `{}`",
+                        j.raw, m.joint
                     );
+                    if options.strict {
+                        cx.error(m.span, message, help);
+                    } else {
+                        cx.warnings.push(
+                            Diagnostic::warning(
+                                m.span,
+                                format!("{message}; ignored: `{}` moves on its own", j.raw),
+                            )
+                            .with_help(format!(
+                                "{help} (urdfdom ignores it too; `strict` rejects it)"
+                            )),
+                        );
+                    }
                 }
                 Some(o)
                     if !o.kind.is_some_and(Kind::one_dof) || !kind.one_dof() || o.raw == j.raw =>
@@ -1006,6 +1017,8 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
     }
 
     if cx.diags.iter().any(Diagnostic::is_error) {
+        // Every problem at once: the warnings too.
+        cx.diags.append(&mut cx.warnings);
         cx.diags.sort_by_key(|d| d.span.map(|s| s.start));
         return Err(fail(cx.diags));
     }
@@ -1027,9 +1040,13 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
             InertiaPolicy::Strict
         },
     };
-    if lenient {
-        check_mass_matrix(&mut cx, src, &spec, &links, &joints);
+    // Always: positive masses do not make it positive definite (a point
+    // mass on a joint axis).
+    {
+        check_mass_matrix(&mut cx, src, &spec, &links, &joints, options.strict);
         if cx.diags.iter().any(Diagnostic::is_error) {
+            cx.diags.append(&mut cx.warnings);
+            cx.diags.sort_by_key(|d| d.span.map(|s| s.start));
             return Err(fail(cx.diags));
         }
     }
@@ -1222,11 +1239,13 @@ fn principal(i: &Matrix3<f64>) -> ([f64; 3], Matrix3<f64>) {
 }
 
 /// The inertia policy for one link's tensor (see `docs/model-format.md`,
-/// "Inertia policy"): a principal moment negative by more than 1 % of the
-/// largest is an error; a slightly negative one or a violated triangle
-/// inequality a warning at the `<inertia>`, an error in strict mode, fixed
-/// with `balance_inertia`; links fixed to the ground are not checked (a
-/// note says so when their tensor is inconsistent).
+/// "Inertia policy"): a negative principal moment or a violated triangle
+/// inequality is a warning at the `<inertia>` (the mass matrix is checked
+/// instead), an error in strict mode, fixed with `balance_inertia`;
+/// rounding-level violations (below `1e-12·(I_max + m·1 m²)`, say a point
+/// mass written with `ixz="2.4e-35"`) count as none; links fixed to the
+/// ground are not checked (a note says so when their tensor is
+/// inconsistent).
 fn check_inertia(cx: &mut Ctx, link: &mut Link, on_ground: bool, options: &Options) {
     let Some(i) = link.inertial.as_mut() else {
         return;
@@ -1234,10 +1253,24 @@ fn check_inertia(cx: &mut Ctx, link: &mut Link, on_ground: bool, options: &Optio
     if i.inertia == Matrix3::zeros() {
         return;
     }
+    if i.inertia.amax() <= 1e-12 * i.mass {
+        // All rounding noise (icub writes a point mass as `ixz="2.4e-35"`,
+        // the rest zero): a point mass, as intended.
+        cx.notes.push(format!(
+            "inertia of link `{}` is rounding noise (largest entry {:.1e} kg m² for {} kg): taken as a point mass",
+            link.raw,
+            i.inertia.amax(),
+            i.mass
+        ));
+        i.inertia = Matrix3::zeros();
+        return;
+    }
     let (p, v) = principal(&i.inertia);
-    let scale = p[0].abs().max(p[2].abs());
-    let negative = p[0] < -1e-12 * scale;
-    let triangle = p[0] + p[1] < p[2] * (1.0 - 1e-9);
+    // Rounding noise: relative to the tensor and to the link's mass times
+    // 1 m², so that a tensor that is all noise is zero.
+    let floor = 1e-12 * (p[0].abs().max(p[2].abs()) + i.mass.abs());
+    let negative = p[0] < -floor;
+    let triangle = p[0] + p[1] < p[2] * (1.0 - 1e-9) - floor;
     if !negative && !triangle {
         return;
     }
@@ -1260,14 +1293,6 @@ fn check_inertia(cx: &mut Ctx, link: &mut Link, on_ground: bool, options: &Optio
         return;
     }
     let help = "ixx, iyy, izz are the moments and ixy, ixz, iyz the tensor entries about the centre of mass; no mass distribution has a negative principal moment or one larger than the sum of the other two";
-    if p[0] < -0.01 * scale {
-        cx.error(
-            i.span,
-            format!("inertia of link `{}` {what}", link.raw),
-            help,
-        );
-        return;
-    }
     if options.balance_inertia {
         let mut q = p.map(|x| x.max(0.0));
         if q[0] + q[1] < q[2] {
@@ -1299,17 +1324,25 @@ fn check_inertia(cx: &mut Ctx, link: &mut Link, on_ground: bool, options: &Optio
 
 /// The mass matrix of the converted model must be positive definite at the
 /// initial state: otherwise an error at the URDF link whose joint's motion
-/// has no inertia.
-fn check_mass_matrix(cx: &mut Ctx, src: &Source, spec: &Spec, links: &[Link], joints: &[UJoint]) {
+/// has no inertia, or a warning (an error when `strict`) when it is only a
+/// configuration singularity (positive definite at other configurations).
+fn check_mass_matrix(
+    cx: &mut Ctx,
+    src: &Source,
+    spec: &Spec,
+    links: &[Link],
+    joints: &[UJoint],
+    strict: bool,
+) {
     let text = Source::new(format!("{}{CONVERTED}", src.path), spec.to_ron());
     let (Some(system), _) = super::validate::check_with(&text, spec, None, false) else {
         // Reported when the converted model is checked.
         return;
     };
-    let Some((_, j)) = super::validate::singular_joint(&system) else {
+    let Some(singular) = super::validate::singular_joint(&system) else {
         return;
     };
-    let name = &system.joints[j].name;
+    let name = &system.joints[singular.joint].name;
     let Some(uj) = joints.iter().find(|u| &u.name == name) else {
         return;
     };
@@ -1323,6 +1356,22 @@ fn check_mass_matrix(cx: &mut Ctx, src: &Source, spec: &Spec, links: &[Link], jo
         .iter()
         .find(|b| child.is_some_and(|c| c.name == b.name))
         .map(|b| b.mass == Some(Num::Value(0.0)));
+    if !singular.everywhere {
+        // A configuration singularity (icub's neck: two axes aligned at
+        // zero): Pinocchio loads it as well; a warning, an error when strict.
+        let message = format!(
+            "the mass matrix is singular at the initial state: the motion of joint `{}` ({kind}) has no inertia there (it has at other configurations)",
+            uj.raw
+        );
+        let help = "two joint axes line up at the initial state; simulations starting there fail: start elsewhere (`--q0`)";
+        if strict {
+            cx.error(uj.span, message, help);
+        } else {
+            cx.warnings
+                .push(Diagnostic::warning(uj.span, message).with_help(help));
+        }
+        return;
+    }
     let (at, message) = match (child, body_mass) {
         (Some(c), Some(true)) => (
             c.span,

@@ -108,23 +108,57 @@ struct Ctx<'a> {
     failed_markers: HashSet<(String, String)>,
 }
 
-/// The first speed (and its joint) whose motion has no inertia at the
-/// initial state: a zero pivot of `M = L D Lᵀ` (see
-/// [`crate::mech::numeric::singular_speed`]). `None` when `M` is positive
-/// definite or cannot be evaluated.
-pub(crate) fn singular_joint(system: &System) -> Option<(usize, usize)> {
+/// Where the mass matrix is singular: the first speed (and its joint)
+/// whose motion has no inertia at the initial state, and whether it has
+/// none at other configurations either.
+pub(crate) struct Singular {
+    /// The speed: a zero pivot of `M = L D Lᵀ` at the initial state.
+    pub speed: usize,
+    /// The tree joint that speed belongs to.
+    pub joint: usize,
+    /// Singular at two generic configurations too (a motion without
+    /// inertia, a massless leaf), not only at the initial state (two axes
+    /// aligned there, icub's neck).
+    pub everywhere: bool,
+}
+
+/// The mass matrix at the initial state, checked by its `L D Lᵀ` pivots
+/// (see [`crate::mech::numeric::singular_speed`]). `None` when it is
+/// positive definite or cannot be evaluated.
+pub(crate) fn singular_joint(system: &System) -> Option<Singular> {
     let num = crate::mech::Numeric::new(system).ok()?;
-    let q0 = system.q0();
     let u0 = vec![0.0; system.nu()];
     let inputs = vec![0.0; system.inputs.len()];
-    let terms = num.terms(&q0, &u0, 0.0, &inputs).ok()?;
-    let k = crate::mech::numeric::singular_speed(&terms.mass_matrix)?;
+    // Some(None): positive definite; None: not evaluable.
+    let at = |q: &[f64]| -> Option<Option<usize>> {
+        let terms = num.terms(q, &u0, 0.0, &inputs).ok()?;
+        Some(crate::mech::numeric::singular_speed(&terms.mass_matrix))
+    };
+    let q0 = system.q0();
+    let k = at(&q0)??;
     let joint = system.graph.tree_joints().iter().copied().find(|&j| {
         let j = &system.joints[j];
         j.motion == crate::system::Motion::Free
             && (j.u_index..j.u_index + j.speed_names.len()).contains(&k)
     })?;
-    Some((k, joint))
+    // Two fixed, generic configurations near q0 (quaternions renormalised).
+    let everywhere = (1..=2).all(|s| {
+        let mut q: Vec<f64> = q0
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x + 0.4 * ((0.618_033_988_75 * (i * 7 + s * 13) as f64).fract() - 0.5))
+            .collect();
+        for w in system.quaternion_indices() {
+            let n = q[w..w + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
+            q[w..w + 4].iter_mut().for_each(|x| *x /= n);
+        }
+        at(&q) != Some(None)
+    });
+    Some(Singular {
+        speed: k,
+        joint,
+        everywhere,
+    })
 }
 
 pub(crate) fn is_ident(s: &str) -> bool {
@@ -485,24 +519,28 @@ impl Ctx<'_> {
     /// The mass matrix at the initial state must be positive definite:
     /// otherwise the first joint whose motion has no inertia is an error.
     fn check_mass_matrix(&mut self, system: &System) {
-        let Some((k, joint)) = singular_joint(system) else {
+        let Some(s) = singular_joint(system) else {
             return;
         };
-        let j = &system.joints[joint];
+        let j = &system.joints[s.joint];
         let body = system.bodies.get(j.child).map_or("?", |b| b.name.as_str());
-        let speed = j.speed_names.get(k - j.u_index).map_or("?", String::as_str);
-        self.diags.push(
-            Diagnostic::error(
-                j.span,
-                format!(
-                    "the mass matrix is singular at the initial state: the motion of joint `{}` (speed `{speed}`) has no inertia",
-                    j.name
-                ),
-            )
-            .with_help(format!(
-                "give body `{body}` or the bodies it carries mass and inertia for this motion, or lock or remove the joint"
-            )),
+        let speed = j
+            .speed_names
+            .get(s.speed - j.u_index)
+            .map_or("?", String::as_str);
+        let message = format!(
+            "the mass matrix is singular at the initial state: the motion of joint `{}` (speed `{speed}`) has no inertia",
+            j.name
         );
+        self.diags.push(if s.everywhere {
+            Diagnostic::error(j.span, message).with_help(format!(
+                "give body `{body}` or the bodies it carries mass and inertia for this motion, or lock or remove the joint"
+            ))
+        } else {
+            Diagnostic::warning(j.span, format!("{message} there (it has elsewhere)")).with_help(
+                "two joint axes line up at the initial state; simulations starting there fail: start elsewhere (`q0`, `--q0`)",
+            )
+        });
     }
 
     fn parameters(&mut self, spec: &Spec) -> Option<Vec<Parameter>> {
