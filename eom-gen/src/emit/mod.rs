@@ -109,6 +109,18 @@ impl Binding<'_> {
 /// negated one.
 fn float(x: f64) -> TokenStream {
     use std::f64::consts as c;
+    // Formulation refuses programs with such constants
+    // (`FormulateError::NotFinite`), but emission never panics:
+    // `proc_macro2` refuses non-finite literals.
+    if x.is_nan() {
+        return quote!(::core::f64::NAN);
+    } else if x.is_infinite() {
+        return if x > 0.0 {
+            quote!(::core::f64::INFINITY)
+        } else {
+            quote!((-::core::f64::INFINITY))
+        };
+    }
     let named: [(f64, &str); 18] = [
         (c::PI, "PI"),
         (c::TAU, "TAU"),

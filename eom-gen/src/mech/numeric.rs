@@ -33,6 +33,24 @@ pub fn singular_speed(m: &[Vec<f64>]) -> Option<usize> {
     None
 }
 
+/// The first speed (and its joint) whose motion has no inertia at the
+/// initial state: a zero pivot of `M = L D Lᵀ` (see [`singular_speed`]).
+/// `None` when `M` is positive definite or cannot be evaluated.
+pub fn singular_joint(system: &System) -> Option<(usize, usize)> {
+    let num = Numeric::new(system).ok()?;
+    let q0 = system.q0();
+    let u0 = vec![0.0; system.nu()];
+    let inputs = vec![0.0; system.inputs.len()];
+    let terms = num.terms(&q0, &u0, 0.0, &inputs).ok()?;
+    let k = singular_speed(&terms.mass_matrix)?;
+    let joint = system.graph.tree_joints().iter().copied().find(|&j| {
+        let j = &system.joints[j];
+        j.motion == crate::system::Motion::Free
+            && (j.u_index..j.u_index + j.speed_names.len()).contains(&k)
+    })?;
+    Some((k, joint))
+}
+
 /// A system ready for numeric evaluation.
 #[derive(Clone, Debug)]
 pub struct Numeric {

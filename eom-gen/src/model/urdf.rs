@@ -1304,7 +1304,7 @@ fn check_mass_matrix(cx: &mut Ctx, src: &Source, spec: &Spec, links: &[Link], jo
         // Reported when the converted model is checked.
         return;
     };
-    let Some((_, j)) = super::validate::singular_joint(&system) else {
+    let Some((_, j)) = crate::mech::numeric::singular_joint(&system) else {
         return;
     };
     let name = &system.joints[j].name;

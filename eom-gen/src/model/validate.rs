@@ -108,25 +108,6 @@ struct Ctx<'a> {
     failed_markers: HashSet<(String, String)>,
 }
 
-/// The first speed (and its joint) whose motion has no inertia at the
-/// initial state: a zero pivot of `M = L D Lᵀ` (see
-/// [`crate::mech::numeric::singular_speed`]). `None` when `M` is positive
-/// definite or cannot be evaluated.
-pub(crate) fn singular_joint(system: &System) -> Option<(usize, usize)> {
-    let num = crate::mech::Numeric::new(system).ok()?;
-    let q0 = system.q0();
-    let u0 = vec![0.0; system.nu()];
-    let inputs = vec![0.0; system.inputs.len()];
-    let terms = num.terms(&q0, &u0, 0.0, &inputs).ok()?;
-    let k = crate::mech::numeric::singular_speed(&terms.mass_matrix)?;
-    let joint = system.graph.tree_joints().iter().copied().find(|&j| {
-        let j = &system.joints[j];
-        j.motion == crate::system::Motion::Free
-            && (j.u_index..j.u_index + j.speed_names.len()).contains(&k)
-    })?;
-    Some((k, joint))
-}
-
 pub(crate) fn is_ident(s: &str) -> bool {
     let mut chars = s.chars();
     chars
@@ -473,7 +454,7 @@ impl Ctx<'_> {
     /// The mass matrix at the initial state must be positive definite:
     /// otherwise the first joint whose motion has no inertia is an error.
     fn check_mass_matrix(&mut self, system: &System) {
-        let Some((k, joint)) = singular_joint(system) else {
+        let Some((k, joint)) = crate::mech::numeric::singular_joint(system) else {
             return;
         };
         let j = &system.joints[joint];
