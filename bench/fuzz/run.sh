@@ -73,6 +73,11 @@ nrobots=$(printf '%s\n' "$robots" | grep -c . || true)
 export CARGO_BUILD_JOBS="${CARGO_BUILD_JOBS:-1}"
 logs="$root/target/fuzz-logs"
 mkdir -p "$logs" "$root/bench/results"
+# The scene target copies the models into a temporary directory per
+# process: here, removed at the end.
+export TMPDIR="$root/target/fuzz-tmp/$$"
+mkdir -p "$TMPDIR"
+trap 'rm -rf "$TMPDIR"' EXIT
 cd "$fuzz"
 echo "building the fuzz targets…"
 for t in "${targets[@]}"; do

@@ -977,3 +977,17 @@ fn evaluate_dispatch(sys: &System, f: &Formulation) -> (TokenStream, TokenStream
     };
     (functions_const, evaluate_fn)
 }
+
+#[cfg(test)]
+mod tests {
+    /// `proc_macro2` panics on a non-finite literal; `float` writes the
+    /// constants instead (see `tests/fuzz_findings.rs`).
+    #[test]
+    fn non_finite_floats_are_written_as_constants() {
+        let text = |x: f64| super::float_operand(x).to_string().replace(' ', "");
+        assert_eq!(text(f64::INFINITY), "::core::f64::INFINITY");
+        assert_eq!(text(f64::NEG_INFINITY), "((-::core::f64::INFINITY))");
+        assert_eq!(text(f64::NAN), "::core::f64::NAN");
+        assert_eq!(text(-0.5), "(-0.5)");
+    }
+}
