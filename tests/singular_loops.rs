@@ -291,7 +291,11 @@ fn table() {
                     "fourbar_n{n},{integrator},{name},tol,{tol:e},{:.6},1,0,{},0,{},,,{}\n",
                     r.cpu * 1e3,
                     r.steps,
-                    if finished { format!("{rel:e}") } else { String::new() },
+                    if finished {
+                        format!("{rel:e}")
+                    } else {
+                        String::new()
+                    },
                     if finished { "" } else { "refused" },
                 );
             }

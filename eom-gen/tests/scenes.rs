@@ -169,7 +169,8 @@ fn tunable_and_fixed_override_the_model() {
     );
     // Each field carries the model's `doc` text of the parameter.
     assert!(
-        g.source.contains("/// `l` (default 1): length of the link, m"),
+        g.source
+            .contains("/// `l` (default 1): length of the link, m"),
         "{}",
         g.source
     );

@@ -109,6 +109,18 @@ impl Binding<'_> {
 /// negated one.
 fn float(x: f64) -> TokenStream {
     use std::f64::consts as c;
+    // Formulation refuses programs with such constants
+    // (`FormulateError::NotFinite`), but emission never panics:
+    // `proc_macro2` refuses non-finite literals.
+    if x.is_nan() {
+        return quote!(::core::f64::NAN);
+    } else if x.is_infinite() {
+        return if x > 0.0 {
+            quote!(::core::f64::INFINITY)
+        } else {
+            quote!((-::core::f64::INFINITY))
+        };
+    }
     let named: [(f64, &str); 18] = [
         (c::PI, "PI"),
         (c::TAU, "TAU"),
@@ -967,4 +979,18 @@ fn evaluate_dispatch(sys: &System, f: &Formulation) -> (TokenStream, TokenStream
         }
     };
     (functions_const, evaluate_fn)
+}
+
+#[cfg(test)]
+mod tests {
+    /// `proc_macro2` panics on a non-finite literal; `float` writes the
+    /// constants instead (see `tests/fuzz_findings.rs`).
+    #[test]
+    fn non_finite_floats_are_written_as_constants() {
+        let text = |x: f64| super::float_operand(x).to_string().replace(' ', "");
+        assert_eq!(text(f64::INFINITY), "::core::f64::INFINITY");
+        assert_eq!(text(f64::NEG_INFINITY), "((-::core::f64::INFINITY))");
+        assert_eq!(text(f64::NAN), "::core::f64::NAN");
+        assert_eq!(text(-0.5), "(-0.5)");
+    }
 }

@@ -50,6 +50,18 @@ pub enum FormulateError {
         /// Where the name is defined in the model file, when known.
         span: Option<Span>,
     },
+    /// A generated function holds an infinite or NaN constant: it divides
+    /// by a structural zero for every state, as forward dynamics does when
+    /// a joint's motion has no inertia (a point mass on a hinge's axis).
+    NotFinite {
+        /// The function.
+        function: Function,
+        /// The joint whose motion has no inertia at the initial state and
+        /// its speed, when the mass matrix shows one.
+        joint: Option<(String, String)>,
+        /// Where: that joint, else none.
+        span: Option<Span>,
+    },
 }
 
 impl FormulateError {
@@ -57,7 +69,7 @@ impl FormulateError {
     pub fn span(&self) -> Option<Span> {
         match self {
             FormulateError::Mech(e) => Some(e.span()),
-            FormulateError::Sym { span, .. } => *span,
+            FormulateError::Sym { span, .. } | FormulateError::NotFinite { span, .. } => *span,
         }
     }
 
@@ -72,6 +84,16 @@ impl FormulateError {
                 };
                 d.with_help("rename it in the model file")
             }
+            FormulateError::NotFinite { span, joint, .. } => {
+                let d = match span {
+                    Some(s) => Diagnostic::error(*s, self.to_string()),
+                    None => Diagnostic::file_error(self.to_string()),
+                };
+                d.with_help(match joint {
+                    Some(_) => "give the body this joint carries mass and inertia for its motion (off the axis), or lock or remove the joint",
+                    None => "look for a zero mass, length or radius that the model divides by",
+                })
+            }
         }
     }
 }
@@ -81,6 +103,24 @@ impl fmt::Display for FormulateError {
         match self {
             FormulateError::Mech(e) => write!(f, "{e}"),
             FormulateError::Sym { error, .. } => write!(f, "{error}"),
+            FormulateError::NotFinite {
+                function,
+                joint: Some((joint, speed)),
+                ..
+            } => write!(
+                f,
+                "the mass matrix is singular for every state: the motion of joint `{joint}` (speed `{speed}`) has no inertia, and `{}` would divide by zero",
+                function.name()
+            ),
+            FormulateError::NotFinite {
+                function,
+                joint: None,
+                ..
+            } => write!(
+                f,
+                "`{}` divides by zero for every state (a constant of the generated code is not finite)",
+                function.name()
+            ),
         }
     }
 }
@@ -90,6 +130,7 @@ impl std::error::Error for FormulateError {
         match self {
             FormulateError::Mech(e) => Some(e),
             FormulateError::Sym { error, .. } => Some(error),
+            FormulateError::NotFinite { .. } => None,
         }
     }
 }
@@ -104,6 +145,29 @@ impl From<SymError> for FormulateError {
     fn from(error: SymError) -> Self {
         FormulateError::Sym { error, span: None }
     }
+}
+
+/// The first program with a non-finite constant, as an error at the joint
+/// whose motion has no inertia (found by fuzzing: a point mass on a hinge's
+/// axis made forward dynamics `τ / 0`, which emission cannot write).
+fn not_finite(sys: &System, programs: &BTreeMap<Function, Program>) -> Result<(), FormulateError> {
+    let Some((&function, _)) = programs.iter().find(|(_, p)| p.has_non_finite_constant()) else {
+        return Ok(());
+    };
+    let found = super::numeric::singular_joint(sys).map(|s| {
+        let j = &sys.joints[s.joint];
+        let speed = j
+            .speed_names
+            .get(s.speed - j.u_index)
+            .cloned()
+            .unwrap_or_default();
+        ((j.name.clone(), speed), j.span)
+    });
+    Err(FormulateError::NotFinite {
+        function,
+        span: found.as_ref().map(|(_, s)| *s),
+        joint: found.map(|(j, _)| j),
+    })
 }
 
 /// Generated straight-line programs of one system, one per generated
@@ -446,6 +510,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     .into_iter()
     .filter_map(|(f, p)| p.map(|p| (f, p)))
     .collect();
+    not_finite(sys, &programs)?;
     Ok(Formulation {
         programs,
         fd_form,

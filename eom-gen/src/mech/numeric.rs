@@ -33,6 +33,59 @@ pub fn singular_speed(m: &[Vec<f64>]) -> Option<usize> {
     None
 }
 
+/// Where the mass matrix is singular: the first speed (and its joint)
+/// whose motion has no inertia at the initial state, and whether it has
+/// none at other configurations either.
+pub struct Singular {
+    /// The speed: a zero pivot of `M = L D Lᵀ` at the initial state.
+    pub speed: usize,
+    /// The tree joint that speed belongs to.
+    pub joint: usize,
+    /// Singular at two generic configurations too (a motion without
+    /// inertia, a massless leaf), not only at the initial state (two axes
+    /// aligned there, icub's neck).
+    pub everywhere: bool,
+}
+
+/// The mass matrix at the initial state, checked by its `L D Lᵀ` pivots
+/// (see [`singular_speed`]). `None` when it is
+/// positive definite or cannot be evaluated.
+pub fn singular_joint(system: &System) -> Option<Singular> {
+    let num = Numeric::new(system).ok()?;
+    let u0 = vec![0.0; system.nu()];
+    let inputs = vec![0.0; system.inputs.len()];
+    // Some(None): positive definite; None: not evaluable.
+    let at = |q: &[f64]| -> Option<Option<usize>> {
+        let terms = num.terms(q, &u0, 0.0, &inputs).ok()?;
+        Some(singular_speed(&terms.mass_matrix))
+    };
+    let q0 = system.q0();
+    let k = at(&q0)??;
+    let joint = system.graph.tree_joints().iter().copied().find(|&j| {
+        let j = &system.joints[j];
+        j.motion == crate::system::Motion::Free
+            && (j.u_index..j.u_index + j.speed_names.len()).contains(&k)
+    })?;
+    // Two fixed, generic configurations near q0 (quaternions renormalised).
+    let everywhere = (1..=2).all(|s| {
+        let mut q: Vec<f64> = q0
+            .iter()
+            .enumerate()
+            .map(|(i, x)| x + 0.4 * ((0.618_033_988_75 * (i * 7 + s * 13) as f64).fract() - 0.5))
+            .collect();
+        for w in system.quaternion_indices() {
+            let n = q[w..w + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
+            q[w..w + 4].iter_mut().for_each(|x| *x /= n);
+        }
+        at(&q) != Some(None)
+    });
+    Some(Singular {
+        speed: k,
+        joint,
+        everywhere,
+    })
+}
+
 /// A system ready for numeric evaluation.
 #[derive(Clone, Debug)]
 pub struct Numeric {

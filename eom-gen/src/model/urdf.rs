@@ -1339,7 +1339,7 @@ fn check_mass_matrix(
         // Reported when the converted model is checked.
         return;
     };
-    let Some(singular) = super::validate::singular_joint(&system) else {
+    let Some(singular) = crate::mech::numeric::singular_joint(&system) else {
         return;
     };
     let name = &system.joints[singular.joint].name;

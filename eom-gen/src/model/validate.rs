@@ -108,59 +108,6 @@ struct Ctx<'a> {
     failed_markers: HashSet<(String, String)>,
 }
 
-/// Where the mass matrix is singular: the first speed (and its joint)
-/// whose motion has no inertia at the initial state, and whether it has
-/// none at other configurations either.
-pub(crate) struct Singular {
-    /// The speed: a zero pivot of `M = L D Lᵀ` at the initial state.
-    pub speed: usize,
-    /// The tree joint that speed belongs to.
-    pub joint: usize,
-    /// Singular at two generic configurations too (a motion without
-    /// inertia, a massless leaf), not only at the initial state (two axes
-    /// aligned there, icub's neck).
-    pub everywhere: bool,
-}
-
-/// The mass matrix at the initial state, checked by its `L D Lᵀ` pivots
-/// (see [`crate::mech::numeric::singular_speed`]). `None` when it is
-/// positive definite or cannot be evaluated.
-pub(crate) fn singular_joint(system: &System) -> Option<Singular> {
-    let num = crate::mech::Numeric::new(system).ok()?;
-    let u0 = vec![0.0; system.nu()];
-    let inputs = vec![0.0; system.inputs.len()];
-    // Some(None): positive definite; None: not evaluable.
-    let at = |q: &[f64]| -> Option<Option<usize>> {
-        let terms = num.terms(q, &u0, 0.0, &inputs).ok()?;
-        Some(crate::mech::numeric::singular_speed(&terms.mass_matrix))
-    };
-    let q0 = system.q0();
-    let k = at(&q0)??;
-    let joint = system.graph.tree_joints().iter().copied().find(|&j| {
-        let j = &system.joints[j];
-        j.motion == crate::system::Motion::Free
-            && (j.u_index..j.u_index + j.speed_names.len()).contains(&k)
-    })?;
-    // Two fixed, generic configurations near q0 (quaternions renormalised).
-    let everywhere = (1..=2).all(|s| {
-        let mut q: Vec<f64> = q0
-            .iter()
-            .enumerate()
-            .map(|(i, x)| x + 0.4 * ((0.618_033_988_75 * (i * 7 + s * 13) as f64).fract() - 0.5))
-            .collect();
-        for w in system.quaternion_indices() {
-            let n = q[w..w + 4].iter().map(|x| x * x).sum::<f64>().sqrt();
-            q[w..w + 4].iter_mut().for_each(|x| *x /= n);
-        }
-        at(&q) != Some(None)
-    });
-    Some(Singular {
-        speed: k,
-        joint,
-        everywhere,
-    })
-}
-
 pub(crate) fn is_ident(s: &str) -> bool {
     let mut chars = s.chars();
     chars
@@ -519,7 +466,7 @@ impl Ctx<'_> {
     /// The mass matrix at the initial state must be positive definite:
     /// otherwise the first joint whose motion has no inertia is an error.
     fn check_mass_matrix(&mut self, system: &System) {
-        let Some(s) = singular_joint(system) else {
+        let Some(s) = crate::mech::numeric::singular_joint(system) else {
             return;
         };
         let j = &system.joints[s.joint];

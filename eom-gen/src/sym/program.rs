@@ -185,6 +185,16 @@ pub struct Program {
     pub n_tmps: u32,
 }
 
+impl Program {
+    /// True if a constant operand is infinite or NaN: the program divides
+    /// by a structural zero (or overflows) for every value of its inputs.
+    pub fn has_non_finite_constant(&self) -> bool {
+        let bad = |o: Operand| matches!(o, Operand::Const(n) if !n.to_f64().is_finite());
+        self.instrs.iter().any(|i| i.op.operands().any(bad))
+            || self.outputs.iter().any(|(_, o)| bad(*o))
+    }
+}
+
 /// Options for [`Arena::lower`].
 #[derive(Clone, Copy, Debug)]
 pub struct LowerOptions {
