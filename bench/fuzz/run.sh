@@ -124,7 +124,7 @@ done
     echo "$(cargo fuzz --version 2>/dev/null), debug assertions, no sanitizer, one job,"
     echo "\`-timeout=10 -rss_limit_mb=2048\`; URDF seeds include $nrobots robots of \`example-robot-data\`."
     echo
-    echo "| target | seconds | executions | exec/s | corpus at start | corpus at end | cov | ft | peak RSS MB | crashes | status |"
+    echo "| target | seconds | executions | exec/s | corpus files at start | corpus at end (units) | cov | ft | peak RSS MB | crashes | status |"
     echo "|---|---|---|---|---|---|---|---|---|---|---|"
     printf '%s\n' "${rows[@]}"
 } | tee "${EOM_FUZZ_OUT:-$root/bench/results/fuzz.md}"
