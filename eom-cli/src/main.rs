@@ -164,6 +164,22 @@ enum Command {
         /// code is regenerated with the value.
         #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
         params: Vec<String>,
+        /// Drive an input of the model by a value or an expression of
+        /// parameters, `t`, coordinates and speeds: `NAME=VALUE|EXPR`
+        /// (repeatable; the code is regenerated with it).
+        #[arg(
+            long = "input",
+            value_name = "NAME=VALUE|EXPR",
+            allow_hyphen_values = true
+        )]
+        inputs: Vec<String>,
+        /// Initial positions of the work-precision runs, comma-separated
+        /// (default: the model's q0; the code is regenerated with them).
+        #[arg(long, allow_hyphen_values = true)]
+        q0: Option<String>,
+        /// Initial speeds of the work-precision runs, comma-separated.
+        #[arg(long, allow_hyphen_values = true)]
+        u0: Option<String>,
         /// Per-call cost of the generated functions.
         #[arg(long)]
         per_call: bool,
@@ -276,6 +292,9 @@ fn main() -> ExitCode {
             error_label,
             json,
             params,
+            inputs,
+            q0,
+            u0,
         } => {
             if !plot.is_empty() {
                 if model.is_some() || per_call || work_precision || suite {
@@ -329,15 +348,46 @@ fn main() -> ExitCode {
                     Vec::new()
                 }
             };
+            // Every input is driven (a value is a constant torque): the
+            // timing and sweep programs run the model as generated.
+            let mut drives = Vec::new();
+            for item in &inputs {
+                match item.split_once('=') {
+                    Some((n, v)) if !n.trim().is_empty() && !v.trim().is_empty() => {
+                        drives.push((n.trim().to_string(), v.trim().to_string()));
+                    }
+                    _ => problems.push(format!(
+                        "--input `{item}`: expected NAME=VALUE or NAME=EXPR, e.g. `--input motor=\"2*sin(3*t)\"`"
+                    )),
+                }
+            }
+            let mut initial =
+                |what: &str, text: Option<String>| match text.map(|t| numbers(what, &t)) {
+                    Some(Ok(v)) => Some(v),
+                    Some(Err(e)) => {
+                        problems.push(e);
+                        None
+                    }
+                    None => None,
+                };
+            let (q0, u0) = (initial("q0", q0), initial("u0", u0));
+            if (q0.is_some() || u0.is_some()) && !work_precision {
+                problems.push(
+                    "--q0 and --u0 set the start of the --work-precision runs; --per-call times random states".into(),
+                );
+            }
             if !problems.is_empty() {
                 return fail(&Error::Usage(problems));
             }
-            if suite && !params.is_empty() {
-                eprintln!("error: --param sets a parameter of one model; not with --suite");
+            if suite && !(params.is_empty() && drives.is_empty()) {
+                eprintln!("error: --param and --input set values of one model; not with --suite");
                 return ExitCode::from(2);
             }
             let vary = Vary {
                 params,
+                drives,
+                q0,
+                u0,
                 ..Vary::default()
             };
             if suite {
@@ -577,15 +627,15 @@ fn diagnostics_json(report: &Report) -> serde_json::Value {
 /// than half a second (large models).
 fn generate_with_progress(
     path: &str,
-    params: &[(String, f64)],
-    drives: &[(String, String)],
+    vary: &Vary,
 ) -> Result<eom_gen::Generated, eom_gen::GenerateError> {
+    let (params, drives) = (&vary.params, &vary.drives);
     use std::io::{IsTerminal, Write};
     use std::sync::mpsc;
     use std::time::{Duration, Instant};
     let generate = || {
         let options = eom_gen::EmitOptions::default();
-        if drives.is_empty() {
+        if drives.is_empty() && vary.q0.is_none() && vary.u0.is_none() {
             return eom_gen::generate_file_with_values(path, params, &options);
         }
         let mut checked = eom_gen::model::check_file_with_values(path, params)
@@ -598,6 +648,14 @@ fn generate_with_progress(
                     .into_iter()
                     .map(|e| eom_gen::Diagnostic::file_error(e.message).with_help(e.help))
                     .collect(),
+            }));
+        }
+        if let Err(e) =
+            eom_gen::model::set_initial(&mut checked, vary.q0.as_deref(), vary.u0.as_deref())
+        {
+            return Err(eom_gen::GenerateError::Model(eom_gen::Report {
+                source: checked.source.clone(),
+                diagnostics: vec![eom_gen::Diagnostic::file_error(e)],
             }));
         }
         eom_gen::generate_checked(checked, &options)
@@ -650,6 +708,10 @@ struct Vary {
     inputs: Vec<(String, f64)>,
     /// Inputs driven by expressions (`--input NAME=EXPR`), by name.
     drives: Vec<(String, String)>,
+    /// The model's initial positions replaced (`bench --q0`; regenerates).
+    q0: Option<Vec<f64>>,
+    /// The model's initial speeds replaced (`bench --u0`; regenerates).
+    u0: Option<Vec<f64>>,
 }
 
 impl Vary {
@@ -678,6 +740,7 @@ impl Vary {
                 params,
                 inputs,
                 drives,
+                ..Vary::default()
             }),
             (p, i) => {
                 for e in p
@@ -788,7 +851,7 @@ fn parse_assignments(what: &str, items: &[String]) -> Result<Vec<(String, f64)>,
 
 /// Generates `path` with the parameter values and driven inputs of `vary`.
 fn generated_with(path: &str, vary: &Vary) -> Result<eom_gen::Generated, ExitCode> {
-    generate_with_progress(path, &vary.params, &vary.drives).map_err(|e| {
+    generate_with_progress(path, vary).map_err(|e| {
         eprint!("{e}");
         if !e.to_string().ends_with('\n') {
             eprintln!();
@@ -1415,7 +1478,7 @@ fn bench_suite(dir: &str, out: &str, o: &crate::sweep::WpOptions, t_end_given: b
     let mut sections = String::new();
     for path in &models {
         let p = path.display().to_string();
-        let g = match generate_with_progress(&p, &[], &[]) {
+        let g = match generate_with_progress(&p, &Vary::default()) {
             Ok(g) => g,
             Err(e) => {
                 bars.suspend(|| eprint!("{e}"));

@@ -1331,3 +1331,55 @@ fn an_input_driven_by_an_expression_of_time_and_state() {
     }
     let _ = std::fs::remove_file(&model);
 }
+
+#[test]
+fn bench_takes_the_initial_state_and_driven_inputs() {
+    // The work-precision reference starts where --q0/--u0 say: the
+    // pendulum hanging at rest is an equilibrium (θ stays 0), and with the
+    // motor cancelling gravity (--input motor=m g l sin θ) it turns at its
+    // initial rate, θ(t) = π/2 + u0 t.
+    let model = actuated_pendulum("bench_driven.ron");
+    let sweep = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec![
+            "bench",
+            model.as_str(),
+            "--work-precision",
+            "--t-end",
+            "0.5",
+            "--integrators",
+            "dop853",
+            "--tols",
+            "1e-8",
+            "--min-time",
+            "0",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let out = cached(&args);
+        assert!(
+            out.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).expect("JSON")
+    };
+    let q_final = |v: &serde_json::Value| v["reference"]["q_final"][0].as_f64().unwrap_or(f64::NAN);
+    let v = sweep(&["--q0", "0", "--u0", "0"]);
+    assert_eq!(q_final(&v), 0.0, "{v}");
+    let v = sweep(&["--u0", "1", "--input", "motor=g*m*l*sin(theta)"]);
+    assert!(
+        (q_final(&v) - std::f64::consts::FRAC_PI_2 - 0.5).abs() < 1e-10,
+        "{v}"
+    );
+    // --q0 with --per-call, and a wrong number of values, are refused.
+    let out = eom_gen(&["bench", &model, "--per-call", "--q0", "0"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = cached(&["bench", &model, "--work-precision", "--q0", "0,1"]);
+    assert_ne!(out.status.code(), Some(0));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("q0 has 2 value(s); the model has 1"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_file(&model);
+}

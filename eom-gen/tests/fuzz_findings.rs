@@ -54,7 +54,9 @@ fn point_mass_on_a_hinge_axis_urdf() {
     let src = Source::new("r.urdf", text);
     // The URDF importer checks the mass matrix of every robot and rejects
     // a motion without inertia at every state, at the joint in the URDF.
-    let err = urdf::convert(&src).map(|_| ()).expect_err("rejected at import");
+    let err = urdf::convert(&src)
+        .map(|_| ())
+        .expect_err("rejected at import");
     let out = err.to_string();
     assert!(
         out.contains("r.urdf:9:")

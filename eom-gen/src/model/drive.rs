@@ -164,3 +164,66 @@ pub fn drive_inputs(
     }
     Ok(())
 }
+
+/// Replaces the initial positions and speeds of the coordinates the model
+/// keeps (`eom-gen bench --q0 … --u0 …`): one value per coordinate or
+/// speed, in the model's order, finite.
+pub fn set_initial(
+    checked: &mut Checked,
+    q0: Option<&[f64]>,
+    u0: Option<&[f64]>,
+) -> Result<(), String> {
+    let sys = &mut checked.system;
+    for (what, values, speeds) in [("q0", q0, false), ("u0", u0, true)] {
+        let Some(values) = values else { continue };
+        let names = if speeds {
+            sys.speed_names()
+        } else {
+            sys.coordinate_names()
+        };
+        if values.len() != names.len() {
+            return Err(format!(
+                "{what} has {} value(s); the model has {}: {}",
+                values.len(),
+                names.len(),
+                list_names(names.iter().copied())
+            ));
+        }
+        if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+            return Err(format!("{what} holds {v}; give finite numbers"));
+        }
+        let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+        for (name, &value) in names.iter().zip(values) {
+            let slot = sys.joints.iter_mut().find_map(|j| {
+                let list = if speeds {
+                    &j.speed_names
+                } else {
+                    &j.coordinate_names
+                };
+                let k = list.iter().position(|n| n == name)?;
+                if speeds {
+                    j.u0.get_mut(k)
+                } else {
+                    j.q0.get_mut(k)
+                }
+            });
+            match slot {
+                Some(slot) => {
+                    *slot = Quantity {
+                        expr: Ast::Num(value),
+                        value,
+                        span: slot.span,
+                    };
+                }
+                // Elastic coordinates of flexible bodies start undeformed.
+                None if value == 0.0 => {}
+                None => {
+                    return Err(format!(
+                        "{what}: `{name}` is an elastic coordinate, which starts at zero"
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}

@@ -29,7 +29,7 @@ mod validate;
 // re-exported here under their old paths.
 pub use crate::{diag, expr};
 pub use diag::{Diagnostic, Report, Severity, Source, Span};
-pub use drive::{DriveError, drive_inputs};
+pub use drive::{DriveError, drive_inputs, set_initial};
 pub use load::{Loaded, load, load_in, load_model, load_with};
 pub use read::{Format, read, read_in};
 pub use spec::Spec;
