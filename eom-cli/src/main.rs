@@ -21,6 +21,25 @@ use std::process::ExitCode;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// URDF import: inconsistent inertias of moving links are errors, not
+    /// warnings (see docs/model-format.md, "Inertia policy").
+    #[arg(long, global = true)]
+    strict_inertia: bool,
+    /// URDF import: fix inconsistent inertias of moving links (negative
+    /// principal moments to zero, then the triangle inequality), each fix
+    /// listed in the notes (like MuJoCo's `balanceinertia`).
+    #[arg(long, global = true)]
+    balance_inertia: bool,
+}
+
+/// How this run imports URDF files (`--strict-inertia`, `--balance-inertia`).
+static URDF_OPTIONS: std::sync::OnceLock<eom_gen::urdf::Options> = std::sync::OnceLock::new();
+
+/// Loads and checks a model file of any format with this run's URDF
+/// options and parameter values.
+fn load_checked(path: &str, values: &[(String, f64)]) -> Result<eom_gen::Checked, eom_gen::Report> {
+    let options = URDF_OPTIONS.get().copied().unwrap_or_default();
+    eom_gen::model::load_with(path, &options)?.check_with(std::path::Path::new(""), values)
 }
 
 #[derive(Subcommand)]
@@ -262,6 +281,10 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let _ = URDF_OPTIONS.set(eom_gen::urdf::Options {
+        balance_inertia: cli.balance_inertia,
+        strict: cli.strict_inertia,
+    });
     match cli.command {
         Command::Check { model, json } => check(&model, json),
         Command::Import { urdf, output } => import(&urdf, output.as_deref()),
@@ -512,7 +535,7 @@ fn main() -> ExitCode {
 }
 
 fn check(path: &str, json: bool) -> ExitCode {
-    match eom_gen::check_file(path) {
+    match load_checked(path, &[]) {
         Ok(checked) => {
             eprint!("{}", checked.render_warnings());
             let notes = checked.urdf_notes.clone().unwrap_or_default();
@@ -562,7 +585,8 @@ fn check(path: &str, json: bool) -> ExitCode {
 }
 
 fn import(path: &str, output: Option<&str>) -> ExitCode {
-    let import = match eom_gen::urdf::import_file(path) {
+    let options = URDF_OPTIONS.get().copied().unwrap_or_default();
+    let import = match eom_gen::urdf::import_file_with(path, &options) {
         Ok(i) => i,
         Err(report) => {
             eprint!("{report}");
@@ -635,11 +659,7 @@ fn generate_with_progress(
     use std::time::{Duration, Instant};
     let generate = || {
         let options = eom_gen::EmitOptions::default();
-        if drives.is_empty() && vary.q0.is_none() && vary.u0.is_none() {
-            return eom_gen::generate_file_with_values(path, params, &options);
-        }
-        let mut checked = eom_gen::model::check_file_with_values(path, params)
-            .map_err(eom_gen::GenerateError::Model)?;
+        let mut checked = load_checked(path, params).map_err(eom_gen::GenerateError::Model)?;
         // Checked by `Vary::resolve` before (exit 2), reported again here.
         if let Err(errors) = eom_gen::model::drive_inputs(&mut checked, drives) {
             return Err(eom_gen::GenerateError::Model(eom_gen::Report {
@@ -765,7 +785,7 @@ impl Vary {
             return Ok(Vec::new());
         }
         // An invalid model is reported by the generation that follows.
-        let Ok(mut checked) = eom_gen::check_file(path) else {
+        let Ok(mut checked) = load_checked(path, &[]) else {
             return Ok(Vec::new());
         };
         let mut problems: Vec<String> = Vec::new();
@@ -866,7 +886,10 @@ fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
             type_name: None,
             fma,
         };
-        match eom_gen::generate_file_with(path, &opts) {
+        match load_checked(path, &[])
+            .map_err(eom_gen::GenerateError::Model)
+            .and_then(|c| eom_gen::generate_checked(c, &opts))
+        {
             Ok(g) => g,
             Err(e) => {
                 eprint!("{e}");

@@ -509,6 +509,8 @@ fn bench_work_precision_sweeps_and_writes_csv_and_svg() {
     // (order 4), DOP853's with the tolerance, and the reference (DOP853 at
     // 1e-13) agrees with its check (DOPRI5 at 1e-13) far below every point.
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/wp-test");
+    // Output files go into an existing directory (eom-gen creates none).
+    std::fs::create_dir_all(dir).expect("test directory");
     let (csv, svg) = (format!("{dir}/pendulum.csv"), format!("{dir}/pendulum.svg"));
     let run = cached;
     let out = run(&[

@@ -145,3 +145,49 @@ fn check_json_counts_urdf_warnings() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("warning: inertia of link `thigh`"), "{err}");
 }
+
+/// The inertia policy from the command line: a finger whose principal
+/// moments break the triangle inequality (1e-6 + 1e-6 < 2.1e-6) loads with
+/// a located warning, is an error with `--strict-inertia`, and is balanced
+/// with `--balance-inertia` (the fix listed in the notes); the flags work
+/// on every command (here `check` and `simulate`).
+#[test]
+fn inertia_policy_flags() {
+    let file = format!(
+        "{}/../eom-gen/tests/fixtures/urdf/inconsistent_inertia.urdf",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let o = eom_gen_cli(&["check", &file]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("inconsistent_inertia.urdf:8:8: warning"),
+        "{err}"
+    );
+    let o = eom_gen_cli(&["check", &file, "--strict-inertia"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("inconsistent_inertia.urdf:8:8: error"),
+        "{err}"
+    );
+    let o = eom_gen_cli(&["--balance-inertia", "check", &file]);
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{text}");
+    assert!(text.contains("balanced (balance_inertia)"), "{text}");
+    assert!(!text.contains("warning"), "{text}");
+    let o = eom_gen_cli(&[
+        "simulate",
+        &file,
+        "--t-end",
+        "0.1",
+        "--interpret",
+        "--strict-inertia",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}

@@ -25,6 +25,8 @@ pub struct Loaded {
     pub urdf_notes: Option<Vec<String>>,
     /// For a URDF, the conversion's warnings, located in the URDF.
     pub urdf_warnings: Option<Report>,
+    /// How URDF files are imported: this one, and a scene's URDF model.
+    pub urdf_options: urdf::Options,
 }
 
 impl Loaded {
@@ -48,6 +50,7 @@ impl Loaded {
                         source: src,
                         diagnostics: import.warnings,
                     }),
+                    urdf_options: *options,
                 })
             }
             format => Ok(Loaded {
@@ -55,6 +58,7 @@ impl Loaded {
                 source: src,
                 urdf_notes: None,
                 urdf_warnings: None,
+                urdf_options: *options,
             }),
         }
     }
@@ -79,7 +83,7 @@ impl Loaded {
     /// closest name.
     pub fn check_with(&self, root: &Path, values: &[(String, f64)]) -> Result<Checked, Report> {
         match self.format {
-            Format::Scene => check_scene(&self.source, root, values),
+            Format::Scene => check_scene(&self.source, root, values, &self.urdf_options),
             Format::Ron | Format::Urdf => {
                 let mut checked = check_model_with(&self.source, values)?;
                 checked.urdf_notes = self.urdf_notes.clone();
@@ -124,7 +128,12 @@ pub fn load_with(path: &str, options: &urdf::Options) -> Result<Loaded, Report> 
 
 /// A scene: reads and validates its model (RON or URDF, relative to
 /// `root`), then validates the scene against it and applies it.
-fn check_scene(src: &Source, root: &Path, values: &[(String, f64)]) -> Result<Checked, Report> {
+fn check_scene(
+    src: &Source,
+    root: &Path,
+    values: &[(String, f64)],
+    options: &urdf::Options,
+) -> Result<Checked, Report> {
     let spec = scene::parse(src)?;
     let shown = scene::model_path(&src.path, &spec.model);
     let shown_str = shown.display().to_string();
@@ -139,7 +148,7 @@ fn check_scene(src: &Source, root: &Path, values: &[(String, f64)]) -> Result<Ch
             "`model` is the path of a `.ron` model or `.urdf` file, relative to this scene file",
         )
     })?;
-    let model = Loaded::from_source(read?)?;
+    let model = Loaded::from_source_with(read?, options)?;
     if model.format == Format::Scene {
         return Err(scene::model_error(
             src,

@@ -1311,12 +1311,12 @@ fn check_inertia(cx: &mut Ctx, link: &mut Link, on_ground: bool, options: &Optio
         cx.error(
             i.span,
             message,
-            format!("{help} (strict mode; `balance_inertia` fixes it)"),
+            format!("{help} (strict mode; `--balance-inertia` or `urdf::Options::balance_inertia` fixes it)"),
         );
     } else {
         cx.warnings.push(
             Diagnostic::warning(i.span, message).with_help(format!(
-                "kept as written (the mass matrix is checked instead); import with `balance_inertia` to fix it, or `strict` to reject it. {help}"
+                "kept as written (the mass matrix is checked instead); import with `--balance-inertia` (`urdf::Options::balance_inertia`) to fix it, or `--strict-inertia` to reject it. {help}"
             )),
         );
     }
