@@ -408,10 +408,17 @@ impl Stop {
                     .cloned()
                     .unwrap_or_else(|| "multiplier".into()),
             },
-            #[allow(unreachable_patterns)]
-            other => Stop::Failed {
-                t: f64::NAN,
-                message: format!("{other:?}"),
+            StopReason::StiffnessDetected { t } => Stop::Failed {
+                t,
+                message: "the problem became stiff for the explicit integrator; use --integrator \
+                          radau5"
+                    .into(),
+            },
+            StopReason::ConvergenceFailure { t } => Stop::Failed {
+                t,
+                message: "the implicit integrator's Newton iteration did not converge (a singular \
+                          constraint or mass matrix, or a step the iteration cannot follow)"
+                    .into(),
             },
         }
     }
