@@ -354,9 +354,9 @@ impl std::fmt::Display for Refusal {
                 f,
                 "--constraints {method} stopped at t = {t} s near a singular configuration: the \
                  constraint Jacobian is losing rank (σ_r/σ_1 = {singular_ratio:.1e}; links \
-                 aligned, the mobility changes there), where its stabilisation terms divided by \
-                 the vanishing singular value would corrupt the motion; use --constraints \
-                 {recommended}"
+                 aligned, the mobility changes there), where this method's multipliers are \
+                 undetermined along the vanishing direction and would corrupt the motion; use \
+                 --constraints {recommended}"
             ),
         }
     }
@@ -1012,6 +1012,49 @@ pub struct ConstrainedSystem<'a, D: ?Sized> {
     start_rank: std::cell::Cell<Option<usize>>,
 }
 
+/// `σ_r / σ_1` of `J M^{-1/2}` at `(t, q)`, `r` the rank at the first state
+/// asked about (kept in `start_rank`); 1 without constraints, 0 where `M`
+/// is not positive definite.
+fn weighted_singular_ratio<D: Dynamics + ?Sized>(
+    d: &D,
+    t: f64,
+    q: &[f64],
+    start_rank: &std::cell::Cell<Option<usize>>,
+) -> f64 {
+    let (nu, nc) = (d.nu(), d.nc());
+    let mut m = DMatrix::zeros(nu, nu);
+    let mut c = ConstraintValues::zeros(nc, nu);
+    d.mass_matrix(t, q, &mut m);
+    d.constraints(t, q, &vec![0.0; nu], &mut c);
+    let Some(l) = m.cholesky().map(|c| c.l()) else {
+        return 0.0;
+    };
+    let Some(at) = l.solve_lower_triangular(&c.jacobian.transpose()) else {
+        return 0.0;
+    };
+    let sigma = singular_values(&at);
+    let r = match start_rank.get() {
+        Some(r) => r,
+        None => {
+            let r = numerical_rank(&sigma);
+            start_rank.set(Some(r));
+            r
+        }
+    };
+    match (r, sigma.first()) {
+        (0, _) | (_, None) => 1.0,
+        (r, Some(&s1)) => sigma.get(r - 1).copied().unwrap_or(0.0) / s1.max(f64::MIN_POSITIVE),
+    }
+}
+
+/// [`Method::Index3`] refuses to go on when `σ_r/σ_1` of `J M^{-1/2}` falls
+/// below this at an accepted state: near a rank drop of `J` the index-3
+/// DAE's multipliers are undetermined along the vanishing direction, and
+/// RADAU5 either crosses to another motion (the four-bar at loose
+/// tolerances: energy off by 3e-4) or its Newton iteration fails (at
+/// tight ones).
+pub const INDEX3_SINGULAR_LIMIT: f64 = 5e-2;
+
 /// [`Method::Baumgarte`] refuses to go on when `σ_r/σ_1` of `J M^{-1/2}`
 /// (`r` the rank at the start) falls below this: its terms `−2αΦ̇ − β²Φ`
 /// have components along the vanishing singular direction, which the
@@ -1040,30 +1083,7 @@ impl<'a, D: Dynamics + ?Sized> ConstrainedSystem<'a, D> {
     /// `σ_r / σ_1` of `J M^{-1/2}` at a state, `r` the rank at the first
     /// state asked about; 1 without constraints.
     fn singular_ratio(&self, t: f64, q: &[f64]) -> f64 {
-        let (nu, nc) = (self.d.nu(), self.d.nc());
-        let mut m = DMatrix::zeros(nu, nu);
-        let mut c = ConstraintValues::zeros(nc, nu);
-        self.d.mass_matrix(t, q, &mut m);
-        self.d.constraints(t, q, &vec![0.0; nu], &mut c);
-        let Some(l) = m.cholesky().map(|c| c.l()) else {
-            return 0.0;
-        };
-        let Some(at) = l.solve_lower_triangular(&c.jacobian.transpose()) else {
-            return 0.0;
-        };
-        let sigma = singular_values(&at);
-        let r = match self.start_rank.get() {
-            Some(r) => r,
-            None => {
-                let r = numerical_rank(&sigma);
-                self.start_rank.set(Some(r));
-                r
-            }
-        };
-        match (r, sigma.first()) {
-            (0, _) | (_, None) => 1.0,
-            (r, Some(&s1)) => sigma.get(r - 1).copied().unwrap_or(0.0) / s1.max(f64::MIN_POSITIVE),
-        }
+        weighted_singular_ratio(self.d, t, q, &self.start_rank)
     }
 
     /// Refuses (see [`Refusal`]) when `self.method` cannot go on at `(t, q)`.
@@ -1281,6 +1301,7 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for ConstrainedSystem<'_
 pub struct Index3System<'a, D: ?Sized> {
     d: &'a D,
     stats: Recorder,
+    start_rank: std::cell::Cell<Option<usize>>,
 }
 
 impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
@@ -1289,7 +1310,14 @@ impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
         Index3System {
             d,
             stats: Recorder::new(),
+            start_rank: std::cell::Cell::new(None),
         }
+    }
+
+    /// Why the run was stopped, if the DAE refused to go on (near a
+    /// singular configuration, see [`INDEX3_SINGULAR_LIMIT`]).
+    pub fn refusal(&self) -> Option<Refusal> {
+        self.stats.0.borrow().0.refusal.clone()
     }
 
     /// (index-2 variables, index-3 variables) for
@@ -1349,6 +1377,11 @@ impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
 
 impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for Index3System<'_, D> {
     fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
+        if self.stats.0.borrow().0.refusal.is_some() {
+            // Refused (see `project`): the run stops here.
+            dy.iter_mut().for_each(|d| *d = f64::NAN);
+            return;
+        }
         let d = self.d;
         let (nq, nu, nc, nh) = (d.nq(), d.nu(), d.nc(), d.n_holonomic());
         let q = &y[..nq];
@@ -1394,6 +1427,17 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for Index3System<'_, D> 
         let mut c = ConstraintValues::zeros(d.nc(), nu);
         d.constraints(t, &y[..nq], &y[nq..nq + nu], &mut c);
         self.stats.record(d.n_holonomic(), &c);
+        if d.nc() > 0 && self.stats.0.borrow().0.refusal.is_none() {
+            let ratio = weighted_singular_ratio(d, t, &y[..nq], &self.start_rank);
+            if ratio < INDEX3_SINGULAR_LIMIT {
+                self.stats.0.borrow_mut().0.refusal = Some(Refusal::SingularConfiguration {
+                    method: "index3",
+                    t,
+                    singular_ratio: ratio,
+                    recommended: "projection or partitioning",
+                });
+            }
+        }
         !d.quaternions().is_empty()
     }
 }

@@ -967,7 +967,14 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         let cpu = start.elapsed().as_secs_f64();
         let lambda = dae.multipliers(&sol.y_final);
         let c = constrained(dae.stats(), lambda, &sol.y_final[..nq], sol.t_final);
-        let report = finish(model, &names, &state_names, &sol, &y0, cpu, Some(c));
+        let mut report = finish(model, &names, &state_names, &sol, &y0, cpu, Some(c));
+        if let Some(r) = dae.refusal() {
+            let super::constrained::Refusal::SingularConfiguration { t, .. } = r;
+            report.stop = Stop::Failed {
+                t,
+                message: r.to_string(),
+            };
+        }
         let outputs_at = ConstrainedSystem::new(model, Method::Projection);
         write_csv(model, &names, options, &sol, &|t, y| {
             outputs_at.accelerations(t, &y[..nq], &y[nq..nq + nu])
