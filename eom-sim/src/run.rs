@@ -16,6 +16,7 @@ use crate::constrained::{
     ConstrainedModel, ConstrainedSystem, ConstraintStats, Dynamics, Generated, Index3System,
     Method, assemble,
 };
+pub use crate::integrate::by_name::{Integrator, UnknownName};
 use crate::integrate::by_name::{Settings, solve};
 use crate::integrate::driver::{Solution, SolveOptions};
 use crate::integrate::system::OdeSystem;
@@ -27,111 +28,6 @@ use std::time::Instant;
 
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
-
-/// The integrators, one name each (as `eom-gen simulate --integrator`
-/// takes them).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
-#[cfg_attr(feature = "serde", serde(rename_all = "lowercase"))]
-pub enum Integrator {
-    /// Explicit Euler, fixed step.
-    Euler,
-    /// Classical Runge–Kutta, fixed step.
-    Rk4,
-    /// Implicit midpoint rule, fixed step, symplectic.
-    Midpoint,
-    /// Dormand–Prince 5(4), adaptive.
-    Dopri5,
-    /// Dormand–Prince 8(5,3), adaptive.
-    Dop853,
-    /// Radau IIA order 5, implicit, adaptive (stiff problems, index-3 DAEs).
-    Radau5,
-}
-
-impl Integrator {
-    /// Every integrator, in the order of the docs.
-    pub const ALL: [Integrator; 6] = [
-        Integrator::Euler,
-        Integrator::Rk4,
-        Integrator::Midpoint,
-        Integrator::Dopri5,
-        Integrator::Dop853,
-        Integrator::Radau5,
-    ];
-
-    /// Its name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Integrator::Euler => "euler",
-            Integrator::Rk4 => "rk4",
-            Integrator::Midpoint => "midpoint",
-            Integrator::Dopri5 => "dopri5",
-            Integrator::Dop853 => "dop853",
-            Integrator::Radau5 => "radau5",
-        }
-    }
-
-    /// True for the methods with error control (tolerances), false for the
-    /// fixed-step ones (a step size).
-    pub fn is_adaptive(self) -> bool {
-        matches!(
-            self,
-            Integrator::Dopri5 | Integrator::Dop853 | Integrator::Radau5
-        )
-    }
-}
-
-impl fmt::Display for Integrator {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// A name that is not one of a list.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct UnknownName {
-    /// What was named (`integrator`, `constraint method`).
-    pub what: &'static str,
-    /// The name given.
-    pub name: String,
-    /// The names known.
-    pub known: Vec<&'static str>,
-    /// A known name the given one was probably meant to be.
-    pub hint: Option<&'static str>,
-}
-
-impl fmt::Display for UnknownName {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "unknown {} `{}`; choose one of {}",
-            self.what,
-            self.name,
-            self.known.join(", ")
-        )?;
-        if let Some(h) = self.hint {
-            write!(f, " (did you mean `{h}`?)")?;
-        }
-        Ok(())
-    }
-}
-
-impl std::error::Error for UnknownName {}
-
-impl FromStr for Integrator {
-    type Err = UnknownName;
-    fn from_str(s: &str) -> Result<Self, UnknownName> {
-        Integrator::ALL
-            .into_iter()
-            .find(|i| i.name() == s)
-            .ok_or_else(|| UnknownName {
-                what: "integrator",
-                name: s.to_string(),
-                known: Integrator::ALL.iter().map(|i| i.name()).collect(),
-                hint: None,
-            })
-    }
-}
 
 impl Method {
     /// The methods with their default settings, in the order of the docs.
