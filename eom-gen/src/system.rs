@@ -270,6 +270,19 @@ pub struct JointInfo {
     pub span: Span,
 }
 
+/// What [`System::set_initial_value`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InitialValue {
+    /// The value was set.
+    Set,
+    /// The name belongs to a locked, prescribed or cut joint, which has no
+    /// coordinates of the model.
+    NotFree,
+    /// No joint has that coordinate or speed (an elastic coordinate of a
+    /// flexible body, or a name the model does not have).
+    Unknown,
+}
+
 /// A point on a body.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Point {
@@ -458,6 +471,35 @@ impl System {
             let child = self.joints[j].child;
             self.bodies[child].flexible.as_deref().map(|f| (child, f))
         })
+    }
+
+    /// Sets the initial value of the joint coordinate `name` (or, with
+    /// `speed`, the joint speed `name`) to the number `value`; what became
+    /// of it.
+    pub fn set_initial_value(&mut self, name: &str, speed: bool, value: f64) -> InitialValue {
+        let found = self.joints.iter_mut().find_map(|j| {
+            let names = if speed {
+                &j.speed_names
+            } else {
+                &j.coordinate_names
+            };
+            let k = names.iter().position(|n| n == name)?;
+            let free = j.motion == Motion::Free;
+            let values = if speed { &mut j.u0 } else { &mut j.q0 };
+            Some((free, values.get_mut(k)?))
+        });
+        match found {
+            Some((true, slot)) => {
+                *slot = Quantity {
+                    expr: Ast::Num(value),
+                    value,
+                    span: slot.span,
+                };
+                InitialValue::Set
+            }
+            Some((false, _)) => InitialValue::NotFree,
+            None => InitialValue::Unknown,
+        }
     }
 
     /// Names of the position coordinates `q`, in order.

@@ -14,7 +14,7 @@
 
 use crate::constrained::{
     ConstrainedModel, ConstrainedSystem, ConstraintStats, Dynamics, Generated, Index3System,
-    Method, assemble,
+    Method, Refusal, assemble,
 };
 pub use crate::integrate::by_name::{Integrator, UnknownName};
 use crate::integrate::by_name::{Settings, solve};
@@ -316,6 +316,19 @@ impl Stop {
                           constraint or mass matrix, or a step the iteration cannot follow)"
                     .into(),
             },
+        }
+    }
+}
+
+/// A method that refused to go on stopped the run on purpose (its
+/// right-hand side is NaN from there on): the stop is its reason, not the
+/// NaN it left behind.
+impl From<&Refusal> for Stop {
+    fn from(r: &Refusal) -> Stop {
+        let Refusal::SingularConfiguration { t, .. } = r;
+        Stop::Failed {
+            t: *t,
+            message: r.to_string(),
         }
     }
 }
@@ -865,11 +878,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         let c = constrained(dae.stats(), lambda, &sol.y_final[..nq], sol.t_final);
         let mut report = finish(model, &names, &state_names, &sol, &y0, cpu, Some(c));
         if let Some(r) = dae.refusal() {
-            let super::constrained::Refusal::SingularConfiguration { t, .. } = r;
-            report.stop = Stop::Failed {
-                t,
-                message: r.to_string(),
-            };
+            report.stop = Stop::from(&r);
         }
         let outputs_at = ConstrainedSystem::new(model, Method::Projection);
         write_csv(model, &names, options, &sol, &|t, y| {
@@ -892,13 +901,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
     let c = constrained(cs.stats(), lambda, q, sol.t_final);
     let mut report = finish(model, &names, &state_names, &sol, &y0, cpu, Some(c));
     if let Some(r) = cs.refusal() {
-        // The method stopped the run on purpose (its right-hand side is NaN
-        // from there on): its reason, not the NaN it left behind.
-        let super::constrained::Refusal::SingularConfiguration { t, .. } = r;
-        report.stop = Stop::Failed {
-            t,
-            message: r.to_string(),
-        };
+        report.stop = Stop::from(&r);
     }
     write_csv(model, &names, options, &sol, &|t, y| {
         cs.accelerations(t, &y[..nq], &y[nq..nq + nu])

@@ -9,7 +9,7 @@
 use super::Checked;
 use crate::diag::{Span, did_you_mean, list_names};
 use crate::expr::Ast;
-use crate::system::{Force, ForceElement, Quantity};
+use crate::system::{Force, ForceElement, InitialValue, Quantity};
 use std::collections::HashMap;
 use std::fmt;
 
@@ -194,34 +194,12 @@ pub fn set_initial(
         }
         let names: Vec<String> = names.iter().map(|n| n.to_string()).collect();
         for (name, &value) in names.iter().zip(values) {
-            let slot = sys.joints.iter_mut().find_map(|j| {
-                let list = if speeds {
-                    &j.speed_names
-                } else {
-                    &j.coordinate_names
-                };
-                let k = list.iter().position(|n| n == name)?;
-                if speeds {
-                    j.u0.get_mut(k)
-                } else {
-                    j.q0.get_mut(k)
-                }
-            });
-            match slot {
-                Some(slot) => {
-                    *slot = Quantity {
-                        expr: Ast::Num(value),
-                        value,
-                        span: slot.span,
-                    };
-                }
-                // Elastic coordinates of flexible bodies start undeformed.
-                None if value == 0.0 => {}
-                None => {
-                    return Err(format!(
-                        "{what}: `{name}` is an elastic coordinate, which starts at zero"
-                    ));
-                }
+            // The model's own names: a joint's (set), or an elastic
+            // coordinate of a flexible body, which starts undeformed.
+            if sys.set_initial_value(name, speeds, value) != InitialValue::Set && value != 0.0 {
+                return Err(format!(
+                    "{what}: `{name}` is an elastic coordinate, which starts at zero"
+                ));
             }
         }
     }

@@ -20,7 +20,8 @@ pub use crate::functions::Function;
 use crate::functions::{FunctionSet, When};
 use crate::graph::JointId;
 use crate::system::{
-    ConstraintKind, ForceElement, JointType, Motion, OutputKind, Parameter, Quantity, System,
+    ConstraintKind, ForceElement, InitialValue, JointType, Motion, OutputKind, Parameter, Quantity,
+    System,
 };
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashSet};
@@ -342,39 +343,23 @@ impl Ctx<'_> {
         for (field, map, speeds) in [("q0", &scene.q0, false), ("u0", &scene.u0, true)] {
             for (name, &value) in map {
                 let path = [f(field)];
-                let found = sys.joints.iter_mut().find_map(|j| {
-                    let names = if speeds {
-                        &j.speed_names
-                    } else {
-                        &j.coordinate_names
-                    };
-                    let k = names.iter().position(|n| n == name)?;
-                    Some((
-                        j.motion == Motion::Free,
-                        if speeds { &mut j.u0 } else { &mut j.q0 },
-                        k,
-                    ))
-                });
                 let what = if speeds { "speed" } else { "coordinate" };
-                match found {
-                    _ if !value.is_finite() => self.error(
+                if !value.is_finite() {
+                    self.error(
                         &path,
                         format!("{field} of `{name}` is {value}"),
                         "give a finite number",
-                    ),
-                    Some((true, values, k)) if k < values.len() => {
-                        values[k] = Quantity {
-                            expr: Ast::Num(value),
-                            value,
-                            span: values[k].span,
-                        };
-                    }
-                    Some(_) => self.error(
+                    );
+                    continue;
+                }
+                match sys.set_initial_value(name, speeds, value) {
+                    InitialValue::Set => {}
+                    InitialValue::NotFree => self.error(
                         &path,
                         format!("{what} `{name}` belongs to a locked, prescribed or cut joint"),
                         "only the coordinates and speeds of the generated model have initial values",
                     ),
-                    None => {
+                    InitialValue::Unknown => {
                         let names: Vec<&str> = if speeds {
                             sys.speed_names()
                         } else {
