@@ -99,7 +99,10 @@ fn clean_block(values: &[f64]) -> impl Fn(f64) -> f64 {
 }
 
 fn matrix<S: Scalar>(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<S>> {
-    let c = clean_block(m.as_slice());
+    matrix_with(m, &clean_block(m.as_slice()))
+}
+
+fn matrix_with<S: Scalar>(m: &nalgebra::DMatrix<f64>, c: &dyn Fn(f64) -> f64) -> Vec<Vec<S>> {
     (0..m.nrows())
         .map(|r| (0..m.ncols()).map(|j| S::from_f64(c(m[(r, j)]))).collect())
         .collect()
@@ -150,7 +153,18 @@ impl<S: Scalar> FlexModel<S> {
         let s_bar = (0..k)
             .map(|j| Vec3(std::array::from_fn(|r| S::from_f64(cs(inv.s_bar[(r, j)])))))
             .collect();
-        let s_ij = std::array::from_fn(|i| std::array::from_fn(|j| matrix(&inv.s_ij[i][j])));
+        // One scale for the nine blocks: a block that is round-off
+        // throughout (e.g. `S̄_xx` of bending modes, which do not move
+        // axially) must vanish, not be kept relative to its own noise.
+        let all_s: Vec<f64> = inv
+            .s_ij
+            .iter()
+            .flatten()
+            .flat_map(|m| m.iter().copied())
+            .collect();
+        let cs_ij = clean_block(&all_s);
+        let s_ij =
+            std::array::from_fn(|i| std::array::from_fn(|j| matrix_with(&inv.s_ij[i][j], &cs_ij)));
         let all_x: Vec<f64> = inv
             .x_s
             .iter()
@@ -159,7 +173,10 @@ impl<S: Scalar> FlexModel<S> {
             .collect();
         let cx = clean_block(&all_x);
         let x_s = std::array::from_fn(|i| std::array::from_fn(|j| vector(&inv.x_s[i][j], &cx)));
-        let cp = clean_block(inv.spin_modes.as_slice());
+        // `c_p` joins `Ī_θf`'s torsion row: the same scale as `X`, so that
+        // without torsion modes it vanishes instead of keeping round-off.
+        let x_and_spin: Vec<f64> = all_x.iter().chain(inv.spin_modes.iter()).copied().collect();
+        let cp = clean_block(&x_and_spin);
         let zeta = low.quantity(&flex.damping)?;
         let damping = (0..k)
             .map(|r| {
