@@ -17,7 +17,7 @@ use crate::diag::Span;
 use crate::expr::Ast;
 use crate::flex::{Beam, Invariants, Modes, Reference};
 use crate::graph::{BodyId, Graph, JointId};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector3};
 
 /// An expression from the model with its value at the default parameters.
 #[derive(Clone, Debug, PartialEq)]
@@ -101,9 +101,14 @@ pub struct MarkerInfo {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlexInfo {
     /// The beam's data as written (length, `ρA`, `ρI_p`, `EA`, `EI_y`,
-    /// `EI_z`, `GJ`), in that order.
-    pub written: [Quantity; 7],
-    /// The beam at the defaults.
+    /// `EI_z`, `GJ`), in that order; for assumed modes then the shape
+    /// expressions; none for imported data. None may be tunable.
+    pub written: Vec<Quantity>,
+    /// Where the shape functions come from. `beam`, `reference` and
+    /// `modes.shapes` describe a built-in beam only for [`FlexSource::Beam`].
+    pub source: FlexSource,
+    /// The beam at the defaults (for assumed modes the section data, with
+    /// `elements` 1; for imported data a placeholder: see `source`).
     pub beam: Beam,
     /// Its reference conditions.
     pub reference: Reference,
@@ -132,6 +137,73 @@ impl FlexInfo {
     pub fn count(&self) -> usize {
         self.modes.count()
     }
+
+    /// For assumed modes and imported data, the damping matrix
+    /// `D_ff = ζ D_1 + D_0` as `(D_1, D_0)`: `D_1 = M_ff Φ diag(2 ω_i) Φᵀ M_ff`
+    /// damps every normal mode of the reduced body by the ratio `ζ`
+    /// ([`crate::flex::ritz`]), `D_0` is the imported file's. `None` for the
+    /// beam, whose mass-normalised modes take `D_ff = 2 ζ diag(ω_i)`.
+    pub fn damping_matrices(&self) -> Option<(&DMatrix<f64>, Option<&DMatrix<f64>>)> {
+        match &self.source {
+            FlexSource::Beam => None,
+            FlexSource::Assumed { damping_unit, .. } => Some((damping_unit, None)),
+            FlexSource::Modal {
+                damping_unit,
+                damping,
+                ..
+            } => Some((damping_unit, Some(damping))),
+        }
+    }
+
+    /// For assumed modes, the geometric stiffness per `Ω²` of the
+    /// centrifugal load (the beam's is computed from its FE model).
+    pub fn assumed_geometric_stiffness(&self) -> Option<&DMatrix<f64>> {
+        match &self.source {
+            FlexSource::Assumed { geometric, .. } => Some(geometric),
+            _ => None,
+        }
+    }
+
+    /// Undeformed position of node `node` in body axes: on the beam axis for
+    /// a beam, from the file for imported data; assumed modes have no nodes.
+    pub fn node_position(&self, node: usize) -> Option<Vector3<f64>> {
+        match &self.source {
+            FlexSource::Beam => {
+                (node < self.beam.nodes()).then(|| Vector3::new(self.beam.node_x(node), 0.0, 0.0))
+            }
+            FlexSource::Assumed { .. } => None,
+            FlexSource::Modal { positions, .. } => positions.get(node).copied(),
+        }
+    }
+}
+
+/// Where a flexible body's shape functions come from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FlexSource {
+    /// The built-in beam's normal modes.
+    Beam,
+    /// Assumed modes (Rayleigh–Ritz): shape functions of `x` written in the
+    /// model; no nodes (`modes.shapes` is `0 × k`).
+    Assumed {
+        /// `K_G1`, the geometric stiffness per `Ω²` (k×k).
+        geometric: DMatrix<f64>,
+        /// `D_1`: damping per unit ratio ζ (k×k).
+        damping_unit: DMatrix<f64>,
+    },
+    /// Modal data imported from a file; `modes.shapes` holds the nodal
+    /// shapes (`6N × k`, the beam's layout).
+    Modal {
+        /// The file as found (relative to the working directory).
+        path: String,
+        /// Node positions, body axes, m.
+        positions: Vec<Vector3<f64>>,
+        /// Node names (`None` where unnamed).
+        names: Vec<Option<String>>,
+        /// `D_1`: damping per unit ratio ζ (k×k).
+        damping_unit: DMatrix<f64>,
+        /// `D_0`: the file's damping matrix (k×k, zeros if none).
+        damping: DMatrix<f64>,
+    },
 }
 
 /// A body; index 0 is ground.

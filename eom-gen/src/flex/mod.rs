@@ -14,13 +14,20 @@
 //!   modes and Craig–Bampton modes;
 //! - [`invariants`]: the inertia shape integrals of the reduced body
 //!   (Shabana 5.2; Wallrapp's standard input data);
+//! - [`assumed`]: assumed modes (Rayleigh–Ritz) of a slender body, shape
+//!   functions of `x` integrated by Gauss–Legendre quadrature;
+//! - [`imported`]: modal data of an external FE model (file format, lumped-mass
+//!   invariants); [`ritz`]: the checks and normal modes of such given bases;
 //! - [`ffr`]: the FFR mass matrix `M(q)` and quadratic velocity vector `Q_v`
 //!   of one free flexible body (Shabana 5.5).
 
+pub mod assumed;
 pub mod beam;
 pub mod ffr;
+pub mod imported;
 pub mod invariants;
 pub mod modes;
+pub mod ritz;
 
 pub use beam::{Beam, Deformation, NodeDof, Section};
 pub use ffr::{mass_matrix, quadratic_velocity};

@@ -178,20 +178,49 @@ impl<S: Scalar> FlexModel<S> {
         let x_and_spin: Vec<f64> = all_x.iter().chain(inv.spin_modes.iter()).copied().collect();
         let cp = clean_block(&x_and_spin);
         let zeta = low.quantity(&flex.damping)?;
-        let damping = (0..k)
-            .map(|r| {
-                (0..k)
-                    .map(|c| {
-                        if r == c && !zeta.is_zero() {
-                            S::from_f64(2.0 * flex.modes.frequencies[r]) * zeta
-                        } else {
-                            S::zero()
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
+        let damping = if let Some((unit, fixed)) = flex.damping_matrices() {
+            // Assumed modes, imported data: D_ff = ζ D_1 + D_0 in the written coordinates.
+            let cu = clean_block(unit.as_slice());
+            let c0 = fixed.map(|d| clean_block(d.as_slice()));
+            (0..k)
+                .map(|r| {
+                    (0..k)
+                        .map(|c| {
+                            let mut d = S::zero();
+                            let u = cu(unit[(r, c)]);
+                            if u != 0.0 && !zeta.is_zero() {
+                                d = S::from_f64(u) * zeta;
+                            }
+                            if let (Some(fixed), Some(c0)) = (fixed, &c0) {
+                                let v = c0(fixed[(r, c)]);
+                                if v != 0.0 {
+                                    d = d + S::from_f64(v);
+                                }
+                            }
+                            d
+                        })
+                        .collect()
+                })
+                .collect()
+        } else {
+            (0..k)
+                .map(|r| {
+                    (0..k)
+                        .map(|c| {
+                            if r == c && !zeta.is_zero() {
+                                S::from_f64(2.0 * flex.modes.frequencies[r]) * zeta
+                            } else {
+                                S::zero()
+                            }
+                        })
+                        .collect()
+                })
+                .collect()
+        };
         let stiffening = flex.stiffening.then(|| {
+            if let Some(g) = flex.assumed_geometric_stiffness() {
+                return matrix(g);
+            }
             let beam = &flex.beam;
             matrix(&modal_geometric_stiffness(beam, &flex.modes, &|x| {
                 beam.centrifugal_force(0.0, x)

@@ -231,10 +231,96 @@ pub enum Flexible {
         #[serde(default, skip_serializing_if = "Num::is_zero")]
         damping: Num,
     },
+    /// Assumed modes (Rayleigh–Ritz; Shabana 5.1): a straight slender body
+    /// along the body `x` axis from the origin to `x = length`, whose
+    /// deformation is `Σ_j q_fj S_j(x)` with shape functions written as
+    /// expressions of the body coordinate `x` (and parameters).
+    AssumedModes {
+        /// Length `L`, m.
+        length: Num,
+        /// Mass per length `ρA`, kg/m.
+        rho_a: Num,
+        /// Polar mass moment per length `ρI_p`, kg m (torsion inertia).
+        rho_ip: Num,
+        /// Axial stiffness `EA`, N.
+        ea: Num,
+        /// Bending stiffness about `y` (bending in the `x–z` plane), N m².
+        ei_y: Num,
+        /// Bending stiffness about `z` (bending in the `x–y` plane), N m².
+        ei_z: Num,
+        /// Torsional stiffness `GJ`, N m².
+        gj: Num,
+        /// The shape functions, one per elastic coordinate.
+        shapes: Vec<AssumedShape>,
+        /// Geometric stiffening by the centrifugal axial load.
+        #[serde(default, skip_serializing_if = "is_false")]
+        stiffening: bool,
+        /// Damping ratio `ζ` of every normal mode of the reduced body.
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        damping: Num,
+    },
+    /// Modal data imported from an external finite-element model: a RON or
+    /// JSON file (`ModalData(…)`, see `docs/model-format.md`) with nodes,
+    /// lumped masses, mode shapes at the nodes and the modal matrices.
+    Modal {
+        /// The file, relative to the model file's directory.
+        file: String,
+        /// Damping ratio `ζ` of every normal mode of the reduced body, on top
+        /// of the file's damping matrix.
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        damping: Num,
+    },
+}
+
+/// One assumed shape function: the axial, lateral and torsional parts of
+/// the deformation it describes, each an expression of `x` (m) and the
+/// parameters; absent parts are zero.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AssumedShape {
+    /// Axial displacement `u(x)`, m per unit coordinate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub u: Option<Num>,
+    /// Lateral displacement along `y`, `v(x)` (bending with `EI_z`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub v: Option<Num>,
+    /// Lateral displacement along `z`, `w(x)` (bending with `EI_y`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub w: Option<Num>,
+    /// Torsion angle `φ(x)` about `x`, rad per unit coordinate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub phi: Option<Num>,
+}
+
+/// One of the six degrees of freedom of a beam node.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum NodeDofName {
+    /// Axial translation `u_x`.
+    Ux,
+    /// Translation `u_y`.
+    Uy,
+    /// Translation `u_z`.
+    Uz,
+    /// Torsion `θ_x`.
+    Rx,
+    /// Bending rotation `θ_y`.
+    Ry,
+    /// Bending rotation `θ_z`.
+    Rz,
+}
+
+/// Degrees of freedom of one beam node held at zero (a `Fixed` reference).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FixedNode {
+    /// The node, `0..=elements`.
+    pub node: usize,
+    /// Its degrees of freedom that do not deform.
+    pub dofs: Vec<NodeDofName>,
 }
 
 /// Reference conditions of a built-in beam (Shabana 6.2).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum BeamReference {
     /// The tangent frame: node 0 neither moves nor rotates (clamped–free modes).
     Clamped,
@@ -243,6 +329,9 @@ pub enum BeamReference {
     /// The mean axis: the deformation carries no linear or angular momentum
     /// (free–free modes).
     MeanAxis,
+    /// These nodal degrees of freedom are zero; they must leave no rigid
+    /// motion of the whole beam free.
+    Fixed(Vec<FixedNode>),
 }
 
 /// An inertia tensor about the centre of mass, in body axes, kg m².

@@ -34,6 +34,8 @@ fn join(path: &[Seg<'static>], more: &[Seg<'static>]) -> Path {
     path.iter().chain(more).copied().collect()
 }
 
+mod flex_sources;
+
 /// Which names an expression may use.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Scope {
@@ -642,7 +644,14 @@ impl Ctx<'_> {
                                     "node i sits at x = i·length/{elements}; use a node from 0 to {elements}"
                                 ),
                             ),
-                        Some(_) => {}
+                        Some(other) => self.node_marker(
+                            other,
+                            flexible.as_deref(),
+                            node,
+                            &marker.name,
+                            &b.name,
+                            &npath,
+                        ),
                     }
                 }
                 match self.frame(&frame, &mpath) {
@@ -692,7 +701,10 @@ impl Ctx<'_> {
             modes,
             stiffening,
             damping,
-        } = flex;
+        } = flex
+        else {
+            return self.flexible_source(flex, body, path);
+        };
         let fpath = join(path, &[f("flexible")]);
         let fields: [(&'static str, &Num, &str, &str); 7] = [
             ("length", length, "m", "length"),
@@ -742,7 +754,7 @@ impl Ctx<'_> {
             "damping ratio",
             body,
         );
-        let (Ok(written), Some(damping)) = (<[Quantity; 7]>::try_from(written), damping) else {
+        let (true, Some(damping)) = (written.len() == 7, damping) else {
             return None;
         };
         if *elements == 0 || *modes == 0 {
@@ -762,6 +774,9 @@ impl Ctx<'_> {
             spec::BeamReference::Clamped => crate::flex::Reference::Clamped,
             spec::BeamReference::PinnedPinned => crate::flex::Reference::PinnedPinned,
             spec::BeamReference::MeanAxis => crate::flex::Reference::MeanAxis,
+            spec::BeamReference::Fixed(nodes) => {
+                self.fixed_reference(nodes, *elements, body, &fpath)?
+            }
         };
         let reduced = match crate::flex::normal_modes(&beam, &reference, *modes) {
             Ok(m) => m,
@@ -787,23 +802,10 @@ impl Ctx<'_> {
             }
         };
         let invariants = crate::flex::Invariants::new(&beam, &reduced);
-        let k = reduced.count();
-        let mut names = |suffix: &str, what: &'static str| -> Option<Vec<String>> {
-            let names: Vec<String> = (1..=k).map(|n| format!("{body}_f{n}{suffix}")).collect();
-            let mut ok = true;
-            for name in &names {
-                if self.check_symbol_name(name, path, what) {
-                    self.state_names.insert(name.clone(), what);
-                } else {
-                    ok = false;
-                }
-            }
-            ok.then_some(names)
-        };
-        let coordinate_names = names("", "elastic coordinate")?;
-        let speed_names = names("_dot", "elastic speed")?;
+        let (coordinate_names, speed_names) = self.elastic_names(body, path, reduced.count())?;
         Some(Box::new(FlexInfo {
             written,
+            source: crate::system::FlexSource::Beam,
             beam,
             reference,
             modes: reduced,
@@ -816,6 +818,31 @@ impl Ctx<'_> {
             u_index: 0,
             span: self.span(&fpath),
         }))
+    }
+
+    /// The names of a flexible body's `k` elastic coordinates
+    /// (`<body>_f1 …`) and their rates (`<body>_f1_dot …`), registered.
+    fn elastic_names(
+        &mut self,
+        body: &str,
+        path: &[Seg<'static>],
+        k: usize,
+    ) -> Option<(Vec<String>, Vec<String>)> {
+        let mut names = |suffix: &str, what: &'static str| -> Option<Vec<String>> {
+            let names: Vec<String> = (1..=k).map(|n| format!("{body}_f{n}{suffix}")).collect();
+            let mut ok = true;
+            for name in &names {
+                if self.check_symbol_name(name, path, what) {
+                    self.state_names.insert(name.clone(), what);
+                } else {
+                    ok = false;
+                }
+            }
+            ok.then_some(names)
+        };
+        let coordinates = names("", "elastic coordinate")?;
+        let speeds = names("_dot", "elastic speed")?;
+        Some((coordinates, speeds))
     }
 
     fn inertia(
