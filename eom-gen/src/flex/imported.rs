@@ -24,13 +24,19 @@
 //!
 //! **The lumped-mass approximation.** These are the integrals of the lumped
 //! mass, not of the FE model's consistent mass: for a beam of `n` elements,
-//! `m`, `S̄` and `Ī_θf⁰` are exact for linear fields and off by `O(h²)` for
-//! curved ones (`h = L/n`; see `BENCHMARKS.md`). The modal mass `M_ff` is
-//! the file's (the FE model's own generalised mass, as Wallrapp's SID keeps
-//! it) when given, else `Σ_i S̄_ii`: the elastic kinetic energy
-//! `½ q̇_fᵀ M_ff q̇_f` differs from the lumped one by a constant quadratic
-//! form of `q̇_f` alone, which adds no velocity terms and keeps the energy
-//! conserved.
+//! `m` and `I₁` are exact, `S̄`, `Ī_θf⁰` and `Ī` off by `O(h²)` (`h = L/n`;
+//! see `BENCHMARKS.md`). The modal mass used is the lumped one too,
+//! `M_ff = Σ_i S̄_ii`, so the body is one consistent system of particles and
+//! its mass matrix is positive definite in every state. Mixing in the FE
+//! model's own modal mass instead would not be: a free body whose modes are
+//! clamped at the frame is mostly rigid motion, the part of `M_ff` not
+//! explained by the frame's motion (the Schur complement
+//! `M_ff − Pᵀ M_rr⁻¹ P`) is small, and the `O(h²)` mismatch between a
+//! consistent `M_ff` and lumped couplings `P` makes it indefinite (measured:
+//! a 6-element clamped beam on a free joint). The file's `modal_mass`, when
+//! given, is compared with the lumped one ([`Imported::file_modal_mass`]).
+//! The natural frequencies of `(K_ff, M_ff)` therefore differ from the FE
+//! model's by the lumped-mass error, `O(h²)`.
 
 use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
@@ -52,7 +58,8 @@ pub struct ModalData {
     pub nodes: Vec<ModalNode>,
     /// The mode shapes, one per elastic coordinate.
     pub modes: Vec<ModeShape>,
-    /// `M_ff` (k×k), kg per unit coordinate²; default the lumped mass's.
+    /// `M_ff` (k×k) of the FE model, kg per unit coordinate²; optional,
+    /// only compared with the lumped mass's (which eom uses, module docs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub modal_mass: Option<Vec<Vec<f64>>>,
     /// `K_ff` (k×k), N/m per unit coordinate².
@@ -131,10 +138,10 @@ enum Step<'a> {
 /// The body described by a modal file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Imported {
-    /// The inertia shape integrals (lumped mass; `M_ff` the file's if given).
+    /// The inertia shape integrals of the lumped mass (`M_ff = Σ_i S̄_ii`).
     pub invariants: Invariants,
-    /// `Σ_i S̄_ii` of the lumped mass, for comparison with the file's `M_ff`.
-    pub lumped_modal_mass: DMatrix<f64>,
+    /// The file's `modal_mass` (the FE model's), if given: for comparison.
+    pub file_modal_mass: Option<DMatrix<f64>>,
     /// `D_ff` from the file (zeros if none).
     pub damping: DMatrix<f64>,
     /// The normal modes of `(M_ff, K_ff)`.
@@ -149,6 +156,14 @@ pub struct Imported {
 }
 
 impl Imported {
+    /// Largest relative difference between the file's modal mass and the
+    /// lumped one (relative to the largest entry), if the file has one.
+    pub fn modal_mass_mismatch(&self) -> Option<f64> {
+        let file = self.file_modal_mass.as_ref()?;
+        let top = file.amax();
+        Some((file - &self.invariants.modal_mass).amax() / top)
+    }
+
     /// The reduced basis in the form the beam path has.
     pub fn modes(&self) -> Modes {
         Modes {
@@ -333,7 +348,7 @@ pub fn build(data: &ModalData, text: &str) -> Result<Imported, Vec<ModalError>> 
         }
     }
     let total: f64 = data.nodes.iter().map(|x| x.mass).sum();
-    if n > 0 && total <= 0.0 {
+    if n > 0 && total <= 0.0 && data.nodes.iter().all(|x| x.mass >= 0.0) {
         err(
             &mut errors,
             &[F("nodes")],
@@ -466,13 +481,11 @@ pub fn build(data: &ModalData, text: &str) -> Result<Imported, Vec<ModalError>> 
             _ => {}
         }
     }
-    let mass = file_mass.unwrap_or_else(|| lumped.clone());
-    let ritz = match Ritz::new(&mass, &stiffness) {
+    let ritz = match Ritz::new(&lumped, &stiffness) {
         Ok(r) => Some(r),
         Err(e) => {
             let field = match e {
                 RitzError::RigidMotion(_) | RitzError::NegativeStiffness => "modal_stiffness",
-                _ if data.modal_mass.is_some() => "modal_mass",
                 _ => "modes",
             };
             if errors.is_empty() {
@@ -484,11 +497,10 @@ pub fn build(data: &ModalData, text: &str) -> Result<Imported, Vec<ModalError>> 
     let Some(ritz) = ritz.filter(|_| errors.is_empty()) else {
         return Err(errors);
     };
-    inv.modal_mass = mass;
     inv.modal_stiffness = stiffness;
     Ok(Imported {
         invariants: inv,
-        lumped_modal_mass: lumped,
+        file_modal_mass: file_mass,
         damping: damping.unwrap_or_else(|| DMatrix::zeros(k, k)),
         ritz,
         shapes,

@@ -19,6 +19,10 @@ use nalgebra::Vector3;
 
 type Path = Vec<Seg<'static>>;
 
+/// Relative difference between an imported file's modal mass and the lumped
+/// one above which `check` warns.
+const MODAL_MASS_TOL: f64 = 0.01;
+
 /// The section fields shared by the beam and assumed modes:
 /// (field, unit, what).
 const SECTION: [(&str, &str, &str); 7] = [
@@ -414,6 +418,18 @@ impl Ctx<'_> {
             }
         };
         let zeta = zeta?;
+        if let Some(d) = body_data.modal_mass_mismatch()
+            && d > MODAL_MASS_TOL
+        {
+            self.warning(
+                &at,
+                format!(
+                    "flexible body `{body}`: the lumped nodal masses give a modal mass that differs                      from the file's `modal_mass` by {:.1} % (of its largest entry); eom uses the lumped one",
+                    100.0 * d
+                ),
+                "the frequencies follow the lumped mass: refine the FE mesh (the difference falls as h²)                  or check the nodal masses and mode shapes",
+            );
+        }
         let modes = body_data.modes();
         let (coordinate_names, speed_names) = self.elastic_names(body, path, modes.count())?;
         // A placeholder beam spanning the nodes along x (see `FlexInfo::beam`).
