@@ -236,8 +236,8 @@ fn integrate(
             inv.first_moment += u0 * dm;
             inv.second_moment += u0 * u0.transpose() * dm;
             for i in 0..3 {
-                for j in 0..k {
-                    inv.s_bar[(i, j)] += s[i][j] * dm;
+                for (j, sij) in s[i].iter().enumerate() {
+                    inv.s_bar[(i, j)] += sij * dm;
                 }
                 for c in 0..3 {
                     inv.s_ij[i][c] += s[i] * s[c].transpose() * dm;
