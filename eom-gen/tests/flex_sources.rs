@@ -380,7 +380,9 @@ fn imported_beam_data_reproduce_the_beam() {
         );
         assert!(dm < 1e-12 && d1 < 1e-12, "mass {dm:e}, first moment {d1:e}");
         errors.push([df, dmm, ds, dc, di]);
-        let _ = std::fs::remove_dir_all(&dir);
+        if std::env::var_os("EOM_KEEP_SCRATCH").is_none() {
+            let _ = std::fs::remove_dir_all(&dir);
+        }
     }
     // Halving h divides the lumped-mass error by ~4.
     let names = ["ω", "M_ff", "S̄", "Ī_θf⁰", "Ī"];
