@@ -85,7 +85,7 @@ impl Loaded {
         match self.format {
             Format::Scene => check_scene(&self.source, root, values, &self.urdf_options),
             Format::Ron | Format::Urdf => {
-                let mut checked = check_model_with(&self.source, values)?;
+                let mut checked = check_model_with(&self.source, values, root)?;
                 checked.urdf_notes = self.urdf_notes.clone();
                 if let Some(w) = &self.urdf_warnings {
                     // The importer reported inconsistent inertias at their

@@ -120,8 +120,14 @@ pub fn check_in(src: &Source, root: &std::path::Path) -> Result<Checked, Report>
 
 /// Validates an already parsed [`Spec`] whose text is `src`.
 pub fn check_spec(src: &Source, spec: Spec) -> Result<Checked, Report> {
+    check_spec_in(src, spec, std::path::Path::new(""))
+}
+
+/// [`check_spec`] for a source whose path is relative to `dir` (files the
+/// model names, such as modal data, are read relative to the model there).
+pub fn check_spec_in(src: &Source, spec: Spec, dir: &std::path::Path) -> Result<Checked, Report> {
     let root = locate::parse(&src.text);
-    let (system, diagnostics) = validate::check(src, &spec, root.as_ref());
+    let (system, diagnostics) = validate::check_in_dir(src, &spec, root.as_ref(), true, dir);
     match system {
         Some(system) => Ok(Checked {
             system,
@@ -153,7 +159,11 @@ pub fn check_file_with_values(path: &str, values: &[(String, f64)]) -> Result<Ch
 /// Parses and validates a RON model with the named parameters' values
 /// replaced; a name the model does not have is an error with the closest
 /// name.
-fn check_model_with(src: &Source, values: &[(String, f64)]) -> Result<Checked, Report> {
+fn check_model_with(
+    src: &Source,
+    values: &[(String, f64)],
+    dir: &std::path::Path,
+) -> Result<Checked, Report> {
     let mut spec = parse(src)?;
     let mut unknown = Vec::new();
     for (name, value) in values {
@@ -182,7 +192,7 @@ fn check_model_with(src: &Source, values: &[(String, f64)]) -> Result<Checked, R
             diagnostics: unknown,
         });
     }
-    check_spec(src, spec)
+    check_spec_in(src, spec, dir)
 }
 
 fn ron_diagnostic(src: &Source, e: &ron::error::SpannedError) -> Diagnostic {

@@ -47,21 +47,30 @@ enum Scope {
     State,
 }
 
-/// Validates `spec` (read from `src`, whose span tree is `root`).
-/// Returns the system when there is no error, and every diagnostic.
-pub fn check(src: &Source, spec: &Spec, root: Option<&Node>) -> (Option<System>, Vec<Diagnostic>) {
-    check_with(src, spec, root, true)
-}
-
-/// [`check`], with or without the check of the mass matrix (which a
-/// lenient inertia policy asks for).
+/// Validates `spec` (read from `src`, whose span tree is `root`), with or
+/// without the check of the mass matrix (which a lenient inertia policy
+/// asks for). Returns the system when there is no error, and every
+/// diagnostic.
 pub fn check_with(
     src: &Source,
     spec: &Spec,
     root: Option<&Node>,
     mass_matrix: bool,
 ) -> (Option<System>, Vec<Diagnostic>) {
+    check_in_dir(src, spec, root, mass_matrix, std::path::Path::new(""))
+}
+
+/// [`check_with`] for a model whose path is relative to the directory
+/// `dir` (files the model names, such as modal data, are read from there).
+pub fn check_in_dir(
+    src: &Source,
+    spec: &Spec,
+    root: Option<&Node>,
+    mass_matrix: bool,
+    dir: &std::path::Path,
+) -> (Option<System>, Vec<Diagnostic>) {
     let mut cx = Ctx {
+        dir,
         mass_matrix,
         src,
         root,
@@ -86,6 +95,8 @@ pub fn check_with(
 }
 
 struct Ctx<'a> {
+    /// What the model's path is relative to.
+    dir: &'a std::path::Path,
     src: &'a Source,
     root: Option<&'a Node>,
     /// `inertia_policy: Lenient`: inconsistent tensors are warnings and

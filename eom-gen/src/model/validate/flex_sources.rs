@@ -382,7 +382,7 @@ impl Ctx<'_> {
             .unwrap_or(std::path::Path::new(""))
             .join(file);
         let shown_str = shown.display().to_string();
-        let text = match std::fs::read_to_string(&shown) {
+        let text = match std::fs::read_to_string(self.dir.join(&shown)) {
             Ok(t) => t,
             Err(e) => {
                 self.error(
