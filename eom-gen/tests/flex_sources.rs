@@ -817,3 +817,37 @@ fn generated_programs_of_assumed_and_imported_bodies_equal_the_f64_algorithms() 
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn tunable_shapes_and_unknown_nodes_are_refused_at_their_field() {
+    // The shape integrals are computed once: a shape using a tunable
+    // parameter is refused where it is written, not silently frozen.
+    let text = model(&assumed(&["(v: \"a*(x/L)^2\")"]), "Fixed").replace(
+        "(name: \"rho_a\", value: 1.5)",
+        "(name: \"rho_a\", value: 1.5), (name: \"a\", value: 2.0, tunable: true)",
+    );
+    let src = Source::new("rod.ron", text);
+    let sys = check(&src).unwrap_or_else(|r| panic!("{r}")).system;
+    let err = Numeric::new(&sys).expect_err("a tunable shape is refused");
+    let at = src.line_col(err.span().start);
+    assert_eq!((at.line, at.col), (7, 26), "{err}");
+    assert!(err.to_string().contains("flexible body `rod`"), "{err}");
+
+    // A marker on a node the modal file does not have.
+    let dir = scratch("nodes");
+    let (file, _) = export_beam(&dir, 2, 1);
+    let path = dir.join("rod.ron");
+    let r = errors_at(
+        path.to_str().unwrap(),
+        model(&format!("Modal(file: \"{file}\")"), "Fixed").replace(
+            "        flexible:",
+            "        markers: [(name: \"tip\", node: 3)],\n        flexible:",
+        ),
+    );
+    assert!(
+        r.contains(":6:39: error: marker `tip`: node 3 does not exist: `")
+            && r.contains("` has nodes 0..=2"),
+        "{r}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

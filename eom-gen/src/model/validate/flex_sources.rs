@@ -424,10 +424,10 @@ impl Ctx<'_> {
             self.warning(
                 &at,
                 format!(
-                    "flexible body `{body}`: the lumped nodal masses give a modal mass that differs                      from the file's `modal_mass` by {:.1} % (of its largest entry); eom uses the lumped one",
+                    "flexible body `{body}`: the lumped nodal masses give a modal mass that differs from the file's `modal_mass` by {:.1} % (of its largest entry); eom uses the lumped one",
                     100.0 * d
                 ),
-                "the frequencies follow the lumped mass: refine the FE mesh (the difference falls as h²)                  or check the nodal masses and mode shapes",
+                "the frequencies follow the lumped mass: refine the FE mesh (the difference falls as h²) or check the nodal masses and mode shapes",
             );
         }
         let modes = body_data.modes();
