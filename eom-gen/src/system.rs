@@ -164,6 +164,19 @@ impl FlexInfo {
         }
     }
 
+    /// Translation and small rotation of the section at `x` along the body
+    /// axis per elastic coordinate (3×k each): the FE interpolation for a
+    /// beam, the shape functions for assumed modes; `None` for imported
+    /// data (no sections between nodes; see [`FlexInfo::node_position`] and
+    /// `modes.at_node`) and where a shape is not finite.
+    pub fn section_at(&self, x: f64) -> Option<crate::flex::Section> {
+        match &self.source {
+            FlexSource::Beam => Some(self.beam.section(x, &self.modes.shapes)),
+            FlexSource::Assumed { shapes, .. } => crate::flex::assumed::section(shapes, x),
+            FlexSource::Modal { .. } => None,
+        }
+    }
+
     /// Undeformed position of node `node` in body axes: on the beam axis for
     /// a beam, from the file for imported data; assumed modes have no nodes.
     pub fn node_position(&self, node: usize) -> Option<Vector3<f64>> {
@@ -185,6 +198,8 @@ pub enum FlexSource {
     /// Assumed modes (Rayleigh–Ritz): shape functions of `x` written in the
     /// model; no nodes (`modes.shapes` is `0 × k`).
     Assumed {
+        /// The shapes as functions of `x` (for sections and attachments).
+        shapes: Vec<crate::flex::assumed::ShapeExprs>,
         /// `K_G1`, the geometric stiffness per `Ω²` (k×k).
         geometric: DMatrix<f64>,
         /// `D_1`: damping per unit ratio ζ (k×k).

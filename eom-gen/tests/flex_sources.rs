@@ -149,6 +149,21 @@ fn assumed_sine_modes_give_the_exact_pinned_pinned_frequencies() {
     }
     // Modal mass of sin(πx/L): ρA L/2.
     assert!((flex.invariants.modal_mass[(0, 0)] - RHO_A * L / 2.0).abs() < 1e-12);
+    // The section at x: mid-span v₁ = 1 with no slope; at x = 0 the slope
+    // θ_z = v₁' = π/L, and the x–z shape turns the section by θ_y = −w' = −π/L.
+    let mid = flex.section_at(L / 2.0).unwrap();
+    assert!((mid.translation[(1, 0)] - 1.0).abs() < 1e-15 && mid.rotation[(2, 0)].abs() < 1e-15);
+    let root = flex.section_at(0.0).unwrap();
+    assert!(
+        (root.rotation[(2, 0)] - PI / L).abs() < 1e-15,
+        "{}",
+        root.rotation
+    );
+    assert!(
+        (root.rotation[(1, 3)] + PI / L).abs() < 1e-15,
+        "{}",
+        root.rotation
+    );
 }
 
 #[test]

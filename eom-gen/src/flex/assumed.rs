@@ -28,10 +28,11 @@
 //! too rough (a kink, a singular derivative) and [`AssumedError::Unresolved`]
 //! is returned rather than a silently inaccurate body.
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DVector, Matrix3, Matrix3xX, Vector3};
 
 use super::ritz::{Ritz, RitzError};
-use super::{Basis, Beam, Invariants, Modes};
+use super::{Basis, Beam, Invariants, Modes, Section};
+use crate::expr::Ast;
 
 /// Intervals of the composite Gauss–Legendre rule.
 pub const INTERVALS: usize = 64;
@@ -143,6 +144,42 @@ impl std::fmt::Display for AssumedError {
 }
 
 impl std::error::Error for AssumedError {}
+
+/// One shape's parts as expressions of `x` alone (parameters replaced by
+/// their values): value and first derivative of `u`, `v`, `w`, `φ` (in
+/// [`Part`] order), `None` where absent.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShapeExprs {
+    /// `[value, d/dx]` per part.
+    pub parts: [Option<[Ast; 2]>; 4],
+}
+
+/// Translation `(u, v, w)` and small rotation `(φ, −w', v')` at `x` of each
+/// shape (the section of a beam: `θ_y = −∂w/∂x`, `θ_z = ∂v/∂x`); `None` if a
+/// value is not finite there.
+pub fn section(shapes: &[ShapeExprs], x: f64) -> Option<Section> {
+    let k = shapes.len();
+    let mut out = Section {
+        translation: Matrix3xX::zeros(k),
+        rotation: Matrix3xX::zeros(k),
+    };
+    let lookup = |n: &str| (n == "x").then_some(x);
+    for (j, s) in shapes.iter().enumerate() {
+        let at = |p: Part, d: usize| -> Option<f64> {
+            match &s.parts[p as usize] {
+                None => Some(0.0),
+                Some(e) => e[d].eval(&lookup).ok(),
+            }
+        };
+        out.translation[(0, j)] = at(Part::U, 0)?;
+        out.translation[(1, j)] = at(Part::V, 0)?;
+        out.translation[(2, j)] = at(Part::W, 0)?;
+        out.rotation[(0, j)] = at(Part::Phi, 0)?;
+        out.rotation[(1, j)] = -at(Part::W, 1)?;
+        out.rotation[(2, j)] = at(Part::V, 1)?;
+    }
+    Some(out)
+}
 
 /// A slender body reduced to assumed modes.
 #[derive(Clone, Debug, PartialEq)]

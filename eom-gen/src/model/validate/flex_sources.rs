@@ -8,7 +8,7 @@
 use super::{Ctx, Scope, f, i, join};
 use crate::diag::{Diagnostic, Span};
 use crate::expr::Ast;
-use crate::flex::assumed::{AssumedError, Part, assumed_modes};
+use crate::flex::assumed::{AssumedError, Part, ShapeExprs, assumed_modes};
 use crate::flex::imported;
 use crate::flex::ritz::RitzError;
 use crate::flex::{Beam, Dof, NodeDof, Reference};
@@ -339,12 +339,31 @@ impl Ctx<'_> {
                 return None;
             }
         };
+        // The shapes as functions of x alone, for sections and attachments.
+        let fixed = |a: &Ast| {
+            a.substitute(&|n| {
+                if n == "x" {
+                    None
+                } else {
+                    self.param_value(n).map(Ast::Num)
+                }
+            })
+        };
+        let shape_exprs = parsed
+            .iter()
+            .map(|row| ShapeExprs {
+                parts: std::array::from_fn(|p| {
+                    row[p].as_ref().map(|e| [fixed(&e.d[0]), fixed(&e.d[1])])
+                }),
+            })
+            .collect();
         let modes = reduced.modes();
         let (coordinate_names, speed_names) = self.elastic_names(body, path, modes.count())?;
         written.extend(exprs);
         Some(Box::new(FlexInfo {
             written,
             source: FlexSource::Assumed {
+                shapes: shape_exprs,
                 geometric: reduced.geometric.clone(),
                 damping_unit: reduced.ritz.damping_unit.clone(),
             },
