@@ -678,7 +678,17 @@ fn modal_file_errors_are_located_in_the_file() {
         "{r}"
     );
     assert!(r.contains("drop the rigid-body modes"), "{r}");
-    // JSON: syntax error at its line and column.
+    // JSON: a problem at its place, and a syntax error at its line and column.
+    let json = "{\n  \"nodes\": [\n    {\"position\": [0, 0, 0], \"mass\": 1.0},\n    {\"position\": [1, 0, 0], \"mass\": -2.0}\n  ],\n  \"modes\": [{\"translation\": [[0, 0, 0], [0, 1, 0]]}],\n  \"modal_stiffness\": [[100]]\n}\n";
+    let r = with("neg.modal.json", json);
+    assert!(
+        r.contains(&format!(
+            "{}:4:37: node 1: mass is -2 kg",
+            shown("neg.modal.json")
+        )),
+        "{r}"
+    );
+    assert_eq!(with("ok.modal.json", &json.replace("-2.0", "2.0")), "valid");
     let r = with(
         "bad.modal.json",
         "{\n  \"nodes\": [\n    {\"position\": [0, 0, 0], \"mass\": 1.0,}\n  ]\n}\n",
