@@ -17,6 +17,7 @@ Input (the usual export of any FE code):
   --given-modes F   instead of solving the eigenproblem: CSV with one mode per
                     line, 6N numbers (the nodal shapes), used as they are.
   --damping ZETA    modal damping ratio of every mode written (default 0).
+  --lumped-only     leave out the consistent-mass invariants (see below).
   -o FILE           output, `.json` for JSON, anything else RON.
 
 What it writes (see docs/model-format.md, "Imported modal data"):
@@ -25,7 +26,12 @@ What it writes (see docs/model-format.md, "Imported modal data"):
     along d) and the row-sum lumped rotary inertia (J_n,ab = Σ_j M[(n,θ_a),(j,θ_b)]);
   - the mode shapes at the nodes (translations and rotations);
   - modal mass Φᵀ M Φ, stiffness Φᵀ K Φ and damping diag(2 ζ ω_i) (mass-normalised
-    modes), from the matrices as given (consistent or lumped).
+    modes), from the matrices as given (consistent or lumped);
+  - `consistent`: the first-order inertia invariants of M itself, with R_t, R_r
+    the nodal vectors of unit rigid translations and rotations about the origin:
+    mass, first moment, inertia R_rᵀ M R_r, and per mode R_tᵀ M φ_j (S̄) and
+    R_rᵀ M φ_j (Ī_θf⁰). With them eom reproduces the FE model's frequencies and
+    these invariants exactly (only the second-order terms stay lumped).
 
 The eigenproblem K φ = ω² M φ on the free degrees of freedom is solved with
 numpy when it is installed, else by a plain-Python cyclic Jacobi method on
@@ -208,6 +214,7 @@ def main():
     p.add_argument("--modes-kept", type=int, default=4)
     p.add_argument("--given-modes")
     p.add_argument("--damping", type=float, default=0.0)
+    p.add_argument("--lumped-only", action="store_true")
     p.add_argument("-o", "--output", required=True)
     a = p.parse_args()
 
@@ -279,11 +286,39 @@ def main():
     }
     if a.damping > 0.0:
         data["modal_damping"] = damping
+    if not a.lumped_only:
+        data["consistent"] = consistent(m, nodes, shapes)
     with open(a.output, "w") as f:
         if a.output.lower().endswith(".json"):
             json.dump(data, f, indent=1)
         else:
             f.write(to_ron(data))
+
+
+def consistent(m, nodes, shapes):
+    """First-order inertia invariants of the mass matrix m (see the docstring)."""
+    ndof = 6 * len(nodes)
+    rigid = [[0.0] * ndof for _ in range(6)]  # columns of R, as rows here
+    for n, (_, r) in enumerate(nodes):
+        for d in range(3):
+            rigid[d][6 * n + d] = 1.0
+        for a in range(3):
+            e = [float(a == i) for i in range(3)]
+            cross = [e[1] * r[2] - e[2] * r[1], e[2] * r[0] - e[0] * r[2], e[0] * r[1] - e[1] * r[0]]
+            for d in range(3):
+                rigid[3 + a][6 * n + d] = cross[d]
+            rigid[3 + a][6 * n + 3 + a] = 1.0
+    g = [[quad(m, rigid[i], rigid[j]) for j in range(6)] for i in range(6)]
+    mass = (g[0][0] + g[1][1] + g[2][2]) / 3.0
+    # R_tᵀ M R_r = −c̃ for the first moment c.
+    first = [g[1][5], g[2][3], g[0][4]]
+    return {
+        "mass": mass,
+        "first_moment": first,
+        "inertia": [[g[3 + i][3 + j] for j in range(3)] for i in range(3)],
+        "s_bar": [[quad(m, rigid[d], s) for d in range(3)] for s in shapes],
+        "coupling": [[quad(m, rigid[3 + a], s) for a in range(3)] for s in shapes],
+    }
 
 
 def to_ron(data):
@@ -313,6 +348,15 @@ def to_ron(data):
         if key in data:
             rows = ", ".join("[" + ", ".join(repr(float(x)) for x in row) + "]" for row in data[key])
             lines.append(f"    {key}: [{rows}],")
+    if "consistent" in data:
+        c = data["consistent"]
+        lines.append("    consistent: (")
+        lines.append(f"        mass: {repr(float(c['mass']))},")
+        lines.append(f"        first_moment: {tup(c['first_moment'])},")
+        lines.append("        inertia: (" + ", ".join(tup(r) for r in c["inertia"]) + "),")
+        lines.append("        s_bar: [" + ", ".join(tup(v) for v in c["s_bar"]) + "],")
+        lines.append("        coupling: [" + ", ".join(tup(v) for v in c["coupling"]) + "],")
+        lines.append("    ),")
     lines.append(")")
     return "\n".join(lines) + "\n"
 

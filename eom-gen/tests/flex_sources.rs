@@ -16,7 +16,7 @@
 //! - every validation error at its `file:line:col`.
 
 use eom_gen::System;
-use eom_gen::flex::imported::{ModalData, ModalNode, ModeShape};
+use eom_gen::flex::imported::{Consistent, ModalData, ModalNode, ModeShape};
 use eom_gen::flex::{Beam, Reference, normal_modes};
 use eom_gen::mech::Numeric;
 use eom_gen::model::{Source, check};
@@ -232,7 +232,7 @@ fn write_mtx(path: &Path, a: &DMatrix<f64>) {
 /// The clamped beam's modal file: through `examples/modal_export.py` from
 /// a generic FE export when `python3` runs, else the script's lumping done
 /// here. Returns the file name and whether Python wrote it.
-fn export_beam(dir: &Path, n: usize, k: usize) -> (String, bool) {
+fn export_beam(dir: &Path, n: usize, k: usize, consistent: bool) -> (String, bool) {
     let b = beam(n);
     let (m, kk) = (b.mass(), b.stiffness());
     let nodes: String = (0..b.nodes())
@@ -243,8 +243,12 @@ fn export_beam(dir: &Path, n: usize, k: usize) -> (String, bool) {
     write_mtx(&dir.join("stiffness.mtx"), &kk);
     let name = format!("beam{n}.modal.ron");
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../examples/modal_export.py");
-    let run = std::process::Command::new("python3")
-        .arg(&script)
+    let mut cmd = std::process::Command::new("python3");
+    cmd.arg(&script);
+    if !consistent {
+        cmd.arg("--lumped-only");
+    }
+    let run = cmd
         .args([
             "--nodes",
             "nodes.csv",
@@ -303,6 +307,23 @@ fn export_beam(dir: &Path, n: usize, k: usize) -> (String, bool) {
         modal_mass: Some(rows(&modes.mass)),
         modal_stiffness: rows(&modes.stiffness),
         modal_damping: None,
+        consistent: consistent.then(|| {
+            // The first-order invariants of the consistent mass: R_tᵀ M R_r = −c̃.
+            let r = b.rigid_modes();
+            let g = r.transpose() * &m * &r;
+            let mr = r.transpose() * &m * &modes.shapes;
+            Consistent {
+                mass: g[(0, 0)],
+                first_moment: [g[(1, 5)], g[(2, 3)], g[(0, 4)]],
+                inertia: std::array::from_fn(|i| std::array::from_fn(|j| g[(3 + i, 3 + j)])),
+                s_bar: (0..k)
+                    .map(|j| std::array::from_fn(|d| mr[(d, j)]))
+                    .collect(),
+                coupling: (0..k)
+                    .map(|j| std::array::from_fn(|a| mr[(3 + a, j)]))
+                    .collect(),
+            }
+        }),
     };
     let name = format!("beam{n}.modal.json");
     std::fs::write(dir.join(&name), serde_json::to_string(&data).unwrap()).unwrap();
@@ -343,7 +364,7 @@ fn imported_beam_data_reproduce_the_beam() {
     let mut errors = Vec::new();
     for n in [8, 16] {
         let dir = scratch(&format!("beam{n}"));
-        let (file, by_python) = export_beam(&dir, n, k);
+        let (file, by_python) = export_beam(&dir, n, k, false);
         let model_path = dir.join("rod.ron");
         let imported = system_at(
             model_path.to_str().unwrap(),
@@ -409,6 +430,112 @@ fn imported_beam_data_reproduce_the_beam() {
             "{name}: error {coarse:e} → {fine:e}, ratio {ratio}"
         );
     }
+}
+
+#[test]
+fn imported_consistent_invariants_reproduce_the_beam_exactly() {
+    // With the consistent mass matrix's first-order invariants in the file
+    // (mass, I₁, Ī, S̄, Ī_θf⁰ and M_ff = Φᵀ M Φ), the imported body is the
+    // built-in beam to round-off at q_f = 0: the same frequencies, clamped
+    // and on a free joint (where the lumped M_ff made the mass matrix
+    // indefinite), and the same invariants; only the second-order terms
+    // (the inertia's change with q_f) stay lumped.
+    let (n, k) = (8, 4);
+    let dir = scratch("consistent");
+    let (file, by_python) = export_beam(&dir, n, k, true);
+    eprintln!(
+        "written by {}",
+        if by_python {
+            "modal_export.py"
+        } else {
+            "the Rust export"
+        }
+    );
+    let path = dir.join("rod.ron");
+    for joint in ["Fixed", "Free"] {
+        let imported = system_at(
+            path.to_str().unwrap(),
+            model(&format!("Modal(file: \"{file}\")"), joint),
+        );
+        let builtin = system_at("rod.ron", model(&beam_flexible(n, k), joint));
+        let (fi, fb) = (
+            imported.bodies[1].flexible.as_deref().unwrap(),
+            builtin.bodies[1].flexible.as_deref().unwrap(),
+        );
+        let sign: Vec<f64> = (0..k)
+            .map(|j| {
+                fb.modes
+                    .shapes
+                    .column(j)
+                    .dot(&fi.modes.shapes.column(j))
+                    .signum()
+            })
+            .collect();
+        let fix =
+            |a: &DMatrix<f64>| DMatrix::from_fn(a.nrows(), a.ncols(), |r, c| a[(r, c)] * sign[c]);
+        let (ib, ii) = (&fb.invariants, &fi.invariants);
+        let diffs = [
+            (
+                "ω (Ritz)",
+                rel(&fb.modes.frequencies, &fi.modes.frequencies),
+            ),
+            ("mass", (ib.mass - ii.mass).abs() / ib.mass),
+            (
+                "I₁",
+                rel(ib.first_moment.as_slice(), ii.first_moment.as_slice()),
+            ),
+            ("Ī", rel(ib.inertia.as_slice(), ii.inertia.as_slice())),
+            ("S̄", rel(ib.s_bar.as_slice(), fix(&ii.s_bar).as_slice())),
+            (
+                "Ī_θf⁰",
+                rel(ib.coupling.as_slice(), fix(&ii.coupling).as_slice()),
+            ),
+            (
+                "M_ff",
+                rel(ib.modal_mass.as_slice(), ii.modal_mass.as_slice()),
+            ),
+        ];
+        for (what, d) in diffs {
+            assert!(d < 1e-9, "{joint}: {what} differs by {d:e}");
+        }
+        if joint == "Fixed" {
+            // The linearised model vibrates at the FE frequencies.
+            let (lb, li) = (frequencies(&builtin), frequencies(&imported));
+            let dl = rel(&lb, &li);
+            eprintln!("{joint}: invariants {diffs:?}, linearised ω {dl:.1e} {li:?}");
+            assert!(
+                dl < 1e-7,
+                "linearised frequencies differ by {dl:e}: {lb:?} vs {li:?}"
+            );
+        } else {
+            // On a free joint: the mass matrix at rest has the same (positive)
+            // eigenvalues as the beam's.
+            let eig = |sys: &System| {
+                let num = Numeric::new(sys).unwrap();
+                let mut q = vec![0.0; sys.nq()];
+                q[3] = 1.0;
+                let m = num
+                    .terms(&q, &vec![0.0; sys.nu()], 0.0, &[])
+                    .unwrap()
+                    .mass_matrix;
+                let n = sys.nu();
+                let mut e: Vec<f64> = DMatrix::from_fn(n, n, |r, c| m[r][c])
+                    .symmetric_eigenvalues()
+                    .iter()
+                    .copied()
+                    .collect();
+                e.sort_by(f64::total_cmp);
+                e
+            };
+            let (eb, ei) = (eig(&builtin), eig(&imported));
+            eprintln!("{joint}: invariants {diffs:?}, M(0) eigenvalues {ei:?}");
+            assert!(
+                ei[0] > 0.0 && rel(&eb, &ei) < 1e-9,
+                "M(0): {eb:?} vs {ei:?}"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `ẏ = (q̇, u̇)` by the articulated-body algorithm.
@@ -485,7 +612,7 @@ fn free_bodies_of_each_kind_conserve_energy() {
     assert!(d < 1e-8, "assumed modes: relative energy drift {d:e}");
 
     let dir = scratch("free");
-    let (file, _) = export_beam(&dir, 6, 4);
+    let (file, _) = export_beam(&dir, 6, 4, true);
     let path = dir.join("rod.ron");
     let sys = system_at(
         path.to_str().unwrap(),
@@ -678,6 +805,52 @@ fn modal_file_errors_are_located_in_the_file() {
         "{r}"
     );
     assert!(r.contains("drop the rigid-body modes"), "{r}");
+    // Consistent invariants: without the modal mass they belong to, with
+    // the wrong number of modes, or making an indefinite mass matrix.
+    let block = "    consistent: (mass: 2.0, first_moment: (1, 0, 0), inertia: ((0.1, 0, 0), (0, 1, 0), (0, 0, 1)),\n        s_bar: [(0, 1, 0), (0, 0, 1)], coupling: [(0, 0, 1), (0, -1, 0)]),\n)\n";
+    let with_block = |b: &str| good.replace(")\n", "").trim_end().to_string() + "\n" + b;
+    let r = with("c1.modal.ron", &with_block(block));
+    assert!(
+        r.contains(&format!(
+            "{}:11:17: `consistent` invariants need the FE model's `modal_mass`",
+            shown("c1.modal.ron")
+        )),
+        "{r}"
+    );
+    let mm = "    modal_mass: [[1, 0], [0, 1]],\n";
+    let r = with(
+        "c2.modal.ron",
+        &with_block(&(mm.to_string() + &block.replace("(0, 1, 0), (0, 0, 1)]", "(0, 1, 0)]"))),
+    );
+    assert!(
+        r.contains("`consistent` has 1 `s_bar` and 2 `coupling` entries for 2 modes"),
+        "{r}"
+    );
+    // S̄ of mode 1 twice as large: its momentum 2 exceeds what m = 2 and
+    // M_ff = 1 allow (1 − 2²/2 < 0), the mass matrix is indefinite.
+    let r = with(
+        "c3.modal.ron",
+        &with_block(&(mm.to_string() + &block.replace("s_bar: [(0, 1, 0)", "s_bar: [(0, 2, 0)"))),
+    );
+    assert!(
+        r.contains("make a mass matrix that is not positive definite"),
+        "{r}"
+    );
+    assert_eq!(
+        with(
+            "c4.modal.ron",
+            &with_block(
+                &(mm.to_string()
+                    + &block
+                        .replace("(0, 1, 0), (0, 0, 1)]", "(0, 0.5, 0), (0, 0, 0.5)]")
+                        .replace(
+                            "coupling: [(0, 0, 1), (0, -1, 0)]",
+                            "coupling: [(0, 0, 0.5), (0, -0.5, 0)]"
+                        ))
+            )
+        ),
+        "valid"
+    );
     // JSON: a problem at its place, and a syntax error at its line and column.
     let json = "{\n  \"nodes\": [\n    {\"position\": [0, 0, 0], \"mass\": 1.0},\n    {\"position\": [1, 0, 0], \"mass\": -2.0}\n  ],\n  \"modes\": [{\"translation\": [[0, 0, 0], [0, 1, 0]]}],\n  \"modal_stiffness\": [[100]]\n}\n";
     let r = with("neg.modal.json", json);
@@ -765,7 +938,7 @@ fn generated_programs_of_assumed_and_imported_bodies_equal_the_f64_algorithms() 
     use eom_gen::functions::{Function, FunctionSet};
     use eom_gen::mech::formulate;
     let dir = scratch("programs");
-    let (file, _) = export_beam(&dir, 4, 3);
+    let (file, _) = export_beam(&dir, 4, 3, true);
     let path = dir.join("rod.ron");
     for flexible in [
         assumed(&[
@@ -860,7 +1033,7 @@ fn tunable_shapes_and_unknown_nodes_are_refused_at_their_field() {
 
     // A marker on a node the modal file does not have.
     let dir = scratch("nodes");
-    let (file, _) = export_beam(&dir, 2, 1);
+    let (file, _) = export_beam(&dir, 2, 1, false);
     let path = dir.join("rod.ron");
     let r = errors_at(
         path.to_str().unwrap(),

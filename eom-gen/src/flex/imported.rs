@@ -37,6 +37,21 @@
 //! given, is compared with the lumped one ([`Imported::file_modal_mass`]).
 //! The natural frequencies of `(K_ff, M_ff)` therefore differ from the FE
 //! model's by the lumped-mass error, `O(h²)`.
+//!
+//! **Consistent first-order invariants.** A file may also carry
+//! ([`Consistent`]) the first-order invariants of the FE model's consistent
+//! mass matrix `M` — `m`, `I₁`, `Ī = R_rᵀ M R_r`, `S̄ = R_tᵀ M Φ`,
+//! `Ī_θf⁰ = R_rᵀ M Φ` with `R_t`, `R_r` the nodal vectors of the rigid
+//! motions — and then its `modal_mass` `Φᵀ M Φ` is used too. These replace
+//! the lumped values ([`build`]): together they make the mass matrix at
+//! `q_f = 0` the Gram matrix of the rigid motions and the modes under `M`,
+//! exactly the FE model's and positive definite, and the natural
+//! frequencies are the FE model's. The second-order terms (the inertia
+//! tensor's change with `q_f`: the symmetric part of `X_ab`, and `S̄_ab`)
+//! stay lumped. Every such tuple of invariants is the moment tuple (up to
+//! second order in position and shape) of some signed mass distribution,
+//! so the FFR equations remain Lagrange's equations of a kinetic energy and
+//! conserve energy.
 
 use nalgebra::{DMatrix, DVector, Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
@@ -67,6 +82,28 @@ pub struct ModalData {
     /// `D_ff` (k×k), N s/m per unit coordinate²; default none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub modal_damping: Option<Vec<Vec<f64>>>,
+    /// The first-order inertia invariants of the FE model's consistent mass
+    /// matrix `M` (optional; with it, `modal_mass` is required and used).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub consistent: Option<Consistent>,
+}
+
+/// First-order inertia invariants of the consistent mass matrix `M`, with
+/// `R_t`, `R_r` the nodal vectors of unit rigid translations and rotations
+/// about the body origin (Adams I¹, I², I⁷, I³, I⁴).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Consistent {
+    /// `m` (kg).
+    pub mass: f64,
+    /// `I₁ = ∫ρ ū₀ dV` (kg m).
+    pub first_moment: [f64; 3],
+    /// `Ī = R_rᵀ M R_r`, the undeformed inertia about the origin (kg m²), by rows.
+    pub inertia: [[f64; 3]; 3],
+    /// Per mode, `S̄ φ_j = R_tᵀ M φ_j` (3 each).
+    pub s_bar: Vec<[f64; 3]>,
+    /// Per mode, `Ī_θf⁰ φ_j = R_rᵀ M φ_j` (3 each).
+    pub coupling: Vec<[f64; 3]>,
 }
 
 /// One FE node.
@@ -498,6 +535,38 @@ pub fn build(data: &ModalData, text: &str) -> Result<Imported, Vec<ModalError>> 
         return Err(errors);
     };
     inv.modal_stiffness = stiffness;
+    let mut file_mass = file_mass;
+    if let Some(c) = &data.consistent {
+        let Some(mass) = file_mass.take() else {
+            err(
+                &mut errors,
+                &[F("consistent")],
+                "`consistent` invariants need the FE model's `modal_mass`".into(),
+                "give `modal_mass` = Φᵀ M Φ of the same consistent mass matrix",
+            );
+            return Err(errors);
+        };
+        if let Some(e) = apply_consistent(&mut inv, c, mass) {
+            err(
+                &mut errors,
+                &[F("consistent")],
+                e,
+                "the consistent invariants, `modal_mass` and the mode shapes must come from one mass matrix",
+            );
+            return Err(errors);
+        }
+    }
+    let ritz = if data.consistent.is_some() {
+        match Ritz::new(&inv.modal_mass, &inv.modal_stiffness) {
+            Ok(r) => r,
+            Err(e) => {
+                fail(&mut errors, "modal_mass", e);
+                return Err(errors);
+            }
+        }
+    } else {
+        ritz
+    };
     Ok(Imported {
         invariants: inv,
         file_modal_mass: file_mass,
@@ -506,6 +575,78 @@ pub fn build(data: &ModalData, text: &str) -> Result<Imported, Vec<ModalError>> 
         shapes,
         positions,
         names: data.nodes.iter().map(|x| x.name.clone()).collect(),
+    })
+}
+
+/// Replaces the first-order invariants by the consistent ones: `m`, `I₁`,
+/// `J₀ = ½ tr(Ī) 1 − Ī`, `S̄`, the antisymmetric part of `X_ab` (which
+/// makes `Ī_θf⁰`; the symmetric part, the first-order change of the inertia
+/// tensor, stays lumped) and `M_ff`. Any such tuple is the moment tuple of
+/// some (signed) mass distribution, so the FFR equations stay Lagrange's
+/// and conserve energy; the mass matrix at `q_f = 0` is the Gram matrix of
+/// the rigid motions and the modes under `M`, positive definite (checked:
+/// the error message if not).
+fn apply_consistent(inv: &mut Invariants, c: &Consistent, mass: DMatrix<f64>) -> Option<String> {
+    let k = inv.modes();
+    if c.s_bar.len() != k || c.coupling.len() != k {
+        return Some(format!(
+            "`consistent` has {} `s_bar` and {} `coupling` entries for {k} modes",
+            c.s_bar.len(),
+            c.coupling.len()
+        ));
+    }
+    let ine = Matrix3::from_fn(|r, col| c.inertia[r][col]);
+    let all = [c.mass]
+        .into_iter()
+        .chain(c.first_moment)
+        .chain(ine.iter().copied())
+        .chain(c.s_bar.iter().flatten().copied())
+        .chain(c.coupling.iter().flatten().copied());
+    if all.into_iter().any(|x| !x.is_finite()) || c.mass <= 0.0 {
+        return Some("`consistent` needs a positive `mass` and finite numbers".into());
+    }
+    let ine = (ine + ine.transpose()) * 0.5;
+    inv.mass = c.mass;
+    inv.first_moment = Vector3::from(c.first_moment);
+    inv.second_moment = Matrix3::identity() * (0.5 * ine.trace()) - ine;
+    inv.inertia = ine;
+    for j in 0..k {
+        for a in 0..3 {
+            inv.s_bar[(a, j)] = c.s_bar[j][a];
+        }
+        // Row a of Ī_θf⁰ is X_bc − X_cb for (a, b, c) cyclic.
+        for (a, b, cc) in [(0, 1, 2), (1, 2, 0), (2, 0, 1)] {
+            let now = inv.x_s[b][cc][j] - inv.x_s[cc][b][j];
+            let d = 0.5 * (c.coupling[j][a] - now);
+            inv.x_s[b][cc][j] += d;
+            inv.x_s[cc][b][j] -= d;
+        }
+    }
+    inv.coupling = inv.coupling_at(&DVector::zeros(k));
+    inv.modal_mass = mass;
+    // M(0) for the speeds (ω, v_O, q̇_f): [[Ī, h̃, C], [h̃ᵀ, m 1, S̄], [Cᵀ, S̄ᵀ, M_ff]].
+    let n = 6 + k;
+    let mut m = DMatrix::zeros(n, n);
+    let h = inv.first_moment.cross_matrix();
+    m.view_mut((0, 0), (3, 3)).copy_from(&inv.inertia);
+    m.view_mut((0, 3), (3, 3)).copy_from(&h);
+    m.view_mut((3, 0), (3, 3)).copy_from(&h.transpose());
+    m.view_mut((3, 3), (3, 3))
+        .copy_from(&(Matrix3::identity() * inv.mass));
+    m.view_mut((0, 6), (3, k)).copy_from(&inv.coupling);
+    m.view_mut((6, 0), (k, 3))
+        .copy_from(&inv.coupling.transpose());
+    m.view_mut((3, 6), (3, k)).copy_from(&inv.s_bar);
+    m.view_mut((6, 3), (k, 3)).copy_from(&inv.s_bar.transpose());
+    m.view_mut((6, 6), (k, k)).copy_from(&inv.modal_mass);
+    let m = (&m + m.transpose()) * 0.5;
+    let eig = SymmetricEigen::new(m);
+    let (low, top) = (eig.eigenvalues.min(), eig.eigenvalues.amax());
+    (low <= 1e-12 * top).then(|| {
+        format!(
+            "the consistent invariants and `modal_mass` make a mass matrix that is not positive \
+             definite (smallest eigenvalue {low:.3e} of {top:.3e})"
+        )
     })
 }
 

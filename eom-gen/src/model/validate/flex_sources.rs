@@ -298,17 +298,18 @@ impl Ctx<'_> {
             gj: v(6),
             elements: 1,
         };
-        let params =
-            |x: f64| move |name: &str| -> Option<f64> { if name == "x" { Some(x) } else { None } };
         let shape = |j: usize, part: Part, order: usize, x: f64| -> Option<f64> {
             match &parsed[j][part as usize] {
                 None => Some(0.0),
-                Some(p) => {
-                    let local = params(x);
-                    p.d[order]
-                        .eval(&|n| local(n).or_else(|| self.param_value(n)))
-                        .ok()
-                }
+                Some(p) => p.d[order]
+                    .eval(&|n| {
+                        if n == "x" {
+                            Some(x)
+                        } else {
+                            self.param_value(n)
+                        }
+                    })
+                    .ok(),
             }
         };
         let result = assumed_modes(&section, shapes.len(), &shape);
