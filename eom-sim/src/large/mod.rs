@@ -4,12 +4,16 @@
 //! matrix and a sparse tangent, solved by `faer`'s sparse direct solvers
 //! with the symbolic factorisation reused.
 //!
+//! - [`ancf`]: chains of ANCF elements between two points, by kernel name.
+//! - [`elastica`]: reference solutions of the planar elastica for tests.
 //! - [`model`]: element groups, fixed coordinates eliminated, loads.
 //! - [`statics`]: Newton with load stepping.
 //! - [`dynamics`]: generalized-α (implicit, fixed step) and RK4 (explicit).
 //! - [`sparse`]: the pattern, the matrix and the solvers behind a trait.
 
+pub mod ancf;
 pub mod dynamics;
+pub mod elastica;
 pub mod model;
 pub mod sparse;
 pub mod statics;

@@ -48,6 +48,16 @@ fn gauss01() -> &'static [(f64, f64)] {
     })
 }
 
+/// Mass per unit reference length from an element's parameters: `rhoA`,
+/// or `rho · A`, or `rho · b · h` (a rectangular section), whichever the
+/// kernel has.
+pub fn mass_per_length(names: &[&str], values: &[f64]) -> Option<f64> {
+    let get = |n: &str| names.iter().position(|&p| p == n).map(|k| values[k]);
+    get("rhoA")
+        .or_else(|| Some(get("rho")? * get("A")?))
+        .or_else(|| Some(get("rho")? * get("b")? * get("h")?))
+}
+
 /// Elements of one type, object-safe so that a model holds groups of
 /// different kernels. Vectors are full-size.
 pub trait ElementGroup: Send + Sync {
@@ -84,8 +94,8 @@ pub trait ElementGroup: Send + Sync {
     /// elastic force (velocity zero, so damping is left out) along the
     /// straight line from each element's reference coordinates.
     fn strain_energy(&self, q: &[f64]) -> f64;
-    /// `f += ` the gravity load: the uniform load `rhoA · g` on every
-    /// element (kernels without a `rhoA` parameter get none).
+    /// `f += ` the gravity load: the uniform load `ρA · g` on every
+    /// element ([`mass_per_length`]; kernels without one get none).
     fn add_gravity(&self, g: [f64; 3], f: &mut [f64]);
 }
 
@@ -214,12 +224,12 @@ impl<E: ElementKernel<N, P>, const N: usize, const P: usize> ElementGroup for El
         u
     }
     fn add_gravity(&self, g: [f64; 3], f: &mut [f64]) {
-        let Some(k) = E::PARAMS.iter().position(|&p| p == "rhoA") else {
-            return;
-        };
         let mut fe = [0.0; N];
         for e in 0..self.conn.len() {
-            let w = g.map(|x| self.params[e][k] * x);
+            let Some(mu) = mass_per_length(&E::PARAMS, &self.params[e]) else {
+                return;
+            };
+            let w = g.map(|x| mu * x);
             E::uniform_load(&self.params[e], &w, &mut fe);
             for (&i, v) in self.conn[e].iter().zip(&fe) {
                 f[i] += v;
@@ -275,6 +285,12 @@ impl ModelBuilder {
         self
     }
 
+    /// Adds a boxed group of elements.
+    pub fn boxed_elements(mut self, g: Box<dyn ElementGroup>) -> Self {
+        self.groups.push(g);
+        self
+    }
+
     /// Fixes full coordinate `i` at its value in `q0`.
     pub fn fix(mut self, i: usize) -> Self {
         self.fixed[i] = true;
@@ -308,8 +324,8 @@ impl ModelBuilder {
         let n = self.q0.len();
         let mut free_of_full = vec![None; n];
         let mut full_of_free = Vec::new();
-        for i in 0..n {
-            if !self.fixed[i] {
+        for (i, &fixed) in self.fixed.iter().enumerate() {
+            if !fixed {
                 free_of_full[i] = Some(full_of_free.len());
                 full_of_free.push(i);
             }

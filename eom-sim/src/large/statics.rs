@@ -210,7 +210,7 @@ pub fn solve_static(
             }
             if lu.factorizations() == 1 {
                 let cond = condition_estimate(&tangent, &lu);
-                if !(cond < opts.max_condition) {
+                if cond.is_nan() || cond >= opts.max_condition {
                     return Err(StaticError::Singular {
                         lambda: target,
                         reason: format!("condition number estimate {cond:.1e}"),
