@@ -12,6 +12,17 @@ use super::model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 use crate::elements::ElementKernel;
 use std::fmt;
 
+/// Element types whose kernels this build has (their `NAME`s).
+pub const KERNELS: &[&str] = &[];
+
+/// Builds a chain by its kernel's name.
+pub fn chain(spec: &ChainSpec) -> Result<Chain, ChainError> {
+    Err(ChainError(format!(
+        "no kernel `{}` in this build (available: {:?})",
+        spec.kernel, KERNELS
+    )))
+}
+
 /// How an end of the chain is held.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Support {
