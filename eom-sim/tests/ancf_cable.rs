@@ -18,13 +18,28 @@
 //!   integrator's O(h²) error, which falls by 4 when h halves; the tip
 //!   position at 1 s converges with the mesh.
 
-use eom_sim::large::ancf::{Chain, ChainSpec, Section, Support, chain};
+use eom_sim::elements::ElementKernel;
+use eom_sim::large::ancf::{Chain, ChainSpec, Section, Support, build_chain, chain};
 use eom_sim::large::elastica::{extensible_cantilever, mattiasson};
 use eom_sim::large::{AlphaOptions, GeneralizedAlpha, State, StaticOptions, solve_static};
 
+/// The kernel under test: the generated `Cable2D`.
+const KERNEL: &str = "HandCable";
+
+/// A chain of `spec.kernel`: the generated kernels by name, the hand-written
+/// reference cable by type.
+fn build(spec: &ChainSpec) -> Chain {
+    let built = if spec.kernel == "HandCable" {
+        build_chain::<HandCable, 8, 6>(spec)
+    } else {
+        chain(spec)
+    };
+    built.unwrap_or_else(|e| panic!("{e}"))
+}
+
 fn cantilever(elements: usize, l: f64, section: Section, force: [f64; 3]) -> Chain {
     let spec = ChainSpec {
-        kernel: "Cable2D".into(),
+        kernel: KERNEL.into(),
         start: [0.0; 3],
         end: [l, 0.0, 0.0],
         elements,
@@ -34,7 +49,7 @@ fn cantilever(elements: usize, l: f64, section: Section, force: [f64; 3]) -> Cha
         end_force: force,
         gravity: [0.0; 3],
     };
-    chain(&spec).unwrap_or_else(|e| panic!("{e}"))
+    build(&spec)
 }
 
 fn static_tip(ch: &Chain, load_steps: usize) -> [f64; 3] {
@@ -130,7 +145,7 @@ fn large_deflection_cantilever_matches_mattiasson() {
 fn pendulum(elements: usize) -> Chain {
     let (a, i) = (0.0018, 1.215e-8);
     let spec = ChainSpec {
-        kernel: "Cable2D".into(),
+        kernel: KERNEL.into(),
         start: [0.0; 3],
         end: [1.2, 0.0, 0.0],
         elements,
@@ -146,7 +161,7 @@ fn pendulum(elements: usize) -> Chain {
         end_force: [0.0; 3],
         gravity: [0.0, -9.81, 0.0],
     };
-    chain(&spec).unwrap_or_else(|e| panic!("{e}"))
+    build(&spec)
 }
 
 /// Runs the pendulum to `t_end`; the tip there and the largest energy
@@ -200,4 +215,187 @@ fn falling_pendulum_tip_converges_with_the_mesh() {
     println!("successive differences {d:?}");
     assert!(d[1] < d[0] && d[2] < d[1], "{d:?}");
     assert!(d[2] < 1e-2, "{d:?}");
+}
+
+/// Gauss–Legendre rule of `n` points on `[0, 1]` (Golub–Welsch free:
+/// Newton on the Legendre polynomial).
+fn gauss(n: usize) -> Vec<(f64, f64)> {
+    (0..n)
+        .map(|i| {
+            let mut x = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+            let mut dp = 1.0;
+            for _ in 0..100 {
+                let (mut p0, mut p1) = (1.0, x);
+                for k in 2..=n {
+                    let k = k as f64;
+                    let p2 = ((2.0 * k - 1.0) * x * p1 - (k - 1.0) * p0) / k;
+                    p0 = p1;
+                    p1 = p2;
+                }
+                dp = n as f64 * (x * p1 - p0) / (x * x - 1.0);
+                let dx = p1 / dp;
+                x -= dx;
+                if dx.abs() < 1e-16 {
+                    break;
+                }
+            }
+            (0.5 * (1.0 + x), 1.0 / ((1.0 - x * x) * dp * dp))
+        })
+        .collect()
+}
+
+/// An independent, hand-written planar cable (Gerstmayr and Irschik
+/// 2008): the same energy `½∫(EA ε² + EI κ²)dx` with `ε = |r'| − 1`,
+/// `κ = (r' × r'')/|r'|²`, the gradient by hand, the Jacobian by central
+/// differences, 5 Gauss points for the axial and 4 for the bending term.
+/// A check of the runtime before the generated kernel, and of the kernel.
+struct HandCable;
+
+/// Hermite shape functions and their first and second derivatives in `x`.
+fn shapes(xi: f64, l: f64) -> ([f64; 4], [f64; 4], [f64; 4]) {
+    let s = [
+        1.0 - 3.0 * xi * xi + 2.0 * xi.powi(3),
+        l * (xi - 2.0 * xi * xi + xi.powi(3)),
+        3.0 * xi * xi - 2.0 * xi.powi(3),
+        l * (-xi * xi + xi.powi(3)),
+    ];
+    let d = [
+        (-6.0 * xi + 6.0 * xi * xi) / l,
+        1.0 - 4.0 * xi + 3.0 * xi * xi,
+        (6.0 * xi - 6.0 * xi * xi) / l,
+        -2.0 * xi + 3.0 * xi * xi,
+    ];
+    let dd = [
+        (-6.0 + 12.0 * xi) / (l * l),
+        (-4.0 + 6.0 * xi) / l,
+        (6.0 - 12.0 * xi) / (l * l),
+        (-2.0 + 6.0 * xi) / l,
+    ];
+    (s, d, dd)
+}
+
+/// `Σ_i S_i q_{2i + c}` for component `c`.
+fn interp(s: &[f64; 4], q: &[f64; 8], c: usize) -> f64 {
+    (0..4).map(|i| s[i] * q[2 * i + c]).sum()
+}
+
+fn hand_forces(q: &[f64; 8], p: &[f64; 6], f: &mut [f64; 8]) {
+    let (l, ea, ei) = (p[0], p[1], p[2]);
+    *f = [0.0; 8];
+    for (xi, w) in gauss(5) {
+        let (_, d, _) = shapes(xi, l);
+        let r1 = [interp(&d, q, 0), interp(&d, q, 1)];
+        let nr = (r1[0] * r1[0] + r1[1] * r1[1]).sqrt();
+        let eps = nr - 1.0;
+        for i in 0..4 {
+            for c in 0..2 {
+                f[2 * i + c] += w * l * ea * eps * d[i] * r1[c] / nr;
+            }
+        }
+    }
+    for (xi, w) in gauss(4) {
+        let (_, d, dd) = shapes(xi, l);
+        let r1 = [interp(&d, q, 0), interp(&d, q, 1)];
+        let r2 = [interp(&dd, q, 0), interp(&dd, q, 1)];
+        let c = r1[0] * r2[1] - r1[1] * r2[0];
+        let g = r1[0] * r1[0] + r1[1] * r1[1];
+        let kappa = c / g;
+        for i in 0..4 {
+            let dc = [d[i] * r2[1] - dd[i] * r1[1], -d[i] * r2[0] + dd[i] * r1[0]];
+            let dg = [2.0 * r1[0] * d[i], 2.0 * r1[1] * d[i]];
+            for k in 0..2 {
+                let dk = (dc[k] * g - c * dg[k]) / (g * g);
+                f[2 * i + k] += w * l * ei * kappa * dk;
+            }
+        }
+    }
+}
+
+impl ElementKernel<8, 6> for HandCable {
+    const NAME: &'static str = "HandCable";
+    const NODE_COORDS: usize = 4;
+    const DIM: usize = 2;
+    const PARAMS: [&'static str; 6] = ["L", "EA", "EI", "rhoA", "d_a", "d_b"];
+    fn internal_forces(q: &[f64; 8], _qd: &[f64; 8], p: &[f64; 6], f: &mut [f64; 8]) {
+        hand_forces(q, p, f);
+    }
+    fn internal_jacobians(
+        q: &[f64; 8],
+        _qd: &[f64; 8],
+        p: &[f64; 6],
+        k: &mut [[f64; 8]; 8],
+        d: &mut [[f64; 8]; 8],
+    ) {
+        *d = [[0.0; 8]; 8];
+        let scale = q.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(p[0]);
+        let h = 1e-6 * scale;
+        for j in 0..8 {
+            let (mut qp, mut qm) = (*q, *q);
+            qp[j] += h;
+            qm[j] -= h;
+            let (mut fp, mut fm) = ([0.0; 8], [0.0; 8]);
+            hand_forces(&qp, p, &mut fp);
+            hand_forces(&qm, p, &mut fm);
+            for i in 0..8 {
+                k[i][j] = (fp[i] - fm[i]) / (2.0 * h);
+            }
+        }
+    }
+    fn mass(p: &[f64; 6], m: &mut [[f64; 8]; 8]) {
+        *m = [[0.0; 8]; 8];
+        for (xi, w) in gauss(4) {
+            let (s, _, _) = shapes(xi, p[0]);
+            for i in 0..4 {
+                for j in 0..4 {
+                    for c in 0..2 {
+                        m[2 * i + c][2 * j + c] += w * p[0] * p[3] * s[i] * s[j];
+                    }
+                }
+            }
+        }
+    }
+    fn uniform_load(p: &[f64; 6], w: &[f64; 3], f: &mut [f64; 8]) {
+        *f = [0.0; 8];
+        for (xi, wt) in gauss(4) {
+            let (s, _, _) = shapes(xi, p[0]);
+            for i in 0..4 {
+                for c in 0..2 {
+                    f[2 * i + c] += wt * p[0] * s[i] * w[c];
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn hand_cable_cantilever_against_the_extensible_elastica() {
+    // The runtime and the tests' reference before (and beside) the
+    // generated kernel: the hand-written cable, 16 elements.
+    let l = 2.0;
+    let s = gi_section();
+    let (ea, ei) = (s.e * s.area, s.e * s.inertia);
+    let p = 3.0 * ei / (l * l);
+    let reference = extensible_cantilever(l, ea, ei, [0.0, -p])
+        .unwrap_or_else(|| panic!("the elastica reference failed"));
+    for n in [4usize, 8, 16, 32, 64] {
+        let spec = ChainSpec {
+            kernel: "HandCable".into(),
+            start: [0.0; 3],
+            end: [l, 0.0, 0.0],
+            elements: n,
+            section: s.clone(),
+            start_support: Support::Clamped,
+            end_support: Support::Free,
+            end_force: [0.0, -p, 0.0],
+            gravity: [0.0; 3],
+        };
+        let ch = build_chain::<HandCable, 8, 6>(&spec).unwrap_or_else(|e| panic!("{e}"));
+        let tip = static_tip(&ch, 10);
+        let err = ((tip[0] - reference.x).powi(2) + (tip[1] - reference.y).powi(2)).sqrt();
+        println!(
+            "hand cable n = {n}: tip ({:.10}, {:.10}) error {err:.3e}",
+            tip[0], tip[1]
+        );
+    }
+    println!("reference ({:.10}, {:.10})", reference.x, reference.y);
 }

@@ -58,6 +58,92 @@ pub fn mass_per_length(names: &[&str], values: &[f64]) -> Option<f64> {
         .or_else(|| Some(get("rho")? * get("b")? * get("h")?))
 }
 
+/// The reference coordinates `r` of a two-node element moved rigidly so
+/// that its chord (node 0 to node 1) lies along the chord of `q` and its
+/// node 0 on `q`'s: positions are rotated about node 0 and translated,
+/// gradients rotated. Coordinates per node: position (`dim`) then
+/// gradients (`dim` each).
+fn placed_reference<const N: usize>(r: &[f64; N], q: &[f64; N], dim: usize, nc: usize) -> [f64; N] {
+    let chord = |v: &[f64; N]| -> [f64; 3] {
+        let mut c = [0.0; 3];
+        for (k, ck) in c.iter_mut().enumerate().take(dim) {
+            *ck = v[nc + k] - v[k];
+        }
+        c
+    };
+    let (a, b) = (chord(r), chord(q));
+    let norm = |v: &[f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    let (na, nb) = (norm(&a), norm(&b));
+    if na == 0.0 || nb == 0.0 || dim < 2 {
+        return *r;
+    }
+    let a = a.map(|x| x / na);
+    let b = b.map(|x| x / nb);
+    // Rotation taking a to b (Rodrigues about a × b).
+    let axis = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let s = norm(&axis);
+    let c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let rot = |v: [f64; 3]| -> [f64; 3] {
+        if s < 1e-300 {
+            // Parallel or antiparallel: identity, or a half turn about an
+            // axis normal to a (in the plane for dim 2: z).
+            if c > 0.0 {
+                return v;
+            }
+            let k = if dim == 2 || a[2].abs() < 0.9 {
+                let z = [0.0, 0.0, 1.0];
+                let p = [
+                    z[1] * a[2] - z[2] * a[1],
+                    z[2] * a[0] - z[0] * a[2],
+                    z[0] * a[1] - z[1] * a[0],
+                ];
+                let n = norm(&p);
+                p.map(|x| x / n)
+            } else {
+                [1.0, 0.0, 0.0]
+            };
+            let d = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+            return [
+                2.0 * d * k[0] - v[0],
+                2.0 * d * k[1] - v[1],
+                2.0 * d * k[2] - v[2],
+            ];
+        }
+        let k = axis.map(|x| x / s);
+        let kv = [
+            k[1] * v[2] - k[2] * v[1],
+            k[2] * v[0] - k[0] * v[2],
+            k[0] * v[1] - k[1] * v[0],
+        ];
+        let kd = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+        [0, 1, 2].map(|i| v[i] * c + kv[i] * s + k[i] * kd * (1.0 - c))
+    };
+    let mut out = *r;
+    for node in 0..2 {
+        let base = node * nc;
+        for block in 0..nc / dim {
+            let at = base + block * dim;
+            let mut v = [0.0; 3];
+            for k in 0..dim {
+                v[k] = if block == 0 {
+                    r[at + k] - r[k]
+                } else {
+                    r[at + k]
+                };
+            }
+            let w = rot(v);
+            for k in 0..dim {
+                out[at + k] = if block == 0 { w[k] + q[k] } else { w[k] };
+            }
+        }
+    }
+    out
+}
+
 /// Elements of one type, object-safe so that a model holds groups of
 /// different kernels. Vectors are full-size.
 pub trait ElementGroup: Send + Sync {
@@ -207,7 +293,10 @@ impl<E: ElementKernel<N, P>, const N: usize, const P: usize> ElementGroup for El
         let mut u = 0.0;
         for e in 0..self.conn.len() {
             let qe = self.gather(e, q);
-            let r = &self.reference[e];
+            // Start the path at the reference moved rigidly onto the
+            // element (strain energy is invariant under rigid motions), so
+            // that it stays short and away from a vanishing gradient.
+            let r = placed_reference::<N>(&self.reference[e], &qe, E::DIM, E::NODE_COORDS);
             let mut dq = [0.0; N];
             for i in 0..N {
                 dq[i] = qe[i] - r[i];
