@@ -49,6 +49,7 @@
 //! ```
 
 pub mod constrained;
+pub mod elements;
 mod integrate;
 mod model;
 pub mod run;
