@@ -36,3 +36,17 @@ pub trait ElementKernel<const N: usize, const P: usize> {
     /// (first `DIM` entries used; e.g. `w = ρA g` for gravity).
     fn uniform_load(p: &[f64; P], w: &[f64; 3], f: &mut [f64; N]);
 }
+
+#[rustfmt::skip] // generated, formatted by prettyplease; stays byte-identical
+pub mod cable2d;
+#[rustfmt::skip]
+pub mod cable2d_green;
+#[rustfmt::skip]
+pub mod cable3d;
+#[rustfmt::skip]
+pub mod beam2d;
+
+pub use beam2d::Beam2D;
+pub use cable2d::Cable2D;
+pub use cable2d_green::Cable2DGreen;
+pub use cable3d::Cable3D;
