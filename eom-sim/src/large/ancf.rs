@@ -9,18 +9,28 @@
 //! per model.
 
 use super::model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
-use crate::elements::ElementKernel;
+use crate::elements::{Beam2D, Cable2D, Cable2DGreen, Cable3D, ElementKernel};
 use std::fmt;
 
 /// Element types whose kernels this build has (their `NAME`s).
-pub const KERNELS: &[&str] = &[];
+pub const KERNELS: &[&str] = &[
+    Cable2D::NAME,
+    Cable2DGreen::NAME,
+    Cable3D::NAME,
+    Beam2D::NAME,
+];
 
 /// Builds a chain by its kernel's name.
 pub fn chain(spec: &ChainSpec) -> Result<Chain, ChainError> {
-    Err(ChainError(format!(
-        "no kernel `{}` in this build (available: {:?})",
-        spec.kernel, KERNELS
-    )))
+    match spec.kernel.as_str() {
+        Cable2D::NAME => build_chain::<Cable2D, 8, 6>(spec),
+        Cable2DGreen::NAME => build_chain::<Cable2DGreen, 8, 6>(spec),
+        Cable3D::NAME => build_chain::<Cable3D, 12, 6>(spec),
+        Beam2D::NAME => build_chain::<Beam2D, 12, 7>(spec),
+        other => Err(ChainError(format!(
+            "no kernel `{other}` in this build (available: {KERNELS:?})"
+        ))),
+    }
 }
 
 /// How an end of the chain is held.
