@@ -29,6 +29,12 @@ pub fn has_cables(checked: &Checked) -> bool {
 
 fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
     let sys = &checked.system;
+    if sys.cables.is_empty() {
+        return Err(Error::Refused(format!(
+            "model `{}` has no cables: solve-static solves the equilibrium of ANCF chains (`cables:`)",
+            sys.name
+        )));
+    }
     if sys.bodies.len() > 1 {
         return Err(Error::Refused(format!(
             "model `{}` mixes rigid bodies and cables: attaching ANCF chains to rigid bodies is not supported yet; \
@@ -53,12 +59,6 @@ pub fn solve_static_cmd(
     json_out: bool,
 ) -> Result<String, Error> {
     let chains = build(checked)?;
-    if chains.is_empty() {
-        return Err(Error::Refused(format!(
-            "model `{}` has no cables: solve-static solves the equilibrium of ANCF chains (`cables:`)",
-            checked.system.name
-        )));
-    }
     let mut text = String::new();
     let mut report = Vec::new();
     for (name, ch) in &chains {

@@ -456,6 +456,11 @@ fn hand_cable_cantilever_against_the_extensible_elastica() {
             "hand cable n = {n}: tip ({:.10}, {:.10}) error {err:.3e}",
             tip[0], tip[1]
         );
+        errors.push(err);
     }
     println!("reference ({:.10}, {:.10})", reference.x, reference.y);
+    // The same convergence as the generated kernel's (independent code).
+    for w in errors.windows(2).skip(1) {
+        assert!((w[0] / w[1]).log2() > 3.5, "{errors:?}");
+    }
 }
