@@ -8,7 +8,8 @@
 //!   average acceleration, which keeps the energy of linear undamped
 //!   systems exactly). Newton on the accelerations with the iteration
 //!   matrix `S = M + γ' D + β' K` assembled sparse and factored by LU with
-//!   the symbolic analysis reused. **Fixed step**: no error estimate or
+//!   the symbolic analysis reused; by default modified Newton (the factored
+//!   matrix kept while the iteration contracts fast, [`AlphaOptions::reuse_matrix`]). **Fixed step**: no error estimate or
 //!   step control; the user picks `h` and checks convergence by halving it
 //!   (the tests do). A step whose Newton iteration fails stops the run
 //!   with a typed error naming the time.
@@ -42,6 +43,12 @@ pub struct AlphaOptions {
     pub max_iterations: usize,
     /// Newton stops when the position correction `‖β' Δq̈‖∞ ≤ tol · (1 + ‖q‖∞)`.
     pub tol: f64,
+    /// Modified Newton: keep the factored iteration matrix across
+    /// iterations and steps, rebuilding it when a correction is more than
+    /// a quarter of the one before (and retrying a failed step with full
+    /// Newton) (the element Jacobians cost about 16
+    /// force evaluations for the planar cable). `false`: full Newton.
+    pub reuse_matrix: bool,
 }
 
 impl Default for AlphaOptions {
@@ -50,7 +57,8 @@ impl Default for AlphaOptions {
             h: 1e-3,
             rho_inf: 1.0,
             max_iterations: 20,
-            tol: 1e-12,
+            tol: 1e-10,
+            reuse_matrix: true,
         }
     }
 }
@@ -134,6 +142,7 @@ pub struct GeneralizedAlpha<'m> {
     load: Vec<f64>,
     iteration: SparseMatrix,
     lu: FaerLu,
+    have_matrix: bool,
     q_full: Vec<f64>,
     v_full: Vec<f64>,
     scratch: Vec<f64>,
@@ -188,6 +197,7 @@ impl<'m> GeneralizedAlpha<'m> {
             load,
             iteration: SparseMatrix::zeros(model.pattern().clone()),
             lu: FaerLu::default(),
+            have_matrix: false,
             q_full,
             v_full,
             scratch: vec![0.0; model.n_full()],
@@ -206,8 +216,19 @@ impl<'m> GeneralizedAlpha<'m> {
         &self.q_full
     }
 
-    /// One step of size `h`.
+    /// One step of size `h`. With [`AlphaOptions::reuse_matrix`], a step
+    /// whose modified Newton iteration fails is retried with full Newton
+    /// before the run stops.
     pub fn step(&mut self) -> Result<(), DynamicsError> {
+        match self.try_step(false) {
+            Err(DynamicsError::NewtonFailed { .. }) if self.opts.reuse_matrix => {
+                self.try_step(true)
+            }
+            other => other,
+        }
+    }
+
+    fn try_step(&mut self, always_refresh: bool) -> Result<(), DynamicsError> {
         let h = self.opts.h;
         let (am, af, beta, gamma) = (self.alpha_m, self.alpha_f, self.beta, self.gamma);
         let n = self.model.n_free();
@@ -233,6 +254,11 @@ impl<'m> GeneralizedAlpha<'m> {
         let mut r = vec![0.0; n];
         let mut corrections = Vec::new();
         let mut converged = false;
+        // Modified Newton: the factored iteration matrix is kept across
+        // iterations and steps while each correction is at most a quarter
+        // of the one before; otherwise (or on the first use) it is rebuilt.
+        let mut refresh = always_refresh || !self.opts.reuse_matrix || !self.have_matrix;
+        let mut fresh = false;
         for _ in 0..self.opts.max_iterations {
             self.model.expand_into(&q1, &mut self.q_full);
             self.model.expand_into(&v1, &mut self.v_full);
@@ -244,18 +270,23 @@ impl<'m> GeneralizedAlpha<'m> {
                 *ri -= fi;
             }
             self.model.mass().mul_add(1.0, &acc1, &mut r);
-            self.model.jacobian(
-                &self.q_full,
-                &self.v_full,
-                beta_p,
-                gamma_p,
-                1.0,
-                &mut self.iteration,
-            );
-            if let Err(e) = self.lu.factor(&self.iteration) {
-                return Err(DynamicsError::Singular { t: t1, reason: e.0 });
+            if refresh {
+                self.model.jacobian(
+                    &self.q_full,
+                    &self.v_full,
+                    beta_p,
+                    gamma_p,
+                    1.0,
+                    &mut self.iteration,
+                );
+                if let Err(e) = self.lu.factor(&self.iteration) {
+                    return Err(DynamicsError::Singular { t: t1, reason: e.0 });
+                }
+                self.stats.factorizations += 1;
+                self.have_matrix = true;
+                refresh = always_refresh || !self.opts.reuse_matrix;
+                fresh = true;
             }
-            self.stats.factorizations += 1;
             self.lu.solve(&mut r);
             self.stats.newton_iterations += 1;
             for i in 0..n {
@@ -274,6 +305,13 @@ impl<'m> GeneralizedAlpha<'m> {
                 converged = true;
                 break;
             }
+            if let [.., before, last] = corrections[..]
+                && last > 0.25 * before
+                && !fresh
+            {
+                refresh = true;
+            }
+            fresh = false;
         }
         if !converged {
             return Err(DynamicsError::NewtonFailed { t: t1, corrections });
