@@ -40,6 +40,7 @@ fn cantilever(n: usize) -> (Chain, f64) {
         start_support: Support::Clamped,
         end_support: Support::Free,
         end_force: [0.0, -p, 0.0],
+        end_mass: 0.0,
         gravity: [0.0; 3],
     };
     match chain(&spec) {
@@ -64,6 +65,7 @@ fn pendulum(n: usize) -> Chain {
         start_support: Support::Pinned,
         end_support: Support::Free,
         end_force: [0.0; 3],
+        end_mass: 0.0,
         gravity: [0.0, -9.81, 0.0],
     };
     match chain(&spec) {

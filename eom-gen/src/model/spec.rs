@@ -185,6 +185,9 @@ pub struct Cable {
     /// A constant force on the second end, world axes, N.
     #[serde(default, skip_serializing_if = "V3::is_zero")]
     pub end_force: V3,
+    /// A point mass on the second end (a bob), kg.
+    #[serde(default, skip_serializing_if = "Num::is_zero")]
+    pub end_mass: Num,
 }
 
 /// ANCF element types (the kernels generated once per type).

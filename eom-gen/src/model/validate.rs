@@ -2111,6 +2111,7 @@ impl Ctx<'_> {
                 name,
             );
             let mu = self.nonnegative(&c.retardation, &at("retardation"), "retardation time", name);
+            let end_mass = self.nonnegative(&c.end_mass, &at("end_mass"), "end mass", name);
             let planar = c.element != spec::AncfElement::Cable3D;
             if let (Some(a), Some(b)) = (&from, &to) {
                 let (a, b) = (values(a), values(b));
@@ -2162,8 +2163,9 @@ impl Ctx<'_> {
                 Some(da),
                 Some(db),
                 Some(mu),
+                Some(end_mass),
             ) = (
-                from, to, end_force, young, density, area, second, poisson, da, db, mu,
+                from, to, end_force, young, density, area, second, poisson, da, db, mu, end_mass,
             )
             else {
                 ok = false;
@@ -2193,6 +2195,7 @@ impl Ctx<'_> {
                     start_support: support(c.start),
                     end_support: support(c.end),
                     end_force: v(&end_force),
+                    end_mass: end_mass.value,
                     gravity: g,
                 },
             });

@@ -115,6 +115,9 @@ pub struct ChainSpec {
     pub end_support: Support,
     /// A constant force on the second end's position, N.
     pub end_force: [f64; 3],
+    /// A point mass (a rigid particle, no rotary inertia) on the second
+    /// end, kg; it takes its weight under `gravity`.
+    pub end_mass: f64,
     /// Gravity, m/s².
     pub gravity: [f64; 3],
 }
@@ -235,8 +238,12 @@ pub fn build_chain<E: ElementKernel<N, P> + 'static, const N: usize, const P: us
         }
     }
     for k in 0..dim {
-        if spec.end_force[k] != 0.0 {
-            b = b.point_load(ne * nc + k, spec.end_force[k]);
+        let f = spec.end_force[k] + spec.end_mass * spec.gravity[k];
+        if f != 0.0 {
+            b = b.point_load(ne * nc + k, f);
+        }
+        if spec.end_mass > 0.0 {
+            b = b.point_mass(ne * nc + k, spec.end_mass);
         }
     }
     let group: Box<dyn ElementGroup> = Box::new(els);
