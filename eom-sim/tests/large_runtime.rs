@@ -91,13 +91,12 @@ fn static_chain_under_tip_force_and_own_weight() {
         worst = worst.max(err);
     }
     assert!(worst < 1e-12, "{worst}");
-    // Linear: every load step converges in one Newton iteration.
+    // Linear: the first load step converges in one Newton iteration, the
+    // later ones at once from the secant predictor (exact when the
+    // response is linear in the load).
     assert_eq!(sol.steps.len(), 10);
-    assert!(
-        sol.steps.iter().all(|s| s.iterations() == 1),
-        "{:?}",
-        sol.steps
-    );
+    assert_eq!(sol.steps[0].iterations(), 1, "{:?}", sol.steps);
+    assert!(sol.steps[1..].iter().all(|s| s.iterations() == 0), "{:?}", sol.steps);
     assert_eq!(sol.cuts, 0);
 }
 
