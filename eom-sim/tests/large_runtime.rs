@@ -96,7 +96,11 @@ fn static_chain_under_tip_force_and_own_weight() {
     // response is linear in the load).
     assert_eq!(sol.steps.len(), 10);
     assert_eq!(sol.steps[0].iterations(), 1, "{:?}", sol.steps);
-    assert!(sol.steps[1..].iter().all(|s| s.iterations() == 0), "{:?}", sol.steps);
+    assert!(
+        sol.steps[1..].iter().all(|s| s.iterations() == 0),
+        "{:?}",
+        sol.steps
+    );
     assert_eq!(sol.cuts, 0);
 }
 
