@@ -5,7 +5,7 @@
 //! `h₁ = 1 − 3ξ² + 2ξ³`, `h₂ = ξ − 2ξ² + ξ³`, `h₃ = 3ξ² − 2ξ³`,
 //! `h₄ = −ξ² + ξ³`, so that `r(x) = h₁ r₁ + L h₂ r₁' + h₃ r₂ + L h₄ r₂'`.
 
-use super::{Definition, Symbols, gauss_legendre, symbols, time_rate};
+use super::{Definition, Point, Symbols, gauss_legendre, symbols};
 use crate::sym::{Arena, Id};
 
 /// Integer coefficients (ascending powers of ξ) of `h₁ … h₄`.
@@ -200,10 +200,14 @@ pub(super) fn cable2d(a: &mut Arena, green: bool) -> Definition {
     let [l, ea, ei, rho_a, da, db] = [s.p[0], s.p[1], s.p[2], s.p[3], s.p[4], s.p[5]];
     let half = a.ratio(1, 2);
     let one = a.constant(1.0);
-    let (mut u, mut r) = (vec![], vec![]);
+    let mut points = Vec::new();
     for (xi, w) in gauss_legendre(CABLE_AXIAL_POINTS) {
         let (d1, _) = cable_derivatives(a, &s, 2, l, xi);
-        let ss = dot(a, &d1, &d1);
+        let c = a.constant(w);
+        let wt = a.mul2(c, l);
+        let mut pt = Point::new(a, points.len(), wt, d1);
+        let z = pt.z_nodes(a);
+        let ss = dot(a, &z, &z);
         let eps = if green {
             let t = a.sub(ss, one);
             a.mul2(half, t)
@@ -211,33 +215,36 @@ pub(super) fn cable2d(a: &mut Arena, green: bool) -> Definition {
             let t = a.sqrt(ss);
             a.sub(t, one)
         };
-        let epsd = time_rate(a, eps);
-        let c = a.constant(0.5 * w);
+        let epsd = pt.rate(a, eps);
         let e2 = square(a, eps);
-        u.push(a.mul(&[c, l, ea, e2]));
+        pt.phi = a.mul(&[half, ea, e2]);
         let e2 = square(a, epsd);
-        r.push(a.mul(&[c, l, da, e2]));
+        pt.psi = a.mul(&[half, da, e2]);
+        points.push(pt);
     }
     for (xi, w) in gauss_legendre(CABLE_BENDING_POINTS) {
-        let (d1, d2) = cable_derivatives(a, &s, 2, l, xi);
-        let t1 = a.mul2(d1[0], d2[1]);
-        let t2 = a.mul2(d1[1], d2[0]);
+        let (mut d1, d2) = cable_derivatives(a, &s, 2, l, xi);
+        d1.extend(d2);
+        let c = a.constant(w);
+        let wt = a.mul2(c, l);
+        let mut pt = Point::new(a, points.len(), wt, d1);
+        let z = pt.z_nodes(a);
+        let t1 = a.mul2(z[0], z[3]);
+        let t2 = a.mul2(z[1], z[2]);
         let cross = a.sub(t1, t2);
         let kappa = if green {
             cross
         } else {
-            let ss = dot(a, &d1, &d1);
+            let ss = dot(a, &z[..2], &z[..2]);
             a.div(cross, ss)
         };
-        let kd = time_rate(a, kappa);
-        let c = a.constant(0.5 * w);
+        let kd = pt.rate(a, kappa);
         let k2 = square(a, kappa);
-        u.push(a.mul(&[c, l, ei, k2]));
+        pt.phi = a.mul(&[half, ei, k2]);
         let k2 = square(a, kd);
-        r.push(a.mul(&[c, l, db, k2]));
+        pt.psi = a.mul(&[half, db, k2]);
+        points.push(pt);
     }
-    let energy = a.add(&u);
-    let dissipation = a.add(&r);
     let (mass, load) = mass_and_load(a, &s, &cable_slots(), (2, 2), l, rho_a, None);
     let (name, module, summary, integration) = if green {
         (
@@ -287,8 +294,7 @@ pub(super) fn cable2d(a: &mut Arena, green: bool) -> Definition {
         params,
         summary,
         integration,
-        energy,
-        dissipation,
+        points,
         mass,
         load,
     }
@@ -313,22 +319,33 @@ pub(super) fn cable3d(a: &mut Arena) -> Definition {
     let s = symbols(a, 12, &params);
     let [l, ea, ei, rho_a, da, db] = [s.p[0], s.p[1], s.p[2], s.p[3], s.p[4], s.p[5]];
     let one = a.constant(1.0);
-    let (mut u, mut r) = (vec![], vec![]);
+    let half = a.ratio(1, 2);
+    let mut points = Vec::new();
     for (xi, w) in gauss_legendre(CABLE_AXIAL_POINTS) {
         let (d1, _) = cable_derivatives(a, &s, 3, l, xi);
-        let ss = dot(a, &d1, &d1);
+        let c = a.constant(w);
+        let wt = a.mul2(c, l);
+        let mut pt = Point::new(a, points.len(), wt, d1);
+        let z = pt.z_nodes(a);
+        let ss = dot(a, &z, &z);
         let t = a.sqrt(ss);
         let eps = a.sub(t, one);
-        let epsd = time_rate(a, eps);
-        let c = a.constant(0.5 * w);
+        let epsd = pt.rate(a, eps);
         let e2 = square(a, eps);
-        u.push(a.mul(&[c, l, ea, e2]));
+        pt.phi = a.mul(&[half, ea, e2]);
         let e2 = square(a, epsd);
-        r.push(a.mul(&[c, l, da, e2]));
+        pt.psi = a.mul(&[half, da, e2]);
+        points.push(pt);
     }
     for (xi, w) in gauss_legendre(CABLE_BENDING_POINTS) {
-        let (d1, d2) = cable_derivatives(a, &s, 3, l, xi);
-        let ss = dot(a, &d1, &d1);
+        let (mut d1, d2) = cable_derivatives(a, &s, 3, l, xi);
+        d1.extend(d2);
+        let c = a.constant(w);
+        let wt = a.mul2(c, l);
+        let mut pt = Point::new(a, points.len(), wt, d1);
+        let z = pt.z_nodes(a);
+        let (r1, r2) = (&z[..3], &z[3..]);
+        let ss = dot(a, r1, r1);
         // Curvature vector k = (r' × r'')/|r'|³; κ = |k| (its square is smooth
         // at zero curvature, κ itself is not).
         let t = a.sqrt(ss);
@@ -336,20 +353,18 @@ pub(super) fn cable3d(a: &mut Arena) -> Definition {
         let inv = a.recip(n3);
         let mut k = Vec::with_capacity(3);
         for (i, j) in [(1, 2), (2, 0), (0, 1)] {
-            let t1 = a.mul2(d1[i], d2[j]);
-            let t2 = a.mul2(d1[j], d2[i]);
+            let t1 = a.mul2(r1[i], r2[j]);
+            let t2 = a.mul2(r1[j], r2[i]);
             let c = a.sub(t1, t2);
             k.push(a.mul2(c, inv));
         }
         let k2 = dot(a, &k, &k);
-        let kd: Vec<Id> = k.iter().map(|&e| time_rate(a, e)).collect();
+        let kd: Vec<Id> = k.iter().map(|&e| pt.rate(a, e)).collect();
         let kd2 = dot(a, &kd, &kd);
-        let c = a.constant(0.5 * w);
-        u.push(a.mul(&[c, l, ei, k2]));
-        r.push(a.mul(&[c, l, db, kd2]));
+        pt.phi = a.mul(&[half, ei, k2]);
+        pt.psi = a.mul(&[half, db, kd2]);
+        points.push(pt);
     }
-    let energy = a.add(&u);
-    let dissipation = a.add(&r);
     let (mass, load) = mass_and_load(a, &s, &cable_slots(), (2, 3), l, rho_a, None);
     Definition {
         name: "Cable3D",
@@ -373,8 +388,7 @@ pub(super) fn cable3d(a: &mut Arena) -> Definition {
              term, as for the planar cable (the integrands are rational; the forces \
              differ from a 40-point rule's by about 1.5e-6 at deformations of 5 %)."
         ),
-        energy,
-        dissipation,
+        points,
         mass,
         load,
     }
@@ -425,12 +439,12 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
         let t2 = a.mul(&[two, g, s12]);
         a.add2(t1, t2)
     };
-    let (mut u, mut r) = (vec![], vec![]);
+    let mut points = Vec::new();
     for (xi, wx) in gauss_legendre(BEAM_AXIAL_POINTS) {
         for (eta, wy) in gauss_legendre(BEAM_HEIGHT_POINTS) {
             let ycoef = a.constant(eta - 0.5);
             let y = a.mul2(ycoef, h);
-            let mut rx = Vec::with_capacity(2);
+            let mut rx = Vec::with_capacity(4);
             let mut ry = Vec::with_capacity(2);
             for comp in 0..2 {
                 let (mut pos, mut slope, mut tr, mut ty) = (vec![], vec![], vec![], vec![]);
@@ -458,9 +472,15 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
                 rx.push(a.add2(scaled, slope));
                 ry.push(a.add(&ty));
             }
-            let xx = dot(a, &rx, &rx);
-            let yy = dot(a, &ry, &ry);
-            let xy = dot(a, &rx, &ry);
+            rx.extend(ry);
+            let c = a.constant(wx * wy);
+            let wt = a.mul(&[c, l, b, h]);
+            let mut pt = Point::new(a, points.len(), wt, rx);
+            let z = pt.z_nodes(a);
+            let (rx, ry) = (&z[..2], &z[2..]);
+            let xx = dot(a, rx, rx);
+            let yy = dot(a, ry, ry);
+            let xy = dot(a, rx, ry);
             let e11 = {
                 let t = a.sub(xx, one);
                 a.mul2(half, t)
@@ -470,16 +490,13 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
                 a.mul2(half, t)
             };
             let e12 = a.mul2(half, xy);
-            let wgt = a.constant(wx * wy);
-            let w = density(a, e11, e22, e12);
-            u.push(a.mul(&[wgt, l, b, h, w]));
-            let [d11, d22, d12] = [e11, e22, e12].map(|x| time_rate(a, x));
+            pt.phi = density(a, e11, e22, e12);
+            let [d11, d22, d12] = [e11, e22, e12].map(|x| pt.rate(a, x));
             let wd = density(a, d11, d22, d12);
-            r.push(a.mul(&[wgt, l, b, h, mu, wd]));
+            pt.psi = a.mul2(mu, wd);
+            points.push(pt);
         }
     }
-    let energy = a.add(&u);
-    let dissipation = a.add(&r);
     // Mass: ρ L ∫ (A S₀ᵀS₀ + I S₁ᵀS₁) dξ with A = b h, I = b h³/12.
     let area = a.mul2(b, h);
     let m_axis = a.mul2(rho, area);
@@ -526,8 +543,7 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
              Gauss–Legendre {BEAM_AXIAL_POINTS} × {BEAM_HEIGHT_POINTS} points \
              (exact to degree 9 × 5), unrolled."
         ),
-        energy,
-        dissipation,
+        points,
         mass,
         load,
     }
