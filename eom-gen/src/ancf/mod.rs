@@ -80,6 +80,9 @@ pub struct Definition {
     pub summary: String,
     /// The integration rule and why, markdown.
     pub integration: String,
+    /// Linear combinations of `q` shared by the points' `z` (symbols and
+    /// their expressions; `z` may be written in these symbols).
+    pub pre: Vec<(SymId, Id)>,
     /// The quadrature points: `U = Σ weight·φ(z)`, `R = Σ weight·ψ(z, ż)`.
     pub points: Vec<Point>,
     /// Mass matrix entries, row-major `n × n`.
@@ -219,9 +222,10 @@ pub struct Kernels {
 /// lowers.
 ///
 /// Per quadrature point `g` with kinematic values `z_g = B_g q` (`B_g`
-/// constant): `σ_g = w_g (∂φ/∂z + ∂ψ/∂ż)`, `H_g = ∂σ_g/∂z`,
+/// constant) and weight `w_g`: `σ_g = ∂φ/∂z + ∂ψ/∂ż`, `H_g = ∂σ_g/∂z`,
 /// `C_g = ∂σ_g/∂ż`, all by [`Arena::diff`] in symbols standing for `z_g`,
-/// `ż_g`; then `f = Σ B_gᵀ σ_g`, `K = Σ B_gᵀ H_g B_g`, `D = Σ B_gᵀ C_g B_g`
+/// `ż_g` (common factors taken out of `σ` by the `factor` rewrite); then
+/// `f = Σ w_g B_gᵀ σ_g`, `K = Σ w_g B_gᵀ H_g B_g`, `D = Σ w_g B_gᵀ C_g B_g`
 /// (exact: `z` is linear in `q`, so `∂²z/∂q² = 0`). The three stages are
 /// lowered separately, so the point quantities are computed once and not
 /// multiplied out into every entry, and chained into one program.
@@ -239,16 +243,34 @@ pub fn derive(kind: Kind) -> Kernels {
     let zero = a.constant(0.0);
     let is_zero = |a: &Arena, e: Id| a.num(e).is_some_and(|v| v.to_f64() == 0.0);
     let name = |a: &Arena, s: SymId| a.symbol(s).name.clone();
-    // Stage 1: z_g and ż_g = B_g q̇; B_g by differentiation.
+    // Stage 0: the shared linear combinations of q (and the same of q̇).
+    let mut stage0: Vec<(String, Id)> = Vec::new();
+    let mut pre_of: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
+    let mut pre_rate: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
+    let mut pre_rate_of: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
+    let rate_of_q: rustc_hash::FxHashMap<SymId, Id> =
+        qs.iter().copied().zip(qd.iter().copied()).collect();
+    for &(sym, e) in &def.pre {
+        let nm = name(&a, sym);
+        stage0.push((nm.clone(), e));
+        let ed = a.substitute(&[e], |s| rate_of_q.get(&s).copied())[0];
+        let rate = a.input(&format!("{nm}_d")).expect("identifier");
+        stage0.push((format!("{nm}_d"), ed));
+        pre_of.insert(sym, e);
+        pre_rate.insert(sym, rate);
+        pre_rate_of.insert(a.as_sym(rate).expect("symbol"), ed);
+    }
+    // Stage 1: z_g and ż_g = B_g q̇ (z of the rates of stage 0); B_g by
+    // differentiation of z in q.
     let mut stage1: Vec<(String, Id)> = Vec::new();
     let mut b: Vec<Vec<Vec<Id>>> = Vec::new();
     for pt in &def.points {
-        let bg: Vec<Vec<Id>> = pt.z.iter().map(|&z| a.gradient(z, &qs)).collect();
+        let zq = a.substitute(&pt.z, |s| pre_of.get(&s).copied());
+        let bg: Vec<Vec<Id>> = zq.iter().map(|&z| a.gradient(z, &qs)).collect();
+        let zd = a.substitute(&pt.z, |s| pre_rate.get(&s).or(rate_of_q.get(&s)).copied());
         for (k, &z) in pt.z.iter().enumerate() {
             stage1.push((name(&a, pt.zs[k]), z));
-            let terms: Vec<Id> = bg[k].iter().zip(&qd).map(|(&c, &v)| a.mul2(c, v)).collect();
-            let zd = a.add(&terms);
-            stage1.push((name(&a, pt.zds[k]), zd));
+            stage1.push((name(&a, pt.zds[k]), zd[k]));
         }
         b.push(bg);
     }
@@ -265,9 +287,12 @@ pub fn derive(kind: Kind) -> Kernels {
         for k in 0..m {
             let d1 = a.diff(pt.phi, pt.zs[k]);
             let d2 = a.diff(pt.psi, pt.zds[k]);
-            let sum = a.add2(d1, d2);
-            sig.push(a.mul2(pt.weight, sum));
+            sig.push(a.add2(d1, d2));
         }
+        // Common factors out of each σ_a (e.g. `(EA ε + d_a ε̇)/|r'|` of `z_a`).
+        let mut runner = crate::sym::Runner::with_rules(a.rules());
+        runner.rewrites = crate::sym::rewrites();
+        sig = runner.run(&mut a, &sig).roots;
         let mut hs = vec![vec![zero; m]; m];
         let mut cs = vec![vec![zero; m]; m];
         let mut ss = Vec::with_capacity(m);
@@ -310,7 +335,7 @@ pub fn derive(kind: Kind) -> Kernels {
         for (g, bg) in b.iter().enumerate() {
             for (k, row) in bg.iter().enumerate() {
                 if !is_zero(&a, row[i]) {
-                    terms.push(a.mul2(row[i], sig_sym[g][k]));
+                    terms.push(a.mul(&[def.points[g].weight, row[i], sig_sym[g][k]]));
                 }
             }
         }
@@ -327,7 +352,7 @@ pub fn derive(kind: Kind) -> Kernels {
                     if is_zero(a, rl[j]) || is_zero(a, mats[g][k][l]) {
                         continue;
                     }
-                    terms.push(a.mul(&[rk[i], rl[j], mats[g][k][l]]));
+                    terms.push(a.mul(&[def.points[g].weight, rk[i], rl[j], mats[g][k][l]]));
                 }
             }
         }
@@ -358,7 +383,7 @@ pub fn derive(kind: Kind) -> Kernels {
         names.into_iter().zip(ids.iter().copied()).collect()
     };
     let fnames: Vec<String> = (0..n).map(|i| format!("f{i}")).collect();
-    let p1 = lower(&a, &stage1);
+    let p1 = chain(&lower(&a, &stage0), &lower(&a, &stage1));
     let forces = chain(
         &chain(&p1, &lower(&a, &s2_forces)),
         &lower(&a, &zip(fnames.clone(), &f)),
@@ -387,6 +412,7 @@ pub fn derive(kind: Kind) -> Kernels {
         }
     }
     let roots = a.substitute(&roots, |s| z_of.get(&s).copied());
+    let roots = a.substitute(&roots, |s| pre_of.get(&s).or(pre_rate_of.get(&s)).copied());
     let f_full = roots[..n].to_vec();
     let k_full = roots[n..n + n * n].chunks(n).map(<[Id]>::to_vec).collect();
     let d_full = roots[n + n * n..].chunks(n).map(<[Id]>::to_vec).collect();
