@@ -328,22 +328,53 @@ pub fn derive(kind: Kind) -> Kernels {
         h_sym.push(hs);
         c_sym.push(cs);
     }
-    // Stage 3: assembly over the points.
-    let mut f = Vec::with_capacity(n);
-    for i in 0..n {
+    // Stage 3a: assembly over the points in the variables `w` that `z` is
+    // written in (stage-0 combinations and coordinates; for the elements
+    // here, the chords replace the two nodes' positions, so `w` has `dim`
+    // fewer entries than `q`: the element's forces are invariant to
+    // translation).
+    let mut wvars: Vec<SymId> = def.pre.iter().map(|&(s, _)| s).collect();
+    for &qsym in &qs {
+        if def
+            .points
+            .iter()
+            .any(|pt| pt.z.iter().any(|&z| a.depends_on(z, qsym)))
+        {
+            wvars.push(qsym);
+        }
+    }
+    let nw = wvars.len();
+    let one = a.constant(1.0);
+    let t: Vec<Vec<Id>> = wvars
+        .iter()
+        .map(|&w| match pre_of.get(&w) {
+            Some(&e) => a.gradient(e, &qs),
+            None => qs
+                .iter()
+                .map(|&q| if q == w { one } else { zero })
+                .collect(),
+        })
+        .collect();
+    let bw: Vec<Vec<Vec<Id>>> = def
+        .points
+        .iter()
+        .map(|pt| pt.z.iter().map(|&z| a.gradient(z, &wvars)).collect())
+        .collect();
+    let mut fw = Vec::with_capacity(nw);
+    for i in 0..nw {
         let mut terms = Vec::new();
-        for (g, bg) in b.iter().enumerate() {
+        for (g, bg) in bw.iter().enumerate() {
             for (k, row) in bg.iter().enumerate() {
                 if !is_zero(&a, row[i]) {
                     terms.push(a.mul(&[def.points[g].weight, row[i], sig_sym[g][k]]));
                 }
             }
         }
-        f.push(a.add(&terms));
+        fw.push(a.add(&terms));
     }
     let quad = |a: &mut Arena, mats: &[Vec<Vec<Id>>], i: usize, j: usize| -> Id {
         let mut terms = Vec::new();
-        for (g, bg) in b.iter().enumerate() {
+        for (g, bg) in bw.iter().enumerate() {
             for (k, rk) in bg.iter().enumerate() {
                 if is_zero(a, rk[i]) {
                     continue;
@@ -358,13 +389,73 @@ pub fn derive(kind: Kind) -> Kernels {
         }
         a.add(&terms)
     };
+    let mut kw = vec![vec![zero; nw]; nw];
+    let mut dw = vec![vec![zero; nw]; nw];
+    for i in 0..nw {
+        for j in 0..nw {
+            kw[i][j] = quad(&mut a, &h_sym, i, j);
+            if j >= i {
+                dw[i][j] = quad(&mut a, &c_sym, i, j);
+                dw[j][i] = dw[i][j];
+            }
+        }
+    }
+    // Stage 3b: back to q through T = ∂w/∂q (constant, sparse).
+    let mut s3_forces: Vec<(String, Id)> = Vec::new();
+    let mut s3_jac: Vec<(String, Id)> = Vec::new();
+    let mut as_sym = |a: &mut Arena, out: &mut Vec<(String, Id)>, nm: String, e: Id| -> Id {
+        if is_zero(a, e) {
+            return e;
+        }
+        let sym = a.input(&nm).expect("identifier");
+        back.push((a.as_sym(sym).expect("symbol"), e));
+        out.push((nm, e));
+        sym
+    };
+    let fws: Vec<Id> = (0..nw)
+        .map(|i| as_sym(&mut a, &mut s3_forces, format!("fw{i}"), fw[i]))
+        .collect();
+    let mut kws = vec![vec![zero; nw]; nw];
+    let mut dws = vec![vec![zero; nw]; nw];
+    for i in 0..nw {
+        for j in 0..nw {
+            kws[i][j] = as_sym(&mut a, &mut s3_jac, format!("kw{i}_{j}"), kw[i][j]);
+            if j >= i {
+                dws[i][j] = as_sym(&mut a, &mut s3_jac, format!("dw{i}_{j}"), dw[i][j]);
+                dws[j][i] = dws[i][j];
+            }
+        }
+    }
+    let mut f = Vec::with_capacity(n);
+    for i in 0..n {
+        let terms: Vec<Id> = t
+            .iter()
+            .zip(&fws)
+            .map(|(tw, &fw)| a.mul2(tw[i], fw))
+            .collect();
+        f.push(a.add(&terms));
+    }
+    let back_q = |a: &mut Arena, m: &[Vec<Id>], i: usize, j: usize| -> Id {
+        let mut terms = Vec::new();
+        for (w, tw) in t.iter().enumerate() {
+            if is_zero(a, tw[i]) {
+                continue;
+            }
+            for (v, tv) in t.iter().enumerate() {
+                if !is_zero(a, tv[j]) && !is_zero(a, m[w][v]) {
+                    terms.push(a.mul(&[tw[i], tv[j], m[w][v]]));
+                }
+            }
+        }
+        a.add(&terms)
+    };
     let mut k = vec![vec![zero; n]; n];
     let mut d = vec![vec![zero; n]; n];
     for i in 0..n {
         for j in 0..n {
-            k[i][j] = quad(&mut a, &h_sym, i, j);
+            k[i][j] = back_q(&mut a, &kws, i, j);
             if j >= i {
-                d[i][j] = quad(&mut a, &c_sym, i, j);
+                d[i][j] = back_q(&mut a, &dws, i, j);
                 d[j][i] = d[i][j];
             }
         }
@@ -385,14 +476,14 @@ pub fn derive(kind: Kind) -> Kernels {
     let fnames: Vec<String> = (0..n).map(|i| format!("f{i}")).collect();
     let p1 = chain(&lower(&a, &stage0), &lower(&a, &stage1));
     let forces = chain(
-        &chain(&p1, &lower(&a, &s2_forces)),
+        &chain(&chain(&p1, &lower(&a, &s2_forces)), &lower(&a, &s3_forces)),
         &lower(&a, &zip(fnames.clone(), &f)),
     );
     let mut jn = names("k", n);
     jn.extend(names("d", n));
     let jids: Vec<Id> = k.iter().chain(&d).flatten().copied().collect();
     let jacobians = chain(
-        &chain(&p1, &lower(&a, &s2_jac)),
+        &chain(&chain(&p1, &lower(&a, &s2_jac)), &lower(&a, &s3_jac)),
         &lower(&a, &zip(jn, &jids)),
     );
     let mids: Vec<Id> = def.mass.iter().flatten().copied().collect();
@@ -404,6 +495,7 @@ pub fn derive(kind: Kind) -> Kernels {
     roots.extend(k.iter().flatten());
     roots.extend(d.iter().flatten());
     let stage2: rustc_hash::FxHashMap<SymId, Id> = back.into_iter().collect();
+    let roots = a.substitute(&roots, |s| stage2.get(&s).copied());
     let roots = a.substitute(&roots, |s| stage2.get(&s).copied());
     let mut z_of: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
     for (nm, e) in &stage1 {

@@ -137,13 +137,12 @@ fn pre(a: &mut Arena, pre: &mut Vec<(SymId, Id)>, e: Id) -> Id {
 }
 
 /// The shared combinations of a cable, per component `c`: the chord
-/// `Δ = (r₂ − r₁)/L`, `Δ/L`, and the slopes over `L` (`h₁' = −h₃'`, so
-/// positions enter `r'` only through the chord).
+/// `Δ = (r₂ − r₁)/L` (`h₁' = −h₃'`, so positions enter `r'` and `r''` only
+/// through it), and the reciprocal length.
 struct CablePre {
     chord: Vec<Id>,
-    chord_l: Vec<Id>,
     slope: [Vec<Id>; 2],
-    slope_l: [Vec<Id>; 2],
+    il: Id,
 }
 
 fn cable_pre(
@@ -156,28 +155,23 @@ fn cable_pre(
     let il = a.pow(l, -1);
     let mut p = CablePre {
         chord: vec![],
-        chord_l: vec![],
         slope: [vec![], vec![]],
-        slope_l: [vec![], vec![]],
+        il,
     };
     for c in 0..dim {
         let d = a.sub(s.q[2 * dim + c], s.q[c]);
         let e = a.mul2(il, d);
         p.chord.push(pre(a, out, e));
-        let e = a.mul2(il, e);
-        p.chord_l.push(pre(a, out, e));
         for node in 0..2 {
-            let q = s.q[node * 2 * dim + dim + c];
-            p.slope[node].push(q);
-            let e = a.mul2(il, q);
-            p.slope_l[node].push(pre(a, out, e));
+            p.slope[node].push(s.q[node * 2 * dim + dim + c]);
         }
     }
     p
 }
 
 /// `r'` and `r''` (derivatives in the reference arc length `x`) of a
-/// cable at `ξ`, components `0..dim`, in the shared combinations.
+/// cable at `ξ`, components `0..dim`: `r' = h₃'Δ + h₂'r₁' + h₄'r₂'`,
+/// `r'' = (h₃''Δ + h₂''r₁' + h₄''r₂'')/L` (ξ-derivatives of the `h`).
 fn cable_derivatives(a: &mut Arena, p: &CablePre, dim: usize, xi: f64) -> (Vec<Id>, Vec<Id>) {
     let h3 = eval(&HERMITE[2], xi);
     let h2 = eval(&HERMITE[1], xi);
@@ -196,8 +190,10 @@ fn cable_derivatives(a: &mut Arena, p: &CablePre, dim: usize, xi: f64) -> (Vec<I
                 .collect();
             a.add(&t)
         };
-        d1.push(lin(a, 1, [p.chord[c], p.slope[0][c], p.slope[1][c]]));
-        d2.push(lin(a, 2, [p.chord_l[c], p.slope_l[0][c], p.slope_l[1][c]]));
+        let x = [p.chord[c], p.slope[0][c], p.slope[1][c]];
+        d1.push(lin(a, 1, x));
+        let t = lin(a, 2, x);
+        d2.push(a.mul2(p.il, t));
     }
     (d1, d2)
 }
@@ -481,7 +477,7 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
         let t2 = a.mul(&[two, g, s12]);
         a.add2(t1, t2)
     };
-    // Shared combinations per component: the chord (r₂ − r₁)/L and the
+    // Shared combinations per component: the chord (r₂ − r₁)/L, and the
     // change of the section vector over the element times the height,
     // h (r₂,ᵧ − r₁,ᵧ)/L.
     let mut pre_defs = Vec::new();
@@ -492,8 +488,7 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
         let e = a.mul2(il, d);
         chord.push(pre(a, &mut pre_defs, e));
         let d = a.sub(s.q[10 + comp], s.q[4 + comp]);
-        let e = a.mul(&[h, il, d]);
-        turn.push(pre(a, &mut pre_defs, e));
+        turn.push(a.mul(&[h, il, d]));
     }
     let mut points = Vec::new();
     for (xi, wx) in gauss_legendre(BEAM_AXIAL_POINTS) {
