@@ -37,7 +37,7 @@ mod shapes;
 
 pub use gauss::gauss_legendre;
 
-use crate::sym::{Arena, Id, LowerOptions, OpCount, Program, SymId, SymKind, TimeDerivative};
+use crate::sym::{Arena, Id, LowerOptions, OpCount, Program, SymId, SymKind};
 
 /// The element types.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -80,10 +80,11 @@ pub struct Definition {
     pub summary: String,
     /// The integration rule and why, markdown.
     pub integration: String,
-    /// Strain energy `U(q)`.
-    pub energy: Id,
-    /// Dissipation function `R(q, q̇)`, quadratic in `q̇`.
-    pub dissipation: Id,
+    /// Linear combinations of `q` shared by the points' `z` (symbols and
+    /// their expressions; `z` may be written in these symbols).
+    pub pre: Vec<(SymId, Id)>,
+    /// The quadrature points: `U = Σ weight·φ(z)`, `R = Σ weight·ψ(z, ż)`.
+    pub points: Vec<Point>,
     /// Mass matrix entries, row-major `n × n`.
     pub mass: Vec<Vec<Id>>,
     /// Generalised force of the uniform load `(w_x, w_y, w_z)` per unit length.
@@ -94,6 +95,65 @@ impl Definition {
     /// Coordinates per element.
     pub fn n(&self) -> usize {
         2 * self.node_coords
+    }
+}
+
+/// One quadrature point of an element: the kinematic values `z` there
+/// (linear in `q`: derivatives of the position field), and the energy and
+/// dissipation densities written in symbols standing for `z` and `ż`.
+pub struct Point {
+    /// Quadrature weight times the measure (`w L`, `w L b h`).
+    pub weight: Id,
+    /// `z` in terms of `q`.
+    pub z: Vec<Id>,
+    /// The symbols standing for `z` (inputs `zz<g>_<a>`).
+    pub zs: Vec<SymId>,
+    /// The symbols standing for `ż` (inputs `zv<g>_<a>`).
+    pub zds: Vec<SymId>,
+    /// Energy density `φ(z)` (per unit weight).
+    pub phi: Id,
+    /// Dissipation density `ψ(z, ż)`, quadratic in `ż`.
+    pub psi: Id,
+}
+
+impl Point {
+    /// A point with fresh symbols for `z`, `ż` (densities zero until set).
+    pub fn new(a: &mut Arena, g: usize, weight: Id, z: Vec<Id>) -> Point {
+        let sym = |a: &mut Arena, name: String| {
+            let id = a.input(&name).expect("point symbols are identifiers");
+            a.as_sym(id).expect("an input is a symbol")
+        };
+        let zs = (0..z.len()).map(|i| sym(a, format!("zz{g}_{i}"))).collect();
+        let zds = (0..z.len()).map(|i| sym(a, format!("zv{g}_{i}"))).collect();
+        let zero = a.constant(0.0);
+        Point {
+            weight,
+            z,
+            zs,
+            zds,
+            phi: zero,
+            psi: zero,
+        }
+    }
+
+    /// The symbol nodes standing for `z`.
+    pub fn z_nodes(&self, a: &Arena) -> Vec<Id> {
+        self.zs.iter().map(|&s| a.sym_node(s)).collect()
+    }
+
+    /// The rate of a strain `e(z)`: `Σ ∂e/∂z_a ż_a`.
+    pub fn rate(&self, a: &mut Arena, e: Id) -> Id {
+        let terms: Vec<Id> = self
+            .zs
+            .iter()
+            .zip(&self.zds)
+            .map(|(&z, &zd)| {
+                let d = a.diff(e, z);
+                let v = a.sym_node(zd);
+                a.mul2(d, v)
+            })
+            .collect();
+        a.add(&terms)
     }
 }
 
@@ -160,6 +220,15 @@ pub struct Kernels {
 
 /// Derives the kernels of `kind`: builds its definition, differentiates,
 /// lowers.
+///
+/// Per quadrature point `g` with kinematic values `z_g = B_g q` (`B_g`
+/// constant) and weight `w_g`: `σ_g = ∂φ/∂z + ∂ψ/∂ż`, `H_g = ∂σ_g/∂z`,
+/// `C_g = ∂σ_g/∂ż`, all by [`Arena::diff`] in symbols standing for `z_g`,
+/// `ż_g` (common factors taken out of `σ` by the `factor` rewrite); then
+/// `f = Σ w_g B_gᵀ σ_g`, `K = Σ w_g B_gᵀ H_g B_g`, `D = Σ w_g B_gᵀ C_g B_g`
+/// (exact: `z` is linear in `q`, so `∂²z/∂q² = 0`). The three stages are
+/// lowered separately, so the point quantities are computed once and not
+/// multiplied out into every entry, and chained into one program.
 pub fn derive(kind: Kind) -> Kernels {
     let mut a = Arena::new();
     let def = define(&mut a, kind);
@@ -170,35 +239,225 @@ pub fn derive(kind: Kind) -> Kernels {
             a.as_sym(id).expect("q is a symbol")
         })
         .collect();
-    let qds: Vec<SymId> = (0..n as u32)
-        .map(|i| {
-            let id = a.qd(i);
-            a.as_sym(id).expect("qd is a symbol")
-        })
-        .collect();
-    let fu = a.gradient(def.energy, &qs);
-    let fr = a.gradient(def.dissipation, &qds);
-    let f: Vec<Id> = fu.iter().zip(&fr).map(|(&x, &y)| a.add2(x, y)).collect();
-    // Elastic stiffness: upper triangle, mirrored.
-    let mut ku = vec![vec![a.constant(0.0); n]; n];
-    for i in 0..n {
-        for j in i..n {
-            let v = a.diff(fu[i], qs[j]);
-            ku[i][j] = v;
-            ku[j][i] = v;
+    let qd: Vec<Id> = (0..n as u32).map(|i| a.qd(i)).collect();
+    let zero = a.constant(0.0);
+    let is_zero = |a: &Arena, e: Id| a.num(e).is_some_and(|v| v.to_f64() == 0.0);
+    let name = |a: &Arena, s: SymId| a.symbol(s).name.clone();
+    // Stage 0: the shared linear combinations of q (and the same of q̇).
+    let mut stage0: Vec<(String, Id)> = Vec::new();
+    let mut pre_of: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
+    let mut pre_rate: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
+    let mut pre_rate_of: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
+    let rate_of_q: rustc_hash::FxHashMap<SymId, Id> =
+        qs.iter().copied().zip(qd.iter().copied()).collect();
+    for &(sym, e) in &def.pre {
+        let nm = name(&a, sym);
+        stage0.push((nm.clone(), e));
+        let ed = a.substitute(&[e], |s| rate_of_q.get(&s).copied())[0];
+        let rate = a.input(&format!("{nm}_d")).expect("identifier");
+        stage0.push((format!("{nm}_d"), ed));
+        pre_of.insert(sym, e);
+        pre_rate.insert(sym, rate);
+        pre_rate_of.insert(a.as_sym(rate).expect("symbol"), ed);
+    }
+    // Stage 1: z_g and ż_g = B_g q̇ (z of the rates of stage 0); B_g by
+    // differentiation of z in q.
+    let mut stage1: Vec<(String, Id)> = Vec::new();
+    let mut b: Vec<Vec<Vec<Id>>> = Vec::new();
+    for pt in &def.points {
+        let zq = a.substitute(&pt.z, |s| pre_of.get(&s).copied());
+        let bg: Vec<Vec<Id>> = zq.iter().map(|&z| a.gradient(z, &qs)).collect();
+        let zd = a.substitute(&pt.z, |s| pre_rate.get(&s).or(rate_of_q.get(&s)).copied());
+        for (k, &z) in pt.z.iter().enumerate() {
+            stage1.push((name(&a, pt.zs[k]), z));
+            stage1.push((name(&a, pt.zds[k]), zd[k]));
+        }
+        b.push(bg);
+    }
+    // Stage 2: σ, H, C per point, as symbols for stage 3.
+    let mut s2_forces: Vec<(String, Id)> = Vec::new();
+    let mut s2_jac: Vec<(String, Id)> = Vec::new();
+    let mut sig_sym: Vec<Vec<Id>> = Vec::new();
+    let mut h_sym: Vec<Vec<Vec<Id>>> = Vec::new();
+    let mut c_sym: Vec<Vec<Vec<Id>>> = Vec::new();
+    let mut back: Vec<(SymId, Id)> = Vec::new();
+    for (g, pt) in def.points.iter().enumerate() {
+        let m = pt.z.len();
+        let mut sig = Vec::with_capacity(m);
+        for k in 0..m {
+            let d1 = a.diff(pt.phi, pt.zs[k]);
+            let d2 = a.diff(pt.psi, pt.zds[k]);
+            sig.push(a.add2(d1, d2));
+        }
+        // Common factors out of each σ_a (e.g. `(EA ε + d_a ε̇)/|r'|` of `z_a`).
+        let mut runner = crate::sym::Runner::with_rules(a.rules());
+        runner.rewrites = crate::sym::rewrites();
+        sig = runner.run(&mut a, &sig).roots;
+        let mut hs = vec![vec![zero; m]; m];
+        let mut cs = vec![vec![zero; m]; m];
+        let mut ss = Vec::with_capacity(m);
+        for k in 0..m {
+            let nm = format!("sg{g}_{k}");
+            s2_forces.push((nm.clone(), sig[k]));
+            let sym = a.input(&nm).expect("identifier");
+            back.push((a.as_sym(sym).expect("symbol"), sig[k]));
+            ss.push(sym);
+            for l in 0..m {
+                let h = a.diff(sig[k], pt.zs[l]);
+                if !is_zero(&a, h) {
+                    let nm = format!("hg{g}_{k}_{l}");
+                    s2_jac.push((nm.clone(), h));
+                    let sym = a.input(&nm).expect("identifier");
+                    back.push((a.as_sym(sym).expect("symbol"), h));
+                    hs[k][l] = sym;
+                }
+                if l >= k {
+                    let c = a.diff(sig[k], pt.zds[l]);
+                    if !is_zero(&a, c) {
+                        let nm = format!("cg{g}_{k}_{l}");
+                        s2_jac.push((nm.clone(), c));
+                        let sym = a.input(&nm).expect("identifier");
+                        back.push((a.as_sym(sym).expect("symbol"), c));
+                        cs[k][l] = sym;
+                        cs[l][k] = sym;
+                    }
+                }
+            }
+        }
+        sig_sym.push(ss);
+        h_sym.push(hs);
+        c_sym.push(cs);
+    }
+    // Stage 3a: assembly over the points in the variables `w` that `z` is
+    // written in (stage-0 combinations and coordinates; for the elements
+    // here, the chords replace the two nodes' positions, so `w` has `dim`
+    // fewer entries than `q`: the element's forces are invariant to
+    // translation).
+    let mut wvars: Vec<SymId> = def.pre.iter().map(|&(s, _)| s).collect();
+    for &qsym in &qs {
+        if def
+            .points
+            .iter()
+            .any(|pt| pt.z.iter().any(|&z| a.depends_on(z, qsym)))
+        {
+            wvars.push(qsym);
         }
     }
-    let mut k = vec![vec![ku[0][0]; n]; n];
-    let mut d = vec![vec![ku[0][0]; n]; n];
+    let nw = wvars.len();
+    let one = a.constant(1.0);
+    let t: Vec<Vec<Id>> = wvars
+        .iter()
+        .map(|&w| match pre_of.get(&w) {
+            Some(&e) => a.gradient(e, &qs),
+            None => qs
+                .iter()
+                .map(|&q| if q == w { one } else { zero })
+                .collect(),
+        })
+        .collect();
+    let bw: Vec<Vec<Vec<Id>>> = def
+        .points
+        .iter()
+        .map(|pt| pt.z.iter().map(|&z| a.gradient(z, &wvars)).collect())
+        .collect();
+    let mut fw = Vec::with_capacity(nw);
+    for i in 0..nw {
+        let mut terms = Vec::new();
+        for (g, bg) in bw.iter().enumerate() {
+            for (k, row) in bg.iter().enumerate() {
+                if !is_zero(&a, row[i]) {
+                    terms.push(a.mul(&[def.points[g].weight, row[i], sig_sym[g][k]]));
+                }
+            }
+        }
+        fw.push(a.add(&terms));
+    }
+    let quad = |a: &mut Arena, mats: &[Vec<Vec<Id>>], i: usize, j: usize| -> Id {
+        let mut terms = Vec::new();
+        for (g, bg) in bw.iter().enumerate() {
+            for (k, rk) in bg.iter().enumerate() {
+                if is_zero(a, rk[i]) {
+                    continue;
+                }
+                for (l, rl) in bg.iter().enumerate() {
+                    if is_zero(a, rl[j]) || is_zero(a, mats[g][k][l]) {
+                        continue;
+                    }
+                    terms.push(a.mul(&[def.points[g].weight, rk[i], rl[j], mats[g][k][l]]));
+                }
+            }
+        }
+        a.add(&terms)
+    };
+    let mut kw = vec![vec![zero; nw]; nw];
+    let mut dw = vec![vec![zero; nw]; nw];
+    for i in 0..nw {
+        for j in 0..nw {
+            kw[i][j] = quad(&mut a, &h_sym, i, j);
+            if j >= i {
+                dw[i][j] = quad(&mut a, &c_sym, i, j);
+                dw[j][i] = dw[i][j];
+            }
+        }
+    }
+    // Stage 3b: back to q through T = ∂w/∂q (constant, sparse).
+    let mut s3_forces: Vec<(String, Id)> = Vec::new();
+    let mut s3_jac: Vec<(String, Id)> = Vec::new();
+    let mut as_sym = |a: &mut Arena, out: &mut Vec<(String, Id)>, nm: String, e: Id| -> Id {
+        if is_zero(a, e) {
+            return e;
+        }
+        let sym = a.input(&nm).expect("identifier");
+        back.push((a.as_sym(sym).expect("symbol"), e));
+        out.push((nm, e));
+        sym
+    };
+    let fws: Vec<Id> = (0..nw)
+        .map(|i| as_sym(&mut a, &mut s3_forces, format!("fw{i}"), fw[i]))
+        .collect();
+    let mut kws = vec![vec![zero; nw]; nw];
+    let mut dws = vec![vec![zero; nw]; nw];
+    for i in 0..nw {
+        for j in 0..nw {
+            kws[i][j] = as_sym(&mut a, &mut s3_jac, format!("kw{i}_{j}"), kw[i][j]);
+            if j >= i {
+                dws[i][j] = as_sym(&mut a, &mut s3_jac, format!("dw{i}_{j}"), dw[i][j]);
+                dws[j][i] = dws[i][j];
+            }
+        }
+    }
+    let mut f = Vec::with_capacity(n);
+    for i in 0..n {
+        let terms: Vec<Id> = t
+            .iter()
+            .zip(&fws)
+            .map(|(tw, &fw)| a.mul2(tw[i], fw))
+            .collect();
+        f.push(a.add(&terms));
+    }
+    let back_q = |a: &mut Arena, m: &[Vec<Id>], i: usize, j: usize| -> Id {
+        let mut terms = Vec::new();
+        for (w, tw) in t.iter().enumerate() {
+            if is_zero(a, tw[i]) {
+                continue;
+            }
+            for (v, tv) in t.iter().enumerate() {
+                if !is_zero(a, tv[j]) && !is_zero(a, m[w][v]) {
+                    terms.push(a.mul(&[tw[i], tv[j], m[w][v]]));
+                }
+            }
+        }
+        a.add(&terms)
+    };
+    let mut k = vec![vec![zero; n]; n];
+    let mut d = vec![vec![zero; n]; n];
     for i in 0..n {
         for j in 0..n {
-            let kr = a.diff(fr[i], qs[j]);
-            k[i][j] = a.add2(ku[i][j], kr);
-        }
-        for j in i..n {
-            let v = a.diff(fr[i], qds[j]);
-            d[i][j] = v;
-            d[j][i] = v;
+            k[i][j] = back_q(&mut a, &kws, i, j);
+            if j >= i {
+                d[i][j] = back_q(&mut a, &dws, i, j);
+                d[j][i] = d[i][j];
+            }
         }
     }
     let names = |prefix: &str, m: usize| -> Vec<String> {
@@ -207,23 +466,48 @@ pub fn derive(kind: Kind) -> Kernels {
             .map(|(i, j)| format!("{prefix}_{i}_{j}"))
             .collect()
     };
-    let lower = |a: &Arena, names: &[String], ids: &[Id]| {
-        let outs: Vec<(&str, Id)> = names
-            .iter()
-            .map(|s| s.as_str())
-            .zip(ids.iter().copied())
-            .collect();
+    let lower = |a: &Arena, outs: &[(String, Id)]| {
+        let outs: Vec<(&str, Id)> = outs.iter().map(|(s, id)| (s.as_str(), *id)).collect();
         a.lower(&outs, LowerOptions::default())
     };
+    let zip = |names: Vec<String>, ids: &[Id]| -> Vec<(String, Id)> {
+        names.into_iter().zip(ids.iter().copied()).collect()
+    };
     let fnames: Vec<String> = (0..n).map(|i| format!("f{i}")).collect();
-    let forces = lower(&a, &fnames, &f);
+    let p1 = chain(&lower(&a, &stage0), &lower(&a, &stage1));
+    let forces = chain(
+        &chain(&chain(&p1, &lower(&a, &s2_forces)), &lower(&a, &s3_forces)),
+        &lower(&a, &zip(fnames.clone(), &f)),
+    );
     let mut jn = names("k", n);
     jn.extend(names("d", n));
     let jids: Vec<Id> = k.iter().chain(&d).flatten().copied().collect();
-    let jacobians = lower(&a, &jn, &jids);
+    let jacobians = chain(
+        &chain(&chain(&p1, &lower(&a, &s2_jac)), &lower(&a, &s3_jac)),
+        &lower(&a, &zip(jn, &jids)),
+    );
     let mids: Vec<Id> = def.mass.iter().flatten().copied().collect();
-    let mass = lower(&a, &names("m", n), &mids);
-    let load = lower(&a, &fnames, &def.load);
+    let mass = lower(&a, &zip(names("m", n), &mids));
+    let load = lower(&a, &zip(fnames, &def.load));
+    // The same quantities as expressions of q, q̇ and the parameters only
+    // (for checking the lowering against the arena's evaluation).
+    let mut roots: Vec<Id> = f.clone();
+    roots.extend(k.iter().flatten());
+    roots.extend(d.iter().flatten());
+    let stage2: rustc_hash::FxHashMap<SymId, Id> = back.into_iter().collect();
+    let roots = a.substitute(&roots, |s| stage2.get(&s).copied());
+    let roots = a.substitute(&roots, |s| stage2.get(&s).copied());
+    let mut z_of: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
+    for (nm, e) in &stage1 {
+        if let Some(s) = a.find_symbol(nm) {
+            z_of.insert(s, *e);
+        }
+    }
+    let roots = a.substitute(&roots, |s| z_of.get(&s).copied());
+    let roots = a.substitute(&roots, |s| pre_of.get(&s).or(pre_rate_of.get(&s)).copied());
+    let f_full = roots[..n].to_vec();
+    let k_full = roots[n..n + n * n].chunks(n).map(<[Id]>::to_vec).collect();
+    let d_full = roots[n + n * n..].chunks(n).map(<[Id]>::to_vec).collect();
     Kernels {
         arena: a,
         def,
@@ -231,9 +515,80 @@ pub fn derive(kind: Kind) -> Kernels {
         jacobians,
         mass,
         load,
-        f,
-        k,
-        d,
+        f: f_full,
+        k: k_full,
+        d: d_full,
+    }
+}
+
+/// `second` after `first`: inputs of `second` named like an output of
+/// `first` read that output; the result is optimised again (constant
+/// propagation, value numbering and dead-code elimination across the two).
+pub fn chain(first: &Program, second: &Program) -> Program {
+    use crate::sym::{Instr, Op, Operand};
+    let off = first.n_tmps;
+    let mut inputs = first.inputs.clone();
+    let map_in: Vec<Operand> = second
+        .inputs
+        .iter()
+        .map(|s| {
+            if let Some((_, o)) = first.outputs.iter().find(|(n, _)| *n == s.name) {
+                *o
+            } else if let Some(i) = inputs.iter().position(|t| t == s) {
+                Operand::Var(i as u32)
+            } else {
+                inputs.push(s.clone());
+                Operand::Var(inputs.len() as u32 - 1)
+            }
+        })
+        .collect();
+    let map = |o: Operand| match o {
+        Operand::Const(_) => o,
+        Operand::Var(i) => map_in[i as usize],
+        Operand::Tmp(t) => Operand::Tmp(t + off),
+    };
+    let mut instrs = first.instrs.clone();
+    instrs.extend(second.instrs.iter().map(|ins| Instr {
+        dst: ins.dst + off,
+        op: remap(ins.op, map),
+    }));
+    let outputs = second
+        .outputs
+        .iter()
+        .map(|(n, o)| (n.clone(), map(*o)))
+        .collect();
+    let mut p = Program {
+        inputs,
+        instrs,
+        outputs,
+        n_tmps: off + second.n_tmps,
+    };
+    p.optimize();
+    let _ = Op::Neg;
+    p
+}
+
+fn remap(
+    op: crate::sym::Op,
+    f: impl Fn(crate::sym::Operand) -> crate::sym::Operand,
+) -> crate::sym::Op {
+    use crate::sym::Op;
+    match op {
+        Op::Add(a, b) => Op::Add(f(a), f(b)),
+        Op::Sub(a, b) => Op::Sub(f(a), f(b)),
+        Op::Mul(a, b) => Op::Mul(f(a), f(b)),
+        Op::Div(a, b) => Op::Div(f(a), f(b)),
+        Op::Atan2(a, b) => Op::Atan2(f(a), f(b)),
+        Op::Neg(a) => Op::Neg(f(a)),
+        Op::Sqrt(a) => Op::Sqrt(f(a)),
+        Op::Sin(a) => Op::Sin(f(a)),
+        Op::Cos(a) => Op::Cos(f(a)),
+        Op::SinCos(a) => Op::SinCos(f(a)),
+        Op::Tan(a) => Op::Tan(f(a)),
+        Op::Exp(a) => Op::Exp(f(a)),
+        Op::Ln(a) => Op::Ln(f(a)),
+        Op::Abs(a) => Op::Abs(f(a)),
+        Op::Select(c, a, b) => Op::Select(f(c), f(a), f(b)),
     }
 }
 
@@ -324,11 +679,4 @@ impl Kernels {
             self.load.op_count(),
         ]
     }
-}
-
-/// Helpers shared by the element definitions.
-pub(crate) fn time_rate(a: &mut Arena, e: Id) -> Id {
-    TimeDerivative::new()
-        .apply(a, e)
-        .expect("element strains depend on q and parameters only")
 }

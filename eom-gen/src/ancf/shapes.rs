@@ -5,8 +5,8 @@
 //! `h₁ = 1 − 3ξ² + 2ξ³`, `h₂ = ξ − 2ξ² + ξ³`, `h₃ = 3ξ² − 2ξ³`,
 //! `h₄ = −ξ² + ξ³`, so that `r(x) = h₁ r₁ + L h₂ r₁' + h₃ r₂ + L h₄ r₂'`.
 
-use super::{Definition, Symbols, gauss_legendre, symbols, time_rate};
-use crate::sym::{Arena, Id};
+use super::{Definition, Point, Symbols, gauss_legendre, symbols};
+use crate::sym::{Arena, Id, SymId};
 
 /// Integer coefficients (ascending powers of ξ) of `h₁ … h₄`.
 const HERMITE: [[i64; 4]; 4] = [[1, 0, -3, 2], [0, 1, -2, 1], [0, 0, 3, -2], [0, 0, -1, 1]];
@@ -129,39 +129,71 @@ fn cable_slots() -> [[Slot; 3]; 2] {
     [[s(0, 0), s(1, 1), none], [s(2, 0), s(3, 1), none]]
 }
 
-/// `r'` and `r''` (derivatives in the reference arc length `x`) of a
-/// cable at `ξ`, components `0..dim`.
-fn cable_derivatives(a: &mut Arena, s: &Symbols, dim: usize, l: Id, xi: f64) -> (Vec<Id>, Vec<Id>) {
+/// A shared linear combination of `q`: a symbol `pa<k>` standing for `e`.
+fn pre(a: &mut Arena, pre: &mut Vec<(SymId, Id)>, e: Id) -> Id {
+    let id = a.input(&format!("pa{}", pre.len())).expect("identifier");
+    pre.push((a.as_sym(id).expect("symbol"), e));
+    id
+}
+
+/// The shared combinations of a cable, per component `c`: the chord
+/// `Δ = (r₂ − r₁)/L` (`h₁' = −h₃'`, so positions enter `r'` and `r''` only
+/// through it), and the reciprocal length.
+struct CablePre {
+    chord: Vec<Id>,
+    slope: [Vec<Id>; 2],
+    il: Id,
+}
+
+fn cable_pre(
+    a: &mut Arena,
+    s: &Symbols,
+    dim: usize,
+    l: Id,
+    out: &mut Vec<(SymId, Id)>,
+) -> CablePre {
     let il = a.pow(l, -1);
-    let il2 = a.pow(l, -2);
+    let mut p = CablePre {
+        chord: vec![],
+        slope: [vec![], vec![]],
+        il,
+    };
+    for c in 0..dim {
+        let d = a.sub(s.q[2 * dim + c], s.q[c]);
+        let e = a.mul2(il, d);
+        p.chord.push(pre(a, out, e));
+        for node in 0..2 {
+            p.slope[node].push(s.q[node * 2 * dim + dim + c]);
+        }
+    }
+    p
+}
+
+/// `r'` and `r''` (derivatives in the reference arc length `x`) of a
+/// cable at `ξ`, components `0..dim`: `r' = h₃'Δ + h₂'r₁' + h₄'r₂'`,
+/// `r'' = (h₃''Δ + h₂''r₁' + h₄''r₂'')/L` (ξ-derivatives of the `h`).
+fn cable_derivatives(a: &mut Arena, p: &CablePre, dim: usize, xi: f64) -> (Vec<Id>, Vec<Id>) {
+    let h3 = eval(&HERMITE[2], xi);
+    let h2 = eval(&HERMITE[1], xi);
+    let h4 = eval(&HERMITE[3], xi);
     let mut d1 = Vec::with_capacity(dim);
     let mut d2 = Vec::with_capacity(dim);
     for c in 0..dim {
-        // Position slots scale by 1/L (1/L² in r''), slope slots by 1 (1/L).
-        let (mut p1, mut s1, mut p2, mut s2) = (vec![], vec![], vec![], vec![]);
-        for node in 0..2 {
-            let qp = s.q[node * 2 * dim + c];
-            let qs = s.q[node * 2 * dim + dim + c];
-            let hp = eval(&HERMITE[2 * node], xi);
-            let hs = eval(&HERMITE[2 * node + 1], xi);
-            let k = a.constant(hp[1]);
-            p1.push(a.mul2(k, qp));
-            let k = a.constant(hs[1]);
-            s1.push(a.mul2(k, qs));
-            let k = a.constant(hp[2]);
-            p2.push(a.mul2(k, qp));
-            let k = a.constant(hs[2]);
-            s2.push(a.mul2(k, qs));
-        }
-        let p1 = a.add(&p1);
-        let s1 = a.add(&s1);
-        let p2 = a.add(&p2);
-        let s2 = a.add(&s2);
-        let t = a.mul2(il, p1);
-        d1.push(a.add2(t, s1));
-        let t = a.mul2(il2, p2);
-        let u = a.mul2(il, s2);
-        d2.push(a.add2(t, u));
+        let lin = |a: &mut Arena, k: usize, x: [Id; 3]| {
+            let t: Vec<Id> = [h3[k], h2[k], h4[k]]
+                .iter()
+                .zip(x)
+                .map(|(&w, v)| {
+                    let w = a.constant(w);
+                    a.mul2(w, v)
+                })
+                .collect();
+            a.add(&t)
+        };
+        let x = [p.chord[c], p.slope[0][c], p.slope[1][c]];
+        d1.push(lin(a, 1, x));
+        let t = lin(a, 2, x);
+        d2.push(a.mul2(p.il, t));
     }
     (d1, d2)
 }
@@ -200,10 +232,16 @@ pub(super) fn cable2d(a: &mut Arena, green: bool) -> Definition {
     let [l, ea, ei, rho_a, da, db] = [s.p[0], s.p[1], s.p[2], s.p[3], s.p[4], s.p[5]];
     let half = a.ratio(1, 2);
     let one = a.constant(1.0);
-    let (mut u, mut r) = (vec![], vec![]);
+    let mut pre_defs = Vec::new();
+    let cp = cable_pre(a, &s, 2, l, &mut pre_defs);
+    let mut points = Vec::new();
     for (xi, w) in gauss_legendre(CABLE_AXIAL_POINTS) {
-        let (d1, _) = cable_derivatives(a, &s, 2, l, xi);
-        let ss = dot(a, &d1, &d1);
+        let (d1, _) = cable_derivatives(a, &cp, 2, xi);
+        let c = a.constant(w);
+        let wt = a.mul2(c, l);
+        let mut pt = Point::new(a, points.len(), wt, d1);
+        let z = pt.z_nodes(a);
+        let ss = dot(a, &z, &z);
         let eps = if green {
             let t = a.sub(ss, one);
             a.mul2(half, t)
@@ -211,33 +249,36 @@ pub(super) fn cable2d(a: &mut Arena, green: bool) -> Definition {
             let t = a.sqrt(ss);
             a.sub(t, one)
         };
-        let epsd = time_rate(a, eps);
-        let c = a.constant(0.5 * w);
+        let epsd = pt.rate(a, eps);
         let e2 = square(a, eps);
-        u.push(a.mul(&[c, l, ea, e2]));
+        pt.phi = a.mul(&[half, ea, e2]);
         let e2 = square(a, epsd);
-        r.push(a.mul(&[c, l, da, e2]));
+        pt.psi = a.mul(&[half, da, e2]);
+        points.push(pt);
     }
     for (xi, w) in gauss_legendre(CABLE_BENDING_POINTS) {
-        let (d1, d2) = cable_derivatives(a, &s, 2, l, xi);
-        let t1 = a.mul2(d1[0], d2[1]);
-        let t2 = a.mul2(d1[1], d2[0]);
+        let (mut d1, d2) = cable_derivatives(a, &cp, 2, xi);
+        d1.extend(d2);
+        let c = a.constant(w);
+        let wt = a.mul2(c, l);
+        let mut pt = Point::new(a, points.len(), wt, d1);
+        let z = pt.z_nodes(a);
+        let t1 = a.mul2(z[0], z[3]);
+        let t2 = a.mul2(z[1], z[2]);
         let cross = a.sub(t1, t2);
         let kappa = if green {
             cross
         } else {
-            let ss = dot(a, &d1, &d1);
+            let ss = dot(a, &z[..2], &z[..2]);
             a.div(cross, ss)
         };
-        let kd = time_rate(a, kappa);
-        let c = a.constant(0.5 * w);
+        let kd = pt.rate(a, kappa);
         let k2 = square(a, kappa);
-        u.push(a.mul(&[c, l, ei, k2]));
+        pt.phi = a.mul(&[half, ei, k2]);
         let k2 = square(a, kd);
-        r.push(a.mul(&[c, l, db, k2]));
+        pt.psi = a.mul(&[half, db, k2]);
+        points.push(pt);
     }
-    let energy = a.add(&u);
-    let dissipation = a.add(&r);
     let (mass, load) = mass_and_load(a, &s, &cable_slots(), (2, 2), l, rho_a, None);
     let (name, module, summary, integration) = if green {
         (
@@ -287,8 +328,8 @@ pub(super) fn cable2d(a: &mut Arena, green: bool) -> Definition {
         params,
         summary,
         integration,
-        energy,
-        dissipation,
+        pre: pre_defs,
+        points,
         mass,
         load,
     }
@@ -313,22 +354,35 @@ pub(super) fn cable3d(a: &mut Arena) -> Definition {
     let s = symbols(a, 12, &params);
     let [l, ea, ei, rho_a, da, db] = [s.p[0], s.p[1], s.p[2], s.p[3], s.p[4], s.p[5]];
     let one = a.constant(1.0);
-    let (mut u, mut r) = (vec![], vec![]);
+    let half = a.ratio(1, 2);
+    let mut pre_defs = Vec::new();
+    let cp = cable_pre(a, &s, 3, l, &mut pre_defs);
+    let mut points = Vec::new();
     for (xi, w) in gauss_legendre(CABLE_AXIAL_POINTS) {
-        let (d1, _) = cable_derivatives(a, &s, 3, l, xi);
-        let ss = dot(a, &d1, &d1);
+        let (d1, _) = cable_derivatives(a, &cp, 3, xi);
+        let c = a.constant(w);
+        let wt = a.mul2(c, l);
+        let mut pt = Point::new(a, points.len(), wt, d1);
+        let z = pt.z_nodes(a);
+        let ss = dot(a, &z, &z);
         let t = a.sqrt(ss);
         let eps = a.sub(t, one);
-        let epsd = time_rate(a, eps);
-        let c = a.constant(0.5 * w);
+        let epsd = pt.rate(a, eps);
         let e2 = square(a, eps);
-        u.push(a.mul(&[c, l, ea, e2]));
+        pt.phi = a.mul(&[half, ea, e2]);
         let e2 = square(a, epsd);
-        r.push(a.mul(&[c, l, da, e2]));
+        pt.psi = a.mul(&[half, da, e2]);
+        points.push(pt);
     }
     for (xi, w) in gauss_legendre(CABLE_BENDING_POINTS) {
-        let (d1, d2) = cable_derivatives(a, &s, 3, l, xi);
-        let ss = dot(a, &d1, &d1);
+        let (mut d1, d2) = cable_derivatives(a, &cp, 3, xi);
+        d1.extend(d2);
+        let c = a.constant(w);
+        let wt = a.mul2(c, l);
+        let mut pt = Point::new(a, points.len(), wt, d1);
+        let z = pt.z_nodes(a);
+        let (r1, r2) = (&z[..3], &z[3..]);
+        let ss = dot(a, r1, r1);
         // Curvature vector k = (r' × r'')/|r'|³; κ = |k| (its square is smooth
         // at zero curvature, κ itself is not).
         let t = a.sqrt(ss);
@@ -336,20 +390,18 @@ pub(super) fn cable3d(a: &mut Arena) -> Definition {
         let inv = a.recip(n3);
         let mut k = Vec::with_capacity(3);
         for (i, j) in [(1, 2), (2, 0), (0, 1)] {
-            let t1 = a.mul2(d1[i], d2[j]);
-            let t2 = a.mul2(d1[j], d2[i]);
+            let t1 = a.mul2(r1[i], r2[j]);
+            let t2 = a.mul2(r1[j], r2[i]);
             let c = a.sub(t1, t2);
             k.push(a.mul2(c, inv));
         }
         let k2 = dot(a, &k, &k);
-        let kd: Vec<Id> = k.iter().map(|&e| time_rate(a, e)).collect();
+        let kd: Vec<Id> = k.iter().map(|&e| pt.rate(a, e)).collect();
         let kd2 = dot(a, &kd, &kd);
-        let c = a.constant(0.5 * w);
-        u.push(a.mul(&[c, l, ei, k2]));
-        r.push(a.mul(&[c, l, db, kd2]));
+        pt.phi = a.mul(&[half, ei, k2]);
+        pt.psi = a.mul(&[half, db, kd2]);
+        points.push(pt);
     }
-    let energy = a.add(&u);
-    let dissipation = a.add(&r);
     let (mass, load) = mass_and_load(a, &s, &cable_slots(), (2, 3), l, rho_a, None);
     Definition {
         name: "Cable3D",
@@ -373,8 +425,8 @@ pub(super) fn cable3d(a: &mut Arena) -> Definition {
              term, as for the planar cable (the integrands are rational; the forces \
              differ from a 40-point rule's by about 1.5e-6 at deformations of 5 %)."
         ),
-        energy,
-        dissipation,
+        pre: pre_defs,
+        points,
         mass,
         load,
     }
@@ -425,42 +477,58 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
         let t2 = a.mul(&[two, g, s12]);
         a.add2(t1, t2)
     };
-    let (mut u, mut r) = (vec![], vec![]);
+    // Shared combinations per component: the chord (r₂ − r₁)/L, and the
+    // change of the section vector over the element times the height,
+    // h (r₂,ᵧ − r₁,ᵧ)/L.
+    let mut pre_defs = Vec::new();
+    let mut chord = Vec::with_capacity(2);
+    let mut turn = Vec::with_capacity(2);
+    for comp in 0..2 {
+        let d = a.sub(s.q[6 + comp], s.q[comp]);
+        let e = a.mul2(il, d);
+        chord.push(pre(a, &mut pre_defs, e));
+        let d = a.sub(s.q[10 + comp], s.q[4 + comp]);
+        turn.push(a.mul(&[h, il, d]));
+    }
+    let mut points = Vec::new();
     for (xi, wx) in gauss_legendre(BEAM_AXIAL_POINTS) {
         for (eta, wy) in gauss_legendre(BEAM_HEIGHT_POINTS) {
-            let ycoef = a.constant(eta - 0.5);
-            let y = a.mul2(ycoef, h);
-            let mut rx = Vec::with_capacity(2);
+            let h3 = eval(&HERMITE[2], xi);
+            let h2 = eval(&HERMITE[1], xi);
+            let h4 = eval(&HERMITE[3], xi);
+            let mut rx = Vec::with_capacity(4);
             let mut ry = Vec::with_capacity(2);
             for comp in 0..2 {
-                let (mut pos, mut slope, mut tr, mut ty) = (vec![], vec![], vec![], vec![]);
-                for node in 0..2 {
-                    let base = node * 6;
-                    let hp = eval(&HERMITE[2 * node], xi);
-                    let hs = eval(&HERMITE[2 * node + 1], xi);
-                    let lin = eval(&LINEAR[node], xi);
-                    let k = a.constant(hp[1]);
-                    pos.push(a.mul2(k, s.q[base + comp]));
-                    let k = a.constant(hs[1]);
-                    slope.push(a.mul2(k, s.q[base + 2 + comp]));
-                    let k = a.constant(lin[1]);
-                    tr.push(a.mul2(k, s.q[base + 4 + comp]));
-                    let k = a.constant(lin[0]);
-                    ty.push(a.mul2(k, s.q[base + 4 + comp]));
-                }
-                let pos = a.add(&pos);
-                let slope = a.add(&slope);
-                let tr = a.add(&tr);
-                // r_x = (Σ h' r)/L + Σ h' r_x + y (Σ ℓ' r_y)/L
-                let ytr = a.mul(&[y, tr]);
-                let inner = a.add2(pos, ytr);
-                let scaled = a.mul2(il, inner);
-                rx.push(a.add2(scaled, slope));
-                ry.push(a.add(&ty));
+                // r_x = h₃' Δ + h₂' r₁,ₓ + h₄' r₂,ₓ + y (r₂,ᵧ − r₁,ᵧ)/L, y = (η − ½) h
+                let terms: Vec<Id> = [
+                    (h3[1], chord[comp]),
+                    (h2[1], s.q[2 + comp]),
+                    (h4[1], s.q[8 + comp]),
+                    (eta - 0.5, turn[comp]),
+                ]
+                .iter()
+                .map(|&(c, v)| {
+                    let c = a.constant(c);
+                    a.mul2(c, v)
+                })
+                .collect();
+                rx.push(a.add(&terms));
+                // r_y = (1 − ξ) r₁,ᵧ + ξ r₂,ᵧ
+                let c0 = a.constant(1.0 - xi);
+                let c1 = a.constant(xi);
+                let t0 = a.mul2(c0, s.q[4 + comp]);
+                let t1 = a.mul2(c1, s.q[10 + comp]);
+                ry.push(a.add2(t0, t1));
             }
-            let xx = dot(a, &rx, &rx);
-            let yy = dot(a, &ry, &ry);
-            let xy = dot(a, &rx, &ry);
+            rx.extend(ry);
+            let c = a.constant(wx * wy);
+            let wt = a.mul(&[c, l, b, h]);
+            let mut pt = Point::new(a, points.len(), wt, rx);
+            let z = pt.z_nodes(a);
+            let (rx, ry) = (&z[..2], &z[2..]);
+            let xx = dot(a, rx, rx);
+            let yy = dot(a, ry, ry);
+            let xy = dot(a, rx, ry);
             let e11 = {
                 let t = a.sub(xx, one);
                 a.mul2(half, t)
@@ -470,16 +538,13 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
                 a.mul2(half, t)
             };
             let e12 = a.mul2(half, xy);
-            let wgt = a.constant(wx * wy);
-            let w = density(a, e11, e22, e12);
-            u.push(a.mul(&[wgt, l, b, h, w]));
-            let [d11, d22, d12] = [e11, e22, e12].map(|x| time_rate(a, x));
+            pt.phi = density(a, e11, e22, e12);
+            let [d11, d22, d12] = [e11, e22, e12].map(|x| pt.rate(a, x));
             let wd = density(a, d11, d22, d12);
-            r.push(a.mul(&[wgt, l, b, h, mu, wd]));
+            pt.psi = a.mul2(mu, wd);
+            points.push(pt);
         }
     }
-    let energy = a.add(&u);
-    let dissipation = a.add(&r);
     // Mass: ρ L ∫ (A S₀ᵀS₀ + I S₁ᵀS₁) dξ with A = b h, I = b h³/12.
     let area = a.mul2(b, h);
     let m_axis = a.mul2(rho, area);
@@ -526,8 +591,8 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
              Gauss–Legendre {BEAM_AXIAL_POINTS} × {BEAM_HEIGHT_POINTS} points \
              (exact to degree 9 × 5), unrolled."
         ),
-        energy,
-        dissipation,
+        pre: pre_defs,
+        points,
         mass,
         load,
     }
