@@ -1,6 +1,7 @@
 //! The `eom-gen` command-line tool: the application on top of the
 //! generator library (`eom_gen`) and the runtime (`eom_sim`).
 
+mod ancf;
 mod bench;
 mod compiled;
 mod error;
@@ -162,6 +163,10 @@ enum Command {
         /// Print one JSON object instead of the summary.
         #[arg(long)]
         json: bool,
+        /// Spectral radius at infinity of generalized-α (models with
+        /// cables; 1 = no numerical damping).
+        #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
+        rho_inf: f64,
     },
     /// Convert a URDF robot description into an eom model (RON).
     Import {
@@ -269,6 +274,33 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Static equilibrium of a model's cables (ANCF chains): Newton with
+    /// load stepping, the residual of every iteration reported. Exit 0 in
+    /// equilibrium; 1 if the model is invalid or the solve refuses (no
+    /// convergence at the smallest load step, a singular tangent); 2 for
+    /// bad arguments.
+    SolveStatic {
+        /// The model file (`.ron`) with `cables:`.
+        model: String,
+        /// Equal load steps to begin with (halved where Newton fails).
+        #[arg(long, default_value_t = 10)]
+        load_steps: usize,
+        /// Newton iterations allowed per load step.
+        #[arg(long, default_value_t = 25)]
+        max_iterations: usize,
+        /// Relative residual tolerance: `|r|∞ ≤ rtol · |λ f_ext|∞ + atol`.
+        #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
+        rtol: f64,
+        /// Absolute residual tolerance, N.
+        #[arg(long, default_value_t = 1e-12, allow_hyphen_values = true)]
+        atol: f64,
+        /// Set a parameter of the model: `NAME=VALUE` (repeatable).
+        #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+        params: Vec<String>,
+        /// Print one JSON object (with every node's position).
+        #[arg(long)]
+        json: bool,
+    },
     /// Operation counts of the generated functions and generation time.
     Stats {
         /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
@@ -290,6 +322,52 @@ fn main() -> ExitCode {
         Command::Import { urdf, output } => import(&urdf, output.as_deref()),
         Command::Dump { model, output, fma } => dump(&model, output.as_deref(), fma),
         Command::Stats { model, json } => stats(&model, json),
+        Command::SolveStatic {
+            model,
+            load_steps,
+            max_iterations,
+            rtol,
+            atol,
+            params,
+            json,
+        } => {
+            let vary = match Vary::parse(&params, &[]) {
+                Ok(v) => v,
+                Err(code) => return code,
+            };
+            let mut problems = Vec::new();
+            if load_steps == 0 {
+                problems.push("--load-steps must be at least 1".to_string());
+            }
+            if !(rtol >= 0.0 && atol >= 0.0) {
+                problems.push("--rtol and --atol must not be negative".to_string());
+            }
+            if !problems.is_empty() {
+                return fail(&Error::Usage(problems));
+            }
+            let checked = match load_checked(&model, &vary.params) {
+                Ok(c) => c,
+                Err(report) => {
+                    eprint!("{report}");
+                    return ExitCode::from(1);
+                }
+            };
+            eprint!("{}", checked.render_warnings());
+            let opts = eom_sim::large::StaticOptions {
+                load_steps,
+                max_iterations,
+                rtol,
+                atol,
+                ..Default::default()
+            };
+            match ancf::solve_static_cmd(&checked, &opts, json) {
+                Ok(text) => {
+                    print!("{text}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(&e),
+            }
+        }
         Command::Bench {
             model,
             per_call,
@@ -467,11 +545,37 @@ fn main() -> ExitCode {
             json,
             params,
             inputs,
+            rho_inf,
         } => {
             let vary = match Vary::parse(&params, &inputs) {
                 Ok(v) => v,
                 Err(code) => return code,
             };
+            // Models with cables run on the large-model runtime.
+            if let Ok(checked) = load_checked(&model, &vary.params)
+                && ancf::has_cables(&checked)
+            {
+                eprint!("{}", checked.render_warnings());
+                let integrator = if integrator == "dopri5" {
+                    "generalized-alpha".to_string()
+                } else {
+                    integrator
+                };
+                let run = ancf::CableRun {
+                    integrator,
+                    t_end,
+                    dt,
+                    rho_inf,
+                    csv,
+                };
+                return match ancf::simulate_cmd(&checked, &run, json) {
+                    Ok(text) => {
+                        print!("{text}");
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => fail(&e),
+                };
+            }
             let list = |what: &str, text: Option<String>| -> Result<Option<Vec<f64>>, String> {
                 text.map(|t| numbers(what, &t)).transpose()
             };

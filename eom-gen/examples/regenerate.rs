@@ -1,10 +1,40 @@
-//! Regenerates `generated/src/` from every model in `models/`:
-//! `cargo run -p eom-gen --example regenerate`.
+//! Regenerates `generated/src/` from every model in `models/`, and the ANCF
+//! element kernels in `eom-sim/src/elements/` (one file per element type):
+//! `cargo run -p eom-gen --example regenerate` (`-- elements` for the
+//! element kernels only).
 
 use std::process::ExitCode;
 
+/// Writes one file per ANCF element type and prints its op counts.
+fn elements(root: &str) -> ExitCode {
+    for kind in eom_gen::ancf::Kind::ALL {
+        let k = eom_gen::ancf::derive(kind);
+        let path = format!("{root}/eom-sim/src/elements/{}.rs", k.def.module);
+        eprintln!("… {path}");
+        for (name, p) in [
+            ("internal_forces", &k.forces),
+            ("internal_jacobians", &k.jacobians),
+            ("mass", &k.mass),
+            ("uniform_load", &k.load),
+        ] {
+            eprintln!("    {}", eom_gen::ancf::emit::op_line(name, p));
+        }
+        if let Err(e) = std::fs::write(&path, eom_gen::ancf::emit::emit(&k)) {
+            eprintln!("cannot write {path}: {e}");
+            return ExitCode::from(1);
+        }
+    }
+    ExitCode::SUCCESS
+}
+
 fn main() -> ExitCode {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+    if elements(root) != ExitCode::SUCCESS {
+        return ExitCode::from(1);
+    }
+    if std::env::args().nth(1).as_deref() == Some("elements") {
+        return ExitCode::SUCCESS;
+    }
     let mut names: Vec<String> = match std::fs::read_dir(format!("{root}/models")) {
         Ok(dir) => dir
             .filter_map(|e| e.ok())

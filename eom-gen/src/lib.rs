@@ -19,6 +19,7 @@
 //! [`model`], yet an error found while formulating still names its
 //! `file:line:col` ([`GenerateError`] renders a [`Report`]).
 
+pub mod ancf;
 pub mod builder;
 pub mod diag;
 pub mod emit;

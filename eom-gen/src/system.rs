@@ -524,6 +524,19 @@ pub struct System {
     pub outputs: Vec<OutputKind>,
     /// Grübler–Kutzbach count.
     pub grubler: Grubler,
+    /// Chains of ANCF elements (issue #18), in file order: solved by the
+    /// large-model runtime (`eom_sim::large`), not by generated code.
+    pub cables: Vec<CableInfo>,
+}
+
+/// A validated chain of ANCF elements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CableInfo {
+    /// Its name.
+    pub name: String,
+    /// Everything the runtime builds it from (values at the parameters'
+    /// defaults; gravity from the model).
+    pub chain: eom_sim::large::ancf::ChainSpec,
 }
 
 impl System {

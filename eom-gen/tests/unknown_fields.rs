@@ -34,7 +34,12 @@ fn check_text(path: &str, text: &str) -> Result<(), Report> {
 fn corpus() -> Vec<(String, String)> {
     let root = workspace();
     let mut files = Vec::new();
-    for dir in ["models", "models/scenes", "eom-gen/tests/fixtures"] {
+    for dir in [
+        "models",
+        "models/scenes",
+        "models/ancf",
+        "eom-gen/tests/fixtures",
+    ] {
         let mut names: Vec<PathBuf> = std::fs::read_dir(root.join(dir))
             .expect("read the directory")
             .map(|e| e.expect("directory entry").path())

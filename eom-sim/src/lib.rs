@@ -49,7 +49,9 @@
 //! ```
 
 pub mod constrained;
+pub mod elements;
 mod integrate;
+pub mod large;
 mod model;
 pub mod run;
 pub mod state;

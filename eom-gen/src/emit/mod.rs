@@ -107,7 +107,7 @@ impl Binding<'_> {
 
 /// A float literal (unsuffixed), a `std` constant it equals exactly, or a
 /// negated one.
-fn float(x: f64) -> TokenStream {
+pub(crate) fn float(x: f64) -> TokenStream {
     use std::f64::consts as c;
     // Formulation refuses programs with such constants
     // (`FormulateError::NotFinite`), but emission never panics:
@@ -160,7 +160,7 @@ fn float(x: f64) -> TokenStream {
 }
 
 /// [`float`] in operand position: negative values in parentheses.
-fn float_operand(x: f64) -> TokenStream {
+pub(crate) fn float_operand(x: f64) -> TokenStream {
     let f = float(x);
     if x.is_sign_negative() && x != 0.0 {
         quote!((#f))

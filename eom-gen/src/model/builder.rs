@@ -37,6 +37,7 @@ impl ModelBuilder {
                 constraints: Vec::new(),
                 outputs: Vec::new(),
                 inertia_policy: Default::default(),
+                cables: Vec::new(),
             },
         }
     }

@@ -128,6 +128,111 @@ pub struct Spec {
     /// How masses and inertia tensors are checked (default `Strict`).
     #[serde(default, skip_serializing_if = "InertiaPolicy::is_strict")]
     pub inertia_policy: InertiaPolicy,
+    /// Chains of absolute-nodal-coordinate (ANCF) elements: cables and
+    /// beams that bend far (issue #18).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub cables: Vec<Cable>,
+}
+
+/// A chain of ANCF elements on the straight line between two points.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Cable {
+    /// Unique name.
+    pub name: String,
+    /// The element type (the generated kernel).
+    pub element: AncfElement,
+    /// First end, world axes, m.
+    pub from: V3,
+    /// Second end, world axes, m.
+    pub to: V3,
+    /// Number of elements (nodes `0..=elements`).
+    pub elements: usize,
+    /// Young's modulus `E`, Pa.
+    pub young: Num,
+    /// Density `ρ`, kg/m³.
+    pub density: Num,
+    /// Section area `A`, m² (default `width · height`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub area: Option<Num>,
+    /// Second moment of area `I` for bending, m⁴ (default
+    /// `width · height³ / 12`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub second_moment: Option<Num>,
+    /// Width of a rectangular section (out of the bending plane), m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub width: Option<Num>,
+    /// Height of a rectangular section (in the bending plane), m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<Num>,
+    /// Poisson's ratio (the continuum beam `Beam2D`).
+    #[serde(default, skip_serializing_if = "Num::is_zero")]
+    pub poisson: Num,
+    /// Axial Kelvin–Voigt damping (cables), N s.
+    #[serde(default, skip_serializing_if = "Num::is_zero")]
+    pub damping_axial: Num,
+    /// Bending Kelvin–Voigt damping (cables), N m² s.
+    #[serde(default, skip_serializing_if = "Num::is_zero")]
+    pub damping_bending: Num,
+    /// Kelvin–Voigt retardation time (`Beam2D`), s.
+    #[serde(default, skip_serializing_if = "Num::is_zero")]
+    pub retardation: Num,
+    /// How the first end is held.
+    pub start: CableEnd,
+    /// How the second end is held.
+    #[serde(default, skip_serializing_if = "CableEnd::is_free")]
+    pub end: CableEnd,
+    /// A constant force on the second end, world axes, N.
+    #[serde(default, skip_serializing_if = "V3::is_zero")]
+    pub end_force: V3,
+    /// A point mass on the second end (a bob), kg.
+    #[serde(default, skip_serializing_if = "Num::is_zero")]
+    pub end_mass: Num,
+}
+
+/// ANCF element types (the kernels generated once per type).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum AncfElement {
+    /// Planar cable, axial strain `|r'| − 1` and material curvature
+    /// (Gerstmayr and Irschik 2008).
+    Cable2D,
+    /// Planar cable with the Green axial strain.
+    Cable2DGreen,
+    /// Spatial cable, bending and axial, no torsion.
+    Cable3D,
+    /// Planar fully parameterised (shear-deformable) beam.
+    Beam2D,
+}
+
+impl AncfElement {
+    /// The kernel's name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            AncfElement::Cable2D => "Cable2D",
+            AncfElement::Cable2DGreen => "Cable2DGreen",
+            AncfElement::Cable3D => "Cable3D",
+            AncfElement::Beam2D => "Beam2D",
+        }
+    }
+}
+
+/// How an end of a cable is held.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum CableEnd {
+    /// Not held.
+    #[default]
+    Free,
+    /// Held in place, free to turn.
+    Pinned,
+    /// Held in place and in direction.
+    Clamped,
+}
+
+impl CableEnd {
+    /// True for [`CableEnd::Free`].
+    pub fn is_free(&self) -> bool {
+        *self == CableEnd::Free
+    }
 }
 
 /// How a model's masses and inertia tensors are checked (see

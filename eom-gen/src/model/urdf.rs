@@ -1034,6 +1034,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         forces,
         constraints,
         outputs: Vec::new(),
+        cables: Vec::new(),
         inertia_policy: if lenient {
             InertiaPolicy::Lenient
         } else {

@@ -445,6 +445,7 @@ impl Ctx<'_> {
         let (forces, inputs) = self.forces(spec, &bodies, &joints);
         let constraints = self.constraints(spec, &bodies);
         let outputs = self.outputs(spec, &bodies, &joints);
+        let cables = self.cables(spec, gravity.as_ref());
         let (Some(graph), true) = (graph, joints_ok) else {
             return None;
         };
@@ -463,6 +464,7 @@ impl Ctx<'_> {
                 dof: 0,
                 planar: false,
             },
+            cables: cables?,
         };
         if self.diags.iter().any(Diagnostic::is_error) {
             return None;
@@ -1997,4 +1999,245 @@ fn planar_normal(sys: &System, poses: &[Pose<f64>]) -> Option<Vector3<f64>> {
     }
     let n = normal?;
     in_plane.iter().all(|a| a.dot(&n).abs() < 1e-9).then_some(n)
+}
+
+impl Ctx<'_> {
+    /// The ANCF chains: names, element types, geometry, section and
+    /// material, supports, end force; every problem reported.
+    fn cables(&mut self, spec: &Spec, gravity: Option<&Vec3Q>) -> Option<Vec<CableInfo>> {
+        use eom_sim::large::ancf::{ChainSpec, Section, Support};
+        let g = gravity.map_or([0.0; 3], |g| [g[0].value, g[1].value, g[2].value]);
+        let mut out = Vec::new();
+        let mut ok = true;
+        let mut names = HashSet::new();
+        for (k, c) in spec.cables.iter().enumerate() {
+            let path = [f("cables"), i(k)];
+            let at = |field: &'static str| join(&path, &[f(field)]);
+            let name = c.name.as_str();
+            if !is_ident(name) {
+                self.error(
+                    &at("name"),
+                    format!("cable name `{name}` is not an identifier"),
+                    "use letters, digits and `_`",
+                );
+                ok = false;
+            } else if !names.insert(name) {
+                self.error(
+                    &at("name"),
+                    format!("cable `{name}` is defined twice"),
+                    "give every cable its own name",
+                );
+                ok = false;
+            }
+            let kernel = c.element.name();
+            if !eom_sim::large::ancf::KERNELS.contains(&kernel) {
+                self.error(
+                    &at("element"),
+                    format!(
+                        "element type `{kernel}` of cable `{name}` has no kernel in this build"
+                    ),
+                    format!(
+                        "available: {}",
+                        list_names(eom_sim::large::ancf::KERNELS.iter().copied())
+                    ),
+                );
+                ok = false;
+            }
+            if c.elements == 0 {
+                self.error(
+                    &at("elements"),
+                    format!("cable `{name}` has no elements"),
+                    "a cable needs at least one element (the tests converge from 4 to 64)",
+                );
+                ok = false;
+            }
+            let from = self.vec3(&c.from, &at("from"), Scope::Params);
+            let to = self.vec3(&c.to, &at("to"), Scope::Params);
+            let end_force = self.vec3(&c.end_force, &at("end_force"), Scope::Params);
+            let positive = |cx: &mut Self, n: &Num, field: &'static str, what: &str, unit: &str| {
+                let q = cx.quantity(n, &at(field), Scope::Params)?;
+                if q.value.is_nan() || q.value <= 0.0 {
+                    cx.error(
+                        &at(field),
+                        format!("{what} `{field}` of cable `{name}` is {} {unit}", q.value),
+                        format!("a cable needs a positive {what} ({unit})"),
+                    );
+                    return None;
+                }
+                Some(q.value)
+            };
+            let young = positive(self, &c.young, "young", "Young's modulus", "Pa");
+            let density = positive(self, &c.density, "density", "density", "kg/m³");
+            let width = c
+                .width
+                .as_ref()
+                .map(|n| positive(self, n, "width", "section width", "m"));
+            let height = c
+                .height
+                .as_ref()
+                .map(|n| positive(self, n, "height", "section height", "m"));
+            let area = c
+                .area
+                .as_ref()
+                .map(|n| positive(self, n, "area", "section area", "m²"));
+            let second = c
+                .second_moment
+                .as_ref()
+                .map(|n| positive(self, n, "second_moment", "second moment of area", "m⁴"));
+            let rect = match (width, height) {
+                (Some(Some(b)), Some(Some(h))) => Some((b, h)),
+                (Some(_), None) | (None, Some(_)) => {
+                    let missing = if c.width.is_none() { "width" } else { "height" };
+                    self.error(
+                        &path,
+                        format!("cable `{name}` gives one side of a rectangular section but not `{missing}`"),
+                        "give both `width` and `height`, or `area` and `second_moment`",
+                    );
+                    None
+                }
+                _ => None,
+            };
+            let area = match area {
+                Some(a) => a,
+                None => rect.map(|(b, h)| b * h),
+            };
+            let second = match second {
+                Some(s) => s,
+                None => rect.map(|(b, h)| b * h * h * h / 12.0),
+            };
+            if c.area.is_none() && c.width.is_none() {
+                self.error(
+                    &path,
+                    format!("cable `{name}` has no section area"),
+                    "give `area` and `second_moment`, or `width` and `height` of a rectangular section",
+                );
+            }
+            if c.second_moment.is_none() && c.width.is_none() {
+                self.error(
+                    &path,
+                    format!("cable `{name}` has no second moment of area"),
+                    "give `second_moment` (m⁴), or `width` and `height` of a rectangular section",
+                );
+            }
+            if c.element == spec::AncfElement::Beam2D && rect.is_none() && c.width.is_none() {
+                self.error(
+                    &at("element"),
+                    format!("`Beam2D` cable `{name}` needs a rectangular section"),
+                    "the continuum beam integrates over the section: give `width` and `height`",
+                );
+            }
+            let poisson = self.quantity(&c.poisson, &at("poisson"), Scope::Params);
+            if let Some(p) = &poisson
+                && !(0.0..0.5).contains(&p.value)
+            {
+                self.error(
+                    &at("poisson"),
+                    format!("Poisson's ratio of cable `{name}` is {}", p.value),
+                    "it lies in [0, 0.5)",
+                );
+            }
+            let da = self.nonnegative(
+                &c.damping_axial,
+                &at("damping_axial"),
+                "axial damping",
+                name,
+            );
+            let db = self.nonnegative(
+                &c.damping_bending,
+                &at("damping_bending"),
+                "bending damping",
+                name,
+            );
+            let mu = self.nonnegative(&c.retardation, &at("retardation"), "retardation time", name);
+            let end_mass = self.nonnegative(&c.end_mass, &at("end_mass"), "end mass", name);
+            let planar = c.element != spec::AncfElement::Cable3D;
+            if let (Some(a), Some(b)) = (&from, &to) {
+                let (a, b) = (values(a), values(b));
+                if (a - b).norm() <= 0.0 {
+                    self.error(
+                        &at("to"),
+                        format!("the ends of cable `{name}` coincide"),
+                        "`from` and `to` are the two ends of the straight reference line",
+                    );
+                    ok = false;
+                }
+                if planar && (a.z != 0.0 || b.z != 0.0) {
+                    self.error(
+                        &at(if a.z != 0.0 { "from" } else { "to" }),
+                        format!("`{kernel}` cable `{name}` leaves the plane z = 0"),
+                        "planar elements move in the x–y plane: give z = 0, or use `Cable3D`",
+                    );
+                    ok = false;
+                }
+            }
+            if planar && g[2] != 0.0 {
+                self.warning(
+                    &[f("gravity")],
+                    format!("gravity has a z component that planar cable `{name}` does not feel"),
+                    "planar elements move in the x–y plane",
+                );
+            }
+            if c.start.is_free() && c.end.is_free() {
+                self.warning(
+                    &at("start"),
+                    format!("cable `{name}` is held at neither end"),
+                    "it can move freely (dynamics); a static solve will refuse it",
+                );
+            }
+            let support = |e: spec::CableEnd| match e {
+                spec::CableEnd::Free => Support::Free,
+                spec::CableEnd::Pinned => Support::Pinned,
+                spec::CableEnd::Clamped => Support::Clamped,
+            };
+            let (
+                Some(from),
+                Some(to),
+                Some(end_force),
+                Some(young),
+                Some(density),
+                Some(area),
+                Some(second),
+                Some(poisson),
+                Some(da),
+                Some(db),
+                Some(mu),
+                Some(end_mass),
+            ) = (
+                from, to, end_force, young, density, area, second, poisson, da, db, mu, end_mass,
+            )
+            else {
+                ok = false;
+                continue;
+            };
+            let v = |q: &Vec3Q| [q[0].value, q[1].value, q[2].value];
+            let (b, h) = rect.unwrap_or((0.0, 0.0));
+            out.push(CableInfo {
+                name: name.to_string(),
+                chain: ChainSpec {
+                    kernel: kernel.to_string(),
+                    start: v(&from),
+                    end: v(&to),
+                    elements: c.elements,
+                    section: Section {
+                        e: young,
+                        nu: poisson.value,
+                        rho: density,
+                        area,
+                        inertia: second,
+                        b,
+                        h,
+                        damping_axial: da.value,
+                        damping_bending: db.value,
+                        retardation: mu.value,
+                    },
+                    start_support: support(c.start),
+                    end_support: support(c.end),
+                    end_force: v(&end_force),
+                    end_mass: end_mass.value,
+                    gravity: g,
+                },
+            });
+        }
+        ok.then_some(out)
+    }
 }

@@ -1,0 +1,454 @@
+//! Emission of an element type's kernels as one
+//! `eom_sim::elements::ElementKernel` implementation: straight-line Rust,
+//! one `let` per instruction, fixed-size arrays with constant indices (no
+//! allocation, no panic), formatted by `prettyplease`.
+
+use super::{Kernels, LOAD_NAMES};
+use crate::emit::{VERSION, float, float_operand};
+use crate::sym::{Op, Operand, Program, SymKind, Symbol};
+use proc_macro2::{Literal, TokenStream};
+use quote::{format_ident, quote};
+use std::collections::HashMap;
+
+/// How each symbol kind is read in the generated functions.
+fn input(k: &Kernels, s: &Symbol) -> TokenStream {
+    let idx = |i: usize| Literal::usize_unsuffixed(i);
+    match s.kind {
+        SymKind::Coord(i) => {
+            let i = idx(i as usize);
+            quote!(q[#i])
+        }
+        SymKind::CoordRate(i) => {
+            let i = idx(i as usize);
+            quote!(qd[#i])
+        }
+        SymKind::Param => match k.def.params.iter().position(|(n, _)| *n == s.name) {
+            Some(i) => {
+                let i = idx(i);
+                quote!(p[#i])
+            }
+            None => quote!(::core::compile_error!("eom-gen: unknown element parameter")),
+        },
+        SymKind::Input => match LOAD_NAMES.iter().position(|n| *n == s.name) {
+            Some(i) => {
+                let i = idx(i);
+                quote!(w[#i])
+            }
+            None => quote!(::core::compile_error!("eom-gen: unknown element input")),
+        },
+        _ => quote!(::core::compile_error!(
+            "eom-gen: unexpected symbol in an element kernel"
+        )),
+    }
+}
+
+/// Instructions per function: longer straight-line functions overflow
+/// rustc's stack when it writes debug information (one nested scope per
+/// `let`), as in `emit::split`.
+pub const PART_LIMIT: usize = 1500;
+
+/// An argument of a kernel function: name, type, which symbols it carries.
+struct KArg {
+    name: &'static str,
+    ty: TokenStream,
+    carries: fn(&SymKind) -> bool,
+}
+
+fn operands(op: &Op) -> Vec<Operand> {
+    match *op {
+        Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
+            vec![a, b]
+        }
+        Op::Select(c, a, b) => vec![c, a, b],
+        Op::Neg(a)
+        | Op::Sqrt(a)
+        | Op::Sin(a)
+        | Op::Cos(a)
+        | Op::SinCos(a)
+        | Op::Tan(a)
+        | Op::Exp(a)
+        | Op::Ln(a)
+        | Op::Abs(a) => vec![a],
+    }
+}
+
+/// A kernel function's body and its helper parts (free functions).
+struct Body {
+    stmts: TokenStream,
+    parts: TokenStream,
+    used: Vec<bool>,
+}
+
+/// The statements of `p`, then `targets[i] = output i`. Programs longer
+/// than [`PART_LIMIT`] become consecutive `#[inline(never)]` parts; a
+/// temporary read in a later part or written to an output goes through a
+/// scratch array `s` on the caller's stack.
+fn body(k: &Kernels, p: &Program, fname: &str, args: &[KArg], targets: &[TokenStream]) -> Body {
+    let ranges: Vec<std::ops::Range<usize>> = if p.instrs.len() <= PART_LIMIT {
+        std::iter::once(0..p.instrs.len()).collect()
+    } else {
+        (0..p.instrs.len())
+            .step_by(PART_LIMIT)
+            .map(|s| s..(s + PART_LIMIT).min(p.instrs.len()))
+            .collect()
+    };
+    let split = ranges.len() > 1;
+    let mut part_of: HashMap<u32, usize> = HashMap::new();
+    for (r, range) in ranges.iter().enumerate() {
+        for ins in &p.instrs[range.clone()] {
+            part_of.insert(ins.dst, r);
+            part_of.insert(ins.dst + 1, r);
+        }
+    }
+    let mut slots: HashMap<u32, usize> = HashMap::new();
+    if split {
+        for (r, range) in ranges.iter().enumerate() {
+            for ins in &p.instrs[range.clone()] {
+                for o in operands(&ins.op) {
+                    if let Operand::Tmp(t) = o
+                        && part_of.get(&t).is_some_and(|&d| d < r)
+                    {
+                        let n = slots.len();
+                        slots.entry(t).or_insert(n);
+                    }
+                }
+            }
+        }
+        for (_, o) in &p.outputs {
+            if let Operand::Tmp(t) = *o {
+                let n = slots.len();
+                slots.entry(t).or_insert(n);
+            }
+        }
+    }
+    let slot = |t: u32| {
+        let i = Literal::usize_unsuffixed(slots[&t]);
+        quote!(s[#i])
+    };
+    let un = |f: &str, x: TokenStream| {
+        let f = format_ident!("{f}");
+        quote!(f64::#f(#x))
+    };
+    let mut stmts = TokenStream::new();
+    let mut parts = TokenStream::new();
+    let ns = Literal::usize_unsuffixed(slots.len().max(1));
+    for (r, range) in ranges.iter().enumerate() {
+        let o = |x: Operand| -> TokenStream {
+            match x {
+                Operand::Const(n) => float_operand(n.to_f64()),
+                Operand::Var(i) => input(k, &p.inputs[i as usize]),
+                Operand::Tmp(t) if split && part_of.get(&t) != Some(&r) => slot(t),
+                Operand::Tmp(t) => {
+                    let t = format_ident!("x{t}");
+                    quote!(#t)
+                }
+            }
+        };
+        let mut out = TokenStream::new();
+        let store = |t: u32, out: &mut TokenStream| {
+            if split && slots.contains_key(&t) {
+                let (sl, x) = (slot(t), format_ident!("x{t}"));
+                out.extend(quote!(#sl = #x;));
+            }
+        };
+        for ins in &p.instrs[range.clone()] {
+            let dst = format_ident!("x{}", ins.dst);
+            let value = match ins.op {
+                Op::Add(x, y) => {
+                    let (x, y) = (o(x), o(y));
+                    quote!(#x + #y)
+                }
+                Op::Sub(x, y) => {
+                    let (x, y) = (o(x), o(y));
+                    quote!(#x - #y)
+                }
+                Op::Mul(x, y) => {
+                    let (x, y) = (o(x), o(y));
+                    quote!(#x * #y)
+                }
+                Op::Div(x, y) => {
+                    let (x, y) = (o(x), o(y));
+                    quote!(#x / #y)
+                }
+                Op::Neg(x) => {
+                    let x = o(x);
+                    quote!(-#x)
+                }
+                Op::Sqrt(x) => un("sqrt", o(x)),
+                Op::Sin(x) => un("sin", o(x)),
+                Op::Cos(x) => un("cos", o(x)),
+                Op::Tan(x) => un("tan", o(x)),
+                Op::Exp(x) => un("exp", o(x)),
+                Op::Ln(x) => un("ln", o(x)),
+                Op::Abs(x) => un("abs", o(x)),
+                Op::Atan2(y, x) => {
+                    let (y, x) = (o(y), o(x));
+                    quote!(f64::atan2(#y, #x))
+                }
+                Op::Select(c, x, y) => {
+                    let (c, x, y) = (o(c), o(x), o(y));
+                    quote!(if #c > 0.0 { #x } else { #y })
+                }
+                Op::SinCos(x) => {
+                    let (sn, cs, x) = (
+                        format_ident!("x{}", ins.dst),
+                        format_ident!("x{}", ins.dst + 1),
+                        o(x),
+                    );
+                    out.extend(quote!(let (#sn, #cs) = f64::sin_cos(#x);));
+                    store(ins.dst, &mut out);
+                    store(ins.dst + 1, &mut out);
+                    continue;
+                }
+            };
+            out.extend(quote!(let #dst = #value;));
+            store(ins.dst, &mut out);
+        }
+        if !split {
+            stmts = out;
+            break;
+        }
+        let name = format_ident!("{fname}_part{r}");
+        let reads_arg = |a: &KArg| {
+            p.instrs[range.clone()].iter().any(|i| {
+                operands(&i.op).iter().any(
+                    |o| matches!(o, Operand::Var(v) if (a.carries)(&p.inputs[*v as usize].kind)),
+                )
+            })
+        };
+        let params = args.iter().map(|a| {
+            let n = arg(a.name, reads_arg(a));
+            let ty = &a.ty;
+            quote!(#n: #ty)
+        });
+        let doc = format!(
+            " Part {} of {} of `{fname}` (instructions {}–{}).",
+            r + 1,
+            ranges.len(),
+            range.start,
+            range.end - 1
+        );
+        parts.extend(quote! {
+            #[doc = #doc]
+            #[inline(never)]
+            fn #name(#(#params,)* s: &mut [f64; #ns]) {
+                #out
+            }
+        });
+        let names = args.iter().map(|a| format_ident!("{}", a.name));
+        stmts.extend(quote!(#name(#(#names,)* &mut s);));
+    }
+    if split {
+        stmts = quote! {
+            let mut s = [0.0f64; #ns];
+            #stmts
+        };
+    }
+    let last = ranges.len() - 1;
+    for ((_, v), t) in p.outputs.iter().zip(targets) {
+        let v = match *v {
+            Operand::Const(n) => float(n.to_f64()),
+            Operand::Var(i) => input(k, &p.inputs[i as usize]),
+            Operand::Tmp(t) if split => {
+                let _ = last;
+                slot(t)
+            }
+            Operand::Tmp(t) => {
+                let t = format_ident!("x{t}");
+                quote!(#t)
+            }
+        };
+        stmts.extend(quote!(#t = #v;));
+    }
+    let used = args
+        .iter()
+        .map(|a| split || p.inputs.iter().any(|s| (a.carries)(&s.kind)))
+        .collect();
+    Body { stmts, parts, used }
+}
+
+fn arg(name: &str, used: bool) -> proc_macro2::Ident {
+    if used {
+        format_ident!("{name}")
+    } else {
+        format_ident!("_{name}")
+    }
+}
+
+/// One line of markdown per op count.
+pub fn op_line(name: &str, p: &Program) -> String {
+    format!("`{name}`: {}", p.op_count())
+}
+
+/// The formatted source of `eom-sim/src/elements/<module>.rs`.
+pub fn emit(k: &Kernels) -> String {
+    let def = &k.def;
+    let n = def.n();
+    let np = def.params.len();
+    let nl = Literal::usize_unsuffixed(n);
+    let npl = Literal::usize_unsuffixed(np);
+    let ty = format_ident!("{}", def.name);
+    let name = def.name;
+    let node_coords = Literal::usize_unsuffixed(def.node_coords);
+    let dim = Literal::usize_unsuffixed(def.dim);
+    let pnames = def.params.iter().map(|(p, _)| *p);
+    let idx = |i: usize| Literal::usize_unsuffixed(i);
+
+    let vec_targets = |arr: &str| -> Vec<TokenStream> {
+        let a = format_ident!("{arr}");
+        (0..n)
+            .map(|i| {
+                let i = idx(i);
+                quote!(#a[#i])
+            })
+            .collect()
+    };
+    let mat_targets = |arr: &str| -> Vec<TokenStream> {
+        let a = format_ident!("{arr}");
+        (0..n * n)
+            .map(|ij| {
+                let (i, j) = (idx(ij / n), idx(ij % n));
+                quote!(#a[#i][#j])
+            })
+            .collect()
+    };
+    let is_q = |s: &SymKind| matches!(s, SymKind::Coord(_));
+    let is_qd = |s: &SymKind| matches!(s, SymKind::CoordRate(_));
+    let is_p = |s: &SymKind| matches!(s, SymKind::Param);
+    let is_w = |s: &SymKind| matches!(s, SymKind::Input);
+
+    let vec_ty = quote!(&[f64; #nl]);
+    let p_ty = quote!(&[f64; #npl]);
+    let mat_ty = quote!(&mut [[f64; #nl]; #nl]);
+    let vec_out = quote!(&mut [f64; #nl]);
+    let qa = |ty: &TokenStream| KArg {
+        name: "q",
+        ty: ty.clone(),
+        carries: is_q,
+    };
+    let qda = |ty: &TokenStream| KArg {
+        name: "qd",
+        ty: ty.clone(),
+        carries: is_qd,
+    };
+    let pa = |ty: &TokenStream| KArg {
+        name: "p",
+        ty: ty.clone(),
+        carries: is_p,
+    };
+    let none = |_: &SymKind| false;
+
+    let fargs = [qa(&vec_ty), qda(&vec_ty), pa(&p_ty)];
+    let fb = body(k, &k.forces, "internal_forces", &fargs, &vec_targets("f"));
+    let (fq, fqd, fp) = (
+        arg("q", fb.used[0]),
+        arg("qd", fb.used[1]),
+        arg("p", fb.used[2]),
+    );
+    let mut jt = mat_targets("k");
+    jt.extend(mat_targets("d"));
+    let jargs = [qa(&vec_ty), qda(&vec_ty), pa(&p_ty)];
+    let jb = body(k, &k.jacobians, "internal_jacobians", &jargs, &jt);
+    let (jq, jqd, jp) = (
+        arg("q", jb.used[0]),
+        arg("qd", jb.used[1]),
+        arg("p", jb.used[2]),
+    );
+    let margs = [pa(&p_ty)];
+    let mb = body(k, &k.mass, "mass", &margs, &mat_targets("m"));
+    let mp = arg("p", mb.used[0]);
+    let largs = [
+        pa(&p_ty),
+        KArg {
+            name: "w",
+            ty: quote!(&[f64; 3]),
+            carries: is_w,
+        },
+    ];
+    let lb = body(k, &k.load, "uniform_load", &largs, &vec_targets("f"));
+    let (lp, lw) = (arg("p", lb.used[0]), arg("w", lb.used[1]));
+    let _ = (none, &mat_ty, &vec_out);
+    let parts = [&fb.parts, &jb.parts, &mb.parts, &lb.parts];
+    let (fb, jb, mb, lb) = (&fb.stmts, &jb.stmts, &mb.stmts, &lb.stmts);
+
+    let layout = {
+        let node = |a: usize| {
+            def.node_layout
+                .iter()
+                .enumerate()
+                .map(|(i, s)| format!("`q[{}]` = `{s}`", a * def.node_coords + i))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        format!(
+            " Node 1 (at `x = 0`): {}.\n\n Node 2 (at `x = L`): {}.",
+            node(0),
+            node(1)
+        )
+    };
+    let params_doc = def
+        .params
+        .iter()
+        .enumerate()
+        .map(|(i, (p, m))| format!(" - `p[{i}]` = `{p}`: {m}"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let counts = [
+        ("internal_forces", &k.forces),
+        ("internal_jacobians", &k.jacobians),
+        ("mass", &k.mass),
+        ("uniform_load", &k.load),
+    ]
+    .map(|(n, p)| format!(" - {}", op_line(n, p)))
+    .join("\n");
+    let doc = format!(
+        " {}\n\n # Coordinates ({n}, `{}` per node; positions and gradients in the inertial frame)\n\n{layout}\n\n # Parameters\n\n{params_doc}\n\n # Integration\n\n {}\n\n # Operations per call\n\n{counts}",
+        def.summary, def.node_coords, def.integration
+    );
+    let module_doc = format!(
+        "//! Element `{name}`: kernels generated by eom-gen {VERSION} (`eom-gen/src/ancf/`) — do not edit.\n//! Regenerate with `cargo run -p eom-gen --example regenerate`.\n\n"
+    );
+    let tokens = quote! {
+        use super::ElementKernel;
+
+        #[doc = #doc]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+        pub struct #ty;
+
+        impl ElementKernel<#nl, #npl> for #ty {
+            const NAME: &'static str = #name;
+            const NODE_COORDS: usize = #node_coords;
+            const DIM: usize = #dim;
+            const PARAMS: [&'static str; #npl] = [#(#pnames),*];
+
+            fn internal_forces(#fq: &[f64; #nl], #fqd: &[f64; #nl], #fp: &[f64; #npl], f: &mut [f64; #nl]) {
+                #fb
+            }
+
+            fn internal_jacobians(
+                #jq: &[f64; #nl],
+                #jqd: &[f64; #nl],
+                #jp: &[f64; #npl],
+                k: &mut [[f64; #nl]; #nl],
+                d: &mut [[f64; #nl]; #nl],
+            ) {
+                #jb
+            }
+
+            fn mass(#mp: &[f64; #npl], m: &mut [[f64; #nl]; #nl]) {
+                #mb
+            }
+
+            fn uniform_load(#lp: &[f64; #npl], #lw: &[f64; 3], f: &mut [f64; #nl]) {
+                #lb
+            }
+        }
+
+        #(#parts)*
+    };
+    let text = match syn::parse2::<syn::File>(tokens.clone()) {
+        Ok(file) => prettyplease::unparse(&file),
+        Err(e) => format!("// eom-gen: formatting failed ({e}); raw tokens follow\n{tokens}\n"),
+    };
+    module_doc + &text
+}

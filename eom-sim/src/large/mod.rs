@@ -1,0 +1,26 @@
+//! The runtime for large structural models (hundreds to thousands of
+//! coordinates): element kernels ([`crate::elements`]) assembled by a loop
+//! over elements into a dynamic-size model with a constant sparse mass
+//! matrix and a sparse tangent, solved by `faer`'s sparse direct solvers
+//! with the symbolic factorisation reused.
+//!
+//! - [`ancf`]: chains of ANCF elements between two points, by kernel name.
+//! - [`elastica`]: reference solutions of the planar elastica for tests.
+//! - [`model`]: element groups, fixed coordinates eliminated, loads.
+//! - [`statics`]: Newton with load stepping.
+//! - [`dynamics`]: generalized-α (implicit, fixed step) and RK4 (explicit).
+//! - [`sparse`]: the pattern, the matrix and the solvers behind a trait.
+
+pub mod ancf;
+pub mod dynamics;
+pub mod elastica;
+pub mod model;
+pub mod sparse;
+pub mod statics;
+
+pub use dynamics::{
+    AlphaOptions, DynamicsError, DynamicsStats, GeneralizedAlpha, State, integrate_rk4,
+};
+pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
+pub use sparse::{FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
+pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};
