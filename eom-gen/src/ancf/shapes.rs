@@ -314,8 +314,10 @@ pub(super) fn cable2d(a: &mut Arena, green: bool) -> Definition {
                  the degree of `ε²` with `|r'|` replaced by `|r'|²`) and \
                  {CABLE_BENDING_POINTS} for the bending term (degree 7, exact for \
                  `(r' × r'')²`); the integrands are rational, not polynomial, and \
-                 the forces differ from a 40-point rule's by about 2e-6 (relative) \
-                 at random deformations of 5 % (`eom-gen/tests/ancf_elements.rs`)."
+                 at random deformations of 5 % the forces differ from a 40-point \
+                 rule's by 4e-6 (relative; 2.7e-5 with 3 bending points, 1.7e-4 \
+                 with 4 axial points; `integration_rule_study` in \
+                 `eom-gen/tests/ancf_elements.rs`)."
             ),
         )
     };
@@ -422,8 +424,9 @@ pub(super) fn cable3d(a: &mut Arena) -> Definition {
         integration: format!(
             "Gauss–Legendre, fixed at generation and unrolled: {CABLE_AXIAL_POINTS} \
              points for the axial term and {CABLE_BENDING_POINTS} for the bending \
-             term, as for the planar cable (the integrands are rational; the forces \
-             differ from a 40-point rule's by about 1.5e-6 at deformations of 5 %)."
+             term, as for the planar cable (the integrands are rational; at random \
+             deformations of 5 % the forces differ from a 40-point rule's by \
+             2.5e-5, relative; `integration_rule_study`)."
         ),
         pre: pre_defs,
         points,
