@@ -43,6 +43,7 @@ def build(n, reduced):
     solver = exu.MainSolverImplicitSecondOrder()
     settings = exu.SimulationSettings()
     settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
+    settings.solutionSettings.writeSolutionToFile = False
     solver.InitializeSolver(mbs, settings)
     return mbs, solver
 
