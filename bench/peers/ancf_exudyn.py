@@ -43,7 +43,7 @@ def build(n, reduced):
     solver = exu.MainSolverImplicitSecondOrder()
     settings = exu.SimulationSettings()
     settings.linearSolver.solverType = exu.LinearSolverType.EigenSparse
-    settings.solutionSettings.writeSolutionToFile = False
+    settings.solution.file.write = False
     solver.InitializeSolver(mbs, settings)
     return mbs, solver
 
