@@ -314,8 +314,10 @@ pub(super) fn cable2d(a: &mut Arena, green: bool) -> Definition {
                  the degree of `ε²` with `|r'|` replaced by `|r'|²`) and \
                  {CABLE_BENDING_POINTS} for the bending term (degree 7, exact for \
                  `(r' × r'')²`); the integrands are rational, not polynomial, and \
-                 the forces differ from a 40-point rule's by about 2e-6 (relative) \
-                 at random deformations of 5 % (`eom-gen/tests/ancf_elements.rs`)."
+                 at random deformations of 5 % the forces differ from a 40-point \
+                 rule's by 4e-6 (relative; 2.7e-5 with 3 bending points, 1.7e-4 \
+                 with 4 axial points; `integration_rule_study` in \
+                 `eom-gen/tests/ancf_elements.rs`)."
             ),
         )
     };
@@ -422,8 +424,9 @@ pub(super) fn cable3d(a: &mut Arena) -> Definition {
         integration: format!(
             "Gauss–Legendre, fixed at generation and unrolled: {CABLE_AXIAL_POINTS} \
              points for the axial term and {CABLE_BENDING_POINTS} for the bending \
-             term, as for the planar cable (the integrands are rational; the forces \
-             differ from a 40-point rule's by about 1.5e-6 at deformations of 5 %)."
+             term, as for the planar cable (the integrands are rational; at random \
+             deformations of 5 % the forces differ from a 40-point rule's by \
+             2.5e-5, relative; `integration_rule_study`)."
         ),
         pre: pre_defs,
         points,
@@ -580,11 +583,15 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
                   Continuum mechanics: deformation gradient `F = [r,ₓ r,ᵧ]`, \
                   Green–Lagrange strain `E = ½(FᵀF − I)`, plane stress \
                   `W = ½ E/(1−ν²) (E₁₁² + E₂₂² + 2ν E₁₁E₂₂) + 2G E₁₂²`, \
-                  `U = ∫ W dV`; Kelvin–Voigt `R = mu ∫ W(Ė) dV`. No locking \
-                  remedy: the element shows the Poisson and shear (thickness) \
-                  locking of the fully parameterised element with full \
-                  integration (Gerstmayr, Matikainen and Mikkola 2008); set \
-                  `nu = 0` to remove the Poisson part."
+                  `U = ∫ W dV`; Kelvin–Voigt `R = mu ∫ W(Ė) dV`. Locking is not \
+                  treated (full integration, no strain splitting): one element \
+                  clamped with a small tip force deflects 0.75 × Euler–Bernoulli \
+                  at `nu = 0` for `L/h` = 10 and 50 alike (the section vector \
+                  `r,ᵧ` is interpolated linearly, so the bending strain is \
+                  constant along the element), and 0.68 × at `nu = 0.3` (Poisson \
+                  locking, the factor `1 − ν²`; `beam2d_locking_measured` in \
+                  `eom-gen/tests/ancf_elements.rs`). Use `nu = 0` and several \
+                  elements."
             .to_string(),
         integration: format!(
             "Exact: `W` is a polynomial, of degree 8 in `ξ` and 4 in `y`; \

@@ -21,7 +21,7 @@ use super::ElementKernel;
 
  # Integration
 
- Gauss–Legendre, fixed at generation and unrolled: 5 points for the axial term and 4 for the bending term, as for the planar cable (the integrands are rational; the forces differ from a 40-point rule's by about 1.5e-6 at deformations of 5 %).
+ Gauss–Legendre, fixed at generation and unrolled: 5 points for the axial term and 4 for the bending term, as for the planar cable (the integrands are rational; at random deformations of 5 % the forces differ from a 40-point rule's by 2.5e-5, relative; `integration_rule_study`).
 
  # Operations per call
 

@@ -2,8 +2,8 @@
 ("ANCF runtime"), beside `cargo run --release -p eom-sim --example ancf_bench`.
 
     python3 -m venv /tmp/venv && /tmp/venv/bin/pip install exudyn numpy
-    /tmp/venv/bin/python bench/peers/ancf_exudyn.py static
-    /tmp/venv/bin/python bench/peers/ancf_exudyn.py pendulum N H
+    /tmp/venv/bin/python bench/peers/ancf_exudyn_cases.py static
+    /tmp/venv/bin/python bench/peers/ancf_exudyn_cases.py pendulum N H
 
 static: the Gerstmayr-Irschik cantilever (L = 2 m, E = 2.07e11 Pa,
 b = h = 0.1 m, tip force 3EI/L^2), 16 and 64 elements, 10 load steps,
