@@ -371,15 +371,10 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     let (forward_dynamics, fd_form, fd_candidates) = if request.contains(Function::ForwardDynamics)
     {
         let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
-        let aba = lower("udot", &ev.aba(&k, &drive, &fext));
         let lambda = ev.speed_parents();
-        let mut candidates = vec![(FdForm::Aba, aba.op_count())];
-        // The mass-matrix route costs at least its factorisation; skip
-        // building it when that alone exceeds the articulated-body count
-        // (long chains, where M is dense and LᵀDL is cubic).
-        if ltdl_flops(&lambda) >= aba.op_count().total() {
-            (Some(aba), FdForm::Aba, candidates)
-        } else {
+        if tree.has_nodes() {
+            // Bodies at the nodes of a flexible body: forward dynamics
+            // through the mass matrix (see `Evaluator::aba`).
             let (mut m, b) = (
                 mass.get_or_insert_with(crba).clone(),
                 bias.get_or_insert_with(rnea_bias).clone(),
@@ -387,11 +382,34 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             ltdl(&mut m, &lambda);
             let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
             let sparse = lower("udot", &ltdl_solve(&m, &lambda, rhs));
-            candidates.push((FdForm::MassMatrix, sparse.op_count()));
-            if sparse.op_count().total() < aba.op_count().total() {
-                (Some(sparse), FdForm::MassMatrix, candidates)
-            } else {
+            let count = sparse.op_count();
+            (
+                Some(sparse),
+                FdForm::MassMatrix,
+                vec![(FdForm::MassMatrix, count)],
+            )
+        } else {
+            let aba = lower("udot", &ev.aba(&k, &drive, &fext));
+            let mut candidates = vec![(FdForm::Aba, aba.op_count())];
+            // The mass-matrix route costs at least its factorisation; skip
+            // building it when that alone exceeds the articulated-body count
+            // (long chains, where M is dense and LᵀDL is cubic).
+            if ltdl_flops(&lambda) >= aba.op_count().total() {
                 (Some(aba), FdForm::Aba, candidates)
+            } else {
+                let (mut m, b) = (
+                    mass.get_or_insert_with(crba).clone(),
+                    bias.get_or_insert_with(rnea_bias).clone(),
+                );
+                ltdl(&mut m, &lambda);
+                let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
+                let sparse = lower("udot", &ltdl_solve(&m, &lambda, rhs));
+                candidates.push((FdForm::MassMatrix, sparse.op_count()));
+                if sparse.op_count().total() < aba.op_count().total() {
+                    (Some(sparse), FdForm::MassMatrix, candidates)
+                } else {
+                    (Some(aba), FdForm::Aba, candidates)
+                }
             }
         }
     } else {
@@ -479,7 +497,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             let n = c.equations.len();
             let lambda: Vec<Expr> = (row..row + n).map(|r| cx.multiplier(r as u32)).collect();
             row += n;
-            let (f, m) = super::constraints::cut_reaction(&k, c, &lambda);
+            let (f, m) = super::constraints::cut_reaction(&tree, &k, c, &lambda);
             for (a, &e) in ["fx", "fy", "fz", "nx", "ny", "nz"]
                 .iter()
                 .zip(f.0.iter().chain(&m.0))
@@ -562,8 +580,12 @@ fn outputs<'cx>(
         match *out {
             OutputKind::Position(b, m) | OutputKind::Velocity(b, m) => {
                 let marker = &sys.bodies[b].markers[m];
-                let p = low.vec3(&marker.frame.position)?;
-                let (x, v) = ev.point(k, tree.index_of_body[b], p);
+                let site = super::dynamics::Site {
+                    body: tree.index_of_body[b],
+                    node: marker.node,
+                    point: low.vec3(&marker.frame.position)?,
+                };
+                let (x, v) = ev.site(k, &site);
                 let tag = format!("{}_{}", sys.bodies[b].name, marker.name);
                 if matches!(out, OutputKind::Position(..)) {
                     for (a, &e) in axes.iter().zip(&x.0) {
@@ -651,7 +673,7 @@ fn closure<'cx>(
 ) -> Result<Option<ConstraintProgram>, FormulateError> {
     use crate::sym::TimeDerivative;
     let cuts = super::constraints::cut_joints(sys, tree, env)?;
-    let phi = super::constraints::phi(k, &cuts);
+    let phi = super::constraints::phi(tree, k, &cuts);
     let mut holonomic: Vec<(String, Expr<'cx>)> = Vec::new();
     let mut row = 0;
     for c in &cuts {

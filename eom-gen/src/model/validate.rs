@@ -413,14 +413,14 @@ impl Ctx<'_> {
         if let (Some(graph), true) = (&graph, joints_ok) {
             self.assign_coordinates(spec, graph, &mut joints, &mut bodies);
             for (k, j) in joints.iter().enumerate() {
-                if bodies[j.parent].flexible.is_some() {
+                if bodies[j.parent].flexible.is_some() && j.parent_node.is_none() {
                     self.warning(
                         &[f("joints"), i(k), f("parent")],
                         format!(
                             "joint `{}` is attached to the reference frame of flexible body `{}`: it does not move with the deformation",
                             j.name, bodies[j.parent].name
                         ),
-                        "attachments to the nodes of a flexible body are not supported yet (#17); this is exact only where the reference conditions hold the beam (node 0 when clamped)",
+                        "attach it to a node with `parent_node: \"tip\"` (a named node) or `parent_node: 3` (a node index) to move with the deformation; the frame is exact only where the reference conditions hold the beam (node 0 when clamped)",
                     );
                 }
             }
@@ -616,40 +616,26 @@ impl Ctx<'_> {
                     position: marker.position.clone(),
                     orientation: marker.orientation.clone(),
                 };
-                if let Some(node) = marker.node {
-                    let npath = join(&mpath, &[f("node")]);
-                    match &b.flexible {
-                        None => self.error(
-                            &npath,
-                            format!(
-                                "marker `{}` names node {node}, but body `{}` is rigid",
-                                marker.name, b.name
-                            ),
-                            "only markers on a flexible body attach to nodes; leave `node` out",
-                        ),
-                        Some(spec::Flexible::Beam { elements, .. }) if node > *elements => self
-                            .error(
-                                &npath,
-                                format!(
-                                    "marker `{}`: {}",
-                                    marker.name,
-                                    crate::flex::FlexError::UnknownNode {
-                                        node,
-                                        nodes: elements + 1
-                                    }
-                                ),
-                                format!(
-                                    "node i sits at x = i·length/{elements}; use a node from 0 to {elements}"
-                                ),
-                            ),
-                        Some(_) => {}
-                    }
+                let node = marker.node.as_ref().map(|node| {
+                    self.node_ref(
+                        node,
+                        &b.name,
+                        b.flexible.as_ref(),
+                        flexible.as_deref(),
+                        &join(&mpath, &[f("node")]),
+                        &format!("marker `{}`", marker.name),
+                    )
+                });
+                if node == Some(None) {
+                    self.failed_markers
+                        .insert((b.name.clone(), marker.name.clone()));
+                    continue;
                 }
                 match self.frame(&frame, &mpath) {
                     Some(frame) => markers.push(MarkerInfo {
                         name: marker.name.clone(),
                         frame,
-                        node: marker.node,
+                        node: node.flatten(),
                     }),
                     None => {
                         self.failed_markers
@@ -692,6 +678,8 @@ impl Ctx<'_> {
             modes,
             stiffening,
             damping,
+            nodes: named_nodes,
+            craig_bampton,
         } = flex;
         let fpath = join(path, &[f("flexible")]);
         let fields: [(&'static str, &Num, &str, &str); 7] = [
@@ -729,7 +717,7 @@ impl Ctx<'_> {
                 "a beam needs at least one finite element; a few per mode kept is typical",
             );
         }
-        if *modes == 0 {
+        if *modes == 0 && !(*craig_bampton && !named_nodes.is_empty()) {
             self.error(
                 &join(&fpath, &[f("modes")]),
                 format!("flexible body `{body}` keeps no modes"),
@@ -745,9 +733,18 @@ impl Ctx<'_> {
         let (Ok(written), Some(damping)) = (<[Quantity; 7]>::try_from(written), damping) else {
             return None;
         };
-        if *elements == 0 || *modes == 0 {
+        if *craig_bampton && named_nodes.is_empty() {
+            self.error(
+                &join(&fpath, &[f("craig_bampton")]),
+                format!("flexible body `{body}` asks for Craig–Bampton modes but names no nodes"),
+                "the boundary of a Craig–Bampton basis is the named nodes: add `nodes: [(name: \"tip\", x: …)]`, or leave out `craig_bampton`",
+            );
             return None;
         }
+        if *elements == 0 || (*modes == 0 && !*craig_bampton) {
+            return None;
+        }
+        let nodes = self.beam_nodes(named_nodes, &written[0], *elements, body, &fpath)?;
         let beam = crate::flex::Beam {
             length: written[0].value,
             rho_a: written[1].value,
@@ -763,7 +760,13 @@ impl Ctx<'_> {
             spec::BeamReference::PinnedPinned => crate::flex::Reference::PinnedPinned,
             spec::BeamReference::MeanAxis => crate::flex::Reference::MeanAxis,
         };
-        let reduced = match crate::flex::normal_modes(&beam, &reference, *modes) {
+        let reduced = if *craig_bampton {
+            let boundary: Vec<usize> = nodes.iter().map(|(_, n)| *n).collect();
+            crate::flex::craig_bampton(&beam, &reference, &boundary, *modes)
+        } else {
+            crate::flex::normal_modes(&beam, &reference, *modes)
+        };
+        let reduced = match reduced {
             Ok(m) => m,
             Err(e) => {
                 use crate::flex::FlexError;
@@ -810,12 +813,138 @@ impl Ctx<'_> {
             invariants,
             damping,
             stiffening: *stiffening,
+            nodes,
             coordinate_names,
             speed_names,
             q_index: 0,
             u_index: 0,
             span: self.span(&fpath),
         }))
+    }
+
+    /// A beam's named nodes: unique names, each at a finite-element node
+    /// (`x = i · length / elements`), as `(name, node index)`.
+    fn beam_nodes(
+        &mut self,
+        named: &[spec::BeamNode],
+        length: &Quantity,
+        elements: usize,
+        body: &str,
+        fpath: &[Seg<'static>],
+    ) -> Option<Vec<(String, usize)>> {
+        let mut out: Vec<(String, usize)> = Vec::new();
+        let mut ok = true;
+        let l = length.value;
+        let h = l / elements as f64;
+        for (k, node) in named.iter().enumerate() {
+            let npath = join(fpath, &[f("nodes"), i(k)]);
+            if out.iter().any(|(n, _)| *n == node.name) {
+                self.error(
+                    &join(&npath, &[f("name")]),
+                    format!("node `{}` is named twice on body `{body}`", node.name),
+                    "node names must be unique on their body",
+                );
+                ok = false;
+                continue;
+            }
+            let xpath = join(&npath, &[f("x")]);
+            let Some(x) = self.quantity(&node.x, &xpath, Scope::Params) else {
+                ok = false;
+                continue;
+            };
+            let at = (x.value / h).round();
+            if !(0.0..=elements as f64).contains(&at) || (x.value - at * h).abs() > 1e-9 * l {
+                let below = (x.value / h).floor().clamp(0.0, elements as f64) as usize;
+                let above = (below + 1).min(elements);
+                let near = if below == above || x.value <= 0.0 {
+                    format!("node {below} at x = {}", below as f64 * h)
+                } else {
+                    format!(
+                        "node {below} at x = {} and node {above} at x = {}",
+                        below as f64 * h,
+                        above as f64 * h
+                    )
+                };
+                self.error(
+                    &xpath,
+                    format!(
+                        "node `{}` of flexible body `{body}` at x = {} m is not a finite-element node",
+                        node.name, x.value
+                    ),
+                    format!(
+                        "nodes sit at x = i·length/{elements} (every {h} m, from 0 to {l}); the nearest: {near}"
+                    ),
+                );
+                ok = false;
+                continue;
+            }
+            out.push((node.name.clone(), at as usize));
+        }
+        ok.then_some(out)
+    }
+
+    /// The finite-element node index that `node` names on body `body`
+    /// (`spec_flexible`: the body is flexible as written; `info`: its
+    /// checked data, `None` if it failed and was reported already).
+    fn node_ref(
+        &mut self,
+        node: &spec::NodeRef,
+        body: &str,
+        spec_flexible: Option<&spec::Flexible>,
+        info: Option<&FlexInfo>,
+        path: &[Seg<'static>],
+        what: &str,
+    ) -> Option<usize> {
+        let Some(spec::Flexible::Beam { elements, .. }) = spec_flexible else {
+            self.error(
+                path,
+                format!("{what} names node {node}, but body `{body}` is rigid"),
+                "only a flexible body has nodes to attach to; leave the node out",
+            );
+            return None;
+        };
+        match node {
+            spec::NodeRef::Index(n) if *n > *elements => {
+                self.error(
+                    path,
+                    format!(
+                        "{what}: {}",
+                        crate::flex::FlexError::UnknownNode {
+                            node: *n,
+                            nodes: elements + 1
+                        }
+                    ),
+                    format!(
+                        "node i sits at x = i·length/{elements}; use a node from 0 to {elements}"
+                    ),
+                );
+                None
+            }
+            spec::NodeRef::Index(n) => Some(*n),
+            spec::NodeRef::Name(name) => {
+                let info = info?;
+                if let Some((_, n)) = info.nodes.iter().find(|(n, _)| n == name) {
+                    return Some(*n);
+                }
+                let names = info.nodes.iter().map(|(n, _)| n.as_str());
+                let help = match did_you_mean(name, names.clone()) {
+                    Some(best) => format!("did you mean `{best}`?"),
+                    None if info.nodes.is_empty() => format!(
+                        "name nodes in the beam's `nodes: [(name: \"{name}\", x: …)]`, or give a node index 0..={elements}"
+                    ),
+                    None => format!(
+                        "its nodes are {}; or give a node index 0..={elements}",
+                        list_names(names)
+                    ),
+                };
+                self.error(
+                    path,
+                    format!("{what}: flexible body `{body}` has no node `{name}`"),
+                    help,
+                );
+                None
+            }
+        }
     }
 
     fn inertia(
@@ -941,8 +1070,31 @@ impl Ctx<'_> {
             }
             let parent = self.body_ref(bodies, &j.parent, &join(&path, &[f("parent")]), "parent");
             let child = self.body_ref(bodies, &j.child, &join(&path, &[f("child")]), "child");
+            let parent_node = match (&j.parent_node, parent) {
+                (Some(node), Some(p)) => {
+                    let written = spec.bodies.iter().find(|b| b.name == j.parent);
+                    let n = self.node_ref(
+                        node,
+                        &j.parent,
+                        written.and_then(|b| b.flexible.as_ref()),
+                        bodies[p].flexible.as_deref(),
+                        &join(&path, &[f("parent_node")]),
+                        &format!("joint `{}`", j.name),
+                    );
+                    if n.is_none() {
+                        ok = false;
+                        self.failed_joints.insert(j.name.clone());
+                        continue;
+                    }
+                    n
+                }
+                _ => None,
+            };
             match self.joint(j, &path, parent, child) {
-                Some(info) => out.push(info),
+                Some(mut info) => {
+                    info.parent_node = parent_node;
+                    out.push(info)
+                }
                 None => {
                     self.failed_joints.insert(j.name.clone());
                     ok = false;
@@ -1120,6 +1272,7 @@ impl Ctx<'_> {
             child: child?,
             parent_frame: parent_frame?,
             child_frame: child_frame?,
+            parent_node: None,
             coordinate_names: coordinate_names?,
             speed_names: speed_names?,
             q0: q0?,
@@ -1450,6 +1603,7 @@ impl Ctx<'_> {
             (Some(p), None) => Some(Point {
                 body,
                 position: self.vec3(p, &join(path, &[f("point")]), Scope::Params)?,
+                node: None,
             }),
             (None, Some(m)) => {
                 let Some(marker) = bodies[body].markers.iter().find(|x| &x.name == m) else {
@@ -1467,6 +1621,7 @@ impl Ctx<'_> {
                 Some(Point {
                     body,
                     position: marker.frame.position.clone(),
+                    node: marker.node,
                 })
             }
             (None, None) => {
@@ -1478,6 +1633,7 @@ impl Ctx<'_> {
                 Some(Point {
                     body,
                     position: [zero.clone(), zero.clone(), zero],
+                    node: None,
                 })
             }
         }
