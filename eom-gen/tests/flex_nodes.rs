@@ -696,3 +696,94 @@ fn flex_slider_crank_reference_two_ways_and_bending_frequency() {
         "peak at {best} rad/s, pinned–pinned {w_closed}"
     );
 }
+
+#[test]
+fn flex_arm7_with_a_flexible_forearm_is_arm7_at_rest_and_conserves_energy() {
+    // models/arm7_flex.ron: link 4 a clamped beam carrying links 5–7 at
+    // its tip node. (1) It generates, deterministically. (2) With the
+    // elastic coordinates and rates at zero the joint rows of M and b and
+    // the energies are arm7's (the forearm's mass, centre and inertia at
+    // rest are arm7's link 4; the tip node is where arm7's j5 sits). (3)
+    // Released from arm7's start with the forearm bent (no damping), T + V
+    // stays constant to DOP853's tolerance over 1 s while the arm falls.
+    let path = format!("{}/../models/arm7_flex.ron", env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(&path).expect("reads arm7_flex");
+    let src = Source::new("models/arm7_flex.ron", text);
+    let g1 = eom_gen::generate(&src).unwrap_or_else(|e| panic!("{e}"));
+    let g2 = eom_gen::generate(&src).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(g1.source, g2.source, "generation is deterministic");
+
+    let flex = Numeric::new(&bundled("arm7_flex")).unwrap();
+    let rigid = Numeric::new(&bundled("arm7")).unwrap();
+    // arm7_flex's coordinates: q1..q4, link4_f1, link4_f2, q5..q7.
+    let joints = [0, 1, 2, 3, 6, 7, 8];
+    let mut rng = Rng(0x5eed_0007);
+    for _ in 0..4 {
+        let qr = rng.vec(7, 2.0);
+        let ur = rng.vec(7, 1.5);
+        let mut q = vec![0.0; 9];
+        let mut u = vec![0.0; 9];
+        for (r, &j) in joints.iter().enumerate() {
+            q[j] = qr[r];
+            u[j] = ur[r];
+        }
+        let (tf, tr) = (
+            flex.terms(&q, &u, 0.0, &[]).unwrap(),
+            rigid.terms(&qr, &ur, 0.0, &[]).unwrap(),
+        );
+        for (r, &jr) in joints.iter().enumerate() {
+            for (c, &jc) in joints.iter().enumerate() {
+                let (a, b) = (tf.mass_matrix[jr][jc], tr.mass_matrix[r][c]);
+                assert!((a - b).abs() < 1e-12, "M[{r}][{c}]: flexible {a}, arm7 {b}");
+            }
+            let (a, b) = (tf.bias[jr], tr.bias[r]);
+            assert!((a - b).abs() < 1e-11, "b[{r}]: flexible {a}, arm7 {b}");
+        }
+        let (ef, er) = (
+            flex.energy(&q, &u, 0.0).unwrap(),
+            rigid.energy(&qr, &ur, 0.0).unwrap(),
+        );
+        assert!(
+            (ef.0 - er.0).abs() < 1e-12 && (ef.1 - er.1).abs() < 1e-11,
+            "energies {ef:?}, arm7 {er:?}"
+        );
+    }
+
+    const N: usize = 18;
+    let sys = bundled("arm7_flex");
+    let mut y0 = [0.0; N];
+    y0[..9].copy_from_slice(&sys.q0());
+    y0[4] = 2e-3;
+    y0[5] = -1e-3;
+    let energy = |y: &[f64; N]| {
+        let (t, v) = flex.energy(&y[..9], &y[9..], 0.0).unwrap();
+        (t + v, t.abs() + v.abs())
+    };
+    let (e0, scale) = energy(&y0);
+    let opts = SolveOptions {
+        t_eval: (1..=10).map(|k| 0.1 * k as f64).collect(),
+        ..SolveOptions::default()
+    };
+    let sol = integrate(
+        &mut Dop853::new(1e-12, 1e-12),
+        &Ode { num: &flex, n: 9 },
+        0.0,
+        y0,
+        1.0,
+        &opts,
+        &mut [],
+    );
+    assert_eq!(sol.y_out.len(), 10, "stopped: {:?}", sol.stop);
+    let drift = sol
+        .y_out
+        .iter()
+        .map(|y| (energy(y).0 - e0).abs() / scale)
+        .fold(0.0, f64::max);
+    let fall = sol.y_out.last().map_or(0.0, |y| (y[1] - y0[1]).abs());
+    eprintln!(
+        "arm7_flex: relative energy drift {drift:e} over 1 s, {} steps; q2 moved {fall:.3} rad",
+        sol.stats.accepted
+    );
+    assert!(drift < 1e-8, "relative energy drift {drift:e}");
+    assert!(fall > 0.1, "the arm fell: q2 moved {fall} rad");
+}
