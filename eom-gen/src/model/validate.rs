@@ -108,6 +108,17 @@ struct Ctx<'a> {
     failed_markers: HashSet<(String, String)>,
 }
 
+/// A length for messages: at most nine decimals, trailing zeros dropped.
+fn short(x: f64) -> String {
+    let s = format!("{x:.9}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
+    }
+}
+
 pub(crate) fn is_ident(s: &str) -> bool {
     let mut chars = s.chars();
     chars
@@ -857,22 +868,25 @@ impl Ctx<'_> {
                 let below = (x.value / h).floor().clamp(0.0, elements as f64) as usize;
                 let above = (below + 1).min(elements);
                 let near = if below == above || x.value <= 0.0 {
-                    format!("node {below} at x = {}", below as f64 * h)
+                    format!("node {below} at x = {}", short(below as f64 * h))
                 } else {
                     format!(
                         "node {below} at x = {} and node {above} at x = {}",
-                        below as f64 * h,
-                        above as f64 * h
+                        short(below as f64 * h),
+                        short(above as f64 * h)
                     )
                 };
                 self.error(
                     &xpath,
                     format!(
                         "node `{}` of flexible body `{body}` at x = {} m is not a finite-element node",
-                        node.name, x.value
+                        node.name,
+                        short(x.value)
                     ),
                     format!(
-                        "nodes sit at x = i·length/{elements} (every {h} m, from 0 to {l}); the nearest: {near}"
+                        "nodes sit at x = i·length/{elements} (every {} m, from 0 to {}); the nearest: {near}",
+                        short(h),
+                        short(l)
                     ),
                 );
                 ok = false;
@@ -922,14 +936,18 @@ impl Ctx<'_> {
             }
             spec::NodeRef::Index(n) => Some(*n),
             spec::NodeRef::Name(name) => {
-                let info = info?;
-                if let Some((_, n)) = info.nodes.iter().find(|(n, _)| n == name) {
+                if let Some((_, n)) = info.and_then(|f| f.nodes.iter().find(|(n, _)| n == name)) {
                     return Some(*n);
                 }
-                let names = info.nodes.iter().map(|(n, _)| n.as_str());
+                let spec::Flexible::Beam { nodes: written, .. } = spec_flexible?;
+                if written.iter().any(|n| &n.name == name) {
+                    // Named, but the node or its body has an error (reported).
+                    return None;
+                }
+                let names = written.iter().map(|n| n.name.as_str());
                 let help = match did_you_mean(name, names.clone()) {
                     Some(best) => format!("did you mean `{best}`?"),
-                    None if info.nodes.is_empty() => format!(
+                    None if written.is_empty() => format!(
                         "name nodes in the beam's `nodes: [(name: \"{name}\", x: …)]`, or give a node index 0..={elements}"
                     ),
                     None => format!(
@@ -1081,21 +1099,16 @@ impl Ctx<'_> {
                         &join(&path, &[f("parent_node")]),
                         &format!("joint `{}`", j.name),
                     );
-                    if n.is_none() {
-                        ok = false;
-                        self.failed_joints.insert(j.name.clone());
-                        continue;
-                    }
-                    n
+                    n.map(Some).ok_or(())
                 }
-                _ => None,
+                _ => Ok(None),
             };
-            match self.joint(j, &path, parent, child) {
-                Some(mut info) => {
-                    info.parent_node = parent_node;
+            match (self.joint(j, &path, parent, child), parent_node) {
+                (Some(mut info), Ok(node)) => {
+                    info.parent_node = node;
                     out.push(info)
                 }
-                None => {
+                _ => {
                     self.failed_joints.insert(j.name.clone());
                     ok = false;
                 }
