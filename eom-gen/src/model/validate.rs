@@ -728,7 +728,7 @@ impl Ctx<'_> {
                 "a beam needs at least one finite element; a few per mode kept is typical",
             );
         }
-        if *modes == 0 && !(*craig_bampton && !named_nodes.is_empty()) {
+        if *modes == 0 && (!*craig_bampton || named_nodes.is_empty()) {
             self.error(
                 &join(&fpath, &[f("modes")]),
                 format!("flexible body `{body}` keeps no modes"),
