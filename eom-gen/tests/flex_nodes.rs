@@ -610,9 +610,10 @@ fn flex_slider_crank_reference_two_ways_and_bending_frequency() {
     // at its pinned–pinned frequency ω₁ = π² √(EI/(ρA l2⁴)) = 1276.6 rad/s
     // (the FE beam's 1277.0 with 8 elements), shifted by the rod's rotation
     // (|ψ̇_abs| ≤ 75 rad/s: a shift of order ψ̇²/ω₁ ≈ 0.3 %) and not by the
-    // axial load (the linear FFR model has no geometric stiffening: with
-    // it, the rod's compression and tension would move ω₁ by up to
-    // ±N/(2 N_cr) ≈ ±3 % through the revolution).
+    // axial load (the linear FFR model has no geometric stiffening of the
+    // axial force: with it, the rod's compression and tension, of order
+    // 500 N against the buckling load π² EI/l2² = 7.5 kN, would move ω₁ by
+    // roughly ±N/(2 N_cr) ≈ ±3 % through the revolution).
     let sys = bundled("slider_crank_flex");
     let t_end = 2.0 * std::f64::consts::PI / 150.0;
     let a = simulate(&sys, "projection", "dop853", (1e-12, 1e-15), t_end, None);
