@@ -42,11 +42,11 @@
 //! node's rotation and translation per unit `q̇_f,k` (node coordinates),
 //! `q_f`-dependent through `R`. A body hung at a node therefore carries
 //! these columns besides its own joint's, with the flexible body's elastic
-//! speeds: RNEA and CRBA handle them as extra joint columns, and forward
-//! dynamics goes through the mass matrix (the articulated-body algorithm
-//! of [`super::dynamics`] falls back to `M⁻¹(τ − C)` for such trees). Bodies
-//! on the frame ride it; `q̈_f` then couples only to the frame's
-//! acceleration.
+//! speeds: RNEA and CRBA handle them as extra joint columns, and the
+//! articulated-body algorithm eliminates `q̈_f` at the flexible body
+//! together with the articulated subtrees hung at its nodes (see
+//! [`super::dynamics::Evaluator::aba`]). Bodies on the frame ride it; `q̈_f`
+//! couples to them only through the frame's acceleration.
 
 use super::spatial::{Force, Motion, Pose, RigidInertia};
 use super::tree::{Lowering, MechError};

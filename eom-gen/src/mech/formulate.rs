@@ -372,9 +372,14 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     {
         let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
         let lambda = ev.speed_parents();
-        if tree.has_nodes() {
-            // Bodies at the nodes of a flexible body: forward dynamics
-            // through the mass matrix (see `Evaluator::aba`).
+        let aba = lower("udot", &ev.aba(&k, &drive, &fext));
+        let mut candidates = vec![(FdForm::Aba, aba.op_count())];
+        // The mass-matrix route costs at least its factorisation; skip
+        // building it when that alone exceeds the articulated-body count
+        // (long chains, where M is dense and LᵀDL is cubic).
+        if ltdl_flops(&lambda) >= aba.op_count().total() {
+            (Some(aba), FdForm::Aba, candidates)
+        } else {
             let (mut m, b) = (
                 mass.get_or_insert_with(crba).clone(),
                 bias.get_or_insert_with(rnea_bias).clone(),
@@ -382,34 +387,11 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             ltdl(&mut m, &lambda);
             let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
             let sparse = lower("udot", &ltdl_solve(&m, &lambda, rhs));
-            let count = sparse.op_count();
-            (
-                Some(sparse),
-                FdForm::MassMatrix,
-                vec![(FdForm::MassMatrix, count)],
-            )
-        } else {
-            let aba = lower("udot", &ev.aba(&k, &drive, &fext));
-            let mut candidates = vec![(FdForm::Aba, aba.op_count())];
-            // The mass-matrix route costs at least its factorisation; skip
-            // building it when that alone exceeds the articulated-body count
-            // (long chains, where M is dense and LᵀDL is cubic).
-            if ltdl_flops(&lambda) >= aba.op_count().total() {
-                (Some(aba), FdForm::Aba, candidates)
+            candidates.push((FdForm::MassMatrix, sparse.op_count()));
+            if sparse.op_count().total() < aba.op_count().total() {
+                (Some(sparse), FdForm::MassMatrix, candidates)
             } else {
-                let (mut m, b) = (
-                    mass.get_or_insert_with(crba).clone(),
-                    bias.get_or_insert_with(rnea_bias).clone(),
-                );
-                ltdl(&mut m, &lambda);
-                let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
-                let sparse = lower("udot", &ltdl_solve(&m, &lambda, rhs));
-                candidates.push((FdForm::MassMatrix, sparse.op_count()));
-                if sparse.op_count().total() < aba.op_count().total() {
-                    (Some(sparse), FdForm::MassMatrix, candidates)
-                } else {
-                    (Some(aba), FdForm::Aba, candidates)
-                }
+                (Some(aba), FdForm::Aba, candidates)
             }
         }
     } else {
