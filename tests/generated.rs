@@ -137,6 +137,8 @@ fn compiled_models_equal_the_f64_algorithms() {
     compare::<g::stewart::Stewart>("stewart");
     compare::<g::stewart_driven::StewartDriven>("stewart_driven");
     compare::<g::rolling_disk::RollingDisk>("rolling_disk");
+    compare::<g::arm7_flex::Arm7Flex>("arm7_flex");
+    compare::<g::slider_crank_flex::SliderCrankFlex>("slider_crank_flex");
 }
 
 #[test]
