@@ -135,6 +135,16 @@ impl FlexInfo {
     pub fn count(&self) -> usize {
         self.modes.count()
     }
+
+    /// The undeformed place of node `node` in body axes, m (the beam's
+    /// nodes lie along `x`, `length / elements` apart).
+    pub fn node_place(&self, node: usize) -> [f64; 3] {
+        [
+            node as f64 * self.beam.length / self.beam.elements as f64,
+            0.0,
+            0.0,
+        ]
+    }
 }
 
 /// A body; index 0 is ground.

@@ -230,7 +230,6 @@ impl<S: Scalar> FlexModel<S> {
                 beam.centrifugal_force(0.0, x)
             }))
         });
-        let h = flex.beam.length / flex.beam.elements as f64;
         let nodes = attached
             .iter()
             .map(|&n| {
@@ -248,7 +247,7 @@ impl<S: Scalar> FlexModel<S> {
                 };
                 NodeShape {
                     node: n,
-                    place: Vec3::new(S::from_f64(n as f64 * h), S::zero(), S::zero()),
+                    place: Vec3::from_f64(flex.node_place(n)),
                     translation: (0..k).map(|j| col(j, 0, &c_t)).collect(),
                     rotation: (0..k).map(|j| col(j, 3, &c_r)).collect(),
                 }

@@ -70,14 +70,11 @@ pub fn parent_frame_pose(sys: &System, joint: &crate::system::JointInfo) -> Pose
         joint.parent_node,
         sys.bodies[joint.parent].flexible.as_deref(),
     ) {
-        (Some(n), Some(flex)) => {
-            let x = n as f64 * flex.beam.length / flex.beam.elements as f64;
-            Pose {
-                e: Mat3::identity(),
-                r: Vec3::new(x, 0.0, 0.0),
-            }
-            .then(&fp)
+        (Some(n), Some(flex)) => Pose {
+            e: Mat3::identity(),
+            r: Vec3(flex.node_place(n)),
         }
+        .then(&fp),
         _ => fp,
     }
 }
