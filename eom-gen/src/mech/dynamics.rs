@@ -328,7 +328,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 .fold(Motion::zero(), |acc, (col, &uk)| acc.add(col.scale(uk)));
             // Hung at a node N of a flexible parent: the node's motion comes
             // first, as a joint from the parent frame with speeds q̇_f
-            // (two joints in series, Featherstone §4.4): X = X_J X_N, the
+            // (two joints in series across a massless frame): X = X_J X_N, the
             // node's columns and velocity w carried into this body, and the
             // bias c = X_J c_N − v_J × w + c_J.
             let mut node_s = Vec::new();

@@ -235,12 +235,13 @@ impl<S: Scalar> FlexModel<S> {
             .map(|&n| {
                 let at = flex.modes.at_node(n);
                 // Translations and rotations are cleaned against their own kind.
-                let tr: Vec<f64> = (0..3)
-                    .flat_map(|r| at.row(r).iter().copied().collect::<Vec<_>>())
-                    .collect();
-                let rot: Vec<f64> = (3..6)
-                    .flat_map(|r| at.row(r).iter().copied().collect::<Vec<_>>())
-                    .collect();
+                let rows = |r0: usize| -> Vec<f64> {
+                    (r0..r0 + 3)
+                        .flat_map(|r| (0..k).map(move |j| (r, j)))
+                        .map(|(r, j)| at[(r, j)])
+                        .collect()
+                };
+                let (tr, rot) = (rows(0), rows(3));
                 let (c_t, c_r) = (clean_block(&tr), clean_block(&rot));
                 let col = |j: usize, off: usize, c: &dyn Fn(f64) -> f64| {
                     Vec3(std::array::from_fn(|r| S::from_f64(c(at[(off + r, j)]))))
