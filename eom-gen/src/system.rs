@@ -91,7 +91,8 @@ pub struct MarkerInfo {
     pub name: String,
     /// The frame.
     pub frame: FrameInfo,
-    /// On a flexible body, the beam node it is attached to.
+    /// On a flexible body, the beam node it is attached to (its frame is
+    /// then relative to the node's deformed frame).
     pub node: Option<usize>,
 }
 
@@ -120,6 +121,8 @@ pub struct FlexInfo {
     pub damping: Quantity,
     /// Geometric stiffening by the centrifugal axial load.
     pub stiffening: bool,
+    /// Named nodes `(name, node index)`, where markers and joints attach.
+    pub nodes: Vec<(String, usize)>,
     /// Names of the elastic coordinates (`<body>_f1 …`).
     pub coordinate_names: Vec<String>,
     /// Names of their rates (`<body>_f1_dot …`).
@@ -186,6 +189,22 @@ impl FlexInfo {
             }
             FlexSource::Assumed { .. } => None,
             FlexSource::Modal { positions, .. } => positions.get(node).copied(),
+        }
+    }
+
+    /// The undeformed place of node `node` in body axes, m: the beam's
+    /// nodes lie along `x`, `length / elements` apart; imported nodes where
+    /// the file puts them (assumed modes have none: the origin).
+    pub fn node_place(&self, node: usize) -> [f64; 3] {
+        match &self.source {
+            FlexSource::Modal { positions, .. } => positions
+                .get(node)
+                .map_or([0.0; 3], |p| [p.x, p.y, p.z]),
+            _ => [
+                node as f64 * self.beam.length / self.beam.elements as f64,
+                0.0,
+                0.0,
+            ],
         }
     }
 }
@@ -335,8 +354,11 @@ pub struct JointInfo {
     pub parent: BodyId,
     /// Child body.
     pub child: BodyId,
-    /// Joint frame on the parent.
+    /// Joint frame on the parent (on a node of a flexible parent: relative
+    /// to the node's deformed frame).
     pub parent_frame: FrameInfo,
+    /// On a flexible parent, the beam node the joint is attached to.
+    pub parent_node: Option<usize>,
     /// Joint frame on the child.
     pub child_frame: FrameInfo,
     /// Names of the joint's position coordinates.
@@ -375,8 +397,11 @@ pub enum InitialValue {
 pub struct Point {
     /// The body.
     pub body: BodyId,
-    /// Position in body axes.
+    /// Position in body axes (at a node: relative to the node's deformed
+    /// frame).
     pub position: Vec3Q,
+    /// On a flexible body, the beam node the point moves with.
+    pub node: Option<usize>,
 }
 
 /// A force element, resolved.
@@ -563,6 +588,25 @@ impl System {
                 .map(Block::Elastic);
             rigid.into_iter().chain(elastic)
         })
+    }
+
+    /// The beam nodes of body `body` that markers or joints attach to,
+    /// ascending.
+    pub fn attached_nodes(&self, body: BodyId) -> Vec<usize> {
+        let mut nodes: Vec<usize> = self.bodies[body]
+            .markers
+            .iter()
+            .filter_map(|m| m.node)
+            .chain(
+                self.joints
+                    .iter()
+                    .filter(|j| j.parent == body)
+                    .filter_map(|j| j.parent_node),
+            )
+            .collect();
+        nodes.sort_unstable();
+        nodes.dedup();
+        nodes
     }
 
     /// Flexible bodies of the tree, with their body indices, in coordinate order.

@@ -8,6 +8,9 @@ pub mod andrews;
 /// Model `arm7`, generated from `models/arm7.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod arm7;
+/// Model `arm7_flex`, generated from `models/arm7_flex.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod arm7_flex;
 /// Model `bricard`, generated from `models/bricard.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod bricard;
@@ -41,6 +44,9 @@ pub mod slider_crank;
 /// Model `slider_crank_driven`, generated from `models/slider_crank_driven.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod slider_crank_driven;
+/// Model `slider_crank_flex`, generated from `models/slider_crank_flex.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod slider_crank_flex;
 /// Model `stewart`, generated from `models/stewart.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod stewart;

@@ -38,6 +38,9 @@ pub struct CutJoint<S> {
     pub name: String,
     /// Tree index of the parent body (`None`: ground).
     pub parent: Option<usize>,
+    /// On a flexible parent: the beam node the joint is attached to
+    /// (`frame_parent` is relative to the node's deformed frame).
+    pub parent_node: Option<usize>,
     /// Tree index of the child body (`None`: ground).
     pub child: Option<usize>,
     /// Joint frame on the parent.
@@ -172,6 +175,7 @@ pub fn cut_joints<S: Scalar>(
             Ok(CutJoint {
                 name: joint.name.clone(),
                 parent: tree.index_of_body[joint.parent],
+                parent_node: joint.parent_node,
                 child: tree.index_of_body[joint.child],
                 frame_parent: low.frame(&joint.parent_frame)?,
                 frame_child: low.frame(&joint.child_frame)?,
@@ -198,13 +202,24 @@ fn planar_normal(sys: &System) -> Option<Vector3<f64>> {
     })
 }
 
+/// World pose of the frame a cut joint's parent side is fixed to: the
+/// parent body's, or that of its node.
+fn parent_base<S: Scalar>(tree: &TreeModel<S>, k: &Kinematics<S>, c: &CutJoint<S>) -> Pose<S> {
+    let Some(i) = c.parent else {
+        return Pose::identity();
+    };
+    c.parent_node
+        .and_then(|n| tree.bodies[i].flex.as_ref()?.node_slot(n))
+        .map_or(k.world[i], |slot| k.world[i].then(&k.nodes[i][slot].pose))
+}
+
 /// `Φ` of every cut joint, in order, at the kinematics `k`.
-pub fn phi<S: Scalar>(k: &Kinematics<S>, cuts: &[CutJoint<S>]) -> Vec<S> {
+pub fn phi<S: Scalar>(tree: &TreeModel<S>, k: &Kinematics<S>, cuts: &[CutJoint<S>]) -> Vec<S> {
     let world = |b: Option<usize>| b.map_or_else(Pose::identity, |i| k.world[i]);
     let v = |a: [f64; 3]| Vec3::from_f64(a);
     let mut out = Vec::new();
     for c in cuts {
-        let p = world(c.parent).then(&c.frame_parent);
+        let p = parent_base(tree, k, c).then(&c.frame_parent);
         let ch = world(c.child).then(&c.frame_child);
         let d = p.e.tr_mul_vec(ch.r - p.r);
         let m = p.e.transpose() * ch.e;
@@ -226,12 +241,13 @@ pub fn phi<S: Scalar>(k: &Kinematics<S>, cuts: &[CutJoint<S>]) -> Vec<S> {
 /// `v · M w` (relative rotation `M`) the torque `λ (M w) × v`: both are the
 /// rows of `Jᵀ` read as a spatial force on the child.
 pub fn cut_reaction<S: Scalar>(
+    tree: &TreeModel<S>,
     k: &Kinematics<S>,
     cut: &CutJoint<S>,
     lambda: &[S],
 ) -> (Vec3<S>, Vec3<S>) {
     let world = |b: Option<usize>| b.map_or_else(Pose::identity, |i| k.world[i]);
-    let p = world(cut.parent).then(&cut.frame_parent);
+    let p = parent_base(tree, k, cut).then(&cut.frame_parent);
     let ch = world(cut.child).then(&cut.frame_child);
     let m = p.e.transpose() * ch.e;
     let (mut force, mut torque) = (Vec3::zero(), Vec3::zero());
@@ -265,33 +281,43 @@ pub fn constraint_body_forces<S: Scalar>(
 ) -> Result<Vec<super::spatial::Force<S>>, MechError> {
     use super::spatial::Force;
     use crate::system::ConstraintKind;
-    let mut out = vec![Force::zero(); tree.bodies.len()];
+    let mut out = vec![Force::zero(); tree.loads()];
     let at = |i: usize| lambda.get(i).copied().unwrap_or(S::zero());
-    // A world-axes force `fw` and torque `nw` at world point `x` on body `b`.
-    let mut apply = |b: Option<usize>, x: Vec3<S>, fw: Vec3<S>, nw: Vec3<S>| {
-        if let Some(i) = b {
-            let pose = &k.world[i];
-            let (f, n) = (pose.e.tr_mul_vec(fw), pose.e.tr_mul_vec(nw));
-            let r = pose.e.tr_mul_vec(x - pose.r);
-            out[i] = out[i]
-                + Force {
-                    n: r.cross(f) + n,
-                    f,
-                };
-        }
-    };
+    // A world-axes force `fw` and torque `nw` at world point `x` on body
+    // `b` (or on its node `node`: a node load, see `TreeModel::loads`).
+    let mut apply =
+        |b: Option<usize>, node: Option<usize>, x: Vec3<S>, fw: Vec3<S>, nw: Vec3<S>| {
+            if let Some(b) = b {
+                let at_node = node.and_then(|n| {
+                    let slot = tree.bodies[b].flex.as_ref()?.node_slot(n)?;
+                    Some((
+                        tree.bodies[b].node_loads + slot,
+                        k.world[b].then(&k.nodes[b][slot].pose),
+                    ))
+                });
+                let (i, pose) = at_node.unwrap_or((b, k.world[b]));
+                let pose = &pose;
+                let (f, n) = (pose.e.tr_mul_vec(fw), pose.e.tr_mul_vec(nw));
+                let r = pose.e.tr_mul_vec(x - pose.r);
+                out[i] = out[i]
+                    + Force {
+                        n: r.cross(f) + n,
+                        f,
+                    };
+            }
+        };
     let world = |b: Option<usize>| b.map_or_else(Pose::identity, |i| k.world[i]);
     let mut row = 0;
     for c in cuts {
         let n = c.equations.len();
         let l: Vec<S> = (row..row + n).map(at).collect();
         row += n;
-        let (f, m) = cut_reaction(k, c, &l);
-        let p = world(c.parent).then(&c.frame_parent);
+        let (f, m) = cut_reaction(tree, k, c, &l);
+        let p = parent_base(tree, k, c).then(&c.frame_parent);
         let ch = world(c.child).then(&c.frame_child);
         let (fw, mw) = (p.e.mul_vec(f), p.e.mul_vec(m));
-        apply(c.child, ch.r, fw, mw);
-        apply(c.parent, ch.r, -fw, -mw);
+        apply(c.child, None, ch.r, fw, mw);
+        apply(c.parent, c.parent_node, ch.r, -fw, -mw);
     }
     let n_holonomic = row + constraints.iter().map(|c| c.equations().0).sum::<usize>();
     let mut nonholonomic = n_holonomic;
@@ -314,7 +340,13 @@ pub fn constraint_body_forces<S: Scalar>(
                 };
                 let (to_contact, _) = disk_contact(k, i, axis, low.quantity(radius)?);
                 let point = k.world[i].point(low.vec3(center)?) + to_contact;
-                apply(Some(i), point, Vec3::new(sx, sy, contact), Vec3::zero());
+                apply(
+                    Some(i),
+                    None,
+                    point,
+                    Vec3::new(sx, sy, contact),
+                    Vec3::zero(),
+                );
             }
         }
     }

@@ -21,7 +21,7 @@
 // Index loops over small dense matrices read like the textbook formulas.
 #![allow(clippy::needless_range_loop)]
 
-use super::flexible::FlexState;
+use super::flexible::{FlexState, NodeState};
 use super::joint::JointModel;
 use super::spatial::{Force, Inertia6, Motion, Pose, RigidInertia};
 use super::tree::{Coords, Env, Lowering, MechError, TreeModel};
@@ -32,18 +32,33 @@ use std::ops::{Add, Sub};
 /// Base rotation, axis and summed angle of a run of revolute joints.
 type AngleChain<S> = (Mat3<S>, Vec3<S>, S);
 
-/// A flexible body's elastic equations in the articulated-body algorithm:
-/// `M_ff⁻¹` and `τ_f − b_f`.
-type Elimination<S> = (Vec<Vec<S>>, Vec<S>);
+/// A flexible body's elastic equations in the articulated-body algorithm,
+/// `D q̈_f = u − Uᵀ a`: `D⁻¹`, `u` and the columns of `U`.
+type Elimination<S> = (Vec<Vec<S>>, Vec<S>, Vec<Force<S>>);
+
+/// Of a body hung at a node: its pose in the node frame, and its own
+/// joint's bias `c_J` and velocity `v_J` (its coordinates).
+type NodeJoint<S> = (Pose<S>, Motion<S>, Motion<S>);
 
 /// A joint's positions, speeds and (if known) accelerations.
 type JointValues<S> = (Vec<S>, Vec<S>, Option<Vec<S>>);
 
+/// A point on a tree body or on one of its nodes.
+#[derive(Clone, Copy, Debug)]
+pub struct Site<S> {
+    /// Tree index of the body (`None`: ground).
+    pub body: Option<usize>,
+    /// On a flexible body: the beam node the point moves with.
+    pub node: Option<usize>,
+    /// The point in body coordinates (at a node: node coordinates).
+    pub point: Vec3<S>,
+}
+
 /// A point-to-point spring-damper, resolved to tree bodies.
 #[derive(Clone, Debug)]
 pub struct SpringModel<S> {
-    /// Tree index and point (body coordinates) of each end; `None` = ground.
-    pub ends: [(Option<usize>, Vec3<S>); 2],
+    /// Each end.
+    pub ends: [Site<S>; 2],
     /// Stiffness, damping, rest length.
     pub k: S,
     /// Damping.
@@ -115,8 +130,16 @@ impl<S: Scalar> Applied<S> {
                     rest_length,
                 } => springs.push(SpringModel {
                     ends: [
-                        (tree.index_of_body[a.body], low.vec3(&a.position)?),
-                        (tree.index_of_body[b.body], low.vec3(&b.position)?),
+                        Site {
+                            body: tree.index_of_body[a.body],
+                            node: a.node,
+                            point: low.vec3(&a.position)?,
+                        },
+                        Site {
+                            body: tree.index_of_body[b.body],
+                            node: b.node,
+                            point: low.vec3(&b.position)?,
+                        },
                     ],
                     k: low.quantity(stiffness)?,
                     c: low.quantity(damping)?,
@@ -209,6 +232,14 @@ pub struct Kinematics<S> {
     pub inertia: Vec<RigidInertia<S>>,
     /// The deformable part of each flexible body at this state.
     pub flex: Vec<Option<FlexState<S>>>,
+    /// The attached nodes of each flexible body at this state (by slot).
+    pub nodes: Vec<Vec<NodeState<S>>>,
+    /// Of a body hung at a node: the node's motion columns (body
+    /// coordinates), whose speeds are the parent's elastic rates.
+    pub node_s: Vec<Vec<Motion<S>>>,
+    /// Of a body hung at a node: its pose in the node frame and its own
+    /// joint's bias and velocity (for the articulated-body algorithm).
+    pub node_joint: Vec<Option<NodeJoint<S>>>,
 }
 
 /// Runs the algorithms of one tree.
@@ -269,6 +300,9 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             known_ud: Vec::with_capacity(n),
             inertia: Vec::with_capacity(n),
             flex: Vec::with_capacity(n),
+            nodes: Vec::with_capacity(n),
+            node_s: Vec::with_capacity(n),
+            node_joint: Vec::with_capacity(n),
         };
         // Per body: (base rotation, axis, summed angle) of a run of revolute
         // joints about one axis ending at it.
@@ -277,7 +311,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         for (i, body) in self.tree.bodies.iter().enumerate() {
             let (q, u, known) = self.joint_state(i, st)?;
             let fc = body.frame_child;
-            let x = body
+            let mut x = body
                 .frame_parent
                 .then(&body.kind.transform(&q))
                 .then(&fc.inverse());
@@ -287,11 +321,27 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 .into_iter()
                 .map(|m| fc.motion_to_parent(m))
                 .collect();
-            let c = fc.motion_to_parent(body.kind.bias(&q, &u));
-            let vj = s
+            let mut c = fc.motion_to_parent(body.kind.bias(&q, &u));
+            let mut vj = s
                 .iter()
                 .zip(&u)
                 .fold(Motion::zero(), |acc, (col, &uk)| acc.add(col.scale(uk)));
+            // Hung at a node N of a flexible parent: the node's motion comes
+            // first, as a joint from the parent frame with speeds q̇_f
+            // (two joints in series across a massless frame): X = X_J X_N, the
+            // node's columns and velocity w carried into this body, and the
+            // bias c = X_J c_N − v_J × w + c_J.
+            let mut node_s = Vec::new();
+            let mut node_joint = None;
+            if let (Some(slot), Some(p)) = (body.node, body.parent) {
+                node_joint = Some((x, c, vj));
+                let ns = &k.nodes[p][slot];
+                let w = x.motion_to_child(ns.velocity);
+                c = x.motion_to_child(ns.bias).add(c).sub(vj.cross_motion(w));
+                node_s = ns.columns.iter().map(|m| x.motion_to_child(*m)).collect();
+                vj = vj.add(w);
+                x = ns.pose.then(&x);
+            }
             let (v, mut world) = match body.parent {
                 Some(p) => (x.motion_to_child(k.v[p]).add(vj), k.world[p].then(&x)),
                 None => (vj, x),
@@ -301,6 +351,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             // rotation turned by the summed angle, one sin/cos instead of a
             // matrix product per body.
             let summed = match (&body.kind, body.parent.and_then(|p| chain[p])) {
+                _ if body.node.is_some() => None,
                 (JointModel::Revolute(a), Some((base, axis, angle)))
                     if (0..3).all(|c| (axis.0[c] - a.0[c]).is_zero())
                         && is_identity(&body.frame_parent.e)
@@ -321,16 +372,23 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             }
             chain.push(summed);
             // A flexible body's inertia and velocity terms at its deformation.
-            let (inertia, flex) = match &body.flex {
+            let (inertia, flex, nodes) = match &body.flex {
                 Some(fm) => {
                     let m = fm.count();
-                    let fs = fm.state(&st.q[fm.q..fm.q + m], &st.u[fm.u..fm.u + m], v);
-                    (body.inertia.add(fs.inertia), Some(fs))
+                    let (qf, qfd) = (&st.q[fm.q..fm.q + m], &st.u[fm.u..fm.u + m]);
+                    let fs = fm.state(qf, qfd, v);
+                    let nodes = (0..fm.nodes.len())
+                        .map(|slot| fm.node_state(slot, qf, qfd))
+                        .collect();
+                    (body.inertia.add(fs.inertia), Some(fs), nodes)
                 }
-                None => (body.inertia, None),
+                None => (body.inertia, None, Vec::new()),
             };
             k.inertia.push(inertia);
             k.flex.push(flex);
+            k.nodes.push(nodes);
+            k.node_s.push(node_s);
+            k.node_joint.push(node_joint);
             k.x.push(x);
             k.world.push(world);
             k.s.push(s);
@@ -340,6 +398,36 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             k.known_ud.push(known);
         }
         Ok(k)
+    }
+
+    /// World pose of node `node` of tree body `i` and its spatial velocity
+    /// (node coordinates); `None` if nothing attaches there.
+    pub fn node_frame(
+        &self,
+        k: &Kinematics<S>,
+        i: usize,
+        node: usize,
+    ) -> Option<(Pose<S>, Motion<S>)> {
+        let slot = self.tree.bodies[i].flex.as_ref()?.node_slot(node)?;
+        let ns = &k.nodes[i][slot];
+        Some((
+            k.world[i].then(&ns.pose),
+            ns.pose.motion_to_child(k.v[i]).add(ns.velocity),
+        ))
+    }
+
+    /// World position and velocity of a site.
+    pub fn site(&self, k: &Kinematics<S>, s: &Site<S>) -> (Vec3<S>, Vec3<S>) {
+        match (s.body, s.node) {
+            (Some(i), Some(node)) => match self.node_frame(k, i, node) {
+                Some((pose, v)) => {
+                    let vel = v.v + v.w.cross(s.point);
+                    (pose.point(s.point), pose.e.mul_vec(vel))
+                }
+                None => self.point(k, s.body, s.point),
+            },
+            _ => self.point(k, s.body, s.point),
+        }
     }
 
     /// World position and velocity of a point fixed on tree body `b`
@@ -356,13 +444,14 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
     }
 
     /// Spatial forces of the point spring-dampers on each body (body
-    /// coordinates, at the body origin), and their potential energy.
+    /// coordinates, at the body origin) and node (node coordinates, see
+    /// [`TreeModel::loads`]), and their potential energy.
     pub fn point_forces(&self, k: &Kinematics<S>) -> (Vec<Force<S>>, S) {
-        let mut f = vec![Force::zero(); self.tree.bodies.len()];
+        let mut f = vec![Force::zero(); self.tree.loads()];
         let mut energy = S::zero();
         for s in &self.applied.springs {
-            let (xa, va) = self.point(k, s.ends[0].0, s.ends[0].1);
-            let (xb, vb) = self.point(k, s.ends[1].0, s.ends[1].1);
+            let (xa, va) = self.site(k, &s.ends[0]);
+            let (xb, vb) = self.site(k, &s.ends[1]);
             let d = xb - xa;
             let len = d.norm();
             let e = d.scale(S::one() / len);
@@ -371,11 +460,19 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             let tension = s.k * stretch + s.c * e.dot(vb - va);
             energy = energy + S::from_ratio(1, 2) * s.k * stretch * stretch;
             for (end, sign) in [(0, S::one()), (1, -S::one())] {
-                if let Some(i) = s.ends[end].0 {
+                let site = &s.ends[end];
+                if let Some(i) = site.body {
                     let fw = e.scale(tension * sign);
-                    let fb = k.world[i].e.tr_mul_vec(fw);
-                    f[i] = f[i].add(Force {
-                        n: s.ends[end].1.cross(fb),
+                    let (slot, frame) = match site.node {
+                        Some(node) => match self.tree.node_load(i, node) {
+                            Some(slot) => (slot, self.node_frame(k, i, node).map(|x| x.0)),
+                            None => (i, None),
+                        },
+                        None => (i, None),
+                    };
+                    let fb = frame.unwrap_or(k.world[i]).e.tr_mul_vec(fw);
+                    f[slot] = f[slot].add(Force {
+                        n: site.point.cross(fb),
                         f: fb,
                     });
                 }
@@ -456,6 +553,11 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             for (col, &x) in k.s[i].iter().zip(&udj) {
                 ai = ai.add(col.scale(x));
             }
+            if let Some(uf) = self.node_speeds(i) {
+                for (col, &x) in k.node_s[i].iter().zip(&ud[uf..]) {
+                    ai = ai.add(col.scale(x));
+                }
+            }
             let inertia = &k.inertia[i];
             let mut fi = inertia
                 .mul_motion(ai)
@@ -476,9 +578,29 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         }
         // Backward pass over bodies: project on the joints, pass to parents.
         for i in (0..n).rev() {
-            if let Coords::Free { u, .. } = self.tree.bodies[i].coords {
+            let body = &self.tree.bodies[i];
+            // Loads on the nodes of a flexible body: on its elastic
+            // coordinates through the node's columns, and on its frame.
+            if let Some(fm) = &body.flex {
+                for (slot, ns) in k.nodes[i].iter().enumerate() {
+                    let load = fext[body.node_loads + slot];
+                    if is_zero_force(&load) {
+                        continue;
+                    }
+                    for (kk, col) in ns.columns.iter().enumerate() {
+                        tau[fm.u + kk] = tau[fm.u + kk] - col.dot(load);
+                    }
+                    f[i] = f[i].sub(ns.pose.force_to_parent(load));
+                }
+            }
+            if let Coords::Free { u, .. } = body.coords {
                 for (kk, col) in k.s[i].iter().enumerate() {
                     tau[u + kk] = col.dot(f[i]);
+                }
+            }
+            if let Some(uf) = self.node_speeds(i) {
+                for (kk, col) in k.node_s[i].iter().enumerate() {
+                    tau[uf + kk] = tau[uf + kk] + col.dot(f[i]);
                 }
             }
             if let Some(p) = self.tree.bodies[i].parent {
@@ -487,6 +609,27 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             }
         }
         (tau, f)
+    }
+
+    /// Of a body hung at a node: the first elastic speed of its parent
+    /// (the speeds of its node columns).
+    pub fn node_speeds(&self, i: usize) -> Option<usize> {
+        let b = &self.tree.bodies[i];
+        b.node?;
+        self.tree.bodies[b.parent?].flex.as_ref().map(|f| f.u)
+    }
+
+    /// The free motion columns of body `i` with their speeds: its joint's
+    /// (if free) and, hung at a node, the node's.
+    fn columns(&self, k: &Kinematics<S>, i: usize) -> Vec<(usize, Motion<S>)> {
+        let mut out = Vec::new();
+        if let Coords::Free { u, .. } = self.tree.bodies[i].coords {
+            out.extend(k.s[i].iter().enumerate().map(|(j, c)| (u + j, *c)));
+        }
+        if let Some(uf) = self.node_speeds(i) {
+            out.extend(k.node_s[i].iter().enumerate().map(|(j, c)| (uf + j, *c)));
+        }
+        out
     }
 
     fn joint_ud(&self, i: usize, k: &Kinematics<S>, ud: &[S]) -> Vec<S> {
@@ -511,9 +654,18 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 ic[p] = ic[p].add(moved);
             }
         }
+        // Each body's free columns with their speeds (a body hung at a
+        // node also has the node's, with its parent's elastic speeds,
+        // shared with its siblings there: entries accumulate).
+        let cols: Vec<Vec<(usize, Motion<S>)>> = (0..n).map(|i| self.columns(k, i)).collect();
+        let add = |m: &mut Vec<Vec<S>>, r: usize, c: usize, x: S| {
+            if !x.is_zero() {
+                m[r][c] = if m[r][c].is_zero() { x } else { m[r][c] + x };
+            }
+        };
         // Elastic columns of flexible bodies: M_ff, and the momentum P of
-        // unit q̇_f carried up the tree (bodies below ride the frame, so
-        // their rows are zero).
+        // unit q̇_f carried up the tree (bodies on the frame ride it, so
+        // their rows are zero; those at nodes enter through their columns).
         for i in 0..n {
             let (Some(fm), Some(fs)) = (&self.tree.bodies[i].flex, &k.flex[i]) else {
                 continue;
@@ -521,19 +673,17 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             let uf = fm.u;
             for (a, row) in fm.modal_mass.iter().enumerate() {
                 for (b, x) in row.iter().enumerate() {
-                    m[uf + a][uf + b] = *x;
+                    add(&mut m, uf + a, uf + b, *x);
                 }
             }
             for (a, p) in fs.coupling.iter().enumerate() {
                 let mut force = *p;
                 let mut j = i;
                 loop {
-                    if let Coords::Free { u: uj, .. } = self.tree.bodies[j].coords {
-                        for (b, col2) in k.s[j].iter().enumerate() {
-                            let x = col2.dot(force);
-                            m[uj + b][uf + a] = x;
-                            m[uf + a][uj + b] = x;
-                        }
+                    for &(ub, col2) in &cols[j] {
+                        let x = col2.dot(force);
+                        add(&mut m, ub, uf + a, x);
+                        add(&mut m, uf + a, ub, x);
                     }
                     let Some(p) = self.tree.bodies[j].parent else {
                         break;
@@ -544,25 +694,20 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             }
         }
         for i in 0..n {
-            let Coords::Free { u: ui, .. } = self.tree.bodies[i].coords else {
-                continue;
-            };
-            for (a, col) in k.s[i].iter().enumerate() {
-                let mut force = ic[i].mul_motion(*col);
-                for (b, col2) in k.s[i].iter().enumerate() {
-                    m[ui + b][ui + a] = col2.dot(force);
+            for &(ua, col) in &cols[i] {
+                let mut force = ic[i].mul_motion(col);
+                for &(ub, col2) in &cols[i] {
+                    add(&mut m, ub, ua, col2.dot(force));
                 }
                 // Up the tree: M[j][i] = S_jᵀ (X…ᵀ F).
                 let mut j = i;
                 while let Some(p) = self.tree.bodies[j].parent {
                     force = k.x[j].force_to_parent(force);
                     j = p;
-                    if let Coords::Free { u: uj, .. } = self.tree.bodies[j].coords {
-                        for (b, col2) in k.s[j].iter().enumerate() {
-                            let x = col2.dot(force);
-                            m[uj + b][ui + a] = x;
-                            m[ui + a][uj + b] = x;
-                        }
+                    for &(ub, col2) in &cols[j] {
+                        let x = col2.dot(force);
+                        add(&mut m, ub, ua, x);
+                        add(&mut m, ua, ub, x);
                     }
                 }
             }
@@ -571,8 +716,19 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
     }
 
     /// Articulated-body algorithm (Featherstone §7.3, Table 7.1): `u̇` for
-    /// generalised forces `tau` (one per free speed) and body forces `fext`.
-    /// Locked and prescribed joints move with their known accelerations.
+    /// generalised forces `tau` (one per free speed) and loads `fext` (see
+    /// [`TreeModel::loads`]). Locked and prescribed joints move with their
+    /// known accelerations.
+    ///
+    /// A flexible body's elastic coordinates are eliminated at the body,
+    /// together with the subtrees hung at its nodes: with the articulated
+    /// inertia `I_N` and bias `p_N` of the subtrees at node `N` (node
+    /// coordinates, less the node's load), its columns `m_N`, pose `X_N`
+    /// and velocity product `c_N`, the elastic equations read
+    /// `D q̈_f = u − Uᵀ a` with `D = M_ff + Σ m_Nᵀ I_N m_N`,
+    /// `U = P + Σ X_Nᵀ I_N m_N` and `u = τ_f − b_f − Σ m_Nᵀ (p_N + I_N c_N)`,
+    /// so the body passes on `IA − U D⁻¹ Uᵀ` and `pA + U D⁻¹ u` (both with
+    /// the node subtrees' `X_Nᵀ I_N X_N` and `X_Nᵀ (p_N + I_N c_N)` added).
     pub fn aba(&self, k: &Kinematics<S>, tau: &[S], fext: &[Force<S>]) -> Vec<S> {
         let n = self.tree.bodies.len();
         let mut ia: Vec<Inertia6<S>> = k.inertia.iter().map(Inertia6::from_rigid).collect();
@@ -586,38 +742,92 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 }
             })
             .collect();
-        // Flexible bodies: M_ff⁻¹ and the elastic equations' known part
-        // τ_f − b_f, kept for the last pass.
+        // The subtrees hung at each node (node coordinates).
+        let mut node_ia: Vec<Vec<Option<Inertia6<S>>>> =
+            k.nodes.iter().map(|ns| vec![None; ns.len()]).collect();
+        let mut node_pa: Vec<Vec<Force<S>>> = k
+            .nodes
+            .iter()
+            .map(|ns| vec![Force::zero(); ns.len()])
+            .collect();
+        // Velocity products of the node frames: c_N + v_N ×ₘ w_N.
+        let node_cv: Vec<Vec<Motion<S>>> = (0..n)
+            .map(|i| {
+                k.nodes[i]
+                    .iter()
+                    .map(|ns| {
+                        let vn = ns.pose.motion_to_child(k.v[i]).add(ns.velocity);
+                        ns.bias.add(vn.cross_motion(ns.velocity))
+                    })
+                    .collect()
+            })
+            .collect();
+        // Flexible bodies' elastic equations, kept for the last pass.
         let mut elastic: Vec<Option<Elimination<S>>> = vec![None; n];
         // U_i, D_i⁻¹ and u_i of the free joints, kept for the last pass.
         let mut uu: Vec<Vec<Force<S>>> = vec![Vec::new(); n];
         let mut dinv: Vec<Vec<Vec<S>>> = vec![Vec::new(); n];
         let mut small_u: Vec<Vec<S>> = vec![Vec::new(); n];
-        // Velocity-product accelerations c_i = S̊ u + v_i ×ₘ v_J (eq. 7.34).
+        // Velocity-product accelerations c_i = S̊ u + v_i ×ₘ v_J (eq. 7.34),
+        // of a body at a node with its own joint's terms (the node's are in
+        // `node_cv`).
         let cv: Vec<Motion<S>> = (0..n)
-            .map(|i| k.c[i].add(k.v[i].cross_motion(k.vj[i])))
+            .map(|i| match &k.node_joint[i] {
+                Some((_, c, vj)) => c.add(k.v[i].cross_motion(*vj)),
+                None => k.c[i].add(k.v[i].cross_motion(k.vj[i])),
+            })
             .collect();
         // Backward pass over bodies: articulated inertias and bias forces.
         for i in (0..n).rev() {
+            let body = &self.tree.bodies[i];
             let s = &k.s[i];
-            // Eliminate a flexible body's elastic coordinates first:
-            // q̈_f = M_ff⁻¹ (τ_f − b_f − Pᵀ a), so IA −= P M_ff⁻¹ Pᵀ and
-            // pA += P M_ff⁻¹ (τ_f − b_f).
-            if let (Some(fm), Some(fs)) = (&self.tree.bodies[i].flex, &k.flex[i]) {
-                let minv = invert_spd(fm.modal_mass.clone());
-                let rhs: Vec<S> = (0..fm.count())
+            // Eliminate a flexible body's elastic coordinates first, with
+            // the subtrees at its nodes.
+            if let (Some(fm), Some(fs)) = (&body.flex, &k.flex[i]) {
+                let mut d = fm.modal_mass.clone();
+                let mut ucols = fs.coupling.clone();
+                let mut rhs: Vec<S> = (0..fm.count())
                     .map(|j| tau[fm.u + j] - fs.elastic_bias[j])
                     .collect();
-                for (r, pr) in fs.coupling.iter().enumerate() {
-                    for (c, pc) in fs.coupling.iter().enumerate() {
-                        ia[i] = ia[i].sub_outer(pr, pc, minv[r][c]);
+                for (slot, ns) in k.nodes[i].iter().enumerate() {
+                    let load = fext[body.node_loads + slot];
+                    let inode = node_ia[i][slot];
+                    if inode.is_none() && is_zero_force(&load) {
+                        continue;
                     }
-                    let w = (0..rhs.len()).fold(S::zero(), |acc, c| acc + minv[r][c] * rhs[c]);
-                    pa[i] = pa[i].add(pr.scale(w));
+                    let mut p_eff = node_pa[i][slot].sub(load);
+                    if let Some(inn) = &inode {
+                        p_eff = p_eff.add(inn.mul_motion(node_cv[i][slot]));
+                    }
+                    for (kk, col) in ns.columns.iter().enumerate() {
+                        rhs[kk] = rhs[kk] - col.dot(p_eff);
+                    }
+                    pa[i] = pa[i].add(ns.pose.force_to_parent(p_eff));
+                    if let Some(inn) = &inode {
+                        ia[i] = ia[i].add(inn.to_parent(&ns.pose));
+                        let f_cols: Vec<Force<S>> =
+                            ns.columns.iter().map(|m| inn.mul_motion(*m)).collect();
+                        for (r, mr) in ns.columns.iter().enumerate() {
+                            for (c, fc) in f_cols.iter().enumerate() {
+                                d[r][c] = d[r][c] + mr.dot(*fc);
+                            }
+                        }
+                        for (c, fc) in f_cols.iter().enumerate() {
+                            ucols[c] = ucols[c].add(ns.pose.force_to_parent(*fc));
+                        }
+                    }
                 }
-                elastic[i] = Some((minv, rhs));
+                let di = invert_spd(d);
+                for (r, ur) in ucols.iter().enumerate() {
+                    for (c, uc) in ucols.iter().enumerate() {
+                        ia[i] = ia[i].sub_outer(ur, uc, di[r][c]);
+                    }
+                    let w = (0..rhs.len()).fold(S::zero(), |acc, c| acc + di[r][c] * rhs[c]);
+                    pa[i] = pa[i].add(ur.scale(w));
+                }
+                elastic[i] = Some((di, rhs, ucols));
             }
-            let (ia_a, pa_a) = match (&self.tree.bodies[i].coords, &k.known_ud[i]) {
+            let (ia_a, pa_a) = match (&body.coords, &k.known_ud[i]) {
                 (Coords::Free { u, .. }, _) => {
                     let ucols: Vec<Force<S>> = s.iter().map(|col| ia[i].mul_motion(*col)).collect();
                     let d: Vec<Vec<S>> = s
@@ -658,11 +868,23 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                     (ia[i], pa[i].add(ia[i].mul_motion(acc)))
                 }
             };
-            if let Some(p) = self.tree.bodies[i].parent {
-                let moved = ia_a.to_parent(&k.x[i]);
-                ia[p] = ia[p].add(moved);
-                let fp = k.x[i].force_to_parent(pa_a);
-                pa[p] = pa[p].add(fp);
+            match (body.node, body.parent, &k.node_joint[i]) {
+                // Hung at a node: to the node's subtree sums.
+                (Some(slot), Some(p), Some((xj, _, _))) => {
+                    let moved = ia_a.to_parent(xj);
+                    node_ia[p][slot] = Some(match node_ia[p][slot] {
+                        Some(prev) => prev.add(moved),
+                        None => moved,
+                    });
+                    node_pa[p][slot] = node_pa[p][slot].add(xj.force_to_parent(pa_a));
+                }
+                (_, Some(p), _) => {
+                    let moved = ia_a.to_parent(&k.x[i]);
+                    ia[p] = ia[p].add(moved);
+                    let fp = k.x[i].force_to_parent(pa_a);
+                    pa[p] = pa[p].add(fp);
+                }
+                _ => {}
             }
         }
         // Forward pass over bodies: accelerations.
@@ -671,11 +893,21 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             v: -self.tree.gravity,
         };
         let mut a: Vec<Motion<S>> = Vec::with_capacity(n);
+        // Accelerations of the node frames, once their body's are known.
+        let mut a_node: Vec<Vec<Motion<S>>> = vec![Vec::new(); n];
         let mut ud = vec![S::zero(); self.tree.nu];
         for i in 0..n {
-            let ap = self.tree.bodies[i].parent.map_or(base, |p| a[p]);
-            let mut ai = k.x[i].motion_to_child(ap).add(cv[i]);
-            match (&self.tree.bodies[i].coords, &k.known_ud[i]) {
+            let body = &self.tree.bodies[i];
+            let mut ai = match (body.node, body.parent, &k.node_joint[i]) {
+                (Some(slot), Some(p), Some((xj, _, _))) => {
+                    xj.motion_to_child(a_node[p][slot]).add(cv[i])
+                }
+                _ => {
+                    let ap = body.parent.map_or(base, |p| a[p]);
+                    k.x[i].motion_to_child(ap).add(cv[i])
+                }
+            };
+            match (&body.coords, &k.known_ud[i]) {
                 (Coords::Free { u, .. }, _) => {
                     let m = k.s[i].len();
                     let rhs: Vec<S> = (0..m).map(|r| small_u[i][r] - ai.dot(uu[i][r])).collect();
@@ -692,15 +924,23 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 }
                 _ => {}
             }
-            if let (Some(fm), Some(fs), Some((minv, rhs))) =
-                (&self.tree.bodies[i].flex, &k.flex[i], &elastic[i])
-            {
-                let r: Vec<S> = (0..rhs.len())
-                    .map(|j| rhs[j] - ai.dot(fs.coupling[j]))
+            if let (Some(fm), Some((di, rhs, ucols))) = (&body.flex, &elastic[i]) {
+                let r: Vec<S> = (0..rhs.len()).map(|j| rhs[j] - ai.dot(ucols[j])).collect();
+                let qdd: Vec<S> = (0..r.len())
+                    .map(|j| (0..r.len()).fold(S::zero(), |acc, c| acc + di[j][c] * r[c]))
                     .collect();
-                for j in 0..r.len() {
-                    ud[fm.u + j] = (0..r.len()).fold(S::zero(), |acc, c| acc + minv[j][c] * r[c]);
-                }
+                ud[fm.u..fm.u + qdd.len()].copy_from_slice(&qdd);
+                a_node[i] = k.nodes[i]
+                    .iter()
+                    .zip(&node_cv[i])
+                    .map(|(ns, c)| {
+                        let mut an = ns.pose.motion_to_child(ai).add(*c);
+                        for (col, &x) in ns.columns.iter().zip(&qdd) {
+                            an = an.add(col.scale(x));
+                        }
+                        an
+                    })
+                    .collect();
             }
             a.push(ai);
         }
@@ -767,8 +1007,13 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
     pub fn speed_parents(&self) -> Vec<Option<usize>> {
         let mut lambda = vec![None; self.tree.nu];
         let mut last: Vec<Option<usize>> = vec![None; self.tree.bodies.len()];
+        // The last elastic speed of each flexible body: above its nodes.
+        let mut last_elastic: Vec<Option<usize>> = vec![None; self.tree.bodies.len()];
         for (i, b) in self.tree.bodies.iter().enumerate() {
-            let above = b.parent.and_then(|p| last[p]);
+            let above = match (b.node, b.parent) {
+                (Some(_), Some(p)) => last_elastic[p],
+                _ => b.parent.and_then(|p| last[p]),
+            };
             last[i] = above;
             if let Coords::Free { u, .. } = b.coords {
                 for k in 0..b.kind.nu() {
@@ -779,11 +1024,13 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 }
             }
             // Elastic speeds: a branch of their own below the joint's
-            // (bodies carried by the frame do not couple to them).
+            // (bodies carried by the frame do not couple to them; bodies
+            // at nodes hang below them).
             if let Some(fm) = &b.flex {
                 for j in 0..fm.count() {
                     lambda[fm.u + j] = if j == 0 { last[i] } else { Some(fm.u + j - 1) };
                 }
+                last_elastic[i] = fm.count().checked_sub(1).map(|j| fm.u + j).or(last[i]);
             }
         }
         lambda
@@ -894,6 +1141,11 @@ pub fn ltdl_solve<S: Scalar>(f: &[Vec<S>], lambda: &[Option<usize>], mut b: Vec<
         }
     }
     b
+}
+
+/// Is `f` structurally zero?
+fn is_zero_force<S: Scalar>(f: &Force<S>) -> bool {
+    f.n.0.iter().chain(&f.f.0).all(|x| x.is_zero())
 }
 
 /// Is `m` structurally the identity (exact zeros and ones)?

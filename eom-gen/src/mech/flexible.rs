@@ -30,15 +30,28 @@
 //! (`P ᵀ a` holds `−S̄ᵀ g`, `I a` the deformed first moment). The elastic
 //! force `−K_ff q_f − D_ff q̇_f` is a generalised force
 //! ([`super::dynamics::Evaluator::generalized_forces`]), with potential
-//! `½ q_fᵀ K_ff q_f`. Bodies carried by a flexible body are attached to its
-//! frame (not yet to nodes), so `q̈_f` couples only to the frame's
-//! acceleration: the composite-rigid-body and articulated-body recursions
-//! stay exact with the elastic columns `P` added at their own body.
+//! `½ q_fᵀ K_ff q_f`.
+//!
+//! Bodies, joints and markers attach either to the frame or to a node
+//! ([`NodeShape`], [`NodeState`]). A node's frame sits at `ū₀ + S_n q_f`
+//! in body coordinates, turned by the small rotation `θ = Φ_n q_f`
+//! (`R = R_z(θ_z) R_y(θ_y) R_x(θ_x)`, equal to `1 + θ̃` to first order and
+//! orthonormal at any size, so kinematics and energy stay exact for the
+//! linear FFR body). Relative to the body frame it moves like the child of a
+//! joint whose speeds are `q̇_f`: column `k` of its motion subspace is the
+//! node's rotation and translation per unit `q̇_f,k` (node coordinates),
+//! `q_f`-dependent through `R`. A body hung at a node therefore carries
+//! these columns besides its own joint's, with the flexible body's elastic
+//! speeds: RNEA and CRBA handle them as extra joint columns, and the
+//! articulated-body algorithm eliminates `q̈_f` at the flexible body
+//! together with the articulated subtrees hung at its nodes (see
+//! [`super::dynamics::Evaluator::aba`]). Bodies on the frame ride it; `q̈_f`
+//! couples to them only through the frame's acceleration.
 
-use super::spatial::{Force, Motion, RigidInertia};
+use super::spatial::{Force, Motion, Pose, RigidInertia};
 use super::tree::{Lowering, MechError};
 use crate::flex::invariants::modal_geometric_stiffness;
-use crate::sym::{Mat3, Scalar, Vec3};
+use crate::sym::{Axis, Mat3, Scalar, Vec3};
 use crate::system::FlexInfo;
 use std::ops::Add;
 
@@ -73,6 +86,37 @@ pub struct FlexModel<S> {
     pub damping: Vec<Vec<S>>,
     /// `K_G1`, the geometric stiffness per `(ω_y² + ω_z²)`, if stiffening.
     pub stiffening: Option<Vec<Vec<S>>>,
+    /// The nodes something attaches to, in ascending node order.
+    pub nodes: Vec<NodeShape<S>>,
+}
+
+/// The shapes of one node of a flexible body (body axes).
+#[derive(Clone, Debug)]
+pub struct NodeShape<S> {
+    /// The beam node's index.
+    pub node: usize,
+    /// `ū₀`: its undeformed place.
+    pub place: Vec3<S>,
+    /// `S_n`: its translation per unit `q_f,k` (`k` columns).
+    pub translation: Vec<Vec3<S>>,
+    /// `Φ_n`: its small rotation per unit `q_f,k` (`k` columns).
+    pub rotation: Vec<Vec3<S>>,
+}
+
+/// A node at one state, as the child of a joint from the body frame whose
+/// speeds are `q̇_f`.
+#[derive(Clone, Debug)]
+pub struct NodeState<S> {
+    /// The node frame in body coordinates.
+    pub pose: Pose<S>,
+    /// Motion subspace: the node frame's motion relative to the body frame
+    /// per unit `q̇_f,k` (node coordinates).
+    pub columns: Vec<Motion<S>>,
+    /// Its velocity relative to the body frame, `Σ columns q̇_f`.
+    pub velocity: Motion<S>,
+    /// `c = (d/dt columns) q̇_f`, the derivative of the columns' node
+    /// coordinates along the motion (Featherstone's `S̊ q̇`).
+    pub bias: Motion<S>,
 }
 
 /// A flexible body at one state.
@@ -137,8 +181,14 @@ fn axpy<S: Scalar>(out: &mut [S], k: S, x: &[S]) {
 
 impl<S: Scalar> FlexModel<S> {
     /// The constants of `flex` on body `body` (its damping ratio may be
-    /// tunable, its beam data may not).
-    pub fn new(flex: &FlexInfo, body: &str, low: &Lowering<'_, S>) -> Result<Self, MechError> {
+    /// tunable, its beam data may not), with the shapes of the nodes
+    /// `attached` (ascending beam node indices).
+    pub fn new(
+        flex: &FlexInfo,
+        body: &str,
+        attached: &[usize],
+        low: &Lowering<'_, S>,
+    ) -> Result<Self, MechError> {
         // The modes are computed once, at the defaults: beam data may not
         // change at run time.
         if let Some(q) = flex.written.iter().find(|q| low.uses_tunable(&q.expr)) {
@@ -226,6 +276,30 @@ impl<S: Scalar> FlexModel<S> {
                 beam.centrifugal_force(0.0, x)
             }))
         });
+        let nodes = attached
+            .iter()
+            .map(|&n| {
+                let at = flex.modes.at_node(n);
+                // Translations and rotations are cleaned against their own kind.
+                let rows = |r0: usize| -> Vec<f64> {
+                    (r0..r0 + 3)
+                        .flat_map(|r| (0..k).map(move |j| (r, j)))
+                        .map(|(r, j)| at[(r, j)])
+                        .collect()
+                };
+                let (tr, rot) = (rows(0), rows(3));
+                let (c_t, c_r) = (clean_block(&tr), clean_block(&rot));
+                let col = |j: usize, off: usize, c: &dyn Fn(f64) -> f64| {
+                    Vec3(std::array::from_fn(|r| S::from_f64(c(at[(off + r, j)]))))
+                };
+                NodeShape {
+                    node: n,
+                    place: Vec3::from_f64(flex.node_place(n)),
+                    translation: (0..k).map(|j| col(j, 0, &c_t)).collect(),
+                    rotation: (0..k).map(|j| col(j, 3, &c_r)).collect(),
+                }
+            })
+            .collect();
         let ci = clean_block(inv.inertia.as_slice());
         let c1 = clean_block(inv.first_moment.as_slice());
         Ok(FlexModel {
@@ -246,7 +320,93 @@ impl<S: Scalar> FlexModel<S> {
             stiffness: matrix(&inv.modal_stiffness),
             damping,
             stiffening,
+            nodes,
         })
+    }
+
+    /// The slot in [`Self::nodes`] of beam node `node`.
+    pub fn node_slot(&self, node: usize) -> Option<usize> {
+        self.nodes.iter().position(|n| n.node == node)
+    }
+
+    /// Node `slot` at elastic coordinates `q`, rates `qd`: its frame, the
+    /// columns of its motion relative to the body frame, that motion and
+    /// its bias. With `R = R_z R_y R_x` the node's angular velocity in its
+    /// own axes is `w₁ + w₂ + w₃`, `w₁ = e_x θ̇_x`, `w₂ = R_xᵀ e_y θ̇_y`,
+    /// `w₃ = R_xᵀ R_yᵀ e_z θ̇_z`, whose derivative at fixed `θ̇` is
+    /// `−w₁ × w₂ − (w₁ + w₂) × w₃`; the translation rate `Rᵀ ḋ` has
+    /// derivative `−ω × Rᵀ ḋ`.
+    pub fn node_state(&self, slot: usize, q: &[S], qd: &[S]) -> NodeState<S> {
+        let shape = &self.nodes[slot];
+        let combine = |cols: &[Vec3<S>], x: &[S]| {
+            let mut out = Vec3::zero();
+            for (c, &xj) in cols.iter().zip(x) {
+                for r in 0..3 {
+                    if !c.0[r].is_zero() && !xj.is_zero() {
+                        out.0[r] = out.0[r] + c.0[r] * xj;
+                    }
+                }
+            }
+            out
+        };
+        let theta = combine(&shape.rotation, q);
+        let rot = |axis: Axis, angle: S| {
+            if angle.is_zero() {
+                Mat3::identity()
+            } else {
+                Mat3::rot(axis, angle)
+            }
+        };
+        let (rx, ry, rz) = (
+            rot(Axis::X, theta.0[0]),
+            rot(Axis::Y, theta.0[1]),
+            rot(Axis::Z, theta.0[2]),
+        );
+        let e = rz * ry * rx;
+        let pose = Pose {
+            e,
+            r: shape.place + combine(&shape.translation, q),
+        };
+        // Node-axes images of the rotation axes: e_x, R_xᵀ e_y, R_xᵀ R_yᵀ e_z.
+        let ax = Vec3::unit(Axis::X);
+        let ay = rx.tr_mul_vec(Vec3::unit(Axis::Y));
+        let az = rx.tr_mul_vec(ry.tr_mul_vec(Vec3::unit(Axis::Z)));
+        let angular = |r: Vec3<S>| -> Vec3<S> {
+            let mut w = Vec3::zero();
+            for (axis, c) in [(ax, r.0[0]), (ay, r.0[1]), (az, r.0[2])] {
+                if !c.is_zero() {
+                    w = w + axis.scale(c);
+                }
+            }
+            w
+        };
+        let columns: Vec<Motion<S>> = shape
+            .rotation
+            .iter()
+            .zip(&shape.translation)
+            .map(|(r, t)| Motion {
+                w: angular(*r),
+                v: e.tr_mul_vec(*t),
+            })
+            .collect();
+        let rate = combine(&shape.rotation, qd);
+        let w1 = ax.scale(rate.0[0]);
+        let w2 = ay.scale(rate.0[1]);
+        let w3 = az.scale(rate.0[2]);
+        let velocity = Motion {
+            w: w1 + w2 + w3,
+            v: e.tr_mul_vec(combine(&shape.translation, qd)),
+        };
+        let bias = Motion {
+            w: -(w1.cross(w2)) - (w1 + w2).cross(w3),
+            v: -(velocity.w.cross(velocity.v)),
+        };
+        NodeState {
+            pose,
+            columns,
+            velocity,
+            bias,
+        }
     }
 
     /// Number of elastic coordinates.

@@ -371,8 +371,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     let (forward_dynamics, fd_form, fd_candidates) = if request.contains(Function::ForwardDynamics)
     {
         let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
-        let aba = lower("udot", &ev.aba(&k, &drive, &fext));
         let lambda = ev.speed_parents();
+        let aba = lower("udot", &ev.aba(&k, &drive, &fext));
         let mut candidates = vec![(FdForm::Aba, aba.op_count())];
         // The mass-matrix route costs at least its factorisation; skip
         // building it when that alone exceeds the articulated-body count
@@ -479,7 +479,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             let n = c.equations.len();
             let lambda: Vec<Expr> = (row..row + n).map(|r| cx.multiplier(r as u32)).collect();
             row += n;
-            let (f, m) = super::constraints::cut_reaction(&k, c, &lambda);
+            let (f, m) = super::constraints::cut_reaction(&tree, &k, c, &lambda);
             for (a, &e) in ["fx", "fy", "fz", "nx", "ny", "nz"]
                 .iter()
                 .zip(f.0.iter().chain(&m.0))
@@ -562,8 +562,12 @@ fn outputs<'cx>(
         match *out {
             OutputKind::Position(b, m) | OutputKind::Velocity(b, m) => {
                 let marker = &sys.bodies[b].markers[m];
-                let p = low.vec3(&marker.frame.position)?;
-                let (x, v) = ev.point(k, tree.index_of_body[b], p);
+                let site = super::dynamics::Site {
+                    body: tree.index_of_body[b],
+                    node: marker.node,
+                    point: low.vec3(&marker.frame.position)?,
+                };
+                let (x, v) = ev.site(k, &site);
                 let tag = format!("{}_{}", sys.bodies[b].name, marker.name);
                 if matches!(out, OutputKind::Position(..)) {
                     for (a, &e) in axes.iter().zip(&x.0) {
@@ -651,7 +655,7 @@ fn closure<'cx>(
 ) -> Result<Option<ConstraintProgram>, FormulateError> {
     use crate::sym::TimeDerivative;
     let cuts = super::constraints::cut_joints(sys, tree, env)?;
-    let phi = super::constraints::phi(k, &cuts);
+    let phi = super::constraints::phi(tree, k, &cuts);
     let mut holonomic: Vec<(String, Expr<'cx>)> = Vec::new();
     let mut row = 0;
     for c in &cuts {

@@ -61,6 +61,24 @@ pub fn frame_pose(frame: &FrameInfo) -> Pose<f64> {
     }
 }
 
+/// A joint's frame on its parent at the initial state: at a node of a
+/// flexible parent, relative to the node's undeformed place (the elastic
+/// coordinates start at zero).
+pub fn parent_frame_pose(sys: &System, joint: &crate::system::JointInfo) -> Pose<f64> {
+    let fp = frame_pose(&joint.parent_frame);
+    match (
+        joint.parent_node,
+        sys.bodies[joint.parent].flexible.as_deref(),
+    ) {
+        (Some(n), Some(flex)) => Pose {
+            e: Mat3::identity(),
+            r: Vec3(flex.node_place(n)),
+        }
+        .then(&fp),
+        _ => fp,
+    }
+}
+
 /// World pose of every body at the initial state (locked joints at `q0`,
 /// prescribed ones at `t = 0`), indexed by body; ground is the identity.
 pub fn initial_poses(sys: &System) -> Vec<Pose<f64>> {
@@ -71,7 +89,7 @@ pub fn initial_poses(sys: &System) -> Vec<Pose<f64>> {
             Motion::Prescribed(p) => p.iter().map(|x| x.value).collect(),
             _ => joint.q0.iter().map(|x| x.value).collect(),
         };
-        let fp = frame_pose(&joint.parent_frame);
+        let fp = parent_frame_pose(sys, joint);
         let fc = frame_pose(&joint.child_frame);
         let jt = joint_transform(&joint.kind, &q);
         poses[joint.child] = poses[joint.parent].then(&fp).then(&jt).then(&fc.inverse());
@@ -96,7 +114,7 @@ pub fn closure_gaps(sys: &System, poses: &[Pose<f64>]) -> Vec<Gap> {
         .iter()
         .map(|&j| {
             let joint = &sys.joints[j];
-            let on_parent = poses[joint.parent].then(&frame_pose(&joint.parent_frame));
+            let on_parent = poses[joint.parent].then(&parent_frame_pose(sys, joint));
             let on_child = poses[joint.child].then(&frame_pose(&joint.child_frame));
             let (rp, rc) = (Matrix3::from(on_parent.e), Matrix3::from(on_child.e));
             let d = Vector3::from(on_child.r - on_parent.r);

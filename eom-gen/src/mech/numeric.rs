@@ -288,6 +288,36 @@ impl Numeric {
         Ok((x.0, v.0))
     }
 
+    /// World position and velocity of `point` on system body `body`, at
+    /// beam node `node` of a flexible body (node coordinates: the point
+    /// moves with the node's translation and small rotation).
+    pub fn node_point(
+        &self,
+        body: usize,
+        node: usize,
+        point: [f64; 3],
+        q: &[f64],
+        u: &[f64],
+        t: f64,
+    ) -> Result<([f64; 3], [f64; 3]), MechError> {
+        let ev = self.eval();
+        let k = ev.kinematics(&State {
+            q,
+            u,
+            t,
+            inputs: &[],
+        })?;
+        let (x, v) = ev.site(
+            &k,
+            &super::dynamics::Site {
+                body: self.tree.index_of_body.get(body).copied().flatten(),
+                node: Some(node),
+                point: crate::sym::Vec3(point),
+            },
+        );
+        Ok((x.0, v.0))
+    }
+
     /// Force and moment that tree joint `joint` transmits to its child, in
     /// the child joint frame at its origin, at accelerations `ud`;
     /// `None` for a joint outside the tree.
@@ -343,7 +373,7 @@ impl Numeric {
                 .map(|r| lambda.get(r).copied().unwrap_or(f64::NAN))
                 .collect();
             row += n;
-            let (f, m) = super::constraints::cut_reaction(&k, c, &l);
+            let (f, m) = super::constraints::cut_reaction(&self.tree, &k, c, &l);
             out.push((c.name.clone(), f.0, m.0));
         }
         Ok(out)
@@ -359,7 +389,7 @@ impl Numeric {
             t,
             inputs: &[],
         })?;
-        let mut phi = super::constraints::phi(&k, &self.cuts);
+        let mut phi = super::constraints::phi(&self.tree, &k, &self.cuts);
         let (holonomic, _) = self.user(q, &zero, t)?;
         phi.extend(holonomic);
         Ok(phi)

@@ -278,6 +278,16 @@ impl<S: Scalar> Add for Motion<S> {
     }
 }
 
+impl<S: Scalar> Sub for Motion<S> {
+    type Output = Self;
+    fn sub(self, o: Self) -> Self {
+        Motion {
+            w: self.w - o.w,
+            v: self.v - o.v,
+        }
+    }
+}
+
 impl<S: Scalar> Add for Force<S> {
     type Output = Self;
     fn add(self, o: Self) -> Self {

@@ -265,6 +265,13 @@ pub struct TreeBody<S> {
     pub coords: Coords,
     /// The deformable part of a flexible body.
     pub flex: Option<FlexModel<S>>,
+    /// On a flexible parent: the slot in its [`FlexModel::nodes`] of the
+    /// node the joint is attached to.
+    pub node: Option<usize>,
+    /// Index in the load vectors of this body's first node slot (loads
+    /// on the bodies come first, then those on nodes; see
+    /// [`TreeModel::loads`]).
+    pub node_loads: usize,
 }
 
 /// The tree over scalar `S`.
@@ -280,6 +287,37 @@ pub struct TreeModel<S> {
     pub nq: usize,
     /// Number of speeds.
     pub nu: usize,
+}
+
+impl<S: Scalar> TreeModel<S> {
+    /// Length of a load vector (`fext`): one spatial force per body (body
+    /// coordinates at its origin), then one per attached node of each
+    /// flexible body (node coordinates at the node), in tree order.
+    pub fn loads(&self) -> usize {
+        self.bodies.len()
+            + self
+                .bodies
+                .iter()
+                .filter_map(|b| b.flex.as_ref())
+                .map(|f| f.nodes.len())
+                .sum::<usize>()
+    }
+
+    /// True if a marker or a joint attaches to a node of a flexible body.
+    pub fn has_nodes(&self) -> bool {
+        self.bodies
+            .iter()
+            .any(|b| b.flex.as_ref().is_some_and(|f| !f.nodes.is_empty()))
+    }
+
+    /// The load slot of beam node `node` on tree body `i`, if attached.
+    pub fn node_load(&self, i: usize, node: usize) -> Option<usize> {
+        let b = &self.bodies[i];
+        b.flex
+            .as_ref()
+            .and_then(|f| f.node_slot(node))
+            .map(|s| b.node_loads + s)
+    }
 }
 
 /// Values of quantities under an environment.
@@ -386,7 +424,7 @@ impl<S: Scalar> TreeModel<S> {
     pub fn new(sys: &System, env: &dyn Env<S>) -> Result<Self, MechError> {
         let low = Lowering::new(env);
         let mut index_of_body = vec![None; sys.bodies.len()];
-        let mut bodies = Vec::new();
+        let mut bodies: Vec<TreeBody<S>> = Vec::new();
         for &j in sys.graph.tree_joints() {
             let joint = &sys.joints[j];
             let axis = |a: &crate::system::Axis| -> Result<Vec3<S>, MechError> {
@@ -445,7 +483,20 @@ impl<S: Scalar> TreeModel<S> {
                 }
                 JointMotion::Cut => continue,
             };
-            let parent = index_of_body[joint.parent];
+            let parent: Option<usize> = index_of_body[joint.parent];
+            let node = match (joint.parent_node, parent) {
+                (Some(n), Some(p)) => {
+                    let slot = bodies[p].flex.as_ref().and_then(|f| f.node_slot(n));
+                    debug_assert!(slot.is_some(), "validated: the node is attached");
+                    slot
+                }
+                _ => None,
+            };
+            let flex = body
+                .flexible
+                .as_deref()
+                .map(|f| FlexModel::new(f, &body.name, &sys.attached_nodes(joint.child), &low))
+                .transpose()?;
             index_of_body[joint.child] = Some(bodies.len());
             bodies.push(TreeBody {
                 body: joint.child,
@@ -456,12 +507,15 @@ impl<S: Scalar> TreeModel<S> {
                 frame_child: low.frame(&joint.child_frame)?,
                 inertia: RigidInertia::from_com(mass, com, ic),
                 coords,
-                flex: body
-                    .flexible
-                    .as_deref()
-                    .map(|f| FlexModel::new(f, &body.name, &low))
-                    .transpose()?,
+                flex,
+                node,
+                node_loads: 0,
             });
+        }
+        let mut next = bodies.len();
+        for b in &mut bodies {
+            b.node_loads = next;
+            next += b.flex.as_ref().map_or(0, |f| f.nodes.len());
         }
         let gravity = match &sys.gravity {
             Some(g) => low.vec3(g)?,

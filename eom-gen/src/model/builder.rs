@@ -191,6 +191,7 @@ impl Joint {
             parent: parent.into(),
             child: child.into(),
             parent_frame: Frame::default(),
+            parent_node: None,
             child_frame: Frame::default(),
             coordinates: None,
             speeds: None,

@@ -335,6 +335,15 @@ pub enum Flexible {
         /// Modal damping ratio `ζ` of every mode (dimensionless).
         #[serde(default, skip_serializing_if = "Num::is_zero")]
         damping: Num,
+        /// Named nodes, where markers and joints may attach (each at a
+        /// finite-element node).
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        nodes: Vec<BeamNode>,
+        /// Craig–Bampton reduction: one static constraint mode per free
+        /// degree of freedom of each named node, then `modes`
+        /// fixed-interface normal modes (instead of `modes` normal modes).
+        #[serde(default, skip_serializing_if = "is_false")]
+        craig_bampton: bool,
     },
     /// Assumed modes (Rayleigh–Ritz; Shabana 5.1): a straight slender body
     /// along the body `x` axis from the origin to `x = length`, whose
@@ -424,6 +433,37 @@ pub struct FixedNode {
     pub dofs: Vec<NodeDofName>,
 }
 
+/// A named node of a built-in beam.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BeamNode {
+    /// Name, unique on its body.
+    pub name: String,
+    /// Place along the beam, m from the body origin; must be a
+    /// finite-element node, `i · length / elements`.
+    pub x: Num,
+}
+
+/// A node of a flexible body: by name (`"tip"`, from the beam's `nodes`)
+/// or by finite-element index (`3`; node `i` at `x = i · length / elements`).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum NodeRef {
+    /// A finite-element node index.
+    Index(usize),
+    /// A named node.
+    Name(String),
+}
+
+impl std::fmt::Display for NodeRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NodeRef::Index(i) => write!(f, "{i}"),
+            NodeRef::Name(n) => write!(f, "`{n}`"),
+        }
+    }
+}
+
 /// Reference conditions of a built-in beam (Shabana 6.2).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum BeamReference {
@@ -462,11 +502,12 @@ pub struct Marker {
     /// Orientation of the marker frame relative to the body.
     #[serde(default, skip_serializing_if = "Orientation::is_identity")]
     pub orientation: Orientation,
-    /// On a flexible body: the beam node the marker is attached to (it will
-    /// move with that node's deformation); `position` is then relative to
-    /// the node's undeformed place.
+    /// On a flexible body: the node the marker is attached to (it moves
+    /// with that node's deformation: its translation and small rotation);
+    /// `position` and `orientation` are then relative to the node's
+    /// deformed frame (axes parallel to the body's when undeformed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub node: Option<usize>,
+    pub node: Option<NodeRef>,
 }
 
 /// A rotation: how a frame's axes sit in its reference frame's axes.
@@ -608,6 +649,10 @@ pub struct Joint {
     /// Joint frame on the parent, in parent body axes.
     #[serde(default, skip_serializing_if = "Frame::is_identity")]
     pub parent_frame: Frame,
+    /// On a flexible parent: the node the joint is attached to
+    /// (`parent_frame` is then relative to the node's deformed frame).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parent_node: Option<NodeRef>,
     /// Joint frame on the child, in child body axes; it coincides with the
     /// parent joint frame when all coordinates are zero.
     #[serde(default, skip_serializing_if = "Frame::is_identity")]

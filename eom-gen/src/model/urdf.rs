@@ -924,6 +924,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
             parent: body_name(pb),
             child: links[c].name.clone(),
             parent_frame: parent_frame.frame(),
+            parent_node: None,
             child_frame: child_frame.frame(),
             coordinates: None,
             speeds: None,

@@ -121,6 +121,17 @@ struct Ctx<'a> {
     failed_markers: HashSet<(String, String)>,
 }
 
+/// A length for messages: at most nine decimals, trailing zeros dropped.
+fn short(x: f64) -> String {
+    let s = format!("{x:.9}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
+    }
+}
+
 pub(crate) fn is_ident(s: &str) -> bool {
     let mut chars = s.chars();
     chars
@@ -426,14 +437,14 @@ impl Ctx<'_> {
         if let (Some(graph), true) = (&graph, joints_ok) {
             self.assign_coordinates(spec, graph, &mut joints, &mut bodies);
             for (k, j) in joints.iter().enumerate() {
-                if bodies[j.parent].flexible.is_some() {
+                if bodies[j.parent].flexible.is_some() && j.parent_node.is_none() {
                     self.warning(
                         &[f("joints"), i(k), f("parent")],
                         format!(
                             "joint `{}` is attached to the reference frame of flexible body `{}`: it does not move with the deformation",
                             j.name, bodies[j.parent].name
                         ),
-                        "attachments to the nodes of a flexible body are not supported yet (#17); this is exact only where the reference conditions hold the beam (node 0 when clamped)",
+                        "attach it to a node with `parent_node: \"tip\"` (a named node) or `parent_node: 3` (a node index) to move with the deformation; the frame is exact only where the reference conditions hold the beam (node 0 when clamped)",
                     );
                 }
             }
@@ -631,47 +642,26 @@ impl Ctx<'_> {
                     position: marker.position.clone(),
                     orientation: marker.orientation.clone(),
                 };
-                if let Some(node) = marker.node {
-                    let npath = join(&mpath, &[f("node")]);
-                    match &b.flexible {
-                        None => self.error(
-                            &npath,
-                            format!(
-                                "marker `{}` names node {node}, but body `{}` is rigid",
-                                marker.name, b.name
-                            ),
-                            "only markers on a flexible body attach to nodes; leave `node` out",
-                        ),
-                        Some(spec::Flexible::Beam { elements, .. }) if node > *elements => self
-                            .error(
-                                &npath,
-                                format!(
-                                    "marker `{}`: {}",
-                                    marker.name,
-                                    crate::flex::FlexError::UnknownNode {
-                                        node,
-                                        nodes: elements + 1
-                                    }
-                                ),
-                                format!(
-                                    "node i sits at x = i·length/{elements}; use a node from 0 to {elements}"
-                                ),
-                            ),
-                        Some(other) => self.node_marker(
-                            other,
-                            flexible.as_deref(),
-                            node,
-                            &marker.name,
-                            &b.name,
-                            &npath,
-                        ),
-                    }
+                let node = marker.node.as_ref().map(|node| {
+                    self.node_ref(
+                        node,
+                        &b.name,
+                        b.flexible.as_ref(),
+                        flexible.as_deref(),
+                        &join(&mpath, &[f("node")]),
+                        &format!("marker `{}`", marker.name),
+                    )
+                });
+                if node == Some(None) {
+                    self.failed_markers
+                        .insert((b.name.clone(), marker.name.clone()));
+                    continue;
                 }
                 match self.frame(&frame, &mpath) {
                     Some(frame) => markers.push(MarkerInfo {
                         name: marker.name.clone(),
                         frame,
-                        node: marker.node,
+                        node: node.flatten(),
                     }),
                     None => {
                         self.failed_markers
@@ -714,6 +704,8 @@ impl Ctx<'_> {
             modes,
             stiffening,
             damping,
+            nodes: named_nodes,
+            craig_bampton,
         } = flex
         else {
             return self.flexible_source(flex, body, path);
@@ -754,7 +746,7 @@ impl Ctx<'_> {
                 "a beam needs at least one finite element; a few per mode kept is typical",
             );
         }
-        if *modes == 0 {
+        if *modes == 0 && (!*craig_bampton || named_nodes.is_empty()) {
             self.error(
                 &join(&fpath, &[f("modes")]),
                 format!("flexible body `{body}` keeps no modes"),
@@ -770,9 +762,18 @@ impl Ctx<'_> {
         let (true, Some(damping)) = (written.len() == 7, damping) else {
             return None;
         };
-        if *elements == 0 || *modes == 0 {
+        if *craig_bampton && named_nodes.is_empty() {
+            self.error(
+                &join(&fpath, &[f("craig_bampton")]),
+                format!("flexible body `{body}` asks for Craig–Bampton modes but names no nodes"),
+                "the boundary of a Craig–Bampton basis is the named nodes: add `nodes: [(name: \"tip\", x: …)]`, or leave out `craig_bampton`",
+            );
             return None;
         }
+        if *elements == 0 || (*modes == 0 && !*craig_bampton) {
+            return None;
+        }
+        let nodes = self.beam_nodes(named_nodes, &written[0], *elements, body, &fpath)?;
         let beam = crate::flex::Beam {
             length: written[0].value,
             rho_a: written[1].value,
@@ -791,7 +792,13 @@ impl Ctx<'_> {
                 self.fixed_reference(nodes, *elements, body, &fpath)?
             }
         };
-        let reduced = match crate::flex::normal_modes(&beam, &reference, *modes) {
+        let reduced = if *craig_bampton {
+            let boundary: Vec<usize> = nodes.iter().map(|(_, n)| *n).collect();
+            crate::flex::craig_bampton(&beam, &reference, &boundary, *modes)
+        } else {
+            crate::flex::normal_modes(&beam, &reference, *modes)
+        };
+        let reduced = match reduced {
             Ok(m) => m,
             Err(e) => {
                 use crate::flex::FlexError;
@@ -825,6 +832,7 @@ impl Ctx<'_> {
             invariants,
             damping,
             stiffening: *stiffening,
+            nodes,
             coordinate_names,
             speed_names,
             q_index: 0,
@@ -856,6 +864,207 @@ impl Ctx<'_> {
         let coordinates = names("", "elastic coordinate")?;
         let speeds = names("_dot", "elastic speed")?;
         Some((coordinates, speeds))
+    }
+
+    /// A beam's named nodes: unique names, each at a finite-element node
+    /// (`x = i · length / elements`), as `(name, node index)`.
+    fn beam_nodes(
+        &mut self,
+        named: &[spec::BeamNode],
+        length: &Quantity,
+        elements: usize,
+        body: &str,
+        fpath: &[Seg<'static>],
+    ) -> Option<Vec<(String, usize)>> {
+        let mut out: Vec<(String, usize)> = Vec::new();
+        let mut ok = true;
+        let l = length.value;
+        let h = l / elements as f64;
+        for (k, node) in named.iter().enumerate() {
+            let npath = join(fpath, &[f("nodes"), i(k)]);
+            if out.iter().any(|(n, _)| *n == node.name) {
+                self.error(
+                    &join(&npath, &[f("name")]),
+                    format!("node `{}` is named twice on body `{body}`", node.name),
+                    "node names must be unique on their body",
+                );
+                ok = false;
+                continue;
+            }
+            let xpath = join(&npath, &[f("x")]);
+            let Some(x) = self.quantity(&node.x, &xpath, Scope::Params) else {
+                ok = false;
+                continue;
+            };
+            let at = (x.value / h).round();
+            if !(0.0..=elements as f64).contains(&at) || (x.value - at * h).abs() > 1e-9 * l {
+                let below = (x.value / h).floor().clamp(0.0, elements as f64) as usize;
+                let above = (below + 1).min(elements);
+                let near = if below == above || x.value <= 0.0 {
+                    format!("node {below} at x = {}", short(below as f64 * h))
+                } else {
+                    format!(
+                        "node {below} at x = {} and node {above} at x = {}",
+                        short(below as f64 * h),
+                        short(above as f64 * h)
+                    )
+                };
+                self.error(
+                    &xpath,
+                    format!(
+                        "node `{}` of flexible body `{body}` at x = {} m is not a finite-element node",
+                        node.name,
+                        short(x.value)
+                    ),
+                    format!(
+                        "nodes sit at x = i·length/{elements} (every {} m, from 0 to {}); the nearest: {near}",
+                        short(h),
+                        short(l)
+                    ),
+                );
+                ok = false;
+                continue;
+            }
+            out.push((node.name.clone(), at as usize));
+        }
+        ok.then_some(out)
+    }
+
+    /// The finite-element node index that `node` names on body `body`
+    /// (`spec_flexible`: the body is flexible as written; `info`: its
+    /// checked data, `None` if it failed and was reported already).
+    fn node_ref(
+        &mut self,
+        node: &spec::NodeRef,
+        body: &str,
+        spec_flexible: Option<&spec::Flexible>,
+        info: Option<&FlexInfo>,
+        path: &[Seg<'static>],
+        what: &str,
+    ) -> Option<usize> {
+        let elements = match spec_flexible {
+            Some(spec::Flexible::Beam { elements, .. }) => elements,
+            Some(spec::Flexible::Modal { file, .. }) => {
+                return self.modal_node_ref(node, body, file, info, path, what);
+            }
+            Some(spec::Flexible::AssumedModes { .. }) => {
+                self.error(
+                    path,
+                    format!(
+                        "{what} names node {node}, but body `{body}` has assumed modes, which have no nodes"
+                    ),
+                    "leave the node out: it then rides the body frame",
+                );
+                return None;
+            }
+            None => {
+                self.error(
+                    path,
+                    format!("{what} names node {node}, but body `{body}` is rigid"),
+                    "only a flexible body has nodes to attach to; leave the node out",
+                );
+                return None;
+            }
+        };
+        match node {
+            spec::NodeRef::Index(n) if *n > *elements => {
+                self.error(
+                    path,
+                    format!(
+                        "{what}: {}",
+                        crate::flex::FlexError::UnknownNode {
+                            node: *n,
+                            nodes: elements + 1
+                        }
+                    ),
+                    format!(
+                        "node i sits at x = i·length/{elements}; use a node from 0 to {elements}"
+                    ),
+                );
+                None
+            }
+            spec::NodeRef::Index(n) => Some(*n),
+            spec::NodeRef::Name(name) => {
+                if let Some((_, n)) = info.and_then(|f| f.nodes.iter().find(|(n, _)| n == name)) {
+                    return Some(*n);
+                }
+                let Some(spec::Flexible::Beam { nodes: written, .. }) = spec_flexible else {
+                    return None;
+                };
+                if written.iter().any(|n| &n.name == name) {
+                    // Named, but the node or its body has an error (reported).
+                    return None;
+                }
+                let names = written.iter().map(|n| n.name.as_str());
+                let help = match did_you_mean(name, names.clone()) {
+                    Some(best) => format!("did you mean `{best}`?"),
+                    None if written.is_empty() => format!(
+                        "name nodes in the beam's `nodes: [(name: \"{name}\", x: …)]`, or give a node index 0..={elements}"
+                    ),
+                    None => format!(
+                        "its nodes are {}; or give a node index 0..={elements}",
+                        list_names(names)
+                    ),
+                };
+                self.error(
+                    path,
+                    format!("{what}: flexible body `{body}` has no node `{name}`"),
+                    help,
+                );
+                None
+            }
+        }
+    }
+
+    /// The node of an imported modal body that `node` names: an index into
+    /// the file's `nodes`, or a name one of them carries.
+    fn modal_node_ref(
+        &mut self,
+        node: &spec::NodeRef,
+        body: &str,
+        file: &str,
+        info: Option<&FlexInfo>,
+        path: &[Seg<'static>],
+        what: &str,
+    ) -> Option<usize> {
+        // The file failed to load or check: reported already.
+        let Some(FlexSource::Modal { positions, names, .. }) = info.map(|x| &x.source) else {
+            return None;
+        };
+        match node {
+            spec::NodeRef::Index(n) if *n < positions.len() => Some(*n),
+            spec::NodeRef::Index(n) => {
+                self.error(
+                    path,
+                    format!(
+                        "{what}: node {n} does not exist: `{file}` has nodes 0..={}",
+                        positions.len().saturating_sub(1)
+                    ),
+                    "nodes are numbered from 0 in the order of the file's `nodes`",
+                );
+                None
+            }
+            spec::NodeRef::Name(name) => {
+                if let Some(n) = names.iter().position(|x| x.as_deref() == Some(name.as_str())) {
+                    return Some(n);
+                }
+                let written = names.iter().flatten().map(String::as_str);
+                let help = match did_you_mean(name, written.clone()) {
+                    Some(best) => format!("did you mean `{best}`?"),
+                    None if names.iter().all(Option::is_none) => format!(
+                        "`{file}` names no nodes: give a node index 0..={}, or a `name` in the file",
+                        positions.len().saturating_sub(1)
+                    ),
+                    None => format!("its named nodes are {}", list_names(written)),
+                };
+                self.error(
+                    path,
+                    format!("{what}: flexible body `{body}` (`{file}`) has no node `{name}`"),
+                    help,
+                );
+                None
+            }
+        }
     }
 
     fn inertia(
@@ -981,9 +1190,27 @@ impl Ctx<'_> {
             }
             let parent = self.body_ref(bodies, &j.parent, &join(&path, &[f("parent")]), "parent");
             let child = self.body_ref(bodies, &j.child, &join(&path, &[f("child")]), "child");
-            match self.joint(j, &path, parent, child) {
-                Some(info) => out.push(info),
-                None => {
+            let parent_node = match (&j.parent_node, parent) {
+                (Some(node), Some(p)) => {
+                    let written = spec.bodies.iter().find(|b| b.name == j.parent);
+                    let n = self.node_ref(
+                        node,
+                        &j.parent,
+                        written.and_then(|b| b.flexible.as_ref()),
+                        bodies[p].flexible.as_deref(),
+                        &join(&path, &[f("parent_node")]),
+                        &format!("joint `{}`", j.name),
+                    );
+                    n.map(Some).ok_or(())
+                }
+                _ => Ok(None),
+            };
+            match (self.joint(j, &path, parent, child), parent_node) {
+                (Some(mut info), Ok(node)) => {
+                    info.parent_node = node;
+                    out.push(info)
+                }
+                _ => {
                     self.failed_joints.insert(j.name.clone());
                     ok = false;
                 }
@@ -1160,6 +1387,7 @@ impl Ctx<'_> {
             child: child?,
             parent_frame: parent_frame?,
             child_frame: child_frame?,
+            parent_node: None,
             coordinate_names: coordinate_names?,
             speed_names: speed_names?,
             q0: q0?,
@@ -1490,6 +1718,7 @@ impl Ctx<'_> {
             (Some(p), None) => Some(Point {
                 body,
                 position: self.vec3(p, &join(path, &[f("point")]), Scope::Params)?,
+                node: None,
             }),
             (None, Some(m)) => {
                 let Some(marker) = bodies[body].markers.iter().find(|x| &x.name == m) else {
@@ -1507,6 +1736,7 @@ impl Ctx<'_> {
                 Some(Point {
                     body,
                     position: marker.frame.position.clone(),
+                    node: marker.node,
                 })
             }
             (None, None) => {
@@ -1518,6 +1748,7 @@ impl Ctx<'_> {
                 Some(Point {
                     body,
                     position: [zero.clone(), zero.clone(), zero],
+                    node: None,
                 })
             }
         }

@@ -118,40 +118,6 @@ impl Ctx<'_> {
         ok.then_some(Reference::Fixed(dofs))
     }
 
-    /// A marker naming a node of a flexible body that is not a beam.
-    pub(super) fn node_marker(
-        &mut self,
-        flex: &spec::Flexible,
-        info: Option<&FlexInfo>,
-        node: usize,
-        marker: &str,
-        body: &str,
-        npath: &[Seg<'static>],
-    ) {
-        match flex {
-            spec::Flexible::AssumedModes { .. } => self.error(
-                npath,
-                format!("marker `{marker}` names node {node}, but body `{body}` has assumed modes, which have no nodes"),
-                "leave `node` out: the marker rides the body frame",
-            ),
-            spec::Flexible::Modal { file, .. } => {
-                if let Some(FlexSource::Modal { positions, .. }) = info.map(|x| &x.source)
-                    && node >= positions.len()
-                {
-                    self.error(
-                        npath,
-                        format!(
-                            "marker `{marker}`: node {node} does not exist: `{file}` has nodes 0..={}",
-                            positions.len() - 1
-                        ),
-                        "nodes are numbered from 0 in the order of the file's `nodes`",
-                    );
-                }
-            }
-            spec::Flexible::Beam { .. } => {}
-        }
-    }
-
     /// The seven section numbers, each positive.
     fn section(
         &mut self,
@@ -362,6 +328,7 @@ impl Ctx<'_> {
         let (coordinate_names, speed_names) = self.elastic_names(body, path, modes.count())?;
         written.extend(exprs);
         Some(Box::new(FlexInfo {
+            nodes: Vec::new(),
             written,
             source: FlexSource::Assumed {
                 shapes: shape_exprs,
@@ -471,7 +438,14 @@ impl Ctx<'_> {
             elements: body_data.positions.len().saturating_sub(1).max(1),
         };
         let positions: Vec<Vector3<f64>> = body_data.positions;
+        let named: Vec<(String, usize)> = body_data
+            .names
+            .iter()
+            .enumerate()
+            .filter_map(|(i, n)| n.clone().map(|n| (n, i)))
+            .collect();
         Some(Box::new(FlexInfo {
+            nodes: named,
             written: Vec::new(),
             source: FlexSource::Modal {
                 path: shown_str,
