@@ -197,9 +197,9 @@ impl FlexInfo {
     /// the file puts them (assumed modes have none: the origin).
     pub fn node_place(&self, node: usize) -> [f64; 3] {
         match &self.source {
-            FlexSource::Modal { positions, .. } => positions
-                .get(node)
-                .map_or([0.0; 3], |p| [p.x, p.y, p.z]),
+            FlexSource::Modal { positions, .. } => {
+                positions.get(node).map_or([0.0; 3], |p| [p.x, p.y, p.z])
+            }
             _ => [
                 node as f64 * self.beam.length / self.beam.elements as f64,
                 0.0,

@@ -1061,3 +1061,59 @@ fn tunable_shapes_and_unknown_nodes_are_refused_at_their_field() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_point_at_an_imported_node_moves_as_at_the_beams_node() {
+    // The beam's own FE model exported (8 elements, 4 clamped modes) and
+    // read back: a point at the tip node, offset from it, must move with
+    // the node's translation and small rotation exactly as at the built-in
+    // beam's node 8 (the file's mode shapes are the beam's, up to sign),
+    // position and velocity, at a deformed and moving state.
+    let (n, k) = (8, 4);
+    let dir = scratch("node_point");
+    let (file, _) = export_beam(&dir, n, k, true);
+    let path = dir.join("rod.ron");
+    let joint = "Revolute(axis: (0, 1, 0))";
+    let imported = system_at(
+        path.to_str().unwrap(),
+        model(&format!("Modal(file: \"{file}\")"), joint),
+    );
+    let builtin = system_at("rod.ron", model(&beam_flexible(n, k), joint));
+    let (fi, fb) = (
+        imported.bodies[1].flexible.as_deref().unwrap(),
+        builtin.bodies[1].flexible.as_deref().unwrap(),
+    );
+    let sign: Vec<f64> = (0..k)
+        .map(|j| {
+            fb.modes
+                .shapes
+                .column(j)
+                .dot(&fi.modes.shapes.column(j))
+                .signum()
+        })
+        .collect();
+    let (ni, nb) = (
+        Numeric::new(&imported).unwrap(),
+        Numeric::new(&builtin).unwrap(),
+    );
+    let qf = [0.03, -0.02, 0.01, 0.004];
+    let qfd = [0.5, 0.3, -0.2, 0.1];
+    let mut qb = vec![0.4];
+    let mut ub = vec![1.3];
+    qb.extend(qf);
+    ub.extend(qfd);
+    let qi: Vec<f64> = std::iter::once(qb[0])
+        .chain((0..k).map(|j| qf[j] * sign[j]))
+        .collect();
+    let ui: Vec<f64> = std::iter::once(ub[0])
+        .chain((0..k).map(|j| qfd[j] * sign[j]))
+        .collect();
+    let offset = [0.01, 0.02, -0.03];
+    let (xb, vb) = nb.node_point(1, n, offset, &qb, &ub, 0.0).unwrap();
+    let (xi, vi) = ni.node_point(1, n, offset, &qi, &ui, 0.0).unwrap();
+    let dx = rel(&xb, &xi);
+    let dv = rel(&vb, &vi);
+    eprintln!("tip point: position {dx:.1e}, velocity {dv:.1e}; {xb:?} {vb:?}");
+    assert!(dx < 1e-9 && dv < 1e-9, "{xb:?} vs {xi:?}; {vb:?} vs {vi:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1028,7 +1028,10 @@ impl Ctx<'_> {
         what: &str,
     ) -> Option<usize> {
         // The file failed to load or check: reported already.
-        let Some(FlexSource::Modal { positions, names, .. }) = info.map(|x| &x.source) else {
+        let Some(FlexSource::Modal {
+            positions, names, ..
+        }) = info.map(|x| &x.source)
+        else {
             return None;
         };
         match node {
@@ -1045,7 +1048,10 @@ impl Ctx<'_> {
                 None
             }
             spec::NodeRef::Name(name) => {
-                if let Some(n) = names.iter().position(|x| x.as_deref() == Some(name.as_str())) {
+                if let Some(n) = names
+                    .iter()
+                    .position(|x| x.as_deref() == Some(name.as_str()))
+                {
                     return Some(n);
                 }
                 let written = names.iter().flatten().map(String::as_str);
