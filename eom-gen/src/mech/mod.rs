@@ -12,6 +12,7 @@ pub mod initial;
 pub mod joint;
 pub mod numeric;
 pub mod spatial;
+pub mod stiffening;
 pub mod tree;
 
 pub use dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
