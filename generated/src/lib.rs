@@ -41,6 +41,9 @@ pub mod slider_crank;
 /// Model `slider_crank_driven`, generated from `models/slider_crank_driven.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod slider_crank_driven;
+/// Model `spin_up`, generated from `models/spin_up.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod spin_up;
 /// Model `stewart`, generated from `models/stewart.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod stewart;
