@@ -401,6 +401,33 @@ pub enum OutputKind {
     Energy,
     /// Linear and angular momentum.
     Momentum,
+    /// Elastic displacement and small rotation of a beam section (body axes).
+    Deformation {
+        /// The flexible body.
+        body: BodyId,
+        /// Where along the beam, m.
+        x: f64,
+        /// Prefix of the output names.
+        name: String,
+    },
+    /// Stress resultants at a beam section (body axes).
+    SectionForces {
+        /// The flexible body.
+        body: BodyId,
+        /// Where along the beam, m.
+        x: f64,
+        /// Prefix of the output names.
+        name: String,
+    },
+    /// World position of a beam node, deformation included.
+    NodePosition {
+        /// The flexible body.
+        body: BodyId,
+        /// The node.
+        node: usize,
+    },
+    /// Strain energy of a flexible body.
+    ElasticEnergy(BodyId),
 }
 
 /// The Grübler–Kutzbach count of degrees of freedom.

@@ -6,6 +6,7 @@
 pub mod constraints;
 pub mod count;
 pub mod dynamics;
+pub mod flex_outputs;
 pub mod flexible;
 pub mod formulate;
 pub mod initial;
