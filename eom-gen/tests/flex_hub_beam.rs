@@ -55,12 +55,7 @@ impl OdeSystem<10> for Ode<'_> {
 /// lowest root `β > 0` by a scan and bisection.
 fn hub_cantilever() -> f64 {
     let det = |b: f64| {
-        let (ch, sh, c, s) = (
-            (b * L).cosh(),
-            (b * L).sinh(),
-            (b * L).cos(),
-            (b * L).sin(),
-        );
+        let (ch, sh, c, s) = ((b * L).cosh(), (b * L).sinh(), (b * L).cos(), (b * L).sin());
         let j = J_HUB * b.powi(3) / RHO_A;
         Matrix3::new(2.0, j, j, ch + c, sh, -s, sh - s, ch, -c).determinant()
     };
@@ -158,12 +153,18 @@ fn hub_beam_vibrates_at_the_free_hub_frequency() {
         got / linear - 1.0
     );
     assert!(n >= 9, "{n} periods");
-    assert!(got > clamped * 1.01, "the free hub raises ω₁ above {clamped}");
+    assert!(
+        got > clamped * 1.01,
+        "the free hub raises ω₁ above {clamped}"
+    );
     // The simulation oscillates at the linearised model's frequency (1 mm
     // amplitude: the nonlinearity and the sampling shift it by < 2e-6),
     // and that is a Ritz approximation of the exact one from above: the
     // hub-coupled mode built from three in-plane clamped modes, 9e-6 high.
-    assert!((got / linear - 1.0).abs() < 2e-6, "ω₁ = {got}, linearised {linear}");
+    assert!(
+        (got / linear - 1.0).abs() < 2e-6,
+        "ω₁ = {got}, linearised {linear}"
+    );
     assert!(
         (0.0..2e-5).contains(&(linear / want - 1.0)),
         "linearised ω₁ = {linear}, frequency equation {want}"

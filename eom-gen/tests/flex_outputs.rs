@@ -112,12 +112,29 @@ fn flex_outputs_of_a_cantilever_under_its_own_weight() {
     let out = outputs(&sys, &q);
     let w = RHO_A * G;
     let l = L / ELEMENTS as f64;
-    close(get(&out, "tip_uy"), -w * L.powi(4) / (8.0 * EI_Z), 1e-9, "tip u_y");
-    close(get(&out, "tip_rz"), -w * L.powi(3) / (6.0 * EI_Z), 1e-9, "tip θ_z");
-    for n in ["tip_ux", "tip_uz", "tip_rx", "tip_ry", "root_N", "root_Qz", "root_My"] {
+    close(
+        get(&out, "tip_uy"),
+        -w * L.powi(4) / (8.0 * EI_Z),
+        1e-9,
+        "tip u_y",
+    );
+    close(
+        get(&out, "tip_rz"),
+        -w * L.powi(3) / (6.0 * EI_Z),
+        1e-9,
+        "tip θ_z",
+    );
+    for n in [
+        "tip_ux", "tip_uz", "tip_rx", "tip_ry", "root_N", "root_Qz", "root_My",
+    ] {
         assert!(get(&out, n).abs() < 1e-9, "{n} = {}", get(&out, n));
     }
-    close(get(&out, "root_Mz"), -w * L * L / 2.0 + w * l * l / 12.0, 1e-9, "root M_z");
+    close(
+        get(&out, "root_Mz"),
+        -w * L * L / 2.0 + w * l * l / 12.0,
+        1e-9,
+        "root M_z",
+    );
     close(get(&out, "root_Qy"), -w * L + w * l / 2.0, 1e-9, "root Q_y");
     // Mid-element x = 0.75 (ξ = 1/2, where the fixed-end correction of the
     // moment is −w l²/24): M_z = −w (L − x)²/2 − w l²/24 … and Q_y there
@@ -133,25 +150,52 @@ fn flex_outputs_of_a_cantilever_under_its_own_weight() {
     close(get(&out, "mid_Qy"), -w * (L - x), 1e-9, "Q_y(0.75)");
     // The tip node in the world (the frame is the ground's).
     close(get(&out, "beam_node4_x"), L, 1e-12, "tip node x");
-    close(get(&out, "beam_node4_y"), get(&out, "tip_uy"), 1e-12, "tip node y");
+    close(
+        get(&out, "beam_node4_y"),
+        get(&out, "tip_uy"),
+        1e-12,
+        "tip node y",
+    );
     // Strain energy: the output equals ½ q_fᵀ K_ff q_f; and the FE
     // solution, the energy projection of the exact one with the error
     // w_p = w ξ²(l − ξ)²/(24 EI_z) in each element, holds the closed form
     // w² L⁵/(40 EI_z) less n · w² l⁵/(1440 EI_z), the error's energy.
-    let kff = &sys.bodies[1].flexible.as_deref().unwrap().invariants.modal_stiffness;
+    let kff = &sys.bodies[1]
+        .flexible
+        .as_deref()
+        .unwrap()
+        .invariants
+        .modal_stiffness;
     let qv = DVector::from_vec(q.clone());
     let strain = 0.5 * qv.dot(&(kff * &qv));
-    close(get(&out, "beam_strain_energy"), strain, 1e-12, "strain energy");
+    close(
+        get(&out, "beam_strain_energy"),
+        strain,
+        1e-12,
+        "strain energy",
+    );
     let exact = w * w * L.powi(5) / (40.0 * EI_Z);
     eprintln!(
         "strain energy {strain:.9} J, Euler–Bernoulli {exact:.9} J ({:+.1e})",
         strain / exact - 1.0
     );
     let fe = exact - ELEMENTS as f64 * w * w * l.powi(5) / (1440.0 * EI_Z);
-    close(strain, fe, 1e-9, "strain energy against w² L⁵/(40 EI) − n w² l⁵/(1440 EI)");
+    close(
+        strain,
+        fe,
+        1e-9,
+        "strain energy against w² L⁵/(40 EI) − n w² l⁵/(1440 EI)",
+    );
     // The potential energy of `energy()` holds the strain energy: V = U − Σ m g·c.
     let (_, v) = num.energy(&q, &vec![0.0; K], 0.0).unwrap();
-    let first_moment_y = sys.bodies[1].flexible.as_deref().unwrap().invariants.s_bar.row(1) * &qv;
+    let first_moment_y = sys.bodies[1]
+        .flexible
+        .as_deref()
+        .unwrap()
+        .invariants
+        .s_bar
+        .row(1)
+        * &qv;
     close(v, strain + G * first_moment_y[0], 1e-12, "V = U + m g y_c");
 }
 

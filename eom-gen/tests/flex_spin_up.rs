@@ -71,7 +71,11 @@ fn run(stiffening: bool) -> (Vec<f64>, Vec<f64>, String) {
         .iter()
         .map(|y| (0..N).map(|j| tip_y[j] * y[j]).sum())
         .collect();
-    (times[..tips.len()].to_vec(), tips, format!("{:?}", sol.stop))
+    (
+        times[..tips.len()].to_vec(),
+        tips,
+        format!("{:?}", sol.stop),
+    )
 }
 
 /// The quasi-static tip deflection under the hub's angular acceleration
@@ -132,16 +136,26 @@ fn spin_up_with_stiffening_stays_bounded_and_quasi_static() {
     // Bounded over the whole run: never beyond the static deflection
     // under the largest acceleration without stiffening (0.63 m, 6 % of L).
     let bound = -quasi_static(7.5) * (1.0 + 0.1933 * 9.0 / 14.42);
-    assert!(peak <= bound * 1.05, "peak |u_y(L)| = {peak}, bound {bound}");
+    assert!(
+        peak <= bound * 1.05,
+        "peak |u_y(L)| = {peak}, bound {bound}"
+    );
     // At constant speed the beam vibrates freely about its straight shape
     // with the little energy the end of the spin-up leaves (under 1 % of
     // the peak), and that vibration does not grow (no damping: the
     // amplitude of 15–20 s is that of 20–30 s).
-    let settling = tip[t.iter().position(|&x| x >= 15.0).unwrap()..t.iter().position(|&x| x >= 20.0).unwrap()]
+    let settling = tip
+        [t.iter().position(|&x| x >= 15.0).unwrap()..t.iter().position(|&x| x >= 20.0).unwrap()]
         .iter()
         .fold(0.0_f64, |a, &b| a.max(b.abs()));
-    assert!(late < 0.01 * peak, "after the spin-up |u_y(L)| reaches {late}");
-    assert!(late < 1.05 * settling, "the free vibration grows: {settling} → {late}");
+    assert!(
+        late < 0.01 * peak,
+        "after the spin-up |u_y(L)| reaches {late}"
+    );
+    assert!(
+        late < 1.05 * settling,
+        "the free vibration grows: {settling} → {late}"
+    );
 }
 
 #[test]
@@ -161,9 +175,18 @@ fn spin_up_without_stiffening_diverges() {
     let (tc, _) = crossed.expect("the linear model's tip passes L = 10 m");
     // Ω(t) = (ω_s/T_s)(t − (T_s/2π) sin(2πt/T_s)) reaches ω₁ at:
     let w1 = 3.516_015 * (1.4e4_f64 / 1.2e4).sqrt();
-    let omega = |t: f64| 0.4 * (t - 15.0 / (2.0 * std::f64::consts::PI) * (2.0 * std::f64::consts::PI * t / 15.0).sin());
-    let t1 = (0..1500).map(|k| 0.01 * k as f64).find(|&t| omega(t) >= w1).unwrap();
+    let omega = |t: f64| {
+        0.4 * (t - 15.0 / (2.0 * std::f64::consts::PI)
+            * (2.0 * std::f64::consts::PI * t / 15.0).sin())
+    };
+    let t1 = (0..1500)
+        .map(|k| 0.01 * k as f64)
+        .find(|&t| omega(t) >= w1)
+        .unwrap();
     eprintln!("Ω = ω₁ at t = {t1} s");
-    assert!(*tc > t1, "diverged at {tc} s, before Ω reached ω₁ at {t1} s");
+    assert!(
+        *tc > t1,
+        "diverged at {tc} s, before Ω reached ω₁ at {t1} s"
+    );
     // With stiffening the same run stays below 0.6 m (the test above).
 }

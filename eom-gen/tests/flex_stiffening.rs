@@ -79,7 +79,9 @@ fn frequencies(num: &Numeric, n: usize, t: f64) -> Vec<f64> {
     let a = (&a + a.transpose()) * 0.5;
     let mut w2: Vec<f64> = a.symmetric_eigenvalues().iter().copied().collect();
     w2.sort_by(f64::total_cmp);
-    w2.into_iter().map(|x| x.signum() * x.abs().sqrt()).collect()
+    w2.into_iter()
+        .map(|x| x.signum() * x.abs().sqrt())
+        .collect()
 }
 
 /// The first flapping frequency `μ = ω √(ρA L⁴/EI)` of a uniform cantilever
@@ -100,8 +102,10 @@ fn rotating_cantilever(lambda: f64) -> f64 {
             a[3] = a3;
             for n in 0..n_terms {
                 let nf = n as f64;
-                let rhs = 0.5 * lambda * lambda * ((nf + 2.0) * (nf + 1.0) * a[n + 2]
-                    - nf * (nf + 1.0) * a[n])
+                let rhs = 0.5
+                    * lambda
+                    * lambda
+                    * ((nf + 2.0) * (nf + 1.0) * a[n + 2] - nf * (nf + 1.0) * a[n])
                     + mu * mu * a[n];
                 a[n + 4] = rhs / ((nf + 4.0) * (nf + 3.0) * (nf + 2.0) * (nf + 1.0));
             }
@@ -181,7 +185,10 @@ fn stiffening_spinning_cantilever_matches_the_exact_rotating_beam() {
     // 1981, Wright et al. 1982): μ = 3.5160 at rest, 13.1702 at λ = 12.
     for (lambda, want) in [(0.0, 3.5160), (12.0, 13.1702)] {
         let got = rotating_cantilever(lambda);
-        assert!((got - want).abs() < 1e-4, "μ(λ = {lambda}) = {got}, published {want}");
+        assert!(
+            (got - want).abs() < 1e-4,
+            "μ(λ = {lambda}) = {got}, published {want}"
+        );
     }
     let mut worst: f64 = 0.0;
     for lambda in [0.0, 1.0, 2.0, 4.0, 8.0, 12.0] {
@@ -240,7 +247,12 @@ fn stiffening_off_the_linear_model_softens_and_loses_stability_past_the_first_fr
     let scale = (EI / (RHO_A * L.powi(4))).sqrt();
     let w0 = 1.875_104_068_711_961_f64.powi(2) * scale;
     for omega in [2.0, 6.0] {
-        let sys = system(&model(&format!("prescribed: [\"{omega}*t\"]"), false, 2, ""));
+        let sys = system(&model(
+            &format!("prescribed: [\"{omega}*t\"]"),
+            false,
+            2,
+            "",
+        ));
         let w = frequencies(&Numeric::new(&sys).unwrap(), 2, 0.0);
         let lag2 = w0 * w0 - omega * omega;
         let got2 = w[0].signum() * w[0] * w[0];
@@ -269,8 +281,13 @@ fn stiffening_by_gravity_along_a_hanging_beam_and_buckling_of_a_standing_one() {
     let w_free = at(0.0, true);
     let below = at(-0.99 * g_cr, true);
     let above = at(-1.01 * g_cr, true);
-    eprintln!("standing column: ω₁ = {w_free} unloaded, {below} at 0.99 g_cr, {above} at 1.01 g_cr");
-    assert!(below > 0.0 && above < 0.0, "ω₁ {below} below, {above} above g_cr");
+    eprintln!(
+        "standing column: ω₁ = {w_free} unloaded, {below} at 0.99 g_cr, {above} at 1.01 g_cr"
+    );
+    assert!(
+        below > 0.0 && above < 0.0,
+        "ω₁ {below} below, {above} above g_cr"
+    );
     // Hanging (gravity along +x pulls the beam out): stiffer; and the
     // linear model without stiffening ignores gravity's axial part.
     let hanging = at(9.81, true);
@@ -344,12 +361,17 @@ fn stiffening_keeps_m_symmetric_aba_exact_and_energy_conserved() {
         }
     }
     let tau = vec![0.0; n];
-    let aba = num.forward_dynamics(&y0[..n], &y0[n..], 0.0, &tau, &[]).unwrap();
+    let aba = num
+        .forward_dynamics(&y0[..n], &y0[n..], 0.0, &tau, &[])
+        .unwrap();
     let ltdl = num
         .forward_dynamics_ltdl(&y0[..n], &y0[n..], 0.0, &tau, &[])
         .unwrap();
     for (k, (a, b)) in aba.iter().zip(&ltdl).enumerate() {
-        assert!((a - b).abs() < 1e-9 * b.abs().max(1.0), "u̇[{k}]: ABA {a}, LᵀDL {b}");
+        assert!(
+            (a - b).abs() < 1e-9 * b.abs().max(1.0),
+            "u̇[{k}]: ABA {a}, LᵀDL {b}"
+        );
     }
     let energy = |y: &[f64; 14]| {
         let (t, v) = num.energy(&y[..n], &y[n..], 0.0).unwrap();
@@ -374,7 +396,10 @@ fn stiffening_keeps_m_symmetric_aba_exact_and_energy_conserved() {
         .iter()
         .map(|y| (energy(y).0 - e0).abs() / scale)
         .fold(0.0, f64::max);
-    eprintln!("relative energy drift {drift:e} over 3 s, {} steps", sol.stats.accepted);
+    eprintln!(
+        "relative energy drift {drift:e} over 3 s, {} steps",
+        sol.stats.accepted
+    );
     assert!(drift < 1e-8, "relative energy drift {drift:e}");
 
     // The symbolic path gives the same numbers.
@@ -397,7 +422,10 @@ fn stiffening_keeps_m_symmetric_aba_exact_and_energy_conserved() {
     };
     let fd = run(Function::ForwardDynamics);
     for (k, (g, w)) in fd.iter().zip(&aba).enumerate() {
-        assert!((g - w).abs() < 1e-10 * w.abs().max(1.0), "u̇[{k}]: generated {g}, f64 {w}");
+        assert!(
+            (g - w).abs() < 1e-10 * w.abs().max(1.0),
+            "u̇[{k}]: generated {g}, f64 {w}"
+        );
     }
     let (t, v) = num.energy(&y0[..n], &y0[n..], 0.0).unwrap();
     let e = run(Function::Energy);

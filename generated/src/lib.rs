@@ -29,6 +29,9 @@ pub mod free_body;
 /// Model `heavy_top`, generated from `models/heavy_top.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod heavy_top;
+/// Model `hub_beam`, generated from `models/hub_beam.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod hub_beam;
 /// Model `pendulum`, generated from `models/pendulum.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod pendulum;

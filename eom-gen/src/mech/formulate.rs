@@ -536,7 +536,11 @@ fn flex_of<'a, 'cx>(
     usize,
 )> {
     let i = tree.index_of_body[body]?;
-    Some((sys.bodies[body].flexible.as_deref()?, k.flex[i].as_ref()?, i))
+    Some((
+        sys.bodies[body].flexible.as_deref()?,
+        k.flex[i].as_ref()?,
+        i,
+    ))
 }
 
 /// The programs of the outputs and marker Jacobians, with their names.

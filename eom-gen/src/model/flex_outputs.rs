@@ -30,7 +30,8 @@ pub(crate) struct Problem {
 
 fn is_identifier(s: &str) -> bool {
     let mut c = s.chars();
-    c.next().is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+    c.next()
+        .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
         && c.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
@@ -49,7 +50,10 @@ pub(crate) fn resolve(
     let Some(flex) = body.flexible.as_deref() else {
         return Err(vec![Problem {
             field: "body",
-            message: format!("output `{what}` needs a flexible body, but `{}` is rigid", body.name),
+            message: format!(
+                "output `{what}` needs a flexible body, but `{}` is rigid",
+                body.name
+            ),
             help: "name a body with `flexible: Beam(…)`".into(),
         }]);
     };

@@ -11,9 +11,9 @@
 //! `docs/model-format.md` ("Scenes").
 
 use super::Checked;
+use super::flex_outputs::FlexOutput;
 use super::locate::{self, Node, Seg, string_contents_start};
 use super::read::Format;
-use super::flex_outputs::FlexOutput;
 use super::spec::{Num, Output};
 use crate::diag::{Diagnostic, Report, Source, Span, did_you_mean, list_names};
 use crate::expr::Ast;
