@@ -187,7 +187,7 @@ fn flex_outputs_of_a_cantilever_under_its_own_weight() {
         "strain energy against w² L⁵/(40 EI) − n w² l⁵/(1440 EI)",
     );
     // The potential energy of `energy()` holds the strain energy: V = U − Σ m g·c.
-    let (_, v) = num.energy(&q, &vec![0.0; K], 0.0).unwrap();
+    let (_, v) = num.energy(&q, &[0.0; K], 0.0).unwrap();
     let first_moment_y = sys.bodies[1]
         .flexible
         .as_deref()

@@ -350,12 +350,11 @@ fn stiffening_keeps_m_symmetric_aba_exact_and_energy_conserved() {
     // M symmetric, ABA = LᵀDL solve, at the start.
     let terms = num.terms(&y0[..n], &y0[n..], 0.0, &[]).unwrap();
     let m = &terms.mass_matrix;
-    for r in 0..n {
-        for c in 0..n {
+    for (r, row) in m.iter().enumerate() {
+        for (c, &x) in row.iter().enumerate() {
             assert!(
-                (m[r][c] - m[c][r]).abs() < 1e-12 * m[r][r].abs().max(1.0),
-                "M[{r}][{c}] = {} but M[{c}][{r}] = {}",
-                m[r][c],
+                (x - m[c][r]).abs() < 1e-12 * row[r].abs().max(1.0),
+                "M[{r}][{c}] = {x} but M[{c}][{r}] = {}",
                 m[c][r]
             );
         }
