@@ -137,6 +137,8 @@ fn compiled_models_equal_the_f64_algorithms() {
     compare::<g::stewart::Stewart>("stewart");
     compare::<g::stewart_driven::StewartDriven>("stewart_driven");
     compare::<g::rolling_disk::RollingDisk>("rolling_disk");
+    compare::<g::spin_up::SpinUp>("spin_up");
+    compare::<g::hub_beam::HubBeam>("hub_beam");
 }
 
 #[test]
