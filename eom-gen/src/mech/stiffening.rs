@@ -49,6 +49,16 @@
 //! attached to the beam (bodies carried by the frame load the frame, not
 //! the beam's sections). Terms of order `q_f³` are the error of the
 //! second-order kinetic energy: relative `(q_f/L)²`.
+//!
+//! The second-order kinetic energy is not positive definite for every
+//! `q_f`: `Ī` loses `q_fᵀ K₁ q_f` about the lateral axes while the
+//! coupling `P` keeps its moments. When the clamped modes reproduce a
+//! rotation about the root almost entirely (a beam on a revolute joint at
+//! its root with nothing else on that joint: the modes miss ~0.5 % of its
+//! `ρA L³/3`), a large deformation (tip deflection ~7 % of `L` in the
+//! test that found it) makes the mass matrix singular and the integrator
+//! stops. A hub's own inertia on the joint, or smaller deformation, keeps
+//! it definite; the exact foreshortening (fourth-order terms) would too.
 
 use super::flexible::FlexState;
 use super::spatial::Motion;
