@@ -14,6 +14,12 @@
 //! Names are parameters, coordinates, `t` or the constant `pi`, depending
 //! on where the expression stands; functions are listed in [`Func`].
 //!
+//! `select(c, a, b)` is piecewise: `a` where `c > 0`, else `b` (as the
+//! symbolic `select`; NaN conditions take `b`). Its derivative is
+//! `select(c, a', b')`, the derivative away from the switch, so a
+//! prescribed motion written piecewise gets its `q̇(t)` and `q̈(t)`
+//! piecewise too; making the pieces meet smoothly is the writer's task.
+//!
 //! A leaf module below the pipeline: the validator parses the expressions,
 //! the validated [`crate::System`] keeps them as [`Ast`]s, and the
 //! formulation lowers them to scalars.
@@ -78,11 +84,13 @@ pub enum Func {
     Ln,
     /// absolute value
     Abs,
+    /// `select(c, a, b)`: `a` if `c > 0`, else `b` (piecewise definitions)
+    Select,
 }
 
 impl Func {
     /// Every function, for lookups and help messages.
-    pub const ALL: [Func; 11] = [
+    pub const ALL: [Func; 12] = [
         Func::Sin,
         Func::Cos,
         Func::Tan,
@@ -94,6 +102,7 @@ impl Func {
         Func::Exp,
         Func::Ln,
         Func::Abs,
+        Func::Select,
     ];
 
     /// The name as written in a model.
@@ -110,12 +119,17 @@ impl Func {
             Func::Exp => "exp",
             Func::Ln => "ln",
             Func::Abs => "abs",
+            Func::Select => "select",
         }
     }
 
     /// Number of arguments.
     pub fn arity(self) -> usize {
-        if self == Func::Atan2 { 2 } else { 1 }
+        match self {
+            Func::Atan2 => 2,
+            Func::Select => 3,
+            _ => 1,
+        }
     }
 
     fn from_name(name: &str) -> Option<Func> {
@@ -246,6 +260,11 @@ impl Ast {
                     BinOp::Pow => a.powf(b),
                 }
             }
+            Ast::Call(Func::Select, args, _) => {
+                let arg = |k: usize| args.get(k).map_or(Ok(f64::NAN), |a| a.eval_raw(lookup));
+                let (c, a, b) = (arg(0)?, arg(1)?, arg(2)?);
+                if c > 0.0 { a } else { b }
+            }
             Ast::Call(f, args, _) => {
                 let x = args.first().map_or(Ok(f64::NAN), |a| a.eval_raw(lookup))?;
                 match f {
@@ -263,6 +282,7 @@ impl Ast {
                     Func::Exp => x.exp(),
                     Func::Ln => x.ln(),
                     Func::Abs => x.abs(),
+                    Func::Select => f64::NAN,
                 }
             }
         })
@@ -330,6 +350,15 @@ impl Ast {
                     },
                 }
             }
+            // Away from the switch: select(c, a, b)' = select(c, a', b').
+            Call(Func::Select, args, off) => {
+                let mut d: Vec<Ast> = args.iter().map(|a| a.diff(var)).collect();
+                d[0] = args[0].clone();
+                match (&d[1], &d[2]) {
+                    (Num(x), Num(y)) if x == y => Num(*x),
+                    _ => Call(Func::Select, d, *off),
+                }
+            }
             Call(f, args, _) => {
                 let a = &args[0];
                 let da = a.diff(var);
@@ -359,6 +388,7 @@ impl Ast {
                     Func::Exp => call(Func::Exp, a),
                     Func::Ln => div(Num(1.0), a.clone()),
                     Func::Abs => div(a.clone(), call(Func::Abs, a)),
+                    Func::Select => Num(0.0), // handled above
                     Func::Atan2 => {
                         // atan2(y, x)' = (x y' − y x') / (x² + y²)
                         let (y, x) = (a.clone(), args.get(1).cloned().unwrap_or(Num(1.0)));
@@ -607,6 +637,8 @@ impl Parser<'_> {
                         ),
                         help: if func == Func::Atan2 {
                             "write `atan2(y, x)`".into()
+                        } else if func == Func::Select {
+                            "write `select(c, a, b)`: `a` where `c > 0`, else `b`".into()
                         } else {
                             format!("write `{name}(x)`")
                         },
@@ -717,6 +749,7 @@ mod tests {
             "sqrt(1 + t^2)*exp(-t)*cos(t)",
             "atan2(sin(t), 2 + cos(t)) + asin(t/3) + acos(t/4) + atan(t) + ln(2 + t) + tan(t/2)",
             "abs(t - 0.1) + (1 + t)^t + -t",
+            "select(t - 0.5, t^2/2, sin(t)) + select(1 - t, 3, t^3)",
         ];
         for text in cases {
             let ast = Ast::parse(text).expect("parses");
@@ -735,6 +768,55 @@ mod tests {
     }
 
     #[test]
+    fn select_is_piecewise_with_piecewise_derivatives() {
+        // a where c > 0, else b (c = 0 and NaN take b, as the symbolic select).
+        assert_eq!(eval("select(l - 1, 10, 20)"), 10.0);
+        assert_eq!(eval("select(1 - l, 10, 20)"), 20.0);
+        assert_eq!(eval("select(l - 2, 10, 20)"), 20.0);
+        assert_eq!(eval("2*select(m, l, 0) + 1"), 5.0);
+        let e = Ast::parse("select(t, 1)").expect_err("arity");
+        assert!(e.message.contains("takes 3") && e.help.contains("select(c, a, b)"));
+        // The spin-up profile's angle: θ̈ = (ω_s/T)(1 − cos(2πt/T)) before T, 0 after.
+        let theta = Ast::parse(
+            "select(T - t, w/T*(t^2/2 + (T/(2*pi))^2*(cos(2*pi*t/T) - 1)), w*(t - T/2))",
+        )
+        .expect("parses");
+        let (w, tt) = (6.0, 15.0);
+        let acc = theta.diff("t").diff("t");
+        for t in [1.0, 7.5, 14.0, 16.0, 30.0] {
+            let lookup = |n: &str| match n {
+                "t" => Some(t),
+                "T" => Some(tt),
+                "w" => Some(w),
+                _ => None,
+            };
+            let want = if t < tt {
+                w / tt * (1.0 - (2.0 * std::f64::consts::PI * t / tt).cos())
+            } else {
+                0.0
+            };
+            let got = acc.eval(&lookup).expect("finite");
+            assert!((got - want).abs() < 1e-12, "θ̈({t}) = {got}, want {want}");
+        }
+        // Both pieces and their rates meet at T: θ = ω_s T/2, θ̇ = ω_s.
+        let at = |a: &Ast, t: f64| {
+            a.eval(&|n: &str| match n {
+                "t" => Some(t),
+                "T" => Some(tt),
+                "w" => Some(w),
+                _ => None,
+            })
+            .expect("finite")
+        };
+        let rate = theta.diff("t");
+        for (a, want) in [(&theta, w * tt / 2.0), (&rate, w)] {
+            for t in [tt - 1e-9, tt + 1e-9] {
+                assert!((at(a, t) - want).abs() < 1e-7, "at {t}: {}", at(a, t));
+            }
+        }
+    }
+
+    #[test]
     fn display_round_trips() {
         for text in [
             "-l^2",
@@ -742,6 +824,7 @@ mod tests {
             "2^(3^2)",
             "-(a - b)/c",
             "atan2(y, -x)",
+            "select(t - 1, -a, b^2)",
             "a - (b - c)",
             "-2*x",
         ] {

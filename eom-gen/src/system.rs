@@ -158,11 +158,17 @@ impl FlexInfo {
         }
     }
 
-    /// For assumed modes, the geometric stiffness per `Ω²` of the
-    /// centrifugal load (the beam's is computed from its FE model).
-    pub fn assumed_geometric_stiffness(&self) -> Option<&DMatrix<f64>> {
+    /// For assumed modes, the foreshortening matrices `(K₁, K₂)`: the
+    /// geometric stiffness per `Ω²` of the centrifugal load and per unit
+    /// axial acceleration of the root (the beam's are computed from its FE
+    /// model, [`crate::flex::invariants::foreshortening`]).
+    pub fn assumed_geometric_stiffness(&self) -> Option<(&DMatrix<f64>, &DMatrix<f64>)> {
         match &self.source {
-            FlexSource::Assumed { geometric, .. } => Some(geometric),
+            FlexSource::Assumed {
+                geometric,
+                axial_geometric,
+                ..
+            } => Some((geometric, axial_geometric)),
             _ => None,
         }
     }
@@ -221,6 +227,8 @@ pub enum FlexSource {
         shapes: Vec<crate::flex::assumed::ShapeExprs>,
         /// `K_G1`, the geometric stiffness per `Ω²` (k×k).
         geometric: DMatrix<f64>,
+        /// `K₂`, the geometric stiffness per unit axial acceleration (k×k).
+        axial_geometric: DMatrix<f64>,
         /// `D_1`: damping per unit ratio ζ (k×k).
         damping_unit: DMatrix<f64>,
     },
@@ -513,6 +521,33 @@ pub enum OutputKind {
     Energy,
     /// Linear and angular momentum.
     Momentum,
+    /// Elastic displacement and small rotation of a beam section (body axes).
+    Deformation {
+        /// The flexible body.
+        body: BodyId,
+        /// Where along the beam, m.
+        x: f64,
+        /// Prefix of the output names.
+        name: String,
+    },
+    /// Stress resultants at a beam section (body axes).
+    SectionForces {
+        /// The flexible body.
+        body: BodyId,
+        /// Where along the beam, m.
+        x: f64,
+        /// Prefix of the output names.
+        name: String,
+    },
+    /// World position of a beam node, deformation included.
+    NodePosition {
+        /// The flexible body.
+        body: BodyId,
+        /// The node.
+        node: usize,
+    },
+    /// Strain energy of a flexible body.
+    ElasticEnergy(BodyId),
 }
 
 /// The Grübler–Kutzbach count of degrees of freedom.

@@ -924,7 +924,8 @@ fn assumed_damping_and_stiffening_have_their_closed_forms() {
     let flex = sys.bodies[1].flexible.as_deref().unwrap();
     let g = flex
         .assumed_geometric_stiffness()
-        .expect("assumed modes keep K_G1")[(0, 0)];
+        .expect("assumed modes keep K_G1")
+        .0[(0, 0)];
     let want = RHO_A * PI * PI * L * (1.0 / 3.0 - 1.0 / (4.0 * PI * PI)) / 2.0;
     assert!((g / want - 1.0).abs() < 1e-13, "K_G1 = {g}, want {want}");
 }

@@ -32,6 +32,9 @@ pub mod free_body;
 /// Model `heavy_top`, generated from `models/heavy_top.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod heavy_top;
+/// Model `hub_beam`, generated from `models/hub_beam.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod hub_beam;
 /// Model `pendulum`, generated from `models/pendulum.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod pendulum;
@@ -47,6 +50,9 @@ pub mod slider_crank_driven;
 /// Model `slider_crank_flex`, generated from `models/slider_crank_flex.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod slider_crank_flex;
+/// Model `spin_up`, generated from `models/spin_up.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod spin_up;
 /// Model `stewart`, generated from `models/stewart.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod stewart;

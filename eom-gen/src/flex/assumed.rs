@@ -186,8 +186,12 @@ pub fn section(shapes: &[ShapeExprs], x: f64) -> Option<Section> {
 pub struct Assumed {
     /// The inertia shape integrals (with `M_ff` and `K_ff`).
     pub invariants: Invariants,
-    /// `K_G1` per `Ω²` (k×k).
+    /// `K_G1` per `Ω²` (k×k): the foreshortening's first moment
+    /// `∫ρA (L² − x²)/2 (v'v'ᵀ + w'w'ᵀ) dx`.
     pub geometric: DMatrix<f64>,
+    /// `K₂` per unit axial acceleration of the root (k×k):
+    /// `∫ρA (L − x) (v'v'ᵀ + w'w'ᵀ) dx` ([`crate::flex::invariants::foreshortening`]).
+    pub axial_geometric: DMatrix<f64>,
     /// The reduced matrices' normal modes.
     pub ritz: Ritz,
 }
@@ -213,7 +217,7 @@ fn integrate(
     k: usize,
     shape: &ShapeFn<'_>,
     intervals: usize,
-) -> Result<(Invariants, DMatrix<f64>), AssumedError> {
+) -> Result<(Invariants, DMatrix<f64>, DMatrix<f64>), AssumedError> {
     let h = section.length / intervals as f64;
     let zk = || DMatrix::<f64>::zeros(k, k);
     let zv = || DVector::<f64>::zeros(k);
@@ -233,6 +237,7 @@ fn integrate(
     };
     let mut spin_mass = zk();
     let mut geometric = zk();
+    let mut axial_geometric = zk();
     let at = |j: usize, part: Part, order: usize, x: f64| {
         shape(j, part, order, x).ok_or(AssumedError::NotFinite {
             shape: j,
@@ -289,8 +294,9 @@ fn integrate(
                 + &ddw * ddw.transpose() * section.ei_y
                 + &dphi * dphi.transpose() * section.gj)
                 * dx;
-            geometric += (&dv * dv.transpose() + &dw * dw.transpose())
-                * (section.centrifugal_force(0.0, x) * dx);
+            let bending = &dv * dv.transpose() + &dw * dw.transpose();
+            geometric += &bending * (section.centrifugal_force(0.0, x) * dx);
+            axial_geometric += bending * (section.rho_a * (section.length - x) * dx);
         }
     }
     let ex = Vector3::x();
@@ -301,7 +307,7 @@ fn integrate(
     let sym = |a: &DMatrix<f64>| (a + a.transpose()) * 0.5;
     inv.modal_mass = sym(&inv.modal_mass);
     inv.modal_stiffness = sym(&inv.modal_stiffness);
-    Ok((inv, sym(&geometric)))
+    Ok((inv, sym(&geometric), sym(&axial_geometric)))
 }
 
 /// The body of `k` assumed shapes over `section` (its `elements` unused):
@@ -311,8 +317,8 @@ pub fn assumed_modes(
     k: usize,
     shape: &ShapeFn<'_>,
 ) -> Result<Assumed, AssumedError> {
-    let (inv, geometric) = integrate(section, k, shape, INTERVALS)?;
-    let (coarse, _) = integrate(section, k, shape, INTERVALS / 2)?;
+    let (inv, geometric, axial_geometric) = integrate(section, k, shape, INTERVALS)?;
+    let (coarse, _, _) = integrate(section, k, shape, INTERVALS / 2)?;
     let change = |a: &DMatrix<f64>, b: &DMatrix<f64>| {
         let top = a.amax();
         if top == 0.0 {
@@ -330,6 +336,7 @@ pub fn assumed_modes(
     Ok(Assumed {
         invariants: inv,
         geometric,
+        axial_geometric,
         ritz,
     })
 }

@@ -215,3 +215,28 @@ pub fn modal_geometric_stiffness(
     let g = modes.shapes.transpose() * kg * &modes.shapes;
     (&g + g.transpose()) * 0.5
 }
+
+/// The foreshortening integrals of geometric stiffening (Kane, Ryan and
+/// Banerjee 1987; Sharf 1996), `k×k`, symmetric.
+///
+/// A bent beam's sections move back along its axis: to second order in
+/// the deformation, the axial displacement of the section at `x` is
+/// `S_x(x) q_f − ½ q_fᵀ G(x) q_f` with `G(x) = ∫₀ˣ (S_y'ᵀ S_y' + S_z'ᵀ S_z') dξ`
+/// (measured from the frame's section `x = 0`; the axial modes are then the
+/// stretch of the arc, not the axial displacement). Its first and second
+/// moments along the axis are the two matrices here:
+///
+/// ```text
+/// K₁ = ∫ρA x G(x) dx = ∫ ρA (L² − x²)/2 (S_y'ᵀS_y' + S_z'ᵀS_z') dx   centrifugal
+/// K₂ = ∫ρA G(x) dx   = ∫ ρA (L − x)      (S_y'ᵀS_y' + S_z'ᵀS_z') dx   axial acceleration
+/// ```
+///
+/// which are the modal geometric stiffness matrices under the axial forces
+/// `ρA (L² − x²)/2` (a unit `Ω²` spinning about the root) and `ρA (L − x)`
+/// (a unit axial acceleration of the root; tip free in both). Returns `(K₁, K₂)`.
+pub fn foreshortening(beam: &Beam, modes: &Modes) -> (DMatrix<f64>, DMatrix<f64>) {
+    let l = beam.length;
+    let k1 = modal_geometric_stiffness(beam, modes, &|x| beam.centrifugal_force(0.0, x));
+    let k2 = modal_geometric_stiffness(beam, modes, &|x| beam.rho_a * (l - x));
+    (k1, k2)
+}

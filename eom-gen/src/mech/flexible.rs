@@ -21,10 +21,12 @@
 //! - `b`: the velocity terms `v ×* I v` does not hold, force
 //!   `2 ω × S̄ q̇_f`, moment `2 (tr C_v 1 − C_vᵀ) ω + ω × e_x (c_p · q̇_f)`
 //!   with `C_v = ∫ρ ū (S q̇_f)ᵀ dV`;
-//! - `b_f = S̄ᵀ (ω × v_O) + ∫ρ Sᵀ ω̃ω̃ ū dV + 2 ∫ρ Sᵀ ω̃ S dV q̇_f`, plus
-//!   with stiffening `(ω_y² + ω_z²) K_G1 q_f`, the geometric stiffness of
-//!   the centrifugal axial load `P(x) = (ω_y² + ω_z²) ρA (L² − x²)/2`
-//!   (Kane, Ryan and Banerjee 1987).
+//! - `b_f = S̄ᵀ (ω × v_O) + ∫ρ Sᵀ ω̃ω̃ ū dV + 2 ∫ρ Sᵀ ω̃ S dV q̇_f`.
+//!
+//! With `stiffening`, the beam's foreshortening adds to `I`, `P`, `b` and
+//! `b_f` ([`super::stiffening`]): the geometric stiffness of the axial
+//! inertia load (centrifugal, axial acceleration, gravity; Kane, Ryan and
+//! Banerjee 1987), symmetric and energy-consistent.
 //!
 //! Gravity enters through the base acceleration as for rigid bodies
 //! (`P ᵀ a` holds `−S̄ᵀ g`, `I a` the deformed first moment). The elastic
@@ -49,8 +51,8 @@
 //! couples to them only through the frame's acceleration.
 
 use super::spatial::{Force, Motion, Pose, RigidInertia};
+use super::stiffening::Stiffening;
 use super::tree::{Lowering, MechError};
-use crate::flex::invariants::modal_geometric_stiffness;
 use crate::sym::{Axis, Mat3, Scalar, Vec3};
 use crate::system::FlexInfo;
 use std::ops::Add;
@@ -84,8 +86,8 @@ pub struct FlexModel<S> {
     pub stiffness: Vec<Vec<S>>,
     /// `D_ff = 2 ζ diag(ω_i)`.
     pub damping: Vec<Vec<S>>,
-    /// `K_G1`, the geometric stiffness per `(ω_y² + ω_z²)`, if stiffening.
-    pub stiffening: Option<Vec<Vec<S>>>,
+    /// The foreshortening matrices, if stiffening.
+    pub stiffening: Option<Stiffening<S>>,
     /// The nodes something attaches to, in ascending node order.
     pub nodes: Vec<NodeShape<S>>,
 }
@@ -267,15 +269,7 @@ impl<S: Scalar> FlexModel<S> {
                 })
                 .collect()
         };
-        let stiffening = flex.stiffening.then(|| {
-            if let Some(g) = flex.assumed_geometric_stiffness() {
-                return matrix(g);
-            }
-            let beam = &flex.beam;
-            matrix(&modal_geometric_stiffness(beam, &flex.modes, &|x| {
-                beam.centrifugal_force(0.0, x)
-            }))
-        });
+        let stiffening = flex.stiffening.then(|| Stiffening::new(flex));
         let nodes = attached
             .iter()
             .map(|&n| {
@@ -484,12 +478,7 @@ impl<S: Scalar> FlexModel<S> {
                 axpy(&mut elastic_bias, two * wt.0[a][b], &sqd[a][b]);
             }
         }
-        if let Some(kg) = &self.stiffening {
-            let spin2 = w.0[1] * w.0[1] + w.0[2] * w.0[2];
-            let g = mat_vec(kg, q);
-            axpy(&mut elastic_bias, spin2, &g);
-        }
-        FlexState {
+        let mut st = FlexState {
             q: q.to_vec(),
             qd: qd.to_vec(),
             inertia: RigidInertia {
@@ -500,7 +489,11 @@ impl<S: Scalar> FlexModel<S> {
             coupling,
             bias,
             elastic_bias,
+        };
+        if let Some(s) = &self.stiffening {
+            s.apply(q, qd, v, &mut st);
         }
+        st
     }
 
     /// `M_ff x`.

@@ -524,6 +524,25 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     })
 }
 
+/// A flexible body's data, its state and its index in the tree.
+fn flex_of<'a, 'cx>(
+    sys: &'a System,
+    tree: &TreeModel<Expr<'cx>>,
+    k: &'a Kinematics<Expr<'cx>>,
+    body: usize,
+) -> Option<(
+    &'a crate::system::FlexInfo,
+    &'a super::flexible::FlexState<Expr<'cx>>,
+    usize,
+)> {
+    let i = tree.index_of_body[body]?;
+    Some((
+        sys.bodies[body].flexible.as_deref()?,
+        k.flex[i].as_ref()?,
+        i,
+    ))
+}
+
 /// The programs of the outputs and marker Jacobians, with their names.
 struct OutputPrograms {
     outputs: Option<Program>,
@@ -617,6 +636,46 @@ fn outputs<'cx>(
                 }
             }
             OutputKind::Energy | OutputKind::Momentum => {}
+            OutputKind::Deformation { body, x, ref name }
+            | OutputKind::SectionForces { body, x, ref name } => {
+                let Some((flex, fs, _)) = flex_of(sys, tree, k, body) else {
+                    continue;
+                };
+                let (vals, tags) = if matches!(out, OutputKind::Deformation { .. }) {
+                    (
+                        super::flex_outputs::deformation(flex, x, &fs.q),
+                        ["ux", "uy", "uz", "rx", "ry", "rz"],
+                    )
+                } else {
+                    (
+                        super::flex_outputs::section_forces(flex, x, &fs.q),
+                        ["N", "Qy", "Qz", "Mx", "My", "Mz"],
+                    )
+                };
+                for (t, v) in tags.iter().zip(vals) {
+                    names.push(format!("{name}_{t}"));
+                    values.push(v);
+                }
+            }
+            OutputKind::NodePosition { body, node } => {
+                let Some((flex, fs, i)) = flex_of(sys, tree, k, body) else {
+                    continue;
+                };
+                let p = k.world[i].point(super::flex_outputs::node_point(flex, node, &fs.q));
+                for (a, &e) in axes.iter().zip(&p.0) {
+                    names.push(format!("{}_node{node}_{a}", sys.bodies[body].name));
+                    values.push(e);
+                }
+            }
+            OutputKind::ElasticEnergy(body) => {
+                let Some((_, fs, i)) = flex_of(sys, tree, k, body) else {
+                    continue;
+                };
+                if let Some(fm) = &tree.bodies[i].flex {
+                    names.push(format!("{}_strain_energy", sys.bodies[body].name));
+                    values.push(fm.elastic_forces(&fs.q, &fs.qd).1);
+                }
+            }
         }
     }
     let lower = |names: &[String], values: &[Expr<'cx>]| -> Option<Program> {

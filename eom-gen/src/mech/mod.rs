@@ -6,12 +6,14 @@
 pub mod constraints;
 pub mod count;
 pub mod dynamics;
+pub mod flex_outputs;
 pub mod flexible;
 pub mod formulate;
 pub mod initial;
 pub mod joint;
 pub mod numeric;
 pub mod spatial;
+pub mod stiffening;
 pub mod tree;
 
 pub use dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};

@@ -192,6 +192,10 @@ pub fn lower_ast<S: Scalar>(
                 BinOp::Pow => (y * x.ln()).exp(),
             }
         }
+        Ast::Call(Func::Select, args, _) => {
+            let arg = |k: usize| args.get(k).map_or(Ok(S::zero()), lower);
+            S::select(arg(0)?, arg(1)?, arg(2)?)
+        }
         Ast::Call(f, args, _) => {
             let x = lower(&args[0])?;
             let one = S::one();
@@ -213,6 +217,7 @@ pub fn lower_ast<S: Scalar>(
                 Func::Exp => x.exp(),
                 Func::Ln => x.ln(),
                 Func::Abs => x.abs(),
+                Func::Select => x, // handled above
             }
         }
     })

@@ -15,6 +15,7 @@
 pub mod builder;
 mod drive;
 mod fields;
+mod flex_outputs;
 mod load;
 pub mod locate;
 mod read;

@@ -11,6 +11,7 @@
 //! `docs/model-format.md` ("Scenes").
 
 use super::Checked;
+use super::flex_outputs::FlexOutput;
 use super::locate::{self, Node, Seg, string_contents_start};
 use super::read::Format;
 use super::spec::{Num, Output};
@@ -496,6 +497,27 @@ impl Ctx<'_> {
                     .map(OutputKind::JointReaction),
                 Output::Energy => Some(OutputKind::Energy),
                 Output::Momentum => Some(OutputKind::Momentum),
+                Output::Deformation { name, body, x } | Output::SectionForces { name, body, x } => {
+                    let b = self.output_body(sys, body, &path);
+                    let x = self.quantity(x, &at(&path, &[f("x")]), sys);
+                    match (b, x) {
+                        (Some(b), Some(x)) => {
+                            let want = if matches!(o, Output::Deformation { .. }) {
+                                FlexOutput::Deformation(name, x.value)
+                            } else {
+                                FlexOutput::SectionForces(name, x.value)
+                            };
+                            self.flex_output(want, b, sys, &path)
+                        }
+                        _ => None,
+                    }
+                }
+                Output::NodePosition { body, node } => self
+                    .output_body(sys, body, &path)
+                    .and_then(|b| self.flex_output(FlexOutput::NodePosition(*node), b, sys, &path)),
+                Output::ElasticEnergy { body } => self
+                    .output_body(sys, body, &path)
+                    .and_then(|b| self.flex_output(FlexOutput::ElasticEnergy, b, sys, &path)),
             };
             match kind {
                 Some(kind) if kinds.contains(&kind) => self.warning(
@@ -508,6 +530,40 @@ impl Ctx<'_> {
             }
         }
         ok.then_some(kinds)
+    }
+
+    /// The body an output names, or an error at its `body`.
+    fn output_body(&mut self, sys: &System, body: &str, path: &[Seg<'static>]) -> Option<usize> {
+        let found = sys.body_id(body);
+        if found.is_none() {
+            let names = sys.bodies.iter().map(|b| b.name.as_str());
+            let help = suggest(body, names, "bodies");
+            self.error(
+                &at(path, &[f("body")]),
+                format!("unknown output body `{body}`"),
+                help,
+            );
+        }
+        found
+    }
+
+    /// A flexible-body output on body `b`, its problems reported at `path`.
+    fn flex_output(
+        &mut self,
+        want: FlexOutput<'_>,
+        b: usize,
+        sys: &System,
+        path: &[Seg<'static>],
+    ) -> Option<OutputKind> {
+        match super::flex_outputs::resolve(want, b, &sys.bodies[b]) {
+            Ok(kind) => Some(kind),
+            Err(problems) => {
+                for p in problems {
+                    self.error(&at(path, &[f(p.field)]), p.message, p.help);
+                }
+                None
+            }
+        }
     }
 
     fn marker(

@@ -809,6 +809,44 @@ pub enum Output {
     Energy,
     /// Linear and angular momentum (about the world origin).
     Momentum,
+    /// Elastic displacement `(u_x, u_y, u_z)` and small rotation
+    /// `(θ_x, θ_y, θ_z)` of the section at `x` of a flexible beam, in its
+    /// body axes: outputs `<name>_ux … <name>_rz`.
+    Deformation {
+        /// Prefix of the output names (an identifier).
+        name: String,
+        /// The flexible body.
+        body: String,
+        /// Where along the beam, m (`0 ≤ x ≤ L`; parameters only).
+        x: Num,
+    },
+    /// Stress resultants at the section `x` of a flexible beam from the FE
+    /// interpolation, body axes, acting on the part `[0, x]` from the part
+    /// beyond: `N = EA u_x'`, `Q_y = −EI_z u_y'''`, `Q_z = −EI_y u_z'''`,
+    /// `M_x = GJ θ_x'`, `M_y = −EI_y u_z''`, `M_z = EI_z u_y''`; outputs
+    /// `<name>_N, <name>_Qy, <name>_Qz, <name>_Mx, <name>_My, <name>_Mz`.
+    SectionForces {
+        /// Prefix of the output names (an identifier).
+        name: String,
+        /// The flexible body.
+        body: String,
+        /// Where along the beam, m (`0 ≤ x ≤ L`; parameters only).
+        x: Num,
+    },
+    /// World position of a node of a flexible beam, deformation included:
+    /// outputs `<body>_node<k>_x`, `_y`, `_z`.
+    NodePosition {
+        /// The flexible body.
+        body: String,
+        /// The node (0 at the body origin … `elements` at the tip).
+        node: usize,
+    },
+    /// Strain energy `½ q_fᵀ K_ff q_f` of a flexible body (J): output
+    /// `<body>_strain_energy` (the potential energy of `Energy` includes it).
+    ElasticEnergy {
+        /// The flexible body.
+        body: String,
+    },
 }
 
 fn is_false(b: &bool) -> bool {

@@ -5,6 +5,7 @@
 //! and says what would be right. Checks go on after a failure wherever the
 //! remaining ones still make sense, so one run reports everything.
 
+use super::flex_outputs::{self, FlexOutput};
 use super::locate::{Node, Seg, string_contents_start};
 use super::rotation;
 use super::spec::{self, Num, Orientation, Spec, V3};
@@ -2092,6 +2093,25 @@ impl Ctx<'_> {
         ok.then_some(out)
     }
 
+    /// A flexible-body output on body `b`, its problems reported at `path`.
+    fn flex_output(
+        &mut self,
+        want: FlexOutput<'_>,
+        b: usize,
+        body: &BodyInfo,
+        path: &[Seg<'static>],
+    ) -> Option<OutputKind> {
+        match flex_outputs::resolve(want, b, body) {
+            Ok(kind) => Some(kind),
+            Err(problems) => {
+                for p in problems {
+                    self.error(&join(path, &[f(p.field)]), p.message, p.help);
+                }
+                None
+            }
+        }
+    }
+
     fn outputs(
         &mut self,
         spec: &Spec,
@@ -2134,6 +2154,32 @@ impl Ctx<'_> {
                     .map(OutputKind::JointReaction),
                 spec::Output::Energy => Some(OutputKind::Energy),
                 spec::Output::Momentum => Some(OutputKind::Momentum),
+                spec::Output::Deformation { name, body, x }
+                | spec::Output::SectionForces { name, body, x } => {
+                    let b = self.body_ref(bodies, body, &join(&path, &[f("body")]), "output");
+                    let x = self.quantity(x, &join(&path, &[f("x")]), Scope::Params);
+                    match (b, x) {
+                        (Some(b), Some(x)) => {
+                            let want = if matches!(o, spec::Output::Deformation { .. }) {
+                                FlexOutput::Deformation(name, x.value)
+                            } else {
+                                FlexOutput::SectionForces(name, x.value)
+                            };
+                            self.flex_output(want, b, &bodies[b], &path)
+                        }
+                        _ => None,
+                    }
+                }
+                spec::Output::NodePosition { body, node } => self
+                    .body_ref(bodies, body, &join(&path, &[f("body")]), "output")
+                    .and_then(|b| {
+                        self.flex_output(FlexOutput::NodePosition(*node), b, &bodies[b], &path)
+                    }),
+                spec::Output::ElasticEnergy { body } => self
+                    .body_ref(bodies, body, &join(&path, &[f("body")]), "output")
+                    .and_then(|b| {
+                        self.flex_output(FlexOutput::ElasticEnergy, b, &bodies[b], &path)
+                    }),
             };
             match kind {
                 Some(kind) => out.push(kind),

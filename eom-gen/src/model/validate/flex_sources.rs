@@ -333,6 +333,7 @@ impl Ctx<'_> {
             source: FlexSource::Assumed {
                 shapes: shape_exprs,
                 geometric: reduced.geometric.clone(),
+                axial_geometric: reduced.axial_geometric.clone(),
                 damping_unit: reduced.ritz.damping_unit.clone(),
             },
             beam: section,
