@@ -595,8 +595,46 @@ pub struct CableInfo {
     /// Its name.
     pub name: String,
     /// Everything the runtime builds it from (values at the parameters'
-    /// defaults; gravity from the model).
+    /// defaults; gravity from the model). An end held at a marker has the
+    /// support `Free` here: the attachment holds it.
     pub chain: eom_sim::large::ancf::ChainSpec,
+    /// The first end held at a marker of a rigid body.
+    pub start_at: Option<CableMountInfo>,
+    /// The second end held at a marker of a rigid body.
+    pub end_at: Option<CableMountInfo>,
+}
+
+/// A cable end held at a marker of a rigid body (validated).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CableMountInfo {
+    /// The body (index into `System::bodies`, never ground).
+    pub body: usize,
+    /// The marker (index into the body's markers).
+    pub marker: usize,
+    /// Clamped: the unit direction of the cable's tangent in marker axes;
+    /// pinned: none.
+    pub axis: Option<[f64; 3]>,
+    /// Where in the model file.
+    pub span: Span,
+}
+
+impl System {
+    /// The cable ends held at markers of rigid bodies, in order (cable by
+    /// cable, start before end): cable index, `true` for the second end,
+    /// the mount. The generated `attachments` function has one block per
+    /// entry, in this order.
+    pub fn cable_mounts(&self) -> Vec<(usize, bool, &CableMountInfo)> {
+        let mut out = Vec::new();
+        for (k, c) in self.cables.iter().enumerate() {
+            if let Some(m) = &c.start_at {
+                out.push((k, false, m));
+            }
+            if let Some(m) = &c.end_at {
+                out.push((k, true, m));
+            }
+        }
+        out
+    }
 }
 
 impl System {

@@ -182,12 +182,34 @@ pub struct Cable {
     /// How the second end is held.
     #[serde(default, skip_serializing_if = "CableEnd::is_free")]
     pub end: CableEnd,
+    /// The first end held (as `start` says: pinned or clamped) at a marker
+    /// of a rigid body instead of to ground.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_at: Option<CableMount>,
+    /// The second end held at a marker of a rigid body.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end_at: Option<CableMount>,
     /// A constant force on the second end, world axes, N.
     #[serde(default, skip_serializing_if = "V3::is_zero")]
     pub end_force: V3,
     /// A point mass on the second end (a bob), kg.
     #[serde(default, skip_serializing_if = "Num::is_zero")]
     pub end_mass: Num,
+}
+
+/// Where a cable end is held on a rigid body: a marker, and for a clamped
+/// end the direction (marker axes) along which the cable leaves it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CableMount {
+    /// The rigid body.
+    pub body: String,
+    /// Its marker: the end node stays at the marker's origin.
+    pub marker: String,
+    /// Clamped ends: the cable's tangent at the end, in the marker's axes
+    /// (it stays parallel to this direction as the body turns).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axis: Option<V3>,
 }
 
 /// ANCF element types (the kernels generated once per type).

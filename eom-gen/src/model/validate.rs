@@ -457,7 +457,7 @@ impl Ctx<'_> {
         let (forces, inputs) = self.forces(spec, &bodies, &joints);
         let constraints = self.constraints(spec, &bodies);
         let outputs = self.outputs(spec, &bodies, &joints);
-        let cables = self.cables(spec, gravity.as_ref());
+        let cables = self.cables(spec, gravity.as_ref(), &bodies);
         let (Some(graph), true) = (graph, joints_ok) else {
             return None;
         };
@@ -2287,7 +2287,12 @@ fn planar_normal(sys: &System, poses: &[Pose<f64>]) -> Option<Vector3<f64>> {
 impl Ctx<'_> {
     /// The ANCF chains: names, element types, geometry, section and
     /// material, supports, end force; every problem reported.
-    fn cables(&mut self, spec: &Spec, gravity: Option<&Vec3Q>) -> Option<Vec<CableInfo>> {
+    fn cables(
+        &mut self,
+        spec: &Spec,
+        gravity: Option<&Vec3Q>,
+        bodies: &[BodyInfo],
+    ) -> Option<Vec<CableInfo>> {
         use eom_sim::large::ancf::{ChainSpec, Section, Support};
         let g = gravity.map_or([0.0; 3], |g| [g[0].value, g[1].value, g[2].value]);
         let mut out = Vec::new();
@@ -2467,7 +2472,24 @@ impl Ctx<'_> {
                     "it can move freely (dynamics); a static solve will refuse it",
                 );
             }
-            let support = |e: spec::CableEnd| match e {
+            let start_at = c.start_at.as_ref().map(|m| {
+                self.cable_mount(m, c.start, &at("start_at"), "start", name, planar, bodies)
+            });
+            let end_at = c
+                .end_at
+                .as_ref()
+                .map(|m| self.cable_mount(m, c.end, &at("end_at"), "end", name, planar, bodies));
+            let (start_at, end_at) = match (start_at, end_at) {
+                (Some(None), _) | (_, Some(None)) => {
+                    ok = false;
+                    (None, None)
+                }
+                (a, b) => (a.flatten(), b.flatten()),
+            };
+            // An end held at a marker is free in the chain: the attachment
+            // constraint holds it.
+            let support = |e: spec::CableEnd, mounted: bool| match e {
+                _ if mounted => Support::Free,
                 spec::CableEnd::Free => Support::Free,
                 spec::CableEnd::Pinned => Support::Pinned,
                 spec::CableEnd::Clamped => Support::Clamped,
@@ -2513,14 +2535,135 @@ impl Ctx<'_> {
                         damping_bending: db.value,
                         retardation: mu.value,
                     },
-                    start_support: support(c.start),
-                    end_support: support(c.end),
+                    start_support: support(c.start, start_at.is_some()),
+                    end_support: support(c.end, end_at.is_some()),
                     end_force: v(&end_force),
                     end_mass: end_mass.value,
                     gravity: g,
                 },
+                start_at,
+                end_at,
             });
         }
         ok.then_some(out)
+    }
+
+    /// A cable end held at a marker of a rigid body: the body and marker
+    /// exist, the body is rigid and not ground, the end is pinned or
+    /// clamped, a clamped end gives its `axis` (in the cable's plane for
+    /// planar elements), a pinned one none. `None` inside: an error was
+    /// reported.
+    #[allow(clippy::too_many_arguments)]
+    fn cable_mount(
+        &mut self,
+        m: &spec::CableMount,
+        how: spec::CableEnd,
+        path: &[Seg<'static>],
+        end: &str,
+        cable: &str,
+        planar: bool,
+        bodies: &[BodyInfo],
+    ) -> Option<CableMountInfo> {
+        let span = self.span(path);
+        let body = self.body_ref(bodies, &m.body, &join(path, &[f("body")]), "mount");
+        let mut ok = body.is_some();
+        if let Some(b) = body {
+            if b == 0 {
+                self.error(
+                    &join(path, &[f("body")]),
+                    format!("the {end} of cable `{cable}` is held at a marker of `ground`"),
+                    format!("hold it to ground with `{end}: Pinned` or `{end}: Clamped` alone (at the `from`/`to` point), or name a rigid body"),
+                );
+                ok = false;
+            } else if bodies[b].flexible.is_some() {
+                self.error(
+                    &join(path, &[f("body")]),
+                    format!(
+                        "the {end} of cable `{cable}` is held at flexible body `{}`",
+                        m.body
+                    ),
+                    "cables attach to markers of rigid bodies only",
+                );
+                ok = false;
+            }
+        }
+        let marker = body.and_then(|b| {
+            let found = bodies[b].markers.iter().position(|x| x.name == m.marker);
+            if found.is_none() {
+                let names = bodies[b].markers.iter().map(|x| x.name.as_str());
+                let help = match did_you_mean(&m.marker, names.clone()) {
+                    Some(best) => format!("did you mean `{best}`?"),
+                    None => format!("its markers are {}", list_names(names)),
+                };
+                self.error(
+                    &join(path, &[f("marker")]),
+                    format!("body `{}` has no marker `{}`", m.body, m.marker),
+                    help,
+                );
+            }
+            found
+        });
+        ok &= marker.is_some();
+        let axis = match (how, &m.axis) {
+            (spec::CableEnd::Free, _) => {
+                self.error(
+                    path,
+                    format!("the {end} of cable `{cable}` is `Free` but held at marker `{}.{}`", m.body, m.marker),
+                    format!("say how the marker holds it: `{end}: Pinned` (position) or `{end}: Clamped` (position and direction, with `axis`)"),
+                );
+                ok = false;
+                None
+            }
+            (spec::CableEnd::Clamped, None) => {
+                self.error(
+                    path,
+                    format!(
+                        "the {end} of cable `{cable}` is clamped at marker `{}.{}` without an `axis`",
+                        m.body, m.marker
+                    ),
+                    "give `axis: (1, 0, 0)`: the direction, in the marker's axes, along which the cable leaves the marker",
+                );
+                ok = false;
+                None
+            }
+            (spec::CableEnd::Pinned, Some(_)) => {
+                self.error(
+                    &join(path, &[f("axis")]),
+                    format!("the {end} of cable `{cable}` is pinned: it turns freely, so `axis` means nothing"),
+                    format!("remove `axis`, or clamp the end (`{end}: Clamped`)"),
+                );
+                ok = false;
+                None
+            }
+            (spec::CableEnd::Pinned, None) => None,
+            (spec::CableEnd::Clamped, Some(a)) => {
+                let ap = join(path, &[f("axis")]);
+                match self.axis(a, &ap, "the clamp's axis") {
+                    Some(a) if planar && a.unit.z.abs() > 1e-12 => {
+                        self.error(
+                            &ap,
+                            format!("the clamp's axis of planar cable `{cable}` leaves the x–y plane"),
+                            "give an axis with z = 0 (in the marker's axes; planar models turn about z)",
+                        );
+                        ok = false;
+                        None
+                    }
+                    Some(a) => Some([a.unit.x, a.unit.y, a.unit.z]),
+                    None => {
+                        ok = false;
+                        None
+                    }
+                }
+            }
+        };
+        let (Some(body), Some(marker), true) = (body, marker, ok) else {
+            return None;
+        };
+        Some(CableMountInfo {
+            body,
+            marker,
+            axis,
+            span,
+        })
     }
 }

@@ -158,6 +158,20 @@ impl Chain {
         p
     }
 
+    /// The attachment of the first (`end == false`) or last node to a
+    /// mount of a rigid part ([`super::mixed`]): its position, and when
+    /// `clamped` its gradient `r'` (the chain must leave that end free).
+    pub fn attachment(&self, name: &str, end: bool, clamped: bool) -> super::mixed::Attachment {
+        let node = if end { self.nodes - 1 } else { 0 };
+        let base = node * self.node_coords;
+        super::mixed::Attachment {
+            name: name.to_string(),
+            dim: self.dim,
+            position: (0..self.dim).map(|k| base + k).collect(),
+            gradient: clamped.then(|| (0..self.dim).map(|k| base + self.dim + k).collect()),
+        }
+    }
+
     /// Full coordinate index of `node`'s position component `k`.
     pub fn position_index(&self, node: usize, k: usize) -> usize {
         node * self.node_coords + k

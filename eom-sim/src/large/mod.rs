@@ -9,11 +9,14 @@
 //! - [`model`]: element groups, fixed coordinates eliminated, loads.
 //! - [`statics`]: Newton with load stepping.
 //! - [`dynamics`]: generalized-α (implicit, fixed step) and RK4 (explicit).
+//! - [`mixed`]: rigid parts and chains in one model, attachment
+//!   constraints, index-3 generalized-α.
 //! - [`sparse`]: the pattern, the matrix and the solvers behind a trait.
 
 pub mod ancf;
 pub mod dynamics;
 pub mod elastica;
+pub mod mixed;
 pub mod model;
 pub mod sparse;
 pub mod statics;
@@ -21,6 +24,7 @@ pub mod statics;
 pub use dynamics::{
     AlphaOptions, DynamicsError, DynamicsStats, GeneralizedAlpha, State, integrate_rk4,
 };
+pub use mixed::{Attachment, MixedAlpha, MixedError, MixedModel, MixedStats, RigidPart};
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 pub use sparse::{FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
 pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};

@@ -59,6 +59,13 @@ impl Pattern {
         self.row_idx[a..b].binary_search(&row).ok().map(|k| a + k)
     }
 
+    /// Every stored entry as `(row, col, slot)`, column by column.
+    pub fn entries(&self) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+        (0..self.n).flat_map(move |j| {
+            (self.col_ptr[j]..self.col_ptr[j + 1]).map(move |k| (self.row_idx[k], j, k))
+        })
+    }
+
     fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
         SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
     }

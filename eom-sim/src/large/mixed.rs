@@ -1,0 +1,813 @@
+//! Rigid bodies and ANCF chains in one model: the rigid part's coordinates
+//! appended to the structural free vector, its mass matrix as a dense
+//! block in the sparse Newton matrix, and each cable end held at a marker
+//! of a rigid body as constraints with multipliers, integrated by the
+//! index-3 generalized-α method of Arnold and Brüls (2007).
+//!
+//! Unknowns `y = (x, q_r)`: the structure's free coordinates `x` and the
+//! rigid part's coordinates `q_r` (with `q̇_r = u_r`, which the rigid part
+//! guarantees). At `t_{n+1}` the step solves
+//!
+//! ```text
+//! M_s ẍ + f_int(x, ẋ) − f_ext + Φ_xᵀ λ = 0
+//! M_r(q_r) q̈_r + b(q_r, q̇_r, t) + Φ_qᵀ λ = 0
+//! Φ(x, q_r, t) / β' = 0
+//! ```
+//!
+//! by Newton on the accelerations and `λ` with the matrix
+//! `[[S, Φ_yᵀ], [Φ_y, 0]]`, `S = M + γ' D + β' K` (`β' = h² β (1−α_f)/(1−α_m)`).
+//! Dividing the constraint rows by `β'` (Bottasso, Bauchau and Cardona
+//! 2007; Arnold and Brüls 2007 §4) makes them act on the acceleration
+//! correction with the unit Jacobian `Φ_y`: both blocks of the matrix are
+//! then of order one in `h`, and `λ` is the physical constraint force.
+//! The rigid part's tangent (`∂(M_r q̈ + b + Φ_qᵀλ)/∂q_r`, `∂b/∂q̇_r`) is
+//! taken by forward differences (a handful of columns); the coupling of a
+//! clamp's multiplier with the node gradient and the body's rotation is
+//! exact.
+//!
+//! The attachment constraints (mount `k` at world position `p(q_r, t)`,
+//! normals `n₁`, `n₂` of the clamp's axis in world axes):
+//! - pinned: `r_node − p = 0` (`dim` rows);
+//! - clamped: also `r'_node · n₁ = 0` (planar) or `r'_node · n₁ = 0`,
+//!   `r'_node · n₂ = 0` (spatial): the end's tangent stays along the axis
+//!   (its length, the axial strain, stays free).
+//!
+//! The explicit path ([`super::integrate_rk4`]) does not run these models:
+//! they are differential-algebraic (index 3).
+
+use super::dynamics::{AlphaOptions, DynamicsError, DynamicsStats, State};
+use super::model::StructuralModel;
+use super::sparse::{FaerLu, Pattern, SparseMatrix, SparseSolver};
+use std::fmt;
+use std::sync::Arc;
+
+/// The rigid part of a mixed model, with dynamic sizes: what the
+/// generated code of the rigid bodies gives (`mass_matrix`, `bias`,
+/// `energy`, `attachments`), compiled or interpreted.
+pub trait RigidPart {
+    /// Number of coordinates, equal to the number of speeds (`q̇ = u`).
+    fn n(&self) -> usize;
+    /// `M(q, t)`, `n × n` by rows.
+    fn mass_matrix(&self, t: f64, q: &[f64], m: &mut [f64]);
+    /// `b(q, u, t)` of `M u̇ = τ − b` (gravity, springs, velocity terms).
+    fn bias(&self, t: f64, q: &[f64], u: &[f64], b: &mut [f64]);
+    /// Kinetic plus potential energy.
+    fn energy(&self, t: f64, q: &[f64], u: &[f64]) -> f64;
+    /// The mounts, flat: for each mount in order, the rows `p_x, p_y, p_z`
+    /// (world position of the marker) and for a clamped mount also
+    /// `n₁` and `n₂` (unit normals of the clamp's axis, world axes); each
+    /// row its value followed by its `n` partial derivatives `∂/∂q_k`.
+    fn attachments(&self, t: f64, q: &[f64], out: &mut [f64]);
+}
+
+/// A cable end held at a mount of the rigid part.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Attachment {
+    /// A name for reports (`cable.start`).
+    pub name: String,
+    /// Dimension of positions, 2 or 3.
+    pub dim: usize,
+    /// Full structural indices of the end node's position coordinates.
+    pub position: Vec<usize>,
+    /// Clamped ends: full structural indices of the node's gradient `r'`.
+    pub gradient: Option<Vec<usize>>,
+}
+
+impl Attachment {
+    /// Rows of the rigid part's [`RigidPart::attachments`] for this mount.
+    fn mount_rows(&self) -> usize {
+        if self.gradient.is_some() { 9 } else { 3 }
+    }
+
+    /// Constraint equations.
+    fn equations(&self) -> usize {
+        self.dim + self.gradient.as_ref().map_or(0, |_| self.dim - 1)
+    }
+}
+
+/// Why a mixed model cannot be built or started.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MixedError(pub String);
+
+impl fmt::Display for MixedError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for MixedError {}
+
+/// The constraint values and Jacobian at one state.
+#[derive(Clone, Debug, Default)]
+struct ConstraintEval {
+    /// `Φ`.
+    phi: Vec<f64>,
+    /// `(row, column of y, ∂Φ_row/∂y_col)`.
+    jac: Vec<(usize, usize, f64)>,
+    /// Clamps: `(row, y column of r'_i, y column of q_j, ∂n_i/∂q_j)`, the
+    /// coupling `∂²Φ_row/∂r'_i∂q_j`.
+    cross: Vec<(usize, usize, usize, f64)>,
+}
+
+/// Structure, rigid part and attachments over one unknown vector.
+pub struct MixedModel {
+    structure: StructuralModel,
+    rigid: Box<dyn RigidPart>,
+    attachments: Vec<Attachment>,
+    n_s: usize,
+    n_r: usize,
+    m: usize,
+    mount_len: usize,
+    pattern: Arc<Pattern>,
+    /// Structural pattern slot → slot of the combined pattern.
+    s_map: Vec<usize>,
+}
+
+impl MixedModel {
+    /// Joins `structure` and `rigid` by `attachments` (whose node
+    /// coordinates must be free in `structure`).
+    pub fn new(
+        structure: StructuralModel,
+        rigid: Box<dyn RigidPart>,
+        attachments: Vec<Attachment>,
+    ) -> Result<MixedModel, MixedError> {
+        let (n_s, n_r) = (structure.n_free(), rigid.n());
+        let mut entries: Vec<(usize, usize)> = structure
+            .pattern()
+            .entries()
+            .map(|(i, j, _)| (i, j))
+            .collect();
+        for i in 0..n_r {
+            for j in 0..n_r {
+                entries.push((n_s + i, n_s + j));
+            }
+        }
+        let mut row = n_s + n_r;
+        let mut mount_len = 0;
+        for a in &attachments {
+            if a.dim != 2 && a.dim != 3 {
+                return Err(MixedError(format!(
+                    "attachment `{}`: positions have 2 or 3 components, not {}",
+                    a.name, a.dim
+                )));
+            }
+            let free = |i: usize| {
+                structure.free_index(i).ok_or_else(|| {
+                    MixedError(format!(
+                        "attachment `{}`: node coordinate {i} is fixed by a support; an end held at a marker must be free in the chain",
+                        a.name
+                    ))
+                })
+            };
+            let pos: Vec<usize> = a.position.iter().map(|&i| free(i)).collect::<Result<_, _>>()?;
+            let grad: Vec<usize> = match &a.gradient {
+                Some(g) => g.iter().map(|&i| free(i)).collect::<Result<_, _>>()?,
+                None => Vec::new(),
+            };
+            let mut cols: Vec<usize> = (n_s..n_s + n_r).collect();
+            cols.extend(&pos);
+            cols.extend(&grad);
+            for _ in 0..a.equations() {
+                for &c in &cols {
+                    entries.push((row, c));
+                    entries.push((c, row));
+                }
+                row += 1;
+            }
+            for &g in &grad {
+                for j in n_s..n_s + n_r {
+                    entries.push((g, j));
+                    entries.push((j, g));
+                }
+            }
+            mount_len += a.mount_rows() * (1 + n_r);
+        }
+        let m = row - n_s - n_r;
+        let pattern = Arc::new(Pattern::new(n_s + n_r + m, entries));
+        let s_map = structure
+            .pattern()
+            .entries()
+            .map(|(i, j, _)| pattern.slot(i, j).unwrap_or(usize::MAX))
+            .collect();
+        Ok(MixedModel {
+            structure,
+            rigid,
+            attachments,
+            n_s,
+            n_r,
+            m,
+            mount_len,
+            pattern,
+            s_map,
+        })
+    }
+
+    /// The structure.
+    pub fn structure(&self) -> &StructuralModel {
+        &self.structure
+    }
+
+    /// The rigid part.
+    pub fn rigid(&self) -> &dyn RigidPart {
+        self.rigid.as_ref()
+    }
+
+    /// The attachments.
+    pub fn attachments(&self) -> &[Attachment] {
+        &self.attachments
+    }
+
+    /// Unknowns (structural free coordinates, then rigid coordinates).
+    pub fn n(&self) -> usize {
+        self.n_s + self.n_r
+    }
+
+    /// Structural free coordinates (the first entries of `y`).
+    pub fn n_structural(&self) -> usize {
+        self.n_s
+    }
+
+    /// Constraint equations (multipliers).
+    pub fn n_constraints(&self) -> usize {
+        self.m
+    }
+
+    /// The starting state: the structure at its reference, the rigid part
+    /// at `q_r`, `u_r`, the structure at rest.
+    pub fn initial_state(&self, t: f64, q_r: &[f64], u_r: &[f64]) -> State {
+        let mut q = self.structure.restrict(self.structure.q0());
+        q.extend_from_slice(q_r);
+        let mut v = vec![0.0; self.n_s];
+        v.extend_from_slice(u_r);
+        State { t, q, v }
+    }
+
+    /// The structure's full coordinates of `y`.
+    pub fn structural_full(&self, y: &[f64]) -> Vec<f64> {
+        self.structure.expand(&y[..self.n_s])
+    }
+
+    /// Total energy: the structure's (kinetic, strain, loads) and the
+    /// rigid part's.
+    pub fn energy(&self, s: &State) -> f64 {
+        let q_full = self.structural_full(&s.q);
+        self.structure.energy(&q_full, &s.v[..self.n_s])
+            + self
+                .rigid
+                .energy(s.t, &s.q[self.n_s..], &s.v[self.n_s..])
+    }
+
+    /// `Φ(y, t)` (the attachment constraints, unscaled).
+    pub fn constraint_residual(&self, t: f64, y: &[f64]) -> Vec<f64> {
+        let q_full = self.structural_full(y);
+        let mut c = ConstraintEval::default();
+        let mut mounts = vec![0.0; self.mount_len];
+        self.constraints(t, &q_full, &y[self.n_s..], &mut mounts, &mut c);
+        c.phi
+    }
+
+    /// `Φ` with its Jacobian and the clamps' coupling terms.
+    fn constraints(
+        &self,
+        t: f64,
+        q_full: &[f64],
+        q_r: &[f64],
+        mounts: &mut [f64],
+        c: &mut ConstraintEval,
+    ) {
+        let (n_s, n_r) = (self.n_s, self.n_r);
+        self.rigid.attachments(t, q_r, mounts);
+        c.phi.clear();
+        c.jac.clear();
+        c.cross.clear();
+        let stride = 1 + n_r;
+        let mut at = 0;
+        let free = |i: usize| self.structure.free_index(i).unwrap_or(usize::MAX);
+        for a in &self.attachments {
+            let rows = &mounts[at..at + a.mount_rows() * stride];
+            at += a.mount_rows() * stride;
+            // r_node − p = 0.
+            for k in 0..a.dim {
+                let row = c.phi.len();
+                let p = &rows[k * stride..(k + 1) * stride];
+                c.phi.push(q_full[a.position[k]] - p[0]);
+                c.jac.push((row, free(a.position[k]), 1.0));
+                for j in 0..n_r {
+                    c.jac.push((row, n_s + j, -p[1 + j]));
+                }
+            }
+            // r'_node · n_l = 0.
+            if let Some(g) = &a.gradient {
+                for l in 0..a.dim - 1 {
+                    let row = c.phi.len();
+                    let base = (3 + 3 * l) * stride;
+                    let normal = |i: usize| &rows[base + i * stride..base + (i + 1) * stride];
+                    let mut phi = 0.0;
+                    for (i, &gi) in g.iter().enumerate() {
+                        phi += q_full[gi] * normal(i)[0];
+                        c.jac.push((row, free(gi), normal(i)[0]));
+                    }
+                    for j in 0..n_r {
+                        let d: f64 = g
+                            .iter()
+                            .enumerate()
+                            .map(|(i, &gi)| q_full[gi] * normal(i)[1 + j])
+                            .sum();
+                        c.jac.push((row, n_s + j, d));
+                        for (i, &gi) in g.iter().enumerate() {
+                            c.cross.push((row, free(gi), n_s + j, normal(i)[1 + j]));
+                        }
+                    }
+                    c.phi.push(phi);
+                }
+            }
+        }
+    }
+
+    /// The rigid rows of the residual, `M_r a + b + Φ_qᵀ λ`, at `q_r`.
+    #[allow(clippy::too_many_arguments)]
+    fn rigid_residual(
+        &self,
+        t: f64,
+        q_full: &[f64],
+        q_r: &[f64],
+        u_r: &[f64],
+        a_r: &[f64],
+        lambda: &[f64],
+        scratch: &mut RigidScratch,
+        out: &mut [f64],
+    ) {
+        let n_r = self.n_r;
+        self.rigid.mass_matrix(t, q_r, &mut scratch.mass);
+        self.rigid.bias(t, q_r, u_r, out);
+        for i in 0..n_r {
+            for j in 0..n_r {
+                out[i] += scratch.mass[i * n_r + j] * a_r[j];
+            }
+        }
+        self.constraints(t, q_full, q_r, &mut scratch.mounts, &mut scratch.c);
+        for &(row, col, v) in &scratch.c.jac {
+            if col >= self.n_s {
+                out[col - self.n_s] += v * lambda[row];
+            }
+        }
+    }
+}
+
+struct RigidScratch {
+    mass: Vec<f64>,
+    mounts: Vec<f64>,
+    c: ConstraintEval,
+}
+
+/// Counters and the constraint residual of a mixed run.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MixedStats {
+    /// Steps, Newton iterations, factorisations, force evaluations.
+    pub dynamics: DynamicsStats,
+    /// Largest `‖Φ‖∞` after a step (m, and for clamps the sine of the
+    /// tangent's angle off the axis times `|r'|`).
+    pub max_constraint_residual: f64,
+}
+
+fn norm_inf(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+/// Index-3 generalized-α (Arnold and Brüls 2007) on a [`MixedModel`]:
+/// fixed step, Newton on accelerations and multipliers, modified Newton
+/// as in [`super::GeneralizedAlpha`].
+pub struct MixedAlpha<'m> {
+    model: &'m MixedModel,
+    opts: AlphaOptions,
+    alpha_m: f64,
+    alpha_f: f64,
+    beta: f64,
+    gamma: f64,
+    state: State,
+    acc: Vec<f64>,
+    aux: Vec<f64>,
+    lambda: Vec<f64>,
+    load: Vec<f64>,
+    s_matrix: SparseMatrix,
+    matrix: SparseMatrix,
+    lu: FaerLu,
+    have_matrix: bool,
+    q_full: Vec<f64>,
+    v_full: Vec<f64>,
+    scratch: Vec<f64>,
+    rs: RigidScratch,
+    /// Counters and the largest constraint residual.
+    pub stats: MixedStats,
+}
+
+impl<'m> MixedAlpha<'m> {
+    /// Starts at `state` (of [`MixedModel::initial_state`]'s layout) with
+    /// consistent accelerations and multipliers; refuses a start whose
+    /// constraint residual exceeds `1e-8` (the cable ends are not at their
+    /// markers, or a clamp's axis is not along the cable).
+    pub fn new(
+        model: &'m MixedModel,
+        state: State,
+        opts: AlphaOptions,
+    ) -> Result<Self, DynamicsError> {
+        let rho = opts.rho_inf.clamp(0.0, 1.0);
+        let alpha_m = (2.0 * rho - 1.0) / (rho + 1.0);
+        let alpha_f = rho / (rho + 1.0);
+        let gamma = 0.5 + alpha_f - alpha_m;
+        let beta = 0.25 * (gamma + 0.5).powi(2);
+        let (n, n_s, n_r, m) = (model.n(), model.n_s, model.n_r, model.m);
+        let st = &model.structure;
+        let mut ga = MixedAlpha {
+            model,
+            opts,
+            alpha_m,
+            alpha_f,
+            beta,
+            gamma,
+            acc: vec![0.0; n],
+            aux: vec![0.0; n],
+            lambda: vec![0.0; m],
+            load: st.load_free(),
+            s_matrix: SparseMatrix::zeros(st.pattern().clone()),
+            matrix: SparseMatrix::zeros(model.pattern.clone()),
+            lu: FaerLu::default(),
+            have_matrix: false,
+            q_full: st.expand(&state.q[..n_s]),
+            v_full: st.expand_rate(&state.v[..n_s]),
+            scratch: vec![0.0; st.n_full()],
+            rs: RigidScratch {
+                mass: vec![0.0; n_r * n_r],
+                mounts: vec![0.0; model.mount_len],
+                c: ConstraintEval::default(),
+            },
+            state,
+            stats: MixedStats::default(),
+        };
+        let phi0 = model.constraint_residual(ga.state.t, &ga.state.q);
+        let worst = norm_inf(&phi0);
+        if !(worst <= 1e-8) {
+            return Err(DynamicsError::Singular {
+                t: ga.state.t,
+                reason: format!(
+                    "the attachments do not hold at the start (|Φ|∞ = {worst:.3e}): {}",
+                    ga.describe_residual(&phi0)
+                ),
+            });
+        }
+        ga.initial_acceleration()?;
+        ga.aux = ga.acc.clone();
+        Ok(ga)
+    }
+
+    fn describe_residual(&self, phi: &[f64]) -> String {
+        let mut out = Vec::new();
+        let mut row = 0;
+        for a in &self.model.attachments {
+            let rows = &phi[row..row + a.equations()];
+            row += a.equations();
+            let gap = rows[..a.dim].iter().map(|x| x * x).sum::<f64>().sqrt();
+            if gap > 1e-8 {
+                out.push(format!(
+                    "`{}` is {gap:.3e} m from its marker",
+                    a.name
+                ));
+            }
+            if rows[a.dim..].iter().any(|x| x.abs() > 1e-8) {
+                out.push(format!(
+                    "`{}`'s tangent is off the clamp's axis",
+                    a.name
+                ));
+            }
+        }
+        out.join("; ")
+    }
+
+    /// `[[M, Φ_yᵀ], [Φ_y, 0]] (q̈, λ) = (f_ext − f_int − b, γ)` with
+    /// `γ = −d²Φ/dt²` at `q̈ = 0`, by a central second difference along
+    /// the motion.
+    fn initial_acceleration(&mut self) -> Result<(), DynamicsError> {
+        let (n_s, n_r, n) = (self.model.n_s, self.model.n_r, self.model.n());
+        let t = self.state.t;
+        let mut rhs = vec![0.0; n + self.model.m];
+        let mut f = vec![0.0; n_s];
+        self.model
+            .structure
+            .internal(&self.q_full, &self.v_full, &mut self.scratch, &mut f);
+        for i in 0..n_s {
+            rhs[i] = self.load[i] - f[i];
+        }
+        let mut b = vec![0.0; n_r];
+        let (q_r, u_r) = (&self.state.q[n_s..], &self.state.v[n_s..]);
+        self.model.rigid.bias(t, q_r, u_r, &mut b);
+        for i in 0..n_r {
+            rhs[n_s + i] = -b[i];
+        }
+        let eps = 1e-4;
+        let shifted = |s: f64| -> Vec<f64> {
+            let y: Vec<f64> = self
+                .state
+                .q
+                .iter()
+                .zip(&self.state.v)
+                .map(|(q, v)| q + s * v)
+                .collect();
+            self.model.constraint_residual(t + s, &y)
+        };
+        let (plus, zero, minus) = (shifted(eps), shifted(0.0), shifted(-eps));
+        for k in 0..self.model.m {
+            rhs[n + k] = -(plus[k] - 2.0 * zero[k] + minus[k]) / (eps * eps);
+        }
+        let (y, v, a) = (self.state.q.clone(), self.state.v.clone(), self.acc.clone());
+        self.assemble_at(&y, &v, &a, t, 0.0, 0.0)?;
+        self.lu.solve(&mut rhs);
+        if rhs.iter().any(|x| !x.is_finite()) {
+            return Err(DynamicsError::NonFinite { t });
+        }
+        self.acc.copy_from_slice(&rhs[..n]);
+        self.lambda.copy_from_slice(&rhs[n..]);
+        Ok(())
+    }
+
+    /// Builds and factors `[[M + γ' D + β' K, Φ_yᵀ], [Φ_y, 0]]` at the
+    /// current iterate (`self.q_full`, `self.v_full`, `self.rs`'s rigid
+    /// state from `y`, `v`, `a`, `λ` given).
+    fn assemble_at(
+        &mut self,
+        y: &[f64],
+        v: &[f64],
+        a: &[f64],
+        t: f64,
+        bp: f64,
+        gp: f64,
+    ) -> Result<(), DynamicsError> {
+        let model = self.model;
+        let (n_s, n_r, n) = (model.n_s, model.n_r, model.n());
+        self.matrix.clear();
+        model.structure.jacobian(
+            &self.q_full,
+            &self.v_full,
+            bp,
+            gp,
+            1.0,
+            &mut self.s_matrix,
+        );
+        for (k, &slot) in model.s_map.iter().enumerate() {
+            if slot != usize::MAX {
+                self.matrix.values[slot] += self.s_matrix.values[k];
+            }
+        }
+        let (q_r, u_r, a_r) = (&y[n_s..], &v[n_s..], &a[n_s..]);
+        // Rigid block: M_r + β' ∂g/∂q + γ' ∂b/∂u by forward differences
+        // of g = M_r a + b + Φ_qᵀ λ.
+        let mut g0 = vec![0.0; n_r];
+        let lambda = self.lambda.clone();
+        model.rigid_residual(t, &self.q_full, q_r, u_r, a_r, &lambda, &mut self.rs, &mut g0);
+        let mass = self.rs.mass.clone();
+        let mut g1 = vec![0.0; n_r];
+        let mut b0 = vec![0.0; n_r];
+        let mut b1 = vec![0.0; n_r];
+        model.rigid.bias(t, q_r, u_r, &mut b0);
+        let mut qp = q_r.to_vec();
+        let mut up = u_r.to_vec();
+        for j in 0..n_r {
+            let mut col = vec![0.0; n_r];
+            if bp != 0.0 {
+                let e = 1e-7 * (1.0 + q_r[j].abs());
+                qp[j] = q_r[j] + e;
+                model.rigid_residual(t, &self.q_full, &qp, u_r, a_r, &lambda, &mut self.rs, &mut g1);
+                qp[j] = q_r[j];
+                for i in 0..n_r {
+                    col[i] += bp * (g1[i] - g0[i]) / e;
+                }
+            }
+            if gp != 0.0 {
+                let e = 1e-7 * (1.0 + u_r[j].abs());
+                up[j] = u_r[j] + e;
+                model.rigid.bias(t, q_r, &up, &mut b1);
+                up[j] = u_r[j];
+                for i in 0..n_r {
+                    col[i] += gp * (b1[i] - b0[i]) / e;
+                }
+            }
+            for i in 0..n_r {
+                let v = mass[i * n_r + j] + col[i];
+                if let Some(s) = model.pattern.slot(n_s + i, n_s + j) {
+                    self.matrix.values[s] += v;
+                }
+            }
+        }
+        // Constraint rows and columns, and the clamps' coupling.
+        let mut c = std::mem::take(&mut self.rs.c);
+        model.constraints(t, &self.q_full, q_r, &mut self.rs.mounts, &mut c);
+        for &(row, col, val) in &c.jac {
+            for (i, j) in [(n + row, col), (col, n + row)] {
+                if let Some(s) = model.pattern.slot(i, j) {
+                    self.matrix.values[s] += val;
+                }
+            }
+        }
+        if bp != 0.0 {
+            for &(row, gi, qj, d) in &c.cross {
+                let v = bp * lambda[row] * d;
+                for (i, j) in [(gi, qj), (qj, gi)] {
+                    if let Some(s) = model.pattern.slot(i, j) {
+                        self.matrix.values[s] += v;
+                    }
+                }
+            }
+        }
+        self.rs.c = c;
+        self.lu
+            .factor(&self.matrix)
+            .map_err(|e| DynamicsError::Singular { t, reason: e.0 })?;
+        self.stats.dynamics.factorizations += 1;
+        self.have_matrix = true;
+        Ok(())
+    }
+
+    /// The current state.
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// The structure's current full coordinates.
+    pub fn q_full(&self) -> &[f64] {
+        &self.q_full
+    }
+
+    /// The current multipliers `λ` (constraint forces; for a pinned end
+    /// `−λ` is the force the marker applies to the cable end, world axes).
+    pub fn multipliers(&self) -> &[f64] {
+        &self.lambda
+    }
+
+    /// The force each mount applies to its cable end, world axes (`−λ` of
+    /// the position rows; `z = 0` when planar).
+    pub fn reactions(&self) -> Vec<[f64; 3]> {
+        let mut out = Vec::new();
+        let mut row = 0;
+        for a in &self.model.attachments {
+            let mut f = [0.0; 3];
+            for (k, fk) in f.iter_mut().enumerate().take(a.dim) {
+                *fk = -self.lambda[row + k];
+            }
+            out.push(f);
+            row += a.equations();
+        }
+        out
+    }
+
+    /// One step; with [`AlphaOptions::reuse_matrix`], a failed modified
+    /// Newton iteration is retried with full Newton.
+    pub fn step(&mut self) -> Result<(), DynamicsError> {
+        match self.try_step(false) {
+            Err(DynamicsError::NewtonFailed { .. }) if self.opts.reuse_matrix => {
+                self.try_step(true)
+            }
+            other => other,
+        }
+    }
+
+    fn try_step(&mut self, always_refresh: bool) -> Result<(), DynamicsError> {
+        let model = self.model;
+        let h = self.opts.h;
+        let (am, af, beta, gamma) = (self.alpha_m, self.alpha_f, self.beta, self.gamma);
+        let (n_s, n_r, n, m) = (model.n_s, model.n_r, model.n(), model.m);
+        let t1 = self.state.t + h;
+        let mut acc1 = self.acc.clone();
+        let mut aux1: Vec<f64> = (0..n)
+            .map(|i| (af * self.acc[i] + (1.0 - af) * acc1[i] - am * self.aux[i]) / (1.0 - am))
+            .collect();
+        let mut q1: Vec<f64> = (0..n)
+            .map(|i| {
+                self.state.q[i]
+                    + h * self.state.v[i]
+                    + h * h * ((0.5 - beta) * self.aux[i] + beta * aux1[i])
+            })
+            .collect();
+        let mut v1: Vec<f64> = (0..n)
+            .map(|i| self.state.v[i] + h * ((1.0 - gamma) * self.aux[i] + gamma * aux1[i]))
+            .collect();
+        let lambda0 = self.lambda.clone();
+        let da = (1.0 - af) / (1.0 - am);
+        let bp = h * h * beta * da;
+        let gp = h * gamma * da;
+        let mut r = vec![0.0; n + m];
+        let mut f = vec![0.0; n_s];
+        let mut corrections = Vec::new();
+        let mut converged = false;
+        let mut refresh = always_refresh || !self.opts.reuse_matrix || !self.have_matrix;
+        let mut fresh = false;
+        for _ in 0..self.opts.max_iterations {
+            model.structure.expand_into(&q1[..n_s], &mut self.q_full);
+            model.structure.expand_into(&v1[..n_s], &mut self.v_full);
+            // Structural rows: M a + f_int − f_ext.
+            model
+                .structure
+                .internal(&self.q_full, &self.v_full, &mut self.scratch, &mut f);
+            self.stats.dynamics.force_evaluations += 1;
+            for i in 0..n_s {
+                r[i] = f[i] - self.load[i];
+            }
+            model
+                .structure
+                .mass()
+                .mul_add(1.0, &acc1[..n_s], &mut r[..n_s]);
+            // Rigid rows, constraint forces and Φ / β'.
+            let lambda = self.lambda.clone();
+            let mut rr = vec![0.0; n_r];
+            model.rigid_residual(
+                t1,
+                &self.q_full,
+                &q1[n_s..],
+                &v1[n_s..],
+                &acc1[n_s..],
+                &lambda,
+                &mut self.rs,
+                &mut rr,
+            );
+            r[n_s..n].copy_from_slice(&rr);
+            let c = std::mem::take(&mut self.rs.c);
+            for &(row, col, v) in &c.jac {
+                if col < n_s {
+                    r[col] += v * lambda[row];
+                }
+            }
+            for k in 0..m {
+                r[n + k] = c.phi[k] / bp;
+            }
+            self.rs.c = c;
+            if refresh {
+                self.assemble_at(&q1, &v1, &acc1, t1, bp, gp)?;
+                refresh = always_refresh || !self.opts.reuse_matrix;
+                fresh = true;
+            }
+            self.lu.solve(&mut r);
+            self.stats.dynamics.newton_iterations += 1;
+            for i in 0..n {
+                let d = -r[i];
+                acc1[i] += d;
+                aux1[i] += da * d;
+                q1[i] += bp * d;
+                v1[i] += gp * d;
+            }
+            for k in 0..m {
+                self.lambda[k] -= r[n + k];
+            }
+            let cor = bp * norm_inf(&r[..n]);
+            corrections.push(cor);
+            if !cor.is_finite() {
+                self.lambda = lambda0;
+                return Err(DynamicsError::NonFinite { t: t1 });
+            }
+            if cor <= self.opts.tol * (1.0 + norm_inf(&q1)) {
+                converged = true;
+                break;
+            }
+            if let [.., before, last] = corrections[..]
+                && last > 0.25 * before
+                && !fresh
+            {
+                refresh = true;
+            }
+            fresh = false;
+        }
+        if !converged {
+            self.lambda = lambda0;
+            return Err(DynamicsError::NewtonFailed { t: t1, corrections });
+        }
+        self.state.t = t1;
+        self.state.q = q1;
+        self.state.v = v1;
+        self.acc = acc1;
+        self.aux = aux1;
+        model
+            .structure
+            .expand_into(&self.state.q[..n_s], &mut self.q_full);
+        model
+            .structure
+            .expand_into(&self.state.v[..n_s], &mut self.v_full);
+        let phi = model.constraint_residual(t1, &self.state.q);
+        self.stats.max_constraint_residual = self.stats.max_constraint_residual.max(norm_inf(&phi));
+        self.stats.dynamics.steps += 1;
+        Ok(())
+    }
+
+    /// Steps until `t_end` (`t_end − t` a multiple of `h`), calling
+    /// `observe` after every step.
+    pub fn run_to(
+        &mut self,
+        t_end: f64,
+        mut observe: impl FnMut(&State, &[f64]),
+    ) -> Result<(), DynamicsError> {
+        let steps = ((t_end - self.state.t) / self.opts.h - 1e-3)
+            .ceil()
+            .max(0.0) as usize;
+        for _ in 0..steps {
+            self.step()?;
+            observe(&self.state, &self.q_full);
+        }
+        Ok(())
+    }
+}
