@@ -9,15 +9,18 @@
 //! - `simulate` on a model with cables: generalized-α (fixed step `--dt`,
 //!   `--rho-inf`) or RK4.
 //!
-//! Rigid bodies and cables in one model are refused for now (the chains
-//! would need attachment constraints to the rigid part; see
-//! `docs/model-format.md`, "Cables").
+//! A model whose cable hangs at markers of its rigid bodies (`start_at`,
+//! `end_at`) runs as one mixed model (`eom_sim::large::mixed`): the rigid
+//! part's generated functions through the interpreter, the attachments as
+//! constraints, index-3 generalized-α (`simulate` only; `rk4` and
+//! `solve-static` refuse it). Rigid bodies beside cables that do not hang
+//! at them are refused.
 
 use crate::error::Error;
 use eom_gen::Checked;
 use eom_sim::large::ancf::{Chain, chain};
 use eom_sim::large::{
-    AlphaOptions, GeneralizedAlpha, State, StaticOptions, integrate_rk4, solve_static,
+    AlphaOptions, GeneralizedAlpha, MixedAlpha, State, StaticOptions, integrate_rk4, solve_static,
 };
 use serde_json::json;
 use std::fmt::Write;
@@ -35,10 +38,16 @@ fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
             sys.name
         )));
     }
+    if eom_gen::cables::has_mounts(sys) {
+        return Err(Error::Refused(format!(
+            "model `{}` hangs cables at rigid bodies: solve-static does not solve mixed models yet; run `simulate` (with `damping_axial`/`damping_bending` or `--rho-inf` < 1 to settle)",
+            sys.name
+        )));
+    }
     if sys.bodies.len() > 1 {
         return Err(Error::Refused(format!(
-            "model `{}` mixes rigid bodies and cables: attaching ANCF chains to rigid bodies is not supported yet; \
-             solve the cables in a model of their own",
+            "model `{}` mixes rigid bodies and cables that do not hang at them: \
+             hold a cable end at a marker (`start_at`/`end_at`), or solve the cables in a model of their own",
             sys.name
         )));
     }
@@ -144,9 +153,8 @@ pub struct CableRun {
     pub csv: Option<String>,
 }
 
-/// `eom-gen simulate` on a model with cables.
-pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result<String, Error> {
-    let chains = build(checked)?;
+/// The problems of `run`'s settings; `true` for the explicit method.
+fn run_problems(run: &CableRun) -> Result<bool, Error> {
     let mut problems = Vec::new();
     if !(run.t_end > 0.0 && run.t_end.is_finite()) {
         problems.push(format!("--t-end must be positive, not {}", run.t_end));
@@ -170,6 +178,16 @@ pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result
     if !problems.is_empty() {
         return Err(Error::Usage(problems));
     }
+    Ok(explicit)
+}
+
+/// `eom-gen simulate` on a model with cables.
+pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result<String, Error> {
+    if eom_gen::cables::has_mounts(&checked.system) {
+        return simulate_mixed(checked, run, json_out);
+    }
+    let chains = build(checked)?;
+    let explicit = run_problems(run)?;
     let steps = (run.t_end / run.dt).round().max(1.0) as usize;
     let mut text = String::new();
     let mut report = Vec::new();
@@ -275,6 +293,181 @@ pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result
         Ok(format!(
             "{}\n",
             json!({ "model": checked.system.name, "cables": report })
+        ))
+    } else {
+        Ok(text)
+    }
+}
+
+/// A progress bar over the steps of a run (hidden when stderr is not a
+/// terminal).
+fn step_progress(label: &str, steps: usize) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(steps as u64);
+    let style = indicatif::ProgressStyle::with_template(
+        "{prefix} [{bar:30}] {pos}/{len} steps, {elapsed} {msg}",
+    )
+    .map(|s| s.progress_chars("=> "))
+    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar());
+    bar.set_style(style);
+    bar.set_prefix(label.to_string());
+    bar
+}
+
+/// `simulate` on a model whose cable hangs at markers of its rigid
+/// bodies: the rigid part interpreted, index-3 generalized-α.
+fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<String, Error> {
+    let sys = &checked.system;
+    if run_problems(run)? {
+        return Err(Error::Refused(format!(
+            "model `{}` hangs a cable at rigid bodies: the attachments are constraints (an index-3 differential-algebraic system), which rk4 does not solve; use `--integrator generalized-alpha`",
+            sys.name
+        )));
+    }
+    let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
+        .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
+    eom_gen::cables::check_rigid(sys, &f).map_err(Error::Refused)?;
+    let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
+        .map_err(Error::Refused)?;
+    let m = &mixed.model;
+    let (q0, u0) = (sys.q0(), sys.u0());
+    let state = m.initial_state(0.0, &q0, &u0);
+    let e0 = m.energy(&state);
+    let steps = (run.t_end / run.dt).round().max(1.0) as usize;
+    let opts = AlphaOptions {
+        h: run.t_end / steps as f64,
+        rho_inf: run.rho_inf,
+        ..AlphaOptions::default()
+    };
+    let refused = |e: eom_sim::large::DynamicsError| {
+        Error::Refused(format!("model `{}`: {e}", sys.name))
+    };
+    let start = std::time::Instant::now();
+    let mut ga = MixedAlpha::new(m, state, opts).map_err(refused)?;
+    let bar = step_progress(&sys.name, steps);
+    let ns = m.n_structural();
+    let mut rows: Vec<Vec<f64>> = Vec::new();
+    let result = ga.run_to(run.t_end, |s, q| {
+        bar.inc(1);
+        if run.csv.is_some() {
+            let mut row = vec![s.t];
+            row.extend_from_slice(&s.q[ns..]);
+            for node in [0, mixed.nodes - 1] {
+                row.extend(mixed.node_position(q, node));
+            }
+            row.push(m.energy(s));
+            rows.push(row);
+        }
+    });
+    bar.finish_and_clear();
+    result.map_err(refused)?;
+    let cpu = start.elapsed().as_secs_f64();
+    let end = ga.state().clone();
+    let q_full = m.structural_full(&end.q);
+    let e1 = m.energy(&end);
+    let stats = &ga.stats;
+    let coords: Vec<&str> = sys.coordinate_names();
+    let rigid_q = &end.q[ns..];
+    let (first, last) = (
+        mixed.node_position(&q_full, 0),
+        mixed.node_position(&q_full, mixed.nodes - 1),
+    );
+    let reactions = ga.reactions();
+    let names: Vec<String> = m.attachments().iter().map(|a| a.name.clone()).collect();
+    let mut text = String::new();
+    let _ = writeln!(
+        text,
+        "model {}: rigid part of {} coordinates ({}) + cable {}: {} × {}, {} unknowns, {} constraint equations",
+        sys.name,
+        rigid_q.len(),
+        coords.join(", "),
+        mixed.cable,
+        mixed.nodes - 1,
+        mixed.kernel,
+        m.n(),
+        m.n_constraints()
+    );
+    let _ = writeln!(
+        text,
+        "  generalized-alpha (index 3, rho_inf = {}) to t = {} in {} steps of {:e} s, {:.3} s CPU",
+        run.rho_inf,
+        end.t,
+        stats.dynamics.steps,
+        run.t_end / steps as f64,
+        cpu
+    );
+    let _ = writeln!(
+        text,
+        "  {} Newton iterations, {} factorisations, {} force evaluations",
+        stats.dynamics.newton_iterations,
+        stats.dynamics.factorizations,
+        stats.dynamics.force_evaluations
+    );
+    let qs: Vec<String> = coords
+        .iter()
+        .zip(rigid_q)
+        .map(|(n, v)| format!("{n} = {v:.9}"))
+        .collect();
+    if !qs.is_empty() {
+        let _ = writeln!(text, "  rigid part: {}", qs.join(", "));
+    }
+    let _ = writeln!(
+        text,
+        "  cable nodes: first at ({:.9}, {:.9}, {:.9}) m, last at ({:.9}, {:.9}, {:.9}) m",
+        first[0], first[1], first[2], last[0], last[1], last[2]
+    );
+    for (n, f) in names.iter().zip(&reactions) {
+        let _ = writeln!(
+            text,
+            "  force of the marker on {n}: ({:.6e}, {:.6e}, {:.6e}) N",
+            f[0], f[1], f[2]
+        );
+    }
+    let _ = writeln!(
+        text,
+        "  energy {e0:.9e} → {e1:.9e} J (change {:.3e}); largest constraint residual |Φ|∞ {:.3e}",
+        e1 - e0,
+        stats.max_constraint_residual
+    );
+    if let Some(path) = &run.csv {
+        let mut csv = String::new();
+        let mut header = vec!["t".to_string()];
+        header.extend(coords.iter().map(|c| c.to_string()));
+        for node in ["first", "last"] {
+            header.extend(["x", "y", "z"].map(|c| format!("{}.{node}.{c}", mixed.cable)));
+        }
+        header.push("energy".into());
+        let _ = writeln!(csv, "{}", header.join(","));
+        for r in &rows {
+            let line: Vec<String> = r.iter().map(|v| format!("{v:e}")).collect();
+            let _ = writeln!(csv, "{}", line.join(","));
+        }
+        std::fs::write(path, csv).map_err(|e| Error::io(path, e))?;
+    }
+    if json_out {
+        Ok(format!(
+            "{}\n",
+            json!({
+                "model": sys.name,
+                "cable": mixed.cable,
+                "element": mixed.kernel,
+                "elements": mixed.nodes - 1,
+                "integrator": "generalized-alpha",
+                "t": end.t,
+                "steps": stats.dynamics.steps,
+                "newton_iterations": stats.dynamics.newton_iterations,
+                "factorizations": stats.dynamics.factorizations,
+                "force_evaluations": stats.dynamics.force_evaluations,
+                "cpu_seconds": cpu,
+                "coordinates": coords,
+                "q": rigid_q,
+                "first_node": first,
+                "last_node": last,
+                "attachments": names,
+                "reactions": reactions,
+                "energy_start": e0,
+                "energy_end": e1,
+                "max_constraint_residual": stats.max_constraint_residual,
+            })
         ))
     } else {
         Ok(text)

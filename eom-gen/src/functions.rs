@@ -43,6 +43,9 @@ pub enum Function {
     Constraints,
     /// Force and torque each cut joint applies to its child, from `λ`.
     CutJointReactions,
+    /// The markers holding cable ends: positions, clamp normals and their
+    /// Jacobians `∂/∂q`.
+    Attachments,
 }
 
 /// An argument of a generated function, in this order when present.
@@ -102,6 +105,8 @@ pub enum When {
     HasConstraints,
     /// When the model has cut joints.
     HasCutJoints,
+    /// When cable ends are held at markers of rigid bodies.
+    HasCableMounts,
 }
 
 /// One row of the table.
@@ -251,6 +256,17 @@ pub const TABLE: &[Entry] = &[
         uses_multipliers: true,
         layout: Layout::Vector,
         when: When::HasCutJoints,
+        in_trait: false,
+        derived_from: &[],
+    },
+    Entry {
+        function: Function::Attachments,
+        name: "attachments",
+        doc: "the markers holding cable ends (issue #18), mount by mount: world position, and for a clamped end the unit normals `n1`, `n2` of the clamp's axis (world axes); each value followed by its partial derivatives `∂/∂q_k`",
+        args: &[Arg::T, Arg::Q],
+        uses_multipliers: false,
+        layout: Layout::Vector,
+        when: When::HasCableMounts,
         in_trait: false,
         derived_from: &[],
     },

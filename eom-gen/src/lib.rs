@@ -21,6 +21,7 @@
 
 pub mod ancf;
 pub mod builder;
+pub mod cables;
 pub mod diag;
 pub mod emit;
 pub mod expr;

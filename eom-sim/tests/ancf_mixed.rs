@@ -170,11 +170,6 @@ fn a_cable_pinned_to_a_rigid_particle_moves_as_one_with_an_end_mass() {
     assert!(err < 1e-8, "got {got:?}, want {want:?}");
     assert!((particle[0] - got[0]).abs() < 1e-9 && (particle[1] - got[1]).abs() < 1e-9);
     assert!(ma.stats.max_constraint_residual < 1e-9);
-    // The tension in the cable holds the particle up: the reaction on the
-    // cable end points from the particle towards… the particle's weight
-    // and inertia; check its magnitude is of the order of m g.
-    let f = ma.reactions()[0];
-    assert!(f.iter().all(|x| x.is_finite()));
 }
 
 /// The compound pendulum's angle at `t_end` (RK4 with a fine step):
@@ -198,7 +193,7 @@ fn compound_angle(inertia: f64, moment: f64, t_end: f64) -> f64 {
 /// The link's angle at `t_end` with a steel rod of modulus `e` clamped at
 /// its tip, and the largest constraint residual.
 fn link_with_rod(e: f64, t_end: f64) -> (f64, f64) {
-    let (a, m_link, l, side) = (0.3, 1.0, 0.5, 0.02);
+    let (a, m_link, l, side): (f64, f64, f64, f64) = (0.3, 1.0, 0.5, 0.02);
     let section = Section {
         e,
         rho: 7800.0,
@@ -222,7 +217,7 @@ fn link_with_rod(e: f64, t_end: f64) -> (f64, f64) {
 
 #[test]
 fn a_stiff_rod_clamped_to_a_rigid_link_swings_as_the_rigid_compound() {
-    let (a, m_link, l, side, rho) = (0.3, 1.0, 0.5, 0.02, 7800.0);
+    let (a, m_link, l, side, rho): (f64, f64, f64, f64, f64) = (0.3, 1.0, 0.5, 0.02, 7800.0);
     let mu = rho * side * side;
     // About the pivot: the link (m a²/3) and the rod from a to a + L.
     let inertia = m_link * a * a / 3.0 + mu * ((a + l).powi(3) - a.powi(3)) / 3.0;

@@ -193,6 +193,9 @@ pub struct Formulation {
     pub jacobian_rows: Vec<String>,
     /// The cut joints, in the order of `cut_joint_reactions`.
     pub cut_joints: Vec<String>,
+    /// The cable mounts, in the order of `attachments` (`cable.start`,
+    /// `cable.end`).
+    pub mounts: Vec<String>,
     /// Wall time of formulation and lowering, seconds.
     pub seconds: f64,
 }
@@ -229,6 +232,7 @@ impl Formulation {
             Function::MarkerJacobians => &self.jacobian_rows,
             Function::CutJointReactions => &self.cut_joints,
             Function::Constraints => &self.constraint_names,
+            Function::Attachments => &self.mounts,
             _ => &[],
         }
     }
@@ -494,6 +498,35 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             cuts.iter().map(|c| c.name.clone()).collect(),
         )
     };
+    // The markers holding cable ends: values and their Jacobians ∂/∂q.
+    let (attachments, mounts) = if sys.cable_mounts().is_empty() {
+        (None, Vec::new())
+    } else {
+        let values = super::mounts::mount_values(sys, &tree, &env, &k)?;
+        let mut names = Vec::new();
+        let mut exprs = Vec::new();
+        for (r, &v) in values.iter().enumerate() {
+            names.push(format!("a{r}"));
+            exprs.push(v);
+            for (kk, &qk) in q.iter().enumerate() {
+                names.push(format!("a{r}_q{kk}"));
+                exprs.push(cx.diff(v, qk));
+            }
+        }
+        let outs: Vec<(&str, Expr<'_>)> = names.iter().map(String::as_str).zip(exprs).collect();
+        let labels = sys
+            .cable_mounts()
+            .iter()
+            .map(|(c, end, _)| {
+                format!(
+                    "{}.{}",
+                    sys.cables[*c].name,
+                    if *end { "end" } else { "start" }
+                )
+            })
+            .collect();
+        (Some(cx.lower(&outs, opts)), labels)
+    };
     let programs: BTreeMap<Function, Program> = [
         (Function::Qdot, Some(qdot)),
         (Function::ForwardDynamics, forward_dynamics),
@@ -506,6 +539,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Function::MarkerJacobians, out.jacobians),
         (Function::Constraints, constraints),
         (Function::CutJointReactions, cut_reactions),
+        (Function::Attachments, attachments),
     ]
     .into_iter()
     .filter_map(|(f, p)| p.map(|p| (f, p)))
@@ -520,6 +554,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         output_names: out.names,
         jacobian_rows: out.jacobian_rows,
         cut_joints,
+        mounts,
         seconds: start.elapsed().as_secs_f64(),
     })
 }

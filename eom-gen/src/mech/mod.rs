@@ -11,6 +11,7 @@ pub mod flexible;
 pub mod formulate;
 pub mod initial;
 pub mod joint;
+pub mod mounts;
 pub mod numeric;
 pub mod spatial;
 pub mod stiffening;

@@ -263,6 +263,20 @@ impl Numeric {
         })
     }
 
+    /// The values of the cable mounts at `q`, `t` (the generated
+    /// `attachments` without its Jacobians; see [`super::mounts`]).
+    pub fn mounts(&self, sys: &System, q: &[f64], t: f64) -> Result<Vec<f64>, MechError> {
+        let ev = self.eval();
+        let u = vec![0.0; self.tree.nu];
+        let k = ev.kinematics(&State {
+            q,
+            u: &u,
+            t,
+            inputs: &[],
+        })?;
+        super::mounts::mount_values(sys, &self.tree, &self.env, &k)
+    }
+
     /// World position and velocity of `point` (body coordinates) on
     /// system body `body`.
     pub fn point(

@@ -38,6 +38,7 @@
 use super::dynamics::{AlphaOptions, DynamicsError, DynamicsStats, State};
 use super::model::StructuralModel;
 use super::sparse::{FaerLu, Pattern, SparseMatrix, SparseSolver};
+use crate::model::Point;
 use std::fmt;
 use std::sync::Arc;
 
@@ -58,6 +59,63 @@ pub trait RigidPart {
     /// `n₁` and `n₂` (unit normals of the clamp's axis, world axes); each
     /// row its value followed by its `n` partial derivatives `∂/∂q_k`.
     fn attachments(&self, t: f64, q: &[f64], out: &mut [f64]);
+}
+
+/// A rigid part from the generated functions by name (`mass_matrix`,
+/// `bias`, `energy`, `attachments`): compiled code through
+/// `eom_sim::Model::evaluate`, the interpreter through its own `evaluate`.
+/// A function that cannot be evaluated gives NaN, which stops the run.
+pub struct ByName<F> {
+    n: usize,
+    mounts: usize,
+    evaluate: F,
+}
+
+impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
+    /// A rigid part of `n` coordinates (`q̇ = u`) whose `attachments`
+    /// result is `mount_len` long, evaluated by `evaluate(name, at, out)`.
+    pub fn new(n: usize, mount_len: usize, evaluate: F) -> Self {
+        ByName {
+            n,
+            mounts: mount_len,
+            evaluate,
+        }
+    }
+
+    fn call(&self, name: &str, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
+        let at = Point {
+            t,
+            q,
+            u,
+            udot: &[],
+            tau: &[],
+            lambda: &[],
+        };
+        if !(self.evaluate)(name, &at, out) {
+            out.fill(f64::NAN);
+        }
+    }
+}
+
+impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> RigidPart for ByName<F> {
+    fn n(&self) -> usize {
+        self.n
+    }
+    fn mass_matrix(&self, t: f64, q: &[f64], m: &mut [f64]) {
+        self.call("mass_matrix", t, q, &[], m);
+    }
+    fn bias(&self, t: f64, q: &[f64], u: &[f64], b: &mut [f64]) {
+        self.call("bias", t, q, u, b);
+    }
+    fn energy(&self, t: f64, q: &[f64], u: &[f64]) -> f64 {
+        let mut e = [0.0; 2];
+        self.call("energy", t, q, u, &mut e);
+        e[0] + e[1]
+    }
+    fn attachments(&self, t: f64, q: &[f64], out: &mut [f64]) {
+        debug_assert_eq!(out.len(), self.mounts);
+        self.call("attachments", t, q, &[], out);
+    }
 }
 
 /// A cable end held at a mount of the rigid part.
@@ -110,9 +168,9 @@ struct ConstraintEval {
 }
 
 /// Structure, rigid part and attachments over one unknown vector.
-pub struct MixedModel {
+pub struct MixedModel<'r> {
     structure: StructuralModel,
-    rigid: Box<dyn RigidPart>,
+    rigid: Box<dyn RigidPart + 'r>,
     attachments: Vec<Attachment>,
     n_s: usize,
     n_r: usize,
@@ -123,14 +181,14 @@ pub struct MixedModel {
     s_map: Vec<usize>,
 }
 
-impl MixedModel {
+impl<'r> MixedModel<'r> {
     /// Joins `structure` and `rigid` by `attachments` (whose node
     /// coordinates must be free in `structure`).
     pub fn new(
         structure: StructuralModel,
-        rigid: Box<dyn RigidPart>,
+        rigid: Box<dyn RigidPart + 'r>,
         attachments: Vec<Attachment>,
-    ) -> Result<MixedModel, MixedError> {
+    ) -> Result<MixedModel<'r>, MixedError> {
         let (n_s, n_r) = (structure.n_free(), rigid.n());
         let mut entries: Vec<(usize, usize)> = structure
             .pattern()
@@ -208,7 +266,7 @@ impl MixedModel {
     }
 
     /// The rigid part.
-    pub fn rigid(&self) -> &dyn RigidPart {
+    pub fn rigid(&self) -> &(dyn RigidPart + 'r) {
         self.rigid.as_ref()
     }
 
@@ -377,8 +435,8 @@ fn norm_inf(v: &[f64]) -> f64 {
 /// Index-3 generalized-α (Arnold and Brüls 2007) on a [`MixedModel`]:
 /// fixed step, Newton on accelerations and multipliers, modified Newton
 /// as in [`super::GeneralizedAlpha`].
-pub struct MixedAlpha<'m> {
-    model: &'m MixedModel,
+pub struct MixedAlpha<'m, 'r> {
+    model: &'m MixedModel<'r>,
     opts: AlphaOptions,
     alpha_m: f64,
     alpha_f: f64,
@@ -401,13 +459,13 @@ pub struct MixedAlpha<'m> {
     pub stats: MixedStats,
 }
 
-impl<'m> MixedAlpha<'m> {
+impl<'m, 'r> MixedAlpha<'m, 'r> {
     /// Starts at `state` (of [`MixedModel::initial_state`]'s layout) with
     /// consistent accelerations and multipliers; refuses a start whose
     /// constraint residual exceeds `1e-8` (the cable ends are not at their
     /// markers, or a clamp's axis is not along the cable).
     pub fn new(
-        model: &'m MixedModel,
+        model: &'m MixedModel<'r>,
         state: State,
         opts: AlphaOptions,
     ) -> Result<Self, DynamicsError> {

@@ -24,7 +24,7 @@ pub mod statics;
 pub use dynamics::{
     AlphaOptions, DynamicsError, DynamicsStats, GeneralizedAlpha, State, integrate_rk4,
 };
-pub use mixed::{Attachment, MixedAlpha, MixedError, MixedModel, MixedStats, RigidPart};
+pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, MixedStats, RigidPart};
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 pub use sparse::{FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
 pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};
