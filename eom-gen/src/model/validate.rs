@@ -2587,7 +2587,7 @@ impl Ctx<'_> {
                 ok = false;
             }
         }
-        let marker = body.and_then(|b| {
+        let marker = body.filter(|&b| b != 0).and_then(|b| {
             let found = bodies[b].markers.iter().position(|x| x.name == m.marker);
             if found.is_none() {
                 let names = bodies[b].markers.iter().map(|x| x.name.as_str());
