@@ -388,7 +388,7 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
     );
     let _ = writeln!(
         text,
-        "  generalized-alpha (index 3, rho_inf = {}) to t = {} in {} steps of {:e} s, {:.3} s CPU",
+        "  generalized-alpha (index 3, rho_inf = {}) to t = {} in {} steps of {:e} s, {:.3} s wall",
         run.rho_inf,
         end.t,
         stats.dynamics.steps,

@@ -179,3 +179,61 @@ fn simulate_runs_the_pendulum_and_refuses_a_mixed_model() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("mixes rigid bodies and cables"));
 }
+
+#[test]
+fn simulate_runs_a_cable_held_by_a_rigid_link_and_refuses_what_it_cannot() {
+    // The Berzeri–Shabana rod pinned to a rigid link (models/ancf/pendulum_rod.ron).
+    let out = eom_gen(&[
+        "simulate",
+        "models/ancf/pendulum_rod.ron",
+        "--t-end",
+        "0.1",
+        "--dt",
+        "1e-3",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    assert_eq!(v["steps"], 100);
+    assert_eq!(v["coordinates"][0], "theta");
+    let num = |x: &serde_json::Value| x.as_f64().unwrap_or(f64::NAN);
+    // The rod's first node stays at the link's tip (a = 0.3 m).
+    let theta = num(&v["q"][0]);
+    let first = [num(&v["first_node"][0]), num(&v["first_node"][1])];
+    assert!(
+        (first[0] - 0.3 * theta.cos()).abs() < 1e-9 && (first[1] - 0.3 * theta.sin()).abs() < 1e-9,
+        "{first:?} at θ = {theta}"
+    );
+    assert!(num(&v["max_constraint_residual"]) < 1e-9);
+    // Energy (scale: the rod's weight times its length, 140 J) kept.
+    assert!((num(&v["energy_end"]) - num(&v["energy_start"])).abs() < 1e-3);
+    // The explicit method and statics refuse, with the reason.
+    let out = eom_gen(&[
+        "simulate",
+        "models/ancf/pendulum_rod.ron",
+        "--t-end",
+        "0.01",
+        "--integrator",
+        "rk4",
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("index-3"));
+    let out = eom_gen(&["solve-static", "models/ancf/pendulum_rod.ron"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("solve-static does not solve mixed models"));
+    // A cable end that is not at its marker at the start.
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/ancf/pendulum_rod.ron"
+    ))
+    .expect("the bundled model");
+    let path = write("off_marker.ron", &text.replace("from: (\"a\", 0, 0)", "from: (\"a + 0.01\", 0, 0)"));
+    let out = eom_gen(&["simulate", &path, "--t-end", "0.01"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("`rod.start` is 1.000e-2 m from its marker"), "{err}");
+}
