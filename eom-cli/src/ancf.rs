@@ -338,9 +338,8 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
         rho_inf: run.rho_inf,
         ..AlphaOptions::default()
     };
-    let refused = |e: eom_sim::large::DynamicsError| {
-        Error::Refused(format!("model `{}`: {e}", sys.name))
-    };
+    let refused =
+        |e: eom_sim::large::DynamicsError| Error::Refused(format!("model `{}`: {e}", sys.name));
     let start = std::time::Instant::now();
     let mut ga = MixedAlpha::new(m, state, opts).map_err(refused)?;
     let bar = step_progress(&sys.name, steps);
@@ -457,7 +456,7 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
                 "newton_iterations": stats.dynamics.newton_iterations,
                 "factorizations": stats.dynamics.factorizations,
                 "force_evaluations": stats.dynamics.force_evaluations,
-                "cpu_seconds": cpu,
+                "wall_seconds": cpu,
                 "coordinates": coords,
                 "q": rigid_q,
                 "first_node": first,

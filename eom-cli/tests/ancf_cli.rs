@@ -224,16 +224,24 @@ fn simulate_runs_a_cable_held_by_a_rigid_link_and_refuses_what_it_cannot() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("index-3"));
     let out = eom_gen(&["solve-static", "models/ancf/pendulum_rod.ron"]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("solve-static does not solve mixed models"));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("solve-static does not solve mixed models")
+    );
     // A cable end that is not at its marker at the start.
     let text = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../models/ancf/pendulum_rod.ron"
     ))
     .expect("the bundled model");
-    let path = write("off_marker.ron", &text.replace("from: (\"a\", 0, 0)", "from: (\"a + 0.01\", 0, 0)"));
+    let path = write(
+        "off_marker.ron",
+        &text.replace("from: (\"a\", 0, 0)", "from: (\"a + 0.01\", 0, 0)"),
+    );
     let out = eom_gen(&["simulate", &path, "--t-end", "0.01"]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("`rod.start` is 1.000e-2 m from its marker"), "{err}");
+    assert!(
+        err.contains("`rod.start` is 1.000e-2 m from its marker"),
+        "{err}"
+    );
 }

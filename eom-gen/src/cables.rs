@@ -95,7 +95,12 @@ pub fn check_rigid(sys: &System, f: &Formulation) -> Result<(), String> {
         t: 0.0,
     };
     let qdot = crate::interpret::evaluate_function(f, Function::Qdot, &x).unwrap_or_default();
-    if qdot.len() != nu || qdot.iter().zip(&u).any(|(a, b)| (a - b).abs() > 1e-12 * (1.0 + b.abs())) {
+    if qdot.len() != nu
+        || qdot
+            .iter()
+            .zip(&u)
+            .any(|(a, b)| (a - b).abs() > 1e-12 * (1.0 + b.abs()))
+    {
         return Err(format!(
             "the rigid part of `{}` has speeds that are not the coordinates' rates (q̇ ≠ u): cables join revolute and prismatic chains",
             sys.name

@@ -88,7 +88,8 @@ fn wrong_attachments_are_located_errors_all_at_once() {
     println!("{text}");
     for want in [
         // The unknown marker, with the nearest name.
-        "models/mix.ron:21:63: error: body `link` has no marker `tipp`", "did you mean `tip`?",
+        "models/mix.ron:21:63: error: body `link` has no marker `tipp`",
+        "did you mean `tip`?",
         // Clamped at a marker without an axis.
         "models/mix.ron:22:37: error: the end of cable `b` is clamped at marker `link.mid` without an `axis`",
         "give `axis: (1, 0, 0)`",
@@ -106,7 +107,9 @@ fn wrong_attachments_are_located_errors_all_at_once() {
     );
     let text = diagnose(&pinned_axis);
     assert!(
-        text.contains("models/mix.ron:18:76: error: the start of cable `rod` is pinned: it turns freely"),
+        text.contains(
+            "models/mix.ron:18:76: error: the start of cable `rod` is pinned: it turns freely"
+        ),
         "{text}"
     );
     let off_plane = CART_LINK.replace("axis: (1, 0, 0)", "axis: (1, 0, 1)");
@@ -148,8 +151,16 @@ fn generated_attachments_agree_with_the_numeric_twin() {
         let closed = [q[0] + 0.3 * c, 0.3 * s, 0.0, -s, c, 0.0, 0.0, 0.0, 1.0];
         for r in 0..want.len() {
             let value = got[r * (1 + nq)];
-            assert!((value - want[r]).abs() < 1e-13, "row {r}: got {value}, twin {}", want[r]);
-            assert!((value - closed[r]).abs() < 1e-13, "row {r}: got {value}, closed form {}", closed[r]);
+            assert!(
+                (value - want[r]).abs() < 1e-13,
+                "row {r}: got {value}, twin {}",
+                want[r]
+            );
+            assert!(
+                (value - closed[r]).abs() < 1e-13,
+                "row {r}: got {value}, closed form {}",
+                closed[r]
+            );
             for k in 0..nq {
                 let e = 1e-6;
                 let (mut qp, mut qm) = (q.clone(), q.clone());
@@ -159,7 +170,10 @@ fn generated_attachments_agree_with_the_numeric_twin() {
                     - num.mounts(&sys, &qm, t).unwrap_or_default()[r])
                     / (2.0 * e);
                 let d = got[r * (1 + nq) + 1 + k];
-                assert!((d - fd).abs() < 1e-8, "∂(row {r})/∂q{k}: got {d}, differences {fd}");
+                assert!(
+                    (d - fd).abs() < 1e-8,
+                    "∂(row {r})/∂q{k}: got {d}, differences {fd}"
+                );
             }
         }
     }
@@ -167,7 +181,10 @@ fn generated_attachments_agree_with_the_numeric_twin() {
     let src = eom_gen::generate(&Source::new("cart_link.ron", CART_LINK.to_string()))
         .map(|g| g.source)
         .unwrap_or_else(|e| panic!("{e}"));
-    assert!(src.contains("pub fn attachments("), "no attachments in the emitted code");
+    assert!(
+        src.contains("pub fn attachments("),
+        "no attachments in the emitted code"
+    );
 }
 
 /// The angle of the link on a fixed pivot (the cart locked by a stiff rail:
@@ -188,8 +205,12 @@ fn mixed_angle(e: f64, t_end: f64) -> (f64, f64) {
         ..AlphaOptions::default()
     };
     let mut ga = MixedAlpha::new(m, state, opts).unwrap_or_else(|e| panic!("{e}"));
-    ga.run_to(t_end, |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
-    (ga.state().q[m.n_structural()], ga.stats.max_constraint_residual)
+    ga.run_to(t_end, |_, _| {})
+        .unwrap_or_else(|e| panic!("{e}"));
+    (
+        ga.state().q[m.n_structural()],
+        ga.stats.max_constraint_residual,
+    )
 }
 
 const LINK_ROD: &str = r#"
@@ -256,7 +277,10 @@ fn a_stiff_rod_clamped_to_a_link_swings_as_eoms_rigid_model() {
 /// `[0, t_end]` at step `h` (no damping, `ρ∞ = 1`), and the largest
 /// constraint residual.
 fn pendulum_rod_energy(h: f64, t_end: f64) -> (f64, f64) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/ancf/pendulum_rod.ron");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/ancf/pendulum_rod.ron"
+    );
     let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
     let sys = system("pendulum_rod.ron", &text);
     let f = formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
@@ -283,7 +307,75 @@ fn the_bundled_pendulum_rod_keeps_its_energy_to_second_order() {
     let (e1, r1) = pendulum_rod_energy(2e-3, t_end);
     let (e2, r2) = pendulum_rod_energy(1e-3, t_end);
     let order = (e1 / e2).log2();
-    println!("pendulum_rod, max |ΔE| over {t_end} s: h = 2e-3 {e1:.3e} J, 1e-3 {e2:.3e} J, order {order:.2}; max |Φ| {r1:.1e}, {r2:.1e}");
+    println!(
+        "pendulum_rod, max |ΔE| over {t_end} s: h = 2e-3 {e1:.3e} J, 1e-3 {e2:.3e} J, order {order:.2}; max |Φ| {r1:.1e}, {r2:.1e}"
+    );
     assert!(order > 1.7 && order < 2.5, "order {order}");
     assert!(r1 < 1e-9 && r2 < 1e-9);
+}
+
+/// The quasi-static tip deflection of the spin-up beam at `t < T_s` (see
+/// `flex_spin_up.rs`): the inertia load `−ρA α x` on a cantilever,
+/// `u_y(L) = −11 ρA α L⁵ / (120 EI)`, reduced by the centrifugal
+/// stiffening of the first mode (Southwell, κ = 1.1933).
+fn spin_up_quasi_static(t: f64) -> f64 {
+    let (l, rho_a, ei, w_s, t_s) = (10.0_f64, 1.2, 1.4e4, 6.0, 15.0);
+    let phase = 2.0 * std::f64::consts::PI * t / t_s;
+    let alpha = w_s / t_s * (1.0 - phase.cos());
+    let omega = w_s / t_s * (t - phase.sin() * t_s / (2.0 * std::f64::consts::PI));
+    let w1 = 3.516_015 * (ei / (rho_a * l.powi(4))).sqrt();
+    let stiffer = 1.0 + 0.1933 * omega * omega / (w1 * w1);
+    -11.0 * rho_a * alpha * l.powi(5) / (120.0 * ei) / stiffer
+}
+
+#[test]
+fn the_ancf_beam_on_a_prescribed_hub_lags_by_the_quasi_static_deflection() {
+    // models/ancf/spin_up_ancf.ron: the rigid part has no free coordinate
+    // (the hub's angle is prescribed); the root is clamped to the hub.
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/ancf/spin_up_ancf.ron"
+    );
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let sys = system("spin_up_ancf.ron", &text);
+    let f = formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
+    eom_gen::cables::check_rigid(&sys, &f).unwrap_or_else(|e| panic!("{e}"));
+    let mixed = eom_gen::cables::mixed(&sys, eom_gen::cables::interpreted_rigid(&f, &sys))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let m = &mixed.model;
+    assert_eq!(m.n(), m.n_structural(), "no rigid coordinate");
+    let state = m.initial_state(0.0, &sys.q0(), &sys.u0());
+    let opts = AlphaOptions {
+        h: 1e-2,
+        rho_inf: 0.8,
+        ..AlphaOptions::default()
+    };
+    let mut ga = MixedAlpha::new(m, state, opts).unwrap_or_else(|e| panic!("{e}"));
+    let t = 7.5;
+    ga.run_to(t, |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
+    let q = ga.q_full();
+    let tip = mixed.node_position(q, mixed.nodes - 1);
+    // The hub's angle at t, and the tip's deflection across the hub's x axis.
+    let (w_s, t_s) = (6.0_f64, 15.0_f64);
+    let theta = w_s / t_s
+        * (t * t / 2.0
+            + (t_s / (2.0 * std::f64::consts::PI)).powi(2)
+                * ((2.0 * std::f64::consts::PI * t / t_s).cos() - 1.0));
+    let (s, c) = theta.sin_cos();
+    let deflection = -s * tip[0] + c * tip[1];
+    let want = spin_up_quasi_static(t);
+    // The root's tangent stays along the hub's x axis (the clamp).
+    let root_tangent = [q[2], q[3]];
+    let off_axis = -s * root_tangent[0] + c * root_tangent[1];
+    println!(
+        "spin-up at {t} s: tip deflection {deflection:.5} m, quasi-static {want:.5} m; root tangent off the axis {off_axis:.1e}; max |Φ| {:.1e}",
+        ga.stats.max_constraint_residual
+    );
+    // The floating-frame model with stiffening meets the same closed form
+    // within 5 % (flex_spin_up.rs); the ANCF beam stiffens by itself.
+    assert!(
+        (deflection / want - 1.0).abs() < 0.05,
+        "{deflection} against {want}"
+    );
+    assert!(off_axis.abs() < 1e-9 && ga.stats.max_constraint_residual < 1e-9);
 }

@@ -23,9 +23,7 @@
 //!   tolerance at every step.
 
 use eom_sim::large::ancf::{Chain, ChainSpec, Section, Support, chain};
-use eom_sim::large::{
-    AlphaOptions, GeneralizedAlpha, MixedAlpha, MixedModel, RigidPart, State,
-};
+use eom_sim::large::{AlphaOptions, GeneralizedAlpha, MixedAlpha, MixedModel, RigidPart, State};
 
 const G: f64 = 9.81;
 
@@ -141,7 +139,8 @@ fn a_cable_pinned_to_a_rigid_particle_moves_as_one_with_an_end_mass() {
         v: vec![0.0; rm.n_free()],
     };
     let mut ga = GeneralizedAlpha::new(rm, state, opts(h, 1.0)).unwrap_or_else(|e| panic!("{e}"));
-    ga.run_to(t_end, |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
+    ga.run_to(t_end, |_, _| {})
+        .unwrap_or_else(|e| panic!("{e}"));
     let want = reference.node_position(ga.q_full(), ne);
     // Mixed: the same cable, its end pinned to a particle of mass m.
     spec.end_mass = 0.0;
@@ -151,7 +150,8 @@ fn a_cable_pinned_to_a_rigid_particle_moves_as_one_with_an_end_mass() {
         .unwrap_or_else(|e| panic!("{e}"));
     let state = mixed.initial_state(0.0, &[l, 0.0], &[0.0, 0.0]);
     let mut ma = MixedAlpha::new(&mixed, state, opts(h, 1.0)).unwrap_or_else(|e| panic!("{e}"));
-    ma.run_to(t_end, |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
+    ma.run_to(t_end, |_, _| {})
+        .unwrap_or_else(|e| panic!("{e}"));
     let q = mixed.structural_full(&ma.state().q);
     let got = [q[ne * 4], q[ne * 4 + 1]];
     let particle = &ma.state().q[mixed.n_structural()..];
@@ -208,11 +208,16 @@ fn link_with_rod(e: f64, t_end: f64) -> (f64, f64) {
         m: m_link,
         clamped: true,
     };
-    let mixed = MixedModel::new(ch.model, Box::new(link), vec![at]).unwrap_or_else(|e| panic!("{e}"));
+    let mixed =
+        MixedModel::new(ch.model, Box::new(link), vec![at]).unwrap_or_else(|e| panic!("{e}"));
     let state = mixed.initial_state(0.0, &[0.0], &[0.0]);
     let mut ma = MixedAlpha::new(&mixed, state, opts(1e-3, 0.9)).unwrap_or_else(|e| panic!("{e}"));
-    ma.run_to(t_end, |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
-    (ma.state().q[mixed.n_structural()], ma.stats.max_constraint_residual)
+    ma.run_to(t_end, |_, _| {})
+        .unwrap_or_else(|e| panic!("{e}"));
+    (
+        ma.state().q[mixed.n_structural()],
+        ma.stats.max_constraint_residual,
+    )
 }
 
 #[test]
@@ -242,14 +247,20 @@ fn a_stiff_rod_clamped_to_a_rigid_link_swings_as_the_rigid_compound() {
 /// pinned at its tip, step `h`, no damping, `ρ∞ = 1`.
 fn energy_error(h: f64, t_end: f64) -> (f64, f64) {
     let a = 0.3;
-    let ch = build(&cable([a, 0.0, 0.0], [a + 1.2, 0.0, 0.0], 8, berzeri_section()));
+    let ch = build(&cable(
+        [a, 0.0, 0.0],
+        [a + 1.2, 0.0, 0.0],
+        8,
+        berzeri_section(),
+    ));
     let at = ch.attachment("rod.start", false, false);
     let link = Link {
         a,
         m: 0.5,
         clamped: false,
     };
-    let mixed = MixedModel::new(ch.model, Box::new(link), vec![at]).unwrap_or_else(|e| panic!("{e}"));
+    let mixed =
+        MixedModel::new(ch.model, Box::new(link), vec![at]).unwrap_or_else(|e| panic!("{e}"));
     let state = mixed.initial_state(0.0, &[0.0], &[0.0]);
     let e0 = mixed.energy(&state);
     let mut ma = MixedAlpha::new(&mixed, state, opts(h, 1.0)).unwrap_or_else(|e| panic!("{e}"));
@@ -279,18 +290,27 @@ fn a_free_mixed_system_keeps_its_energy_to_second_order() {
 
 #[test]
 fn a_start_off_the_marker_is_refused() {
-    let ch = build(&cable([0.31, 0.0, 0.0], [1.5, 0.0, 0.0], 4, berzeri_section()));
+    let ch = build(&cable(
+        [0.31, 0.0, 0.0],
+        [1.5, 0.0, 0.0],
+        4,
+        berzeri_section(),
+    ));
     let at = ch.attachment("rod.start", false, false);
     let link = Link {
         a: 0.3,
         m: 0.5,
         clamped: false,
     };
-    let mixed = MixedModel::new(ch.model, Box::new(link), vec![at]).unwrap_or_else(|e| panic!("{e}"));
+    let mixed =
+        MixedModel::new(ch.model, Box::new(link), vec![at]).unwrap_or_else(|e| panic!("{e}"));
     let state = mixed.initial_state(0.0, &[0.0], &[0.0]);
     let Err(e) = MixedAlpha::new(&mixed, state, opts(1e-3, 1.0)) else {
         panic!("a cable end 1 cm from its marker was accepted");
     };
     let text = e.to_string();
-    assert!(text.contains("`rod.start` is 1.000e-2 m from its marker"), "{text}");
+    assert!(
+        text.contains("`rod.start` is 1.000e-2 m from its marker"),
+        "{text}"
+    );
 }

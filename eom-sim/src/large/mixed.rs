@@ -217,7 +217,11 @@ impl<'r> MixedModel<'r> {
                     ))
                 })
             };
-            let pos: Vec<usize> = a.position.iter().map(|&i| free(i)).collect::<Result<_, _>>()?;
+            let pos: Vec<usize> = a
+                .position
+                .iter()
+                .map(|&i| free(i))
+                .collect::<Result<_, _>>()?;
             let grad: Vec<usize> = match &a.gradient {
                 Some(g) => g.iter().map(|&i| free(i)).collect::<Result<_, _>>()?,
                 None => Vec::new(),
@@ -310,9 +314,7 @@ impl<'r> MixedModel<'r> {
     pub fn energy(&self, s: &State) -> f64 {
         let q_full = self.structural_full(&s.q);
         self.structure.energy(&q_full, &s.v[..self.n_s])
-            + self
-                .rigid
-                .energy(s.t, &s.q[self.n_s..], &s.v[self.n_s..])
+            + self.rigid.energy(s.t, &s.q[self.n_s..], &s.v[self.n_s..])
     }
 
     /// `Φ(y, t)` (the attachment constraints, unscaled).
@@ -526,16 +528,10 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
             row += a.equations();
             let gap = rows[..a.dim].iter().map(|x| x * x).sum::<f64>().sqrt();
             if gap > 1e-8 {
-                out.push(format!(
-                    "`{}` is {gap:.3e} m from its marker",
-                    a.name
-                ));
+                out.push(format!("`{}` is {gap:.3e} m from its marker", a.name));
             }
             if rows[a.dim..].iter().any(|x| x.abs() > 1e-8) {
-                out.push(format!(
-                    "`{}`'s tangent is off the clamp's axis",
-                    a.name
-                ));
+                out.push(format!("`{}`'s tangent is off the clamp's axis", a.name));
             }
         }
         out.join("; ")
@@ -602,14 +598,9 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
         let model = self.model;
         let (n_s, n_r, n) = (model.n_s, model.n_r, model.n());
         self.matrix.clear();
-        model.structure.jacobian(
-            &self.q_full,
-            &self.v_full,
-            bp,
-            gp,
-            1.0,
-            &mut self.s_matrix,
-        );
+        model
+            .structure
+            .jacobian(&self.q_full, &self.v_full, bp, gp, 1.0, &mut self.s_matrix);
         for (k, &slot) in model.s_map.iter().enumerate() {
             if slot != usize::MAX {
                 self.matrix.values[slot] += self.s_matrix.values[k];
@@ -620,7 +611,16 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
         // of g = M_r a + b + Φ_qᵀ λ.
         let mut g0 = vec![0.0; n_r];
         let lambda = self.lambda.clone();
-        model.rigid_residual(t, &self.q_full, q_r, u_r, a_r, &lambda, &mut self.rs, &mut g0);
+        model.rigid_residual(
+            t,
+            &self.q_full,
+            q_r,
+            u_r,
+            a_r,
+            &lambda,
+            &mut self.rs,
+            &mut g0,
+        );
         let mass = self.rs.mass.clone();
         let mut g1 = vec![0.0; n_r];
         let mut b0 = vec![0.0; n_r];
@@ -633,7 +633,16 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
             if bp != 0.0 {
                 let e = 1e-7 * (1.0 + q_r[j].abs());
                 qp[j] = q_r[j] + e;
-                model.rigid_residual(t, &self.q_full, &qp, u_r, a_r, &lambda, &mut self.rs, &mut g1);
+                model.rigid_residual(
+                    t,
+                    &self.q_full,
+                    &qp,
+                    u_r,
+                    a_r,
+                    &lambda,
+                    &mut self.rs,
+                    &mut g1,
+                );
                 qp[j] = q_r[j];
                 for i in 0..n_r {
                     col[i] += bp * (g1[i] - g0[i]) / e;
