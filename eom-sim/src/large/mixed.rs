@@ -400,10 +400,8 @@ impl<'r> MixedModel<'r> {
         let n_r = self.n_r;
         self.rigid.mass_matrix(t, q_r, &mut scratch.mass);
         self.rigid.bias(t, q_r, u_r, out);
-        for i in 0..n_r {
-            for j in 0..n_r {
-                out[i] += scratch.mass[i * n_r + j] * a_r[j];
-            }
+        for (o, row) in out.iter_mut().zip(scratch.mass.chunks(n_r.max(1))) {
+            *o += row.iter().zip(a_r).map(|(m, a)| m * a).sum::<f64>();
         }
         self.constraints(t, q_full, q_r, &mut scratch.mounts, &mut scratch.c);
         for &(row, col, v) in &scratch.c.jac {
@@ -506,7 +504,7 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
         };
         let phi0 = model.constraint_residual(ga.state.t, &ga.state.q);
         let worst = norm_inf(&phi0);
-        if !(worst <= 1e-8) {
+        if worst.is_nan() || worst > 1e-8 {
             return Err(DynamicsError::Singular {
                 t: ga.state.t,
                 reason: format!(
