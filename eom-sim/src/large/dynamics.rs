@@ -80,6 +80,14 @@ pub enum DynamicsError {
         /// The solver's message.
         reason: String,
     },
+    /// The starting state violates the model's constraints (a cable end
+    /// away from its marker).
+    Inconsistent {
+        /// Time.
+        t: f64,
+        /// Which constraints, by how much.
+        reason: String,
+    },
     /// The state became non-finite.
     NonFinite {
         /// Time.
@@ -100,6 +108,9 @@ impl fmt::Display for DynamicsError {
             ),
             DynamicsError::Singular { t, reason } => {
                 write!(f, "singular matrix at t = {t}: {reason}")
+            }
+            DynamicsError::Inconsistent { t, reason } => {
+                write!(f, "inconsistent start at t = {t}: {reason}")
             }
             DynamicsError::NonFinite { t } => write!(f, "the state became non-finite at t = {t}"),
         }

@@ -505,7 +505,7 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
         let phi0 = model.constraint_residual(ga.state.t, &ga.state.q);
         let worst = norm_inf(&phi0);
         if worst.is_nan() || worst > 1e-8 {
-            return Err(DynamicsError::Singular {
+            return Err(DynamicsError::Inconsistent {
                 t: ga.state.t,
                 reason: format!(
                     "the attachments do not hold at the start (|Φ|∞ = {worst:.3e}): {}",
