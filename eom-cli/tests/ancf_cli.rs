@@ -179,3 +179,63 @@ fn simulate_runs_the_pendulum_and_refuses_a_mixed_model() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("mixes rigid bodies and cables"));
 }
+
+#[test]
+fn check_stats_and_dump_report_the_cables() {
+    // The bundled cantilever: one Cable2D chain of 16 elements clamped at
+    // one end (17 nodes × 4 = 68 coordinates, 64 free).
+    let model = "models/ancf/cantilever.ron";
+    let out = eom_gen(&["check", model]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("Cable2D × 16 elements, 17 nodes × 4 = 68 coordinates (64 free)")
+            && text.contains("kernel eom_sim::elements::Cable2D")
+            && text.contains("rule: "),
+        "{text}"
+    );
+    let out = eom_gen(&["check", model, "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let c = &v["cables"][0];
+    assert_eq!(c["element"], "Cable2D");
+    assert_eq!(c["coordinates"], 68);
+    assert_eq!(c["free_coordinates"], 64);
+    assert_eq!(c["kernel_file"], "eom-sim/src/elements/cable2d.rs");
+    assert!(
+        c["rule"].as_str().is_some_and(|r| r.contains("Gauss")),
+        "{c}"
+    );
+
+    // stats: the kernel's operation counts (those in the generated file's
+    // documentation) and the chain's ops per force evaluation.
+    let out = eom_gen(&["stats", model, "--json"]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let k = &v["cables"]["kernels"]["Cable2D"];
+    let forces = k["internal_forces"]["total"].as_u64().unwrap_or(0);
+    let file = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../eom-sim/src/elements/cable2d.rs"
+    ))
+    .expect("the generated kernel");
+    assert!(
+        forces > 0 && file.contains(&format!("`internal_forces`: {forces} ops")),
+        "{forces}"
+    );
+    assert_eq!(
+        v["cables"]["cables"][0]["forces_ops"].as_u64(),
+        Some(16 * forces)
+    );
+    let out = eom_gen(&["stats", model]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("Cable2D::internal_jacobians"), "{text}");
+
+    // dump: the source has no cable kernels, and says so.
+    let out = eom_gen(&["dump", model]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("model-independent") && err.contains("eom-sim/src/elements/cable2d.rs"),
+        "{err}"
+    );
+}
