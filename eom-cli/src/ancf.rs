@@ -46,7 +46,12 @@ fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
         .iter()
         .map(|c| {
             chain(&c.chain)
-                .map(|ch| (c.name.clone(), ch))
+                .map(|mut ch| {
+                    if c.distributed_load != [0.0; 3] {
+                        ch.model.add_distributed_load(c.distributed_load);
+                    }
+                    (c.name.clone(), ch)
+                })
                 .map_err(|e| Error::Refused(format!("cable `{}`: {e}", c.name)))
         })
         .collect()

@@ -597,6 +597,10 @@ pub struct CableInfo {
     /// Everything the runtime builds it from (values at the parameters'
     /// defaults; gravity from the model).
     pub chain: eom_sim::large::ancf::ChainSpec,
+    /// A dead load per unit reference length on every element, world
+    /// axes, N/m (`StructuralModel::add_distributed_load` after building
+    /// the chain).
+    pub distributed_load: [f64; 3],
 }
 
 impl System {

@@ -188,6 +188,10 @@ pub struct Cable {
     /// A point mass on the second end (a bob), kg.
     #[serde(default, skip_serializing_if = "Num::is_zero")]
     pub end_mass: Num,
+    /// A dead load per unit reference length on every element, world
+    /// axes, N/m (besides gravity's `ρ A g`).
+    #[serde(default, skip_serializing_if = "V3::is_zero")]
+    pub distributed_load: V3,
 }
 
 /// ANCF element types (the kernels generated once per type).

@@ -2337,6 +2337,8 @@ impl Ctx<'_> {
             let from = self.vec3(&c.from, &at("from"), Scope::Params);
             let to = self.vec3(&c.to, &at("to"), Scope::Params);
             let end_force = self.vec3(&c.end_force, &at("end_force"), Scope::Params);
+            let distributed =
+                self.vec3(&c.distributed_load, &at("distributed_load"), Scope::Params);
             let positive = |cx: &mut Self, n: &Num, field: &'static str, what: &str, unit: &str| {
                 let q = cx.quantity(n, &at(field), Scope::Params)?;
                 if q.value.is_nan() || q.value <= 0.0 {
@@ -2453,6 +2455,27 @@ impl Ctx<'_> {
                     ok = false;
                 }
             }
+            if let Some(d) = &distributed {
+                let d = values(d);
+                if !(d.x.is_finite() && d.y.is_finite() && d.z.is_finite()) {
+                    self.error(
+                        &at("distributed_load"),
+                        format!("the distributed load of cable `{name}` is not finite"),
+                        "give a load per unit length in N/m",
+                    );
+                    ok = false;
+                } else if planar && d.z != 0.0 {
+                    self.error(
+                        &at("distributed_load"),
+                        format!(
+                            "`{kernel}` cable `{name}` has a distributed load out of its plane (z = {})",
+                            d.z
+                        ),
+                        "planar elements carry loads in the x–y plane: give z = 0, or use `Cable3D`",
+                    );
+                    ok = false;
+                }
+            }
             if planar && g[2] != 0.0 {
                 self.warning(
                     &[f("gravity")],
@@ -2485,8 +2508,21 @@ impl Ctx<'_> {
                 Some(db),
                 Some(mu),
                 Some(end_mass),
+                Some(distributed),
             ) = (
-                from, to, end_force, young, density, area, second, poisson, da, db, mu, end_mass,
+                from,
+                to,
+                end_force,
+                young,
+                density,
+                area,
+                second,
+                poisson,
+                da,
+                db,
+                mu,
+                end_mass,
+                distributed,
             )
             else {
                 ok = false;
@@ -2519,6 +2555,7 @@ impl Ctx<'_> {
                     end_mass: end_mass.value,
                     gravity: g,
                 },
+                distributed_load: v(&distributed),
             });
         }
         ok.then_some(out)
