@@ -537,3 +537,47 @@ fn uniformly_loaded_cantilever_small_and_large_deflection() {
         }
     }
 }
+
+#[test]
+fn beam2d_large_deflection_converges_to_the_elastica() {
+    // A slender strip (L = 1 m, b = h = 0.01 m, E = 1.2e9 Pa: EI = 1 N m²,
+    // EA = 1.2e5 N, ν = 0.3) under the tip force PL²/EI = 3: Mattiasson's
+    // inextensible elastica, up to shear and stretch (P/(k_s G A) and P/EA,
+    // 6e-5 and 2.5e-5 here), the tip turning by 1.2 rad. Measured: errors
+    // 7.9e-2, 7.8e-3, 4.9e-4 m for 8, 16, 32 elements (orders 3.3, 4.0:
+    // at this load the coarse meshes' error converges faster than the
+    // second order of the small-deflection case, which is its asymptotic
+    // order and what is asserted).
+    let (l, b, h) = (1.0, 0.01, 0.01);
+    let section = Section {
+        e: 1.2e9,
+        nu: 0.3,
+        rho: 1.0,
+        area: b * h,
+        inertia: b * h * h * h / 12.0,
+        b,
+        h,
+        ..Section::default()
+    };
+    let alpha = 3.0;
+    let (u, w, _) = mattiasson(alpha);
+    let mut errors = Vec::new();
+    for n in [8usize, 16, 32] {
+        let mut s = spec("Beam2D", n, [l, 0.0, 0.0], section.clone());
+        s.end_force = [0.0, -alpha, 0.0];
+        let (tip, _) = solve(&build(&s), 10);
+        let e = ((l - tip[0] - u).powi(2) + (-tip[1] - w).powi(2)).sqrt();
+        println!(
+            "Beam2D, {n} elements: u/L {:.7}, w/L {:.7} (Mattiasson {u:.7}, {w:.7}), error {e:.2e}",
+            l - tip[0],
+            -tip[1]
+        );
+        errors.push(e);
+    }
+    let orders: Vec<f64> = errors.windows(2).map(|w| (w[0] / w[1]).log2()).collect();
+    println!("orders {orders:?}");
+    for &o in &orders {
+        assert!(o > 1.8, "{orders:?}");
+    }
+    assert!(errors[2] < 6e-4, "{errors:?}");
+}
