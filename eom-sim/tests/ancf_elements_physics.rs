@@ -29,7 +29,12 @@
 //!   force converges with the mesh to Timoshenko's `PL³/(3EI) +
 //!   PL/(k_s G A)` at second order (constant bending strain per element),
 //!   for ν = 0 and 0.3 alike (no Poisson locking), at L/h = 10 and 100 (no
-//!   shear locking).
+//!   shear locking); at large deflection (PL²/EI = 3, L/h = 100) it
+//!   converges to Mattiasson's elastica.
+//! - **Distributed load** (`StructuralModel::add_distributed_load`, the
+//!   model's `distributed_load`): `wL⁴/(8EI)` at small load, and at
+//!   wL³/EI = 1, 3, 10 the extensible elastica under the same load
+//!   (shooting, `large::elastica::extensible_cantilever_distributed`).
 
 use eom_sim::elements::{Cable2D, Cable2DGreen, ElementKernel};
 use eom_sim::large::ancf::{Chain, ChainSpec, Section, Support, chain};
