@@ -303,8 +303,8 @@ fn cable3d_is_objective() {
     // Newton tolerance. A general load (f has components along all three
     // axes) and a general rotation make the test fully spatial.
     let k = {
-        let v = [0.3, -0.5, 0.81];
-        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) as f64;
+        let v: [f64; 3] = [0.3, -0.5, 0.81];
+        let n = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
         v.map(|x| x / n.sqrt())
     };
     let r = rotation(k, 1.1);

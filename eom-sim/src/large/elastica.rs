@@ -200,67 +200,6 @@ pub fn mattiasson(alpha: f64) -> (f64, f64, f64) {
     (u, w, theta)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn elliptic_integrals_match_known_values() {
-        // K(k = sin 45°) = 1.854074677301372, E = 1.350643881047675.
-        let (f, e) = elliptic_fe(std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_1_SQRT_2);
-        assert!((f - 1.854_074_677_301_372).abs() < 1e-14, "{f}");
-        assert!((e - 1.350_643_881_047_675).abs() < 1e-14, "{e}");
-    }
-
-    #[test]
-    fn mattiasson_agrees_with_shooting_and_his_table() {
-        // Two independent solutions of the inextensible elastica: the
-        // elliptic integrals and shooting on the ODE with EA = ∞.
-        for alpha in [0.5, 1.0, 2.0, 5.0, 10.0] {
-            let (u, w, th) = mattiasson(alpha);
-            let tip = extensible_cantilever(1.0, f64::INFINITY, 1.0, [0.0, -alpha])
-                .unwrap_or_else(|| panic!("shooting failed at {alpha}"));
-            assert!(
-                (1.0 - tip.x - u).abs() < 1e-10,
-                "{alpha}: {} {u}",
-                1.0 - tip.x
-            );
-            assert!((-tip.y - w).abs() < 1e-10, "{alpha}: {} {w}", -tip.y);
-            assert!(
-                (-tip.theta - th).abs() < 1e-10,
-                "{alpha}: {} {th}",
-                -tip.theta
-            );
-        }
-        // Mattiasson (1981), table 1, PL²/EI = 1: w/L = 0.30172,
-        // u/L = 0.05643, θ = 0.46135; PL²/EI = 10: 0.81061, 0.55500.
-        let (u, w, th) = mattiasson(1.0);
-        assert!(
-            (w - 0.30172).abs() < 5e-6 && (u - 0.05643).abs() < 5e-6,
-            "{u} {w}"
-        );
-        assert!((th - 0.46135).abs() < 5e-6, "{th}");
-        let (u, w, _) = mattiasson(10.0);
-        assert!(
-            (w - 0.81061).abs() < 5e-6 && (u - 0.55500).abs() < 5e-6,
-            "{u} {w}"
-        );
-    }
-
-    #[test]
-    fn small_load_is_the_linear_cantilever() {
-        // P L³/(3 EI) and the extensible shortening vanish for small P.
-        let (l, ei, ea) = (2.0, 1.0e6, 2.0e9);
-        let p = 1e-3;
-        let tip = extensible_cantilever(l, ea, ei, [0.0, -p]).unwrap_or_else(|| panic!("shoot"));
-        let lin = p * l * l * l / (3.0 * ei);
-        assert!((-tip.y - lin).abs() < 1e-9 * lin, "{} {lin}", -tip.y);
-        // An axial pull stretches by P L/EA.
-        let tip = extensible_cantilever(l, ea, ei, [1e5, 0.0]).unwrap_or_else(|| panic!("shoot"));
-        assert!((tip.x - l - 1e5 * l / ea).abs() < 1e-14, "{}", tip.x);
-    }
-}
-
 /// The extensible elastica under a uniform dead load `w` per unit
 /// reference length (instead of an end force): the section force at `X`
 /// is the resultant of the load beyond it, `F(X) = w (L − X)`, in the
@@ -334,4 +273,65 @@ pub fn extensible_cantilever_distributed(l: f64, ea: f64, ei: f64, w: [f64; 2]) 
         theta: y[0],
         root_moment: m,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn elliptic_integrals_match_known_values() {
+        // K(k = sin 45°) = 1.854074677301372, E = 1.350643881047675.
+        let (f, e) = elliptic_fe(std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_1_SQRT_2);
+        assert!((f - 1.854_074_677_301_372).abs() < 1e-14, "{f}");
+        assert!((e - 1.350_643_881_047_675).abs() < 1e-14, "{e}");
+    }
+
+    #[test]
+    fn mattiasson_agrees_with_shooting_and_his_table() {
+        // Two independent solutions of the inextensible elastica: the
+        // elliptic integrals and shooting on the ODE with EA = ∞.
+        for alpha in [0.5, 1.0, 2.0, 5.0, 10.0] {
+            let (u, w, th) = mattiasson(alpha);
+            let tip = extensible_cantilever(1.0, f64::INFINITY, 1.0, [0.0, -alpha])
+                .unwrap_or_else(|| panic!("shooting failed at {alpha}"));
+            assert!(
+                (1.0 - tip.x - u).abs() < 1e-10,
+                "{alpha}: {} {u}",
+                1.0 - tip.x
+            );
+            assert!((-tip.y - w).abs() < 1e-10, "{alpha}: {} {w}", -tip.y);
+            assert!(
+                (-tip.theta - th).abs() < 1e-10,
+                "{alpha}: {} {th}",
+                -tip.theta
+            );
+        }
+        // Mattiasson (1981), table 1, PL²/EI = 1: w/L = 0.30172,
+        // u/L = 0.05643, θ = 0.46135; PL²/EI = 10: 0.81061, 0.55500.
+        let (u, w, th) = mattiasson(1.0);
+        assert!(
+            (w - 0.30172).abs() < 5e-6 && (u - 0.05643).abs() < 5e-6,
+            "{u} {w}"
+        );
+        assert!((th - 0.46135).abs() < 5e-6, "{th}");
+        let (u, w, _) = mattiasson(10.0);
+        assert!(
+            (w - 0.81061).abs() < 5e-6 && (u - 0.55500).abs() < 5e-6,
+            "{u} {w}"
+        );
+    }
+
+    #[test]
+    fn small_load_is_the_linear_cantilever() {
+        // P L³/(3 EI) and the extensible shortening vanish for small P.
+        let (l, ei, ea) = (2.0, 1.0e6, 2.0e9);
+        let p = 1e-3;
+        let tip = extensible_cantilever(l, ea, ei, [0.0, -p]).unwrap_or_else(|| panic!("shoot"));
+        let lin = p * l * l * l / (3.0 * ei);
+        assert!((-tip.y - lin).abs() < 1e-9 * lin, "{} {lin}", -tip.y);
+        // An axial pull stretches by P L/EA.
+        let tip = extensible_cantilever(l, ea, ei, [1e5, 0.0]).unwrap_or_else(|| panic!("shoot"));
+        assert!((tip.x - l - 1e5 * l / ea).abs() < 1e-14, "{}", tip.x);
+    }
 }
