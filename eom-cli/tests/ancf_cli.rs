@@ -295,3 +295,53 @@ fn distributed_load_in_the_model_format() {
         assert!(err.contains(needle), "{needle} in\n{err}");
     }
 }
+
+#[test]
+fn node_forces_in_the_model_format() {
+    // A force P at the middle node of a cantilever (EI = 1 N m², L = 1 m,
+    // 4 elements, P = 1e-4 N): Euler–Bernoulli's tip deflection
+    // 5PL³/(48EI), nodally exact for the cubic elements; beside it the
+    // same force on the tip gives PL³/(3EI).
+    let model = |node: usize| {
+        format!(
+            r#"Model(name: "node_force", bodies: [], joints: [], cables: [
+    Cable(name: "c", element: Cable2D, from: (0, 0, 0), to: (1, 0, 0), elements: 4,
+          young: 1, density: 1, area: 1e6, second_moment: 1, start: Clamped,
+          node_forces: [(node: {node}, force: (0, -1e-4, 0))]),
+])"#
+        )
+    };
+    for (node, want) in [(2usize, 5.0 / 48.0 * 1e-4), (4, 1e-4 / 3.0)] {
+        let path = write(&format!("node_force_{node}.ron"), &model(node));
+        let out = eom_gen(&["solve-static", &path, "--json"]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        let y = v["cables"][0]["end_position"][1]
+            .as_f64()
+            .unwrap_or(f64::NAN);
+        assert!((-y / want - 1.0).abs() < 1e-6, "node {node}: {y} vs {want}");
+    }
+    // A node the cable does not have, and a planar cable loaded out of its
+    // plane: both errors at their fields.
+    let path = write(
+        "bad_node_force.ron",
+        r#"Model(name: "bad", bodies: [], joints: [], cables: [
+    Cable(name: "c", element: Cable2D, from: (0, 0, 0), to: (1, 0, 0), elements: 4,
+          young: 1, density: 1, area: 1, second_moment: 1, start: Clamped,
+          node_forces: [(node: 5, force: (0, -1, 0)), (node: 1, force: (0, 0, 2))]),
+])"#,
+    );
+    let out = eom_gen(&["check", &path]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    for needle in [
+        "bad_node_force.ron:4:32: error: cable `c` has no node 5 (its nodes are 0 to 4)",
+        "bad_node_force.ron:4:72: error: `Cable2D` cable `c` has a node force out of its plane (z = 2)",
+    ] {
+        assert!(err.contains(needle), "{needle} in\n{err}");
+    }
+}

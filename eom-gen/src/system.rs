@@ -601,6 +601,8 @@ pub struct CableInfo {
     /// axes, N/m (`StructuralModel::add_distributed_load` after building
     /// the chain).
     pub distributed_load: [f64; 3],
+    /// Constant forces on nodes: `(node, force)`, world axes, N.
+    pub node_forces: Vec<(usize, [f64; 3])>,
 }
 
 impl System {

@@ -2476,6 +2476,45 @@ impl Ctx<'_> {
                     ok = false;
                 }
             }
+            let mut node_forces = Vec::new();
+            for (j, nf) in c.node_forces.iter().enumerate() {
+                let here = |field: &'static str| join(&path, &[f("node_forces"), i(j), f(field)]);
+                if nf.node > c.elements {
+                    self.error(
+                        &here("node"),
+                        format!(
+                            "cable `{name}` has no node {} (its nodes are 0 to {})",
+                            nf.node, c.elements
+                        ),
+                        "node j lies at from + j/elements · (to − from)",
+                    );
+                    ok = false;
+                }
+                let Some(force) = self.vec3(&nf.force, &here("force"), Scope::Params) else {
+                    ok = false;
+                    continue;
+                };
+                let fv = values(&force);
+                if !(fv.x.is_finite() && fv.y.is_finite() && fv.z.is_finite()) {
+                    self.error(
+                        &here("force"),
+                        format!("a node force of cable `{name}` is not finite"),
+                        "give a force in N",
+                    );
+                    ok = false;
+                } else if planar && fv.z != 0.0 {
+                    self.error(
+                        &here("force"),
+                        format!(
+                            "`{kernel}` cable `{name}` has a node force out of its plane (z = {})",
+                            fv.z
+                        ),
+                        "planar elements carry loads in the x–y plane: give z = 0, or use `Cable3D`",
+                    );
+                    ok = false;
+                }
+                node_forces.push((nf.node, [fv.x, fv.y, fv.z]));
+            }
             if planar && g[2] != 0.0 {
                 self.warning(
                     &[f("gravity")],
@@ -2556,6 +2595,7 @@ impl Ctx<'_> {
                     gravity: g,
                 },
                 distributed_load: v(&distributed),
+                node_forces,
             });
         }
         ok.then_some(out)

@@ -642,4 +642,10 @@ impl StructuralModel {
             g.add_uniform_load(w, &mut self.load);
         }
     }
+
+    /// Adds a constant force `f` on full coordinate `i` to the external
+    /// load.
+    pub fn add_point_load(&mut self, i: usize, f: f64) {
+        self.load[i] += f;
+    }
 }
