@@ -55,7 +55,18 @@ fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
         .iter()
         .map(|c| {
             chain(&c.chain)
-                .map(|ch| (c.name.clone(), ch))
+                .map(|mut ch| {
+                    if c.distributed_load != [0.0; 3] {
+                        ch.model.add_distributed_load(c.distributed_load);
+                    }
+                    for &(node, f) in &c.node_forces {
+                        for (k, &fk) in f.iter().enumerate().take(ch.dim) {
+                            let i = ch.position_index(node, k);
+                            ch.model.add_point_load(i, fk);
+                        }
+                    }
+                    (c.name.clone(), ch)
+                })
                 .map_err(|e| Error::Refused(format!("cable `{}`: {e}", c.name)))
         })
         .collect()

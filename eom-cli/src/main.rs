@@ -3,6 +3,7 @@
 
 mod ancf;
 mod bench;
+mod cable_report;
 mod compiled;
 mod error;
 mod plot;
@@ -658,6 +659,7 @@ fn check(path: &str, json: bool) -> ExitCode {
                 println!("{v}");
             } else {
                 print!("{}", crate::summary::human(&checked));
+                print!("{}", cable_report::check_lines(&checked.system));
                 if let Some(s) = &checked.scene {
                     println!("  scene        {}", s.source.path);
                     if s.spec.functions.is_some() {
@@ -1007,6 +1009,7 @@ fn dump(path: &str, output: Option<&str>, fma: bool) -> ExitCode {
         }
     };
     eprint!("{}", g.checked.render_warnings());
+    eprint!("{}", cable_report::dump_note(&g.checked.system));
     match output {
         None => {
             print!("{}", g.source);
@@ -1047,8 +1050,10 @@ fn stats(path: &str, json: bool) -> ExitCode {
         .iter()
         .map(|(form, c)| (format!("{form:?}"), op_json(c)))
         .collect();
+    let (cable_text, cable_json) = cable_report::stats(&g.checked.system);
     let v = serde_json::json!({
         "name": g.checked.system.name,
+        "cables": cable_json,
         "formulation": format!("{}", f.fd_form),
         "forward_dynamics_candidates": candidates,
         "ops": ops,
@@ -1062,6 +1067,7 @@ fn stats(path: &str, json: bool) -> ExitCode {
         println!("{v}");
     } else {
         print!("{}", stats_table(&g));
+        print!("{cable_text}");
     }
     ExitCode::SUCCESS
 }

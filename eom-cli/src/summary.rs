@@ -28,11 +28,7 @@ pub fn json(checked: &Checked) -> Value {
         "q0": sys.q0(),
         "u0": sys.u0(),
         "cut_joints": sys.cut_joint_names(),
-        "cables": sys.cables.iter().map(|c| json!({
-            "name": c.name,
-            "element": c.chain.kernel,
-            "elements": c.chain.elements,
-        })).collect::<Vec<_>>(),
+        "cables": crate::cable_report::check_json(sys),
         "constraints": sys.constraints.iter().map(|c| c.name.as_str()).collect::<Vec<_>>(),
         "grubler_dof": sys.grubler.dof,
         "grubler_space": if sys.grubler.planar { "planar" } else { "spatial" },

@@ -245,3 +245,169 @@ fn simulate_runs_a_cable_held_by_a_rigid_link_and_refuses_what_it_cannot() {
         "{err}"
     );
 }
+
+#[test]
+fn check_stats_and_dump_report_the_cables() {
+    // The bundled cantilever: one Cable2D chain of 16 elements clamped at
+    // one end (17 nodes × 4 = 68 coordinates, 64 free).
+    let model = "models/ancf/cantilever.ron";
+    let out = eom_gen(&["check", model]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("Cable2D × 16 elements, 17 nodes × 4 = 68 coordinates (64 free)")
+            && text.contains("kernel eom_sim::elements::Cable2D")
+            && text.contains("rule: "),
+        "{text}"
+    );
+    let out = eom_gen(&["check", model, "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let c = &v["cables"][0];
+    assert_eq!(c["element"], "Cable2D");
+    assert_eq!(c["coordinates"], 68);
+    assert_eq!(c["free_coordinates"], 64);
+    assert_eq!(c["kernel_file"], "eom-sim/src/elements/cable2d.rs");
+    assert!(
+        c["rule"].as_str().is_some_and(|r| r.contains("Gauss")),
+        "{c}"
+    );
+
+    // stats: the kernel's operation counts (those in the generated file's
+    // documentation) and the chain's ops per force evaluation.
+    let out = eom_gen(&["stats", model, "--json"]);
+    assert!(out.status.success());
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let k = &v["cables"]["kernels"]["Cable2D"];
+    let forces = k["internal_forces"]["total"].as_u64().unwrap_or(0);
+    let file = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../eom-sim/src/elements/cable2d.rs"
+    ))
+    .expect("the generated kernel");
+    assert!(
+        forces > 0 && file.contains(&format!("`internal_forces`: {forces} ops")),
+        "{forces}"
+    );
+    assert_eq!(
+        v["cables"]["cables"][0]["forces_ops"].as_u64(),
+        Some(16 * forces)
+    );
+    let out = eom_gen(&["stats", model]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("Cable2D::internal_jacobians"), "{text}");
+
+    // dump: the source has no cable kernels, and says so.
+    let out = eom_gen(&["dump", model]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("model-independent") && err.contains("eom-sim/src/elements/cable2d.rs"),
+        "{err}"
+    );
+}
+
+#[test]
+fn distributed_load_in_the_model_format() {
+    // A nearly inextensible cantilever (EI = 1 N m², EA = 1e6 N, L = 1 m)
+    // under a dead load of 3 N/m (wL³/EI = 3): `solve-static` against the
+    // extensible elastica under the same distributed load (shooting); 32
+    // elements are within 1e-6 m of it (measured 7e-7).
+    let path = write(
+        "distributed.ron",
+        r#"Model(name: "distributed", bodies: [], joints: [], cables: [
+    Cable(name: "c", element: Cable2D, from: (0, 0, 0), to: (1, 0, 0), elements: 32,
+          young: 1, density: 1, area: 1e6, second_moment: 1, start: Clamped,
+          distributed_load: (0, -3, 0)),
+])"#,
+    );
+    let out = eom_gen(&["solve-static", &path, "--json", "--load-steps", "20"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let tip = &v["cables"][0]["end_position"];
+    let (x, y) = (
+        tip[0].as_f64().unwrap_or(f64::NAN),
+        tip[1].as_f64().unwrap_or(f64::NAN),
+    );
+    let reference =
+        eom_sim::large::elastica::extensible_cantilever_distributed(1.0, 1e6, 1.0, [0.0, -3.0])
+            .unwrap_or_else(|| panic!("the elastica reference failed"));
+    let err = ((x - reference.x).powi(2) + (y - reference.y).powi(2)).sqrt();
+    assert!(err < 1e-6, "({x}, {y}) vs {reference:?}");
+
+    // Out of the plane of a planar cable, and not a vector: errors at the field.
+    let path = write(
+        "bad_distributed.ron",
+        r#"Model(name: "bad", bodies: [], joints: [], cables: [
+    Cable(name: "c", element: Cable2D, from: (0, 0, 0), to: (1, 0, 0), elements: 4,
+          young: 1, density: 1, area: 1, second_moment: 1, start: Clamped,
+          distributed_load: (0, -3, 1)),
+    Cable(name: "d", element: Cable3D, from: (0, 0, 0), to: (1, 0, 0), elements: 4,
+          young: 1, density: 1, area: 1, second_moment: 1, start: Clamped,
+          distributed_load: (0, "w", 1)),
+])"#,
+    );
+    let out = eom_gen(&["check", &path]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    for needle in [
+        "bad_distributed.ron:4:29: error: `Cable2D` cable `c` has a distributed load out of its plane (z = 1)",
+        "bad_distributed.ron:7:",
+        "`w`",
+    ] {
+        assert!(err.contains(needle), "{needle} in\n{err}");
+    }
+}
+
+#[test]
+fn node_forces_in_the_model_format() {
+    // A force P at the middle node of a cantilever (EI = 1 N m², L = 1 m,
+    // 4 elements, P = 1e-4 N): Euler–Bernoulli's tip deflection
+    // 5PL³/(48EI), nodally exact for the cubic elements; beside it the
+    // same force on the tip gives PL³/(3EI).
+    let model = |node: usize| {
+        format!(
+            r#"Model(name: "node_force", bodies: [], joints: [], cables: [
+    Cable(name: "c", element: Cable2D, from: (0, 0, 0), to: (1, 0, 0), elements: 4,
+          young: 1, density: 1, area: 1e6, second_moment: 1, start: Clamped,
+          node_forces: [(node: {node}, force: (0, -1e-4, 0))]),
+])"#
+        )
+    };
+    for (node, want) in [(2usize, 5.0 / 48.0 * 1e-4), (4, 1e-4 / 3.0)] {
+        let path = write(&format!("node_force_{node}.ron"), &model(node));
+        let out = eom_gen(&["solve-static", &path, "--json"]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+        let y = v["cables"][0]["end_position"][1]
+            .as_f64()
+            .unwrap_or(f64::NAN);
+        assert!((-y / want - 1.0).abs() < 1e-6, "node {node}: {y} vs {want}");
+    }
+    // A node the cable does not have, and a planar cable loaded out of its
+    // plane: both errors at their fields.
+    let path = write(
+        "bad_node_force.ron",
+        r#"Model(name: "bad", bodies: [], joints: [], cables: [
+    Cable(name: "c", element: Cable2D, from: (0, 0, 0), to: (1, 0, 0), elements: 4,
+          young: 1, density: 1, area: 1, second_moment: 1, start: Clamped,
+          node_forces: [(node: 5, force: (0, -1, 0)), (node: 1, force: (0, 0, 2))]),
+])"#,
+    );
+    let out = eom_gen(&["check", &path]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    for needle in [
+        "bad_node_force.ron:4:32: error: cable `c` has no node 5 (its nodes are 0 to 4)",
+        "bad_node_force.ron:4:72: error: `Cable2D` cable `c` has a node force out of its plane (z = 2)",
+    ] {
+        assert!(err.contains(needle), "{needle} in\n{err}");
+    }
+}

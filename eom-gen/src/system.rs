@@ -602,6 +602,12 @@ pub struct CableInfo {
     pub start_at: Option<CableMountInfo>,
     /// The second end held at a marker of a rigid body.
     pub end_at: Option<CableMountInfo>,
+    /// A dead load per unit reference length on every element, world
+    /// axes, N/m (`StructuralModel::add_distributed_load` after building
+    /// the chain).
+    pub distributed_load: [f64; 3],
+    /// Constant forces on nodes: `(node, force)`, world axes, N.
+    pub node_forces: Vec<(usize, [f64; 3])>,
 }
 
 /// A cable end held at a marker of a rigid body (validated).

@@ -28,8 +28,10 @@
 //! - [`Kind::Cable3D`]: spatial cable (no torsion), `ε = |r'| − 1`,
 //!   `κ = |r' × r''|/|r'|³` (Gerstmayr and Shabana 2006);
 //! - [`Kind::Beam2D`]: planar fully parameterised beam, Green–Lagrange
-//!   strain of the continuum, plane stress (Omar and Shabana 2001; Berzeri
-//!   and Shabana 2000).
+//!   strain of the continuum (Omar and Shabana 2001; Berzeri and Shabana
+//!   2000), against locking with ν = 0 in the normal-strain terms and
+//!   Cowper's shear correction (Sopanen and Mikkola 2003; Gerstmayr,
+//!   Matikainen and Mikkola 2008).
 
 pub mod emit;
 mod gauss;

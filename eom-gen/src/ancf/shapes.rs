@@ -459,23 +459,30 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
     let [l, e, nu, rho, b, h, mu] = [s.p[0], s.p[1], s.p[2], s.p[3], s.p[4], s.p[5], s.p[6]];
     let one = a.constant(1.0);
     let half = a.ratio(1, 2);
-    // Plane stress: c = E/(1 − ν²), G = E/(2(1 + ν)).
-    let nu2 = a.pow(nu, 2);
-    let den = a.sub(one, nu2);
-    let c = a.div(e, den);
-    let onep = a.add2(one, nu);
+    // Locking remedy (Sopanen and Mikkola 2003, Nonlinear Dyn. 34;
+    // Gerstmayr, Matikainen and Mikkola 2008, Multibody Syst. Dyn. 20):
+    // Poisson's ratio is set to zero in the normal-strain terms (the
+    // section vector `r,ᵧ` is constant through the height, so the
+    // transverse contraction a bent section needs cannot occur and the
+    // plane-stress coupling stiffens bending by `1/(1 − ν²)`), and the
+    // shear term carries Cowper's correction for a rectangle,
+    // `k_s = 10(1 + ν)/(12 + 11ν)` (the continuum shear strain is uniform
+    // through the height), so `k_s G = 5E/(12 + 11ν)`.
+    // W(E) = ½ E (E11² + E22²) + 2 k_s G E12².
+    let five = a.constant(5.0);
+    let twelve = a.constant(12.0);
+    let eleven = a.constant(11.0);
+    let e5 = a.mul2(five, e);
+    let nu11 = a.mul2(eleven, nu);
+    let ks_den = a.add2(twelve, nu11);
+    let g = a.div(e5, ks_den);
     let two = a.constant(2.0);
-    let g2 = a.mul2(two, onep);
-    let g = a.div(e, g2);
     let il = a.pow(l, -1);
-    // W(E) = ½ c (E11² + E22² + 2ν E11 E22) + 2 G E12².
     let density = |a: &mut Arena, e11: Id, e22: Id, e12: Id| -> Id {
         let x = square(a, e11);
         let y = square(a, e22);
-        let two_nu = a.mul2(two, nu);
-        let z = a.mul(&[two_nu, e11, e22]);
-        let sum = a.add(&[x, y, z]);
-        let t1 = a.mul(&[half, c, sum]);
+        let sum = a.add2(x, y);
+        let t1 = a.mul(&[half, e, sum]);
         let s12 = square(a, e12);
         let t2 = a.mul(&[two, g, s12]);
         a.add2(t1, t2)
@@ -582,16 +589,20 @@ pub(super) fn beam2d(a: &mut Arena) -> Definition {
                   over a rectangular section `b × h` centred on the axis. \
                   Continuum mechanics: deformation gradient `F = [r,ₓ r,ᵧ]`, \
                   Green–Lagrange strain `E = ½(FᵀF − I)`, plane stress \
-                  `W = ½ E/(1−ν²) (E₁₁² + E₂₂² + 2ν E₁₁E₂₂) + 2G E₁₂²`, \
-                  `U = ∫ W dV`; Kelvin–Voigt `R = mu ∫ W(Ė) dV`. Locking is not \
-                  treated (full integration, no strain splitting): one element \
-                  clamped with a small tip force deflects 0.75 × Euler–Bernoulli \
-                  at `nu = 0` for `L/h` = 10 and 50 alike (the section vector \
-                  `r,ᵧ` is interpolated linearly, so the bending strain is \
-                  constant along the element), and 0.68 × at `nu = 0.3` (Poisson \
-                  locking, the factor `1 − ν²`; `beam2d_locking_measured` in \
-                  `eom-gen/tests/ancf_elements.rs`). Use `nu = 0` and several \
-                  elements."
+                  `W = ½ E (E₁₁² + E₂₂²) + 2 k_s G E₁₂²`, `U = ∫ W dV`; \
+                  Kelvin–Voigt `R = mu ∫ W(Ė) dV`. Locking remedy (Sopanen and \
+                  Mikkola 2003; Gerstmayr, Matikainen and Mikkola 2008): \
+                  Poisson's ratio is zero in the normal-strain terms (no \
+                  Poisson locking: full plane stress stiffens bending by \
+                  `1/(1 − ν²)`, 0.68 × Euler–Bernoulli at `nu = 0.3`), and the \
+                  shear term has Cowper's factor `k_s = 10(1 + ν)/(12 + 11ν)`, \
+                  `G = E/(2(1 + ν))`; `nu` enters only there. The section \
+                  vector `r,ᵧ` is interpolated linearly, so the bending strain \
+                  is constant along an element (one element: 0.75 × \
+                  Euler–Bernoulli under a tip force); a cantilever converges \
+                  to Timoshenko's deflection with the mesh at second order \
+                  (`beam2d_cantilever_converges_to_timoshenko` in \
+                  `eom-sim/tests/ancf_elements_physics.rs`)."
             .to_string(),
         integration: format!(
             "Exact: `W` is a polynomial, of degree 8 in `ξ` and 4 in `y`; \

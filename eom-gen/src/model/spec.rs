@@ -195,6 +195,23 @@ pub struct Cable {
     /// A point mass on the second end (a bob), kg.
     #[serde(default, skip_serializing_if = "Num::is_zero")]
     pub end_mass: Num,
+    /// A dead load per unit reference length on every element, world
+    /// axes, N/m (besides gravity's `ρ A g`).
+    #[serde(default, skip_serializing_if = "V3::is_zero")]
+    pub distributed_load: V3,
+    /// Constant (dead) forces on nodes of the chain, world axes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub node_forces: Vec<NodeForce>,
+}
+
+/// A constant force on one node of a cable.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NodeForce {
+    /// The node, `0..=elements` (node `j` at `from + j/elements · (to − from)`).
+    pub node: usize,
+    /// The force, world axes, N.
+    pub force: V3,
 }
 
 /// Where a cable end is held on a rigid body: a marker, and for a clamped

@@ -2342,6 +2342,8 @@ impl Ctx<'_> {
             let from = self.vec3(&c.from, &at("from"), Scope::Params);
             let to = self.vec3(&c.to, &at("to"), Scope::Params);
             let end_force = self.vec3(&c.end_force, &at("end_force"), Scope::Params);
+            let distributed =
+                self.vec3(&c.distributed_load, &at("distributed_load"), Scope::Params);
             let positive = |cx: &mut Self, n: &Num, field: &'static str, what: &str, unit: &str| {
                 let q = cx.quantity(n, &at(field), Scope::Params)?;
                 if q.value.is_nan() || q.value <= 0.0 {
@@ -2458,6 +2460,66 @@ impl Ctx<'_> {
                     ok = false;
                 }
             }
+            if let Some(d) = &distributed {
+                let d = values(d);
+                if !(d.x.is_finite() && d.y.is_finite() && d.z.is_finite()) {
+                    self.error(
+                        &at("distributed_load"),
+                        format!("the distributed load of cable `{name}` is not finite"),
+                        "give a load per unit length in N/m",
+                    );
+                    ok = false;
+                } else if planar && d.z != 0.0 {
+                    self.error(
+                        &at("distributed_load"),
+                        format!(
+                            "`{kernel}` cable `{name}` has a distributed load out of its plane (z = {})",
+                            d.z
+                        ),
+                        "planar elements carry loads in the x–y plane: give z = 0, or use `Cable3D`",
+                    );
+                    ok = false;
+                }
+            }
+            let mut node_forces = Vec::new();
+            for (j, nf) in c.node_forces.iter().enumerate() {
+                let here = |field: &'static str| join(&path, &[f("node_forces"), i(j), f(field)]);
+                if nf.node > c.elements {
+                    self.error(
+                        &here("node"),
+                        format!(
+                            "cable `{name}` has no node {} (its nodes are 0 to {})",
+                            nf.node, c.elements
+                        ),
+                        "node j lies at from + j/elements · (to − from)",
+                    );
+                    ok = false;
+                }
+                let Some(force) = self.vec3(&nf.force, &here("force"), Scope::Params) else {
+                    ok = false;
+                    continue;
+                };
+                let fv = values(&force);
+                if !(fv.x.is_finite() && fv.y.is_finite() && fv.z.is_finite()) {
+                    self.error(
+                        &here("force"),
+                        format!("a node force of cable `{name}` is not finite"),
+                        "give a force in N",
+                    );
+                    ok = false;
+                } else if planar && fv.z != 0.0 {
+                    self.error(
+                        &here("force"),
+                        format!(
+                            "`{kernel}` cable `{name}` has a node force out of its plane (z = {})",
+                            fv.z
+                        ),
+                        "planar elements carry loads in the x–y plane: give z = 0, or use `Cable3D`",
+                    );
+                    ok = false;
+                }
+                node_forces.push((nf.node, [fv.x, fv.y, fv.z]));
+            }
             if planar && g[2] != 0.0 {
                 self.warning(
                     &[f("gravity")],
@@ -2507,8 +2569,21 @@ impl Ctx<'_> {
                 Some(db),
                 Some(mu),
                 Some(end_mass),
+                Some(distributed),
             ) = (
-                from, to, end_force, young, density, area, second, poisson, da, db, mu, end_mass,
+                from,
+                to,
+                end_force,
+                young,
+                density,
+                area,
+                second,
+                poisson,
+                da,
+                db,
+                mu,
+                end_mass,
+                distributed,
             )
             else {
                 ok = false;
@@ -2543,6 +2618,8 @@ impl Ctx<'_> {
                 },
                 start_at,
                 end_at,
+                distributed_load: v(&distributed),
+                node_forces,
             });
         }
         ok.then_some(out)

@@ -42,7 +42,9 @@ pub enum Support {
     /// end node are eliminated).
     Pinned,
     /// Position and orientation fixed (every coordinate of the end node
-    /// eliminated: position and gradients keep their reference values).
+    /// eliminated: position and gradients keep their reference values;
+    /// for the fully parameterised beam the position and the section
+    /// vector `∂r/∂y`, the axial gradient left free: the face may shear).
     Clamped,
 }
 
@@ -248,6 +250,13 @@ pub fn build_chain<E: ElementKernel<N, P> + 'static, const N: usize, const P: us
             Support::Clamped => nc,
         };
         for k in 0..fixed {
+            // A clamped face of the fully parameterised beam holds
+            // `r(0, y) = r₀ + y r,ᵧ`: position and section vector; its
+            // `r,ₓ` stays free (the face may shear, as Timoshenko's clamp;
+            // holding it too would force zero shear strain at the face).
+            if support == Support::Clamped && nc == 3 * dim && (dim..2 * dim).contains(&k) {
+                continue;
+            }
             b = b.fix(node * nc + k);
         }
     }

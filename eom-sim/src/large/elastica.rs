@@ -7,6 +7,8 @@
 //!   the rotation's rate per reference length), the same strain measures
 //!   as Gerstmayr and Irschik's cable, solved as a boundary value problem
 //!   by shooting on the root moment with DOP853 at tolerance 1e-13;
+//! - [`extensible_cantilever_distributed`]: the same under a uniform dead
+//!   load per unit reference length (shooting as above);
 //! - [`mattiasson`]: the inextensible elastica under a transverse end load
 //!   in closed form by elliptic integrals (Mattiasson 1981), with the
 //!   incomplete integrals by Carlson's symmetric forms.
@@ -196,6 +198,81 @@ pub fn mattiasson(alpha: f64) -> (f64, f64, f64) {
     let w = 1.0 - 2.0 * de / sa;
     let u = 1.0 - (2.0 * theta.sin() / alpha).sqrt();
     (u, w, theta)
+}
+
+/// The extensible elastica under a uniform dead load `w` per unit
+/// reference length (instead of an end force): the section force at `X`
+/// is the resultant of the load beyond it, `F(X) = w (L − X)`, in the
+/// equations above. Tip of the cantilever clamped at the origin along
+/// `+x`; the load applied in steps (continuation of the root moment).
+/// `None` if shooting fails.
+pub fn extensible_cantilever_distributed(l: f64, ea: f64, ei: f64, w: [f64; 2]) -> Option<Tip> {
+    let shoot_w = |w: [f64; 2], m0: f64| -> Option<[f64; 4]> {
+        let sys = FnSystem(move |x: f64, y: &[f64; 4], dy: &mut [f64; 4]| {
+            let f = [w[0] * (l - x), w[1] * (l - x)];
+            let (s, c) = y[0].sin_cos();
+            let eps = if ea.is_finite() {
+                (f[0] * c + f[1] * s) / ea
+            } else {
+                0.0
+            };
+            dy[0] = y[1] / ei;
+            dy[1] = (1.0 + eps) * (f[0] * s - f[1] * c);
+            dy[2] = (1.0 + eps) * c;
+            dy[3] = (1.0 + eps) * s;
+        });
+        let mut method = Dop853::new(1e-13, 1e-15);
+        let opts = SolveOptions {
+            record_steps: false,
+            ..SolveOptions::default()
+        };
+        let sol = integrate(
+            &mut method,
+            &sys,
+            0.0,
+            [0.0, m0, 0.0, 0.0],
+            l,
+            &opts,
+            &mut [],
+        );
+        matches!(sol.stop, StopReason::Finished).then_some(sol.y_final)
+    };
+    let secant_w = |w: [f64; 2], guess: f64| -> Option<f64> {
+        let scale = (w[0].abs() + w[1].abs()) * l * l;
+        let mut m_a = guess;
+        let mut r_a = shoot_w(w, m_a)?[1];
+        let mut m_b = guess * (1.0 + 1e-3) + 1e-6 * scale;
+        let mut r_b = shoot_w(w, m_b)?[1];
+        for _ in 0..100 {
+            if r_b.abs() <= 1e-14 * scale || r_b == r_a {
+                break;
+            }
+            let m_c = m_b - r_b * (m_b - m_a) / (r_b - r_a);
+            let r_c = shoot_w(w, m_c)?[1];
+            (m_a, r_a, m_b, r_b) = (m_b, r_b, m_c, r_c);
+        }
+        (r_b.abs() <= 1e-10 * scale).then_some(m_b)
+    };
+    let load = (w[0].abs() + w[1].abs()) * l * l * l / ei;
+    let steps = (2.0 * load).ceil().max(1.0) as usize;
+    let mut m = 0.0;
+    for k in 1..=steps {
+        let s = k as f64 / steps as f64;
+        let wk = [s * w[0], s * w[1]];
+        let guess = if k == 1 {
+            0.5 * wk[1] * l * l
+        } else {
+            m * k as f64 / (k - 1) as f64
+        };
+        m = secant_w(wk, guess)?;
+    }
+    let y = shoot_w(w, m)?;
+    Some(Tip {
+        x: y[2],
+        y: y[3],
+        theta: y[0],
+        root_moment: m,
+    })
 }
 
 #[cfg(test)]

@@ -633,4 +633,19 @@ impl StructuralModel {
     pub fn point_masses(&self) -> &[(usize, f64)] {
         &self.point_masses
     }
+
+    /// Adds a dead load `w` per unit reference length (N/m, world axes)
+    /// on every element to the constant external load (each element's
+    /// consistent generalised force, `∫ Sᵀ w dx`, exact).
+    pub fn add_distributed_load(&mut self, w: [f64; 3]) {
+        for g in &self.groups {
+            g.add_uniform_load(w, &mut self.load);
+        }
+    }
+
+    /// Adds a constant force `f` on full coordinate `i` to the external
+    /// load.
+    pub fn add_point_load(&mut self, i: usize, f: f64) {
+        self.load[i] += f;
+    }
 }
