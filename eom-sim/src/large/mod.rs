@@ -22,5 +22,5 @@ pub use dynamics::{
     AlphaOptions, DynamicsError, DynamicsStats, GeneralizedAlpha, State, integrate_rk4,
 };
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
-pub use sparse::{FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
+pub use sparse::{AutoLu, BandedLu, FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
 pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};
