@@ -14,6 +14,8 @@ fn elements(root: &str) -> ExitCode {
         for (name, p) in [
             ("internal_forces", &k.forces),
             ("internal_jacobians", &k.jacobians),
+            ("elastic_forces", &k.elastic_forces),
+            ("elastic_stiffness", &k.elastic_stiffness),
             ("mass", &k.mass),
             ("uniform_load", &k.load),
         ] {

@@ -13,7 +13,7 @@
 //! (generalized-α), printing the tip, the energy error and the CPU time.
 //! `kernels`: ns per element for one force and one Jacobian evaluation.
 
-use eom_sim::elements::{Cable2D, ElementKernel};
+use eom_sim::elements::{Cable2D, ElementKernel, Lanes};
 use eom_sim::large::ancf::{Chain, ChainSpec, Section, Support, chain};
 use eom_sim::large::elastica::extensible_cantilever;
 use eom_sim::large::{AlphaOptions, GeneralizedAlpha, State, StaticOptions, solve_static};
@@ -123,7 +123,9 @@ fn statics() {
 }
 
 fn fall(n: usize, h: f64, rho: f64, tol: f64) {
+    let t_build = Instant::now();
     let ch = pendulum(n);
+    let build = t_build.elapsed().as_secs_f64();
     let m = &ch.model;
     let state = State {
         t: 0.0,
@@ -149,46 +151,180 @@ fn fall(n: usize, h: f64, rho: f64, tol: f64) {
     let tip = ch.node_position(ga.q_full(), ch.nodes - 1);
     let e1 = m.energy(ga.q_full(), &ga.state().v);
     println!(
-        "pendulum n = {n:>3} h = {h:e} rho_inf = {rho} tol = {tol:e}: tip at 1 s ({:.9}, {:.9}), energy change {:.2e} J, {:.3} s CPU, {} steps, {} Newton iterations, {} factorisations",
+        "pendulum n = {n:>3} h = {h:e} rho_inf = {rho} tol = {tol:e}: tip at 1 s ({:.9}, {:.9}), energy change {:.2e} J, {:.3} s CPU, {} steps, {} Newton iterations, {} factorisations; model built in {:.3} ms",
         tip[0],
         tip[1],
         e1 - e0,
         cpu,
         ga.stats.steps,
         ga.stats.newton_iterations,
-        ga.stats.factorizations
+        ga.stats.factorizations,
+        build * 1e3
     );
 }
 
+/// The 64 element states of `bench/benches/ancf.rs` (and of Exudyn's
+/// `ancf_exudyn_kernels.py`): a straight element of length 0.25 m bent and
+/// stretched by a few per cent, with rates.
+fn kernel_states() -> Vec<([f64; 8], [f64; 8])> {
+    (0..64)
+        .map(|e| {
+            let mut q = [0.0, 0.0, 1.0, 0.0, 0.25, 0.0, 1.0, 0.0];
+            let mut qd = [0.0; 8];
+            for k in 0..8 {
+                let s = (e * 8 + k) as f64;
+                q[k] += 0.03 * (1.7 * s).sin();
+                qd[k] = 0.5 * (0.9 * s).cos();
+            }
+            (q, qd)
+        })
+        .collect()
+}
+
+/// Median over 7 rounds (each ≥ 0.1 s, as the CPU clock read from
+/// `schedstat` advances in scheduler ticks) of the CPU time per element of `f` applied to
+/// all 64 elements `reps` times, ns.
+fn per_element(reps: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..7)
+        .map(|_| {
+            let t0 = cpu_now();
+            for _ in 0..reps {
+                f();
+            }
+            (cpu_now() - t0) / (reps * 64) as f64 * 1e9
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+fn lanes_of<const W: usize>(st: &[([f64; 8], [f64; 8])]) -> Vec<([Lanes<W>; 8], [Lanes<W>; 8])> {
+    st.chunks(W)
+        .map(|c| {
+            let mut q = [Lanes::<W>::default(); 8];
+            let mut qd = [Lanes::<W>::default(); 8];
+            for (l, (a, b)) in c.iter().enumerate() {
+                for i in 0..8 {
+                    q[i].0[l] = a[i];
+                    qd[i].0[l] = b[i];
+                }
+            }
+            (q, qd)
+        })
+        .collect()
+}
+
+/// ns per element of the `W`-lane kernels: full forces, full Jacobians,
+/// elastic forces, elastic stiffness.
+fn lane_kernels<const W: usize>(st: &[([f64; 8], [f64; 8])], p: &[f64; 6]) -> [f64; 4] {
+    let ls = lanes_of::<W>(st);
+    let pl = p.map(Lanes::<W>::splat);
+    let mut f = [Lanes::<W>::default(); 8];
+    let mut k = [[Lanes::<W>::default(); 8]; 8];
+    let mut d = [[Lanes::<W>::default(); 8]; 8];
+    use std::hint::black_box as bb;
+    let ff = per_element(50_000, || {
+        for (q, qd) in &ls {
+            Cable2D::forces_lanes(bb(q), bb(qd), bb(&pl), &mut f);
+            bb(&f);
+        }
+    });
+    let jj = per_element(5_000, || {
+        for (q, qd) in &ls {
+            Cable2D::jacobians_lanes(bb(q), bb(qd), bb(&pl), &mut k, &mut d);
+            bb((&k, &d));
+        }
+    });
+    let ef = per_element(50_000, || {
+        for (q, _) in &ls {
+            Cable2D::elastic_forces_lanes(bb(q), bb(&pl), &mut f);
+            bb(&f);
+        }
+    });
+    let ek = per_element(5_000, || {
+        for (q, _) in &ls {
+            Cable2D::elastic_stiffness_lanes(bb(q), bb(&pl), &mut k);
+            bb(&k);
+        }
+    });
+    [ff, jj, ef, ek]
+}
+
 fn kernels() {
-    let p = [0.1, 2.0e9, 1.7e6, 78.0, 0.0, 0.0];
-    let q = [0.0, 0.0, 0.99, 0.1, 0.1, 0.01, 0.98, 0.12];
-    let qd = [0.0; 8];
-    let reps = 2_000_000;
-    let mut f = [0.0; 8];
-    let mut acc = 0.0;
-    let t0 = Instant::now();
-    for k in 0..reps {
-        let mut qk = q;
-        qk[7] += k as f64 * 1e-12;
-        Cable2D::internal_forces(std::hint::black_box(&qk), &qd, &p, &mut f);
-        acc += f[3];
-    }
-    let ns_f = t0.elapsed().as_secs_f64() / reps as f64 * 1e9;
-    let mut kk = [[0.0; 8]; 8];
-    let mut dd = [[0.0; 8]; 8];
-    let reps_j = reps / 4;
-    let t0 = Instant::now();
-    for k in 0..reps_j {
-        let mut qk = q;
-        qk[7] += k as f64 * 1e-12;
-        Cable2D::internal_jacobians(std::hint::black_box(&qk), &qd, &p, &mut kk, &mut dd);
-        acc += kk[3][3];
-    }
-    let ns_j = t0.elapsed().as_secs_f64() / reps_j as f64 * 1e9;
+    // Gerstmayr–Irschik's section, element length 0.25 m, damping on as
+    // in Exudyn's figures (1e-3 s × EA, EI).
+    let (e, a, i) = (2.07e11, 0.01, 0.1f64.powi(4) / 12.0);
+    let p = [0.25, e * a, e * i, 7800.0 * a, 1e-3 * e * a, 1e-3 * e * i];
+    let st = kernel_states();
     println!(
-        "Cable2D: {ns_f:.1} ns per element force evaluation, {ns_j:.1} ns per element Jacobian (K and D) ({acc:.1e})"
+        "ns per element, Cable2D, 64 elements at their own deformed states with rates (medians):"
     );
+    println!("lanes  forces  K and D  elastic forces  elastic K");
+    for (w, r) in [
+        (1, lane_kernels::<1>(&st, &p)),
+        (2, lane_kernels::<2>(&st, &p)),
+        (4, lane_kernels::<4>(&st, &p)),
+        (8, lane_kernels::<8>(&st, &p)),
+    ] {
+        println!(
+            "{w:>5}  {:>6.1}  {:>7.1}  {:>14.1}  {:>9.1}",
+            r[0], r[1], r[2], r[3]
+        );
+    }
+    // The runtime's assembly (gather, kernel, scatter into the full vector
+    // and the sparse matrix) on a free chain of 64 such elements, as
+    // Exudyn's ComputeODE2RHS / ComputeJacobianODE2RHS do.
+    for damped in [true, false] {
+        let mut sec = Section {
+            e,
+            rho: 7800.0,
+            area: a,
+            inertia: i,
+            ..Section::default()
+        };
+        if damped {
+            sec.damping_axial = 1e-3 * e * a;
+            sec.damping_bending = 1e-3 * e * i;
+        }
+        let spec = ChainSpec {
+            kernel: "Cable2D".into(),
+            start: [0.0; 3],
+            end: [16.0, 0.0, 0.0],
+            elements: 64,
+            section: sec,
+            start_support: Support::Free,
+            end_support: Support::Free,
+            end_force: [0.0; 3],
+            end_mass: 0.0,
+            gravity: [0.0; 3],
+        };
+        let ch = match chain(&spec) {
+            Ok(c) => c,
+            Err(e) => panic!("{e}"),
+        };
+        let m = &ch.model;
+        let mut q = m.q0().to_vec();
+        let mut qd = vec![0.0; q.len()];
+        for (k, (x, v)) in q.iter_mut().zip(qd.iter_mut()).enumerate() {
+            *x += 0.03 * (1.7 * k as f64).sin();
+            *v = 0.5 * (0.9 * k as f64).cos();
+        }
+        let mut scratch = vec![0.0; q.len()];
+        let mut out = vec![0.0; m.n_free()];
+        let mut jac = eom_sim::large::SparseMatrix::zeros(m.pattern().clone());
+        let rhs = per_element(50_000, || {
+            m.internal(&q, &qd, &mut scratch, &mut out);
+            std::hint::black_box(&out);
+        });
+        let jj = per_element(5_000, || {
+            m.jacobian(&q, &qd, 1.0, 1.0, 1.0, &mut jac);
+            std::hint::black_box(&jac);
+        });
+        println!(
+            "assembled (StructuralModel::internal / ::jacobian incl. M), 64 elements, damping {}: {rhs:.1} ns / {jj:.1} ns per element",
+            if damped { "on" } else { "off" }
+        );
+    }
 }
 
 fn main() {

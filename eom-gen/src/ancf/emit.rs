@@ -1,7 +1,11 @@
 //! Emission of an element type's kernels as one
 //! `eom_sim::elements::ElementKernel` implementation: straight-line Rust,
 //! one `let` per instruction, fixed-size arrays with constant indices (no
-//! allocation, no panic), formatted by `prettyplease`.
+//! allocation, no panic), formatted by `prettyplease`. The force and
+//! Jacobian kernels are generic in a lane count `W` (`Lanes<W>` values:
+//! `W` elements evaluated by the same code at once, which the compiler
+//! turns into SIMD instructions; the scalar entry points of the trait are
+//! `W = 1`).
 
 use super::{Kernels, LOAD_NAMES};
 use crate::emit::{VERSION, float, float_operand};
@@ -83,7 +87,18 @@ struct Body {
 /// than [`PART_LIMIT`] become consecutive `#[inline(never)]` parts; a
 /// temporary read in a later part or written to an output goes through a
 /// scratch array `s` on the caller's stack.
-fn body(k: &Kernels, p: &Program, fname: &str, args: &[KArg], targets: &[TokenStream]) -> Body {
+///
+/// With `lanes`, every value is a `Lanes<W>` (`W` elements at once, one per
+/// lane, the same straight-line code): constants are splatted, functions
+/// are the lane-wise methods, and the parts are generic in `W`.
+fn body(
+    k: &Kernels,
+    p: &Program,
+    fname: &str,
+    args: &[KArg],
+    targets: &[TokenStream],
+    lanes: bool,
+) -> Body {
     let ranges: Vec<std::ops::Range<usize>> = if p.instrs.len() <= PART_LIMIT {
         std::iter::once(0..p.instrs.len()).collect()
     } else {
@@ -127,7 +142,19 @@ fn body(k: &Kernels, p: &Program, fname: &str, args: &[KArg], targets: &[TokenSt
     };
     let un = |f: &str, x: TokenStream| {
         let f = format_ident!("{f}");
-        quote!(f64::#f(#x))
+        if lanes {
+            quote!(#x.#f())
+        } else {
+            quote!(f64::#f(#x))
+        }
+    };
+    let constant = |c: f64| {
+        if lanes {
+            let c = float(c);
+            quote!(Lanes::<W>::splat(#c))
+        } else {
+            float_operand(c)
+        }
     };
     let mut stmts = TokenStream::new();
     let mut parts = TokenStream::new();
@@ -135,7 +162,7 @@ fn body(k: &Kernels, p: &Program, fname: &str, args: &[KArg], targets: &[TokenSt
     for (r, range) in ranges.iter().enumerate() {
         let o = |x: Operand| -> TokenStream {
             match x {
-                Operand::Const(n) => float_operand(n.to_f64()),
+                Operand::Const(n) => constant(n.to_f64()),
                 Operand::Var(i) => input(k, &p.inputs[i as usize]),
                 Operand::Tmp(t) if split && part_of.get(&t) != Some(&r) => slot(t),
                 Operand::Tmp(t) => {
@@ -181,9 +208,17 @@ fn body(k: &Kernels, p: &Program, fname: &str, args: &[KArg], targets: &[TokenSt
                 Op::Exp(x) => un("exp", o(x)),
                 Op::Ln(x) => un("ln", o(x)),
                 Op::Abs(x) => un("abs", o(x)),
+                Op::Atan2(y, x) if lanes => {
+                    let (y, x) = (o(y), o(x));
+                    quote!(Lanes::atan2(#y, #x))
+                }
                 Op::Atan2(y, x) => {
                     let (y, x) = (o(y), o(x));
                     quote!(f64::atan2(#y, #x))
+                }
+                Op::Select(c, x, y) if lanes => {
+                    let (c, x, y) = (o(c), o(x), o(y));
+                    quote!(Lanes::select(#c, #x, #y))
                 }
                 Op::Select(c, x, y) => {
                     let (c, x, y) = (o(c), o(x), o(y));
@@ -195,7 +230,11 @@ fn body(k: &Kernels, p: &Program, fname: &str, args: &[KArg], targets: &[TokenSt
                         format_ident!("x{}", ins.dst + 1),
                         o(x),
                     );
-                    out.extend(quote!(let (#sn, #cs) = f64::sin_cos(#x);));
+                    if lanes {
+                        out.extend(quote!(let (#sn, #cs) = #x.sin_cos();));
+                    } else {
+                        out.extend(quote!(let (#sn, #cs) = f64::sin_cos(#x);));
+                    }
                     store(ins.dst, &mut out);
                     store(ins.dst + 1, &mut out);
                     continue;
@@ -228,25 +267,44 @@ fn body(k: &Kernels, p: &Program, fname: &str, args: &[KArg], targets: &[TokenSt
             range.start,
             range.end - 1
         );
-        parts.extend(quote! {
-            #[doc = #doc]
-            #[inline(never)]
-            fn #name(#(#params,)* s: &mut [f64; #ns]) {
-                #out
-            }
-        });
+        if lanes {
+            parts.extend(quote! {
+                #[doc = #doc]
+                #[inline(never)]
+                fn #name<const W: usize>(#(#params,)* s: &mut [Lanes<W>; #ns]) {
+                    #out
+                }
+            });
+        } else {
+            parts.extend(quote! {
+                #[doc = #doc]
+                #[inline(never)]
+                fn #name(#(#params,)* s: &mut [f64; #ns]) {
+                    #out
+                }
+            });
+        }
         let names = args.iter().map(|a| format_ident!("{}", a.name));
         stmts.extend(quote!(#name(#(#names,)* &mut s);));
     }
     if split {
+        let init = if lanes {
+            quote!(Lanes::<W>::splat(0.0))
+        } else {
+            quote!(0.0f64)
+        };
         stmts = quote! {
-            let mut s = [0.0f64; #ns];
+            let mut s = [#init; #ns];
             #stmts
         };
     }
     let last = ranges.len() - 1;
     for ((_, v), t) in p.outputs.iter().zip(targets) {
         let v = match *v {
+            Operand::Const(n) if lanes => {
+                let c = float(n.to_f64());
+                quote!(Lanes::<W>::splat(#c))
+            }
             Operand::Const(n) => float(n.to_f64()),
             Operand::Var(i) => input(k, &p.inputs[i as usize]),
             Operand::Tmp(t) if split => {
@@ -319,8 +377,8 @@ pub fn emit(k: &Kernels) -> String {
 
     let vec_ty = quote!(&[f64; #nl]);
     let p_ty = quote!(&[f64; #npl]);
-    let mat_ty = quote!(&mut [[f64; #nl]; #nl]);
-    let vec_out = quote!(&mut [f64; #nl]);
+    let lvec_ty = quote!(&[Lanes<W>; #nl]);
+    let lp_ty = quote!(&[Lanes<W>; #npl]);
     let qa = |ty: &TokenStream| KArg {
         name: "q",
         ty: ty.clone(),
@@ -336,10 +394,16 @@ pub fn emit(k: &Kernels) -> String {
         ty: ty.clone(),
         carries: is_p,
     };
-    let none = |_: &SymKind| false;
 
-    let fargs = [qa(&vec_ty), qda(&vec_ty), pa(&p_ty)];
-    let fb = body(k, &k.forces, "internal_forces", &fargs, &vec_targets("f"));
+    let fargs = [qa(&lvec_ty), qda(&lvec_ty), pa(&lp_ty)];
+    let fb = body(
+        k,
+        &k.forces,
+        "forces_lanes",
+        &fargs,
+        &vec_targets("f"),
+        true,
+    );
     let (fq, fqd, fp) = (
         arg("q", fb.used[0]),
         arg("qd", fb.used[1]),
@@ -347,15 +411,33 @@ pub fn emit(k: &Kernels) -> String {
     );
     let mut jt = mat_targets("k");
     jt.extend(mat_targets("d"));
-    let jargs = [qa(&vec_ty), qda(&vec_ty), pa(&p_ty)];
-    let jb = body(k, &k.jacobians, "internal_jacobians", &jargs, &jt);
+    let jb = body(k, &k.jacobians, "jacobians_lanes", &fargs, &jt, true);
     let (jq, jqd, jp) = (
         arg("q", jb.used[0]),
         arg("qd", jb.used[1]),
         arg("p", jb.used[2]),
     );
+    let eargs = [qa(&lvec_ty), pa(&lp_ty)];
+    let efb = body(
+        k,
+        &k.elastic_forces,
+        "elastic_forces_lanes",
+        &eargs,
+        &vec_targets("f"),
+        true,
+    );
+    let (efq, efp) = (arg("q", efb.used[0]), arg("p", efb.used[1]));
+    let ekb = body(
+        k,
+        &k.elastic_stiffness,
+        "elastic_stiffness_lanes",
+        &eargs,
+        &mat_targets("k"),
+        true,
+    );
+    let (ekq, ekp) = (arg("q", ekb.used[0]), arg("p", ekb.used[1]));
     let margs = [pa(&p_ty)];
-    let mb = body(k, &k.mass, "mass", &margs, &mat_targets("m"));
+    let mb = body(k, &k.mass, "mass", &margs, &mat_targets("m"), false);
     let mp = arg("p", mb.used[0]);
     let largs = [
         pa(&p_ty),
@@ -365,11 +447,24 @@ pub fn emit(k: &Kernels) -> String {
             carries: is_w,
         },
     ];
-    let lb = body(k, &k.load, "uniform_load", &largs, &vec_targets("f"));
+    let lb = body(k, &k.load, "uniform_load", &largs, &vec_targets("f"), false);
     let (lp, lw) = (arg("p", lb.used[0]), arg("w", lb.used[1]));
-    let _ = (none, &mat_ty, &vec_out);
-    let parts = [&fb.parts, &jb.parts, &mb.parts, &lb.parts];
-    let (fb, jb, mb, lb) = (&fb.stmts, &jb.stmts, &mb.stmts, &lb.stmts);
+    let _ = &vec_ty;
+    let parts = [
+        &fb.parts, &jb.parts, &efb.parts, &ekb.parts, &mb.parts, &lb.parts,
+    ];
+    let (fb, jb, efb, ekb, mb, lb) = (
+        &fb.stmts, &jb.stmts, &efb.stmts, &ekb.stmts, &mb.stmts, &lb.stmts,
+    );
+    let damping = if k.damping_params.is_empty() {
+        quote!(None)
+    } else {
+        let d = k
+            .damping_params
+            .iter()
+            .map(|&i| Literal::usize_unsuffixed(i));
+        quote!(Some(&[#(#d),*]))
+    };
 
     let layout = {
         let node = |a: usize| {
@@ -396,6 +491,8 @@ pub fn emit(k: &Kernels) -> String {
     let counts = [
         ("internal_forces", &k.forces),
         ("internal_jacobians", &k.jacobians),
+        ("elastic_forces", &k.elastic_forces),
+        ("elastic_stiffness", &k.elastic_stiffness),
         ("mass", &k.mass),
         ("uniform_load", &k.load),
     ]
@@ -409,7 +506,7 @@ pub fn emit(k: &Kernels) -> String {
         "//! Element `{name}`: kernels generated by eom-gen {VERSION} (`eom-gen/src/ancf/`) — do not edit.\n//! Regenerate with `cargo run -p eom-gen --example regenerate`.\n\n"
     );
     let tokens = quote! {
-        use super::ElementKernel;
+        use super::{ElementKernel, Lanes, one_lane};
 
         #[doc = #doc]
         #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -420,19 +517,61 @@ pub fn emit(k: &Kernels) -> String {
             const NODE_COORDS: usize = #node_coords;
             const DIM: usize = #dim;
             const PARAMS: [&'static str; #npl] = [#(#pnames),*];
+            const DAMPING_PARAMS: Option<&'static [usize]> = #damping;
 
-            fn internal_forces(#fq: &[f64; #nl], #fqd: &[f64; #nl], #fp: &[f64; #npl], f: &mut [f64; #nl]) {
-                #fb
+            fn internal_forces(q: &[f64; #nl], qd: &[f64; #nl], p: &[f64; #npl], f: &mut [f64; #nl]) {
+                let mut out = [Lanes([0.0]); #nl];
+                Self::forces_lanes(&one_lane(q), &one_lane(qd), &one_lane(p), &mut out);
+                *f = out.map(|x| x.0[0]);
             }
 
             fn internal_jacobians(
-                #jq: &[f64; #nl],
-                #jqd: &[f64; #nl],
-                #jp: &[f64; #npl],
+                q: &[f64; #nl],
+                qd: &[f64; #nl],
+                p: &[f64; #npl],
                 k: &mut [[f64; #nl]; #nl],
                 d: &mut [[f64; #nl]; #nl],
             ) {
+                let mut kl = [[Lanes([0.0]); #nl]; #nl];
+                let mut dl = [[Lanes([0.0]); #nl]; #nl];
+                Self::jacobians_lanes(&one_lane(q), &one_lane(qd), &one_lane(p), &mut kl, &mut dl);
+                *k = kl.map(|r| r.map(|x| x.0[0]));
+                *d = dl.map(|r| r.map(|x| x.0[0]));
+            }
+
+            fn forces_lanes<const W: usize>(
+                #fq: &[Lanes<W>; #nl],
+                #fqd: &[Lanes<W>; #nl],
+                #fp: &[Lanes<W>; #npl],
+                f: &mut [Lanes<W>; #nl],
+            ) {
+                #fb
+            }
+
+            fn jacobians_lanes<const W: usize>(
+                #jq: &[Lanes<W>; #nl],
+                #jqd: &[Lanes<W>; #nl],
+                #jp: &[Lanes<W>; #npl],
+                k: &mut [[Lanes<W>; #nl]; #nl],
+                d: &mut [[Lanes<W>; #nl]; #nl],
+            ) {
                 #jb
+            }
+
+            fn elastic_forces_lanes<const W: usize>(
+                #efq: &[Lanes<W>; #nl],
+                #efp: &[Lanes<W>; #npl],
+                f: &mut [Lanes<W>; #nl],
+            ) {
+                #efb
+            }
+
+            fn elastic_stiffness_lanes<const W: usize>(
+                #ekq: &[Lanes<W>; #nl],
+                #ekp: &[Lanes<W>; #npl],
+                k: &mut [[Lanes<W>; #nl]; #nl],
+            ) {
+                #ekb
             }
 
             fn mass(#mp: &[f64; #npl], m: &mut [[f64; #nl]; #nl]) {

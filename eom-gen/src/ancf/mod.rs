@@ -14,8 +14,10 @@
 //!   uniform load, integrated exactly (rational coefficients),
 //!
 //! and differentiates them with [`Arena::diff`]: `f_int = ∂U/∂q + ∂R/∂q̇`,
-//! `K = ∂f_int/∂q` (the elastic part `∂²U/∂q²` built on the upper
-//! triangle and mirrored), `D = ∂f_int/∂q̇ = ∂²R/∂q̇²` (symmetric). The
+//! `K = ∂f_int/∂q` (not symmetric with damping: it holds `∂(D q̇)/∂q`),
+//! `D = ∂f_int/∂q̇ = ∂²R/∂q̇²` (symmetric, built on one triangle), and for
+//! undamped elements and statics the elastic kernels `∂U/∂q` and the
+//! symmetric `∂²U/∂q²` (built on the upper triangle and mirrored). The
 //! results are lowered to [`Program`]s (common subexpressions shared across
 //! all outputs of a kernel) and emitted by [`emit::emit`] as one
 //! `eom_sim::elements::ElementKernel` implementation per element type.
@@ -208,6 +210,14 @@ pub struct Kernels {
     pub forces: Program,
     /// `K` then `D`, row-major (outputs `k_i_j`, then `d_i_j`).
     pub jacobians: Program,
+    /// `∂U/∂q`: the forces without the dissipation (outputs `f0 …`).
+    pub elastic_forces: Program,
+    /// `∂²U/∂q²`, symmetric, row-major (outputs `k_i_j`).
+    pub elastic_stiffness: Program,
+    /// Indices of the parameters that only the dissipation uses; with all
+    /// of them zero the element is undamped and the elastic programs give
+    /// its forces and `K` exactly (`D = 0`).
+    pub damping_params: Vec<usize>,
     /// `M`, row-major (outputs `m_i_j`).
     pub mass: Program,
     /// Uniform load force (outputs `f0 …`).
@@ -235,6 +245,131 @@ pub fn derive(kind: Kind) -> Kernels {
     let mut a = Arena::new();
     let def = define(&mut a, kind);
     let n = def.n();
+    let full = derive_pass(&mut a, &def, false);
+    let elastic = derive_pass(&mut a, &def, true);
+    let Pass {
+        forces,
+        jacobians,
+        f,
+        k,
+        d,
+        back,
+        stage1,
+        pre_of,
+        pre_rate_of,
+    } = full;
+    let names = |prefix: &str, m: usize| -> Vec<String> {
+        (0..m)
+            .flat_map(|i| (0..m).map(move |j| (i, j)))
+            .map(|(i, j)| format!("{prefix}_{i}_{j}"))
+            .collect()
+    };
+    let zip = |names: Vec<String>, ids: &[Id]| -> Vec<(String, Id)> {
+        names.into_iter().zip(ids.iter().copied()).collect()
+    };
+    let lower = |a: &Arena, outs: &[(String, Id)]| {
+        let outs: Vec<(&str, Id)> = outs.iter().map(|(s, id)| (s.as_str(), *id)).collect();
+        a.lower(&outs, LowerOptions::default())
+    };
+    let fnames: Vec<String> = (0..n).map(|i| format!("f{i}")).collect();
+    let mids: Vec<Id> = def.mass.iter().flatten().copied().collect();
+    let mass = lower(&a, &zip(names("m", n), &mids));
+    let load = lower(&a, &zip(fnames, &def.load));
+    let damping_params = damping_params(&mut a, &def);
+    // The same quantities as expressions of q, q̇ and the parameters only
+    // (for checking the lowering against the arena's evaluation).
+    let mut roots: Vec<Id> = f.clone();
+    roots.extend(k.iter().flatten());
+    roots.extend(d.iter().flatten());
+    let stage2: rustc_hash::FxHashMap<SymId, Id> = back.into_iter().collect();
+    let roots = a.substitute(&roots, |s| stage2.get(&s).copied());
+    let roots = a.substitute(&roots, |s| stage2.get(&s).copied());
+    let mut z_of: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
+    for (nm, e) in &stage1 {
+        if let Some(s) = a.find_symbol(nm) {
+            z_of.insert(s, *e);
+        }
+    }
+    let roots = a.substitute(&roots, |s| z_of.get(&s).copied());
+    let roots = a.substitute(&roots, |s| pre_of.get(&s).or(pre_rate_of.get(&s)).copied());
+    let f_full = roots[..n].to_vec();
+    let k_full = roots[n..n + n * n].chunks(n).map(<[Id]>::to_vec).collect();
+    let d_full = roots[n + n * n..].chunks(n).map(<[Id]>::to_vec).collect();
+    Kernels {
+        arena: a,
+        def,
+        forces,
+        jacobians,
+        elastic_forces: elastic.forces,
+        elastic_stiffness: elastic.jacobians,
+        damping_params,
+        mass,
+        load,
+        f: f_full,
+        k: k_full,
+        d: d_full,
+    }
+}
+
+/// Indices of the parameters that only the dissipation uses (e.g. `d_a`,
+/// `d_b`, `mu`), if setting them all to zero makes every point's
+/// dissipation density vanish identically (checked by substitution);
+/// otherwise empty (the element is then never treated as undamped).
+fn damping_params(a: &mut Arena, def: &Definition) -> Vec<usize> {
+    let syms: Vec<SymId> = def
+        .params
+        .iter()
+        .map(|(name, _)| {
+            let id = a
+                .param(name)
+                .expect("element parameter names are identifiers");
+            a.as_sym(id).expect("a parameter is a symbol")
+        })
+        .collect();
+    let idx: Vec<usize> = (0..syms.len())
+        .filter(|&i| {
+            def.points.iter().any(|pt| a.depends_on(pt.psi, syms[i]))
+                && !def.points.iter().any(|pt| a.depends_on(pt.phi, syms[i]))
+        })
+        .collect();
+    if idx.is_empty() {
+        return idx;
+    }
+    let zero = a.constant(0.0);
+    let psis: Vec<Id> = def.points.iter().map(|pt| pt.psi).collect();
+    let dsyms: Vec<SymId> = idx.iter().map(|&i| syms[i]).collect();
+    let gone = a.substitute(&psis, |s| dsyms.contains(&s).then_some(zero));
+    if gone
+        .iter()
+        .all(|&e| a.num(e).is_some_and(|v| v.to_f64() == 0.0))
+    {
+        idx
+    } else {
+        Vec::new()
+    }
+}
+
+/// The lowered kernels of one pass of [`derive`] and what the check of the
+/// lowering needs.
+struct Pass {
+    forces: Program,
+    jacobians: Program,
+    f: Vec<Id>,
+    k: Vec<Vec<Id>>,
+    d: Vec<Vec<Id>>,
+    back: Vec<(SymId, Id)>,
+    stage1: Vec<(String, Id)>,
+    pre_of: rustc_hash::FxHashMap<SymId, Id>,
+    pre_rate_of: rustc_hash::FxHashMap<SymId, Id>,
+}
+
+/// The staged derivation of [`derive`]. With `elastic`, the dissipation is
+/// left out (`ψ = 0`): the forces are `∂U/∂q` and the Jacobian program has
+/// the outputs of `K = ∂²U/∂q²` only, every symmetric matrix (`H_g`, the
+/// assembled `K` in `w` and in `q`) built on its upper triangle and
+/// mirrored, so each distinct entry is computed once.
+fn derive_pass(a: &mut Arena, def: &Definition, elastic: bool) -> Pass {
+    let n = def.n();
     let qs: Vec<SymId> = (0..n as u32)
         .map(|i| {
             let id = a.q(i);
@@ -245,6 +380,7 @@ pub fn derive(kind: Kind) -> Kernels {
     let zero = a.constant(0.0);
     let is_zero = |a: &Arena, e: Id| a.num(e).is_some_and(|v| v.to_f64() == 0.0);
     let name = |a: &Arena, s: SymId| a.symbol(s).name.clone();
+    let psi_of = |pt: &Point| if elastic { zero } else { pt.psi };
     // Stage 0: the shared linear combinations of q (and the same of q̇).
     let mut stage0: Vec<(String, Id)> = Vec::new();
     let mut pre_of: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
@@ -253,7 +389,7 @@ pub fn derive(kind: Kind) -> Kernels {
     let rate_of_q: rustc_hash::FxHashMap<SymId, Id> =
         qs.iter().copied().zip(qd.iter().copied()).collect();
     for &(sym, e) in &def.pre {
-        let nm = name(&a, sym);
+        let nm = name(a, sym);
         stage0.push((nm.clone(), e));
         let ed = a.substitute(&[e], |s| rate_of_q.get(&s).copied())[0];
         let rate = a.input(&format!("{nm}_d")).expect("identifier");
@@ -262,19 +398,14 @@ pub fn derive(kind: Kind) -> Kernels {
         pre_rate.insert(sym, rate);
         pre_rate_of.insert(a.as_sym(rate).expect("symbol"), ed);
     }
-    // Stage 1: z_g and ż_g = B_g q̇ (z of the rates of stage 0); B_g by
-    // differentiation of z in q.
+    // Stage 1: z_g and ż_g = B_g q̇ (z of the rates of stage 0).
     let mut stage1: Vec<(String, Id)> = Vec::new();
-    let mut b: Vec<Vec<Vec<Id>>> = Vec::new();
     for pt in &def.points {
-        let zq = a.substitute(&pt.z, |s| pre_of.get(&s).copied());
-        let bg: Vec<Vec<Id>> = zq.iter().map(|&z| a.gradient(z, &qs)).collect();
         let zd = a.substitute(&pt.z, |s| pre_rate.get(&s).or(rate_of_q.get(&s)).copied());
         for (k, &z) in pt.z.iter().enumerate() {
-            stage1.push((name(&a, pt.zs[k]), z));
-            stage1.push((name(&a, pt.zds[k]), zd[k]));
+            stage1.push((name(a, pt.zs[k]), z));
+            stage1.push((name(a, pt.zds[k]), zd[k]));
         }
-        b.push(bg);
     }
     // Stage 2: σ, H, C per point, as symbols for stage 3.
     let mut s2_forces: Vec<(String, Id)> = Vec::new();
@@ -283,39 +414,47 @@ pub fn derive(kind: Kind) -> Kernels {
     let mut h_sym: Vec<Vec<Vec<Id>>> = Vec::new();
     let mut c_sym: Vec<Vec<Vec<Id>>> = Vec::new();
     let mut back: Vec<(SymId, Id)> = Vec::new();
+    let tag = if elastic { "e" } else { "" };
     for (g, pt) in def.points.iter().enumerate() {
         let m = pt.z.len();
+        let psi = psi_of(pt);
         let mut sig = Vec::with_capacity(m);
         for k in 0..m {
             let d1 = a.diff(pt.phi, pt.zs[k]);
-            let d2 = a.diff(pt.psi, pt.zds[k]);
+            let d2 = a.diff(psi, pt.zds[k]);
             sig.push(a.add2(d1, d2));
         }
         // Common factors out of each σ_a (e.g. `(EA ε + d_a ε̇)/|r'|` of `z_a`).
         let mut runner = crate::sym::Runner::with_rules(a.rules());
         runner.rewrites = crate::sym::rewrites();
-        sig = runner.run(&mut a, &sig).roots;
+        sig = runner.run(a, &sig).roots;
         let mut hs = vec![vec![zero; m]; m];
         let mut cs = vec![vec![zero; m]; m];
         let mut ss = Vec::with_capacity(m);
         for k in 0..m {
-            let nm = format!("sg{g}_{k}");
+            let nm = format!("sg{tag}{g}_{k}");
             s2_forces.push((nm.clone(), sig[k]));
             let sym = a.input(&nm).expect("identifier");
             back.push((a.as_sym(sym).expect("symbol"), sig[k]));
             ss.push(sym);
             for l in 0..m {
-                let h = a.diff(sig[k], pt.zs[l]);
-                if !is_zero(&a, h) {
-                    let nm = format!("hg{g}_{k}_{l}");
-                    s2_jac.push((nm.clone(), h));
-                    let sym = a.input(&nm).expect("identifier");
-                    back.push((a.as_sym(sym).expect("symbol"), h));
-                    hs[k][l] = sym;
+                // Elastic: H = ∂²φ/∂z² is symmetric; build l ≥ k only.
+                if !(elastic && l < k) {
+                    let h = a.diff(sig[k], pt.zs[l]);
+                    if !is_zero(a, h) {
+                        let nm = format!("hg{tag}{g}_{k}_{l}");
+                        s2_jac.push((nm.clone(), h));
+                        let sym = a.input(&nm).expect("identifier");
+                        back.push((a.as_sym(sym).expect("symbol"), h));
+                        hs[k][l] = sym;
+                        if elastic {
+                            hs[l][k] = sym;
+                        }
+                    }
                 }
-                if l >= k {
+                if l >= k && !elastic {
                     let c = a.diff(sig[k], pt.zds[l]);
-                    if !is_zero(&a, c) {
+                    if !is_zero(a, c) {
                         let nm = format!("cg{g}_{k}_{l}");
                         s2_jac.push((nm.clone(), c));
                         let sym = a.input(&nm).expect("identifier");
@@ -367,7 +506,7 @@ pub fn derive(kind: Kind) -> Kernels {
         let mut terms = Vec::new();
         for (g, bg) in bw.iter().enumerate() {
             for (k, row) in bg.iter().enumerate() {
-                if !is_zero(&a, row[i]) {
+                if !is_zero(a, row[i]) {
                     terms.push(a.mul(&[def.points[g].weight, row[i], sig_sym[g][k]]));
                 }
             }
@@ -395,9 +534,16 @@ pub fn derive(kind: Kind) -> Kernels {
     let mut dw = vec![vec![zero; nw]; nw];
     for i in 0..nw {
         for j in 0..nw {
-            kw[i][j] = quad(&mut a, &h_sym, i, j);
+            if elastic {
+                if j >= i {
+                    kw[i][j] = quad(a, &h_sym, i, j);
+                    kw[j][i] = kw[i][j];
+                }
+                continue;
+            }
+            kw[i][j] = quad(a, &h_sym, i, j);
             if j >= i {
-                dw[i][j] = quad(&mut a, &c_sym, i, j);
+                dw[i][j] = quad(a, &c_sym, i, j);
                 dw[j][i] = dw[i][j];
             }
         }
@@ -415,15 +561,22 @@ pub fn derive(kind: Kind) -> Kernels {
         sym
     };
     let fws: Vec<Id> = (0..nw)
-        .map(|i| as_sym(&mut a, &mut s3_forces, format!("fw{i}"), fw[i]))
+        .map(|i| as_sym(a, &mut s3_forces, format!("fw{tag}{i}"), fw[i]))
         .collect();
     let mut kws = vec![vec![zero; nw]; nw];
     let mut dws = vec![vec![zero; nw]; nw];
     for i in 0..nw {
         for j in 0..nw {
-            kws[i][j] = as_sym(&mut a, &mut s3_jac, format!("kw{i}_{j}"), kw[i][j]);
+            if elastic {
+                if j >= i {
+                    kws[i][j] = as_sym(a, &mut s3_jac, format!("kwe{i}_{j}"), kw[i][j]);
+                    kws[j][i] = kws[i][j];
+                }
+                continue;
+            }
+            kws[i][j] = as_sym(a, &mut s3_jac, format!("kw{i}_{j}"), kw[i][j]);
             if j >= i {
-                dws[i][j] = as_sym(&mut a, &mut s3_jac, format!("dw{i}_{j}"), dw[i][j]);
+                dws[i][j] = as_sym(a, &mut s3_jac, format!("dw{i}_{j}"), dw[i][j]);
                 dws[j][i] = dws[i][j];
             }
         }
@@ -455,9 +608,16 @@ pub fn derive(kind: Kind) -> Kernels {
     let mut d = vec![vec![zero; n]; n];
     for i in 0..n {
         for j in 0..n {
-            k[i][j] = back_q(&mut a, &kws, i, j);
+            if elastic {
+                if j >= i {
+                    k[i][j] = back_q(a, &kws, i, j);
+                    k[j][i] = k[i][j];
+                }
+                continue;
+            }
+            k[i][j] = back_q(a, &kws, i, j);
             if j >= i {
-                d[i][j] = back_q(&mut a, &dws, i, j);
+                d[i][j] = back_q(a, &dws, i, j);
                 d[j][i] = d[i][j];
             }
         }
@@ -476,50 +636,31 @@ pub fn derive(kind: Kind) -> Kernels {
         names.into_iter().zip(ids.iter().copied()).collect()
     };
     let fnames: Vec<String> = (0..n).map(|i| format!("f{i}")).collect();
-    let p1 = chain(&lower(&a, &stage0), &lower(&a, &stage1));
+    let p1 = chain(&lower(a, &stage0), &lower(a, &stage1));
     let forces = chain(
-        &chain(&chain(&p1, &lower(&a, &s2_forces)), &lower(&a, &s3_forces)),
-        &lower(&a, &zip(fnames.clone(), &f)),
+        &chain(&chain(&p1, &lower(a, &s2_forces)), &lower(a, &s3_forces)),
+        &lower(a, &zip(fnames, &f)),
     );
     let mut jn = names("k", n);
-    jn.extend(names("d", n));
-    let jids: Vec<Id> = k.iter().chain(&d).flatten().copied().collect();
-    let jacobians = chain(
-        &chain(&chain(&p1, &lower(&a, &s2_jac)), &lower(&a, &s3_jac)),
-        &lower(&a, &zip(jn, &jids)),
-    );
-    let mids: Vec<Id> = def.mass.iter().flatten().copied().collect();
-    let mass = lower(&a, &zip(names("m", n), &mids));
-    let load = lower(&a, &zip(fnames, &def.load));
-    // The same quantities as expressions of q, q̇ and the parameters only
-    // (for checking the lowering against the arena's evaluation).
-    let mut roots: Vec<Id> = f.clone();
-    roots.extend(k.iter().flatten());
-    roots.extend(d.iter().flatten());
-    let stage2: rustc_hash::FxHashMap<SymId, Id> = back.into_iter().collect();
-    let roots = a.substitute(&roots, |s| stage2.get(&s).copied());
-    let roots = a.substitute(&roots, |s| stage2.get(&s).copied());
-    let mut z_of: rustc_hash::FxHashMap<SymId, Id> = rustc_hash::FxHashMap::default();
-    for (nm, e) in &stage1 {
-        if let Some(s) = a.find_symbol(nm) {
-            z_of.insert(s, *e);
-        }
+    let mut jids: Vec<Id> = k.iter().flatten().copied().collect();
+    if !elastic {
+        jn.extend(names("d", n));
+        jids.extend(d.iter().flatten());
     }
-    let roots = a.substitute(&roots, |s| z_of.get(&s).copied());
-    let roots = a.substitute(&roots, |s| pre_of.get(&s).or(pre_rate_of.get(&s)).copied());
-    let f_full = roots[..n].to_vec();
-    let k_full = roots[n..n + n * n].chunks(n).map(<[Id]>::to_vec).collect();
-    let d_full = roots[n + n * n..].chunks(n).map(<[Id]>::to_vec).collect();
-    Kernels {
-        arena: a,
-        def,
+    let jacobians = chain(
+        &chain(&chain(&p1, &lower(a, &s2_jac)), &lower(a, &s3_jac)),
+        &lower(a, &zip(jn, &jids)),
+    );
+    Pass {
         forces,
         jacobians,
-        mass,
-        load,
-        f: f_full,
-        k: k_full,
-        d: d_full,
+        f,
+        k,
+        d,
+        back,
+        stage1,
+        pre_of,
+        pre_rate_of,
     }
 }
 

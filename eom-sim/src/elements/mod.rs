@@ -8,8 +8,153 @@
 //! `M q̈ + f_int(q, q̇) = f_ext`, with `f_int = ∂U/∂q + D(q) q̇` (elastic
 //! force from the strain energy `U`, plus material damping).
 
-/// One element type's generated kernels. `N` coordinates per element (two
-/// nodes), `P` parameters per element in the order of [`ElementKernel::PARAMS`].
+/// `W` values of `f64` treated as one: the element kernels are generic in
+/// `W` and evaluate `W` elements at once, one per lane, by the same
+/// straight-line code. Every operation is lane-wise on a fixed-size array,
+/// which the compiler vectorises (SSE2 by default on x86-64: two lanes per
+/// instruction; with `-C target-cpu=x86-64-v3` or `native`, AVX2: four).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lanes<const W: usize>(pub [f64; W]);
+
+impl<const W: usize> Default for Lanes<W> {
+    fn default() -> Self {
+        Lanes([0.0; W])
+    }
+}
+
+impl<const W: usize> Lanes<W> {
+    /// Every lane `x`.
+    #[inline(always)]
+    pub fn splat(x: f64) -> Self {
+        Lanes([x; W])
+    }
+    /// `f` of every lane.
+    #[inline(always)]
+    pub fn map(self, f: impl Fn(f64) -> f64) -> Self {
+        let mut o = self.0;
+        for v in &mut o {
+            *v = f(*v);
+        }
+        Lanes(o)
+    }
+    /// `f` of every pair of lanes.
+    #[inline(always)]
+    pub fn zip(self, b: Self, f: impl Fn(f64, f64) -> f64) -> Self {
+        let mut o = self.0;
+        for (v, w) in o.iter_mut().zip(b.0) {
+            *v = f(*v, w);
+        }
+        Lanes(o)
+    }
+    /// Lane-wise square root.
+    #[inline(always)]
+    pub fn sqrt(self) -> Self {
+        self.map(f64::sqrt)
+    }
+    /// Lane-wise sine.
+    #[inline(always)]
+    pub fn sin(self) -> Self {
+        self.map(f64::sin)
+    }
+    /// Lane-wise cosine.
+    #[inline(always)]
+    pub fn cos(self) -> Self {
+        self.map(f64::cos)
+    }
+    /// Lane-wise sine and cosine.
+    #[inline(always)]
+    pub fn sin_cos(self) -> (Self, Self) {
+        (self.sin(), self.cos())
+    }
+    /// Lane-wise tangent.
+    #[inline(always)]
+    pub fn tan(self) -> Self {
+        self.map(f64::tan)
+    }
+    /// Lane-wise exponential.
+    #[inline(always)]
+    pub fn exp(self) -> Self {
+        self.map(f64::exp)
+    }
+    /// Lane-wise natural logarithm.
+    #[inline(always)]
+    pub fn ln(self) -> Self {
+        self.map(f64::ln)
+    }
+    /// Lane-wise absolute value.
+    #[inline(always)]
+    pub fn abs(self) -> Self {
+        self.map(f64::abs)
+    }
+    /// Lane-wise `atan2(y, x)`.
+    #[inline(always)]
+    pub fn atan2(y: Self, x: Self) -> Self {
+        y.zip(x, f64::atan2)
+    }
+    /// Lane-wise `if c > 0 { a } else { b }`.
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // three arrays by one index
+    pub fn select(c: Self, a: Self, b: Self) -> Self {
+        let mut o = b.0;
+        for i in 0..W {
+            if c.0[i] > 0.0 {
+                o[i] = a.0[i];
+            }
+        }
+        Lanes(o)
+    }
+}
+
+macro_rules! lane_op {
+    ($tr:ident, $f:ident, $op:tt) => {
+        impl<const W: usize> core::ops::$tr for Lanes<W> {
+            type Output = Self;
+            #[inline(always)]
+            // One indexed loop for all four operators (the form measured
+            // in BENCHMARKS.md, vectorised by LLVM).
+            #[allow(clippy::assign_op_pattern, clippy::needless_range_loop)]
+            fn $f(self, b: Self) -> Self {
+                let mut o = self.0;
+                for i in 0..W {
+                    o[i] = o[i] $op b.0[i];
+                }
+                Lanes(o)
+            }
+        }
+    };
+}
+lane_op!(Add, add, +);
+lane_op!(Sub, sub, -);
+lane_op!(Mul, mul, *);
+lane_op!(Div, div, /);
+
+impl<const W: usize> core::ops::Neg for Lanes<W> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        self.map(|x| -x)
+    }
+}
+
+/// `v` as one lane (`W = 1`).
+pub fn one_lane<const N: usize>(v: &[f64; N]) -> [Lanes<1>; N] {
+    v.map(|x| Lanes([x]))
+}
+
+/// Lane `l` of `v`.
+fn lane<const N: usize, const W: usize>(v: &[Lanes<W>; N], l: usize) -> [f64; N] {
+    v.map(|x| x.0[l])
+}
+
+/// One element type's kernels. `N` coordinates per element (two nodes),
+/// `P` parameters per element in the order of [`ElementKernel::PARAMS`].
+///
+/// The generated kernels implement every function, the `*_lanes` ones
+/// generic in the lane count `W` (`W` elements at once, one per lane) and
+/// the scalar ones as `W = 1`. A hand-written kernel needs only the
+/// scalar functions: the lane functions then default to a loop over the
+/// lanes, and the elastic ones to the full kernels at zero velocity (the
+/// damping force `D(q) q̇` and its `q`-derivative vanish there).
 pub trait ElementKernel<const N: usize, const P: usize> {
     /// Element type name as written in models (e.g. `"Cable2D"`).
     const NAME: &'static str;
@@ -19,6 +164,10 @@ pub trait ElementKernel<const N: usize, const P: usize> {
     const DIM: usize;
     /// Names of the per-element parameters (e.g. `["L", "EA", "EI", "rhoA", "d_a", "d_b"]`).
     const PARAMS: [&'static str; P];
+    /// Indices of the parameters only the material damping uses, if
+    /// known: with all of them zero the element is undamped
+    /// ([`ElementKernel::is_undamped`]). `None`: never treated as undamped.
+    const DAMPING_PARAMS: Option<&'static [usize]> = None;
     /// `f_int = ∂U/∂q + D(q) q̇`.
     fn internal_forces(q: &[f64; N], qd: &[f64; N], p: &[f64; P], f: &mut [f64; N]);
     /// `∂f_int/∂q` (tangent stiffness, with the damping force's `q`
@@ -35,6 +184,77 @@ pub trait ElementKernel<const N: usize, const P: usize> {
     /// Generalised force of a uniform load `w` per unit reference length
     /// (first `DIM` entries used; e.g. `w = ρA g` for gravity).
     fn uniform_load(p: &[f64; P], w: &[f64; 3], f: &mut [f64; N]);
+
+    /// True if the damping parameters are known and all zero: then
+    /// `f_int = ∂U/∂q`, `K = ∂²U/∂q²` and `D = 0`, and the elastic kernels
+    /// suffice.
+    fn is_undamped(p: &[f64; P]) -> bool {
+        Self::DAMPING_PARAMS.is_some_and(|d| d.iter().all(|&i| p[i] == 0.0))
+    }
+    /// [`ElementKernel::internal_forces`] of `W` elements.
+    fn forces_lanes<const W: usize>(
+        q: &[Lanes<W>; N],
+        qd: &[Lanes<W>; N],
+        p: &[Lanes<W>; P],
+        f: &mut [Lanes<W>; N],
+    ) {
+        for l in 0..W {
+            let mut fl = [0.0; N];
+            Self::internal_forces(&lane(q, l), &lane(qd, l), &lane(p, l), &mut fl);
+            for (o, v) in f.iter_mut().zip(fl) {
+                o.0[l] = v;
+            }
+        }
+    }
+    /// [`ElementKernel::internal_jacobians`] of `W` elements.
+    fn jacobians_lanes<const W: usize>(
+        q: &[Lanes<W>; N],
+        qd: &[Lanes<W>; N],
+        p: &[Lanes<W>; P],
+        k: &mut [[Lanes<W>; N]; N],
+        d: &mut [[Lanes<W>; N]; N],
+    ) {
+        for l in 0..W {
+            let (mut kl, mut dl) = ([[0.0; N]; N], [[0.0; N]; N]);
+            Self::internal_jacobians(&lane(q, l), &lane(qd, l), &lane(p, l), &mut kl, &mut dl);
+            for i in 0..N {
+                for j in 0..N {
+                    k[i][j].0[l] = kl[i][j];
+                    d[i][j].0[l] = dl[i][j];
+                }
+            }
+        }
+    }
+    /// The elastic force `∂U/∂q` of `W` elements (no damping terms).
+    fn elastic_forces_lanes<const W: usize>(
+        q: &[Lanes<W>; N],
+        p: &[Lanes<W>; P],
+        f: &mut [Lanes<W>; N],
+    ) {
+        Self::forces_lanes(q, &[Lanes::default(); N], p, f);
+    }
+    /// The elastic stiffness `∂²U/∂q²` (symmetric; each distinct entry
+    /// computed once in the generated kernels) of `W` elements.
+    fn elastic_stiffness_lanes<const W: usize>(
+        q: &[Lanes<W>; N],
+        p: &[Lanes<W>; P],
+        k: &mut [[Lanes<W>; N]; N],
+    ) {
+        let mut d = [[Lanes::default(); N]; N];
+        Self::jacobians_lanes(q, &[Lanes::default(); N], p, k, &mut d);
+    }
+    /// The elastic force `∂U/∂q` (no damping terms).
+    fn elastic_forces(q: &[f64; N], p: &[f64; P], f: &mut [f64; N]) {
+        let mut out = [Lanes([0.0]); N];
+        Self::elastic_forces_lanes(&one_lane(q), &one_lane(p), &mut out);
+        *f = out.map(|x| x.0[0]);
+    }
+    /// The elastic stiffness `∂²U/∂q²` (symmetric).
+    fn elastic_stiffness(q: &[f64; N], p: &[f64; P], k: &mut [[f64; N]; N]) {
+        let mut kl = [[Lanes([0.0]); N]; N];
+        Self::elastic_stiffness_lanes(&one_lane(q), &one_lane(p), &mut kl);
+        *k = kl.map(|r| r.map(|x| x.0[0]));
+    }
 }
 
 #[rustfmt::skip] // generated, formatted by prettyplease; stays byte-identical

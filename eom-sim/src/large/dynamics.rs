@@ -7,8 +7,9 @@
 //!   radius at infinity `ρ∞` (`ρ∞ = 1`: none, the trapezoidal rule /
 //!   average acceleration, which keeps the energy of linear undamped
 //!   systems exactly). Newton on the accelerations with the iteration
-//!   matrix `S = M + γ' D + β' K` assembled sparse and factored by LU with
-//!   the symbolic analysis reused; by default modified Newton (the factored
+//!   matrix `S = M + γ' D + β' K` assembled sparse and factored by LU
+//!   ([`super::sparse::AutoLu`]: banded when the pattern is, else sparse
+//!   with the symbolic analysis reused); by default modified Newton (the factored
 //!   matrix kept while the iteration contracts fast, [`AlphaOptions::reuse_matrix`]). **Fixed step**: no error estimate or
 //!   step control; the user picks `h` and checks convergence by halving it
 //!   (the tests do). A step whose Newton iteration fails stops the run
@@ -18,7 +19,7 @@
 //!   once by sparse Cholesky.
 
 use super::model::StructuralModel;
-use super::sparse::{FaerCholesky, FaerLu, SparseMatrix, SparseSolver};
+use super::sparse::{AutoLu, FaerCholesky, SparseMatrix, SparseSolver};
 use std::fmt;
 
 /// A state on the free coordinates.
@@ -152,7 +153,7 @@ pub struct GeneralizedAlpha<'m> {
     aux: Vec<f64>,
     load: Vec<f64>,
     iteration: SparseMatrix,
-    lu: FaerLu,
+    lu: AutoLu,
     have_matrix: bool,
     q_full: Vec<f64>,
     v_full: Vec<f64>,
@@ -207,7 +208,7 @@ impl<'m> GeneralizedAlpha<'m> {
             acc,
             load,
             iteration: SparseMatrix::zeros(model.pattern().clone()),
-            lu: FaerLu::default(),
+            lu: AutoLu::default(),
             have_matrix: false,
             q_full,
             v_full,
@@ -280,7 +281,7 @@ impl<'m> GeneralizedAlpha<'m> {
             for (ri, fi) in r.iter_mut().zip(&self.load) {
                 *ri -= fi;
             }
-            self.model.mass().mul_add(1.0, &acc1, &mut r);
+            self.model.mass().sym_mul_add(1.0, &acc1, &mut r);
             if refresh {
                 self.model.jacobian(
                     &self.q_full,

@@ -26,5 +26,5 @@ pub use dynamics::{
 };
 pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, MixedStats, RigidPart};
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
-pub use sparse::{FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
+pub use sparse::{AutoLu, BandedLu, FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
 pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};

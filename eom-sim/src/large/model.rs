@@ -9,7 +9,7 @@
 //! columns simply drop out of the mass matrix and the tangent.
 
 use super::sparse::{Pattern, SparseMatrix};
-use crate::elements::ElementKernel;
+use crate::elements::{ElementKernel, Lanes};
 use std::marker::PhantomData;
 use std::sync::Arc;
 
@@ -171,6 +171,30 @@ pub trait ElementGroup: Send + Sync {
         scratch: &mut Vec<f64>,
         out: &mut dyn FnMut(usize, usize, f64, f64),
     );
+    /// `values[slots[e·dofs² + i·dofs + j]] += a ∂f_i/∂q_j + b ∂f_i/∂q̇_j`
+    /// over all elements `e` (slots `usize::MAX` skipped). The default goes
+    /// through [`ElementGroup::element_jacobian`] element by element.
+    fn add_jacobian(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        a: f64,
+        b: f64,
+        slots: &[usize],
+        values: &mut [f64],
+    ) {
+        let d = self.dofs();
+        let mut scratch = Vec::new();
+        for e in 0..self.len() {
+            let base = e * d * d;
+            self.element_jacobian(e, q, qd, &mut scratch, &mut |i, j, k, dd| {
+                let slot = slots[base + i * d + j];
+                if slot != usize::MAX {
+                    values[slot] += a * k + b * dd;
+                }
+            });
+        }
+    }
     /// The mass matrix of element `e` through `add(i, j, m_ij)`.
     fn element_mass(&self, e: usize, out: &mut dyn FnMut(usize, usize, f64));
     /// `f += ` the generalised force of the uniform load `w` per unit
@@ -185,12 +209,32 @@ pub trait ElementGroup: Send + Sync {
     fn add_gravity(&self, g: [f64; 3], f: &mut [f64]);
 }
 
+/// Elements evaluated at once by the assembly loops of [`Elements`] (the
+/// kernels' lane count): four `f64` lanes, one AVX register, when the
+/// build targets AVX (`-C target-cpu=x86-64-v3` or `native`); otherwise
+/// two, one SSE2 register (the default x86-64 target; wider lanes there
+/// only spill registers: BENCHMARKS.md, "ANCF elements").
+#[cfg(target_feature = "avx")]
+pub const LANES: usize = 4;
+/// Elements evaluated at once by the assembly loops of [`Elements`] (the
+/// kernels' lane count): two `f64` lanes, one SSE2 register, for targets
+/// without AVX (the default x86-64 target); four with AVX
+/// (`-C target-cpu=x86-64-v3` or `native`).
+#[cfg(not(target_feature = "avx"))]
+pub const LANES: usize = 2;
+
 /// The elements of one kernel type `E`: per element its full coordinate
 /// indices, parameters and reference (stress-free) coordinates.
+///
+/// The assembly loops evaluate [`LANES`] elements per kernel call, and use
+/// the elastic kernels (`∂U/∂q`, symmetric `∂²U/∂q²`) when no element of
+/// the group is damped, or when the velocities are zero and `∂f/∂q̇` is
+/// not asked for (statics).
 pub struct Elements<E, const N: usize, const P: usize> {
     conn: Vec<[usize; N]>,
     params: Vec<[f64; P]>,
     reference: Vec<[f64; N]>,
+    damped: bool,
     kernel: PhantomData<fn() -> E>,
 }
 
@@ -200,6 +244,7 @@ impl<E: ElementKernel<N, P>, const N: usize, const P: usize> Default for Element
             conn: Vec::new(),
             params: Vec::new(),
             reference: Vec::new(),
+            damped: false,
             kernel: PhantomData,
         }
     }
@@ -214,9 +259,34 @@ impl<E: ElementKernel<N, P>, const N: usize, const P: usize> Elements<E, N, P> {
     /// Adds one element: its full coordinate indices, parameters, and the
     /// coordinates at which it is free of stress.
     pub fn push(&mut self, conn: [usize; N], params: [f64; P], reference: [f64; N]) {
+        self.damped |= !E::is_undamped(&params);
         self.conn.push(conn);
         self.params.push(params);
         self.reference.push(reference);
+    }
+
+    /// Coordinates (`v`) and parameters of elements `e0 … e0 + LANES − 1`
+    /// in lanes; lanes past the last element repeat it.
+    fn gather_lanes(&self, e0: usize, v: &[f64], out: &mut [Lanes<LANES>; N]) {
+        let last = self.conn.len() - 1;
+        for l in 0..LANES {
+            let c = &self.conn[(e0 + l).min(last)];
+            for (o, &i) in out.iter_mut().zip(c) {
+                o.0[l] = v[i];
+            }
+        }
+    }
+
+    fn params_lanes(&self, e0: usize) -> [Lanes<LANES>; P] {
+        let last = self.conn.len() - 1;
+        let mut out = [Lanes::default(); P];
+        for l in 0..LANES {
+            let p = &self.params[(e0 + l).min(last)];
+            for (o, &v) in out.iter_mut().zip(p) {
+                o.0[l] = v;
+            }
+        }
+        out
     }
 
     fn gather(&self, e: usize, v: &[f64]) -> [f64; N] {
@@ -242,12 +312,66 @@ impl<E: ElementKernel<N, P>, const N: usize, const P: usize> ElementGroup for El
         &self.conn[e]
     }
     fn add_internal(&self, q: &[f64], qd: &[f64], f: &mut [f64]) {
-        let mut fe = [0.0; N];
-        for e in 0..self.conn.len() {
-            let (qe, qde) = (self.gather(e, q), self.gather(e, qd));
-            E::internal_forces(&qe, &qde, &self.params[e], &mut fe);
-            for (&i, v) in self.conn[e].iter().zip(&fe) {
-                f[i] += v;
+        let ne = self.conn.len();
+        let elastic = !self.damped || qd.iter().all(|&v| v == 0.0);
+        let mut ql = [Lanes::default(); N];
+        let mut qdl = [Lanes::default(); N];
+        let mut fl = [Lanes::default(); N];
+        for e0 in (0..ne).step_by(LANES) {
+            self.gather_lanes(e0, q, &mut ql);
+            let pl = self.params_lanes(e0);
+            if elastic {
+                E::elastic_forces_lanes(&ql, &pl, &mut fl);
+            } else {
+                self.gather_lanes(e0, qd, &mut qdl);
+                E::forces_lanes(&ql, &qdl, &pl, &mut fl);
+            }
+            for l in 0..LANES.min(ne - e0) {
+                for (&i, v) in self.conn[e0 + l].iter().zip(&fl) {
+                    f[i] += v.0[l];
+                }
+            }
+        }
+    }
+    fn add_jacobian(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        a: f64,
+        b: f64,
+        slots: &[usize],
+        values: &mut [f64],
+    ) {
+        let ne = self.conn.len();
+        let elastic = !self.damped || (b == 0.0 && qd.iter().all(|&v| v == 0.0));
+        let mut ql = [Lanes::default(); N];
+        let mut qdl = [Lanes::default(); N];
+        let mut kl = [[Lanes::default(); N]; N];
+        let mut dl = [[Lanes::default(); N]; N];
+        for e0 in (0..ne).step_by(LANES) {
+            self.gather_lanes(e0, q, &mut ql);
+            let pl = self.params_lanes(e0);
+            if elastic {
+                E::elastic_stiffness_lanes(&ql, &pl, &mut kl);
+            } else {
+                self.gather_lanes(e0, qd, &mut qdl);
+                E::jacobians_lanes(&ql, &qdl, &pl, &mut kl, &mut dl);
+            }
+            for l in 0..LANES.min(ne - e0) {
+                let s = &slots[(e0 + l) * N * N..(e0 + l + 1) * N * N];
+                for i in 0..N {
+                    for j in 0..N {
+                        let slot = s[i * N + j];
+                        if slot == usize::MAX {
+                            continue;
+                        }
+                        values[slot] += if elastic {
+                            a * kl[i][j].0[l]
+                        } else {
+                            a * kl[i][j].0[l] + b * dl[i][j].0[l]
+                        };
+                    }
+                }
             }
         }
     }
@@ -584,18 +708,8 @@ impl StructuralModel {
     /// `out = a ∂f_int/∂q + b ∂f_int/∂q̇ + c M` on the free coordinates.
     pub fn jacobian(&self, q: &[f64], qd: &[f64], a: f64, b: f64, c: f64, out: &mut SparseMatrix) {
         out.clear();
-        let mut scratch = Vec::new();
         for (g, s) in self.groups.iter().zip(&self.slots) {
-            let d = g.dofs();
-            for e in 0..g.len() {
-                let base = e * d * d;
-                g.element_jacobian(e, q, qd, &mut scratch, &mut |i, j, k, dd| {
-                    let slot = s[base + i * d + j];
-                    if slot != usize::MAX {
-                        out.values[slot] += a * k + b * dd;
-                    }
-                });
-            }
+            g.add_jacobian(q, qd, a, b, s, &mut out.values);
         }
         if c != 0.0 {
             for (o, m) in out.values.iter_mut().zip(&self.mass.values) {

@@ -109,6 +109,21 @@ impl SparseMatrix {
         }
     }
 
+    /// `y += a A x` for a symmetric `A` (e.g. the mass matrix): column `j`
+    /// of `A` is its row `j`, so each `y_j` is one gathered dot product
+    /// instead of scattered updates.
+    pub fn sym_mul_add(&self, a: f64, x: &[f64], y: &mut [f64]) {
+        let p = &self.pattern;
+        for (j, yj) in y.iter_mut().enumerate().take(p.n) {
+            let (s, e) = (p.col_ptr[j], p.col_ptr[j + 1]);
+            let mut acc = 0.0;
+            for (v, &i) in self.values[s..e].iter().zip(&p.row_idx[s..e]) {
+                acc += v * x[i];
+            }
+            *yj += a * acc;
+        }
+    }
+
     /// `xᵀ · self · x`.
     pub fn quadratic_form(&self, x: &[f64]) -> f64 {
         let mut y = vec![0.0; x.len()];
@@ -224,6 +239,206 @@ impl SparseSolver for FaerCholesky {
     }
 }
 
+/// LU with partial pivoting of a banded matrix (LAPACK's `gbtrf` scheme,
+/// rows stored densely across the band widened by the lower bandwidth for
+/// the row exchanges): `n · kl · (kl + ku)` operations to factor and
+/// `n · (2 kl + ku)` to solve, against the general sparse LU's symbolic
+/// bookkeeping. The bandwidths `kl`, `ku` come from the pattern (a chain of
+/// elements with node-ordered coordinates has both equal to
+/// `2 · coordinates per node − 1`).
+#[derive(Clone, Debug, Default)]
+pub struct BandedLu {
+    n: usize,
+    kl: usize,
+    ku: usize,
+    a: Vec<f64>,
+    piv: Vec<usize>,
+    ext: Vec<usize>,
+    count: usize,
+    factored: bool,
+}
+
+impl BandedLu {
+    /// Lower and upper bandwidth of a pattern.
+    pub fn bandwidths(p: &Pattern) -> (usize, usize) {
+        let (mut kl, mut ku) = (0, 0);
+        for j in 0..p.n {
+            for &i in &p.row_idx[p.col_ptr[j]..p.col_ptr[j + 1]] {
+                kl = kl.max(i.saturating_sub(j));
+                ku = ku.max(j.saturating_sub(i));
+            }
+        }
+        (kl, ku)
+    }
+
+    /// Width of a stored row.
+    fn width(&self) -> usize {
+        2 * self.kl + self.ku + 1
+    }
+}
+
+impl SparseSolver for BandedLu {
+    fn factor(&mut self, m: &SparseMatrix) -> Result<(), FactorError> {
+        let p = &m.pattern;
+        let n = p.n;
+        let (kl, ku) = Self::bandwidths(p);
+        self.n = n;
+        self.kl = kl;
+        self.ku = ku;
+        let w = self.width();
+        self.a.clear();
+        self.a.resize(n * w, 0.0);
+        self.piv.clear();
+        self.piv.resize(n, 0);
+        self.factored = false;
+        let a = &mut self.a;
+        let ext = &mut self.ext;
+        // Row i holds columns i − kl … i + ku + kl at i·w + (j + kl − i).
+        let at = |i: usize, j: usize| i * w + j + kl - i;
+        for j in 0..n {
+            for k in p.col_ptr[j]..p.col_ptr[j + 1] {
+                let i = p.row_idx[k];
+                a[at(i, j)] = m.values[k];
+            }
+        }
+        // Last stored column of each row's nonzeros: `i + ku` at first,
+        // growing only where a pivot row with a longer reach is swapped in
+        // or eliminated into it (usually never: then U keeps bandwidth ku).
+        ext.clear();
+        ext.extend((0..n).map(|i| (i + ku).min(n - 1)));
+        for k in 0..n {
+            let last_row = (k + kl).min(n - 1);
+            let mut piv = k;
+            let mut big = a[at(k, k)].abs();
+            for i in k + 1..=last_row {
+                let v = a[at(i, k)].abs();
+                if v > big {
+                    big = v;
+                    piv = i;
+                }
+            }
+            if big == 0.0 || !big.is_finite() {
+                return Err(FactorError(format!(
+                    "zero or non-finite pivot in column {k} (banded LU)"
+                )));
+            }
+            self.piv[k] = piv;
+            if piv != k {
+                for j in k..=ext[k].max(ext[piv]) {
+                    a.swap(at(k, j), at(piv, j));
+                }
+                ext.swap(k, piv);
+            }
+            let inv = 1.0 / a[at(k, k)];
+            let (base_k, len) = (at(k, k + 1), ext[k] - k);
+            for i in k + 1..=last_row {
+                let l = a[at(i, k)] * inv;
+                a[at(i, k)] = l;
+                if l != 0.0 {
+                    let base_i = at(i, k + 1);
+                    let (head, tail) = a.split_at_mut(base_i);
+                    for (x, y) in tail[..len].iter_mut().zip(&head[base_k..base_k + len]) {
+                        *x -= l * y;
+                    }
+                    ext[i] = ext[i].max(ext[k]);
+                }
+            }
+        }
+        self.factored = true;
+        self.count += 1;
+        Ok(())
+    }
+
+    fn solve(&self, rhs: &mut [f64]) {
+        if !self.factored {
+            return;
+        }
+        let (n, kl, w, a) = (self.n, self.kl, self.width(), &self.a);
+        let at = |i: usize, j: usize| i * w + j + kl - i;
+        for k in 0..n {
+            rhs.swap(k, self.piv[k]);
+            let bk = rhs[k];
+            if bk != 0.0 {
+                for i in k + 1..=(k + kl).min(n - 1) {
+                    rhs[i] -= a[at(i, k)] * bk;
+                }
+            }
+        }
+        for k in (0..n).rev() {
+            let len = self.ext[k] - k;
+            let base = at(k, k + 1);
+            let (head, tail) = rhs.split_at_mut(k + 1);
+            let (row, x) = (&a[base..base + len], &tail[..len]);
+            // Four partial sums: the dot product is latency-bound otherwise.
+            let mut acc = [0.0; 4];
+            let (rc, xc) = (row.chunks_exact(4), x.chunks_exact(4));
+            let (rr, xr) = (rc.remainder(), xc.remainder());
+            for (r4, x4) in rc.zip(xc) {
+                for t in 0..4 {
+                    acc[t] += r4[t] * x4[t];
+                }
+            }
+            let mut s = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+            for (r, v) in rr.iter().zip(xr) {
+                s += r * v;
+            }
+            head[k] = (head[k] - s) / a[at(k, k)];
+        }
+    }
+
+    fn factorizations(&self) -> usize {
+        self.count
+    }
+}
+
+/// LU by [`BandedLu`] when the pattern is banded (the band, widened for
+/// pivoting, stores at most 8 times the pattern's entries), otherwise by
+/// faer's sparse LU ([`FaerLu`]); decided at the first factorisation.
+#[derive(Default)]
+pub struct AutoLu {
+    banded: Option<BandedLu>,
+    general: FaerLu,
+    decided: bool,
+}
+
+impl AutoLu {
+    /// True once the banded solver has been chosen.
+    pub fn is_banded(&self) -> bool {
+        self.banded.is_some()
+    }
+}
+
+impl SparseSolver for AutoLu {
+    fn factor(&mut self, m: &SparseMatrix) -> Result<(), FactorError> {
+        if !self.decided {
+            let p = &m.pattern;
+            let (kl, ku) = BandedLu::bandwidths(p);
+            if p.n * (2 * kl + ku + 1) <= 8 * p.nnz() {
+                self.banded = Some(BandedLu::default());
+            }
+            self.decided = true;
+        }
+        match &mut self.banded {
+            Some(b) => b.factor(m),
+            None => self.general.factor(m),
+        }
+    }
+
+    fn solve(&self, rhs: &mut [f64]) {
+        match &self.banded {
+            Some(b) => b.solve(rhs),
+            None => self.general.solve(rhs),
+        }
+    }
+
+    fn factorizations(&self) -> usize {
+        match &self.banded {
+            Some(b) => b.factorizations(),
+            None => self.general.factorizations(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -251,6 +466,8 @@ mod tests {
         for solver in [
             &mut FaerLu::default() as &mut dyn SparseSolver,
             &mut FaerCholesky::default(),
+            &mut BandedLu::default(),
+            &mut AutoLu::default(),
         ] {
             solver.factor(&a).unwrap_or_else(|e| panic!("{e}"));
             solver.factor(&a).unwrap_or_else(|e| panic!("{e}"));

@@ -2,12 +2,13 @@
 //! stepping: the load factor `λ` goes from 0 to 1 in steps; each step is
 //! solved by Newton from the secant extrapolation of the last two
 //! equilibria (full Newton by default; modified Newton on request; the tangent
-//! `∂f_int/∂q` assembled from the element Jacobians, factored by sparse LU
-//! with the symbolic analysis reused); a step that does not converge is
+//! `∂f_int/∂q` assembled from the element Jacobians, factored by LU,
+//! banded when the pattern is, else sparse with the symbolic analysis
+//! reused: [`super::sparse::AutoLu`]); a step that does not converge is
 //! halved, down to a smallest step, after which the solve refuses.
 
 use super::model::StructuralModel;
-use super::sparse::{FaerLu, SparseMatrix, SparseSolver};
+use super::sparse::{AutoLu, SparseMatrix, SparseSolver};
 use std::fmt;
 
 /// Settings of [`solve_static`].
@@ -156,7 +157,7 @@ fn inf_norm(k: &SparseMatrix) -> f64 {
 
 /// `‖K‖∞ · ‖K⁻¹‖₂`-estimate: a few steps of inverse iteration with the
 /// factored `K` from a fixed start vector.
-fn condition_estimate(k: &SparseMatrix, lu: &FaerLu) -> f64 {
+fn condition_estimate(k: &SparseMatrix, lu: &AutoLu) -> f64 {
     let n = k.pattern().n();
     let knorm = inf_norm(k);
     let mut x: Vec<f64> = (0..n)
@@ -187,7 +188,7 @@ pub fn solve_static(
     let mut q_full = model.q0().to_vec();
     let mut x = model.restrict(&q_full);
     let mut tangent = SparseMatrix::zeros(model.pattern().clone());
-    let mut lu = FaerLu::default();
+    let mut lu = AutoLu::default();
     let mut r = vec![0.0; n];
     let mut steps = Vec::new();
     let mut cuts = 0usize;
