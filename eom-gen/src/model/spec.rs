@@ -372,6 +372,10 @@ pub enum Flexible {
         /// Damping ratio `ζ` of every normal mode of the reduced body.
         #[serde(default, skip_serializing_if = "Num::is_zero")]
         damping: Num,
+        /// Named nodes, where markers and joints may attach: any place
+        /// `0 ≤ x ≤ length` on the axis (node `i` is the `i`-th listed).
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        nodes: Vec<BeamNode>,
     },
     /// Modal data imported from an external finite-element model: a RON or
     /// JSON file (`ModalData(…)`, see `docs/model-format.md`) with nodes,

@@ -948,15 +948,8 @@ impl Ctx<'_> {
             Some(spec::Flexible::Modal { file, .. }) => {
                 return self.modal_node_ref(node, body, file, info, path, what);
             }
-            Some(spec::Flexible::AssumedModes { .. }) => {
-                self.error(
-                    path,
-                    format!(
-                        "{what} names node {node}, but body `{body}` has assumed modes, which have no nodes"
-                    ),
-                    "leave the node out: it then rides the body frame",
-                );
-                return None;
+            Some(spec::Flexible::AssumedModes { nodes: written, .. }) => {
+                return self.assumed_node_ref(node, body, written, info, path, what);
             }
             None => {
                 self.error(
@@ -1006,6 +999,59 @@ impl Ctx<'_> {
                         "its nodes are {}; or give a node index 0..={elements}",
                         list_names(names)
                     ),
+                };
+                self.error(
+                    path,
+                    format!("{what}: flexible body `{body}` has no node `{name}`"),
+                    help,
+                );
+                None
+            }
+        }
+    }
+
+    /// The node of an assumed-modes body that `node` names: a name from its
+    /// `nodes`, or an index into them.
+    fn assumed_node_ref(
+        &mut self,
+        node: &spec::NodeRef,
+        body: &str,
+        written: &[spec::BeamNode],
+        info: Option<&FlexInfo>,
+        path: &[Seg<'static>],
+        what: &str,
+    ) -> Option<usize> {
+        let names = written.iter().map(|n| n.name.as_str());
+        let list = if written.is_empty() {
+            "name nodes in the body's `nodes: [(name: \"tip\", x: …)]` (assumed modes have no others)".to_string()
+        } else {
+            format!("its nodes are {}", list_names(names.clone()))
+        };
+        match node {
+            spec::NodeRef::Index(n) if *n < written.len() => info.is_some().then_some(*n),
+            spec::NodeRef::Index(n) => {
+                self.error(
+                    path,
+                    format!(
+                        "{what} names node {n}, but body `{body}` (assumed modes) has {} named node{}",
+                        written.len(),
+                        if written.len() == 1 { "" } else { "s" }
+                    ),
+                    list,
+                );
+                None
+            }
+            spec::NodeRef::Name(name) => {
+                if let Some((_, n)) = info.and_then(|f| f.nodes.iter().find(|(n, _)| n == name)) {
+                    return Some(*n);
+                }
+                if written.iter().any(|n| &n.name == name) {
+                    // Named, but the node or its body has an error (reported).
+                    return None;
+                }
+                let help = match did_you_mean(name, names) {
+                    Some(best) => format!("did you mean `{best}`?"),
+                    None => list,
                 };
                 self.error(
                     path,
