@@ -376,6 +376,9 @@ pub struct JointInfo {
     pub parent_frame: FrameInfo,
     /// On a flexible parent, the beam node the joint is attached to.
     pub parent_node: Option<usize>,
+    /// On a flexible child of a cut joint, the node the joint is attached
+    /// to (`child_frame` relative to the node's deformed frame).
+    pub child_node: Option<usize>,
     /// Joint frame on the child.
     pub child_frame: FrameInfo,
     /// Names of the joint's position coordinates.
@@ -646,6 +649,12 @@ impl System {
                     .iter()
                     .filter(|j| j.parent == body)
                     .filter_map(|j| j.parent_node),
+            )
+            .chain(
+                self.joints
+                    .iter()
+                    .filter(|j| j.child == body)
+                    .filter_map(|j| j.child_node),
             )
             .collect();
         nodes.sort_unstable();

@@ -527,13 +527,16 @@ fn flex_crank_modes_oscillate_at_their_frequencies() {
     // initial value: the rod undeformed, so its inertia loads set it
     // vibrating), over 0.2 s: the first bending amplitude rod_f1 oscillates
     // at ω1 = π² √(EI/(ρA l2⁴)) = 1276.6 rad/s (the sine is the exact
-    // pinned–pinned mode), the axial amplitude rod_f3 at the lower
-    // eigenvalue of the axial block, √(λ EA/(ρA l2²)) with
-    // 15 λ² − (104/3) λ + 16/3 = 0 scaled by 15 for the consistent mass:
-    // 26 494 rad/s. The forced part (harmonics of 150 rad/s) is removed by
-    // a moving average over one period of the free vibration. The shift by
-    // the rod's rotation (|φ̇2| ≤ 75 rad/s) and by the axial load (not in
-    // the linear model) is small: within 1 %.
+    // pinned–pinned mode; the rod's rotation, |φ̇2| ≤ 75 rad/s, shifts it
+    // by well under 1 %). The axial amplitude rod_f3 oscillates at the
+    // lower axial mode of the rod carrying the slider at its tip: with the
+    // crank held, an axial stretch q4 moves the slider by q4/cos φ2 and
+    // turns the rod by −q4 tan φ2 / l2, so the tip carries
+    // m3/cos²φ2 + J2 tan²φ2/l2²; the lowest eigenvalue of the axial block
+    // with that tip mass runs from 18 113 rad/s at φ2 = 0 down to its
+    // value at |φ2| = asin(l1/l2) through the revolution, and the peak lies
+    // between. The forced part (harmonics of 150 rad/s) is removed by a
+    // moving average over one period of the free vibration.
     let sys = bundled("slider_crank_simeon");
     let dir = env!("CARGO_TARGET_TMPDIR");
     let path = format!("{dir}/slider_crank_simeon.csv");
@@ -561,24 +564,36 @@ fn flex_crank_modes_oscillate_at_their_frequencies() {
     let t = column("t");
     let (ea, ei, ra) = (E * B * H, E * B * H.powi(3) / 12.0, RHO * B * H);
     let w1 = PI * PI * (ei / (ra * L2.powi(4))).sqrt();
-    let lambda =
-        ((104.0 / 3.0) - ((104.0f64 / 3.0).powi(2) - 4.0 * 15.0 * 16.0 / 3.0).sqrt()) / 30.0;
-    let w_axial = (15.0 * lambda * ea / (ra * L2 * L2)).sqrt();
+    // The lowest ω of `K − ω² M` with `M = m/15 [[8, 1], [1, 2]] + diag(0, mt)`.
+    let axial = |mt: f64| {
+        let (m, k) = (ra * L2, ea / L2);
+        let (a, b, d) = (8.0 * m / 15.0, m / 15.0, 2.0 * m / 15.0 + mt);
+        let (p, q, r) = (16.0 * k / 3.0, -8.0 * k / 3.0, 7.0 * k / 3.0);
+        // det([[p − λa, q − λb], [q − λb, r − λd]]) = 0.
+        let (c2, c1, c0) = (a * d - b * b, -(p * d + r * a - 2.0 * q * b), p * r - q * q);
+        ((-c1 - (c1 * c1 - 4.0 * c2 * c0).sqrt()) / (2.0 * c2)).sqrt()
+    };
+    let j2 = ra * L2 * (L2 * L2 / 3.0 + H * H / 12.0);
+    let tip_mass = |phi: f64| M3 / phi.cos().powi(2) + j2 * phi.tan().powi(2) / (L2 * L2);
+    let (w_hi, w_lo) = (axial(tip_mass(0.0)), axial(tip_mass((L1 / L2).asin())));
+    let w_axial = w_hi;
     let window = |w: f64| (2.0 * PI / w / dt).round() as usize;
     let bending = peak(&t, &column("rod_f1"), window(w1), (700.0, 2500.0, 0.5));
-    let axial = peak(
+    let peak_axial = peak(
         &t,
         &column("rod_f3"),
         window(w_axial),
-        (15_000.0, 40_000.0, 5.0),
+        (10_000.0, 40_000.0, 5.0),
     );
     eprintln!(
-        "bending: peak {bending} rad/s, expected {w1:.1} ({:+.2} %); axial: peak {axial} rad/s, expected {w_axial:.0} ({:+.2} %)",
+        "bending: peak {bending} rad/s, expected {w1:.1} ({:+.2} %); axial: peak {peak_axial} rad/s, expected between {w_lo:.0} and {w_hi:.0}",
         100.0 * (bending / w1 - 1.0),
-        100.0 * (axial / w_axial - 1.0)
     );
     assert!((bending / w1 - 1.0).abs() < 0.01, "bending peak {bending}");
-    assert!((axial / w_axial - 1.0).abs() < 0.01, "axial peak {axial}");
+    assert!(
+        peak_axial > 0.995 * w_lo && peak_axial < 1.005 * w_hi,
+        "axial peak {peak_axial}, expected between {w_lo} and {w_hi}"
+    );
 }
 
 #[test]
@@ -616,6 +631,118 @@ fn flex_assumed_mode_nodes_errors_are_located_all_at_once() {
         "has no node `tpi`",
         "did you mean `tip`?",
         "names node 5, but body `rod` (assumed modes) has",
+    ] {
+        assert!(report.contains(want), "missing `{want}` in:\n{report}");
+    }
+}
+
+/// A four-bar whose coupler is a flexible beam (the model of
+/// `flex_nodes.rs`), its loop closed by the pin between the coupler's end
+/// node and the rocker: `{CUT}` is that cut joint.
+const CRANK_ROCKER: &str = r#"Model(
+    name: "flex_crank_rocker",
+    gravity: (0, "-g", 0),
+    parameters: [
+        (name: "g", value: 9.81),
+        (name: "m", value: 1.0),
+        (name: "a", value: 0.4),
+        (name: "b", value: 1.0),
+        (name: "c", value: 0.8),
+        (name: "d", value: 1.0),
+    ],
+    bodies: [
+        (name: "crank", mass: "m", inertia: Diag("m*a^2/12", 0, "m*a^2/12")),
+        (name: "coupler", flexible: Beam(length: "b", rho_a: 1.0, rho_ip: 1e-4, ea: 1e6,
+            ei_y: 20000, ei_z: 200, gj: 500, elements: 6, reference: Clamped, modes: 2,
+            nodes: [(name: "end", x: "b")])),
+        (name: "rocker", mass: "m", inertia: Diag("m*c^2/12", 0, "m*c^2/12")),
+    ],
+    joints: [
+        (name: "o2", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "crank",
+         child_frame: (position: (0, "-a/2", 0)), coordinates: ["phi1"], u0: [3.0]),
+        (name: "a_pin", kind: Revolute(axis: (0, 0, 1)), parent: "crank", child: "coupler",
+         parent_frame: (position: (0, "a/2", 0)), coordinates: ["phi2"], q0: [0.407]),
+        (name: "o4", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "rocker",
+         parent_frame: (position: ("d", 0, 0)), child_frame: (position: (0, "-c/2", 0)),
+         coordinates: ["phi3"], q0: [0.102]),
+        {CUT}
+    ],
+    outputs: [Energy],
+)"#;
+
+#[test]
+fn flex_loop_closed_at_a_child_side_node() {
+    // The same flexible four-bar cut two ways: the pin between the
+    // coupler's end node and the rocker with the coupler as the cut
+    // joint's parent (`parent_node`), and turned round, the rocker as the
+    // parent and the coupler's node as the child side (`child_node`).
+    // Integrated by projection with DOP853 for 1 s (no damping, gravity),
+    // each conserves T + V and keeps the loop closed, and the two give the
+    // same motion.
+    use eom_gen::model::{Source, check};
+    let as_parent = r#"(name: "b_pin", kind: Revolute(axis: (0, 0, 1)), parent: "coupler", parent_node: "end",
+         child: "rocker", child_frame: (position: (0, "c/2", 0)), cut: true),"#;
+    let as_child = r#"(name: "b_pin", kind: Revolute(axis: (0, 0, 1)), parent: "rocker",
+         parent_frame: (position: (0, "c/2", 0)), child: "coupler", child_node: "end", cut: true),"#;
+    let mut finals = Vec::new();
+    for cut in [as_parent, as_child] {
+        let text = CRANK_ROCKER.replace("{CUT}", cut);
+        let sys = check(&Source::new("crank_rocker.ron", &text))
+            .unwrap_or_else(|r| panic!("{r}"))
+            .system;
+        assert_eq!(
+            sys.coordinate_names(),
+            ["phi1", "phi2", "coupler_f1", "coupler_f2", "phi3"]
+        );
+        let r = eom_run(
+            &sys,
+            "projection",
+            "dop853",
+            (1e-10, 1e-12),
+            1.0,
+            None,
+            None,
+        );
+        assert_eq!(r["stop"], "finished", "{r}");
+        let e = floats(&r["energy"]);
+        let res = r["max_constraint_residual"].as_f64().unwrap_or(f64::NAN);
+        let q = floats(&r["q"]);
+        eprintln!("energy {e:?}, max |Φ| {res:e}, q {q:?}");
+        assert!((e[1] - e[0]).abs() < 1e-7 * e[0].abs(), "energy {e:?}");
+        assert!(res < 1e-9, "max |Φ| = {res:e}");
+        assert!(q[2] != 0.0 && q[3] != 0.0, "the coupler bent: {q:?}");
+        finals.push(q);
+    }
+    for (k, (a, b)) in finals[0].iter().zip(&finals[1]).enumerate() {
+        let scale = if k == 2 || k == 3 { 1e-3 } else { 1.0 };
+        assert!(
+            (a - b).abs() < 1e-6 * scale,
+            "q[{k}]: cut at the parent side {a}, at the child side {b}"
+        );
+    }
+}
+
+#[test]
+fn flex_child_node_on_a_tree_joint_is_an_error() {
+    // A joint whose child side is at a node must close a loop; on a tree
+    // joint `child_node` is an error at the field, saying what to do.
+    use eom_gen::model::{Source, check};
+    let cut = r#"(name: "b_pin", kind: Revolute(axis: (0, 0, 1)), parent: "coupler", parent_node: "end",
+         child: "rocker", child_frame: (position: (0, "c/2", 0)), cut: true),"#;
+    let text = CRANK_ROCKER.replace("{CUT}", cut).replace(
+        "coordinates: [\"phi2\"], q0: [0.407]",
+        "coordinates: [\"phi2\"], q0: [0.407], child_node: \"end\"",
+    );
+    let report = match check(&Source::new("tree_child_node.ron", &text)) {
+        Ok(_) => panic!("a tree joint with child_node is an error"),
+        Err(r) => r.to_string(),
+    };
+    eprintln!("{report}");
+    for want in [
+        "tree_child_node.ron:",
+        "child_node",
+        "is a tree joint",
+        "turn the joint round",
     ] {
         assert!(report.contains(want), "missing `{want}` in:\n{report}");
     }

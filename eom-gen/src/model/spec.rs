@@ -661,6 +661,10 @@ pub struct Joint {
     /// parent joint frame when all coordinates are zero.
     #[serde(default, skip_serializing_if = "Frame::is_identity")]
     pub child_frame: Frame,
+    /// On a flexible child of a cut joint: the node the joint is attached
+    /// to (`child_frame` is then relative to the node's deformed frame).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub child_node: Option<NodeRef>,
     /// Names of the position coordinates (default: derived from the joint name).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coordinates: Option<Vec<String>>,

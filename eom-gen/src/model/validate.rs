@@ -1258,9 +1258,25 @@ impl Ctx<'_> {
                 }
                 _ => Ok(None),
             };
-            match (self.joint(j, &path, parent, child), parent_node) {
-                (Some(mut info), Ok(node)) => {
+            let child_node = match (&j.child_node, child) {
+                (Some(node), Some(c)) => {
+                    let written = spec.bodies.iter().find(|b| b.name == j.child);
+                    let n = self.node_ref(
+                        node,
+                        &j.child,
+                        written.and_then(|b| b.flexible.as_ref()),
+                        bodies[c].flexible.as_deref(),
+                        &join(&path, &[f("child_node")]),
+                        &format!("joint `{}`", j.name),
+                    );
+                    n.map(Some).ok_or(())
+                }
+                _ => Ok(None),
+            };
+            match (self.joint(j, &path, parent, child), parent_node, child_node) {
+                (Some(mut info), Ok(node), Ok(child_node)) => {
                     info.parent_node = node;
+                    info.child_node = child_node;
                     out.push(info)
                 }
                 _ => {
@@ -1441,6 +1457,7 @@ impl Ctx<'_> {
             parent_frame: parent_frame?,
             child_frame: child_frame?,
             parent_node: None,
+            child_node: None,
             coordinate_names: coordinate_names?,
             speed_names: speed_names?,
             q0: q0?,
@@ -1656,6 +1673,19 @@ impl Ctx<'_> {
                 flex.u_index = u;
                 q += flex.count();
                 u += flex.count();
+            }
+        }
+        for (j, s) in spec.joints.iter().enumerate() {
+            if s.child_node.is_some() && graph.is_tree_joint(j) {
+                self.error(
+                    &[f("joints"), i(j), f("child_node")],
+                    format!(
+                        "joint `{}` attaches its child side at a node, but it is a tree joint: body `{}` hangs from it",
+                        s.name, s.child
+                    ),
+                    "only a cut joint (one that closes a loop) may attach its child at a node; turn the joint round \
+                     (the flexible body as `parent` with `parent_node`) or let it close a loop with `cut: true`",
+                );
             }
         }
         for &j in graph.cut_joints() {
