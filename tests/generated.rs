@@ -166,6 +166,7 @@ fn compiled_models_equal_the_f64_algorithms() {
     compare::<g::rolling_disk::RollingDisk>("rolling_disk");
     compare::<g::arm7_flex::Arm7Flex>("arm7_flex");
     compare::<g::slider_crank_flex::SliderCrankFlex>("slider_crank_flex");
+    compare::<g::slider_crank_simeon::SliderCrankSimeon>("slider_crank_simeon");
     compare::<g::spin_up::SpinUp>("spin_up");
     compare::<g::hub_beam::HubBeam>("hub_beam");
 }

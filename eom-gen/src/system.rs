@@ -187,26 +187,32 @@ impl FlexInfo {
     }
 
     /// Undeformed position of node `node` in body axes: on the beam axis for
-    /// a beam, from the file for imported data; assumed modes have no nodes.
+    /// a beam and for assumed modes (their named nodes), from the file for
+    /// imported data.
     pub fn node_position(&self, node: usize) -> Option<Vector3<f64>> {
         match &self.source {
             FlexSource::Beam => {
                 (node < self.beam.nodes()).then(|| Vector3::new(self.beam.node_x(node), 0.0, 0.0))
             }
-            FlexSource::Assumed { .. } => None,
+            FlexSource::Assumed { node_x, .. } => {
+                node_x.get(node).map(|&x| Vector3::new(x, 0.0, 0.0))
+            }
             FlexSource::Modal { positions, .. } => positions.get(node).copied(),
         }
     }
 
     /// The undeformed place of node `node` in body axes, m: the beam's
-    /// nodes lie along `x`, `length / elements` apart; imported nodes where
-    /// the file puts them (assumed modes have none: the origin).
+    /// nodes lie along `x`, `length / elements` apart; assumed modes' named
+    /// nodes where they are named; imported nodes where the file puts them.
     pub fn node_place(&self, node: usize) -> [f64; 3] {
         match &self.source {
             FlexSource::Modal { positions, .. } => {
                 positions.get(node).map_or([0.0; 3], |p| [p.x, p.y, p.z])
             }
-            _ => [
+            FlexSource::Assumed { node_x, .. } => {
+                [node_x.get(node).copied().unwrap_or(0.0), 0.0, 0.0]
+            }
+            FlexSource::Beam => [
                 node as f64 * self.beam.length / self.beam.elements as f64,
                 0.0,
                 0.0,
@@ -221,10 +227,13 @@ pub enum FlexSource {
     /// The built-in beam's normal modes.
     Beam,
     /// Assumed modes (Rayleigh–Ritz): shape functions of `x` written in the
-    /// model; no nodes (`modes.shapes` is `0 × k`).
+    /// model; `modes.shapes` holds the shapes at the named nodes (`6N × k`,
+    /// the beam's layout: `u, v, w, φ, −w', v'`), node `i` the `i`-th named.
     Assumed {
         /// The shapes as functions of `x` (for sections and attachments).
         shapes: Vec<crate::flex::assumed::ShapeExprs>,
+        /// Where the named nodes sit on the axis, m, in node order.
+        node_x: Vec<f64>,
         /// `K_G1`, the geometric stiffness per `Ω²` (k×k).
         geometric: DMatrix<f64>,
         /// `K₂`, the geometric stiffness per unit axial acceleration (k×k).
@@ -367,6 +376,9 @@ pub struct JointInfo {
     pub parent_frame: FrameInfo,
     /// On a flexible parent, the beam node the joint is attached to.
     pub parent_node: Option<usize>,
+    /// On a flexible child of a cut joint, the node the joint is attached
+    /// to (`child_frame` relative to the node's deformed frame).
+    pub child_node: Option<usize>,
     /// Joint frame on the child.
     pub child_frame: FrameInfo,
     /// Names of the joint's position coordinates.
@@ -681,6 +693,12 @@ impl System {
                     .iter()
                     .filter(|j| j.parent == body)
                     .filter_map(|j| j.parent_node),
+            )
+            .chain(
+                self.joints
+                    .iter()
+                    .filter(|j| j.child == body)
+                    .filter_map(|j| j.child_node),
             )
             .collect();
         nodes.sort_unstable();

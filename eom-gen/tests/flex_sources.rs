@@ -694,7 +694,7 @@ fn flex_source_errors_are_located() {
             && r.contains("axial stiffness `ea` of flexible body `rod` is -1 N"),
         "{r}"
     );
-    // A node marker on an assumed-mode body.
+    // A node marker on an assumed-mode body that names no nodes.
     let r = errors_at(
         "rod.ron",
         model(&assumed(&["(v: \"(x/L)^2\")"]), "Fixed").replace(
@@ -703,7 +703,7 @@ fn flex_source_errors_are_located() {
         ),
     );
     assert!(
-        r.contains("marker `tip` names node 3, but body `rod` has assumed modes"),
+        r.contains("marker `tip` names node 3, but body `rod` (assumed modes) has 0 named nodes"),
         "{r}"
     );
 

@@ -50,6 +50,9 @@ pub mod slider_crank_driven;
 /// Model `slider_crank_flex`, generated from `models/slider_crank_flex.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod slider_crank_flex;
+/// Model `slider_crank_simeon`, generated from `models/slider_crank_simeon.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod slider_crank_simeon;
 /// Model `spin_up`, generated from `models/spin_up.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod spin_up;

@@ -43,6 +43,9 @@ pub struct CutJoint<S> {
     pub parent_node: Option<usize>,
     /// Tree index of the child body (`None`: ground).
     pub child: Option<usize>,
+    /// On a flexible child: the node the joint is attached to
+    /// (`frame_child` is relative to the node's deformed frame).
+    pub child_node: Option<usize>,
     /// Joint frame on the parent.
     pub frame_parent: Pose<S>,
     /// Joint frame on the child.
@@ -177,6 +180,7 @@ pub fn cut_joints<S: Scalar>(
                 parent: tree.index_of_body[joint.parent],
                 parent_node: joint.parent_node,
                 child: tree.index_of_body[joint.child],
+                child_node: joint.child_node,
                 frame_parent: low.frame(&joint.parent_frame)?,
                 frame_child: low.frame(&joint.child_frame)?,
                 equations: equations(&joint.kind, n),
@@ -213,14 +217,24 @@ fn parent_base<S: Scalar>(tree: &TreeModel<S>, k: &Kinematics<S>, c: &CutJoint<S
         .map_or(k.world[i], |slot| k.world[i].then(&k.nodes[i][slot].pose))
 }
 
+/// World pose of the frame a cut joint's child side is fixed to: the child
+/// body's, or that of its node.
+fn child_base<S: Scalar>(tree: &TreeModel<S>, k: &Kinematics<S>, c: &CutJoint<S>) -> Pose<S> {
+    let Some(i) = c.child else {
+        return Pose::identity();
+    };
+    c.child_node
+        .and_then(|n| tree.bodies[i].flex.as_ref()?.node_slot(n))
+        .map_or(k.world[i], |slot| k.world[i].then(&k.nodes[i][slot].pose))
+}
+
 /// `Φ` of every cut joint, in order, at the kinematics `k`.
 pub fn phi<S: Scalar>(tree: &TreeModel<S>, k: &Kinematics<S>, cuts: &[CutJoint<S>]) -> Vec<S> {
-    let world = |b: Option<usize>| b.map_or_else(Pose::identity, |i| k.world[i]);
     let v = |a: [f64; 3]| Vec3::from_f64(a);
     let mut out = Vec::new();
     for c in cuts {
         let p = parent_base(tree, k, c).then(&c.frame_parent);
-        let ch = world(c.child).then(&c.frame_child);
+        let ch = child_base(tree, k, c).then(&c.frame_child);
         let d = p.e.tr_mul_vec(ch.r - p.r);
         let m = p.e.transpose() * ch.e;
         for e in &c.equations {
@@ -246,9 +260,8 @@ pub fn cut_reaction<S: Scalar>(
     cut: &CutJoint<S>,
     lambda: &[S],
 ) -> (Vec3<S>, Vec3<S>) {
-    let world = |b: Option<usize>| b.map_or_else(Pose::identity, |i| k.world[i]);
     let p = parent_base(tree, k, cut).then(&cut.frame_parent);
-    let ch = world(cut.child).then(&cut.frame_child);
+    let ch = child_base(tree, k, cut).then(&cut.frame_child);
     let m = p.e.transpose() * ch.e;
     let (mut force, mut torque) = (Vec3::zero(), Vec3::zero());
     for (e, &l) in cut.equations.iter().zip(lambda) {
@@ -306,7 +319,6 @@ pub fn constraint_body_forces<S: Scalar>(
                     };
             }
         };
-    let world = |b: Option<usize>| b.map_or_else(Pose::identity, |i| k.world[i]);
     let mut row = 0;
     for c in cuts {
         let n = c.equations.len();
@@ -314,9 +326,9 @@ pub fn constraint_body_forces<S: Scalar>(
         row += n;
         let (f, m) = cut_reaction(tree, k, c, &l);
         let p = parent_base(tree, k, c).then(&c.frame_parent);
-        let ch = world(c.child).then(&c.frame_child);
+        let ch = child_base(tree, k, c).then(&c.frame_child);
         let (fw, mw) = (p.e.mul_vec(f), p.e.mul_vec(m));
-        apply(c.child, None, ch.r, fw, mw);
+        apply(c.child, c.child_node, ch.r, fw, mw);
         apply(c.parent, c.parent_node, ch.r, -fw, -mw);
     }
     let n_holonomic = row + constraints.iter().map(|c| c.equations().0).sum::<usize>();

@@ -79,6 +79,23 @@ pub fn parent_frame_pose(sys: &System, joint: &crate::system::JointInfo) -> Pose
     }
 }
 
+/// A cut joint's frame on its child at the initial state: at a node of a
+/// flexible child, relative to the node's undeformed place.
+pub fn child_frame_pose(sys: &System, joint: &crate::system::JointInfo) -> Pose<f64> {
+    let fc = frame_pose(&joint.child_frame);
+    match (
+        joint.child_node,
+        sys.bodies[joint.child].flexible.as_deref(),
+    ) {
+        (Some(n), Some(flex)) => Pose {
+            e: Mat3::identity(),
+            r: Vec3(flex.node_place(n)),
+        }
+        .then(&fc),
+        _ => fc,
+    }
+}
+
 /// World pose of every body at the initial state (locked joints at `q0`,
 /// prescribed ones at `t = 0`), indexed by body; ground is the identity.
 pub fn initial_poses(sys: &System) -> Vec<Pose<f64>> {
@@ -115,7 +132,7 @@ pub fn closure_gaps(sys: &System, poses: &[Pose<f64>]) -> Vec<Gap> {
         .map(|&j| {
             let joint = &sys.joints[j];
             let on_parent = poses[joint.parent].then(&parent_frame_pose(sys, joint));
-            let on_child = poses[joint.child].then(&frame_pose(&joint.child_frame));
+            let on_child = poses[joint.child].then(&child_frame_pose(sys, joint));
             let (rp, rc) = (Matrix3::from(on_parent.e), Matrix3::from(on_child.e));
             let d = Vector3::from(on_child.r - on_parent.r);
             let angle_between = |a: &Vector3<f64>| {

@@ -193,6 +193,7 @@ impl Joint {
             parent_frame: Frame::default(),
             parent_node: None,
             child_frame: Frame::default(),
+            child_node: None,
             coordinates: None,
             speeds: None,
             q0: None,

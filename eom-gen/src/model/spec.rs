@@ -411,6 +411,10 @@ pub enum Flexible {
         /// Damping ratio `ζ` of every normal mode of the reduced body.
         #[serde(default, skip_serializing_if = "Num::is_zero")]
         damping: Num,
+        /// Named nodes, where markers and joints may attach: any place
+        /// `0 ≤ x ≤ length` on the axis (node `i` is the `i`-th listed).
+        #[serde(default, skip_serializing_if = "Vec::is_empty")]
+        nodes: Vec<BeamNode>,
     },
     /// Modal data imported from an external finite-element model: a RON or
     /// JSON file (`ModalData(…)`, see `docs/model-format.md`) with nodes,
@@ -696,6 +700,10 @@ pub struct Joint {
     /// parent joint frame when all coordinates are zero.
     #[serde(default, skip_serializing_if = "Frame::is_identity")]
     pub child_frame: Frame,
+    /// On a flexible child of a cut joint: the node the joint is attached
+    /// to (`child_frame` is then relative to the node's deformed frame).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub child_node: Option<NodeRef>,
     /// Names of the position coordinates (default: derived from the joint name).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coordinates: Option<Vec<String>>,

@@ -926,6 +926,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
             parent_frame: parent_frame.frame(),
             parent_node: None,
             child_frame: child_frame.frame(),
+            child_node: None,
             coordinates: None,
             speeds: None,
             q0: None,

@@ -948,15 +948,8 @@ impl Ctx<'_> {
             Some(spec::Flexible::Modal { file, .. }) => {
                 return self.modal_node_ref(node, body, file, info, path, what);
             }
-            Some(spec::Flexible::AssumedModes { .. }) => {
-                self.error(
-                    path,
-                    format!(
-                        "{what} names node {node}, but body `{body}` has assumed modes, which have no nodes"
-                    ),
-                    "leave the node out: it then rides the body frame",
-                );
-                return None;
+            Some(spec::Flexible::AssumedModes { nodes: written, .. }) => {
+                return self.assumed_node_ref(node, body, written, info, path, what);
             }
             None => {
                 self.error(
@@ -1006,6 +999,59 @@ impl Ctx<'_> {
                         "its nodes are {}; or give a node index 0..={elements}",
                         list_names(names)
                     ),
+                };
+                self.error(
+                    path,
+                    format!("{what}: flexible body `{body}` has no node `{name}`"),
+                    help,
+                );
+                None
+            }
+        }
+    }
+
+    /// The node of an assumed-modes body that `node` names: a name from its
+    /// `nodes`, or an index into them.
+    fn assumed_node_ref(
+        &mut self,
+        node: &spec::NodeRef,
+        body: &str,
+        written: &[spec::BeamNode],
+        info: Option<&FlexInfo>,
+        path: &[Seg<'static>],
+        what: &str,
+    ) -> Option<usize> {
+        let names = written.iter().map(|n| n.name.as_str());
+        let list = if written.is_empty() {
+            "name nodes in the body's `nodes: [(name: \"tip\", x: …)]` (assumed modes have no others)".to_string()
+        } else {
+            format!("its nodes are {}", list_names(names.clone()))
+        };
+        match node {
+            spec::NodeRef::Index(n) if *n < written.len() => info.is_some().then_some(*n),
+            spec::NodeRef::Index(n) => {
+                self.error(
+                    path,
+                    format!(
+                        "{what} names node {n}, but body `{body}` (assumed modes) has {} named node{}",
+                        written.len(),
+                        if written.len() == 1 { "" } else { "s" }
+                    ),
+                    list,
+                );
+                None
+            }
+            spec::NodeRef::Name(name) => {
+                if let Some((_, n)) = info.and_then(|f| f.nodes.iter().find(|(n, _)| n == name)) {
+                    return Some(*n);
+                }
+                if written.iter().any(|n| &n.name == name) {
+                    // Named, but the node or its body has an error (reported).
+                    return None;
+                }
+                let help = match did_you_mean(name, names) {
+                    Some(best) => format!("did you mean `{best}`?"),
+                    None => list,
                 };
                 self.error(
                     path,
@@ -1212,9 +1258,25 @@ impl Ctx<'_> {
                 }
                 _ => Ok(None),
             };
-            match (self.joint(j, &path, parent, child), parent_node) {
-                (Some(mut info), Ok(node)) => {
+            let child_node = match (&j.child_node, child) {
+                (Some(node), Some(c)) => {
+                    let written = spec.bodies.iter().find(|b| b.name == j.child);
+                    let n = self.node_ref(
+                        node,
+                        &j.child,
+                        written.and_then(|b| b.flexible.as_ref()),
+                        bodies[c].flexible.as_deref(),
+                        &join(&path, &[f("child_node")]),
+                        &format!("joint `{}`", j.name),
+                    );
+                    n.map(Some).ok_or(())
+                }
+                _ => Ok(None),
+            };
+            match (self.joint(j, &path, parent, child), parent_node, child_node) {
+                (Some(mut info), Ok(node), Ok(child_node)) => {
                     info.parent_node = node;
+                    info.child_node = child_node;
                     out.push(info)
                 }
                 _ => {
@@ -1395,6 +1457,7 @@ impl Ctx<'_> {
             parent_frame: parent_frame?,
             child_frame: child_frame?,
             parent_node: None,
+            child_node: None,
             coordinate_names: coordinate_names?,
             speed_names: speed_names?,
             q0: q0?,
@@ -1610,6 +1673,19 @@ impl Ctx<'_> {
                 flex.u_index = u;
                 q += flex.count();
                 u += flex.count();
+            }
+        }
+        for (j, s) in spec.joints.iter().enumerate() {
+            if s.child_node.is_some() && graph.is_tree_joint(j) {
+                self.error(
+                    &[f("joints"), i(j), f("child_node")],
+                    format!(
+                        "joint `{}` attaches its child side at a node, but it is a tree joint: body `{}` hangs from it",
+                        s.name, s.child
+                    ),
+                    "only a cut joint (one that closes a loop) may attach its child at a node; turn the joint round \
+                     (the flexible body as `parent` with `parent_node`) or let it close a loop with `cut: true`",
+                );
             }
         }
         for &j in graph.cut_joints() {

@@ -62,9 +62,11 @@ impl Ctx<'_> {
                 shapes,
                 stiffening,
                 damping,
+                nodes,
             } => self.assumed(
                 [length, rho_a, rho_ip, ea, ei_y, ei_z, gj],
                 shapes,
+                nodes,
                 *stiffening,
                 damping,
                 body,
@@ -199,6 +201,7 @@ impl Ctx<'_> {
         &mut self,
         nums: [&Num; 7],
         shapes: &[spec::AssumedShape],
+        nodes: &[spec::BeamNode],
         stiffening: bool,
         damping: &Num,
         body: &str,
@@ -316,7 +319,7 @@ impl Ctx<'_> {
                 }
             })
         };
-        let shape_exprs = parsed
+        let shape_exprs: Vec<ShapeExprs> = parsed
             .iter()
             .map(|row| ShapeExprs {
                 parts: std::array::from_fn(|p| {
@@ -324,14 +327,18 @@ impl Ctx<'_> {
                 }),
             })
             .collect();
-        let modes = reduced.modes();
+        let mut modes = reduced.modes();
+        let (named, node_x, at_nodes) =
+            self.assumed_nodes(nodes, &section, &shape_exprs, body, fpath)?;
+        modes.shapes = at_nodes;
         let (coordinate_names, speed_names) = self.elastic_names(body, path, modes.count())?;
         written.extend(exprs);
         Some(Box::new(FlexInfo {
-            nodes: Vec::new(),
+            nodes: named,
             written,
             source: FlexSource::Assumed {
                 shapes: shape_exprs,
+                node_x,
                 geometric: reduced.geometric.clone(),
                 axial_geometric: reduced.axial_geometric.clone(),
                 damping_unit: reduced.ritz.damping_unit.clone(),
@@ -348,6 +355,81 @@ impl Ctx<'_> {
             u_index: 0,
             span: self.span(fpath),
         }))
+    }
+
+    /// The named nodes of an assumed-modes body: unique names, each on the
+    /// axis (`0 ≤ x ≤ length`), as `(name, node index)`, their places, and
+    /// the shapes there (`6N × k`: `u, v, w, φ, −w', v'` per node).
+    #[allow(clippy::type_complexity)]
+    fn assumed_nodes(
+        &mut self,
+        named: &[spec::BeamNode],
+        section: &Beam,
+        shapes: &[ShapeExprs],
+        body: &str,
+        fpath: &[Seg<'static>],
+    ) -> Option<(Vec<(String, usize)>, Vec<f64>, nalgebra::DMatrix<f64>)> {
+        let k = shapes.len();
+        let mut out: Vec<(String, usize)> = Vec::new();
+        let mut places = Vec::new();
+        let mut columns = nalgebra::DMatrix::zeros(6 * named.len(), k);
+        let mut ok = true;
+        let l = section.length;
+        for (n, node) in named.iter().enumerate() {
+            let npath = join(fpath, &[f("nodes"), i(n)]);
+            if out.iter().any(|(m, _)| *m == node.name) {
+                self.error(
+                    &join(&npath, &[f("name")]),
+                    format!("node `{}` is named twice on body `{body}`", node.name),
+                    "node names must be unique on their body",
+                );
+                ok = false;
+                continue;
+            }
+            let xpath = join(&npath, &[f("x")]);
+            let Some(x) = self.quantity(&node.x, &xpath, Scope::Params) else {
+                ok = false;
+                continue;
+            };
+            let x = x.value;
+            if !(0.0..=l).contains(&x) {
+                self.error(
+                    &xpath,
+                    format!(
+                        "node `{}` of flexible body `{body}` at x = {x} m is not on the body, which runs from 0 to {l} m",
+                        node.name
+                    ),
+                    format!("give 0 ≤ x ≤ {l}"),
+                );
+                ok = false;
+                continue;
+            }
+            let Some(at) = crate::flex::assumed::section(shapes, x) else {
+                self.error(
+                    &xpath,
+                    format!(
+                        "the shapes of flexible body `{body}` or their slopes are not finite at node `{}` (x = {x} m)",
+                        node.name
+                    ),
+                    "shapes and their first derivatives must be finite where a node sits",
+                );
+                ok = false;
+                continue;
+            };
+            let row = 6 * out.len();
+            for j in 0..k {
+                for r in 0..3 {
+                    columns[(row + r, j)] = at.translation[(r, j)];
+                    columns[(row + 3 + r, j)] = at.rotation[(r, j)];
+                }
+            }
+            out.push((node.name.clone(), out.len()));
+            places.push(x);
+        }
+        ok.then(|| {
+            let rows = 6 * out.len();
+            (out, places, columns.rows(0, rows).into_owned())
+        })
     }
 
     fn modal(
