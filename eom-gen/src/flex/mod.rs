@@ -29,7 +29,7 @@ pub mod invariants;
 pub mod modes;
 pub mod ritz;
 
-pub use beam::{Beam, Deformation, NodeDof, Section};
+pub use beam::{Beam, Deformation, NodeDof, Section, Shear};
 pub use ffr::{mass_matrix, quadratic_velocity};
 pub use invariants::Invariants;
 pub use modes::{Basis, Dof, Modes, Reference, craig_bampton, normal_modes};
