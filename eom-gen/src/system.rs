@@ -553,8 +553,13 @@ pub enum OutputKind {
 /// The Grübler–Kutzbach count of degrees of freedom.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Grubler {
-    /// `dof = λ (n_bodies) − Σ (λ − f_j) − n_holonomic`, λ = 6 or 3.
+    /// `dof = λ (n_bodies) − Σ (λ − f_j) − n_holonomic + n_elastic`,
+    /// λ = 6 or 3: the rigid-body count plus the flexible bodies' elastic
+    /// coordinates.
     pub dof: i64,
+    /// `n_elastic`: the elastic coordinates of flexible bodies in `dof`
+    /// (each is a degree of freedom of its own).
+    pub elastic: i64,
     /// True if every joint keeps the motion in one plane (λ = 3).
     pub planar: bool,
 }

@@ -474,6 +474,7 @@ impl Ctx<'_> {
             outputs: outputs?,
             grubler: Grubler {
                 dof: 0,
+                elastic: 0,
                 planar: false,
             },
             cables: cables?,
@@ -2349,8 +2350,16 @@ pub(crate) fn grubler(sys: &System, poses: &[Pose<f64>]) -> Grubler {
     for c in &sys.constraints {
         dof -= c.equations().0 as i64;
     }
+    // Every elastic coordinate of a flexible body is a freedom of its own.
+    let elastic: i64 = sys
+        .bodies
+        .iter()
+        .filter_map(|b| b.flexible.as_deref())
+        .map(|f| f.count() as i64)
+        .sum();
     Grubler {
-        dof,
+        dof: dof + elastic,
+        elastic,
         planar: planar_normal.is_some(),
     }
 }
