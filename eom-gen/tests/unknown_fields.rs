@@ -117,7 +117,7 @@ fn misspellings(name: &str) -> Vec<String> {
 
 /// Every struct and struct-like variant of the two formats: each must
 /// appear in the corpus, with each of its fields.
-const STRUCTS: [&str; 28] = [
+const STRUCTS: [&str; 29] = [
     "Model",
     "Parameter",
     "Body",
@@ -141,6 +141,7 @@ const STRUCTS: [&str; 28] = [
     "AssumedModes",
     "Modal",
     "FixedNode",
+    "Timoshenko",
     "Position",
     "Velocity",
     "JointReaction",

@@ -442,8 +442,8 @@ impl Beam {
             if let Some(sh) = &self.shear {
                 let gxy = (s.slope.row(0) - s.rotation.row(2)).transpose();
                 let gxz = (s.slope.row(1) + s.rotation.row(1)).transpose();
-                k += (&gxy * gxy.transpose()) * (sh.kga_y * w * l)
-                    + (&gxz * gxz.transpose()) * (sh.kga_z * w * l);
+                k += (gxy * gxy.transpose()) * (sh.kga_y * w * l)
+                    + (gxz * gxz.transpose()) * (sh.kga_z * w * l);
             }
         }
         k

@@ -775,7 +775,6 @@ impl Ctx<'_> {
             Some((sh, q)) => (Some(sh), q),
             None => (None, Vec::new()),
         };
-        let mut written = written;
         if *craig_bampton && named_nodes.is_empty() {
             self.error(
                 &join(&fpath, &[f("craig_bampton")]),
