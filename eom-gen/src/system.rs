@@ -102,7 +102,8 @@ pub struct MarkerInfo {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlexInfo {
     /// The beam's data as written (length, `ρA`, `ρI_p`, `EA`, `EI_y`,
-    /// `EI_z`, `GJ`), in that order; for assumed modes then the shape
+    /// `EI_z`, `GJ`), in that order (a Timoshenko beam's shear data as
+    /// written after them); for assumed modes then the shape
     /// expressions; none for imported data. None may be tunable.
     pub written: Vec<Quantity>,
     /// Where the shape functions come from. `beam`, `reference` and
