@@ -31,6 +31,7 @@ pub fn json(checked: &Checked) -> Value {
         "cables": crate::cable_report::check_json(sys),
         "constraints": sys.constraints.iter().map(|c| c.name.as_str()).collect::<Vec<_>>(),
         "grubler_dof": sys.grubler.dof,
+        "grubler_elastic": sys.grubler.elastic,
         "grubler_space": if sys.grubler.planar { "planar" } else { "spatial" },
         "body_names": sys.bodies.iter().skip(1).map(|b| b.name.as_str()).collect::<Vec<_>>(),
         "tree": sys.graph.tree_joints().iter().map(|&j| {
@@ -132,13 +133,21 @@ pub fn human(checked: &Checked) -> String {
         out += &format!("  constraints  {}\n", c.join(", "));
     }
     out += &format!(
-        "  Grübler–Kutzbach ({}): {} degree(s) of freedom\n",
+        "  Grübler–Kutzbach ({}): {} degree(s) of freedom{}\n",
         if sys.grubler.planar {
             "planar"
         } else {
             "spatial"
         },
-        sys.grubler.dof
+        sys.grubler.dof,
+        match sys.grubler.elastic {
+            0 => String::new(),
+            k => format!(
+                " ({} of the rigid bodies and joints + {k} elastic coordinate{} of flexible bodies)",
+                sys.grubler.dof - k,
+                if k == 1 { "" } else { "s" }
+            ),
+        }
     );
     if let Some((m, (residual, velocity_residual, iterations))) = mobility(sys) {
         out += &format!(

@@ -1385,3 +1385,29 @@ fn bench_takes_the_initial_state_and_driven_inputs() {
     );
     let _ = std::fs::remove_file(&model);
 }
+
+#[test]
+fn check_counts_the_elastic_coordinates_of_flexible_bodies() {
+    // hub_beam: a hub on a revolute joint and a beam clamped to it with 4
+    // modes. The rigid count is 1 (planar: 3·2 − 2 − 3); every elastic
+    // coordinate is a freedom of its own, so Grübler–Kutzbach says 1 + 4 = 5
+    // = nu (a tree: no constraint removes any).
+    let v = json(&["check", "models/hub_beam.ron", "--json"]);
+    assert_eq!(
+        (
+            v["grubler_dof"].as_i64(),
+            v["grubler_elastic"].as_i64(),
+            v["nu"].as_i64()
+        ),
+        (Some(5), Some(4), Some(5)),
+        "{v}"
+    );
+    let out = eom_gen(&["check", "models/hub_beam.ron"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains(
+            "5 degree(s) of freedom (1 of the rigid bodies and joints + 4 elastic coordinates of flexible bodies)"
+        ),
+        "{text}"
+    );
+}

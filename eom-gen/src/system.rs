@@ -102,7 +102,8 @@ pub struct MarkerInfo {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlexInfo {
     /// The beam's data as written (length, `ρA`, `ρI_p`, `EA`, `EI_y`,
-    /// `EI_z`, `GJ`), in that order; for assumed modes then the shape
+    /// `EI_z`, `GJ`), in that order (a Timoshenko beam's shear data as
+    /// written after them); for assumed modes then the shape
     /// expressions; none for imported data. None may be tunable.
     pub written: Vec<Quantity>,
     /// Where the shape functions come from. `beam`, `reference` and
@@ -565,8 +566,13 @@ pub enum OutputKind {
 /// The Grübler–Kutzbach count of degrees of freedom.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Grubler {
-    /// `dof = λ (n_bodies) − Σ (λ − f_j) − n_holonomic`, λ = 6 or 3.
+    /// `dof = λ (n_bodies) − Σ (λ − f_j) − n_holonomic + n_elastic`,
+    /// λ = 6 or 3: the rigid-body count plus the flexible bodies' elastic
+    /// coordinates.
     pub dof: i64,
+    /// `n_elastic`: the elastic coordinates of flexible bodies in `dof`
+    /// (each is a degree of freedom of its own).
+    pub elastic: i64,
     /// True if every joint keeps the motion in one plane (λ = 3).
     pub planar: bool,
 }

@@ -142,6 +142,7 @@ const STRUCTS: [&str; 29] = [
     "AssumedModes",
     "Modal",
     "FixedNode",
+    "Timoshenko",
     "Position",
     "Velocity",
     "JointReaction",

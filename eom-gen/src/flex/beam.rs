@@ -1,7 +1,8 @@
-//! A straight 3-D Euler–Bernoulli beam along the body `x` axis, discretised
-//! with two-node elements: the consistent mass and stiffness matrices of
-//! Przemieniecki (*Theory of Matrix Structural Analysis*, §5.6 and §11.3;
-//! Shabana, *Dynamics of Multibody Systems*, ch. 6), assembled.
+//! A straight 3-D beam along the body `x` axis, Euler–Bernoulli or (with
+//! [`Shear`]) Timoshenko, discretised with two-node elements: the consistent
+//! mass and stiffness matrices of Przemieniecki (*Theory of Matrix Structural
+//! Analysis*, §5.6 and §11.3; Shabana, *Dynamics of Multibody Systems*,
+//! ch. 6), assembled.
 //!
 //! Every node carries six degrees of freedom in the body frame, in this order
 //! ([`NodeDof`]): the translations `u_x, u_y, u_z` and the small rotations
@@ -33,6 +34,45 @@
 //! `EI/l³ [12, 6l, −12, 6l; …]`, `P/(30 l) [36, 3l, −36, 3l; …]`); the
 //! unit tests check that. Bending rotary inertia is neglected
 //! (Euler–Bernoulli); torsion has the polar mass moment `ρI_p`.
+//!
+//! ## Timoshenko
+//!
+//! With [`Shear`] the sections rotate by `ψ` independently of the axis'
+//! slope `v'`: the bending strain energy is `½ ∫ EI ψ'² + κGA (v' − ψ)² dx`
+//! and the nodal rotations `θ_z = ψ_xy`, `θ_y = −ψ_xz` are the **section
+//! rotations** (what node attachments turn with), not the slopes. The
+//! element is the interdependent interpolation element (IIE: Friedman and
+//! Kosmatka, *Comput. Struct.* 47 (1993) 473; Reddy 1997), whose shape
+//! functions solve the homogeneous static Timoshenko equations
+//! `(EI ψ')' + κGA (v' − ψ) = 0`, `(κGA (v' − ψ))' = 0` (so the element is
+//! exact for end-loaded static beams and cannot lock), with
+//! `Φ = 12 EI / (κGA l²)` and `p = 1/(1 + Φ)`:
+//!
+//! ```text
+//! v = p [2ξ³ − 3ξ² − Φξ + 1 + Φ] v_a + p l [ξ³ − (2 + Φ/2)ξ² + (1 + Φ/2)ξ] ψ_a
+//!   + p [−2ξ³ + 3ξ² + Φξ] v_b     + p l [ξ³ − (1 − Φ/2)ξ² − (Φ/2)ξ] ψ_b
+//! ψ = p 6(ξ² − ξ)/l v_a + p [3ξ² − (4 + Φ)ξ + 1 + Φ] ψ_a
+//!   − p 6(ξ² − ξ)/l v_b + p [3ξ² − (2 − Φ)ξ] ψ_b
+//! ```
+//!
+//! (`Φ_xy = 12 EI_z/(κGA_y l²)` in `x–y`, `Φ_xz = 12 EI_y/(κGA_z l²)` in
+//! `x–z` with the signs of `θ_y` above). The shear strain `v' − ψ =
+//! p Φ [−1/l, −1/2, 1/l, −1/2]·(v_a, ψ_a, v_b, ψ_b)` is constant per element.
+//! The element matrices are the same integrals with these shapes,
+//!
+//! ```text
+//! M_e += ∫ ρI_y N_θyᵀ N_θy + ρI_z N_θzᵀ N_θz dx        rotary inertia of the sections
+//! K_e  = ∫ … + EI_z N_ψxy'ᵀ N_ψxy' + κGA_y γ_xyᵀ γ_xy + (x–z alike) dx
+//! ```
+//!
+//! (degree ≤ 6, exact with the 4-point rule): the stiffness is
+//! Przemieniecki's `EI/((1+Φ) l³) [12, 6l, −12, 6l; 6l, (4+Φ)l², −6l,
+//! (2−Φ)l²; …]` and the mass the consistent Timoshenko mass of the same
+//! shapes (translational and rotary parts). `Φ = 0` takes the Hermite
+//! cubics above, so a beam without [`Shear`] is the Euler–Bernoulli beam bit
+//! for bit. `K_G` uses the slope `v'` of the axis (the foreshortening of the
+//! centroid line; the model format refuses stiffening with shear, see
+//! `docs/model-format.md`).
 
 use nalgebra::{DMatrix, DVector, Matrix3xX, SMatrix, SVector};
 
@@ -123,6 +163,29 @@ pub struct Beam {
     pub gj: f64,
     /// Number of elements `n`.
     pub elements: usize,
+    /// Shear deformation and rotary inertia (Timoshenko); `None` is the
+    /// Euler–Bernoulli beam.
+    pub shear: Option<Shear>,
+}
+
+/// The Timoshenko data of a beam: shear stiffnesses and the sections'
+/// rotary inertia in bending. Units: N for the shear stiffnesses, kg m for
+/// the rotary inertias (mass moment per length).
+///
+/// The element is the interdependent interpolation element (IIE; see the
+/// module docs), with the shear parameters
+/// `Φ_xy = 12 EI_z / (κGA_y l²)` (bending in `x–y`, shear force `Q_y`) and
+/// `Φ_xz = 12 EI_y / (κGA_z l²)` (bending in `x–z`, shear force `Q_z`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shear {
+    /// Effective shear stiffness for shear along `y`, `κ_y G A` (bending in `x–y`).
+    pub kga_y: f64,
+    /// Effective shear stiffness for shear along `z`, `κ_z G A` (bending in `x–z`).
+    pub kga_z: f64,
+    /// Rotary inertia per length about `y`, `ρI_y` (bending in `x–z`); 0 leaves it out.
+    pub rho_iy: f64,
+    /// Rotary inertia per length about `z`, `ρI_z` (bending in `x–y`); 0 leaves it out.
+    pub rho_iz: f64,
 }
 
 /// Translation and small rotation of a section, per coordinate.
@@ -145,10 +208,19 @@ pub struct Interpolation {
     pub axial_strain: SVector<f64, 12>,
     /// `∂θ_x/∂x`, the twist.
     pub twist: SVector<f64, 12>,
-    /// `∂²u_y/∂x²`, curvature in `x–y`.
+    /// Curvature in `x–y`: `∂θ_z/∂x` (`= ∂²u_y/∂x²` for Euler–Bernoulli).
     pub curvature_xy: SVector<f64, 12>,
-    /// `∂²u_z/∂x²`, curvature in `x–z`.
+    /// Curvature in `x–z`: `−∂θ_y/∂x` (`= ∂²u_z/∂x²` for Euler–Bernoulli).
     pub curvature_xz: SVector<f64, 12>,
+    /// Slopes of the axis `(∂u_y/∂x, ∂u_z/∂x)` (rows 0, 1): for
+    /// Euler–Bernoulli `θ_z` and `−θ_y`, for Timoshenko the section rotation
+    /// plus the shear strain.
+    pub slope: SMatrix<f64, 2, 12>,
+    /// Derivatives of the curvatures, `∂(curvature_xy)/∂x` and
+    /// `∂(curvature_xz)/∂x` (rows 0, 1), constant in an element: the shear
+    /// forces are `Q_y = −EI_z ·` row 0 and `Q_z = −EI_y ·` row 1
+    /// (for Timoshenko equal to `κGA_y (u_y' − θ_z)` and `κGA_z (u_z' + θ_y)`).
+    pub curvature_rate: SMatrix<f64, 2, 12>,
 }
 
 impl Beam {
@@ -173,6 +245,7 @@ impl Beam {
             ei_z,
             gj,
             elements,
+            shear: None,
         };
         beam.check()?;
         Ok(beam)
@@ -199,6 +272,22 @@ impl Beam {
         }
         if self.elements == 0 {
             problems.push("`elements` is 0; a beam needs at least one element".to_string());
+        }
+        if let Some(sh) = &self.shear {
+            for (name, value) in [("kga_y", sh.kga_y), ("kga_z", sh.kga_z)] {
+                if !(value.is_finite() && value > 0.0) {
+                    problems.push(format!(
+                        "`{name}` is {value}; a shear stiffness must be a positive number (N)"
+                    ));
+                }
+            }
+            for (name, value) in [("rho_iy", sh.rho_iy), ("rho_iz", sh.rho_iz)] {
+                if !(value.is_finite() && value >= 0.0) {
+                    problems.push(format!(
+                        "`{name}` is {value}; a rotary inertia must be zero or positive (kg m)"
+                    ));
+                }
+            }
         }
         if problems.is_empty() {
             Ok(())
@@ -240,28 +329,41 @@ impl Beam {
         (e, (x - e as f64 * l) / l)
     }
 
-    /// The interpolation rows of an element of length `l` at `ξ`.
+    /// The Euler–Bernoulli interpolation rows of an element of length `l`
+    /// at `ξ` (Hermite cubics; the module docs).
     pub fn interpolation(l: f64, xi: f64) -> Interpolation {
-        let (x2, x3) = (xi * xi, xi * xi * xi);
-        // Hermite cubics and their x-derivatives (l factors folded in for rotations).
-        let n = [
-            1.0 - 3.0 * x2 + 2.0 * x3,
-            l * (xi - 2.0 * x2 + x3),
-            3.0 * x2 - 2.0 * x3,
-            l * (x3 - x2),
-        ];
-        let d = [
-            (-6.0 * xi + 6.0 * x2) / l,
-            1.0 - 4.0 * xi + 3.0 * x2,
-            (6.0 * xi - 6.0 * x2) / l,
-            3.0 * x2 - 2.0 * xi,
-        ];
-        let dd = [
-            (-6.0 + 12.0 * xi) / (l * l),
-            (-4.0 + 6.0 * xi) / l,
-            (6.0 - 12.0 * xi) / (l * l),
-            (-2.0 + 6.0 * xi) / l,
-        ];
+        Self::interpolation_sheared(l, xi, 0.0, 0.0)
+    }
+
+    /// The shear parameters `(Φ_xy, Φ_xz)` of this beam's elements,
+    /// `12 EI_z / (κGA_y l²)` and `12 EI_y / (κGA_z l²)`; `(0, 0)` for
+    /// Euler–Bernoulli.
+    pub fn shear_parameters(&self) -> (f64, f64) {
+        match &self.shear {
+            None => (0.0, 0.0),
+            Some(s) => {
+                let l2 = self.element_length().powi(2);
+                (
+                    12.0 * self.ei_z / (s.kga_y * l2),
+                    12.0 * self.ei_y / (s.kga_z * l2),
+                )
+            }
+        }
+    }
+
+    /// The interpolation rows of this beam's elements at `ξ` (Timoshenko's
+    /// interdependent interpolation when the beam has [`Shear`]).
+    pub fn element_interpolation(&self, xi: f64) -> Interpolation {
+        let (pxy, pxz) = self.shear_parameters();
+        Self::interpolation_sheared(self.element_length(), xi, pxy, pxz)
+    }
+
+    /// The interpolation rows of an element of length `l` at `ξ` with the
+    /// shear parameters `Φ_xy`, `Φ_xz` (0: the Hermite cubics of
+    /// Euler–Bernoulli, exactly; see the module docs).
+    pub fn interpolation_sheared(l: f64, xi: f64, phi_xy: f64, phi_xz: f64) -> Interpolation {
+        let pxy = plane_shapes(l, xi, phi_xy);
+        let pxz = plane_shapes(l, xi, phi_xz);
         // Element dofs of bending in x–y (u_y, θ_z) and x–z (u_z, θ_y, with −).
         let xy = [1, 5, 7, 11];
         let xz = [2, 4, 8, 10];
@@ -272,6 +374,8 @@ impl Beam {
         let mut twist = SVector::<f64, 12>::zeros();
         let mut kxy = SVector::<f64, 12>::zeros();
         let mut kxz = SVector::<f64, 12>::zeros();
+        let mut slope = SMatrix::<f64, 2, 12>::zeros();
+        let mut rate = SMatrix::<f64, 2, 12>::zeros();
         t[(0, 0)] = 1.0 - xi;
         t[(0, 6)] = xi;
         r[(0, 3)] = 1.0 - xi;
@@ -281,12 +385,16 @@ impl Beam {
         twist[3] = -1.0 / l;
         twist[9] = 1.0 / l;
         for a in 0..4 {
-            t[(1, xy[a])] = n[a];
-            t[(2, xz[a])] = sz[a] * n[a];
-            r[(2, xy[a])] = d[a]; // θ_z = u_y'
-            r[(1, xz[a])] = -sz[a] * d[a]; // θ_y = −u_z'
-            kxy[xy[a]] = dd[a];
-            kxz[xz[a]] = sz[a] * dd[a];
+            t[(1, xy[a])] = pxy.v[a];
+            t[(2, xz[a])] = sz[a] * pxz.v[a];
+            r[(2, xy[a])] = pxy.psi[a]; // θ_z = ψ_xy (= u_y' for Euler–Bernoulli)
+            r[(1, xz[a])] = -sz[a] * pxz.psi[a]; // θ_y = −ψ_xz (= −u_z')
+            kxy[xy[a]] = pxy.dpsi[a];
+            kxz[xz[a]] = sz[a] * pxz.dpsi[a];
+            slope[(0, xy[a])] = pxy.dv[a];
+            slope[(1, xz[a])] = sz[a] * pxz.dv[a];
+            rate[(0, xy[a])] = pxy.ddpsi[a];
+            rate[(1, xz[a])] = sz[a] * pxz.ddpsi[a];
         }
         Interpolation {
             translation: t,
@@ -295,32 +403,48 @@ impl Beam {
             twist,
             curvature_xy: kxy,
             curvature_xz: kxz,
+            slope,
+            curvature_rate: rate,
         }
     }
 
-    /// Consistent element mass `M_e = ∫ ρA NᵀN + ρI_p N_θxᵀ N_θx dx`.
+    /// Consistent element mass `M_e = ∫ ρA NᵀN + ρI_p N_θxᵀ N_θx dx`, for
+    /// Timoshenko plus the rotary inertia `∫ ρI_y N_θyᵀ N_θy + ρI_z N_θzᵀ N_θz dx`.
     pub fn element_mass(&self) -> ElementMatrix {
         let l = self.element_length();
         let mut m = ElementMatrix::zeros();
         for (xi, w) in GAUSS4 {
-            let s = Self::interpolation(l, xi);
+            let s = self.element_interpolation(xi);
             let rx = s.rotation.row(0);
             m += (s.translation.transpose() * s.translation) * (self.rho_a * w * l)
                 + (rx.transpose() * rx) * (self.rho_ip * w * l);
+            if let Some(sh) = &self.shear {
+                let (ry, rz) = (s.rotation.row(1), s.rotation.row(2));
+                m += (ry.transpose() * ry) * (sh.rho_iy * w * l)
+                    + (rz.transpose() * rz) * (sh.rho_iz * w * l);
+            }
         }
         m
     }
 
-    /// Element stiffness: axial `EA`, torsion `GJ`, bending `EI_z` (x–y) and `EI_y` (x–z).
+    /// Element stiffness: axial `EA`, torsion `GJ`, bending `EI_z` (x–y) and
+    /// `EI_y` (x–z), for Timoshenko plus the shear `κGA_y γ_xy² + κGA_z γ_xz²`
+    /// with `γ_xy = u_y' − θ_z`, `γ_xz = u_z' + θ_y`.
     pub fn element_stiffness(&self) -> ElementMatrix {
         let l = self.element_length();
         let mut k = ElementMatrix::zeros();
         for (xi, w) in GAUSS4 {
-            let s = Self::interpolation(l, xi);
+            let s = self.element_interpolation(xi);
             k += (s.axial_strain * s.axial_strain.transpose()) * (self.ea * w * l)
                 + (s.twist * s.twist.transpose()) * (self.gj * w * l)
                 + (s.curvature_xy * s.curvature_xy.transpose()) * (self.ei_z * w * l)
                 + (s.curvature_xz * s.curvature_xz.transpose()) * (self.ei_y * w * l);
+            if let Some(sh) = &self.shear {
+                let gxy = (s.slope.row(0) - s.rotation.row(2)).transpose();
+                let gxz = (s.slope.row(1) + s.rotation.row(1)).transpose();
+                k += (gxy * gxy.transpose()) * (sh.kga_y * w * l)
+                    + (gxz * gxz.transpose()) * (sh.kga_z * w * l);
+            }
         }
         k
     }
@@ -333,10 +457,9 @@ impl Beam {
         let x0 = self.node_x(e);
         let mut k = ElementMatrix::zeros();
         for (xi, w) in GAUSS4 {
-            let s = Self::interpolation(l, xi);
+            let s = self.element_interpolation(xi);
             let p = axial_force(x0 + xi * l);
-            let vy = s.rotation.row(2); // u_y'
-            let vz = s.rotation.row(1); // −u_z' (the sign drops out of the square)
+            let (vy, vz) = (s.slope.row(0), s.slope.row(1)); // u_y', u_z'
             k += (vy.transpose() * vy + vz.transpose() * vz) * (p * w * l);
         }
         k
@@ -407,7 +530,7 @@ impl Beam {
     /// (nodal vectors, `6(n+1)` rows): the FE interpolation of the mode shapes.
     pub fn section(&self, x: f64, shapes: &DMatrix<f64>) -> Section {
         let (e, xi) = self.locate(x);
-        let s = Self::interpolation(self.element_length(), xi);
+        let s = self.element_interpolation(xi);
         let local = shapes.rows(6 * e, 12);
         Section {
             translation: s.translation * local,
@@ -439,6 +562,88 @@ impl Beam {
             Deformation::BendingXy,
             Deformation::BendingXz,
         ][best]
+    }
+}
+
+/// The shape functions of one bending plane on `(v_a, ψ_a, v_b, ψ_b)`
+/// (`ψ` the section rotation, `v` the transverse displacement) and their
+/// `x`-derivatives.
+struct PlaneShapes {
+    v: [f64; 4],
+    dv: [f64; 4],
+    psi: [f64; 4],
+    dpsi: [f64; 4],
+    ddpsi: [f64; 4],
+}
+
+/// Hermite cubics for `Φ = 0` (`ψ = v'`), else the interdependent
+/// interpolation of Timoshenko's beam (Friedman and Kosmatka 1993; the
+/// module docs), which tends to the Hermite cubics as `Φ → 0`.
+fn plane_shapes(l: f64, xi: f64, phi: f64) -> PlaneShapes {
+    let (x2, x3) = (xi * xi, xi * xi * xi);
+    if phi == 0.0 {
+        let d = [
+            (-6.0 * xi + 6.0 * x2) / l,
+            1.0 - 4.0 * xi + 3.0 * x2,
+            (6.0 * xi - 6.0 * x2) / l,
+            3.0 * x2 - 2.0 * xi,
+        ];
+        return PlaneShapes {
+            v: [
+                1.0 - 3.0 * x2 + 2.0 * x3,
+                l * (xi - 2.0 * x2 + x3),
+                3.0 * x2 - 2.0 * x3,
+                l * (x3 - x2),
+            ],
+            dv: d,
+            psi: d,
+            dpsi: [
+                (-6.0 + 12.0 * xi) / (l * l),
+                (-4.0 + 6.0 * xi) / l,
+                (6.0 - 12.0 * xi) / (l * l),
+                (-2.0 + 6.0 * xi) / l,
+            ],
+            ddpsi: [
+                12.0 / l.powi(3),
+                6.0 / (l * l),
+                -12.0 / l.powi(3),
+                6.0 / (l * l),
+            ],
+        };
+    }
+    let p = 1.0 / (1.0 + phi);
+    let h = 0.5 * phi;
+    PlaneShapes {
+        v: [
+            p * (2.0 * x3 - 3.0 * x2 - phi * xi + 1.0 + phi),
+            p * l * (x3 - (2.0 + h) * x2 + (1.0 + h) * xi),
+            p * (-2.0 * x3 + 3.0 * x2 + phi * xi),
+            p * l * (x3 - (1.0 - h) * x2 - h * xi),
+        ],
+        dv: [
+            p * (6.0 * x2 - 6.0 * xi - phi) / l,
+            p * (3.0 * x2 - (4.0 + phi) * xi + 1.0 + h),
+            p * (-6.0 * x2 + 6.0 * xi + phi) / l,
+            p * (3.0 * x2 - (2.0 - phi) * xi - h),
+        ],
+        psi: [
+            p * 6.0 * (x2 - xi) / l,
+            p * (3.0 * x2 - (4.0 + phi) * xi + 1.0 + phi),
+            -p * 6.0 * (x2 - xi) / l,
+            p * (3.0 * x2 - (2.0 - phi) * xi),
+        ],
+        dpsi: [
+            p * 6.0 * (2.0 * xi - 1.0) / (l * l),
+            p * (6.0 * xi - 4.0 - phi) / l,
+            -p * 6.0 * (2.0 * xi - 1.0) / (l * l),
+            p * (6.0 * xi - 2.0 + phi) / l,
+        ],
+        ddpsi: [
+            p * 12.0 / (l * l * l),
+            p * 6.0 / (l * l),
+            -p * 12.0 / (l * l * l),
+            p * 6.0 / (l * l),
+        ],
     }
 }
 

@@ -22,13 +22,15 @@
 //!        ⎣ sym                 M_ff   ⎦
 //!
 //! Q_v,R = −A (ω̃ ω̃ (I₁ + S̄ q_f) + 2 ω̃ S̄ q̇_f)
-//! Q_v,θ = −ω̃ Ī_θθ ω − 2 (tr C_v 1 − C_vᵀ) ω − ω̃ e_x (c_p · q̇_f),   C_v = ∫ρ ū (S q̇_f)ᵀ dV
+//! Q_v,θ = −ω̃ Ī_θθ ω − 2 (tr C_v 1 − C_vᵀ) ω − ω̃ c_s q̇_f,   C_v = ∫ρ ū (S q̇_f)ᵀ dV
 //! Q_v,f = −∫ρ Sᵀ ω̃ ω̃ ū dV − 2 ∫ρ Sᵀ ω̃ S dV q̇_f
 //!       = −Σ_ij (ω̃ω̃)_ij (X_ji + S̄_ij q_f) − 2 Σ_ij ω̃_ij S̄_ij q̇_f
 //! ```
 //!
 //! (`u × (ω × w) = ω (u·w) − w (u·ω)` gives `Q_v,θ`'s middle term; the first
-//! is `Σ m ũ ω̃ ω̃ ū = ω̃ Ī ω`.) With `k = 0` this is the rigid body's
+//! is `Σ m ũ ω̃ ω̃ ū = ω̃ Ī ω`; `c_s q̇_f = (c_p · q̇_f, c_r q̇_f)` is the
+//! sections' own angular momentum from the deformation rate: torsion, and
+//! the rotary inertia of Timoshenko beams.) With `k = 0` this is the rigid body's
 //! `[m 1, −A c̃; ·, Ī]` and `−(A ω̃ ω̃ c, ω̃ Ī ω)`.
 
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
@@ -78,7 +80,7 @@ pub fn quadratic_velocity(
     let cv = inv.rate_moment(q, qd);
     let q_t = -w * (inv.inertia_at(q) * omega)
         - 2.0 * (Matrix3::identity() * cv.trace() - cv.transpose()) * omega
-        - w * Vector3::x() * inv.spin_modes.dot(qd);
+        - w * inv.section_rate(qd);
     let q_f = -inv.modal_load(&ww, q) - inv.modal_quadratic(&w) * qd * 2.0;
     let mut out = DVector::zeros(6 + k);
     out.rows_mut(0, 3).copy_from(&q_r);

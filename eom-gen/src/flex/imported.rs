@@ -670,6 +670,8 @@ fn lumped_invariants(
         coupling: DMatrix::zeros(3, k),
         spin_inertia: 0.0,
         spin_modes: zv(),
+        rotary_inertia: [0.0; 2],
+        rotary_modes: DMatrix::zeros(2, k),
         modal_mass: zk(),
         modal_stiffness: zk(),
     };

@@ -12,6 +12,14 @@
 //! ```
 //!
 //! (bending rotary inertia is left out, as in the Euler–Bernoulli FE mass).
+//! A Timoshenko beam ([`super::beam::Shear`]) adds the rotary inertia of its
+//! sections in bending, `½ ∫ ρI_y (ω_y + φ_y q̇_f)² + ρI_z (ω_z + φ_z q̇_f)² dx`
+//! with `θ_y = φ_y q_f`, `θ_z = φ_z q_f` the section rotations `ψ` (not the
+//! slopes): `J_r = (∫ρI_y, ∫ρI_z)` joins `Ī` about `y` and `z`, `c_r =
+//! (∫ρI_y φ_yᵀ, ∫ρI_z φ_zᵀ)` joins rows `y`, `z` of `Ī_θf`, `M_r` joins
+//! `M_ff` (so `M_ff = Φᵀ M Φ` with the Timoshenko consistent mass), and
+//! the frame's moment equation gets `ω × (c_r q̇_f)` as it gets `ω × e_x
+//! (c_p · q̇_f)`. `S` is then the IIE displacement field of the axis.
 //! The integrals below are taken element by element with the 4-point Gauss
 //! rule of the FE matrices; the integrands are polynomials of degree ≤ 6, so
 //! they are exact, and `M_ff` equals `Φᵀ M Φ` with the consistent mass:
@@ -63,6 +71,12 @@ pub struct Invariants {
     pub spin_inertia: f64,
     /// `c_p = ∫ρI_p φ_xᵀ dx` (k).
     pub spin_modes: DVector<f64>,
+    /// `J_r = (∫ρI_y dx, ∫ρI_z dx)`, the sections' rotary inertia in bending
+    /// (Timoshenko beams; zero otherwise).
+    pub rotary_inertia: [f64; 2],
+    /// `c_r`: rows `∫ρI_y φ_yᵀ dx` and `∫ρI_z φ_zᵀ dx` (2×k; zero without
+    /// rotary inertia).
+    pub rotary_modes: DMatrix<f64>,
     /// `M_ff` (k×k).
     pub modal_mass: DMatrix<f64>,
     /// `K_ff` (k×k).
@@ -87,14 +101,17 @@ impl Invariants {
             coupling: DMatrix::zeros(3, k),
             spin_inertia: 0.0,
             spin_modes: zv(),
+            rotary_inertia: [0.0; 2],
+            rotary_modes: DMatrix::zeros(2, k),
             modal_mass: zk(),
             modal_stiffness: modes.stiffness.clone(),
         };
         let mut spin_mass = zk();
+        let rotary = beam.shear.map_or([0.0; 2], |s| [s.rho_iy, s.rho_iz]);
         for e in 0..beam.elements {
             let local = modes.shapes.rows(6 * e, 12);
             for (xi, w) in GAUSS4 {
-                let interp = Beam::interpolation(l, xi);
+                let interp = beam.element_interpolation(xi);
                 let s = interp.translation * local; // 3×k
                 let phi_x = interp.rotation.row(0) * local; // 1×k
                 let u0 = Vector3::new(beam.node_x(e) + xi * l, 0.0, 0.0);
@@ -113,10 +130,20 @@ impl Invariants {
                 inv.spin_inertia += dj;
                 inv.spin_modes += phi_x.transpose() * dj;
                 spin_mass += phi_x.transpose() * phi_x * dj;
+                for (r, rho_i) in rotary.iter().enumerate() {
+                    if *rho_i == 0.0 {
+                        continue;
+                    }
+                    let phi = interp.rotation.row(1 + r) * local; // 1×k
+                    let dr = rho_i * w * l;
+                    inv.rotary_inertia[r] += dr;
+                    let mut row = inv.rotary_modes.row_mut(r);
+                    row += &phi * dr;
+                    spin_mass += phi.transpose() * phi * dr;
+                }
             }
         }
-        let ex = Vector3::x();
-        inv.inertia = inertia_from(&inv.second_moment) + ex * ex.transpose() * inv.spin_inertia;
+        inv.inertia = inertia_from(&inv.second_moment) + inv.section_inertia();
         inv.coupling = inv.coupling_at(&DVector::zeros(k));
         inv.modal_mass = &inv.s_ij[0][0] + &inv.s_ij[1][1] + &inv.s_ij[2][2] + spin_mass;
         inv
@@ -146,10 +173,29 @@ impl Invariants {
         self.second_moment + x + x.transpose() + quad
     }
 
-    /// `Ī_θθ(q_f) = ∫ρ ũᵀ ũ dV + J_p e_x e_xᵀ`, the deformed body's inertia tensor.
+    /// `diag(J_p, J_r,y, J_r,z)`: the sections' own inertia (torsion, and
+    /// rotary inertia in bending for Timoshenko beams).
+    pub fn section_inertia(&self) -> Matrix3<f64> {
+        Matrix3::from_diagonal(&Vector3::new(
+            self.spin_inertia,
+            self.rotary_inertia[0],
+            self.rotary_inertia[1],
+        ))
+    }
+
+    /// `c_s q̇`: the sections' own angular momentum per unit `ω`-free rate,
+    /// `(c_p · q̇, c_r,y · q̇, c_r,z · q̇)`.
+    pub fn section_rate(&self, qd: &DVector<f64>) -> Vector3<f64> {
+        Vector3::new(
+            self.spin_modes.dot(qd),
+            self.rotary_modes.row(0).transpose().dot(qd),
+            self.rotary_modes.row(1).transpose().dot(qd),
+        )
+    }
+
+    /// `Ī_θθ(q_f) = ∫ρ ũᵀ ũ dV + diag(J_p, J_r)`, the deformed body's inertia tensor.
     pub fn inertia_at(&self, q: &DVector<f64>) -> Matrix3<f64> {
-        let ex = Vector3::x();
-        inertia_from(&self.second_moment_at(q)) + ex * ex.transpose() * self.spin_inertia
+        inertia_from(&self.second_moment_at(q)) + self.section_inertia()
     }
 
     /// `Ī_θf(q_f) = ∫ρ ũ S dV + e_x c_pᵀ` (3×k), with
@@ -162,6 +208,8 @@ impl Invariants {
         out.row_mut(2).copy_from(&(us(0, 1) - us(1, 0)).transpose());
         let mut first = out.row_mut(0);
         first += self.spin_modes.transpose();
+        let mut bending = out.rows_mut(1, 2);
+        bending += &self.rotary_modes;
         out
     }
 

@@ -8,7 +8,7 @@
 //! pipeline; the symbolic FFR terms inside the recursive algorithms will be
 //! checked against it.
 //!
-//! - [`beam`]: a straight 3-D Euler–Bernoulli beam, consistent FE mass,
+//! - [`beam`]: a straight 3-D Euler–Bernoulli (or Timoshenko) beam, consistent FE mass,
 //!   stiffness and geometric stiffness;
 //! - [`modes`]: reference conditions that fix the frame (Shabana 6.2), normal
 //!   modes and Craig–Bampton modes;
@@ -29,7 +29,7 @@ pub mod invariants;
 pub mod modes;
 pub mod ritz;
 
-pub use beam::{Beam, Deformation, NodeDof, Section};
+pub use beam::{Beam, Deformation, NodeDof, Section, Shear};
 pub use ffr::{mass_matrix, quadratic_velocity};
 pub use invariants::Invariants;
 pub use modes::{Basis, Dof, Modes, Reference, craig_bampton, normal_modes};

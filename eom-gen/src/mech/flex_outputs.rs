@@ -3,16 +3,17 @@
 //! the mode shapes, and the undeformed-plus-elastic place of a node.
 //!
 //! At `x` in element `e` (`ξ = (x − x_e)/l`), the rows `N(ξ)` of
-//! [`Beam::interpolation`] times the element's nodal shapes give the
+//! [`crate::flex::Beam::element_interpolation`] times the element's nodal shapes give the
 //! section's translation, small rotation, axial strain `u_x'`, twist
 //! `θ_x'`, curvatures `u_y''`, `u_z''`; the third derivatives of the
 //! Hermite cubics (constant in an element: `12/l³, 6/l², −12/l³, 6/l²`)
-//! give the shear forces. With cubic elements the moments are linear and
-//! the shear forces constant per element: exact for end loads, and for a
+//! give the shear forces. A Timoshenko beam's sections turn by `ψ`
+//! (its nodal rotations): its rotation output is `ψ`, its moments
+//! `EI ψ'` and its shear forces `κGA (v' − ψ)`. With cubic elements the
+//! moments are linear and the shear forces constant per element: exact for end loads, and for a
 //! distributed load `q` off by the element's fixed-end values
 //! (`q l²/12` in the moment, `q l/2` in the shear at an element end).
 
-use crate::flex::Beam;
 use crate::sym::{Scalar, Vec3};
 use crate::system::FlexInfo;
 use nalgebra::{DMatrix, SVector};
@@ -34,7 +35,7 @@ fn element(flex: &FlexInfo, x: f64) -> (f64, crate::flex::beam::Interpolation, D
     let (e, xi) = beam.locate(x);
     let l = beam.element_length();
     let local = flex.modes.shapes.rows(6 * e, 12).into_owned();
-    (l, Beam::interpolation(l, xi), local)
+    (l, beam.element_interpolation(xi), local)
 }
 
 /// `(u_x, u_y, u_z, θ_x, θ_y, θ_z)` of the section at `x` (body axes).
@@ -53,28 +54,33 @@ pub fn deformation<S: Scalar>(flex: &FlexInfo, x: f64, q: &[S]) -> [S; 6] {
 /// `(N, Q_y, Q_z, M_x, M_y, M_z)` at the section `x`, acting on the part
 /// `[0, x]` from the part beyond, body axes: `N = EA u_x'`,
 /// `Q_y = −EI_z u_y'''`, `Q_z = −EI_y u_z'''`, `M_x = GJ θ_x'`,
-/// `M_y = −EI_y u_z''`, `M_z = EI_z u_y''`.
+/// `M_y = −EI_y u_z''`, `M_z = EI_z u_y''`. For a Timoshenko beam the
+/// moments are those of the section rotations, `M_y = EI_y θ_y'`,
+/// `M_z = EI_z θ_z'`, and the shear forces those of the shear strains,
+/// `Q_y = κGA_y (u_y' − θ_z)`, `Q_z = κGA_z (u_z' + θ_y)` (constant per
+/// element, equal to `−M_z'` and `M_y'`).
 pub fn section_forces<S: Scalar>(flex: &FlexInfo, x: f64, q: &[S]) -> [S; 6] {
     let beam = &flex.beam;
-    let (l, s, local) = element(flex, x);
-    let ddd = [
-        12.0 / l.powi(3),
-        6.0 / (l * l),
-        -12.0 / l.powi(3),
-        6.0 / (l * l),
-    ];
-    let (xy, xz, sz) = ([1, 5, 7, 11], [2, 4, 8, 10], [1.0, -1.0, 1.0, -1.0]);
-    let mut vy = SVector::<f64, 12>::zeros();
-    let mut vz = SVector::<f64, 12>::zeros();
-    for a in 0..4 {
-        vy[xy[a]] = ddd[a];
-        vz[xz[a]] = sz[a] * ddd[a];
-    }
+    let (_, s, local) = element(flex, x);
     let k = |c: f64| S::from_f64(c);
+    let (qy, qz) = match &beam.shear {
+        None => (
+            -k(beam.ei_z) * combine(&s.curvature_rate.row(0).transpose(), &local, q),
+            -k(beam.ei_y) * combine(&s.curvature_rate.row(1).transpose(), &local, q),
+        ),
+        Some(sh) => {
+            let gxy = (s.slope.row(0) - s.rotation.row(2)).transpose();
+            let gxz = (s.slope.row(1) + s.rotation.row(1)).transpose();
+            (
+                k(sh.kga_y) * combine(&gxy, &local, q),
+                k(sh.kga_z) * combine(&gxz, &local, q),
+            )
+        }
+    };
     [
         k(beam.ea) * combine(&s.axial_strain, &local, q),
-        -k(beam.ei_z) * combine(&vy, &local, q),
-        -k(beam.ei_y) * combine(&vz, &local, q),
+        qy,
+        qz,
         k(beam.gj) * combine(&s.twist, &local, q),
         -k(beam.ei_y) * combine(&s.curvature_xz, &local, q),
         k(beam.ei_z) * combine(&s.curvature_xy, &local, q),

@@ -19,8 +19,9 @@
 //! - `P(q_f)`: `k` spatial forces, the momentum of unit `q̇_f`, moment
 //!   `Ī_θf(q_f)` and force `S̄`;
 //! - `b`: the velocity terms `v ×* I v` does not hold, force
-//!   `2 ω × S̄ q̇_f`, moment `2 (tr C_v 1 − C_vᵀ) ω + ω × e_x (c_p · q̇_f)`
-//!   with `C_v = ∫ρ ū (S q̇_f)ᵀ dV`;
+//!   `2 ω × S̄ q̇_f`, moment `2 (tr C_v 1 − C_vᵀ) ω + ω × (c_p · q̇_f, c_r q̇_f)`
+//!   with `C_v = ∫ρ ū (S q̇_f)ᵀ dV` (`c_r`: the sections' rotary inertia of
+//!   a Timoshenko beam, [`crate::flex::invariants`]);
 //! - `b_f = S̄ᵀ (ω × v_O) + ∫ρ Sᵀ ω̃ω̃ ū dV + 2 ∫ρ Sᵀ ω̃ S dV q̇_f`.
 //!
 //! With `stiffening`, the beam's foreshortening adds to `I`, `P`, `b` and
@@ -80,6 +81,9 @@ pub struct FlexModel<S> {
     pub x_s: [[Vec<S>; 3]; 3],
     /// `c_p` (k).
     pub spin: Vec<S>,
+    /// `c_r`: the rotary inertia of a Timoshenko beam's sections about `y`
+    /// and `z` per unit `q̇_f` (2 × k; zeros otherwise).
+    pub rotary: [Vec<S>; 2],
     /// `M_ff`.
     pub modal_mass: Vec<Vec<S>>,
     /// `K_ff`.
@@ -227,7 +231,12 @@ impl<S: Scalar> FlexModel<S> {
         let x_s = std::array::from_fn(|i| std::array::from_fn(|j| vector(&inv.x_s[i][j], &cx)));
         // `c_p` joins `Ī_θf`'s torsion row: the same scale as `X`, so that
         // without torsion modes it vanishes instead of keeping round-off.
-        let x_and_spin: Vec<f64> = all_x.iter().chain(inv.spin_modes.iter()).copied().collect();
+        let x_and_spin: Vec<f64> = all_x
+            .iter()
+            .chain(inv.spin_modes.iter())
+            .chain(inv.rotary_modes.iter())
+            .copied()
+            .collect();
         let cp = clean_block(&x_and_spin);
         let zeta = low.quantity(&flex.damping)?;
         let damping = if let Some((unit, fixed)) = flex.damping_matrices() {
@@ -310,6 +319,9 @@ impl<S: Scalar> FlexModel<S> {
             s_ij,
             x_s,
             spin: vector(&inv.spin_modes, &cp),
+            rotary: std::array::from_fn(|r| {
+                vector(&inv.rotary_modes.row(r).transpose().into_owned(), &cp)
+            }),
             modal_mass: matrix(&inv.modal_mass),
             stiffness: matrix(&inv.modal_stiffness),
             damping,
@@ -439,14 +451,15 @@ impl<S: Scalar> FlexModel<S> {
         }));
         let inertia_q = self.inertia + Mat3::identity().scale(dj.trace()) - dj;
         let h = self.first_moment + self.s_bar_times(q);
-        // Ī_θf column j: ∫ρ ũ S_j dV + e_x c_p,j with ∫ρ ū_b S_c = X_bc + S̄_cb q.
+        // Ī_θf column j: ∫ρ ũ S_j dV + (c_p,j, c_r,j) with ∫ρ ū_b S_c = X_bc + S̄_cb q.
         let us = |b: usize, c: usize, j: usize| self.x_s[b][c][j] + sq[c][b][j];
+        let plus = |a: S, b: S| if b.is_zero() { a } else { a + b };
         let coupling = (0..k)
             .map(|j| Force {
                 n: Vec3::new(
                     us(1, 2, j) - us(2, 1, j) + self.spin[j],
-                    us(2, 0, j) - us(0, 2, j),
-                    us(0, 1, j) - us(1, 0, j),
+                    plus(us(2, 0, j) - us(0, 2, j), self.rotary[0][j]),
+                    plus(us(0, 1, j) - us(1, 0, j), self.rotary[1][j]),
                 ),
                 f: self.s_bar[j],
             })
@@ -462,7 +475,11 @@ impl<S: Scalar> FlexModel<S> {
             n: (Mat3::identity().scale(cv.trace()) - cv.transpose())
                 .mul_vec(w)
                 .scale(two)
-                + w.cross(Vec3::new(spin_rate, S::zero(), S::zero())),
+                + w.cross(Vec3::new(
+                    spin_rate,
+                    dot(&self.rotary[0], qd),
+                    dot(&self.rotary[1], qd),
+                )),
             f: w.cross(sqdot).scale(two),
         };
         // b_f = S̄ᵀ(ω × v) + Σ_ab W_ab (X_ba + S̄_ab q) + 2 Σ_ab ω̃_ab S̄_ab q̇,  W = ω̃ω̃.

@@ -383,6 +383,10 @@ pub enum Flexible {
         /// fixed-interface normal modes (instead of `modes` normal modes).
         #[serde(default, skip_serializing_if = "is_false")]
         craig_bampton: bool,
+        /// Shear deformation and rotary inertia of the sections
+        /// (Timoshenko); absent = Euler–Bernoulli.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        shear: Option<BeamShear>,
     },
     /// Assumed modes (Rayleigh–Ritz; Shabana 5.1): a straight slender body
     /// along the body `x` axis from the origin to `x = length`, whose
@@ -505,6 +509,30 @@ impl std::fmt::Display for NodeRef {
             NodeRef::Name(n) => write!(f, "`{n}`"),
         }
     }
+}
+
+/// Shear deformation of a built-in beam.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum BeamShear {
+    /// Timoshenko's beam: sections rotate independently of the axis' slope,
+    /// resisted by the shear stiffnesses, and carry rotary inertia.
+    Timoshenko {
+        /// Effective shear stiffness for shear along `y` (bending in the
+        /// `x–y` plane, with `ei_z`), `κ_y G A`, N.
+        kga_y: Num,
+        /// Effective shear stiffness for shear along `z` (bending in the
+        /// `x–z` plane, with `ei_y`), `κ_z G A`, N.
+        kga_z: Num,
+        /// Rotary inertia per length about `y`, `ρI_y`, kg m (≥ 0);
+        /// absent = `rho_a · ei_y / ea` (a homogeneous section).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rho_iy: Option<Num>,
+        /// Rotary inertia per length about `z`, `ρI_z`, kg m (≥ 0);
+        /// absent = `rho_a · ei_z / ea` (a homogeneous section).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        rho_iz: Option<Num>,
+    },
 }
 
 /// Reference conditions of a built-in beam (Shabana 6.2).

@@ -474,6 +474,7 @@ impl Ctx<'_> {
             outputs: outputs?,
             grubler: Grubler {
                 dof: 0,
+                elastic: 0,
                 planar: false,
             },
             cables: cables?,
@@ -707,6 +708,7 @@ impl Ctx<'_> {
             damping,
             nodes: named_nodes,
             craig_bampton,
+            shear,
         } = flex
         else {
             return self.flexible_source(flex, body, path);
@@ -760,8 +762,18 @@ impl Ctx<'_> {
             "damping ratio",
             body,
         );
-        let (true, Some(damping)) = (written.len() == 7, damping) else {
+        let sheared = match shear {
+            None => Some(None),
+            Some(sh) => self
+                .beam_shear(sh, &written, *stiffening, body, &fpath)
+                .map(Some),
+        };
+        let (true, Some(damping), Some(sheared)) = (written.len() == 7, damping, sheared) else {
             return None;
+        };
+        let (shear, shear_written) = match sheared {
+            Some((sh, q)) => (Some(sh), q),
+            None => (None, Vec::new()),
         };
         if *craig_bampton && named_nodes.is_empty() {
             self.error(
@@ -784,7 +796,9 @@ impl Ctx<'_> {
             ei_z: written[5].value,
             gj: written[6].value,
             elements: *elements,
+            shear,
         };
+        written.extend(shear_written);
         let reference = match reference {
             spec::BeamReference::Clamped => crate::flex::Reference::Clamped,
             spec::BeamReference::PinnedPinned => crate::flex::Reference::PinnedPinned,
@@ -840,6 +854,96 @@ impl Ctx<'_> {
             u_index: 0,
             span: self.span(&fpath),
         }))
+    }
+
+    /// A beam's Timoshenko data (`shear`), checked: positive shear
+    /// stiffnesses, rotary inertias zero or positive (absent: `ρA EI / EA`
+    /// of a homogeneous section, from `written`, the seven beam numbers when
+    /// all are valid), and no stiffening. The data and the quantities as
+    /// written, or `None` when something is wrong (reported).
+    fn beam_shear(
+        &mut self,
+        shear: &spec::BeamShear,
+        written: &[Quantity],
+        stiffening: bool,
+        body: &str,
+        fpath: &[Seg<'static>],
+    ) -> Option<(crate::flex::beam::Shear, Vec<Quantity>)> {
+        let spec::BeamShear::Timoshenko {
+            kga_y,
+            kga_z,
+            rho_iy,
+            rho_iz,
+        } = shear;
+        let spath = join(fpath, &[f("shear")]);
+        let mut ok = true;
+        if stiffening {
+            self.error(
+                &join(fpath, &[f("stiffening")]),
+                format!(
+                    "flexible body `{body}` asks for geometric stiffening of a Timoshenko beam (`shear`)"
+                ),
+                "stiffening is only built for Euler–Bernoulli beams: with shear the axial load's \
+                 geometric stiffness is not unique (Engesser's and Haringx's forms differ), and eom's \
+                 foreshortening terms are checked for Euler–Bernoulli only; leave out `stiffening` or `shear`",
+            );
+            ok = false;
+        }
+        let mut quantities = Vec::new();
+        let mut values = [0.0; 4];
+        for (slot, (name, num)) in [("kga_y", kga_y), ("kga_z", kga_z)].into_iter().enumerate() {
+            let at = join(&spath, &[f(name)]);
+            match self.quantity(num, &at, Scope::Params) {
+                Some(q) if q.value <= 0.0 => {
+                    self.error(
+                        &at,
+                        format!(
+                            "shear stiffness `{name}` of flexible body `{body}` is {} N",
+                            q.value
+                        ),
+                        "a Timoshenko beam needs a positive shear stiffness κGA (N); \
+                         for a rectangle κ = 5/6, for a solid circle κ = 0.9 (or 6/7)",
+                    );
+                    ok = false;
+                }
+                Some(q) => {
+                    values[slot] = q.value;
+                    quantities.push(q);
+                }
+                None => ok = false,
+            }
+        }
+        // Written index of the bending stiffness of each rotary inertia: ei_y, ei_z.
+        for (slot, (name, num, ei)) in [("rho_iy", rho_iy, 4), ("rho_iz", rho_iz, 5)]
+            .into_iter()
+            .enumerate()
+        {
+            match num {
+                Some(num) => {
+                    let what = "rotary inertia per length";
+                    match self.nonnegative(num, &join(&spath, &[f(name)]), what, body) {
+                        Some(q) => {
+                            values[2 + slot] = q.value;
+                            quantities.push(q);
+                        }
+                        None => ok = false,
+                    }
+                }
+                None if written.len() == 7 => {
+                    values[2 + slot] = written[1].value * written[ei].value / written[3].value;
+                }
+                None => {}
+            }
+        }
+        ok.then_some((
+            crate::flex::beam::Shear {
+                kga_y: values[0],
+                kga_z: values[1],
+                rho_iy: values[2],
+                rho_iz: values[3],
+            },
+            quantities,
+        ))
     }
 
     /// The names of a flexible body's `k` elastic coordinates
@@ -2321,8 +2425,16 @@ pub(crate) fn grubler(sys: &System, poses: &[Pose<f64>]) -> Grubler {
     for c in &sys.constraints {
         dof -= c.equations().0 as i64;
     }
+    // Every elastic coordinate of a flexible body is a freedom of its own.
+    let elastic: i64 = sys
+        .bodies
+        .iter()
+        .filter_map(|b| b.flexible.as_deref())
+        .map(|f| f.count() as i64)
+        .sum();
     Grubler {
-        dof,
+        dof: dof + elastic,
+        elastic,
         planar: planar_normal.is_some(),
     }
 }

@@ -266,6 +266,7 @@ impl Ctx<'_> {
             ei_z: v(5),
             gj: v(6),
             elements: 1,
+            shear: None,
         };
         let shape = |j: usize, part: Part, order: usize, x: f64| -> Option<f64> {
             match &parsed[j][part as usize] {
@@ -519,6 +520,7 @@ impl Ctx<'_> {
             ei_z: 0.0,
             gj: 0.0,
             elements: body_data.positions.len().saturating_sub(1).max(1),
+            shear: None,
         };
         let positions: Vec<Vector3<f64>> = body_data.positions;
         let named: Vec<(String, usize)> = body_data
