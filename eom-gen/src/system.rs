@@ -103,8 +103,13 @@ pub struct MarkerInfo {
 pub struct FlexInfo {
     /// The beam's data as written (length, `ρA`, `ρI_p`, `EA`, `EI_y`,
     /// `EI_z`, `GJ`), in that order; for assumed modes then the shape
-    /// expressions; none for imported data. None may be tunable.
+    /// expressions; none for imported data. The six section data may be
+    /// tunable (see `shares`); the length and the shapes may not.
     pub written: Vec<Quantity>,
+    /// The shares of the reduced matrices per section datum, which make
+    /// tunable section data exact for the kept basis (`None` for imported
+    /// data, which have no section data).
+    pub shares: Option<crate::flex::invariants::Shares>,
     /// Where the shape functions come from. `beam`, `reference` and
     /// `modes.shapes` describe a built-in beam only for [`FlexSource::Beam`].
     pub source: FlexSource,

@@ -53,9 +53,10 @@ pub fn deformation<S: Scalar>(flex: &FlexInfo, x: f64, q: &[S]) -> [S; 6] {
 /// `(N, Q_y, Q_z, M_x, M_y, M_z)` at the section `x`, acting on the part
 /// `[0, x]` from the part beyond, body axes: `N = EA u_x'`,
 /// `Q_y = −EI_z u_y'''`, `Q_z = −EI_y u_z'''`, `M_x = GJ θ_x'`,
-/// `M_y = −EI_y u_z''`, `M_z = EI_z u_y''`.
-pub fn section_forces<S: Scalar>(flex: &FlexInfo, x: f64, q: &[S]) -> [S; 6] {
-    let beam = &flex.beam;
+/// `M_y = −EI_y u_z''`, `M_z = EI_z u_y''`, with `stiffness` the section's
+/// `EA`, `EI_y`, `EI_z`, `GJ` (runtime fields where tunable).
+pub fn section_forces<S: Scalar>(flex: &FlexInfo, stiffness: &[S; 4], x: f64, q: &[S]) -> [S; 6] {
+    let [ea, ei_y, ei_z, gj] = *stiffness;
     let (l, s, local) = element(flex, x);
     let ddd = [
         12.0 / l.powi(3),
@@ -70,14 +71,13 @@ pub fn section_forces<S: Scalar>(flex: &FlexInfo, x: f64, q: &[S]) -> [S; 6] {
         vy[xy[a]] = ddd[a];
         vz[xz[a]] = sz[a] * ddd[a];
     }
-    let k = |c: f64| S::from_f64(c);
     [
-        k(beam.ea) * combine(&s.axial_strain, &local, q),
-        -k(beam.ei_z) * combine(&vy, &local, q),
-        -k(beam.ei_y) * combine(&vz, &local, q),
-        k(beam.gj) * combine(&s.twist, &local, q),
-        -k(beam.ei_y) * combine(&s.curvature_xz, &local, q),
-        k(beam.ei_z) * combine(&s.curvature_xy, &local, q),
+        ea * combine(&s.axial_strain, &local, q),
+        -ei_z * combine(&vy, &local, q),
+        -ei_y * combine(&vz, &local, q),
+        gj * combine(&s.twist, &local, q),
+        -ei_y * combine(&s.curvature_xz, &local, q),
+        ei_z * combine(&s.curvature_xy, &local, q),
     ]
 }
 

@@ -823,9 +823,11 @@ impl Ctx<'_> {
             }
         };
         let invariants = crate::flex::Invariants::new(&beam, &reduced);
+        let shares = crate::flex::invariants::Shares::of_beam(&beam, &reduced);
         let (coordinate_names, speed_names) = self.elastic_names(body, path, reduced.count())?;
         Some(Box::new(FlexInfo {
             written,
+            shares: Some(shares),
             source: crate::system::FlexSource::Beam,
             beam,
             reference,

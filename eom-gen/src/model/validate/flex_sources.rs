@@ -330,6 +330,7 @@ impl Ctx<'_> {
         Some(Box::new(FlexInfo {
             nodes: Vec::new(),
             written,
+            shares: Some(reduced.shares.clone()),
             source: FlexSource::Assumed {
                 shapes: shape_exprs,
                 geometric: reduced.geometric.clone(),
@@ -448,6 +449,7 @@ impl Ctx<'_> {
         Some(Box::new(FlexInfo {
             nodes: named,
             written: Vec::new(),
+            shares: None,
             source: FlexSource::Modal {
                 path: shown_str,
                 positions,
