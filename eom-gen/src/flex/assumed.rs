@@ -30,8 +30,8 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix3xX, Vector3};
 
-use super::ritz::{Ritz, RitzError};
 use super::invariants::Shares;
+use super::ritz::{Ritz, RitzError};
 use super::{Basis, Beam, Invariants, Modes, Section};
 use crate::expr::Ast;
 

@@ -275,8 +275,7 @@ fn separate_blocks(
     let mut start = 0;
     while start < omega2.len() {
         let mut end = start + 1;
-        while end < omega2.len()
-            && (omega2[end] - omega2[start]).abs() <= 1e-9 * omega2[end].abs()
+        while end < omega2.len() && (omega2[end] - omega2[start]).abs() <= 1e-9 * omega2[end].abs()
         {
             end += 1;
         }
@@ -405,8 +404,7 @@ pub fn craig_bampton(
         })?;
         -chol.solve(&pick(&kk, &iset, &bset))
     };
-    let (phi, fixed_omega2) =
-        lowest(&kii, &pick(&m, &iset, &iset), k, "the fixed-interface beam")?;
+    let (phi, fixed_omega2) = lowest(&kii, &pick(&m, &iset, &iset), k, "the fixed-interface beam")?;
     let nb = bset.len();
     let mut shapes = DMatrix::zeros(n, nb + k);
     for (c, &i) in bset.iter().enumerate() {

@@ -21,14 +21,15 @@
 //! lower, the model still holds the kept ones exactly but not the lowest.
 //!
 //! Not tunable (a located error): the length (the mesh, the nodes, the
-//! quadrature interval), the shape expressions of assumed modes, and a
+//! quadrature interval), a named node's `x`, the shape expressions of
+//! assumed modes, and a
 //! damping ratio on a basis that is not the beam's normal modes
 //! (Craig–Bampton, assumed modes: their modal damping needs the normal
 //! modes of the reduced body, which change with the data).
 
 use super::tree::{Lowering, MechError};
 use crate::sym::Scalar;
-use crate::system::FlexInfo;
+use crate::system::{FlexInfo, FlexSource};
 
 /// The section data in the order of [`FlexInfo::written`] after the length.
 pub const RHO_A: usize = 0;
@@ -72,12 +73,24 @@ impl<S: Scalar> SectionScales<S> {
                 length.span,
             ));
         }
-        if let Some(shape) = flex.written.iter().skip(7).find(|q| low.uses_tunable(&q.expr)) {
-            return Err(refuse(
-                "shapes",
-                "the shape functions are integrated once, at the defaults",
-                shape.span,
-            ));
+        if let Some(q) = flex
+            .written
+            .iter()
+            .skip(7)
+            .find(|q| low.uses_tunable(&q.expr))
+        {
+            return Err(match flex.source {
+                FlexSource::Assumed { .. } => refuse(
+                    "shapes",
+                    "the shape functions are integrated once, at the defaults",
+                    q.span,
+                ),
+                _ => refuse(
+                    "nodes",
+                    "a node sits at a finite-element node of the mesh built at the defaults",
+                    q.span,
+                ),
+            });
         }
         let b = &flex.beam;
         let defaults = [b.rho_a, b.rho_ip, b.ea, b.ei_y, b.ei_z, b.gj];

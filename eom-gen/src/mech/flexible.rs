@@ -182,7 +182,7 @@ fn tunable_damping<S: Scalar>(
         return Err(MechError::TunableFlex {
             body: body.to_string(),
             field: "damping",
-            why: "with tunable section data, modal damping needs the beam's normal modes (not Craig–Bampton, assumed or imported modes), whose shapes do not change with the data",
+            why: "modal damping needs the reduced body's normal modes, which change with the data unless the basis is the beam's own normal modes (not Craig–Bampton or assumed modes)",
             span: flex.damping.span,
         });
     }
@@ -287,10 +287,7 @@ impl<S: Scalar> FlexModel<S> {
                     .map(|c| {
                         sc.entry(
                             inv.modal_mass[(r, c)],
-                            &[
-                                (RHO_A, translational[(r, c)]),
-                                (RHO_IP, spin_mass[(r, c)]),
-                            ],
+                            &[(RHO_A, translational[(r, c)]), (RHO_IP, spin_mass[(r, c)])],
                             &cm,
                         )
                     })

@@ -131,7 +131,9 @@ impl MechError {
             MechError::TunableAxis { .. } => {
                 "make the parameters in the axis fixed (`tunable: false`, or `fixed` in a scene)"
             }
-            MechError::TunableFlex { field: "damping", .. } => {
+            MechError::TunableFlex {
+                field: "damping", ..
+            } => {
                 "give `damping: 0`, or make the section data fixed (`tunable: false`, or `fixed` in a scene)"
             }
             MechError::TunableFlex { .. } => {
@@ -155,6 +157,15 @@ impl fmt::Display for MechError {
             MechError::TunableAxis { joint, .. } => write!(
                 f,
                 "the axis of joint `{joint}` depends on a tunable parameter; joint axes must be fixed"
+            ),
+            MechError::TunableFlex {
+                body,
+                field: "damping",
+                why,
+                ..
+            } => write!(
+                f,
+                "the `damping` of flexible body `{body}` cannot be kept with tunable section data: {why}"
             ),
             MechError::TunableFlex {
                 body, field, why, ..
