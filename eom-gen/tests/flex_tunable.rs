@@ -556,3 +556,38 @@ fn flex_tunable_fields_that_cannot_follow_are_refused_where_written() {
     );
     Numeric::new(&system(cb)).expect("undamped Craig–Bampton with tunable data");
 }
+
+/// The emitted Rust reads the section data from the parameter struct at
+/// run time (fields with the defaults; the modal damping as
+/// `2 ζ √(K_ii M_ii)`), and leaves them inlined when they are fixed.
+#[test]
+fn flex_tunable_section_data_are_fields_of_the_generated_struct() {
+    let g = eom_gen::generate(&Source::new(
+        "hub_beam.ron",
+        model(&beam(), &DEFAULTS, true, 0.02),
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    for name in NAMES.iter().chain(&["zeta"]) {
+        assert!(
+            g.source.contains(&format!("pub {name}: f64,")),
+            "field `{name}`"
+        );
+        assert!(
+            g.source.contains(&format!("self.params.{name}")),
+            "`{name}` is read at run time"
+        );
+    }
+    assert!(
+        g.source.contains("sqrt"),
+        "the modal damping's √(K_ii M_ii)"
+    );
+    let fixed = eom_gen::generate(&Source::new(
+        "hub_beam.ron",
+        model(&beam(), &DEFAULTS, false, 0.02),
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        !fixed.source.contains("self.params.rho_a"),
+        "fixed data are inlined"
+    );
+}
