@@ -37,6 +37,9 @@ fn join(path: &[Seg<'static>], more: &[Seg<'static>]) -> Path {
 
 mod flex_sources;
 
+/// A beam's named nodes, `(name, node index)`.
+type NamedNodes = Vec<(String, usize)>;
+
 /// Which names an expression may use.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Scope {
@@ -826,7 +829,6 @@ impl Ctx<'_> {
         let shares = crate::flex::invariants::Shares::of_beam(&beam, &reduced);
         let (coordinate_names, speed_names) = self.elastic_names(body, path, reduced.count())?;
         // After the seven section data, the nodes' places (none may be tunable).
-        let mut written = written;
         written.extend(places);
         Some(Box::new(FlexInfo {
             written,
@@ -882,7 +884,7 @@ impl Ctx<'_> {
         elements: usize,
         body: &str,
         fpath: &[Seg<'static>],
-    ) -> Option<(Vec<(String, usize)>, Vec<Quantity>)> {
+    ) -> Option<(NamedNodes, Vec<Quantity>)> {
         let mut out: Vec<(String, usize)> = Vec::new();
         let mut places = Vec::new();
         let mut ok = true;
