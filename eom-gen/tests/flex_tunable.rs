@@ -15,7 +15,7 @@
 //! cannot be tunable are refused at their place in the file.
 
 use eom_gen::System;
-use eom_gen::flex::Deformation;
+use eom_gen::flex::{Basis, Deformation};
 use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::mech::{Numeric, NumericEnv, formulate};
 use eom_gen::model::{Source, check};
@@ -121,11 +121,19 @@ fn kept_blocks(sys: &System) -> Vec<Deformation> {
 /// of each mode's block for the elastic coordinates, the sign that of the
 /// fixed model's shape against the tunable one's (the convention "largest
 /// entry positive" may pick either sign where two entries tie).
+/// With Craig–Bampton, the constraint modes (unit boundary motions, not
+/// mass-normalised) keep their scale: 1.
 fn scaling(tun: &System, fix: &System, runtime: &Data) -> Vec<f64> {
     let (ft, ff) = (
         tun.bodies[2].flexible.as_deref().unwrap(),
         fix.bodies[2].flexible.as_deref().unwrap(),
     );
+    let static_modes = match &ft.modes.basis {
+        Basis::CraigBampton {
+            constraint_modes, ..
+        } => *constraint_modes,
+        Basis::Normal => 0,
+    };
     let mut s = vec![1.0, 1.0];
     for (j, d) in kept_blocks(tun).into_iter().enumerate() {
         let m = if d == Deformation::Torsion { 1 } else { 0 };
@@ -135,7 +143,12 @@ fn scaling(tun: &System, fix: &System, runtime: &Data) -> Vec<f64> {
             .column(j)
             .dot(&ff.modes.shapes.column(j))
             .signum();
-        s.push(sign * (runtime[m] / DEFAULTS[m]).sqrt());
+        let size = if j < static_modes {
+            1.0
+        } else {
+            (runtime[m] / DEFAULTS[m]).sqrt()
+        };
+        s.push(sign * size);
     }
     s
 }
@@ -161,8 +174,75 @@ fn assert_close(what: &str, got: &[f64], want: &[f64], rel: f64) {
 /// by `s` (the shapes do not depend on the scale of a block's data).
 #[test]
 fn flex_tunable_beam_equals_the_beam_generated_at_those_values() {
-    let tun = system(model(&beam(), &DEFAULTS, true, 0.02));
-    let fix = system(model(&beam(), &RUNTIME, false, 0.02));
+    tunable_equals_fixed(&beam(), 0.02);
+}
+
+/// Craig–Bampton alike (undamped): the constraint modes are unit boundary
+/// motions with interior shapes `−K_ii⁻¹ K_ib` of their own deformation,
+/// independent of the data's scale; the fixed-interface modes scale as
+/// normal modes. And the outputs (section forces, strain energy) follow
+/// the runtime stiffness.
+#[test]
+fn flex_tunable_craig_bampton_and_outputs_equal_those_generated_at_those_values() {
+    let cb = beam().replace(
+        "modes: 6,",
+        "modes: 3, nodes: [(name: \"tip\", x: 2.0)], craig_bampton: true,",
+    );
+    tunable_equals_fixed(&cb, 0.0);
+    let with_outputs = |text: String| {
+        text.replace(
+            "    joints: [",
+            "    outputs: [SectionForces(name: \"a\", body: \"beam\", x: 0.5), \
+             SectionForces(name: \"b\", body: \"beam\", x: 1.25), \
+             ElasticEnergy(body: \"beam\")],\n    joints: [",
+        )
+    };
+    let tun = system(with_outputs(model(&beam(), &DEFAULTS, true, 0.0)));
+    let fix = system(with_outputs(model(&beam(), &RUNTIME, false, 0.0)));
+    let s = scaling(&tun, &fix, &RUNTIME);
+    let runtime: Vec<(String, f64)> = NAMES
+        .iter()
+        .zip(RUNTIME)
+        .map(|(n, v)| (n.to_string(), v))
+        .collect();
+    let run = |sys: &System, q: &[f64], params: &[(String, f64)]| {
+        let f = formulate(sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
+        let zero = vec![0.0; 8];
+        let point = eom_gen::interpret::Point {
+            sys,
+            q,
+            u: &zero,
+            udot: &zero,
+            tau: &zero,
+            inputs: &[],
+            params,
+            multipliers: &[],
+            t: 0.0,
+        };
+        eom_gen::interpret::run(f.program(Function::Outputs).expect("outputs"), &point)
+    };
+    let mut seed = 31;
+    let q: Vec<f64> = (0..8).map(|_| 0.01 * rand(&mut seed)).collect();
+    let tq: Vec<f64> = q.iter().zip(&s).map(|(x, s)| x * s).collect();
+    let (a, b) = (run(&tun, &q, &runtime), run(&fix, &tq, &[]));
+    assert_eq!(a.len(), 13, "two sections of six and the strain energy");
+    assert_close("outputs", &a, &b, 1e-10);
+    // And they differ from the defaults' (the stiffness is read at run time).
+    let d = run(&tun, &q, &[]);
+    assert!(
+        (d[5] - a[5]).abs() > 1e-3 * a[5].abs(),
+        "M_z at a: defaults {}, runtime {}",
+        d[5],
+        a[5]
+    );
+}
+
+/// The model of `flexible` with tunable section data at [`RUNTIME`] is the
+/// model generated with [`RUNTIME`] fixed, in coordinates scaled by
+/// [`scaling`]; `zeta` the damping ratio of both.
+fn tunable_equals_fixed(flexible: &str, zeta: f64) {
+    let tun = system(model(flexible, &DEFAULTS, true, zeta));
+    let fix = system(model(flexible, &RUNTIME, false, zeta));
     assert_eq!(
         kept_blocks(&tun),
         kept_blocks(&fix),
@@ -173,7 +253,8 @@ fn flex_tunable_beam_equals_the_beam_generated_at_those_values() {
         tun.bodies[2].flexible.as_deref().unwrap(),
         fix.bodies[2].flexible.as_deref().unwrap(),
     );
-    for j in 0..6 {
+    let k = ft.count();
+    for j in 0..k {
         let a = ft.modes.shapes.column(j) / s[2 + j];
         let b = ff.modes.shapes.column(j);
         let rel = (&a - b).amax() / b.amax();
@@ -181,7 +262,7 @@ fn flex_tunable_beam_equals_the_beam_generated_at_those_values() {
     }
     let tn = at_runtime(&tun, &RUNTIME);
     let fx = Numeric::new(&fix).unwrap();
-    let n = 8;
+    let n = 2 + k;
     let mut seed = 17;
     for _ in 0..5 {
         let q: Vec<f64> = (0..n).map(|_| 0.3 * rand(&mut seed)).collect();
