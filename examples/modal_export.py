@@ -18,6 +18,14 @@ Input (the usual export of any FE code):
                     line, 6N numbers (the nodal shapes), used as they are.
   --damping ZETA    modal damping ratio of every mode written (default 0).
   --lumped-only     leave out the consistent-mass invariants (see below).
+  --geometric-centrifugal FILE, --geometric-axial FILE
+                    the assembled geometric stiffness matrices (Matrix Market)
+                    of the body's two unit axial inertia loads, for geometric
+                    stiffening (`stiffening: true` on the body): K_G under the
+                    axial force N₁(x) of spinning at Ω = 1 rad/s about an axis
+                    through the frame origin normal to the body's x axis, and
+                    under N₂(x) of a unit axial acceleration of the root (tip
+                    free, tension positive); both or neither.
   -o FILE           output, `.json` for JSON, anything else RON.
 
 What it writes (see docs/model-format.md, "Imported modal data"):
@@ -31,7 +39,9 @@ What it writes (see docs/model-format.md, "Imported modal data"):
     the nodal vectors of unit rigid translations and rotations about the origin:
     mass, first moment, inertia R_rᵀ M R_r, and per mode R_tᵀ M φ_j (S̄) and
     R_rᵀ M φ_j (Ī_θf⁰). With them eom reproduces the FE model's frequencies and
-    these invariants exactly (only the second-order terms stay lumped).
+    these invariants exactly (only the second-order terms stay lumped);
+  - `geometric_stiffness` (with the two --geometric-* files): Φᵀ K_G Φ of each,
+    symmetrised (the foreshortening matrices K₁, K₂ eom's stiffening needs).
 
 The eigenproblem K φ = ω² M φ on the free degrees of freedom is solved with
 numpy when it is installed, else by a plain-Python cyclic Jacobi method on
@@ -215,6 +225,8 @@ def main():
     p.add_argument("--given-modes")
     p.add_argument("--damping", type=float, default=0.0)
     p.add_argument("--lumped-only", action="store_true")
+    p.add_argument("--geometric-centrifugal")
+    p.add_argument("--geometric-axial")
     p.add_argument("-o", "--output", required=True)
     a = p.parse_args()
 
@@ -288,6 +300,16 @@ def main():
         data["modal_damping"] = damping
     if not a.lumped_only:
         data["consistent"] = consistent(m, nodes, shapes)
+    if bool(a.geometric_centrifugal) != bool(a.geometric_axial):
+        sys.exit("--geometric-centrifugal and --geometric-axial go together")
+    if a.geometric_centrifugal:
+        data["geometric_stiffness"] = {}
+        for key, path in (("centrifugal", a.geometric_centrifugal), ("axial", a.geometric_axial)):
+            g = read_mtx(path)
+            if len(g) != ndof:
+                sys.exit(f"{path}: {len(nodes)} nodes need a {ndof}×{ndof} matrix; got {len(g)}")
+            full = [[quad(g, shapes[i], shapes[j]) for j in range(kk)] for i in range(kk)]
+            data["geometric_stiffness"][key] = [[0.5 * (full[i][j] + full[j][i]) for j in range(kk)] for i in range(kk)]
     with open(a.output, "w") as f:
         if a.output.lower().endswith(".json"):
             json.dump(data, f, indent=1)
@@ -356,6 +378,13 @@ def to_ron(data):
         lines.append("        inertia: (" + ", ".join(tup(r) for r in c["inertia"]) + "),")
         lines.append("        s_bar: [" + ", ".join(tup(v) for v in c["s_bar"]) + "],")
         lines.append("        coupling: [" + ", ".join(tup(v) for v in c["coupling"]) + "],")
+        lines.append("    ),")
+    if "geometric_stiffness" in data:
+        g = data["geometric_stiffness"]
+        lines.append("    geometric_stiffness: (")
+        for key in ("centrifugal", "axial"):
+            rows = ", ".join("[" + ", ".join(repr(float(x)) for x in row) + "]" for row in g[key])
+            lines.append(f"        {key}: [{rows}],")
         lines.append("    ),")
     lines.append(")")
     return "\n".join(lines) + "\n"

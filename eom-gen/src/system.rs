@@ -102,10 +102,16 @@ pub struct MarkerInfo {
 #[derive(Clone, Debug, PartialEq)]
 pub struct FlexInfo {
     /// The beam's data as written (length, `ρA`, `ρI_p`, `EA`, `EI_y`,
-    /// `EI_z`, `GJ`), in that order (a Timoshenko beam's shear data as
-    /// written after them); for assumed modes then the shape
-    /// expressions; none for imported data. None may be tunable.
+    /// `EI_z`, `GJ`), in that order; then a Timoshenko beam's shear data
+    /// as written; then for a beam its named nodes' `x`, for assumed modes
+    /// the shape expressions; none for imported data. The six section data
+    /// may be tunable (see `shares`) unless the beam is a Timoshenko beam;
+    /// the length, the shear data, the nodes and the shapes may not.
     pub written: Vec<Quantity>,
+    /// The shares of the reduced matrices per section datum, which make
+    /// tunable section data exact for the kept basis (`None` for imported
+    /// data, which have no section data).
+    pub shares: Option<crate::flex::invariants::Shares>,
     /// Where the shape functions come from. `beam`, `reference` and
     /// `modes.shapes` describe a built-in beam only for [`FlexSource::Beam`].
     pub source: FlexSource,
@@ -159,10 +165,11 @@ impl FlexInfo {
         }
     }
 
-    /// For assumed modes, the foreshortening matrices `(K₁, K₂)`: the
-    /// geometric stiffness per `Ω²` of the centrifugal load and per unit
-    /// axial acceleration of the root (the beam's are computed from its FE
-    /// model, [`crate::flex::invariants::foreshortening`]).
+    /// For assumed modes and imported data, the foreshortening matrices
+    /// `(K₁, K₂)`: the geometric stiffness per `Ω²` of the centrifugal load
+    /// and per unit axial acceleration of the root (the beam's are computed
+    /// from its FE model, [`crate::flex::invariants::foreshortening`]; an
+    /// imported file's are its `geometric_stiffness`, if given).
     pub fn assumed_geometric_stiffness(&self) -> Option<(&DMatrix<f64>, &DMatrix<f64>)> {
         match &self.source {
             FlexSource::Assumed {
@@ -170,6 +177,10 @@ impl FlexInfo {
                 axial_geometric,
                 ..
             } => Some((geometric, axial_geometric)),
+            FlexSource::Modal {
+                geometric: Some((k1, k2)),
+                ..
+            } => Some((k1, k2)),
             _ => None,
         }
     }
@@ -255,6 +266,8 @@ pub enum FlexSource {
         damping_unit: DMatrix<f64>,
         /// `D_0`: the file's damping matrix (k×k, zeros if none).
         damping: DMatrix<f64>,
+        /// The file's foreshortening matrices `(K₁, K₂)`, if given.
+        geometric: Option<(DMatrix<f64>, DMatrix<f64>)>,
     },
 }
 

@@ -627,9 +627,10 @@ fn flex_generated_programs_equal_the_f64_algorithms() {
     }
 }
 
-/// The modes are computed once at the defaults: a beam whose data use a
+/// The mesh is built once at the defaults: a beam whose length uses a
 /// tunable parameter is refused (at the field), not silently frozen; a
-/// tunable damping ratio is fine.
+/// tunable damping ratio is fine (tunable section data:
+/// `tests/flex_tunable.rs`).
 #[test]
 fn flex_tunable_beam_data_are_refused_at_the_field() {
     let text = model(HUB_BEAM).replace(

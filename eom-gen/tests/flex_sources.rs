@@ -324,6 +324,7 @@ fn export_beam(dir: &Path, n: usize, k: usize, consistent: bool) -> (String, boo
                     .collect(),
             }
         }),
+        geometric_stiffness: None,
     };
     let name = format!("beam{n}.modal.json");
     std::fs::write(dir.join(&name), serde_json::to_string(&data).unwrap()).unwrap();

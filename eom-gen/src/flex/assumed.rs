@@ -30,6 +30,7 @@
 
 use nalgebra::{DMatrix, DVector, Matrix3, Matrix3xX, Vector3};
 
+use super::invariants::Shares;
 use super::ritz::{Ritz, RitzError};
 use super::{Basis, Beam, Invariants, Modes, Section};
 use crate::expr::Ast;
@@ -194,6 +195,8 @@ pub struct Assumed {
     pub axial_geometric: DMatrix<f64>,
     /// The reduced matrices' normal modes.
     pub ritz: Ritz,
+    /// The shares of `M_ff` and `K_ff` per section datum (tunable data).
+    pub shares: Shares,
 }
 
 impl Assumed {
@@ -217,7 +220,7 @@ fn integrate(
     k: usize,
     shape: &ShapeFn<'_>,
     intervals: usize,
-) -> Result<(Invariants, DMatrix<f64>, DMatrix<f64>), AssumedError> {
+) -> Result<(Invariants, DMatrix<f64>, DMatrix<f64>, Shares), AssumedError> {
     let h = section.length / intervals as f64;
     let zk = || DMatrix::<f64>::zeros(k, k);
     let zv = || DVector::<f64>::zeros(k);
@@ -238,6 +241,7 @@ fn integrate(
         modal_stiffness: zk(),
     };
     let mut spin_mass = zk();
+    let mut stiffness: [DMatrix<f64>; 4] = std::array::from_fn(|_| zk());
     let mut geometric = zk();
     let mut axial_geometric = zk();
     let at = |j: usize, part: Part, order: usize, x: f64| {
@@ -291,11 +295,17 @@ fn integrate(
             inv.spin_inertia += dj;
             inv.spin_modes += &phi * dj;
             spin_mass += &phi * phi.transpose() * dj;
-            inv.modal_stiffness += (&du * du.transpose() * section.ea
-                + &ddv * ddv.transpose() * section.ei_z
-                + &ddw * ddw.transpose() * section.ei_y
-                + &dphi * dphi.transpose() * section.gj)
-                * dx;
+            // K_ff's shares of EA, EI_y, EI_z, GJ.
+            let parts = [
+                &du * du.transpose() * (section.ea * dx),
+                &ddw * ddw.transpose() * (section.ei_y * dx),
+                &ddv * ddv.transpose() * (section.ei_z * dx),
+                &dphi * dphi.transpose() * (section.gj * dx),
+            ];
+            for (total, part) in stiffness.iter_mut().zip(parts) {
+                inv.modal_stiffness += &part;
+                *total += part;
+            }
             let bending = &dv * dv.transpose() + &dw * dw.transpose();
             geometric += &bending * (section.centrifugal_force(0.0, x) * dx);
             axial_geometric += bending * (section.rho_a * (section.length - x) * dx);
@@ -305,11 +315,15 @@ fn integrate(
     let c = inv.second_moment;
     inv.inertia = Matrix3::identity() * c.trace() - c + ex * ex.transpose() * inv.spin_inertia;
     inv.coupling = inv.coupling_at(&DVector::zeros(k));
-    inv.modal_mass = &inv.s_ij[0][0] + &inv.s_ij[1][1] + &inv.s_ij[2][2] + spin_mass;
+    inv.modal_mass = &inv.s_ij[0][0] + &inv.s_ij[1][1] + &inv.s_ij[2][2] + &spin_mass;
     let sym = |a: &DMatrix<f64>| (a + a.transpose()) * 0.5;
     inv.modal_mass = sym(&inv.modal_mass);
     inv.modal_stiffness = sym(&inv.modal_stiffness);
-    Ok((inv, sym(&geometric), sym(&axial_geometric)))
+    let shares = Shares {
+        spin_mass: sym(&spin_mass),
+        stiffness: stiffness.map(|k| sym(&k)),
+    };
+    Ok((inv, sym(&geometric), sym(&axial_geometric), shares))
 }
 
 /// The body of `k` assumed shapes over `section` (its `elements` unused):
@@ -319,8 +333,8 @@ pub fn assumed_modes(
     k: usize,
     shape: &ShapeFn<'_>,
 ) -> Result<Assumed, AssumedError> {
-    let (inv, geometric, axial_geometric) = integrate(section, k, shape, INTERVALS)?;
-    let (coarse, _, _) = integrate(section, k, shape, INTERVALS / 2)?;
+    let (inv, geometric, axial_geometric, shares) = integrate(section, k, shape, INTERVALS)?;
+    let (coarse, _, _, _) = integrate(section, k, shape, INTERVALS / 2)?;
     let change = |a: &DMatrix<f64>, b: &DMatrix<f64>| {
         let top = a.amax();
         if top == 0.0 {
@@ -340,6 +354,7 @@ pub fn assumed_modes(
         geometric,
         axial_geometric,
         ritz,
+        shares,
     })
 }
 

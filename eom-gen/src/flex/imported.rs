@@ -86,6 +86,27 @@ pub struct ModalData {
     /// matrix `M` (optional; with it, `modal_mass` is required and used).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub consistent: Option<Consistent>,
+    /// The foreshortening matrices of geometric stiffening (optional;
+    /// needed for `stiffening: true` on the body).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub geometric_stiffness: Option<GeometricStiffness>,
+}
+
+/// The modal geometric stiffness of a slender body along the body `x`
+/// axis under its two unit axial inertia loads (Kane, Ryan and Banerjee
+/// 1987; [`crate::flex::invariants::foreshortening`]): `Φᵀ K_G(N) Φ` with
+/// `K_G(N)` the FE geometric stiffness under the axial force `N(x)` (tension
+/// positive) of the sections beyond `x`, tip free. With `μ(x)` the mass per
+/// length, `N₁(x) = ∫ₓᴸ μ ξ dξ` (spinning at unit `Ω` about an axis through
+/// `x = 0` normal to the body) and `N₂(x) = ∫ₓᴸ μ dξ` (unit axial
+/// acceleration of the root).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GeometricStiffness {
+    /// `K₁ = Φᵀ K_G(N₁) Φ` (k×k, kg m per unit coordinate²: N/m per (rad/s)²).
+    pub centrifugal: Vec<Vec<f64>>,
+    /// `K₂ = Φᵀ K_G(N₂) Φ` (k×k, kg per unit coordinate²: N/m per m/s²).
+    pub axial: Vec<Vec<f64>>,
 }
 
 /// First-order inertia invariants of the consistent mass matrix `M`, with
@@ -190,6 +211,8 @@ pub struct Imported {
     pub positions: Vec<Vector3<f64>>,
     /// Node names (`None` where unnamed).
     pub names: Vec<Option<String>>,
+    /// The file's foreshortening matrices `(K₁, K₂)`, if given.
+    pub geometric: Option<(DMatrix<f64>, DMatrix<f64>)>,
 }
 
 impl Imported {
@@ -449,6 +472,42 @@ pub fn build(data: &ModalData, text: &str) -> Result<Imported, Vec<ModalError>> 
     let file_mass = square(&data.modal_mass.as_ref(), "modal_mass");
     let stiffness = square(&Some(&data.modal_stiffness), "modal_stiffness");
     let damping = square(&data.modal_damping.as_ref(), "modal_damping");
+    let mut geometric = None;
+    if let Some(g) = &data.geometric_stiffness {
+        let mut pair = Vec::new();
+        for (field, rows) in [("centrifugal", &g.centrifugal), ("axial", &g.axial)] {
+            let m = match matrix(rows, k) {
+                Some(m) => check_square(&m, k, &format!("`geometric_stiffness.{field}`"))
+                    .map(|_| m)
+                    .map_err(|e| e.to_string()),
+                None => Err(format!(
+                    "`geometric_stiffness.{field}` must be {k}×{k} (one row of {k} per mode)"
+                )),
+            };
+            match m {
+                Ok(m) if SymmetricEigen::new(m.clone()).eigenvalues.min() < -1e-9 * m.amax() => {
+                    err(
+                        &mut errors,
+                        &[F("geometric_stiffness"), F(field)],
+                        format!(
+                            "`geometric_stiffness.{field}` is not positive semi-definite: a tensile axial load cannot soften the body"
+                        ),
+                        "Φᵀ K_G Φ under the axial force of the unit load (tension positive, tip free)",
+                    );
+                }
+                Ok(m) => pair.push((&m + m.transpose()) * 0.5),
+                Err(e) => err(
+                    &mut errors,
+                    &[F("geometric_stiffness"), F(field)],
+                    e,
+                    "a symmetric matrix by rows, in the order of `modes`",
+                ),
+            }
+        }
+        if let [k1, k2] = &pair[..] {
+            geometric = Some((k1.clone(), k2.clone()));
+        }
+    }
     for (field, r) in [
         ("modal_mass", &file_mass),
         ("modal_stiffness", &stiffness),
@@ -575,6 +634,7 @@ pub fn build(data: &ModalData, text: &str) -> Result<Imported, Vec<ModalError>> 
         shapes,
         positions,
         names: data.nodes.iter().map(|x| x.name.clone()).collect(),
+        geometric,
     })
 }
 

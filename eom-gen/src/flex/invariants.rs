@@ -245,8 +245,61 @@ impl Invariants {
     }
 }
 
+/// The shares of a reduced body's matrices that each section datum
+/// carries, at the defaults: what makes tunable section data exact
+/// (`mech::flexible`). For a fixed basis the integrals are linear in the
+/// section data: every translational integral (`m`, `I₁`, `J₀`, `S̄`,
+/// `S̄_ij`, `X_ij`, the foreshortening `K₁`, `K₂`) in `ρA`, the torsion
+/// inertia's (`J_p`, `c_p`, `M_p`) in `ρI_p`, and
+/// `K_ff = EA K_EA + EI_y K_EIy + EI_z K_EIz + GJ K_GJ`. So with `p` a
+/// datum at run time and `p₀` its default, each share is its value at the
+/// defaults times `p/p₀`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shares {
+    /// `M_p = ∫ρI_p φ_xᵀ φ_x dx` (k×k), the torsion inertia's share of
+    /// `M_ff` (the rest, `Σ_i S̄_ii`, is `ρA`'s).
+    pub spin_mass: DMatrix<f64>,
+    /// The shares of `K_ff` of `EA`, `EI_y`, `EI_z`, `GJ` (k×k each), in
+    /// that order.
+    pub stiffness: [DMatrix<f64>; 4],
+}
+
+impl Shares {
+    /// The shares of a beam reduced to `modes` (`Φᵀ K_b Φ` of the FE
+    /// stiffness with one datum kept, `Φᵀ M Φ` of the torsion mass).
+    pub fn of_beam(beam: &Beam, modes: &Modes) -> Shares {
+        let only = |f: &dyn Fn(&mut Beam)| {
+            let mut b = Beam {
+                rho_a: 0.0,
+                rho_ip: 0.0,
+                ea: 0.0,
+                ei_y: 0.0,
+                ei_z: 0.0,
+                gj: 0.0,
+                ..beam.clone()
+            };
+            f(&mut b);
+            b
+        };
+        let phi = &modes.shapes;
+        let project = |m: DMatrix<f64>| {
+            let r = phi.transpose() * m * phi;
+            (&r + r.transpose()) * 0.5
+        };
+        Shares {
+            spin_mass: project(only(&|b| b.rho_ip = beam.rho_ip).mass()),
+            stiffness: [
+                project(only(&|b| b.ea = beam.ea).stiffness()),
+                project(only(&|b| b.ei_y = beam.ei_y).stiffness()),
+                project(only(&|b| b.ei_z = beam.ei_z).stiffness()),
+                project(only(&|b| b.gj = beam.gj).stiffness()),
+            ],
+        }
+    }
+}
+
 /// `∫ρ ũᵀ ũ = tr(C) 1 − C` from the second moment `C = ∫ρ ū ūᵀ`.
-fn inertia_from(c: &Matrix3<f64>) -> Matrix3<f64> {
+pub fn inertia_from(c: &Matrix3<f64>) -> Matrix3<f64> {
     Matrix3::identity() * c.trace() - c
 }
 

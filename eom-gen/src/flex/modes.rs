@@ -248,6 +248,61 @@ fn lowest(
     Ok((shapes, omega2))
 }
 
+/// The deformation a nodal degree of freedom belongs to: 0 axial (`u_x`),
+/// 1 bending x–y (`u_y`, `θ_z`), 2 bending x–z (`u_z`, `θ_y`), 3 torsion
+/// (`θ_x`). A straight beam's mass and stiffness do not couple them.
+pub fn dof_block(dof: usize) -> usize {
+    [0, 1, 2, 3, 2, 1][dof % 6]
+}
+
+/// Makes every mode of a degenerate group (equal `ω²` to 1e-9 relative,
+/// e.g. the two bending planes of a round section) belong to one
+/// deformation ([`dof_block`]), so each kept shape scales with its own
+/// block's stiffness and mass (tunable section data,
+/// `mech::flexible`). The mass-normalised columns `cols` of the nodal
+/// `shapes` (ascending `omega2`) are turned within each group by the
+/// eigenvectors of `Cᵀ W C`, `W` the mass weighted by block number, which
+/// separates the blocks (ordered axial, x–y, x–z, torsion) and keeps
+/// `Cᵀ M C = 1`. Non-degenerate modes are already pure and are left as
+/// they are.
+fn separate_blocks(
+    shapes: &mut DMatrix<f64>,
+    cols: std::ops::Range<usize>,
+    omega2: &[f64],
+    m: &DMatrix<f64>,
+) {
+    let n = m.nrows();
+    let mut start = 0;
+    while start < omega2.len() {
+        let mut end = start + 1;
+        while end < omega2.len() && (omega2[end] - omega2[start]).abs() <= 1e-9 * omega2[end].abs()
+        {
+            end += 1;
+        }
+        if end - start > 1 {
+            let c = shapes.columns(cols.start + start, end - start).into_owned();
+            let w = DMatrix::from_fn(n, n, |i, j| {
+                if dof_block(i) == dof_block(j) {
+                    m[(i, j)] * (dof_block(i) + 1) as f64
+                } else {
+                    0.0
+                }
+            });
+            let eig = SymmetricEigen::new(sym(c.transpose() * w * &c));
+            let mut order: Vec<usize> = (0..end - start).collect();
+            order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+            for (slot, &j) in order.iter().enumerate() {
+                let y = &c * eig.eigenvectors.column(j);
+                let big = y
+                    .iter()
+                    .fold(0.0_f64, |a, &b| if b.abs() > a.abs() { b } else { a });
+                shapes.set_column(cols.start + start + slot, &(y * big.signum()));
+            }
+        }
+        start = end;
+    }
+}
+
 /// An orthonormal basis `Z` (columns) of the deformations allowed by the
 /// reference conditions: the free dofs, or the mass-orthogonal complement of
 /// the rigid motions for the mean axis.
@@ -294,7 +349,8 @@ pub fn normal_modes(beam: &Beam, reference: &Reference, k: usize) -> Result<Mode
     let mz = sym(z.transpose() * &m * &z);
     let kz = sym(z.transpose() * &kk * &z);
     let (phi, omega2) = lowest(&kz, &mz, k, "the constrained beam")?;
-    let shapes = &z * phi;
+    let mut shapes = &z * phi;
+    separate_blocks(&mut shapes, 0..k, &omega2, &m);
     Ok(Modes {
         mass: sym(shapes.transpose() * &m * &shapes),
         stiffness: sym(shapes.transpose() * &kk * &shapes),
@@ -348,7 +404,7 @@ pub fn craig_bampton(
         })?;
         -chol.solve(&pick(&kk, &iset, &bset))
     };
-    let (phi, _) = lowest(&kii, &pick(&m, &iset, &iset), k, "the fixed-interface beam")?;
+    let (phi, fixed_omega2) = lowest(&kii, &pick(&m, &iset, &iset), k, "the fixed-interface beam")?;
     let nb = bset.len();
     let mut shapes = DMatrix::zeros(n, nb + k);
     for (c, &i) in bset.iter().enumerate() {
@@ -362,6 +418,7 @@ pub fn craig_bampton(
             shapes[(i, nb + c)] = phi[(r, c)];
         }
     }
+    separate_blocks(&mut shapes, nb..nb + k, &fixed_omega2, &m);
     let mass = sym(shapes.transpose() * &m * &shapes);
     let stiffness = sym(shapes.transpose() * &kk * &shapes);
     let (_, omega2) = lowest(&stiffness, &mass, nb + k, "the Craig–Bampton basis")?;

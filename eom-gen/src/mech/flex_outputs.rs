@@ -54,19 +54,21 @@ pub fn deformation<S: Scalar>(flex: &FlexInfo, x: f64, q: &[S]) -> [S; 6] {
 /// `(N, Q_y, Q_z, M_x, M_y, M_z)` at the section `x`, acting on the part
 /// `[0, x]` from the part beyond, body axes: `N = EA u_x'`,
 /// `Q_y = −EI_z u_y'''`, `Q_z = −EI_y u_z'''`, `M_x = GJ θ_x'`,
-/// `M_y = −EI_y u_z''`, `M_z = EI_z u_y''`. For a Timoshenko beam the
-/// moments are those of the section rotations, `M_y = EI_y θ_y'`,
-/// `M_z = EI_z θ_z'`, and the shear forces those of the shear strains,
-/// `Q_y = κGA_y (u_y' − θ_z)`, `Q_z = κGA_z (u_z' + θ_y)` (constant per
-/// element, equal to `−M_z'` and `M_y'`).
-pub fn section_forces<S: Scalar>(flex: &FlexInfo, x: f64, q: &[S]) -> [S; 6] {
+/// `M_y = −EI_y u_z''`, `M_z = EI_z u_y''`, with `stiffness` the section's
+/// `EA`, `EI_y`, `EI_z`, `GJ` (runtime fields where tunable). For a
+/// Timoshenko beam the moments are those of the section rotations,
+/// `M_y = EI_y θ_y'`, `M_z = EI_z θ_z'`, and the shear forces those of the
+/// shear strains, `Q_y = κGA_y (u_y' − θ_z)`, `Q_z = κGA_z (u_z' + θ_y)`
+/// (constant per element, equal to `−M_z'` and `M_y'`).
+pub fn section_forces<S: Scalar>(flex: &FlexInfo, stiffness: &[S; 4], x: f64, q: &[S]) -> [S; 6] {
+    let [ea, ei_y, ei_z, gj] = *stiffness;
     let beam = &flex.beam;
     let (_, s, local) = element(flex, x);
     let k = |c: f64| S::from_f64(c);
     let (qy, qz) = match &beam.shear {
         None => (
-            -k(beam.ei_z) * combine(&s.curvature_rate.row(0).transpose(), &local, q),
-            -k(beam.ei_y) * combine(&s.curvature_rate.row(1).transpose(), &local, q),
+            -ei_z * combine(&s.curvature_rate.row(0).transpose(), &local, q),
+            -ei_y * combine(&s.curvature_rate.row(1).transpose(), &local, q),
         ),
         Some(sh) => {
             let gxy = (s.slope.row(0) - s.rotation.row(2)).transpose();
@@ -78,12 +80,12 @@ pub fn section_forces<S: Scalar>(flex: &FlexInfo, x: f64, q: &[S]) -> [S; 6] {
         }
     };
     [
-        k(beam.ea) * combine(&s.axial_strain, &local, q),
+        ea * combine(&s.axial_strain, &local, q),
         qy,
         qz,
-        k(beam.gj) * combine(&s.twist, &local, q),
-        -k(beam.ei_y) * combine(&s.curvature_xz, &local, q),
-        k(beam.ei_z) * combine(&s.curvature_xy, &local, q),
+        gj * combine(&s.twist, &local, q),
+        -ei_y * combine(&s.curvature_xz, &local, q),
+        ei_z * combine(&s.curvature_xy, &local, q),
     ]
 }
 

@@ -51,6 +51,7 @@
 //! [`super::dynamics::Evaluator::aba`]). Bodies on the frame ride it; `q̈_f`
 //! couples to them only through the frame's acceleration.
 
+use super::flex_tunable::{EA, EI_Y, EI_Z, GJ, RHO_A, RHO_IP, SectionScales};
 use super::spatial::{Force, Motion, Pose, RigidInertia};
 use super::stiffening::Stiffening;
 use super::tree::{Lowering, MechError};
@@ -94,6 +95,9 @@ pub struct FlexModel<S> {
     pub stiffening: Option<Stiffening<S>>,
     /// The nodes something attaches to, in ascending node order.
     pub nodes: Vec<NodeShape<S>>,
+    /// The section stiffnesses `EA`, `EI_y`, `EI_z`, `GJ` (runtime fields
+    /// where tunable), for the section forces.
+    pub section: [S; 4],
 }
 
 /// The shapes of one node of a flexible body (body axes).
@@ -148,18 +152,58 @@ fn clean_block(values: &[f64]) -> impl Fn(f64) -> f64 {
     move |x| if x.abs() <= 1e-13 * top { 0.0 } else { x }
 }
 
-fn matrix<S: Scalar>(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<S>> {
-    matrix_with(m, &clean_block(m.as_slice()))
-}
-
-fn matrix_with<S: Scalar>(m: &nalgebra::DMatrix<f64>, c: &dyn Fn(f64) -> f64) -> Vec<Vec<S>> {
+/// `m` cleaned by `c`, each entry through `to` (inlined or scaled by a
+/// tunable datum).
+fn scaled_matrix<S: Scalar>(
+    m: &nalgebra::DMatrix<f64>,
+    c: &dyn Fn(f64) -> f64,
+    to: &dyn Fn(f64) -> S,
+) -> Vec<Vec<S>> {
     (0..m.nrows())
-        .map(|r| (0..m.ncols()).map(|j| S::from_f64(c(m[(r, j)]))).collect())
+        .map(|r| (0..m.ncols()).map(|j| to(c(m[(r, j)]))).collect())
         .collect()
 }
 
-fn vector<S: Scalar>(v: &nalgebra::DVector<f64>, c: &dyn Fn(f64) -> f64) -> Vec<S> {
-    v.iter().map(|&x| S::from_f64(c(x))).collect()
+/// `D_ff` with tunable section data: for the beam's normal modes (pure per
+/// deformation, so `M_ff` and `K_ff` stay diagonal at any values) the
+/// modal damping `D_ii = 2 ζ √(K_ii M_ii)` (`2 ζ ω_i` per unit modal mass);
+/// refused for other bases, whose normal modes change with the data.
+fn tunable_damping<S: Scalar>(
+    flex: &FlexInfo,
+    body: &str,
+    zeta: S,
+    mass: &[Vec<S>],
+    stiffness: &[Vec<S>],
+) -> Result<Vec<Vec<S>>, MechError> {
+    let diagonal = |m: &[Vec<S>]| {
+        m.iter()
+            .enumerate()
+            .all(|(r, row)| row.iter().enumerate().all(|(c, x)| r == c || x.is_zero()))
+    };
+    let normal = matches!(flex.source, crate::system::FlexSource::Beam)
+        && flex.modes.basis == crate::flex::Basis::Normal;
+    if !normal || !diagonal(mass) || !diagonal(stiffness) {
+        return Err(MechError::TunableFlex {
+            body: body.to_string(),
+            field: "damping",
+            why: "modal damping needs the reduced body's normal modes, which change with the data unless the basis is the beam's own normal modes (not Craig–Bampton or assumed modes)",
+            span: flex.damping.span,
+        });
+    }
+    let two = S::from_f64(2.0);
+    Ok((0..mass.len())
+        .map(|r| {
+            (0..mass.len())
+                .map(|c| {
+                    if r == c {
+                        two * zeta * (stiffness[r][r] * mass[r][r]).sqrt()
+                    } else {
+                        S::zero()
+                    }
+                })
+                .collect()
+        })
+        .collect())
 }
 
 /// `Σ a_i b_i`, skipping exact zeros.
@@ -186,28 +230,22 @@ fn axpy<S: Scalar>(out: &mut [S], k: S, x: &[S]) {
 }
 
 impl<S: Scalar> FlexModel<S> {
-    /// The constants of `flex` on body `body` (its damping ratio may be
-    /// tunable, its beam data may not), with the shapes of the nodes
-    /// `attached` (ascending beam node indices).
+    /// The constants of `flex` on body `body` (its damping ratio and its
+    /// section data may be tunable, [`super::flex_tunable`]), with the
+    /// shapes of the nodes `attached` (ascending beam node indices).
     pub fn new(
         flex: &FlexInfo,
         body: &str,
         attached: &[usize],
         low: &Lowering<'_, S>,
     ) -> Result<Self, MechError> {
-        // The modes are computed once, at the defaults: beam data may not
-        // change at run time.
-        if let Some(q) = flex.written.iter().find(|q| low.uses_tunable(&q.expr)) {
-            return Err(MechError::TunableBeam {
-                body: body.to_string(),
-                span: q.span,
-            });
-        }
+        let sc = SectionScales::new(flex, body, low)?;
         let inv = &flex.invariants;
         let k = flex.count();
+        let a = |v: f64| sc.scale(RHO_A, v);
         let cs = clean_block(inv.s_bar.as_slice());
         let s_bar = (0..k)
-            .map(|j| Vec3(std::array::from_fn(|r| S::from_f64(cs(inv.s_bar[(r, j)])))))
+            .map(|j| Vec3(std::array::from_fn(|r| a(cs(inv.s_bar[(r, j)])))))
             .collect();
         // One scale for the nine blocks: a block that is round-off
         // throughout (e.g. `S̄_xx` of bending modes, which do not move
@@ -219,8 +257,9 @@ impl<S: Scalar> FlexModel<S> {
             .flat_map(|m| m.iter().copied())
             .collect();
         let cs_ij = clean_block(&all_s);
-        let s_ij =
-            std::array::from_fn(|i| std::array::from_fn(|j| matrix_with(&inv.s_ij[i][j], &cs_ij)));
+        let s_ij = std::array::from_fn(|i| {
+            std::array::from_fn(|j| scaled_matrix(&inv.s_ij[i][j], &cs_ij, &a))
+        });
         let all_x: Vec<f64> = inv
             .x_s
             .iter()
@@ -228,7 +267,9 @@ impl<S: Scalar> FlexModel<S> {
             .flat_map(|v| v.iter().copied())
             .collect();
         let cx = clean_block(&all_x);
-        let x_s = std::array::from_fn(|i| std::array::from_fn(|j| vector(&inv.x_s[i][j], &cx)));
+        let x_s = std::array::from_fn(|i| {
+            std::array::from_fn(|j| inv.x_s[i][j].iter().map(|&x| a(cx(x))).collect())
+        });
         // `c_p` joins `Ī_θf`'s torsion row: the same scale as `X`, so that
         // without torsion modes it vanishes instead of keeping round-off.
         let x_and_spin: Vec<f64> = all_x
@@ -238,8 +279,51 @@ impl<S: Scalar> FlexModel<S> {
             .copied()
             .collect();
         let cp = clean_block(&x_and_spin);
+        let spin = inv
+            .spin_modes
+            .iter()
+            .map(|&x| sc.scale(RHO_IP, cp(x)))
+            .collect();
+        // M_ff = Σ_i S̄_ii (ρA) + M_p (ρI_p); K_ff = Σ shares of EA, EI_y, EI_z, GJ.
+        let none = nalgebra::DMatrix::zeros(k, k);
+        let shares = flex.shares.as_ref();
+        let spin_mass = shares.map_or(&none, |s| &s.spin_mass);
+        let translational = &inv.s_ij[0][0] + &inv.s_ij[1][1] + &inv.s_ij[2][2];
+        let cm = clean_block(inv.modal_mass.as_slice());
+        let modal_mass: Vec<Vec<S>> = (0..k)
+            .map(|r| {
+                (0..k)
+                    .map(|c| {
+                        sc.entry(
+                            inv.modal_mass[(r, c)],
+                            &[(RHO_A, translational[(r, c)]), (RHO_IP, spin_mass[(r, c)])],
+                            &cm,
+                        )
+                    })
+                    .collect()
+            })
+            .collect();
+        let ck = clean_block(inv.modal_stiffness.as_slice());
+        let stiffness: Vec<Vec<S>> = (0..k)
+            .map(|r| {
+                (0..k)
+                    .map(|c| {
+                        let parts: Vec<(usize, f64)> = shares.map_or(Vec::new(), |s| {
+                            [EA, EI_Y, EI_Z, GJ]
+                                .iter()
+                                .zip(&s.stiffness)
+                                .map(|(&d, m)| (d, m[(r, c)]))
+                                .collect()
+                        });
+                        sc.entry(inv.modal_stiffness[(r, c)], &parts, &ck)
+                    })
+                    .collect()
+            })
+            .collect();
         let zeta = low.quantity(&flex.damping)?;
-        let damping = if let Some((unit, fixed)) = flex.damping_matrices() {
+        let damping = if sc.any() && !zeta.is_zero() {
+            tunable_damping(flex, body, zeta, &modal_mass, &stiffness)?
+        } else if let Some((unit, fixed)) = flex.damping_matrices() {
             // Assumed modes, imported data: D_ff = ζ D_1 + D_0 in the written coordinates.
             let cu = clean_block(unit.as_slice());
             let c0 = fixed.map(|d| clean_block(d.as_slice()));
@@ -278,7 +362,7 @@ impl<S: Scalar> FlexModel<S> {
                 })
                 .collect()
         };
-        let stiffening = flex.stiffening.then(|| Stiffening::new(flex));
+        let stiffening = flex.stiffening.then(|| Stiffening::new(flex, &a));
         let nodes = attached
             .iter()
             .map(|&n| {
@@ -303,30 +387,51 @@ impl<S: Scalar> FlexModel<S> {
                 }
             })
             .collect();
+        // Ī = tr(J₀) 1 − J₀ (ρA) + J_p e_x e_xᵀ (ρI_p).
         let ci = clean_block(inv.inertia.as_slice());
+        let rigid = crate::flex::invariants::inertia_from(&inv.second_moment);
         let c1 = clean_block(inv.first_moment.as_slice());
         Ok(FlexModel {
             q: flex.q_index,
             u: flex.u_index,
-            mass: S::from_f64(inv.mass),
-            first_moment: Vec3(std::array::from_fn(|r| {
-                S::from_f64(c1(inv.first_moment[r]))
-            })),
+            mass: a(inv.mass),
+            first_moment: Vec3(std::array::from_fn(|r| a(c1(inv.first_moment[r])))),
             inertia: Mat3(std::array::from_fn(|r| {
-                std::array::from_fn(|c| S::from_f64(ci(inv.inertia[(r, c)])))
+                std::array::from_fn(|c| {
+                    let spin = if (r, c) == (0, 0) {
+                        inv.spin_inertia
+                    } else {
+                        0.0
+                    };
+                    sc.entry(
+                        inv.inertia[(r, c)],
+                        &[(RHO_A, rigid[(r, c)]), (RHO_IP, spin)],
+                        &ci,
+                    )
+                })
             })),
             s_bar,
             s_ij,
             x_s,
-            spin: vector(&inv.spin_modes, &cp),
+            spin,
             rotary: std::array::from_fn(|r| {
-                vector(&inv.rotary_modes.row(r).transpose().into_owned(), &cp)
+                inv.rotary_modes
+                    .row(r)
+                    .iter()
+                    .map(|&x| sc.scale(RHO_A, cp(x)))
+                    .collect()
             }),
-            modal_mass: matrix(&inv.modal_mass),
-            stiffness: matrix(&inv.modal_stiffness),
+            modal_mass,
+            stiffness,
             damping,
             stiffening,
             nodes,
+            section: [
+                sc.values[EA],
+                sc.values[EI_Y],
+                sc.values[EI_Z],
+                sc.values[GJ],
+            ],
         })
     }
 

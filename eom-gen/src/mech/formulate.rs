@@ -673,7 +673,10 @@ fn outputs<'cx>(
             OutputKind::Energy | OutputKind::Momentum => {}
             OutputKind::Deformation { body, x, ref name }
             | OutputKind::SectionForces { body, x, ref name } => {
-                let Some((flex, fs, _)) = flex_of(sys, tree, k, body) else {
+                let Some((flex, fs, i)) = flex_of(sys, tree, k, body) else {
+                    continue;
+                };
+                let Some(fm) = &tree.bodies[i].flex else {
                     continue;
                 };
                 let (vals, tags) = if matches!(out, OutputKind::Deformation { .. }) {
@@ -683,7 +686,7 @@ fn outputs<'cx>(
                     )
                 } else {
                     (
-                        super::flex_outputs::section_forces(flex, x, &fs.q),
+                        super::flex_outputs::section_forces(flex, &fm.section, x, &fs.q),
                         ["N", "Qy", "Qz", "Mx", "My", "Mz"],
                     )
                 };

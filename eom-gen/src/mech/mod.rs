@@ -7,6 +7,7 @@ pub mod constraints;
 pub mod count;
 pub mod dynamics;
 pub mod flex_outputs;
+pub mod flex_tunable;
 pub mod flexible;
 pub mod formulate;
 pub mod initial;

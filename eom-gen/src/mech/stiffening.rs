@@ -89,15 +89,16 @@ fn mat_vec<S: Scalar>(m: &[Vec<S>], x: &[S]) -> Vec<S> {
 }
 
 /// Entries below `1e-13` of the largest are exact zeros (the bending
-/// planes decouple, axial and torsion modes have no slope).
-fn matrix<S: Scalar>(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<S>> {
+/// planes decouple, axial and torsion modes have no slope); the others go
+/// through `to`.
+fn matrix<S: Scalar>(m: &nalgebra::DMatrix<f64>, to: &dyn Fn(f64) -> S) -> Vec<Vec<S>> {
     let top = m.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
     (0..m.nrows())
         .map(|r| {
             (0..m.ncols())
                 .map(|c| {
                     let x = m[(r, c)];
-                    S::from_f64(if x.abs() <= 1e-13 * top { 0.0 } else { x })
+                    to(if x.abs() <= 1e-13 * top { 0.0 } else { x })
                 })
                 .collect()
         })
@@ -105,16 +106,18 @@ fn matrix<S: Scalar>(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<S>> {
 }
 
 impl<S: Scalar> Stiffening<S> {
-    /// The matrices of `flex` (its beam and modes at the defaults).
-    pub fn new(flex: &FlexInfo) -> Self {
+    /// The matrices of `flex` (its beam and modes at the defaults), each
+    /// entry through `rho_a`: both are linear in `ρA`, which scales them
+    /// when it is tunable ([`super::flex_tunable`]).
+    pub fn new(flex: &FlexInfo, rho_a: &dyn Fn(f64) -> S) -> Self {
         // Assumed modes integrate their own shapes; a beam its FE model.
         let (k1, k2) = match flex.assumed_geometric_stiffness() {
             Some((k1, k2)) => (k1.clone(), k2.clone()),
             None => foreshortening(&flex.beam, &flex.modes),
         };
         Stiffening {
-            centrifugal: matrix(&k1),
-            axial: matrix(&k2),
+            centrifugal: matrix(&k1, rho_a),
+            axial: matrix(&k2, rho_a),
         }
     }
 

@@ -97,12 +97,17 @@ pub enum MechError {
         /// The axis component that uses a tunable parameter.
         span: Span,
     },
-    /// A flexible body's beam data depend on a tunable parameter (its
-    /// modes and inertia shape integrals are computed once and inlined).
-    TunableBeam {
+    /// A field of a flexible body that cannot follow a tunable parameter
+    /// (the mesh, the shapes: the basis is built once; the modal damping
+    /// of a basis that is not the beam's normal modes).
+    TunableFlex {
         /// The body.
         body: String,
-        /// The beam field that uses a tunable parameter.
+        /// The field as written (`length`, `shapes`, `damping`).
+        field: &'static str,
+        /// Why it must be fixed.
+        why: &'static str,
+        /// The field that uses a tunable parameter.
         span: Span,
     },
 }
@@ -113,7 +118,7 @@ impl MechError {
         match self {
             MechError::UnknownName { span, .. }
             | MechError::TunableAxis { span, .. }
-            | MechError::TunableBeam { span, .. } => *span,
+            | MechError::TunableFlex { span, .. } => *span,
         }
     }
 
@@ -126,8 +131,13 @@ impl MechError {
             MechError::TunableAxis { .. } => {
                 "make the parameters in the axis fixed (`tunable: false`, or `fixed` in a scene)"
             }
-            MechError::TunableBeam { .. } => {
-                "make the beam's parameters fixed (`tunable: false`, or `fixed` in a scene); only its `damping` may be tunable"
+            MechError::TunableFlex {
+                field: "damping", ..
+            } => {
+                "give `damping: 0`, or make the section data fixed (`tunable: false`, or `fixed` in a scene)"
+            }
+            MechError::TunableFlex { .. } => {
+                "make this field's parameters fixed (`tunable: false`, or `fixed` in a scene); the section data `rho_a`, `rho_ip`, `ea`, `ei_y`, `ei_z`, `gj` and the `damping` ratio may be tunable"
             }
         }
     }
@@ -148,9 +158,20 @@ impl fmt::Display for MechError {
                 f,
                 "the axis of joint `{joint}` depends on a tunable parameter; joint axes must be fixed"
             ),
-            MechError::TunableBeam { body, .. } => write!(
+            MechError::TunableFlex {
+                body,
+                field: "damping",
+                why,
+                ..
+            } => write!(
                 f,
-                "the beam of flexible body `{body}` depends on a tunable parameter; its modes are computed once, so its data must be fixed"
+                "the `damping` of flexible body `{body}` cannot be kept with tunable section data: {why}"
+            ),
+            MechError::TunableFlex {
+                body, field, why, ..
+            } => write!(
+                f,
+                "`{field}` of flexible body `{body}` depends on a tunable parameter: {why}"
             ),
         }
     }

@@ -430,6 +430,10 @@ pub enum Flexible {
         /// of the file's damping matrix.
         #[serde(default, skip_serializing_if = "Num::is_zero")]
         damping: Num,
+        /// Geometric stiffening by the axial inertia loads, from the file's
+        /// `geometric_stiffness` (required then).
+        #[serde(default, skip_serializing_if = "is_false")]
+        stiffening: bool,
     },
 }
 

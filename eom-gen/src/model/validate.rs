@@ -37,6 +37,9 @@ fn join(path: &[Seg<'static>], more: &[Seg<'static>]) -> Path {
 
 mod flex_sources;
 
+/// A beam's named nodes, `(name, node index)`.
+type NamedNodes = Vec<(String, usize)>;
+
 /// Which names an expression may use.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Scope {
@@ -786,7 +789,7 @@ impl Ctx<'_> {
         if *elements == 0 || (*modes == 0 && !*craig_bampton) {
             return None;
         }
-        let nodes = self.beam_nodes(named_nodes, &written[0], *elements, body, &fpath)?;
+        let (nodes, places) = self.beam_nodes(named_nodes, &written[0], *elements, body, &fpath)?;
         let beam = crate::flex::Beam {
             length: written[0].value,
             rho_a: written[1].value,
@@ -837,9 +840,13 @@ impl Ctx<'_> {
             }
         };
         let invariants = crate::flex::Invariants::new(&beam, &reduced);
+        let shares = crate::flex::invariants::Shares::of_beam(&beam, &reduced);
         let (coordinate_names, speed_names) = self.elastic_names(body, path, reduced.count())?;
+        // After the seven section data, the nodes' places (none may be tunable).
+        written.extend(places);
         Some(Box::new(FlexInfo {
             written,
+            shares: Some(shares),
             source: crate::system::FlexSource::Beam,
             beam,
             reference,
@@ -972,7 +979,8 @@ impl Ctx<'_> {
     }
 
     /// A beam's named nodes: unique names, each at a finite-element node
-    /// (`x = i · length / elements`), as `(name, node index)`.
+    /// (`x = i · length / elements`), as `(name, node index)`, and their
+    /// `x` as written.
     fn beam_nodes(
         &mut self,
         named: &[spec::BeamNode],
@@ -980,8 +988,9 @@ impl Ctx<'_> {
         elements: usize,
         body: &str,
         fpath: &[Seg<'static>],
-    ) -> Option<Vec<(String, usize)>> {
+    ) -> Option<(NamedNodes, Vec<Quantity>)> {
         let mut out: Vec<(String, usize)> = Vec::new();
+        let mut places = Vec::new();
         let mut ok = true;
         let l = length.value;
         let h = l / elements as f64;
@@ -1031,8 +1040,9 @@ impl Ctx<'_> {
                 continue;
             }
             out.push((node.name.clone(), at as usize));
+            places.push(x);
         }
-        ok.then_some(out)
+        ok.then_some((out, places))
     }
 
     /// The finite-element node index that `node` names on body `body`

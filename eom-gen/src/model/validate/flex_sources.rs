@@ -73,9 +73,11 @@ impl Ctx<'_> {
                 path,
                 &fpath,
             ),
-            spec::Flexible::Modal { file, damping } => {
-                self.modal(file, damping, body, path, &fpath)
-            }
+            spec::Flexible::Modal {
+                file,
+                damping,
+                stiffening,
+            } => self.modal(file, damping, *stiffening, body, path, &fpath),
         }
     }
 
@@ -337,6 +339,7 @@ impl Ctx<'_> {
         Some(Box::new(FlexInfo {
             nodes: named,
             written,
+            shares: Some(reduced.shares.clone()),
             source: FlexSource::Assumed {
                 shapes: shape_exprs,
                 node_x,
@@ -437,6 +440,7 @@ impl Ctx<'_> {
         &mut self,
         file: &str,
         damping: &Num,
+        stiffening: bool,
         body: &str,
         path: &[Seg<'static>],
         fpath: &Path,
@@ -489,6 +493,16 @@ impl Ctx<'_> {
             }
         };
         let zeta = zeta?;
+        if stiffening && body_data.geometric.is_none() {
+            self.error(
+                &join(fpath, &[f("stiffening")]),
+                format!(
+                    "flexible body `{body}` asks for geometric stiffening, but modal file `{file}` has no `geometric_stiffness`"
+                ),
+                "add `geometric_stiffness: (centrifugal: […], axial: […])` to the modal file (`examples/modal_export.py --geometric-centrifugal … --geometric-axial …`), or leave out `stiffening`",
+            );
+            return None;
+        }
         if let Some(d) = body_data.modal_mass_mismatch()
             && d > MODAL_MASS_TOL
         {
@@ -532,19 +546,21 @@ impl Ctx<'_> {
         Some(Box::new(FlexInfo {
             nodes: named,
             written: Vec::new(),
+            shares: None,
             source: FlexSource::Modal {
                 path: shown_str,
                 positions,
                 names: body_data.names,
                 damping_unit: body_data.ritz.damping_unit.clone(),
                 damping: body_data.damping,
+                geometric: body_data.geometric,
             },
             beam,
             reference: Reference::Fixed(Vec::new()),
             modes,
             invariants: inv,
             damping: zeta,
-            stiffening: false,
+            stiffening,
             coordinate_names,
             speed_names,
             q_index: 0,
