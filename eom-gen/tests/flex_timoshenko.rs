@@ -735,7 +735,9 @@ fn section_outputs_turn_with_psi_and_shear_is_kga_gamma() {
     let want_psi = p * l * l / (2.0 * 300.0);
     assert!((d[5] - want_psi).abs() < 1e-9 * want_psi, "θ_z(L) {}", d[5]);
     for x in [0.1, 0.77, 1.5, 1.95] {
-        let sf = eom_gen::mech::flex_outputs::section_forces(flex, x, &q);
+        let b = &flex.beam;
+        let stiffness = [b.ea, b.ei_y, b.ei_z, b.gj];
+        let sf = eom_gen::mech::flex_outputs::section_forces(flex, &stiffness, x, &q);
         assert!((sf[1] - p).abs() < 1e-8 * p, "Q_y({x}) = {}", sf[1]);
         assert!(
             (sf[5] - p * (l - x)).abs() < 1e-8 * p * l,
