@@ -239,3 +239,87 @@ fn flex_output_errors_are_located() {
         assert!(report.contains(want), "want `{want}` in:\n{report}");
     }
 }
+
+/// Outputs on an assumed-mode body: a named node's position is its place
+/// plus the written shapes there (`x + u(x)`, `v(x)`, `w(x)` at amplitude
+/// `q`); sections need the beam's elements and are refused at the field.
+#[test]
+fn flex_outputs_of_assumed_modes_at_their_nodes() {
+    let text = |outputs: &str| {
+        format!(
+            r#"Model(
+    name: "rod",
+    gravity: (0, 0, 0),
+    bodies: [(name: "rod", flexible: AssumedModes(length: 2, rho_a: 1.2, rho_ip: 1e-4,
+        ea: 2.8e7, ei_y: 1.4e4, ei_z: 1.4e4, gj: 1e4,
+        shapes: [(v: "sin(pi*x/2)"), (u: "x/2", w: "x*x/4")],
+        nodes: [(name: "mid", x: 0.5), (name: "tip", x: 2)]))],
+    joints: [(name: "hub", kind: Fixed, parent: "ground", child: "rod")],
+    outputs: [{outputs}],
+)"#
+        )
+    };
+    let sys = check(&Source::new(
+        "rod.ron",
+        text("NodePosition(body: \"rod\", node: 0), NodePosition(body: \"rod\", node: 1)"),
+    ))
+    .unwrap_or_else(|r| panic!("{r}"))
+    .system;
+    let q = [0.03, -0.02];
+    let out = outputs_k(&sys, &q);
+    for (k, x) in [(0usize, 0.5f64), (1, 2.0)] {
+        let want = [
+            x + q[1] * x / 2.0,
+            q[0] * (std::f64::consts::PI * x / 2.0).sin(),
+            q[1] * x * x / 4.0,
+        ];
+        for (c, w) in want.iter().enumerate() {
+            let got = out[3 * k + c].1;
+            assert!(
+                (got - w).abs() < 1e-12,
+                "node {k} component {c}: {got} vs {w}"
+            );
+        }
+    }
+    let report = match check(&Source::new(
+        "rod.ron",
+        text(
+            "Deformation(name: \"d\", body: \"rod\", x: 1), NodePosition(body: \"rod\", node: 2), \
+             SectionForces(name: \"s\", body: \"rod\", x: 1)",
+        ),
+    )) {
+        Ok(_) => panic!("want errors"),
+        Err(r) => r.to_string(),
+    };
+    for want in [
+        "rod.ron:9:",
+        "output `Deformation` at a section needs the built-in beam's elements, but `rod` has assumed modes",
+        "output `SectionForces` at a section needs the built-in beam's elements",
+        "node 2 does not exist: `rod` has nodes 0..=1",
+    ] {
+        assert!(report.contains(want), "want `{want}` in:\n{report}");
+    }
+}
+
+/// The outputs program at `q` (any number of elastic coordinates, no rigid ones).
+fn outputs_k(sys: &System, q: &[f64]) -> Vec<(String, f64)> {
+    let f = formulate(sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
+    let zero = vec![0.0; q.len()];
+    let point = eom_gen::interpret::Point {
+        sys,
+        q,
+        u: &zero,
+        udot: &zero,
+        tau: &zero,
+        inputs: &[],
+        params: &[],
+        multipliers: &[],
+        t: 0.0,
+    };
+    let values = eom_gen::interpret::run(f.program(Function::Outputs).expect("outputs"), &point);
+    f.labels(Function::Outputs)
+        .iter()
+        .cloned()
+        .zip(values)
+        .collect()
+}

@@ -547,8 +547,8 @@ fn flex_tunable_beam_conserves_energy_at_changed_values() {
 
 /// What cannot be tunable is refused at its field, naming the field, the
 /// body and what may be tunable: the length (the mesh), a node's place, a
-/// shape expression,
-/// and a damping ratio on a basis whose normal modes change with the data
+/// shape expression, any datum of a Timoshenko beam (its element's shapes
+/// depend on `EI/κGA`), and a damping ratio on a basis whose normal modes change with the data
 /// (assumed modes, Craig–Bampton).
 #[test]
 fn flex_tunable_fields_that_cannot_follow_are_refused_where_written() {
@@ -603,6 +603,15 @@ fn flex_tunable_fields_that_cannot_follow_are_refused_where_written() {
                 .replace("damping: \"zeta\"", "damping: 0.02"),
             "damping: 0.02",
             "the `damping` of flexible body `beam` cannot be kept with tunable section data",
+        ),
+        (
+            "a Timoshenko beam",
+            model(&beam(), &DEFAULTS, true, 0.0).replace(
+                "stiffening: true,",
+                "stiffening: false, shear: Timoshenko(kga_y: 1e6, kga_z: 1e6),",
+            ),
+            "rho_a: \"rho_a\"",
+            "`section data of a Timoshenko beam` of flexible body `beam`",
         ),
     ];
     for (what, text, at, message) in cases {

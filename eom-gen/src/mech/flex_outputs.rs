@@ -91,6 +91,23 @@ pub fn section_forces<S: Scalar>(flex: &FlexInfo, stiffness: &[S; 4], x: f64, q:
 
 /// The place of node `node` in body axes: `(x_node, 0, 0) + ū_f`.
 pub fn node_point<S: Scalar>(flex: &FlexInfo, node: usize, q: &[S]) -> Vec3<S> {
+    if !matches!(flex.source, crate::system::FlexSource::Beam) {
+        // Assumed modes and imported data: the place of the node plus its
+        // translational shapes (`modes.shapes`, six rows per node).
+        let p = flex.node_place(node);
+        let shapes = &flex.modes.shapes;
+        return Vec3(std::array::from_fn(|r| {
+            let row = 6 * node + r;
+            (0..shapes.ncols().min(q.len())).fold(S::from_f64(p[r]), |acc, j| {
+                let c = shapes.get((row, j)).copied().unwrap_or(0.0);
+                if c == 0.0 {
+                    acc
+                } else {
+                    acc + S::from_f64(c) * q[j]
+                }
+            })
+        }));
+    }
     let x = flex.beam.node_x(node);
     let d = deformation(flex, x, q);
     Vec3::new(S::from_f64(x) + d[0], d[1], d[2])

@@ -77,8 +77,8 @@ impl<S: Scalar> SectionScales<S> {
             && let Some(q) = flex.written.iter().find(|q| low.uses_tunable(&q.expr))
         {
             return Err(refuse(
-                "shear",
-                "a Timoshenko beam's element shape functions depend on EI/κGA, so its data are fixed at generation",
+                "section data of a Timoshenko beam",
+                "the element's shape functions depend on EI/κGA, so the data are fixed at generation",
                 q.span,
             ));
         }

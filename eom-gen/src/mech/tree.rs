@@ -136,6 +136,12 @@ impl MechError {
             } => {
                 "give `damping: 0`, or make the section data fixed (`tunable: false`, or `fixed` in a scene)"
             }
+            MechError::TunableFlex {
+                field: "section data of a Timoshenko beam",
+                ..
+            } => {
+                "make the beam's parameters fixed (`tunable: false`, or `fixed` in a scene), or drop `shear` (an Euler–Bernoulli beam's section data may be tunable)"
+            }
             MechError::TunableFlex { .. } => {
                 "make this field's parameters fixed (`tunable: false`, or `fixed` in a scene); the section data `rho_a`, `rho_ip`, `ea`, `ei_y`, `ei_z`, `gj` and the `damping` ratio may be tunable"
             }

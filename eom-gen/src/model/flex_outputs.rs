@@ -4,7 +4,7 @@
 //! wrong.
 
 use crate::graph::BodyId;
-use crate::system::{BodyInfo, OutputKind};
+use crate::system::{BodyInfo, FlexSource, OutputKind};
 
 /// A flexible-body output with its body found and `x` evaluated.
 pub(crate) enum FlexOutput<'a> {
@@ -58,6 +58,26 @@ pub(crate) fn resolve(
         }]);
     };
     let mut problems = Vec::new();
+    // Sections need the built-in beam's elements; assumed modes and
+    // imported modal data have their shapes only at their nodes.
+    let source = match &flex.source {
+        FlexSource::Beam => None,
+        FlexSource::Assumed { .. } => Some("assumed modes"),
+        FlexSource::Modal { .. } => Some("imported modal data"),
+    };
+    if let (Some(source), FlexOutput::Deformation(..) | FlexOutput::SectionForces(..)) =
+        (source, &out)
+    {
+        return Err(vec![Problem {
+            field: "body",
+            message: format!(
+                "output `{what}` at a section needs the built-in beam's elements, but `{}` has {source}",
+                body.name
+            ),
+            help: "ask for `NodePosition` at a node of the body (named in its `nodes`, or the modal file's) or for `ElasticEnergy`".into(),
+        }]);
+    }
+    let nodes = flex.modes.shapes.nrows() / 6;
     let length = flex.beam.length;
     let mut section = |name: &str, x: f64| {
         if !is_identifier(name) {
@@ -96,14 +116,27 @@ pub(crate) fn resolve(
             }
         }
         FlexOutput::NodePosition(node) => {
-            if node > flex.beam.elements {
+            let last = match source {
+                None => flex.beam.elements,
+                Some(_) => nodes.saturating_sub(1),
+            };
+            if node > last || (source.is_some() && nodes == 0) {
                 problems.push(Problem {
                     field: "node",
-                    message: format!(
-                        "node {node} does not exist: beam `{}` has nodes 0..={}",
-                        body.name, flex.beam.elements
-                    ),
-                    help: format!("give a node from 0 to {}", flex.beam.elements),
+                    message: if nodes == 0 {
+                        format!("node {node} does not exist: `{}` has no nodes", body.name)
+                    } else {
+                        format!(
+                            "node {node} does not exist: {}`{}` has nodes 0..={last}",
+                            if source.is_none() { "beam " } else { "" },
+                            body.name
+                        )
+                    },
+                    help: if nodes == 0 {
+                        "name nodes on the body (`nodes: [(name, x)]`) first".into()
+                    } else {
+                        format!("give a node from 0 to {last}")
+                    },
                 });
             }
             OutputKind::NodePosition { body: b, node }
