@@ -29,6 +29,10 @@ fn elements(root: &str) -> ExitCode {
     ExitCode::SUCCESS
 }
 
+/// Mixed models of `models/ancf/` whose rigid part is generated too (the
+/// cables' kernels are model-independent, in `eom-sim/src/elements/`).
+pub const MIXED: [&str; 1] = ["ancf/pendulum_rod"];
+
 fn main() -> ExitCode {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
     if elements(root) != ExitCode::SUCCESS {
@@ -49,13 +53,17 @@ fn main() -> ExitCode {
         }
     };
     names.sort();
+    // Mixed models (rigid bodies holding ANCF cables) under models/ancf/:
+    // their rigid part is generated code like any model's.
+    names.extend(MIXED.iter().map(|m| m.to_string()));
     let mut lib = String::from(
         "//! Generated source of every bundled model, one module per model, committed\n\
          //! so readers can see what eom-gen emits. A test fails when a file is stale;\n\
          //! refresh with `cargo run -p eom-gen --example regenerate`.\n\n",
     );
-    for name in &names {
-        let model = format!("models/{name}.ron");
+    for path in &names {
+        let name = path.rsplit('/').next().unwrap_or(path);
+        let model = format!("models/{path}.ron");
         eprintln!("… {model}");
         let src = match std::fs::read_to_string(format!("{root}/{model}")) {
             Ok(text) => eom_gen::Source::new(model.clone(), text),
@@ -72,7 +80,7 @@ fn main() -> ExitCode {
                     return ExitCode::from(1);
                 }
                 lib += &format!(
-                    "/// Model `{name}`, generated from `models/{name}.ron`.\n#[rustfmt::skip] // formatted by prettyplease; stays byte-identical\npub mod {name};\n"
+                    "/// Model `{name}`, generated from `models/{path}.ron`.\n#[rustfmt::skip] // formatted by prettyplease; stays byte-identical\npub mod {name};\n"
                 );
             }
             Err(e) => {

@@ -62,3 +62,6 @@ pub mod stewart;
 /// Model `stewart_driven`, generated from `models/stewart_driven.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod stewart_driven;
+/// Model `pendulum_rod`, generated from `models/ancf/pendulum_rod.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod pendulum_rod;
