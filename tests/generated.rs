@@ -186,7 +186,11 @@ fn generated_sources_are_fresh() {
     // example's `MIXED`).
     names.push("ancf/pendulum_rod.ron".to_string());
     for file in names.iter().filter(|n| n.ends_with(".ron")) {
-        let name = file.trim_end_matches(".ron").rsplit('/').next().unwrap_or(file);
+        let name = file
+            .trim_end_matches(".ron")
+            .rsplit('/')
+            .next()
+            .unwrap_or(file);
         let text = std::fs::read_to_string(format!("{dir}/{file}")).unwrap_or_default();
         let fresh = generate(&Source::new(format!("models/{file}"), text))
             .unwrap_or_else(|e| panic!("{e}"))

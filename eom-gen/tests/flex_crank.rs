@@ -464,12 +464,17 @@ fn flex_crank_against_the_ivp_test_set() {
         &rv,
     );
     let eom_ts = table("eom against the test set's reference", &pb, &vb, &rp, &rv);
-    // eom's two methods agree to the integrators' accuracy (measured:
-    // 14.3 and 14.0 digits in φ2 and x3, 11.6 and 10.8 in their rates,
-    // 8.4–9.7 in the elastic amplitudes, 6.0–9.0 in their rates, which are
-    // samples of oscillations at up to 95 000 rad/s).
+    // eom's two methods agree beyond the requested tolerance (rtol 1e-12:
+    // 12 digits) in φ2 and x3, and to the integrators' accuracy elsewhere.
+    // Measured: 14.3 and 14.0 digits in φ2 and x3, 11.6 and 10.8 in their
+    // rates, 8.4–9.7 in the elastic amplitudes, 6.0–9.0 in their rates,
+    // which are samples of oscillations at up to 95 000 rad/s. A change of
+    // the model's constants in their last digit (another summation order
+    // of the same invariants) moved these by up to 0.9 digits (13.4 and
+    // 13.1 in φ2 and x3, 8.6–9.6 in the amplitudes): round-off amplified
+    // by the stiff axial modes, so the bounds keep one digit for it.
     let two = [
-        13.5, 11.0, 13.5, 10.0, 8.5, 8.0, 8.0, 6.5, 9.0, 5.0, 9.0, 6.0,
+        12.5, 10.0, 12.5, 9.0, 7.5, 7.0, 7.0, 5.5, 8.0, 4.0, 8.0, 5.0,
     ];
     for (k, (d, want)) in eom_two.iter().zip(two).enumerate() {
         assert!(*d > want, "eom two ways, component {k}: {d:.2} digits");
