@@ -59,7 +59,7 @@ fn equilibrium(num: &Numeric) -> Vec<f64> {
 /// The outputs program at `q`, by name.
 fn outputs(sys: &System, q: &[f64]) -> Vec<(String, f64)> {
     let f = formulate(sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
-    let zero = vec![0.0; K];
+    let zero = vec![0.0; q.len()];
     let point = eom_gen::interpret::Point {
         sys,
         q,
@@ -266,7 +266,7 @@ fn flex_outputs_of_assumed_modes_at_their_nodes() {
     .unwrap_or_else(|r| panic!("{r}"))
     .system;
     let q = [0.03, -0.02];
-    let out = outputs_k(&sys, &q);
+    let out = outputs(&sys, &q);
     for (k, x) in [(0usize, 0.5f64), (1, 2.0)] {
         let want = [
             x + q[1] * x / 2.0,
@@ -299,27 +299,4 @@ fn flex_outputs_of_assumed_modes_at_their_nodes() {
     ] {
         assert!(report.contains(want), "want `{want}` in:\n{report}");
     }
-}
-
-/// The outputs program at `q` (any number of elastic coordinates, no rigid ones).
-fn outputs_k(sys: &System, q: &[f64]) -> Vec<(String, f64)> {
-    let f = formulate(sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
-    let zero = vec![0.0; q.len()];
-    let point = eom_gen::interpret::Point {
-        sys,
-        q,
-        u: &zero,
-        udot: &zero,
-        tau: &zero,
-        inputs: &[],
-        params: &[],
-        multipliers: &[],
-        t: 0.0,
-    };
-    let values = eom_gen::interpret::run(f.program(Function::Outputs).expect("outputs"), &point);
-    f.labels(Function::Outputs)
-        .iter()
-        .cloned()
-        .zip(values)
-        .collect()
 }
