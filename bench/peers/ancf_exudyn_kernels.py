@@ -2,7 +2,8 @@
 side) and their Jacobian, timed through Exudyn's own solver entry points on
 a chain of N elements at a deformed state with velocities, the same section
 as eom's `bench/benches/ancf.rs` (steel 0.1 m x 0.1 m, element length
-0.25 m, with material damping so that the damping terms are computed).
+0.25 m), with material damping (so that the damping terms are computed)
+and without (the elastic forces alone, eom's elastic kernels).
 
 Each call loops over all elements in C++ and assembles into the system
 vector / Jacobian; per-element time = (median call time) / N. Python's
@@ -19,7 +20,7 @@ import exudyn as exu
 from exudyn.itemInterface import NodePoint2DSlope1, ObjectANCFCable2D
 
 
-def build(n, reduced):
+def build(n, reduced, damped):
     sc = exu.SystemContainer()
     mbs = sc.AddSystem()
     E, b, h, rho, le = 2.07e11, 0.1, 0.1, 7800.0, 0.25
@@ -36,7 +37,8 @@ def build(n, reduced):
         mbs.AddObject(ObjectANCFCable2D(
             length=le, massPerLength=rho * A,
             bendingStiffness=E * I, axialStiffness=E * A,
-            bendingDamping=1e-3 * E * I, axialDamping=1e-3 * E * A,
+            bendingDamping=1e-3 * E * I if damped else 0.0,
+            axialDamping=1e-3 * E * A if damped else 0.0,
             useReducedOrderIntegration=reduced,
             nodeNumbers=[nodes[i], nodes[i + 1]]))
     mbs.Assemble()
@@ -60,12 +62,13 @@ def median_ns(f, reps, rounds=15):
 
 def main():
     print("exudyn", exu.config.Version() if hasattr(exu, "config") else exu.__version__)
-    for reduced in (0, 1):
+    for damped, reduced in ((True, 0), (True, 1), (False, 0)):
         for n in (64, 256, 1024):
-            mbs, solver = build(n, reduced)
+            mbs, solver = build(n, reduced, damped)
             rhs = median_ns(lambda: solver.ComputeODE2RHS(mbs), 20)
             jac = median_ns(lambda: solver.ComputeJacobianODE2RHS(mbs, 1.0, 1.0, 1.0), 3, 7)
-            print(f"ANCFCable2D useReducedOrderIntegration={reduced} N={n}: "
+            print(f"ANCFCable2D damping {'on' if damped else 'off'} "
+                  f"useReducedOrderIntegration={reduced} N={n}: "
                   f"ODE2RHS {rhs / n:.0f} ns/element, JacobianODE2RHS (K + D) {jac / n:.0f} ns/element")
 
 
