@@ -203,7 +203,10 @@ fn simulate_runs_a_cable_held_by_a_rigid_link_and_refuses_what_it_cannot() {
     let num = |x: &serde_json::Value| x.as_f64().unwrap_or(f64::NAN);
     // The rod's first node stays at the link's tip (a = 0.3 m).
     let theta = num(&v["q"][0]);
-    let first = [num(&v["first_node"][0]), num(&v["first_node"][1])];
+    let first = [
+        num(&v["cables"][0]["first_node"][0]),
+        num(&v["cables"][0]["first_node"][1]),
+    ];
     assert!(
         (first[0] - 0.3 * theta.cos()).abs() < 1e-9 && (first[1] - 0.3 * theta.sin()).abs() < 1e-9,
         "{first:?} at θ = {theta}"

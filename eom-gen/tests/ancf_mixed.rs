@@ -354,7 +354,7 @@ fn the_ancf_beam_on_a_prescribed_hub_lags_by_the_quasi_static_deflection() {
     let t = 7.5;
     ga.run_to(t, |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
     let q = ga.q_full();
-    let tip = mixed.node_position(q, mixed.nodes - 1);
+    let tip = mixed.node_position(q, 0, mixed.cables[0].nodes - 1);
     // The hub's angle at t, and the tip's deflection across the hub's x axis.
     let (w_s, t_s) = (6.0_f64, 15.0_f64);
     let theta = w_s / t_s
