@@ -207,7 +207,8 @@ pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'
         return Err(format!("model `{}` has no cables", sys.name));
     }
     let specs: Vec<_> = sys.cables.iter().map(|c| c.chain.clone()).collect();
-    let mut built = chains(&specs).map_err(|e| format!("cable `{}`: {}", sys.cables[e.chain].name, e.error))?;
+    let mut built =
+        chains(&specs).map_err(|e| format!("cable `{}`: {}", sys.cables[e.chain].name, e.error))?;
     for (k, c) in sys.cables.iter().enumerate() {
         if c.distributed_load != [0.0; 3] {
             built.add_distributed_load(k, c.distributed_load);

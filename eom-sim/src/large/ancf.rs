@@ -414,7 +414,8 @@ impl Chains {
     /// Adds a dead load `w` per unit reference length (N/m, world axes) on
     /// every element of chain `k` only.
     pub fn add_distributed_load(&mut self, k: usize, w: [f64; 3]) {
-        self.model.add_group_distributed_load(self.parts[k].group, w);
+        self.model
+            .add_group_distributed_load(self.parts[k].group, w);
     }
 }
 
@@ -449,7 +450,8 @@ pub fn chains(specs: &[ChainSpec]) -> Result<Chains, ChainsError> {
     let mut laid = Vec::with_capacity(specs.len());
     let mut offset = 0;
     for (k, spec) in specs.iter().enumerate() {
-        let l = lay_out_by_name(spec, offset, k).map_err(|error| ChainsError { chain: k, error })?;
+        let l =
+            lay_out_by_name(spec, offset, k).map_err(|error| ChainsError { chain: k, error })?;
         offset += l.q0.len();
         laid.push(l);
     }
