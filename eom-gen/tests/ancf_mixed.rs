@@ -36,6 +36,9 @@
 //!   to round-off (1e-12).
 //! - **A planar cable on a marker that leaves the plane** is refused,
 //!   naming the cable and the marker; the same rope as a `Cable3D` runs.
+//! - **Each cable's own loads in the mixed structure**: a node force lands
+//!   on exactly its node's position coordinates, a distributed load only
+//!   on its cable, with the total `w L`.
 
 use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::mech::{Numeric, formulate};
@@ -709,4 +712,60 @@ fn a_planar_cable_on_a_marker_leaving_the_plane_is_refused_by_name() {
     let (s, names, _) = run_full_newton("link_rod.ron", &spatial, 0.05);
     assert_eq!(names, ["rod"]);
     assert!(s.q.iter().all(|x| x.is_finite()));
+}
+
+#[test]
+fn each_cables_loads_go_on_its_own_nodes_in_the_mixed_structure() {
+    // Node force (1, 2, 0) N on node 2 of `rod_b`; a distributed load of
+    // −3 N/m along z on the 1 m `loose` cable only.
+    let plain = links_model("two_links", &[LINK_A, LINK_B], &[LOOSE]);
+    let loaded = plain
+        .replace(
+            "start: Clamped, start_at: (body: \"link_b\", marker: \"tip\", axis: (1, 0, 0))),",
+            "start: Clamped, start_at: (body: \"link_b\", marker: \"tip\", axis: (1, 0, 0)),\n              node_forces: [(node: 2, force: (1, 2, 0))]),",
+        )
+        .replace(
+            "              start: Pinned),",
+            "              start: Pinned, distributed_load: (0, 0, -3)),",
+        );
+    assert_ne!(plain, loaded);
+    let loads = |text: &str| {
+        let sys = system("two_links.ron", text);
+        let f = formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
+        let mixed = eom_gen::cables::mixed(&sys, eom_gen::cables::interpreted_rigid(&f, &sys))
+            .unwrap_or_else(|e| panic!("{e}"));
+        (
+            mixed.model.structure().load_full().to_vec(),
+            mixed.cables.clone(),
+        )
+    };
+    let (l0, cables) = loads(&plain);
+    let (l1, _) = loads(&loaded);
+    let diff: Vec<f64> = l1.iter().zip(&l0).map(|(a, b)| a - b).collect();
+    let (b, loose) = (&cables[1], &cables[2]);
+    let node2 = b.offset + 2 * b.node_coords;
+    for (i, d) in diff.iter().enumerate() {
+        let want = if i == node2 {
+            1.0
+        } else if i == node2 + 1 {
+            2.0
+        } else {
+            0.0
+        };
+        if (loose.offset..loose.offset + loose.nodes * loose.node_coords).contains(&i) {
+            continue;
+        }
+        assert!(
+            (d - want).abs() < 1e-15,
+            "coordinate {i}: {d} against {want}"
+        );
+    }
+    // On the loose cable: the consistent load of −3 N/m, whose position
+    // components along z sum to the total, −3 N, and along x, y to zero.
+    for (k, want) in [(0, 0.0), (1, 0.0), (2, -3.0)] {
+        let total: f64 = (0..loose.nodes)
+            .map(|j| diff[loose.offset + j * loose.node_coords + k])
+            .sum();
+        assert!((total - want).abs() < 1e-12, "axis {k}: {total}");
+    }
 }
