@@ -163,7 +163,7 @@ fn check_planar_mounts(
             Some(b) => checked
                 .iter()
                 .flat_map(|r| &b[r * stride..(r + 1) * stride])
-                .any(|v| !(v.abs() <= 1e-12)),
+                .any(|v| v.is_nan() || v.abs() > 1e-12),
             None => true,
         };
         if off_plane {
