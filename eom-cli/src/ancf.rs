@@ -9,12 +9,15 @@
 //! - `simulate` on a model with cables: generalized-α (fixed step `--dt`,
 //!   `--rho-inf`) or RK4.
 //!
-//! A model whose cable hangs at markers of its rigid bodies (`start_at`,
-//! `end_at`) runs as one mixed model (`eom_sim::large::mixed`): the rigid
-//! part's generated functions through the interpreter, the attachments as
+//! A model whose cables hang at markers of its rigid bodies (`start_at`,
+//! `end_at`) runs as one mixed model (`eom_sim::large::mixed`): every cable
+//! in one structure (those held at no marker too), the rigid part's
+//! generated functions through the interpreter, the attachments as
 //! constraints, index-3 generalized-α (`simulate` only; `rk4` and
-//! `solve-static` refuse it). Rigid bodies beside cables that do not hang
-//! at them are refused.
+//! `solve-static` refuse it). Its CSV has, per cable, the first and last
+//! node (`CABLE.first.x`, …, `CABLE.last.z`); its JSON, per cable, every
+//! node at the end. Rigid bodies beside cables none of which hangs at
+//! them are refused.
 
 use crate::error::Error;
 use eom_gen::Checked;
@@ -324,13 +327,13 @@ fn step_progress(label: &str, steps: usize) -> indicatif::ProgressBar {
     bar
 }
 
-/// `simulate` on a model whose cable hangs at markers of its rigid
+/// `simulate` on a model whose cables hang at markers of its rigid
 /// bodies: the rigid part interpreted, index-3 generalized-α.
 fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<String, Error> {
     let sys = &checked.system;
     if run_problems(run)? {
         return Err(Error::Refused(format!(
-            "model `{}` hangs a cable at rigid bodies: the attachments are constraints (an index-3 differential-algebraic system), which rk4 does not solve; use `--integrator generalized-alpha`",
+            "model `{}` hangs cables at rigid bodies: the attachments are constraints (an index-3 differential-algebraic system), which rk4 does not solve; use `--integrator generalized-alpha`",
             sys.name
         )));
     }
@@ -355,14 +358,17 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
     let mut ga = MixedAlpha::new(m, state, opts).map_err(refused)?;
     let bar = step_progress(&sys.name, steps);
     let ns = m.n_structural();
+    let cables = &mixed.cables;
     let mut rows: Vec<Vec<f64>> = Vec::new();
     let result = ga.run_to(run.t_end, |s, q| {
         bar.inc(1);
         if run.csv.is_some() {
             let mut row = vec![s.t];
             row.extend_from_slice(&s.q[ns..]);
-            for node in [0, mixed.nodes - 1] {
-                row.extend(mixed.node_position(q, node));
+            for c in cables {
+                for node in [0, c.nodes - 1] {
+                    row.extend(c.node_position(q, node));
+                }
             }
             row.push(m.energy(s));
             rows.push(row);
@@ -377,22 +383,22 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
     let stats = &ga.stats;
     let coords: Vec<&str> = sys.coordinate_names();
     let rigid_q = &end.q[ns..];
-    let (first, last) = (
-        mixed.node_position(&q_full, 0),
-        mixed.node_position(&q_full, mixed.nodes - 1),
-    );
     let reactions = ga.reactions();
     let names: Vec<String> = m.attachments().iter().map(|a| a.name.clone()).collect();
     let mut text = String::new();
+    let described: Vec<String> = cables
+        .iter()
+        .map(|c| format!("{}: {} × {}", c.name, c.nodes - 1, c.kernel))
+        .collect();
     let _ = writeln!(
         text,
-        "model {}: rigid part of {} coordinates ({}) + cable {}: {} × {}, {} unknowns, {} constraint equations",
+        "model {}: rigid part of {} coordinates ({}) + {} {} ({}), {} unknowns, {} constraint equations",
         sys.name,
         rigid_q.len(),
         coords.join(", "),
-        mixed.cable,
-        mixed.nodes - 1,
-        mixed.kernel,
+        cables.len(),
+        if cables.len() == 1 { "cable" } else { "cables" },
+        described.join("; "),
         m.n(),
         m.n_constraints()
     );
@@ -420,11 +426,24 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
     if !qs.is_empty() {
         let _ = writeln!(text, "  rigid part: {}", qs.join(", "));
     }
-    let _ = writeln!(
-        text,
-        "  cable nodes: first at ({:.9}, {:.9}, {:.9}) m, last at ({:.9}, {:.9}, {:.9}) m",
-        first[0], first[1], first[2], last[0], last[1], last[2]
-    );
+    let mut cable_report = Vec::new();
+    for c in cables {
+        let nodes: Vec<[f64; 3]> = (0..c.nodes).map(|j| c.node_position(&q_full, j)).collect();
+        let (first, last) = (nodes[0], nodes[c.nodes - 1]);
+        let _ = writeln!(
+            text,
+            "  cable {} nodes: first at ({:.9}, {:.9}, {:.9}) m, last at ({:.9}, {:.9}, {:.9}) m",
+            c.name, first[0], first[1], first[2], last[0], last[1], last[2]
+        );
+        cable_report.push(json!({
+            "cable": c.name,
+            "element": c.kernel,
+            "elements": c.nodes - 1,
+            "first_node": first,
+            "last_node": last,
+            "nodes": nodes,
+        }));
+    }
     for (n, f) in names.iter().zip(&reactions) {
         let _ = writeln!(
             text,
@@ -442,8 +461,10 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
         let mut csv = String::new();
         let mut header = vec!["t".to_string()];
         header.extend(coords.iter().map(|c| c.to_string()));
-        for node in ["first", "last"] {
-            header.extend(["x", "y", "z"].map(|c| format!("{}.{node}.{c}", mixed.cable)));
+        for c in cables {
+            for node in ["first", "last"] {
+                header.extend(["x", "y", "z"].map(|k| format!("{}.{node}.{k}", c.name)));
+            }
         }
         header.push("energy".into());
         let _ = writeln!(csv, "{}", header.join(","));
@@ -458,9 +479,7 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
             "{}\n",
             json!({
                 "model": sys.name,
-                "cable": mixed.cable,
-                "element": mixed.kernel,
-                "elements": mixed.nodes - 1,
+                "cables": cable_report,
                 "integrator": "generalized-alpha",
                 "t": end.t,
                 "steps": stats.dynamics.steps,
@@ -470,8 +489,6 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
                 "wall_seconds": cpu,
                 "coordinates": coords,
                 "q": rigid_q,
-                "first_node": first,
-                "last_node": last,
                 "attachments": names,
                 "reactions": reactions,
                 "energy_start": e0,

@@ -203,7 +203,10 @@ fn simulate_runs_a_cable_held_by_a_rigid_link_and_refuses_what_it_cannot() {
     let num = |x: &serde_json::Value| x.as_f64().unwrap_or(f64::NAN);
     // The rod's first node stays at the link's tip (a = 0.3 m).
     let theta = num(&v["q"][0]);
-    let first = [num(&v["first_node"][0]), num(&v["first_node"][1])];
+    let first = [
+        num(&v["cables"][0]["first_node"][0]),
+        num(&v["cables"][0]["first_node"][1]),
+    ];
     assert!(
         (first[0] - 0.3 * theta.cos()).abs() < 1e-9 && (first[1] - 0.3 * theta.sin()).abs() < 1e-9,
         "{first:?} at θ = {theta}"
@@ -410,4 +413,54 @@ fn node_forces_in_the_model_format() {
     ] {
         assert!(err.contains(needle), "{needle} in\n{err}");
     }
+}
+
+#[test]
+fn simulate_names_every_cable_of_a_mixed_model() {
+    // models/ancf/trapeze.ron: a bar hanging by two ropes.
+    let csv = write("trapeze.csv", "");
+    let out = eom_gen(&[
+        "simulate",
+        "models/ancf/trapeze.ron",
+        "--t-end",
+        "0.05",
+        "--dt",
+        "1e-3",
+        "--json",
+        "--csv",
+        &csv,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let num = |x: &serde_json::Value| x.as_f64().unwrap_or(f64::NAN);
+    assert_eq!(v["cables"][0]["cable"], "left_rope");
+    assert_eq!(v["cables"][1]["cable"], "right_rope");
+    assert_eq!(v["attachments"][0], "left_rope.end");
+    assert_eq!(v["attachments"][1], "right_rope.end");
+    // Each rope's last node is at its marker on the bar, (x ∓ a, y) with
+    // the bar level; every node is listed (4 elements: 5 nodes).
+    let (x, y) = (num(&v["q"][0]), num(&v["q"][1]));
+    for (k, side) in [(0, -0.25), (1, 0.25)] {
+        let rope = &v["cables"][k];
+        assert_eq!(rope["nodes"].as_array().map(|a| a.len()), Some(5));
+        let last = [num(&rope["last_node"][0]), num(&rope["last_node"][1])];
+        assert!(
+            (last[0] - x - side).abs() < 1e-9 && (last[1] - y).abs() < 1e-9,
+            "{last:?} against ({x}, {y})"
+        );
+    }
+    let text = std::fs::read_to_string(&csv).expect("the CSV");
+    let header = text.lines().next().unwrap_or_default();
+    assert_eq!(
+        header,
+        "t,x,y,theta,left_rope.first.x,left_rope.first.y,left_rope.first.z,\
+         left_rope.last.x,left_rope.last.y,left_rope.last.z,\
+         right_rope.first.x,right_rope.first.y,right_rope.first.z,\
+         right_rope.last.x,right_rope.last.y,right_rope.last.z,energy"
+    );
+    assert_eq!(text.lines().count(), 51, "a header and 50 steps");
 }

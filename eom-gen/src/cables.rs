@@ -1,21 +1,24 @@
 //! A checked model whose cables hang at markers of its rigid bodies, as
-//! one large model of `eom_sim::large::mixed`: the cable built by its
-//! kernel's name, its ends held at the markers by attachment constraints,
-//! and the rigid part from the generated functions (`mass_matrix`, `bias`,
+//! one large model of `eom_sim::large::mixed`: every cable of the model
+//! built by its kernel's name into one structure
+//! (`eom_sim::large::ancf::chains`, each cable's nodes at its own offset),
+//! the ends held at markers by attachment constraints, cables held at no
+//! marker (free, or held to ground) simply part of the same structure, and
+//! the rigid part from the generated functions (`mass_matrix`, `bias`,
 //! `energy`, `attachments`), interpreted or compiled.
 
 use crate::functions::Function;
 use crate::mech::Formulation;
 use crate::system::System;
-use eom_sim::large::ancf::chain;
+use eom_sim::large::ancf::{chains, kernel_dim};
 use eom_sim::large::{ByName, MixedModel, RigidPart};
 
-/// A mixed model and how to read its cable.
-pub struct Mixed<'r> {
-    /// The model.
-    pub model: MixedModel<'r>,
+/// One cable of a mixed model: what it is and where its nodes sit in the
+/// structure's full coordinates.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MixedCable {
     /// The cable's name.
-    pub cable: String,
+    pub name: String,
     /// Its kernel's name.
     pub kernel: &'static str,
     /// Dimension of positions (2 or 3).
@@ -24,17 +27,41 @@ pub struct Mixed<'r> {
     pub node_coords: usize,
     /// Number of nodes.
     pub nodes: usize,
+    /// Full structural index of its first node's first coordinate (node
+    /// `j`'s coordinates start at `offset + j · node_coords`).
+    pub offset: usize,
 }
 
-impl Mixed<'_> {
+impl MixedCable {
     /// Position of `node` in the structure's full coordinates (`z = 0`
     /// when planar).
     pub fn node_position(&self, q_full: &[f64], node: usize) -> [f64; 3] {
         let mut p = [0.0; 3];
         for (k, pk) in p.iter_mut().enumerate().take(self.dim) {
-            *pk = q_full[node * self.node_coords + k];
+            *pk = q_full[self.offset + node * self.node_coords + k];
         }
         p
+    }
+}
+
+/// A mixed model and how to read its cables.
+pub struct Mixed<'r> {
+    /// The model.
+    pub model: MixedModel<'r>,
+    /// Every cable of the model, in file order.
+    pub cables: Vec<MixedCable>,
+}
+
+impl Mixed<'_> {
+    /// Position of `node` of cable `cable` (index into [`Mixed::cables`])
+    /// in the structure's full coordinates (`z = 0` when planar).
+    pub fn node_position(&self, q_full: &[f64], cable: usize, node: usize) -> [f64; 3] {
+        self.cables[cable].node_position(q_full, node)
+    }
+
+    /// The index of the cable named `name`.
+    pub fn cable(&self, name: &str) -> Option<usize> {
+        self.cables.iter().position(|c| c.name == name)
     }
 }
 
@@ -45,16 +72,11 @@ pub fn has_mounts(sys: &System) -> bool {
 
 /// Why the rigid part of `sys` cannot join its cables, or `Ok`: the large
 /// runtime needs `q̇ = u` (no quaternions, no speeds other than the
-/// coordinates' rates), no constraint equations of its own, one cable.
+/// coordinates' rates), no constraint equations of its own, and a planar
+/// cable's ends held at markers that move in the plane z = 0
+/// ([`check_planar_mounts`]). Any number of cables, of any kernels.
 pub fn check_rigid(sys: &System, f: &Formulation) -> Result<(), String> {
     let mounted: Vec<usize> = sys.cable_mounts().iter().map(|(c, _, _)| *c).collect();
-    if sys.cables.len() != 1 {
-        return Err(format!(
-            "model `{}` has {} cables and rigid bodies holding cable ends: one cable per such model for now",
-            sys.name,
-            sys.cables.len()
-        ));
-    }
     if mounted.is_empty() {
         return Err(format!(
             "no cable end of model `{}` is held at a marker (`start_at`/`end_at`)",
@@ -106,6 +128,62 @@ pub fn check_rigid(sys: &System, f: &Formulation) -> Result<(), String> {
             sys.name
         ));
     }
+    check_planar_mounts(sys, f, &x)
+}
+
+/// A planar cable (`Cable2D`, `Cable2DGreen`, `Beam2D`) moves in the plane
+/// z = 0, and its attachments hold only the x and y of its end: the
+/// marker it hangs at must stay in that plane (`p_z = 0` and `∂p_z/∂q = 0`),
+/// and a clamp's normal `n₁` too, at the generic state `x` (else the
+/// marker would leave the cable behind, unseen). `Err` names the cable,
+/// its end and the marker.
+fn check_planar_mounts(
+    sys: &System,
+    f: &Formulation,
+    x: &crate::interpret::Point<'_>,
+) -> Result<(), String> {
+    let mounts = sys.cable_mounts();
+    let planar = |c: usize| kernel_dim(&sys.cables[c].chain.kernel) == Some(2);
+    if !mounts.iter().any(|(c, _, _)| planar(*c)) {
+        return Ok(());
+    }
+    let stride = 1 + sys.nq();
+    let rows = crate::interpret::evaluate_function(f, Function::Attachments, x).unwrap_or_default();
+    let mut at = 0;
+    for (c, end, m) in &mounts {
+        let n_rows = if m.axis.is_some() { 9 } else { 3 };
+        let block = rows.get(at * stride..(at + n_rows) * stride);
+        at += n_rows;
+        if !planar(*c) {
+            continue;
+        }
+        // Rows p_z (2) and, for a clamp, n₁_z (5): value and partials.
+        let checked: &[usize] = if m.axis.is_some() { &[2, 5] } else { &[2] };
+        let off_plane = match block {
+            Some(b) => checked
+                .iter()
+                .flat_map(|r| &b[r * stride..(r + 1) * stride])
+                .any(|v| v.is_nan() || v.abs() > 1e-12),
+            None => true,
+        };
+        if off_plane {
+            let cable = &sys.cables[*c];
+            let body = &sys.bodies[m.body];
+            return Err(format!(
+                "cable `{}` is planar ({}) but the marker `{}.{}` holding its {} leaves the plane z = 0 as the rigid part moves{}: use `Cable3D`, or keep the marker in the x–y plane (revolute joints about z, prismatic joints in x–y)",
+                cable.name,
+                cable.chain.kernel,
+                body.name,
+                body.markers[m.marker].name,
+                if *end { "end" } else { "start" },
+                if m.axis.is_some() {
+                    " (or its clamp's axis turns out of the plane)"
+                } else {
+                    ""
+                }
+            ));
+        }
+    }
     Ok(())
 }
 
@@ -118,28 +196,57 @@ pub fn interpreted_rigid<'a>(f: &'a Formulation, sys: &'a System) -> Box<dyn Rig
     }))
 }
 
-/// The model's one cable joined to the rigid part `rigid` at its mounts.
+/// Every cable of the model in one structure (in file order, each
+/// cable's nodes after the previous cable's; its distributed load and node
+/// forces carried over), joined to the rigid part `rigid` at the cable
+/// ends held at markers (`System::cable_mounts` order, the order of the
+/// generated `attachments`). Cables held at no marker are part of the
+/// structure too (free, or held to ground by their supports).
 pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'r>, String> {
-    let Some(c) = sys.cables.first() else {
+    if sys.cables.is_empty() {
         return Err(format!("model `{}` has no cables", sys.name));
-    };
-    let ch = chain(&c.chain).map_err(|e| format!("cable `{}`: {e}", c.name))?;
-    let mut attachments = Vec::new();
-    for (end, mount) in [(false, &c.start_at), (true, &c.end_at)] {
-        if let Some(m) = mount {
-            let name = format!("{}.{}", c.name, if end { "end" } else { "start" });
-            attachments.push(ch.attachment(&name, end, m.axis.is_some()));
+    }
+    let specs: Vec<_> = sys.cables.iter().map(|c| c.chain.clone()).collect();
+    let mut built =
+        chains(&specs).map_err(|e| format!("cable `{}`: {}", sys.cables[e.chain].name, e.error))?;
+    for (k, c) in sys.cables.iter().enumerate() {
+        if c.distributed_load != [0.0; 3] {
+            built.add_distributed_load(k, c.distributed_load);
+        }
+        let part = &built.parts[k];
+        for &(node, f) in &c.node_forces {
+            if node >= part.nodes {
+                return Err(format!(
+                    "cable `{}` has no node {node} (its nodes are 0 to {})",
+                    c.name,
+                    part.nodes - 1
+                ));
+            }
+            for (k, &fk) in f.iter().enumerate().take(part.dim) {
+                built.model.add_point_load(part.position_index(node, k), fk);
+            }
         }
     }
-    let (kernel, dim, node_coords, nodes) = (ch.kernel, ch.dim, ch.node_coords, ch.nodes);
-    let model = MixedModel::new(ch.model, rigid, attachments)
-        .map_err(|e| format!("cable `{}`: {e}", c.name))?;
-    Ok(Mixed {
-        model,
-        cable: c.name.clone(),
-        kernel,
-        dim,
-        node_coords,
-        nodes,
-    })
+    let mut attachments = Vec::new();
+    for (c, end, mount) in sys.cable_mounts() {
+        let cable = &sys.cables[c];
+        let name = format!("{}.{}", cable.name, if end { "end" } else { "start" });
+        attachments.push(built.parts[c].attachment(&name, end, mount.axis.is_some()));
+    }
+    let cables = sys
+        .cables
+        .iter()
+        .zip(&built.parts)
+        .map(|(c, p)| MixedCable {
+            name: c.name.clone(),
+            kernel: p.kernel,
+            dim: p.dim,
+            node_coords: p.node_coords,
+            nodes: p.nodes,
+            offset: p.offset,
+        })
+        .collect();
+    let model = MixedModel::new(built.model, rigid, attachments)
+        .map_err(|e| format!("model `{}`: {e}", sys.name))?;
+    Ok(Mixed { model, cables })
 }

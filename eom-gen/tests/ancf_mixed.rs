@@ -19,6 +19,26 @@
 //! - **The bundled `models/ancf/pendulum_rod.ron`** (the Berzeri–Shabana
 //!   rod pinned to a rigid link) keeps its energy to second order in the
 //!   step and its constraint residual at the Newton tolerance.
+//! - **The bundled `models/ancf/trapeze.ron`** (a rigid bar hanging by two
+//!   ANCF ropes, several cables in one mixed model): without damping its
+//!   energy is kept to second order in the step (halving `h` cuts the
+//!   largest drift about 4×); released as a tilted parallelogram it swings
+//!   with the bar level — by symmetry the two ropes pull equally, so the
+//!   bar's angle stays at round-off and the right rope is the left one
+//!   moved by the pivots' spacing — and as the rigid parallelogram (the
+//!   compound pendulum of the bar and two uniform rods), up to the ropes'
+//!   compliance.
+//! - **Independent subsystems in one model file move as each in a file of
+//!   its own**: two links each holding a cable (one pinned, one clamped,
+//!   of two kernels) and a spatial cable held to ground only (it joins the
+//!   same structure), against the two links' models alone: the same
+//!   block-diagonal step equations, so with full Newton the states agree
+//!   to round-off (1e-12).
+//! - **A planar cable on a marker that leaves the plane** is refused,
+//!   naming the cable and the marker; the same rope as a `Cable3D` runs.
+//! - **Each cable's own loads in the mixed structure**: a node force lands
+//!   on exactly its node's position coordinates, a distributed load only
+//!   on its cable, with the total `w L`.
 
 use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::mech::{Numeric, formulate};
@@ -354,7 +374,7 @@ fn the_ancf_beam_on_a_prescribed_hub_lags_by_the_quasi_static_deflection() {
     let t = 7.5;
     ga.run_to(t, |_, _| {}).unwrap_or_else(|e| panic!("{e}"));
     let q = ga.q_full();
-    let tip = mixed.node_position(q, mixed.nodes - 1);
+    let tip = mixed.node_position(q, 0, mixed.cables[0].nodes - 1);
     // The hub's angle at t, and the tip's deflection across the hub's x axis.
     let (w_s, t_s) = (6.0_f64, 15.0_f64);
     let theta = w_s / t_s
@@ -378,4 +398,374 @@ fn the_ancf_beam_on_a_prescribed_hub_lags_by_the_quasi_static_deflection() {
         "{deflection} against {want}"
     );
     assert!(off_axis.abs() < 1e-9 && ga.stats.max_constraint_residual < 1e-9);
+}
+
+/// Runs the trapeze at step `h` to `t_end` (no damping, `ρ∞ = 1`),
+/// calling `observe(mixed, state, q_full)` after every step; returns the
+/// largest constraint residual.
+fn run_trapeze(
+    h: f64,
+    t_end: f64,
+    observe: impl FnMut(&eom_gen::cables::Mixed<'_>, &eom_sim::large::State, &[f64]),
+) -> f64 {
+    run_trapeze_with(h, t_end, 1e9, 1.0, observe)
+}
+
+/// [`run_trapeze`] with the ropes' Young's modulus `e` and the spectral
+/// radius `rho_inf`.
+fn run_trapeze_with(
+    h: f64,
+    t_end: f64,
+    e: f64,
+    rho_inf: f64,
+    mut observe: impl FnMut(&eom_gen::cables::Mixed<'_>, &eom_sim::large::State, &[f64]),
+) -> f64 {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/ancf/trapeze.ron");
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{path}: {e}"));
+    let bundled_e = "(name: \"E\", value: 1e9,";
+    assert!(text.contains(bundled_e), "the bundled trapeze's E");
+    let text = text.replace(bundled_e, &format!("(name: \"E\", value: {e:e},"));
+    let sys = system("trapeze.ron", &text);
+    let f = formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
+    eom_gen::cables::check_rigid(&sys, &f).unwrap_or_else(|e| panic!("{e}"));
+    let mixed = eom_gen::cables::mixed(&sys, eom_gen::cables::interpreted_rigid(&f, &sys))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let m = &mixed.model;
+    let state = m.initial_state(0.0, &sys.q0(), &sys.u0());
+    observe(&mixed, &state, &m.structural_full(&state.q));
+    let opts = AlphaOptions {
+        h,
+        rho_inf,
+        ..AlphaOptions::default()
+    };
+    let mut ga = MixedAlpha::new(m, state, opts).unwrap_or_else(|e| panic!("{e}"));
+    ga.run_to(t_end, |s, q| observe(&mixed, s, q))
+        .unwrap_or_else(|e| panic!("{e}"));
+    ga.stats.max_constraint_residual
+}
+
+#[test]
+fn the_trapeze_keeps_its_energy_to_second_order() {
+    let t_end = 0.5;
+    let drift = |h: f64| {
+        let mut e0 = None;
+        let mut worst = 0.0_f64;
+        let r = run_trapeze(h, t_end, |mixed, s, _| {
+            let e = mixed.model.energy(s);
+            let e0 = *e0.get_or_insert(e);
+            worst = worst.max((e - e0).abs());
+        });
+        (worst, r)
+    };
+    let (e1, r1) = drift(2e-3);
+    let (e2, r2) = drift(1e-3);
+    let order = (e1 / e2).log2();
+    println!(
+        "trapeze, max |ΔE| over {t_end} s: h = 2e-3 {e1:.3e} J, 1e-3 {e2:.3e} J, order {order:.2}; max |Φ| {r1:.1e}, {r2:.1e}"
+    );
+    // The energy exchanged in the swing: m g L (1 − cos φ0) ≈ 0.87 J; the
+    // drift is a few millionths of it.
+    assert!(e2 < 1e-5, "{e2}");
+    assert!(order > 1.7 && order < 2.5, "order {order}");
+    assert!(r1 < 1e-9 && r2 < 1e-9);
+}
+
+/// The rigid parallelogram: a bar of mass `m` translating on a circle of
+/// radius `l` and two uniform rods of `mu` kg/m, angle `φ` from the
+/// vertical, `I φ̈ = −g S sin φ` with `I = m l² + 2 μ l³/3`,
+/// `S = m l + μ l²`, released at rest from `φ0`: the angle at `h, 2h, …,
+/// steps · h` (RK4, 20 substeps a step).
+fn parallelogram_angles(m: f64, l: f64, mu: f64, phi0: f64, h: f64, steps: usize) -> Vec<f64> {
+    let inertia = m * l * l + 2.0 * mu * l.powi(3) / 3.0;
+    let moment = m * l + mu * l * l;
+    let f = |p: f64| -9.81 * moment * p.sin() / inertia;
+    let sub = 20;
+    let k = h / sub as f64;
+    let (mut p, mut w) = (phi0, 0.0_f64);
+    let mut out = Vec::with_capacity(steps);
+    for _ in 0..steps {
+        for _ in 0..sub {
+            let (k1p, k1w) = (w, f(p));
+            let (k2p, k2w) = (w + 0.5 * k * k1w, f(p + 0.5 * k * k1p));
+            let (k3p, k3w) = (w + 0.5 * k * k2w, f(p + 0.5 * k * k2p));
+            let (k4p, k4w) = (w + k * k3w, f(p + k * k3p));
+            p += k / 6.0 * (k1p + 2.0 * k2p + 2.0 * k3p + k4p);
+            w += k / 6.0 * (k1w + 2.0 * k2w + 2.0 * k3w + k4w);
+        }
+        out.push(p);
+    }
+    out
+}
+
+/// The largest difference over `[0, t_end]` between the trapeze's rope
+/// angle (of the bar's centre about the pivots' midpoint) and the rigid
+/// parallelogram's, with ropes of modulus `e`; the largest bar angle, the
+/// largest difference between the right rope and the left rope moved by
+/// `(2a, 0)`, and the largest constraint residual.
+fn trapeze_against_rigid(e: f64, t_end: f64) -> (f64, f64, f64, f64) {
+    let (a, m, l, d, phi0, h) = (0.25, 2.0, 1.0, 0.006_f64, 0.3, 1e-3);
+    let mu = 1150.0 * std::f64::consts::PI * d * d / 4.0;
+    let want = parallelogram_angles(m, l, mu, phi0, h, (t_end / h).round() as usize);
+    let (mut off_rigid, mut theta_max, mut shift) = (0.0_f64, 0.0_f64, 0.0_f64);
+    let mut step = 0;
+    let residual = run_trapeze_with(h, t_end, e, 1.0, |mixed, s, q| {
+        let ns = mixed.model.n_structural();
+        let (x, y, theta) = (s.q[ns], s.q[ns + 1], s.q[ns + 2]);
+        theta_max = theta_max.max(theta.abs());
+        let (Some(left), Some(right)) = (mixed.cable("left_rope"), mixed.cable("right_rope"))
+        else {
+            panic!("the ropes are named left_rope and right_rope")
+        };
+        for j in 0..mixed.cables[left].nodes {
+            let (pl, pr) = (
+                mixed.node_position(q, left, j),
+                mixed.node_position(q, right, j),
+            );
+            shift = shift
+                .max((pr[0] - pl[0] - 2.0 * a).abs())
+                .max((pr[1] - pl[1]).abs());
+        }
+        if s.t > 0.0 {
+            off_rigid = off_rigid.max((x.atan2(-y) - want[step]).abs());
+            step += 1;
+        }
+    });
+    (off_rigid, theta_max, shift, residual)
+}
+
+#[test]
+fn the_trapeze_swings_level_as_the_rigid_parallelogram() {
+    let t_end = 1.0;
+    // The bundled ropes (E = 1 GPa) and ten times softer ones. (Ten times
+    // stiffer ones need a smaller step: at h = 1e-3 Newton fails in the
+    // first steps, at 5e-4 it runs.)
+    let (d1, theta1, shift1, r1) = trapeze_against_rigid(1e8, t_end);
+    let (d2, theta2, shift2, r2) = trapeze_against_rigid(1e9, t_end);
+    println!(
+        "trapeze over {t_end} s against the rigid parallelogram: max |Δφ| {d1:.2e} rad (E = 1e8), {d2:.2e} rad (E = 1e9); max |θ| {theta1:.1e}, {theta2:.1e} rad; right rope − left rope − (2a, 0): {shift1:.1e}, {shift2:.1e} m; max |Φ| {r1:.1e}, {r2:.1e}"
+    );
+    // Symmetry: the bar stays level and the ropes move alike, to round-off.
+    for (theta, shift) in [(theta1, shift1), (theta2, shift2)] {
+        assert!(theta < 1e-12, "bar angle {theta:e}");
+        assert!(shift < 1e-12, "ropes differ by {shift:e} m");
+    }
+    // The swing is the rigid parallelogram's up to the ropes' compliance:
+    // at E = 1 GPa they stretch by ε ≈ 3.5e-4 under the bar's weight, which
+    // lengthens the period by ε/2, a phase lag of ε/2 · ω t ≈ 5.5e-4 rad
+    // at 1 s, or 1.6e-4 rad of angle at the amplitude 0.3 rad. Ten times
+    // softer, ten times further.
+    assert!(d2 < 3e-4, "{d2}");
+    assert!(d1 / d2 > 5.0 && d1 / d2 < 20.0, "ratio {}", d1 / d2);
+    assert!(r1 < 1e-9 && r2 < 1e-9);
+}
+
+/// Link `a` (pivot at the origin) with the Berzeri–Shabana rod pinned at
+/// its tip (Cable2D): body, joint, cable.
+const LINK_A: [&str; 3] = [
+    r#"(name: "link_a", mass: 0.5, com: (0.15, 0, 0), inertia: Diag(0, 0.00375, 0.00375),
+         markers: [(name: "tip", position: (0.3, 0, 0))]),"#,
+    r#"(name: "pivot_a", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "link_a", coordinates: ["theta_a"]),"#,
+    r#"Cable(name: "rod_a", element: Cable2D, from: (0.3, 0, 0), to: (1.5, 0, 0), elements: 6,
+              young: 0.7e6, density: 5540, area: 0.0018, second_moment: 1.215e-8,
+              start: Pinned, start_at: (body: "link_a", marker: "tip")),"#,
+];
+
+/// Link `b` (pivot at (0, −2)) with a stiffer rod of the Green-strain
+/// kernel clamped at its tip.
+const LINK_B: [&str; 3] = [
+    r#"(name: "link_b", mass: 0.4, com: (0.1, 0, 0), inertia: Diag(0, 0.0013333333333333333, 0.0013333333333333333),
+         markers: [(name: "tip", position: (0.2, 0, 0))]),"#,
+    r#"(name: "pivot_b", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "link_b", coordinates: ["theta_b"],
+         parent_frame: (position: (0, -2, 0))),"#,
+    r#"Cable(name: "rod_b", element: Cable2DGreen, from: (0.2, -2, 0), to: (0.7, -2, 0), elements: 4,
+              young: 2e8, density: 2700, area: 1e-4, second_moment: 8.333333333333333e-10,
+              start: Clamped, start_at: (body: "link_b", marker: "tip", axis: (1, 0, 0))),"#,
+];
+
+/// A spatial cable pinned to ground only, hanging at no marker.
+const LOOSE: &str = r#"Cable(name: "loose", element: Cable3D, from: (-1, 0, 0), to: (-1, 0, 1), elements: 4,
+              young: 0.7e6, density: 5540, area: 0.0018, second_moment: 1.215e-8,
+              start: Pinned),"#;
+
+/// A model of the links `links` and the extra cables `extra`.
+fn links_model(name: &str, links: &[[&str; 3]], extra: &[&str]) -> String {
+    let col = |k: usize| {
+        links
+            .iter()
+            .map(|l| l[k])
+            .collect::<Vec<_>>()
+            .join("\n        ")
+    };
+    let mut cables = col(2);
+    for e in extra {
+        cables.push_str("\n        ");
+        cables.push_str(e);
+    }
+    format!(
+        "Model(\n    name: \"{name}\",\n    gravity: (0, -9.81, 0),\n    bodies: [\n        {}\n    ],\n    joints: [\n        {}\n    ],\n    cables: [\n        {cables}\n    ],\n)\n",
+        col(0),
+        col(1)
+    )
+}
+
+/// Runs the mixed model of `text` to `t_end` with full Newton; the state.
+fn run_full_newton(
+    name: &str,
+    text: &str,
+    t_end: f64,
+) -> (eom_sim::large::State, Vec<String>, Vec<usize>) {
+    let sys = system(name, text);
+    let f = formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
+    eom_gen::cables::check_rigid(&sys, &f).unwrap_or_else(|e| panic!("{e}"));
+    let mixed = eom_gen::cables::mixed(&sys, eom_gen::cables::interpreted_rigid(&f, &sys))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let m = &mixed.model;
+    let state = m.initial_state(0.0, &sys.q0(), &sys.u0());
+    let opts = AlphaOptions {
+        h: 1e-3,
+        rho_inf: 0.9,
+        reuse_matrix: false,
+        ..AlphaOptions::default()
+    };
+    let mut ga = MixedAlpha::new(m, state, opts).unwrap_or_else(|e| panic!("{e}"));
+    ga.run_to(t_end, |_, _| {})
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert!(ga.stats.max_constraint_residual < 1e-9);
+    // Free coordinates per cable, in order.
+    let s = m.structure();
+    let free: Vec<usize> = mixed
+        .cables
+        .iter()
+        .map(|c| {
+            (c.offset..c.offset + c.nodes * c.node_coords)
+                .filter(|&i| s.free_index(i).is_some())
+                .count()
+        })
+        .collect();
+    let names = mixed.cables.iter().map(|c| c.name.clone()).collect();
+    (ga.state().clone(), names, free)
+}
+
+#[test]
+fn independent_links_in_one_model_move_as_each_in_its_own() {
+    let t_end = 0.3;
+    let two = links_model("two_links", &[LINK_A, LINK_B], &[LOOSE]);
+    let (s, names, free) = run_full_newton("two_links.ron", &two, t_end);
+    assert_eq!(names, ["rod_a", "rod_b", "loose"]);
+    let (sa, na, fa) = run_full_newton("link_a.ron", &links_model("link_a", &[LINK_A], &[]), t_end);
+    let (sb, nb, fb) = run_full_newton("link_b.ron", &links_model("link_b", &[LINK_B], &[]), t_end);
+    assert_eq!(
+        (na, nb),
+        (vec!["rod_a".to_string()], vec!["rod_b".to_string()])
+    );
+    assert_eq!((fa[0], fb[0]), (free[0], free[1]));
+    // y = (x_a, x_b, x_loose, θ_a, θ_b) against (x_a, θ_a) and (x_b, θ_b).
+    let (xa, xb) = (free[0], free[1]);
+    let ns: usize = free.iter().sum();
+    let mut worst = 0.0_f64;
+    for (got, want) in [
+        (&s.q[..xa], &sa.q[..xa]),
+        (&s.q[xa..xa + xb], &sb.q[..xb]),
+        (&s.q[ns..ns + 1], &sa.q[xa..]),
+        (&s.q[ns + 1..], &sb.q[xb..]),
+    ] {
+        assert_eq!(got.len(), want.len());
+        for (g, w) in got.iter().zip(want) {
+            worst = worst.max((g - w).abs());
+        }
+    }
+    // The loose cable fell under its own weight beside them.
+    let loose_moved = s.v[xa + xb..ns].iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+    println!(
+        "two links in one model against each alone after {t_end} s: θ_a = {:.9}, θ_b = {:.9}, max |Δq| {worst:.1e}; the loose cable's fastest speed {loose_moved:.3} m/s",
+        s.q[ns],
+        s.q[ns + 1]
+    );
+    assert!(s.q[ns] < -0.1 && s.q[ns + 1] < -0.1, "the links fell");
+    assert!(loose_moved > 0.1, "the loose cable moves");
+    assert!(worst < 1e-12, "{worst:e}");
+}
+
+#[test]
+fn a_planar_cable_on_a_marker_leaving_the_plane_is_refused_by_name() {
+    // The link turns about y: its tip leaves the x–y plane.
+    let text = LINK_ROD
+        .replace("E_VALUE", "2e9")
+        .replace("Revolute(axis: (0, 0, 1))", "Revolute(axis: (0, 1, 0))")
+        .replace(
+            "start: Clamped, start_at: (body: \"link\", marker: \"tip\", axis: (1, 0, 0))",
+            "start: Pinned, start_at: (body: \"link\", marker: \"tip\")",
+        );
+    let sys = system("link_rod.ron", &text);
+    let f = formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
+    let Err(e) = eom_gen::cables::check_rigid(&sys, &f) else {
+        panic!("a planar cable on a marker leaving the plane was accepted")
+    };
+    println!("{e}");
+    assert!(
+        e.contains("cable `rod` is planar (Cable2D) but the marker `link.tip` holding its start leaves the plane z = 0"),
+        "{e}"
+    );
+    assert!(e.contains("use `Cable3D`"), "{e}");
+    // The same rope as a spatial cable: accepted, and it runs.
+    let spatial = text.replace("element: Cable2D", "element: Cable3D");
+    let (s, names, _) = run_full_newton("link_rod.ron", &spatial, 0.05);
+    assert_eq!(names, ["rod"]);
+    assert!(s.q.iter().all(|x| x.is_finite()));
+}
+
+#[test]
+fn each_cables_loads_go_on_its_own_nodes_in_the_mixed_structure() {
+    // Node force (1, 2, 0) N on node 2 of `rod_b`; a distributed load of
+    // −3 N/m along z on the 1 m `loose` cable only.
+    let plain = links_model("two_links", &[LINK_A, LINK_B], &[LOOSE]);
+    let loaded = plain
+        .replace(
+            "start: Clamped, start_at: (body: \"link_b\", marker: \"tip\", axis: (1, 0, 0))),",
+            "start: Clamped, start_at: (body: \"link_b\", marker: \"tip\", axis: (1, 0, 0)),\n              node_forces: [(node: 2, force: (1, 2, 0))]),",
+        )
+        .replace(
+            "              start: Pinned),",
+            "              start: Pinned, distributed_load: (0, 0, -3)),",
+        );
+    assert_ne!(plain, loaded);
+    let loads = |text: &str| {
+        let sys = system("two_links.ron", text);
+        let f = formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
+        let mixed = eom_gen::cables::mixed(&sys, eom_gen::cables::interpreted_rigid(&f, &sys))
+            .unwrap_or_else(|e| panic!("{e}"));
+        (
+            mixed.model.structure().load_full().to_vec(),
+            mixed.cables.clone(),
+        )
+    };
+    let (l0, cables) = loads(&plain);
+    let (l1, _) = loads(&loaded);
+    let diff: Vec<f64> = l1.iter().zip(&l0).map(|(a, b)| a - b).collect();
+    let (b, loose) = (&cables[1], &cables[2]);
+    let node2 = b.offset + 2 * b.node_coords;
+    for (i, d) in diff.iter().enumerate() {
+        let want = if i == node2 {
+            1.0
+        } else if i == node2 + 1 {
+            2.0
+        } else {
+            0.0
+        };
+        if (loose.offset..loose.offset + loose.nodes * loose.node_coords).contains(&i) {
+            continue;
+        }
+        assert!(
+            (d - want).abs() < 1e-15,
+            "coordinate {i}: {d} against {want}"
+        );
+    }
+    // On the loose cable: the consistent load of −3 N/m, whose position
+    // components along z sum to the total, −3 N, and along x, y to zero.
+    for (k, want) in [(0, 0.0), (1, 0.0), (2, -3.0)] {
+        let total: f64 = (0..loose.nodes)
+            .map(|j| diff[loose.offset + j * loose.node_coords + k])
+            .sum();
+        assert!((total - want).abs() < 1e-12, "axis {k}: {total}");
+    }
 }

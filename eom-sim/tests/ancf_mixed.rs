@@ -21,8 +21,22 @@
 //!   4 when `h` halves.
 //! - **Constraint residual**: the index-3 method keeps `Φ` at the Newton
 //!   tolerance at every step.
+//! - **Several chains in one structure** (`ancf::chains`): chains of three
+//!   kernels (a planar cable with an end mass and force, a spatial cable,
+//!   a planar beam) laid out one after the other give exactly (bitwise)
+//!   each chain's own initial coordinates, loads, mass matrix, internal
+//!   forces and tangent as diagonal blocks, and nothing between them; a
+//!   chain with a gravity of its own keeps it; a chain that cannot be
+//!   built is named by its index.
+//! - **Independent subsystems in one mixed model move as each alone**: two
+//!   rigid links, one with a soft rod pinned at its tip, one with a stiffer
+//!   rod of the Green-strain kernel clamped at its tip, and a spatial cable
+//!   pinned to ground, all in one model (one structure, one rigid part of
+//!   two coordinates, three attachments), against each in a model of its
+//!   own: the step equations are the same block-diagonal system, so with
+//!   full Newton the states agree to round-off (1e-12).
 
-use eom_sim::large::ancf::{Chain, ChainSpec, Section, Support, chain};
+use eom_sim::large::ancf::{Chain, ChainSpec, Section, Support, chain, chains};
 use eom_sim::large::{AlphaOptions, GeneralizedAlpha, MixedAlpha, MixedModel, RigidPart, State};
 
 const G: f64 = 9.81;
@@ -313,4 +327,343 @@ fn a_start_off_the_marker_is_refused() {
         text.contains("`rod.start` is 1.000e-2 m from its marker"),
         "{text}"
     );
+}
+
+/// A small deterministic generator for test states.
+struct Lcg(u64);
+
+impl Lcg {
+    /// Uniform in `[-1, 1)`.
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+}
+
+/// The three chains of the layout test: a planar cable pinned at its start
+/// with an end mass and an end force, a spatial cable clamped at its
+/// start, a planar beam clamped at both ends.
+fn three_chains() -> Vec<ChainSpec> {
+    let mut a = cable([0.0; 3], [1.2, 0.0, 0.0], 5, berzeri_section());
+    a.start_support = Support::Pinned;
+    a.end_mass = 0.3;
+    a.end_force = [0.5, 2.0, 0.0];
+    let mut b = cable([0.0, 1.0, 0.5], [0.6, 1.5, 0.1], 3, berzeri_section());
+    b.kernel = "Cable3D".into();
+    b.start_support = Support::Clamped;
+    let section = Section {
+        e: 1e7,
+        nu: 0.3,
+        rho: 1000.0,
+        b: 0.05,
+        h: 0.02,
+        area: 0.001,
+        inertia: 0.05 * 0.02_f64.powi(3) / 12.0,
+        ..Section::default()
+    };
+    let mut c = cable([-1.0, 0.0, 0.0], [-1.0, -1.0, 0.0], 4, section);
+    c.kernel = "Beam2D".into();
+    c.start_support = Support::Clamped;
+    c.end_support = Support::Clamped;
+    vec![a, b, c]
+}
+
+#[test]
+fn chains_in_one_structure_are_each_chain_alone_block_by_block() {
+    let specs = three_chains();
+    let all = chains(&specs).unwrap_or_else(|e| panic!("{e}"));
+    let alone: Vec<Chain> = specs.iter().map(build).collect();
+    let m = &all.model;
+    assert_eq!(
+        m.n_full(),
+        alone.iter().map(|c| c.model.n_full()).sum::<usize>()
+    );
+    assert_eq!(
+        m.n_free(),
+        alone.iter().map(|c| c.model.n_free()).sum::<usize>()
+    );
+    assert_eq!(
+        m.mass().pattern().nnz(),
+        alone
+            .iter()
+            .map(|c| c.model.mass().pattern().nnz())
+            .sum::<usize>(),
+        "no entry couples two chains"
+    );
+    // A deformed state and velocities, the same for the whole and the parts.
+    let mut rng = Lcg(7);
+    let q: Vec<f64> = m.q0().iter().map(|x| x + 0.05 * rng.next()).collect();
+    let qd: Vec<f64> = (0..m.n_full()).map(|_| rng.next()).collect();
+    let x = m.restrict(&q);
+    let xd = m.restrict(&qd);
+    let (q, qd) = (m.expand(&x), m.expand_rate(&xd));
+    let mut f_all = vec![0.0; m.n_free()];
+    m.internal(&q, &qd, &mut vec![0.0; m.n_full()], &mut f_all);
+    let mut k_all = eom_sim::large::SparseMatrix::zeros(m.pattern().clone());
+    m.jacobian(&q, &qd, 0.7, 0.3, 1.1, &mut k_all);
+    let (mut full_at, mut free_at) = (0, 0);
+    for (k, (part, ch)) in all.parts.iter().zip(&alone).enumerate() {
+        let cm = &ch.model;
+        let (nf, nx) = (cm.n_full(), cm.n_free());
+        assert_eq!(part.offset, full_at, "chain {k}'s offset");
+        assert_eq!((part.kernel, part.nodes), (ch.kernel, ch.nodes));
+        let full = full_at..full_at + nf;
+        assert_eq!(&m.q0()[full.clone()], cm.q0(), "chain {k}: q0");
+        assert_eq!(
+            &m.load_full()[full.clone()],
+            cm.load_full(),
+            "chain {k}: loads"
+        );
+        let (qk, qdk) = (&q[full.clone()], &qd[full.clone()]);
+        let mut f = vec![0.0; nx];
+        cm.internal(qk, qdk, &mut vec![0.0; nf], &mut f);
+        assert_eq!(&f_all[free_at..free_at + nx], &f[..], "chain {k}: forces");
+        let mut kk = eom_sim::large::SparseMatrix::zeros(cm.pattern().clone());
+        cm.jacobian(qk, qdk, 0.7, 0.3, 1.1, &mut kk);
+        for (i, j, slot) in cm.pattern().entries() {
+            let (gi, gj) = (free_at + i, free_at + j);
+            assert_eq!(
+                m.mass().get(gi, gj),
+                cm.mass().values[slot],
+                "chain {k}: M[{i}][{j}]"
+            );
+            assert_eq!(k_all.get(gi, gj), kk.values[slot], "chain {k}: K[{i}][{j}]");
+        }
+        // The node reader: node j of the chain is node j of the part.
+        for j in 0..ch.nodes {
+            assert_eq!(part.node_position(&q, j), ch.node_position(qk, j));
+        }
+        full_at += nf;
+        free_at += nx;
+    }
+    let strain: f64 = alone
+        .iter()
+        .zip(&all.parts)
+        .map(|(c, p)| {
+            c.model
+                .strain_energy(&q[p.offset..p.offset + c.model.n_full()])
+        })
+        .sum();
+    assert!((m.strain_energy(&q) - strain).abs() <= 1e-12 * strain.abs());
+    // A chain with a gravity of its own keeps it, and a distributed load
+    // goes on its chain only.
+    let mut specs2 = specs.clone();
+    specs2[1].gravity = [0.0, 0.0, -3.0];
+    let mut two = chains(&specs2).unwrap_or_else(|e| panic!("{e}"));
+    two.add_distributed_load(2, [0.0, -4.0, 0.0]);
+    let mut mid = build(&specs2[1]);
+    let mut last = build(&specs2[2]);
+    last.model.add_distributed_load([0.0, -4.0, 0.0]);
+    mid.model.add_distributed_load([0.0; 3]);
+    for (part, ch) in two.parts.iter().zip([&alone[0], &mid, &last]) {
+        let n = ch.model.n_full();
+        let got = &two.model.load_full()[part.offset..part.offset + n];
+        for (g, w) in got.iter().zip(ch.model.load_full()) {
+            assert!((g - w).abs() <= 1e-15 * (1.0 + w.abs()), "{g} against {w}");
+        }
+    }
+    // The second chain cannot be built: it is named.
+    let mut bad = specs;
+    bad[1].elements = 0;
+    let Err(e) = chains(&bad) else {
+        panic!("a chain without elements was accepted")
+    };
+    assert_eq!(e.chain, 1);
+    assert!(
+        e.to_string()
+            .contains("chain 1: a chain needs at least one element")
+    );
+}
+
+/// Two rigid parts side by side as one: coordinates `(q_a, q_b)`, block-
+/// diagonal mass, the mounts of `a` (rows `rows_a`) then those of `b`.
+struct Both<A, B> {
+    a: A,
+    b: B,
+    rows_a: usize,
+    rows_b: usize,
+}
+
+impl<A: RigidPart, B: RigidPart> RigidPart for Both<A, B> {
+    fn n(&self) -> usize {
+        self.a.n() + self.b.n()
+    }
+    fn mass_matrix(&self, t: f64, q: &[f64], m: &mut [f64]) {
+        let (na, nb, n) = (self.a.n(), self.b.n(), self.n());
+        let (mut ma, mut mb) = (vec![0.0; na * na], vec![0.0; nb * nb]);
+        self.a.mass_matrix(t, &q[..na], &mut ma);
+        self.b.mass_matrix(t, &q[na..], &mut mb);
+        m.fill(0.0);
+        for i in 0..na {
+            m[i * n..i * n + na].copy_from_slice(&ma[i * na..(i + 1) * na]);
+        }
+        for i in 0..nb {
+            m[(na + i) * n + na..(na + i + 1) * n].copy_from_slice(&mb[i * nb..(i + 1) * nb]);
+        }
+    }
+    fn bias(&self, t: f64, q: &[f64], u: &[f64], b: &mut [f64]) {
+        let na = self.a.n();
+        self.a.bias(t, &q[..na], &u[..na], &mut b[..na]);
+        self.b.bias(t, &q[na..], &u[na..], &mut b[na..]);
+    }
+    fn energy(&self, t: f64, q: &[f64], u: &[f64]) -> f64 {
+        let na = self.a.n();
+        self.a.energy(t, &q[..na], &u[..na]) + self.b.energy(t, &q[na..], &u[na..])
+    }
+    fn attachments(&self, t: f64, q: &[f64], out: &mut [f64]) {
+        let (na, nb, n) = (self.a.n(), self.b.n(), self.n());
+        let mut ra = vec![0.0; self.rows_a * (1 + na)];
+        let mut rb = vec![0.0; self.rows_b * (1 + nb)];
+        self.a.attachments(t, &q[..na], &mut ra);
+        self.b.attachments(t, &q[na..], &mut rb);
+        out.fill(0.0);
+        for r in 0..self.rows_a {
+            out[r * (1 + n)..r * (1 + n) + 1 + na]
+                .copy_from_slice(&ra[r * (1 + na)..(r + 1) * (1 + na)]);
+        }
+        for r in 0..self.rows_b {
+            let at = (self.rows_a + r) * (1 + n);
+            let from = &rb[r * (1 + nb)..(r + 1) * (1 + nb)];
+            out[at] = from[0];
+            out[at + 1 + na..at + 1 + n].copy_from_slice(&from[1..]);
+        }
+    }
+}
+
+/// No rigid body at all (a structure alone through the mixed runtime).
+struct Nothing;
+
+impl RigidPart for Nothing {
+    fn n(&self) -> usize {
+        0
+    }
+    fn mass_matrix(&self, _t: f64, _q: &[f64], _m: &mut [f64]) {}
+    fn bias(&self, _t: f64, _q: &[f64], _u: &[f64], _b: &mut [f64]) {}
+    fn energy(&self, _t: f64, _q: &[f64], _u: &[f64]) -> f64 {
+        0.0
+    }
+    fn attachments(&self, _t: f64, _q: &[f64], _out: &mut [f64]) {}
+}
+
+/// The subsystems of the independence test: a soft rod pinned at the tip
+/// of link 1 (a = 0.3 m), a stiffer Green-strain rod clamped at the tip of
+/// link 2 (a = 0.2 m), a spatial cable pinned to ground.
+fn independent_chains() -> (Vec<ChainSpec>, Link, Link) {
+    let a = cable([0.3, 0.0, 0.0], [1.5, 0.0, 0.0], 6, berzeri_section());
+    let mut b = cable(
+        [0.2, 0.0, 0.0],
+        [0.7, 0.0, 0.0],
+        4,
+        Section {
+            e: 2e8,
+            rho: 2700.0,
+            area: 1e-4,
+            inertia: 1e-8 / 12.0,
+            ..Section::default()
+        },
+    );
+    b.kernel = "Cable2DGreen".into();
+    let mut c = cable([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 4, berzeri_section());
+    c.kernel = "Cable3D".into();
+    c.start_support = Support::Pinned;
+    c.gravity = [0.0, -G, 0.0];
+    let l1 = Link {
+        a: 0.3,
+        m: 0.5,
+        clamped: false,
+    };
+    let l2 = Link {
+        a: 0.2,
+        m: 0.4,
+        clamped: true,
+    };
+    (vec![a, b, c], l1, l2)
+}
+
+#[test]
+fn independent_subsystems_in_one_mixed_model_move_as_each_alone() {
+    let (h, t_end) = (1e-3, 0.3);
+    let full_newton = AlphaOptions {
+        h,
+        rho_inf: 0.9,
+        reuse_matrix: false,
+        ..AlphaOptions::default()
+    };
+    let run = |mixed: &MixedModel<'_>, q_r: &[f64]| {
+        let u = vec![0.0; q_r.len()];
+        let state = mixed.initial_state(0.0, q_r, &u);
+        let mut ma =
+            MixedAlpha::new(mixed, state, full_newton.clone()).unwrap_or_else(|e| panic!("{e}"));
+        ma.run_to(t_end, |_, _| {})
+            .unwrap_or_else(|e| panic!("{e}"));
+        (ma.state().clone(), ma.stats.max_constraint_residual)
+    };
+    // Each alone.
+    let (specs, l1, l2) = independent_chains();
+    let c1 = build(&specs[0]);
+    let at1 = c1.attachment("a.start", false, false);
+    let m1 = MixedModel::new(c1.model, Box::new(l1), vec![at1]).unwrap_or_else(|e| panic!("{e}"));
+    let c2 = build(&specs[1]);
+    let at2 = c2.attachment("b.start", false, true);
+    let m2 = MixedModel::new(c2.model, Box::new(l2), vec![at2]).unwrap_or_else(|e| panic!("{e}"));
+    let c3 = build(&specs[2]);
+    let m3 = MixedModel::new(c3.model, Box::new(Nothing), vec![]).unwrap_or_else(|e| panic!("{e}"));
+    let (s1, _) = run(&m1, &[0.0]);
+    let (s2, _) = run(&m2, &[0.0]);
+    let (s3, _) = run(&m3, &[]);
+    // All in one.
+    let (specs, l1, l2) = independent_chains();
+    let all = chains(&specs).unwrap_or_else(|e| panic!("{e}"));
+    let ats = vec![
+        all.parts[0].attachment("a.start", false, false),
+        all.parts[1].attachment("b.start", false, true),
+    ];
+    let both = Both {
+        a: l1,
+        b: l2,
+        rows_a: 3,
+        rows_b: 9,
+    };
+    let m = MixedModel::new(all.model, Box::new(both), ats).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(m.n_constraints(), m1.n_constraints() + m2.n_constraints());
+    let (s, residual) = run(&m, &[0.0, 0.0]);
+    // y = (x₁, x₂, x₃, θ₁, θ₂) against (x₁, θ₁), (x₂, θ₂), (x₃).
+    let (n1, n2, n3) = (m1.n_structural(), m2.n_structural(), m3.n_structural());
+    let mut want_q = Vec::new();
+    let mut want_v = Vec::new();
+    for (st, n) in [(&s1, n1), (&s2, n2), (&s3, n3)] {
+        want_q.extend_from_slice(&st.q[..n]);
+        want_v.extend_from_slice(&st.v[..n]);
+    }
+    for st in [&s1, &s2] {
+        want_q.push(st.q[st.q.len() - 1]);
+        want_v.push(st.v[st.v.len() - 1]);
+    }
+    let dq =
+        s.q.iter()
+            .zip(&want_q)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+    let dv =
+        s.v.iter()
+            .zip(&want_v)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+    let (th1, th2) = (s.q[n1 + n2 + n3], s.q[n1 + n2 + n3 + 1]);
+    println!(
+        "after {t_end} s: θ₁ = {th1:.9}, θ₂ = {th2:.9}; one model against each alone: max |Δq| {dq:.1e}, max |Δv| {dv:.1e}; max |Φ| {residual:.1e}"
+    );
+    assert!(th1 < -0.1 && th2 < -0.1, "the links fell: {th1}, {th2}");
+    // A position difference δ comes with a velocity difference of up to
+    // γ/(β h) δ (the Newmark update): about 2000 δ here.
+    let (gamma, beta) = (
+        0.5 + 0.9 / 1.9 - 0.8 / 1.9,
+        0.25 * (1.0 + 0.9 / 1.9 - 0.8 / 1.9_f64).powi(2),
+    );
+    assert!(dq < 1e-12, "Δq {dq:e}");
+    assert!(dv < gamma / (beta * h) * 1e-12, "Δv {dv:e}");
+    assert!(residual < 1e-9);
 }

@@ -7,6 +7,11 @@
 //! The kernels are model-independent, so a model file's chain is built
 //! here at run time by the kernel's name ([`chain`]); nothing is compiled
 //! per model.
+//!
+//! Several chains go into one structure with [`chains`] (a model with
+//! several cables): each chain's nodes at its own offset in the full
+//! coordinates ([`ChainPart`]), each its own element group, supports, end
+//! mass and end force; the chains share no coordinate.
 
 use super::model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 use crate::elements::{Beam2D, Cable2D, Cable2DGreen, Cable3D, ElementKernel};
@@ -184,6 +189,47 @@ impl Chain {
 pub fn build_chain<E: ElementKernel<N, P> + 'static, const N: usize, const P: usize>(
     spec: &ChainSpec,
 ) -> Result<Chain, ChainError> {
+    let laid = lay_out::<E, N, P>(spec, 0, 0)?;
+    let mut b = ModelBuilder::new(laid.q0).gravity(spec.gravity);
+    for &i in &laid.fixed {
+        b = b.fix(i);
+    }
+    for &(i, f) in &laid.point_loads {
+        b = b.point_load(i, f);
+    }
+    for &(i, m) in &laid.point_masses {
+        b = b.point_mass(i, m);
+    }
+    let model = b.boxed_elements(laid.group).build();
+    let p = laid.part;
+    Ok(Chain {
+        model,
+        kernel: p.kernel,
+        dim: p.dim,
+        node_coords: p.node_coords,
+        nodes: p.nodes,
+    })
+}
+
+/// One chain laid out in a structure's full coordinates: its initial
+/// coordinates, its element group, its fixed coordinates, point masses and
+/// point loads (full indices), and where it sits.
+struct Laid {
+    q0: Vec<f64>,
+    group: Box<dyn ElementGroup>,
+    fixed: Vec<usize>,
+    point_masses: Vec<(usize, f64)>,
+    point_loads: Vec<(usize, f64)>,
+    part: ChainPart,
+}
+
+/// Lays out a chain of kernel `E` whose nodes start at full coordinate
+/// `offset`, as element group `group` of its structure.
+fn lay_out<E: ElementKernel<N, P> + 'static, const N: usize, const P: usize>(
+    spec: &ChainSpec,
+    offset: usize,
+    group: usize,
+) -> Result<Laid, ChainError> {
     let (dim, nc) = (E::DIM, E::NODE_COORDS);
     let ne = spec.elements;
     if ne == 0 {
@@ -233,23 +279,21 @@ pub fn build_chain<E: ElementKernel<N, P> + 'static, const N: usize, const P: us
     let mut els = Elements::<E, N, P>::new();
     for e in 0..ne {
         let mut conn = [0; N];
-        for (i, c) in conn.iter_mut().enumerate() {
-            *c = e * nc + i;
-        }
         let mut reference = [0.0; N];
-        for (r, &c) in reference.iter_mut().zip(&conn) {
-            *r = q0[c];
+        for (i, (c, r)) in conn.iter_mut().zip(&mut reference).enumerate() {
+            *r = q0[e * nc + i];
+            *c = offset + e * nc + i;
         }
         els.push(conn, params, reference);
     }
-    let mut b = ModelBuilder::new(q0).gravity(spec.gravity);
+    let mut fixed = Vec::new();
     for (node, support) in [(0, spec.start_support), (ne, spec.end_support)] {
-        let fixed = match support {
+        let n_fixed = match support {
             Support::Free => 0,
             Support::Pinned => dim,
             Support::Clamped => nc,
         };
-        for k in 0..fixed {
+        for k in 0..n_fixed {
             // A clamped face of the fully parameterised beam holds
             // `r(0, y) = r₀ + y r,ᵧ`: position and section vector; its
             // `r,ₓ` stays free (the face may shear, as Timoshenko's clamp;
@@ -257,25 +301,191 @@ pub fn build_chain<E: ElementKernel<N, P> + 'static, const N: usize, const P: us
             if support == Support::Clamped && nc == 3 * dim && (dim..2 * dim).contains(&k) {
                 continue;
             }
-            b = b.fix(node * nc + k);
+            fixed.push(offset + node * nc + k);
         }
     }
+    let (mut point_loads, mut point_masses) = (Vec::new(), Vec::new());
     for k in 0..dim {
         let f = spec.end_force[k] + spec.end_mass * spec.gravity[k];
         if f != 0.0 {
-            b = b.point_load(ne * nc + k, f);
+            point_loads.push((offset + ne * nc + k, f));
         }
         if spec.end_mass > 0.0 {
-            b = b.point_mass(ne * nc + k, spec.end_mass);
+            point_masses.push((offset + ne * nc + k, spec.end_mass));
         }
     }
-    let group: Box<dyn ElementGroup> = Box::new(els);
-    let model = b.boxed_elements(group).build();
-    Ok(Chain {
-        model,
-        kernel: E::NAME,
-        dim,
-        node_coords: nc,
-        nodes,
+    Ok(Laid {
+        q0,
+        group: Box::new(els),
+        fixed,
+        point_masses,
+        point_loads,
+        part: ChainPart {
+            kernel: E::NAME,
+            dim,
+            node_coords: nc,
+            nodes,
+            offset,
+            group,
+        },
     })
+}
+
+/// Lays out a chain by its kernel's name.
+fn lay_out_by_name(spec: &ChainSpec, offset: usize, group: usize) -> Result<Laid, ChainError> {
+    match spec.kernel.as_str() {
+        Cable2D::NAME => lay_out::<Cable2D, 8, 6>(spec, offset, group),
+        Cable2DGreen::NAME => lay_out::<Cable2DGreen, 8, 6>(spec, offset, group),
+        Cable3D::NAME => lay_out::<Cable3D, 12, 6>(spec, offset, group),
+        Beam2D::NAME => lay_out::<Beam2D, 12, 7>(spec, offset, group),
+        other => Err(ChainError(format!(
+            "no kernel `{other}` in this build (available: {KERNELS:?})"
+        ))),
+    }
+}
+
+/// Dimension of positions (2 or 3) of the kernel named `name`.
+pub fn kernel_dim(name: &str) -> Option<usize> {
+    match name {
+        Cable2D::NAME | Cable2DGreen::NAME | Beam2D::NAME => Some(2),
+        Cable3D::NAME => Some(3),
+        _ => None,
+    }
+}
+
+/// Where one chain of a [`Chains`] structure sits: its kernel, node layout,
+/// the full index of its first coordinate, its element group.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ChainPart {
+    /// Kernel name.
+    pub kernel: &'static str,
+    /// Dimension of positions (2 or 3).
+    pub dim: usize,
+    /// Coordinates per node.
+    pub node_coords: usize,
+    /// Number of nodes (`elements + 1`).
+    pub nodes: usize,
+    /// Full coordinate index of the chain's first node's first coordinate:
+    /// node `j`'s coordinates are `offset + j · node_coords + …`.
+    pub offset: usize,
+    /// Index of its element group in [`StructuralModel::groups`].
+    pub group: usize,
+}
+
+impl ChainPart {
+    /// Full coordinate index of `node`'s position component `k`.
+    pub fn position_index(&self, node: usize, k: usize) -> usize {
+        self.offset + node * self.node_coords + k
+    }
+
+    /// Position of `node` in the structure's full coordinates `q` (`z = 0`
+    /// when planar).
+    pub fn node_position(&self, q: &[f64], node: usize) -> [f64; 3] {
+        let mut p = [0.0; 3];
+        for (k, pk) in p.iter_mut().enumerate().take(self.dim) {
+            *pk = q[self.position_index(node, k)];
+        }
+        p
+    }
+
+    /// The attachment of the first (`end == false`) or last node to a
+    /// mount of a rigid part, as [`Chain::attachment`].
+    pub fn attachment(&self, name: &str, end: bool, clamped: bool) -> super::mixed::Attachment {
+        let node = if end { self.nodes - 1 } else { 0 };
+        let base = self.position_index(node, 0);
+        super::mixed::Attachment {
+            name: name.to_string(),
+            dim: self.dim,
+            position: (0..self.dim).map(|k| base + k).collect(),
+            gradient: clamped.then(|| (0..self.dim).map(|k| base + self.dim + k).collect()),
+        }
+    }
+}
+
+/// Several chains built into one structure ([`chains`]).
+pub struct Chains {
+    /// The structural model: every chain's nodes, one after the other.
+    pub model: StructuralModel,
+    /// Per chain, in the order given, where it sits.
+    pub parts: Vec<ChainPart>,
+}
+
+impl Chains {
+    /// Adds a dead load `w` per unit reference length (N/m, world axes) on
+    /// every element of chain `k` only.
+    pub fn add_distributed_load(&mut self, k: usize, w: [f64; 3]) {
+        self.model
+            .add_group_distributed_load(self.parts[k].group, w);
+    }
+}
+
+/// Why one chain of several cannot be built: its index and the reason.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainsError {
+    /// The chain's index in the list given to [`chains`].
+    pub chain: usize,
+    /// Why.
+    pub error: ChainError,
+}
+
+impl fmt::Display for ChainsError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "chain {}: {}", self.chain, self.error)
+    }
+}
+
+impl std::error::Error for ChainsError {}
+
+/// Builds several chains, each by its kernel's name, into one
+/// [`StructuralModel`]: chain `k`'s nodes follow chain `k − 1`'s in the
+/// full coordinates (its [`ChainPart::offset`]), each chain one element
+/// group with its supports, end mass and end force; gravity on every
+/// group as its chain says. Kernels may differ (a planar `Cable2D` beside
+/// a spatial `Cable3D`: the chains share no coordinate, so each keeps its
+/// own dimension). The chains are not coupled: the model's mass matrix,
+/// tangent and forces are block-diagonal, each block the chain's as
+/// [`chain`] builds it alone. Every chain is checked; the first that
+/// cannot be built is named.
+pub fn chains(specs: &[ChainSpec]) -> Result<Chains, ChainsError> {
+    let mut laid = Vec::with_capacity(specs.len());
+    let mut offset = 0;
+    for (k, spec) in specs.iter().enumerate() {
+        let l =
+            lay_out_by_name(spec, offset, k).map_err(|error| ChainsError { chain: k, error })?;
+        offset += l.q0.len();
+        laid.push(l);
+    }
+    let q0: Vec<f64> = laid.iter().flat_map(|l| l.q0.iter().copied()).collect();
+    let n = q0.len();
+    let same_gravity = specs.windows(2).all(|w| w[0].gravity == w[1].gravity);
+    let mut b = ModelBuilder::new(q0);
+    if same_gravity && let Some(s) = specs.first() {
+        b = b.gravity(s.gravity);
+    }
+    let mut parts = Vec::with_capacity(laid.len());
+    let mut gravity_loads = Vec::new();
+    for (l, spec) in laid.into_iter().zip(specs) {
+        for &i in &l.fixed {
+            b = b.fix(i);
+        }
+        if !same_gravity && spec.gravity != [0.0; 3] {
+            // Each chain's own gravity on its own group.
+            let mut g = vec![0.0; n];
+            l.group.add_gravity(spec.gravity, &mut g);
+            gravity_loads.extend(g.into_iter().enumerate().filter(|(_, f)| *f != 0.0));
+        }
+        for &(i, f) in &l.point_loads {
+            b = b.point_load(i, f);
+        }
+        for &(i, m) in &l.point_masses {
+            b = b.point_mass(i, m);
+        }
+        b = b.boxed_elements(l.group);
+        parts.push(l.part);
+    }
+    let mut model = b.build();
+    for (i, f) in gravity_loads {
+        model.add_point_load(i, f);
+    }
+    Ok(Chains { model, parts })
 }

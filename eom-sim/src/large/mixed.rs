@@ -32,6 +32,10 @@
 //!   `r'_node · n₂ = 0` (spatial): the end's tangent stays along the axis
 //!   (its length, the axial strain, stays free).
 //!
+//! Several cables are one structure ([`super::ancf::chains`]: each chain
+//! at its own offset, [`super::ancf::ChainPart::attachment`] for its ends),
+//! so a model with several cables is one `MixedModel` like any other.
+//!
 //! The explicit path ([`super::integrate_rk4`]) does not run these models:
 //! they are differential-algebraic (index 3).
 

@@ -757,6 +757,13 @@ impl StructuralModel {
         }
     }
 
+    /// Adds a dead load `w` per unit reference length (N/m, world axes)
+    /// on the elements of group `group` only (one chain of several:
+    /// `ancf::Chains::add_distributed_load`).
+    pub fn add_group_distributed_load(&mut self, group: usize, w: [f64; 3]) {
+        self.groups[group].add_uniform_load(w, &mut self.load);
+    }
+
     /// Adds a constant force `f` on full coordinate `i` to the external
     /// load.
     pub fn add_point_load(&mut self, i: usize, f: f64) {
