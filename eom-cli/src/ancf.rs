@@ -329,6 +329,82 @@ fn step_progress(label: &str, steps: usize) -> indicatif::ProgressBar {
 
 /// `simulate` on a model whose cables hang at markers of its rigid
 /// bodies: the rigid part interpreted, index-3 generalized-α.
+/// What `eval` and `bench` say of a model with cables: the generated
+/// functions are the rigid part's alone (the cables' element kernels are
+/// model-independent and assembled at run time), so a note for standard
+/// error, and for `eval` the JSON block `cables`: their names, and for
+/// cables hung at markers the whole model's consistent accelerations of
+/// the rigid coordinates and the mounts' forces at the state, from the
+/// same index-3 system that `simulate` starts from (cable straight and at
+/// rest as in the model file; a state at which the cable ends are off
+/// their markers is refused there, with the reason, under `refused`).
+pub fn scope_note(checked: &Checked, what: &str) -> Option<String> {
+    let sys = &checked.system;
+    if sys.cables.is_empty() {
+        return None;
+    }
+    let names: Vec<String> = sys.cables.iter().map(|c| format!("`{}`", c.name)).collect();
+    Some(format!(
+        "note: model `{}` has cables ({}): {what} covers the generated functions of the rigid part alone, \
+         without the cables' forces; the cables' elements are model-independent kernels \
+         (eom_sim::elements) that `simulate` and `solve-static` assemble at run time",
+        sys.name,
+        names.join(", ")
+    ))
+}
+
+/// The `cables` block of `eval` (see [`scope_note`]); `None` without
+/// cables.
+pub fn eval_block(checked: &Checked, q: &[f64], u: &[f64], t: f64) -> Option<serde_json::Value> {
+    let sys = &checked.system;
+    if sys.cables.is_empty() {
+        return None;
+    }
+    let names: Vec<&str> = sys.cables.iter().map(|c| c.name.as_str()).collect();
+    let mut block = json!({
+        "names": names,
+        "scope": "the functions above are the rigid part's alone, without the cables' forces",
+    });
+    if eom_gen::cables::has_mounts(sys) {
+        match whole_model(checked, q, u, t) {
+            Ok(v) => block["whole_model"] = v,
+            Err(e) => block["refused"] = json!(e),
+        }
+    }
+    Some(block)
+}
+
+/// The rigid coordinates' accelerations and the mounts' forces of the
+/// whole model (rigid part, cables, attachments) at `(q, u, t)`.
+fn whole_model(
+    checked: &Checked,
+    q: &[f64],
+    u: &[f64],
+    t: f64,
+) -> Result<serde_json::Value, String> {
+    let sys = &checked.system;
+    let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
+        .map_err(|e| format!("model `{}`: {e}", sys.name))?;
+    eom_gen::cables::check_rigid(sys, &f)?;
+    let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))?;
+    let m = &mixed.model;
+    let state = m.initial_state(t, q, u);
+    let ga = MixedAlpha::new(m, state, AlphaOptions::default())
+        .map_err(|e| format!("the whole model at this state: {e}"))?;
+    let ns = m.n_structural();
+    let mounts: Vec<serde_json::Value> = m
+        .attachments()
+        .iter()
+        .zip(ga.reactions())
+        .map(|(a, r)| json!({ "mount": a.name, "force_on_cable": r }))
+        .collect();
+    Ok(json!({
+        "udot": &ga.acceleration()[ns..],
+        "mounts": mounts,
+        "cable_state": "straight and at rest, as in the model file",
+    }))
+}
+
 fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<String, Error> {
     let sys = &checked.system;
     if run_problems(run)? {

@@ -1145,6 +1145,11 @@ fn bench(
         Err(code) => return code,
     };
     eprint!("{}", g.checked.render_warnings());
+    if let Some(note) = crate::ancf::scope_note(&g.checked, "bench --per-call") {
+        eprintln!(
+            "{note}; the kernels' ns per element: `cargo run --release -p eom-sim --example ancf_bench -- kernels`"
+        );
+    }
     match crate::bench::per_call(&g, o) {
         Ok(r) if json => {
             println!("{}", crate::bench::json(&g, o, &r));
@@ -1263,6 +1268,12 @@ fn eval(
             });
             for (key, value) in evaluation_json(&e, nu) {
                 v[key] = value;
+            }
+            if let Some(note) = crate::ancf::scope_note(&g.checked, "eval") {
+                eprintln!("{note}");
+            }
+            if let Some(block) = crate::ancf::eval_block(&g.checked, &q, &u, t) {
+                v["cables"] = block;
             }
             println!("{v}");
             ExitCode::SUCCESS

@@ -464,3 +464,70 @@ fn simulate_names_every_cable_of_a_mixed_model() {
     );
     assert_eq!(text.lines().count(), 51, "a header and 50 steps");
 }
+
+/// `eval` on a model with a cable says that the generated functions are
+/// the rigid part's alone, and gives the whole model's consistent
+/// accelerations at the state: for `pendulum_rod` (link released
+/// horizontal, rod pinned at its tip, straight and at rest) the link's θ̈
+/// with the rod differs from the bare link's, and it is what `simulate`
+/// does: over the first millisecond θ(t) = ½ θ̈ t² (to O(t)), and the
+/// rod's free end, with no elastic force yet, falls as a free particle,
+/// y = −½ g t².
+#[test]
+fn eval_of_a_model_with_a_cable_says_its_scope_and_gives_the_whole_model() {
+    let out = eom_gen(&["eval", "--interpret", "models/ancf/pendulum_rod.ron"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("rigid part alone") && err.contains("`rod`"),
+        "{err}"
+    );
+    let v: serde_json::Value = match serde_json::from_slice(&out.stdout) {
+        Ok(v) => v,
+        Err(e) => panic!("eval JSON: {e}"),
+    };
+    let bare = v["udot"][0].as_f64().unwrap_or(f64::NAN);
+    let whole = v["cables"]["whole_model"]["udot"][0]
+        .as_f64()
+        .unwrap_or(f64::NAN);
+    assert!((bare + 49.05).abs() < 1e-9, "bare link θ̈ = {bare}");
+    assert!(
+        whole.is_finite() && (whole - bare).abs() > 1.0,
+        "θ̈ with rod {whole}"
+    );
+
+    let t = 1e-3;
+    let out = eom_gen(&[
+        "simulate",
+        "models/ancf/pendulum_rod.ron",
+        "--t-end",
+        "1e-3",
+        "--dt",
+        "1e-5",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let s: serde_json::Value = match serde_json::from_slice(&out.stdout) {
+        Ok(v) => v,
+        Err(e) => panic!("simulate JSON: {e}"),
+    };
+    let theta = s["q"][0].as_f64().unwrap_or(f64::NAN);
+    let observed = 2.0 * theta / (t * t);
+    assert!(
+        ((observed - whole) / whole).abs() < 1e-2,
+        "θ̈ from simulate {observed}, eval {whole}"
+    );
+    let y_end = s["cables"][0]["last_node"][1].as_f64().unwrap_or(f64::NAN);
+    assert!(
+        ((y_end + 0.5 * 9.81 * t * t) / (0.5 * 9.81 * t * t)).abs() < 1e-2,
+        "free end y = {y_end}"
+    );
+}

@@ -705,6 +705,13 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
         &self.q_full
     }
 
+    /// The current accelerations, in [`MixedModel::initial_state`]'s
+    /// layout (the structure's free coordinates, then the rigid part's);
+    /// right after [`Self::new`] the consistent initial accelerations.
+    pub fn acceleration(&self) -> &[f64] {
+        &self.acc
+    }
+
     /// The current multipliers `λ` (constraint forces; for a pinned end
     /// `−λ` is the force the marker applies to the cable end, world axes).
     pub fn multipliers(&self) -> &[f64] {
