@@ -340,7 +340,7 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
     let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
         .map_err(Error::Refused)?;
     let m = &mixed.model;
-    let (q0, u0) = (sys.q0(), sys.u0());
+    let (q0, u0) = eom_gen::cables::rigid_start(sys, &f).map_err(Error::Refused)?;
     let state = m.initial_state(0.0, &q0, &u0);
     let e0 = m.energy(&state);
     let steps = (run.t_end / run.dt).round().max(1.0) as usize;
