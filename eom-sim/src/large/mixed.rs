@@ -128,7 +128,9 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
     /// part's [`RigidPart::constraints`]. The caller refuses speed-level
     /// (nonholonomic) equations, which come after them.
     pub fn with_constraints(mut self, nc_all: usize, holonomic: Vec<String>) -> Self {
-        self.nc_all = nc_all;
+        // More names than equations: the result is too short for them,
+        // the evaluation fails and gives NaN, which stops the run.
+        self.nc_all = nc_all.max(holonomic.len());
         self.constraint_names = holonomic;
         self
     }
