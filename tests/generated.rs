@@ -430,8 +430,13 @@ fn mixed_model_with_a_loop_runs_on_its_compiled_rigid_part() {
         (ga.state().q.clone(), worst, rows.len())
     };
     let (q_compiled, residual, loop_rows) = run(Box::new(
-        ByName::new(sys.nu(), len, |name, at, out| compiled.evaluate(name, at, out))
-            .with_constraints(f.constraint_names.len(), eom_gen::cables::holonomic_names(&f)),
+        ByName::new(sys.nu(), len, |name, at, out| {
+            compiled.evaluate(name, at, out)
+        })
+        .with_constraints(
+            f.constraint_names.len(),
+            eom_gen::cables::holonomic_names(&f),
+        ),
     ));
     let (q_interpreted, _, _) = run(eom_gen::cables::interpreted_rigid(&f, &sys));
     close("state after 0.2 s", &q_compiled, &q_interpreted);
@@ -440,5 +445,8 @@ fn mixed_model_with_a_loop_runs_on_its_compiled_rigid_part() {
     // The crank turned: the run is not trivially at rest.
     let n = q_compiled.len();
     let crank = q_compiled[n - 3];
-    assert!((crank - (std::f64::consts::FRAC_PI_2 - 0.2)).abs() > 1e-2, "φ1 = {crank}");
+    assert!(
+        (crank - (std::f64::consts::FRAC_PI_2 - 0.2)).abs() > 1e-2,
+        "φ1 = {crank}"
+    );
 }

@@ -53,7 +53,10 @@ fn simulate_runs_the_fourbar_with_a_cable_and_refuses_an_open_loop() {
     println!("q = {q:?}: loop gap {gap:.1e} m, first node off the coupler's middle {off:.1e} m");
     assert!(gap < 1e-9 && off < 1e-9, "gap {gap:e}, off {off:e}");
     // The crank moved.
-    assert!((q[0] - (std::f64::consts::FRAC_PI_2 - 0.2)).abs() > 0.1, "{q:?}");
+    assert!(
+        (q[0] - (std::f64::consts::FRAC_PI_2 - 0.2)).abs() > 0.1,
+        "{q:?}"
+    );
     assert!(num(&v["max_constraint_residual"]) < 1e-9);
     // Energy (scale: about 3 J of potential released) kept without damping.
     assert!((num(&v["energy_end"]) - num(&v["energy_start"])).abs() < 1e-3);
@@ -66,11 +69,8 @@ fn simulate_runs_the_fourbar_with_a_cable_and_refuses_an_open_loop() {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../target/ancf-cli-tests");
     std::fs::create_dir_all(dir).expect("a scratch directory");
     let path = format!("{dir}/open_loop.ron");
-    std::fs::write(
-        &path,
-        text.replace("q0: [\"r0\"]", "q0: [\"r0 + 0.01\"]"),
-    )
-    .expect("write the model");
+    std::fs::write(&path, text.replace("q0: [\"r0\"]", "q0: [\"r0 + 0.01\"]"))
+        .expect("write the model");
     let out = eom_gen(&["simulate", &path, "--t-end", "0.01"]);
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);

@@ -152,7 +152,7 @@ pub fn rigid_start(sys: &System, f: &Formulation) -> Result<(Vec<f64>, Vec<f64>)
     }
     let interp = crate::interpret::Interpreted::new(f, sys);
     let a = eom_sim::constrained::assemble(&interp, &q0, &u0, 0.0);
-    if !(a.residual <= 1e-10) {
+    if a.residual.is_nan() || a.residual > 1e-10 {
         return Err(format!(
             "the rigid part of `{}` does not close its loops near the initial values: |Φ| = {:.3e} after assembly ({}); check the joint frames and the initial values of the loop's joints",
             sys.name,
@@ -165,7 +165,7 @@ pub fn rigid_start(sys: &System, f: &Formulation) -> Result<(Vec<f64>, Vec<f64>)
         .iter()
         .zip(&a.q)
         .zip(&names)
-        .filter(|((x, y), _)| !((*x - *y).abs() <= 1e-8))
+        .filter(|((x, y), _)| (*x - *y).is_nan() || (*x - *y).abs() > 1e-8)
         .map(|((x, y), n)| format!("`{n}` from {x} to {y}"))
         .collect();
     if !moved.is_empty() {

@@ -110,7 +110,9 @@ fn with_rod(text: &str) -> String {
 /// The same rod and mass as rigid bodies welded to the rocker.
 fn rigid_rod(text: &str) -> String {
     let rod = with_rod(text);
-    let at = rod.find("    cables: [").unwrap_or_else(|| panic!("no cables"));
+    let at = rod
+        .find("    cables: [")
+        .unwrap_or_else(|| panic!("no cables"));
     let head = &rod[..at];
     let bodies_end = head
         .find("    ],\n    joints: [")

@@ -135,8 +135,12 @@ fn both(h: f64, t_end: f64) -> ([f64; 2], [f64; 2], f64) {
     let want = [A * th.cos(), A * th.sin()];
     let cart = model(Box::new(Cartesian { a: A, m: M }));
     assert_eq!(cart.rigid_constraint_rows(), 2..3);
-    let mut gc = MixedAlpha::new(&cart, cart.initial_state(0.0, &[A, 0.0], &[0.0, 0.0]), opts(h))
-        .unwrap_or_else(|e| panic!("{e}"));
+    let mut gc = MixedAlpha::new(
+        &cart,
+        cart.initial_state(0.0, &[A, 0.0], &[0.0, 0.0]),
+        opts(h),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     let mut worst = 0.0_f64;
     gc.run_to(t_end, |s, _| {
         let phi = cart.constraint_residual(s.t, &s.q);
@@ -196,8 +200,5 @@ fn a_start_off_the_circle_or_leaving_it_is_refused_by_name() {
     };
     let text = e.to_string();
     println!("{text}");
-    assert!(
-        text.contains("`circle` changes at 6.000e-1/s"),
-        "{text}"
-    );
+    assert!(text.contains("`circle` changes at 6.000e-1/s"), "{text}");
 }

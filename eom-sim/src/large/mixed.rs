@@ -657,7 +657,7 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
         }
         let names = self.model.rigid.constraint_names();
         for (k, name) in self.model.rigid_constraint_rows().zip(&names) {
-            if !(phi[k].abs() <= 1e-8) {
+            if phi[k].is_nan() || phi[k].abs() > 1e-8 {
                 out.push(format!(
                     "the rigid part's constraint `{name}` is {:.3e} off (the loop is not closed: assemble the rigid part first, e.g. `eom_gen::cables::rigid_start`)",
                     phi[k]
@@ -694,7 +694,7 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
         let mut bad = Vec::new();
         for (k, name) in rows.zip(&names) {
             let rate = (plus[k] - minus[k]) / (2.0 * eps);
-            if !(rate.abs() <= 1e-7 * (1.0 + speed)) {
+            if rate.is_nan() || rate.abs() > 1e-7 * (1.0 + speed) {
                 bad.push(format!("`{name}` changes at {rate:.3e}/s"));
             }
         }
