@@ -133,6 +133,10 @@ fn rigid_rod(text: &str) -> String {
     )
 }
 
+/// The rod's compliance is far below the discretisation error: its tip
+/// gives way by `δ ≈ F l³ / (3 E I)` with `F ≲ M (g + 30 m/s²) ≈ 20 N`,
+/// `l = 0.1 m`, `E I = 2e13 · 1.33e-8 ≈ 2.7e5 N m²`: `δ ≈ 2.5e-8 m`, an
+/// angle of about `5e-8` rad against `1.5e-4` at the smallest step.
 #[test]
 fn a_stiff_rod_on_the_rocker_moves_as_the_rigid_mechanism_to_second_order() {
     let t_end = 0.4;
@@ -159,10 +163,10 @@ fn a_stiff_rod_on_the_rocker_moves_as_the_rigid_mechanism_to_second_order() {
             .zip(&want)
             .fold(0.0_f64, |a, (x, y)| a.max((x - y).abs()));
         println!("h = {h:e}: q {q:?}, rigid {want:?}, |Δq|∞ {err:.3e}, loop |Φ| {residual:.1e}");
-        assert!(residual < 1e-9, "loop residual {residual:e}");
+        assert!(residual < 1e-10, "loop residual {residual:e}");
         errors.push(err);
     }
-    // The mechanism moved: the crank turned by more than a radian.
+    // The mechanism moved: the crank turned by more than half a radian.
     let turned = (want[0] - std::f64::consts::FRAC_PI_2 + 0.2).abs();
     assert!(turned > 0.5, "crank turned {turned}");
     for w in errors.windows(2) {

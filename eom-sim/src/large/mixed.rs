@@ -544,7 +544,8 @@ pub struct MixedStats {
     /// Steps, Newton iterations, factorisations, force evaluations.
     pub dynamics: DynamicsStats,
     /// Largest `‖Φ‖∞` after a step (m, and for clamps the sine of the
-    /// tangent's angle off the axis times `|r'|`).
+    /// tangent's angle off the axis times `|r'|`; the rigid part's own
+    /// equations in their units).
     pub max_constraint_residual: f64,
 }
 
