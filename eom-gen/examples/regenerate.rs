@@ -31,7 +31,7 @@ fn elements(root: &str) -> ExitCode {
 
 /// Mixed models of `models/ancf/` whose rigid part is generated too (the
 /// cables' kernels are model-independent, in `eom-sim/src/elements/`).
-pub const MIXED: [&str; 1] = ["ancf/pendulum_rod"];
+pub const MIXED: [&str; 2] = ["ancf/pendulum_rod", "ancf/fourbar_cable"];
 
 fn main() -> ExitCode {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");

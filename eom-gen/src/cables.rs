@@ -6,6 +6,15 @@
 //! marker (free, or held to ground) simply part of the same structure, and
 //! the rigid part from the generated functions (`mass_matrix`, `bias`,
 //! `energy`, `attachments`), interpreted or compiled.
+//!
+//! A rigid part with constraint equations of its own (cut joints closing
+//! loops, the model's holonomic `constraints:`, rheonomic ones included)
+//! brings their position-level rows `Φ_r(q, t) = 0` and `Φ_q` from the
+//! generated `constraints` function (`J = Φ_q` as `q̇ = u`): more rows of
+//! the mixed model's constraint block ([`RigidPart::constraints`]). Its
+//! start is assembled onto the loops ([`rigid_start`]). Speed-level
+//! (nonholonomic) equations, such as a rolling disk's no-slip
+//! conditions, are refused by name: the index-3 method holds positions.
 
 use crate::functions::Function;
 use crate::mech::Formulation;
@@ -72,8 +81,9 @@ pub fn has_mounts(sys: &System) -> bool {
 
 /// Why the rigid part of `sys` cannot join its cables, or `Ok`: the large
 /// runtime needs `q̇ = u` (no quaternions, no speeds other than the
-/// coordinates' rates), no constraint equations of its own, and a planar
-/// cable's ends held at markers that move in the plane z = 0
+/// coordinates' rates), constraint equations of its own only at the
+/// position level (holonomic: cut joints, `Holonomic` constraints), and a
+/// planar cable's ends held at markers that move in the plane z = 0
 /// ([`check_planar_mounts`]). Any number of cables, of any kernels.
 pub fn check_rigid(sys: &System, f: &Formulation) -> Result<(), String> {
     let mounted: Vec<usize> = sys.cable_mounts().iter().map(|(c, _, _)| *c).collect();
@@ -83,11 +93,11 @@ pub fn check_rigid(sys: &System, f: &Formulation) -> Result<(), String> {
             sys.name
         ));
     }
-    if !f.constraint_names.is_empty() {
+    if f.constraint_names.len() > f.n_holonomic {
         return Err(format!(
-            "the rigid part of `{}` has constraint equations ({}): cut joints and constraints beside cables are not supported yet",
+            "the rigid part of `{}` has speed-level (nonholonomic) constraint equations ({}): beside cables the index-3 method holds positions only, `Φ(q, t) = 0` (cut joints, `Holonomic` constraints); a rolling contact's no-slip conditions have no position form",
             sys.name,
-            f.constraint_names.join(", ")
+            f.constraint_names[f.n_holonomic..].join(", ")
         ));
     }
     let (nq, nu) = (sys.nq(), sys.nu());
@@ -191,9 +201,59 @@ fn check_planar_mounts(
 pub fn interpreted_rigid<'a>(f: &'a Formulation, sys: &'a System) -> Box<dyn RigidPart + 'a> {
     let interp = crate::interpret::Interpreted::new(f, sys);
     let len = crate::mech::mounts::mount_rows(sys) * (1 + sys.nq());
-    Box::new(ByName::new(sys.nu(), len, move |name, at, out| {
-        eom_sim::Simulate::evaluate(&interp, name, at, out)
-    }))
+    Box::new(
+        ByName::new(sys.nu(), len, move |name, at, out| {
+            eom_sim::Simulate::evaluate(&interp, name, at, out)
+        })
+        .with_constraints(f.constraint_names.len(), holonomic_names(f)),
+    )
+}
+
+/// The names of the rigid part's holonomic equations (the rows
+/// [`RigidPart::constraints`] gives), for [`ByName::with_constraints`].
+pub fn holonomic_names(f: &Formulation) -> Vec<String> {
+    f.constraint_names[..f.n_holonomic.min(f.constraint_names.len())].to_vec()
+}
+
+/// The rigid part's starting coordinates and speeds: the model's `q0`,
+/// `u0`, and when it has constraint equations of its own, assembled onto
+/// them (`eom_sim::constrained::assemble`: Newton onto `Φ(q, t) = 0`, then
+/// the smallest change of the speeds onto `J u + Φ_t = 0`). The cables'
+/// reference lines are given in the file, at the markers of `q0`: an
+/// assembly that has to move a coordinate by more than `1e-8` is refused,
+/// naming the coordinate and the value that closes the loop.
+pub fn rigid_start(sys: &System, f: &Formulation) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let (q0, u0) = (sys.q0(), sys.u0());
+    if f.constraint_names.is_empty() {
+        return Ok((q0, u0));
+    }
+    let interp = crate::interpret::Interpreted::new(f, sys);
+    let a = eom_sim::constrained::assemble(&interp, &q0, &u0, 0.0);
+    if a.residual.is_nan() || a.residual > 1e-10 {
+        return Err(format!(
+            "the rigid part of `{}` does not close its loops near the initial values: |Φ| = {:.3e} after assembly ({}); check the joint frames and the initial values of the loop's joints",
+            sys.name,
+            a.residual,
+            f.constraint_names.join(", ")
+        ));
+    }
+    let names = sys.coordinate_names();
+    let moved: Vec<String> = q0
+        .iter()
+        .zip(&a.q)
+        .zip(&names)
+        .filter(|((x, y), _)| (*x - *y).is_nan() || (*x - *y).abs() > 1e-8)
+        .map(|((x, y), n)| format!("`{n}` from {x} to {y}"))
+        .collect();
+    if !moved.is_empty() {
+        return Err(format!(
+            "the initial values of `{}` do not close its loops ({}): assembly moves {}; give the closed values (the cables' `from`/`to` must meet their markers there)",
+            sys.name,
+            f.constraint_names.join(", "),
+            moved.join(", ")
+        ));
+    }
+    Ok((a.q, a.u))
 }
 
 /// Every cable of the model in one structure (in file order, each

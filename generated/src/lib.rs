@@ -65,3 +65,6 @@ pub mod stewart_driven;
 /// Model `pendulum_rod`, generated from `models/ancf/pendulum_rod.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod pendulum_rod;
+/// Model `fourbar_cable`, generated from `models/ancf/fourbar_cable.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod fourbar_cable;

@@ -36,6 +36,18 @@
 //! at its own offset, [`super::ancf::ChainPart::attachment`] for its ends),
 //! so a model with several cables is one `MixedModel` like any other.
 //!
+//! The rigid part's own holonomic equations `Φ_r(q_r, t) = 0`
+//! ([`RigidPart::constraints`]: cut joints closing loops, the model's
+//! `constraints:`, rheonomic ones included) are more rows of the same
+//! block, after the attachments, scaled by `1/β'` alike: their multipliers
+//! are the loop's constraint forces, the consistent initial acceleration
+//! takes them in, and the residual check covers them. Only the position
+//! level is used (the index-3 method); speed-level (nonholonomic)
+//! equations have no place here and are refused by the caller. The start
+//! must close the loops (`|Φ| ≤ 1e-8`) with speeds along them
+//! (`|dΦ_r/dt| ≤ 1e-7 (1 + |u_r|)`): [`MixedAlpha::new`] refuses anything
+//! else, naming the equation.
+//!
 //! The explicit path ([`super::integrate_rk4`]) does not run these models:
 //! they are differential-algebraic (index 3).
 
@@ -63,6 +75,26 @@ pub trait RigidPart {
     /// `n₁` and `n₂` (unit normals of the clamp's axis, world axes); each
     /// row its value followed by its `n` partial derivatives `∂/∂q_k`.
     fn attachments(&self, t: f64, q: &[f64], out: &mut [f64]);
+    /// Number of the rigid part's own holonomic constraint equations
+    /// `Φ_r(q, t) = 0` (cut joints closing loops, `constraints:` of the
+    /// model); none by default.
+    fn n_constraints(&self) -> usize {
+        0
+    }
+    /// Names of those equations (`joint.k`, the constraint's name), for
+    /// reports; empty by default.
+    fn constraint_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// `Φ_r(q, t)` and its Jacobian, flat as [`RigidPart::attachments`]:
+    /// for each equation its value followed by its `n` partial
+    /// derivatives `∂Φ_r/∂q_k` (`n_constraints() · (1 + n)` values).
+    /// Position level only: the index-3 method needs nothing else (the
+    /// rows are divided by `β'` as the attachments are); a rheonomic
+    /// `Φ_r(q, t)` is fine. Does nothing by default.
+    fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
+        let _ = (t, q, out);
+    }
 }
 
 /// A rigid part from the generated functions by name (`mass_matrix`,
@@ -73,6 +105,11 @@ pub struct ByName<F> {
     n: usize,
     mounts: usize,
     evaluate: F,
+    /// Names of the holonomic constraint equations (see
+    /// [`ByName::with_constraints`]).
+    constraint_names: Vec<String>,
+    /// All equations of the generated `constraints` function.
+    nc_all: usize,
 }
 
 impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
@@ -83,7 +120,23 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
             n,
             mounts: mount_len,
             evaluate,
+            constraint_names: Vec::new(),
+            nc_all: 0,
         }
+    }
+
+    /// The same with constraint equations of its own from the generated
+    /// `constraints` function (`Φ`, `Φ̇`, `γ`, each `nc_all`, then `J`,
+    /// `nc_all × n`, with `J = Φ_q` as `q̇ = u`): the first
+    /// `holonomic.len()` equations, named `holonomic`, are the rigid
+    /// part's [`RigidPart::constraints`]. The caller refuses speed-level
+    /// (nonholonomic) equations, which come after them.
+    pub fn with_constraints(mut self, nc_all: usize, holonomic: Vec<String>) -> Self {
+        // More names than equations: the result is too short for them,
+        // the evaluation fails and gives NaN, which stops the run.
+        self.nc_all = nc_all.max(holonomic.len());
+        self.constraint_names = holonomic;
+        self
     }
 
     fn call(&self, name: &str, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
@@ -119,6 +172,27 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> RigidPart for ByName<F> {
     fn attachments(&self, t: f64, q: &[f64], out: &mut [f64]) {
         debug_assert_eq!(out.len(), self.mounts);
         self.call("attachments", t, q, &[], out);
+    }
+    fn n_constraints(&self) -> usize {
+        self.constraint_names.len()
+    }
+    fn constraint_names(&self) -> Vec<String> {
+        self.constraint_names.clone()
+    }
+    fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
+        let (n, nc, nh) = (self.n, self.nc_all, self.constraint_names.len());
+        if nh == 0 {
+            return;
+        }
+        // Φ, Φ̇, γ, then J by rows; Φ does not depend on u.
+        let mut all = vec![0.0; 3 * nc + nc * n];
+        let u = vec![0.0; n];
+        self.call("constraints", t, q, &u, &mut all);
+        for i in 0..nh {
+            let row = &mut out[i * (1 + n)..(i + 1) * (1 + n)];
+            row[0] = all[i];
+            row[1..].copy_from_slice(&all[3 * nc + i * n..3 * nc + (i + 1) * n]);
+        }
     }
 }
 
@@ -180,6 +254,8 @@ pub struct MixedModel<'r> {
     n_r: usize,
     m: usize,
     mount_len: usize,
+    /// The rigid part's own constraint equations (the last rows).
+    nc_r: usize,
     pattern: Arc<Pattern>,
     /// Structural pattern slot → slot of the combined pattern.
     s_map: Vec<usize>,
@@ -248,6 +324,22 @@ impl<'r> MixedModel<'r> {
             }
             mount_len += a.mount_rows() * (1 + n_r);
         }
+        // The rigid part's own equations Φ_r(q_r, t) = 0, after the
+        // attachments: they touch the rigid coordinates only.
+        let nc_r = rigid.n_constraints();
+        if rigid.constraint_names().len() != nc_r {
+            return Err(MixedError(format!(
+                "the rigid part has {nc_r} constraint equations but {} names",
+                rigid.constraint_names().len()
+            )));
+        }
+        for _ in 0..nc_r {
+            for c in n_s..n_s + n_r {
+                entries.push((row, c));
+                entries.push((c, row));
+            }
+            row += 1;
+        }
         let m = row - n_s - n_r;
         let pattern = Arc::new(Pattern::new(n_s + n_r + m, entries));
         let s_map = structure
@@ -263,6 +355,7 @@ impl<'r> MixedModel<'r> {
             n_r,
             m,
             mount_len,
+            nc_r,
             pattern,
             s_map,
         })
@@ -293,9 +386,23 @@ impl<'r> MixedModel<'r> {
         self.n_s
     }
 
-    /// Constraint equations (multipliers).
+    /// Constraint equations (multipliers): the attachments' rows, then
+    /// [`MixedModel::rigid_constraint_rows`].
     pub fn n_constraints(&self) -> usize {
         self.m
+    }
+
+    /// The rows of `Φ` (and of the multipliers) that are the rigid part's
+    /// own equations [`RigidPart::constraints`] (loops closed by cut
+    /// joints, `constraints:`): the last ones.
+    pub fn rigid_constraint_rows(&self) -> std::ops::Range<usize> {
+        self.m - self.nc_r..self.m
+    }
+
+    /// Length of the scratch the constraints are evaluated into: the
+    /// attachments, then the rigid part's equations.
+    fn buffer_len(&self) -> usize {
+        self.mount_len + self.nc_r * (1 + self.n_r)
     }
 
     /// The starting state: the structure at its reference, the rigid part
@@ -321,11 +428,12 @@ impl<'r> MixedModel<'r> {
             + self.rigid.energy(s.t, &s.q[self.n_s..], &s.v[self.n_s..])
     }
 
-    /// `Φ(y, t)` (the attachment constraints, unscaled).
+    /// `Φ(y, t)` (the attachment constraints, then the rigid part's own
+    /// equations; unscaled).
     pub fn constraint_residual(&self, t: f64, y: &[f64]) -> Vec<f64> {
         let q_full = self.structural_full(y);
         let mut c = ConstraintEval::default();
-        let mut mounts = vec![0.0; self.mount_len];
+        let mut mounts = vec![0.0; self.buffer_len()];
         self.constraints(t, &q_full, &y[self.n_s..], &mut mounts, &mut c);
         c.phi
     }
@@ -340,6 +448,7 @@ impl<'r> MixedModel<'r> {
         c: &mut ConstraintEval,
     ) {
         let (n_s, n_r) = (self.n_s, self.n_r);
+        let (mounts, own) = mounts.split_at_mut(self.mount_len);
         self.rigid.attachments(t, q_r, mounts);
         c.phi.clear();
         c.jac.clear();
@@ -386,6 +495,17 @@ impl<'r> MixedModel<'r> {
                 }
             }
         }
+        // The rigid part's own equations: Φ_r and ∂Φ_r/∂q_r.
+        if self.nc_r > 0 {
+            self.rigid.constraints(t, q_r, own);
+            for r in own.chunks(stride) {
+                let row = c.phi.len();
+                c.phi.push(r[0]);
+                for j in 0..n_r {
+                    c.jac.push((row, n_s + j, r[1 + j]));
+                }
+            }
+        }
     }
 
     /// The rigid rows of the residual, `M_r a + b + Φ_qᵀ λ`, at `q_r`.
@@ -428,7 +548,8 @@ pub struct MixedStats {
     /// Steps, Newton iterations, factorisations, force evaluations.
     pub dynamics: DynamicsStats,
     /// Largest `‖Φ‖∞` after a step (m, and for clamps the sine of the
-    /// tangent's angle off the axis times `|r'|`).
+    /// tangent's angle off the axis times `|r'|`; the rigid part's own
+    /// equations in their units).
     pub max_constraint_residual: f64,
 }
 
@@ -467,7 +588,9 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
     /// Starts at `state` (of [`MixedModel::initial_state`]'s layout) with
     /// consistent accelerations and multipliers; refuses a start whose
     /// constraint residual exceeds `1e-8` (the cable ends are not at their
-    /// markers, or a clamp's axis is not along the cable).
+    /// markers, a clamp's axis is not along the cable, or the rigid part's
+    /// loop is open) and a start whose rigid speeds leave the rigid part's
+    /// own constraints (`|dΦ_r/dt| > 1e-7 (1 + |u_r|∞)`).
     pub fn new(
         model: &'m MixedModel<'r>,
         state: State,
@@ -500,7 +623,7 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
             scratch: vec![0.0; st.n_full()],
             rs: RigidScratch {
                 mass: vec![0.0; n_r * n_r],
-                mounts: vec![0.0; model.mount_len],
+                mounts: vec![0.0; model.buffer_len()],
                 c: ConstraintEval::default(),
             },
             state,
@@ -512,11 +635,12 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
             return Err(DynamicsError::Inconsistent {
                 t: ga.state.t,
                 reason: format!(
-                    "the attachments do not hold at the start (|Φ|∞ = {worst:.3e}): {}",
+                    "the constraints do not hold at the start (|Φ|∞ = {worst:.3e}): {}",
                     ga.describe_residual(&phi0)
                 ),
             });
         }
+        ga.check_rigid_speeds()?;
         ga.initial_acceleration()?;
         ga.aux = ga.acc.clone();
         Ok(ga)
@@ -536,7 +660,60 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
                 out.push(format!("`{}`'s tangent is off the clamp's axis", a.name));
             }
         }
+        let names = self.model.rigid.constraint_names();
+        for (k, name) in self.model.rigid_constraint_rows().zip(&names) {
+            if phi[k].is_nan() || phi[k].abs() > 1e-8 {
+                out.push(format!(
+                    "the rigid part's constraint `{name}` is {:.3e} off (the loop is not closed: assemble the rigid part first, e.g. `eom_gen::cables::rigid_start`)",
+                    phi[k]
+                ));
+            }
+        }
         out.join("; ")
+    }
+
+    /// The rigid part's own equations at the speed level, `dΦ_r/dt` along
+    /// the motion by a central difference: refuses speeds that leave the
+    /// loop (the index-3 method would jump onto it in the first step).
+    fn check_rigid_speeds(&self) -> Result<(), DynamicsError> {
+        let rows = self.model.rigid_constraint_rows();
+        if rows.is_empty() {
+            return Ok(());
+        }
+        let (t, n_s) = (self.state.t, self.model.n_s);
+        let eps = 1e-5;
+        let shifted = |s: f64| -> Vec<f64> {
+            let y: Vec<f64> = self
+                .state
+                .q
+                .iter()
+                .zip(&self.state.v)
+                .enumerate()
+                .map(|(i, (q, v))| if i < n_s { *q } else { q + s * v })
+                .collect();
+            self.model.constraint_residual(t + s, &y)
+        };
+        let (plus, minus) = (shifted(eps), shifted(-eps));
+        let speed = norm_inf(&self.state.v[n_s..]);
+        let names = self.model.rigid.constraint_names();
+        let mut bad = Vec::new();
+        for (k, name) in rows.zip(&names) {
+            let rate = (plus[k] - minus[k]) / (2.0 * eps);
+            if rate.is_nan() || rate.abs() > 1e-7 * (1.0 + speed) {
+                bad.push(format!("`{name}` changes at {rate:.3e}/s"));
+            }
+        }
+        if bad.is_empty() {
+            Ok(())
+        } else {
+            Err(DynamicsError::Inconsistent {
+                t,
+                reason: format!(
+                    "the rigid part's speeds leave its loop at the start: {} (give speeds with J u + Φ_t = 0, e.g. from `eom_gen::cables::rigid_start`)",
+                    bad.join(", ")
+                ),
+            })
+        }
     }
 
     /// `[[M, Φ_yᵀ], [Φ_y, 0]] (q̈, λ) = (f_ext − f_int − b, γ)` with
