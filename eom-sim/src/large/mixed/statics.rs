@@ -66,6 +66,10 @@ use std::fmt;
 /// dense eigenproblem).
 pub const STABILITY_LIMIT: usize = 1500;
 
+/// The largest change of a rigid coordinate in one Newton iteration (rad
+/// or m): larger corrections are scaled down as a whole.
+pub const MAX_RIGID_STEP: f64 = 0.5;
+
 /// Whether an equilibrium is stable.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Stability {
@@ -239,9 +243,10 @@ impl fmt::Display for MixedStaticError {
                 if *regularized > 0 {
                     write!(
                         f,
-                        "; the tangent was singular in {regularized} of its iterations: \
-                         a part that moves without resistance under a load that pushes it \
-                         (a mechanism: add a spring or a support)"
+                        "; the tangent was singular in {regularized} of its iterations \
+                         (a cable not yet in tension, or a mechanism: a part that nothing holds \
+                         under a load that pushes it); try more iterations or load steps, \
+                         or hold the part by a spring or a support"
                     )
                 } else {
                     f.write_str("; try more load steps or check the supports")
@@ -711,8 +716,18 @@ pub fn solve_static_mixed(
                 regularized += 1;
             }
             kkt.solve(&mut r);
+            // A rigid coordinate moves at most `MAX_RIGID_STEP` per
+            // iteration (the whole correction scaled): far from
+            // equilibrium Newton's linearisation of the rigid part's
+            // trigonometry would otherwise throw it around several turns.
+            let big = norm_inf(&r[n_s..n]);
+            let scale = if big > MAX_RIGID_STEP {
+                MAX_RIGID_STEP / big
+            } else {
+                1.0
+            };
             for (a, d) in zt.iter_mut().zip(&r) {
-                *a -= d;
+                *a -= scale * d;
             }
         }
         regularized_total += regularized;
@@ -749,7 +764,20 @@ pub fn solve_static_mixed(
         (f64::INFINITY, vec![0.0; n + m])
     };
     if !(condition.is_finite() && condition < opts.max_condition) {
-        let mut d = direction[..n].to_vec();
+        // An exactly singular matrix gives no direction: inverse iteration
+        // with a slightly regularised one (H + μ M, μ at 1e-10 of the
+        // stiffness over the mass) finds the motion of least stiffness.
+        let mut direction = direction;
+        if !direction.iter().all(|v| v.is_finite()) || norm_inf(&direction[..n]) == 0.0 {
+            let mu = 1e-10 * kkt.sigma / mass_scale;
+            if kkt.assemble(&z, mu).is_ok() {
+                direction = kkt.condition().1;
+            }
+        }
+        let mut d: Vec<f64> = direction[..n]
+            .iter()
+            .map(|v| if v.is_finite() { *v } else { 0.0 })
+            .collect();
         let nd = d.iter().map(|v| v * v).sum::<f64>().sqrt();
         if nd > 0.0 && nd.is_finite() {
             d.iter_mut().for_each(|v| *v /= nd);
