@@ -21,6 +21,11 @@
 //!   the shape of the same cable pinned between two fixed points (the
 //!   structure-only solver `solve_static`); the difference is the link's
 //!   rotation under the cable's pull, falling as `1/k`.
+//! - **A stiff rod clamped to a sprung link is the rigid compound**: a
+//!   steel rod clamped at the link's tip along its axis; the angle tends
+//!   to the one of the rigid link-and-rod, `k θ + (m g a/2 + μ L g (a +
+//!   L/2)) cos θ = 0`, with a difference that falls in proportion to the
+//!   rod's compliance `1/E`; Newton takes a few iterations per load step.
 //! - **Stability**: a link standing upright on a torsion spring is stable
 //!   when `k > (m g a/2 + W a)` and unstable below; the solver reports the
 //!   sign of the reduced tangent's smallest eigenvalue on either side.
@@ -45,6 +50,7 @@ struct SprungLink {
     m: f64,
     k: f64,
     rest: f64,
+    clamped: bool,
 }
 
 impl RigidPart for SprungLink {
@@ -65,7 +71,12 @@ impl RigidPart for SprungLink {
     fn attachments(&self, _t: f64, q: &[f64], out: &mut [f64]) {
         let (s, c) = q[0].sin_cos();
         let a = self.a;
-        out.copy_from_slice(&[a * c, -a * s, a * s, a * c, 0.0, 0.0]);
+        let mut rows = vec![a * c, -a * s, a * s, a * c, 0.0, 0.0];
+        if self.clamped {
+            // n1 = z × axis = (−sin, cos, 0), n2 = z.
+            rows.extend([-s, -c, c, -s, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+        }
+        out.copy_from_slice(&rows);
     }
 }
 
@@ -154,6 +165,7 @@ fn hanging(k: f64, rest: f64, theta0: f64) -> (MixedModel<'static>, Chain) {
         m: M_LINK,
         k,
         rest,
+        clamped: false,
     };
     let model =
         MixedModel::new(ch.model, Box::new(link), vec![at]).unwrap_or_else(|e| panic!("{e}"));
@@ -285,6 +297,7 @@ fn a_cable_between_a_stiffly_held_link_and_a_pin_takes_the_pure_structures_shape
             m: M_LINK,
             k,
             rest: 0.0,
+            clamped: false,
         };
         let model =
             MixedModel::new(ch.model, Box::new(link), vec![at]).unwrap_or_else(|e| panic!("{e}"));
@@ -375,4 +388,68 @@ fn a_cart_on_a_frictionless_rail_is_a_mechanism_and_is_refused() {
             assert!(x.abs() < 1e-12);
         }
     }
+}
+
+#[test]
+fn a_stiff_rod_clamped_to_a_sprung_link_rests_as_the_rigid_compound() {
+    let (l, side, rho, k) = (0.5_f64, 0.02_f64, 7800.0, 20.0);
+    let mu = rho * side * side;
+    let want = closed_form_angle(k, 0.0, M_LINK * G * A / 2.0 + mu * l * G * (A + l / 2.0));
+    let mut diffs = Vec::new();
+    for e in [2e9, 2e10] {
+        let section = Section {
+            e,
+            rho,
+            area: side * side,
+            inertia: side.powi(4) / 12.0,
+            ..Section::default()
+        };
+        let mut spec = cable([A, 0.0, 0.0], [A + l, 0.0, 0.0], 4);
+        spec.section = section;
+        let ch = build(&spec);
+        let at = ch.attachment("rod.start", false, true);
+        let link = SprungLink {
+            a: A,
+            m: M_LINK,
+            k,
+            rest: 0.0,
+            clamped: true,
+        };
+        let model =
+            MixedModel::new(ch.model, Box::new(link), vec![at]).unwrap_or_else(|e| panic!("{e}"));
+        let sol = solve_static_mixed(&model, 0.0, &[0.0], &StaticOptions::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let theta = sol.y[model.n_structural()];
+        let most = sol.steps.iter().map(|s| s.iterations()).max().unwrap_or(0);
+        println!(
+            "E = {e:e}: θ = {theta:.12} (rigid compound {want:.12}, Δ {:.2e}); at most {most} iterations per step, {} regularised; {}",
+            theta - want,
+            sol.regularized,
+            sol.stability
+        );
+        for s in &sol.steps {
+            println!(
+                "  λ = {:.2}: {} (tol {:.1e})",
+                s.lambda,
+                s.residuals
+                    .iter()
+                    .map(|r| format!("{r:.2e}"))
+                    .collect::<Vec<_>>()
+                    .join(" → "),
+                s.tolerance
+            );
+        }
+        // A few Newton iterations per step (the tangent, clamp coupling
+        // included, is the residual's exact Jacobian: the unit test in
+        // `mixed::statics`); the last ones approach the round-off floor of
+        // the stiff axial term (EA = 8e6 N at E = 2e10: the tolerance's
+        // floor is near 1e-7 N), where the residual falls more slowly.
+        assert!(most <= 6, "{most} iterations");
+        assert_eq!(sol.regularized, 0);
+        assert!(sol.constraint_residual < 1e-12);
+        diffs.push((theta - want).abs());
+    }
+    let (d1, d2) = (diffs[0], diffs[1]);
+    assert!(d2 < 1e-3 * want.abs(), "Δ {d2}");
+    assert!(d1 / d2 > 8.0 && d1 / d2 < 12.0, "ratio {}", d1 / d2);
 }
