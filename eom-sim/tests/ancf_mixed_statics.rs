@@ -13,6 +13,8 @@
 //!   to round-off; the chain's stretch is the hanging bar's, `(m_e g L +
 //!   ρ A g L²/2)/(EA)`, which cubic elements represent exactly (the axial
 //!   strain is linear along a vertical cable).
+//!   The same with a spatial `Cable3D` rope (free to swing out of the
+//!   plane too).
 //! - **The equilibrium is a fixed point of the dynamics**: the index-3
 //!   generalized-α started there at rest stays there; its consistent
 //!   multipliers are the static reactions.
@@ -154,8 +156,14 @@ const M_END: f64 = 0.5;
 /// The link on a spring `k` at angle `theta0` with the cable hanging from
 /// its tip (8 elements, end mass).
 fn hanging(k: f64, rest: f64, theta0: f64) -> (MixedModel<'static>, Chain) {
+    hanging_kernel("Cable2D", k, rest, theta0)
+}
+
+/// [`hanging`] with the cable's kernel named.
+fn hanging_kernel(kernel: &str, k: f64, rest: f64, theta0: f64) -> (MixedModel<'static>, Chain) {
     let tip = [A * theta0.cos(), A * theta0.sin(), 0.0];
     let mut spec = cable(tip, [tip[0], tip[1] - L, 0.0], 8);
+    spec.kernel = kernel.into();
     spec.end_mass = M_END;
     let reader = build(&spec);
     let ch = build(&spec);
@@ -218,6 +226,29 @@ fn a_cable_hanging_from_a_sprung_pendulum_meets_the_closed_form() {
     assert!((bottom[0] - top[0]).abs() < 1e-10, "{top:?} {bottom:?}");
     assert!((top[1] - bottom[1] - L - stretch).abs() < 1e-9 * L);
     assert!(sol.constraint_residual < 1e-12);
+    assert!(matches!(sol.stability, Stability::Stable { .. }));
+}
+
+#[test]
+fn a_spatial_cable_hangs_from_the_pendulum_as_the_planar_one() {
+    // Cable3D: the rope may also swing out of the plane, which its tension
+    // stiffens; the equilibrium is the planar one (the closed form).
+    let (k, rest) = (20.0, 0.0);
+    let (model, ch) = hanging_kernel("Cable3D", k, rest, 0.0);
+    let sol = solve_static_mixed(&model, 0.0, &[0.0], &StaticOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let want = closed_form_angle(k, rest, M_LINK * G * A / 2.0 + weight() * A);
+    let theta = sol.y[model.n_structural()];
+    let bottom = ch.node_position(&sol.q_full, 8);
+    let reaction = sol.reactions(&model)[0];
+    println!(
+        "Cable3D: θ = {theta:.12} (closed form {want:.12}); {} regularised; bottom {bottom:?}; reaction {reaction:?}; {}",
+        sol.regularized, sol.stability
+    );
+    assert_eq!(model.n_constraints(), 3);
+    assert!((theta - want).abs() < 1e-9, "θ {theta} vs {want}");
+    assert!(bottom[2].abs() < 1e-12 && (bottom[0] - A * theta.cos()).abs() < 1e-10);
+    assert!((reaction[1] - weight()).abs() < 1e-8 * weight() && reaction[2].abs() < 1e-10);
     assert!(matches!(sol.stability, Stability::Stable { .. }));
 }
 
