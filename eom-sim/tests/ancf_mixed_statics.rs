@@ -9,12 +9,10 @@
 //!   transmits no moment, and as a free body in equilibrium it hangs
 //!   vertically with the marker carrying its whole weight, `W = (ρ A L +
 //!   m_e) g`, at the tip. So `k θ + (m g a/2 + W a) cos θ = 0`, which a
-//!   scalar Newton solves
-//!   to round-off; the chain's stretch is the hanging bar's, `(m_e g L +
-//!   ρ A g L²/2)/(EA)`, which cubic elements represent exactly (the axial
-//!   strain is linear along a vertical cable).
-//!   The same with a spatial `Cable3D` rope (free to swing out of the
-//!   plane too).
+//!   scalar Newton solves to round-off; the chain's stretch is the hanging
+//!   bar's, `(m_e g L + ρ A g L²/2)/(EA)`, which cubic elements represent
+//!   exactly (the axial strain is linear along a vertical cable). The same
+//!   with a spatial `Cable3D` rope (free to swing out of the plane too).
 //! - **The equilibrium is a fixed point of the dynamics**: the index-3
 //!   generalized-α started there at rest stays there; its consistent
 //!   multipliers are the static reactions.
