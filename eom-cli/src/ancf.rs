@@ -13,8 +13,9 @@
 //! `end_at`) runs as one mixed model (`eom_sim::large::mixed`): every cable
 //! in one structure (those held at no marker too), the rigid part's
 //! generated functions through the interpreter, the attachments as
-//! constraints, index-3 generalized-α (`simulate` only; `rk4` and
-//! `solve-static` refuse it). Its CSV has, per cable, the first and last
+//! constraints, index-3 generalized-α (`rk4` refuses it); `solve-static`
+//! solves its equilibrium by Newton on the KKT system
+//! (`crate::mixed_static`). Its CSV has, per cable, the first and last
 //! node (`CABLE.first.x`, …, `CABLE.last.z`); its JSON, per cable, every
 //! node at the end. Rigid bodies beside cables none of which hangs at
 //! them are refused.
@@ -43,7 +44,7 @@ fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
     }
     if eom_gen::cables::has_mounts(sys) {
         return Err(Error::Refused(format!(
-            "model `{}` hangs cables at rigid bodies: solve-static does not solve mixed models yet; run `simulate` (with `damping_axial`/`damping_bending` or `--rho-inf` < 1 to settle)",
+            "model `{}` hangs cables at rigid bodies: it runs as one mixed model, not chain by chain",
             sys.name
         )));
     }
@@ -81,6 +82,9 @@ pub fn solve_static_cmd(
     opts: &StaticOptions,
     json_out: bool,
 ) -> Result<String, Error> {
+    if eom_gen::cables::has_mounts(&checked.system) {
+        return crate::mixed_static::solve_static_mixed_cmd(checked, opts, json_out);
+    }
     let chains = build(checked)?;
     let mut text = String::new();
     let mut report = Vec::new();

@@ -6,6 +6,7 @@ mod bench;
 mod cable_report;
 mod compiled;
 mod error;
+mod mixed_static;
 mod plot;
 mod summary;
 mod sweep;
@@ -276,10 +277,12 @@ enum Command {
         json: bool,
     },
     /// Static equilibrium of a model's cables (ANCF chains): Newton with
-    /// load stepping, the residual of every iteration reported. Exit 0 in
-    /// equilibrium; 1 if the model is invalid or the solve refuses (no
-    /// convergence at the smallest load step, a singular tangent); 2 for
-    /// bad arguments.
+    /// load stepping, the residual of every iteration reported. A model
+    /// whose cable hangs at markers of rigid bodies is solved as one
+    /// (rigid coordinates, attachment forces, stability reported). Exit 0
+    /// in equilibrium; 1 if the model is invalid or the solve refuses (no
+    /// convergence at the smallest load step, a singular tangent, a
+    /// mechanism); 2 for bad arguments.
     SolveStatic {
         /// The model file (`.ron`) with `cables:`.
         model: String,

@@ -51,6 +51,8 @@
 //! The explicit path ([`super::integrate_rk4`]) does not run these models:
 //! they are differential-algebraic (index 3).
 
+pub mod statics;
+
 use super::dynamics::{AlphaOptions, DynamicsError, DynamicsStats, State};
 use super::model::StructuralModel;
 use super::sparse::{FaerLu, Pattern, SparseMatrix, SparseSolver};

@@ -10,7 +10,8 @@
 //! - [`statics`]: Newton with load stepping.
 //! - [`dynamics`]: generalized-α (implicit, fixed step) and RK4 (explicit).
 //! - [`mixed`]: rigid parts and chains in one model, attachment
-//!   constraints, index-3 generalized-α.
+//!   constraints, index-3 generalized-α; [`mixed::statics`]: their static
+//!   equilibrium (Newton on the KKT system with load stepping).
 //! - [`sparse`]: the pattern, the matrix and the solvers behind a trait.
 
 pub mod ancf;
@@ -24,6 +25,7 @@ pub mod statics;
 pub use dynamics::{
     AlphaOptions, DynamicsError, DynamicsStats, GeneralizedAlpha, State, integrate_rk4,
 };
+pub use mixed::statics::{MixedStaticError, MixedStaticSolution, Stability, solve_static_mixed};
 pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, MixedStats, RigidPart};
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 pub use sparse::{AutoLu, BandedLu, FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
