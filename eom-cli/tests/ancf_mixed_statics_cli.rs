@@ -14,6 +14,8 @@
 //! - **Stability**: the boom standing upright on a spring weaker than
 //!   gravity's negative stiffness `m g a/2 + W a` is in equilibrium but
 //!   reported unstable.
+//! - **Several cables** (`trapeze`) and **a rigid loop beside a cable**
+//!   (`fourbar_cable`): closed forms in their tests.
 //! - **Refusals** with the reason and exit status 1: a cart on a
 //!   frictionless rail (a mechanism, its coordinate named), and Newton
 //!   that cannot converge.
@@ -192,4 +194,81 @@ fn a_mechanism_and_a_failed_newton_are_refused() {
     let err = String::from_utf8_lossy(&out.stderr);
     println!("{err}");
     assert!(err.contains("did not converge"), "{err}");
+}
+
+fn solve_json(model: &str) -> serde_json::Value {
+    let out = eom_gen(&["solve-static", model, "--json"]);
+    assert!(
+        out.status.success(),
+        "{model}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    match serde_json::from_slice(&out.stdout) {
+        Ok(v) => v,
+        Err(e) => panic!("{model}: JSON: {e}"),
+    }
+}
+
+/// **Several cables**: the bundled trapeze (bar of mass m = 2 kg on two
+/// pinned ropes of length L = 1 m, E = 1 GPa, d = 6 mm, ρ = 1150) rests
+/// level under its pivots, each marker holding half the bar's weight,
+/// each rope the hanging bar stretched by `(m g/2) L/EA + ρ g L²/(2E)`.
+#[test]
+fn trapeze_rests_level_on_two_ropes_each_stretched_as_a_hanging_bar() {
+    let v = solve_json("models/ancf/trapeze.ron");
+    let (m, g, l, e, rho) = (2.0, 9.81, 1.0, 1e9, 1150.0);
+    let area = std::f64::consts::PI * 0.006f64.powi(2) / 4.0;
+    let stretch = 0.5 * m * g * l / (e * area) + rho * g * l * l / (2.0 * e);
+    let q = &v["q"];
+    // The sideways sway is held by gravity alone (stiffness m g / L =
+    // 19.6 N/m), so Newton's force tolerance leaves x at ~1e-11 m.
+    assert!(num(&q[0]).abs() < 1e-9 && num(&q[2]).abs() < 1e-12, "{q}");
+    assert!(
+        (num(&q[1]) + l + stretch).abs() < 1e-9 * stretch.max(1.0),
+        "y = {}, closed form {}",
+        num(&q[1]),
+        -(l + stretch)
+    );
+    for r in v["reactions"].as_array().into_iter().flatten() {
+        assert!((num(&r[1]) + 0.5 * m * g).abs() < 1e-9, "marker force {r}");
+    }
+    assert_eq!(v["cables"].as_array().map(Vec::len), Some(2));
+    assert_eq!(v["stability"]["stable"], serde_json::json!(true));
+}
+
+/// **A rigid loop beside a cable**: the bundled four-bar (links of 1 kg/m,
+/// crank a = 0.2 m, rocker c = 0.5 m) with a pinned cable (ρ = 1500,
+/// 0.02 × 0.02 m, L = 0.4 m, E = 1 MPa) at the coupler's middle rests with
+/// crank and rocker upright: both tips then move horizontally, so do the
+/// coupler's points, and no weight does virtual work (a maximum of the
+/// potential: unstable). The cable hangs straight, the marker carries its
+/// weight `ρ A L g`, its free end lies `L + ρ g L²/(2E)` below the marker.
+#[test]
+fn fourbar_with_a_cable_rests_with_crank_and_rocker_upright_unstable() {
+    let v = solve_json("models/ancf/fourbar_cable.ron");
+    let q = &v["q"];
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    assert!(
+        (num(&q[0]) - half_pi).abs() < 1e-9 && (num(&q[2]) - half_pi).abs() < 1e-9,
+        "crank and rocker at {q}"
+    );
+    assert!(num(&v["constraint_residual"]) < 1e-12);
+    let (rho, area, lc, e, g) = (1500.0, 0.02 * 0.02, 0.4, 1e6, 9.81);
+    let r = &v["reactions"][0];
+    assert!(
+        (num(&r[1]) - rho * area * lc * g).abs() < 1e-9,
+        "marker force {r}"
+    );
+    let c = &v["cables"][0];
+    let drop = num(&c["first_node"][1]) - num(&c["last_node"][1]);
+    let expected = lc + rho * g * lc * lc / (2.0 * e);
+    assert!(
+        (drop - expected).abs() < 1e-9,
+        "drop {drop}, closed form {expected}"
+    );
+    assert!(
+        (num(&c["first_node"][0]) - num(&c["last_node"][0])).abs() < 1e-12,
+        "hangs straight"
+    );
+    assert_eq!(v["stability"]["stable"], serde_json::json!(false));
 }
