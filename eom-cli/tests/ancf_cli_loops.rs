@@ -48,7 +48,8 @@ fn simulate_runs_the_fourbar_with_a_cable_and_refuses_an_open_loop() {
         a * t1.cos() + 0.5 * b * t12.cos(),
         a * t1.sin() + 0.5 * b * t12.sin(),
     ];
-    let first = [num(&v["first_node"][0]), num(&v["first_node"][1])];
+    let node = &v["cables"][0]["first_node"];
+    let first = [num(&node[0]), num(&node[1])];
     let off = (first[0] - mid[0]).hypot(first[1] - mid[1]);
     println!("q = {q:?}: loop gap {gap:.1e} m, first node off the coupler's middle {off:.1e} m");
     assert!(gap < 1e-9 && off < 1e-9, "gap {gap:e}, off {off:e}");
