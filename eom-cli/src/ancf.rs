@@ -109,19 +109,7 @@ pub fn solve_static_cmd(
             sol.factorizations,
             cpu * 1e3
         );
-        for s in &sol.steps {
-            let _ = writeln!(
-                text,
-                "  λ = {:<8.4} {:>2} iterations, |r|∞: {}",
-                s.lambda,
-                s.iterations(),
-                s.residuals
-                    .iter()
-                    .map(|r| format!("{r:.2e}"))
-                    .collect::<Vec<_>>()
-                    .join(" → ")
-            );
-        }
+        write_load_steps(&mut text, &sol.steps);
         let _ = writeln!(
             text,
             "  end node at ({:.9}, {:.9}, {:.9}) m, displaced by ({:.9}, {:.9}, {:.9}) m",
@@ -509,39 +497,9 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
         stats.dynamics.factorizations,
         stats.dynamics.force_evaluations
     );
-    let qs: Vec<String> = coords
-        .iter()
-        .zip(rigid_q)
-        .map(|(n, v)| format!("{n} = {v:.9}"))
-        .collect();
-    if !qs.is_empty() {
-        let _ = writeln!(text, "  rigid part: {}", qs.join(", "));
-    }
-    let mut cable_report = Vec::new();
-    for c in cables {
-        let nodes: Vec<[f64; 3]> = (0..c.nodes).map(|j| c.node_position(&q_full, j)).collect();
-        let (first, last) = (nodes[0], nodes[c.nodes - 1]);
-        let _ = writeln!(
-            text,
-            "  cable {} nodes: first at ({:.9}, {:.9}, {:.9}) m, last at ({:.9}, {:.9}, {:.9}) m",
-            c.name, first[0], first[1], first[2], last[0], last[1], last[2]
-        );
-        cable_report.push(json!({
-            "cable": c.name,
-            "element": c.kernel,
-            "elements": c.nodes - 1,
-            "first_node": first,
-            "last_node": last,
-            "nodes": nodes,
-        }));
-    }
-    for (n, f) in names.iter().zip(&reactions) {
-        let _ = writeln!(
-            text,
-            "  force of the marker on {n}: ({:.6e}, {:.6e}, {:.6e}) N",
-            f[0], f[1], f[2]
-        );
-    }
+    let cable_report = write_mixed_state(
+        &mut text, &coords, rigid_q, cables, &q_full, &names, &reactions,
+    );
     let _ = writeln!(
         text,
         "  energy {e0:.9e} → {e1:.9e} J (change {:.3e}); largest constraint residual |Φ|∞ {:.3e}",
@@ -590,4 +548,72 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
     } else {
         Ok(text)
     }
+}
+
+/// The report lines of a static solve's load steps: load factor,
+/// iterations, residual history.
+pub fn write_load_steps(text: &mut String, steps: &[eom_sim::large::LoadStep]) {
+    for s in steps {
+        let _ = writeln!(
+            text,
+            "  λ = {:<8.4} {:>2} iterations, |r|∞: {}",
+            s.lambda,
+            s.iterations(),
+            s.residuals
+                .iter()
+                .map(|r| format!("{r:.2e}"))
+                .collect::<Vec<_>>()
+                .join(" → ")
+        );
+    }
+}
+
+/// The state of a mixed model in the report of `simulate` and
+/// `solve-static`: the rigid coordinates, each cable's end nodes and the
+/// force of each marker on its cable end; returns the JSON `cables`
+/// array (per cable its name, element, element count, first, last and
+/// every node).
+pub fn write_mixed_state(
+    text: &mut String,
+    coords: &[&str],
+    rigid_q: &[f64],
+    cables: &[eom_gen::cables::MixedCable],
+    q_full: &[f64],
+    mounts: &[String],
+    reactions: &[[f64; 3]],
+) -> Vec<serde_json::Value> {
+    let qs: Vec<String> = coords
+        .iter()
+        .zip(rigid_q)
+        .map(|(n, v)| format!("{n} = {v:.9}"))
+        .collect();
+    if !qs.is_empty() {
+        let _ = writeln!(text, "  rigid part: {}", qs.join(", "));
+    }
+    let mut report = Vec::new();
+    for c in cables {
+        let nodes: Vec<[f64; 3]> = (0..c.nodes).map(|j| c.node_position(q_full, j)).collect();
+        let (first, last) = (nodes[0], nodes[c.nodes - 1]);
+        let _ = writeln!(
+            text,
+            "  cable {} nodes: first at ({:.9}, {:.9}, {:.9}) m, last at ({:.9}, {:.9}, {:.9}) m",
+            c.name, first[0], first[1], first[2], last[0], last[1], last[2]
+        );
+        report.push(json!({
+            "cable": c.name,
+            "element": c.kernel,
+            "elements": c.nodes - 1,
+            "first_node": first,
+            "last_node": last,
+            "nodes": nodes,
+        }));
+    }
+    for (n, f) in mounts.iter().zip(reactions) {
+        let _ = writeln!(
+            text,
+            "  force of the marker on {n}: ({:.6e}, {:.6e}, {:.6e}) N",
+            f[0], f[1], f[2]
+        );
+    }
+    report
 }

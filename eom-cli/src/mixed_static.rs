@@ -79,45 +79,16 @@ pub fn solve_static_mixed_cmd(
         sol.factorizations,
         cpu * 1e3
     );
-    for s in &sol.steps {
-        let _ = writeln!(
-            text,
-            "  λ = {:<8.4} {:>2} iterations, |r|∞: {}",
-            s.lambda,
-            s.iterations(),
-            s.residuals
-                .iter()
-                .map(|r| format!("{r:.2e}"))
-                .collect::<Vec<_>>()
-                .join(" → ")
-        );
-    }
-    let qs: Vec<String> = coords
-        .iter()
-        .zip(rigid_q)
-        .map(|(n, v)| format!("{n} = {v:.9}"))
-        .collect();
-    if !qs.is_empty() {
-        let _ = writeln!(text, "  rigid part: {}", qs.join(", "));
-    }
-    for c in &mixed.cables {
-        let (first, last) = (
-            c.node_position(&sol.q_full, 0),
-            c.node_position(&sol.q_full, c.nodes - 1),
-        );
-        let _ = writeln!(
-            text,
-            "  cable {} nodes: first at ({:.9}, {:.9}, {:.9}) m, last at ({:.9}, {:.9}, {:.9}) m",
-            c.name, first[0], first[1], first[2], last[0], last[1], last[2]
-        );
-    }
-    for (n, f) in names.iter().zip(&reactions) {
-        let _ = writeln!(
-            text,
-            "  force of the marker on {n}: ({:.6e}, {:.6e}, {:.6e}) N",
-            f[0], f[1], f[2]
-        );
-    }
+    crate::ancf::write_load_steps(&mut text, &sol.steps);
+    let cables = crate::ancf::write_mixed_state(
+        &mut text,
+        &coords,
+        rigid_q,
+        &mixed.cables,
+        &sol.q_full,
+        &names,
+        &reactions,
+    );
     let _ = writeln!(
         text,
         "  constraint residual |Φ|∞ {:.3e}; condition estimate of the KKT matrix {:.2e}",
@@ -139,14 +110,7 @@ pub fn solve_static_mixed_cmd(
             "{}\n",
             json!({
                 "model": sys.name,
-                "cables": mixed.cables.iter().map(|c| json!({
-                    "cable": c.name,
-                    "element": c.kernel,
-                    "elements": c.nodes - 1,
-                    "first_node": c.node_position(&sol.q_full, 0),
-                    "last_node": c.node_position(&sol.q_full, c.nodes - 1),
-                    "nodes": (0..c.nodes).map(|j| c.node_position(&sol.q_full, j)).collect::<Vec<_>>(),
-                })).collect::<Vec<_>>(),
+                "cables": cables,
                 "unknowns": m.n(),
                 "constraints": m.n_constraints(),
                 "cuts": sol.cuts,
