@@ -19,7 +19,7 @@
 use crate::functions::Function;
 use crate::mech::Formulation;
 use crate::system::System;
-use eom_sim::large::ancf::{chains, kernel_dim};
+use eom_sim::large::ancf::chains;
 use eom_sim::large::{ByName, MixedModel, RigidPart};
 
 /// One cable of a mixed model: what it is and where its nodes sit in the
@@ -153,7 +153,7 @@ fn check_planar_mounts(
     x: &crate::interpret::Point<'_>,
 ) -> Result<(), String> {
     let mounts = sys.cable_mounts();
-    let planar = |c: usize| kernel_dim(&sys.cables[c].chain.kernel) == Some(2);
+    let planar = |c: usize| sys.cables[c].chain.kernel.dim() == 2;
     if !mounts.iter().any(|(c, _, _)| planar(*c)) {
         return Ok(());
     }
@@ -299,7 +299,7 @@ pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'
         .zip(&built.parts)
         .map(|(c, p)| MixedCable {
             name: c.name.clone(),
-            kernel: p.kernel,
+            kernel: p.kernel.name(),
             dim: p.dim,
             node_coords: p.node_coords,
             nodes: p.nodes,

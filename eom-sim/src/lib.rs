@@ -49,8 +49,12 @@
 //! ```
 
 pub mod constrained;
-pub mod elements;
+/// The element kernels (the `eom-elements` crate), with the `cables`
+/// feature.
+#[cfg(feature = "cables")]
+pub use eom_elements as elements;
 mod integrate;
+#[cfg(feature = "cables")]
 pub mod large;
 mod model;
 pub mod run;

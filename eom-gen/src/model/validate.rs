@@ -2516,7 +2516,8 @@ impl Ctx<'_> {
                 ok = false;
             }
             let kernel = c.element.name();
-            if !eom_sim::large::ancf::KERNELS.contains(&kernel) {
+            let element = eom_sim::elements::Element::from_name(kernel);
+            if element.is_err() {
                 self.error(
                     &at("element"),
                     format!(
@@ -2524,7 +2525,7 @@ impl Ctx<'_> {
                     ),
                     format!(
                         "available: {}",
-                        list_names(eom_sim::large::ancf::KERNELS.iter().copied())
+                        list_names(eom_sim::elements::Element::ALL.iter().map(|e| e.name()))
                     ),
                 );
                 ok = false;
@@ -2787,12 +2788,16 @@ impl Ctx<'_> {
                 ok = false;
                 continue;
             };
+            let Ok(element) = element else {
+                ok = false;
+                continue;
+            };
             let v = |q: &Vec3Q| [q[0].value, q[1].value, q[2].value];
             let (b, h) = rect.unwrap_or((0.0, 0.0));
             out.push(CableInfo {
                 name: name.to_string(),
                 chain: ChainSpec {
-                    kernel: kernel.to_string(),
+                    kernel: element,
                     start: v(&from),
                     end: v(&to),
                     elements: c.elements,
