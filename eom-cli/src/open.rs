@@ -204,3 +204,23 @@ fn generate_with_progress(
     let _ = spinner.join();
     result
 }
+
+/// For a model made of cables alone (no rigid bodies): a usage error for
+/// `what`, which works on the generated functions of a rigid part, naming
+/// the commands that apply; `None` for every other model.
+pub fn cables_only_refusal(checked: &Checked, what: &str) -> Option<ExitCode> {
+    let sys = &checked.system;
+    if sys.cables.is_empty() || sys.bodies.len() > 1 {
+        return None;
+    }
+    let names: Vec<String> = sys.cables.iter().map(|c| format!("`{}`", c.name)).collect();
+    eprintln!(
+        "error: `{}` is made of cables alone ({}): {what} works on the generated functions of \
+         rigid bodies, and this model has none (nothing is generated per model: the cables' \
+         elements are model-independent kernels); `simulate` integrates it, `solve-static` \
+         finds its equilibrium, `check` and `stats` describe its cables",
+        sys.name,
+        names.join(", ")
+    );
+    Some(ExitCode::from(2))
+}

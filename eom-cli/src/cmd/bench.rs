@@ -257,7 +257,14 @@ fn per_call(
         eprintln!("error: --states and --reps must be at least 1");
         return ExitCode::from(2);
     }
-    let g = match generated(path, urdf, vary) {
+    let opened = match crate::open::open(path, urdf, vary) {
+        Ok(o) => o,
+        Err(code) => return code,
+    };
+    if let Some(code) = crate::open::cables_only_refusal(&opened.checked, "bench --per-call") {
+        return code;
+    }
+    let g = match crate::open::generate(&opened, vary, &Default::default()) {
         Ok(g) => g,
         Err(code) => return code,
     };

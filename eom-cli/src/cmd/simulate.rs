@@ -15,23 +15,25 @@ pub struct SimulateArgs {
     /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
     pub model: String,
     /// End time, s.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub t_end: f64,
-    /// rk4, dopri5, dop853, radau5, midpoint or euler.
-    #[arg(long, default_value = "dopri5")]
-    pub integrator: String,
-    /// Relative tolerance (adaptive methods).
-    #[arg(long, default_value_t = 1e-8, allow_hyphen_values = true)]
-    pub rtol: f64,
-    /// Absolute tolerance (adaptive methods).
-    #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
-    pub atol: f64,
+    /// rk4, dopri5, dop853, radau5, midpoint or euler (default dopri5);
+    /// models with cables: generalized-alpha (default) or rk4.
+    #[arg(long)]
+    pub integrator: Option<String>,
+    /// Relative tolerance (adaptive methods; default 1e-8).
+    #[arg(long, allow_hyphen_values = true)]
+    pub rtol: Option<f64>,
+    /// Absolute tolerance (adaptive methods; default 1e-10).
+    #[arg(long, allow_hyphen_values = true)]
+    pub atol: Option<f64>,
     /// Step size (fixed-step methods).
     #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
     pub dt: f64,
-    /// Most attempted steps; a run that needs more stops (exit 3).
-    #[arg(long, default_value_t = 100_000)]
-    pub max_steps: usize,
+    /// Most attempted steps; a run that needs more stops (exit 3;
+    /// default 100000).
+    #[arg(long)]
+    pub max_steps: Option<usize>,
     #[command(flatten)]
     pub initial: InitialArgs,
     #[command(flatten)]
@@ -53,80 +55,86 @@ pub struct SimulateArgs {
     /// coordinates from independent ones, Wehage–Haug), `index3` (the
     /// index-3 DAE, with radau5) or `augmented-lagrangian` (Bayo and
     /// Ledesma; well-posed through singular and redundant constraints).
-    #[arg(long, default_value = "projection")]
-    pub constraints: String,
+    /// Default projection.
+    #[arg(long)]
+    pub constraints: Option<String>,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     pub json: bool,
     /// Spectral radius at infinity of generalized-α (models with
-    /// cables; 1 = no numerical damping).
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
-    pub rho_inf: f64,
+    /// cables; 1 = no numerical damping; default 1).
+    #[arg(long, allow_hyphen_values = true)]
+    pub rho_inf: Option<f64>,
 }
 
 /// A run that did not reach its end time: exit status 3.
 const EXIT_RUN_STOPPED: u8 = 3;
 
 pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
-    let vary = match Vary::parse_or_exit(&a.params.params, &a.inputs.inputs) {
-        Ok(v) => v,
-        Err(code) => return code,
+    // Every problem with the arguments is reported together, before
+    // anything is generated or built.
+    let mut problems = Vec::new();
+    let vary = Vary::parse(&a.params.params, &a.inputs.inputs).unwrap_or_else(|p| {
+        problems.extend(p);
+        Vary::default()
+    });
+    let mut list = |what: &str, text: &Option<String>| -> Option<Vec<f64>> {
+        match text.as_deref().map(|t| numbers(what, t)) {
+            Some(Ok(v)) => Some(v),
+            Some(Err(e)) => {
+                problems.push(e);
+                None
+            }
+            None => None,
+        }
     };
+    let (q0, u0) = (list("q0", &a.initial.q0), list("u0", &a.initial.u0));
     let opened = match crate::open::open(&a.model, urdf, &vary) {
         Ok(o) => o,
-        Err(code) => return code,
+        Err(code) => {
+            return if problems.is_empty() {
+                code
+            } else {
+                fail(&Error::Usage(problems))
+            };
+        }
     };
     // Models with cables run on the large-model runtime.
     if crate::ancf::has_cables(&opened.checked) {
-        let checked = &opened.checked;
-        eprint!("{}", checked.render_warnings());
-        let integrator = if a.integrator == "dopri5" {
-            "generalized-alpha".to_string()
-        } else {
-            a.integrator
-        };
-        let run = crate::ancf::CableRun {
-            integrator,
-            t_end: a.t_end,
-            dt: a.dt,
-            rho_inf: a.rho_inf,
-            csv: a.csv,
-        };
-        return match crate::ancf::simulate_cmd(checked, &run, a.json) {
-            Ok(text) => {
-                print!("{text}");
-                ExitCode::SUCCESS
-            }
-            Err(e) => fail(&e),
-        };
+        return simulate_cables(&opened, a, problems);
     }
-    let list = |what: &str, text: Option<String>| -> Result<Option<Vec<f64>>, String> {
-        text.map(|t| numbers(what, &t)).transpose()
-    };
-    let (q0, u0) = match (list("q0", a.initial.q0), list("u0", a.initial.u0)) {
-        (Ok(q), Ok(u)) => (q, u),
-        (Err(e), _) | (_, Err(e)) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let mut problems = Vec::new();
-    let integrator = parse_names(&[a.integrator], &mut problems)
-        .pop()
-        .unwrap_or(Integrator::Dopri5);
-    let constraints = parse_names(&[a.constraints], &mut problems)
-        .pop()
-        .unwrap_or(Method::Projection);
-    if !problems.is_empty() {
-        return fail(&Error::Usage(problems));
+    if a.rho_inf.is_some() {
+        problems.push(
+            "--rho-inf sets generalized-α, which runs models with cables; this model has none (its integrators: --integrator)".into(),
+        );
     }
+    let integrator = parse_names(
+        &[a.integrator.unwrap_or_else(|| "dopri5".into())],
+        &mut problems,
+    )
+    .pop()
+    .unwrap_or(Integrator::Dopri5);
+    let sys = &opened.checked.system;
+    if a.constraints.is_some() && sys.graph.cut_joints().is_empty() && sys.constraints.is_empty() {
+        problems.push(format!(
+            "--constraints chooses how closed loops and constraints are kept; `{}` has none \
+             (its options: --integrator, --rtol, --atol, --dt)",
+            sys.name
+        ));
+    }
+    let constraints = parse_names(
+        &[a.constraints.unwrap_or_else(|| "projection".into())],
+        &mut problems,
+    )
+    .pop()
+    .unwrap_or(Method::Projection);
     let o = RunOptions {
         integrator,
-        rtol: a.rtol,
-        atol: a.atol,
+        rtol: a.rtol.unwrap_or(1e-8),
+        atol: a.atol.unwrap_or(1e-10),
         dt: a.dt,
         t_end: a.t_end,
-        max_steps: a.max_steps,
+        max_steps: a.max_steps.unwrap_or(100_000),
         method: constraints,
         q0,
         u0,
@@ -135,7 +143,86 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         energy_columns: false,
         momentum_columns: false,
     };
+    problems.extend(o.problems());
+    for (what, given, names) in [
+        ("q0", &o.q0, sys.coordinate_names()),
+        ("u0", &o.u0, sys.speed_names()),
+    ] {
+        if let Some(v) = given
+            && v.len() != names.len()
+        {
+            problems.push(format!(
+                "--{what} has {} value(s); `{}` has {}: {}",
+                v.len(),
+                sys.name,
+                names.len(),
+                names.join(", ")
+            ));
+        }
+    }
+    if !problems.is_empty() {
+        return fail(&Error::Usage(problems));
+    }
     simulate(&opened, &vary, &o, a.json, a.interpret)
+}
+
+/// `simulate` on a model with cables: the options of the large-model
+/// runtime honoured, every other one a usage error naming what applies.
+fn simulate_cables(
+    opened: &crate::open::Opened,
+    a: SimulateArgs,
+    mut problems: Vec<String>,
+) -> ExitCode {
+    let checked = &opened.checked;
+    let integrator = a
+        .integrator
+        .unwrap_or_else(|| "generalized-alpha".to_string());
+    let refused: [(&str, bool); 9] = [
+        ("--rtol", a.rtol.is_some()),
+        ("--atol", a.atol.is_some()),
+        ("--max-steps", a.max_steps.is_some()),
+        ("--constraints", a.constraints.is_some()),
+        ("--q0", a.initial.q0.is_some()),
+        ("--u0", a.initial.u0.is_some()),
+        ("--input", !a.inputs.inputs.is_empty()),
+        ("--every", a.every.is_some()),
+        ("--interpret", a.interpret),
+    ];
+    for (option, given) in refused {
+        if given {
+            problems.push(format!(
+                "{option} does not apply to `{}`, a model with cables: it runs generalized-α \
+                 (or rk4) with a fixed step; its options are --t-end, --dt, --integrator \
+                 generalized-alpha|rk4, --rho-inf, --param, --csv and --json",
+                checked.system.name
+            ));
+        }
+    }
+    if !["generalized-alpha", "rk4"].contains(&integrator.as_str()) {
+        problems.push(format!(
+            "--integrator {integrator} does not run `{}`, a model with cables: use \
+             generalized-alpha (implicit, fixed step; the default) or rk4 (explicit, fixed step)",
+            checked.system.name
+        ));
+    }
+    if !problems.is_empty() {
+        return fail(&Error::Usage(problems));
+    }
+    eprint!("{}", checked.render_warnings());
+    let run = crate::ancf::CableRun {
+        integrator,
+        t_end: a.t_end,
+        dt: a.dt,
+        rho_inf: a.rho_inf.unwrap_or(1.0),
+        csv: a.csv,
+    };
+    match crate::ancf::simulate_cmd(checked, &run, a.json) {
+        Ok(text) => {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail(&e),
+    }
 }
 
 fn simulate(
@@ -145,10 +232,6 @@ fn simulate(
     json: bool,
     interpret: bool,
 ) -> ExitCode {
-    let problems = o.problems();
-    if !problems.is_empty() {
-        return fail(&Error::Usage(problems));
-    }
     let inputs = &opened.inputs;
     let g = match crate::open::generate(opened, vary, &Default::default()) {
         Ok(g) => g,
@@ -226,8 +309,8 @@ fn summary(name: &str, coordinates: &[&str], o: &RunOptions, r: &RunReport) -> S
     let [e0, e1] = r.energy;
     let _ = writeln!(
         s,
-        "  energy {e0:.9} → {e1:.9} (relative change {:.1e})",
-        ((e1 - e0) / e0.abs().max(1e-300)).abs()
+        "  energy {e0:.9} → {e1:.9} J{}",
+        energy_change(e0, e1, r.energy_scale)
     );
     if let Some(c) = &r.constrained {
         let m = &c.summary;
@@ -254,4 +337,21 @@ fn summary(name: &str, coordinates: &[&str], o: &RunOptions, r: &RunReport) -> S
         let _ = writeln!(s, "  trajectory written to {csv}");
     }
     s
+}
+
+/// The energy change for people: relative to the size of the energies
+/// (`|T| + |V|`, the larger at the start and at the end), which is
+/// meaningful when the total is near zero; absolute when they are all zero.
+fn energy_change(e0: f64, e1: f64, scale: f64) -> String {
+    let change = (e1 - e0).abs();
+    if !change.is_finite() {
+        String::new()
+    } else if scale.is_finite() && scale > 0.0 {
+        format!(
+            ", change {change:.1e} J = {:.1e} of |T| + |V| ({scale:.3e} J)",
+            change / scale
+        )
+    } else {
+        format!(", change {change:.1e} J")
+    }
 }

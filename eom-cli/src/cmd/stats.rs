@@ -53,8 +53,17 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         "generation_ms": f.seconds * 1e3,
         "source_bytes": g.source.len(),
     });
+    let sys = &g.checked.system;
     if a.json {
         println!("{v}");
+    } else if sys.bodies.len() <= 1 && !sys.cables.is_empty() {
+        // Cables alone: nothing is generated per model (a table of zeros
+        // would measure nothing); the kernels are what runs.
+        println!(
+            "{}: cables alone, no rigid part: nothing is generated per model; the cables run these kernels",
+            sys.name
+        );
+        print!("{cable_text}");
     } else {
         print!("{}", table(&g));
         print!("{cable_text}");
