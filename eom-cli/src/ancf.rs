@@ -76,15 +76,13 @@ fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
         .collect()
 }
 
-/// `eom-gen solve-static`.
+/// `eom-gen solve-static` on cables that hang at no rigid body (a mixed
+/// model is `crate::mixed_static`'s).
 pub fn solve_static_cmd(
     checked: &Checked,
     opts: &StaticOptions,
     json_out: bool,
 ) -> Result<String, Error> {
-    if eom_gen::cables::has_mounts(&checked.system) {
-        return crate::mixed_static::solve_static_mixed_cmd(checked, opts, json_out);
-    }
     let chains = build(checked)?;
     let mut text = String::new();
     let mut report = Vec::new();
