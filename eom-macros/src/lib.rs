@@ -44,10 +44,42 @@ pub fn multibody(attr: TokenStream, item: TokenStream) -> TokenStream {
     let item = syn::parse_macro_input!(item as ItemStruct);
     match expand(attr.into(), &item) {
         Ok(tokens) => tokens.into(),
-        // Keep the struct so that one mistake gives one error.
+        // Keep the struct, and the `Default` the expansion would have
+        // given it, so that one mistake gives one error (not a cascade of
+        // "no function `default`" where the user's code makes one; the
+        // fallback thiserror uses too).
         Err(e) => {
             let err = e.to_compile_error();
-            quote!(#err #item).into()
+            let fallback = fallback_default(&item);
+            quote!(#err #item #fallback).into()
+        }
+    }
+}
+
+/// `impl Default` for the struct of a failed expansion, unless the
+/// struct derives its own; it is never called (the crate does not build).
+fn fallback_default(item: &ItemStruct) -> Tokens {
+    let derives_default = item.attrs.iter().any(|a| {
+        a.path().is_ident("derive")
+            && a.parse_args_with(
+                syn::punctuated::Punctuated::<syn::Path, Token![,]>::parse_terminated,
+            )
+            .is_ok_and(|paths| {
+                paths
+                    .iter()
+                    .any(|p| p.segments.last().is_some_and(|s| s.ident == "Default"))
+            })
+    });
+    if derives_default {
+        return Tokens::new();
+    }
+    let name = &item.ident;
+    let (impl_generics, ty_generics, where_clause) = item.generics.split_for_impl();
+    quote! {
+        impl #impl_generics ::core::default::Default for #name #ty_generics #where_clause {
+            fn default() -> Self {
+                ::core::unreachable!("#[multibody] failed; see the error above")
+            }
         }
     }
 }

@@ -890,7 +890,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         return Ok(report);
     }
     let a = assemble(model, &q0, &u0, 0.0);
-    if !(a.residual <= ASSEMBLY_TOL) {
+    if a.residual.is_nan() || a.residual > ASSEMBLY_TOL {
         return Err(RunError::NotAssembled {
             residual: a.residual,
             iterations: a.iterations,

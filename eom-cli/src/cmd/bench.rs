@@ -172,10 +172,38 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         }
         None => None,
     };
-    let (q0, u0) = (initial("q0", a.initial.q0), initial("u0", a.initial.u0));
+    let (q0, u0) = (
+        initial("q0", a.initial.q0.clone()),
+        initial("u0", a.initial.u0.clone()),
+    );
     if (q0.is_some() || u0.is_some()) && !a.work_precision {
         problems.push(
             "--q0 and --u0 set the start of the --work-precision runs; --per-call times random states".into(),
+        );
+    }
+    if a.per_call && !a.work_precision && !a.suite {
+        // The sweep's options measure nothing per call.
+        for (option, given) in [
+            ("--integrators", !a.integrators.is_empty()),
+            ("--constraints", !a.constraints.is_empty()),
+            ("--t-end", a.t_end.is_some()),
+            ("--tols", !a.tols.is_empty()),
+            ("--steps", !a.steps.is_empty()),
+            ("--csv", a.csv.is_some()),
+            ("--svg", a.svg.is_some()),
+        ] {
+            if given {
+                problems.push(format!(
+                    "{option} sets the --work-precision sweep; --per-call times the generated \
+                     functions at random states (its options: --states, --reps, --seed, --native, --json)"
+                ));
+            }
+        }
+    }
+    if a.native && !a.per_call {
+        problems.push(
+            "--native builds the --per-call timing program; not with --work-precision or --suite"
+                .into(),
         );
     }
     if !problems.is_empty() {
@@ -201,7 +229,7 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         }
         return suite(&a.models, &a.out, &o, a.t_end.is_some(), urdf);
     }
-    let Some(model) = a.model else {
+    let Some(model) = a.model.clone() else {
         eprintln!(
             "error: which model? `eom-gen bench MODEL --per-call|--work-precision`, or `eom-gen bench --suite`"
         );
@@ -212,15 +240,7 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             eprintln!("error: choose one of --per-call and --work-precision");
             return ExitCode::from(2);
         }
-        return work_precision(
-            &model,
-            urdf,
-            &vary,
-            &o,
-            a.csv.as_deref(),
-            a.svg.as_deref(),
-            a.json,
-        );
+        return work_precision(&model, urdf, &vary, &o, &a);
     }
     let o = crate::bench::PerCallOptions {
         states: a.states,
@@ -329,17 +349,37 @@ fn work_precision(
     urdf: &eom_gen::urdf::Options,
     vary: &Vary,
     o: &wp::WpOptions,
-    csv: Option<&str>,
-    svg: Option<&str>,
-    json: bool,
+    a: &BenchArgs,
 ) -> ExitCode {
+    let (csv, svg, json) = (a.csv.as_deref(), a.svg.as_deref(), a.json);
+    let constraints_given = !a.constraints.is_empty();
     if let Err(errors) = wp::validate(o) {
         for e in errors {
             eprintln!("error: {e}");
         }
         return ExitCode::from(2);
     }
-    let g = match generated(path, urdf, vary) {
+    let opened = match crate::open::open(path, urdf, vary) {
+        Ok(o) => o,
+        Err(code) => return code,
+    };
+    let sys = &opened.checked.system;
+    if !sys.cables.is_empty() {
+        eprintln!(
+            "error: `{}` has cables: --work-precision sweeps the integrators of rigid models; \
+             a model with cables runs generalized-α with a fixed step (compare `simulate --dt` runs)",
+            sys.name
+        );
+        return ExitCode::from(2);
+    }
+    if constraints_given && sys.graph.cut_joints().is_empty() && sys.constraints.is_empty() {
+        eprintln!(
+            "error: --constraints chooses the constraint methods to sweep; `{}` has no loops or constraints",
+            sys.name
+        );
+        return ExitCode::from(2);
+    }
+    let g = match crate::open::generate(&opened, vary, &Default::default()) {
         Ok(g) => g,
         Err(code) => return code,
     };

@@ -2403,7 +2403,7 @@ impl Ctx<'_> {
         let stalled = crate::mech::Numeric::new(sys)
             .ok()
             .and_then(|num| num.assemble(&sys.q0(), &sys.u0(), 0.0).ok())
-            .filter(|a| !(a.residual <= eom_sim::ASSEMBLY_TOL));
+            .filter(|a| a.residual.is_nan() || a.residual > eom_sim::ASSEMBLY_TOL);
         for (j, gap) in open {
             let joint = &sys.joints[j];
             let at = format!(
