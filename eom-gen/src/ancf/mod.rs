@@ -693,7 +693,7 @@ pub fn chain(first: &Program, second: &Program) -> Program {
     let mut instrs = first.instrs.clone();
     instrs.extend(second.instrs.iter().map(|ins| Instr {
         dst: ins.dst + off,
-        op: remap(ins.op, map),
+        op: ins.op.map(map),
     }));
     let outputs = second
         .outputs
@@ -709,30 +709,6 @@ pub fn chain(first: &Program, second: &Program) -> Program {
     p.optimize();
     let _ = Op::Neg;
     p
-}
-
-fn remap(
-    op: crate::sym::Op,
-    f: impl Fn(crate::sym::Operand) -> crate::sym::Operand,
-) -> crate::sym::Op {
-    use crate::sym::Op;
-    match op {
-        Op::Add(a, b) => Op::Add(f(a), f(b)),
-        Op::Sub(a, b) => Op::Sub(f(a), f(b)),
-        Op::Mul(a, b) => Op::Mul(f(a), f(b)),
-        Op::Div(a, b) => Op::Div(f(a), f(b)),
-        Op::Atan2(a, b) => Op::Atan2(f(a), f(b)),
-        Op::Neg(a) => Op::Neg(f(a)),
-        Op::Sqrt(a) => Op::Sqrt(f(a)),
-        Op::Sin(a) => Op::Sin(f(a)),
-        Op::Cos(a) => Op::Cos(f(a)),
-        Op::SinCos(a) => Op::SinCos(f(a)),
-        Op::Tan(a) => Op::Tan(f(a)),
-        Op::Exp(a) => Op::Exp(f(a)),
-        Op::Ln(a) => Op::Ln(f(a)),
-        Op::Abs(a) => Op::Abs(f(a)),
-        Op::Select(c, a, b) => Op::Select(f(c), f(a), f(b)),
-    }
 }
 
 impl Kernels {
