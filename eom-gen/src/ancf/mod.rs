@@ -37,34 +37,13 @@
 
 pub mod emit;
 mod gauss;
+mod kind;
 mod shapes;
 
 pub use gauss::gauss_legendre;
+pub use kind::Kind;
 
 use crate::sym::{Arena, Id, LowerOptions, OpCount, Program, SymId, SymKind};
-
-/// The element types.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
-    /// Planar cable, Gerstmayr–Irschik strain and material curvature.
-    Cable2D,
-    /// Planar cable, Green axial strain and the polynomial curvature `r' × r''`.
-    Cable2DGreen,
-    /// Spatial cable, axial strain and curvature, no torsion.
-    Cable3D,
-    /// Planar fully parameterised beam (continuum Green–Lagrange strain).
-    Beam2D,
-}
-
-impl Kind {
-    /// Every element type, in the order the files are written.
-    pub const ALL: [Kind; 4] = [
-        Kind::Cable2D,
-        Kind::Cable2DGreen,
-        Kind::Cable3D,
-        Kind::Beam2D,
-    ];
-}
 
 /// An element type's symbolic definition (built by [`define`]).
 pub struct Definition {

@@ -2491,7 +2491,7 @@ impl Ctx<'_> {
         gravity: Option<&Vec3Q>,
         bodies: &[BodyInfo],
     ) -> Option<Vec<CableInfo>> {
-        use eom_sim::large::ancf::{ChainSpec, Section, Support};
+        use crate::system::{CableSection, ChainInfo, Support};
         let g = gravity.map_or([0.0; 3], |g| [g[0].value, g[1].value, g[2].value]);
         let mut out = Vec::new();
         let mut ok = true;
@@ -2516,19 +2516,6 @@ impl Ctx<'_> {
                 ok = false;
             }
             let kernel = c.element.name();
-            if !eom_sim::large::ancf::KERNELS.contains(&kernel) {
-                self.error(
-                    &at("element"),
-                    format!(
-                        "element type `{kernel}` of cable `{name}` has no kernel in this build"
-                    ),
-                    format!(
-                        "available: {}",
-                        list_names(eom_sim::large::ancf::KERNELS.iter().copied())
-                    ),
-                );
-                ok = false;
-            }
             if c.elements == 0 {
                 self.error(
                     &at("elements"),
@@ -2607,7 +2594,7 @@ impl Ctx<'_> {
                     "give `second_moment` (m⁴), or `width` and `height` of a rectangular section",
                 );
             }
-            if c.element == spec::AncfElement::Beam2D && rect.is_none() && c.width.is_none() {
+            if c.element == crate::ancf::Kind::Beam2D && rect.is_none() && c.width.is_none() {
                 self.error(
                     &at("element"),
                     format!("`Beam2D` cable `{name}` needs a rectangular section"),
@@ -2638,7 +2625,7 @@ impl Ctx<'_> {
             );
             let mu = self.nonnegative(&c.retardation, &at("retardation"), "retardation time", name);
             let end_mass = self.nonnegative(&c.end_mass, &at("end_mass"), "end mass", name);
-            let planar = c.element != spec::AncfElement::Cable3D;
+            let planar = c.element != crate::ancf::Kind::Cable3D;
             if let (Some(a), Some(b)) = (&from, &to) {
                 let (a, b) = (values(a), values(b));
                 if (a - b).norm() <= 0.0 {
@@ -2791,12 +2778,12 @@ impl Ctx<'_> {
             let (b, h) = rect.unwrap_or((0.0, 0.0));
             out.push(CableInfo {
                 name: name.to_string(),
-                chain: ChainSpec {
-                    kernel: kernel.to_string(),
+                chain: ChainInfo {
+                    element: c.element,
                     start: v(&from),
                     end: v(&to),
                     elements: c.elements,
-                    section: Section {
+                    section: CableSection {
                         e: young,
                         nu: poisson.value,
                         rho: density,
