@@ -12,7 +12,8 @@
 # Installs what it needs: cargo-fuzz (`cargo install`) and, for the URDF
 # seeds, the PyPI package `example-robot-data` in a venv under /tmp (its
 # URDFs are copied into the corpus at run time, never committed). Seeds:
-# `models/*.ron`, `models/scenes/*.scene.ron`, `fuzz/seeds/`, the fixtures
+# `models/*.ron`, `models/scenes/*.scene.ron`, `fuzz/seeds/` (`ron_model/`,
+# `scene/`), the fixtures
 # of `eom-gen/tests/fixtures`. Corpora grow in `fuzz/corpus/<target>`,
 # crashes land in `fuzz/artifacts/<target>` (both ignored by git); the
 # summary (executions, coverage, corpus, crashes) is printed and written to
@@ -63,7 +64,8 @@ seed() { # seed TARGET FILE...
     done
     return 0
 }
-seed ron_model "$root"/models/*.ron "$root"/eom-gen/tests/fixtures/every_field.ron
+seed ron_model "$root"/models/*.ron "$fuzz"/seeds/ron_model/*.ron \
+    "$root"/eom-gen/tests/fixtures/every_field.ron
 seed scene "$root"/models/scenes/*.scene.ron "$fuzz"/seeds/scene/*.ron \
     "$root"/eom-gen/tests/fixtures/every_field.scene.ron
 # shellcheck disable=SC2086

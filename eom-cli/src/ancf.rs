@@ -76,15 +76,13 @@ fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
         .collect()
 }
 
-/// `eom-gen solve-static`.
+/// `eom-gen solve-static` on cables that hang at no rigid body (a mixed
+/// model is `crate::mixed_static`'s).
 pub fn solve_static_cmd(
     checked: &Checked,
     opts: &StaticOptions,
     json_out: bool,
 ) -> Result<String, Error> {
-    if eom_gen::cables::has_mounts(&checked.system) {
-        return crate::mixed_static::solve_static_mixed_cmd(checked, opts, json_out);
-    }
     let chains = build(checked)?;
     let mut text = String::new();
     let mut report = Vec::new();
@@ -117,7 +115,7 @@ pub fn solve_static_cmd(
         );
         report.push(json!({
             "cable": name,
-            "element": ch.kernel,
+            "element": ch.kernel.name(),
             "elements": ch.nodes - 1,
             "coordinates": m.n_full(),
             "free": m.n_free(),
@@ -262,7 +260,7 @@ pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result
         );
         report.push(json!({
             "cable": name,
-            "element": ch.kernel,
+            "element": ch.kernel.name(),
             "elements": ch.nodes - 1,
             "integrator": if explicit { "rk4" } else { "generalized-alpha" },
             "t": end.t,
@@ -339,7 +337,7 @@ pub fn scope_note(checked: &Checked, what: &str) -> Option<String> {
     Some(format!(
         "note: model `{}` has cables ({}): {what} covers the generated functions of the rigid part alone, \
          without the cables' forces; the cables' elements are model-independent kernels \
-         (eom_sim::elements) that `simulate` and `solve-static` assemble at run time",
+         (eom_elements) that `simulate` and `solve-static` assemble at run time",
         sys.name,
         names.join(", ")
     ))
@@ -486,16 +484,14 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
         "  generalized-alpha (index 3, rho_inf = {}) to t = {} in {} steps of {:e} s, {:.3} s wall",
         run.rho_inf,
         end.t,
-        stats.dynamics.steps,
+        stats.steps,
         run.t_end / steps as f64,
         cpu
     );
     let _ = writeln!(
         text,
         "  {} Newton iterations, {} factorisations, {} force evaluations",
-        stats.dynamics.newton_iterations,
-        stats.dynamics.factorizations,
-        stats.dynamics.force_evaluations
+        stats.newton_iterations, stats.factorizations, stats.force_evaluations
     );
     let cable_report = write_mixed_state(
         &mut text, &coords, rigid_q, cables, &q_full, &names, &reactions,
@@ -531,10 +527,10 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
                 "cables": cable_report,
                 "integrator": "generalized-alpha",
                 "t": end.t,
-                "steps": stats.dynamics.steps,
-                "newton_iterations": stats.dynamics.newton_iterations,
-                "factorizations": stats.dynamics.factorizations,
-                "force_evaluations": stats.dynamics.force_evaluations,
+                "steps": stats.steps,
+                "newton_iterations": stats.newton_iterations,
+                "factorizations": stats.factorizations,
+                "force_evaluations": stats.force_evaluations,
                 "wall_seconds": cpu,
                 "coordinates": coords,
                 "q": rigid_q,

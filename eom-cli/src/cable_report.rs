@@ -1,7 +1,7 @@
 //! What `check`, `stats` and `dump` say about a model's cables (ANCF
 //! chains): the chain (elements, nodes, coordinates, free coordinates), the
 //! element kernel it runs (model-independent, generated once per element
-//! type into `eom-sim/src/elements/`), its integration rule, and, for
+//! type into `elements/src/`), its integration rule, and, for
 //! `stats`, the kernel's operation counts from the symbolic derivation.
 
 use eom_gen::System;
@@ -64,7 +64,7 @@ pub fn check_lines(sys: &System) -> String {
         let _ = writeln!(
             out,
             "  cable        {}: {} × {} elements, {} nodes × {} = {} coordinates ({} free), \
-             kernel eom_sim::elements::{} ({} per element; parameters {})",
+             kernel eom_elements::{} ({} per element; parameters {})",
             f.name,
             f.kernel,
             f.elements,
@@ -94,8 +94,8 @@ pub fn check_json(sys: &System) -> Value {
                     "nodes": f.nodes,
                     "coordinates": f.coordinates,
                     "free_coordinates": f.free,
-                    "kernel": format!("eom_sim::elements::{}", f.kernel),
-                    "kernel_file": format!("eom-sim/src/elements/{}.rs", f.module),
+                    "kernel": format!("eom_elements::{}", f.kernel),
+                    "kernel_file": format!("elements/src/{}.rs", f.module),
                     "kernel_coordinates": f.kernel_coordinates,
                     "parameters": f.parameters,
                     "rule": f.rule,
@@ -118,7 +118,7 @@ pub fn stats(sys: &System) -> (String, Value) {
     kinds.sort();
     kinds.dedup();
     let mut text = String::from(
-        "  cables: one model-independent kernel per element type (eom-sim/src/elements/), \
+        "  cables: one model-independent kernel per element type (elements/src/), \
          applied by a loop over elements\n",
     );
     let _ = writeln!(
@@ -207,7 +207,7 @@ pub fn dump_note(sys: &System) -> String {
             out,
             "note: cable `{}` ({} × {}) is not in this source: ANCF element kernels are \
              model-independent, generated once per element type into \
-             eom-sim/src/elements/{}.rs (eom_sim::elements::{}) and assembled at run time \
+             elements/src/{}.rs (eom_elements::{}) and assembled at run time \
              by eom_sim::large (`solve-static`, `simulate`)",
             f.name, f.kernel, f.elements, f.module, f.kernel
         );

@@ -92,7 +92,19 @@ struct Request {
 #[derive(serde::Deserialize)]
 enum What {
     Run(eom_sim::RunOptions),
-    Eval { t: f64, q: Vec<f64>, u: Vec<f64>, tau: Vec<f64> },
+    /// `udot`: the accelerations of inverse dynamics and of outputs that
+    /// depend on them; without, the model's forward dynamics at the state.
+    /// `lambda`: the constraint multipliers of the reactions (default none).
+    Eval {
+        t: f64,
+        q: Vec<f64>,
+        u: Vec<f64>,
+        tau: Vec<f64>,
+        #[serde(default)]
+        udot: Option<Vec<f64>>,
+        #[serde(default)]
+        lambda: Vec<f64>,
+    },
 }
 
 fn main() {
@@ -109,8 +121,14 @@ fn main() {
             &eom_sim::simulate_generated::<model::MODEL, { model::NY }, { model::NYC }>(&m, &o)
                 .map_err(|e| e.to_string()),
         ),
-        Ok(What::Eval { t, q, u, tau }) => {
-            let at = eom_sim::Point { t, q: &q, u: &u, tau: &tau, ..Default::default() };
+        Ok(What::Eval { t, q, u, tau, udot, lambda }) => {
+            let at = eom_sim::Point { t, q: &q, u: &u, tau: &tau, lambda: &lambda, ..Default::default() };
+            let udot = udot.unwrap_or_else(|| {
+                let mut a = vec![f64::NAN; u.len()];
+                m.evaluate("forward_dynamics", &at, &mut a);
+                a
+            });
+            let at = eom_sim::Point { udot: &udot, ..at };
             let functions: Vec<(&str, Vec<f64>)> = model::MODEL::FUNCTIONS
                 .iter()
                 .map(|f| {
@@ -216,7 +234,11 @@ pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, Error> {
             std::fs::write(dir.join(file), text)
                 .map_err(|e| Error::io(dir.join(file).display(), e))?;
         }
-        eprintln!("compiling the generated code of `{name}` in release mode (first time only) …");
+        eprintln!(
+            "building the generated code of `{name}` in release mode, once: later runs reuse it from {} (cargo's progress follows) …",
+            root.display()
+        );
+        let started = std::time::Instant::now();
         let mut cargo = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()));
         cargo
             .args(["build", "--release", "--manifest-path"])
@@ -238,6 +260,10 @@ pub(crate) fn build_cached(c: &CachedCrate<'_>) -> Result<PathBuf, Error> {
                 dir.display()
             )));
         }
+        eprintln!(
+            "built `{name}` in {:.0} s; cached",
+            started.elapsed().as_secs_f64()
+        );
     }
     Ok(exe)
 }
@@ -262,25 +288,24 @@ fn request<T: serde::de::DeserializeOwned>(exe: &Path, request: &str) -> Result<
     reply.map_err(Error::Refused)
 }
 
-/// Builds (once) and runs the compiled model at a state: every function it
-/// offers, as [`Evaluation`].
+/// Builds (once) and runs the compiled model at a state `at`: every
+/// function it offers, as [`Evaluation`], at the accelerations `at.udot`
+/// (when empty: the model's forward dynamics at the state).
 pub fn evaluate(
     name: &str,
     source: &str,
-    q: &[f64],
-    u: &[f64],
-    tau: &[f64],
-    t: f64,
+    at: &eom_sim::Point<'_>,
     inputs: &[f64],
 ) -> Result<Evaluation, Error> {
     #[derive(serde::Deserialize)]
     struct Reply {
         functions: Vec<(String, Vec<Option<f64>>)>,
     }
-    let exe = executable(name, source, q.len(), u.len())?;
+    let exe = executable(name, source, at.q.len(), at.u.len())?;
+    let udot = (!at.udot.is_empty()).then_some(at.udot);
     let req = serde_json::json!({
         "inputs": inputs,
-        "what": { "Eval": { "t": t, "q": q, "u": u, "tau": tau } },
+        "what": { "Eval": { "t": at.t, "q": at.q, "u": at.u, "tau": at.tau, "udot": udot, "lambda": at.lambda } },
     });
     let reply: Reply = request(&exe, &req.to_string())?;
     Ok(Evaluation {

@@ -104,7 +104,9 @@ pub fn solve_static_mixed_cmd(
                 omega2_min,
                 negative,
             } => json!({ "stable": false, "omega2_min": omega2_min, "negative": negative }),
-            Stability::NotChecked { reason } => json!({ "stable": null, "reason": reason }),
+            Stability::NotChecked { reason } => {
+                json!({ "stable": null, "reason": reason.to_string() })
+            }
         };
         Ok(format!(
             "{}\n",

@@ -84,6 +84,20 @@ pub fn human(checked: &Checked) -> String {
     let sys: &System = &checked.system;
     let mut out = format!("model `{}` ({}): valid\n", sys.name, checked.source.path);
     let bodies: Vec<&str> = sys.bodies.iter().skip(1).map(|b| b.name.as_str()).collect();
+    if bodies.is_empty() && !sys.cables.is_empty() {
+        // Cables only: no rigid part to count (the cables follow).
+        out += &format!(
+            "  cables       {}: {}; {} free coordinates in all, no rigid bodies or joints\n",
+            sys.cables.len(),
+            sys.cables
+                .iter()
+                .map(|c| c.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            cable_free_coordinates(sys).map_or("?".into(), |n| n.to_string())
+        );
+        return out;
+    }
     out += &format!("  bodies       {}: {}\n", bodies.len(), bodies.join(", "));
     let cut = sys.cut_joint_names();
     out += &format!(
@@ -132,12 +146,29 @@ pub fn human(checked: &Checked) -> String {
         let c: Vec<&str> = sys.constraints.iter().map(|c| c.name.as_str()).collect();
         out += &format!("  constraints  {}\n", c.join(", "));
     }
+    if !sys.cables.is_empty() {
+        out += &format!(
+            "  cables       {}: {}; {} free coordinates besides the rigid part's (below)\n",
+            sys.cables.len(),
+            sys.cables
+                .iter()
+                .map(|c| c.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            cable_free_coordinates(sys).map_or("?".into(), |n| n.to_string())
+        );
+    }
     out += &format!(
-        "  Grübler–Kutzbach ({}): {} degree(s) of freedom{}\n",
+        "  Grübler–Kutzbach ({}{}): {} degree(s) of freedom{}\n",
         if sys.grubler.planar {
             "planar"
         } else {
             "spatial"
+        },
+        if sys.cables.is_empty() {
+            ""
+        } else {
+            ", rigid part alone"
         },
         sys.grubler.dof,
         match sys.grubler.elastic {
@@ -170,4 +201,17 @@ pub fn human(checked: &Checked) -> String {
         );
     }
     out
+}
+
+/// The free coordinates of every cable (their chains' unknowns once the
+/// clamped and pinned ones are removed); `None` if a chain cannot be built.
+fn cable_free_coordinates(sys: &System) -> Option<usize> {
+    sys.cables
+        .iter()
+        .map(|c| {
+            eom_sim::large::ancf::chain(&eom_gen::cables::chain_spec(c))
+                .ok()
+                .map(|ch| ch.model.n_free())
+        })
+        .sum()
 }

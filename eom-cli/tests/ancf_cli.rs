@@ -255,7 +255,7 @@ fn check_stats_and_dump_report_the_cables() {
     assert!(out.status.success(), "{text}");
     assert!(
         text.contains("Cable2D × 16 elements, 17 nodes × 4 = 68 coordinates (64 free)")
-            && text.contains("kernel eom_sim::elements::Cable2D")
+            && text.contains("kernel eom_elements::Cable2D")
             && text.contains("rule: "),
         "{text}"
     );
@@ -265,7 +265,7 @@ fn check_stats_and_dump_report_the_cables() {
     assert_eq!(c["element"], "Cable2D");
     assert_eq!(c["coordinates"], 68);
     assert_eq!(c["free_coordinates"], 64);
-    assert_eq!(c["kernel_file"], "eom-sim/src/elements/cable2d.rs");
+    assert_eq!(c["kernel_file"], "elements/src/cable2d.rs");
     assert!(
         c["rule"].as_str().is_some_and(|r| r.contains("Gauss")),
         "{c}"
@@ -280,7 +280,7 @@ fn check_stats_and_dump_report_the_cables() {
     let forces = k["internal_forces"]["total"].as_u64().unwrap_or(0);
     let file = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../eom-sim/src/elements/cable2d.rs"
+        "/../elements/src/cable2d.rs"
     ))
     .expect("the generated kernel");
     assert!(
@@ -300,7 +300,7 @@ fn check_stats_and_dump_report_the_cables() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(
-        err.contains("model-independent") && err.contains("eom-sim/src/elements/cable2d.rs"),
+        err.contains("model-independent") && err.contains("elements/src/cable2d.rs"),
         "{err}"
     );
 }

@@ -1,5 +1,5 @@
 //! Regenerates `generated/src/` from every model in `models/`, and the ANCF
-//! element kernels in `eom-sim/src/elements/` (one file per element type):
+//! element kernels in `elements/src/` (one file per element type):
 //! `cargo run -p eom-gen --example regenerate` (`-- elements` for the
 //! element kernels only).
 
@@ -9,7 +9,7 @@ use std::process::ExitCode;
 fn elements(root: &str) -> ExitCode {
     for kind in eom_gen::ancf::Kind::ALL {
         let k = eom_gen::ancf::derive(kind);
-        let path = format!("{root}/eom-sim/src/elements/{}.rs", k.def.module);
+        let path = format!("{root}/elements/src/{}.rs", k.def.module);
         eprintln!("… {path}");
         for (name, p) in [
             ("internal_forces", &k.forces),
@@ -30,7 +30,7 @@ fn elements(root: &str) -> ExitCode {
 }
 
 /// Mixed models of `models/ancf/` whose rigid part is generated too (the
-/// cables' kernels are model-independent, in `eom-sim/src/elements/`).
+/// cables' kernels are model-independent, in `elements/src/`).
 pub const MIXED: [&str; 2] = ["ancf/pendulum_rod", "ancf/fourbar_cable"];
 
 fn main() -> ExitCode {

@@ -16,14 +16,27 @@
 //! (nonholonomic) equations, such as a rolling disk's no-slip
 //! conditions, are refused by name: the index-3 method holds positions.
 
+use crate::ancf::Kind;
 use crate::functions::Function;
 use crate::mech::Formulation;
 use crate::system::{CableInfo, Support, System};
+use eom_sim::elements::Element;
 use eom_sim::large::ancf::{ChainSpec, Section, chains};
 use eom_sim::large::{ByName, MixedModel, RigidPart};
 
+/// The runtime's kernel of a generator's element type (its registry
+/// `eom_sim::elements::Element` runs the kernels `ancf::emit` wrote).
+pub fn element(kind: Kind) -> Element {
+    match kind {
+        Kind::Cable2D => Element::Cable2D,
+        Kind::Cable2DGreen => Element::Cable2DGreen,
+        Kind::Cable3D => Element::Cable3D,
+        Kind::Beam2D => Element::Beam2D,
+    }
+}
+
 /// The runtime's description of a validated cable's chain
-/// (`eom_sim::large::ancf::chain` builds it by the element type's name).
+/// (`eom_sim::large::ancf::chain` builds it by its kernel).
 pub fn chain_spec(cable: &CableInfo) -> ChainSpec {
     let c = &cable.chain;
     let s = &c.section;
@@ -33,7 +46,7 @@ pub fn chain_spec(cable: &CableInfo) -> ChainSpec {
         Support::Clamped => eom_sim::large::ancf::Support::Clamped,
     };
     ChainSpec {
-        kernel: c.element.name().to_string(),
+        kernel: element(c.element),
         start: c.start,
         end: c.end,
         elements: c.elements,
@@ -334,7 +347,7 @@ pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'
         .zip(&built.parts)
         .map(|(c, p)| MixedCable {
             name: c.name.clone(),
-            kernel: p.kernel,
+            kernel: p.kernel.name(),
             dim: p.dim,
             node_coords: p.node_coords,
             nodes: p.nodes,

@@ -35,8 +35,9 @@ pub struct Point<'a> {
     pub t: f64,
 }
 
-/// Runs `p` at `x`; symbols with no value are NaN (`τ`, `λ` and inputs
-/// not given are zero).
+/// Runs `p` at `x`; symbols with no value are NaN (`u̇`, `τ`, `λ` and
+/// inputs not given are zero, as the generated `Model::evaluate` takes
+/// them).
 pub fn run(p: &Program, x: &Point<'_>) -> Vec<f64> {
     let at = |v: &[f64], i: u32| v.get(i as usize).copied().unwrap_or(f64::NAN);
     let or_zero = |v: &[f64], i: u32| v.get(i as usize).copied().unwrap_or(0.0);
@@ -46,7 +47,7 @@ pub fn run(p: &Program, x: &Point<'_>) -> Vec<f64> {
         .map(|s| match s.kind {
             SymKind::Coord(i) => at(x.q, i),
             SymKind::Speed(i) => at(x.u, i),
-            SymKind::SpeedRate(i) => at(x.udot, i),
+            SymKind::SpeedRate(i) => or_zero(x.udot, i),
             SymKind::CoordRate(_) => f64::NAN,
             SymKind::Time => x.t,
             SymKind::Tau(i) => or_zero(x.tau, i),

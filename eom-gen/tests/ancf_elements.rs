@@ -1,7 +1,7 @@
 //! ANCF elements (eom-gen/src/ancf/): the symbolically derived kernels
 //! against independent physics.
 //!
-//! - The files in `eom-sim/src/elements/` are what `derive` + `emit` write
+//! - The files in `elements/src/` are what `derive` + `emit` write
 //!   today (fails when stale).
 //! - Mass: a rigid translation `e` has kinetic energy `½ eᵀMe = ½ m` with
 //!   `m = ρAL`; `M` is symmetric positive definite; the planar cable's `M`
@@ -385,7 +385,7 @@ fn max_diff(a: &[f64], b: &[f64]) -> f64 {
 
 #[test]
 fn generated_element_files_are_fresh() {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../eom-sim/src/elements");
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../elements/src");
     let mut stale = Vec::new();
     for kind in Kind::ALL {
         let k = kernels(kind);
@@ -397,7 +397,7 @@ fn generated_element_files_are_fresh() {
     }
     assert!(
         stale.is_empty(),
-        "eom-sim/src/elements/ is stale for {stale:?}; refresh with `cargo run -p eom-gen --example regenerate -- elements`"
+        "elements/src/ is stale for {stale:?}; refresh with `cargo run -p eom-gen --example regenerate -- elements`"
     );
 }
 

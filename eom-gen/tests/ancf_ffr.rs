@@ -126,7 +126,7 @@ fn ffr_tip(g: f64) -> [f64; 2] {
 /// `g` along −y.
 fn ancf(elements: usize, g: f64) -> Chain {
     let spec = ChainSpec {
-        kernel: "Cable2D".into(),
+        kernel: eom_sim::elements::Element::Cable2D,
         start: [0.0; 3],
         end: [L, 0.0, 0.0],
         elements,

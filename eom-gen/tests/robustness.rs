@@ -7,11 +7,19 @@
 use eom_gen::model::{Source, check, load};
 use proptest::prelude::*;
 
+/// The bundled models and the RON fuzzing seeds (`fuzz/seeds/ron_model`:
+/// models that are wrong in ways only the mechanics shows, such as a loop
+/// that cannot close).
 fn bundled() -> Vec<String> {
-    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../models");
-    let mut paths: Vec<_> = std::fs::read_dir(dir)
-        .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).collect())
-        .unwrap_or_default();
+    let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
+    let mut paths: Vec<_> = ["models", "fuzz/seeds/ron_model"]
+        .iter()
+        .flat_map(|dir| {
+            std::fs::read_dir(format!("{root}/{dir}"))
+                .map(|d| d.filter_map(|e| e.ok()).map(|e| e.path()).collect())
+                .unwrap_or_else(|_| Vec::new())
+        })
+        .collect();
     paths.sort();
     paths
         .into_iter()
@@ -138,9 +146,27 @@ fn apply(text: &str, m: &Mutation) -> String {
     }
 }
 
+/// Every error is located; a model that passes `check` with closed loops
+/// assembles: its initial state is put on the loop closures to within the
+/// tolerance a run starts from (`eom_sim::ASSEMBLY_TOL`), so no accepted
+/// model is simulated with its loops open.
 fn assert_located(text: &str) -> Result<(), TestCaseError> {
     match check(&Source::new("m.ron", text)) {
-        Ok(_) => Ok(()),
+        Ok(c) => {
+            let sys = &c.system;
+            if !sys.graph.cut_joints().is_empty()
+                && let Ok(num) = eom_gen::mech::Numeric::new(sys)
+                && let Ok(a) = num.assemble(&sys.q0(), &sys.u0(), 0.0)
+            {
+                prop_assert!(
+                    a.residual <= eom_sim::ASSEMBLY_TOL,
+                    "accepted by check, but its loops assemble only to max |Φ| {:e} (want ≤ {:e})",
+                    a.residual,
+                    eom_sim::ASSEMBLY_TOL
+                );
+            }
+            Ok(())
+        }
         Err(report) => {
             prop_assert!(
                 !report.diagnostics.is_empty(),
@@ -252,4 +278,39 @@ fn deeply_nested_input_is_an_error_not_a_stack_overflow() {
     ] {
         assert!(check(&Source::new("deep.ron", text)).is_err());
     }
+}
+
+/// The bundled four-bar with its second ground pivot 4 m further away:
+/// links of 1 m cannot reach, so no configuration closes the loop. `check`
+/// refuses it at the cut joint `c` (line and column in the file), naming
+/// the smallest residual assembly reached, instead of a warning followed
+/// by "valid".
+#[test]
+fn a_loop_that_cannot_close_is_an_error_at_its_cut_joint() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../fuzz/seeds/ron_model/fourbar_impossible.ron"
+    );
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let report = match check(&Source::new("fourbar_impossible.ron", text.as_str())) {
+        Ok(_) => panic!("got a valid model, want an error: the loop cannot close"),
+        Err(r) => r,
+    };
+    let errors: Vec<_> = report.diagnostics.iter().filter(|d| d.is_error()).collect();
+    assert_eq!(errors.len(), 1, "got {errors:?}, want one error");
+    let e = errors[0];
+    assert!(
+        e.message.contains("cut joint `c` cannot be closed") && e.message.contains("max |Φ|"),
+        "got `{}`",
+        e.message
+    );
+    let line = e.span.map(|s| report.source.line_col(s.start).line);
+    let want = text
+        .lines()
+        .position(|l| l.contains("name: \"c\""))
+        .map(|k| k + 1);
+    assert!(
+        line.is_some() && line <= want && line >= want.map(|w| w.saturating_sub(2)),
+        "got the error at line {line:?}, want the cut joint `c` (line {want:?})"
+    );
 }

@@ -47,7 +47,7 @@ fn cantilever(n: usize) -> (Chain, f64) {
     };
     let p = 3.0 * section.e * section.inertia / (l * l);
     let spec = ChainSpec {
-        kernel: "Cable2D".into(),
+        kernel: eom_sim::elements::Element::Cable2D,
         start: [0.0; 3],
         end: [l, 0.0, 0.0],
         elements: n,
@@ -66,7 +66,7 @@ fn cantilever(n: usize) -> (Chain, f64) {
 
 fn pendulum(n: usize) -> Chain {
     let spec = ChainSpec {
-        kernel: "Cable2D".into(),
+        kernel: eom_sim::elements::Element::Cable2D,
         start: [0.0; 3],
         end: [1.2, 0.0, 0.0],
         elements: n,
@@ -287,7 +287,7 @@ fn kernels() {
             sec.damping_bending = 1e-3 * e * i;
         }
         let spec = ChainSpec {
-            kernel: "Cable2D".into(),
+            kernel: eom_sim::elements::Element::Cable2D,
             start: [0.0; 3],
             end: [16.0, 0.0, 0.0],
             elements: 64,

@@ -49,8 +49,12 @@
 //! ```
 
 pub mod constrained;
-pub mod elements;
+/// The element kernels (the `eom-elements` crate), with the `cables`
+/// feature.
+#[cfg(feature = "cables")]
+pub use eom_elements as elements;
 mod integrate;
+#[cfg(feature = "cables")]
 pub mod large;
 mod model;
 pub mod run;
@@ -65,8 +69,8 @@ pub use model::{__private, FunctionInfo, Model, Point, Vector};
 /// Fixed-size matrices of the integrators' Jacobians and mass matrices.
 pub use nalgebra::SMatrix;
 pub use run::{
-    Integrator, RunError, RunOptions, RunReport, Simulate, Stop, UnknownName, simulate,
-    simulate_generated,
+    ASSEMBLY_TOL, Integrator, RunError, RunOptions, RunReport, Simulate, Stop, UnknownName,
+    simulate, simulate_generated,
 };
 
 pub use integrate::by_name::{Settings, solve};

@@ -291,7 +291,9 @@ impl Stop {
         }
     }
 
-    fn from_solver(s: StopReason, names: &[String]) -> Stop {
+    /// The solver's stop in the run's terms; `names` are the state's
+    /// (a component beyond them is a multiplier; without names, its index).
+    pub(crate) fn from_solver(s: StopReason, names: &[String]) -> Stop {
         match s {
             StopReason::Finished => Stop::Finished,
             StopReason::EventStop { t, .. } => Stop::Event { t },
@@ -299,10 +301,13 @@ impl Stop {
             StopReason::MaxSteps { t } => Stop::MaxSteps { t },
             StopReason::NonFinite { t, component } => Stop::NonFinite {
                 t,
-                coordinate: names
-                    .get(component)
-                    .cloned()
-                    .unwrap_or_else(|| "multiplier".into()),
+                coordinate: names.get(component).cloned().unwrap_or_else(|| {
+                    if names.is_empty() {
+                        format!("state component {component}")
+                    } else {
+                        "multiplier".into()
+                    }
+                }),
             },
             StopReason::StiffnessDetected { t } => Stop::Failed {
                 t,
@@ -603,6 +608,12 @@ pub struct RunReport {
     /// Total energy (kinetic + potential) at the start and at `t`.
     #[cfg_attr(feature = "serde", serde(deserialize_with = "nan::array"))]
     pub energy: [f64; 2],
+    /// The size of the energies the change is measured against:
+    /// `max(|T| + |V|)` over the start and `t` (NaN without an energy
+    /// function). The total can be near zero (a pendulum released
+    /// horizontally) while `T` and `V` are not.
+    #[cfg_attr(feature = "serde", serde(default, deserialize_with = "nan::one"))]
+    pub energy_scale: f64,
     /// Why the run stopped.
     pub stop: Stop,
     /// The integrator's counters.
@@ -719,6 +730,45 @@ pub enum RunError {
     SingularMass,
     /// The CSV could not be written.
     Csv(String),
+    /// The initial state cannot be assembled: Newton on the position
+    /// constraints stalled with `max |Φ|` above [`ASSEMBLY_TOL`] (a loop
+    /// that cannot close, constraints that contradict each other).
+    NotAssembled {
+        /// The smallest `max |Φ|` reached.
+        residual: f64,
+        /// Newton iterations.
+        iterations: usize,
+        /// The constraint equation furthest from satisfied.
+        equation: String,
+    },
+}
+
+/// The largest `max |Φ|` (m or rad) an assembled initial state may keep:
+/// assembly converges quadratically to round-off where the constraints can
+/// be met at all, so a run never starts from a state further off than this.
+pub const ASSEMBLY_TOL: f64 = 1e-8;
+
+/// The name of the holonomic equation with the largest `|Φ|` at `q`.
+fn worst_equation<S: Simulate + ?Sized>(model: &S, q: &[f64], names: &[String]) -> String {
+    let mut c = crate::constrained::ConstraintValues::zeros(model.nc(), model.nu());
+    let zero = vec![0.0; model.nu()];
+    crate::constrained::Assemble::closure(model, 0.0, q, &zero, &mut c);
+    let worst = c
+        .phi
+        .iter()
+        .take(model.n_holonomic())
+        .enumerate()
+        .fold(
+            (0, -1.0),
+            |(k, m), (i, x)| {
+                if x.abs() > m { (i, x.abs()) } else { (k, m) }
+            },
+        )
+        .0;
+    names
+        .get(worst)
+        .cloned()
+        .unwrap_or_else(|| format!("equation {worst}"))
 }
 
 impl fmt::Display for RunError {
@@ -733,6 +783,18 @@ impl fmt::Display for RunError {
                 "the mass matrix is singular at the initial state (a joint whose motion has no inertia)",
             ),
             RunError::Csv(e) => f.write_str(e),
+            RunError::NotAssembled {
+                residual,
+                iterations,
+                equation,
+            } => write!(
+                f,
+                "the initial state cannot be assembled: the constraints cannot all be met \
+                 (the smallest max |Φ| reached is {residual:.3e} after {iterations} Newton step(s), \
+                 above the tolerance {ASSEMBLY_TOL:e}; furthest off: `{equation}`); \
+                 a loop that cannot close (check the joint frames and lengths), \
+                 or contradictory constraints"
+            ),
         }
     }
 }
@@ -828,6 +890,13 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         return Ok(report);
     }
     let a = assemble(model, &q0, &u0, 0.0);
+    if !(a.residual <= ASSEMBLY_TOL) {
+        return Err(RunError::NotAssembled {
+            residual: a.residual,
+            iterations: a.iterations,
+            equation: worst_equation(model, &a.q, &names.constraints),
+        });
+    }
     let assembly = AssemblyReport {
         residual: a.residual,
         velocity_residual: a.velocity_residual,
@@ -911,6 +980,13 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
 
 /// Total energy at a state; NaN if the model has no energy function.
 fn energy<S: Simulate + ?Sized>(model: &S, t: f64, y: &[f64]) -> f64 {
+    let [k, p] = energies(model, t, y);
+    k + p
+}
+
+/// Kinetic and potential energy at a state; NaN if the model has no
+/// energy function.
+fn energies<S: Simulate + ?Sized>(model: &S, t: f64, y: &[f64]) -> [f64; 2] {
     let (nq, nu) = (model.nq(), model.nu());
     let mut e = [0.0; 2];
     let at = Point {
@@ -920,9 +996,9 @@ fn energy<S: Simulate + ?Sized>(model: &S, t: f64, y: &[f64]) -> f64 {
         ..Point::default()
     };
     if model.evaluate("energy", &at, &mut e) {
-        e[0] + e[1]
+        e
     } else {
-        f64::NAN
+        [f64::NAN; 2]
     }
 }
 
@@ -946,6 +1022,13 @@ fn finish<const N: usize, S: Simulate + ?Sized>(
             energy(model, 0.0, y0),
             energy(model, sol.t_final, &sol.y_final),
         ],
+        energy_scale: [
+            energies(model, 0.0, y0),
+            energies(model, sol.t_final, &sol.y_final),
+        ]
+        .iter()
+        .map(|[k, p]| k.abs() + p.abs())
+        .fold(f64::NAN, f64::max),
         stop: Stop::from_solver(sol.stop, state_names),
         stats: RunStats {
             steps: s.steps,

@@ -416,10 +416,8 @@ impl Point {
             end_error: finite(self.end_error),
             path_error: finite(self.path_error),
             digits: finite(self.end_error).map(digits),
-            stop: match self.stop {
-                StopReason::Finished => "finished".to_string(),
-                other => format!("{other:?}"),
-            },
+            // In words, as `simulate` says it.
+            stop: crate::run::Stop::from_solver(self.stop, &[]).to_string(),
         }
     }
 }
@@ -581,6 +579,48 @@ pub fn cases(
 mod tests {
     use super::*;
     use crate::FnSystem;
+
+    /// A point that did not finish says why in words, as `simulate` does
+    /// (`bench --work-precision` printed `NonFinite { t: 0.6798…,
+    /// component: 0 }`).
+    #[test]
+    fn failed_points_say_why_in_words() {
+        for (stop, says) in [
+            (
+                StopReason::NonFinite {
+                    t: 0.6798,
+                    component: 0,
+                },
+                "0.6798",
+            ),
+            (
+                StopReason::ConvergenceFailure { t: 1.5 },
+                "did not converge",
+            ),
+            (StopReason::MaxSteps { t: 2.0 }, "2"),
+        ] {
+            let p = Point {
+                case: Case {
+                    integrator: Integrator::Radau5,
+                    method: Method::Projection,
+                    setting: 1e-6,
+                },
+                cpu_s: 0.0,
+                repeats: 1,
+                rhs_evals: 0,
+                accepted: 0,
+                rejected: 0,
+                end_error: f64::NAN,
+                path_error: f64::NAN,
+                stop,
+            };
+            let got = p.summary().stop;
+            assert!(
+                got.contains(says) && !got.contains('{') && !got.contains("NonFinite"),
+                "{stop:?}: got `{got}`, want words naming {says}"
+            );
+        }
+    }
 
     /// The harmonic oscillator `x'' = −x` from `x = 1` at rest: the
     /// reference must match `cos t`, and a sweep's errors must fall with

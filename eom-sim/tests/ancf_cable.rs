@@ -25,22 +25,17 @@ use eom_sim::large::elastica::{extensible_cantilever, mattiasson};
 use eom_sim::large::{AlphaOptions, GeneralizedAlpha, State, StaticOptions, solve_static};
 
 /// The kernel under test: the generated `Cable2D`.
-const KERNEL: &str = "Cable2D";
+const KERNEL: eom_sim::elements::Element = eom_sim::elements::Element::Cable2D;
 
-/// A chain of `spec.kernel`: the generated kernels by name, the hand-written
-/// reference cable by type.
+/// A chain of `spec.kernel`, the generated kernels through the registry
+/// (the hand-written reference cable is built by type, `build_chain`).
 fn build(spec: &ChainSpec) -> Chain {
-    let built = if spec.kernel == "HandCable" {
-        build_chain::<HandCable, 8, 6>(spec)
-    } else {
-        chain(spec)
-    };
-    built.unwrap_or_else(|e| panic!("{e}"))
+    chain(spec).unwrap_or_else(|e| panic!("{e}"))
 }
 
 fn cantilever(elements: usize, l: f64, section: Section, force: [f64; 3]) -> Chain {
     let spec = ChainSpec {
-        kernel: KERNEL.into(),
+        kernel: KERNEL,
         start: [0.0; 3],
         end: [l, 0.0, 0.0],
         elements,
@@ -149,7 +144,7 @@ fn large_deflection_cantilever_matches_mattiasson() {
 fn pendulum(elements: usize) -> Chain {
     let (a, i) = (0.0018, 1.215e-8);
     let spec = ChainSpec {
-        kernel: KERNEL.into(),
+        kernel: KERNEL,
         start: [0.0; 3],
         end: [1.2, 0.0, 0.0],
         elements,
@@ -470,7 +465,7 @@ fn hand_cable_cantilever_against_the_extensible_elastica() {
     let mut errors: Vec<f64> = Vec::new();
     for n in [4usize, 8, 16, 32, 64] {
         let spec = ChainSpec {
-            kernel: "HandCable".into(),
+            kernel: eom_sim::elements::Element::Cable2D,
             start: [0.0; 3],
             end: [l, 0.0, 0.0],
             elements: n,
@@ -511,7 +506,7 @@ fn stiff_rod_with_a_bob_swings_as_the_rigid_compound_pendulum() {
     let rho = 7800.0;
     let th0: f64 = 0.05;
     let spec = ChainSpec {
-        kernel: KERNEL.into(),
+        kernel: KERNEL,
         start: [0.0; 3],
         end: [l * th0.sin(), -l * th0.cos(), 0.0],
         elements: 4,

@@ -47,7 +47,7 @@ use eom_sim::large::{
 
 fn spec(kernel: &str, elements: usize, end: [f64; 3], section: Section) -> ChainSpec {
     ChainSpec {
-        kernel: kernel.into(),
+        kernel: kernel.parse().unwrap_or_else(|e| panic!("{e}")),
         start: [0.0; 3],
         end,
         elements,

@@ -113,7 +113,7 @@ fn berzeri_section() -> Section {
 
 fn cable(start: [f64; 3], end: [f64; 3], elements: usize, section: Section) -> ChainSpec {
     ChainSpec {
-        kernel: "Cable2D".into(),
+        kernel: eom_sim::elements::Element::Cable2D,
         start,
         end,
         elements,
@@ -352,7 +352,7 @@ fn three_chains() -> Vec<ChainSpec> {
     a.end_mass = 0.3;
     a.end_force = [0.5, 2.0, 0.0];
     let mut b = cable([0.0, 1.0, 0.5], [0.6, 1.5, 0.1], 3, berzeri_section());
-    b.kernel = "Cable3D".into();
+    b.kernel = eom_sim::elements::Element::Cable3D;
     b.start_support = Support::Clamped;
     let section = Section {
         e: 1e7,
@@ -365,7 +365,7 @@ fn three_chains() -> Vec<ChainSpec> {
         ..Section::default()
     };
     let mut c = cable([-1.0, 0.0, 0.0], [-1.0, -1.0, 0.0], 4, section);
-    c.kernel = "Beam2D".into();
+    c.kernel = eom_sim::elements::Element::Beam2D;
     c.start_support = Support::Clamped;
     c.end_support = Support::Clamped;
     vec![a, b, c]
@@ -565,9 +565,9 @@ fn independent_chains() -> (Vec<ChainSpec>, Link, Link) {
             ..Section::default()
         },
     );
-    b.kernel = "Cable2DGreen".into();
+    b.kernel = eom_sim::elements::Element::Cable2DGreen;
     let mut c = cable([0.0, 0.0, 0.0], [0.0, 0.0, 1.0], 4, berzeri_section());
-    c.kernel = "Cable3D".into();
+    c.kernel = eom_sim::elements::Element::Cable3D;
     c.start_support = Support::Pinned;
     c.gravity = [0.0, -G, 0.0];
     let l1 = Link {

@@ -90,7 +90,7 @@ const M: f64 = 0.5;
 /// Berzeri and Shabana's soft rod from the mass at `(a, 0)` along +x.
 fn rod() -> ChainSpec {
     ChainSpec {
-        kernel: "Cable2D".into(),
+        kernel: eom_sim::elements::Element::Cable2D,
         start: [A, 0.0, 0.0],
         end: [A + 1.2, 0.0, 0.0],
         elements: 8,

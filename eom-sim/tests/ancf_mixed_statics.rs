@@ -118,7 +118,7 @@ fn section() -> Section {
 
 fn cable(start: [f64; 3], end: [f64; 3], elements: usize) -> ChainSpec {
     ChainSpec {
-        kernel: "Cable2D".into(),
+        kernel: eom_sim::elements::Element::Cable2D,
         start,
         end,
         elements,
@@ -161,7 +161,7 @@ fn hanging(k: f64, rest: f64, theta0: f64) -> (MixedModel<'static>, Chain) {
 fn hanging_kernel(kernel: &str, k: f64, rest: f64, theta0: f64) -> (MixedModel<'static>, Chain) {
     let tip = [A * theta0.cos(), A * theta0.sin(), 0.0];
     let mut spec = cable(tip, [tip[0], tip[1] - L, 0.0], 8);
-    spec.kernel = kernel.into();
+    spec.kernel = kernel.parse().unwrap_or_else(|e| panic!("{e}"));
     spec.end_mass = M_END;
     let reader = build(&spec);
     let ch = build(&spec);

@@ -1,5 +1,5 @@
 //! Emission of an element type's kernels as one
-//! `eom_sim::elements::ElementKernel` implementation: straight-line Rust,
+//! `eom_elements::ElementKernel` implementation: straight-line Rust,
 //! one `let` per instruction, fixed-size arrays with constant indices (no
 //! allocation, no panic), formatted by `prettyplease`. The force and
 //! Jacobian kernels are generic in a lane count `W` (`Lanes<W>` values:
@@ -124,7 +124,7 @@ pub fn op_line(name: &str, p: &Program) -> String {
     format!("`{name}`: {}", p.op_count())
 }
 
-/// The formatted source of `eom-sim/src/elements/<module>.rs`.
+/// The formatted source of `elements/src/<module>.rs`.
 pub fn emit(k: &Kernels) -> String {
     let def = &k.def;
     let n = def.n();

@@ -20,7 +20,7 @@
 //! symmetric `∂²U/∂q²` (built on the upper triangle and mirrored). The
 //! results are lowered to [`Program`]s (common subexpressions shared across
 //! all outputs of a kernel) and emitted by [`emit::emit`] as one
-//! `eom_sim::elements::ElementKernel` implementation per element type.
+//! `eom_elements::ElementKernel` implementation per element type.
 //!
 //! Element types ([`Kind`]):
 //! - [`Kind::Cable2D`]: planar cable, Gerstmayr and Irschik 2008,
@@ -49,7 +49,7 @@ use crate::sym::{Arena, Id, LowerOptions, OpCount, Program, SymId, SymKind};
 pub struct Definition {
     /// Type name as written in models and of the generated struct.
     pub name: &'static str,
-    /// File stem of the generated module (`eom-sim/src/elements/<module>.rs`).
+    /// File stem of the generated module (`elements/src/<module>.rs`).
     pub module: &'static str,
     /// Dimension of positions.
     pub dim: usize,

@@ -14,28 +14,12 @@
 //! mass and end force; the chains share no coordinate.
 
 use super::model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
-use crate::elements::{Beam2D, Cable2D, Cable2DGreen, Cable3D, ElementKernel};
+use crate::elements::{Element, ElementKernel, with_element};
 use std::fmt;
 
-/// Element types whose kernels this build has (their `NAME`s).
-pub const KERNELS: &[&str] = &[
-    Cable2D::NAME,
-    Cable2DGreen::NAME,
-    Cable3D::NAME,
-    Beam2D::NAME,
-];
-
-/// Builds a chain by its kernel's name.
+/// Builds a chain of the element type its spec names.
 pub fn chain(spec: &ChainSpec) -> Result<Chain, ChainError> {
-    match spec.kernel.as_str() {
-        Cable2D::NAME => build_chain::<Cable2D, 8, 6>(spec),
-        Cable2DGreen::NAME => build_chain::<Cable2DGreen, 8, 6>(spec),
-        Cable3D::NAME => build_chain::<Cable3D, 12, 6>(spec),
-        Beam2D::NAME => build_chain::<Beam2D, 12, 7>(spec),
-        other => Err(ChainError(format!(
-            "no kernel `{other}` in this build (available: {KERNELS:?})"
-        ))),
-    }
+    with_element!(spec.kernel, |K, N, P| build_chain::<K, N, P>(spec))
 }
 
 /// How an end of the chain is held.
@@ -106,8 +90,8 @@ impl Section {
 /// A chain of elements.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ChainSpec {
-    /// Kernel name (`Cable2D`, `Cable2DGreen`, `Cable3D`, `Beam2D`).
-    pub kernel: String,
+    /// Element type.
+    pub kernel: Element,
     /// First end (planar kernels use `x`, `y`; `z` must be 0).
     pub start: [f64; 3],
     /// Second end.
@@ -131,11 +115,46 @@ pub struct ChainSpec {
 
 /// Why a chain cannot be built.
 #[derive(Clone, Debug, PartialEq)]
-pub struct ChainError(pub String);
+pub enum ChainError {
+    /// Zero elements asked for.
+    NoElements,
+    /// The two ends are one point (or not finite).
+    EndsCoincide {
+        /// The distance between them.
+        length: f64,
+    },
+    /// A planar element type with an end off the plane `z = 0`.
+    OffPlane {
+        /// The element type.
+        element: Element,
+    },
+    /// The section lacks a parameter the element type needs.
+    MissingParameter {
+        /// The element type.
+        element: Element,
+        /// The parameter's name.
+        name: &'static str,
+    },
+}
 
 impl fmt::Display for ChainError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
+        match self {
+            ChainError::NoElements => f.write_str("a chain needs at least one element"),
+            ChainError::EndsCoincide { length } => {
+                write!(f, "the chain's ends coincide (length {length})")
+            }
+            ChainError::OffPlane { element } => {
+                write!(
+                    f,
+                    "{element} is planar: its ends must lie in the plane z = 0"
+                )
+            }
+            ChainError::MissingParameter { element, name } => write!(
+                f,
+                "{element} needs the parameter `{name}`, which the section does not give"
+            ),
+        }
     }
 }
 
@@ -145,8 +164,8 @@ impl std::error::Error for ChainError {}
 pub struct Chain {
     /// The structural model.
     pub model: StructuralModel,
-    /// Kernel name.
-    pub kernel: &'static str,
+    /// Element type.
+    pub kernel: Element,
     /// Dimension of positions (2 or 3).
     pub dim: usize,
     /// Coordinates per node.
@@ -231,33 +250,29 @@ fn lay_out<E: ElementKernel<N, P> + 'static, const N: usize, const P: usize>(
     group: usize,
 ) -> Result<Laid, ChainError> {
     let (dim, nc) = (E::DIM, E::NODE_COORDS);
+    // The registry's entry of `E` (a kernel outside the registry, used
+    // through the generic entry points, goes by the spec's).
+    let element = Element::from_name(E::NAME).unwrap_or(spec.kernel);
     let ne = spec.elements;
     if ne == 0 {
-        return Err(ChainError("a chain needs at least one element".into()));
+        return Err(ChainError::NoElements);
     }
     let d: Vec<f64> = (0..3).map(|k| spec.end[k] - spec.start[k]).collect();
     let len = d.iter().map(|x| x * x).sum::<f64>().sqrt();
     if len.is_nan() || len <= 0.0 || !len.is_finite() {
-        return Err(ChainError(format!(
-            "the chain's ends coincide (length {len})"
-        )));
+        return Err(ChainError::EndsCoincide { length: len });
     }
     if dim == 2 && (spec.start[2] != 0.0 || spec.end[2] != 0.0) {
-        return Err(ChainError(format!(
-            "{} is planar: its ends must lie in the plane z = 0",
-            E::NAME
-        )));
+        return Err(ChainError::OffPlane { element });
     }
     let t: Vec<f64> = d.iter().map(|x| x / len).collect();
     let le = len / ne as f64;
     let mut params = [0.0; P];
     for (v, name) in params.iter_mut().zip(E::PARAMS) {
-        *v = spec.section.param(name, le).ok_or_else(|| {
-            ChainError(format!(
-                "{} needs the parameter `{name}`, which the section does not give",
-                E::NAME
-            ))
-        })?;
+        *v = spec
+            .section
+            .param(name, le)
+            .ok_or(ChainError::MissingParameter { element, name })?;
     }
     // Node coordinates: position, tangent, (normal).
     let nodes = ne + 1;
@@ -321,7 +336,7 @@ fn lay_out<E: ElementKernel<N, P> + 'static, const N: usize, const P: usize>(
         point_masses,
         point_loads,
         part: ChainPart {
-            kernel: E::NAME,
+            kernel: element,
             dim,
             node_coords: nc,
             nodes,
@@ -331,34 +346,19 @@ fn lay_out<E: ElementKernel<N, P> + 'static, const N: usize, const P: usize>(
     })
 }
 
-/// Lays out a chain by its kernel's name.
+/// Lays out a chain of the element type its spec names.
 fn lay_out_by_name(spec: &ChainSpec, offset: usize, group: usize) -> Result<Laid, ChainError> {
-    match spec.kernel.as_str() {
-        Cable2D::NAME => lay_out::<Cable2D, 8, 6>(spec, offset, group),
-        Cable2DGreen::NAME => lay_out::<Cable2DGreen, 8, 6>(spec, offset, group),
-        Cable3D::NAME => lay_out::<Cable3D, 12, 6>(spec, offset, group),
-        Beam2D::NAME => lay_out::<Beam2D, 12, 7>(spec, offset, group),
-        other => Err(ChainError(format!(
-            "no kernel `{other}` in this build (available: {KERNELS:?})"
-        ))),
-    }
-}
-
-/// Dimension of positions (2 or 3) of the kernel named `name`.
-pub fn kernel_dim(name: &str) -> Option<usize> {
-    match name {
-        Cable2D::NAME | Cable2DGreen::NAME | Beam2D::NAME => Some(2),
-        Cable3D::NAME => Some(3),
-        _ => None,
-    }
+    with_element!(spec.kernel, |K, N, P| lay_out::<K, N, P>(
+        spec, offset, group
+    ))
 }
 
 /// Where one chain of a [`Chains`] structure sits: its kernel, node layout,
 /// the full index of its first coordinate, its element group.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ChainPart {
-    /// Kernel name.
-    pub kernel: &'static str,
+    /// Element type.
+    pub kernel: Element,
     /// Dimension of positions (2 or 3).
     pub dim: usize,
     /// Coordinates per node.

@@ -1,25 +1,17 @@
 //! Time integration of `M q̈ + f_int(q, q̇) = f_ext` for large structural
-//! models (free coordinates, constant sparse `M`).
-//!
-//! - [`GeneralizedAlpha`]: Chung and Hulbert's generalized-α method (1993)
-//!   in the form of Arnold and Brüls (2007), implicit, second order,
-//!   numerical dissipation of the highest frequencies set by the spectral
-//!   radius at infinity `ρ∞` (`ρ∞ = 1`: none, the trapezoidal rule /
-//!   average acceleration, which keeps the energy of linear undamped
-//!   systems exactly). Newton on the accelerations with the iteration
-//!   matrix `S = M + γ' D + β' K` assembled sparse and factored by LU
-//!   ([`super::sparse::AutoLu`]: banded when the pattern is, else sparse
-//!   with the symbolic analysis reused); by default modified Newton (the factored
-//!   matrix kept while the iteration contracts fast, [`AlphaOptions::reuse_matrix`]). **Fixed step**: no error estimate or
-//!   step control; the user picks `h` and checks convergence by halving it
-//!   (the tests do). A step whose Newton iteration fails stops the run
-//!   with a typed error naming the time.
-//! - [`integrate_rk4`]: the classical explicit Runge–Kutta method, fixed
-//!   step, for non-stiff cases (soft structures, short runs); `M` factored
-//!   once by sparse Cholesky.
+//! models (free coordinates, constant sparse `M`): the run's types shared
+//! by every vector model ([`State`], [`AlphaOptions`], [`DynamicsError`],
+//! [`DynamicsStats`]), the structure's side of the generalized-α contract
+//! ([`super::alpha::AlphaModel`]: the iteration matrix `M + γ' D + β' K`
+//! assembled sparse and factored by LU, [`super::sparse::AutoLu`], banded
+//! when the pattern is, else sparse with the symbolic analysis reused),
+//! and [`integrate_rk4`], the classical explicit Runge–Kutta method, fixed
+//! step, for non-stiff cases (soft structures, short runs), `M` factored
+//! once by sparse Cholesky.
 
+use super::alpha::{AlphaModel, StepControl};
 use super::model::StructuralModel;
-use super::sparse::{AutoLu, FaerCholesky, SparseMatrix, SparseSolver};
+use super::sparse::{AutoLu, FactorError, FaerCholesky, SparseMatrix, SparseSolver};
 use std::fmt;
 
 /// A state on the free coordinates.
@@ -33,11 +25,13 @@ pub struct State {
     pub v: Vec<f64>,
 }
 
-/// Settings of [`GeneralizedAlpha`].
+/// Settings of [`super::GeneralizedAlpha`].
 #[derive(Clone, Debug)]
 pub struct AlphaOptions {
-    /// Step size.
+    /// Step size (with [`AlphaOptions::control`], the first step's).
     pub h: f64,
+    /// Step-size control by a local error estimate; `None`: fixed step `h`.
+    pub control: Option<StepControl>,
     /// Spectral radius at infinite frequency, in `[0, 1]`.
     pub rho_inf: f64,
     /// Newton iterations per step.
@@ -56,6 +50,7 @@ impl Default for AlphaOptions {
     fn default() -> Self {
         AlphaOptions {
             h: 1e-3,
+            control: None,
             rho_inf: 1.0,
             max_iterations: 20,
             tol: 1e-10,
@@ -78,21 +73,33 @@ pub enum DynamicsError {
     Singular {
         /// Time.
         t: f64,
-        /// The solver's message.
-        reason: String,
+        /// The solver's reason.
+        reason: FactorError,
     },
     /// The starting state violates the model's constraints (a cable end
-    /// away from its marker).
+    /// away from its marker, a rigid loop open or its speeds leaving it).
     Inconsistent {
         /// Time.
         t: f64,
+        /// `‖Φ‖∞` at the start (0 where the positions hold and the speeds
+        /// do not).
+        residual: f64,
         /// Which constraints, by how much.
-        reason: String,
+        violations: Vec<Violation>,
     },
     /// The state became non-finite.
     NonFinite {
         /// Time.
         t: f64,
+    },
+    /// Step-size control needed a step below its smallest.
+    StepTooSmall {
+        /// Time of the last accepted step.
+        t: f64,
+        /// The step that was still too large.
+        h: f64,
+        /// Its error estimate (1 = the tolerance).
+        error: f64,
     },
 }
 
@@ -110,56 +117,133 @@ impl fmt::Display for DynamicsError {
             DynamicsError::Singular { t, reason } => {
                 write!(f, "singular matrix at t = {t}: {reason}")
             }
-            DynamicsError::Inconsistent { t, reason } => {
-                write!(f, "inconsistent start at t = {t}: {reason}")
+            DynamicsError::Inconsistent {
+                t,
+                residual,
+                violations,
+            } => {
+                write!(f, "inconsistent start at t = {t}: ")?;
+                let speeds: Vec<String> = violations
+                    .iter()
+                    .filter_map(|v| match v {
+                        Violation::RigidSpeed { constraint, rate } => {
+                            Some(format!("`{constraint}` changes at {rate:.3e}/s"))
+                        }
+                        _ => None,
+                    })
+                    .collect();
+                let positions: Vec<String> = violations
+                    .iter()
+                    .filter(|v| !matches!(v, Violation::RigidSpeed { .. }))
+                    .map(|v| v.to_string())
+                    .collect();
+                if !positions.is_empty() || speeds.is_empty() {
+                    write!(
+                        f,
+                        "the constraints do not hold at the start (|Φ|∞ = {residual:.3e}): {}",
+                        positions.join("; ")
+                    )?;
+                }
+                if !speeds.is_empty() {
+                    write!(
+                        f,
+                        "the rigid part's speeds leave its loop at the start: {} (give speeds with J u + Φ_t = 0, e.g. from `eom_gen::cables::rigid_start`)",
+                        speeds.join(", ")
+                    )?;
+                }
+                Ok(())
             }
             DynamicsError::NonFinite { t } => write!(f, "the state became non-finite at t = {t}"),
+            DynamicsError::StepTooSmall { t, h, error } => write!(
+                f,
+                "step size {h:.1e} s still too large at t = {t} (error estimate {error:.1e} of the tolerance); loosen --rtol/--atol or check the model"
+            ),
         }
     }
 }
 
 impl std::error::Error for DynamicsError {}
 
+/// One constraint that does not hold at a start.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Violation {
+    /// A cable end away from its marker.
+    Gap {
+        /// The attachment.
+        attachment: String,
+        /// The distance, m.
+        gap: f64,
+    },
+    /// A clamped end's tangent off the clamp's axis.
+    ClampAxis {
+        /// The attachment.
+        attachment: String,
+    },
+    /// A rigid part's own constraint off (its loop not closed).
+    RigidPosition {
+        /// The constraint's name.
+        constraint: String,
+        /// Its value.
+        value: f64,
+    },
+    /// A rigid part's speeds leaving its loop: `dΦ_r/dt ≠ 0`.
+    RigidSpeed {
+        /// The constraint's name.
+        constraint: String,
+        /// `dΦ/dt`.
+        rate: f64,
+    },
+}
+
+impl fmt::Display for Violation {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Violation::Gap { attachment, gap } => {
+                write!(f, "`{attachment}` is {gap:.3e} m from its marker")
+            }
+            Violation::ClampAxis { attachment } => {
+                write!(f, "`{attachment}`'s tangent is off the clamp's axis")
+            }
+            Violation::RigidPosition { constraint, value } => write!(
+                f,
+                "the rigid part's constraint `{constraint}` is {value:.3e} off (the loop is not closed: assemble the rigid part first, e.g. `eom_gen::cables::rigid_start`)"
+            ),
+            Violation::RigidSpeed { constraint, rate } => {
+                write!(f, "`{constraint}` changes at {rate:.3e}/s")
+            }
+        }
+    }
+}
+
 /// Counters of a run.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct DynamicsStats {
-    /// Steps taken.
+    /// Steps taken (accepted).
     pub steps: usize,
+    /// Steps rejected by the step-size control (error estimate above the
+    /// tolerance, or Newton failing even with a fresh matrix).
+    pub rejected: usize,
     /// Newton iterations in all.
     pub newton_iterations: usize,
     /// Numeric factorisations.
     pub factorizations: usize,
     /// Internal force evaluations (over all elements).
     pub force_evaluations: usize,
+    /// Largest `‖Φ‖∞` after a step (0 without constraints; m, and for
+    /// clamps the sine of the tangent's angle off the axis times `|r'|`;
+    /// a rigid part's own equations in their units).
+    pub max_constraint_residual: f64,
 }
 
-fn norm_inf(v: &[f64]) -> f64 {
-    v.iter().fold(0.0, |m, x| m.max(x.abs()))
-}
-
-/// The generalized-α integrator with its state (accelerations and the
-/// auxiliary acceleration variable carried between steps).
-pub struct GeneralizedAlpha<'m> {
-    model: &'m StructuralModel,
-    opts: AlphaOptions,
-    alpha_m: f64,
-    alpha_f: f64,
-    beta: f64,
-    gamma: f64,
-    state: State,
-    /// True accelerations `q̈_n`.
-    acc: Vec<f64>,
-    /// Auxiliary accelerations `a_n`.
-    aux: Vec<f64>,
+/// The structure's scratch for [`super::GeneralizedAlpha`]: the load, the
+/// iteration matrix and its LU, the expanded coordinates.
+pub struct StructuralWork {
     load: Vec<f64>,
     iteration: SparseMatrix,
     lu: AutoLu,
-    have_matrix: bool,
     q_full: Vec<f64>,
     v_full: Vec<f64>,
     scratch: Vec<f64>,
-    /// Counters.
-    pub stats: DynamicsStats,
 }
 
 /// Consistent initial accelerations `M q̈ = f_ext − f_int(q, v)`.
@@ -168,193 +252,103 @@ fn initial_acceleration(
     q_full: &[f64],
     v_full: &[f64],
     load: &[f64],
-) -> Result<Vec<f64>, String> {
+) -> Result<Vec<f64>, FactorError> {
     let n = model.n_free();
     let mut scratch = vec![0.0; model.n_full()];
     let mut f = vec![0.0; n];
     model.internal(q_full, v_full, &mut scratch, &mut f);
     let mut rhs: Vec<f64> = load.iter().zip(&f).map(|(a, b)| a - b).collect();
     let mut chol = FaerCholesky::default();
-    chol.factor(model.mass()).map_err(|e| e.0)?;
+    chol.factor(model.mass())?;
     chol.solve(&mut rhs);
     Ok(rhs)
 }
 
-impl<'m> GeneralizedAlpha<'m> {
-    /// Starts at `state` (free coordinates) with consistent accelerations.
-    pub fn new(
-        model: &'m StructuralModel,
-        state: State,
-        opts: AlphaOptions,
-    ) -> Result<Self, DynamicsError> {
-        let rho = opts.rho_inf.clamp(0.0, 1.0);
-        let alpha_m = (2.0 * rho - 1.0) / (rho + 1.0);
-        let alpha_f = rho / (rho + 1.0);
-        let gamma = 0.5 + alpha_f - alpha_m;
-        let beta = 0.25 * (gamma + 0.5).powi(2);
-        let load = model.load_free();
-        let q_full = model.expand(&state.q);
-        let v_full = model.expand_rate(&state.v);
-        let acc = initial_acceleration(model, &q_full, &v_full, &load)
-            .map_err(|reason| DynamicsError::Singular { t: state.t, reason })?;
-        Ok(GeneralizedAlpha {
-            model,
-            opts,
-            alpha_m,
-            alpha_f,
-            beta,
-            gamma,
-            aux: acc.clone(),
-            acc,
-            load,
-            iteration: SparseMatrix::zeros(model.pattern().clone()),
+/// A structure alone: `M q̈ + f_int(q, q̇) − f_ext = 0` on the free
+/// coordinates, no constraint rows.
+impl AlphaModel for StructuralModel {
+    type Work = StructuralWork;
+
+    fn n(&self) -> usize {
+        self.n_free()
+    }
+
+    fn n_constraints(&self) -> usize {
+        0
+    }
+
+    fn work(&self, state: &State) -> StructuralWork {
+        StructuralWork {
+            load: self.load_free(),
+            iteration: SparseMatrix::zeros(self.pattern().clone()),
             lu: AutoLu::default(),
-            have_matrix: false,
-            q_full,
-            v_full,
-            scratch: vec![0.0; model.n_full()],
-            state,
-            stats: DynamicsStats::default(),
-        })
-    }
-
-    /// The current state.
-    pub fn state(&self) -> &State {
-        &self.state
-    }
-
-    /// The current full coordinates.
-    pub fn q_full(&self) -> &[f64] {
-        &self.q_full
-    }
-
-    /// One step of size `h`. With [`AlphaOptions::reuse_matrix`], a step
-    /// whose modified Newton iteration fails is retried with full Newton
-    /// before the run stops.
-    pub fn step(&mut self) -> Result<(), DynamicsError> {
-        match self.try_step(false) {
-            Err(DynamicsError::NewtonFailed { .. }) if self.opts.reuse_matrix => {
-                self.try_step(true)
-            }
-            other => other,
+            q_full: self.expand(&state.q),
+            v_full: self.expand_rate(&state.v),
+            scratch: vec![0.0; self.n_full()],
         }
     }
 
-    fn try_step(&mut self, always_refresh: bool) -> Result<(), DynamicsError> {
-        let h = self.opts.h;
-        let (am, af, beta, gamma) = (self.alpha_m, self.alpha_f, self.beta, self.gamma);
-        let n = self.model.n_free();
-        let t1 = self.state.t + h;
-        // Predictor: q̈_{n+1} = q̈_n.
-        let mut acc1 = self.acc.clone();
-        let mut aux1: Vec<f64> = (0..n)
-            .map(|i| (af * self.acc[i] + (1.0 - af) * acc1[i] - am * self.aux[i]) / (1.0 - am))
-            .collect();
-        let mut q1: Vec<f64> = (0..n)
-            .map(|i| {
-                self.state.q[i]
-                    + h * self.state.v[i]
-                    + h * h * ((0.5 - beta) * self.aux[i] + beta * aux1[i])
-            })
-            .collect();
-        let mut v1: Vec<f64> = (0..n)
-            .map(|i| self.state.v[i] + h * ((1.0 - gamma) * self.aux[i] + gamma * aux1[i]))
-            .collect();
-        let da = (1.0 - af) / (1.0 - am);
-        let beta_p = h * h * beta * da;
-        let gamma_p = h * gamma * da;
-        let mut r = vec![0.0; n];
-        let mut corrections = Vec::new();
-        let mut converged = false;
-        // Modified Newton: the factored iteration matrix is kept across
-        // iterations and steps while each correction is at most a quarter
-        // of the one before; otherwise (or on the first use) it is rebuilt.
-        let mut refresh = always_refresh || !self.opts.reuse_matrix || !self.have_matrix;
-        let mut fresh = false;
-        for _ in 0..self.opts.max_iterations {
-            self.model.expand_into(&q1, &mut self.q_full);
-            self.model.expand_into(&v1, &mut self.v_full);
-            // r = M q̈ + f_int(q, v) − f_ext.
-            self.model
-                .internal(&self.q_full, &self.v_full, &mut self.scratch, &mut r);
-            self.stats.force_evaluations += 1;
-            for (ri, fi) in r.iter_mut().zip(&self.load) {
-                *ri -= fi;
-            }
-            self.model.mass().sym_mul_add(1.0, &acc1, &mut r);
-            if refresh {
-                self.model.jacobian(
-                    &self.q_full,
-                    &self.v_full,
-                    beta_p,
-                    gamma_p,
-                    1.0,
-                    &mut self.iteration,
-                );
-                if let Err(e) = self.lu.factor(&self.iteration) {
-                    return Err(DynamicsError::Singular { t: t1, reason: e.0 });
-                }
-                self.stats.factorizations += 1;
-                self.have_matrix = true;
-                refresh = always_refresh || !self.opts.reuse_matrix;
-                fresh = true;
-            }
-            self.lu.solve(&mut r);
-            self.stats.newton_iterations += 1;
-            for i in 0..n {
-                let d = -r[i];
-                acc1[i] += d;
-                aux1[i] += da * d;
-                q1[i] += beta_p * d;
-                v1[i] += gamma_p * d;
-            }
-            let c = beta_p * norm_inf(&r);
-            corrections.push(c);
-            if !c.is_finite() {
-                return Err(DynamicsError::NonFinite { t: t1 });
-            }
-            if c <= self.opts.tol * (1.0 + norm_inf(&q1)) {
-                converged = true;
-                break;
-            }
-            if let [.., before, last] = corrections[..]
-                && last > 0.25 * before
-                && !fresh
-            {
-                refresh = true;
-            }
-            fresh = false;
-        }
-        if !converged {
-            return Err(DynamicsError::NewtonFailed { t: t1, corrections });
-        }
-        self.state.t = t1;
-        self.state.q = q1;
-        self.state.v = v1;
-        self.acc = acc1;
-        self.aux = aux1;
-        self.model.expand_into(&self.state.q, &mut self.q_full);
-        self.model.expand_into(&self.state.v, &mut self.v_full);
-        self.stats.steps += 1;
-        Ok(())
-    }
-
-    /// Steps until `t_end` (the last step lands on it to within `h/1000`;
-    /// `t_end − t` should be a multiple of `h`), calling `observe` after
-    /// every step.
-    pub fn run_to(
-        &mut self,
-        t_end: f64,
-        mut observe: impl FnMut(&State, &[f64]),
+    fn start(
+        &self,
+        w: &mut StructuralWork,
+        state: &State,
+        acc: &mut [f64],
+        _lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
-        let steps = ((t_end - self.state.t) / self.opts.h - 1e-3)
-            .ceil()
-            .max(0.0) as usize;
-        for _ in 0..steps {
-            self.step()?;
-            observe(&self.state, &self.q_full);
-        }
+        let a = initial_acceleration(self, &w.q_full, &w.v_full, &w.load)
+            .map_err(|reason| DynamicsError::Singular { t: state.t, reason })?;
+        acc.copy_from_slice(&a);
         Ok(())
+    }
+
+    fn residual(
+        &self,
+        w: &mut StructuralWork,
+        _t: f64,
+        y: &[f64],
+        v: &[f64],
+        acc: &[f64],
+        _lambda: &[f64],
+        r: &mut [f64],
+    ) {
+        self.expand_into(y, &mut w.q_full);
+        self.expand_into(v, &mut w.v_full);
+        // r = M q̈ + f_int(q, v) − f_ext.
+        self.internal(&w.q_full, &w.v_full, &mut w.scratch, r);
+        for (ri, fi) in r.iter_mut().zip(&w.load) {
+            *ri -= fi;
+        }
+        self.mass().sym_mul_add(1.0, acc, r);
+    }
+
+    fn factor(
+        &self,
+        w: &mut StructuralWork,
+        t: f64,
+        _y: &[f64],
+        _v: &[f64],
+        _acc: &[f64],
+        _lambda: &[f64],
+        bp: f64,
+        gp: f64,
+    ) -> Result<(), DynamicsError> {
+        self.jacobian(&w.q_full, &w.v_full, bp, gp, 1.0, &mut w.iteration);
+        w.lu.factor(&w.iteration)
+            .map_err(|reason| DynamicsError::Singular { t, reason })
+    }
+
+    fn solve(&self, w: &mut StructuralWork, r: &mut [f64]) {
+        w.lu.solve(r);
+    }
+
+    fn accepted(&self, w: &mut StructuralWork, state: &State) -> f64 {
+        self.expand_into(&state.q, &mut w.q_full);
+        self.expand_into(&state.v, &mut w.v_full);
+        0.0
+    }
+
+    fn full<'w>(&self, w: &'w StructuralWork) -> &'w [f64] {
+        &w.q_full
     }
 }
 
@@ -371,10 +365,7 @@ pub fn integrate_rk4(
     let n = model.n_free();
     let mut chol = FaerCholesky::default();
     chol.factor(model.mass())
-        .map_err(|e| DynamicsError::Singular {
-            t: state.t,
-            reason: e.0,
-        })?;
+        .map_err(|reason| DynamicsError::Singular { t: state.t, reason })?;
     let load = model.load_free();
     let mut q_full = model.expand(&state.q);
     let mut v_full = model.expand_rate(&state.v);

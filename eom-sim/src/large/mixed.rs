@@ -53,8 +53,10 @@
 
 pub mod statics;
 
-use super::dynamics::{AlphaOptions, DynamicsError, DynamicsStats, State};
+use super::alpha::{AlphaModel, GeneralizedAlpha};
+use super::dynamics::{DynamicsError, State, Violation};
 use super::model::StructuralModel;
+use super::norm_inf;
 use super::sparse::{FaerLu, Pattern, SparseMatrix, SparseSolver};
 use crate::model::Point;
 use std::fmt;
@@ -223,13 +225,51 @@ impl Attachment {
     }
 }
 
-/// Why a mixed model cannot be built or started.
+/// Why a mixed model cannot be built.
 #[derive(Clone, Debug, PartialEq)]
-pub struct MixedError(pub String);
+pub enum MixedError {
+    /// An attachment whose positions have other than 2 or 3 components.
+    Dimension {
+        /// The attachment.
+        attachment: String,
+        /// Its components.
+        dim: usize,
+    },
+    /// An attachment holding a node coordinate a support already fixes.
+    FixedNode {
+        /// The attachment.
+        attachment: String,
+        /// The structure's full coordinate.
+        coordinate: usize,
+    },
+    /// The rigid part names other than one name per constraint equation.
+    ConstraintNames {
+        /// Its equations.
+        equations: usize,
+        /// Its names.
+        names: usize,
+    },
+}
 
 impl fmt::Display for MixedError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
+        match self {
+            MixedError::Dimension { attachment, dim } => write!(
+                f,
+                "attachment `{attachment}`: positions have 2 or 3 components, not {dim}"
+            ),
+            MixedError::FixedNode {
+                attachment,
+                coordinate,
+            } => write!(
+                f,
+                "attachment `{attachment}`: node coordinate {coordinate} is fixed by a support; an end held at a marker must be free in the chain"
+            ),
+            MixedError::ConstraintNames { equations, names } => write!(
+                f,
+                "the rigid part has {equations} constraint equations but {names} names"
+            ),
+        }
     }
 }
 
@@ -286,18 +326,18 @@ impl<'r> MixedModel<'r> {
         let mut mount_len = 0;
         for a in &attachments {
             if a.dim != 2 && a.dim != 3 {
-                return Err(MixedError(format!(
-                    "attachment `{}`: positions have 2 or 3 components, not {}",
-                    a.name, a.dim
-                )));
+                return Err(MixedError::Dimension {
+                    attachment: a.name.clone(),
+                    dim: a.dim,
+                });
             }
             let free = |i: usize| {
-                structure.free_index(i).ok_or_else(|| {
-                    MixedError(format!(
-                        "attachment `{}`: node coordinate {i} is fixed by a support; an end held at a marker must be free in the chain",
-                        a.name
-                    ))
-                })
+                structure
+                    .free_index(i)
+                    .ok_or_else(|| MixedError::FixedNode {
+                        attachment: a.name.clone(),
+                        coordinate: i,
+                    })
             };
             let pos: Vec<usize> = a
                 .position
@@ -330,10 +370,10 @@ impl<'r> MixedModel<'r> {
         // attachments: they touch the rigid coordinates only.
         let nc_r = rigid.n_constraints();
         if rigid.constraint_names().len() != nc_r {
-            return Err(MixedError(format!(
-                "the rigid part has {nc_r} constraint equations but {} names",
-                rigid.constraint_names().len()
-            )));
+            return Err(MixedError::ConstraintNames {
+                equations: nc_r,
+                names: rigid.constraint_names().len(),
+            });
         }
         for _ in 0..nc_r {
             for c in n_s..n_s + n_r {
@@ -544,165 +584,238 @@ struct RigidScratch {
     c: ConstraintEval,
 }
 
-/// Counters and the constraint residual of a mixed run.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct MixedStats {
-    /// Steps, Newton iterations, factorisations, force evaluations.
-    pub dynamics: DynamicsStats,
-    /// Largest `‖Φ‖∞` after a step (m, and for clamps the sine of the
-    /// tangent's angle off the axis times `|r'|`; the rigid part's own
-    /// equations in their units).
-    pub max_constraint_residual: f64,
-}
-
-fn norm_inf(v: &[f64]) -> f64 {
-    v.iter().fold(0.0, |m, x| m.max(x.abs()))
-}
-
-/// Index-3 generalized-α (Arnold and Brüls 2007) on a [`MixedModel`]:
-/// fixed step, Newton on accelerations and multipliers, modified Newton
-/// as in [`super::GeneralizedAlpha`].
-pub struct MixedAlpha<'m, 'r> {
-    model: &'m MixedModel<'r>,
-    opts: AlphaOptions,
-    alpha_m: f64,
-    alpha_f: f64,
-    beta: f64,
-    gamma: f64,
-    state: State,
-    acc: Vec<f64>,
-    aux: Vec<f64>,
-    lambda: Vec<f64>,
+/// A mixed model's scratch for [`GeneralizedAlpha`]: the load, the
+/// structure's tangent, the KKT matrix and its LU, the expanded structural
+/// coordinates, the rigid part's scratch.
+pub struct MixedWork {
     load: Vec<f64>,
     s_matrix: SparseMatrix,
     matrix: SparseMatrix,
     lu: FaerLu,
-    have_matrix: bool,
     q_full: Vec<f64>,
     v_full: Vec<f64>,
     scratch: Vec<f64>,
     rs: RigidScratch,
-    /// Counters and the largest constraint residual.
-    pub stats: MixedStats,
 }
 
-impl<'m, 'r> MixedAlpha<'m, 'r> {
-    /// Starts at `state` (of [`MixedModel::initial_state`]'s layout) with
-    /// consistent accelerations and multipliers; refuses a start whose
-    /// constraint residual exceeds `1e-8` (the cable ends are not at their
-    /// markers, a clamp's axis is not along the cable, or the rigid part's
-    /// loop is open) and a start whose rigid speeds leave the rigid part's
-    /// own constraints (`|dΦ_r/dt| > 1e-7 (1 + |u_r|∞)`).
-    pub fn new(
-        model: &'m MixedModel<'r>,
-        state: State,
-        opts: AlphaOptions,
-    ) -> Result<Self, DynamicsError> {
-        let rho = opts.rho_inf.clamp(0.0, 1.0);
-        let alpha_m = (2.0 * rho - 1.0) / (rho + 1.0);
-        let alpha_f = rho / (rho + 1.0);
-        let gamma = 0.5 + alpha_f - alpha_m;
-        let beta = 0.25 * (gamma + 0.5).powi(2);
-        let (n, n_s, n_r, m) = (model.n(), model.n_s, model.n_r, model.m);
-        let st = &model.structure;
-        let mut ga = MixedAlpha {
-            model,
-            opts,
-            alpha_m,
-            alpha_f,
-            beta,
-            gamma,
-            acc: vec![0.0; n],
-            aux: vec![0.0; n],
-            lambda: vec![0.0; m],
+/// Index-3 generalized-α (Arnold and Brüls 2007) on a [`MixedModel`]: the
+/// one [`GeneralizedAlpha`], on the mixed model's side of its contract.
+pub type MixedAlpha<'m, 'r> = GeneralizedAlpha<'m, MixedModel<'r>>;
+
+impl MixedAlpha<'_, '_> {
+    /// The force each mount applies to its cable end, world axes (`−λ` of
+    /// the position rows; `z = 0` when planar).
+    pub fn reactions(&self) -> Vec<[f64; 3]> {
+        let lambda = self.multipliers();
+        let mut out = Vec::new();
+        let mut row = 0;
+        for a in &self.model().attachments {
+            let mut f = [0.0; 3];
+            for (k, fk) in f.iter_mut().enumerate().take(a.dim) {
+                *fk = -lambda[row + k];
+            }
+            out.push(f);
+            row += a.equations();
+        }
+        out
+    }
+}
+
+/// The structure, the rigid part and the attachments as one index-3
+/// system: `y = (x, q_r)`, the attachment rows then the rigid part's own.
+/// [`GeneralizedAlpha::new`] on it refuses a start whose constraint
+/// residual exceeds `1e-8` (the cable ends are not at their markers, a
+/// clamp's axis is not along the cable, or the rigid part's loop is open)
+/// and a start whose rigid speeds leave the rigid part's own constraints
+/// (`|dΦ_r/dt| > 1e-7 (1 + |u_r|∞)`).
+impl AlphaModel for MixedModel<'_> {
+    type Work = MixedWork;
+
+    fn n(&self) -> usize {
+        self.n_s + self.n_r
+    }
+
+    fn n_constraints(&self) -> usize {
+        self.m
+    }
+
+    fn work(&self, state: &State) -> MixedWork {
+        let st = &self.structure;
+        let n_s = self.n_s;
+        MixedWork {
             load: st.load_free(),
             s_matrix: SparseMatrix::zeros(st.pattern().clone()),
-            matrix: SparseMatrix::zeros(model.pattern.clone()),
+            matrix: SparseMatrix::zeros(self.pattern.clone()),
             lu: FaerLu::default(),
-            have_matrix: false,
             q_full: st.expand(&state.q[..n_s]),
             v_full: st.expand_rate(&state.v[..n_s]),
             scratch: vec![0.0; st.n_full()],
             rs: RigidScratch {
-                mass: vec![0.0; n_r * n_r],
-                mounts: vec![0.0; model.buffer_len()],
+                mass: vec![0.0; self.n_r * self.n_r],
+                mounts: vec![0.0; self.buffer_len()],
                 c: ConstraintEval::default(),
             },
-            state,
-            stats: MixedStats::default(),
-        };
-        let phi0 = model.constraint_residual(ga.state.t, &ga.state.q);
+        }
+    }
+
+    fn start(
+        &self,
+        w: &mut MixedWork,
+        state: &State,
+        acc: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let phi0 = self.constraint_residual(state.t, &state.q);
         let worst = norm_inf(&phi0);
         if worst.is_nan() || worst > 1e-8 {
             return Err(DynamicsError::Inconsistent {
-                t: ga.state.t,
-                reason: format!(
-                    "the constraints do not hold at the start (|Φ|∞ = {worst:.3e}): {}",
-                    ga.describe_residual(&phi0)
-                ),
+                t: state.t,
+                residual: worst,
+                violations: self.violations(&phi0),
             });
         }
-        ga.check_rigid_speeds()?;
-        ga.initial_acceleration()?;
-        ga.aux = ga.acc.clone();
-        Ok(ga)
+        self.check_rigid_speeds(state)?;
+        self.initial_acceleration(w, state, acc, lambda)
     }
 
-    fn describe_residual(&self, phi: &[f64]) -> String {
+    fn residual(
+        &self,
+        w: &mut MixedWork,
+        t: f64,
+        y: &[f64],
+        v: &[f64],
+        acc: &[f64],
+        lambda: &[f64],
+        r: &mut [f64],
+    ) {
+        let (n_s, n_r, n, m) = (self.n_s, self.n_r, self.n(), self.m);
+        self.structure.expand_into(&y[..n_s], &mut w.q_full);
+        self.structure.expand_into(&v[..n_s], &mut w.v_full);
+        // Structural rows: M a + f_int − f_ext.
+        let mut f = vec![0.0; n_s];
+        self.structure
+            .internal(&w.q_full, &w.v_full, &mut w.scratch, &mut f);
+        for i in 0..n_s {
+            r[i] = f[i] - w.load[i];
+        }
+        self.structure
+            .mass()
+            .mul_add(1.0, &acc[..n_s], &mut r[..n_s]);
+        // Rigid rows, constraint forces, and Φ.
+        let mut rr = vec![0.0; n_r];
+        self.rigid_residual(
+            t,
+            &w.q_full,
+            &y[n_s..],
+            &v[n_s..],
+            &acc[n_s..],
+            lambda,
+            &mut w.rs,
+            &mut rr,
+        );
+        r[n_s..n].copy_from_slice(&rr);
+        for &(row, col, val) in &w.rs.c.jac {
+            if col < n_s {
+                r[col] += val * lambda[row];
+            }
+        }
+        r[n..n + m].copy_from_slice(&w.rs.c.phi[..m]);
+    }
+
+    fn factor(
+        &self,
+        w: &mut MixedWork,
+        t: f64,
+        y: &[f64],
+        v: &[f64],
+        acc: &[f64],
+        lambda: &[f64],
+        bp: f64,
+        gp: f64,
+    ) -> Result<(), DynamicsError> {
+        self.assemble_at(w, y, v, acc, lambda, t, bp, gp)
+    }
+
+    fn solve(&self, w: &mut MixedWork, r: &mut [f64]) {
+        w.lu.solve(r);
+    }
+
+    fn accepted(&self, w: &mut MixedWork, state: &State) -> f64 {
+        let n_s = self.n_s;
+        self.structure.expand_into(&state.q[..n_s], &mut w.q_full);
+        self.structure.expand_into(&state.v[..n_s], &mut w.v_full);
+        norm_inf(&self.constraint_residual(state.t, &state.q))
+    }
+
+    fn full<'w>(&self, w: &'w MixedWork) -> &'w [f64] {
+        &w.q_full
+    }
+}
+
+impl MixedModel<'_> {
+    /// What does not hold in `phi`.
+    fn violations(&self, phi: &[f64]) -> Vec<Violation> {
         let mut out = Vec::new();
         let mut row = 0;
-        for a in &self.model.attachments {
+        for a in &self.attachments {
             let rows = &phi[row..row + a.equations()];
             row += a.equations();
             let gap = rows[..a.dim].iter().map(|x| x * x).sum::<f64>().sqrt();
             if gap > 1e-8 {
-                out.push(format!("`{}` is {gap:.3e} m from its marker", a.name));
+                out.push(Violation::Gap {
+                    attachment: a.name.clone(),
+                    gap,
+                });
             }
             if rows[a.dim..].iter().any(|x| x.abs() > 1e-8) {
-                out.push(format!("`{}`'s tangent is off the clamp's axis", a.name));
+                out.push(Violation::ClampAxis {
+                    attachment: a.name.clone(),
+                });
             }
         }
-        let names = self.model.rigid.constraint_names();
-        for (k, name) in self.model.rigid_constraint_rows().zip(&names) {
+        let names = self.rigid.constraint_names();
+        for (k, name) in self.rigid_constraint_rows().zip(&names) {
             if phi[k].is_nan() || phi[k].abs() > 1e-8 {
-                out.push(format!(
-                    "the rigid part's constraint `{name}` is {:.3e} off (the loop is not closed: assemble the rigid part first, e.g. `eom_gen::cables::rigid_start`)",
-                    phi[k]
-                ));
+                out.push(Violation::RigidPosition {
+                    constraint: name.clone(),
+                    value: phi[k],
+                });
             }
         }
-        out.join("; ")
+        out
     }
 
     /// The rigid part's own equations at the speed level, `dΦ_r/dt` along
     /// the motion by a central difference: refuses speeds that leave the
     /// loop (the index-3 method would jump onto it in the first step).
-    fn check_rigid_speeds(&self) -> Result<(), DynamicsError> {
-        let rows = self.model.rigid_constraint_rows();
+    fn check_rigid_speeds(&self, state: &State) -> Result<(), DynamicsError> {
+        let rows = self.rigid_constraint_rows();
         if rows.is_empty() {
             return Ok(());
         }
-        let (t, n_s) = (self.state.t, self.model.n_s);
+        let (t, n_s) = (state.t, self.n_s);
         let eps = 1e-5;
         let shifted = |s: f64| -> Vec<f64> {
-            let y: Vec<f64> = self
-                .state
+            let y: Vec<f64> = state
                 .q
                 .iter()
-                .zip(&self.state.v)
+                .zip(&state.v)
                 .enumerate()
                 .map(|(i, (q, v))| if i < n_s { *q } else { q + s * v })
                 .collect();
-            self.model.constraint_residual(t + s, &y)
+            self.constraint_residual(t + s, &y)
         };
         let (plus, minus) = (shifted(eps), shifted(-eps));
-        let speed = norm_inf(&self.state.v[n_s..]);
-        let names = self.model.rigid.constraint_names();
+        let speed = norm_inf(&state.v[n_s..]);
+        let names = self.rigid.constraint_names();
         let mut bad = Vec::new();
         for (k, name) in rows.zip(&names) {
             let rate = (plus[k] - minus[k]) / (2.0 * eps);
             if rate.is_nan() || rate.abs() > 1e-7 * (1.0 + speed) {
-                bad.push(format!("`{name}` changes at {rate:.3e}/s"));
+                bad.push(Violation::RigidSpeed {
+                    constraint: name.clone(),
+                    rate,
+                });
             }
         }
         if bad.is_empty() {
@@ -710,10 +823,8 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
         } else {
             Err(DynamicsError::Inconsistent {
                 t,
-                reason: format!(
-                    "the rigid part's speeds leave its loop at the start: {} (give speeds with J u + Φ_t = 0, e.g. from `eom_gen::cables::rigid_start`)",
-                    bad.join(", ")
-                ),
+                residual: 0.0,
+                violations: bad,
             })
         }
     }
@@ -721,88 +832,86 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
     /// `[[M, Φ_yᵀ], [Φ_y, 0]] (q̈, λ) = (f_ext − f_int − b, γ)` with
     /// `γ = −d²Φ/dt²` at `q̈ = 0`, by a central second difference along
     /// the motion.
-    fn initial_acceleration(&mut self) -> Result<(), DynamicsError> {
-        let (n_s, n_r, n) = (self.model.n_s, self.model.n_r, self.model.n());
-        let t = self.state.t;
-        let mut rhs = vec![0.0; n + self.model.m];
+    fn initial_acceleration(
+        &self,
+        w: &mut MixedWork,
+        state: &State,
+        acc: &mut [f64],
+        lambda: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let (n_s, n_r, n) = (self.n_s, self.n_r, self.n());
+        let t = state.t;
+        let mut rhs = vec![0.0; n + self.m];
         let mut f = vec![0.0; n_s];
-        self.model
-            .structure
-            .internal(&self.q_full, &self.v_full, &mut self.scratch, &mut f);
+        self.structure
+            .internal(&w.q_full, &w.v_full, &mut w.scratch, &mut f);
         for i in 0..n_s {
-            rhs[i] = self.load[i] - f[i];
+            rhs[i] = w.load[i] - f[i];
         }
         let mut b = vec![0.0; n_r];
-        let (q_r, u_r) = (&self.state.q[n_s..], &self.state.v[n_s..]);
-        self.model.rigid.bias(t, q_r, u_r, &mut b);
+        let (q_r, u_r) = (&state.q[n_s..], &state.v[n_s..]);
+        self.rigid.bias(t, q_r, u_r, &mut b);
         for i in 0..n_r {
             rhs[n_s + i] = -b[i];
         }
         let eps = 1e-4;
         let shifted = |s: f64| -> Vec<f64> {
-            let y: Vec<f64> = self
-                .state
+            let y: Vec<f64> = state
                 .q
                 .iter()
-                .zip(&self.state.v)
+                .zip(&state.v)
                 .map(|(q, v)| q + s * v)
                 .collect();
-            self.model.constraint_residual(t + s, &y)
+            self.constraint_residual(t + s, &y)
         };
         let (plus, zero, minus) = (shifted(eps), shifted(0.0), shifted(-eps));
-        for k in 0..self.model.m {
+        for k in 0..self.m {
             rhs[n + k] = -(plus[k] - 2.0 * zero[k] + minus[k]) / (eps * eps);
         }
-        let (y, v, a) = (self.state.q.clone(), self.state.v.clone(), self.acc.clone());
-        self.assemble_at(&y, &v, &a, t, 0.0, 0.0)?;
-        self.lu.solve(&mut rhs);
+        // At the start: λ = 0 and q̈ = 0 in the (unused) tangent terms.
+        let zeros = vec![0.0; n];
+        let no_lambda = vec![0.0; self.m];
+        self.assemble_at(w, &state.q, &state.v, &zeros, &no_lambda, t, 0.0, 0.0)?;
+        w.lu.solve(&mut rhs);
         if rhs.iter().any(|x| !x.is_finite()) {
             return Err(DynamicsError::NonFinite { t });
         }
-        self.acc.copy_from_slice(&rhs[..n]);
-        self.lambda.copy_from_slice(&rhs[n..]);
+        acc.copy_from_slice(&rhs[..n]);
+        lambda.copy_from_slice(&rhs[n..]);
         Ok(())
     }
-
     /// Builds and factors `[[M + γ' D + β' K, Φ_yᵀ], [Φ_y, 0]]` at the
-    /// current iterate (`self.q_full`, `self.v_full`, `self.rs`'s rigid
+    /// current iterate (`w.q_full`, `w.v_full`, `w.rs`'s rigid
     /// state from `y`, `v`, `a`, `λ` given).
+    #[allow(clippy::too_many_arguments)]
     fn assemble_at(
-        &mut self,
+        &self,
+        w: &mut MixedWork,
         y: &[f64],
         v: &[f64],
         a: &[f64],
+        lambda: &[f64],
         t: f64,
         bp: f64,
         gp: f64,
     ) -> Result<(), DynamicsError> {
-        let model = self.model;
+        let model = self;
         let (n_s, n_r, n) = (model.n_s, model.n_r, model.n());
-        self.matrix.clear();
+        w.matrix.clear();
         model
             .structure
-            .jacobian(&self.q_full, &self.v_full, bp, gp, 1.0, &mut self.s_matrix);
+            .jacobian(&w.q_full, &w.v_full, bp, gp, 1.0, &mut w.s_matrix);
         for (k, &slot) in model.s_map.iter().enumerate() {
             if slot != usize::MAX {
-                self.matrix.values[slot] += self.s_matrix.values[k];
+                w.matrix.values[slot] += w.s_matrix.values[k];
             }
         }
         let (q_r, u_r, a_r) = (&y[n_s..], &v[n_s..], &a[n_s..]);
         // Rigid block: M_r + β' ∂g/∂q + γ' ∂b/∂u by forward differences
         // of g = M_r a + b + Φ_qᵀ λ.
         let mut g0 = vec![0.0; n_r];
-        let lambda = self.lambda.clone();
-        model.rigid_residual(
-            t,
-            &self.q_full,
-            q_r,
-            u_r,
-            a_r,
-            &lambda,
-            &mut self.rs,
-            &mut g0,
-        );
-        let mass = self.rs.mass.clone();
+        model.rigid_residual(t, &w.q_full, q_r, u_r, a_r, lambda, &mut w.rs, &mut g0);
+        let mass = w.rs.mass.clone();
         let mut g1 = vec![0.0; n_r];
         let mut b0 = vec![0.0; n_r];
         let mut b1 = vec![0.0; n_r];
@@ -814,16 +923,7 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
             if bp != 0.0 {
                 let e = 1e-7 * (1.0 + q_r[j].abs());
                 qp[j] = q_r[j] + e;
-                model.rigid_residual(
-                    t,
-                    &self.q_full,
-                    &qp,
-                    u_r,
-                    a_r,
-                    &lambda,
-                    &mut self.rs,
-                    &mut g1,
-                );
+                model.rigid_residual(t, &w.q_full, &qp, u_r, a_r, lambda, &mut w.rs, &mut g1);
                 qp[j] = q_r[j];
                 for i in 0..n_r {
                     col[i] += bp * (g1[i] - g0[i]) / e;
@@ -841,17 +941,17 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
             for i in 0..n_r {
                 let v = mass[i * n_r + j] + col[i];
                 if let Some(s) = model.pattern.slot(n_s + i, n_s + j) {
-                    self.matrix.values[s] += v;
+                    w.matrix.values[s] += v;
                 }
             }
         }
         // Constraint rows and columns, and the clamps' coupling.
-        let mut c = std::mem::take(&mut self.rs.c);
-        model.constraints(t, &self.q_full, q_r, &mut self.rs.mounts, &mut c);
+        let mut c = std::mem::take(&mut w.rs.c);
+        model.constraints(t, &w.q_full, q_r, &mut w.rs.mounts, &mut c);
         for &(row, col, val) in &c.jac {
             for (i, j) in [(n + row, col), (col, n + row)] {
                 if let Some(s) = model.pattern.slot(i, j) {
-                    self.matrix.values[s] += val;
+                    w.matrix.values[s] += val;
                 }
             }
         }
@@ -860,209 +960,14 @@ impl<'m, 'r> MixedAlpha<'m, 'r> {
                 let v = bp * lambda[row] * d;
                 for (i, j) in [(gi, qj), (qj, gi)] {
                     if let Some(s) = model.pattern.slot(i, j) {
-                        self.matrix.values[s] += v;
+                        w.matrix.values[s] += v;
                     }
                 }
             }
         }
-        self.rs.c = c;
-        self.lu
-            .factor(&self.matrix)
-            .map_err(|e| DynamicsError::Singular { t, reason: e.0 })?;
-        self.stats.dynamics.factorizations += 1;
-        self.have_matrix = true;
-        Ok(())
-    }
-
-    /// The current state.
-    pub fn state(&self) -> &State {
-        &self.state
-    }
-
-    /// The structure's current full coordinates.
-    pub fn q_full(&self) -> &[f64] {
-        &self.q_full
-    }
-
-    /// The current accelerations, in [`MixedModel::initial_state`]'s
-    /// layout (the structure's free coordinates, then the rigid part's);
-    /// right after [`Self::new`] the consistent initial accelerations.
-    pub fn acceleration(&self) -> &[f64] {
-        &self.acc
-    }
-
-    /// The current multipliers `λ` (constraint forces; for a pinned end
-    /// `−λ` is the force the marker applies to the cable end, world axes).
-    pub fn multipliers(&self) -> &[f64] {
-        &self.lambda
-    }
-
-    /// The force each mount applies to its cable end, world axes (`−λ` of
-    /// the position rows; `z = 0` when planar).
-    pub fn reactions(&self) -> Vec<[f64; 3]> {
-        let mut out = Vec::new();
-        let mut row = 0;
-        for a in &self.model.attachments {
-            let mut f = [0.0; 3];
-            for (k, fk) in f.iter_mut().enumerate().take(a.dim) {
-                *fk = -self.lambda[row + k];
-            }
-            out.push(f);
-            row += a.equations();
-        }
-        out
-    }
-
-    /// One step; with [`AlphaOptions::reuse_matrix`], a failed modified
-    /// Newton iteration is retried with full Newton.
-    pub fn step(&mut self) -> Result<(), DynamicsError> {
-        match self.try_step(false) {
-            Err(DynamicsError::NewtonFailed { .. }) if self.opts.reuse_matrix => {
-                self.try_step(true)
-            }
-            other => other,
-        }
-    }
-
-    fn try_step(&mut self, always_refresh: bool) -> Result<(), DynamicsError> {
-        let model = self.model;
-        let h = self.opts.h;
-        let (am, af, beta, gamma) = (self.alpha_m, self.alpha_f, self.beta, self.gamma);
-        let (n_s, n_r, n, m) = (model.n_s, model.n_r, model.n(), model.m);
-        let t1 = self.state.t + h;
-        let mut acc1 = self.acc.clone();
-        let mut aux1: Vec<f64> = (0..n)
-            .map(|i| (af * self.acc[i] + (1.0 - af) * acc1[i] - am * self.aux[i]) / (1.0 - am))
-            .collect();
-        let mut q1: Vec<f64> = (0..n)
-            .map(|i| {
-                self.state.q[i]
-                    + h * self.state.v[i]
-                    + h * h * ((0.5 - beta) * self.aux[i] + beta * aux1[i])
-            })
-            .collect();
-        let mut v1: Vec<f64> = (0..n)
-            .map(|i| self.state.v[i] + h * ((1.0 - gamma) * self.aux[i] + gamma * aux1[i]))
-            .collect();
-        let lambda0 = self.lambda.clone();
-        let da = (1.0 - af) / (1.0 - am);
-        let bp = h * h * beta * da;
-        let gp = h * gamma * da;
-        let mut r = vec![0.0; n + m];
-        let mut f = vec![0.0; n_s];
-        let mut corrections = Vec::new();
-        let mut converged = false;
-        let mut refresh = always_refresh || !self.opts.reuse_matrix || !self.have_matrix;
-        let mut fresh = false;
-        for _ in 0..self.opts.max_iterations {
-            model.structure.expand_into(&q1[..n_s], &mut self.q_full);
-            model.structure.expand_into(&v1[..n_s], &mut self.v_full);
-            // Structural rows: M a + f_int − f_ext.
-            model
-                .structure
-                .internal(&self.q_full, &self.v_full, &mut self.scratch, &mut f);
-            self.stats.dynamics.force_evaluations += 1;
-            for i in 0..n_s {
-                r[i] = f[i] - self.load[i];
-            }
-            model
-                .structure
-                .mass()
-                .mul_add(1.0, &acc1[..n_s], &mut r[..n_s]);
-            // Rigid rows, constraint forces and Φ / β'.
-            let lambda = self.lambda.clone();
-            let mut rr = vec![0.0; n_r];
-            model.rigid_residual(
-                t1,
-                &self.q_full,
-                &q1[n_s..],
-                &v1[n_s..],
-                &acc1[n_s..],
-                &lambda,
-                &mut self.rs,
-                &mut rr,
-            );
-            r[n_s..n].copy_from_slice(&rr);
-            let c = std::mem::take(&mut self.rs.c);
-            for &(row, col, v) in &c.jac {
-                if col < n_s {
-                    r[col] += v * lambda[row];
-                }
-            }
-            for k in 0..m {
-                r[n + k] = c.phi[k] / bp;
-            }
-            self.rs.c = c;
-            if refresh {
-                self.assemble_at(&q1, &v1, &acc1, t1, bp, gp)?;
-                refresh = always_refresh || !self.opts.reuse_matrix;
-                fresh = true;
-            }
-            self.lu.solve(&mut r);
-            self.stats.dynamics.newton_iterations += 1;
-            for i in 0..n {
-                let d = -r[i];
-                acc1[i] += d;
-                aux1[i] += da * d;
-                q1[i] += bp * d;
-                v1[i] += gp * d;
-            }
-            for k in 0..m {
-                self.lambda[k] -= r[n + k];
-            }
-            let cor = bp * norm_inf(&r[..n]);
-            corrections.push(cor);
-            if !cor.is_finite() {
-                self.lambda = lambda0;
-                return Err(DynamicsError::NonFinite { t: t1 });
-            }
-            if cor <= self.opts.tol * (1.0 + norm_inf(&q1)) {
-                converged = true;
-                break;
-            }
-            if let [.., before, last] = corrections[..]
-                && last > 0.25 * before
-                && !fresh
-            {
-                refresh = true;
-            }
-            fresh = false;
-        }
-        if !converged {
-            self.lambda = lambda0;
-            return Err(DynamicsError::NewtonFailed { t: t1, corrections });
-        }
-        self.state.t = t1;
-        self.state.q = q1;
-        self.state.v = v1;
-        self.acc = acc1;
-        self.aux = aux1;
-        model
-            .structure
-            .expand_into(&self.state.q[..n_s], &mut self.q_full);
-        model
-            .structure
-            .expand_into(&self.state.v[..n_s], &mut self.v_full);
-        let phi = model.constraint_residual(t1, &self.state.q);
-        self.stats.max_constraint_residual = self.stats.max_constraint_residual.max(norm_inf(&phi));
-        self.stats.dynamics.steps += 1;
-        Ok(())
-    }
-
-    /// Steps until `t_end` (`t_end − t` a multiple of `h`), calling
-    /// `observe` after every step.
-    pub fn run_to(
-        &mut self,
-        t_end: f64,
-        mut observe: impl FnMut(&State, &[f64]),
-    ) -> Result<(), DynamicsError> {
-        let steps = ((t_end - self.state.t) / self.opts.h - 1e-3)
-            .ceil()
-            .max(0.0) as usize;
-        for _ in 0..steps {
-            self.step()?;
-            observe(&self.state, &self.q_full);
-        }
+        w.rs.c = c;
+        w.lu.factor(&w.matrix)
+            .map_err(|reason| DynamicsError::Singular { t, reason })?;
         Ok(())
     }
 }

@@ -8,12 +8,17 @@
 //! - [`elastica`]: reference solutions of the planar elastica for tests.
 //! - [`model`]: element groups, fixed coordinates eliminated, loads.
 //! - [`statics`]: Newton with load stepping.
-//! - [`dynamics`]: generalized-α (implicit, fixed step) and RK4 (explicit).
+//! - [`alpha`]: generalized-α (implicit; fixed step or step-size control),
+//!   written once over [`alpha::AlphaModel`], which a structure alone and a
+//!   mixed model implement.
+//! - [`dynamics`]: the run's types (state, options, errors, counters), the
+//!   structure's side of [`alpha::AlphaModel`], and RK4 (explicit).
 //! - [`mixed`]: rigid parts and chains in one model, attachment
 //!   constraints, index-3 generalized-α; [`mixed::statics`]: their static
 //!   equilibrium (Newton on the KKT system with load stepping).
 //! - [`sparse`]: the pattern, the matrix and the solvers behind a trait.
 
+pub mod alpha;
 pub mod ancf;
 pub mod dynamics;
 pub mod elastica;
@@ -22,11 +27,15 @@ pub mod model;
 pub mod sparse;
 pub mod statics;
 
-pub use dynamics::{
-    AlphaOptions, DynamicsError, DynamicsStats, GeneralizedAlpha, State, integrate_rk4,
-};
+pub use alpha::{AlphaModel, GeneralizedAlpha, StepControl};
+pub use dynamics::{AlphaOptions, DynamicsError, DynamicsStats, State, Violation, integrate_rk4};
 pub use mixed::statics::{MixedStaticError, MixedStaticSolution, Stability, solve_static_mixed};
-pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, MixedStats, RigidPart};
+pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, RigidPart};
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 pub use sparse::{AutoLu, BandedLu, FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
 pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};
+
+/// The largest absolute entry of `v` (0 for an empty vector).
+pub(crate) fn norm_inf(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}

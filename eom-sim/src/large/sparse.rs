@@ -142,12 +142,34 @@ impl SparseMatrix {
 }
 
 /// Why a factorisation failed.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FactorError(pub String);
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FactorError {
+    /// The symbolic analysis of the pattern failed (out of memory or an
+    /// index overflow in `faer`).
+    Symbolic,
+    /// A zero or non-finite pivot: the matrix is singular (or holds a NaN),
+    /// in column `column` where the solver tells.
+    Singular {
+        /// The pivot's column, if known.
+        column: Option<usize>,
+    },
+    /// Cholesky met a non-positive pivot: the matrix is not positive
+    /// definite.
+    NotPositiveDefinite,
+}
 
 impl fmt::Display for FactorError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "sparse factorisation failed: {}", self.0)
+        match self {
+            FactorError::Symbolic => {
+                f.write_str("the symbolic analysis of the sparse pattern failed")
+            }
+            FactorError::Singular { column: Some(k) } => {
+                write!(f, "zero or non-finite pivot in column {k}")
+            }
+            FactorError::Singular { column: None } => f.write_str("zero or non-finite pivot"),
+            FactorError::NotPositiveDefinite => f.write_str("not positive definite"),
+        }
     }
 }
 
@@ -178,12 +200,13 @@ impl SparseSolver for FaerLu {
         let a = m.as_faer();
         if self.symbolic.is_none() {
             self.symbolic =
-                Some(SymbolicLu::try_new(a.symbolic()).map_err(|e| FactorError(format!("{e:?}")))?);
+                Some(SymbolicLu::try_new(a.symbolic()).map_err(|_| FactorError::Symbolic)?);
         }
         let Some(sym) = self.symbolic.clone() else {
-            return Err(FactorError("no symbolic factorisation".into()));
+            return Err(FactorError::Symbolic);
         };
-        let lu = Lu::try_new_with_symbolic(sym, a).map_err(|e| FactorError(format!("{e:?}")))?;
+        let lu = Lu::try_new_with_symbolic(sym, a)
+            .map_err(|_| FactorError::Singular { column: None })?;
         self.lu = Some(lu);
         self.count += 1;
         Ok(())
@@ -215,14 +238,14 @@ impl SparseSolver for FaerCholesky {
         if self.symbolic.is_none() {
             self.symbolic = Some(
                 SymbolicLlt::try_new(a.symbolic(), Side::Lower)
-                    .map_err(|e| FactorError(format!("{e:?}")))?,
+                    .map_err(|_| FactorError::Symbolic)?,
             );
         }
         let Some(sym) = self.symbolic.clone() else {
-            return Err(FactorError("no symbolic factorisation".into()));
+            return Err(FactorError::Symbolic);
         };
         let llt = Llt::try_new_with_symbolic(sym, a, Side::Lower)
-            .map_err(|e| FactorError(format!("not positive definite ({e:?})")))?;
+            .map_err(|_| FactorError::NotPositiveDefinite)?;
         self.llt = Some(llt);
         self.count += 1;
         Ok(())
@@ -318,9 +341,7 @@ impl SparseSolver for BandedLu {
                 }
             }
             if big == 0.0 || !big.is_finite() {
-                return Err(FactorError(format!(
-                    "zero or non-finite pivot in column {k} (banded LU)"
-                )));
+                return Err(FactorError::Singular { column: Some(k) });
             }
             self.piv[k] = piv;
             if piv != k {

@@ -8,7 +8,8 @@
 //! halved, down to a smallest step, after which the solve refuses.
 
 use super::model::StructuralModel;
-use super::sparse::{AutoLu, SparseMatrix, SparseSolver};
+use super::norm_inf;
+use super::sparse::{AutoLu, FactorError, SparseMatrix, SparseSolver};
 use std::fmt;
 
 /// Settings of [`solve_static`].
@@ -106,8 +107,16 @@ pub enum StaticError {
     Singular {
         /// Load factor tried.
         lambda: f64,
-        /// The solver's message.
-        reason: String,
+        /// The solver's reason.
+        reason: FactorError,
+    },
+    /// The tangent factors, but its condition number estimate is above
+    /// [`StaticOptions::max_condition`] (nearly a mechanism).
+    IllConditioned {
+        /// Load factor tried.
+        lambda: f64,
+        /// The estimate (NaN where it could not be formed).
+        condition: f64,
     },
 }
 
@@ -134,15 +143,16 @@ impl fmt::Display for StaticError {
                 "the tangent stiffness is singular at load factor {lambda} ({reason}): \
                  is the structure supported against rigid motion?"
             ),
+            StaticError::IllConditioned { lambda, condition } => write!(
+                f,
+                "the tangent stiffness is singular at load factor {lambda} (condition number \
+                 estimate {condition:.1e}): is the structure supported against rigid motion?"
+            ),
         }
     }
 }
 
 impl std::error::Error for StaticError {}
-
-fn norm_inf(v: &[f64]) -> f64 {
-    v.iter().fold(0.0, |m, x| m.max(x.abs()))
-}
 
 /// `‖K‖∞`, the largest absolute row sum.
 fn inf_norm(k: &SparseMatrix) -> f64 {
@@ -258,18 +268,18 @@ pub fn solve_static(
             fresh = true;
             model.jacobian(&q_full, &zero_full, 1.0, 0.0, 0.0, &mut tangent);
             tol = base_tol + 4.0 * f64::EPSILON * inf_norm(&tangent) * norm_inf(&q_full);
-            if let Err(e) = lu.factor(&tangent) {
+            if let Err(reason) = lu.factor(&tangent) {
                 return Err(StaticError::Singular {
                     lambda: target,
-                    reason: e.0,
+                    reason,
                 });
             }
             if lu.factorizations() == 1 {
                 let cond = condition_estimate(&tangent, &lu);
                 if cond.is_nan() || cond >= opts.max_condition {
-                    return Err(StaticError::Singular {
+                    return Err(StaticError::IllConditioned {
                         lambda: target,
-                        reason: format!("condition number estimate {cond:.1e}"),
+                        condition: cond,
                     });
                 }
             }

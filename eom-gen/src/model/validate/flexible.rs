@@ -3,11 +3,14 @@
 //! nodes (by index or name, on beams, assumed modes and modal data; the
 //! other shape sources in `flex_sources`).
 
-use super::{Ctx, NamedNodes, Scope, f, i, join};
+use super::{Ctx, Scope, f, i, join};
 use crate::diag::{did_you_mean, list_names};
 use crate::model::locate::Seg;
 use crate::model::spec::{self, Num};
 use crate::system::*;
+
+/// A beam's named nodes, `(name, node index)`.
+type NamedNodes = Vec<(String, usize)>;
 
 impl Ctx<'_> {
     /// A flexible body's beam: its numbers checked, its modes and inertia

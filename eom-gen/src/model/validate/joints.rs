@@ -7,7 +7,7 @@ use super::{CLOSURE_TOL, Ctx, Scope, TOL, f, i, is_ident, join};
 use crate::diag::{did_you_mean, list_names};
 use crate::expr::Ast;
 use crate::graph::{Arc, Graph, GraphError, JointId};
-use crate::mech::initial::{Pose, closure_gaps};
+use crate::mech::initial::{Gap, Pose, closure_gaps};
 use crate::model::locate::Seg;
 use crate::model::spec::{self, Num, Spec};
 use crate::system::*;
@@ -576,19 +576,51 @@ impl Ctx<'_> {
         Some(j)
     }
 
-    /// Warns about cut joints whose two frames do not meet at the initial state.
+    /// Warns about cut joints whose two frames do not meet at the initial
+    /// state, which simulation closes by assembling the loop; if assembly
+    /// cannot close them (Newton on the closure equations stalls above
+    /// [`eom_sim::ASSEMBLY_TOL`]: the loop cannot close anywhere near, say
+    /// a link too short to reach), each open cut joint is an error with the
+    /// smallest residual reached.
     pub(super) fn check_closure(&mut self, sys: &System, poses: &[Pose<f64>]) {
-        for (&j, gap) in sys.graph.cut_joints().iter().zip(closure_gaps(sys, poses)) {
+        let open: Vec<(usize, Gap)> = sys
+            .graph
+            .cut_joints()
+            .iter()
+            .zip(closure_gaps(sys, poses))
+            .filter(|(_, gap)| gap.position > CLOSURE_TOL || gap.angle > CLOSURE_TOL)
+            .map(|(&j, gap)| (j, gap))
+            .collect();
+        if open.is_empty() {
+            return;
+        }
+        let stalled = crate::mech::Numeric::new(sys)
+            .ok()
+            .and_then(|num| num.assemble(&sys.q0(), &sys.u0(), 0.0).ok())
+            .filter(|a| a.residual.is_nan() || a.residual > eom_sim::ASSEMBLY_TOL);
+        for (j, gap) in open {
             let joint = &sys.joints[j];
-            if gap.position > CLOSURE_TOL || gap.angle > CLOSURE_TOL {
-                self.warning(
+            let at = format!(
+                "its frames are {:.3e} m apart and their axes {:.3e} rad out of line",
+                gap.position, gap.angle
+            );
+            match &stalled {
+                None => self.warning(
+                    &[f("joints"), i(j)],
+                    format!("cut joint `{}` is open at the initial state: {at}", joint.name),
+                    "check the joint frames and the initial values of the loop's tree joints; simulation starts by assembling the loop",
+                ),
+                Some(a) => self.error(
                     &[f("joints"), i(j)],
                     format!(
-                        "cut joint `{}` is open at the initial state: its frames are {:.3e} m apart and their axes {:.3e} rad out of line",
-                        joint.name, gap.position, gap.angle
+                        "cut joint `{}` cannot be closed: at the initial state {at}, and assembling the loop stalls with max |Φ| {:.3e} (the smallest reached, after {} Newton step(s); tolerance {:e})",
+                        joint.name,
+                        a.residual,
+                        a.iterations,
+                        eom_sim::ASSEMBLY_TOL
                     ),
-                    "check the joint frames and the initial values of the loop's tree joints; simulation starts by assembling the loop",
-                );
+                    "no configuration of the loop's joints near the initial state closes it: check the joint frames and the lengths of the loop's links",
+                ),
             }
         }
     }

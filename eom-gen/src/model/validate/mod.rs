@@ -4,6 +4,12 @@
 //! path through the [`locate`](super::locate) tree), names it in backticks
 //! and says what would be right. Checks go on after a failure wherever the
 //! remaining ones still make sense, so one run reports everything.
+//!
+//! One file per concern, each adding its checks to the shared `Ctx`:
+//! `quantities` (parameters, expressions, frames), `bodies`, `flexible`
+//! (and `flex_sources` for assumed modes and modal files), `joints` (and
+//! the graph), `mobility` (Grübler–Kutzbach), `forces`, `constraints`,
+//! `outputs`, `cables`. `Ctx::system` runs them in order.
 
 use super::locate::{Node, Seg};
 use super::spec::Spec;
@@ -42,9 +48,6 @@ mod outputs;
 mod quantities;
 
 pub(crate) use mobility::grubler;
-
-/// A beam's named nodes, `(name, node index)`.
-type NamedNodes = Vec<(String, usize)>;
 
 /// Which names an expression may use.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -230,6 +233,9 @@ impl Ctx<'_> {
         let poses = initial_poses(&system);
         system.grubler = grubler(&system, &poses);
         self.check_closure(&system, &poses);
+        if self.diags.iter().any(Diagnostic::is_error) {
+            return None;
+        }
         if self.lenient && self.mass_matrix {
             self.check_mass_matrix(&system);
         }

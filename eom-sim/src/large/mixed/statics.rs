@@ -56,9 +56,10 @@
 //! the equilibrium, negative when the equilibrium is unstable (dense, up
 //! to [`STABILITY_LIMIT`] unknowns).
 
-use super::super::sparse::{FaerLu, SparseMatrix, SparseSolver};
+use super::super::norm_inf;
+use super::super::sparse::{FactorError, FaerLu, SparseMatrix, SparseSolver};
 use super::super::statics::{LoadStep, StaticOptions};
-use super::{ConstraintEval, MixedModel, RigidScratch, norm_inf};
+use super::{ConstraintEval, MixedModel, RigidScratch};
 use nalgebra::{DMatrix, SymmetricEigen};
 use std::fmt;
 
@@ -88,8 +89,41 @@ pub enum Stability {
     /// Not checked (too many unknowns, or a singular mass matrix).
     NotChecked {
         /// Why not.
-        reason: String,
+        reason: Unchecked,
     },
+}
+
+/// Why the stability of an equilibrium was not checked.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Unchecked {
+    /// More unknowns than the dense eigenvalue problem takes.
+    TooLarge {
+        /// Unknowns.
+        unknowns: usize,
+        /// The limit.
+        limit: usize,
+    },
+    /// The tangent or the mass matrix holds a non-finite entry.
+    NonFinite,
+    /// The mass matrix on the allowed motions is not positive definite.
+    MassNotPositive,
+    /// The mass matrix is singular.
+    MassSingular,
+}
+
+impl fmt::Display for Unchecked {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Unchecked::TooLarge { unknowns, limit } => {
+                write!(f, "{unknowns} unknowns, more than the dense limit {limit}")
+            }
+            Unchecked::NonFinite => f.write_str("the tangent is not finite"),
+            Unchecked::MassNotPositive => {
+                f.write_str("the mass matrix on the allowed motions is not positive definite")
+            }
+            Unchecked::MassSingular => f.write_str("the mass matrix is singular"),
+        }
+    }
 }
 
 impl fmt::Display for Stability {
@@ -164,8 +198,19 @@ impl MixedStaticSolution {
 /// Why a mixed static solve gave up.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MixedStaticError {
-    /// The start is not consistent (cable ends away from their markers).
-    Start(String),
+    /// The rigid start has the wrong number of coordinates.
+    StartSize {
+        /// Coordinates given.
+        given: usize,
+        /// The rigid part's coordinates.
+        needed: usize,
+    },
+    /// The attachments do not hold at the start (a cable end away from
+    /// its marker, a clamped end's tangent off the clamp's axis).
+    StartOpen {
+        /// `‖Φ‖∞` there.
+        residual: f64,
+    },
     /// Newton did not converge at the smallest load step allowed.
     NoConvergence {
         /// Last load factor reached in equilibrium.
@@ -181,8 +226,11 @@ pub enum MixedStaticError {
     Singular {
         /// Load factor tried.
         lambda: f64,
-        /// The solver's message.
-        reason: String,
+        /// The factorisation's failure at the last regularisation tried
+        /// (`None`: it factored, but too ill-conditioned).
+        factor: Option<FactorError>,
+        /// The last condition estimate (NaN where it did not factor).
+        condition: f64,
     },
     /// The equilibrium reached is not isolated: the tangent is singular
     /// there (a mechanism).
@@ -224,7 +272,13 @@ impl MixedStaticError {
 impl fmt::Display for MixedStaticError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            MixedStaticError::Start(reason) => f.write_str(reason),
+            MixedStaticError::StartSize { given, needed } => {
+                write!(f, "the rigid part has {needed} coordinates, not {given}")
+            }
+            MixedStaticError::StartOpen { residual } => write!(
+                f,
+                "the attachments do not hold at the start (|Φ|∞ = {residual:.3e}): put each cable end at its marker, with a clamped end's tangent along the clamp's axis"
+            ),
             MixedStaticError::NoConvergence {
                 lambda_reached,
                 lambda_tried,
@@ -252,11 +306,21 @@ impl fmt::Display for MixedStaticError {
                     f.write_str("; try more load steps or check the supports")
                 }
             }
-            MixedStaticError::Singular { lambda, reason } => write!(
-                f,
-                "the KKT matrix is singular at load factor {lambda} even with regularisation ({reason}): \
-                 are the rigid part and the cables held against free motion?"
-            ),
+            MixedStaticError::Singular {
+                lambda,
+                factor,
+                condition,
+            } => {
+                let reason = match factor {
+                    Some(e) => e.to_string(),
+                    None => format!("condition estimate {condition:.1e}"),
+                };
+                write!(
+                    f,
+                    "the KKT matrix is singular at load factor {lambda} even with regularisation ({reason}): \
+                     are the rigid part and the cables held against free motion?"
+                )
+            }
             MixedStaticError::Mechanism {
                 condition,
                 direction,
@@ -377,7 +441,7 @@ impl<'a, 'r> Kkt<'a, 'r> {
 
     /// Builds `[[H + μ M, σ Φ_yᵀ], [σ Φ_y, 0]]` at `z` (after
     /// [`Kkt::residual`] at `z`, which left `q_full` there) and factors it.
-    fn assemble(&mut self, z: &[f64], mu: f64) -> Result<(), String> {
+    fn assemble(&mut self, z: &[f64], mu: f64) -> Result<(), FactorError> {
         let (n_s, n_r, n, _) = self.sizes();
         let model = self.model;
         let lambda = &z[n..];
@@ -457,7 +521,7 @@ impl<'a, 'r> Kkt<'a, 'r> {
             }
         }
         self.rs.c = c;
-        self.lu.factor(&self.matrix).map_err(|e| e.0)
+        self.lu.factor(&self.matrix)
     }
 
     /// Solves the factored system for the Newton correction of `z` from
@@ -508,7 +572,10 @@ impl<'a, 'r> Kkt<'a, 'r> {
         let (n_s, n_r, n, m) = self.sizes();
         if n > STABILITY_LIMIT {
             return Stability::NotChecked {
-                reason: format!("{n} unknowns, more than the dense limit {STABILITY_LIMIT}"),
+                reason: Unchecked::TooLarge {
+                    unknowns: n,
+                    limit: STABILITY_LIMIT,
+                },
             };
         }
         let mut h = DMatrix::<f64>::zeros(n, n);
@@ -539,7 +606,7 @@ impl<'a, 'r> Kkt<'a, 'r> {
             .any(|v| !v.is_finite())
         {
             return Stability::NotChecked {
-                reason: "the tangent is not finite".into(),
+                reason: Unchecked::NonFinite,
             };
         }
         // Z: eigenvectors of AᵀA with zero eigenvalues.
@@ -557,19 +624,19 @@ impl<'a, 'r> Kkt<'a, 'r> {
         let mr = zb.transpose() * &mass * &zb;
         let Some(chol) = mr.clone().cholesky() else {
             return Stability::NotChecked {
-                reason: "the mass matrix on the allowed motions is not positive definite".into(),
+                reason: Unchecked::MassNotPositive,
             };
         };
         let l = chol.l();
         // C = L⁻¹ Hr L⁻ᵀ.
         let Some(x) = l.solve_lower_triangular(&hr) else {
             return Stability::NotChecked {
-                reason: "the mass matrix is singular".into(),
+                reason: Unchecked::MassSingular,
             };
         };
         let Some(ct) = l.solve_lower_triangular(&x.transpose()) else {
             return Stability::NotChecked {
-                reason: "the mass matrix is singular".into(),
+                reason: Unchecked::MassSingular,
             };
         };
         let c = (&ct + ct.transpose()) * 0.5;
@@ -602,10 +669,10 @@ pub fn solve_static_mixed(
     let (n_s, n_r, m) = (model.n_s, model.n_r, model.m);
     let n = n_s + n_r;
     if q_r0.len() != n_r {
-        return Err(MixedStaticError::Start(format!(
-            "the rigid part has {n_r} coordinates, not {}",
-            q_r0.len()
-        )));
+        return Err(MixedStaticError::StartSize {
+            given: q_r0.len(),
+            needed: n_r,
+        });
     }
     let st = &model.structure;
     let mut z = st.restrict(st.q0());
@@ -614,9 +681,7 @@ pub fn solve_static_mixed(
     let phi0 = model.constraint_residual(t, &z[..n]);
     let worst = norm_inf(&phi0);
     if worst.is_nan() || worst > 1e-8 {
-        return Err(MixedStaticError::Start(format!(
-            "the attachments do not hold at the start (|Φ|∞ = {worst:.3e}): put each cable end at its marker, with a clamped end's tangent along the clamp's axis"
-        )));
+        return Err(MixedStaticError::StartOpen { residual: worst });
     }
     let mut kkt = Kkt::new(model, t);
     // F(z⁰): the structure's internal forces and the rigid part's bias at
@@ -700,7 +765,7 @@ pub fn solve_static_mixed(
                     1e-4 * kkt.sigma / mass_scale
                 };
                 let mut ok = false;
-                let mut last = String::new();
+                let (mut factor, mut condition) = (None, f64::NAN);
                 for _ in 0..6 {
                     match kkt.assemble(&zt, mu) {
                         Ok(()) => {
@@ -709,16 +774,17 @@ pub fn solve_static_mixed(
                                 ok = true;
                                 break;
                             }
-                            last = format!("condition estimate {cond:.1e}");
+                            (factor, condition) = (None, cond);
                         }
-                        Err(e) => last = e,
+                        Err(e) => (factor, condition) = (Some(e), f64::NAN),
                     }
                     mu *= 100.0;
                 }
                 if !ok {
                     return Err(MixedStaticError::Singular {
                         lambda: target,
-                        reason: last,
+                        factor,
+                        condition,
                     });
                 }
                 regularized += 1;
@@ -871,7 +937,7 @@ mod tests {
     #[test]
     fn the_kkt_matrix_is_the_residuals_jacobian() {
         let spec = ChainSpec {
-            kernel: "Cable2D".into(),
+            kernel: crate::elements::Element::Cable2D,
             start: [0.5, 0.0, 0.0],
             end: [1.0, 0.0, 0.0],
             elements: 2,

@@ -4,6 +4,12 @@
 //! `cargo run -p eom-gen --example regenerate`; do not edit them by hand),
 //! and the interface the large-model runtime assembles them through.
 //!
+//! [`Element`] is the registry of element types: one entry per type, read
+//! by the runtime (`eom_sim::large`, which builds chains by it) and the
+//! command line. Adding an element type is its derivation in
+//! `eom-gen/src/ancf/`, its generated file here, one arm in
+//! [`with_element!`] and one variant of [`Element`].
+//!
 //! Sign convention: an element's equations are
 //! `M q̈ + f_int(q, q̇) = f_ext`, with `f_int = ∂U/∂q + D(q) q̇` (elastic
 //! force from the strain energy `U`, plus material damping).
@@ -256,6 +262,9 @@ pub trait ElementKernel<const N: usize, const P: usize> {
         *k = kl.map(|r| r.map(|x| x.0[0]));
     }
 }
+
+mod registry;
+pub use registry::{Element, UnknownElement};
 
 #[rustfmt::skip] // generated, formatted by prettyplease; stays byte-identical
 pub mod cable2d;

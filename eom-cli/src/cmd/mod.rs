@@ -1,0 +1,11 @@
+//! One file per command of `eom-gen`: its arguments (a clap `Args`
+//! struct, the shared ones flattened from `crate::args`) and its `run`.
+
+pub mod bench;
+pub mod check;
+pub mod dump;
+pub mod eval;
+pub mod import;
+pub mod simulate;
+pub mod solve_static;
+pub mod stats;
