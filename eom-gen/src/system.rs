@@ -616,7 +616,7 @@ pub struct System {
     /// Grübler–Kutzbach count.
     pub grubler: Grubler,
     /// Chains of ANCF elements (issue #18), in file order: solved by the
-    /// large-model runtime (`eom_sim::large`, through `cables::chain_spec`), not by generated code.
+    /// large-model runtime through `eom_gen::cables` (`chain_spec`), not by generated code.
     pub cables: Vec<CableInfo>,
 }
 
