@@ -58,7 +58,7 @@ fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
     sys.cables
         .iter()
         .map(|c| {
-            chain(&c.chain)
+            chain(&eom_gen::cables::chain_spec(c))
                 .map(|mut ch| {
                     if c.distributed_load != [0.0; 3] {
                         ch.model.add_distributed_load(c.distributed_load);

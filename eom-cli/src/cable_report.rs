@@ -11,17 +11,6 @@ use eom_sim::large::ancf::chain;
 use serde_json::{Value, json};
 use std::fmt::Write;
 
-/// The element type of a kernel name.
-fn kind(name: &str) -> Option<Kind> {
-    Some(match name {
-        "Cable2D" => Kind::Cable2D,
-        "Cable2DGreen" => Kind::Cable2DGreen,
-        "Cable3D" => Kind::Cable3D,
-        "Beam2D" => Kind::Beam2D,
-        _ => return None,
-    })
-}
-
 /// One cable's facts (no derivation: cheap).
 struct Facts {
     name: String,
@@ -42,17 +31,19 @@ fn facts(sys: &System) -> Vec<Facts> {
         .iter()
         .map(|c| {
             let spec = &c.chain;
-            let def = kind(spec.kernel.name()).map(|k| define(&mut Arena::new(), k));
+            let def = Some(define(&mut Arena::new(), spec.element));
             let node_coords = def.as_ref().map_or(0, |d| d.node_coords);
             let nodes = spec.elements + 1;
             Facts {
                 name: c.name.clone(),
-                kernel: spec.kernel.name().to_owned(),
+                kernel: spec.element.name().to_string(),
                 elements: spec.elements,
                 nodes,
                 node_coords,
                 coordinates: nodes * node_coords,
-                free: chain(spec).ok().map(|ch| ch.model.n_free()),
+                free: chain(&eom_gen::cables::chain_spec(c))
+                    .ok()
+                    .map(|ch| ch.model.n_free()),
                 kernel_coordinates: 2 * node_coords,
                 parameters: def
                     .as_ref()
@@ -138,7 +129,9 @@ pub fn stats(sys: &System) -> (String, Value) {
     let mut kernels = serde_json::Map::new();
     let mut per_call = std::collections::HashMap::new();
     for name in &kinds {
-        let Some(k) = kind(name) else { continue };
+        let Some(k) = Kind::from_name(name) else {
+            continue;
+        };
         let derived = derive(k);
         let counts = derived.op_counts();
         let mut obj = serde_json::Map::new();

@@ -209,7 +209,7 @@ fn cable_free_coordinates(sys: &System) -> Option<usize> {
     sys.cables
         .iter()
         .map(|c| {
-            eom_sim::large::ancf::chain(&c.chain)
+            eom_sim::large::ancf::chain(&eom_gen::cables::chain_spec(c))
                 .ok()
                 .map(|ch| ch.model.n_free())
         })

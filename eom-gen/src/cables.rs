@@ -16,11 +16,59 @@
 //! (nonholonomic) equations, such as a rolling disk's no-slip
 //! conditions, are refused by name: the index-3 method holds positions.
 
+use crate::ancf::Kind;
 use crate::functions::Function;
 use crate::mech::Formulation;
-use crate::system::System;
-use eom_sim::large::ancf::chains;
+use crate::system::{CableInfo, Support, System};
+use eom_sim::elements::Element;
+use eom_sim::large::ancf::{ChainSpec, Section, chains};
 use eom_sim::large::{ByName, MixedModel, RigidPart};
+
+/// The runtime's kernel of a generator's element type (its registry
+/// `eom_sim::elements::Element` runs the kernels `ancf::emit` wrote).
+pub fn element(kind: Kind) -> Element {
+    match kind {
+        Kind::Cable2D => Element::Cable2D,
+        Kind::Cable2DGreen => Element::Cable2DGreen,
+        Kind::Cable3D => Element::Cable3D,
+        Kind::Beam2D => Element::Beam2D,
+    }
+}
+
+/// The runtime's description of a validated cable's chain
+/// (`eom_sim::large::ancf::chain` builds it by its kernel).
+pub fn chain_spec(cable: &CableInfo) -> ChainSpec {
+    let c = &cable.chain;
+    let s = &c.section;
+    let support = |s: Support| match s {
+        Support::Free => eom_sim::large::ancf::Support::Free,
+        Support::Pinned => eom_sim::large::ancf::Support::Pinned,
+        Support::Clamped => eom_sim::large::ancf::Support::Clamped,
+    };
+    ChainSpec {
+        kernel: element(c.element),
+        start: c.start,
+        end: c.end,
+        elements: c.elements,
+        section: Section {
+            e: s.e,
+            nu: s.nu,
+            rho: s.rho,
+            area: s.area,
+            inertia: s.inertia,
+            b: s.b,
+            h: s.h,
+            damping_axial: s.damping_axial,
+            damping_bending: s.damping_bending,
+            retardation: s.retardation,
+        },
+        start_support: support(c.start_support),
+        end_support: support(c.end_support),
+        end_force: c.end_force,
+        end_mass: c.end_mass,
+        gravity: c.gravity,
+    }
+}
 
 /// One cable of a mixed model: what it is and where its nodes sit in the
 /// structure's full coordinates.
@@ -153,7 +201,7 @@ fn check_planar_mounts(
     x: &crate::interpret::Point<'_>,
 ) -> Result<(), String> {
     let mounts = sys.cable_mounts();
-    let planar = |c: usize| sys.cables[c].chain.kernel.dim() == 2;
+    let planar = |c: usize| sys.cables[c].chain.element.dim() == 2;
     if !mounts.iter().any(|(c, _, _)| planar(*c)) {
         return Ok(());
     }
@@ -182,7 +230,7 @@ fn check_planar_mounts(
             return Err(format!(
                 "cable `{}` is planar ({}) but the marker `{}.{}` holding its {} leaves the plane z = 0 as the rigid part moves{}: use `Cable3D`, or keep the marker in the x–y plane (revolute joints about z, prismatic joints in x–y)",
                 cable.name,
-                cable.chain.kernel,
+                cable.chain.element.name(),
                 body.name,
                 body.markers[m.marker].name,
                 if *end { "end" } else { "start" },
@@ -266,7 +314,7 @@ pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'
     if sys.cables.is_empty() {
         return Err(format!("model `{}` has no cables", sys.name));
     }
-    let specs: Vec<_> = sys.cables.iter().map(|c| c.chain.clone()).collect();
+    let specs: Vec<_> = sys.cables.iter().map(chain_spec).collect();
     let mut built =
         chains(&specs).map_err(|e| format!("cable `{}`: {}", sys.cables[e.chain].name, e.error))?;
     for (k, c) in sys.cables.iter().enumerate() {

@@ -21,6 +21,7 @@
 
 pub mod ancf;
 pub mod builder;
+#[cfg(feature = "cables")]
 pub mod cables;
 pub mod diag;
 pub mod emit;

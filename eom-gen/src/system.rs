@@ -616,7 +616,7 @@ pub struct System {
     /// Grübler–Kutzbach count.
     pub grubler: Grubler,
     /// Chains of ANCF elements (issue #18), in file order: solved by the
-    /// large-model runtime (`eom_sim::large`), not by generated code.
+    /// large-model runtime through `eom_gen::cables` (`chain_spec`), not by generated code.
     pub cables: Vec<CableInfo>,
 }
 
@@ -628,7 +628,7 @@ pub struct CableInfo {
     /// Everything the runtime builds it from (values at the parameters'
     /// defaults; gravity from the model). An end held at a marker has the
     /// support `Free` here: the attachment holds it.
-    pub chain: eom_sim::large::ancf::ChainSpec,
+    pub chain: ChainInfo,
     /// The first end held at a marker of a rigid body.
     pub start_at: Option<CableMountInfo>,
     /// The second end held at a marker of a rigid body.
@@ -639,6 +639,68 @@ pub struct CableInfo {
     pub distributed_load: [f64; 3],
     /// Constant forces on nodes: `(node, force)`, world axes, N.
     pub node_forces: Vec<(usize, [f64; 3])>,
+}
+
+/// A chain of ANCF elements as the runtime builds it (`eom_gen::cables`
+/// turns it into the runtime's description).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ChainInfo {
+    /// The element type.
+    pub element: crate::ancf::Kind,
+    /// First end, world axes, m (planar elements: `z = 0`).
+    pub start: [f64; 3],
+    /// Second end.
+    pub end: [f64; 3],
+    /// Number of elements.
+    pub elements: usize,
+    /// Section and material.
+    pub section: CableSection,
+    /// Support of the first end.
+    pub start_support: Support,
+    /// Support of the second end.
+    pub end_support: Support,
+    /// A constant force on the second end's position, N.
+    pub end_force: [f64; 3],
+    /// A point mass (no rotary inertia) on the second end, kg.
+    pub end_mass: f64,
+    /// Gravity, m/s².
+    pub gravity: [f64; 3],
+}
+
+/// Cross-section and material data of a chain's elements.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CableSection {
+    /// Young's modulus, Pa.
+    pub e: f64,
+    /// Poisson's ratio (the planar beam).
+    pub nu: f64,
+    /// Density, kg/m³.
+    pub rho: f64,
+    /// Area, m².
+    pub area: f64,
+    /// Second moment of area for in-plane bending, m⁴.
+    pub inertia: f64,
+    /// Section width (out of plane), m, if rectangular (else 0).
+    pub b: f64,
+    /// Section height (in plane), m, if rectangular (else 0).
+    pub h: f64,
+    /// Axial Kelvin–Voigt damping, N s.
+    pub damping_axial: f64,
+    /// Bending Kelvin–Voigt damping, N m² s.
+    pub damping_bending: f64,
+    /// Kelvin–Voigt retardation time of the continuum beam, s.
+    pub retardation: f64,
+}
+
+/// How an end of a chain is held by the ground.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Support {
+    /// Not held (or held by an attachment to a rigid body).
+    Free,
+    /// Position fixed, free to rotate.
+    Pinned,
+    /// Position and orientation fixed.
+    Clamped,
 }
 
 /// A cable end held at a marker of a rigid body (validated).

@@ -5,7 +5,7 @@
 //! top, the torque-free body and Andrews' mechanism (Hairer & Wanner VII.7).
 
 use eom_gen::mech::Numeric;
-use eom_gen::mech::dynamics::solve_dense;
+use eom_gen::mech::solve_dense;
 use eom_gen::testkit::{Rng, random_state};
 use eom_gen::{System, check_file};
 

@@ -8,11 +8,11 @@
 //! `W = 1`).
 
 use super::{Kernels, LOAD_NAMES};
-use crate::emit::{VERSION, float, float_operand};
-use crate::sym::{Op, Operand, Program, SymKind, Symbol};
+use crate::emit::VERSION;
+use crate::emit::lower::{Arg, Style, lower};
+use crate::sym::{Program, SymKind, Symbol};
 use proc_macro2::{Literal, TokenStream};
 use quote::{format_ident, quote};
-use std::collections::HashMap;
 
 /// How each symbol kind is read in the generated functions.
 fn input(k: &Kernels, s: &Symbol) -> TokenStream {
@@ -48,32 +48,14 @@ fn input(k: &Kernels, s: &Symbol) -> TokenStream {
 
 /// Instructions per function: longer straight-line functions overflow
 /// rustc's stack when it writes debug information (one nested scope per
-/// `let`), as in `emit::split`.
-pub const PART_LIMIT: usize = 1500;
+/// `let`).
+pub use crate::emit::lower::PART_LIMIT;
 
 /// An argument of a kernel function: name, type, which symbols it carries.
 struct KArg {
     name: &'static str,
     ty: TokenStream,
     carries: fn(&SymKind) -> bool,
-}
-
-fn operands(op: &Op) -> Vec<Operand> {
-    match *op {
-        Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
-            vec![a, b]
-        }
-        Op::Select(c, a, b) => vec![c, a, b],
-        Op::Neg(a)
-        | Op::Sqrt(a)
-        | Op::Sin(a)
-        | Op::Cos(a)
-        | Op::SinCos(a)
-        | Op::Tan(a)
-        | Op::Exp(a)
-        | Op::Ln(a)
-        | Op::Abs(a) => vec![a],
-    }
 }
 
 /// A kernel function's body and its helper parts (free functions).
@@ -83,14 +65,14 @@ struct Body {
     used: Vec<bool>,
 }
 
-/// The statements of `p`, then `targets[i] = output i`. Programs longer
-/// than [`PART_LIMIT`] become consecutive `#[inline(never)]` parts; a
-/// temporary read in a later part or written to an output goes through a
-/// scratch array `s` on the caller's stack.
+/// The statements of `p` (the one lowering of `crate::emit::lower`), then
+/// `targets[i] = output i`. Programs longer than [`PART_LIMIT`] become
+/// consecutive `#[inline(never)]` free functions; a temporary read in a
+/// later part or written to an output goes through a scratch array `s` on
+/// the caller's stack.
 ///
 /// With `lanes`, every value is a `Lanes<W>` (`W` elements at once, one per
-/// lane, the same straight-line code): constants are splatted, functions
-/// are the lane-wise methods, and the parts are generic in `W`.
+/// lane, the same straight-line code) and the parts are generic in `W`.
 fn body(
     k: &Kernels,
     p: &Program,
@@ -99,230 +81,34 @@ fn body(
     targets: &[TokenStream],
     lanes: bool,
 ) -> Body {
-    let ranges: Vec<std::ops::Range<usize>> = if p.instrs.len() <= PART_LIMIT {
-        std::iter::once(0..p.instrs.len()).collect()
-    } else {
-        (0..p.instrs.len())
-            .step_by(PART_LIMIT)
-            .map(|s| s..(s + PART_LIMIT).min(p.instrs.len()))
-            .collect()
+    let read = |s: &Symbol| input(k, s);
+    let style = Style {
+        input: &read,
+        fma: false,
+        lanes,
+        methods: false,
     };
-    let split = ranges.len() > 1;
-    let mut part_of: HashMap<u32, usize> = HashMap::new();
-    for (r, range) in ranges.iter().enumerate() {
-        for ins in &p.instrs[range.clone()] {
-            part_of.insert(ins.dst, r);
-            part_of.insert(ins.dst + 1, r);
-        }
-    }
-    let mut slots: HashMap<u32, usize> = HashMap::new();
-    if split {
-        for (r, range) in ranges.iter().enumerate() {
-            for ins in &p.instrs[range.clone()] {
-                for o in operands(&ins.op) {
-                    if let Operand::Tmp(t) = o
-                        && part_of.get(&t).is_some_and(|&d| d < r)
-                    {
-                        let n = slots.len();
-                        slots.entry(t).or_insert(n);
-                    }
-                }
+    let args: Vec<Arg<'_>> = args
+        .iter()
+        .map(|a| {
+            let carries = a.carries;
+            Arg {
+                name: a.name,
+                ty: a.ty.clone(),
+                carries: Box::new(move |s: &Symbol| carries(&s.kind)),
             }
-        }
-        for (_, o) in &p.outputs {
-            if let Operand::Tmp(t) = *o {
-                let n = slots.len();
-                slots.entry(t).or_insert(n);
-            }
-        }
-    }
-    let slot = |t: u32| {
-        let i = Literal::usize_unsuffixed(slots[&t]);
-        quote!(s[#i])
-    };
-    let un = |f: &str, x: TokenStream| {
-        let f = format_ident!("{f}");
-        if lanes {
-            quote!(#x.#f())
-        } else {
-            quote!(f64::#f(#x))
-        }
-    };
-    let constant = |c: f64| {
-        if lanes {
-            let c = float(c);
-            quote!(Lanes::<W>::splat(#c))
-        } else {
-            float_operand(c)
-        }
-    };
-    let mut stmts = TokenStream::new();
-    let mut parts = TokenStream::new();
-    let ns = Literal::usize_unsuffixed(slots.len().max(1));
-    for (r, range) in ranges.iter().enumerate() {
-        let o = |x: Operand| -> TokenStream {
-            match x {
-                Operand::Const(n) => constant(n.to_f64()),
-                Operand::Var(i) => input(k, &p.inputs[i as usize]),
-                Operand::Tmp(t) if split && part_of.get(&t) != Some(&r) => slot(t),
-                Operand::Tmp(t) => {
-                    let t = format_ident!("x{t}");
-                    quote!(#t)
-                }
-            }
-        };
-        let mut out = TokenStream::new();
-        let store = |t: u32, out: &mut TokenStream| {
-            if split && slots.contains_key(&t) {
-                let (sl, x) = (slot(t), format_ident!("x{t}"));
-                out.extend(quote!(#sl = #x;));
-            }
-        };
-        for ins in &p.instrs[range.clone()] {
-            let dst = format_ident!("x{}", ins.dst);
-            let value = match ins.op {
-                Op::Add(x, y) => {
-                    let (x, y) = (o(x), o(y));
-                    quote!(#x + #y)
-                }
-                Op::Sub(x, y) => {
-                    let (x, y) = (o(x), o(y));
-                    quote!(#x - #y)
-                }
-                Op::Mul(x, y) => {
-                    let (x, y) = (o(x), o(y));
-                    quote!(#x * #y)
-                }
-                Op::Div(x, y) => {
-                    let (x, y) = (o(x), o(y));
-                    quote!(#x / #y)
-                }
-                Op::Neg(x) => {
-                    let x = o(x);
-                    quote!(-#x)
-                }
-                Op::Sqrt(x) => un("sqrt", o(x)),
-                Op::Sin(x) => un("sin", o(x)),
-                Op::Cos(x) => un("cos", o(x)),
-                Op::Tan(x) => un("tan", o(x)),
-                Op::Exp(x) => un("exp", o(x)),
-                Op::Ln(x) => un("ln", o(x)),
-                Op::Abs(x) => un("abs", o(x)),
-                Op::Atan2(y, x) if lanes => {
-                    let (y, x) = (o(y), o(x));
-                    quote!(Lanes::atan2(#y, #x))
-                }
-                Op::Atan2(y, x) => {
-                    let (y, x) = (o(y), o(x));
-                    quote!(f64::atan2(#y, #x))
-                }
-                Op::Select(c, x, y) if lanes => {
-                    let (c, x, y) = (o(c), o(x), o(y));
-                    quote!(Lanes::select(#c, #x, #y))
-                }
-                Op::Select(c, x, y) => {
-                    let (c, x, y) = (o(c), o(x), o(y));
-                    quote!(if #c > 0.0 { #x } else { #y })
-                }
-                Op::SinCos(x) => {
-                    let (sn, cs, x) = (
-                        format_ident!("x{}", ins.dst),
-                        format_ident!("x{}", ins.dst + 1),
-                        o(x),
-                    );
-                    if lanes {
-                        out.extend(quote!(let (#sn, #cs) = #x.sin_cos();));
-                    } else {
-                        out.extend(quote!(let (#sn, #cs) = f64::sin_cos(#x);));
-                    }
-                    store(ins.dst, &mut out);
-                    store(ins.dst + 1, &mut out);
-                    continue;
-                }
-            };
-            out.extend(quote!(let #dst = #value;));
-            store(ins.dst, &mut out);
-        }
-        if !split {
-            stmts = out;
-            break;
-        }
-        let name = format_ident!("{fname}_part{r}");
-        let reads_arg = |a: &KArg| {
-            p.instrs[range.clone()].iter().any(|i| {
-                operands(&i.op).iter().any(
-                    |o| matches!(o, Operand::Var(v) if (a.carries)(&p.inputs[*v as usize].kind)),
-                )
-            })
-        };
-        let params = args.iter().map(|a| {
-            let n = arg(a.name, reads_arg(a));
-            let ty = &a.ty;
-            quote!(#n: #ty)
-        });
-        let doc = format!(
-            " Part {} of {} of `{fname}` (instructions {}–{}).",
-            r + 1,
-            ranges.len(),
-            range.start,
-            range.end - 1
-        );
-        if lanes {
-            parts.extend(quote! {
-                #[doc = #doc]
-                #[inline(never)]
-                fn #name<const W: usize>(#(#params,)* s: &mut [Lanes<W>; #ns]) {
-                    #out
-                }
-            });
-        } else {
-            parts.extend(quote! {
-                #[doc = #doc]
-                #[inline(never)]
-                fn #name(#(#params,)* s: &mut [f64; #ns]) {
-                    #out
-                }
-            });
-        }
-        let names = args.iter().map(|a| format_ident!("{}", a.name));
-        stmts.extend(quote!(#name(#(#names,)* &mut s);));
-    }
-    if split {
-        let init = if lanes {
-            quote!(Lanes::<W>::splat(0.0))
-        } else {
-            quote!(0.0f64)
-        };
-        stmts = quote! {
-            let mut s = [#init; #ns];
-            #stmts
-        };
-    }
-    let last = ranges.len() - 1;
-    for ((_, v), t) in p.outputs.iter().zip(targets) {
-        let v = match *v {
-            Operand::Const(n) if lanes => {
-                let c = float(n.to_f64());
-                quote!(Lanes::<W>::splat(#c))
-            }
-            Operand::Const(n) => float(n.to_f64()),
-            Operand::Var(i) => input(k, &p.inputs[i as usize]),
-            Operand::Tmp(t) if split => {
-                let _ = last;
-                slot(t)
-            }
-            Operand::Tmp(t) => {
-                let t = format_ident!("x{t}");
-                quote!(#t)
-            }
-        };
+        })
+        .collect();
+    let l = lower(&style, p, fname, &args);
+    let mut stmts = l.body;
+    for (v, t) in l.outputs.iter().zip(targets) {
         stmts.extend(quote!(#t = #v;));
     }
-    let used = args
-        .iter()
-        .map(|a| split || p.inputs.iter().any(|s| (a.carries)(&s.kind)))
-        .collect();
-    Body { stmts, parts, used }
+    Body {
+        stmts,
+        parts: l.parts,
+        used: l.used,
+    }
 }
 
 fn arg(name: &str, used: bool) -> proc_macro2::Ident {

@@ -37,34 +37,13 @@
 
 pub mod emit;
 mod gauss;
+mod kind;
 mod shapes;
 
 pub use gauss::gauss_legendre;
+pub use kind::Kind;
 
 use crate::sym::{Arena, Id, LowerOptions, OpCount, Program, SymId, SymKind};
-
-/// The element types.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Kind {
-    /// Planar cable, Gerstmayr–Irschik strain and material curvature.
-    Cable2D,
-    /// Planar cable, Green axial strain and the polynomial curvature `r' × r''`.
-    Cable2DGreen,
-    /// Spatial cable, axial strain and curvature, no torsion.
-    Cable3D,
-    /// Planar fully parameterised beam (continuum Green–Lagrange strain).
-    Beam2D,
-}
-
-impl Kind {
-    /// Every element type, in the order the files are written.
-    pub const ALL: [Kind; 4] = [
-        Kind::Cable2D,
-        Kind::Cable2DGreen,
-        Kind::Cable3D,
-        Kind::Beam2D,
-    ];
-}
 
 /// An element type's symbolic definition (built by [`define`]).
 pub struct Definition {
@@ -693,7 +672,7 @@ pub fn chain(first: &Program, second: &Program) -> Program {
     let mut instrs = first.instrs.clone();
     instrs.extend(second.instrs.iter().map(|ins| Instr {
         dst: ins.dst + off,
-        op: remap(ins.op, map),
+        op: ins.op.map(map),
     }));
     let outputs = second
         .outputs
@@ -709,30 +688,6 @@ pub fn chain(first: &Program, second: &Program) -> Program {
     p.optimize();
     let _ = Op::Neg;
     p
-}
-
-fn remap(
-    op: crate::sym::Op,
-    f: impl Fn(crate::sym::Operand) -> crate::sym::Operand,
-) -> crate::sym::Op {
-    use crate::sym::Op;
-    match op {
-        Op::Add(a, b) => Op::Add(f(a), f(b)),
-        Op::Sub(a, b) => Op::Sub(f(a), f(b)),
-        Op::Mul(a, b) => Op::Mul(f(a), f(b)),
-        Op::Div(a, b) => Op::Div(f(a), f(b)),
-        Op::Atan2(a, b) => Op::Atan2(f(a), f(b)),
-        Op::Neg(a) => Op::Neg(f(a)),
-        Op::Sqrt(a) => Op::Sqrt(f(a)),
-        Op::Sin(a) => Op::Sin(f(a)),
-        Op::Cos(a) => Op::Cos(f(a)),
-        Op::SinCos(a) => Op::SinCos(f(a)),
-        Op::Tan(a) => Op::Tan(f(a)),
-        Op::Exp(a) => Op::Exp(f(a)),
-        Op::Ln(a) => Op::Ln(f(a)),
-        Op::Abs(a) => Op::Abs(f(a)),
-        Op::Select(c, a, b) => Op::Select(f(c), f(a), f(b)),
-    }
 }
 
 impl Kernels {

@@ -16,10 +16,10 @@
 use crate::functions::{Arg as FnArg, Function, Layout, TABLE};
 use crate::mech::Formulation;
 use crate::sym::{SymKind, Symbol};
-use split::{Arg, lower};
+use lower::{Arg, Style, lower};
 
+pub(crate) mod lower;
 mod names;
-mod split;
 use crate::system::{Motion, System};
 pub use names::{is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
@@ -33,8 +33,6 @@ struct Binding<'a> {
     sys: &'a System,
     /// Name of the `u̇` argument (`udot` in inverse dynamics).
     speed_rate: &'a str,
-    /// Fuse `a·b + c` into `f64::mul_add`.
-    fma: bool,
     /// Field of each tunable parameter in the parameter struct.
     fields: std::collections::HashMap<&'a str, Ident>,
 }
@@ -287,8 +285,14 @@ pub fn emit_tokens(
     let b = Binding {
         sys,
         speed_rate: "udot",
-        fma: opts.fma,
         fields,
+    };
+    let input = |s: &Symbol| b.input(s);
+    let style = Style {
+        input: &input,
+        fma: opts.fma,
+        lanes: false,
+        methods: true,
     };
     let q_doc = format!("`q` = ({})", list(&coords));
     let u_doc = format!("`u` = ({})", list(&speeds));
@@ -350,7 +354,7 @@ pub fn emit_tokens(
     let Some(qdot_program) = f.program(Function::Qdot) else {
         return quote!(::core::compile_error!("eom-gen: the formulation has no q̇ program"););
     };
-    let l = lower(&b, qdot_program, "qdot", &args);
+    let l = lower(&style, qdot_program, "qdot", &args);
     parts.extend(l.parts.clone());
     let (params, body, assign) = (l.params(&args), &l.body, assign_all("qdot", &l.outputs));
     let qdot_fn = quote! {
@@ -362,7 +366,7 @@ pub fn emit_tokens(
 
     let fd_fn = f.program(Function::ForwardDynamics).map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
-        let l = lower(&b, p, "forward_dynamics", &args);
+        let l = lower(&style, p, "forward_dynamics", &args);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("udot", &l.outputs));
         let doc = format!(
@@ -380,7 +384,7 @@ pub fn emit_tokens(
     });
     let mm_fn = f.program(Function::MassMatrix).map(|p| {
         let args = [arg_t(), arg_q()];
-        let l = lower(&b, p, "mass_matrix", &args);
+        let l = lower(&style, p, "mass_matrix", &args);
         parts.extend(l.parts.clone());
         let (params, body) = (l.params(&args), &l.body);
         let mut assign = TokenStream::new();
@@ -405,7 +409,7 @@ pub fn emit_tokens(
     });
     let bias_fn = f.program(Function::Bias).map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
-        let l = lower(&b, p, "bias", &args);
+        let l = lower(&style, p, "bias", &args);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("b", &l.outputs));
         quote! {
@@ -417,7 +421,7 @@ pub fn emit_tokens(
     });
     let id_fn = f.program(Function::InverseDynamics).map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
-        let l = lower(&b, p, "inverse_dynamics", &args);
+        let l = lower(&style, p, "inverse_dynamics", &args);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("tau", &l.outputs));
         quote! {
@@ -486,7 +490,7 @@ pub fn emit_tokens(
     });
     let energy_fn = f.program(Function::Energy).map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
-        let l = lower(&b, p, "energy", &args);
+        let l = lower(&style, p, "energy", &args);
         parts.extend(l.parts.clone());
         let (params, body, o) = (l.params(&args), &l.body, &l.outputs);
         let (k0, k1) = (&o[0], &o[1]);
@@ -499,7 +503,7 @@ pub fn emit_tokens(
     });
     let momentum_fn = f.program(Function::Momentum).map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
-        let l = lower(&b, p, "momentum", &args);
+        let l = lower(&style, p, "momentum", &args);
         parts.extend(l.parts.clone());
         let (params, body, o) = (l.params(&args), &l.body, &l.outputs);
         quote! {
@@ -514,7 +518,7 @@ pub fn emit_tokens(
     let outputs_fn = match f.program(Function::Outputs) {
         Some(p) => {
             let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
-            let l = lower(&b, p, "outputs", &args);
+            let l = lower(&style, p, "outputs", &args);
             parts.extend(l.parts.clone());
             let (params, body, assign) = (l.params(&args), &l.body, assign_all("out", &l.outputs));
             quote! {
@@ -530,7 +534,7 @@ pub fn emit_tokens(
     };
     let constrained_impl = f.program(Function::Constraints).map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
-        let l = lower(&b, p, "constraints", &args);
+        let l = lower(&style, p, "constraints", &args);
         parts.extend(l.parts.clone());
         let params = l.params(&args);
         let body = &l.body;
@@ -624,7 +628,7 @@ pub fn emit_tokens(
                 FnArg::Tau => arg_tau(),
             })
             .collect();
-        let l = lower(&b, p, e.name, &args);
+        let l = lower(&style, p, e.name, &args);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("out", &l.outputs));
         let n = format_ident!("{}", e.name);

@@ -24,9 +24,12 @@
 //! equations of spatial loops (Bricard's) are kept; the solvers handle the
 //! rank deficiency.
 
-use super::dynamics::Kinematics;
+use super::env::Env;
+use super::error::MechError;
+use super::kinematics::Kinematics;
+use super::lower::{Lowering, snap};
 use super::spatial::Pose;
-use super::tree::{Env, Lowering, MechError, TreeModel, snap};
+use super::tree::TreeModel;
 use crate::sym::{Scalar, Vec3};
 use crate::system::{JointType, System};
 use nalgebra::{Matrix3, Vector3};
@@ -395,7 +398,7 @@ pub fn user_constraints<S: Scalar>(
     coordinate_names: &[String],
     tree: &TreeModel<S>,
     env: &dyn Env<S>,
-    ev: &super::dynamics::Evaluator<'_, S>,
+    ev: &super::kinematics::Evaluator<'_, S>,
     k: &Kinematics<S>,
     q: &[S],
     t: S,

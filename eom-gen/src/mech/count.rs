@@ -5,8 +5,11 @@
 //! spatial vectors, no structural zeros), the baseline against which the
 //! generated programs' counts show what symbolic specialisation saves.
 
-use super::dynamics::{Applied, Evaluator, State};
-use super::tree::{Env, MechError, NumericEnv, TreeModel};
+use super::applied::Applied;
+use super::env::{Env, NumericEnv};
+use super::error::MechError;
+use super::kinematics::{Evaluator, State};
+use super::tree::TreeModel;
 use crate::sym::Scalar;
 use crate::system::System;
 use std::cell::Cell;

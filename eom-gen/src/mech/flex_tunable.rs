@@ -27,7 +27,8 @@
 //! (Craig–Bampton, assumed modes: their modal damping needs the normal
 //! modes of the reduced body, which change with the data).
 
-use super::tree::{Lowering, MechError};
+use super::error::MechError;
+use super::lower::Lowering;
 use crate::sym::Scalar;
 use crate::system::{FlexInfo, FlexSource};
 

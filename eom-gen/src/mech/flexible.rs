@@ -32,7 +32,7 @@
 //! Gravity enters through the base acceleration as for rigid bodies
 //! (`P ᵀ a` holds `−S̄ᵀ g`, `I a` the deformed first moment). The elastic
 //! force `−K_ff q_f − D_ff q̇_f` is a generalised force
-//! ([`super::dynamics::Evaluator::generalized_forces`]), with potential
+//! ([`super::kinematics::Evaluator::generalized_forces`]), with potential
 //! `½ q_fᵀ K_ff q_f`.
 //!
 //! Bodies, joints and markers attach either to the frame or to a node
@@ -48,13 +48,15 @@
 //! speeds: RNEA and CRBA handle them as extra joint columns, and the
 //! articulated-body algorithm eliminates `q̈_f` at the flexible body
 //! together with the articulated subtrees hung at its nodes (see
-//! [`super::dynamics::Evaluator::aba`]). Bodies on the frame ride it; `q̈_f`
+//! [`super::kinematics::Evaluator::aba`]). Bodies on the frame ride it; `q̈_f`
 //! couples to them only through the frame's acceleration.
 
+use super::error::MechError;
+use super::flex_state::{FlexState, NodeState};
 use super::flex_tunable::{EA, EI_Y, EI_Z, GJ, RHO_A, RHO_IP, SectionScales};
+use super::lower::Lowering;
 use super::spatial::{Force, Motion, Pose, RigidInertia};
 use super::stiffening::Stiffening;
-use super::tree::{Lowering, MechError};
 use crate::sym::{Axis, Mat3, Scalar, Vec3};
 use crate::system::FlexInfo;
 use std::ops::Add;
@@ -111,40 +113,6 @@ pub struct NodeShape<S> {
     pub translation: Vec<Vec3<S>>,
     /// `Φ_n`: its small rotation per unit `q_f,k` (`k` columns).
     pub rotation: Vec<Vec3<S>>,
-}
-
-/// A node at one state, as the child of a joint from the body frame whose
-/// speeds are `q̇_f`.
-#[derive(Clone, Debug)]
-pub struct NodeState<S> {
-    /// The node frame in body coordinates.
-    pub pose: Pose<S>,
-    /// Motion subspace: the node frame's motion relative to the body frame
-    /// per unit `q̇_f,k` (node coordinates).
-    pub columns: Vec<Motion<S>>,
-    /// Its velocity relative to the body frame, `Σ columns q̇_f`.
-    pub velocity: Motion<S>,
-    /// `c = (d/dt columns) q̇_f`, the derivative of the columns' node
-    /// coordinates along the motion (Featherstone's `S̊ q̇`).
-    pub bias: Motion<S>,
-}
-
-/// A flexible body at one state.
-#[derive(Clone, Debug)]
-pub struct FlexState<S> {
-    /// `q_f`.
-    pub q: Vec<S>,
-    /// `q̇_f`.
-    pub qd: Vec<S>,
-    /// The deformed body's inertia about the frame origin (without the
-    /// rigid part the body may carry).
-    pub inertia: RigidInertia<S>,
-    /// `P`: the spatial momentum of each unit `q̇_f` (body coordinates).
-    pub coupling: Vec<Force<S>>,
-    /// `b`: velocity terms of the frame's force beyond `v ×* I v`.
-    pub bias: Force<S>,
-    /// `b_f`: velocity (and stiffening) terms of the elastic equations.
-    pub elastic_bias: Vec<S>,
 }
 
 fn clean_block(values: &[f64]) -> impl Fn(f64) -> f64 {

@@ -7,9 +7,13 @@
 //! articulated bodies (O(n)) and the mass matrix with its tree-sparse `LᵀDL`
 //! factorisation — and the form with fewer counted operations is kept.
 
-use super::dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
+use super::applied::Applied;
+use super::env::{Env, NumericEnv};
+use super::error::MechError;
+use super::kinematics::{Evaluator, Kinematics, State};
+use super::ltdl::{ltdl, ltdl_solve};
 use super::spatial::Force;
-use super::tree::{Env, MechError, NumericEnv, TreeModel};
+use super::tree::TreeModel;
 use crate::diag::{Diagnostic, Span};
 use crate::functions::{Function, FunctionSet, Layout};
 use crate::sym::{Context, Expr, LowerOptions, OpCount, Program, Scalar, SymError};
@@ -567,7 +571,7 @@ fn flex_of<'a, 'cx>(
     body: usize,
 ) -> Option<(
     &'a crate::system::FlexInfo,
-    &'a super::flexible::FlexState<Expr<'cx>>,
+    &'a super::flex_state::FlexState<Expr<'cx>>,
     usize,
 )> {
     let i = tree.index_of_body[body]?;
@@ -604,7 +608,7 @@ fn outputs<'cx>(
             jacobian_rows: Vec::new(),
         });
     }
-    let low = super::tree::Lowering::new(ev.env);
+    let low = super::lower::Lowering::new(ev.env);
     let mut names: Vec<String> = Vec::new();
     let mut values: Vec<Expr<'cx>> = Vec::new();
     let mut jac_names: Vec<String> = Vec::new();
@@ -616,7 +620,7 @@ fn outputs<'cx>(
         match *out {
             OutputKind::Position(b, m) | OutputKind::Velocity(b, m) => {
                 let marker = &sys.bodies[b].markers[m];
-                let site = super::dynamics::Site {
+                let site = super::applied::Site {
                     body: tree.index_of_body[b],
                     node: marker.node,
                     point: low.vec3(&marker.frame.position)?,

@@ -2,25 +2,57 @@
 //! [`Scalar`](crate::sym::Scalar) — run on `f64` they are the reference
 //! numerics, run on [`Expr`](crate::sym::Expr) they build the expressions
 //! the generator emits.
+//!
+//! The recursive algorithms, one per file (Featherstone, *Rigid Body
+//! Dynamics Algorithms*, 2008), over the tree of [`tree::TreeModel`]:
+//!
+//! - [`kinematics`]: poses, subspaces and velocities, root to leaves, and
+//!   the [`Evaluator`] that runs the others;
+//! - [`rnea`]: inverse dynamics by recursive Newton–Euler (§5.3);
+//! - [`crba`]: the joint-space mass matrix by composite rigid bodies (§6.2);
+//! - [`aba`]: forward dynamics in O(n) by articulated bodies (§7.3);
+//! - [`ltdl`]: the sparse `LᵀDL` factorisation of the mass matrix that
+//!   follows the tree (§6.5), the other forward-dynamics route;
+//! - [`energy`], [`loads`] (the force elements of [`applied`] at a state).
+//!
+//! Building the tree: [`env`] (what parameters are), [`lower`] (model
+//! expressions as scalars), [`error`] (why a system cannot be formulated).
 
+pub mod aba;
+pub mod applied;
 pub mod constraints;
 pub mod count;
-pub mod dynamics;
+pub mod crba;
+pub mod dense;
+pub mod energy;
+pub mod env;
+pub mod error;
 pub mod flex_outputs;
+pub mod flex_state;
 pub mod flex_tunable;
 pub mod flexible;
 pub mod formulate;
 pub mod initial;
 pub mod joint;
+pub mod kinematics;
+pub mod loads;
+pub mod lower;
+pub mod ltdl;
 pub mod mounts;
 pub mod numeric;
+pub mod rnea;
 pub mod spatial;
 pub mod stiffening;
 pub mod tree;
 
-pub use dynamics::{Applied, Evaluator, Kinematics, State, ltdl, ltdl_solve};
+pub use applied::Applied;
+pub use dense::solve_dense;
+pub use env::{Env, NumericEnv};
+pub use error::MechError;
 pub use formulate::{FdForm, Formulation, formulate};
 pub use joint::JointModel;
+pub use kinematics::{Evaluator, Kinematics, State};
+pub use ltdl::{ltdl, ltdl_solve};
 pub use numeric::Numeric;
 pub use spatial::{Force, Motion, Pose, RigidInertia};
-pub use tree::{Env, MechError, NumericEnv, TreeModel};
+pub use tree::TreeModel;

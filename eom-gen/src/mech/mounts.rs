@@ -6,9 +6,12 @@
 //! function `attachments` (with the Jacobians `∂/∂q` the large-model
 //! runtime's attachment constraints need).
 
-use super::dynamics::Kinematics;
+use super::env::Env;
+use super::error::MechError;
+use super::kinematics::Kinematics;
+use super::lower::Lowering;
 use super::spatial::Pose;
-use super::tree::{Env, Lowering, MechError, TreeModel};
+use super::tree::TreeModel;
 use crate::sym::{Scalar, Vec3};
 use crate::system::System;
 

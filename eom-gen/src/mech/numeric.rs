@@ -2,9 +2,13 @@
 //! generated function is tested against, and the baseline that shows what
 //! generation buys.
 
-use super::dynamics::{Applied, Evaluator, State, ltdl, ltdl_solve};
+use super::applied::Applied;
+use super::env::NumericEnv;
+use super::error::MechError;
+use super::kinematics::{Evaluator, State};
+use super::ltdl::{ltdl, ltdl_solve};
 use super::spatial::Force;
-use super::tree::{MechError, NumericEnv, TreeModel};
+use super::tree::TreeModel;
 use crate::system::System;
 
 /// The first speed whose motion has no inertia: the first zero pivot
@@ -323,7 +327,7 @@ impl Numeric {
         })?;
         let (x, v) = ev.site(
             &k,
-            &super::dynamics::Site {
+            &super::applied::Site {
                 body: self.tree.index_of_body.get(body).copied().flatten(),
                 node: Some(node),
                 point: crate::sym::Vec3(point),

@@ -331,6 +331,11 @@ impl<S: Scalar> Add for Inertia6<S> {
     }
 }
 
+/// Is `f` structurally zero?
+pub(crate) fn is_zero_force<S: Scalar>(f: &Force<S>) -> bool {
+    f.n.0.iter().chain(&f.f.0).all(|x| x.is_zero())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

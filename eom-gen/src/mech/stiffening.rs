@@ -60,7 +60,7 @@
 //! stops. A hub's own inertia on the joint, or smaller deformation, keeps
 //! it definite; the exact foreshortening (fourth-order terms) would too.
 
-use super::flexible::FlexState;
+use super::flex_state::FlexState;
 use super::spatial::Motion;
 use crate::flex::invariants::foreshortening;
 use crate::sym::{Mat3, Scalar, Vec3};

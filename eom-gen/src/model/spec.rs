@@ -141,7 +141,7 @@ pub struct Cable {
     /// Unique name.
     pub name: String,
     /// The element type (the generated kernel).
-    pub element: AncfElement,
+    pub element: crate::ancf::Kind,
     /// First end, world axes, m.
     pub from: V3,
     /// Second end, world axes, m.
@@ -227,32 +227,6 @@ pub struct CableMount {
     /// (it stays parallel to this direction as the body turns).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub axis: Option<V3>,
-}
-
-/// ANCF element types (the kernels generated once per type).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum AncfElement {
-    /// Planar cable, axial strain `|r'| − 1` and material curvature
-    /// (Gerstmayr and Irschik 2008).
-    Cable2D,
-    /// Planar cable with the Green axial strain.
-    Cable2DGreen,
-    /// Spatial cable, bending and axial, no torsion.
-    Cable3D,
-    /// Planar fully parameterised (shear-deformable) beam.
-    Beam2D,
-}
-
-impl AncfElement {
-    /// The kernel's name.
-    pub fn name(&self) -> &'static str {
-        match self {
-            AncfElement::Cable2D => "Cable2D",
-            AncfElement::Cable2DGreen => "Cable2DGreen",
-            AncfElement::Cable3D => "Cable3D",
-            AncfElement::Beam2D => "Beam2D",
-        }
-    }
 }
 
 /// How an end of a cable is held.

@@ -8,9 +8,9 @@
 //! and the table is never iterated, so ids — and everything printed or
 //! lowered from them — are identical run to run.
 
-use super::build::RuleSet;
 use super::node::{Id, Node, SymId, SymKind, Symbol, View};
 use super::num::Num;
+use super::rules::RuleSet;
 use hashbrown::HashTable;
 use rustc_hash::{FxHashMap, FxHashSet, FxHasher};
 use std::fmt;

@@ -19,11 +19,11 @@
 //! For bulk work prefer the `&mut Arena` methods on [`Id`]s (no `RefCell`).
 
 use super::arena::{Arena, SymError};
-use super::build::RuleSet;
 use super::diff::TimeDerivative;
 use super::node::{Id, SymId};
 use super::num::Num;
 use super::program::{LowerOptions, Program};
+use super::rules::RuleSet;
 use super::scalar::Scalar;
 use std::cell::{Ref, RefCell, RefMut};
 use std::fmt;

@@ -74,7 +74,8 @@ pub enum Op {
 }
 
 impl Op {
-    fn operands(&self) -> impl Iterator<Item = Operand> {
+    /// The operands read, in order.
+    pub fn operands(&self) -> impl Iterator<Item = Operand> {
         let v: [Option<Operand>; 3] = match *self {
             Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
                 [Some(a), Some(b), None]
@@ -93,7 +94,8 @@ impl Op {
         v.into_iter().flatten()
     }
 
-    fn map(self, f: impl Fn(Operand) -> Operand) -> Op {
+    /// The same operation on `f` of each operand.
+    pub fn map(self, f: impl Fn(Operand) -> Operand) -> Op {
         match self {
             Op::Add(a, b) => Op::Add(f(a), f(b)),
             Op::Sub(a, b) => Op::Sub(f(a), f(b)),

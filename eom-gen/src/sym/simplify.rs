@@ -23,8 +23,8 @@
 //!   which holds since it multiplied every term it is removed from).
 
 use super::arena::Arena;
-use super::build::RuleSet;
 use super::node::{Id, View};
+use super::rules::RuleSet;
 use rustc_hash::{FxHashMap, FxHashSet};
 use std::time::{Duration, Instant};
 

@@ -21,8 +21,9 @@
 //! Neither identity assumes anything about its arguments.
 
 use super::arena::Arena;
-use super::build::{RuleSet, Term};
+use super::build::Term;
 use super::node::{Id, View};
+use super::rules::RuleSet;
 
 const MAX_ROUNDS: usize = 16;
 const MAX_FACTORS: usize = 8;

@@ -1,6 +1,11 @@
-//! Long programs become several functions.
+//! The one lowering of a [`Program`] to Rust: one `let` per instruction,
+//! for the rigid models' functions (`emit`) and the ANCF element kernels
+//! (`ancf::emit`) alike. A [`Style`] says how inputs are read, whether
+//! products fuse into `mul_add`, whether values are `f64` or `Lanes<W>`
+//! (`W` elements at once: constants splatted, functions the lane-wise
+//! methods) and whether parts are methods or free functions.
 //!
-//! rustc and LLVM are superlinear in the length of a function, and very
+//! Long programs become several functions: rustc and LLVM are superlinear in the length of a function, and very
 //! long straight-line functions can exhaust rustc's stack. A program of more
 //! than [`PART_LIMIT`] instructions is cut into consecutive parts, each an
 //! `#[inline(never)]` method; a temporary that is defined in one part and
@@ -8,7 +13,7 @@
 //! `s` on the caller's stack, so every part stays short and the caller
 //! reads the outputs from `s`.
 
-use super::{Binding, float, float_operand, tmp};
+use super::{float, float_operand, tmp};
 use crate::sym::{Op, Operand, Program, Symbol};
 use proc_macro2::{Ident, Literal, TokenStream};
 use quote::{format_ident, quote};
@@ -16,6 +21,53 @@ use std::collections::HashMap;
 
 /// Instructions per part.
 pub const PART_LIMIT: usize = 1500;
+
+/// How a program's values are written.
+pub struct Style<'a> {
+    /// How each input symbol is read.
+    pub input: &'a dyn Fn(&Symbol) -> TokenStream,
+    /// Fuse `a·b + c` into `f64::mul_add` where the product is used only
+    /// there.
+    pub fma: bool,
+    /// Every value is a `Lanes<W>` (`W` elements by the same straight-line
+    /// code): constants are splatted, functions are the lane-wise methods,
+    /// parts are generic in `W`.
+    pub lanes: bool,
+    /// Parts are methods of `&self` (else free functions).
+    pub methods: bool,
+}
+
+impl Style<'_> {
+    /// A constant in operand position.
+    fn constant(&self, c: f64) -> TokenStream {
+        if self.lanes {
+            let c = float(c);
+            quote!(Lanes::<W>::splat(#c))
+        } else {
+            float_operand(c)
+        }
+    }
+
+    /// A constant as an output value.
+    fn output_constant(&self, c: f64) -> TokenStream {
+        if self.lanes {
+            let c = float(c);
+            quote!(Lanes::<W>::splat(#c))
+        } else {
+            float(c)
+        }
+    }
+
+    /// `f(x)` of a one-argument function.
+    fn unary(&self, f: &str, x: TokenStream) -> TokenStream {
+        let f = format_ident!("{f}");
+        if self.lanes {
+            quote!(#x.#f())
+        } else {
+            quote!(f64::#f(#x))
+        }
+    }
+}
 
 /// An argument of a generated function.
 pub struct Arg<'a> {
@@ -61,28 +113,10 @@ fn reads(p: &Program, ops: &[Operand], carries: &dyn Fn(&Symbol) -> bool) -> boo
         .any(|o| matches!(o, Operand::Var(i) if carries(&p.inputs[*i as usize])))
 }
 
-fn operands(op: &Op) -> Vec<Operand> {
-    match *op {
-        Op::Add(a, b) | Op::Sub(a, b) | Op::Mul(a, b) | Op::Div(a, b) | Op::Atan2(a, b) => {
-            vec![a, b]
-        }
-        Op::Select(c, a, b) => vec![c, a, b],
-        Op::Neg(a)
-        | Op::Sqrt(a)
-        | Op::Sin(a)
-        | Op::Cos(a)
-        | Op::SinCos(a)
-        | Op::Tan(a)
-        | Op::Exp(a)
-        | Op::Ln(a)
-        | Op::Abs(a) => vec![a],
-    }
-}
-
 /// One statement per instruction of `p.instrs[range]`; temporaries outside
 /// the range (and those listed in `store`) go through the scratch slots.
 fn statements(
-    b: &Binding<'_>,
+    b: &Style<'_>,
     p: &Program,
     range: std::ops::Range<usize>,
     slots: &HashMap<u32, usize>,
@@ -95,8 +129,8 @@ fn statements(
     let defined_here = |t: u32| !split || (first..next).contains(&t);
     let o = |x: Operand| -> TokenStream {
         match x {
-            Operand::Const(n) => float_operand(n.to_f64()),
-            Operand::Var(i) => b.input(&p.inputs[i as usize]),
+            Operand::Const(n) => b.constant(n.to_f64()),
+            Operand::Var(i) => (b.input)(&p.inputs[i as usize]),
             Operand::Tmp(t) if defined_here(t) => {
                 let t = tmp(t);
                 quote!(#t)
@@ -161,16 +195,24 @@ fn statements(
                 let x = o(x);
                 quote!(-#x)
             }
-            Op::Sqrt(x) => unary("sqrt", o(x)),
-            Op::Sin(x) => unary("sin", o(x)),
-            Op::Cos(x) => unary("cos", o(x)),
-            Op::Tan(x) => unary("tan", o(x)),
-            Op::Exp(x) => unary("exp", o(x)),
-            Op::Ln(x) => unary("ln", o(x)),
-            Op::Abs(x) => unary("abs", o(x)),
+            Op::Sqrt(x) => b.unary("sqrt", o(x)),
+            Op::Sin(x) => b.unary("sin", o(x)),
+            Op::Cos(x) => b.unary("cos", o(x)),
+            Op::Tan(x) => b.unary("tan", o(x)),
+            Op::Exp(x) => b.unary("exp", o(x)),
+            Op::Ln(x) => b.unary("ln", o(x)),
+            Op::Abs(x) => b.unary("abs", o(x)),
+            Op::Atan2(y, x) if b.lanes => {
+                let (y, x) = (o(y), o(x));
+                quote!(Lanes::atan2(#y, #x))
+            }
             Op::Atan2(y, x) => {
                 let (y, x) = (o(y), o(x));
                 quote!(f64::atan2(#y, #x))
+            }
+            Op::Select(c, x, y) if b.lanes => {
+                let (c, x, y) = (o(c), o(x), o(y));
+                quote!(Lanes::select(#c, #x, #y))
             }
             Op::Select(c, x, y) => {
                 let (c, x, y) = (o(c), o(x), o(y));
@@ -178,7 +220,11 @@ fn statements(
             }
             Op::SinCos(x) => {
                 let (sn, cs, x) = (tmp(ins.dst), tmp(ins.dst + 1), o(x));
-                out.extend(quote!(let (#sn, #cs) = f64::sin_cos(#x);));
+                if b.lanes {
+                    out.extend(quote!(let (#sn, #cs) = #x.sin_cos();));
+                } else {
+                    out.extend(quote!(let (#sn, #cs) = f64::sin_cos(#x);));
+                }
                 for t in [ins.dst, ins.dst + 1] {
                     out.extend(store(slots, t, split));
                 }
@@ -201,7 +247,7 @@ fn fusable(
 ) -> HashMap<u32, (Operand, Operand)> {
     let mut uses: HashMap<u32, usize> = HashMap::new();
     for ins in &p.instrs {
-        for o in operands(&ins.op) {
+        for o in ins.op.operands() {
             if let Operand::Tmp(t) = o {
                 *uses.entry(t).or_insert(0) += 1;
             }
@@ -251,20 +297,15 @@ fn store(slots: &HashMap<u32, usize>, t: u32, split: bool) -> TokenStream {
     }
 }
 
-fn unary(f: &str, x: TokenStream) -> TokenStream {
-    let f = format_ident!("{f}");
-    quote!(f64::#f(#x))
-}
-
 /// Lowers `p` for a function called `name` with arguments `args`.
-pub fn lower(b: &Binding<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
+pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
     let used: Vec<bool> = args
         .iter()
         .map(|a| p.inputs.iter().any(|s| (a.carries)(s)))
         .collect();
     let output = |o: Operand, slots: &HashMap<u32, usize>, split: bool| match o {
-        Operand::Const(n) => float(n.to_f64()),
-        Operand::Var(i) => b.input(&p.inputs[i as usize]),
+        Operand::Const(n) => b.output_constant(n.to_f64()),
+        Operand::Var(i) => (b.input)(&p.inputs[i as usize]),
         Operand::Tmp(t) => match slots.get(&t) {
             Some(&k) if split => {
                 let k = Literal::usize_unsuffixed(k);
@@ -311,7 +352,7 @@ pub fn lower(b: &Binding<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowe
     };
     for (k, r) in parts.iter().enumerate() {
         for ins in &p.instrs[r.clone()] {
-            for o in operands(&ins.op) {
+            for o in ins.op.operands() {
                 if let Operand::Tmp(t) = o
                     && part_of_tmp.get(&t).is_some_and(|&d| d < k)
                 {
@@ -332,7 +373,7 @@ pub fn lower(b: &Binding<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowe
         let fname: Ident = format_ident!("{name}_part{k}");
         let ops: Vec<Operand> = p.instrs[r.clone()]
             .iter()
-            .flat_map(|i| operands(&i.op))
+            .flat_map(|i| i.op.operands())
             .collect();
         let params = args.iter().map(|a| {
             let n = if reads(p, &ops, &*a.carries) {
@@ -351,19 +392,46 @@ pub fn lower(b: &Binding<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowe
             r.start,
             r.end - 1
         );
-        methods.extend(quote! {
-            #[doc = #doc]
-            #[inline(never)]
-            fn #fname(&self, #(#params,)* s: &mut [f64; #ns]) {
-                #body
-            }
-        });
         let names = args.iter().map(|a| format_ident!("{}", a.name));
-        calls.extend(quote!(self.#fname(#(#names,)* &mut s);));
+        if b.lanes {
+            methods.extend(quote! {
+                #[doc = #doc]
+                #[inline(never)]
+                fn #fname<const W: usize>(#(#params,)* s: &mut [Lanes<W>; #ns]) {
+                    #body
+                }
+            });
+        } else if b.methods {
+            methods.extend(quote! {
+                #[doc = #doc]
+                #[inline(never)]
+                fn #fname(&self, #(#params,)* s: &mut [f64; #ns]) {
+                    #body
+                }
+            });
+        } else {
+            methods.extend(quote! {
+                #[doc = #doc]
+                #[inline(never)]
+                fn #fname(#(#params,)* s: &mut [f64; #ns]) {
+                    #body
+                }
+            });
+        }
+        calls.extend(if b.methods {
+            quote!(self.#fname(#(#names,)* &mut s);)
+        } else {
+            quote!(#fname(#(#names,)* &mut s);)
+        });
     }
+    let init = if b.lanes {
+        quote!(Lanes::<W>::splat(0.0))
+    } else {
+        quote!(0.0f64)
+    };
     Lowered {
         body: quote! {
-            let mut s = [0.0f64; #ns];
+            let mut s = [#init; #ns];
             #calls
         },
         outputs: p
