@@ -22,8 +22,8 @@
 //! with a fresh matrix, is rejected and retried smaller; the next step
 //! grows or shrinks by `0.9 ‖e‖^{-1/3}` within `[0.2, 5]`.
 
-use super::dynamics::{AlphaOptions, DynamicsError, DynamicsStats, State};
 use super::norm_inf;
+use super::run::{AlphaOptions, DynamicsError, DynamicsStats, State, StepControl};
 
 /// A model whose state is a vector, as [`GeneralizedAlpha`] integrates it:
 /// `n` coordinates `y` with speeds `ẏ`, `m` constraint equations.
@@ -84,31 +84,6 @@ pub trait AlphaModel {
     /// The full coordinates of the last accepted state (a structure's
     /// supported coordinates included), as observers read node positions.
     fn full<'w>(&self, w: &'w Self::Work) -> &'w [f64];
-}
-
-/// Step-size control of [`GeneralizedAlpha`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StepControl {
-    /// Relative tolerance of the positions' local error.
-    pub rtol: f64,
-    /// Absolute tolerance, in the coordinates' units.
-    pub atol: f64,
-    /// Smallest step: a step that must be smaller fails the run.
-    pub h_min: f64,
-    /// Largest step.
-    pub h_max: f64,
-}
-
-impl StepControl {
-    /// `rtol`, `atol`, with steps between 1e-12 s and unbounded.
-    pub fn new(rtol: f64, atol: f64) -> Self {
-        StepControl {
-            rtol,
-            atol,
-            h_min: 1e-12,
-            h_max: f64::INFINITY,
-        }
-    }
 }
 
 /// The generalized-α integrator on model `M`, with its state

@@ -54,9 +54,9 @@
 pub mod statics;
 
 use super::alpha::{AlphaModel, GeneralizedAlpha};
-use super::dynamics::{DynamicsError, State, Violation};
 use super::model::StructuralModel;
 use super::norm_inf;
+use super::run::{DynamicsError, State, Violation};
 use super::sparse::{FaerLu, Pattern, SparseMatrix, SparseSolver};
 use crate::model::Point;
 use std::fmt;

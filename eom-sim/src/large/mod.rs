@@ -11,8 +11,10 @@
 //! - [`alpha`]: generalized-α (implicit; fixed step or step-size control),
 //!   written once over [`alpha::AlphaModel`], which a structure alone and a
 //!   mixed model implement.
-//! - [`dynamics`]: the run's types (state, options, errors, counters), the
-//!   structure's side of [`alpha::AlphaModel`], and RK4 (explicit).
+//! - [`run`]: the run's types (state, options, step control, errors,
+//!   counters), shared by both integrators and every vector model.
+//! - [`dynamics`]: the structure's side of [`alpha::AlphaModel`], and RK4
+//!   (explicit).
 //! - [`mixed`]: rigid parts and chains in one model, attachment
 //!   constraints, index-3 generalized-α; [`mixed::statics`]: their static
 //!   equilibrium (Newton on the KKT system with load stepping).
@@ -24,14 +26,16 @@ pub mod dynamics;
 pub mod elastica;
 pub mod mixed;
 pub mod model;
+pub mod run;
 pub mod sparse;
 pub mod statics;
 
-pub use alpha::{AlphaModel, GeneralizedAlpha, StepControl};
-pub use dynamics::{AlphaOptions, DynamicsError, DynamicsStats, State, Violation, integrate_rk4};
+pub use alpha::{AlphaModel, GeneralizedAlpha};
+pub use dynamics::integrate_rk4;
 pub use mixed::statics::{MixedStaticError, MixedStaticSolution, Stability, solve_static_mixed};
 pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, RigidPart};
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
+pub use run::{AlphaOptions, DynamicsError, DynamicsStats, State, StepControl, Violation};
 pub use sparse::{AutoLu, BandedLu, FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
 pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};
 
