@@ -1,19 +1,28 @@
 //! Step-size control of the one generalized-α (`eom_sim::large::alpha`),
 //! on Berzeri and Shabana's falling ANCF pendulum (L = 1.2 m,
 //! A = 0.0018 m², I = 1.215e-8 m⁴, ρ = 5540 kg/m³, E = 0.7e6 Pa, pinned at
-//! the origin, released horizontal; 8 `Cable2D` elements) and on the mixed
-//! model's side of the same integrator.
+//! the origin, released horizontal; 8 `Cable2D` elements).
 //!
 //! Physics and numerics checked:
-//! - The tip at 1 s against a fixed-step reference (h = 5e-5 s, whose own
-//!   O(h²) error, estimated from h = 1e-4 s by Richardson, is stated): the
-//!   error of the controlled runs falls with the tolerance, about as
-//!   `tol^{2/3}` for a second-order method controlled per step.
-//! - At equal or smaller error, the controlled run takes fewer steps than
-//!   the fixed step (the pendulum's fast start and the whip at the bottom
-//!   need small steps only briefly).
-//! - The energy (kinetic + strain + gravity) drifts no more than the
-//!   tolerance asks.
+//! - The tip at 1 s against a fixed-step reference (h = 1e-4 s, whose own
+//!   O(h²) error, estimated from h = 2e-4 s by Richardson, is stated and
+//!   must be well below every error compared).
+//! - The controlled run lands on `t_end` exactly, counts its rejected
+//!   steps, and its error falls with the tolerance: by at least a factor
+//!   two per decade (a second-order method controlled per step on the
+//!   local error falls about as `tol^{2/3}`, 4.6 per decade).
+//! - The fixed-step path is unchanged (exactly `t_end / h` steps, none
+//!   rejected).
+//!
+//! What this case shows and the test prints (BENCHMARKS.md, "Generalized-α
+//! with step-size control"): against the fixed step at equal work the
+//! controlled run is more accurate only at the loosest tolerance (1e-4);
+//! at 1e-5 it is even, and at 1e-6 a fixed step of the same count is
+//! several times more accurate. The pendulum's axial modes (E = 0.7e6 Pa)
+//! ring through the whole run and hold the step uniformly small, so there
+//! is no quiet stretch for the controller to win; the controller's use is
+//! the run whose stiff phase is brief, and reaching `t_end` without
+//! choosing `h`. That is asserted nowhere as a win.
 
 use eom_sim::elements::Element;
 use eom_sim::large::ancf::{Chain, ChainSpec, Section, Support, chain};
@@ -78,9 +87,17 @@ fn fall(ch: &Chain, opts: AlphaOptions, t_end: f64) -> Run {
     }
 }
 
+fn rho() -> f64 {
+    std::env::var("RHO")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1.0)
+}
+
 fn fixed(h: f64) -> AlphaOptions {
     AlphaOptions {
         h,
+        rho_inf: rho(),
         ..AlphaOptions::default()
     }
 }
@@ -88,6 +105,7 @@ fn fixed(h: f64) -> AlphaOptions {
 fn controlled(tol: f64) -> AlphaOptions {
     AlphaOptions {
         h: 1e-4,
+        rho_inf: rho(),
         control: Some(StepControl::new(tol, tol)),
         ..AlphaOptions::default()
     }
@@ -98,19 +116,18 @@ fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 #[test]
-fn step_size_control_meets_the_error_in_fewer_steps_than_the_fixed_step() {
+fn step_size_control_error_falls_with_the_tolerance() {
     let ch = pendulum(8);
     let t_end = 1.0;
-    let reference = fall(&ch, fixed(5e-5), t_end);
-    let coarser = fall(&ch, fixed(1e-4), t_end);
+    let reference = fall(&ch, fixed(1e-4), t_end);
+    let coarser = fall(&ch, fixed(2e-4), t_end);
     // Richardson: the reference's own error is a third of its distance to
     // the run at twice the step.
     let reference_error = distance(reference.tip, coarser.tip) / 3.0;
     println!(
-        "reference (h = 5e-5): tip {:?}, own error ≈ {reference_error:.1e} m",
+        "reference (h = 1e-4): tip {:?}, own error ≈ {reference_error:.1e} m",
         reference.tip
     );
-    let mut fixed_runs = Vec::new();
     for h in [2e-3, 1e-3, 5e-4, 2.5e-4] {
         let r = fall(&ch, fixed(h), t_end);
         let err = distance(r.tip, reference.tip);
@@ -118,7 +135,6 @@ fn step_size_control_meets_the_error_in_fewer_steps_than_the_fixed_step() {
             "fixed h = {h:.1e}: {} steps, tip error {err:.2e} m, energy {:.1e}",
             r.steps, r.energy
         );
-        fixed_runs.push((r.steps, err));
     }
     let mut controlled_runs = Vec::new();
     for tol in [1e-4, 1e-5, 1e-6] {
@@ -134,32 +150,18 @@ fn step_size_control_meets_the_error_in_fewer_steps_than_the_fixed_step() {
         );
         controlled_runs.push((tol, r.steps, err));
     }
-    // The error falls with the tolerance.
     for w in controlled_runs.windows(2) {
+        let (tol_a, steps_a, err_a) = w[0];
+        let (tol_b, steps_b, err_b) = w[1];
         assert!(
-            w[1].2 < w[0].2,
-            "error did not fall from tol {:e} to {:e}: {:e} → {:e}",
-            w[0].0,
-            w[1].0,
-            w[0].2,
-            w[1].2
+            err_b < err_a / 2.0,
+            "a decade of tolerance ({tol_a:e} → {tol_b:e}) took the error only from {err_a:.2e} to {err_b:.2e}"
+        );
+        assert!(
+            steps_b > steps_a,
+            "a tighter tolerance took no more steps: {steps_a} → {steps_b}"
         );
     }
-    // Every controlled run is cheaper than every fixed-step run that is at
-    // least as accurate (and some fixed-step run is as accurate).
-    for &(tol, steps, err) in &controlled_runs {
-        let matching: Vec<&(usize, f64)> = fixed_runs.iter().filter(|(_, e)| *e <= err).collect();
-        if let Some((fixed_steps, fixed_err)) = matching.first() {
-            assert!(
-                steps < *fixed_steps,
-                "tol {tol:e}: {steps} steps for error {err:.2e}; the fixed step needs {fixed_steps} for {fixed_err:.2e}"
-            );
-        }
-    }
-    assert!(
-        fixed_runs.iter().any(|(_, e)| *e <= controlled_runs[0].2),
-        "no fixed step as accurate as tol 1e-4: {fixed_runs:?}"
-    );
 }
 
 #[test]
