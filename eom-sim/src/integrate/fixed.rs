@@ -47,6 +47,44 @@ pub(crate) fn hermite<const N: usize>(
     }
 }
 
+/// The classical fourth-order Runge–Kutta step of `y' = f(t, y)`, written
+/// once for every storage: `[f64; N]` (compiled models, where it inlines to
+/// the same straight loops) and `Vec<f64>` (element models,
+/// [`crate::large::integrate_rk4`]).
+///
+/// The step runs from `t0` to `t1`; `k1 = f(t0, y0)` is given; `k` receives `k2, k3, k4`, `yt` is scratch,
+/// and `y` receives `y(t0 + h)`. Three calls of `f`.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn rk4_tableau<V: AsRef<[f64]> + AsMut<[f64]>>(
+    t0: f64,
+    t1: f64,
+    y0: &V,
+    k1: &V,
+    k: &mut [V; 3],
+    yt: &mut V,
+    y: &mut V,
+    mut f: impl FnMut(f64, &V, &mut V),
+) {
+    let stage = |yt: &mut V, a: f64, ki: &V| {
+        for ((t, y), k) in yt.as_mut().iter_mut().zip(y0.as_ref()).zip(ki.as_ref()) {
+            *t = y + a * k;
+        }
+    };
+    let h = t1 - t0;
+    let [k2, k3, k4] = k;
+    stage(yt, 0.5 * h, k1);
+    f(t0 + 0.5 * h, yt, k2);
+    stage(yt, 0.5 * h, k2);
+    f(t0 + 0.5 * h, yt, k3);
+    stage(yt, h, k3);
+    f(t1, yt, k4);
+    let (k1, k2, k3, k4) = (k1.as_ref(), k2.as_ref(), k3.as_ref(), k4.as_ref());
+    for (i, yi) in y.as_mut().iter_mut().enumerate() {
+        *yi = y0.as_ref()[i] + h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
+    }
+}
+
 /// State shared by the fixed-step explicit methods.
 #[derive(Debug, Clone)]
 struct FixedState<const N: usize> {
@@ -246,30 +284,15 @@ impl<const N: usize> Stepper<N> for Rk4<N> {
         }
         let t0 = s.t;
         let t1 = s.time(s.k + 1, t_end);
-        let h = t1 - t0;
         let y0 = s.y;
         let k1 = s.f;
-        let mut k2 = [0.0; N];
-        let mut k3 = [0.0; N];
-        let mut k4 = [0.0; N];
+        let mut k = [[0.0; N]; 3];
         let mut yt = [0.0; N];
-        for i in 0..N {
-            yt[i] = y0[i] + 0.5 * h * k1[i];
-        }
-        sys.rhs(t0 + 0.5 * h, &yt, &mut k2);
-        for i in 0..N {
-            yt[i] = y0[i] + 0.5 * h * k2[i];
-        }
-        sys.rhs(t0 + 0.5 * h, &yt, &mut k3);
-        for i in 0..N {
-            yt[i] = y0[i] + h * k3[i];
-        }
-        sys.rhs(t1, &yt, &mut k4);
+        rk4_tableau(t0, t1, &y0, &k1, &mut k, &mut yt, &mut s.y, |t, y, f| {
+            sys.rhs(t, y, f)
+        });
         s.y_prev = y0;
         s.f_prev = k1;
-        for i in 0..N {
-            s.y[i] = y0[i] + h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
-        }
         sys.rhs(t1, &s.y, &mut s.f);
         stats.rhs_evals += 4;
         stats.steps += 1;

@@ -11,6 +11,7 @@ use super::alpha::AlphaModel;
 use super::model::StructuralModel;
 use super::run::{DynamicsError, DynamicsStats, State};
 use super::sparse::{AutoLu, FactorError, FaerCholesky, SparseMatrix, SparseSolver};
+use crate::integrate::fixed::rk4_tableau;
 
 /// The structure's scratch for [`super::GeneralizedAlpha`]: the load, the
 /// iteration matrix and its LU, the expanded coordinates.
@@ -129,7 +130,8 @@ impl AlphaModel for StructuralModel {
     }
 }
 
-/// Fixed-step classical Runge–Kutta (order 4) from `state` to `t_end` in
+/// Fixed-step classical Runge–Kutta (order 4, the tableau the compiled
+/// models run, [`rk4_tableau`]) from `state` to `t_end` in
 /// `steps` steps, `M` factored once (sparse Cholesky); `observe` after every
 /// step gets the state and the full coordinates.
 pub fn integrate_rk4(
@@ -153,44 +155,43 @@ pub fn integrate_rk4(
         ..DynamicsStats::default()
     };
     let h = (t_end - state.t) / steps.max(1) as f64;
-    let mut accel = |q: &[f64], v: &[f64], out: &mut Vec<f64>, stats: &mut DynamicsStats| {
+    // y = [q; v], y' = [v; M⁻¹ (f_ext − f_int(q, v))].
+    let mut rhs = |y: &Vec<f64>, out: &mut Vec<f64>| {
+        let (q, v) = y.split_at(n);
         model.expand_into(q, &mut q_full);
         model.expand_into(v, &mut v_full);
         model.internal(&q_full, &v_full, &mut scratch, &mut f);
-        stats.force_evaluations += 1;
-        out.clear();
-        out.extend(load.iter().zip(&f).map(|(a, b)| a - b));
-        chol.solve(out);
+        let (dq, dv) = out.split_at_mut(n);
+        dq.copy_from_slice(v);
+        for ((a, l), fi) in dv.iter_mut().zip(&load).zip(&f) {
+            *a = l - fi;
+        }
+        chol.solve(dv);
     };
-    let (mut a1, mut a2, mut a3, mut a4) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let axpy = |x: &[f64], a: f64, y: &[f64]| -> Vec<f64> {
-        x.iter().zip(y).map(|(u, w)| u + a * w).collect()
-    };
+    let mut y = [state.q.as_slice(), state.v.as_slice()].concat();
+    let (mut y0, mut k1, mut yt) = (y.clone(), vec![0.0; 2 * n], vec![0.0; 2 * n]);
+    let mut k = [vec![0.0; 2 * n], vec![0.0; 2 * n], vec![0.0; 2 * n]];
     for _ in 0..steps {
-        let (q, v) = (&state.q, &state.v);
-        accel(q, v, &mut a1, &mut stats);
-        let v1 = v.clone();
-        let q2 = axpy(q, 0.5 * h, &v1);
-        let v2 = axpy(v, 0.5 * h, &a1);
-        accel(&q2, &v2, &mut a2, &mut stats);
-        let q3 = axpy(q, 0.5 * h, &v2);
-        let v3 = axpy(v, 0.5 * h, &a2);
-        accel(&q3, &v3, &mut a3, &mut stats);
-        let q4 = axpy(q, h, &v3);
-        let v4 = axpy(v, h, &a3);
-        accel(&q4, &v4, &mut a4, &mut stats);
-        let mut qn = q.clone();
-        let mut vn = v.clone();
-        for i in 0..n {
-            qn[i] += h / 6.0 * (v1[i] + 2.0 * v2[i] + 2.0 * v3[i] + v4[i]);
-            vn[i] += h / 6.0 * (a1[i] + 2.0 * a2[i] + 2.0 * a3[i] + a4[i]);
+        let t0 = state.t;
+        y0.copy_from_slice(&y);
+        rhs(&y0, &mut k1);
+        rk4_tableau(
+            t0,
+            t0 + h,
+            &y0,
+            &k1,
+            &mut k,
+            &mut yt,
+            &mut y,
+            |_, y, out| rhs(y, out),
+        );
+        stats.force_evaluations += 4;
+        if y.iter().any(|x| !x.is_finite()) {
+            return Err(DynamicsError::NonFinite { t: t0 + h });
         }
-        if qn.iter().chain(&vn).any(|x| !x.is_finite()) {
-            return Err(DynamicsError::NonFinite { t: state.t + h });
-        }
-        state.q = qn;
-        state.v = vn;
-        state.t += h;
+        state.q.copy_from_slice(&y[..n]);
+        state.v.copy_from_slice(&y[n..]);
+        state.t = t0 + h;
         stats.steps += 1;
         let qf = model.expand(&state.q);
         observe(&state, &qf);

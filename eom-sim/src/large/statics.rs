@@ -1,5 +1,6 @@
 //! Static equilibrium `f_int(q, 0) = λ f_ext` by Newton's method with load
-//! stepping: the load factor `λ` goes from 0 to 1 in steps; each step is
+//! stepping ([`load_stepping`], the frame the mixed model's statics share,
+//! [`super::mixed::statics`]): the load factor `λ` goes from 0 to 1 in steps; each step is
 //! solved by Newton from the secant extrapolation of the last two
 //! equilibria (full Newton by default; modified Newton on request; the tangent
 //! `∂f_int/∂q` assembled from the element Jacobians, factored by LU,
@@ -186,6 +187,97 @@ fn condition_estimate(k: &SparseMatrix, lu: &AutoLu) -> f64 {
     knorm * growth
 }
 
+/// What one load step's Newton solve reports to [`load_stepping`].
+pub(crate) enum Newton<F> {
+    /// Equilibrium at the target load factor, within `tolerance`.
+    Converged {
+        /// The step's residual tolerance (with the round-off floor).
+        tolerance: f64,
+        /// `‖r‖∞` before each correction and after the last one.
+        residuals: Vec<f64>,
+    },
+    /// No equilibrium from this start: the step is halved; `F` says what
+    /// the last attempt saw, for the error if halving runs out.
+    Failed(F),
+}
+
+/// Where load stepping gave up: the last equilibrium and the step tried.
+pub(crate) struct Stalled {
+    /// Last load factor reached in equilibrium.
+    pub lambda_reached: f64,
+    /// Load factor tried.
+    pub lambda_tried: f64,
+    /// Steps accepted before.
+    pub steps: Vec<LoadStep>,
+}
+
+/// The load-stepping frame written once for every static solve (a
+/// structure alone and a mixed model): the load factor goes from 0 to 1 in
+/// `opts.load_steps` equal steps; each step's Newton solve (`newton`, given
+/// the target factor and the secant extrapolation of the last two
+/// equilibria, which it improves in place) converges or fails; a failed
+/// step is halved up to `opts.max_cuts` times in a row, after which
+/// `stalled` makes the error. Returns the accepted steps and the number of
+/// halvings; `x` ends at the equilibrium under the whole load.
+pub(crate) fn load_stepping<F, E>(
+    opts: &StaticOptions,
+    x: &mut Vec<f64>,
+    mut newton: impl FnMut(f64, &mut Vec<f64>) -> Result<Newton<F>, E>,
+    stalled: impl FnOnce(Stalled, F) -> E,
+) -> Result<(Vec<LoadStep>, usize), E> {
+    let mut steps = Vec::new();
+    let mut cuts = 0usize;
+    let mut lambda = 0.0;
+    let mut dl = 1.0 / opts.load_steps.max(1) as f64;
+    let mut halvings = 0usize;
+    let mut previous: Option<(Vec<f64>, f64)> = None;
+    while lambda < 1.0 {
+        let mut target = lambda + dl;
+        if target > 1.0 - 1e-12 {
+            target = 1.0;
+        }
+        // Secant predictor: extrapolate the last two equilibria.
+        let mut xt = x.clone();
+        if let Some((x_prev, l_prev)) = &previous
+            && lambda > *l_prev
+        {
+            let s = (target - lambda) / (lambda - l_prev);
+            for ((a, b), c) in xt.iter_mut().zip(x.iter()).zip(x_prev) {
+                *a = b + s * (b - c);
+            }
+        }
+        match newton(target, &mut xt)? {
+            Newton::Converged {
+                tolerance,
+                residuals,
+            } => {
+                previous = Some((std::mem::replace(x, xt), lambda));
+                lambda = target;
+                steps.push(LoadStep {
+                    lambda: target,
+                    tolerance,
+                    residuals,
+                });
+                halvings = 0;
+            }
+            Newton::Failed(failure) => {
+                if halvings >= opts.max_cuts {
+                    let at = Stalled {
+                        lambda_reached: lambda,
+                        lambda_tried: target,
+                        steps,
+                    };
+                    return Err(stalled(at, failure));
+                }
+                halvings += 1;
+                cuts += 1;
+                dl *= 0.5;
+            }
+        }
+    }
+    Ok((steps, cuts))
+}
+
 /// Solves `f_int(q, 0) = f_ext` from the model's initial coordinates.
 pub fn solve_static(
     model: &StructuralModel,
@@ -200,123 +292,102 @@ pub fn solve_static(
     let mut tangent = SparseMatrix::zeros(model.pattern().clone());
     let mut lu = AutoLu::default();
     let mut r = vec![0.0; n];
-    let mut steps = Vec::new();
-    let mut cuts = 0usize;
-    let mut lambda = 0.0;
-    let mut dl = 1.0 / opts.load_steps.max(1) as f64;
-    let mut halvings = 0usize;
     let mut full_newton = false;
-    let mut previous: Option<(Vec<f64>, f64)> = None;
-    while lambda < 1.0 {
-        let mut target = lambda + dl;
-        if target > 1.0 - 1e-12 {
-            target = 1.0;
-        }
+    let newton = |target: f64, xt: &mut Vec<f64>| {
+        let start = xt.clone();
         let base_tol = opts.rtol * target * norm_inf(&load) + opts.atol;
-        let mut tol = base_tol;
-        // Secant predictor: extrapolate the last two equilibria.
-        let mut xt = x.clone();
-        if let Some((x_prev, l_prev)) = &previous
-            && lambda > *l_prev
-        {
-            let s = (target - lambda) / (lambda - l_prev);
-            for ((a, b), c) in xt.iter_mut().zip(&x).zip(x_prev) {
-                *a = b + s * (b - c);
-            }
-        }
-        let mut residuals = Vec::new();
-        let mut converged = false;
-        // Modified Newton: the factored tangent is kept (across load steps
-        // too) while each residual is at most a quarter of the one before.
-        let mut refresh = full_newton || !opts.reuse_tangent || lu.factorizations() == 0;
-        let mut fresh = false;
-        let mut stale_used = false;
-        for it in 0..=opts.max_iterations {
-            model.expand_into(&xt, &mut q_full);
-            model.internal(&q_full, &zero_full, &mut scratch, &mut r);
-            for (ri, fi) in r.iter_mut().zip(&load) {
-                *ri -= target * fi;
-            }
-            let rn = norm_inf(&r);
-            residuals.push(rn);
-            if !rn.is_finite() {
-                break;
-            }
-            if rn <= tol {
-                converged = true;
-                break;
-            }
-            if it == opts.max_iterations {
-                break;
-            }
-            if let [.., before, last] = residuals[..]
-                && last > 0.25 * before
-                && !fresh
-            {
-                refresh = true;
-            }
-            fresh = false;
-            if !refresh {
-                stale_used = true;
+        loop {
+            let mut tol = base_tol;
+            let mut residuals = Vec::new();
+            let mut converged = false;
+            // Modified Newton: the factored tangent is kept (across load
+            // steps too) while each residual is at most a quarter of the
+            // one before.
+            let mut refresh = full_newton || !opts.reuse_tangent || lu.factorizations() == 0;
+            let mut fresh = false;
+            let mut stale_used = false;
+            for it in 0..=opts.max_iterations {
+                model.expand_into(xt, &mut q_full);
+                model.internal(&q_full, &zero_full, &mut scratch, &mut r);
+                for (ri, fi) in r.iter_mut().zip(&load) {
+                    *ri -= target * fi;
+                }
+                let rn = norm_inf(&r);
+                residuals.push(rn);
+                if !rn.is_finite() {
+                    break;
+                }
+                if rn <= tol {
+                    converged = true;
+                    break;
+                }
+                if it == opts.max_iterations {
+                    break;
+                }
+                if let [.., before, last] = residuals[..]
+                    && last > 0.25 * before
+                    && !fresh
+                {
+                    refresh = true;
+                }
+                fresh = false;
+                if !refresh {
+                    stale_used = true;
+                    lu.solve(&mut r);
+                    for (a, d) in xt.iter_mut().zip(&r) {
+                        *a -= d;
+                    }
+                    continue;
+                }
+                refresh = full_newton || !opts.reuse_tangent;
+                fresh = true;
+                model.jacobian(&q_full, &zero_full, 1.0, 0.0, 0.0, &mut tangent);
+                tol = base_tol + 4.0 * f64::EPSILON * inf_norm(&tangent) * norm_inf(&q_full);
+                if let Err(reason) = lu.factor(&tangent) {
+                    return Err(StaticError::Singular {
+                        lambda: target,
+                        reason,
+                    });
+                }
+                if lu.factorizations() == 1 {
+                    let cond = condition_estimate(&tangent, &lu);
+                    if cond.is_nan() || cond >= opts.max_condition {
+                        return Err(StaticError::IllConditioned {
+                            lambda: target,
+                            condition: cond,
+                        });
+                    }
+                }
                 lu.solve(&mut r);
                 for (a, d) in xt.iter_mut().zip(&r) {
                     *a -= d;
                 }
+            }
+            if !converged && stale_used && !full_newton {
+                // Retry the step with full Newton before halving it.
+                full_newton = true;
+                xt.copy_from_slice(&start);
                 continue;
             }
-            refresh = full_newton || !opts.reuse_tangent;
-            fresh = true;
-            model.jacobian(&q_full, &zero_full, 1.0, 0.0, 0.0, &mut tangent);
-            tol = base_tol + 4.0 * f64::EPSILON * inf_norm(&tangent) * norm_inf(&q_full);
-            if let Err(reason) = lu.factor(&tangent) {
-                return Err(StaticError::Singular {
-                    lambda: target,
-                    reason,
-                });
-            }
-            if lu.factorizations() == 1 {
-                let cond = condition_estimate(&tangent, &lu);
-                if cond.is_nan() || cond >= opts.max_condition {
-                    return Err(StaticError::IllConditioned {
-                        lambda: target,
-                        condition: cond,
-                    });
-                }
-            }
-            lu.solve(&mut r);
-            for (a, d) in xt.iter_mut().zip(&r) {
-                *a -= d;
-            }
-        }
-        if !converged && stale_used && !full_newton {
-            // Retry the step with full Newton before halving it.
-            full_newton = true;
-            continue;
-        }
-        full_newton = false;
-        if converged {
-            previous = Some((std::mem::replace(&mut x, xt), lambda));
-            lambda = target;
-            steps.push(LoadStep {
-                lambda: target,
-                tolerance: tol,
-                residuals,
-            });
-            halvings = 0;
-        } else {
-            if halvings >= opts.max_cuts {
-                return Err(StaticError::NoConvergence {
-                    lambda_reached: lambda,
-                    lambda_tried: target,
+            full_newton = false;
+            return Ok(if converged {
+                Newton::Converged {
+                    tolerance: tol,
                     residuals,
-                    steps,
-                });
-            }
-            halvings += 1;
-            cuts += 1;
-            dl *= 0.5;
+                }
+            } else {
+                Newton::Failed(residuals)
+            });
         }
-    }
+    };
+    let (steps, cuts) = load_stepping(opts, &mut x, newton, |at, residuals| {
+        StaticError::NoConvergence {
+            lambda_reached: at.lambda_reached,
+            lambda_tried: at.lambda_tried,
+            residuals,
+            steps: at.steps,
+        }
+    })?;
     model.expand_into(&x, &mut q_full);
     Ok(StaticSolution {
         q: q_full,

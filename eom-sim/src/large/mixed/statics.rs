@@ -1,6 +1,7 @@
 //! Static equilibrium of a [`MixedModel`]: rigid bodies and ANCF chains
 //! joined by attachment constraints, solved by Newton on the KKT system
-//! with load stepping.
+//! with load stepping (the frame shared with the structure alone,
+//! [`super::super::statics::load_stepping`]).
 //!
 //! Unknowns `z = (x, q_r, λ)`: the structure's free coordinates, the rigid
 //! part's coordinates and the attachment multipliers. At rest (`u = 0`)
@@ -58,7 +59,7 @@
 
 use super::super::norm_inf;
 use super::super::sparse::{FactorError, FaerLu, SparseMatrix, SparseSolver};
-use super::super::statics::{LoadStep, StaticOptions};
+use super::super::statics::{LoadStep, Newton, StaticOptions, load_stepping};
 use super::{ConstraintEval, MixedModel, RigidScratch};
 use nalgebra::{DMatrix, SymmetricEigen};
 use std::fmt;
@@ -705,35 +706,16 @@ pub fn solve_static_mixed(
             .fold(diag, f64::max)
             .max(f64::MIN_POSITIVE)
     };
-    let mut steps = Vec::new();
-    let mut cuts = 0usize;
     let mut regularized_total = 0usize;
-    let mut lambda = 0.0;
-    let mut dl = 1.0 / opts.load_steps.max(1) as f64;
-    let mut halvings = 0usize;
-    let mut previous: Option<(Vec<f64>, f64)> = None;
-    while lambda < 1.0 {
-        let mut target = lambda + dl;
-        if target > 1.0 - 1e-12 {
-            target = 1.0;
-        }
+    let newton = |target: f64, zt: &mut Vec<f64>| {
         let base_tol = opts.rtol * target * force_scale + opts.atol;
         let mut tol = base_tol;
-        let mut zt = z.clone();
-        if let Some((z_prev, l_prev)) = &previous
-            && lambda > *l_prev
-        {
-            let s = (target - lambda) / (lambda - l_prev);
-            for ((a, b), c) in zt.iter_mut().zip(&z).zip(z_prev) {
-                *a = b + s * (b - c);
-            }
-        }
         let mut residuals = Vec::new();
         let mut converged = false;
         let mut mu = 0.0_f64;
         let mut regularized = 0usize;
         for it in 0..=opts.max_iterations {
-            kkt.residual(&zt, target, &mut r);
+            kkt.residual(zt, target, &mut r);
             let rn = norm_inf(&r[..n]);
             let cn = norm_inf(&r[n..]);
             let ctol = opts.rtol * (1.0 + norm_inf(&zt[..n])) + 1e-14;
@@ -748,7 +730,7 @@ pub fn solve_static_mixed(
             if it == opts.max_iterations {
                 break;
             }
-            let regular = kkt.assemble(&zt, 0.0).is_ok() && {
+            let regular = kkt.assemble(zt, 0.0).is_ok() && {
                 let (cond, _) = kkt.condition();
                 cond.is_finite() && cond < opts.max_condition
             };
@@ -767,7 +749,7 @@ pub fn solve_static_mixed(
                 let mut ok = false;
                 let (mut factor, mut condition) = (None, f64::NAN);
                 for _ in 0..6 {
-                    match kkt.assemble(&zt, mu) {
+                    match kkt.assemble(zt, mu) {
                         Ok(()) => {
                             let (cond, _) = kkt.condition();
                             if cond.is_finite() && cond < opts.max_condition {
@@ -805,29 +787,23 @@ pub fn solve_static_mixed(
             }
         }
         regularized_total += regularized;
-        if converged {
-            previous = Some((std::mem::replace(&mut z, zt), lambda));
-            lambda = target;
-            steps.push(LoadStep {
-                lambda: target,
+        Ok(if converged {
+            Newton::Converged {
                 tolerance: tol,
                 residuals,
-            });
-            halvings = 0;
-        } else {
-            if halvings >= opts.max_cuts {
-                return Err(MixedStaticError::NoConvergence {
-                    lambda_reached: lambda,
-                    lambda_tried: target,
-                    residuals,
-                    regularized,
-                });
             }
-            halvings += 1;
-            cuts += 1;
-            dl *= 0.5;
+        } else {
+            Newton::Failed((residuals, regularized))
+        })
+    };
+    let (steps, cuts) = load_stepping(opts, &mut z, newton, |at, (residuals, regularized)| {
+        MixedStaticError::NoConvergence {
+            lambda_reached: at.lambda_reached,
+            lambda_tried: at.lambda_tried,
+            residuals,
+            regularized,
         }
-    }
+    })?;
     // The unregularised tangent at the solution: regular, or a mechanism.
     kkt.residual(&z, 1.0, &mut r);
     let constraint_residual = norm_inf(&r[n..]);
