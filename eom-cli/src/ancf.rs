@@ -24,7 +24,8 @@ use crate::error::Error;
 use eom_gen::Checked;
 use eom_sim::large::ancf::{Chain, chain};
 use eom_sim::large::{
-    AlphaOptions, GeneralizedAlpha, MixedAlpha, State, StaticOptions, integrate_rk4, solve_static,
+    AlphaOptions, GeneralizedAlpha, MixedAlpha, State, StaticOptions, StepControl, integrate_rk4,
+    solve_static,
 };
 use serde_json::json;
 use std::fmt::Write;
@@ -153,6 +154,9 @@ pub struct CableRun {
     pub dt: f64,
     /// Spectral radius at infinity (generalized-α).
     pub rho_inf: f64,
+    /// Step-size control of generalized-α (`--rtol`/`--atol`); `None` for
+    /// the fixed step `dt` (with control, `dt` is the first step).
+    pub control: Option<StepControl>,
     /// CSV of `t`, end-node positions and energy per cable.
     pub csv: Option<String>,
 }
@@ -169,8 +173,23 @@ fn run_problems(run: &CableRun) -> Result<bool, Error> {
     if !(0.0..=1.0).contains(&run.rho_inf) {
         problems.push(format!("--rho-inf lies in [0, 1], not {}", run.rho_inf));
     }
+    if let Some(c) = &run.control
+        && !(c.rtol > 0.0 && c.atol > 0.0 && c.rtol.is_finite() && c.atol.is_finite())
+    {
+        problems.push(format!(
+            "--rtol and --atol must be positive, not {} and {}",
+            c.rtol, c.atol
+        ));
+    }
     let explicit = match run.integrator.as_str() {
         "generalized-alpha" => false,
+        "rk4" if run.control.is_some() => {
+            problems.push(
+                "--rtol/--atol control generalized-α's step; rk4 on cables takes the fixed step --dt"
+                    .to_string(),
+            );
+            true
+        }
         "rk4" => true,
         other => {
             problems.push(format!(
@@ -183,6 +202,18 @@ fn run_problems(run: &CableRun) -> Result<bool, Error> {
         return Err(Error::Usage(problems));
     }
     Ok(explicit)
+}
+
+/// How a run stepped: "N steps of h s" or "N steps (R rejected), step
+/// control rtol …, atol …".
+fn stepping(run: &CableRun, steps: usize, stats: &eom_sim::large::DynamicsStats) -> String {
+    match &run.control {
+        Some(c) => format!(
+            "{} steps ({} rejected), step control rtol {:e}, atol {:e}",
+            stats.steps, stats.rejected, c.rtol, c.atol
+        ),
+        None => format!("{} steps of {:e} s", stats.steps, run.t_end / steps as f64),
+    }
 }
 
 /// `eom-gen simulate` on a model with cables.
@@ -221,6 +252,7 @@ pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result
             let opts = AlphaOptions {
                 h: run.t_end / steps as f64,
                 rho_inf: run.rho_inf,
+                control: run.control,
                 ..AlphaOptions::default()
             };
             let mut ga = GeneralizedAlpha::new(m, state, opts)
@@ -235,14 +267,13 @@ pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result
         let e1 = m.energy(&q, &end.v);
         let _ = writeln!(
             text,
-            "cable {name}: {} × {}, {} free coordinates, {} to t = {} in {} steps of {:e} s, {:.3} s CPU",
+            "cable {name}: {} × {}, {} free coordinates, {} to t = {} in {}, {:.3} s CPU",
             ch.nodes - 1,
             ch.kernel,
             n,
             if explicit { "rk4" } else { "generalized-alpha" },
             end.t,
-            stats.steps,
-            run.t_end / steps as f64,
+            stepping(run, steps, &stats),
             cpu
         );
         let _ = writeln!(
@@ -265,6 +296,7 @@ pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result
             "integrator": if explicit { "rk4" } else { "generalized-alpha" },
             "t": end.t,
             "steps": stats.steps,
+            "rejected": stats.rejected,
             "newton_iterations": stats.newton_iterations,
             "factorizations": stats.factorizations,
             "force_evaluations": stats.force_evaluations,
@@ -375,8 +407,9 @@ fn whole_model(
     let sys = &checked.system;
     let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
         .map_err(|e| format!("model `{}`: {e}", sys.name))?;
-    eom_gen::cables::check_rigid(sys, &f)?;
-    let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))?;
+    eom_gen::cables::check_rigid(sys, &f).map_err(|e| e.to_string())?;
+    let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
+        .map_err(|e| e.to_string())?;
     let m = &mixed.model;
     let state = m.initial_state(t, q, u);
     let ga = MixedAlpha::new(m, state, AlphaOptions::default())
@@ -405,29 +438,40 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
     }
     let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
         .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
-    eom_gen::cables::check_rigid(sys, &f).map_err(Error::Refused)?;
+    eom_gen::cables::check_rigid(sys, &f).map_err(|e| Error::Refused(e.to_string()))?;
     let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
-        .map_err(Error::Refused)?;
+        .map_err(|e| Error::Refused(e.to_string()))?;
     let m = &mixed.model;
-    let (q0, u0) = eom_gen::cables::rigid_start(sys, &f).map_err(Error::Refused)?;
+    let (q0, u0) =
+        eom_gen::cables::rigid_start(sys, &f).map_err(|e| Error::Refused(e.to_string()))?;
     let state = m.initial_state(0.0, &q0, &u0);
     let e0 = m.energy(&state);
     let steps = (run.t_end / run.dt).round().max(1.0) as usize;
     let opts = AlphaOptions {
         h: run.t_end / steps as f64,
         rho_inf: run.rho_inf,
+        control: run.control,
         ..AlphaOptions::default()
     };
     let refused =
         |e: eom_sim::large::DynamicsError| Error::Refused(format!("model `{}`: {e}", sys.name));
     let start = std::time::Instant::now();
     let mut ga = MixedAlpha::new(m, state, opts).map_err(refused)?;
-    let bar = step_progress(&sys.name, steps);
+    // With step control the count is not known ahead: the bar then
+    // counts thousandths of the run's time.
+    let (bar, per_time) = match run.control {
+        Some(_) => (step_progress(&sys.name, 1000), true),
+        None => (step_progress(&sys.name, steps), false),
+    };
     let ns = m.n_structural();
     let cables = &mixed.cables;
     let mut rows: Vec<Vec<f64>> = Vec::new();
     let result = ga.run_to(run.t_end, |s, q| {
-        bar.inc(1);
+        if per_time {
+            bar.set_position((1000.0 * s.t / run.t_end) as u64);
+        } else {
+            bar.inc(1);
+        }
         if run.csv.is_some() {
             let mut row = vec![s.t];
             row.extend_from_slice(&s.q[ns..]);
@@ -481,11 +525,10 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
     }
     let _ = writeln!(
         text,
-        "  generalized-alpha (index 3, rho_inf = {}) to t = {} in {} steps of {:e} s, {:.3} s wall",
+        "  generalized-alpha (index 3, rho_inf = {}) to t = {} in {}, {:.3} s wall",
         run.rho_inf,
         end.t,
-        stats.steps,
-        run.t_end / steps as f64,
+        stepping(run, steps, stats),
         cpu
     );
     let _ = writeln!(
@@ -528,6 +571,7 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
                 "integrator": "generalized-alpha",
                 "t": end.t,
                 "steps": stats.steps,
+                "rejected": stats.rejected,
                 "newton_iterations": stats.newton_iterations,
                 "factorizations": stats.factorizations,
                 "force_evaluations": stats.force_evaluations,

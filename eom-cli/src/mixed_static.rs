@@ -40,12 +40,13 @@ pub fn solve_static_mixed_cmd(
     let sys = &checked.system;
     let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
         .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
-    eom_gen::cables::check_rigid(sys, &f).map_err(Error::Refused)?;
+    eom_gen::cables::check_rigid(sys, &f).map_err(|e| Error::Refused(e.to_string()))?;
     let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
-        .map_err(Error::Refused)?;
+        .map_err(|e| Error::Refused(e.to_string()))?;
     let m = &mixed.model;
     let coords: Vec<&str> = sys.coordinate_names();
-    let (q0, _) = eom_gen::cables::rigid_start(sys, &f).map_err(Error::Refused)?;
+    let (q0, _) =
+        eom_gen::cables::rigid_start(sys, &f).map_err(|e| Error::Refused(e.to_string()))?;
     let start = std::time::Instant::now();
     let sol = solve_static_mixed(m, 0.0, &q0, opts).map_err(|e| refusal(&sys.name, &coords, &e))?;
     let cpu = start.elapsed().as_secs_f64();

@@ -293,13 +293,14 @@ fn cables_alone_are_described_not_zeroed() {
 
 /// An option that does not apply to a model with cables is a usage error
 /// naming the ones that do, instead of being ignored (`--integrator
-/// dopri5` ran generalized-α).
+/// dopri5` ran generalized-α). `--rtol`/`--atol` apply to generalized-α
+/// (step-size control) and are refused with rk4's fixed step.
 #[test]
 fn options_that_do_not_apply_to_cables_are_refused() {
     let model = "models/ancf/pendulum.ron";
     for extra in [
         &["--integrator", "dopri5"][..],
-        &["--rtol", "1e-6"],
+        &["--rtol", "1e-6", "--integrator", "rk4"],
         &["--constraints", "baumgarte"],
         &["--max-steps", "10"],
     ] {
@@ -328,6 +329,20 @@ fn options_that_do_not_apply_to_cables_are_refused() {
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
+    );
+    // Step-size control: the run lands on t_end and says how it stepped.
+    let out = eom_gen(&[
+        "simulate", model, "--t-end", "0.05", "--dt", "1e-3", "--rtol", "1e-6",
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("to t = 0.05 in") && text.contains("rejected), step control rtol 1e-6"),
+        "got {text}"
     );
 }
 

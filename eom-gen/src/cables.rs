@@ -24,6 +24,165 @@ use eom_sim::elements::Element;
 use eom_sim::large::ancf::{ChainSpec, Section, chains};
 use eom_sim::large::{ByName, MixedModel, RigidPart};
 
+/// Why a model's cables cannot run with its rigid part: each names the
+/// model, cable, marker or coordinate concerned and what would be right.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CableError {
+    /// No cable end is held at a marker.
+    NoMounts {
+        /// The model.
+        model: String,
+    },
+    /// The rigid part has speed-level equations (their names).
+    Nonholonomic {
+        /// The model.
+        model: String,
+        /// The nonholonomic rows.
+        rows: Vec<String>,
+    },
+    /// Coordinates and speeds differ in number (or quaternions).
+    SpeedsNotRates {
+        /// The model.
+        model: String,
+        /// Coordinates and speeds, when their numbers differ.
+        sizes: Option<(usize, usize)>,
+    },
+    /// A planar cable hangs at a marker that leaves the plane z = 0.
+    OffPlane {
+        /// The cable.
+        cable: String,
+        /// Its element type.
+        element: &'static str,
+        /// `body.marker`.
+        marker: String,
+        /// Its end (true) or start.
+        end: bool,
+        /// Held by a clamp (whose axis may turn out of the plane).
+        clamp: bool,
+    },
+    /// The rigid part's loops do not close near the initial values.
+    LoopOpen {
+        /// The model.
+        model: String,
+        /// `|Φ|` after assembly.
+        residual: f64,
+        /// The loops' equations.
+        constraints: Vec<String>,
+    },
+    /// Assembly moves initial values (coordinate, given, closed).
+    StartMoved {
+        /// The model.
+        model: String,
+        /// The loops' equations.
+        constraints: Vec<String>,
+        /// Each moved coordinate: name, given value, closed value.
+        moved: Vec<(String, f64, f64)>,
+    },
+    /// The model has no cables.
+    NoCables {
+        /// The model.
+        model: String,
+    },
+    /// A cable's chain could not be built.
+    Chain {
+        /// The cable.
+        cable: String,
+        /// Why.
+        error: eom_sim::large::ancf::ChainError,
+    },
+    /// A node force at a node the cable does not have.
+    NoNode {
+        /// The cable.
+        cable: String,
+        /// The node asked for.
+        node: usize,
+        /// Its last node.
+        last: usize,
+    },
+    /// The mixed model could not be formed.
+    Mixed {
+        /// The model.
+        model: String,
+        /// Why.
+        error: eom_sim::large::MixedError,
+    },
+}
+
+impl std::fmt::Display for CableError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CableError::NoMounts { model } => write!(
+                f,
+                "no cable end of model `{model}` is held at a marker (`start_at`/`end_at`)"
+            ),
+            CableError::Nonholonomic { model, rows } => write!(
+                f,
+                "the rigid part of `{model}` has speed-level (nonholonomic) constraint equations ({}): beside cables the index-3 method holds positions only, `Φ(q, t) = 0` (cut joints, `Holonomic` constraints); a rolling contact's no-slip conditions have no position form",
+                rows.join(", ")
+            ),
+            CableError::SpeedsNotRates {
+                model,
+                sizes: Some((nq, nu)),
+            } => write!(
+                f,
+                "the rigid part of `{model}` has {nq} coordinates and {nu} speeds: cables join rigid parts whose speeds are the coordinates' rates (revolute, prismatic joints)"
+            ),
+            CableError::SpeedsNotRates { model, sizes: None } => write!(
+                f,
+                "the rigid part of `{model}` has speeds that are not the coordinates' rates (q̇ ≠ u): cables join revolute and prismatic chains"
+            ),
+            CableError::OffPlane {
+                cable,
+                element,
+                marker,
+                end,
+                clamp,
+            } => write!(
+                f,
+                "cable `{cable}` is planar ({element}) but the marker `{marker}` holding its {} leaves the plane z = 0 as the rigid part moves{}: use `Cable3D`, or keep the marker in the x–y plane (revolute joints about z, prismatic joints in x–y)",
+                if *end { "end" } else { "start" },
+                if *clamp {
+                    " (or its clamp's axis turns out of the plane)"
+                } else {
+                    ""
+                }
+            ),
+            CableError::LoopOpen {
+                model,
+                residual,
+                constraints,
+            } => write!(
+                f,
+                "the rigid part of `{model}` does not close its loops near the initial values: |Φ| = {residual:.3e} after assembly ({}); check the joint frames and the initial values of the loop's joints",
+                constraints.join(", ")
+            ),
+            CableError::StartMoved {
+                model,
+                constraints,
+                moved,
+            } => write!(
+                f,
+                "the initial values of `{model}` do not close its loops ({}): assembly moves {}; give the closed values (the cables' `from`/`to` must meet their markers there)",
+                constraints.join(", "),
+                moved
+                    .iter()
+                    .map(|(n, x, y)| format!("`{n}` from {x} to {y}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            CableError::NoCables { model } => write!(f, "model `{model}` has no cables"),
+            CableError::Chain { cable, error } => write!(f, "cable `{cable}`: {error}"),
+            CableError::NoNode { cable, node, last } => write!(
+                f,
+                "cable `{cable}` has no node {node} (its nodes are 0 to {last})"
+            ),
+            CableError::Mixed { model, error } => write!(f, "model `{model}`: {error}"),
+        }
+    }
+}
+
+impl std::error::Error for CableError {}
+
 /// The runtime's kernel of a generator's element type (its registry
 /// `eom_sim::elements::Element` runs the kernels `ancf::emit` wrote).
 pub fn element(kind: Kind) -> Element {
@@ -133,27 +292,25 @@ pub fn has_mounts(sys: &System) -> bool {
 /// position level (holonomic: cut joints, `Holonomic` constraints), and a
 /// planar cable's ends held at markers that move in the plane z = 0
 /// ([`check_planar_mounts`]). Any number of cables, of any kernels.
-pub fn check_rigid(sys: &System, f: &Formulation) -> Result<(), String> {
+pub fn check_rigid(sys: &System, f: &Formulation) -> Result<(), CableError> {
     let mounted: Vec<usize> = sys.cable_mounts().iter().map(|(c, _, _)| *c).collect();
     if mounted.is_empty() {
-        return Err(format!(
-            "no cable end of model `{}` is held at a marker (`start_at`/`end_at`)",
-            sys.name
-        ));
+        return Err(CableError::NoMounts {
+            model: sys.name.clone(),
+        });
     }
     if f.constraint_names.len() > f.n_holonomic {
-        return Err(format!(
-            "the rigid part of `{}` has speed-level (nonholonomic) constraint equations ({}): beside cables the index-3 method holds positions only, `Φ(q, t) = 0` (cut joints, `Holonomic` constraints); a rolling contact's no-slip conditions have no position form",
-            sys.name,
-            f.constraint_names[f.n_holonomic..].join(", ")
-        ));
+        return Err(CableError::Nonholonomic {
+            model: sys.name.clone(),
+            rows: f.constraint_names[f.n_holonomic..].to_vec(),
+        });
     }
     let (nq, nu) = (sys.nq(), sys.nu());
     if nq != nu || !sys.quaternion_indices().is_empty() {
-        return Err(format!(
-            "the rigid part of `{}` has {nq} coordinates and {nu} speeds: cables join rigid parts whose speeds are the coordinates' rates (revolute, prismatic joints)",
-            sys.name
-        ));
+        return Err(CableError::SpeedsNotRates {
+            model: sys.name.clone(),
+            sizes: Some((nq, nu)),
+        });
     }
     // q̇ = u at a generic state.
     let q: Vec<f64> = sys
@@ -181,10 +338,10 @@ pub fn check_rigid(sys: &System, f: &Formulation) -> Result<(), String> {
             .zip(&u)
             .any(|(a, b)| (a - b).abs() > 1e-12 * (1.0 + b.abs()))
     {
-        return Err(format!(
-            "the rigid part of `{}` has speeds that are not the coordinates' rates (q̇ ≠ u): cables join revolute and prismatic chains",
-            sys.name
-        ));
+        return Err(CableError::SpeedsNotRates {
+            model: sys.name.clone(),
+            sizes: None,
+        });
     }
     check_planar_mounts(sys, f, &x)
 }
@@ -199,7 +356,7 @@ fn check_planar_mounts(
     sys: &System,
     f: &Formulation,
     x: &crate::interpret::Point<'_>,
-) -> Result<(), String> {
+) -> Result<(), CableError> {
     let mounts = sys.cable_mounts();
     let planar = |c: usize| sys.cables[c].chain.element.dim() == 2;
     if !mounts.iter().any(|(c, _, _)| planar(*c)) {
@@ -227,19 +384,13 @@ fn check_planar_mounts(
         if off_plane {
             let cable = &sys.cables[*c];
             let body = &sys.bodies[m.body];
-            return Err(format!(
-                "cable `{}` is planar ({}) but the marker `{}.{}` holding its {} leaves the plane z = 0 as the rigid part moves{}: use `Cable3D`, or keep the marker in the x–y plane (revolute joints about z, prismatic joints in x–y)",
-                cable.name,
-                cable.chain.element.name(),
-                body.name,
-                body.markers[m.marker].name,
-                if *end { "end" } else { "start" },
-                if m.axis.is_some() {
-                    " (or its clamp's axis turns out of the plane)"
-                } else {
-                    ""
-                }
-            ));
+            return Err(CableError::OffPlane {
+                cable: cable.name.clone(),
+                element: cable.chain.element.name(),
+                marker: format!("{}.{}", body.name, body.markers[m.marker].name),
+                end: *end,
+                clamp: m.axis.is_some(),
+            });
         }
     }
     Ok(())
@@ -270,7 +421,7 @@ pub fn holonomic_names(f: &Formulation) -> Vec<String> {
 /// reference lines are given in the file, at the markers of `q0`: an
 /// assembly that has to move a coordinate by more than `1e-8` is refused,
 /// naming the coordinate and the value that closes the loop.
-pub fn rigid_start(sys: &System, f: &Formulation) -> Result<(Vec<f64>, Vec<f64>), String> {
+pub fn rigid_start(sys: &System, f: &Formulation) -> Result<(Vec<f64>, Vec<f64>), CableError> {
     let (q0, u0) = (sys.q0(), sys.u0());
     if f.constraint_names.is_empty() {
         return Ok((q0, u0));
@@ -278,28 +429,26 @@ pub fn rigid_start(sys: &System, f: &Formulation) -> Result<(Vec<f64>, Vec<f64>)
     let interp = crate::interpret::Interpreted::new(f, sys);
     let a = eom_sim::constrained::assemble(&interp, &q0, &u0, 0.0);
     if a.residual.is_nan() || a.residual > 1e-10 {
-        return Err(format!(
-            "the rigid part of `{}` does not close its loops near the initial values: |Φ| = {:.3e} after assembly ({}); check the joint frames and the initial values of the loop's joints",
-            sys.name,
-            a.residual,
-            f.constraint_names.join(", ")
-        ));
+        return Err(CableError::LoopOpen {
+            model: sys.name.clone(),
+            residual: a.residual,
+            constraints: f.constraint_names.clone(),
+        });
     }
     let names = sys.coordinate_names();
-    let moved: Vec<String> = q0
+    let moved: Vec<(String, f64, f64)> = q0
         .iter()
         .zip(&a.q)
         .zip(&names)
         .filter(|((x, y), _)| (*x - *y).is_nan() || (*x - *y).abs() > 1e-8)
-        .map(|((x, y), n)| format!("`{n}` from {x} to {y}"))
+        .map(|((x, y), n)| (n.to_string(), *x, *y))
         .collect();
     if !moved.is_empty() {
-        return Err(format!(
-            "the initial values of `{}` do not close its loops ({}): assembly moves {}; give the closed values (the cables' `from`/`to` must meet their markers there)",
-            sys.name,
-            f.constraint_names.join(", "),
-            moved.join(", ")
-        ));
+        return Err(CableError::StartMoved {
+            model: sys.name.clone(),
+            constraints: f.constraint_names.clone(),
+            moved,
+        });
     }
     Ok((a.q, a.u))
 }
@@ -310,13 +459,17 @@ pub fn rigid_start(sys: &System, f: &Formulation) -> Result<(Vec<f64>, Vec<f64>)
 /// ends held at markers (`System::cable_mounts` order, the order of the
 /// generated `attachments`). Cables held at no marker are part of the
 /// structure too (free, or held to ground by their supports).
-pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'r>, String> {
+pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'r>, CableError> {
     if sys.cables.is_empty() {
-        return Err(format!("model `{}` has no cables", sys.name));
+        return Err(CableError::NoCables {
+            model: sys.name.clone(),
+        });
     }
     let specs: Vec<_> = sys.cables.iter().map(chain_spec).collect();
-    let mut built =
-        chains(&specs).map_err(|e| format!("cable `{}`: {}", sys.cables[e.chain].name, e.error))?;
+    let mut built = chains(&specs).map_err(|e| CableError::Chain {
+        cable: sys.cables[e.chain].name.clone(),
+        error: e.error,
+    })?;
     for (k, c) in sys.cables.iter().enumerate() {
         if c.distributed_load != [0.0; 3] {
             built.add_distributed_load(k, c.distributed_load);
@@ -324,11 +477,11 @@ pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'
         let part = &built.parts[k];
         for &(node, f) in &c.node_forces {
             if node >= part.nodes {
-                return Err(format!(
-                    "cable `{}` has no node {node} (its nodes are 0 to {})",
-                    c.name,
-                    part.nodes - 1
-                ));
+                return Err(CableError::NoNode {
+                    cable: c.name.clone(),
+                    node,
+                    last: part.nodes - 1,
+                });
             }
             for (k, &fk) in f.iter().enumerate().take(part.dim) {
                 built.model.add_point_load(part.position_index(node, k), fk);
@@ -354,7 +507,10 @@ pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'
             offset: p.offset,
         })
         .collect();
-    let model = MixedModel::new(built.model, rigid, attachments)
-        .map_err(|e| format!("model `{}`: {e}", sys.name))?;
+    let model =
+        MixedModel::new(built.model, rigid, attachments).map_err(|error| CableError::Mixed {
+            model: sys.name.clone(),
+            error,
+        })?;
     Ok(Mixed { model, cables })
 }

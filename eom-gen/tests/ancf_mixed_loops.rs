@@ -325,7 +325,7 @@ fn refusal(text: &str) -> String {
         .and_then(|()| eom_gen::cables::rigid_start(&sys, &f).map(|_| ()))
     {
         Ok(()) => "accepted".into(),
-        Err(e) => e,
+        Err(e) => e.to_string(),
     }
 }
 

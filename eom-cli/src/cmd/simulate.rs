@@ -177,9 +177,7 @@ fn simulate_cables(
     let integrator = a
         .integrator
         .unwrap_or_else(|| "generalized-alpha".to_string());
-    let refused: [(&str, bool); 9] = [
-        ("--rtol", a.rtol.is_some()),
-        ("--atol", a.atol.is_some()),
+    let refused: [(&str, bool); 7] = [
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--q0", a.initial.q0.is_some()),
@@ -192,8 +190,9 @@ fn simulate_cables(
         if given {
             problems.push(format!(
                 "{option} does not apply to `{}`, a model with cables: it runs generalized-α \
-                 (or rk4) with a fixed step; its options are --t-end, --dt, --integrator \
-                 generalized-alpha|rk4, --rho-inf, --param, --csv and --json",
+                 (fixed step, or step control with --rtol/--atol) or rk4 (fixed step); its \
+                 options are --t-end, --dt, --rtol, --atol, --integrator generalized-alpha|rk4, \
+                 --rho-inf, --param, --csv and --json",
                 checked.system.name
             ));
         }
@@ -201,7 +200,8 @@ fn simulate_cables(
     if !["generalized-alpha", "rk4"].contains(&integrator.as_str()) {
         problems.push(format!(
             "--integrator {integrator} does not run `{}`, a model with cables: use \
-             generalized-alpha (implicit, fixed step; the default) or rk4 (explicit, fixed step)",
+             generalized-alpha (implicit, fixed step or step control with --rtol/--atol; the \
+             default) or rk4 (explicit, fixed step)",
             checked.system.name
         ));
     }
@@ -214,6 +214,10 @@ fn simulate_cables(
         t_end: a.t_end,
         dt: a.dt,
         rho_inf: a.rho_inf.unwrap_or(1.0),
+        control: (a.rtol.is_some() || a.atol.is_some()).then(|| {
+            let rtol = a.rtol.unwrap_or(1e-6);
+            eom_sim::large::StepControl::new(rtol, a.atol.unwrap_or(rtol))
+        }),
         csv: a.csv,
     };
     match crate::ancf::simulate_cmd(checked, &run, a.json) {
