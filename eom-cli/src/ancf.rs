@@ -22,6 +22,7 @@
 
 use crate::error::Error;
 use eom_gen::Checked;
+use eom_sim::Integrator;
 use eom_sim::large::ancf::{Chain, chain};
 use eom_sim::large::{
     AlphaOptions, GeneralizedAlpha, MixedAlpha, State, StaticOptions, StepControl, integrate_rk4,
@@ -146,8 +147,8 @@ pub fn solve_static_cmd(
 /// How `simulate` integrates a model with cables.
 #[derive(Clone, Debug)]
 pub struct CableRun {
-    /// `generalized-alpha` or `rk4`.
-    pub integrator: String,
+    /// [`Integrator::GeneralizedAlpha`] or [`Integrator::Rk4`].
+    pub integrator: Integrator,
     /// End time, s.
     pub t_end: f64,
     /// Step, s.
@@ -181,19 +182,20 @@ fn run_problems(run: &CableRun) -> Result<bool, Error> {
             c.rtol, c.atol
         ));
     }
-    let explicit = match run.integrator.as_str() {
-        "generalized-alpha" => false,
-        "rk4" if run.control.is_some() => {
+    let explicit = match run.integrator {
+        Integrator::GeneralizedAlpha => false,
+        Integrator::Rk4 if run.control.is_some() => {
             problems.push(
                 "--rtol/--atol control generalized-α's step; rk4 on cables takes the fixed step --dt"
                     .to_string(),
             );
             true
         }
-        "rk4" => true,
+        Integrator::Rk4 => true,
         other => {
             problems.push(format!(
-                "integrator `{other}` does not run ANCF models: use `generalized-alpha` (implicit, fixed step) or `rk4` (explicit, fixed step)"
+                "integrator `{other}` does not run ANCF models: use one of {}",
+                Integrator::names_where(Integrator::runs_element_models)
             ));
             false
         }

@@ -499,3 +499,24 @@ fn eval_outputs_equal_simulates_first_row_for_every_bundled_model() {
         "only {compared} models with outputs compared"
     );
 }
+
+/// One `Integrator` names every method: generalized-α is one of them, and
+/// a rigid model refuses it before anything is built (it integrates
+/// element models, not the rigid model's ODE), naming the ones that apply.
+#[test]
+fn generalized_alpha_on_a_rigid_model_is_refused() {
+    let out = eom_gen(&[
+        "simulate",
+        "models/double_pendulum.ron",
+        "--t-end",
+        "1",
+        "--integrator",
+        "generalized-alpha",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("generalized-alpha runs models with cables") && err.contains("dopri5"),
+        "got {err}"
+    );
+}

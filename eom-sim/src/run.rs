@@ -202,6 +202,13 @@ impl RunOptions {
         if self.max_steps == 0 {
             p.push("--max-steps must be at least 1".into());
         }
+        if !self.integrator.runs_odes() {
+            p.push(format!(
+                "--integrator {} runs models with cables; this model's integrators are {}",
+                self.integrator,
+                Integrator::names_where(Integrator::runs_odes)
+            ));
+        }
         if self.method == Method::Index3 && self.integrator != Integrator::Radau5 {
             p.push(
                 "--constraints index3 integrates the index-3 DAE and needs --integrator radau5"
@@ -320,6 +327,14 @@ impl Stop {
                 message: "the implicit integrator's Newton iteration did not converge (a singular \
                           constraint or mass matrix, or a step the iteration cannot follow)"
                     .into(),
+            },
+            StopReason::NotApplicable { t, integrator } => Stop::Failed {
+                t,
+                message: format!(
+                    "{integrator} integrates element models (cables), not this model's ODE; \
+                     use one of {}",
+                    Integrator::names_where(Integrator::runs_odes)
+                ),
             },
         }
     }

@@ -174,9 +174,14 @@ fn simulate_cables(
     mut problems: Vec<String>,
 ) -> ExitCode {
     let checked = &opened.checked;
-    let integrator = a
-        .integrator
-        .unwrap_or_else(|| "generalized-alpha".to_string());
+    let integrator = parse_names::<Integrator>(
+        &[a.integrator
+            .clone()
+            .unwrap_or_else(|| "generalized-alpha".to_string())],
+        &mut problems,
+    )
+    .pop()
+    .unwrap_or(Integrator::GeneralizedAlpha);
     let refused: [(&str, bool); 7] = [
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
@@ -197,7 +202,7 @@ fn simulate_cables(
             ));
         }
     }
-    if !["generalized-alpha", "rk4"].contains(&integrator.as_str()) {
+    if !integrator.runs_element_models() {
         problems.push(format!(
             "--integrator {integrator} does not run `{}`, a model with cables: use \
              generalized-alpha (implicit, fixed step or step control with --rtol/--atol; the \

@@ -1,5 +1,6 @@
 //! Running the integrator an [`Integrator`] names.
 
+use super::StopReason;
 use super::driver::{Solution, SolveOptions, integrate};
 use super::system::OdeSystem;
 use std::fmt;
@@ -69,6 +70,23 @@ pub fn solve<const N: usize, S: OdeSystem<N>>(
             (r.index2_vars, r.index3_vars) = s.index_vars;
             integrate(&mut r, sys, t0, y0, t_end, opts, &mut [])
         }
+        // Generalized-α integrates `M q̈ = f` of element models
+        // (`crate::large::alpha`), not a first-order ODE: the run stops
+        // where it starts, saying so.
+        Integrator::GeneralizedAlpha => Solution {
+            t: Vec::new(),
+            y: Vec::new(),
+            t_out: Vec::new(),
+            y_out: Vec::new(),
+            events: Vec::new(),
+            t_final: t0,
+            y_final: y0,
+            stats: Default::default(),
+            stop: StopReason::NotApplicable {
+                t: t0,
+                integrator: Integrator::GeneralizedAlpha,
+            },
+        },
     }
 }
 
@@ -90,17 +108,23 @@ pub enum Integrator {
     Dop853,
     /// Radau IIA order 5, implicit, adaptive (stiff problems, index-3 DAEs).
     Radau5,
+    /// Generalized-α of Chung–Hulbert / Arnold–Brüls, implicit, fixed step
+    /// or step-size control: the integrator of element models (cables,
+    /// alone or hung at rigid bodies; `crate::large::alpha`).
+    #[cfg_attr(feature = "serde", serde(rename = "generalized-alpha"))]
+    GeneralizedAlpha,
 }
 
 impl Integrator {
     /// Every integrator, in the order of the docs.
-    pub const ALL: [Integrator; 6] = [
+    pub const ALL: [Integrator; 7] = [
         Integrator::Euler,
         Integrator::Rk4,
         Integrator::Midpoint,
         Integrator::Dopri5,
         Integrator::Dop853,
         Integrator::Radau5,
+        Integrator::GeneralizedAlpha,
     ];
 
     /// Its name.
@@ -112,7 +136,30 @@ impl Integrator {
             Integrator::Dopri5 => "dopri5",
             Integrator::Dop853 => "dop853",
             Integrator::Radau5 => "radau5",
+            Integrator::GeneralizedAlpha => "generalized-alpha",
         }
+    }
+
+    /// True for the methods of compiled and interpreted models (first-order
+    /// ODEs `y' = f(t, y)`): all but generalized-α.
+    pub fn runs_odes(self) -> bool {
+        self != Integrator::GeneralizedAlpha
+    }
+
+    /// True for the methods of element models (cables): generalized-α and
+    /// RK4.
+    pub fn runs_element_models(self) -> bool {
+        matches!(self, Integrator::GeneralizedAlpha | Integrator::Rk4)
+    }
+
+    /// The names of the integrators for which `keep` holds, comma-separated.
+    pub fn names_where(keep: impl Fn(Integrator) -> bool) -> String {
+        Integrator::ALL
+            .into_iter()
+            .filter(|i| keep(*i))
+            .map(Integrator::name)
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// True for the methods with error control (tolerances), false for the

@@ -67,6 +67,14 @@ pub enum StopReason {
         /// The step size that was too small.
         h: f64,
     },
+    /// The integrator does not integrate this kind of system
+    /// (generalized-α on a first-order ODE); nothing was integrated.
+    NotApplicable {
+        /// Time of the start.
+        t: f64,
+        /// The integrator asked for.
+        integrator: by_name::Integrator,
+    },
     /// The maximum number of attempted steps was exceeded.
     MaxSteps {
         /// Time reached.
