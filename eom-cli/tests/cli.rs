@@ -1411,3 +1411,59 @@ fn check_counts_the_elastic_coordinates_of_flexible_bodies() {
         "{text}"
     );
 }
+
+/// The README's first command prints what the README shows (all but the
+/// CPU time), and says on standard error what it builds the first time
+/// and that it is cached; a second run builds nothing and says nothing.
+#[test]
+fn the_readme_quick_start_is_what_a_user_sees() {
+    let readme = include_str!("../../README.md");
+    let command = "cargo run -p eom-cli -- simulate models/double_pendulum.ron --t-end 10";
+    assert!(
+        readme.contains(command),
+        "the README's first command changed"
+    );
+    let shown: Vec<&str> = readme
+        .split("```text\n")
+        .nth(1)
+        .and_then(|b| b.split("```").next())
+        .expect("the README shows the output in a text block")
+        .lines()
+        .collect();
+    let args = ["simulate", "models/double_pendulum.ron", "--t-end", "10"];
+    let first = cached(&args);
+    let err = String::from_utf8_lossy(&first.stderr);
+    assert!(first.status.success(), "{err}");
+    if err.contains("building the generated code") {
+        assert!(
+            err.contains("built `double_pendulum` in") && err.contains("; cached"),
+            "{err}"
+        );
+    }
+    let again = cached(&args);
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(again.status.success(), "{err}");
+    assert!(
+        !err.contains("building"),
+        "a cached model was built again: {err}"
+    );
+    let out = String::from_utf8_lossy(&again.stdout);
+    let printed: Vec<&str> = out.lines().collect();
+    assert_eq!(
+        printed.len(),
+        shown.len(),
+        "README:\n{shown:#?}\nprinted:\n{out}"
+    );
+    // The CPU time (the last field of the second line) differs run to run.
+    let without_time = |l: &str| {
+        l.rsplit_once(", ")
+            .map_or(l.to_string(), |(a, _)| a.to_string())
+    };
+    for (i, (p, s)) in printed.iter().zip(&shown).enumerate() {
+        if i == 1 {
+            assert_eq!(without_time(p), without_time(s));
+        } else {
+            assert_eq!(p, s);
+        }
+    }
+}

@@ -520,3 +520,23 @@ fn generalized_alpha_on_a_rigid_model_is_refused() {
         "got {err}"
     );
 }
+
+/// `bench`: an option of the other mode is a usage error naming it (the
+/// per-call options with the sweep, the sweep's with `--per-call`), found
+/// before anything is built.
+#[test]
+fn bench_options_of_the_other_mode_are_refused() {
+    let model = "models/pendulum.ron";
+    for (mode, extra) in [
+        ("--work-precision", "--states"),
+        ("--work-precision", "--reps"),
+        ("--work-precision", "--seed"),
+        ("--per-call", "--tols"),
+    ] {
+        let value = if extra == "--tols" { "1e-6" } else { "3" };
+        let out = eom_gen(&["bench", model, mode, extra, value]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{mode} {extra}: {err}");
+        assert!(err.contains(extra), "{mode} {extra}: got {err}");
+    }
+}

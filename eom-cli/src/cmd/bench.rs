@@ -36,15 +36,15 @@ pub struct BenchArgs {
     /// Work-precision of every model in `--models`, written to `--out`.
     #[arg(long)]
     pub suite: bool,
-    /// Random states per repetition (`--per-call`).
-    #[arg(long, default_value_t = 1024)]
-    pub states: usize,
-    /// Timed repetitions; the median is reported (`--per-call`).
-    #[arg(long, default_value_t = 31)]
-    pub reps: usize,
-    /// Seed of the random states (`--per-call`).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// Random states per repetition (`--per-call`; default 1024).
+    #[arg(long)]
+    pub states: Option<usize>,
+    /// Timed repetitions; the median is reported (`--per-call`; default 31).
+    #[arg(long)]
+    pub reps: Option<usize>,
+    /// Seed of the random states (`--per-call`; default 1).
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Build the timing program with `-C target-cpu=native` (`--per-call`).
     #[arg(long)]
     pub native: bool,
@@ -206,6 +206,21 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
                 .into(),
         );
     }
+    if a.work_precision || a.suite {
+        for (option, given) in [
+            ("--states", a.states.is_some()),
+            ("--reps", a.reps.is_some()),
+            ("--seed", a.seed.is_some()),
+        ] {
+            if given {
+                problems.push(format!(
+                    "{option} sets the --per-call timing at random states; the --work-precision \
+                     sweep runs from the model's start (its options: --integrators, --constraints, \
+                     --t-end, --tols, --steps, --q0, --u0, --csv, --svg)"
+                ));
+            }
+        }
+    }
     if !problems.is_empty() {
         return fail(&Error::Usage(problems));
     }
@@ -243,9 +258,9 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         return work_precision(&model, urdf, &vary, &o, &a);
     }
     let o = crate::bench::PerCallOptions {
-        states: a.states,
-        reps: a.reps,
-        seed: a.seed,
+        states: a.states.unwrap_or(1024),
+        reps: a.reps.unwrap_or(31),
+        seed: a.seed.unwrap_or(1),
         native: a.native,
     };
     per_call(&model, urdf, &vary, a.per_call, &o, a.json)
