@@ -2,7 +2,7 @@ use eom_macros::multibody;
 
 // One misspelled field in the model gives one error: the code that uses
 // the struct (`Misspelled::default()`) does not add a cascade of its own.
-#[multibody(model = "../../../../eom-macros/tests/ui/misspelled_field.ron")]
+#[multibody(model = "misspelled_field.ron")]
 pub struct Misspelled;
 
 fn main() {
