@@ -225,6 +225,17 @@ pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result
     }
     let chains = build(checked)?;
     let explicit = run_problems(run)?;
+    if chains.len() > 1 && run.control.is_some() && run.csv.is_some() {
+        // Each cable of a cable-only model is its own run: with step
+        // control their steps differ and share no rows.
+        return Err(Error::Usage(vec![format!(
+            "--csv with --rtol/--atol on `{}`: its {} cables are separate runs whose controlled \
+             steps differ, so they share no table; give a fixed step (--dt, without --rtol/--atol) \
+             for the CSV",
+            checked.system.name,
+            chains.len()
+        )]));
+    }
     let steps = (run.t_end / run.dt).round().max(1.0) as usize;
     let mut text = String::new();
     let mut report = Vec::new();
@@ -240,12 +251,19 @@ pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result
         };
         let e0 = m.energy(m.q0(), &state.v);
         let mut rows = Vec::new();
+        // Every node's position, then the energy; the first row is the
+        // start, t = 0.
         let mut record = |s: &State, q: &[f64]| {
             if run.csv.is_some() {
-                let p = ch.node_position(q, ch.nodes - 1);
-                rows.push(vec![s.t, p[0], p[1], p[2], m.energy(q, &s.v)]);
+                let mut row = vec![s.t];
+                for node in 0..ch.nodes {
+                    row.extend(ch.node_position(q, node));
+                }
+                row.push(m.energy(q, &s.v));
+                rows.push(row);
             }
         };
+        record(&state, m.q0());
         let start = std::time::Instant::now();
         let (end, stats) = if explicit {
             integrate_rk4(m, state, run.t_end, steps, &mut record)
@@ -318,7 +336,11 @@ pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result
     if let Some(path) = &run.csv {
         let names: Vec<String> = chains
             .iter()
-            .flat_map(|(n, _)| ["x", "y", "z", "energy"].map(|c| format!("{n}.{c}")))
+            .flat_map(|(n, ch)| {
+                (0..ch.nodes)
+                    .flat_map(move |k| ["x", "y", "z"].map(|c| format!("{n}.node{k}.{c}")))
+                    .chain([format!("{n}.energy")])
+            })
             .collect();
         let _ = writeln!(csv, "t,{}", names.join(","));
         for r in &columns {
@@ -468,12 +490,7 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
     let ns = m.n_structural();
     let cables = &mixed.cables;
     let mut rows: Vec<Vec<f64>> = Vec::new();
-    let result = ga.run_to(run.t_end, |s, q| {
-        if per_time {
-            bar.set_position((1000.0 * s.t / run.t_end) as u64);
-        } else {
-            bar.inc(1);
-        }
+    let mut record = |s: &State, q: &[f64]| {
         if run.csv.is_some() {
             let mut row = vec![s.t];
             row.extend_from_slice(&s.q[ns..]);
@@ -485,6 +502,16 @@ fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<S
             row.push(m.energy(s));
             rows.push(row);
         }
+    };
+    // The first row is the start, t = 0.
+    record(ga.state(), &m.structural_full(&ga.state().q));
+    let result = ga.run_to(run.t_end, |s, q| {
+        if per_time {
+            bar.set_position((1000.0 * s.t / run.t_end) as u64);
+        } else {
+            bar.inc(1);
+        }
+        record(s, q);
     });
     bar.finish_and_clear();
     result.map_err(refused)?;

@@ -458,7 +458,11 @@ fn simulate_names_every_cable_of_a_mixed_model() {
          right_rope.first.x,right_rope.first.y,right_rope.first.z,\
          right_rope.last.x,right_rope.last.y,right_rope.last.z,energy"
     );
-    assert_eq!(text.lines().count(), 51, "a header and 50 steps");
+    assert_eq!(
+        text.lines().count(),
+        52,
+        "a header, the start (t = 0) and 50 steps"
+    );
 }
 
 /// `eval` on a model with a cable says that the generated functions are

@@ -540,3 +540,46 @@ fn bench_options_of_the_other_mode_are_refused() {
         assert!(err.contains(extra), "{mode} {extra}: got {err}");
     }
 }
+
+/// A cable's CSV starts at t = 0 (it began after the first step) and holds
+/// every node (it held the end node only): the first row is the cable
+/// straight and at rest, as in the model file (8 elements from (0, 0) to
+/// (0.6, 0), nodes 0.075 m apart).
+#[test]
+fn cable_csv_starts_at_t0_with_every_node() {
+    let csv = temp_path("cable.csv");
+    let out = eom_gen(&[
+        "simulate",
+        "models/ancf/pendulum.ron",
+        "--t-end",
+        "0.01",
+        "--dt",
+        "1e-3",
+        "--csv",
+        &csv,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&csv).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 12, "a header, t = 0 and 10 steps: {text}");
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let nodes = header.iter().filter(|h| h.ends_with(".x")).count();
+    assert!(nodes > 2, "every node, not the end node alone: {header:?}");
+    let first: Vec<f64> = lines[1]
+        .split(',')
+        .map(|v| v.parse().unwrap_or(f64::NAN))
+        .collect();
+    assert_eq!(first[0], 0.0, "the first row is t = 0");
+    let spacing = first[4] - first[1];
+    for k in 0..nodes {
+        let (x, y) = (first[1 + 3 * k], first[2 + 3 * k]);
+        assert!(
+            (x - k as f64 * spacing).abs() < 1e-12 && y.abs() < 1e-12,
+            "node {k} at ({x}, {y}) at t = 0"
+        );
+    }
+}
