@@ -1,35 +1,34 @@
-//! Models with ANCF chains (`cables:` in the model file, issue #18): the
-//! element kernels are compiled into `eom-sim` once, so these commands
-//! build each chain at run time (`eom_sim::large::ancf::chain`) and solve
-//! it with the large-model runtime; nothing is generated or compiled per
-//! model.
+//! Models with ANCF chains (`cables:` in the model file): the element
+//! kernels are compiled into `eom-sim` (feature `cables`) once, so nothing
+//! is generated or compiled per model.
 //!
+//! - `simulate`: cables alone run as one structure of every cable
+//!   (generalized-α, fixed step or step control, or RK4); cables hung at
+//!   markers of rigid bodies (`start_at`, `end_at`) as one mixed model
+//!   (`eom_sim::large::mixed`: the rigid part's generated functions
+//!   through the interpreter, the attachments as constraints, index-3
+//!   generalized-α). Both through `eom_sim::large::simulate` into the
+//!   common `RunReport`, summary (`crate::report`) and CSV (`t`, the rigid
+//!   coordinates and speeds, every node of every cable, the energy).
 //! - `solve-static`: Newton with load stepping, per chain, with the
-//!   residual history of every load step.
-//! - `simulate` on a model with cables: generalized-α (fixed step `--dt`,
-//!   `--rho-inf`) or RK4.
+//!   residual history of every load step; a mixed model's equilibrium by
+//!   Newton on the KKT system (`crate::mixed_static`).
 //!
-//! A model whose cables hang at markers of its rigid bodies (`start_at`,
-//! `end_at`) runs as one mixed model (`eom_sim::large::mixed`): every cable
-//! in one structure (those held at no marker too), the rigid part's
-//! generated functions through the interpreter, the attachments as
-//! constraints, index-3 generalized-α (`rk4` refuses it); `solve-static`
-//! solves its equilibrium by Newton on the KKT system
-//! (`crate::mixed_static`). Its CSV has, per cable, the first and last
-//! node (`CABLE.first.x`, …, `CABLE.last.z`); its JSON, per cable, every
-//! node at the end. Rigid bodies beside cables none of which hangs at
-//! them are refused.
+//! Rigid bodies beside cables none of which hangs at them are refused.
 
 use crate::error::Error;
+use crate::report::{Setting, finish};
 use eom_gen::Checked;
 use eom_sim::Integrator;
+use eom_sim::RunError;
 use eom_sim::large::ancf::{Chain, chain};
 use eom_sim::large::{
-    AlphaOptions, GeneralizedAlpha, MixedAlpha, State, StaticOptions, StepControl, integrate_rk4,
+    AlphaOptions, ElementRun, MixedAlpha, StaticOptions, simulate_mixed, simulate_structure,
     solve_static,
 };
 use serde_json::json;
 use std::fmt::Write;
+use std::process::ExitCode;
 
 /// True if the model has ANCF chains.
 pub fn has_cables(checked: &Checked) -> bool {
@@ -144,219 +143,81 @@ pub fn solve_static_cmd(
     }
 }
 
-/// How `simulate` integrates a model with cables.
-#[derive(Clone, Debug)]
-pub struct CableRun {
-    /// [`Integrator::GeneralizedAlpha`] or [`Integrator::Rk4`].
-    pub integrator: Integrator,
-    /// End time, s.
-    pub t_end: f64,
-    /// Step, s.
-    pub dt: f64,
-    /// Spectral radius at infinity (generalized-α).
-    pub rho_inf: f64,
-    /// Step-size control of generalized-α (`--rtol`/`--atol`); `None` for
-    /// the fixed step `dt` (with control, `dt` is the first step).
-    pub control: Option<StepControl>,
-    /// CSV of `t`, end-node positions and energy per cable.
-    pub csv: Option<String>,
-}
-
-/// The problems of `run`'s settings; `true` for the explicit method.
-fn run_problems(run: &CableRun) -> Result<bool, Error> {
-    let mut problems = Vec::new();
-    if !(run.t_end > 0.0 && run.t_end.is_finite()) {
-        problems.push(format!("--t-end must be positive, not {}", run.t_end));
-    }
-    if !(run.dt > 0.0 && run.dt.is_finite()) {
-        problems.push(format!("--dt must be positive, not {}", run.dt));
-    }
-    if !(0.0..=1.0).contains(&run.rho_inf) {
-        problems.push(format!("--rho-inf lies in [0, 1], not {}", run.rho_inf));
-    }
-    if let Some(c) = &run.control
-        && !(c.rtol > 0.0 && c.atol > 0.0 && c.rtol.is_finite() && c.atol.is_finite())
-    {
-        problems.push(format!(
-            "--rtol and --atol must be positive, not {} and {}",
-            c.rtol, c.atol
-        ));
-    }
-    let explicit = match run.integrator {
-        Integrator::GeneralizedAlpha => false,
-        Integrator::Rk4 if run.control.is_some() => {
-            problems.push(
-                "--rtol/--atol control generalized-α's step; rk4 on cables takes the fixed step --dt"
-                    .to_string(),
-            );
-            true
-        }
-        Integrator::Rk4 => true,
-        other => {
-            problems.push(format!(
-                "integrator `{other}` does not run ANCF models: use one of {}",
-                Integrator::names_where(Integrator::runs_element_models)
-            ));
-            false
-        }
+/// `eom-gen simulate` on a model with cables: cables alone run as one
+/// structure of every cable, cables hung at markers as one mixed model
+/// with the rigid part interpreted; both through the element runtime's
+/// run (`eom_sim::large::simulate`), into the common report and CSV.
+pub fn simulate_cmd(
+    checked: &Checked,
+    run: &ElementRun,
+    csv: Option<&str>,
+    json_out: bool,
+) -> Result<ExitCode, Error> {
+    let sys = &checked.system;
+    let refused = |e: eom_gen::cables::CableError| Error::Refused(e.to_string());
+    let run_error = |e: RunError| match e {
+        RunError::Options(p) => Error::Usage(p),
+        other => Error::Refused(format!("model `{}`: {other}", sys.name)),
     };
-    if !problems.is_empty() {
-        return Err(Error::Usage(problems));
-    }
-    Ok(explicit)
-}
-
-/// How a run stepped: "N steps of h s" or "N steps (R rejected), step
-/// control rtol …, atol …".
-fn stepping(run: &CableRun, steps: usize, stats: &eom_sim::large::DynamicsStats) -> String {
-    match &run.control {
-        Some(c) => format!(
-            "{} steps ({} rejected), step control rtol {:e}, atol {:e}",
-            stats.steps, stats.rejected, c.rtol, c.atol
-        ),
-        None => format!("{} steps of {:e} s", stats.steps, run.t_end / steps as f64),
-    }
-}
-
-/// `eom-gen simulate` on a model with cables.
-pub fn simulate_cmd(checked: &Checked, run: &CableRun, json_out: bool) -> Result<String, Error> {
-    if eom_gen::cables::has_mounts(&checked.system) {
-        return simulate_mixed(checked, run, json_out);
-    }
-    let chains = build(checked)?;
-    let explicit = run_problems(run)?;
-    if chains.len() > 1 && run.control.is_some() && run.csv.is_some() {
-        // Each cable of a cable-only model is its own run: with step
-        // control their steps differ and share no rows.
-        return Err(Error::Usage(vec![format!(
-            "--csv with --rtol/--atol on `{}`: its {} cables are separate runs whose controlled \
-             steps differ, so they share no table; give a fixed step (--dt, without --rtol/--atol) \
-             for the CSV",
-            checked.system.name,
-            chains.len()
-        )]));
-    }
-    let steps = (run.t_end / run.dt).round().max(1.0) as usize;
-    let mut text = String::new();
-    let mut report = Vec::new();
-    let mut csv = String::new();
-    let mut columns: Vec<Vec<f64>> = Vec::new();
-    for (name, ch) in &chains {
-        let m = &ch.model;
-        let n = m.n_free();
-        let state = State {
-            t: 0.0,
-            q: m.restrict(m.q0()),
-            v: vec![0.0; n],
-        };
-        let e0 = m.energy(m.q0(), &state.v);
-        let mut rows = Vec::new();
-        // Every node's position, then the energy; the first row is the
-        // start, t = 0.
-        let mut record = |s: &State, q: &[f64]| {
-            if run.csv.is_some() {
-                let mut row = vec![s.t];
-                for node in 0..ch.nodes {
-                    row.extend(ch.node_position(q, node));
-                }
-                row.push(m.energy(q, &s.v));
-                rows.push(row);
-            }
-        };
-        record(&state, m.q0());
-        let start = std::time::Instant::now();
-        let (end, stats) = if explicit {
-            integrate_rk4(m, state, run.t_end, steps, &mut record)
-                .map_err(|e| Error::Refused(format!("cable `{name}`: {e}")))?
-        } else {
-            let opts = AlphaOptions {
-                h: run.t_end / steps as f64,
-                rho_inf: run.rho_inf,
-                control: run.control,
-                ..AlphaOptions::default()
-            };
-            let mut ga = GeneralizedAlpha::new(m, state, opts)
-                .map_err(|e| Error::Refused(format!("cable `{name}`: {e}")))?;
-            ga.run_to(run.t_end, &mut record)
-                .map_err(|e| Error::Refused(format!("cable `{name}`: {e}")))?;
-            (ga.state().clone(), ga.stats.clone())
-        };
-        let cpu = start.elapsed().as_secs_f64();
-        let q = m.expand(&end.q);
-        let tip = ch.node_position(&q, ch.nodes - 1);
-        let e1 = m.energy(&q, &end.v);
-        let _ = writeln!(
-            text,
-            "cable {name}: {} × {}, {} free coordinates, {} to t = {} in {}, {:.3} s CPU",
-            ch.nodes - 1,
-            ch.kernel,
-            n,
-            if explicit { "rk4" } else { "generalized-alpha" },
-            end.t,
-            stepping(run, steps, &stats),
-            cpu
-        );
-        let _ = writeln!(
-            text,
-            "  {} Newton iterations, {} factorisations, {} force evaluations",
-            stats.newton_iterations, stats.factorizations, stats.force_evaluations
-        );
-        let _ = writeln!(
-            text,
-            "  end node at ({:.9}, {:.9}, {:.9}) m; energy {e0:.9e} → {e1:.9e} J (change {:.3e})",
-            tip[0],
-            tip[1],
-            tip[2],
-            e1 - e0
-        );
-        report.push(json!({
-            "cable": name,
-            "element": ch.kernel.name(),
-            "elements": ch.nodes - 1,
-            "integrator": if explicit { "rk4" } else { "generalized-alpha" },
-            "t": end.t,
-            "steps": stats.steps,
-            "rejected": stats.rejected,
-            "newton_iterations": stats.newton_iterations,
-            "factorizations": stats.factorizations,
-            "force_evaluations": stats.force_evaluations,
-            "cpu_seconds": cpu,
-            "end_position": tip,
-            "energy_start": e0,
-            "energy_end": e1,
-        }));
-        if columns.is_empty() {
-            columns = rows;
-        } else {
-            for (c, r) in columns.iter_mut().zip(rows) {
-                c.extend_from_slice(&r[1..]);
-            }
-        }
-    }
-    if let Some(path) = &run.csv {
-        let names: Vec<String> = chains
-            .iter()
-            .flat_map(|(n, ch)| {
-                (0..ch.nodes)
-                    .flat_map(move |k| ["x", "y", "z"].map(|c| format!("{n}.node{k}.{c}")))
-                    .chain([format!("{n}.energy")])
-            })
-            .collect();
-        let _ = writeln!(csv, "t,{}", names.join(","));
-        for r in &columns {
-            let line: Vec<String> = r.iter().map(|v| format!("{v:e}")).collect();
-            let _ = writeln!(csv, "{}", line.join(","));
-        }
-        std::fs::write(path, csv).map_err(|e| Error::io(path, e))?;
-    }
-    if json_out {
-        Ok(format!(
-            "{}\n",
-            json!({ "model": checked.system.name, "cables": report })
-        ))
+    // With step control the count is not known ahead: the bar then
+    // counts thousandths of the run's time.
+    let bar = step_progress(&sys.name, 1000);
+    let mut progress = |t: f64| bar.set_position((1000.0 * t / run.t_end) as u64);
+    let mut coordinates: Vec<&str> = Vec::new();
+    let (report, table) = if eom_gen::cables::has_mounts(sys) {
+        let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
+            .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
+        eom_gen::cables::check_rigid(sys, &f).map_err(refused)?;
+        let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
+            .map_err(refused)?;
+        let (q0, u0) = eom_gen::cables::rigid_start(sys, &f).map_err(refused)?;
+        coordinates = sys.coordinate_names();
+        let own = |v: Vec<&str>| v.into_iter().map(str::to_string).collect::<Vec<_>>();
+        let (qn, un) = (own(sys.coordinate_names()), own(sys.speed_names()));
+        simulate_mixed(
+            &mixed.model,
+            &mixed.cables,
+            (&q0, &u0),
+            (&qn, &un),
+            run,
+            &mut progress,
+        )
     } else {
-        Ok(text)
+        if sys.bodies.len() > 1 {
+            return Err(Error::Refused(format!(
+                "model `{}` mixes rigid bodies and cables that do not hang at them: \
+                 hold a cable end at a marker (`start_at`/`end_at`), or simulate the cables in a model of their own",
+                sys.name
+            )));
+        }
+        let (built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
+        simulate_structure(&built.model, &cables, run, &mut progress)
     }
+    .map_err(run_error)?;
+    bar.finish_and_clear();
+    if let (Some(path), Some(table)) = (csv, &table) {
+        table.write(path).map_err(|e| Error::io(path, e))?;
+    }
+    let mut detail = match &run.control {
+        Some(c) => format!("step control rtol {:e}, atol {:e}", c.rtol, c.atol),
+        None => format!("step {:e} s", run.t_end / run.steps() as f64),
+    };
+    if run.integrator == Integrator::GeneralizedAlpha {
+        detail += &format!(", rho_inf {}", run.rho_inf);
+    }
+    let setting = Setting {
+        integrator: run.integrator,
+        detail,
+        csv,
+    };
+    Ok(finish(
+        &sys.name,
+        &coordinates,
+        &setting,
+        run.t_end,
+        &report,
+        json_out,
+    ))
 }
 
 /// A progress bar over the steps of a run (hidden when stderr is not a
@@ -373,8 +234,6 @@ fn step_progress(label: &str, steps: usize) -> indicatif::ProgressBar {
     bar
 }
 
-/// `simulate` on a model whose cables hang at markers of its rigid
-/// bodies: the rigid part interpreted, index-3 generalized-α.
 /// What `eval` and `bench` say of a model with cables: the generated
 /// functions are the rigid part's alone (the cables' element kernels are
 /// model-independent and assembled at run time), so a note for standard
@@ -450,173 +309,6 @@ fn whole_model(
         "mounts": mounts,
         "cable_state": "straight and at rest, as in the model file",
     }))
-}
-
-fn simulate_mixed(checked: &Checked, run: &CableRun, json_out: bool) -> Result<String, Error> {
-    let sys = &checked.system;
-    if run_problems(run)? {
-        return Err(Error::Refused(format!(
-            "model `{}` hangs cables at rigid bodies: the attachments are constraints (an index-3 differential-algebraic system), which rk4 does not solve; use `--integrator generalized-alpha`",
-            sys.name
-        )));
-    }
-    let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
-        .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
-    eom_gen::cables::check_rigid(sys, &f).map_err(|e| Error::Refused(e.to_string()))?;
-    let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
-        .map_err(|e| Error::Refused(e.to_string()))?;
-    let m = &mixed.model;
-    let (q0, u0) =
-        eom_gen::cables::rigid_start(sys, &f).map_err(|e| Error::Refused(e.to_string()))?;
-    let state = m.initial_state(0.0, &q0, &u0);
-    let e0 = m.energy(&state);
-    let steps = (run.t_end / run.dt).round().max(1.0) as usize;
-    let opts = AlphaOptions {
-        h: run.t_end / steps as f64,
-        rho_inf: run.rho_inf,
-        control: run.control,
-        ..AlphaOptions::default()
-    };
-    let refused =
-        |e: eom_sim::large::DynamicsError| Error::Refused(format!("model `{}`: {e}", sys.name));
-    let start = std::time::Instant::now();
-    let mut ga = MixedAlpha::new(m, state, opts).map_err(refused)?;
-    // With step control the count is not known ahead: the bar then
-    // counts thousandths of the run's time.
-    let (bar, per_time) = match run.control {
-        Some(_) => (step_progress(&sys.name, 1000), true),
-        None => (step_progress(&sys.name, steps), false),
-    };
-    let ns = m.n_structural();
-    let cables = &mixed.cables;
-    let mut rows: Vec<Vec<f64>> = Vec::new();
-    let mut record = |s: &State, q: &[f64]| {
-        if run.csv.is_some() {
-            let mut row = vec![s.t];
-            row.extend_from_slice(&s.q[ns..]);
-            for c in cables {
-                for node in [0, c.nodes - 1] {
-                    row.extend(c.node_position(q, node));
-                }
-            }
-            row.push(m.energy(s));
-            rows.push(row);
-        }
-    };
-    // The first row is the start, t = 0.
-    record(ga.state(), &m.structural_full(&ga.state().q));
-    let result = ga.run_to(run.t_end, |s, q| {
-        if per_time {
-            bar.set_position((1000.0 * s.t / run.t_end) as u64);
-        } else {
-            bar.inc(1);
-        }
-        record(s, q);
-    });
-    bar.finish_and_clear();
-    result.map_err(refused)?;
-    let cpu = start.elapsed().as_secs_f64();
-    let end = ga.state().clone();
-    let q_full = m.structural_full(&end.q);
-    let e1 = m.energy(&end);
-    let stats = &ga.stats;
-    let coords: Vec<&str> = sys.coordinate_names();
-    let rigid_q = &end.q[ns..];
-    let reactions = ga.reactions();
-    let names: Vec<String> = m.attachments().iter().map(|a| a.name.clone()).collect();
-    let mut text = String::new();
-    let described: Vec<String> = cables
-        .iter()
-        .map(|c| format!("{}: {} × {}", c.name, c.nodes - 1, c.kernel))
-        .collect();
-    let _ = writeln!(
-        text,
-        "model {}: rigid part of {} coordinates ({}) + {} {} ({}), {} unknowns, {} constraint equations",
-        sys.name,
-        rigid_q.len(),
-        coords.join(", "),
-        cables.len(),
-        if cables.len() == 1 { "cable" } else { "cables" },
-        described.join("; "),
-        m.n(),
-        m.n_constraints()
-    );
-    let own = m.rigid().constraint_names();
-    if !own.is_empty() {
-        let _ = writeln!(
-            text,
-            "  the rigid part's own equations ({}) held with the attachments; their largest |Φ| at the end {:.3e}",
-            own.join(", "),
-            m.constraint_residual(end.t, &end.q)[m.rigid_constraint_rows()]
-                .iter()
-                .fold(0.0_f64, |a, x| a.max(x.abs()))
-        );
-    }
-    let _ = writeln!(
-        text,
-        "  generalized-alpha (index 3, rho_inf = {}) to t = {} in {}, {:.3} s wall",
-        run.rho_inf,
-        end.t,
-        stepping(run, steps, stats),
-        cpu
-    );
-    let _ = writeln!(
-        text,
-        "  {} Newton iterations, {} factorisations, {} force evaluations",
-        stats.newton_iterations, stats.factorizations, stats.force_evaluations
-    );
-    let cable_report = write_mixed_state(
-        &mut text, &coords, rigid_q, cables, &q_full, &names, &reactions,
-    );
-    let _ = writeln!(
-        text,
-        "  energy {e0:.9e} → {e1:.9e} J (change {:.3e}); largest constraint residual |Φ|∞ {:.3e}",
-        e1 - e0,
-        stats.max_constraint_residual
-    );
-    if let Some(path) = &run.csv {
-        let mut csv = String::new();
-        let mut header = vec!["t".to_string()];
-        header.extend(coords.iter().map(|c| c.to_string()));
-        for c in cables {
-            for node in ["first", "last"] {
-                header.extend(["x", "y", "z"].map(|k| format!("{}.{node}.{k}", c.name)));
-            }
-        }
-        header.push("energy".into());
-        let _ = writeln!(csv, "{}", header.join(","));
-        for r in &rows {
-            let line: Vec<String> = r.iter().map(|v| format!("{v:e}")).collect();
-            let _ = writeln!(csv, "{}", line.join(","));
-        }
-        std::fs::write(path, csv).map_err(|e| Error::io(path, e))?;
-    }
-    if json_out {
-        Ok(format!(
-            "{}\n",
-            json!({
-                "model": sys.name,
-                "cables": cable_report,
-                "integrator": "generalized-alpha",
-                "t": end.t,
-                "steps": stats.steps,
-                "rejected": stats.rejected,
-                "newton_iterations": stats.newton_iterations,
-                "factorizations": stats.factorizations,
-                "force_evaluations": stats.force_evaluations,
-                "wall_seconds": cpu,
-                "coordinates": coords,
-                "q": rigid_q,
-                "attachments": names,
-                "reactions": reactions,
-                "energy_start": e0,
-                "energy_end": e1,
-                "max_constraint_residual": stats.max_constraint_residual,
-            })
-        ))
-    } else {
-        Ok(text)
-    }
 }
 
 /// The report lines of a static solve's load steps: load factor,

@@ -14,6 +14,7 @@ mod mixed_static;
 mod open;
 mod output;
 mod plot;
+mod report;
 mod summary;
 mod sweep;
 

@@ -341,7 +341,7 @@ fn options_that_do_not_apply_to_cables_are_refused() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(
-        text.contains("to t = 0.05 in") && text.contains("rejected), step control rtol 1e-6"),
+        text.contains("to t = 0.05 s (step control rtol 1e-6") && text.contains(" rejected)"),
         "got {text}"
     );
 }

@@ -21,7 +21,7 @@ use crate::functions::Function;
 use crate::mech::Formulation;
 use crate::system::{CableInfo, Support, System};
 use eom_sim::elements::Element;
-use eom_sim::large::ancf::{ChainSpec, Section, chains};
+use eom_sim::large::ancf::{ChainSpec, Chains, Section, chains};
 use eom_sim::large::{ByName, MixedModel, RigidPart};
 
 /// Why a model's cables cannot run with its rigid part: each names the
@@ -229,36 +229,9 @@ pub fn chain_spec(cable: &CableInfo) -> ChainSpec {
     }
 }
 
-/// One cable of a mixed model: what it is and where its nodes sit in the
-/// structure's full coordinates.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct MixedCable {
-    /// The cable's name.
-    pub name: String,
-    /// Its kernel's name.
-    pub kernel: &'static str,
-    /// Dimension of positions (2 or 3).
-    pub dim: usize,
-    /// Coordinates per node.
-    pub node_coords: usize,
-    /// Number of nodes.
-    pub nodes: usize,
-    /// Full structural index of its first node's first coordinate (node
-    /// `j`'s coordinates start at `offset + j · node_coords`).
-    pub offset: usize,
-}
-
-impl MixedCable {
-    /// Position of `node` in the structure's full coordinates (`z = 0`
-    /// when planar).
-    pub fn node_position(&self, q_full: &[f64], node: usize) -> [f64; 3] {
-        let mut p = [0.0; 3];
-        for (k, pk) in p.iter_mut().enumerate().take(self.dim) {
-            *pk = q_full[self.offset + node * self.node_coords + k];
-        }
-        p
-    }
-}
+/// One cable of a model with elements: what it is and where its nodes sit
+/// in the structure's full coordinates (the runtime's layout).
+pub use eom_sim::large::CableLayout as MixedCable;
 
 /// A mixed model and how to read its cables.
 pub struct Mixed<'r> {
@@ -453,13 +426,11 @@ pub fn rigid_start(sys: &System, f: &Formulation) -> Result<(Vec<f64>, Vec<f64>)
     Ok((a.q, a.u))
 }
 
-/// Every cable of the model in one structure (in file order, each
-/// cable's nodes after the previous cable's; its distributed load and node
-/// forces carried over), joined to the rigid part `rigid` at the cable
-/// ends held at markers (`System::cable_mounts` order, the order of the
-/// generated `attachments`). Cables held at no marker are part of the
-/// structure too (free, or held to ground by their supports).
-pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'r>, CableError> {
+/// Every cable of the model in one structure, in file order (each cable's
+/// nodes after the previous cable's; its distributed load and node forces
+/// carried over), and where each cable sits: a model of cables alone runs
+/// as this structure, a mixed model joins it to its rigid part.
+pub fn structure(sys: &System) -> Result<(Chains, Vec<MixedCable>), CableError> {
     if sys.cables.is_empty() {
         return Err(CableError::NoCables {
             model: sys.name.clone(),
@@ -488,12 +459,6 @@ pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'
             }
         }
     }
-    let mut attachments = Vec::new();
-    for (c, end, mount) in sys.cable_mounts() {
-        let cable = &sys.cables[c];
-        let name = format!("{}.{}", cable.name, if end { "end" } else { "start" });
-        attachments.push(built.parts[c].attachment(&name, end, mount.axis.is_some()));
-    }
     let cables = sys
         .cables
         .iter()
@@ -507,6 +472,22 @@ pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'
             offset: p.offset,
         })
         .collect();
+    Ok((built, cables))
+}
+
+/// Every cable of the model in one structure ([`structure`]), joined to
+/// the rigid part `rigid` at the cable
+/// ends held at markers (`System::cable_mounts` order, the order of the
+/// generated `attachments`). Cables held at no marker are part of the
+/// structure too (free, or held to ground by their supports).
+pub fn mixed<'r>(sys: &System, rigid: Box<dyn RigidPart + 'r>) -> Result<Mixed<'r>, CableError> {
+    let (built, cables) = structure(sys)?;
+    let mut attachments = Vec::new();
+    for (c, end, mount) in sys.cable_mounts() {
+        let cable = &sys.cables[c];
+        let name = format!("{}.{}", cable.name, if end { "end" } else { "start" });
+        attachments.push(built.parts[c].attachment(&name, end, mount.axis.is_some()));
+    }
     let model =
         MixedModel::new(built.model, rigid, attachments).map_err(|error| CableError::Mixed {
             model: sys.name.clone(),

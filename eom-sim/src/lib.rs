@@ -59,6 +59,7 @@ pub mod large;
 mod model;
 pub mod run;
 pub mod state;
+pub mod table;
 pub mod work_precision;
 
 pub use constrained::{

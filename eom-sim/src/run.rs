@@ -29,6 +29,9 @@ use std::time::Instant;
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
+mod elements;
+pub use elements::{CableState, ElementReport, MountForce};
+
 impl Method {
     /// The methods with their default settings, in the order of the docs.
     pub const ALL: [Method; 5] = [
@@ -642,6 +645,14 @@ pub struct RunReport {
         serde(flatten, default, skip_serializing_if = "Option::is_none")
     )]
     pub constrained: Option<ConstraintReport>,
+    /// Cables' nodes, markers' forces and element counters (models with
+    /// elements; their `q`, `u` are the rigid part's coordinates and
+    /// speeds, empty for cables alone).
+    #[cfg_attr(
+        feature = "serde",
+        serde(flatten, default, skip_serializing_if = "Option::is_none")
+    )]
+    pub elements: Option<ElementReport>,
 }
 
 /// The names a run reports by.
@@ -756,6 +767,10 @@ pub enum RunError {
         /// The constraint equation furthest from satisfied.
         equation: String,
     },
+    /// A model with elements cannot start (constraints off at the start,
+    /// a singular matrix).
+    #[cfg(feature = "cables")]
+    Elements(crate::large::DynamicsError),
 }
 
 /// The largest `max |Φ|` (m or rad) an assembled initial state may keep:
@@ -810,6 +825,8 @@ impl fmt::Display for RunError {
                  a loop that cannot close (check the joint frames and lengths), \
                  or contradictory constraints"
             ),
+            #[cfg(feature = "cables")]
+            RunError::Elements(e) => e.fmt(f),
         }
     }
 }
@@ -1058,6 +1075,7 @@ fn finish<const N: usize, S: Simulate + ?Sized>(
         },
         cpu_s: cpu,
         constrained,
+        elements: None,
     }
 }
 
@@ -1114,12 +1132,19 @@ fn write_csv<const N: usize, S: Simulate + ?Sized>(
         .chain(energy_names.iter().copied())
         .chain(momentum_names.iter().copied())
         .collect();
-    let mut text = format!("t,{}\n", header.join(","));
+    let mut table = crate::table::Table::new(
+        std::iter::once("t")
+            .chain(header)
+            .map(str::to_string)
+            .collect(),
+    );
     let mut out = vec![0.0; names.outputs.len()];
     let mut udot = vec![0.0; nu];
     for (t, y) in rows {
         let (q, u) = y[..nq + nu].split_at(nq);
-        let mut row: Vec<String> = y[..nq + nu].iter().map(|x| format!("{x:?}")).collect();
+        let mut row: Vec<f64> = std::iter::once(t)
+            .chain(y[..nq + nu].iter().copied())
+            .collect();
         if !out.is_empty() {
             let lambda = match constrained(t, &y[..nq + nu]) {
                 Some((a, l)) => {
@@ -1142,7 +1167,7 @@ fn write_csv<const N: usize, S: Simulate + ?Sized>(
             if !model.evaluate("outputs", &at, &mut out) {
                 out.iter_mut().for_each(|x| *x = f64::NAN);
             }
-            row.extend(out.iter().map(|x| format!("{x:?}")));
+            row.extend_from_slice(&out);
         }
         let at = Point {
             t,
@@ -1159,12 +1184,14 @@ fn write_csv<const N: usize, S: Simulate + ?Sized>(
                 if !model.evaluate(name, &at, &mut v) {
                     v.iter_mut().for_each(|x| *x = f64::NAN);
                 }
-                row.extend(v.iter().map(|x| format!("{x:?}")));
+                row.extend_from_slice(&v);
             }
         }
-        text += &format!("{t:?},{}\n", row.join(","));
+        table.push(row);
     }
-    std::fs::write(path, text).map_err(|e| RunError::Csv(format!("cannot write `{path}`: {e}")))
+    table
+        .write(path)
+        .map_err(|e| RunError::Csv(format!("cannot write `{path}`: {e}")))
 }
 
 /// The CSV columns of [`RunOptions::momentum_columns`].

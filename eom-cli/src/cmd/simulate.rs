@@ -5,6 +5,7 @@
 use crate::args::{InitialArgs, InputArgs, ParamArgs, Vary, numbers, parse_names};
 use crate::error::Error;
 use crate::output::fail;
+use crate::report::{Setting, finish};
 use clap::Args;
 use eom_sim::{Integrator, Method, RunOptions, RunReport};
 use std::process::ExitCode;
@@ -66,9 +67,6 @@ pub struct SimulateArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub rho_inf: Option<f64>,
 }
-
-/// A run that did not reach its end time: exit status 3.
-const EXIT_RUN_STOPPED: u8 = 3;
 
 pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     // Every problem with the arguments is reported together, before
@@ -214,7 +212,7 @@ fn simulate_cables(
         return fail(&Error::Usage(problems));
     }
     eprint!("{}", checked.render_warnings());
-    let run = crate::ancf::CableRun {
+    let run = eom_sim::large::ElementRun {
         integrator,
         t_end: a.t_end,
         dt: a.dt,
@@ -223,13 +221,10 @@ fn simulate_cables(
             let rtol = a.rtol.unwrap_or(1e-6);
             eom_sim::large::StepControl::new(rtol, a.atol.unwrap_or(rtol))
         }),
-        csv: a.csv,
+        record: a.csv.is_some(),
     };
-    match crate::ancf::simulate_cmd(checked, &run, a.json) {
-        Ok(text) => {
-            print!("{text}");
-            ExitCode::SUCCESS
-        }
+    match crate::ancf::simulate_cmd(checked, &run, a.csv.as_deref(), a.json) {
+        Ok(code) => code,
         Err(e) => fail(&e),
     }
 }
@@ -263,104 +258,22 @@ fn simulate(
         Ok(r) => r,
         Err(e) => return fail(&e),
     };
-    if json {
-        match serde_json::to_string(&r) {
-            Ok(text) => println!("{text}"),
-            Err(e) => {
-                eprintln!("error: cannot encode the report: {e}");
-                return ExitCode::from(1);
-            }
-        }
-    } else {
-        print!("{}", summary(&sys.name, &sys.coordinate_names(), o, &r));
-    }
-    if r.stop.is_finished() {
-        ExitCode::SUCCESS
-    } else {
-        eprintln!("error: the run stopped before t = {}: {}", o.t_end, r.stop);
-        ExitCode::from(EXIT_RUN_STOPPED)
-    }
-}
-
-/// The human summary of a run.
-fn summary(name: &str, coordinates: &[&str], o: &RunOptions, r: &RunReport) -> String {
-    use std::fmt::Write;
-    let mut s = String::new();
-    let setting = if o.integrator.is_adaptive() {
+    let detail = if o.integrator.is_adaptive() {
         format!("rtol {:e}, atol {:e}", o.rtol, o.atol)
     } else {
         format!("step {:e} s", o.dt)
     };
-    let stop = if r.stop.is_finished() {
-        "\"finished\"".to_string()
-    } else {
-        r.stop.to_string()
+    let setting = Setting {
+        integrator: o.integrator,
+        detail,
+        csv: o.csv.as_deref(),
     };
-    let _ = writeln!(
-        s,
-        "{name}: {} to t = {:?} s ({setting}): {stop}",
-        o.integrator, r.t
-    );
-    let _ = writeln!(
-        s,
-        "  {} steps ({} rejected), {} right-hand sides, {:.3} ms",
-        r.stats.steps,
-        r.stats.rejected,
-        r.stats.rhs_evals,
-        r.cpu_s * 1e3
-    );
-    let q: Vec<String> =
-        r.q.iter()
-            .zip(coordinates)
-            .map(|(x, n)| format!("{n} = {x:.6}"))
-            .collect();
-    let _ = writeln!(s, "  final {}", q.join(", "));
-    let [e0, e1] = r.energy;
-    let _ = writeln!(
-        s,
-        "  energy {e0:.9} → {e1:.9} J{}",
-        energy_change(e0, e1, r.energy_scale)
-    );
-    if let Some(c) = &r.constrained {
-        let m = &c.summary;
-        let _ = writeln!(
-            s,
-            "  constraints ({}): max |Φ| {:.1e}, max |Φ̇| {:.1e}, rank {} of {}, smallest σ_r/σ_1 of J {:.1e}",
-            c.constraints,
-            m.max_constraint_residual,
-            m.max_velocity_residual,
-            m.constraint_rank,
-            c.constraint_names.len(),
-            m.min_singular_ratio
-        );
-        if m.min_singular_ratio < 1e-2 {
-            let _ = writeln!(
-                s,
-                "  note: J came near losing rank: the run passed close to a singular configuration, \
-                 where the constraint forces are ill-conditioned and accuracy is limited; compare \
-                 with a tighter tolerance or another --constraints method"
-            );
-        }
-    }
-    if let Some(csv) = &o.csv {
-        let _ = writeln!(s, "  trajectory written to {csv}");
-    }
-    s
-}
-
-/// The energy change for people: relative to the size of the energies
-/// (`|T| + |V|`, the larger at the start and at the end), which is
-/// meaningful when the total is near zero; absolute when they are all zero.
-fn energy_change(e0: f64, e1: f64, scale: f64) -> String {
-    let change = (e1 - e0).abs();
-    if !change.is_finite() {
-        String::new()
-    } else if scale.is_finite() && scale > 0.0 {
-        format!(
-            ", change {change:.1e} J = {:.1e} of |T| + |V| ({scale:.3e} J)",
-            change / scale
-        )
-    } else {
-        format!(", change {change:.1e} J")
-    }
+    finish(
+        &sys.name,
+        &sys.coordinate_names(),
+        &setting,
+        o.t_end,
+        &r,
+        json,
+    )
 }

@@ -606,10 +606,18 @@ impl MixedAlpha<'_, '_> {
     /// The force each mount applies to its cable end, world axes (`−λ` of
     /// the position rows; `z = 0` when planar).
     pub fn reactions(&self) -> Vec<[f64; 3]> {
-        let lambda = self.multipliers();
+        self.model().mount_forces(self.multipliers())
+    }
+}
+
+impl MixedModel<'_> {
+    /// The force each mount applies to its cable end, world axes, from
+    /// the multipliers `lambda` (`−λ` of the position rows; `z = 0` when
+    /// planar).
+    pub fn mount_forces(&self, lambda: &[f64]) -> Vec<[f64; 3]> {
         let mut out = Vec::new();
         let mut row = 0;
-        for a in &self.model().attachments {
+        for a in &self.attachments {
             let mut f = [0.0; 3];
             for (k, fk) in f.iter_mut().enumerate().take(a.dim) {
                 *fk = -lambda[row + k];

@@ -13,6 +13,8 @@
 //!   mixed model implement.
 //! - [`run`]: the run's types (state, options, step control, errors,
 //!   counters), shared by both integrators and every vector model.
+//! - [`simulate`]: one run of cables alone or a mixed model into the
+//!   common [`crate::RunReport`] and CSV [`crate::table::Table`].
 //! - [`dynamics`]: the structure's side of [`alpha::AlphaModel`], and RK4
 //!   (explicit).
 //! - [`mixed`]: rigid parts and chains in one model, attachment
@@ -27,6 +29,7 @@ pub mod elastica;
 pub mod mixed;
 pub mod model;
 pub mod run;
+pub mod simulate;
 pub mod sparse;
 pub mod statics;
 
@@ -36,6 +39,7 @@ pub use mixed::statics::{MixedStaticError, MixedStaticSolution, Stability, solve
 pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, RigidPart};
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 pub use run::{AlphaOptions, DynamicsError, DynamicsStats, State, StepControl, Violation};
+pub use simulate::{CableLayout, ElementRun, simulate_mixed, simulate_structure};
 pub use sparse::{AutoLu, BandedLu, FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
 pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};
 

@@ -1,0 +1,430 @@
+//! One run of a model with elements — cables alone (a [`StructuralModel`]
+//! of every cable) or cables hung at markers of a rigid part (a
+//! [`MixedModel`]) — into the same [`RunReport`] and [`Table`] as a
+//! compiled or interpreted rigid model's run (`crate::run::simulate`):
+//! the same [`Stop`] when a run ends early (the report up to the last
+//! accepted step, never an error), the same counters, the same energy
+//! line, the same CSV writer. What only such models have is the report's
+//! [`ElementReport`]: each cable's nodes and each marker's force at the
+//! end.
+//!
+//! Integrators: generalized-α (fixed step, or step-size control with
+//! [`ElementRun::control`]) on both; RK4 (fixed step) on a structure
+//! alone (a mixed model's attachments are an index-3 system, which an
+//! explicit method does not solve).
+
+use super::alpha::{AlphaModel, GeneralizedAlpha};
+use super::dynamics::integrate_rk4;
+use super::mixed::MixedModel;
+use super::model::StructuralModel;
+use super::run::{AlphaOptions, DynamicsError, DynamicsStats, State, StepControl};
+use crate::Integrator;
+use crate::run::{CableState, ElementReport, MountForce, RunError, RunReport, RunStats, Stop};
+use crate::table::Table;
+use std::time::Instant;
+
+/// Where one cable's nodes sit in a structure's full coordinates.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CableLayout {
+    /// The cable's name.
+    pub name: String,
+    /// Its element type's name.
+    pub kernel: &'static str,
+    /// Dimension of positions (2 or 3).
+    pub dim: usize,
+    /// Coordinates per node.
+    pub node_coords: usize,
+    /// Number of nodes.
+    pub nodes: usize,
+    /// Full structural index of its first node's first coordinate (node
+    /// `j`'s coordinates start at `offset + j · node_coords`).
+    pub offset: usize,
+}
+
+impl CableLayout {
+    /// Position of `node` in the structure's full coordinates (`z = 0`
+    /// when planar).
+    pub fn node_position(&self, q_full: &[f64], node: usize) -> [f64; 3] {
+        let mut p = [0.0; 3];
+        for (k, pk) in p.iter_mut().enumerate().take(self.dim) {
+            *pk = q_full[self.offset + node * self.node_coords + k];
+        }
+        p
+    }
+
+    /// The cable at `q_full`, as reported.
+    fn state(&self, q_full: &[f64]) -> CableState {
+        let nodes: Vec<[f64; 3]> = (0..self.nodes)
+            .map(|j| self.node_position(q_full, j))
+            .collect();
+        CableState {
+            cable: self.name.clone(),
+            element: self.kernel.to_string(),
+            elements: self.nodes.saturating_sub(1),
+            first_node: nodes.first().copied().unwrap_or_default(),
+            last_node: nodes.last().copied().unwrap_or_default(),
+            nodes,
+        }
+    }
+}
+
+/// How a model with elements is integrated.
+#[derive(Clone, Debug)]
+pub struct ElementRun {
+    /// [`Integrator::GeneralizedAlpha`], or [`Integrator::Rk4`] on cables
+    /// alone.
+    pub integrator: Integrator,
+    /// End time, s.
+    pub t_end: f64,
+    /// Step, s (with [`ElementRun::control`], the first step); rounded so
+    /// that a whole number of steps reaches `t_end`.
+    pub dt: f64,
+    /// Spectral radius at infinite frequency of generalized-α, in `[0, 1]`.
+    pub rho_inf: f64,
+    /// Step-size control of generalized-α; `None`: the fixed step.
+    pub control: Option<StepControl>,
+    /// Record the trajectory (every accepted step, and the start).
+    pub record: bool,
+}
+
+impl ElementRun {
+    /// What is wrong with these settings, each a sentence (empty: none).
+    pub fn problems(&self) -> Vec<String> {
+        let mut problems = Vec::new();
+        if !(self.t_end > 0.0 && self.t_end.is_finite()) {
+            problems.push(format!("--t-end must be positive, not {}", self.t_end));
+        }
+        if !(self.dt > 0.0 && self.dt.is_finite()) {
+            problems.push(format!("--dt must be positive, not {}", self.dt));
+        }
+        if !(0.0..=1.0).contains(&self.rho_inf) {
+            problems.push(format!("--rho-inf lies in [0, 1], not {}", self.rho_inf));
+        }
+        if let Some(c) = &self.control
+            && !(c.rtol > 0.0 && c.atol > 0.0 && c.rtol.is_finite() && c.atol.is_finite())
+        {
+            problems.push(format!(
+                "--rtol and --atol must be positive, not {} and {}",
+                c.rtol, c.atol
+            ));
+        }
+        match self.integrator {
+            Integrator::GeneralizedAlpha => {}
+            Integrator::Rk4 if self.control.is_some() => problems.push(
+                "--rtol/--atol control generalized-α's step; rk4 on cables takes the fixed step --dt"
+                    .to_string(),
+            ),
+            Integrator::Rk4 => {}
+            other => problems.push(format!(
+                "integrator `{other}` does not run models with elements: use one of {}",
+                Integrator::names_where(Integrator::runs_element_models)
+            )),
+        }
+        problems
+    }
+
+    /// Steps of the fixed step size.
+    pub fn steps(&self) -> usize {
+        (self.t_end / self.dt).round().max(1.0) as usize
+    }
+
+    fn alpha_options(&self) -> AlphaOptions {
+        AlphaOptions {
+            h: self.t_end / self.steps() as f64,
+            rho_inf: self.rho_inf,
+            control: self.control,
+            ..AlphaOptions::default()
+        }
+    }
+}
+
+/// A vector model as a run reports it.
+trait Reported: AlphaModel {
+    /// The rigid part's coordinates and speeds at the end of `y`, `v`
+    /// (none for a structure alone).
+    fn rigid_len(&self) -> usize;
+    /// Total energy and the size of the energies it is measured against
+    /// (`|T| + |V|` of the structure plus the rigid part's `|E|`).
+    fn energies(&self, s: &State) -> (f64, f64);
+    /// The structure's full coordinates of the state's `y`.
+    fn full_of(&self, y: &[f64]) -> Vec<f64>;
+    /// The markers' forces on the cable ends from the multipliers, named.
+    fn mounts(&self, lambda: &[f64]) -> Vec<MountForce>;
+}
+
+impl Reported for StructuralModel {
+    fn rigid_len(&self) -> usize {
+        0
+    }
+    fn energies(&self, s: &State) -> (f64, f64) {
+        let q = self.expand(&s.q);
+        let (t, v) = (
+            self.kinetic_energy(&s.v),
+            self.strain_energy(&q) + self.load_potential(&q),
+        );
+        (t + v, t.abs() + v.abs())
+    }
+    fn full_of(&self, y: &[f64]) -> Vec<f64> {
+        self.expand(y)
+    }
+    fn mounts(&self, _: &[f64]) -> Vec<MountForce> {
+        Vec::new()
+    }
+}
+
+impl Reported for MixedModel<'_> {
+    fn rigid_len(&self) -> usize {
+        self.n() - self.n_structural()
+    }
+    fn energies(&self, s: &State) -> (f64, f64) {
+        let ns = self.n_structural();
+        let st = self.structure();
+        let q = self.structural_full(&s.q);
+        let (t, v) = (
+            st.kinetic_energy(&s.v[..ns]),
+            st.strain_energy(&q) + st.load_potential(&q),
+        );
+        let rigid = self.rigid().energy(s.t, &s.q[ns..], &s.v[ns..]);
+        (t + v + rigid, t.abs() + v.abs() + rigid.abs())
+    }
+    fn full_of(&self, y: &[f64]) -> Vec<f64> {
+        self.structural_full(y)
+    }
+    fn mounts(&self, lambda: &[f64]) -> Vec<MountForce> {
+        self.attachments()
+            .iter()
+            .zip(self.mount_forces(lambda))
+            .map(|(a, force)| MountForce {
+                attachment: a.name.clone(),
+                force,
+            })
+            .collect()
+    }
+}
+
+/// The CSV of a run: `t`, the rigid part's coordinates and speeds, every
+/// node of every cable (`CABLE.nodeK.x|y|z`), the total energy.
+struct Recorder<'a> {
+    cables: &'a [CableLayout],
+    table: Option<Table>,
+}
+
+impl<'a> Recorder<'a> {
+    fn new(cables: &'a [CableLayout], coordinates: &[String], speeds: &[String], on: bool) -> Self {
+        let table = on.then(|| {
+            let mut header = vec!["t".to_string()];
+            header.extend(coordinates.iter().chain(speeds).cloned());
+            for c in cables {
+                for k in 0..c.nodes {
+                    header.extend(["x", "y", "z"].map(|a| format!("{}.node{k}.{a}", c.name)));
+                }
+            }
+            header.push("energy".into());
+            Table::new(header)
+        });
+        Recorder { cables, table }
+    }
+
+    fn record<M: Reported + ?Sized>(&mut self, m: &M, s: &State, q_full: &[f64]) {
+        let Some(table) = &mut self.table else {
+            return;
+        };
+        let nr = m.rigid_len();
+        let mut row = vec![s.t];
+        row.extend_from_slice(&s.q[s.q.len() - nr..]);
+        row.extend_from_slice(&s.v[s.v.len() - nr..]);
+        for c in self.cables {
+            for k in 0..c.nodes {
+                row.extend(c.node_position(q_full, k));
+            }
+        }
+        row.push(m.energies(s).0);
+        table.push(row);
+    }
+}
+
+/// The report of a run from `start` that ended at `end` (why: `stop`).
+#[allow(clippy::too_many_arguments)]
+fn report<M: Reported + ?Sized>(
+    m: &M,
+    cables: &[CableLayout],
+    start: &State,
+    end: &State,
+    lambda: &[f64],
+    stop: Stop,
+    stats: &DynamicsStats,
+    cpu_s: f64,
+    rho_inf: f64,
+) -> RunReport {
+    let nr = m.rigid_len();
+    let (e0, s0) = m.energies(start);
+    let (e1, s1) = m.energies(end);
+    let q_full = m.full_of(&end.q);
+    RunReport {
+        t: end.t,
+        q: end.q[end.q.len() - nr..].to_vec(),
+        u: end.v[end.v.len() - nr..].to_vec(),
+        energy: [e0, e1],
+        energy_scale: s0.max(s1),
+        stop,
+        stats: RunStats {
+            steps: stats.steps + stats.rejected,
+            accepted: stats.steps,
+            rejected: stats.rejected,
+            rhs_evals: stats.force_evaluations,
+            jacobian_evals: stats.factorizations,
+            lu_decompositions: stats.factorizations,
+            newton_iterations: stats.newton_iterations,
+            stiffness_detections: 0,
+            constraints: None,
+        },
+        cpu_s,
+        constrained: None,
+        elements: Some(ElementReport {
+            rho_inf,
+            largest_constraint_residual: stats.max_constraint_residual,
+            cables: cables.iter().map(|c| c.state(&q_full)).collect(),
+            mounts: m.mounts(lambda),
+        }),
+    }
+}
+
+/// A run's stop from the error it ended with (the start's errors are
+/// [`RunError::Elements`]).
+fn stop_of(e: DynamicsError) -> Stop {
+    match e {
+        DynamicsError::StepTooSmall { t, h, .. } => Stop::StepSizeTooSmall { t, h },
+        DynamicsError::NonFinite { t } => Stop::NonFinite {
+            t,
+            coordinate: "a coordinate of the model".into(),
+        },
+        DynamicsError::NewtonFailed { t, .. }
+        | DynamicsError::Singular { t, .. }
+        | DynamicsError::Inconsistent { t, .. } => Stop::Failed {
+            t,
+            message: e.to_string(),
+        },
+    }
+}
+
+/// Generalized-α on `m` from `state`.
+fn run_alpha<M: Reported>(
+    m: &M,
+    cables: &[CableLayout],
+    state: State,
+    names: (&[String], &[String]),
+    run: &ElementRun,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(RunReport, Option<Table>), RunError> {
+    let clock = Instant::now();
+    let start = state.clone();
+    let mut ga =
+        GeneralizedAlpha::new(m, state, run.alpha_options()).map_err(RunError::Elements)?;
+    let mut rec = Recorder::new(cables, names.0, names.1, run.record);
+    rec.record(m, &start, &m.full_of(&start.q));
+    let result = ga.run_to(run.t_end, |s, q| {
+        progress(s.t);
+        rec.record(m, s, q);
+    });
+    let cpu = clock.elapsed().as_secs_f64();
+    let stop = result.map_or_else(stop_of, |()| Stop::Finished);
+    let r = report(
+        m,
+        cables,
+        &start,
+        ga.state(),
+        ga.multipliers(),
+        stop,
+        &ga.stats,
+        cpu,
+        run.rho_inf,
+    );
+    Ok((r, rec.table))
+}
+
+/// Runs cables alone: `model` holds every cable (`cables` says where),
+/// from its reference configuration at rest.
+pub fn simulate_structure(
+    model: &StructuralModel,
+    cables: &[CableLayout],
+    run: &ElementRun,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(RunReport, Option<Table>), RunError> {
+    let problems = run.problems();
+    if !problems.is_empty() {
+        return Err(RunError::Options(problems));
+    }
+    let state = State {
+        t: 0.0,
+        q: model.restrict(model.q0()),
+        v: vec![0.0; model.n_free()],
+    };
+    if run.integrator != Integrator::Rk4 {
+        return run_alpha(model, cables, state, (&[], &[]), run, progress);
+    }
+    let clock = Instant::now();
+    let start = state.clone();
+    let mut rec = Recorder::new(cables, &[], &[], run.record);
+    rec.record(model, &start, model.q0());
+    let (mut last, mut taken) = (start.clone(), 0);
+    let result = integrate_rk4(model, state, run.t_end, run.steps(), |s, q| {
+        progress(s.t);
+        rec.record(model, s, q);
+        last.clone_from(s);
+        taken += 1;
+    });
+    let cpu = clock.elapsed().as_secs_f64();
+    let (end, stats, stop) = match result {
+        Ok((end, stats)) => (end, stats, Stop::Finished),
+        Err(e) => {
+            // The steps before the one that failed, and that one's four
+            // stages.
+            let stats = DynamicsStats {
+                steps: taken,
+                force_evaluations: 4 * (taken + 1),
+                factorizations: 1,
+                ..DynamicsStats::default()
+            };
+            (last, stats, stop_of(e))
+        }
+    };
+    let r = report(
+        model,
+        cables,
+        &start,
+        &end,
+        &[],
+        stop,
+        &stats,
+        cpu,
+        f64::NAN,
+    );
+    Ok((r, rec.table))
+}
+
+/// Runs a rigid part with cables hung at its markers from the rigid
+/// coordinates `q0` and speeds `u0` (the cables at their reference, at
+/// rest); `coordinates` and `speeds` name the rigid part's.
+pub fn simulate_mixed(
+    model: &MixedModel<'_>,
+    cables: &[CableLayout],
+    (q0, u0): (&[f64], &[f64]),
+    names: (&[String], &[String]),
+    run: &ElementRun,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(RunReport, Option<Table>), RunError> {
+    let mut problems = run.problems();
+    if run.integrator == Integrator::Rk4 {
+        problems.push(
+            "the cables hang at rigid bodies: the attachments are constraints (an index-3 \
+             differential-algebraic system), which rk4 does not solve; use --integrator \
+             generalized-alpha"
+                .to_string(),
+        );
+    }
+    if !problems.is_empty() {
+        return Err(RunError::Options(problems));
+    }
+    let state = model.initial_state(0.0, q0, u0);
+    run_alpha(model, cables, state, names, run, progress)
+}

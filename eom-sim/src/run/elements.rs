@@ -1,0 +1,54 @@
+//! The part of a [`super::RunReport`] that only models with elements have
+//! (cables alone, or hung at markers of a rigid part): the integrator's
+//! element counters, each cable's nodes at the end and the force of each
+//! marker on the cable end it holds. The run itself is
+//! `eom_sim::large::simulate` (feature `cables`); these are plain data, so
+//! a report reads the same with or without that feature.
+
+#[cfg(feature = "serde")]
+use serde::{Deserialize, Serialize};
+
+/// One cable at the end of a run.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub struct CableState {
+    /// The cable's name.
+    pub cable: String,
+    /// Its element type (`Cable2D`, …).
+    pub element: String,
+    /// Number of elements.
+    pub elements: usize,
+    /// Position of the first node, m (`z = 0` when planar).
+    pub first_node: [f64; 3],
+    /// Position of the last node, m.
+    pub last_node: [f64; 3],
+    /// Every node's position, first to last, m.
+    pub nodes: Vec<[f64; 3]>,
+}
+
+/// The force a marker applies to the cable end it holds, at the end of a
+/// run.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub struct MountForce {
+    /// The attachment (`CABLE.start` or `CABLE.end`).
+    pub attachment: String,
+    /// The force on the cable, N (world axes).
+    pub force: [f64; 3],
+}
+
+/// What a run of a model with elements reports beyond the common fields.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub struct ElementReport {
+    /// Spectral radius at infinite frequency of generalized-α (NaN for
+    /// RK4).
+    pub rho_inf: f64,
+    /// Largest `‖Φ‖∞` of the attachments and the rigid part's own
+    /// equations after a step (0 without constraints).
+    pub largest_constraint_residual: f64,
+    /// Every cable, in file order.
+    pub cables: Vec<CableState>,
+    /// Every marker holding a cable end (`System::cable_mounts` order).
+    pub mounts: Vec<MountForce>,
+}
