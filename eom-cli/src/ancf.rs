@@ -21,13 +21,11 @@ use crate::report::{Setting, finish};
 use eom_gen::Checked;
 use eom_sim::Integrator;
 use eom_sim::RunError;
-use eom_sim::large::ancf::{Chain, chain};
 use eom_sim::large::{
-    AlphaOptions, ElementRun, MixedAlpha, StaticOptions, simulate_mixed, simulate_structure,
-    solve_static,
+    AlphaOptions, ElementRun, MixedAlpha, MixedStaticError, StaticOptions, equilibrium_mixed,
+    equilibrium_structure, simulate_mixed, simulate_structure,
 };
 use serde_json::json;
-use std::fmt::Write;
 use std::process::ExitCode;
 
 /// True if the model has ANCF chains.
@@ -35,20 +33,9 @@ pub fn has_cables(checked: &Checked) -> bool {
     !checked.system.cables.is_empty()
 }
 
-fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
+/// Refuses rigid bodies beside cables none of which hangs at them.
+fn cables_alone(checked: &Checked) -> Result<(), Error> {
     let sys = &checked.system;
-    if sys.cables.is_empty() {
-        return Err(Error::Refused(format!(
-            "model `{}` has no cables: solve-static solves the equilibrium of ANCF chains (`cables:`)",
-            sys.name
-        )));
-    }
-    if eom_gen::cables::has_mounts(sys) {
-        return Err(Error::Refused(format!(
-            "model `{}` hangs cables at rigid bodies: it runs as one mixed model, not chain by chain",
-            sys.name
-        )));
-    }
     if sys.bodies.len() > 1 {
         return Err(Error::Refused(format!(
             "model `{}` mixes rigid bodies and cables that do not hang at them: \
@@ -56,90 +43,69 @@ fn build(checked: &Checked) -> Result<Vec<(String, Chain)>, Error> {
             sys.name
         )));
     }
-    sys.cables
-        .iter()
-        .map(|c| {
-            chain(&eom_gen::cables::chain_spec(c))
-                .map(|mut ch| {
-                    if c.distributed_load != [0.0; 3] {
-                        ch.model.add_distributed_load(c.distributed_load);
-                    }
-                    for &(node, f) in &c.node_forces {
-                        for (k, &fk) in f.iter().enumerate().take(ch.dim) {
-                            let i = ch.position_index(node, k);
-                            ch.model.add_point_load(i, fk);
-                        }
-                    }
-                    (c.name.clone(), ch)
-                })
-                .map_err(|e| Error::Refused(format!("cable `{}`: {e}", c.name)))
-        })
-        .collect()
+    Ok(())
 }
 
-/// `eom-gen solve-static` on cables that hang at no rigid body (a mixed
-/// model is `crate::mixed_static`'s).
+/// The refusal of a mixed static solve, with the rigid coordinates named.
+fn refusal(model: &str, coords: &[&str], e: &MixedStaticError) -> Error {
+    let mut text = e.to_string();
+    let mut free = e.free_rigid_coordinates();
+    // Longest indices first, so that `1` does not rewrite `10`.
+    free.sort_by_key(|f| std::cmp::Reverse(f.0));
+    for (i, _) in free {
+        if let Some(name) = coords.get(i) {
+            text = text.replace(
+                &format!("rigid coordinate {i} ("),
+                &format!("coordinate `{name}` ("),
+            );
+        }
+    }
+    Error::Refused(format!("model `{model}`: {text}"))
+}
+
+/// `eom-gen solve-static`: cables alone as one structure of every cable
+/// (Newton with load stepping), cables hung at markers as one mixed model
+/// (Newton on the KKT system, with the equilibrium's stability), both
+/// into the one `StaticReport`.
 pub fn solve_static_cmd(
     checked: &Checked,
     opts: &StaticOptions,
     json_out: bool,
 ) -> Result<String, Error> {
-    let chains = build(checked)?;
-    let mut text = String::new();
-    let mut report = Vec::new();
-    for (name, ch) in &chains {
-        let m = &ch.model;
-        let start = std::time::Instant::now();
-        let sol =
-            solve_static(m, opts).map_err(|e| Error::Refused(format!("cable `{name}`: {e}")))?;
-        let cpu = start.elapsed().as_secs_f64();
-        let tip0 = ch.node_position(m.q0(), ch.nodes - 1);
-        let tip = ch.node_position(&sol.q, ch.nodes - 1);
-        let disp = [tip[0] - tip0[0], tip[1] - tip0[1], tip[2] - tip0[2]];
-        let _ = writeln!(
-            text,
-            "cable {name}: {} × {}, {} coordinates ({} free), {} load steps ({} halved), {} factorisations, {:.3} ms",
-            ch.nodes - 1,
-            ch.kernel,
-            m.n_full(),
-            m.n_free(),
-            sol.steps.len(),
-            sol.cuts,
-            sol.factorizations,
-            cpu * 1e3
-        );
-        write_load_steps(&mut text, &sol.steps);
-        let _ = writeln!(
-            text,
-            "  end node at ({:.9}, {:.9}, {:.9}) m, displaced by ({:.9}, {:.9}, {:.9}) m",
-            tip[0], tip[1], tip[2], disp[0], disp[1], disp[2]
-        );
-        report.push(json!({
-            "cable": name,
-            "element": ch.kernel.name(),
-            "elements": ch.nodes - 1,
-            "coordinates": m.n_full(),
-            "free": m.n_free(),
-            "cuts": sol.cuts,
-            "factorizations": sol.factorizations,
-            "cpu_seconds": cpu,
-            "steps": sol.steps.iter().map(|s| json!({
-                "lambda": s.lambda,
-                "iterations": s.iterations(),
-                "residuals": s.residuals,
-            })).collect::<Vec<_>>(),
-            "end_position": tip,
-            "end_displacement": disp,
-            "nodes": (0..ch.nodes).map(|j| ch.node_position(&sol.q, j)).collect::<Vec<_>>(),
-        }));
+    let sys = &checked.system;
+    if sys.cables.is_empty() {
+        return Err(Error::Refused(format!(
+            "model `{}` has no cables: solve-static solves the equilibrium of ANCF chains (`cables:`)",
+            sys.name
+        )));
     }
-    if json_out {
-        Ok(format!(
-            "{}\n",
-            json!({ "model": checked.system.name, "cables": report })
-        ))
+    let refused = |e: eom_gen::cables::CableError| Error::Refused(e.to_string());
+    let coordinates = sys.coordinate_names();
+    let report = if eom_gen::cables::has_mounts(sys) {
+        let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
+            .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
+        eom_gen::cables::check_rigid(sys, &f).map_err(refused)?;
+        let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
+            .map_err(refused)?;
+        let (q0, _) = eom_gen::cables::rigid_start(sys, &f).map_err(refused)?;
+        equilibrium_mixed(&mixed.model, &mixed.cables, &q0, opts)
+            .map_err(|e| refusal(&sys.name, &coordinates, &e))?
     } else {
-        Ok(text)
+        cables_alone(checked)?;
+        let (built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
+        equilibrium_structure(&built.model, &cables, opts)
+            .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?
+    };
+    if json_out {
+        serde_json::to_string(&report)
+            .map(|t| t + "\n")
+            .map_err(|e| Error::Refused(format!("cannot encode the report: {e}")))
+    } else {
+        Ok(crate::report::static_summary(
+            &sys.name,
+            &coordinates,
+            &report,
+        ))
     }
 }
 
@@ -183,13 +149,7 @@ pub fn simulate_cmd(
             &mut progress,
         )
     } else {
-        if sys.bodies.len() > 1 {
-            return Err(Error::Refused(format!(
-                "model `{}` mixes rigid bodies and cables that do not hang at them: \
-                 hold a cable end at a marker (`start_at`/`end_at`), or simulate the cables in a model of their own",
-                sys.name
-            )));
-        }
+        cables_alone(checked)?;
         let (built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
         simulate_structure(&built.model, &cables, run, &mut progress)
     }
@@ -309,72 +269,4 @@ fn whole_model(
         "mounts": mounts,
         "cable_state": "straight and at rest, as in the model file",
     }))
-}
-
-/// The report lines of a static solve's load steps: load factor,
-/// iterations, residual history.
-pub fn write_load_steps(text: &mut String, steps: &[eom_sim::large::LoadStep]) {
-    for s in steps {
-        let _ = writeln!(
-            text,
-            "  λ = {:<8.4} {:>2} iterations, |r|∞: {}",
-            s.lambda,
-            s.iterations(),
-            s.residuals
-                .iter()
-                .map(|r| format!("{r:.2e}"))
-                .collect::<Vec<_>>()
-                .join(" → ")
-        );
-    }
-}
-
-/// The state of a mixed model in the report of `simulate` and
-/// `solve-static`: the rigid coordinates, each cable's end nodes and the
-/// force of each marker on its cable end; returns the JSON `cables`
-/// array (per cable its name, element, element count, first, last and
-/// every node).
-pub fn write_mixed_state(
-    text: &mut String,
-    coords: &[&str],
-    rigid_q: &[f64],
-    cables: &[eom_gen::cables::MixedCable],
-    q_full: &[f64],
-    mounts: &[String],
-    reactions: &[[f64; 3]],
-) -> Vec<serde_json::Value> {
-    let qs: Vec<String> = coords
-        .iter()
-        .zip(rigid_q)
-        .map(|(n, v)| format!("{n} = {v:.9}"))
-        .collect();
-    if !qs.is_empty() {
-        let _ = writeln!(text, "  rigid part: {}", qs.join(", "));
-    }
-    let mut report = Vec::new();
-    for c in cables {
-        let nodes: Vec<[f64; 3]> = (0..c.nodes).map(|j| c.node_position(q_full, j)).collect();
-        let (first, last) = (nodes[0], nodes[c.nodes - 1]);
-        let _ = writeln!(
-            text,
-            "  cable {} nodes: first at ({:.9}, {:.9}, {:.9}) m, last at ({:.9}, {:.9}, {:.9}) m",
-            c.name, first[0], first[1], first[2], last[0], last[1], last[2]
-        );
-        report.push(json!({
-            "cable": c.name,
-            "element": c.kernel,
-            "elements": c.nodes - 1,
-            "first_node": first,
-            "last_node": last,
-            "nodes": nodes,
-        }));
-    }
-    for (n, f) in mounts.iter().zip(reactions) {
-        let _ = writeln!(
-            text,
-            "  force of the marker on {n}: ({:.6e}, {:.6e}, {:.6e}) N",
-            f[0], f[1], f[2]
-        );
-    }
-    report
 }

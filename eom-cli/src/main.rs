@@ -10,7 +10,6 @@ mod cable_report;
 mod cmd;
 mod compiled;
 mod error;
-mod mixed_static;
 mod open;
 mod output;
 mod plot;

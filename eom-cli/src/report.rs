@@ -4,6 +4,7 @@
 //! exit status (0 when the run reached its end time, 3 with the reason
 //! when it stopped early).
 
+use eom_sim::run::{CableState, MountForce, StaticReport};
 use eom_sim::{Integrator, RunReport};
 use std::fmt::Write;
 use std::process::ExitCode;
@@ -84,22 +85,7 @@ pub fn summary(name: &str, coordinates: &[&str], o: &Setting<'_>, r: &RunReport)
         let _ = writeln!(s, "  final {}", q.join(", "));
     }
     if let Some(e) = &r.elements {
-        for c in &e.cables {
-            let (a, b) = (c.first_node, c.last_node);
-            let _ = writeln!(
-                s,
-                "  cable {}: {} × {}, first node at ({:.9}, {:.9}, {:.9}) m, last node at ({:.9}, {:.9}, {:.9}) m",
-                c.cable, c.elements, c.element, a[0], a[1], a[2], b[0], b[1], b[2]
-            );
-        }
-        for m in &e.mounts {
-            let f = m.force;
-            let _ = writeln!(
-                s,
-                "  force of the marker on {}: ({:.6e}, {:.6e}, {:.6e}) N",
-                m.attachment, f[0], f[1], f[2]
-            );
-        }
+        write_elements(&mut s, &e.cables, &e.mounts);
         if !e.mounts.is_empty() || e.largest_constraint_residual > 0.0 {
             let _ = writeln!(
                 s,
@@ -156,4 +142,79 @@ fn energy_change(e0: f64, e1: f64, scale: f64) -> String {
     } else {
         format!(", change {change:.1e} J")
     }
+}
+
+/// Each cable's end nodes and each marker's force on its cable end.
+fn write_elements(s: &mut String, cables: &[CableState], mounts: &[MountForce]) {
+    for c in cables {
+        let (a, b) = (c.first_node, c.last_node);
+        let _ = writeln!(
+            s,
+            "  cable {}: {} × {}, first node at ({:.9}, {:.9}, {:.9}) m, last node at ({:.9}, {:.9}, {:.9}) m",
+            c.cable, c.elements, c.element, a[0], a[1], a[2], b[0], b[1], b[2]
+        );
+    }
+    for m in mounts {
+        let f = m.force;
+        let _ = writeln!(
+            s,
+            "  force of the marker on {}: ({:.6e}, {:.6e}, {:.6e}) N",
+            m.attachment, f[0], f[1], f[2]
+        );
+    }
+}
+
+/// The human summary of a static solve: the load steps with their
+/// residual histories, the rigid coordinates, the cables' end nodes, the
+/// markers' forces, the constraint residual and the stability.
+pub fn static_summary(name: &str, coordinates: &[&str], r: &StaticReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{name}: static equilibrium, {} unknowns, {} constraint equations",
+        r.unknowns, r.constraints
+    );
+    let iterations: usize = r.load_steps.iter().map(|l| l.iterations).sum();
+    let _ = writeln!(
+        s,
+        "  {} load steps ({} halved), {iterations} Newton iterations ({} regularised: singular tangent), {} factorisations, {:.3} ms",
+        r.load_steps.len(),
+        r.cuts,
+        r.regularized,
+        r.factorizations,
+        r.cpu_s * 1e3
+    );
+    for l in &r.load_steps {
+        let _ = writeln!(
+            s,
+            "  λ = {:<8.4} {:>2} iterations, |r|∞: {}",
+            l.lambda,
+            l.iterations,
+            l.residuals
+                .iter()
+                .map(|r| format!("{r:.2e}"))
+                .collect::<Vec<_>>()
+                .join(" → ")
+        );
+    }
+    if !r.q.is_empty() {
+        let q: Vec<String> = coordinates
+            .iter()
+            .zip(&r.q)
+            .map(|(n, v)| format!("{n} = {v:.9}"))
+            .collect();
+        let _ = writeln!(s, "  rigid part: {}", q.join(", "));
+    }
+    write_elements(&mut s, &r.cables, &r.mounts);
+    if r.constraints > 0 {
+        let _ = writeln!(
+            s,
+            "  constraint residual |Φ|∞ {:.3e}; condition estimate of the KKT matrix {:.2e}",
+            r.constraint_residual, r.condition
+        );
+    }
+    if let Some(st) = &r.stability {
+        let _ = writeln!(s, "  {}", st.summary);
+    }
+    s
 }

@@ -70,10 +70,10 @@ fn the_crane_rope_meets_the_closed_form() {
     }
     let theta = num(&v["q"][0]);
     println!("θ = {theta:.12}, closed form {want:.12}");
-    assert_eq!(v["coordinates"][0], "theta");
+    assert_eq!(v["q"].as_array().map(Vec::len), Some(1));
     assert!((theta - want).abs() < 1e-9, "{theta} vs {want}");
     // The marker holds the whole weight, straight up.
-    let f = &v["reactions"][0];
+    let f = &v["mounts"][0]["force"];
     assert!(num(&f[0]).abs() < 1e-8 && (num(&f[1]) - w).abs() < 1e-8 * w);
     // Vertical below the tip, stretched as the hanging bar.
     let (first, last) = (&v["cables"][0]["first_node"], &v["cables"][0]["last_node"]);
@@ -121,7 +121,7 @@ fn the_pendulum_rod_hangs_straight_down() {
     );
     assert!((num(&first[1]) + 0.3).abs() < 1e-9 && num(&last[0]).abs() < 1e-9);
     assert!((num(&first[1]) - num(&last[1]) - l - stretch).abs() < 1e-9);
-    assert!((num(&v["reactions"][0][1]) - rho_a * l * G).abs() < 1e-8);
+    assert!((num(&v["mounts"][0]["force"][1]) - rho_a * l * G).abs() < 1e-8);
     assert_eq!(v["stability"]["stable"], true);
 }
 
@@ -229,7 +229,8 @@ fn trapeze_rests_level_on_two_ropes_each_stretched_as_a_hanging_bar() {
         num(&q[1]),
         -(l + stretch)
     );
-    for r in v["reactions"].as_array().into_iter().flatten() {
+    for r in v["mounts"].as_array().into_iter().flatten() {
+        let r = &r["force"];
         assert!((num(&r[1]) + 0.5 * m * g).abs() < 1e-9, "marker force {r}");
     }
     assert_eq!(v["cables"].as_array().map(Vec::len), Some(2));
@@ -254,7 +255,7 @@ fn fourbar_with_a_cable_rests_with_crank_and_rocker_upright_unstable() {
     );
     assert!(num(&v["constraint_residual"]) < 1e-12);
     let (rho, area, lc, e, g) = (1500.0, 0.02 * 0.02, 0.4, 1e6, 9.81);
-    let r = &v["reactions"][0];
+    let r = &v["mounts"][0]["force"];
     assert!(
         (num(&r[1]) - rho * area * lc * g).abs() < 1e-9,
         "marker force {r}"

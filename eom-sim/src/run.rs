@@ -30,7 +30,9 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 mod elements;
-pub use elements::{CableState, ElementReport, MountForce};
+pub use elements::{
+    CableState, ElementReport, LoadStepReport, MountForce, StabilityReport, StaticReport,
+};
 
 impl Method {
     /// The methods with their default settings, in the order of the docs.

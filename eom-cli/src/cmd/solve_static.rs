@@ -1,6 +1,5 @@
-//! `eom-gen solve-static`: the static equilibrium of a model's cables
-//! (`crate::ancf`), or of a mixed model whose cables hang at rigid bodies
-//! (`crate::mixed_static`).
+//! `eom-gen solve-static`: the static equilibrium of a model's cables,
+//! alone or hung at rigid bodies (`crate::ancf`).
 
 use crate::args::{ParamArgs, Vary};
 use crate::error::Error;
@@ -65,12 +64,7 @@ pub fn run(a: &SolveStaticArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         atol: a.atol,
         ..Default::default()
     };
-    let result = if eom_gen::cables::has_mounts(&checked.system) {
-        crate::mixed_static::solve_static_mixed_cmd(&checked, &opts, a.json)
-    } else {
-        crate::ancf::solve_static_cmd(&checked, &opts, a.json)
-    };
-    match result {
+    match crate::ancf::solve_static_cmd(&checked, &opts, a.json) {
         Ok(text) => {
             print!("{text}");
             ExitCode::SUCCESS

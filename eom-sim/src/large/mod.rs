@@ -39,7 +39,10 @@ pub use mixed::statics::{MixedStaticError, MixedStaticSolution, Stability, solve
 pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, RigidPart};
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 pub use run::{AlphaOptions, DynamicsError, DynamicsStats, State, StepControl, Violation};
-pub use simulate::{CableLayout, ElementRun, simulate_mixed, simulate_structure};
+pub use simulate::{
+    CableLayout, ElementRun, equilibrium_mixed, equilibrium_structure, simulate_mixed,
+    simulate_structure,
+};
 pub use sparse::{AutoLu, BandedLu, FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
 pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};
 

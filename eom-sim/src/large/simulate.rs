@@ -16,10 +16,15 @@
 use super::alpha::{AlphaModel, GeneralizedAlpha};
 use super::dynamics::integrate_rk4;
 use super::mixed::MixedModel;
+use super::mixed::statics::{MixedStaticError, Stability, solve_static_mixed};
 use super::model::StructuralModel;
 use super::run::{AlphaOptions, DynamicsError, DynamicsStats, State, StepControl};
+use super::statics::{LoadStep, StaticError, StaticOptions, solve_static};
 use crate::Integrator;
-use crate::run::{CableState, ElementReport, MountForce, RunError, RunReport, RunStats, Stop};
+use crate::run::{
+    CableState, ElementReport, LoadStepReport, MountForce, RunError, RunReport, RunStats,
+    StabilityReport, StaticReport, Stop,
+};
 use crate::table::Table;
 use std::time::Instant;
 
@@ -427,4 +432,98 @@ pub fn simulate_mixed(
     }
     let state = model.initial_state(0.0, q0, u0);
     run_alpha(model, cables, state, names, run, progress)
+}
+
+fn load_steps(steps: &[LoadStep]) -> Vec<LoadStepReport> {
+    steps
+        .iter()
+        .map(|s| LoadStepReport {
+            lambda: s.lambda,
+            iterations: s.iterations(),
+            residuals: s.residuals.clone(),
+        })
+        .collect()
+}
+
+/// The static equilibrium of cables alone: Newton with load stepping on
+/// the structure of every cable (`cables` says where each sits).
+pub fn equilibrium_structure(
+    model: &StructuralModel,
+    cables: &[CableLayout],
+    opts: &StaticOptions,
+) -> Result<StaticReport, StaticError> {
+    let clock = Instant::now();
+    let sol = solve_static(model, opts)?;
+    let cpu_s = clock.elapsed().as_secs_f64();
+    Ok(StaticReport {
+        q: Vec::new(),
+        unknowns: model.n_free(),
+        constraints: 0,
+        load_steps: load_steps(&sol.steps),
+        cuts: sol.cuts,
+        regularized: 0,
+        factorizations: sol.factorizations,
+        cpu_s,
+        constraint_residual: 0.0,
+        condition: f64::NAN,
+        stability: None,
+        cables: cables.iter().map(|c| c.state(&sol.q)).collect(),
+        mounts: Vec::new(),
+    })
+}
+
+/// The static equilibrium of a rigid part with cables hung at its
+/// markers, from the rigid coordinates `q0` (Newton on the KKT system
+/// with load stepping), with its stability.
+pub fn equilibrium_mixed(
+    model: &MixedModel<'_>,
+    cables: &[CableLayout],
+    q0: &[f64],
+    opts: &StaticOptions,
+) -> Result<StaticReport, MixedStaticError> {
+    let clock = Instant::now();
+    let sol = solve_static_mixed(model, 0.0, q0, opts)?;
+    let cpu_s = clock.elapsed().as_secs_f64();
+    let summary = sol.stability.to_string();
+    let stability = match &sol.stability {
+        Stability::Stable { omega2_min } => StabilityReport {
+            stable: Some(true),
+            omega2_min: *omega2_min,
+            negative: 0,
+            reason: None,
+            summary,
+        },
+        Stability::Unstable {
+            omega2_min,
+            negative,
+        } => StabilityReport {
+            stable: Some(false),
+            omega2_min: *omega2_min,
+            negative: *negative,
+            reason: None,
+            summary,
+        },
+        Stability::NotChecked { reason } => StabilityReport {
+            stable: None,
+            omega2_min: f64::NAN,
+            negative: 0,
+            reason: Some(reason.to_string()),
+            summary,
+        },
+    };
+    Ok(StaticReport {
+        q: sol.y[model.n_structural()..].to_vec(),
+        unknowns: model.n(),
+        constraints: model.n_constraints(),
+        load_steps: load_steps(&sol.steps),
+        cuts: sol.cuts,
+        regularized: sol.regularized,
+        factorizations: sol.factorizations,
+        cpu_s,
+        constraint_residual: sol.constraint_residual,
+        condition: sol.condition,
+        stability: Some(stability),
+        cables: cables.iter().map(|c| c.state(&sol.q_full)).collect(),
+        mounts: model.mounts(&sol.lambda),
+    })
 }

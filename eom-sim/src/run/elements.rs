@@ -52,3 +52,70 @@ pub struct ElementReport {
     /// Every marker holding a cable end (`System::cable_mounts` order).
     pub mounts: Vec<MountForce>,
 }
+
+/// One load step of a static solve.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub struct LoadStepReport {
+    /// Load factor reached.
+    pub lambda: f64,
+    /// Newton iterations.
+    pub iterations: usize,
+    /// `‖r‖∞` before each Newton correction and after the last one.
+    pub residuals: Vec<f64>,
+}
+
+/// Whether a static equilibrium is stable, from the smallest eigenvalue
+/// `ω²` of the (constraint-reduced) tangent.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub struct StabilityReport {
+    /// `true` stable, `false` unstable, `None` not checked.
+    pub stable: Option<bool>,
+    /// The smallest `ω²` (NaN when not checked).
+    pub omega2_min: f64,
+    /// Negative eigenvalues (unstable directions).
+    pub negative: usize,
+    /// Why it was not checked.
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "Option::is_none")
+    )]
+    pub reason: Option<String>,
+    /// In words.
+    pub summary: String,
+}
+
+/// What `solve-static` reports for a model with elements, cables alone or
+/// hung at a rigid part.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub struct StaticReport {
+    /// The rigid part's coordinates at equilibrium (empty for cables
+    /// alone).
+    pub q: Vec<f64>,
+    /// Unknowns of the solve (free coordinates, with the rigid part's).
+    pub unknowns: usize,
+    /// Constraint equations (attachments and the rigid part's own).
+    pub constraints: usize,
+    /// The accepted load steps in order.
+    pub load_steps: Vec<LoadStepReport>,
+    /// Load steps that failed and were halved.
+    pub cuts: usize,
+    /// Newton iterations whose tangent was singular and regularised.
+    pub regularized: usize,
+    /// Numeric factorisations.
+    pub factorizations: usize,
+    /// CPU (wall) time, s.
+    pub cpu_s: f64,
+    /// `‖Φ‖∞` at equilibrium (0 without constraints).
+    pub constraint_residual: f64,
+    /// Condition estimate of the KKT matrix (NaN without constraints).
+    pub condition: f64,
+    /// Stability of the equilibrium (`None`: not assessed, cables alone).
+    pub stability: Option<StabilityReport>,
+    /// Every cable at equilibrium, in file order.
+    pub cables: Vec<CableState>,
+    /// Every marker's force on the cable end it holds.
+    pub mounts: Vec<MountForce>,
+}

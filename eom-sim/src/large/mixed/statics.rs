@@ -182,17 +182,7 @@ impl MixedStaticSolution {
     /// the position rows; `z = 0` when planar), in the order of
     /// [`MixedModel::attachments`].
     pub fn reactions(&self, model: &MixedModel<'_>) -> Vec<[f64; 3]> {
-        let mut out = Vec::new();
-        let mut row = 0;
-        for a in model.attachments() {
-            let mut f = [0.0; 3];
-            for (k, fk) in f.iter_mut().enumerate().take(a.dim) {
-                *fk = -self.lambda[row + k];
-            }
-            out.push(f);
-            row += a.equations();
-        }
-        out
+        model.mount_forces(&self.lambda)
     }
 }
 
