@@ -180,13 +180,12 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 7] = [
+    let refused: [(&str, bool); 6] = [
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--q0", a.initial.q0.is_some()),
         ("--u0", a.initial.u0.is_some()),
         ("--input", !a.inputs.inputs.is_empty()),
-        ("--every", a.every.is_some()),
         ("--interpret", a.interpret),
     ];
     for (option, given) in refused {
@@ -195,7 +194,7 @@ fn simulate_cables(
                 "{option} does not apply to `{}`, a model with cables: it runs generalized-α \
                  (fixed step, or step control with --rtol/--atol) or rk4 (fixed step); its \
                  options are --t-end, --dt, --rtol, --atol, --integrator generalized-alpha|rk4, \
-                 --rho-inf, --param, --csv and --json",
+                 --rho-inf, --param, --csv, --every and --json",
                 checked.system.name
             ));
         }
@@ -222,6 +221,7 @@ fn simulate_cables(
             eom_sim::large::StepControl::new(rtol, a.atol.unwrap_or(rtol))
         }),
         record: a.csv.is_some(),
+        every: a.every,
     };
     match crate::ancf::simulate_cmd(checked, &run, a.csv.as_deref(), a.json) {
         Ok(code) => code,

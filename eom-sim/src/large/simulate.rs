@@ -88,8 +88,14 @@ pub struct ElementRun {
     pub rho_inf: f64,
     /// Step-size control of generalized-α; `None`: the fixed step.
     pub control: Option<StepControl>,
-    /// Record the trajectory (every accepted step, and the start).
+    /// Record the trajectory (the start, then every accepted step, or
+    /// the samples of [`ElementRun::every`]).
     pub record: bool,
+    /// Sample the trajectory every this many seconds (from t = 0; the end
+    /// of the run is the last row) by cubic Hermite interpolation of the
+    /// positions between accepted steps (their speeds the interpolant's
+    /// derivative); `None`: every accepted step.
+    pub every: Option<f64>,
 }
 
 impl ElementRun {
@@ -101,6 +107,11 @@ impl ElementRun {
         }
         if !(self.dt > 0.0 && self.dt.is_finite()) {
             problems.push(format!("--dt must be positive, not {}", self.dt));
+        }
+        if let Some(e) = self.every
+            && !(e > 0.0 && e.is_finite())
+        {
+            problems.push(format!("--every must be positive, not {e}"));
         }
         if !(0.0..=1.0).contains(&self.rho_inf) {
             problems.push(format!("--rho-inf lies in [0, 1], not {}", self.rho_inf));
@@ -208,15 +219,25 @@ impl Reported for MixedModel<'_> {
 }
 
 /// The CSV of a run: `t`, the rigid part's coordinates and speeds, every
-/// node of every cable (`CABLE.nodeK.x|y|z`), the total energy.
+/// node of every cable (`CABLE.nodeK.x|y|z`), the total energy; at every
+/// accepted step, or at the samples `k · every`.
 struct Recorder<'a> {
     cables: &'a [CableLayout],
     table: Option<Table>,
+    every: Option<f64>,
+    /// The next sample's index `k`.
+    next: usize,
+    /// The last accepted state.
+    prev: Option<State>,
 }
 
 impl<'a> Recorder<'a> {
-    fn new(cables: &'a [CableLayout], coordinates: &[String], speeds: &[String], on: bool) -> Self {
-        let table = on.then(|| {
+    fn new(
+        cables: &'a [CableLayout],
+        (coordinates, speeds): (&[String], &[String]),
+        run: &ElementRun,
+    ) -> Self {
+        let table = run.record.then(|| {
             let mut header = vec!["t".to_string()];
             header.extend(coordinates.iter().chain(speeds).cloned());
             for c in cables {
@@ -227,10 +248,56 @@ impl<'a> Recorder<'a> {
             header.push("energy".into());
             Table::new(header)
         });
-        Recorder { cables, table }
+        Recorder {
+            cables,
+            table,
+            every: run.every,
+            next: 0,
+            prev: None,
+        }
     }
 
+    /// An accepted state (the start first).
     fn record<M: Reported + ?Sized>(&mut self, m: &M, s: &State, q_full: &[f64]) {
+        if self.table.is_none() {
+            return;
+        }
+        let Some(every) = self.every else {
+            self.row(m, s, q_full);
+            return;
+        };
+        let eps = 1e-9 * every;
+        loop {
+            let t = self.next as f64 * every;
+            if t > s.t + eps {
+                break;
+            }
+            self.next += 1;
+            match &self.prev {
+                Some(p) if (t - s.t).abs() > eps => {
+                    let at = hermite(p, s, t);
+                    let q = m.full_of(&at.q);
+                    self.row(m, &at, &q);
+                }
+                _ => self.row(m, s, q_full),
+            }
+        }
+        self.prev = Some(s.clone());
+    }
+
+    /// The last state of the run, as the last row if no sample fell on it.
+    fn finish<M: Reported + ?Sized>(&mut self, m: &M, s: &State) {
+        let last = self
+            .table
+            .as_ref()
+            .and_then(|t| t.rows.last())
+            .map(|r| r[0]);
+        if self.every.is_some() && last.is_some_and(|t| t < s.t) {
+            self.row(m, s, &m.full_of(&s.q));
+        }
+    }
+
+    fn row<M: Reported + ?Sized>(&mut self, m: &M, s: &State, q_full: &[f64]) {
         let Some(table) = &mut self.table else {
             return;
         };
@@ -246,6 +313,36 @@ impl<'a> Recorder<'a> {
         row.push(m.energies(s).0);
         table.push(row);
     }
+}
+
+/// The state at `t` between the accepted states `a` and `b`: the cubic
+/// Hermite interpolant of the positions through `(q, v)` at both ends
+/// (error `O(h⁴)` in the positions), its derivative as the speeds
+/// (`O(h³)`).
+fn hermite(a: &State, b: &State, t: f64) -> State {
+    let h = b.t - a.t;
+    let x = (t - a.t) / h;
+    let (x2, x3) = (x * x, x * x * x);
+    let (h00, h10, h01, h11) = (
+        2.0 * x3 - 3.0 * x2 + 1.0,
+        x3 - 2.0 * x2 + x,
+        -2.0 * x3 + 3.0 * x2,
+        x3 - x2,
+    );
+    let (d00, d10, d01, d11) = (
+        (6.0 * x2 - 6.0 * x) / h,
+        3.0 * x2 - 4.0 * x + 1.0,
+        (-6.0 * x2 + 6.0 * x) / h,
+        3.0 * x2 - 2.0 * x,
+    );
+    let mut q = Vec::with_capacity(a.q.len());
+    let mut v = Vec::with_capacity(a.v.len());
+    for i in 0..a.q.len() {
+        let (q0, q1, v0, v1) = (a.q[i], b.q[i], a.v[i], b.v[i]);
+        q.push(h00 * q0 + h10 * h * v0 + h01 * q1 + h11 * h * v1);
+        v.push(d00 * q0 + d10 * v0 + d01 * q1 + d11 * v1);
+    }
+    State { t, q, v }
 }
 
 /// The report of a run from `start` that ended at `end` (why: `stop`).
@@ -325,13 +422,14 @@ fn run_alpha<M: Reported>(
     let start = state.clone();
     let mut ga =
         GeneralizedAlpha::new(m, state, run.alpha_options()).map_err(RunError::Elements)?;
-    let mut rec = Recorder::new(cables, names.0, names.1, run.record);
+    let mut rec = Recorder::new(cables, names, run);
     rec.record(m, &start, &m.full_of(&start.q));
     let result = ga.run_to(run.t_end, |s, q| {
         progress(s.t);
         rec.record(m, s, q);
     });
     let cpu = clock.elapsed().as_secs_f64();
+    rec.finish(m, ga.state());
     let stop = result.map_or_else(stop_of, |()| Stop::Finished);
     let r = report(
         m,
@@ -369,7 +467,7 @@ pub fn simulate_structure(
     }
     let clock = Instant::now();
     let start = state.clone();
-    let mut rec = Recorder::new(cables, &[], &[], run.record);
+    let mut rec = Recorder::new(cables, (&[], &[]), run);
     rec.record(model, &start, model.q0());
     let (mut last, mut taken) = (start.clone(), 0);
     let result = integrate_rk4(model, state, run.t_end, run.steps(), |s, q| {
@@ -393,6 +491,7 @@ pub fn simulate_structure(
             (last, stats, stop_of(e))
         }
     };
+    rec.finish(model, &end);
     let r = report(
         model,
         cables,
@@ -526,4 +625,28 @@ pub fn equilibrium_mixed(
         cables: cables.iter().map(|c| c.state(&sol.q_full)).collect(),
         mounts: model.mounts(&sol.lambda),
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cubic Hermite interpolant is exact for a cubic motion: its
+    /// positions and, as its derivative, its speeds.
+    #[test]
+    fn hermite_is_exact_for_cubics() {
+        let q = |t: f64| 2.0 - 0.5 * t + 3.0 * t * t - 1.25 * t * t * t;
+        let v = |t: f64| -0.5 + 6.0 * t - 3.75 * t * t;
+        let at = |t: f64| State {
+            t,
+            q: vec![q(t), -q(t)],
+            v: vec![v(t), -v(t)],
+        };
+        let (a, b) = (at(0.3), at(0.7));
+        for t in [0.3, 0.35, 0.5, 0.61, 0.7] {
+            let s = hermite(&a, &b, t);
+            assert!((s.q[0] - q(t)).abs() < 1e-14 && (s.q[1] + q(t)).abs() < 1e-14);
+            assert!((s.v[0] - v(t)).abs() < 1e-13 && (s.v[1] + v(t)).abs() < 1e-13);
+        }
+    }
 }
