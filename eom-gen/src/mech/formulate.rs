@@ -376,35 +376,46 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     let mut mass = request.contains(Function::MassMatrix).then(crba);
     let mut bias = request.contains(Function::Bias).then(rnea_bias);
 
-    let (forward_dynamics, fd_form, fd_candidates) = if request.contains(Function::ForwardDynamics)
-    {
-        let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
-        let lambda = ev.speed_parents();
-        let aba = lower("udot", &ev.aba(&k, &drive, &fext));
-        let mut candidates = vec![(FdForm::Aba, aba.op_count())];
-        // The mass-matrix route costs at least its factorisation; skip
-        // building it when that alone exceeds the articulated-body count
-        // (long chains, where M is dense and LᵀDL is cubic).
-        if ltdl_flops(&lambda) >= aba.op_count().total() {
-            (Some(aba), FdForm::Aba, candidates)
-        } else {
-            let (mut m, b) = (
-                mass.get_or_insert_with(crba).clone(),
-                bias.get_or_insert_with(rnea_bias).clone(),
-            );
-            ltdl(&mut m, &lambda);
-            let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
-            let sparse = lower("udot", &ltdl_solve(&m, &lambda, rhs));
-            candidates.push((FdForm::MassMatrix, sparse.op_count()));
-            if sparse.op_count().total() < aba.op_count().total() {
-                (Some(sparse), FdForm::MassMatrix, candidates)
+    // The chosen form's expressions are kept for the derivatives.
+    let (forward_dynamics, fd_form, fd_candidates, udot) =
+        if request.contains(Function::ForwardDynamics) {
+            let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
+            let lambda = ev.speed_parents();
+            let aba_exprs = ev.aba(&k, &drive, &fext);
+            let aba = lower("udot", &aba_exprs);
+            let mut candidates = vec![(FdForm::Aba, aba.op_count())];
+            // The mass-matrix route costs at least its factorisation; skip
+            // building it when that alone exceeds the articulated-body count
+            // (long chains, where M is dense and LᵀDL is cubic).
+            if ltdl_flops(&lambda) >= aba.op_count().total() {
+                (Some(aba), FdForm::Aba, candidates, aba_exprs)
             } else {
-                (Some(aba), FdForm::Aba, candidates)
+                let (mut m, b) = (
+                    mass.get_or_insert_with(crba).clone(),
+                    bias.get_or_insert_with(rnea_bias).clone(),
+                );
+                ltdl(&mut m, &lambda);
+                let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
+                let sparse_exprs = ltdl_solve(&m, &lambda, rhs);
+                let sparse = lower("udot", &sparse_exprs);
+                candidates.push((FdForm::MassMatrix, sparse.op_count()));
+                if sparse.op_count().total() < aba.op_count().total() {
+                    (Some(sparse), FdForm::MassMatrix, candidates, sparse_exprs)
+                } else {
+                    (Some(aba), FdForm::Aba, candidates, aba_exprs)
+                }
             }
-        }
-    } else {
-        (None, FdForm::Aba, Vec::new())
-    };
+        } else {
+            (None, FdForm::Aba, Vec::new(), Vec::new())
+        };
+    let fd_derivatives = request
+        .contains(Function::ForwardDynamicsDerivatives)
+        .then(|| {
+            let qdot = ev.qdot(&st);
+            super::derivatives::forward_dynamics_derivatives(
+                &cx, &udot, &qdot, &q, &u, &tau, &inputs, opts,
+            )
+        });
 
     let mass_matrix = request.contains(Function::MassMatrix).then(|| {
         let m = mass.get_or_insert_with(crba).clone();
@@ -544,6 +555,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Function::Constraints, constraints),
         (Function::CutJointReactions, cut_reactions),
         (Function::Attachments, attachments),
+        (Function::ForwardDynamicsDerivatives, fd_derivatives),
     ]
     .into_iter()
     .filter_map(|(f, p)| p.map(|p| (f, p)))
