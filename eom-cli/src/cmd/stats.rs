@@ -3,7 +3,7 @@
 
 use crate::args::Vary;
 use clap::Args;
-use eom_gen::functions::TABLE;
+use eom_gen::functions::{Function, TABLE};
 use std::process::ExitCode;
 
 /// Operation counts of the generated functions and generation time.
@@ -14,6 +14,10 @@ pub struct StatsArgs {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Also formulate and count `forward_dynamics_derivatives` (generated
+    /// only when asked for: a scene's `functions`, `linearize`).
+    #[arg(long)]
+    pub derivatives: bool,
 }
 
 pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
@@ -25,13 +29,36 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         Err(code) => return code,
     };
     let f = &g.formulation;
+    // The derivatives, when asked for here and the model does not have them.
+    let derivatives = if a.derivatives && f.program(Function::ForwardDynamicsDerivatives).is_none()
+    {
+        let request = g
+            .checked
+            .request()
+            .with(Function::ForwardDynamicsDerivatives);
+        match eom_gen::mech::formulate(&g.checked.system, request) {
+            Ok(d) => d
+                .programs
+                .get(&Function::ForwardDynamicsDerivatives)
+                .cloned(),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(1);
+            }
+        }
+    } else {
+        None
+    };
+    let program = |function: Function| {
+        f.program(function).or(derivatives
+            .as_ref()
+            .filter(|_| function == Function::ForwardDynamicsDerivatives))
+    };
     // Every function of the table, `null` where not generated.
     let ops: serde_json::Map<String, serde_json::Value> = TABLE
         .iter()
         .map(|e| {
-            let v = f
-                .program(e.function)
-                .map_or(serde_json::Value::Null, |p| op_json(&p.op_count()));
+            let v = program(e.function).map_or(serde_json::Value::Null, |p| op_json(&p.op_count()));
             (e.name.to_string(), v)
         })
         .collect();
@@ -65,14 +92,17 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         );
         print!("{cable_text}");
     } else {
-        print!("{}", table(&g));
+        print!("{}", table(&g, &program));
         print!("{cable_text}");
     }
     ExitCode::SUCCESS
 }
 
 /// `stats` for people: one row of operation counts per generated function.
-fn table(g: &eom_gen::Generated) -> String {
+fn table<'a>(
+    g: &eom_gen::Generated,
+    program: &dyn Fn(Function) -> Option<&'a eom_gen::sym::Program>,
+) -> String {
     use std::fmt::Write;
     let f = &g.formulation;
     let sys = &g.checked.system;
@@ -89,16 +119,16 @@ fn table(g: &eom_gen::Generated) -> String {
     );
     let _ = writeln!(
         s,
-        "  {:<20} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
+        "  {:<28} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
         "function", "add", "mul", "div", "neg", "sqrt", "trig", "other", "total"
     );
     for e in TABLE {
-        match f.program(e.function) {
+        match program(e.function) {
             Some(p) => {
                 let c = p.op_count();
                 let _ = writeln!(
                     s,
-                    "  {:<20} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
+                    "  {:<28} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
                     e.name,
                     c.adds,
                     c.muls,
@@ -111,7 +141,7 @@ fn table(g: &eom_gen::Generated) -> String {
                 );
             }
             None => {
-                let _ = writeln!(s, "  {:<20} {:>8}", e.name, "—");
+                let _ = writeln!(s, "  {:<28} {:>8}", e.name, "—");
             }
         }
     }
