@@ -40,6 +40,7 @@ enum Command {
     Bench(cmd::bench::BenchArgs),
     SolveStatic(cmd::solve_static::SolveStaticArgs),
     Stats(cmd::stats::StatsArgs),
+    Linearize(cmd::linearize::LinearizeArgs),
 }
 
 fn main() -> ExitCode {
@@ -54,5 +55,6 @@ fn main() -> ExitCode {
         Command::Bench(a) => cmd::bench::run(a, &urdf),
         Command::SolveStatic(a) => cmd::solve_static::run(&a, &urdf),
         Command::Stats(a) => cmd::stats::run(&a, &urdf),
+        Command::Linearize(a) => cmd::linearize::run(&a, &urdf),
     }
 }

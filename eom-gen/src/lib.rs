@@ -9,6 +9,9 @@
 //! cut joints) → [`mech`] (kinematics and dynamics as [`sym`] expressions)
 //! → [`emit`] (Rust source); [`generate`] runs it all.
 //!
+//! [`linearize`] turns the generated derivatives of forward dynamics
+//! into a state-space model `A`, `B` about a state, with its eigenvalues.
+//!
 //! [`flex`] holds the numeric foundation of flexible bodies (FE beam, modes,
 //! inertia shape integrals, the floating-frame mass matrix), not yet part of
 //! the pipeline.
@@ -31,6 +34,7 @@ pub mod functions;
 pub mod generate;
 pub mod graph;
 pub mod interpret;
+pub mod linearize;
 pub mod mech;
 pub mod model;
 pub mod sym;

@@ -1,0 +1,243 @@
+//! `eom-gen linearize`: the state-space model `ẏ ≈ A y + B w` about a
+//! state (default: the model's initial state), from the generated
+//! derivatives of forward dynamics (interpreted: no compiler needed), with
+//! its eigenvalues, natural frequencies and damping ratios (see
+//! `eom_gen::linearize`).
+
+use crate::args::{InputArgs, ParamArgs, Vary, parse_list};
+use crate::error::Error;
+use clap::Args;
+use eom_gen::functions::Function;
+use eom_gen::linearize::{Eigenvalue, InputKind, Linearization, LinearizeError};
+use std::process::ExitCode;
+
+/// Linearise a model about a state: `A`, `B` of the first-order system
+/// `y = (q, u)` (quaternions in the tangent space), eigenvalues, natural
+/// frequencies and damping ratios. Trees without constraint equations.
+#[derive(Args)]
+pub struct LinearizeArgs {
+    /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
+    pub model: String,
+    /// Positions, comma-separated (default: the model's q0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub q: Option<String>,
+    /// Speeds, comma-separated (default: the model's u0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub u: Option<String>,
+    /// Time.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub t: f64,
+    #[command(flatten)]
+    pub params: ParamArgs,
+    #[command(flatten)]
+    pub inputs: InputArgs,
+    /// Print one JSON object instead of the tables.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the eigenvalues to this CSV file (`re,im,natural_frequency,damping_ratio`).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<String>,
+}
+
+pub fn run(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
+    if !a.t.is_finite() {
+        return crate::output::fail(&Error::Usage(vec![format!(
+            "--t must be a finite number, got {}",
+            a.t
+        )]));
+    }
+    let vary = match Vary::parse_or_exit(&a.params.params, &a.inputs.inputs) {
+        Ok(v) => v,
+        Err(code) => return code,
+    };
+    let opened = match crate::open::open(&a.model, urdf, &vary) {
+        Ok(o) => o,
+        Err(code) => return code,
+    };
+    if let Some(code) = crate::open::cables_only_refusal(&opened.checked, "linearize") {
+        return code;
+    }
+    let mut checked = opened.checked.clone();
+    if !checked.system.cables.is_empty() {
+        return usage(LinearizeError::Cables {
+            model: checked.system.name.clone(),
+        });
+    }
+    // Checked by `open` (exit 2); driven inputs leave the model.
+    if let Err(errors) = eom_gen::model::drive_inputs(&mut checked, &vary.drives) {
+        return crate::output::fail(&Error::Usage(
+            errors
+                .iter()
+                .map(|e| format!("--input {}: {e}", e.input))
+                .collect(),
+        ));
+    }
+    let sys = &checked.system;
+    let mut problems = Vec::new();
+    let mut list = |what: &str, text: Option<&str>, n: usize, default: Vec<f64>| {
+        parse_list(what, text, n, default).unwrap_or_else(|e| {
+            problems.push(e);
+            Vec::new()
+        })
+    };
+    let q = list("q", a.q.as_deref(), sys.nq(), sys.q0());
+    let u = list("u", a.u.as_deref(), sys.nu(), sys.u0());
+    if !problems.is_empty() {
+        return crate::output::fail(&Error::Usage(problems));
+    }
+    let request = checked.request().with(Function::ForwardDynamicsDerivatives);
+    let f = match eom_gen::mech::formulate(sys, request) {
+        Ok(f) => f,
+        Err(e) => {
+            let report = eom_gen::Report {
+                source: checked.source.clone(),
+                diagnostics: vec![e.diagnostic()],
+            };
+            eprint!("{report}");
+            return ExitCode::from(1);
+        }
+    };
+    let point = eom_gen::interpret::Point {
+        sys,
+        q: &q,
+        u: &u,
+        udot: &[],
+        tau: &[],
+        inputs: &opened.inputs,
+        params: &[],
+        multipliers: &[],
+        t: a.t,
+    };
+    let lin = match eom_gen::linearize::linearize(&f, &point) {
+        Ok(l) => l,
+        Err(e @ LinearizeError::NotFinite) => {
+            return crate::output::fail(&Error::Refused(e.to_string()));
+        }
+        Err(e) => return usage(e),
+    };
+    let Some(eig) = eom_gen::linearize::eigenvalues(&lin.a) else {
+        return crate::output::fail(&Error::Refused(
+            "the eigenvalue iteration (real Schur form of A) did not converge".into(),
+        ));
+    };
+    if let Some(path) = &a.csv
+        && let Err(code) = crate::output::write_file(path, &csv(&eig))
+    {
+        return code;
+    }
+    if a.json {
+        println!("{}", json(sys, &lin, &eig, &q, &u, a.t));
+    } else {
+        print!("{}", text(sys, &lin, &eig));
+    }
+    ExitCode::SUCCESS
+}
+
+/// A model this command does not linearise: a usage error (exit 2).
+fn usage(e: LinearizeError) -> ExitCode {
+    crate::output::fail(&Error::Usage(vec![e.to_string()]))
+}
+
+fn rows(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows())
+        .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+        .collect()
+}
+
+/// `null` for a NaN (JSON has none).
+fn number(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        serde_json::json!(x)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+fn json(
+    sys: &eom_gen::System,
+    lin: &Linearization,
+    eig: &[Eigenvalue],
+    q: &[f64],
+    u: &[f64],
+    t: f64,
+) -> serde_json::Value {
+    let nu = sys.nu();
+    serde_json::json!({
+        "model": sys.name,
+        "q": q,
+        "u": u,
+        "t": t,
+        "states": lin.states,
+        "coordinates": lin.states[..nu],
+        "speeds": lin.states[nu..],
+        "inputs": lin.inputs,
+        "input_kind": match lin.input_kind {
+            InputKind::Inputs => "inputs",
+            InputKind::GeneralizedForces => "generalized_forces",
+        },
+        "A": rows(&lin.a),
+        "B": rows(&lin.b),
+        "eigenvalues": eig.iter().map(|e| [e.re, e.im]).collect::<Vec<_>>(),
+        "natural_frequencies": eig.iter().map(|e| number(e.natural_frequency)).collect::<Vec<_>>(),
+        "damping_ratios": eig.iter().map(|e| number(e.damping_ratio)).collect::<Vec<_>>(),
+    })
+}
+
+fn csv(eig: &[Eigenvalue]) -> String {
+    let mut s = String::from("re,im,natural_frequency,damping_ratio\n");
+    for e in eig {
+        s += &format!(
+            "{},{},{},{}\n",
+            e.re, e.im, e.natural_frequency, e.damping_ratio
+        );
+    }
+    s
+}
+
+/// A labelled matrix, one row per line.
+fn matrix(title: &str, m: &nalgebra::DMatrix<f64>, rows: &[String], cols: &[String]) -> String {
+    use std::fmt::Write;
+    let width = rows.iter().map(|r| r.len()).max().unwrap_or(0).max(4);
+    let mut s = format!("{title}\n  {:width$}", "");
+    for c in cols {
+        let _ = write!(s, " {c:>12}");
+    }
+    s.push('\n');
+    for (i, r) in rows.iter().enumerate() {
+        let _ = write!(s, "  {r:width$}");
+        for j in 0..m.ncols() {
+            let _ = write!(s, " {:>12.6}", m[(i, j)]);
+        }
+        s.push('\n');
+    }
+    s
+}
+
+fn text(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue]) -> String {
+    use std::fmt::Write;
+    let mut s = format!(
+        "{}: ẏ = A y + B w, y = ({}), w = ({})\n",
+        sys.name,
+        lin.states.join(", "),
+        lin.inputs.join(", ")
+    );
+    s += &matrix("A", &lin.a, &lin.states, &lin.states);
+    s += &matrix("B", &lin.b, &lin.states, &lin.inputs);
+    let _ = writeln!(
+        s,
+        "eigenvalues\n  {:>14} {:>14} {:>14} {:>12} {:>10}",
+        "re (1/s)", "im (rad/s)", "ω_n (rad/s)", "f_n (Hz)", "ζ"
+    );
+    for e in eig {
+        let _ = writeln!(
+            s,
+            "  {:>14.6} {:>14.6} {:>14.6} {:>12.6} {:>10.4}",
+            e.re,
+            e.im,
+            e.natural_frequency,
+            e.natural_frequency / std::f64::consts::TAU,
+            e.damping_ratio
+        );
+    }
+    s
+}
