@@ -1,0 +1,345 @@
+//! `eom-gen linearize`: `A`, `B` and the eigenvalues against hand
+//! derivations (pendulum upright and hanging, with a damper and with a
+//! proportional drive; the double pendulum's normal modes), the JSON keys
+//! and CSV, and the refusals (closed loops, rolling contacts, cables,
+//! quaternions in motion, malformed arguments: exit 2, naming what applies).
+
+use std::process::{Command, Output};
+
+fn eom_gen(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+        .args(args)
+        .current_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/.."))
+        .output()
+        .expect("eom-gen runs")
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let out = eom_gen(args);
+    assert!(
+        out.status.success(),
+        "{args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
+}
+
+fn temp_path(name: &str) -> String {
+    std::env::temp_dir()
+        .join(format!("eom-linearize-{}-{name}", std::process::id()))
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn matrix(v: &serde_json::Value, key: &str) -> Vec<Vec<f64>> {
+    v[key]
+        .as_array()
+        .unwrap_or_else(|| panic!("{key} in {v}"))
+        .iter()
+        .map(|r| {
+            r.as_array()
+                .expect("row")
+                .iter()
+                .map(|x| x.as_f64().expect("number"))
+                .collect()
+        })
+        .collect()
+}
+
+fn close(what: &str, got: f64, want: f64, tol: f64) {
+    assert!(
+        (got - want).abs() <= tol * (1.0 + want.abs()),
+        "{what}: got {got}, want {want}"
+    );
+}
+
+/// `(re, im)` of every eigenvalue.
+fn eigenvalues(v: &serde_json::Value) -> Vec<(f64, f64)> {
+    matrix(v, "eigenvalues")
+        .into_iter()
+        .map(|p| (p[0], p[1]))
+        .collect()
+}
+
+/// The bundled pendulum (point mass `m = 1 kg`, `l = 1 m`, `g = 9.81`):
+/// `θ̈ = −(g/l) sin θ + τ/(m l²)`, so `A = [[0, 1], [−(g/l) cos θ, 0]]`,
+/// `B = [[0], [1/(m l²)]]`. Hanging (`θ = 0`): `λ = ±i √(g/l)`, `ζ = 0`;
+/// upright (`θ = π`): `λ = ±√(g/l)`, one unstable.
+#[test]
+fn pendulum_a_b_and_eigenvalues_are_the_hand_derivation() {
+    let g: f64 = 9.81;
+    for theta in [0.0f64, 0.3, 2.0] {
+        let v = json(&[
+            "linearize",
+            "models/pendulum.ron",
+            "--q",
+            &theta.to_string(),
+            "--u",
+            "0.7",
+            "--json",
+        ]);
+        let a = matrix(&v, "A");
+        let b = matrix(&v, "B");
+        close("A[0][0]", a[0][0], 0.0, 1e-15);
+        close("A[0][1]", a[0][1], 1.0, 1e-15);
+        close("A[1][0] = −(g/l) cos θ", a[1][0], -g * theta.cos(), 1e-14);
+        close("A[1][1]", a[1][1], 0.0, 1e-15);
+        close("B[0][0]", b[0][0], 0.0, 1e-15);
+        close("B[1][0] = 1/(m l²)", b[1][0], 1.0, 1e-14);
+    }
+    let hanging = json(&["linearize", "models/pendulum.ron", "--q", "0", "--json"]);
+    let w = g.sqrt();
+    let eig = eigenvalues(&hanging);
+    assert_eq!(eig.len(), 2);
+    close("hanging: λ₁ = −i ω", eig[0].1, -w, 1e-12);
+    close("hanging: λ₂ = +i ω", eig[1].1, w, 1e-12);
+    for (re, _) in &eig {
+        close("hanging: Re λ", *re, 0.0, 1e-12);
+    }
+    for n in hanging["natural_frequencies"].as_array().expect("list") {
+        close("ω_n = √(g/l)", n.as_f64().expect("number"), w, 1e-12);
+    }
+    let upright = json(&[
+        "linearize",
+        "models/pendulum.ron",
+        "--q",
+        &std::f64::consts::PI.to_string(),
+        "--json",
+    ]);
+    let mut re: Vec<f64> = eigenvalues(&upright).iter().map(|e| e.0).collect();
+    re.sort_by(f64::total_cmp);
+    close("upright: λ = −√(g/l)", re[0], -w, 1e-12);
+    close("upright: λ = +√(g/l) (unstable)", re[1], w, 1e-12);
+}
+
+/// A parameter sets the point: on Mars (`g = 3.71`) the hanging pendulum's
+/// `A[1][0] = −g/l`; the default state is the model's `θ₀ = π/2`, where
+/// `A[1][0] = −g cos θ₀ = 0`.
+#[test]
+fn parameters_and_the_default_state_set_the_point() {
+    let v = json(&[
+        "linearize",
+        "models/pendulum.ron",
+        "--q",
+        "0",
+        "--param",
+        "g=3.71",
+        "--json",
+    ]);
+    close("A[1][0] = −3.71", matrix(&v, "A")[1][0], -3.71, 1e-14);
+    let v = json(&["linearize", "models/pendulum.ron", "--json"]);
+    assert_eq!(v["q"][0].as_f64(), Some(std::f64::consts::FRAC_PI_2));
+    close("A[1][0] at θ₀ = π/2", matrix(&v, "A")[1][0], 0.0, 1e-14);
+    for key in [
+        "A",
+        "B",
+        "eigenvalues",
+        "coordinates",
+        "speeds",
+        "inputs",
+        "natural_frequencies",
+        "damping_ratios",
+    ] {
+        assert!(!v[key].is_null(), "`{key}` in {v}");
+    }
+    assert_eq!(v["coordinates"], serde_json::json!(["theta"]));
+    assert_eq!(v["speeds"], serde_json::json!(["theta_dot"]));
+    assert_eq!(v["inputs"], serde_json::json!(["tau(theta_dot)"]));
+}
+
+/// The double pendulum (`m1 = m2 = 1 kg`, `l1 = l2 = 1 m`, `g = 9.8`)
+/// hanging: undamped normal modes `λ = ±iω`, `ω² = g (2 ∓ √2)`
+/// (`m1 l1 l2 ω⁴ − (m1+m2) g (l1+l2) ω² + (m1+m2) g² = 0`), `ζ = 0`.
+#[test]
+fn double_pendulum_normal_modes() {
+    let v = json(&[
+        "linearize",
+        "models/double_pendulum.ron",
+        "--q",
+        "0,0",
+        "--u",
+        "0,0",
+        "--json",
+    ]);
+    let g: f64 = 9.8;
+    let (slow, fast) = (
+        (g * (2.0 - 2f64.sqrt())).sqrt(),
+        (g * (2.0 + 2f64.sqrt())).sqrt(),
+    );
+    let eig = eigenvalues(&v);
+    let want = [-slow, slow, -fast, fast];
+    assert_eq!(eig.len(), 4);
+    for ((re, im), w) in eig.iter().zip(want) {
+        close("Re λ", *re, 0.0, 1e-12);
+        close("Im λ = ±ω", *im, w, 1e-12);
+    }
+    for z in v["damping_ratios"].as_array().expect("list") {
+        close("ζ", z.as_f64().expect("number"), 0.0, 1e-12);
+    }
+}
+
+/// A model file next to the bundled pendulum with a hinge damper
+/// (`c = 0.5 N·m·s`) and an actuator `motor` at the hinge.
+fn damped_actuated_pendulum() -> String {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/pendulum.ron");
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let from = "outputs: [";
+    assert!(text.contains(from), "test setup");
+    let text = text.replacen(
+        from,
+        "forces: [JointSpringDamper(name: \"d\", joint: \"hinge\", stiffness: 0, damping: 0.5, rest: 0), Actuator(name: \"motor\", joint: \"hinge\")],\n    outputs: [",
+        1,
+    );
+    let model = temp_path("damped_pendulum.ron");
+    std::fs::write(&model, text).expect("temp model");
+    model
+}
+
+/// With the damper, `θ̈ = −g sin θ − c θ̇ + motor` (`m = l = 1`): hanging,
+/// `A = [[0, 1], [−g, −c]]`, `B = [[0], [1]]` (the input's column), and
+/// `λ = −c/2 ± i √(g − c²/4)`, `ω_n = √g`, `ζ = c/(2√g)`. Driving the
+/// motor by `−k θ` (a proportional controller, `k = 5`) stiffens it:
+/// `A[1][0] = −(g + k)`, and the input leaves `B` (τ's column instead).
+#[test]
+fn damping_inputs_and_drives() {
+    let model = damped_actuated_pendulum();
+    let (g, c, k): (f64, f64, f64) = (9.81, 0.5, 5.0);
+    let v = json(&["linearize", &model, "--q", "0", "--json"]);
+    let a = matrix(&v, "A");
+    close("A[1][0] = −g", a[1][0], -g, 1e-14);
+    close("A[1][1] = −c", a[1][1], -c, 1e-14);
+    assert_eq!(v["inputs"], serde_json::json!(["motor"]));
+    assert_eq!(v["input_kind"], "inputs");
+    close("B[1][0] = 1/(m l²)", matrix(&v, "B")[1][0], 1.0, 1e-14);
+    let eig = eigenvalues(&v);
+    for (re, im) in &eig {
+        close("Re λ = −c/2", *re, -c / 2.0, 1e-12);
+        close(
+            "|Im λ| = √(g − c²/4)",
+            im.abs(),
+            (g - c * c / 4.0).sqrt(),
+            1e-12,
+        );
+    }
+    for z in v["damping_ratios"].as_array().expect("list") {
+        close(
+            "ζ = c/(2√g)",
+            z.as_f64().expect("number"),
+            c / (2.0 * g.sqrt()),
+            1e-12,
+        );
+    }
+    let v = json(&[
+        "linearize",
+        &model,
+        "--q",
+        "0",
+        "--input",
+        &format!("motor=-{k}*theta"),
+        "--json",
+    ]);
+    close(
+        "driven: A[1][0] = −(g + k)",
+        matrix(&v, "A")[1][0],
+        -(g + k),
+        1e-14,
+    );
+    assert_eq!(v["input_kind"], "generalized_forces");
+    // A held input is an operating point: `A` is that of the free motor.
+    let v = json(&[
+        "linearize",
+        &model,
+        "--q",
+        "0",
+        "--input",
+        "motor=2",
+        "--json",
+    ]);
+    close("held: A[1][0] = −g", matrix(&v, "A")[1][0], -g, 1e-14);
+    let _ = std::fs::remove_file(&model);
+}
+
+/// `--csv` writes one row per eigenvalue; the text form prints `A`, `B`
+/// and the eigenvalues.
+#[test]
+fn csv_and_text() {
+    let csv = temp_path("eig.csv");
+    let out = eom_gen(&[
+        "linearize",
+        "models/pendulum.ron",
+        "--q",
+        "0",
+        "--csv",
+        &csv,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    for want in ["A\n", "B\n", "eigenvalues", "theta_dot", "ζ"] {
+        assert!(text.contains(want), "`{want}` in {text}");
+    }
+    let written = std::fs::read_to_string(&csv).unwrap_or_default();
+    let lines: Vec<&str> = written.lines().collect();
+    assert_eq!(lines[0], "re,im,natural_frequency,damping_ratio");
+    assert_eq!(lines.len(), 3, "{written}");
+    let _ = std::fs::remove_file(&csv);
+}
+
+/// What is not linearised is refused by name with exit status 2, and
+/// nothing is printed on standard output: never a wrong `A`.
+#[test]
+fn refusals_name_what_is_supported() {
+    let cases: [(&[&str], &str); 7] = [
+        (&["linearize", "models/fourbar.ron"], "constraint equation"),
+        (
+            &["linearize", "models/rolling_disk.ron"],
+            "rolling contacts need minimal coordinates",
+        ),
+        (&["linearize", "models/ancf/crane_rope.ron"], "cables"),
+        (
+            &["linearize", "models/heavy_top.ron", "--u", "0,0,5"],
+            "state at rest",
+        ),
+        (
+            &["linearize", "models/pendulum.ron", "--q", "0,1"],
+            "--q has 2 value(s), the model has 1",
+        ),
+        (
+            &["linearize", "models/pendulum.ron", "--param", "gg=1"],
+            "has no parameter `gg`",
+        ),
+        (&["linearize", "models/pendulum.ron", "--u", "x"], "--u"),
+    ];
+    for (args, want) in cases {
+        let out = eom_gen(args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: `{want}` in {err}");
+        assert!(out.stdout.is_empty(), "{args:?}: nothing on stdout");
+    }
+}
+
+/// A quaternion model at rest is linearised in the tangent space: the heavy
+/// top has 4 coordinates but 3 speeds, so `A` is 6 × 6 with `∂δq̇/∂u = I`.
+#[test]
+fn quaternions_at_rest_in_the_tangent_space() {
+    let v = json(&[
+        "linearize",
+        "models/heavy_top.ron",
+        "--u",
+        "0,0,0",
+        "--json",
+    ]);
+    let a = matrix(&v, "A");
+    assert_eq!(a.len(), 6);
+    for i in 0..3 {
+        for j in 0..6 {
+            let want = if j == i + 3 { 1.0 } else { 0.0 };
+            close(&format!("A[{i}][{j}]"), a[i][j], want, 0.0);
+        }
+    }
+    assert_eq!(v["coordinates"].as_array().map(Vec::len), Some(3));
+}
