@@ -6,7 +6,8 @@
 //! - the double pendulum's about the hanging equilibrium against the hand
 //!   linearisation `∂q̈/∂q = −M⁻¹K` in relative angles, and the normal-mode
 //!   frequencies of that `A` against their closed form;
-//! - every bundled rigid model's against central differences of the `f64`
+//! - every bundled model's (rigid, and with flexible bodies; not cables)
+//!   against central differences of the `f64`
 //!   forward dynamics (the numeric twin, not the generated program) at
 //!   random states, coordinates moved along the tangent directions
 //!   `N(q) e_j` (quaternions kept on the unit sphere);
@@ -198,9 +199,9 @@ fn double_pendulum_about_hanging_is_minus_m_inverse_k() {
     check_close("ω² fast = g(2 + √2)", fast, g * (2.0 + 2f64.sqrt()), 1e-12);
 }
 
-/// The bundled models with rigid bodies only (no flexible bodies, no
-/// cables), by reading `models/*.ron`.
-fn rigid_models() -> Vec<String> {
+/// The bundled models without cables (rigid, and with flexible bodies
+/// when `flexible`), by reading `models/*.ron`.
+fn bundled_models(flexible: bool) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(models_dir())
         .expect("models/")
         .filter_map(|e| e.ok())
@@ -211,7 +212,7 @@ fn rigid_models() -> Vec<String> {
     names.sort();
     names.retain(|n| {
         let sys = system(n);
-        sys.flexible_bodies().next().is_none() && sys.cables.is_empty()
+        sys.cables.is_empty() && (sys.flexible_bodies().next().is_some() == flexible)
     });
     names
 }
@@ -333,7 +334,7 @@ fn against_differences(name: &str, sys: &System, rng: &mut Rng, states: usize) {
 /// (`heavy_top`, `free_body`, `stewart`), at random states.
 #[test]
 fn derivatives_equal_central_differences_for_every_rigid_model() {
-    let names = rigid_models();
+    let names = bundled_models(false);
     assert!(
         names.len() >= 10,
         "expected the bundled rigid models, got {names:?}"
@@ -341,6 +342,23 @@ fn derivatives_equal_central_differences_for_every_rigid_model() {
     let mut rng = Rng(0xD1FF_5EED_0000_0027);
     for name in &names {
         against_differences(name, &system(name), &mut rng, 3);
+    }
+}
+
+/// Every bundled model with flexible bodies (floating frame: elastic
+/// coordinates with `q̇ = u`, bodies at nodes, stiffening), at random
+/// states; elastic coordinates are modal amplitudes of up to 0.8 here,
+/// large but the functions are smooth there all the same.
+#[test]
+fn derivatives_equal_central_differences_for_every_flexible_model() {
+    let names = bundled_models(true);
+    assert!(
+        names.len() >= 4,
+        "expected the bundled flexible models, got {names:?}"
+    );
+    let mut rng = Rng(0xF1E7_5EED_0000_0027);
+    for name in &names {
+        against_differences(name, &system(name), &mut rng, 2);
     }
 }
 
