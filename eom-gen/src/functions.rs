@@ -280,7 +280,7 @@ pub const TABLE: &[Entry] = &[
     Entry {
         function: Function::ForwardDynamicsDerivatives,
         name: "forward_dynamics_derivatives",
-        doc: "partial derivatives of forward dynamics `u̇ = M⁻¹ (τ − b)` of the tree (constraint forces not included), row-major blocks one after the other: `∂u̇/∂q` (`NU × NU`: column `j` is the derivative along `δq = N(q) e_j`, the direction `q̇ = N(q) u` moves for speed `j`, so the tangent space; for quaternions the rotation vector in the frame of the joint's angular velocity, as Pinocchio; equal to `∂u̇/∂q` where `q̇ = u`), `∂u̇/∂u` (`NU × NU`), `∂u̇/∂τ = M⁻¹` (`NU × NU`), then `∂u̇/∂(inputs)` (`NU × NI`, inputs in the model's order); entry `(i, j)` of block `k` at `k·NU² + i·NU + j`, of the inputs' block at `3·NU² + i·NI + j`",
+        doc: "partial derivatives of forward dynamics `u̇ = M⁻¹ (τ − b)` of the tree (constraint forces not included), row-major blocks one after the other: `∂u̇/∂q` (`NU × NU`: column `j` is the derivative along `δq = N(q) e_j`, the direction `q̇ = N(q) u` moves for speed `j`, so the tangent space; for quaternions a rotation vector in body axes, for a free joint's position a displacement along body axes, as Pinocchio's; equal to `∂u̇/∂q` where `q̇ = u`), `∂u̇/∂u` (`NU × NU`), `∂u̇/∂τ = M⁻¹` (`NU × NU`), then `∂u̇/∂(inputs)` (`NU × NI`, inputs in the model's order); entry `(i, j)` of block `k` at `k·NU² + i·NU + j`, of the inputs' block at `3·NU² + i·NI + j`",
         args: &[Arg::T, Arg::Q, Arg::U, Arg::Tau],
         uses_multipliers: false,
         layout: Layout::Vector,

@@ -44,9 +44,9 @@ pub mod testkit;
 pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;
 pub use generate::{
-    GenerateError, Generated, generate, generate_checked, generate_file, generate_file_with,
-    generate_file_with_values, generate_tokens, generate_tokens_checked, generate_tokens_in,
-    generate_with,
+    GenerateError, Generated, generate, generate_checked, generate_checked_for, generate_file,
+    generate_file_with, generate_file_with_values, generate_tokens, generate_tokens_checked,
+    generate_tokens_in, generate_with,
 };
 pub use model::load_model;
 pub use model::{
