@@ -11,11 +11,14 @@
 //!   forward dynamics (the numeric twin, not the generated program) at
 //!   random states, coordinates moved along the tangent directions
 //!   `N(q) e_j` (quaternions kept on the unit sphere);
+//!   — both forms (forward dynamics differentiated, and `−M⁻¹ ∂ID/∂x`
+//!   from differentiated Newton–Euler), as some models keep each;
 //! - inputs: `∂u̇/∂(inputs)` of an actuator;
 //! - generated only when asked: a model without the request does not get it.
 
 use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::interpret::{Point, run};
+use eom_gen::mech::derivatives::DerivativeForm;
 use eom_gen::mech::{Formulation, Numeric, formulate};
 use eom_gen::model::{Source, check};
 use eom_gen::testkit::{Rng, random_state};
@@ -241,8 +244,28 @@ fn moved(sys: &System, q: &[f64], d: &[f64], h: f64) -> Vec<f64> {
 /// `κ ε ‖u̇‖/h` with the evaluation's cancellation `κ` taken as 100: the
 /// Andrews mechanism's `‖u̇‖ ≈ 2·10⁵` makes its differences good to
 /// about `10⁻⁵` only.
-fn against_differences(name: &str, sys: &System, rng: &mut Rng, states: usize) {
+fn against_differences(
+    name: &str,
+    sys: &System,
+    rng: &mut Rng,
+    states: usize,
+) -> Option<DerivativeForm> {
     let f = with_derivatives(sys, name);
+    // Both forms counted, the cheaper kept.
+    let counts: Vec<usize> = f
+        .derivative_candidates
+        .iter()
+        .map(|(_, c)| c.total())
+        .collect();
+    assert_eq!(counts.len(), 2, "{name}: both forms counted");
+    let kept = f
+        .program(Function::ForwardDynamicsDerivatives)
+        .map(|p| p.op_count().total());
+    assert_eq!(
+        kept,
+        counts.iter().min().copied(),
+        "{name}: the cheaper kept"
+    );
     let num = Numeric::new(sys).unwrap_or_else(|e| panic!("{name}: {e}"));
     let (nu, ni) = (sys.nu(), sys.inputs.len());
     for _ in 0..states {
@@ -327,6 +350,7 @@ fn against_differences(name: &str, sys: &System, rng: &mut Rng, states: usize) {
             }
         }
     }
+    f.derivative_form
 }
 
 /// Every bundled rigid model (closed loops as their spanning trees: the
@@ -340,8 +364,19 @@ fn derivatives_equal_central_differences_for_every_rigid_model() {
         "expected the bundled rigid models, got {names:?}"
     );
     let mut rng = Rng(0xD1FF_5EED_0000_0027);
+    let mut forms = Vec::new();
     for name in &names {
-        against_differences(name, &system(name), &mut rng, 3);
+        forms.push(against_differences(name, &system(name), &mut rng, 3));
+    }
+    // Both forms are checked: some models keep each.
+    for form in [
+        DerivativeForm::ForwardDynamics,
+        DerivativeForm::InverseDynamics,
+    ] {
+        assert!(
+            forms.contains(&Some(form)),
+            "no model keeps {form}: {forms:?}"
+        );
     }
 }
 

@@ -30,17 +30,13 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     };
     let f = &g.formulation;
     // The derivatives, when asked for here and the model does not have them.
-    let derivatives = if a.derivatives && f.program(Function::ForwardDynamicsDerivatives).is_none()
-    {
+    let asked = if a.derivatives && f.program(Function::ForwardDynamicsDerivatives).is_none() {
         let request = g
             .checked
             .request()
             .with(Function::ForwardDynamicsDerivatives);
         match eom_gen::mech::formulate(&g.checked.system, request) {
-            Ok(d) => d
-                .programs
-                .get(&Function::ForwardDynamicsDerivatives)
-                .cloned(),
+            Ok(d) => Some(d),
             Err(e) => {
                 eprintln!("error: {e}");
                 return ExitCode::from(1);
@@ -49,11 +45,16 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     } else {
         None
     };
-    let program = |function: Function| {
-        f.program(function).or(derivatives
-            .as_ref()
-            .filter(|_| function == Function::ForwardDynamicsDerivatives))
+    let with_derivatives = asked.as_ref().unwrap_or(f);
+    let program = |function: Function| match function {
+        Function::ForwardDynamicsDerivatives => with_derivatives.program(function),
+        _ => f.program(function),
     };
+    let derivative_candidates: serde_json::Map<String, serde_json::Value> = with_derivatives
+        .derivative_candidates
+        .iter()
+        .map(|(form, c)| (format!("{form:?}"), op_json(c)))
+        .collect();
     // Every function of the table, `null` where not generated.
     let ops: serde_json::Map<String, serde_json::Value> = TABLE
         .iter()
@@ -73,6 +74,8 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         "cables": cable_json,
         "formulation": format!("{}", f.fd_form),
         "forward_dynamics_candidates": candidates,
+        "derivative_form": with_derivatives.derivative_form.map(|d| format!("{d:?}")),
+        "derivative_candidates": derivative_candidates,
         "ops": ops,
         "nq": g.checked.system.nq(),
         "nu": g.checked.system.nu(),
@@ -93,6 +96,14 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         print!("{cable_text}");
     } else {
         print!("{}", table(&g, &program));
+        for (form, c) in &with_derivatives.derivative_candidates {
+            let chosen = with_derivatives.derivative_form == Some(*form);
+            println!(
+                "  derivatives by {form}: {} operations{}",
+                c.total(),
+                if chosen { " (kept)" } else { "" }
+            );
+        }
         print!("{cable_text}");
     }
     ExitCode::SUCCESS

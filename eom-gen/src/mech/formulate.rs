@@ -186,6 +186,10 @@ pub struct Formulation {
     pub fd_form: FdForm,
     /// Operation counts of both forward-dynamics forms.
     pub fd_candidates: Vec<(FdForm, OpCount)>,
+    /// The form chosen for `forward_dynamics_derivatives`, when generated.
+    pub derivative_form: Option<super::derivatives::DerivativeForm>,
+    /// Operation counts of both forms of the derivatives, when generated.
+    pub derivative_candidates: Vec<(super::derivatives::DerivativeForm, OpCount)>,
     /// Names of the constraint equations (`joint.k`, the constraint's name,
     /// `disk.contact` / `disk.slip_x` / `disk.slip_y`); holonomic first.
     pub constraint_names: Vec<String>,
@@ -408,14 +412,39 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         } else {
             (None, FdForm::Aba, Vec::new(), Vec::new())
         };
-    let fd_derivatives = request
+    // Both ways, the one with fewer counted operations kept (the
+    // differentiated forward dynamics on a tie).
+    let (fd_derivatives, derivative_candidates) = if request
         .contains(Function::ForwardDynamicsDerivatives)
-        .then(|| {
-            let qdot = ev.qdot(&st);
-            super::derivatives::forward_dynamics_derivatives(
-                &cx, &udot, &qdot, &q, &u, &tau, &inputs, opts,
-            )
-        });
+    {
+        use super::derivatives::{
+            DerivativeForm, forward_dynamics_derivatives, forward_dynamics_derivatives_rnea,
+        };
+        let qdot = ev.qdot(&st);
+        let direct = forward_dynamics_derivatives(&cx, &udot, &qdot, &q, &u, &tau, &inputs, opts);
+        let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
+        let (t, _) = ev.rnea(&k, &ud, &fext);
+        let inverse: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
+        let via_rnea = forward_dynamics_derivatives_rnea(
+            &cx, &udot, &inverse, &ud, &qdot, &q, &u, &tau, &inputs, opts,
+        );
+        let candidates = vec![
+            (DerivativeForm::ForwardDynamics, direct.op_count()),
+            (DerivativeForm::InverseDynamics, via_rnea.op_count()),
+        ];
+        let keep = if via_rnea.op_count().total() < direct.op_count().total() {
+            (via_rnea, DerivativeForm::InverseDynamics)
+        } else {
+            (direct, DerivativeForm::ForwardDynamics)
+        };
+        (Some(keep), candidates)
+    } else {
+        (None, Vec::new())
+    };
+    let (fd_derivatives, derivative_form) = match fd_derivatives {
+        Some((p, form)) => (Some(p), Some(form)),
+        None => (None, None),
+    };
 
     let mass_matrix = request.contains(Function::MassMatrix).then(|| {
         let m = mass.get_or_insert_with(crba).clone();
@@ -565,6 +594,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         programs,
         fd_form,
         fd_candidates,
+        derivative_form,
+        derivative_candidates,
         constraint_names,
         n_holonomic,
         output_names: out.names,
