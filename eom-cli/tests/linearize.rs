@@ -335,10 +335,10 @@ fn quaternions_at_rest_in_the_tangent_space() {
     ]);
     let a = matrix(&v, "A");
     assert_eq!(a.len(), 6);
-    for i in 0..3 {
-        for j in 0..6 {
+    for (i, row) in a.iter().take(3).enumerate() {
+        for (j, x) in row.iter().enumerate() {
             let want = if j == i + 3 { 1.0 } else { 0.0 };
-            close(&format!("A[{i}][{j}]"), a[i][j], want, 0.0);
+            close(&format!("A[{i}][{j}]"), *x, want, 0.0);
         }
     }
     assert_eq!(v["coordinates"].as_array().map(Vec::len), Some(3));

@@ -432,3 +432,73 @@ fn derivatives_are_generated_only_when_asked() {
         .expect("asked for");
     assert_eq!(p.outputs.len(), 3 * 7 * 7, "three 7 × 7 blocks, no inputs");
 }
+
+/// RADAU5 uses the generated Jacobian `[[0, I], [∂u̇/∂q, ∂u̇/∂u]]` when
+/// the formulation has the derivatives (`eom_sim`'s unconstrained system
+/// asks the model for `forward_dynamics_derivatives`), and forward
+/// differences of the right-hand side otherwise. On a stiff double
+/// pendulum (an overdamped elbow spring, `k = 10⁵ N·m/rad`,
+/// `c = 10⁴ N·m·s`: modes near `−10/s` and `−10⁴/s`) the generated one
+/// needs fewer right-hand sides (none for the Jacobian) and ends at the
+/// same state within the tolerance. The steps are not identical: the
+/// Jacobian also enters RADAU5's error estimate (`(I − hγ₀J)⁻¹` filters
+/// it), so the differenced Jacobian's `√ε` error moves a step now and then;
+/// the counts agree within one step in a hundred.
+#[test]
+fn radau5_with_the_generated_jacobian_needs_fewer_rhs_for_the_same_run() {
+    let path = format!("{}/double_pendulum.ron", models_dir());
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let from = "outputs: [";
+    assert!(text.contains(from), "test setup");
+    let text = text.replacen(
+        from,
+        "forces: [JointSpringDamper(name: \"s\", joint: \"elbow\", stiffness: 1e5, damping: 1e4, rest: 0)],\n    outputs: [",
+        1,
+    );
+    let sys = check(&Source::new("stiff_double_pendulum", text))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let options = eom_sim::RunOptions {
+        integrator: "radau5".parse().expect("a known integrator"),
+        rtol: 1e-8,
+        atol: 1e-8,
+        dt: 1e-4,
+        t_end: 1.0,
+        ..Default::default()
+    };
+    let run = |request: FunctionSet| {
+        let f = formulate(&sys, request).expect("formulates");
+        eom_gen::interpret::simulate(&f, &sys, &options).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let fd = run(FunctionSet::all_requested());
+    let generated = run(FunctionSet::all_requested().with(Function::ForwardDynamicsDerivatives));
+    let (a, b) = (&fd.stats, &generated.stats);
+    eprintln!("finite differences: {a:?}\ngenerated: {b:?}");
+    let near = |x: usize, y: usize| x.abs_diff(y) <= 1 + x / 100;
+    assert!(
+        near(a.accepted, b.accepted) && near(a.rejected, b.rejected),
+        "steps: differences {}+{} rejected, generated {}+{}",
+        a.accepted,
+        a.rejected,
+        b.accepted,
+        b.rejected
+    );
+    // The differenced Jacobian costs N = 4 right-hand sides each.
+    assert!(
+        b.rhs_evals < a.rhs_evals && a.rhs_evals - b.rhs_evals >= 3 * a.jacobian_evals,
+        "fewer right-hand sides: generated {}, differences {} ({} Jacobians)",
+        b.rhs_evals,
+        a.rhs_evals,
+        a.jacobian_evals
+    );
+    for (x, y) in
+        fd.q.iter()
+            .chain(&fd.u)
+            .zip(generated.q.iter().chain(&generated.u))
+    {
+        assert!(
+            (x - y).abs() <= 10.0 * options.rtol * (1.0 + x.abs()),
+            "end states: differences {x}, generated {y}"
+        );
+    }
+}
