@@ -1,8 +1,12 @@
 //! `eom-gen linearize`: `A`, `B` and the eigenvalues against hand
 //! derivations (pendulum upright and hanging, with a damper and with a
 //! proportional drive; the double pendulum's normal modes), the JSON keys
-//! and CSV, and the refusals (closed loops, rolling contacts, cables,
-//! quaternions in motion, malformed arguments: exit 2, naming what applies).
+//! and CSV; holonomic loops about equilibria in minimal coordinates (the
+//! parallelogram four-bar's single mode, a mass held on a circle by a
+//! constraint, whose stiffness is the constraint force's alone); and the
+//! refusals (loops away from equilibria or not closed, rolling contacts,
+//! cables, quaternions in motion, malformed arguments: exit 2, naming what
+//! applies).
 
 use std::process::{Command, Output};
 
@@ -292,11 +296,23 @@ fn csv_and_text() {
 /// nothing is printed on standard output: never a wrong `A`.
 #[test]
 fn refusals_name_what_is_supported() {
-    let cases: [(&[&str], &str); 7] = [
-        (&["linearize", "models/fourbar.ron"], "constraint equation"),
+    let cases: [(&[&str], &str); 9] = [
+        (&["linearize", "models/fourbar.ron"], "not an equilibrium"),
+        (
+            &[
+                "linearize",
+                "models/fourbar.ron",
+                "--q",
+                "0.1,0,0",
+                "--u",
+                "0,0,0",
+            ],
+            "does not close the loops",
+        ),
+        (&["linearize", "models/stewart.ron"], "quaternion"),
         (
             &["linearize", "models/rolling_disk.ron"],
-            "rolling contacts need minimal coordinates",
+            "rolling contacts need minimal speeds",
         ),
         (&["linearize", "models/ancf/crane_rope.ron"], "cables"),
         (
@@ -342,4 +358,98 @@ fn quaternions_at_rest_in_the_tangent_space() {
         }
     }
     assert_eq!(v["coordinates"].as_array().map(Vec::len), Some(3));
+}
+
+/// The bundled parallelogram four-bar (three uniform rods, `m = 1 kg`,
+/// `L = 1 m`, `g = 9.81`) hanging (`φ1 = φ3 = π`, `φ2 = −π`): one degree
+/// of freedom, the crank angle `θ`; the cranks turn about their pivots
+/// (`m L²/3` each) and the coupler translates (`m L²`), so
+/// `T = ½ (5/3) m L² θ̇²`; the centres sink by `L/2`, `L`, `L/2` times
+/// `cos θ`, so `V = −2 m g L cos θ`. `θ̈ = −(6g/5L) θ`: `λ = ±i √(6g/5L)`.
+/// Upright (all zero) the same with `λ = ±√(6g/5L)`.
+#[test]
+fn fourbar_single_mode_in_minimal_coordinates() {
+    let pi = std::f64::consts::PI;
+    let w2 = 6.0 * 9.81 / 5.0;
+    let hanging = format!("{pi},{},{pi}", -pi);
+    let v = json(&[
+        "linearize",
+        "models/fourbar.ron",
+        "--q",
+        &hanging,
+        "--u",
+        "0,0,0",
+        "--json",
+    ]);
+    assert_eq!(v["states"], serde_json::json!(["z1", "z1_dot"]), "one mode");
+    let a = matrix(&v, "A");
+    close("A[1][0] = −6g/5L", a[1][0], -w2, 1e-9);
+    close("A[1][1] = 0", a[1][1], 0.0, 1e-9);
+    for (re, im) in eigenvalues(&v) {
+        close("Re λ", re, 0.0, 1e-9);
+        close("|Im λ| = √(6g/5L)", im.abs(), w2.sqrt(), 1e-9);
+    }
+    // δq = Z z: the cranks turn together and the coupler against them.
+    let z: Vec<f64> = matrix(&v, "basis").iter().map(|r| r[0]).collect();
+    let third = (1.0f64 / 3.0).sqrt();
+    for (k, want) in [third, -third, third].into_iter().enumerate() {
+        close(&format!("Z[{k}]"), z[k], want, 1e-9);
+    }
+    let v = json(&[
+        "linearize",
+        "models/fourbar.ron",
+        "--q",
+        "0,0,0",
+        "--u",
+        "0,0,0",
+        "--json",
+    ]);
+    let mut re: Vec<f64> = eigenvalues(&v).iter().map(|e| e.0).collect();
+    re.sort_by(f64::total_cmp);
+    close("upright: λ = −√(6g/5L)", re[0], -w2.sqrt(), 1e-9);
+    close("upright: λ = +√(6g/5L)", re[1], w2.sqrt(), 1e-9);
+}
+
+/// A bob (`m = 2 kg`) on a carriage (`m_c = 1 kg`) sliding along x, the bob
+/// sliding along y on it, held on the circle `x² + y² = l²` (`l = 0.5 m`)
+/// by a holonomic constraint. In these Cartesian coordinates gravity has
+/// no stiffness: the restoring force is the constraint force's turning
+/// (`∂(Jᵀλ₀)/∂q`, `λ₀` carrying the bob's weight). Hanging, `x` is the
+/// free direction: `T = ½ (m_c + m) ẋ²`, `V = −m g √(l² − x²) ≈ m g x²/(2l)`,
+/// so `ω² = m g / (l (m_c + m))` = 13.08 /s².
+#[test]
+fn constraint_forces_stiffen_a_mass_on_a_circle() {
+    let text = r#"Model(
+    name: "circle_pendulum",
+    gravity: (0, "-g", 0),
+    parameters: [
+        (name: "g", value: 9.81),
+        (name: "m", value: 2.0),
+        (name: "mc", value: 1.0),
+        (name: "l", value: 0.5),
+    ],
+    bodies: [(name: "carriage", mass: "mc"), (name: "bob", mass: "m")],
+    joints: [
+        (name: "jx", kind: Prismatic(axis: (1, 0, 0)), parent: "ground", child: "carriage", coordinates: ["x"], q0: [0]),
+        (name: "jy", kind: Prismatic(axis: (0, 1, 0)), parent: "carriage", child: "bob", coordinates: ["y"], q0: ["-l"]),
+    ],
+    constraints: [Holonomic(name: "rod", expr: "x^2 + y^2 - l^2")],
+)
+"#;
+    let model = temp_path("circle_pendulum.ron");
+    std::fs::write(&model, text).expect("temp model");
+    let v = json(&["linearize", &model, "--json"]);
+    let (g, m, mc, l) = (9.81, 2.0, 1.0, 0.5);
+    let w2 = m * g / (l * (mc + m));
+    close(
+        "A[1][0] = −m g/(l (m_c + m))",
+        matrix(&v, "A")[1][0],
+        -w2,
+        1e-8,
+    );
+    for (re, im) in eigenvalues(&v) {
+        close("Re λ", re, 0.0, 1e-8);
+        close("|Im λ| = ω", im.abs(), w2.sqrt(), 1e-8);
+    }
+    let _ = std::fs::remove_file(&model);
 }

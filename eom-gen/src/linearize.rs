@@ -17,11 +17,26 @@
 //! `w` is the model's runtime inputs when it has any, else the extra
 //! generalised forces `τ`, one per speed.
 //!
-//! Supported: trees (rigid bodies, locked joints, flexible bodies) without
-//! constraint equations. Closed loops and nonholonomic constraints need
-//! minimal coordinates (the null space of the constraint Jacobian,
-//! Wittenburg 5.6) and are refused, as are models with cables: never a
-//! linearisation of the wrong system.
+//! Trees (rigid bodies, locked joints, flexible bodies) are linearised
+//! about any state. Holonomic loops (cut joints, holonomic constraints,
+//! `q̇ = u`) are linearised about an equilibrium (`u = 0`, the constrained
+//! accelerations zero) in minimal coordinates `δq = Z z`, `Z` an
+//! orthonormal basis of the null space of the constraint Jacobian `J`
+//! (Wittenburg 5.6): with `M u̇ = f(q, u) + τ + Jᵀλ` and the equilibrium's
+//! multipliers `λ₀`,
+//!
+//! ```text
+//! ZᵀMZ z̈ = Zᵀ (∂f/∂q + ∂(Jᵀλ₀)/∂q) Z z + Zᵀ ∂f/∂u Z ż + Zᵀ ∂τ/∂w w,
+//! ```
+//!
+//! `∂f/∂q = M ∂u̇/∂q` from the generated derivatives evaluated at
+//! `τ = Jᵀλ₀` (where the tree's `u̇` is the equilibrium's, zero), and the
+//! constraint forces' geometric stiffness `∂(Jᵀλ₀)/∂q` by central
+//! differences of the generated `J` (the one term not generated
+//! symbolically). Redundant constraints are fine (the rank of `J` decides
+//! the mobility). Nonholonomic constraints (rolling), loops about states
+//! that are not equilibria, loops with quaternions and models with cables
+//! are refused: never a linearisation of the wrong system.
 
 use crate::functions::Function;
 use crate::interpret::{Point, run};
@@ -52,6 +67,9 @@ pub struct Linearization {
     pub inputs: Vec<String>,
     /// What the columns of `B` are.
     pub input_kind: InputKind,
+    /// For a model with loops, the basis `Z` of the minimal coordinates
+    /// (`δq = Z z`, `NU × F`, orthonormal columns): `A` is `2F × 2F`.
+    pub basis: Option<DMatrix<f64>>,
 }
 
 /// Why a model cannot be linearised here.
@@ -63,6 +81,29 @@ pub enum LinearizeError {
         model: String,
         /// The equations' names.
         equations: Vec<String>,
+    },
+    /// Nonholonomic constraint equations (rolling).
+    Nonholonomic {
+        /// The model.
+        model: String,
+        /// The nonholonomic equations' names.
+        equations: Vec<String>,
+    },
+    /// A model with loops about a state that is not an equilibrium.
+    NotEquilibrium {
+        /// The model.
+        model: String,
+        /// `max |u|` at the state.
+        speed: f64,
+        /// `max |u̇|` of the constrained accelerations at the state.
+        acceleration: f64,
+    },
+    /// A model with loops at a state that does not close them.
+    NotAssembled {
+        /// The model.
+        model: String,
+        /// `max |Φ|`.
+        residual: f64,
     },
     /// The model has cables.
     Cables {
@@ -95,13 +136,26 @@ impl fmt::Display for LinearizeError {
         match self {
             LinearizeError::Constraints { model, equations } => write!(
                 f,
-                "`{model}` has {} constraint equation(s) ({}): linearisation supports trees without constraint equations (rigid and flexible bodies, locked joints); closed loops and rolling contacts need minimal coordinates, not implemented yet",
+                "`{model}` has {} constraint equation(s) ({}) and quaternion coordinates: loops are linearised in minimal coordinates where `q̇ = u` only",
                 equations.len(),
-                equations
-                    .iter()
-                    .map(|e| format!("`{e}`"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                names(equations)
+            ),
+            LinearizeError::Nonholonomic { model, equations } => write!(
+                f,
+                "`{model}` has nonholonomic constraint equation(s) ({}): rolling contacts need minimal speeds, not implemented yet; linearisation supports trees and holonomic loops (about equilibria)",
+                names(equations)
+            ),
+            LinearizeError::NotEquilibrium {
+                model,
+                speed,
+                acceleration,
+            } => write!(
+                f,
+                "`{model}` has loops and the state is not an equilibrium (max |u| = {speed:.3e}, max |u̇| = {acceleration:.3e}): loops are linearised about equilibria only (give `--q` at one and `--u` zeros)"
+            ),
+            LinearizeError::NotAssembled { model, residual } => write!(
+                f,
+                "`{model}`: the state does not close the loops (max |Φ| = {residual:.3e}); give `--q` that satisfies the constraints"
             ),
             LinearizeError::Cables { model } => write!(
                 f,
@@ -126,6 +180,14 @@ impl fmt::Display for LinearizeError {
 
 impl std::error::Error for LinearizeError {}
 
+/// `` `a`, `b` `` from names.
+fn names(list: &[String]) -> String {
+    list.iter()
+        .map(|e| format!("`{e}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// Linearises the model of `f` about `x` (its `q`, `u`, `t`, inputs and
 /// parameters; `x.tau` is the operating point of `τ`, zero if empty).
 /// `f` must hold `forward_dynamics_derivatives`.
@@ -137,18 +199,27 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
             model: sys.name.clone(),
         });
     }
-    if !f.constraint_names.is_empty() {
-        return Err(LinearizeError::Constraints {
-            model: sys.name.clone(),
-            equations: f.constraint_names.clone(),
-        });
-    }
     for (what, got, want) in [("q", x.q.len(), nq), ("u", x.u.len(), nu)] {
         if got != want {
             return Err(LinearizeError::Size { what, got, want });
         }
     }
     let tangent = nq != nu || !sys.quaternion_indices().is_empty();
+    if !f.constraint_names.is_empty() {
+        if f.n_holonomic < f.constraint_names.len() {
+            return Err(LinearizeError::Nonholonomic {
+                model: sys.name.clone(),
+                equations: f.constraint_names[f.n_holonomic..].to_vec(),
+            });
+        }
+        if tangent {
+            return Err(LinearizeError::Constraints {
+                model: sys.name.clone(),
+                equations: f.constraint_names.clone(),
+            });
+        }
+        return loops(f, x);
+    }
     if tangent && x.u.iter().any(|&v| v != 0.0) {
         return Err(LinearizeError::MovingQuaternions {
             model: sys.name.clone(),
@@ -210,6 +281,176 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
             .collect(),
         inputs,
         input_kind,
+        basis: None,
+    })
+}
+
+/// The derivative blocks at `x`: `(∂u̇/∂q, ∂u̇/∂u, ∂u̇/∂w)` with `w` the
+/// inputs if the model has any, else `τ`.
+fn derivative_blocks(
+    f: &Formulation,
+    x: &Point<'_>,
+) -> Result<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, InputKind), LinearizeError> {
+    let (nu, ni) = (x.sys.nu(), x.sys.inputs.len());
+    let p = f
+        .program(Function::ForwardDynamicsDerivatives)
+        .ok_or(LinearizeError::NoDerivatives)?;
+    let flat = run(p, x);
+    if flat.len() != 3 * nu * nu + nu * ni {
+        return Err(LinearizeError::NoDerivatives);
+    }
+    let block = |k: usize| DMatrix::from_row_slice(nu, nu, &flat[k * nu * nu..(k + 1) * nu * nu]);
+    let (w, kind) = if ni > 0 {
+        (
+            DMatrix::from_row_slice(nu, ni, &flat[3 * nu * nu..]),
+            InputKind::Inputs,
+        )
+    } else {
+        (block(2), InputKind::GeneralizedForces)
+    };
+    Ok((block(0), block(1), w, kind))
+}
+
+/// `Φ` and `J` (holonomic rows) at `q`.
+fn constraint_values(f: &Formulation, x: &Point<'_>) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    let nu = x.sys.nu();
+    let nc = f.constraint_names.len();
+    let c = crate::interpret::evaluate_function(f, Function::Constraints, x)?;
+    if c.len() != 3 * nc + nc * nu {
+        return None;
+    }
+    Some((
+        c[..nc].to_vec(),
+        DMatrix::from_row_slice(nc, nu, &c[3 * nc..]),
+    ))
+}
+
+/// Holonomic loops about an equilibrium, in minimal coordinates (see the
+/// module documentation).
+fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError> {
+    use crate::interpret::evaluate_function;
+    let sys = x.sys;
+    let nu = sys.nu();
+    let model = sys.name.clone();
+    let not_finite = |m: &DMatrix<f64>| m.iter().any(|v| !v.is_finite());
+    let (phi, j) = constraint_values(f, x).ok_or(LinearizeError::NotFinite)?;
+    let residual = phi.iter().fold(0.0f64, |s, p| s.max(p.abs()));
+    if !(residual <= 1e-8) {
+        return Err(LinearizeError::NotAssembled { model, residual });
+    }
+    let m = evaluate_function(f, Function::MassMatrix, x)
+        .map(|v| DMatrix::from_row_slice(nu, nu, &v))
+        .ok_or(LinearizeError::NotFinite)?;
+    let b = evaluate_function(f, Function::Bias, x).ok_or(LinearizeError::NotFinite)?;
+    let force = nalgebra::DVector::from_iterator(nu, b.iter().map(|b| -b));
+    let gamma = nalgebra::DVector::zeros(j.nrows());
+    if not_finite(&m) || not_finite(&j) {
+        return Err(LinearizeError::NotFinite);
+    }
+    // The equilibrium: u = 0 and the constrained accelerations zero
+    // (relative to what gravity and the force elements alone would give).
+    let (udot, lambda, _) = eom_sim::constrained::accelerations(&m, &force, &j, &gamma)
+        .ok_or(LinearizeError::NotFinite)?;
+    let speed = x.u.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    let acceleration = udot.amax();
+    let free = m
+        .clone()
+        .cholesky()
+        .map_or(f64::INFINITY, |c| c.solve(&force).amax());
+    if speed != 0.0 || !(acceleration <= 1e-8 * free.max(1.0)) {
+        return Err(LinearizeError::NotEquilibrium {
+            model,
+            speed,
+            acceleration,
+        });
+    }
+    // Derivatives of the tree at τ = Jᵀλ₀ (the tree's u̇ is then zero).
+    let tau0 = j.transpose() * &lambda;
+    let tau0 = tau0.as_slice().to_vec();
+    let at = Point {
+        tau: &tau0,
+        ..x.clone()
+    };
+    let (dq, du, dw, input_kind) = derivative_blocks(f, &at)?;
+    // Geometric stiffness of the constraint forces, ∂(J(q)ᵀλ₀)/∂q, by
+    // central differences of the generated J.
+    let mut h = DMatrix::<f64>::zeros(nu, nu);
+    for k in 0..nu {
+        let step = 1e-6 * x.q[k].abs().max(1.0);
+        let jt_lambda = |s: f64| -> Option<nalgebra::DVector<f64>> {
+            let mut q = x.q.to_vec();
+            q[k] += s;
+            let (_, jk) = constraint_values(f, &Point { q: &q, ..x.clone() })?;
+            Some(jk.transpose() * &lambda)
+        };
+        let (plus, minus) = (
+            jt_lambda(step).ok_or(LinearizeError::NotFinite)?,
+            jt_lambda(-step).ok_or(LinearizeError::NotFinite)?,
+        );
+        h.set_column(k, &((plus - minus) / (2.0 * step)));
+    }
+    // Z: the null space of J, from the eigenvectors of JᵀJ.
+    let jtj = j.transpose() * &j;
+    let eig = nalgebra::SymmetricEigen::new(jtj);
+    let largest = eig.eigenvalues.amax().max(1.0);
+    let mut columns: Vec<nalgebra::DVector<f64>> = (0..nu)
+        .filter(|&k| eig.eigenvalues[k] <= 1e-12 * largest)
+        .map(|k| {
+            let mut v = eig.eigenvectors.column(k).into_owned();
+            // A deterministic sign: the largest entry positive.
+            let imax = v.iamax();
+            if v[imax] < 0.0 {
+                v.neg_mut();
+            }
+            v
+        })
+        .collect();
+    columns.sort_by_key(|v| v.iamax());
+    let dof = columns.len();
+    let z = if dof == 0 {
+        DMatrix::<f64>::zeros(nu, 0)
+    } else {
+        DMatrix::from_columns(&columns)
+    };
+    let mr = z.transpose() * &m * &z;
+    let Some(mr_inv) = mr.clone().try_inverse() else {
+        return Err(LinearizeError::NotFinite);
+    };
+    let stiffness = mr_inv.clone() * z.transpose() * (&m * &dq + &h) * &z;
+    let damping = mr_inv.clone() * z.transpose() * &m * &du * &z;
+    let input = mr_inv * z.transpose() * &m * &dw;
+    let n = 2 * dof;
+    let mut a = DMatrix::<f64>::zeros(n, n);
+    let mut bm = DMatrix::<f64>::zeros(n, input.ncols());
+    for i in 0..dof {
+        a[(i, dof + i)] = 1.0;
+        for k in 0..dof {
+            a[(dof + i, k)] = stiffness[(i, k)];
+            a[(dof + i, dof + k)] = damping[(i, k)];
+        }
+        for k in 0..input.ncols() {
+            bm[(dof + i, k)] = input[(i, k)];
+        }
+    }
+    if not_finite(&a) || not_finite(&bm) {
+        return Err(LinearizeError::NotFinite);
+    }
+    let speeds = sys.speed_names();
+    let inputs = match input_kind {
+        InputKind::Inputs => sys.inputs.clone(),
+        InputKind::GeneralizedForces => speeds.iter().map(|s| format!("tau({s})")).collect(),
+    };
+    let states = (1..=dof)
+        .map(|k| format!("z{k}"))
+        .chain((1..=dof).map(|k| format!("z{k}_dot")))
+        .collect();
+    Ok(Linearization {
+        a,
+        b: bm,
+        states,
+        inputs,
+        input_kind,
+        basis: Some(z),
     })
 }
 

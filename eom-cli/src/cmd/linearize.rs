@@ -12,8 +12,9 @@ use eom_gen::linearize::{Eigenvalue, InputKind, Linearization, LinearizeError};
 use std::process::ExitCode;
 
 /// Linearise a model about a state: `A`, `B` of the first-order system
-/// `y = (q, u)` (quaternions in the tangent space), eigenvalues, natural
-/// frequencies and damping ratios. Trees without constraint equations.
+/// `y = (q, u)` (quaternions in the tangent space; holonomic loops about
+/// equilibria in minimal coordinates), eigenvalues, natural frequencies and
+/// damping ratios.
 #[derive(Args)]
 pub struct LinearizeArgs {
     /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
@@ -161,15 +162,15 @@ fn json(
     u: &[f64],
     t: f64,
 ) -> serde_json::Value {
-    let nu = sys.nu();
-    serde_json::json!({
+    let dof = lin.a.nrows() / 2;
+    let mut v = serde_json::json!({
         "model": sys.name,
         "q": q,
         "u": u,
         "t": t,
         "states": lin.states,
-        "coordinates": lin.states[..nu],
-        "speeds": lin.states[nu..],
+        "coordinates": lin.states[..dof],
+        "speeds": lin.states[dof..],
         "inputs": lin.inputs,
         "input_kind": match lin.input_kind {
             InputKind::Inputs => "inputs",
@@ -180,7 +181,12 @@ fn json(
         "eigenvalues": eig.iter().map(|e| [e.re, e.im]).collect::<Vec<_>>(),
         "natural_frequencies": eig.iter().map(|e| number(e.natural_frequency)).collect::<Vec<_>>(),
         "damping_ratios": eig.iter().map(|e| number(e.damping_ratio)).collect::<Vec<_>>(),
-    })
+    });
+    if let Some(z) = &lin.basis {
+        v["basis"] = serde_json::json!(rows(z));
+        v["basis_rows"] = serde_json::json!(sys.coordinate_names());
+    }
+    v
 }
 
 fn csv(eig: &[Eigenvalue]) -> String {
@@ -221,6 +227,20 @@ fn text(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue]) -> Strin
         lin.states.join(", "),
         lin.inputs.join(", ")
     );
+    if let Some(z) = &lin.basis {
+        let coordinates: Vec<String> = sys
+            .coordinate_names()
+            .into_iter()
+            .map(String::from)
+            .collect();
+        let columns: Vec<String> = lin.states[..z.ncols()].to_vec();
+        s += &matrix(
+            "minimal coordinates (loops): δq = Z z, Z",
+            z,
+            &coordinates,
+            &columns,
+        );
+    }
     s += &matrix("A", &lin.a, &lin.states, &lin.states);
     s += &matrix("B", &lin.b, &lin.states, &lin.inputs);
     let _ = writeln!(
