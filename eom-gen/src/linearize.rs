@@ -500,3 +500,42 @@ pub fn eigenvalues(a: &DMatrix<f64>) -> Option<Vec<Eigenvalue>> {
     });
     Some(out)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A damped oscillator `ẍ = −ω₀² x − 2ζω₀ ẋ` (`ω₀ = 3`, `ζ = 0.1`):
+    /// `λ = −ζω₀ ± iω₀√(1−ζ²)`, `|λ| = ω₀`, damping ratio `ζ`; a rotation
+    /// generator has `±i`; a diagonal matrix its diagonal, sorted by
+    /// magnitude.
+    #[test]
+    fn eigenvalues_of_known_matrices() {
+        let (w, z) = (3.0f64, 0.1f64);
+        let a = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -w * w, -2.0 * z * w]);
+        let e = eigenvalues(&a).expect("converges");
+        assert_eq!(e.len(), 2);
+        for (k, sign) in [(0, -1.0), (1, 1.0)] {
+            let l = e[k];
+            assert!((l.re + z * w).abs() < 1e-12, "re {}", l.re);
+            assert!(
+                (l.im - sign * w * (1.0 - z * z).sqrt()).abs() < 1e-12,
+                "im {}",
+                l.im
+            );
+            assert!((l.natural_frequency - w).abs() < 1e-12);
+            assert!((l.damping_ratio - z).abs() < 1e-12);
+        }
+        let r = DMatrix::from_row_slice(2, 2, &[0.0, -1.0, 1.0, 0.0]);
+        let e = eigenvalues(&r).expect("converges");
+        assert!(
+            e.iter()
+                .all(|l| l.re.abs() < 1e-15 && (l.im.abs() - 1.0).abs() < 1e-15)
+        );
+        let d = DMatrix::from_row_slice(2, 2, &[-4.0, 0.0, 0.0, 2.0]);
+        let e = eigenvalues(&d).expect("converges");
+        assert_eq!((e[0].re, e[1].re), (2.0, -4.0));
+        assert!(eigenvalues(&DMatrix::from_row_slice(1, 1, &[f64::NAN])).is_none());
+        assert_eq!(eigenvalues(&DMatrix::zeros(0, 0)), Some(Vec::new()));
+    }
+}
