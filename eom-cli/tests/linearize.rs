@@ -180,6 +180,21 @@ fn double_pendulum_normal_modes() {
     for z in v["damping_ratios"].as_array().expect("list") {
         close("ζ", z.as_f64().expect("number"), 0.0, 1e-12);
     }
+    // Mode shapes: in absolute angles φ2/φ1 = ±√2 (slow, fast), so in the
+    // relative ones q2/q1 = φ2/φ1 − 1 = √2 − 1 and −(√2 + 1); scaled to a
+    // largest entry of 1: (1, √2 − 1) and (−(√2 − 1), 1), real.
+    let r = 2f64.sqrt() - 1.0;
+    let shapes = v["mode_shapes"].as_array().expect("mode_shapes");
+    for (k, want) in [(0, [1.0, r]), (1, [1.0, r]), (2, [-r, 1.0]), (3, [-r, 1.0])] {
+        let shape = shapes[k].as_array().expect("a shape");
+        for (i, w) in want.iter().enumerate() {
+            let c = shape[i].as_array().expect("[re, im]");
+            let (re, im) = (c[0].as_f64().expect("re"), c[1].as_f64().expect("im"));
+            close(&format!("mode {k} q{} re", i + 1), re, *w, 1e-9);
+            close(&format!("mode {k} q{} im", i + 1), im, 0.0, 1e-9);
+        }
+    }
+    assert_eq!(v["mode_coordinates"], serde_json::json!(["q1", "q2"]));
 }
 
 /// A model file next to the bundled pendulum with a hinge damper
@@ -389,11 +404,18 @@ fn fourbar_single_mode_in_minimal_coordinates() {
         close("Re λ", re, 0.0, 1e-9);
         close("|Im λ| = √(6g/5L)", im.abs(), w2.sqrt(), 1e-9);
     }
-    // δq = Z z: the cranks turn together and the coupler against them.
+    // δq = Z z: the cranks turn together and the coupler against them;
+    // the mode shape over (φ1, φ2, φ3) is (1, −1, 1).
     let z: Vec<f64> = matrix(&v, "basis").iter().map(|r| r[0]).collect();
     let third = (1.0f64 / 3.0).sqrt();
     for (k, want) in [third, -third, third].into_iter().enumerate() {
         close(&format!("Z[{k}]"), z[k], want, 1e-9);
+    }
+    for shape in v["mode_shapes"].as_array().expect("mode_shapes") {
+        for (i, want) in [1.0, -1.0, 1.0].into_iter().enumerate() {
+            let re = shape[i][0].as_f64().expect("re");
+            close(&format!("mode shape φ{}", i + 1), re, want, 1e-9);
+        }
     }
     let v = json(&[
         "linearize",

@@ -285,12 +285,17 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
     })
 }
 
-/// The derivative blocks at `x`: `(∂u̇/∂q, ∂u̇/∂u, ∂u̇/∂w)` with `w` the
-/// inputs if the model has any, else `τ`.
-fn derivative_blocks(
-    f: &Formulation,
-    x: &Point<'_>,
-) -> Result<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>, InputKind), LinearizeError> {
+/// `∂u̇/∂q`, `∂u̇/∂u`, `∂u̇/∂w` and what `w` is.
+struct Blocks {
+    dq: DMatrix<f64>,
+    du: DMatrix<f64>,
+    dw: DMatrix<f64>,
+    input_kind: InputKind,
+}
+
+/// The derivative blocks at `x`, with `w` the inputs if the model has any,
+/// else `τ`.
+fn derivative_blocks(f: &Formulation, x: &Point<'_>) -> Result<Blocks, LinearizeError> {
     let (nu, ni) = (x.sys.nu(), x.sys.inputs.len());
     let p = f
         .program(Function::ForwardDynamicsDerivatives)
@@ -308,7 +313,12 @@ fn derivative_blocks(
     } else {
         (block(2), InputKind::GeneralizedForces)
     };
-    Ok((block(0), block(1), w, kind))
+    Ok(Blocks {
+        dq: block(0),
+        du: block(1),
+        dw: w,
+        input_kind: kind,
+    })
 }
 
 /// `Φ` and `J` (holonomic rows) at `q`.
@@ -335,7 +345,8 @@ fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError
     let not_finite = |m: &DMatrix<f64>| m.iter().any(|v| !v.is_finite());
     let (phi, j) = constraint_values(f, x).ok_or(LinearizeError::NotFinite)?;
     let residual = phi.iter().fold(0.0f64, |s, p| s.max(p.abs()));
-    if !(residual <= 1e-8) {
+    // (NaN is not assembled either.)
+    if residual.is_nan() || residual > 1e-8 {
         return Err(LinearizeError::NotAssembled { model, residual });
     }
     let m = evaluate_function(f, Function::MassMatrix, x)
@@ -357,7 +368,7 @@ fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError
         .clone()
         .cholesky()
         .map_or(f64::INFINITY, |c| c.solve(&force).amax());
-    if speed != 0.0 || !(acceleration <= 1e-8 * free.max(1.0)) {
+    if speed != 0.0 || acceleration.is_nan() || acceleration > 1e-8 * free.max(1.0) {
         return Err(LinearizeError::NotEquilibrium {
             model,
             speed,
@@ -371,7 +382,12 @@ fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError
         tau: &tau0,
         ..x.clone()
     };
-    let (dq, du, dw, input_kind) = derivative_blocks(f, &at)?;
+    let Blocks {
+        dq,
+        du,
+        dw,
+        input_kind,
+    } = derivative_blocks(f, &at)?;
     // Geometric stiffness of the constraint forces, ∂(J(q)ᵀλ₀)/∂q, by
     // central differences of the generated J.
     let mut h = DMatrix::<f64>::zeros(nu, nu);
@@ -499,6 +515,63 @@ pub fn eigenvalues(a: &DMatrix<f64>) -> Option<Vec<Eigenvalue>> {
             .then(x.im.total_cmp(&y.im))
     });
     Some(out)
+}
+
+/// The mode shape of eigenvalue `l` of `a`: the eigenvector's first
+/// `positions` entries (the displacements of `y = (δq, u)`), mapped by
+/// `basis` when given (`δq = Z z`), scaled so that the entry of largest
+/// modulus is `1`; by inverse iteration on `A − μI` in complex arithmetic
+/// (`μ` a hair away from `l`, so the solve is regular). `None` if it does
+/// not converge to a finite vector.
+pub fn mode_shape(
+    a: &DMatrix<f64>,
+    l: &Eigenvalue,
+    positions: usize,
+    basis: Option<&DMatrix<f64>>,
+) -> Option<Vec<nalgebra::Complex<f64>>> {
+    use nalgebra::Complex;
+    let n = a.nrows();
+    if n == 0 || positions == 0 || positions > n {
+        return None;
+    }
+    let scale = a.amax().max(1.0);
+    let mu = Complex::new(l.re + 1e-10 * scale, l.im + 1e-10 * scale);
+    let shifted = a.map(|x| Complex::new(x, 0.0)) - DMatrix::<Complex<f64>>::identity(n, n) * mu;
+    let lu = shifted.lu();
+    // A start with every component (deterministic), then two iterations.
+    let mut v = nalgebra::DVector::<Complex<f64>>::from_fn(n, |i, _| {
+        Complex::new(1.0 + 0.1 * i as f64, 0.05 * i as f64)
+    });
+    for _ in 0..3 {
+        v = lu.solve(&v)?;
+        let norm = v.norm();
+        if !(norm.is_finite() && norm > 0.0) {
+            return None;
+        }
+        v /= Complex::new(norm, 0.0);
+    }
+    let head: Vec<Complex<f64>> = v.iter().take(positions).copied().collect();
+    let shape: Vec<Complex<f64>> = match basis {
+        Some(z) if z.ncols() == positions => (0..z.nrows())
+            .map(|r| {
+                (0..positions)
+                    .map(|c| head[c] * z[(r, c)])
+                    .fold(Complex::new(0.0, 0.0), |s, x| s + x)
+            })
+            .collect(),
+        _ => head,
+    };
+    let big = shape
+        .iter()
+        .copied()
+        .max_by(|x, y| x.norm().total_cmp(&y.norm()))?;
+    if !(big.norm() > 0.0) {
+        return None;
+    }
+    let out: Vec<Complex<f64>> = shape.iter().map(|x| x / big).collect();
+    out.iter()
+        .all(|x| x.re.is_finite() && x.im.is_finite())
+        .then_some(out)
 }
 
 #[cfg(test)]

@@ -121,17 +121,43 @@ pub fn run(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             "the eigenvalue iteration (real Schur form of A) did not converge".into(),
         ));
     };
+    let shapes = mode_shapes(sys, &lin, &eig);
     if let Some(path) = &a.csv
         && let Err(code) = crate::output::write_file(path, &csv(&eig))
     {
         return code;
     }
     if a.json {
-        println!("{}", json(sys, &lin, &eig, &q, &u, a.t));
+        println!("{}", json(sys, &lin, &eig, &shapes, &q, &u, a.t));
     } else {
-        print!("{}", text(sys, &lin, &eig));
+        print!("{}", text(sys, &lin, &eig, &shapes));
     }
     ExitCode::SUCCESS
+}
+
+/// Mode shapes: per eigenvalue the displacements over the model's
+/// coordinates (the tangent displacements for quaternion models, `Z z`
+/// for loops), largest entry 1; with the names they are over.
+struct Shapes {
+    over: Vec<String>,
+    shapes: Vec<Option<Vec<nalgebra::Complex<f64>>>>,
+}
+
+fn mode_shapes(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue]) -> Shapes {
+    let dof = lin.a.nrows() / 2;
+    let over = match &lin.basis {
+        Some(_) => sys
+            .coordinate_names()
+            .into_iter()
+            .map(String::from)
+            .collect(),
+        None => lin.states[..dof].to_vec(),
+    };
+    let shapes = eig
+        .iter()
+        .map(|l| eom_gen::linearize::mode_shape(&lin.a, l, dof, lin.basis.as_ref()))
+        .collect();
+    Shapes { over, shapes }
 }
 
 /// A model this command does not linearise: a usage error (exit 2).
@@ -158,6 +184,7 @@ fn json(
     sys: &eom_gen::System,
     lin: &Linearization,
     eig: &[Eigenvalue],
+    shapes: &Shapes,
     q: &[f64],
     u: &[f64],
     t: f64,
@@ -182,6 +209,16 @@ fn json(
         "natural_frequencies": eig.iter().map(|e| number(e.natural_frequency)).collect::<Vec<_>>(),
         "damping_ratios": eig.iter().map(|e| number(e.damping_ratio)).collect::<Vec<_>>(),
     });
+    v["mode_coordinates"] = serde_json::json!(shapes.over);
+    v["mode_shapes"] = serde_json::json!(
+        shapes
+            .shapes
+            .iter()
+            .map(|s| s
+                .as_ref()
+                .map(|s| s.iter().map(|c| [c.re, c.im]).collect::<Vec<_>>()))
+            .collect::<Vec<_>>()
+    );
     if let Some(z) = &lin.basis {
         v["basis"] = serde_json::json!(rows(z));
         v["basis_rows"] = serde_json::json!(sys.coordinate_names());
@@ -219,7 +256,7 @@ fn matrix(title: &str, m: &nalgebra::DMatrix<f64>, rows: &[String], cols: &[Stri
     s
 }
 
-fn text(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue]) -> String {
+fn text(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue], shapes: &Shapes) -> String {
     use std::fmt::Write;
     let mut s = format!(
         "{}: ẏ = A y + B w, y = ({}), w = ({})\n",
@@ -258,6 +295,35 @@ fn text(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue]) -> Strin
             e.natural_frequency / std::f64::consts::TAU,
             e.damping_ratio
         );
+    }
+    // One line per eigenvalue with Im λ ≥ 0 (the conjugate's shape is
+    // the conjugate).
+    let _ = writeln!(
+        s,
+        "mode shapes (displacements of {}; largest 1)",
+        shapes.over.join(", ")
+    );
+    for (e, shape) in eig.iter().zip(&shapes.shapes) {
+        if e.im < 0.0 {
+            continue;
+        }
+        let entries = match shape {
+            Some(v) => v
+                .iter()
+                .map(|c| {
+                    // Scaled to a largest entry of 1: parts below 1e-9
+                    // are rounding.
+                    if c.im.abs() <= 1e-9 {
+                        format!("{:.4}", if c.re.abs() <= 1e-9 { 0.0 } else { c.re })
+                    } else {
+                        format!("{:.4}{:+.4}i", c.re, c.im)
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", "),
+            None => "—".into(),
+        };
+        let _ = writeln!(s, "  λ = {:.6}{:+.6}i: {entries}", e.re, e.im);
     }
     s
 }
