@@ -545,7 +545,7 @@ pub fn mode_shape(
     for _ in 0..3 {
         v = lu.solve(&v)?;
         let norm = v.norm();
-        if !(norm.is_finite() && norm > 0.0) {
+        if !norm.is_finite() || norm <= 0.0 {
             return None;
         }
         v /= Complex::new(norm, 0.0);
@@ -565,7 +565,8 @@ pub fn mode_shape(
         .iter()
         .copied()
         .max_by(|x, y| x.norm().total_cmp(&y.norm()))?;
-    if !(big.norm() > 0.0) {
+    let size = big.norm();
+    if size.is_nan() || size <= 0.0 {
         return None;
     }
     let out: Vec<Complex<f64>> = shape.iter().map(|x| x / big).collect();
