@@ -10,6 +10,7 @@ mod cable_report;
 mod cmd;
 mod compiled;
 mod error;
+mod linearize_sweep;
 mod mixed_static;
 mod open;
 mod output;

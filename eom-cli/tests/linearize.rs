@@ -475,3 +475,83 @@ fn constraint_forces_stiffen_a_mass_on_a_circle() {
     }
     let _ = std::fs::remove_file(&model);
 }
+
+/// `--sweep g=1:9:5`: the hanging pendulum's `λ = ±i √(g/l)` at each of
+/// the five values (the model regenerated at each); `--csv` has one row per
+/// eigenvalue and value, `--svg` draws them; points that cannot be
+/// linearised are named with why (exit 3), malformed sweeps are usage
+/// errors (exit 2).
+#[test]
+fn sweep_gives_the_eigenvalues_against_a_parameter() {
+    let csv = temp_path("sweep.csv");
+    let svg = temp_path("sweep.svg");
+    let v = json(&[
+        "linearize",
+        "models/pendulum.ron",
+        "--q",
+        "0",
+        "--sweep",
+        "g=1:9:5",
+        "--csv",
+        &csv,
+        "--svg",
+        &svg,
+        "--json",
+    ]);
+    let values: Vec<f64> = v["values"]
+        .as_array()
+        .expect("values")
+        .iter()
+        .map(|x| x.as_f64().expect("number"))
+        .collect();
+    assert_eq!(values, [1.0, 3.0, 5.0, 7.0, 9.0]);
+    for (g, eig) in values
+        .iter()
+        .zip(v["eigenvalues"].as_array().expect("list"))
+    {
+        for l in eig.as_array().expect("eigenvalues") {
+            let (re, im) = (l[0].as_f64().expect("re"), l[1].as_f64().expect("im"));
+            close(&format!("g = {g}: Re λ"), re, 0.0, 1e-12);
+            close(&format!("g = {g}: |Im λ| = √g"), im.abs(), g.sqrt(), 1e-12);
+        }
+    }
+    let rows = std::fs::read_to_string(&csv).unwrap_or_default();
+    assert_eq!(rows.lines().count(), 1 + 5 * 2, "{rows}");
+    assert!(rows.starts_with("g,k,re,im,natural_frequency,damping_ratio\n"));
+    let drawn = std::fs::read_to_string(&svg).unwrap_or_default();
+    assert!(drawn.contains("<svg") && drawn.contains("Re λ"), "an SVG");
+    let _ = std::fs::remove_file(&csv);
+    let _ = std::fs::remove_file(&svg);
+    // The four-bar moving at its initial state is no equilibrium at any L.
+    let out = eom_gen(&[
+        "linearize",
+        "models/fourbar.ron",
+        "--sweep",
+        "L=1:2:2",
+        "--json",
+    ]);
+    assert_eq!(out.status.code(), Some(3));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert!(
+        v["errors"][0]
+            .as_str()
+            .is_some_and(|e| e.contains("not an equilibrium"))
+    );
+    for args in [
+        &["linearize", "models/pendulum.ron", "--sweep", "g=1:2"][..],
+        &["linearize", "models/pendulum.ron", "--sweep", "g=1:2:1"],
+        &[
+            "linearize",
+            "models/pendulum.ron",
+            "--sweep",
+            "g=1:2:3",
+            "--param",
+            "g=2",
+        ],
+        &["linearize", "models/pendulum.ron", "--svg", "x.svg"],
+    ] {
+        let out = eom_gen(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        assert!(out.stdout.is_empty(), "{args:?}");
+    }
+}

@@ -35,45 +35,169 @@ pub struct LinearizeArgs {
     /// Print one JSON object instead of the tables.
     #[arg(long)]
     pub json: bool,
-    /// Write the eigenvalues to this CSV file (`re,im,natural_frequency,damping_ratio`).
+    /// Write the eigenvalues to this CSV file (`re,im,natural_frequency,damping_ratio`;
+    /// with --sweep `NAME,k,re,im,natural_frequency,damping_ratio`).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<String>,
+    /// The eigenvalues against a parameter: `NAME=a:b:n` (n equally spaced
+    /// values; the model regenerated at each, its initial state too).
+    #[arg(long, value_name = "NAME=a:b:n", allow_hyphen_values = true)]
+    pub sweep: Option<String>,
+    /// With --sweep: draw the real and imaginary parts against the
+    /// parameter into this SVG file.
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<String>,
+}
+
+/// One linearisation: the model as checked at this point, `A`, `B`, the
+/// eigenvalues and the state.
+struct At {
+    sys: eom_gen::System,
+    lin: Linearization,
+    eig: Vec<Eigenvalue>,
+    q: Vec<f64>,
+    u: Vec<f64>,
+}
+
+/// Why a point was not linearised.
+enum Fail {
+    /// Already reported (the model, the arguments): this exit status.
+    Exit(ExitCode),
+    /// Not linearised at this point: why, and whether it is a usage error
+    /// (exit 2) rather than a refusal (exit 1).
+    Point(String, bool),
 }
 
 pub fn run(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
+    let mut problems = Vec::new();
     if !a.t.is_finite() {
-        return crate::output::fail(&Error::Usage(vec![format!(
-            "--t must be a finite number, got {}",
-            a.t
-        )]));
+        problems.push(format!("--t must be a finite number, got {}", a.t));
     }
-    let vary = match Vary::parse_or_exit(&a.params.params, &a.inputs.inputs) {
+    let sweep = match a.sweep.as_deref().map(parse_sweep).transpose() {
+        Ok(s) => s,
+        Err(e) => {
+            problems.push(e);
+            None
+        }
+    };
+    if a.svg.is_some() && a.sweep.is_none() {
+        problems.push("--svg draws a --sweep; give --sweep NAME=a:b:n".into());
+    }
+    let vary = match Vary::parse(&a.params.params, &a.inputs.inputs) {
         Ok(v) => v,
-        Err(code) => return code,
+        Err(p) => {
+            problems.extend(p);
+            Vary::default()
+        }
     };
-    let opened = match crate::open::open(&a.model, urdf, &vary) {
-        Ok(o) => o,
-        Err(code) => return code,
+    if let Some((name, _)) = &sweep
+        && vary.params.iter().any(|(n, _)| n == name)
+    {
+        problems.push(format!(
+            "--sweep sets parameter `{name}`; do not also give it with --param"
+        ));
+    }
+    if !problems.is_empty() {
+        return crate::output::fail(&Error::Usage(problems));
+    }
+    let Some((name, values)) = sweep else {
+        return single(a, urdf, &vary);
     };
-    if let Some(code) = crate::open::cables_only_refusal(&opened.checked, "linearize") {
+    let mut points: Vec<(f64, Result<Vec<Eigenvalue>, String>)> = Vec::new();
+    for value in values {
+        let mut vary = vary.clone();
+        vary.params.push((name.clone(), value));
+        match at(a, urdf, &vary) {
+            Ok(p) => points.push((value, Ok(p.eig))),
+            Err(Fail::Exit(code)) => return code,
+            Err(Fail::Point(why, _)) => {
+                eprintln!("{name} = {value}: {why}");
+                points.push((value, Err(why)));
+            }
+        }
+    }
+    crate::linearize_sweep::report(
+        &name,
+        &points,
+        a.json,
+        a.csv.as_deref(),
+        a.svg.as_deref(),
+        &a.model,
+    )
+}
+
+/// `NAME=a:b:n`: `n ≥ 2` equally spaced values from `a` to `b`.
+fn parse_sweep(text: &str) -> Result<(String, Vec<f64>), String> {
+    let bad = || {
+        format!(
+            "--sweep `{text}`: expected NAME=a:b:n (finite a, b; n ≥ 2 points), e.g. `--sweep v=0:10:51`"
+        )
+    };
+    let (name, range) = text.split_once('=').ok_or_else(bad)?;
+    let parts: Vec<&str> = range.split(':').collect();
+    let [a, b, n] = parts.as_slice() else {
+        return Err(bad());
+    };
+    let (a, b): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    let n: usize = n.trim().parse().map_err(|_| bad())?;
+    if name.trim().is_empty() || !a.is_finite() || !b.is_finite() || !(2..=100_000).contains(&n) {
+        return Err(bad());
+    }
+    let values = (0..n)
+        .map(|k| a + (b - a) * k as f64 / (n - 1) as f64)
+        .collect();
+    Ok((name.trim().to_string(), values))
+}
+
+/// One point, printed.
+fn single(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> ExitCode {
+    let p = match at(a, urdf, vary) {
+        Ok(p) => p,
+        Err(Fail::Exit(code)) => return code,
+        Err(Fail::Point(why, true)) => return crate::output::fail(&Error::Usage(vec![why])),
+        Err(Fail::Point(why, false)) => return crate::output::fail(&Error::Refused(why)),
+    };
+    let shapes = mode_shapes(&p.sys, &p.lin, &p.eig);
+    if let Some(path) = &a.csv
+        && let Err(code) = crate::output::write_file(path, &csv(&p.eig))
+    {
         return code;
+    }
+    if a.json {
+        println!("{}", json(&p.sys, &p.lin, &p.eig, &shapes, &p.q, &p.u, a.t));
+    } else {
+        print!("{}", text(&p.sys, &p.lin, &p.eig, &shapes));
+    }
+    ExitCode::SUCCESS
+}
+
+/// Opens, generates the derivatives and linearises at the state `a` gives
+/// (default: the model's initial state with these parameter values).
+fn at(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> Result<At, Fail> {
+    let opened = crate::open::open(&a.model, urdf, vary).map_err(Fail::Exit)?;
+    if let Some(code) = crate::open::cables_only_refusal(&opened.checked, "linearize") {
+        return Err(Fail::Exit(code));
     }
     let mut checked = opened.checked.clone();
     if !checked.system.cables.is_empty() {
-        return usage(LinearizeError::Cables {
+        let e = LinearizeError::Cables {
             model: checked.system.name.clone(),
-        });
+        };
+        return Err(Fail::Point(e.to_string(), true));
     }
     // Checked by `open` (exit 2); driven inputs leave the model.
     if let Err(errors) = eom_gen::model::drive_inputs(&mut checked, &vary.drives) {
-        return crate::output::fail(&Error::Usage(
+        return Err(Fail::Exit(crate::output::fail(&Error::Usage(
             errors
                 .iter()
                 .map(|e| format!("--input {}: {e}", e.input))
                 .collect(),
-        ));
+        ))));
     }
-    let sys = &checked.system;
+    let sys = checked.system.clone();
     let mut problems = Vec::new();
     let mut list = |what: &str, text: Option<&str>, n: usize, default: Vec<f64>| {
         parse_list(what, text, n, default).unwrap_or_else(|e| {
@@ -84,22 +208,19 @@ pub fn run(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     let q = list("q", a.q.as_deref(), sys.nq(), sys.q0());
     let u = list("u", a.u.as_deref(), sys.nu(), sys.u0());
     if !problems.is_empty() {
-        return crate::output::fail(&Error::Usage(problems));
+        return Err(Fail::Exit(crate::output::fail(&Error::Usage(problems))));
     }
     let request = checked.request().with(Function::ForwardDynamicsDerivatives);
-    let f = match eom_gen::mech::formulate(sys, request) {
-        Ok(f) => f,
-        Err(e) => {
-            let report = eom_gen::Report {
-                source: checked.source.clone(),
-                diagnostics: vec![e.diagnostic()],
-            };
-            eprint!("{report}");
-            return ExitCode::from(1);
-        }
-    };
+    let f = eom_gen::mech::formulate(&sys, request).map_err(|e| {
+        let report = eom_gen::Report {
+            source: checked.source.clone(),
+            diagnostics: vec![e.diagnostic()],
+        };
+        eprint!("{report}");
+        Fail::Exit(ExitCode::from(1))
+    })?;
     let point = eom_gen::interpret::Point {
-        sys,
+        sys: &sys,
         q: &q,
         u: &u,
         udot: &[],
@@ -109,30 +230,23 @@ pub fn run(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         multipliers: &[],
         t: a.t,
     };
-    let lin = match eom_gen::linearize::linearize(&f, &point) {
-        Ok(l) => l,
-        Err(e @ LinearizeError::NotFinite) => {
-            return crate::output::fail(&Error::Refused(e.to_string()));
-        }
-        Err(e) => return usage(e),
-    };
-    let Some(eig) = eom_gen::linearize::eigenvalues(&lin.a) else {
-        return crate::output::fail(&Error::Refused(
+    let lin = eom_gen::linearize::linearize(&f, &point).map_err(|e| {
+        let usage = !matches!(e, LinearizeError::NotFinite);
+        Fail::Point(e.to_string(), usage)
+    })?;
+    let eig = eom_gen::linearize::eigenvalues(&lin.a).ok_or_else(|| {
+        Fail::Point(
             "the eigenvalue iteration (real Schur form of A) did not converge".into(),
-        ));
-    };
-    let shapes = mode_shapes(sys, &lin, &eig);
-    if let Some(path) = &a.csv
-        && let Err(code) = crate::output::write_file(path, &csv(&eig))
-    {
-        return code;
-    }
-    if a.json {
-        println!("{}", json(sys, &lin, &eig, &shapes, &q, &u, a.t));
-    } else {
-        print!("{}", text(sys, &lin, &eig, &shapes));
-    }
-    ExitCode::SUCCESS
+            false,
+        )
+    })?;
+    Ok(At {
+        sys,
+        lin,
+        eig,
+        q,
+        u,
+    })
 }
 
 /// Mode shapes: per eigenvalue the displacements over the model's
@@ -158,11 +272,6 @@ fn mode_shapes(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue]) -
         .map(|l| eom_gen::linearize::mode_shape(&lin.a, l, dof, lin.basis.as_ref()))
         .collect();
     Shapes { over, shapes }
-}
-
-/// A model this command does not linearise: a usage error (exit 2).
-fn usage(e: LinearizeError) -> ExitCode {
-    crate::output::fail(&Error::Usage(vec![e.to_string()]))
 }
 
 fn rows(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<f64>> {
