@@ -3,7 +3,9 @@
 //! `Model::evaluate("forward_dynamics_derivatives")` equal the interpreted
 //! program at pseudo-random states (1e-12 relative: the same program, two
 //! evaluators), for arm7 (seven hinges) and the heavy top (a quaternion,
-//! derivatives in the tangent space: 3 × 3 blocks, not 3 × 4).
+//! derivatives in the tangent space: 3 × 3 blocks, not 3 × 4); arm7's
+//! `inverse_dynamics_derivatives` likewise, and its `∂τ/∂u̇` equals the
+//! compiled mass matrix.
 
 use eom_gen::interpret::{Point, evaluate_function};
 use eom_macros::multibody;
@@ -85,6 +87,7 @@ fn arm7_derivatives_compiled_equal_interpreted() {
         }
         let mut out = [0.0; 147];
         m.forward_dynamics_derivatives(0.2, &q, &u, &tau, &mut out);
+        inverse_agree(&m, &q, &u, &tau);
         agree("arm7_derivatives.scene.ron", &m, &out, &q, &u, &tau);
     }
 }
@@ -105,5 +108,53 @@ fn heavy_top_derivatives_compiled_equal_interpreted() {
         let mut out = [0.0; 27];
         m.forward_dynamics_derivatives(0.2, &q, &u, &tau, &mut out);
         agree("heavy_top_derivatives.scene.ron", &m, &out, &q, &u, &tau);
+    }
+}
+
+/// arm7's `inverse_dynamics_derivatives`, compiled, against interpreted at
+/// `(q, u, u̇ = ud)`, and `∂τ/∂u̇` against the compiled `M(q)`.
+fn inverse_agree(m: &ArmDerivatives, q: &[f64; 7], u: &[f64; 7], ud: &[f64; 7]) {
+    let path = format!(
+        "{}/tests/scenes/arm7_derivatives.scene.ron",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let g = eom_gen::generate_file(&path).unwrap_or_else(|e| panic!("{e}"));
+    let point = Point {
+        sys: &g.checked.system,
+        q,
+        u,
+        udot: ud,
+        tau: &[],
+        inputs: &[],
+        params: &[],
+        multipliers: &[],
+        t: 0.2,
+    };
+    let want = evaluate_function(
+        &g.formulation,
+        eom_gen::functions::Function::InverseDynamicsDerivatives,
+        &point,
+    )
+    .expect("the scene asks for them");
+    let mut got = [0.0; 147];
+    m.inverse_dynamics_derivatives(0.2, q, u, ud, &mut got);
+    let mut mass = [[0.0; 7]; 7];
+    m.mass_matrix(0.2, q, &mut mass);
+    for (k, w) in want.iter().enumerate() {
+        assert!(
+            (got[k] - w).abs() <= 1e-12 * (1.0 + w.abs()),
+            "inverse_dynamics_derivatives[{k}]: compiled {} interpreted {w}",
+            got[k]
+        );
+    }
+    for i in 0..7 {
+        for j in 0..7 {
+            let d = got[2 * 49 + i * 7 + j];
+            assert!(
+                (d - mass[i][j]).abs() <= 1e-12 * (1.0 + d.abs()),
+                "∂τ/∂u̇[{i}][{j}] = {d}, M = {}",
+                mass[i][j]
+            );
+        }
     }
 }

@@ -49,6 +49,9 @@ pub enum Function {
     /// Partial derivatives of forward dynamics: `∂u̇/∂q` (in the tangent
     /// space), `∂u̇/∂u`, `∂u̇/∂τ`, `∂u̇/∂(inputs)`.
     ForwardDynamicsDerivatives,
+    /// Partial derivatives of inverse dynamics: `∂τ/∂q` (in the tangent
+    /// space), `∂τ/∂u`, `∂τ/∂u̇ = M`, `∂τ/∂(inputs)`.
+    InverseDynamicsDerivatives,
 }
 
 /// An argument of a generated function, in this order when present.
@@ -282,6 +285,17 @@ pub const TABLE: &[Entry] = &[
         name: "forward_dynamics_derivatives",
         doc: "partial derivatives of forward dynamics `u̇ = M⁻¹ (τ − b)` of the tree (constraint forces not included), row-major blocks one after the other: `∂u̇/∂q` (`NU × NU`: column `j` is the derivative along `δq = N(q) e_j`, the direction `q̇ = N(q) u` moves for speed `j`, so the tangent space; for quaternions a rotation vector in body axes, for a free joint's position a displacement along body axes, as Pinocchio's; equal to `∂u̇/∂q` where `q̇ = u`), `∂u̇/∂u` (`NU × NU`), `∂u̇/∂τ = M⁻¹` (`NU × NU`), then `∂u̇/∂(inputs)` (`NU × NI`, inputs in the model's order); entry `(i, j)` of block `k` at `k·NU² + i·NU + j`, of the inputs' block at `3·NU² + i·NI + j`",
         args: &[Arg::T, Arg::Q, Arg::U, Arg::Tau],
+        uses_multipliers: false,
+        layout: Layout::Vector,
+        when: When::Asked,
+        in_trait: false,
+        derived_from: &[],
+    },
+    Entry {
+        function: Function::InverseDynamicsDerivatives,
+        name: "inverse_dynamics_derivatives",
+        doc: "partial derivatives of inverse dynamics `τ = M u̇ + b` of the tree, row-major blocks one after the other: `∂τ/∂q` (`NU × NU`, in the tangent space as `forward_dynamics_derivatives`'), `∂τ/∂u` (`NU × NU`), `∂τ/∂u̇ = M` (`NU × NU`), then `∂τ/∂(inputs)` (`NU × NI`); entry `(i, j)` of block `k` at `k·NU² + i·NU + j`, of the inputs' block at `3·NU² + i·NI + j`",
+        args: &[Arg::T, Arg::Q, Arg::U, Arg::Udot],
         uses_multipliers: false,
         layout: Layout::Vector,
         when: When::Asked,

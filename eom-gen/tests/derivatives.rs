@@ -14,6 +14,9 @@
 //!   — both forms (forward dynamics differentiated, and `−M⁻¹ ∂ID/∂x`
 //!   from differentiated Newton–Euler), as some models keep each;
 //! - inputs: `∂u̇/∂(inputs)` of an actuator;
+//! - `inverse_dynamics_derivatives` (`∂τ/∂q`, `∂τ/∂u`, `∂τ/∂u̇ = M`,
+//!   `∂τ/∂(inputs)`) against central differences of the `f64` inverse
+//!   dynamics and `∂τ/∂u̇` against the `f64` mass matrix, every model;
 //! - generated only when asked: a model without the request does not get it.
 
 use eom_gen::functions::{Function, FunctionSet};
@@ -401,6 +404,15 @@ fn derivatives_equal_central_differences_for_every_flexible_model() {
 /// the inputs enter as generalised forces of their joints.
 #[test]
 fn input_derivatives_equal_central_differences() {
+    let sys = arm7_with_actuators();
+    assert_eq!(sys.inputs.len(), 2, "two actuator inputs");
+    let mut rng = Rng(0x1234_0027);
+    against_differences("arm7 with actuators", &sys, &mut rng, 3);
+}
+
+/// arm7 with actuators at joints 4 and 6 (inputs `m4`, `m6`) and a joint
+/// spring-damper at joint 2.
+fn arm7_with_actuators() -> System {
     let path = format!("{}/arm7.ron", models_dir());
     let text = std::fs::read_to_string(path).unwrap_or_default();
     let from = "outputs: [Energy],";
@@ -410,12 +422,9 @@ fn input_derivatives_equal_central_differences() {
         "forces: [JointSpringDamper(name: \"s2\", joint: \"j2\", stiffness: 20, damping: 0.5, rest: 3), Actuator(name: \"m4\", joint: \"j4\"), Actuator(name: \"m6\", joint: \"j6\")], outputs: [Energy],",
         1,
     );
-    let sys = check(&Source::new("arm7_inputs", text))
+    check(&Source::new("arm7_inputs", text))
         .unwrap_or_else(|r| panic!("{r}"))
-        .system;
-    assert_eq!(sys.inputs.len(), 2, "two actuator inputs");
-    let mut rng = Rng(0x1234_0027);
-    against_differences("arm7 with actuators", &sys, &mut rng, 3);
+        .system
 }
 
 /// Generated only when asked: a model formulated with its default request
@@ -501,4 +510,132 @@ fn radau5_with_the_generated_jacobian_needs_fewer_rhs_for_the_same_run() {
             "end states: differences {x}, generated {y}"
         );
     }
+}
+
+/// `inverse_dynamics_derivatives` of `sys` against central differences of
+/// the `f64` inverse dynamics (Newton–Euler run on numbers), coordinates
+/// moved along `N(q) e_j` as above, and `∂τ/∂u̇` against the `f64` mass
+/// matrix (CRBA), at random states.
+fn inverse_against_differences(name: &str, sys: &System, rng: &mut Rng, states: usize) {
+    let f = formulate(
+        sys,
+        FunctionSet::default().with(Function::InverseDynamicsDerivatives),
+    )
+    .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let num = Numeric::new(sys).unwrap_or_else(|e| panic!("{name}: {e}"));
+    let (nu, ni) = (sys.nu(), sys.inputs.len());
+    for _ in 0..states {
+        let (q, u) = random_state(sys, rng);
+        let ud = rng.vec(nu, 1.0);
+        let inputs = rng.vec(ni, 1.0);
+        let t = rng.uniform().abs();
+        let x = Point {
+            udot: &ud,
+            inputs: &inputs,
+            t,
+            ..point(sys, &q, &u, &[])
+        };
+        let flat = run(
+            f.program(Function::InverseDynamicsDerivatives)
+                .expect("asked for"),
+            &x,
+        );
+        assert_eq!(flat.len(), 3 * nu * nu + nu * ni, "{name}: length");
+        let id = |q: &[f64], u: &[f64], ud: &[f64], inputs: &[f64]| {
+            num.inverse_dynamics(q, u, ud, t, inputs)
+                .unwrap_or_else(|e| panic!("{name}: {e}"))
+        };
+        let tau_norm = id(&q, &u, &ud, &inputs)
+            .iter()
+            .fold(0.0f64, |s, x| s.max(x.abs()));
+        let h = 1e-5;
+        let rounding = 100.0 * f64::EPSILON * tau_norm / h;
+        let mass = num
+            .terms(&q, &u, t, &inputs)
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+            .mass_matrix;
+        let central = |p: Vec<f64>, m: Vec<f64>| -> Vec<f64> {
+            p.iter().zip(&m).map(|(p, m)| (p - m) / (2.0 * h)).collect()
+        };
+        let shift = |v: &[f64], j: usize, s: f64| {
+            let mut v = v.to_vec();
+            v[j] += s;
+            v
+        };
+        let check = |block: &str, i: usize, j: usize, got: f64, want: f64, scale: f64| {
+            assert!(
+                (got - want).abs() <= 1e-6 * scale + rounding,
+                "{name} {block}[{i}][{j}]: generated {got}, reference {want}"
+            );
+        };
+        for j in 0..nu {
+            let d = tangent(&num, &q, nu, j);
+            let columns = [
+                (
+                    "∂τ/∂q",
+                    0,
+                    central(
+                        id(&moved(sys, &q, &d, h), &u, &ud, &inputs),
+                        id(&moved(sys, &q, &d, -h), &u, &ud, &inputs),
+                    ),
+                ),
+                (
+                    "∂τ/∂u",
+                    1,
+                    central(
+                        id(&q, &shift(&u, j, h), &ud, &inputs),
+                        id(&q, &shift(&u, j, -h), &ud, &inputs),
+                    ),
+                ),
+                (
+                    "∂τ/∂u̇",
+                    2,
+                    central(
+                        id(&q, &u, &shift(&ud, j, h), &inputs),
+                        id(&q, &u, &shift(&ud, j, -h), &inputs),
+                    ),
+                ),
+            ];
+            for (block, k, want) in columns {
+                let scale = want.iter().fold(1.0f64, |s, x| s.max(x.abs()));
+                for i in 0..nu {
+                    check(block, i, j, flat[k * nu * nu + i * nu + j], want[i], scale);
+                }
+            }
+            // ∂τ/∂u̇ is the mass matrix.
+            for i in 0..nu {
+                let m = mass[i][j];
+                assert!(
+                    (flat[2 * nu * nu + i * nu + j] - m).abs() <= 1e-10 * (1.0 + m.abs()),
+                    "{name} ∂τ/∂u̇[{i}][{j}] against M"
+                );
+            }
+        }
+        for j in 0..ni {
+            let want = central(
+                id(&q, &u, &ud, &shift(&inputs, j, h)),
+                id(&q, &u, &ud, &shift(&inputs, j, -h)),
+            );
+            for i in 0..nu {
+                check(
+                    "∂τ/∂inputs",
+                    i,
+                    j,
+                    flat[3 * nu * nu + i * ni + j],
+                    want[i],
+                    1.0,
+                );
+            }
+        }
+    }
+}
+
+/// Every bundled model without cables, and arm7 with actuators.
+#[test]
+fn inverse_dynamics_derivatives_equal_central_differences() {
+    let mut rng = Rng(0x1D_DE21_0027);
+    for name in bundled_models(false).iter().chain(&bundled_models(true)) {
+        inverse_against_differences(name, &system(name), &mut rng, 2);
+    }
+    inverse_against_differences("arm7 with actuators", &arm7_with_actuators(), &mut rng, 2);
 }

@@ -14,8 +14,9 @@ pub struct StatsArgs {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
-    /// Also formulate and count `forward_dynamics_derivatives` (generated
-    /// only when asked for: a scene's `functions`, `linearize`).
+    /// Also formulate and count `forward_dynamics_derivatives` and
+    /// `inverse_dynamics_derivatives` (generated only when asked for: a
+    /// scene's `functions`, `linearize`).
     #[arg(long)]
     pub derivatives: bool,
 }
@@ -30,11 +31,15 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     };
     let f = &g.formulation;
     // The derivatives, when asked for here and the model does not have them.
-    let asked = if a.derivatives && f.program(Function::ForwardDynamicsDerivatives).is_none() {
+    let asked = if a.derivatives
+        && (f.program(Function::ForwardDynamicsDerivatives).is_none()
+            || f.program(Function::InverseDynamicsDerivatives).is_none())
+    {
         let request = g
             .checked
             .request()
-            .with(Function::ForwardDynamicsDerivatives);
+            .with(Function::ForwardDynamicsDerivatives)
+            .with(Function::InverseDynamicsDerivatives);
         match eom_gen::mech::formulate(&g.checked.system, request) {
             Ok(d) => Some(d),
             Err(e) => {
@@ -47,7 +52,9 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     };
     let with_derivatives = asked.as_ref().unwrap_or(f);
     let program = |function: Function| match function {
-        Function::ForwardDynamicsDerivatives => with_derivatives.program(function),
+        Function::ForwardDynamicsDerivatives | Function::InverseDynamicsDerivatives => {
+            with_derivatives.program(function)
+        }
         _ => f.program(function),
     };
     let derivative_candidates: serde_json::Map<String, serde_json::Value> = with_derivatives

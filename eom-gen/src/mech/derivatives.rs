@@ -29,6 +29,10 @@
 //! of how the expressions extend off the unit sphere (every column of `N`
 //! is tangent to it).
 //!
+//! [`inverse_dynamics_derivatives`] differentiates inverse dynamics
+//! (Newton–Euler) the same way: `∂τ/∂q` (tangent space), `∂τ/∂u`,
+//! `∂τ/∂u̇ = M`, `∂τ/∂(inputs)`.
+//!
 //! The derivatives go through the same simplification, CSE and emission
 //! as every other generated function (see [`crate::functions`] for the
 //! layout of the result).
@@ -212,6 +216,42 @@ pub fn forward_dynamics_derivatives_rnea<'cx>(
             ("du", solve(gu, nu)),
             ("dtau", minv.clone()),
             ("dinput", solve(gi, ni)),
+        ],
+        opts,
+    )
+}
+
+/// The program of `inverse_dynamics_derivatives` for inverse dynamics
+/// `inverse` (`NU` expressions in the speed-rate symbols `ud`): outputs
+/// `dq_i_j` (tangent space), `du_i_j`, `dud_i_j` (each `NU × NU`, by
+/// rows), then `dinput_i_j` (`NU × NI`).
+#[allow(clippy::too_many_arguments)]
+pub fn inverse_dynamics_derivatives<'cx>(
+    cx: &'cx Context,
+    inverse: &[Expr<'cx>],
+    ud: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    inputs: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Program {
+    let n = cx.jacobian(qdot, u);
+    let nu = u.len();
+    let dq: Vec<Vec<Expr<'cx>>> = inverse
+        .iter()
+        .map(|&id| {
+            let d: Vec<Expr<'cx>> = q.iter().map(|&qk| cx.diff(id, qk)).collect();
+            tangent_row(&d, &n, nu)
+        })
+        .collect();
+    lower_blocks(
+        cx,
+        [
+            ("dq", dq),
+            ("du", cx.jacobian(inverse, u)),
+            ("dud", cx.jacobian(inverse, ud)),
+            ("dinput", cx.jacobian(inverse, inputs)),
         ],
         opts,
     )

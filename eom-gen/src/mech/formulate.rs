@@ -441,6 +441,23 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     } else {
         (None, Vec::new())
     };
+    let id_derivatives = request
+        .contains(Function::InverseDynamicsDerivatives)
+        .then(|| {
+            let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
+            let (t, _) = ev.rnea(&k, &ud, &fext);
+            let inverse: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
+            super::derivatives::inverse_dynamics_derivatives(
+                &cx,
+                &inverse,
+                &ud,
+                &ev.qdot(&st),
+                &q,
+                &u,
+                &inputs,
+                opts,
+            )
+        });
     let (fd_derivatives, derivative_form) = match fd_derivatives {
         Some((p, form)) => (Some(p), Some(form)),
         None => (None, None),
@@ -585,6 +602,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Function::CutJointReactions, cut_reactions),
         (Function::Attachments, attachments),
         (Function::ForwardDynamicsDerivatives, fd_derivatives),
+        (Function::InverseDynamicsDerivatives, id_derivatives),
     ]
     .into_iter()
     .filter_map(|(f, p)| p.map(|p| (f, p)))
