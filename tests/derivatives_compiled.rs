@@ -147,13 +147,12 @@ fn inverse_agree(m: &ArmDerivatives, q: &[f64; 7], u: &[f64; 7], ud: &[f64; 7]) 
             got[k]
         );
     }
-    for i in 0..7 {
-        for j in 0..7 {
+    for (i, row) in mass.iter().enumerate() {
+        for (j, m) in row.iter().enumerate() {
             let d = got[2 * 49 + i * 7 + j];
             assert!(
-                (d - mass[i][j]).abs() <= 1e-12 * (1.0 + d.abs()),
-                "∂τ/∂u̇[{i}][{j}] = {d}, M = {}",
-                mass[i][j]
+                (d - m).abs() <= 1e-12 * (1.0 + d.abs()),
+                "∂τ/∂u̇[{i}][{j}] = {d}, M = {m}"
             );
         }
     }

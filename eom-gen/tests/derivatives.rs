@@ -598,13 +598,13 @@ fn inverse_against_differences(name: &str, sys: &System, rng: &mut Rng, states: 
             ];
             for (block, k, want) in columns {
                 let scale = want.iter().fold(1.0f64, |s, x| s.max(x.abs()));
-                for i in 0..nu {
-                    check(block, i, j, flat[k * nu * nu + i * nu + j], want[i], scale);
+                for (i, w) in want.iter().enumerate() {
+                    check(block, i, j, flat[k * nu * nu + i * nu + j], *w, scale);
                 }
             }
             // ∂τ/∂u̇ is the mass matrix.
-            for i in 0..nu {
-                let m = mass[i][j];
+            for (i, row) in mass.iter().enumerate() {
+                let m = row[j];
                 assert!(
                     (flat[2 * nu * nu + i * nu + j] - m).abs() <= 1e-10 * (1.0 + m.abs()),
                     "{name} ∂τ/∂u̇[{i}][{j}] against M"
@@ -616,15 +616,8 @@ fn inverse_against_differences(name: &str, sys: &System, rng: &mut Rng, states: 
                 id(&q, &u, &ud, &shift(&inputs, j, h)),
                 id(&q, &u, &ud, &shift(&inputs, j, -h)),
             );
-            for i in 0..nu {
-                check(
-                    "∂τ/∂inputs",
-                    i,
-                    j,
-                    flat[3 * nu * nu + i * ni + j],
-                    want[i],
-                    1.0,
-                );
+            for (i, w) in want.iter().enumerate() {
+                check("∂τ/∂inputs", i, j, flat[3 * nu * nu + i * ni + j], *w, 1.0);
             }
         }
     }
