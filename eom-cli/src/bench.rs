@@ -29,6 +29,8 @@ pub struct PerCallOptions {
     pub seed: u64,
     /// Build with `-C target-cpu=native` (a separate target directory).
     pub native: bool,
+    /// Also generate and time `forward_dynamics_derivatives`.
+    pub derivatives: bool,
 }
 
 impl Default for PerCallOptions {
@@ -38,6 +40,7 @@ impl Default for PerCallOptions {
             reps: 31,
             seed: 1,
             native: false,
+            derivatives: false,
         }
     }
 }
@@ -66,6 +69,8 @@ pub struct PerCall {
     pub mass_matrix: Timing,
     /// `inverse_dynamics`.
     pub inverse_dynamics: Timing,
+    /// `forward_dynamics_derivatives`, when asked for.
+    pub derivatives: Option<Timing>,
 }
 
 const MAIN: &str = r#"//! Times the generated model's forward dynamics, mass matrix and inverse
@@ -160,14 +165,41 @@ fn main() {
 }
 "#;
 
+/// What replaces `MAIN`'s last line when the derivatives are timed too (the
+/// model file then defines `DERIVATIVES_LEN`).
+const PRINT: &str = r#"    println!("{{\"forward_dynamics\":{fd},\"mass_matrix\":{mass},\"inverse_dynamics\":{id}}}");"#;
+const PRINT_WITH_DERIVATIVES: &str = r#"    let mut jac = [0.0; model::DERIVATIVES_LEN];
+    let dfd = time(n, reps, |k| {
+        let (q, u, tau, _) = &states[k];
+        m.forward_dynamics_derivatives(0.0, black_box(q), black_box(u), black_box(tau), &mut jac);
+        black_box(&mut jac);
+    });
+    println!("{{\"forward_dynamics\":{fd},\"mass_matrix\":{mass},\"inverse_dynamics\":{id},\"forward_dynamics_derivatives\":{dfd}}}");"#;
+
 /// Builds (once, cached) the timing program of a generated model and runs it.
 pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, Error> {
     let name = &g.checked.system.name;
-    let model = format!("{}\npub type MODEL = {};\n", g.source, camel(name));
+    let mut model = format!("{}\npub type MODEL = {};\n", g.source, camel(name));
+    let derivatives = g
+        .formulation
+        .program(eom_gen::functions::Function::ForwardDynamicsDerivatives)
+        .filter(|_| o.derivatives);
+    let main = match derivatives {
+        Some(p) => {
+            model += &format!("pub const DERIVATIVES_LEN: usize = {};\n", p.outputs.len());
+            MAIN.replace(PRINT, PRINT_WITH_DERIVATIVES)
+        }
+        None => MAIN.to_string(),
+    };
+    if derivatives.is_some() && !MAIN.contains(PRINT) {
+        return Err(Error::Program(
+            "internal: the timing program's last line changed; `PRINT` must match it".into(),
+        ));
+    }
     let exe = build_cached(&CachedCrate {
         prefix: "eom-bench",
         name,
-        main: MAIN,
+        main: &main,
         model: &model,
         rustflags: o.native.then_some("-C target-cpu=native"),
     })?;
@@ -203,6 +235,10 @@ pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, Error> {
         forward_dynamics: timing("forward_dynamics")?,
         mass_matrix: timing("mass_matrix")?,
         inverse_dynamics: timing("inverse_dynamics")?,
+        derivatives: match derivatives {
+            Some(_) => Some(timing("forward_dynamics_derivatives")?),
+            None => None,
+        },
     })
 }
 
@@ -219,13 +255,15 @@ pub fn op_totals(g: &Generated) -> [Option<usize>; 3] {
 }
 
 /// The JSON report: `{"model", "forward_dynamics_ns", "mass_matrix_ns",
-/// "inverse_dynamics_ns", "ops": {…}, "fd_form", "spread", "states",
+/// "inverse_dynamics_ns"` (with `--derivatives` also
+/// `"forward_dynamics_derivatives_ns"`, in `ops` and `spread` too)`,
+/// "ops": {…}, "fd_form", "spread", "states",
 /// "reps", "seed", "target_cpu_native"}`.
 pub fn json(g: &Generated, o: &PerCallOptions, r: &PerCall) -> serde_json::Value {
     let [fd, mm, id] = op_totals(g);
     let spread =
         |t: &Timing| serde_json::json!({"q1": t.q1, "q3": t.q3, "min": t.min, "max": t.max});
-    serde_json::json!({
+    let mut v = serde_json::json!({
         "model": g.checked.system.name,
         "forward_dynamics_ns": r.forward_dynamics.median,
         "mass_matrix_ns": r.mass_matrix.median,
@@ -241,7 +279,17 @@ pub fn json(g: &Generated, o: &PerCallOptions, r: &PerCall) -> serde_json::Value
         "reps": o.reps,
         "seed": o.seed,
         "target_cpu_native": o.native,
-    })
+    });
+    if let Some(t) = &r.derivatives {
+        let ops = g
+            .formulation
+            .program(eom_gen::functions::Function::ForwardDynamicsDerivatives)
+            .map(|p| p.op_count().total());
+        v["forward_dynamics_derivatives_ns"] = serde_json::json!(t.median);
+        v["ops"]["forward_dynamics_derivatives"] = serde_json::json!(ops);
+        v["spread"]["forward_dynamics_derivatives"] = spread(t);
+    }
+    v
 }
 
 /// The human report: one row per function.
@@ -255,22 +303,32 @@ pub fn table(g: &Generated, o: &PerCallOptions, r: &PerCall) -> String {
         if o.native { " (target-cpu=native)" } else { "" }
     );
     s += &format!(
-        "  {:<18} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>7}\n",
+        "  {:<28} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>7}\n",
         "function", "median", "q1", "q3", "min", "max", "ops", "ops/ns"
     );
     let ops = op_totals(g);
+    let derivative_ops = g
+        .formulation
+        .program(eom_gen::functions::Function::ForwardDynamicsDerivatives)
+        .map(|p| p.op_count().total());
     let rows = [
-        ("forward_dynamics", &r.forward_dynamics, ops[0]),
-        ("mass_matrix", &r.mass_matrix, ops[1]),
-        ("inverse_dynamics", &r.inverse_dynamics, ops[2]),
+        ("forward_dynamics", Some(&r.forward_dynamics), ops[0]),
+        ("mass_matrix", Some(&r.mass_matrix), ops[1]),
+        ("inverse_dynamics", Some(&r.inverse_dynamics), ops[2]),
+        (
+            "forward_dynamics_derivatives",
+            r.derivatives.as_ref(),
+            derivative_ops,
+        ),
     ];
     for (f, t, n) in rows {
+        let Some(t) = t else { continue };
         let (n, rate) = match n {
             Some(n) => (n.to_string(), format!("{:.2}", n as f64 / t.median)),
             None => ("-".into(), "-".into()),
         };
         s += &format!(
-            "  {f:<18} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {n:>8} {rate:>7}\n",
+            "  {f:<28} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {n:>8} {rate:>7}\n",
             t.median, t.q1, t.q3, t.min, t.max
         );
     }
@@ -279,4 +337,13 @@ pub fn table(g: &Generated, o: &PerCallOptions, r: &PerCall) -> String {
         s += "  note: closed loops or constraints; these are the spanning tree's functions\n";
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    /// The derivatives' timing replaces the timing program's last line.
+    #[test]
+    fn the_print_line_is_in_the_timing_program() {
+        assert!(super::MAIN.contains(super::PRINT));
+    }
 }

@@ -10,6 +10,7 @@ mod cable_report;
 mod cmd;
 mod compiled;
 mod error;
+mod linearize_sweep;
 mod open;
 mod output;
 mod plot;
@@ -40,6 +41,7 @@ enum Command {
     Bench(cmd::bench::BenchArgs),
     SolveStatic(cmd::solve_static::SolveStaticArgs),
     Stats(cmd::stats::StatsArgs),
+    Linearize(cmd::linearize::LinearizeArgs),
 }
 
 fn main() -> ExitCode {
@@ -54,5 +56,6 @@ fn main() -> ExitCode {
         Command::Bench(a) => cmd::bench::run(a, &urdf),
         Command::SolveStatic(a) => cmd::solve_static::run(&a, &urdf),
         Command::Stats(a) => cmd::stats::run(&a, &urdf),
+        Command::Linearize(a) => cmd::linearize::run(&a, &urdf),
     }
 }

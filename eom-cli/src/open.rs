@@ -131,7 +131,24 @@ pub fn generate(
     vary: &Vary,
     options: &eom_gen::EmitOptions,
 ) -> Result<eom_gen::Generated, ExitCode> {
-    generate_with_progress(opened, vary, options).map_err(|e| {
+    generate_asking(
+        opened,
+        vary,
+        options,
+        eom_gen::functions::FunctionSet::default(),
+    )
+}
+
+/// [`generate`] with the functions of `also` added to the model's request
+/// (those generated only when asked for, as the derivatives `bench
+/// --per-call --derivatives` times).
+pub fn generate_asking(
+    opened: &Opened,
+    vary: &Vary,
+    options: &eom_gen::EmitOptions,
+    also: eom_gen::functions::FunctionSet,
+) -> Result<eom_gen::Generated, ExitCode> {
+    generate_with_progress(opened, vary, options, also).map_err(|e| {
         eprint!("{e}");
         if !e.to_string().ends_with('\n') {
             eprintln!();
@@ -144,6 +161,7 @@ fn generate_with_progress(
     opened: &Opened,
     vary: &Vary,
     options: &eom_gen::EmitOptions,
+    also: eom_gen::functions::FunctionSet,
 ) -> Result<eom_gen::Generated, eom_gen::GenerateError> {
     use std::io::{IsTerminal, Write};
     use std::sync::mpsc;
@@ -168,7 +186,11 @@ fn generate_with_progress(
                 diagnostics: vec![eom_gen::Diagnostic::file_error(e)],
             }));
         }
-        eom_gen::generate_checked(checked, options)
+        let mut request = checked.request();
+        for f in also.iter() {
+            request.insert(f);
+        }
+        eom_gen::generate_checked_for(checked, request, options)
     };
     if !std::io::stderr().is_terminal() {
         return generate();

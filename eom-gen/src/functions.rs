@@ -46,6 +46,12 @@ pub enum Function {
     /// The markers holding cable ends: positions, clamp normals and their
     /// Jacobians `∂/∂q`.
     Attachments,
+    /// Partial derivatives of forward dynamics: `∂u̇/∂q` (in the tangent
+    /// space), `∂u̇/∂u`, `∂u̇/∂τ`, `∂u̇/∂(inputs)`.
+    ForwardDynamicsDerivatives,
+    /// Partial derivatives of inverse dynamics: `∂τ/∂q` (in the tangent
+    /// space), `∂τ/∂u`, `∂τ/∂u̇ = M`, `∂τ/∂(inputs)`.
+    InverseDynamicsDerivatives,
 }
 
 /// An argument of a generated function, in this order when present.
@@ -107,6 +113,10 @@ pub enum When {
     HasCutJoints,
     /// When cable ends are held at markers of rigid bodies.
     HasCableMounts,
+    /// Only when asked for by name (a scene's `functions` list, or a
+    /// caller's request such as `eom-gen linearize`'s); never by default,
+    /// so a model without such a request generates what it did before.
+    Asked,
 }
 
 /// One row of the table.
@@ -270,6 +280,28 @@ pub const TABLE: &[Entry] = &[
         in_trait: false,
         derived_from: &[],
     },
+    Entry {
+        function: Function::ForwardDynamicsDerivatives,
+        name: "forward_dynamics_derivatives",
+        doc: "partial derivatives of forward dynamics `u̇ = M⁻¹ (τ − b)` of the tree (constraint forces not included), row-major blocks one after the other: `∂u̇/∂q` (`NU × NU`: column `j` is the derivative along `δq = N(q) e_j`, the direction `q̇ = N(q) u` moves for speed `j`, so the tangent space; for quaternions a rotation vector in body axes, for a free joint's position a displacement along body axes, as Pinocchio's; equal to `∂u̇/∂q` where `q̇ = u`), `∂u̇/∂u` (`NU × NU`), `∂u̇/∂τ = M⁻¹` (`NU × NU`), then `∂u̇/∂(inputs)` (`NU × NI`, inputs in the model's order); entry `(i, j)` of block `k` at `k·NU² + i·NU + j`, of the inputs' block at `3·NU² + i·NI + j`",
+        args: &[Arg::T, Arg::Q, Arg::U, Arg::Tau],
+        uses_multipliers: false,
+        layout: Layout::Vector,
+        when: When::Asked,
+        in_trait: false,
+        derived_from: &[],
+    },
+    Entry {
+        function: Function::InverseDynamicsDerivatives,
+        name: "inverse_dynamics_derivatives",
+        doc: "partial derivatives of inverse dynamics `τ = M u̇ + b` of the tree, row-major blocks one after the other: `∂τ/∂q` (`NU × NU`, in the tangent space as `forward_dynamics_derivatives`'), `∂τ/∂u` (`NU × NU`), `∂τ/∂u̇ = M` (`NU × NU`), then `∂τ/∂(inputs)` (`NU × NI`); entry `(i, j)` of block `k` at `k·NU² + i·NU + j`, of the inputs' block at `3·NU² + i·NI + j`",
+        args: &[Arg::T, Arg::Q, Arg::U, Arg::Udot],
+        uses_multipliers: false,
+        layout: Layout::Vector,
+        when: When::Asked,
+        in_trait: false,
+        derived_from: &[],
+    },
 ];
 
 impl Function {
@@ -286,11 +318,12 @@ impl Function {
         self.entry().name
     }
 
-    /// The functions a scene may name in its `functions` list.
+    /// The functions a scene may name in its `functions` list: those
+    /// generated unless left out, and those generated only when asked for.
     pub fn selectable() -> impl Iterator<Item = Function> {
         TABLE
             .iter()
-            .filter(|e| e.when == When::Requested)
+            .filter(|e| matches!(e.when, When::Requested | When::Asked))
             .map(|e| e.function)
     }
 }
@@ -317,10 +350,21 @@ impl FromStr for Function {
 pub struct FunctionSet(u32);
 
 impl FunctionSet {
-    /// Every function a scene may ask for: what a model without a scene
-    /// gets.
+    /// Every function generated unless a scene leaves it out: what a
+    /// model without a scene gets (not those generated only when asked
+    /// for, [`When::Asked`]).
     pub fn all_requested() -> Self {
-        Function::selectable().collect()
+        TABLE
+            .iter()
+            .filter(|e| e.when == When::Requested)
+            .map(|e| e.function)
+            .collect()
+    }
+
+    /// This set with `f` added.
+    pub fn with(mut self, f: Function) -> Self {
+        self.insert(f);
+        self
     }
 
     /// True if `f` is in the set.
@@ -405,5 +449,20 @@ mod tests {
             assert_eq!(e.name.parse::<Function>(), Ok(e.function));
             assert_eq!(e.function.entry().name, e.name);
         }
+    }
+
+    /// Derivatives are generated only when asked for: not by default (so
+    /// the committed generated code of every model stays as it was), kept
+    /// when asked, and they bring forward dynamics with them.
+    #[test]
+    fn derivatives_only_when_asked() {
+        use Function::*;
+        assert!(!FunctionSet::all_requested().contains(ForwardDynamicsDerivatives));
+        assert!(Function::selectable().any(|f| f == ForwardDynamicsDerivatives));
+        let asked = [ForwardDynamicsDerivatives]
+            .into_iter()
+            .collect::<FunctionSet>()
+            .derivable();
+        assert!(asked.contains(ForwardDynamicsDerivatives) && asked.contains(ForwardDynamics));
     }
 }

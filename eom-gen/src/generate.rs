@@ -2,6 +2,7 @@
 //! → formatted Rust source.
 
 use crate::emit;
+use crate::functions::FunctionSet;
 use crate::mech::formulate::FormulateError;
 use crate::mech::{Formulation, formulate};
 use crate::model::{Checked, Report, Source, check, check_file, check_in, urdf};
@@ -100,7 +101,21 @@ pub fn generate_checked(
     checked: Checked,
     opts: &emit::EmitOptions,
 ) -> Result<Generated, GenerateError> {
-    let formulation = formulate_checked(&checked)?;
+    let request = checked.request();
+    generate_checked_for(checked, request, opts)
+}
+
+/// Formulates and emits a checked model with the functions of `request`
+/// (completed by [`FunctionSet::derivable`]) instead of the model's or
+/// scene's own request: how a caller asks for functions generated only
+/// when asked, such as `forward_dynamics_derivatives`
+/// (`checked.request().with(…)`).
+pub fn generate_checked_for(
+    checked: Checked,
+    request: FunctionSet,
+    opts: &emit::EmitOptions,
+) -> Result<Generated, GenerateError> {
+    let formulation = formulate_request(&checked, request)?;
     let body = emit::emit_with(&checked.system, &formulation, &checked.content(), opts);
     // The file the user named: the scene, else the model; a converted URDF
     // is named `robot.urdf (converted)`, so regenerate from the URDF.
@@ -162,9 +177,16 @@ pub fn generate_tokens_checked(
 }
 
 fn formulate_checked(checked: &Checked) -> Result<Formulation, GenerateError> {
+    formulate_request(checked, checked.request())
+}
+
+fn formulate_request(
+    checked: &Checked,
+    request: FunctionSet,
+) -> Result<Formulation, GenerateError> {
     // Spans in the system point into the model's source (for a scene, its
     // model; for a URDF, the converted text).
-    formulate(&checked.system, checked.request()).map_err(|error| GenerateError::Formulate {
+    formulate(&checked.system, request).map_err(|error| GenerateError::Formulate {
         report: Report {
             source: checked.source.clone(),
             diagnostics: vec![error.diagnostic()],

@@ -380,6 +380,12 @@ impl eom_sim::Simulate for Interpreted<'_> {
             _ => false,
         }
     }
+    fn function_len(&self, name: &str) -> Option<usize> {
+        let function = name.parse::<Function>().ok()?;
+        self.f
+            .program(function)
+            .map(|_| self.f.result_len(function, self.nu))
+    }
 }
 
 impl<const N: usize> eom_sim::OdeSystem<N> for Interpreted<'_> {

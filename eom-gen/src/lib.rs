@@ -9,6 +9,9 @@
 //! cut joints) → [`mech`] (kinematics and dynamics as [`sym`] expressions)
 //! → [`emit`] (Rust source); [`generate`] runs it all.
 //!
+//! [`linearize`] turns the generated derivatives of forward dynamics
+//! into a state-space model `A`, `B` about a state, with its eigenvalues.
+//!
 //! [`flex`] holds the numeric foundation of flexible bodies (FE beam, modes,
 //! inertia shape integrals, the floating-frame mass matrix), not yet part of
 //! the pipeline.
@@ -31,6 +34,7 @@ pub mod functions;
 pub mod generate;
 pub mod graph;
 pub mod interpret;
+pub mod linearize;
 pub mod mech;
 pub mod model;
 pub mod sym;
@@ -40,9 +44,9 @@ pub mod testkit;
 pub use builder::{BuildError, Builder};
 pub use emit::EmitOptions;
 pub use generate::{
-    GenerateError, Generated, generate, generate_checked, generate_file, generate_file_with,
-    generate_file_with_values, generate_tokens, generate_tokens_checked, generate_tokens_in,
-    generate_with,
+    GenerateError, Generated, generate, generate_checked, generate_checked_for, generate_file,
+    generate_file_with, generate_file_with_values, generate_tokens, generate_tokens_checked,
+    generate_tokens_in, generate_with,
 };
 pub use model::load_model;
 pub use model::{

@@ -686,6 +686,11 @@ pub trait Simulate: Dynamics {
     /// Evaluates a generated function (see [`Model::evaluate`]); `false`
     /// if the model has none of that name or `out` has the wrong length.
     fn evaluate(&self, name: &str, at: &Point<'_>, out: &mut [f64]) -> bool;
+    /// The length of the flat result of the generated function `name`, if
+    /// the model offers it (default: none known).
+    fn function_len(&self, _name: &str) -> Option<usize> {
+        None
+    }
 }
 
 impl<M: ConstrainedModel + Clone> Simulate for Generated<'_, M> {
@@ -722,6 +727,9 @@ impl<M: ConstrainedModel + Clone> Simulate for Generated<'_, M> {
     fn evaluate(&self, name: &str, at: &Point<'_>, out: &mut [f64]) -> bool {
         self.0.evaluate(name, at, out)
     }
+    fn function_len(&self, name: &str) -> Option<usize> {
+        M::FUNCTIONS.iter().find(|f| f.name == name).map(|f| f.len)
+    }
 }
 
 /// The unconstrained first-order system `y = (q, u)` of a [`Simulate`].
@@ -739,7 +747,50 @@ impl<const N: usize, S: Simulate + ?Sized> OdeSystem<N> for Free<'_, S> {
         self.0.normalize(&mut y[..self.0.nq()]);
         !self.0.quaternions().is_empty()
     }
+    /// `∂(q̇, u̇)/∂(q, u) = [[0, I], [∂u̇/∂q, ∂u̇/∂u]]` from the generated
+    /// `forward_dynamics_derivatives` (at `τ = 0`), when the model offers
+    /// them and `q̇ = u` (without quaternions: their derivatives are in the
+    /// tangent space, not in `q`); otherwise `false`, and the implicit
+    /// methods difference `rhs`.
+    fn jacobian(&self, t: f64, y: &[f64; N], jac: &mut nalgebra::SMatrix<f64, N, N>) -> bool {
+        let (nq, nu) = (self.0.nq(), self.0.nu());
+        if nq != nu || nq + nu != N || !self.0.quaternions().is_empty() {
+            return false;
+        }
+        let Some(len) = self.0.function_len(DERIVATIVES) else {
+            return false;
+        };
+        if len < 2 * nu * nu {
+            return false;
+        }
+        let mut d = vec![0.0; len];
+        let (q, u) = y.split_at(nq);
+        let at = Point {
+            t,
+            q,
+            u,
+            tau: &[],
+            udot: &[],
+            lambda: &[],
+        };
+        if !self.0.evaluate(DERIVATIVES, &at, &mut d) || d.iter().any(|x| !x.is_finite()) {
+            return false;
+        }
+        jac.fill(0.0);
+        for i in 0..nu {
+            jac[(i, nq + i)] = 1.0;
+            for j in 0..nu {
+                jac[(nq + i, j)] = d[i * nu + j];
+                jac[(nq + i, nq + j)] = d[nu * nu + i * nu + j];
+            }
+        }
+        true
+    }
 }
+
+/// The generated derivatives of forward dynamics (see `eom_gen::functions`:
+/// `∂u̇/∂q`, `∂u̇/∂u`, … each `NU × NU` by rows).
+const DERIVATIVES: &str = "forward_dynamics_derivatives";
 
 /// Why a run could not start.
 #[derive(Clone, Debug, PartialEq)]

@@ -48,6 +48,10 @@ pub struct BenchArgs {
     /// Build the timing program with `-C target-cpu=native` (`--per-call`).
     #[arg(long)]
     pub native: bool,
+    /// Also generate and time `forward_dynamics_derivatives` (`--per-call`;
+    /// reported as `forward_dynamics_derivatives_ns`).
+    #[arg(long)]
+    pub derivatives: bool,
     /// Integrators to sweep, comma-separated (default rk4,dopri5,dop853,radau5).
     #[arg(long, value_delimiter = ',')]
     pub integrators: Vec<String>,
@@ -195,10 +199,16 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             if given {
                 problems.push(format!(
                     "{option} sets the --work-precision sweep; --per-call times the generated \
-                     functions at random states (its options: --states, --reps, --seed, --native, --json)"
+                     functions at random states (its options: --states, --reps, --seed, --native, --derivatives, --json)"
                 ));
             }
         }
+    }
+    if a.derivatives && !a.per_call {
+        problems.push(
+            "--derivatives times the derivatives with --per-call; not with --work-precision or --suite"
+                .into(),
+        );
     }
     if a.native && !a.per_call {
         problems.push(
@@ -262,6 +272,7 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         reps: a.reps.unwrap_or(31),
         seed: a.seed.unwrap_or(1),
         native: a.native,
+        derivatives: a.derivatives,
     };
     per_call(&model, urdf, &vary, a.per_call, &o, a.json)
 }
@@ -299,7 +310,13 @@ fn per_call(
     if let Some(code) = crate::open::cables_only_refusal(&opened.checked, "bench --per-call") {
         return code;
     }
-    let g = match crate::open::generate(&opened, vary, &Default::default()) {
+    let also = if o.derivatives {
+        eom_gen::functions::FunctionSet::default()
+            .with(eom_gen::functions::Function::ForwardDynamicsDerivatives)
+    } else {
+        eom_gen::functions::FunctionSet::default()
+    };
+    let g = match crate::open::generate_asking(&opened, vary, &Default::default(), also) {
         Ok(g) => g,
         Err(code) => return code,
     };

@@ -6,6 +6,7 @@ pub mod check;
 pub mod dump;
 pub mod eval;
 pub mod import;
+pub mod linearize;
 pub mod simulate;
 pub mod solve_static;
 pub mod stats;

@@ -3,7 +3,7 @@
 
 use crate::args::Vary;
 use clap::Args;
-use eom_gen::functions::TABLE;
+use eom_gen::functions::{Function, TABLE};
 use std::process::ExitCode;
 
 /// Operation counts of the generated functions and generation time.
@@ -14,6 +14,11 @@ pub struct StatsArgs {
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
+    /// Also formulate and count `forward_dynamics_derivatives` and
+    /// `inverse_dynamics_derivatives` (generated only when asked for: a
+    /// scene's `functions`, `linearize`).
+    #[arg(long)]
+    pub derivatives: bool,
 }
 
 pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
@@ -25,13 +30,43 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         Err(code) => return code,
     };
     let f = &g.formulation;
+    // The derivatives, when asked for here and the model does not have them.
+    let asked = if a.derivatives
+        && (f.program(Function::ForwardDynamicsDerivatives).is_none()
+            || f.program(Function::InverseDynamicsDerivatives).is_none())
+    {
+        let request = g
+            .checked
+            .request()
+            .with(Function::ForwardDynamicsDerivatives)
+            .with(Function::InverseDynamicsDerivatives);
+        match eom_gen::mech::formulate(&g.checked.system, request) {
+            Ok(d) => Some(d),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(1);
+            }
+        }
+    } else {
+        None
+    };
+    let with_derivatives = asked.as_ref().unwrap_or(f);
+    let program = |function: Function| match function {
+        Function::ForwardDynamicsDerivatives | Function::InverseDynamicsDerivatives => {
+            with_derivatives.program(function)
+        }
+        _ => f.program(function),
+    };
+    let derivative_candidates: serde_json::Map<String, serde_json::Value> = with_derivatives
+        .derivative_candidates
+        .iter()
+        .map(|(form, c)| (format!("{form:?}"), op_json(c)))
+        .collect();
     // Every function of the table, `null` where not generated.
     let ops: serde_json::Map<String, serde_json::Value> = TABLE
         .iter()
         .map(|e| {
-            let v = f
-                .program(e.function)
-                .map_or(serde_json::Value::Null, |p| op_json(&p.op_count()));
+            let v = program(e.function).map_or(serde_json::Value::Null, |p| op_json(&p.op_count()));
             (e.name.to_string(), v)
         })
         .collect();
@@ -46,6 +81,8 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         "cables": cable_json,
         "formulation": format!("{}", f.fd_form),
         "forward_dynamics_candidates": candidates,
+        "derivative_form": with_derivatives.derivative_form.map(|d| format!("{d:?}")),
+        "derivative_candidates": derivative_candidates,
         "ops": ops,
         "nq": g.checked.system.nq(),
         "nu": g.checked.system.nu(),
@@ -65,14 +102,25 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         );
         print!("{cable_text}");
     } else {
-        print!("{}", table(&g));
+        print!("{}", table(&g, &program));
+        for (form, c) in &with_derivatives.derivative_candidates {
+            let chosen = with_derivatives.derivative_form == Some(*form);
+            println!(
+                "  derivatives by {form}: {} operations{}",
+                c.total(),
+                if chosen { " (kept)" } else { "" }
+            );
+        }
         print!("{cable_text}");
     }
     ExitCode::SUCCESS
 }
 
 /// `stats` for people: one row of operation counts per generated function.
-fn table(g: &eom_gen::Generated) -> String {
+fn table<'a>(
+    g: &eom_gen::Generated,
+    program: &dyn Fn(Function) -> Option<&'a eom_gen::sym::Program>,
+) -> String {
     use std::fmt::Write;
     let f = &g.formulation;
     let sys = &g.checked.system;
@@ -89,16 +137,16 @@ fn table(g: &eom_gen::Generated) -> String {
     );
     let _ = writeln!(
         s,
-        "  {:<20} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
+        "  {:<28} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
         "function", "add", "mul", "div", "neg", "sqrt", "trig", "other", "total"
     );
     for e in TABLE {
-        match f.program(e.function) {
+        match program(e.function) {
             Some(p) => {
                 let c = p.op_count();
                 let _ = writeln!(
                     s,
-                    "  {:<20} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
+                    "  {:<28} {:>8} {:>8} {:>6} {:>6} {:>6} {:>6} {:>6} {:>8}",
                     e.name,
                     c.adds,
                     c.muls,
@@ -111,7 +159,7 @@ fn table(g: &eom_gen::Generated) -> String {
                 );
             }
             None => {
-                let _ = writeln!(s, "  {:<20} {:>8}", e.name, "—");
+                let _ = writeln!(s, "  {:<28} {:>8}", e.name, "—");
             }
         }
     }

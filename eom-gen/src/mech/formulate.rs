@@ -186,6 +186,10 @@ pub struct Formulation {
     pub fd_form: FdForm,
     /// Operation counts of both forward-dynamics forms.
     pub fd_candidates: Vec<(FdForm, OpCount)>,
+    /// The form chosen for `forward_dynamics_derivatives`, when generated.
+    pub derivative_form: Option<super::derivatives::DerivativeForm>,
+    /// Operation counts of both forms of the derivatives, when generated.
+    pub derivative_candidates: Vec<(super::derivatives::DerivativeForm, OpCount)>,
     /// Names of the constraint equations (`joint.k`, the constraint's name,
     /// `disk.contact` / `disk.slip_x` / `disk.slip_y`); holonomic first.
     pub constraint_names: Vec<String>,
@@ -376,34 +380,87 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     let mut mass = request.contains(Function::MassMatrix).then(crba);
     let mut bias = request.contains(Function::Bias).then(rnea_bias);
 
-    let (forward_dynamics, fd_form, fd_candidates) = if request.contains(Function::ForwardDynamics)
-    {
-        let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
-        let lambda = ev.speed_parents();
-        let aba = lower("udot", &ev.aba(&k, &drive, &fext));
-        let mut candidates = vec![(FdForm::Aba, aba.op_count())];
-        // The mass-matrix route costs at least its factorisation; skip
-        // building it when that alone exceeds the articulated-body count
-        // (long chains, where M is dense and LᵀDL is cubic).
-        if ltdl_flops(&lambda) >= aba.op_count().total() {
-            (Some(aba), FdForm::Aba, candidates)
-        } else {
-            let (mut m, b) = (
-                mass.get_or_insert_with(crba).clone(),
-                bias.get_or_insert_with(rnea_bias).clone(),
-            );
-            ltdl(&mut m, &lambda);
-            let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
-            let sparse = lower("udot", &ltdl_solve(&m, &lambda, rhs));
-            candidates.push((FdForm::MassMatrix, sparse.op_count()));
-            if sparse.op_count().total() < aba.op_count().total() {
-                (Some(sparse), FdForm::MassMatrix, candidates)
+    // The chosen form's expressions are kept for the derivatives.
+    let (forward_dynamics, fd_form, fd_candidates, udot) =
+        if request.contains(Function::ForwardDynamics) {
+            let drive: Vec<Expr> = generalized.iter().zip(&tau).map(|(&g, &t)| g + t).collect();
+            let lambda = ev.speed_parents();
+            let aba_exprs = ev.aba(&k, &drive, &fext);
+            let aba = lower("udot", &aba_exprs);
+            let mut candidates = vec![(FdForm::Aba, aba.op_count())];
+            // The mass-matrix route costs at least its factorisation; skip
+            // building it when that alone exceeds the articulated-body count
+            // (long chains, where M is dense and LᵀDL is cubic).
+            if ltdl_flops(&lambda) >= aba.op_count().total() {
+                (Some(aba), FdForm::Aba, candidates, aba_exprs)
             } else {
-                (Some(aba), FdForm::Aba, candidates)
+                let (mut m, b) = (
+                    mass.get_or_insert_with(crba).clone(),
+                    bias.get_or_insert_with(rnea_bias).clone(),
+                );
+                ltdl(&mut m, &lambda);
+                let rhs: Vec<Expr> = tau.iter().zip(&b).map(|(&t, &b)| t - b).collect();
+                let sparse_exprs = ltdl_solve(&m, &lambda, rhs);
+                let sparse = lower("udot", &sparse_exprs);
+                candidates.push((FdForm::MassMatrix, sparse.op_count()));
+                if sparse.op_count().total() < aba.op_count().total() {
+                    (Some(sparse), FdForm::MassMatrix, candidates, sparse_exprs)
+                } else {
+                    (Some(aba), FdForm::Aba, candidates, aba_exprs)
+                }
             }
-        }
+        } else {
+            (None, FdForm::Aba, Vec::new(), Vec::new())
+        };
+    // Both ways, the one with fewer counted operations kept (the
+    // differentiated forward dynamics on a tie).
+    let (fd_derivatives, derivative_candidates) = if request
+        .contains(Function::ForwardDynamicsDerivatives)
+    {
+        use super::derivatives::{
+            DerivativeForm, forward_dynamics_derivatives, forward_dynamics_derivatives_rnea,
+        };
+        let qdot = ev.qdot(&st);
+        let direct = forward_dynamics_derivatives(&cx, &udot, &qdot, &q, &u, &tau, &inputs, opts);
+        let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
+        let (t, _) = ev.rnea(&k, &ud, &fext);
+        let inverse: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
+        let via_rnea = forward_dynamics_derivatives_rnea(
+            &cx, &udot, &inverse, &ud, &qdot, &q, &u, &tau, &inputs, opts,
+        );
+        let candidates = vec![
+            (DerivativeForm::ForwardDynamics, direct.op_count()),
+            (DerivativeForm::InverseDynamics, via_rnea.op_count()),
+        ];
+        let keep = if via_rnea.op_count().total() < direct.op_count().total() {
+            (via_rnea, DerivativeForm::InverseDynamics)
+        } else {
+            (direct, DerivativeForm::ForwardDynamics)
+        };
+        (Some(keep), candidates)
     } else {
-        (None, FdForm::Aba, Vec::new())
+        (None, Vec::new())
+    };
+    let id_derivatives = request
+        .contains(Function::InverseDynamicsDerivatives)
+        .then(|| {
+            let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
+            let (t, _) = ev.rnea(&k, &ud, &fext);
+            let inverse: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
+            super::derivatives::inverse_dynamics_derivatives(
+                &cx,
+                &inverse,
+                &ud,
+                &ev.qdot(&st),
+                &q,
+                &u,
+                &inputs,
+                opts,
+            )
+        });
+    let (fd_derivatives, derivative_form) = match fd_derivatives {
+        Some((p, form)) => (Some(p), Some(form)),
+        None => (None, None),
     };
 
     let mass_matrix = request.contains(Function::MassMatrix).then(|| {
@@ -544,6 +601,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Function::Constraints, constraints),
         (Function::CutJointReactions, cut_reactions),
         (Function::Attachments, attachments),
+        (Function::ForwardDynamicsDerivatives, fd_derivatives),
+        (Function::InverseDynamicsDerivatives, id_derivatives),
     ]
     .into_iter()
     .filter_map(|(f, p)| p.map(|p| (f, p)))
@@ -553,6 +612,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         programs,
         fd_form,
         fd_candidates,
+        derivative_form,
+        derivative_candidates,
         constraint_names,
         n_holonomic,
         output_names: out.names,

@@ -13,7 +13,9 @@
 //! - [`aba`]: forward dynamics in O(n) by articulated bodies (§7.3);
 //! - [`ltdl`]: the sparse `LᵀDL` factorisation of the mass matrix that
 //!   follows the tree (§6.5), the other forward-dynamics route;
-//! - [`energy`], [`loads`] (the force elements of [`applied`] at a state).
+//! - [`energy`], [`loads`] (the force elements of [`applied`] at a state);
+//! - [`derivatives`]: `∂u̇/∂(q, u, τ, inputs)` of the generated forward
+//!   dynamics, symbolically.
 //!
 //! Building the tree: [`env`] (what parameters are), [`lower`] (model
 //! expressions as scalars), [`error`] (why a system cannot be formulated).
@@ -24,6 +26,7 @@ pub mod constraints;
 pub mod count;
 pub mod crba;
 pub mod dense;
+pub mod derivatives;
 pub mod energy;
 pub mod env;
 pub mod error;

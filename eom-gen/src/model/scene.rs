@@ -388,7 +388,7 @@ impl Ctx<'_> {
             }
         }
         for (k, func) in list.iter().enumerate() {
-            if func.entry().when != When::Requested {
+            if !matches!(func.entry().when, When::Requested | When::Asked) {
                 let choices: Vec<String> =
                     Function::selectable().map(|f| format!("`{f:?}`")).collect();
                 self.error(

@@ -1,0 +1,438 @@
+//! `eom-gen linearize`: the state-space model `ẏ ≈ A y + B w` about a
+//! state (default: the model's initial state), from the generated
+//! derivatives of forward dynamics (interpreted: no compiler needed), with
+//! its eigenvalues, natural frequencies and damping ratios (see
+//! `eom_gen::linearize`).
+
+use crate::args::{InputArgs, ParamArgs, Vary, parse_list};
+use crate::error::Error;
+use clap::Args;
+use eom_gen::functions::Function;
+use eom_gen::linearize::{Eigenvalue, InputKind, Linearization, LinearizeError};
+use std::process::ExitCode;
+
+/// Linearise a model about a state: `A`, `B` of the first-order system
+/// `y = (q, u)` (quaternions in the tangent space; holonomic loops about
+/// equilibria in minimal coordinates), eigenvalues, natural frequencies and
+/// damping ratios.
+#[derive(Args)]
+pub struct LinearizeArgs {
+    /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
+    pub model: String,
+    /// Positions, comma-separated (default: the model's q0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub q: Option<String>,
+    /// Speeds, comma-separated (default: the model's u0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub u: Option<String>,
+    /// Time.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub t: f64,
+    #[command(flatten)]
+    pub params: ParamArgs,
+    #[command(flatten)]
+    pub inputs: InputArgs,
+    /// Print one JSON object instead of the tables.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the eigenvalues to this CSV file (`re,im,natural_frequency,damping_ratio`;
+    /// with --sweep `NAME,k,re,im,natural_frequency,damping_ratio`).
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<String>,
+    /// The eigenvalues against a parameter: `NAME=a:b:n` (n equally spaced
+    /// values; the model regenerated at each, its initial state too).
+    #[arg(long, value_name = "NAME=a:b:n", allow_hyphen_values = true)]
+    pub sweep: Option<String>,
+    /// With --sweep: draw the real and imaginary parts against the
+    /// parameter into this SVG file.
+    #[arg(long, value_name = "FILE")]
+    pub svg: Option<String>,
+}
+
+/// One linearisation: the model as checked at this point, `A`, `B`, the
+/// eigenvalues and the state.
+struct At {
+    sys: eom_gen::System,
+    lin: Linearization,
+    eig: Vec<Eigenvalue>,
+    q: Vec<f64>,
+    u: Vec<f64>,
+}
+
+/// Why a point was not linearised.
+enum Fail {
+    /// Already reported (the model, the arguments): this exit status.
+    Exit(ExitCode),
+    /// Not linearised at this point: why, and whether it is a usage error
+    /// (exit 2) rather than a refusal (exit 1).
+    Point(String, bool),
+}
+
+pub fn run(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
+    let mut problems = Vec::new();
+    if !a.t.is_finite() {
+        problems.push(format!("--t must be a finite number, got {}", a.t));
+    }
+    let sweep = match a.sweep.as_deref().map(parse_sweep).transpose() {
+        Ok(s) => s,
+        Err(e) => {
+            problems.push(e);
+            None
+        }
+    };
+    if a.svg.is_some() && a.sweep.is_none() {
+        problems.push("--svg draws a --sweep; give --sweep NAME=a:b:n".into());
+    }
+    let vary = match Vary::parse(&a.params.params, &a.inputs.inputs) {
+        Ok(v) => v,
+        Err(p) => {
+            problems.extend(p);
+            Vary::default()
+        }
+    };
+    if let Some((name, _)) = &sweep
+        && vary.params.iter().any(|(n, _)| n == name)
+    {
+        problems.push(format!(
+            "--sweep sets parameter `{name}`; do not also give it with --param"
+        ));
+    }
+    if !problems.is_empty() {
+        return crate::output::fail(&Error::Usage(problems));
+    }
+    let Some((name, values)) = sweep else {
+        return single(a, urdf, &vary);
+    };
+    let mut points: Vec<(f64, Result<Vec<Eigenvalue>, String>)> = Vec::new();
+    for value in values {
+        let mut vary = vary.clone();
+        vary.params.push((name.clone(), value));
+        match at(a, urdf, &vary) {
+            Ok(p) => points.push((value, Ok(p.eig))),
+            Err(Fail::Exit(code)) => return code,
+            Err(Fail::Point(why, _)) => {
+                eprintln!("{name} = {value}: {why}");
+                points.push((value, Err(why)));
+            }
+        }
+    }
+    crate::linearize_sweep::report(
+        &name,
+        &points,
+        a.json,
+        a.csv.as_deref(),
+        a.svg.as_deref(),
+        &a.model,
+    )
+}
+
+/// `NAME=a:b:n`: `n ≥ 2` equally spaced values from `a` to `b`.
+fn parse_sweep(text: &str) -> Result<(String, Vec<f64>), String> {
+    let bad = || {
+        format!(
+            "--sweep `{text}`: expected NAME=a:b:n (finite a, b; n ≥ 2 points), e.g. `--sweep v=0:10:51`"
+        )
+    };
+    let (name, range) = text.split_once('=').ok_or_else(bad)?;
+    let parts: Vec<&str> = range.split(':').collect();
+    let [a, b, n] = parts.as_slice() else {
+        return Err(bad());
+    };
+    let (a, b): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    let n: usize = n.trim().parse().map_err(|_| bad())?;
+    if name.trim().is_empty() || !a.is_finite() || !b.is_finite() || !(2..=100_000).contains(&n) {
+        return Err(bad());
+    }
+    let values = (0..n)
+        .map(|k| a + (b - a) * k as f64 / (n - 1) as f64)
+        .collect();
+    Ok((name.trim().to_string(), values))
+}
+
+/// One point, printed.
+fn single(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> ExitCode {
+    let p = match at(a, urdf, vary) {
+        Ok(p) => p,
+        Err(Fail::Exit(code)) => return code,
+        Err(Fail::Point(why, true)) => return crate::output::fail(&Error::Usage(vec![why])),
+        Err(Fail::Point(why, false)) => return crate::output::fail(&Error::Refused(why)),
+    };
+    let shapes = mode_shapes(&p.sys, &p.lin, &p.eig);
+    if let Some(path) = &a.csv
+        && let Err(code) = crate::output::write_file(path, &csv(&p.eig))
+    {
+        return code;
+    }
+    if a.json {
+        println!("{}", json(&p.sys, &p.lin, &p.eig, &shapes, &p.q, &p.u, a.t));
+    } else {
+        print!("{}", text(&p.sys, &p.lin, &p.eig, &shapes));
+    }
+    ExitCode::SUCCESS
+}
+
+/// Opens, generates the derivatives and linearises at the state `a` gives
+/// (default: the model's initial state with these parameter values).
+fn at(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> Result<At, Fail> {
+    let opened = crate::open::open(&a.model, urdf, vary).map_err(Fail::Exit)?;
+    if let Some(code) = crate::open::cables_only_refusal(&opened.checked, "linearize") {
+        return Err(Fail::Exit(code));
+    }
+    let mut checked = opened.checked.clone();
+    if !checked.system.cables.is_empty() {
+        let e = LinearizeError::Cables {
+            model: checked.system.name.clone(),
+        };
+        return Err(Fail::Point(e.to_string(), true));
+    }
+    // Checked by `open` (exit 2); driven inputs leave the model.
+    if let Err(errors) = eom_gen::model::drive_inputs(&mut checked, &vary.drives) {
+        return Err(Fail::Exit(crate::output::fail(&Error::Usage(
+            errors
+                .iter()
+                .map(|e| format!("--input {}: {e}", e.input))
+                .collect(),
+        ))));
+    }
+    let sys = checked.system.clone();
+    let mut problems = Vec::new();
+    let mut list = |what: &str, text: Option<&str>, n: usize, default: Vec<f64>| {
+        parse_list(what, text, n, default).unwrap_or_else(|e| {
+            problems.push(e);
+            Vec::new()
+        })
+    };
+    let q = list("q", a.q.as_deref(), sys.nq(), sys.q0());
+    let u = list("u", a.u.as_deref(), sys.nu(), sys.u0());
+    if !problems.is_empty() {
+        return Err(Fail::Exit(crate::output::fail(&Error::Usage(problems))));
+    }
+    let request = checked.request().with(Function::ForwardDynamicsDerivatives);
+    let f = eom_gen::mech::formulate(&sys, request).map_err(|e| {
+        let report = eom_gen::Report {
+            source: checked.source.clone(),
+            diagnostics: vec![e.diagnostic()],
+        };
+        eprint!("{report}");
+        Fail::Exit(ExitCode::from(1))
+    })?;
+    let point = eom_gen::interpret::Point {
+        sys: &sys,
+        q: &q,
+        u: &u,
+        udot: &[],
+        tau: &[],
+        inputs: &opened.inputs,
+        params: &[],
+        multipliers: &[],
+        t: a.t,
+    };
+    let lin = eom_gen::linearize::linearize(&f, &point).map_err(|e| {
+        let usage = !matches!(e, LinearizeError::NotFinite);
+        Fail::Point(e.to_string(), usage)
+    })?;
+    let eig = eom_gen::linearize::eigenvalues(&lin.a).ok_or_else(|| {
+        Fail::Point(
+            "the eigenvalue iteration (real Schur form of A) did not converge".into(),
+            false,
+        )
+    })?;
+    Ok(At {
+        sys,
+        lin,
+        eig,
+        q,
+        u,
+    })
+}
+
+/// Mode shapes: per eigenvalue the displacements over the model's
+/// coordinates (the tangent displacements for quaternion models, `Z z`
+/// for loops), largest entry 1; with the names they are over.
+struct Shapes {
+    over: Vec<String>,
+    shapes: Vec<Option<Vec<nalgebra::Complex<f64>>>>,
+}
+
+fn mode_shapes(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue]) -> Shapes {
+    let dof = lin.a.nrows() / 2;
+    let over = match &lin.basis {
+        Some(_) => sys
+            .coordinate_names()
+            .into_iter()
+            .map(String::from)
+            .collect(),
+        None => lin.states[..dof].to_vec(),
+    };
+    let shapes = eig
+        .iter()
+        .map(|l| eom_gen::linearize::mode_shape(&lin.a, l, dof, lin.basis.as_ref()))
+        .collect();
+    Shapes { over, shapes }
+}
+
+fn rows(m: &nalgebra::DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows())
+        .map(|i| (0..m.ncols()).map(|j| m[(i, j)]).collect())
+        .collect()
+}
+
+/// `null` for a NaN (JSON has none).
+fn number(x: f64) -> serde_json::Value {
+    if x.is_finite() {
+        serde_json::json!(x)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+fn json(
+    sys: &eom_gen::System,
+    lin: &Linearization,
+    eig: &[Eigenvalue],
+    shapes: &Shapes,
+    q: &[f64],
+    u: &[f64],
+    t: f64,
+) -> serde_json::Value {
+    let dof = lin.a.nrows() / 2;
+    let mut v = serde_json::json!({
+        "model": sys.name,
+        "q": q,
+        "u": u,
+        "t": t,
+        "states": lin.states,
+        "coordinates": lin.states[..dof],
+        "speeds": lin.states[dof..],
+        "inputs": lin.inputs,
+        "input_kind": match lin.input_kind {
+            InputKind::Inputs => "inputs",
+            InputKind::GeneralizedForces => "generalized_forces",
+        },
+        "A": rows(&lin.a),
+        "B": rows(&lin.b),
+        "eigenvalues": eig.iter().map(|e| [e.re, e.im]).collect::<Vec<_>>(),
+        "natural_frequencies": eig.iter().map(|e| number(e.natural_frequency)).collect::<Vec<_>>(),
+        "damping_ratios": eig.iter().map(|e| number(e.damping_ratio)).collect::<Vec<_>>(),
+    });
+    v["mode_coordinates"] = serde_json::json!(shapes.over);
+    v["mode_shapes"] = serde_json::json!(
+        shapes
+            .shapes
+            .iter()
+            .map(|s| s
+                .as_ref()
+                .map(|s| s.iter().map(|c| [c.re, c.im]).collect::<Vec<_>>()))
+            .collect::<Vec<_>>()
+    );
+    if let Some(z) = &lin.basis {
+        v["basis"] = serde_json::json!(rows(z));
+        v["basis_rows"] = serde_json::json!(sys.coordinate_names());
+    }
+    v
+}
+
+fn csv(eig: &[Eigenvalue]) -> String {
+    let mut s = String::from("re,im,natural_frequency,damping_ratio\n");
+    for e in eig {
+        s += &format!(
+            "{},{},{},{}\n",
+            e.re, e.im, e.natural_frequency, e.damping_ratio
+        );
+    }
+    s
+}
+
+/// A labelled matrix, one row per line.
+fn matrix(title: &str, m: &nalgebra::DMatrix<f64>, rows: &[String], cols: &[String]) -> String {
+    use std::fmt::Write;
+    let width = rows.iter().map(|r| r.len()).max().unwrap_or(0).max(4);
+    let mut s = format!("{title}\n  {:width$}", "");
+    for c in cols {
+        let _ = write!(s, " {c:>12}");
+    }
+    s.push('\n');
+    for (i, r) in rows.iter().enumerate() {
+        let _ = write!(s, "  {r:width$}");
+        for j in 0..m.ncols() {
+            let _ = write!(s, " {:>12.6}", m[(i, j)]);
+        }
+        s.push('\n');
+    }
+    s
+}
+
+fn text(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue], shapes: &Shapes) -> String {
+    use std::fmt::Write;
+    let mut s = format!(
+        "{}: ẏ = A y + B w, y = ({}), w = ({})\n",
+        sys.name,
+        lin.states.join(", "),
+        lin.inputs.join(", ")
+    );
+    if let Some(z) = &lin.basis {
+        let coordinates: Vec<String> = sys
+            .coordinate_names()
+            .into_iter()
+            .map(String::from)
+            .collect();
+        let columns: Vec<String> = lin.states[..z.ncols()].to_vec();
+        s += &matrix(
+            "minimal coordinates (loops): δq = Z z, Z",
+            z,
+            &coordinates,
+            &columns,
+        );
+    }
+    s += &matrix("A", &lin.a, &lin.states, &lin.states);
+    s += &matrix("B", &lin.b, &lin.states, &lin.inputs);
+    let _ = writeln!(
+        s,
+        "eigenvalues\n  {:>14} {:>14} {:>14} {:>12} {:>10}",
+        "re (1/s)", "im (rad/s)", "ω_n (rad/s)", "f_n (Hz)", "ζ"
+    );
+    for e in eig {
+        let _ = writeln!(
+            s,
+            "  {:>14.6} {:>14.6} {:>14.6} {:>12.6} {:>10.4}",
+            e.re,
+            e.im,
+            e.natural_frequency,
+            e.natural_frequency / std::f64::consts::TAU,
+            e.damping_ratio
+        );
+    }
+    // One line per eigenvalue with Im λ ≥ 0 (the conjugate's shape is
+    // the conjugate).
+    let _ = writeln!(
+        s,
+        "mode shapes (displacements of {}; largest 1)",
+        shapes.over.join(", ")
+    );
+    for (e, shape) in eig.iter().zip(&shapes.shapes) {
+        if e.im < 0.0 {
+            continue;
+        }
+        let entries = match shape {
+            Some(v) => v
+                .iter()
+                .map(|c| {
+                    // Scaled to a largest entry of 1: parts below 1e-9
+                    // are rounding.
+                    if c.im.abs() <= 1e-9 {
+                        format!("{:.4}", if c.re.abs() <= 1e-9 { 0.0 } else { c.re })
+                    } else {
+                        format!("{:.4}{:+.4}i", c.re, c.im)
+                    }
+                })
+                .collect::<Vec<_>>()
+                .join(", "),
+            None => "—".into(),
+        };
+        let _ = writeln!(s, "  λ = {:.6}{:+.6}i: {entries}", e.re, e.im);
+    }
+    s
+}

@@ -1,0 +1,615 @@
+//! Linearisation about a state: the first-order system `y = (δq, u)`,
+//! `ẏ ≈ A y + B w`, from the generated derivatives of forward dynamics
+//! (`forward_dynamics_derivatives`, see [`crate::functions`]), and its
+//! eigenvalues with natural frequencies and damping ratios.
+//!
+//! ```text
+//! A = [[∂δq̇/∂δq, ∂δq̇/∂u],     B = [[0        ],
+//!      [∂u̇/∂δq,  ∂u̇/∂u ]],         [∂u̇/∂w   ]]
+//! ```
+//!
+//! `δq` is the displacement in the tangent space (`q = q₀ ⊕ δq`, to first
+//! order `q₀ + N(q₀) δq` with `q̇ = N(q) u`): the coordinates themselves
+//! where `q̇ = u`, rotation vectors in body axes for quaternions. Then
+//! `∂δq̇/∂u = I`, and `∂δq̇/∂δq = 0` where `q̇ = u` and for quaternion
+//! joints at rest; a model with quaternions is refused about a state where
+//! it moves (that block would need the derivative of the chart, not done).
+//! `w` is the model's runtime inputs when it has any, else the extra
+//! generalised forces `τ`, one per speed.
+//!
+//! Trees (rigid bodies, locked joints, flexible bodies) are linearised
+//! about any state. Holonomic loops (cut joints, holonomic constraints,
+//! `q̇ = u`) are linearised about an equilibrium (`u = 0`, the constrained
+//! accelerations zero) in minimal coordinates `δq = Z z`, `Z` an
+//! orthonormal basis of the null space of the constraint Jacobian `J`
+//! (Wittenburg 5.6): with `M u̇ = f(q, u) + τ + Jᵀλ` and the equilibrium's
+//! multipliers `λ₀`,
+//!
+//! ```text
+//! ZᵀMZ z̈ = Zᵀ (∂f/∂q + ∂(Jᵀλ₀)/∂q) Z z + Zᵀ ∂f/∂u Z ż + Zᵀ ∂τ/∂w w,
+//! ```
+//!
+//! `∂f/∂q = M ∂u̇/∂q` from the generated derivatives evaluated at
+//! `τ = Jᵀλ₀` (where the tree's `u̇` is the equilibrium's, zero), and the
+//! constraint forces' geometric stiffness `∂(Jᵀλ₀)/∂q` by central
+//! differences of the generated `J` (the one term not generated
+//! symbolically). Redundant constraints are fine (the rank of `J` decides
+//! the mobility). Nonholonomic constraints (rolling), loops about states
+//! that are not equilibria, loops with quaternions and models with cables
+//! are refused: never a linearisation of the wrong system.
+
+use crate::functions::Function;
+use crate::interpret::{Point, run};
+use crate::mech::Formulation;
+use nalgebra::DMatrix;
+use std::fmt;
+
+/// What `w` (the columns of `B`) is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputKind {
+    /// The model's runtime inputs, in its order.
+    Inputs,
+    /// The extra generalised forces `τ`, one per speed.
+    GeneralizedForces,
+}
+
+/// A linearisation about a state.
+#[derive(Clone, Debug)]
+pub struct Linearization {
+    /// `A` (`2 NU × 2 NU`).
+    pub a: DMatrix<f64>,
+    /// `B` (`2 NU × NW`).
+    pub b: DMatrix<f64>,
+    /// Names of the displacements `δq` (the coordinates where `q̇ = u`,
+    /// else `d(speed)` per speed), then of the speeds: the rows of `A`.
+    pub states: Vec<String>,
+    /// Names of the columns of `B`.
+    pub inputs: Vec<String>,
+    /// What the columns of `B` are.
+    pub input_kind: InputKind,
+    /// For a model with loops, the basis `Z` of the minimal coordinates
+    /// (`δq = Z z`, `NU × F`, orthonormal columns): `A` is `2F × 2F`.
+    pub basis: Option<DMatrix<f64>>,
+}
+
+/// Why a model cannot be linearised here.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LinearizeError {
+    /// The model has constraint equations (cut joints, constraints).
+    Constraints {
+        /// The model.
+        model: String,
+        /// The equations' names.
+        equations: Vec<String>,
+    },
+    /// Nonholonomic constraint equations (rolling).
+    Nonholonomic {
+        /// The model.
+        model: String,
+        /// The nonholonomic equations' names.
+        equations: Vec<String>,
+    },
+    /// A model with loops about a state that is not an equilibrium.
+    NotEquilibrium {
+        /// The model.
+        model: String,
+        /// `max |u|` at the state.
+        speed: f64,
+        /// `max |u̇|` of the constrained accelerations at the state.
+        acceleration: f64,
+    },
+    /// A model with loops at a state that does not close them.
+    NotAssembled {
+        /// The model.
+        model: String,
+        /// `max |Φ|`.
+        residual: f64,
+    },
+    /// The model has cables.
+    Cables {
+        /// The model.
+        model: String,
+    },
+    /// Quaternion coordinates about a state where they move.
+    MovingQuaternions {
+        /// The model.
+        model: String,
+    },
+    /// The formulation lacks the derivatives (not asked for).
+    NoDerivatives,
+    /// A state of the wrong size.
+    Size {
+        /// `q` or `u`.
+        what: &'static str,
+        /// How many were given.
+        got: usize,
+        /// How many the model has.
+        want: usize,
+    },
+    /// `A` or `B` holds a NaN or infinity (a singular mass matrix at the
+    /// state, or a state outside the model's domain).
+    NotFinite,
+}
+
+impl fmt::Display for LinearizeError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LinearizeError::Constraints { model, equations } => write!(
+                f,
+                "`{model}` has {} constraint equation(s) ({}) and quaternion coordinates: loops are linearised in minimal coordinates where `q̇ = u` only",
+                equations.len(),
+                names(equations)
+            ),
+            LinearizeError::Nonholonomic { model, equations } => write!(
+                f,
+                "`{model}` has nonholonomic constraint equation(s) ({}): rolling contacts need minimal speeds, not implemented yet; linearisation supports trees and holonomic loops (about equilibria)",
+                names(equations)
+            ),
+            LinearizeError::NotEquilibrium {
+                model,
+                speed,
+                acceleration,
+            } => write!(
+                f,
+                "`{model}` has loops and the state is not an equilibrium (max |u| = {speed:.3e}, max |u̇| = {acceleration:.3e}): loops are linearised about equilibria only (give `--q` at one and `--u` zeros)"
+            ),
+            LinearizeError::NotAssembled { model, residual } => write!(
+                f,
+                "`{model}`: the state does not close the loops (max |Φ| = {residual:.3e}); give `--q` that satisfies the constraints"
+            ),
+            LinearizeError::Cables { model } => write!(
+                f,
+                "`{model}` has cables: linearisation supports trees of rigid and flexible bodies without cables"
+            ),
+            LinearizeError::MovingQuaternions { model } => write!(
+                f,
+                "`{model}` has quaternion coordinates and the state moves (some speed is not zero): its linearisation in the tangent space needs the derivative of the chart there, not implemented; linearise about a state at rest (`--u` all zeros)"
+            ),
+            LinearizeError::NoDerivatives => {
+                f.write_str("the formulation has no `forward_dynamics_derivatives` (ask for them)")
+            }
+            LinearizeError::Size { what, got, want } => {
+                write!(f, "`{what}` has {got} value(s), the model has {want}")
+            }
+            LinearizeError::NotFinite => f.write_str(
+                "A or B is not finite at this state (is the mass matrix singular there?)",
+            ),
+        }
+    }
+}
+
+impl std::error::Error for LinearizeError {}
+
+/// `` `a`, `b` `` from names.
+fn names(list: &[String]) -> String {
+    list.iter()
+        .map(|e| format!("`{e}`"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Linearises the model of `f` about `x` (its `q`, `u`, `t`, inputs and
+/// parameters; `x.tau` is the operating point of `τ`, zero if empty).
+/// `f` must hold `forward_dynamics_derivatives`.
+pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError> {
+    let sys = x.sys;
+    let (nq, nu, ni) = (sys.nq(), sys.nu(), sys.inputs.len());
+    if !sys.cables.is_empty() {
+        return Err(LinearizeError::Cables {
+            model: sys.name.clone(),
+        });
+    }
+    for (what, got, want) in [("q", x.q.len(), nq), ("u", x.u.len(), nu)] {
+        if got != want {
+            return Err(LinearizeError::Size { what, got, want });
+        }
+    }
+    let tangent = nq != nu || !sys.quaternion_indices().is_empty();
+    if !f.constraint_names.is_empty() {
+        if f.n_holonomic < f.constraint_names.len() {
+            return Err(LinearizeError::Nonholonomic {
+                model: sys.name.clone(),
+                equations: f.constraint_names[f.n_holonomic..].to_vec(),
+            });
+        }
+        if tangent {
+            return Err(LinearizeError::Constraints {
+                model: sys.name.clone(),
+                equations: f.constraint_names.clone(),
+            });
+        }
+        return loops(f, x);
+    }
+    if tangent && x.u.iter().any(|&v| v != 0.0) {
+        return Err(LinearizeError::MovingQuaternions {
+            model: sys.name.clone(),
+        });
+    }
+    let p = f
+        .program(Function::ForwardDynamicsDerivatives)
+        .ok_or(LinearizeError::NoDerivatives)?;
+    let flat = run(p, x);
+    if flat.len() != 3 * nu * nu + nu * ni {
+        return Err(LinearizeError::NoDerivatives);
+    }
+    let block = |k: usize, i: usize, j: usize| flat[k * nu * nu + i * nu + j];
+    let n = 2 * nu;
+    let mut a = DMatrix::<f64>::zeros(n, n);
+    for i in 0..nu {
+        a[(i, nu + i)] = 1.0;
+        for j in 0..nu {
+            a[(nu + i, j)] = block(0, i, j);
+            a[(nu + i, nu + j)] = block(1, i, j);
+        }
+    }
+    let (input_kind, nw) = if ni > 0 {
+        (InputKind::Inputs, ni)
+    } else {
+        (InputKind::GeneralizedForces, nu)
+    };
+    let mut b = DMatrix::<f64>::zeros(n, nw);
+    for i in 0..nu {
+        for j in 0..nw {
+            b[(nu + i, j)] = match input_kind {
+                InputKind::Inputs => flat[3 * nu * nu + i * ni + j],
+                InputKind::GeneralizedForces => block(2, i, j),
+            };
+        }
+    }
+    if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
+        return Err(LinearizeError::NotFinite);
+    }
+    let speeds = sys.speed_names();
+    let positions: Vec<String> = if tangent {
+        speeds.iter().map(|s| format!("d({s})")).collect()
+    } else {
+        sys.coordinate_names()
+            .into_iter()
+            .map(String::from)
+            .collect()
+    };
+    let inputs = match input_kind {
+        InputKind::Inputs => sys.inputs.clone(),
+        InputKind::GeneralizedForces => speeds.iter().map(|s| format!("tau({s})")).collect(),
+    };
+    Ok(Linearization {
+        a,
+        b,
+        states: positions
+            .into_iter()
+            .chain(speeds.into_iter().map(String::from))
+            .collect(),
+        inputs,
+        input_kind,
+        basis: None,
+    })
+}
+
+/// `∂u̇/∂q`, `∂u̇/∂u`, `∂u̇/∂w` and what `w` is.
+struct Blocks {
+    dq: DMatrix<f64>,
+    du: DMatrix<f64>,
+    dw: DMatrix<f64>,
+    input_kind: InputKind,
+}
+
+/// The derivative blocks at `x`, with `w` the inputs if the model has any,
+/// else `τ`.
+fn derivative_blocks(f: &Formulation, x: &Point<'_>) -> Result<Blocks, LinearizeError> {
+    let (nu, ni) = (x.sys.nu(), x.sys.inputs.len());
+    let p = f
+        .program(Function::ForwardDynamicsDerivatives)
+        .ok_or(LinearizeError::NoDerivatives)?;
+    let flat = run(p, x);
+    if flat.len() != 3 * nu * nu + nu * ni {
+        return Err(LinearizeError::NoDerivatives);
+    }
+    let block = |k: usize| DMatrix::from_row_slice(nu, nu, &flat[k * nu * nu..(k + 1) * nu * nu]);
+    let (w, kind) = if ni > 0 {
+        (
+            DMatrix::from_row_slice(nu, ni, &flat[3 * nu * nu..]),
+            InputKind::Inputs,
+        )
+    } else {
+        (block(2), InputKind::GeneralizedForces)
+    };
+    Ok(Blocks {
+        dq: block(0),
+        du: block(1),
+        dw: w,
+        input_kind: kind,
+    })
+}
+
+/// `Φ` and `J` (holonomic rows) at `q`.
+fn constraint_values(f: &Formulation, x: &Point<'_>) -> Option<(Vec<f64>, DMatrix<f64>)> {
+    let nu = x.sys.nu();
+    let nc = f.constraint_names.len();
+    let c = crate::interpret::evaluate_function(f, Function::Constraints, x)?;
+    if c.len() != 3 * nc + nc * nu {
+        return None;
+    }
+    Some((
+        c[..nc].to_vec(),
+        DMatrix::from_row_slice(nc, nu, &c[3 * nc..]),
+    ))
+}
+
+/// Holonomic loops about an equilibrium, in minimal coordinates (see the
+/// module documentation).
+fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError> {
+    use crate::interpret::evaluate_function;
+    let sys = x.sys;
+    let nu = sys.nu();
+    let model = sys.name.clone();
+    let not_finite = |m: &DMatrix<f64>| m.iter().any(|v| !v.is_finite());
+    let (phi, j) = constraint_values(f, x).ok_or(LinearizeError::NotFinite)?;
+    let residual = phi.iter().fold(0.0f64, |s, p| s.max(p.abs()));
+    // (NaN is not assembled either.)
+    if residual.is_nan() || residual > 1e-8 {
+        return Err(LinearizeError::NotAssembled { model, residual });
+    }
+    let m = evaluate_function(f, Function::MassMatrix, x)
+        .map(|v| DMatrix::from_row_slice(nu, nu, &v))
+        .ok_or(LinearizeError::NotFinite)?;
+    let b = evaluate_function(f, Function::Bias, x).ok_or(LinearizeError::NotFinite)?;
+    let force = nalgebra::DVector::from_iterator(nu, b.iter().map(|b| -b));
+    let gamma = nalgebra::DVector::zeros(j.nrows());
+    if not_finite(&m) || not_finite(&j) {
+        return Err(LinearizeError::NotFinite);
+    }
+    // The equilibrium: u = 0 and the constrained accelerations zero
+    // (relative to what gravity and the force elements alone would give).
+    let (udot, lambda, _) = eom_sim::constrained::accelerations(&m, &force, &j, &gamma)
+        .ok_or(LinearizeError::NotFinite)?;
+    let speed = x.u.iter().fold(0.0f64, |s, v| s.max(v.abs()));
+    let acceleration = udot.amax();
+    let free = m
+        .clone()
+        .cholesky()
+        .map_or(f64::INFINITY, |c| c.solve(&force).amax());
+    if speed != 0.0 || acceleration.is_nan() || acceleration > 1e-8 * free.max(1.0) {
+        return Err(LinearizeError::NotEquilibrium {
+            model,
+            speed,
+            acceleration,
+        });
+    }
+    // Derivatives of the tree at τ = Jᵀλ₀ (the tree's u̇ is then zero).
+    let tau0 = j.transpose() * &lambda;
+    let tau0 = tau0.as_slice().to_vec();
+    let at = Point {
+        tau: &tau0,
+        ..x.clone()
+    };
+    let Blocks {
+        dq,
+        du,
+        dw,
+        input_kind,
+    } = derivative_blocks(f, &at)?;
+    // Geometric stiffness of the constraint forces, ∂(J(q)ᵀλ₀)/∂q, by
+    // central differences of the generated J.
+    let mut h = DMatrix::<f64>::zeros(nu, nu);
+    for k in 0..nu {
+        let step = 1e-6 * x.q[k].abs().max(1.0);
+        let jt_lambda = |s: f64| -> Option<nalgebra::DVector<f64>> {
+            let mut q = x.q.to_vec();
+            q[k] += s;
+            let (_, jk) = constraint_values(f, &Point { q: &q, ..x.clone() })?;
+            Some(jk.transpose() * &lambda)
+        };
+        let (plus, minus) = (
+            jt_lambda(step).ok_or(LinearizeError::NotFinite)?,
+            jt_lambda(-step).ok_or(LinearizeError::NotFinite)?,
+        );
+        h.set_column(k, &((plus - minus) / (2.0 * step)));
+    }
+    // Z: the null space of J, from the eigenvectors of JᵀJ.
+    let jtj = j.transpose() * &j;
+    let eig = nalgebra::SymmetricEigen::new(jtj);
+    let largest = eig.eigenvalues.amax().max(1.0);
+    let mut columns: Vec<nalgebra::DVector<f64>> = (0..nu)
+        .filter(|&k| eig.eigenvalues[k] <= 1e-12 * largest)
+        .map(|k| {
+            let mut v = eig.eigenvectors.column(k).into_owned();
+            // A deterministic sign: the largest entry positive.
+            let imax = v.iamax();
+            if v[imax] < 0.0 {
+                v.neg_mut();
+            }
+            v
+        })
+        .collect();
+    columns.sort_by_key(|v| v.iamax());
+    let dof = columns.len();
+    let z = if dof == 0 {
+        DMatrix::<f64>::zeros(nu, 0)
+    } else {
+        DMatrix::from_columns(&columns)
+    };
+    let mr = z.transpose() * &m * &z;
+    let Some(mr_inv) = mr.clone().try_inverse() else {
+        return Err(LinearizeError::NotFinite);
+    };
+    let stiffness = mr_inv.clone() * z.transpose() * (&m * &dq + &h) * &z;
+    let damping = mr_inv.clone() * z.transpose() * &m * &du * &z;
+    let input = mr_inv * z.transpose() * &m * &dw;
+    let n = 2 * dof;
+    let mut a = DMatrix::<f64>::zeros(n, n);
+    let mut bm = DMatrix::<f64>::zeros(n, input.ncols());
+    for i in 0..dof {
+        a[(i, dof + i)] = 1.0;
+        for k in 0..dof {
+            a[(dof + i, k)] = stiffness[(i, k)];
+            a[(dof + i, dof + k)] = damping[(i, k)];
+        }
+        for k in 0..input.ncols() {
+            bm[(dof + i, k)] = input[(i, k)];
+        }
+    }
+    if not_finite(&a) || not_finite(&bm) {
+        return Err(LinearizeError::NotFinite);
+    }
+    let speeds = sys.speed_names();
+    let inputs = match input_kind {
+        InputKind::Inputs => sys.inputs.clone(),
+        InputKind::GeneralizedForces => speeds.iter().map(|s| format!("tau({s})")).collect(),
+    };
+    let states = (1..=dof)
+        .map(|k| format!("z{k}"))
+        .chain((1..=dof).map(|k| format!("z{k}_dot")))
+        .collect();
+    Ok(Linearization {
+        a,
+        b: bm,
+        states,
+        inputs,
+        input_kind,
+        basis: Some(z),
+    })
+}
+
+/// One eigenvalue `λ = re + i·im` of `A`, with `ω_n = |λ|` and, for
+/// `ω_n > 0`, the damping ratio `ζ = −re/ω_n` (`λ = −ζω_n ± iω_n√(1−ζ²)`
+/// for an oscillatory pair).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Eigenvalue {
+    /// Real part, 1/s.
+    pub re: f64,
+    /// Imaginary part, rad/s.
+    pub im: f64,
+    /// Natural frequency `|λ|`, rad/s.
+    pub natural_frequency: f64,
+    /// Damping ratio `−re/|λ|` (NaN for `λ = 0`).
+    pub damping_ratio: f64,
+}
+
+/// The eigenvalues of a real square matrix (complex in general: the real
+/// Schur form), sorted by natural frequency, then imaginary part; `None`
+/// if the Schur iteration does not converge or the matrix is not finite.
+pub fn eigenvalues(a: &DMatrix<f64>) -> Option<Vec<Eigenvalue>> {
+    if a.nrows() != a.ncols() || a.iter().any(|v| !v.is_finite()) {
+        return None;
+    }
+    if a.is_empty() {
+        return Some(Vec::new());
+    }
+    let schur = nalgebra::linalg::Schur::try_new(a.clone(), f64::EPSILON, 10_000)?;
+    let mut out: Vec<Eigenvalue> = schur
+        .complex_eigenvalues()
+        .iter()
+        .map(|l| {
+            let w = l.re.hypot(l.im);
+            Eigenvalue {
+                re: l.re,
+                im: l.im,
+                natural_frequency: w,
+                damping_ratio: if w > 0.0 { -l.re / w } else { f64::NAN },
+            }
+        })
+        .collect();
+    out.sort_by(|x, y| {
+        x.natural_frequency
+            .total_cmp(&y.natural_frequency)
+            .then(x.im.total_cmp(&y.im))
+    });
+    Some(out)
+}
+
+/// The mode shape of eigenvalue `l` of `a`: the eigenvector's first
+/// `positions` entries (the displacements of `y = (δq, u)`), mapped by
+/// `basis` when given (`δq = Z z`), scaled so that the entry of largest
+/// modulus is `1`; by inverse iteration on `A − μI` in complex arithmetic
+/// (`μ` a hair away from `l`, so the solve is regular). `None` if it does
+/// not converge to a finite vector.
+pub fn mode_shape(
+    a: &DMatrix<f64>,
+    l: &Eigenvalue,
+    positions: usize,
+    basis: Option<&DMatrix<f64>>,
+) -> Option<Vec<nalgebra::Complex<f64>>> {
+    use nalgebra::Complex;
+    let n = a.nrows();
+    if n == 0 || positions == 0 || positions > n {
+        return None;
+    }
+    let scale = a.amax().max(1.0);
+    let mu = Complex::new(l.re + 1e-10 * scale, l.im + 1e-10 * scale);
+    let shifted = a.map(|x| Complex::new(x, 0.0)) - DMatrix::<Complex<f64>>::identity(n, n) * mu;
+    let lu = shifted.lu();
+    // A start with every component (deterministic), then two iterations.
+    let mut v = nalgebra::DVector::<Complex<f64>>::from_fn(n, |i, _| {
+        Complex::new(1.0 + 0.1 * i as f64, 0.05 * i as f64)
+    });
+    for _ in 0..3 {
+        v = lu.solve(&v)?;
+        let norm = v.norm();
+        if !norm.is_finite() || norm <= 0.0 {
+            return None;
+        }
+        v /= Complex::new(norm, 0.0);
+    }
+    let head: Vec<Complex<f64>> = v.iter().take(positions).copied().collect();
+    let shape: Vec<Complex<f64>> = match basis {
+        Some(z) if z.ncols() == positions => (0..z.nrows())
+            .map(|r| {
+                (0..positions)
+                    .map(|c| head[c] * z[(r, c)])
+                    .fold(Complex::new(0.0, 0.0), |s, x| s + x)
+            })
+            .collect(),
+        _ => head,
+    };
+    let big = shape
+        .iter()
+        .copied()
+        .max_by(|x, y| x.norm().total_cmp(&y.norm()))?;
+    let size = big.norm();
+    if size.is_nan() || size <= 0.0 {
+        return None;
+    }
+    let out: Vec<Complex<f64>> = shape.iter().map(|x| x / big).collect();
+    out.iter()
+        .all(|x| x.re.is_finite() && x.im.is_finite())
+        .then_some(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A damped oscillator `ẍ = −ω₀² x − 2ζω₀ ẋ` (`ω₀ = 3`, `ζ = 0.1`):
+    /// `λ = −ζω₀ ± iω₀√(1−ζ²)`, `|λ| = ω₀`, damping ratio `ζ`; a rotation
+    /// generator has `±i`; a diagonal matrix its diagonal, sorted by
+    /// magnitude.
+    #[test]
+    fn eigenvalues_of_known_matrices() {
+        let (w, z) = (3.0f64, 0.1f64);
+        let a = DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -w * w, -2.0 * z * w]);
+        let e = eigenvalues(&a).expect("converges");
+        assert_eq!(e.len(), 2);
+        for (k, sign) in [(0, -1.0), (1, 1.0)] {
+            let l = e[k];
+            assert!((l.re + z * w).abs() < 1e-12, "re {}", l.re);
+            assert!(
+                (l.im - sign * w * (1.0 - z * z).sqrt()).abs() < 1e-12,
+                "im {}",
+                l.im
+            );
+            assert!((l.natural_frequency - w).abs() < 1e-12);
+            assert!((l.damping_ratio - z).abs() < 1e-12);
+        }
+        let r = DMatrix::from_row_slice(2, 2, &[0.0, -1.0, 1.0, 0.0]);
+        let e = eigenvalues(&r).expect("converges");
+        assert!(
+            e.iter()
+                .all(|l| l.re.abs() < 1e-15 && (l.im.abs() - 1.0).abs() < 1e-15)
+        );
+        let d = DMatrix::from_row_slice(2, 2, &[-4.0, 0.0, 0.0, 2.0]);
+        let e = eigenvalues(&d).expect("converges");
+        assert_eq!((e[0].re, e[1].re), (2.0, -4.0));
+        assert!(eigenvalues(&DMatrix::from_row_slice(1, 1, &[f64::NAN])).is_none());
+        assert_eq!(eigenvalues(&DMatrix::zeros(0, 0)), Some(Vec::new()));
+    }
+}

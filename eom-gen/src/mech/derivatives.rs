@@ -1,0 +1,258 @@
+//! Partial derivatives of forward dynamics, `∂u̇/∂q`, `∂u̇/∂u`,
+//! `∂u̇/∂τ`, `∂u̇/∂(inputs)`, two ways (the formulation keeps the one with
+//! fewer counted operations, [`DerivativeForm`]):
+//!
+//! - [`forward_dynamics_derivatives`]: differentiate the expressions of
+//!   the form forward dynamics was generated in (articulated bodies or
+//!   `LᵀDL`);
+//! - [`forward_dynamics_derivatives_rnea`]: differentiate inverse dynamics
+//!   (recursive Newton–Euler) instead, as Carpentier and Mansard (2018) do:
+//!   from `ID(q, u, FD(q, u, τ)) = τ`,
+//!   `∂u̇/∂x = −M⁻¹ ∂ID/∂x |_{u̇ = FD}` for `x = q, u, inputs`, with
+//!   `M⁻¹ = ∂u̇/∂τ` (forward dynamics is linear in `τ`).
+//!
+//! Coordinates are differentiated in the tangent space: column `j` of
+//! `∂u̇/∂q` is the derivative along `δq = N(q) e_j`, where `q̇ = N(q) u`,
+//!
+//! ```text
+//! (∂u̇/∂q)_ij = Σ_k ∂u̇_i/∂q_k · N_kj ,    N = ∂q̇/∂u .
+//! ```
+//!
+//! Where `q̇ = u` (`N = I`, exact ones and zeros) this is the plain partial
+//! derivative and builds nothing more. For a unit quaternion `N` is
+//! `½ q ⊗ (0, ·)` (the joint's angular velocity is in body axes,
+//! `mech::joint::quaternion_rate`), so the columns are the derivatives with
+//! respect to a rotation vector `δθ` in body axes, `q ⊕ δθ = q ⊗ (1, δθ/2)`
+//! to first order; a free joint's translation columns are along body axes
+//! (`ṗ = R v`). This is Pinocchio's local convention for its derivatives
+//! (Carpentier and Mansard 2018): `NU` columns, not `NQ`, and independent
+//! of how the expressions extend off the unit sphere (every column of `N`
+//! is tangent to it).
+//!
+//! [`inverse_dynamics_derivatives`] differentiates inverse dynamics
+//! (Newton–Euler) the same way: `∂τ/∂q` (tangent space), `∂τ/∂u`,
+//! `∂τ/∂u̇ = M`, `∂τ/∂(inputs)`.
+//!
+//! The derivatives go through the same simplification, CSE and emission
+//! as every other generated function (see [`crate::functions`] for the
+//! layout of the result).
+
+use crate::sym::{Context, Expr, LowerOptions, Program, Scalar};
+use std::fmt;
+
+/// How the derivatives of forward dynamics are computed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DerivativeForm {
+    /// Differentiating forward dynamics as generated.
+    ForwardDynamics,
+    /// `−M⁻¹ ∂ID/∂x` at `u̇ = FD`: differentiating recursive Newton–Euler.
+    InverseDynamics,
+}
+
+impl fmt::Display for DerivativeForm {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DerivativeForm::ForwardDynamics => "differentiated forward dynamics",
+            DerivativeForm::InverseDynamics => "−M⁻¹ ∂ID/∂x (differentiated RNEA)",
+        })
+    }
+}
+
+/// `Σ_k d[k] N[k][j]` for every `j`: a row of partial derivatives with
+/// respect to `q` turned into the tangent space (`N = ∂q̇/∂u`).
+fn tangent_row<'cx>(d: &[Expr<'cx>], n: &[Vec<Expr<'cx>>], nu: usize) -> Vec<Expr<'cx>> {
+    (0..nu)
+        .map(|j| {
+            let mut sum = Expr::zero();
+            for (k, dk) in d.iter().enumerate() {
+                let nkj = n[k][j];
+                if nkj.is_zero() || dk.is_zero() {
+                    continue;
+                }
+                sum = sum + *dk * nkj;
+            }
+            sum
+        })
+        .collect()
+}
+
+/// The outputs in the layout of `forward_dynamics_derivatives`.
+fn lower_blocks<'cx>(
+    cx: &'cx Context,
+    blocks: [(&str, Vec<Vec<Expr<'cx>>>); 4],
+    opts: LowerOptions,
+) -> Program {
+    let mut names: Vec<String> = Vec::new();
+    let mut values: Vec<Expr<'cx>> = Vec::new();
+    for (prefix, rows) in blocks {
+        for (i, row) in rows.into_iter().enumerate() {
+            for (j, v) in row.into_iter().enumerate() {
+                names.push(format!("{prefix}_{i}_{j}"));
+                values.push(v);
+            }
+        }
+    }
+    let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
+    cx.lower(&outs, opts)
+}
+
+/// The program of `forward_dynamics_derivatives` for forward dynamics
+/// `udot` (`NU` expressions), kinematics `qdot` (`NQ`, linear in `u`),
+/// coordinates `q`, speeds `u`, extra forces `tau` and the runtime
+/// `inputs`: outputs `dq_i_j`, `du_i_j`, `dtau_i_j` (each `NU × NU`, by
+/// rows), then `dinput_i_j` (`NU × NI`, by rows).
+#[allow(clippy::too_many_arguments)]
+pub fn forward_dynamics_derivatives<'cx>(
+    cx: &'cx Context,
+    udot: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    tau: &[Expr<'cx>],
+    inputs: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Program {
+    // N = ∂q̇/∂u, with its structural zeros (most entries).
+    let n = cx.jacobian(qdot, u);
+    let nu = u.len();
+    let dq: Vec<Vec<Expr<'cx>>> = udot
+        .iter()
+        .map(|&ud| {
+            let d: Vec<Expr<'cx>> = q.iter().map(|&qk| cx.diff(ud, qk)).collect();
+            tangent_row(&d, &n, nu)
+        })
+        .collect();
+    lower_blocks(
+        cx,
+        [
+            ("dq", dq),
+            ("du", cx.jacobian(udot, u)),
+            ("dtau", cx.jacobian(udot, tau)),
+            ("dinput", cx.jacobian(udot, inputs)),
+        ],
+        opts,
+    )
+}
+
+/// The same program by differentiating inverse dynamics: `inverse` is
+/// `ID(q, u, u̇)` (`NU` expressions in the speed-rate symbols `ud`,
+/// generalised forces of the model's force elements subtracted, so that
+/// `ID(q, u, FD(q, u, τ)) = τ`), `udot` forward dynamics. `∂ID/∂x` is
+/// built with `u̇` a symbol, then `u̇ = FD` is substituted and the result
+/// multiplied by `−M⁻¹`, `M⁻¹ = ∂FD/∂τ`.
+#[allow(clippy::too_many_arguments)]
+pub fn forward_dynamics_derivatives_rnea<'cx>(
+    cx: &'cx Context,
+    udot: &[Expr<'cx>],
+    inverse: &[Expr<'cx>],
+    ud: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    tau: &[Expr<'cx>],
+    inputs: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Program {
+    let n = cx.jacobian(qdot, u);
+    let nu = u.len();
+    let minv = cx.jacobian(udot, tau);
+    // ∂ID/∂x with u̇ symbolic, by rows; then u̇ = FD substituted.
+    let gq: Vec<Vec<Expr<'cx>>> = inverse
+        .iter()
+        .map(|&id| {
+            let d: Vec<Expr<'cx>> = q.iter().map(|&qk| cx.diff(id, qk)).collect();
+            tangent_row(&d, &n, nu)
+        })
+        .collect();
+    let gu = cx.jacobian(inverse, u);
+    let gi = cx.jacobian(inverse, inputs);
+    let rates: Vec<(crate::sym::SymId, crate::sym::Id)> = ud
+        .iter()
+        .zip(udot)
+        .filter_map(|(&s, &f)| Some((cx.sym_id(s)?, cx.id(f))))
+        .collect();
+    let at_fd = |rows: Vec<Vec<Expr<'cx>>>| -> Vec<Vec<Expr<'cx>>> {
+        let ids: Vec<crate::sym::Id> = rows.iter().flatten().map(|&e| cx.id(e)).collect();
+        let new = cx.arena_mut().substitute(&ids, |s| {
+            rates.iter().find(|(r, _)| *r == s).map(|(_, f)| *f)
+        });
+        let cols = rows.first().map_or(0, Vec::len);
+        new.chunks(cols.max(1))
+            .take(rows.len())
+            .map(|c| c.iter().map(|&id| cx.expr(id)).collect())
+            .collect()
+    };
+    // −M⁻¹ G, with G's columns `cols` wide.
+    let solve = |g: Vec<Vec<Expr<'cx>>>, cols: usize| -> Vec<Vec<Expr<'cx>>> {
+        (0..nu)
+            .map(|i| {
+                (0..cols)
+                    .map(|j| {
+                        let mut sum = Expr::zero();
+                        for (k, gk) in g.iter().enumerate() {
+                            let (m, x) = (minv[i][k], gk[j]);
+                            if m.is_zero() || x.is_zero() {
+                                continue;
+                            }
+                            sum = sum + m * x;
+                        }
+                        -sum
+                    })
+                    .collect()
+            })
+            .collect()
+    };
+    let ni = inputs.len();
+    let (gq, gu) = (at_fd(gq), at_fd(gu));
+    let gi = if ni == 0 {
+        vec![Vec::new(); nu]
+    } else {
+        at_fd(gi)
+    };
+    lower_blocks(
+        cx,
+        [
+            ("dq", solve(gq, nu)),
+            ("du", solve(gu, nu)),
+            ("dtau", minv.clone()),
+            ("dinput", solve(gi, ni)),
+        ],
+        opts,
+    )
+}
+
+/// The program of `inverse_dynamics_derivatives` for inverse dynamics
+/// `inverse` (`NU` expressions in the speed-rate symbols `ud`): outputs
+/// `dq_i_j` (tangent space), `du_i_j`, `dud_i_j` (each `NU × NU`, by
+/// rows), then `dinput_i_j` (`NU × NI`).
+#[allow(clippy::too_many_arguments)]
+pub fn inverse_dynamics_derivatives<'cx>(
+    cx: &'cx Context,
+    inverse: &[Expr<'cx>],
+    ud: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    inputs: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Program {
+    let n = cx.jacobian(qdot, u);
+    let nu = u.len();
+    let dq: Vec<Vec<Expr<'cx>>> = inverse
+        .iter()
+        .map(|&id| {
+            let d: Vec<Expr<'cx>> = q.iter().map(|&qk| cx.diff(id, qk)).collect();
+            tangent_row(&d, &n, nu)
+        })
+        .collect();
+    lower_blocks(
+        cx,
+        [
+            ("dq", dq),
+            ("du", cx.jacobian(inverse, u)),
+            ("dud", cx.jacobian(inverse, ud)),
+            ("dinput", cx.jacobian(inverse, inputs)),
+        ],
+        opts,
+    )
+}
