@@ -33,6 +33,25 @@ pub fn has_cables(checked: &Checked) -> bool {
     !checked.system.cables.is_empty()
 }
 
+/// The rigid part of a model whose cables hang at its markers, formulated
+/// and checked for the element runtime.
+fn rigid_part(sys: &eom_gen::system::System) -> Result<eom_gen::mech::Formulation, String> {
+    let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
+        .map_err(|e| format!("model `{}`: {e}", sys.name))?;
+    eom_gen::cables::check_rigid(sys, &f).map_err(|e| e.to_string())?;
+    Ok(f)
+}
+
+/// The mixed model of `sys`: every cable in one structure, the rigid part
+/// `f` interpreted.
+fn mixed_model<'a>(
+    sys: &'a eom_gen::system::System,
+    f: &'a eom_gen::mech::Formulation,
+) -> Result<eom_gen::cables::Mixed<'a>, String> {
+    eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(f, sys))
+        .map_err(|e| e.to_string())
+}
+
 /// Refuses rigid bodies beside cables none of which hangs at them.
 fn cables_alone(checked: &Checked) -> Result<(), Error> {
     let sys = &checked.system;
@@ -82,11 +101,8 @@ pub fn solve_static_cmd(
     let refused = |e: eom_gen::cables::CableError| Error::Refused(e.to_string());
     let coordinates = sys.coordinate_names();
     let report = if eom_gen::cables::has_mounts(sys) {
-        let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
-            .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
-        eom_gen::cables::check_rigid(sys, &f).map_err(refused)?;
-        let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
-            .map_err(refused)?;
+        let f = rigid_part(sys).map_err(Error::Refused)?;
+        let mixed = mixed_model(sys, &f).map_err(Error::Refused)?;
         let (q0, _) = eom_gen::cables::rigid_start(sys, &f).map_err(refused)?;
         equilibrium_mixed(&mixed.model, &mixed.cables, &q0, opts)
             .map_err(|e| refusal(&sys.name, &coordinates, &e))?
@@ -131,11 +147,8 @@ pub fn simulate_cmd(
     let mut progress = |t: f64| bar.set_position((1000.0 * t / run.t_end) as u64);
     let mut coordinates: Vec<&str> = Vec::new();
     let (report, table) = if eom_gen::cables::has_mounts(sys) {
-        let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
-            .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
-        eom_gen::cables::check_rigid(sys, &f).map_err(refused)?;
-        let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
-            .map_err(refused)?;
+        let f = rigid_part(sys).map_err(Error::Refused)?;
+        let mixed = mixed_model(sys, &f).map_err(Error::Refused)?;
         let (q0, u0) = eom_gen::cables::rigid_start(sys, &f).map_err(refused)?;
         coordinates = sys.coordinate_names();
         let own = |v: Vec<&str>| v.into_iter().map(str::to_string).collect::<Vec<_>>();
@@ -248,11 +261,8 @@ fn whole_model(
     t: f64,
 ) -> Result<serde_json::Value, String> {
     let sys = &checked.system;
-    let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
-        .map_err(|e| format!("model `{}`: {e}", sys.name))?;
-    eom_gen::cables::check_rigid(sys, &f).map_err(|e| e.to_string())?;
-    let mixed = eom_gen::cables::mixed(sys, eom_gen::cables::interpreted_rigid(&f, sys))
-        .map_err(|e| e.to_string())?;
+    let f = rigid_part(sys)?;
+    let mixed = mixed_model(sys, &f)?;
     let m = &mixed.model;
     let state = m.initial_state(t, q, u);
     let ga = MixedAlpha::new(m, state, AlphaOptions::default())
