@@ -12,7 +12,7 @@
 //!   coordinates and speeds, every node of every cable, the energy).
 //! - `solve-static`: Newton with load stepping, per chain, with the
 //!   residual history of every load step; a mixed model's equilibrium by
-//!   Newton on the KKT system (`crate::mixed_static`).
+//!   Newton on the KKT system.
 //!
 //! Rigid bodies beside cables none of which hangs at them are refused.
 
