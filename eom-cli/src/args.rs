@@ -63,6 +63,20 @@ pub struct InitialArgs {
     pub u0: Option<String>,
 }
 
+/// `--q`, `--u`, `--t`: the state a function is evaluated or linearised at.
+#[derive(Args, Clone, Debug, Default)]
+pub struct StateArgs {
+    /// Positions, comma-separated (default: the model's q0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub q: Option<String>,
+    /// Speeds, comma-separated (default: the model's u0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub u: Option<String>,
+    /// Time.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub t: f64,
+}
+
 /// What `--param`, `--input` (and `bench`'s `--q0`/`--u0`) set.
 #[derive(Clone, Debug, Default)]
 pub struct Vary {

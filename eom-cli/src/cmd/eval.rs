@@ -1,7 +1,7 @@
 //! `eom-gen eval`: every generated function at one state, compiled or
 //! interpreted, as one JSON object.
 
-use crate::args::{InputArgs, ParamArgs, Vary, parse_list};
+use crate::args::{InputArgs, ParamArgs, StateArgs, Vary, parse_list};
 use clap::Args;
 use eom_gen::functions::{Function, Layout};
 use std::process::ExitCode;
@@ -12,12 +12,8 @@ use std::process::ExitCode;
 pub struct EvalArgs {
     /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
     pub model: String,
-    /// Positions, comma-separated (default: the model's q0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub q: Option<String>,
-    /// Speeds, comma-separated (default: the model's u0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub u: Option<String>,
+    #[command(flatten)]
+    pub state: StateArgs,
     /// Extra generalised forces, one per speed (default: zero).
     #[arg(long, allow_hyphen_values = true)]
     pub tau: Option<String>,
@@ -26,9 +22,6 @@ pub struct EvalArgs {
     /// (default: the model's own, from forward dynamics at the state).
     #[arg(long, allow_hyphen_values = true)]
     pub udot: Option<String>,
-    /// Time.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub t: f64,
     #[command(flatten)]
     pub params: ParamArgs,
     #[command(flatten)]
@@ -68,8 +61,8 @@ pub fn run(a: &EvalArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             Vec::new()
         })
     };
-    let q = list("q", a.q.as_deref(), sys.q0());
-    let u = list("u", a.u.as_deref(), sys.u0());
+    let q = list("q", a.state.q.as_deref(), sys.q0());
+    let u = list("u", a.state.u.as_deref(), sys.u0());
     let tau = list("tau", a.tau.as_deref(), vec![0.0; nu]);
     let udot = a
         .udot
@@ -78,7 +71,7 @@ pub fn run(a: &EvalArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     if !problems.is_empty() {
         return crate::output::fail(&crate::error::Error::Usage(problems));
     }
-    let t = a.t;
+    let t = a.state.t;
     // Inverse dynamics and the outputs that depend on accelerations
     // (reactions) are evaluated at the model's own accelerations, with its
     // constraint forces, unless given: what `simulate` writes at a state.

@@ -4,7 +4,7 @@
 //! its eigenvalues, natural frequencies and damping ratios (see
 //! `eom_gen::linearize`).
 
-use crate::args::{InputArgs, ParamArgs, Vary, parse_list};
+use crate::args::{InputArgs, ParamArgs, StateArgs, Vary, parse_list};
 use crate::error::Error;
 use clap::Args;
 use eom_gen::functions::Function;
@@ -19,15 +19,8 @@ use std::process::ExitCode;
 pub struct LinearizeArgs {
     /// The model file (`.ron`, or `.urdf` converted on the fly), or a scene (`.scene.ron`).
     pub model: String,
-    /// Positions, comma-separated (default: the model's q0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub q: Option<String>,
-    /// Speeds, comma-separated (default: the model's u0).
-    #[arg(long, allow_hyphen_values = true)]
-    pub u: Option<String>,
-    /// Time.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    pub t: f64,
+    #[command(flatten)]
+    pub state: StateArgs,
     #[command(flatten)]
     pub params: ParamArgs,
     #[command(flatten)]
@@ -70,8 +63,8 @@ enum Fail {
 
 pub fn run(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     let mut problems = Vec::new();
-    if !a.t.is_finite() {
-        problems.push(format!("--t must be a finite number, got {}", a.t));
+    if !a.state.t.is_finite() {
+        problems.push(format!("--t must be a finite number, got {}", a.state.t));
     }
     let sweep = match a.sweep.as_deref().map(parse_sweep).transpose() {
         Ok(s) => s,
@@ -167,7 +160,10 @@ fn single(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> Exit
         return code;
     }
     if a.json {
-        println!("{}", json(&p.sys, &p.lin, &p.eig, &shapes, &p.q, &p.u, a.t));
+        println!(
+            "{}",
+            json(&p.sys, &p.lin, &p.eig, &shapes, &p.q, &p.u, a.state.t)
+        );
     } else {
         print!("{}", text(&p.sys, &p.lin, &p.eig, &shapes));
     }
@@ -205,8 +201,8 @@ fn at(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> Result<A
             Vec::new()
         })
     };
-    let q = list("q", a.q.as_deref(), sys.nq(), sys.q0());
-    let u = list("u", a.u.as_deref(), sys.nu(), sys.u0());
+    let q = list("q", a.state.q.as_deref(), sys.nq(), sys.q0());
+    let u = list("u", a.state.u.as_deref(), sys.nu(), sys.u0());
     if !problems.is_empty() {
         return Err(Fail::Exit(crate::output::fail(&Error::Usage(problems))));
     }
@@ -228,7 +224,7 @@ fn at(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> Result<A
         inputs: &opened.inputs,
         params: &[],
         multipliers: &[],
-        t: a.t,
+        t: a.state.t,
     };
     let lin = eom_gen::linearize::linearize(&f, &point).map_err(|e| {
         let usage = !matches!(e, LinearizeError::NotFinite);

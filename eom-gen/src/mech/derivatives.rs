@@ -58,20 +58,34 @@ impl fmt::Display for DerivativeForm {
     }
 }
 
-/// `Σ_k d[k] N[k][j]` for every `j`: a row of partial derivatives with
-/// respect to `q` turned into the tangent space (`N = ∂q̇/∂u`).
-fn tangent_row<'cx>(d: &[Expr<'cx>], n: &[Vec<Expr<'cx>>], nu: usize) -> Vec<Expr<'cx>> {
-    (0..nu)
-        .map(|j| {
-            let mut sum = Expr::zero();
-            for (k, dk) in d.iter().enumerate() {
-                let nkj = n[k][j];
-                if nkj.is_zero() || dk.is_zero() {
-                    continue;
-                }
-                sum = sum + *dk * nkj;
-            }
-            sum
+/// `∂f/∂q` in the tangent space, by rows: `(∂f_i/∂q) N` with
+/// `N = ∂q̇/∂u` (its structural zeros, most entries, skipped), so that
+/// column `j` is the derivative along `N e_j` (for quaternions a
+/// body-axis rotation vector).
+fn tangent_jacobian<'cx>(
+    cx: &'cx Context,
+    f: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+) -> Vec<Vec<Expr<'cx>>> {
+    let n = cx.jacobian(qdot, u);
+    f.iter()
+        .map(|&fi| {
+            let d: Vec<Expr<'cx>> = q.iter().map(|&qk| cx.diff(fi, qk)).collect();
+            (0..u.len())
+                .map(|j| {
+                    let mut sum = Expr::zero();
+                    for (k, dk) in d.iter().enumerate() {
+                        let nkj = n[k][j];
+                        if nkj.is_zero() || dk.is_zero() {
+                            continue;
+                        }
+                        sum = sum + *dk * nkj;
+                    }
+                    sum
+                })
+                .collect()
         })
         .collect()
 }
@@ -112,16 +126,7 @@ pub fn forward_dynamics_derivatives<'cx>(
     inputs: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Program {
-    // N = ∂q̇/∂u, with its structural zeros (most entries).
-    let n = cx.jacobian(qdot, u);
-    let nu = u.len();
-    let dq: Vec<Vec<Expr<'cx>>> = udot
-        .iter()
-        .map(|&ud| {
-            let d: Vec<Expr<'cx>> = q.iter().map(|&qk| cx.diff(ud, qk)).collect();
-            tangent_row(&d, &n, nu)
-        })
-        .collect();
+    let dq = tangent_jacobian(cx, udot, qdot, q, u);
     lower_blocks(
         cx,
         [
@@ -153,17 +158,10 @@ pub fn forward_dynamics_derivatives_rnea<'cx>(
     inputs: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Program {
-    let n = cx.jacobian(qdot, u);
     let nu = u.len();
     let minv = cx.jacobian(udot, tau);
     // ∂ID/∂x with u̇ symbolic, by rows; then u̇ = FD substituted.
-    let gq: Vec<Vec<Expr<'cx>>> = inverse
-        .iter()
-        .map(|&id| {
-            let d: Vec<Expr<'cx>> = q.iter().map(|&qk| cx.diff(id, qk)).collect();
-            tangent_row(&d, &n, nu)
-        })
-        .collect();
+    let gq = tangent_jacobian(cx, inverse, qdot, q, u);
     let gu = cx.jacobian(inverse, u);
     let gi = cx.jacobian(inverse, inputs);
     let rates: Vec<(crate::sym::SymId, crate::sym::Id)> = ud
@@ -236,15 +234,7 @@ pub fn inverse_dynamics_derivatives<'cx>(
     inputs: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Program {
-    let n = cx.jacobian(qdot, u);
-    let nu = u.len();
-    let dq: Vec<Vec<Expr<'cx>>> = inverse
-        .iter()
-        .map(|&id| {
-            let d: Vec<Expr<'cx>> = q.iter().map(|&qk| cx.diff(id, qk)).collect();
-            tangent_row(&d, &n, nu)
-        })
-        .collect();
+    let dq = tangent_jacobian(cx, inverse, qdot, q, u);
     lower_blocks(
         cx,
         [
