@@ -153,7 +153,7 @@ fn single(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> Exit
         Err(Fail::Point(why, true)) => return crate::output::fail(&Error::Usage(vec![why])),
         Err(Fail::Point(why, false)) => return crate::output::fail(&Error::Refused(why)),
     };
-    let shapes = mode_shapes(&p.sys, &p.lin, &p.eig);
+    let shapes = mode_shapes(&p.lin, &p.eig);
     if let Some(path) = &a.csv
         && let Err(code) = crate::output::write_file(path, &csv(&p.eig))
     {
@@ -253,14 +253,10 @@ struct Shapes {
     shapes: Vec<Option<Vec<nalgebra::Complex<f64>>>>,
 }
 
-fn mode_shapes(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue]) -> Shapes {
-    let dof = lin.a.nrows() / 2;
+fn mode_shapes(lin: &Linearization, eig: &[Eigenvalue]) -> Shapes {
+    let dof = lin.positions;
     let over = match &lin.basis {
-        Some(_) => sys
-            .coordinate_names()
-            .into_iter()
-            .map(String::from)
-            .collect(),
+        Some(_) => lin.basis_rows.clone(),
         None => lin.states[..dof].to_vec(),
     };
     let shapes = eig
@@ -294,7 +290,7 @@ fn json(
     u: &[f64],
     t: f64,
 ) -> serde_json::Value {
-    let dof = lin.a.nrows() / 2;
+    let dof = lin.positions;
     let mut v = serde_json::json!({
         "model": sys.name,
         "q": q,
@@ -326,8 +322,9 @@ fn json(
     );
     if let Some(z) = &lin.basis {
         v["basis"] = serde_json::json!(rows(z));
-        v["basis_rows"] = serde_json::json!(sys.coordinate_names());
+        v["basis_rows"] = serde_json::json!(lin.basis_rows);
     }
+    v["cyclic"] = serde_json::json!(lin.cyclic);
     v
 }
 
@@ -369,17 +366,19 @@ fn text(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue], shapes: 
         lin.states.join(", "),
         lin.inputs.join(", ")
     );
+    if !lin.cyclic.is_empty() {
+        let _ = writeln!(
+            s,
+            "cyclic coordinates (left out, one zero eigenvalue each): {}",
+            lin.cyclic.join(", ")
+        );
+    }
     if let Some(z) = &lin.basis {
-        let coordinates: Vec<String> = sys
-            .coordinate_names()
-            .into_iter()
-            .map(String::from)
-            .collect();
         let columns: Vec<String> = lin.states[..z.ncols()].to_vec();
         s += &matrix(
-            "minimal coordinates (loops): δq = Z z, Z",
+            "minimal coordinates: δq = Z z, Z",
             z,
-            &coordinates,
+            &lin.basis_rows,
             &columns,
         );
     }

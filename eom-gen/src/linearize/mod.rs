@@ -8,19 +8,20 @@
 //!      [∂u̇/∂δq,  ∂u̇/∂u ]],         [∂u̇/∂w   ]]
 //! ```
 //!
-//! `δq` is the displacement in the tangent space (`q = q₀ ⊕ δq`, to first
-//! order `q₀ + N(q₀) δq` with `q̇ = N(q) u`): the coordinates themselves
-//! where `q̇ = u`, rotation vectors in body axes for quaternions. Then
-//! `∂δq̇/∂u = I`, and `∂δq̇/∂δq = 0` where `q̇ = u` and for quaternion
-//! joints at rest; a model with quaternions is refused about a state where
-//! it moves (that block would need the derivative of the chart, not done).
-//! `w` is the model's runtime inputs when it has any, else the extra
-//! generalised forces `τ`, one per speed.
+//! `δq` is the displacement in the tangent space ([`tangent`]): the
+//! coordinates themselves where `q̇ = u`, rotation vectors in body axes for
+//! quaternions and body-axis displacements for a free joint's position.
+//! Then `∂δq̇/∂u = I`, and `∂δq̇/∂δq` is zero but for quaternion joints
+//! that move (`−½[ω]×`, and `−[v]×` from a free joint's rotation to its
+//! position). `w` is the model's runtime inputs when it has any, else the
+//! extra generalised forces `τ`, one per speed.
 //!
 //! Trees (rigid bodies, locked joints, flexible bodies) are linearised
-//! about any state. Holonomic loops (cut joints, holonomic constraints,
-//! `q̇ = u`) are linearised about an equilibrium (`u = 0`, the constrained
-//! accelerations zero) in minimal coordinates `δq = Z z`, `Z` an
+//! about any state: `A`, `B` are the Jacobians there (at a state that is
+//! not an equilibrium, the eigenvalues of `A` are those of the Jacobian,
+//! chart terms included, not exponents of a motion). Holonomic loops with
+//! `q̇ = u` about an equilibrium (`u = 0`, the constrained accelerations
+//! zero) are linearised in minimal coordinates `δq = Z z`, `Z` an
 //! orthonormal basis of the null space of the constraint Jacobian `J`
 //! (Wittenburg 5.6): with `M u̇ = f(q, u) + τ + Jᵀλ` and the equilibrium's
 //! multipliers `λ₀`,
@@ -34,15 +35,22 @@
 //! constraint forces' geometric stiffness `∂(Jᵀλ₀)/∂q` by central
 //! differences of the generated `J` (the one term not generated
 //! symbolically). Redundant constraints are fine (the rank of `J` decides
-//! the mobility). Nonholonomic constraints (rolling), loops about states
-//! that are not equilibria, loops with quaternions and models with cables
-//! are refused: never a linearisation of the wrong system.
+//! the mobility). Every other constrained model — rolling contacts
+//! (nonholonomic), loops with quaternions, loops about a steady motion —
+//! goes through [`steady`]: independent coordinates and speeds about an
+//! equilibrium or a steady motion with cyclic coordinates (the Whipple
+//! bicycle, `models/whipple.ron`), and a state where the linearised flow
+//! would leave the constraint manifold is refused. Models with cables are
+//! refused: never a linearisation of the wrong system.
 
 use crate::functions::Function;
 use crate::interpret::{Point, run};
 use crate::mech::Formulation;
 use nalgebra::DMatrix;
 use std::fmt;
+
+mod steady;
+mod tangent;
 
 /// What `w` (the columns of `B`) is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -56,39 +64,35 @@ pub enum InputKind {
 /// A linearisation about a state.
 #[derive(Clone, Debug)]
 pub struct Linearization {
-    /// `A` (`2 NU × 2 NU`).
+    /// `A` (`N × N`: `2 NU` for a tree).
     pub a: DMatrix<f64>,
-    /// `B` (`2 NU × NW`).
+    /// `B` (`N × NW`).
     pub b: DMatrix<f64>,
-    /// Names of the displacements `δq` (the coordinates where `q̇ = u`,
-    /// else `d(speed)` per speed), then of the speeds: the rows of `A`.
+    /// Names of the states, the rows of `A`: the displacements first (the
+    /// coordinates where `q̇ = u`, else `d(speed)`; `z1…` for the minimal
+    /// coordinates of loops), then the speeds.
     pub states: Vec<String>,
+    /// How many of the states are displacements (the rest are speeds).
+    pub positions: usize,
     /// Names of the columns of `B`.
     pub inputs: Vec<String>,
     /// What the columns of `B` are.
     pub input_kind: InputKind,
-    /// For a model with loops, the basis `Z` of the minimal coordinates
-    /// (`δq = Z z`, `NU × F`, orthonormal columns): `A` is `2F × 2F`.
+    /// For a constrained model, the map from the position states to all
+    /// tangent displacements, `δq = Z z` (`NU × positions`): for loops an
+    /// orthonormal basis of the null space of `J`, for [`steady`] the
+    /// independent coordinates with the dependent ones following.
     pub basis: Option<DMatrix<f64>>,
+    /// The names of the rows of `basis` (the tangent displacements).
+    pub basis_rows: Vec<String>,
+    /// Cyclic coordinates left out of a steady motion's linearisation
+    /// (each with a zero eigenvalue).
+    pub cyclic: Vec<String>,
 }
 
 /// Why a model cannot be linearised here.
 #[derive(Clone, Debug, PartialEq)]
 pub enum LinearizeError {
-    /// The model has constraint equations (cut joints, constraints).
-    Constraints {
-        /// The model.
-        model: String,
-        /// The equations' names.
-        equations: Vec<String>,
-    },
-    /// Nonholonomic constraint equations (rolling).
-    Nonholonomic {
-        /// The model.
-        model: String,
-        /// The nonholonomic equations' names.
-        equations: Vec<String>,
-    },
     /// A model with loops about a state that is not an equilibrium.
     NotEquilibrium {
         /// The model.
@@ -97,6 +101,19 @@ pub enum LinearizeError {
         speed: f64,
         /// `max |u̇|` of the constrained accelerations at the state.
         acceleration: f64,
+    },
+    /// A constrained model about a state that is neither an equilibrium
+    /// nor a steady motion with cyclic coordinates: the linearised flow
+    /// leaves the constraint manifold's tangent space.
+    NotSteady {
+        /// The model.
+        model: String,
+        /// `max |u|` at the state.
+        speed: f64,
+        /// `max |u̇|` of the constrained accelerations at the state.
+        acceleration: f64,
+        /// How far the flow leaves the tangent space (relative).
+        leak: f64,
     },
     /// A model with loops at a state that does not close them.
     NotAssembled {
@@ -107,11 +124,6 @@ pub enum LinearizeError {
     },
     /// The model has cables.
     Cables {
-        /// The model.
-        model: String,
-    },
-    /// Quaternion coordinates about a state where they move.
-    MovingQuaternions {
         /// The model.
         model: String,
     },
@@ -134,17 +146,6 @@ pub enum LinearizeError {
 impl fmt::Display for LinearizeError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            LinearizeError::Constraints { model, equations } => write!(
-                f,
-                "`{model}` has {} constraint equation(s) ({}) and quaternion coordinates: loops are linearised in minimal coordinates where `q̇ = u` only",
-                equations.len(),
-                names(equations)
-            ),
-            LinearizeError::Nonholonomic { model, equations } => write!(
-                f,
-                "`{model}` has nonholonomic constraint equation(s) ({}): rolling contacts need minimal speeds, not implemented yet; linearisation supports trees and holonomic loops (about equilibria)",
-                names(equations)
-            ),
             LinearizeError::NotEquilibrium {
                 model,
                 speed,
@@ -153,17 +154,22 @@ impl fmt::Display for LinearizeError {
                 f,
                 "`{model}` has loops and the state is not an equilibrium (max |u| = {speed:.3e}, max |u̇| = {acceleration:.3e}): loops are linearised about equilibria only (give `--q` at one and `--u` zeros)"
             ),
+            LinearizeError::NotSteady {
+                model,
+                speed,
+                acceleration,
+                leak,
+            } => write!(
+                f,
+                "`{model}`: the state is neither an equilibrium nor a steady motion (max |u| = {speed:.3e}, max |u̇| = {acceleration:.3e}; the linearised flow leaves the constraint manifold by {leak:.1e} relative): a constrained model is linearised about an equilibrium (`--u` zeros) or a steady motion whose moving coordinates are cyclic"
+            ),
             LinearizeError::NotAssembled { model, residual } => write!(
                 f,
-                "`{model}`: the state does not close the loops (max |Φ| = {residual:.3e}); give `--q` that satisfies the constraints"
+                "`{model}`: the state does not satisfy the constraints (max |Φ|, |Φ̇| = {residual:.3e}); give `--q` and `--u` that satisfy them"
             ),
             LinearizeError::Cables { model } => write!(
                 f,
                 "`{model}` has cables: linearisation supports trees of rigid and flexible bodies without cables"
-            ),
-            LinearizeError::MovingQuaternions { model } => write!(
-                f,
-                "`{model}` has quaternion coordinates and the state moves (some speed is not zero): its linearisation in the tangent space needs the derivative of the chart there, not implemented; linearise about a state at rest (`--u` all zeros)"
             ),
             LinearizeError::NoDerivatives => {
                 f.write_str("the formulation has no `forward_dynamics_derivatives` (ask for them)")
@@ -179,14 +185,6 @@ impl fmt::Display for LinearizeError {
 }
 
 impl std::error::Error for LinearizeError {}
-
-/// `` `a`, `b` `` from names.
-fn names(list: &[String]) -> String {
-    list.iter()
-        .map(|e| format!("`{e}`"))
-        .collect::<Vec<_>>()
-        .join(", ")
-}
 
 /// Linearises the model of `f` about `x` (its `q`, `u`, `t`, inputs and
 /// parameters; `x.tau` is the operating point of `τ`, zero if empty).
@@ -206,24 +204,13 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
     }
     let tangent = nq != nu || !sys.quaternion_indices().is_empty();
     if !f.constraint_names.is_empty() {
-        if f.n_holonomic < f.constraint_names.len() {
-            return Err(LinearizeError::Nonholonomic {
-                model: sys.name.clone(),
-                equations: f.constraint_names[f.n_holonomic..].to_vec(),
-            });
-        }
-        if tangent {
-            return Err(LinearizeError::Constraints {
-                model: sys.name.clone(),
-                equations: f.constraint_names.clone(),
-            });
-        }
-        return loops(f, x);
-    }
-    if tangent && x.u.iter().any(|&v| v != 0.0) {
-        return Err(LinearizeError::MovingQuaternions {
-            model: sys.name.clone(),
-        });
+        let holonomic_at_rest =
+            f.n_holonomic == f.constraint_names.len() && !tangent && x.u.iter().all(|&v| v == 0.0);
+        return if holonomic_at_rest {
+            loops(f, x)
+        } else {
+            steady::linearize(f, x)
+        };
     }
     let p = f
         .program(Function::ForwardDynamicsDerivatives)
@@ -234,7 +221,10 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
     }
     let block = |k: usize, i: usize, j: usize| flat[k * nu * nu + i * nu + j];
     let n = 2 * nu;
+    let chart = tangent::Chart::new(sys);
     let mut a = DMatrix::<f64>::zeros(n, n);
+    a.view_mut((0, 0), (nu, nu))
+        .copy_from(&chart.kinematics(x.u));
     for i in 0..nu {
         a[(i, nu + i)] = 1.0;
         for j in 0..nu {
@@ -260,14 +250,7 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
         return Err(LinearizeError::NotFinite);
     }
     let speeds = sys.speed_names();
-    let positions: Vec<String> = if tangent {
-        speeds.iter().map(|s| format!("d({s})")).collect()
-    } else {
-        sys.coordinate_names()
-            .into_iter()
-            .map(String::from)
-            .collect()
-    };
+    let positions = chart.names(sys);
     let inputs = match input_kind {
         InputKind::Inputs => sys.inputs.clone(),
         InputKind::GeneralizedForces => speeds.iter().map(|s| format!("tau({s})")).collect(),
@@ -279,9 +262,12 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
             .into_iter()
             .chain(speeds.into_iter().map(String::from))
             .collect(),
+        positions: nu,
         inputs,
         input_kind,
         basis: None,
+        basis_rows: Vec::new(),
+        cyclic: Vec::new(),
     })
 }
 
@@ -464,9 +450,12 @@ fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError
         a,
         b: bm,
         states,
+        positions: dof,
         inputs,
         input_kind,
         basis: Some(z),
+        basis_rows: sys.coordinate_names().into_iter().map(String::from).collect(),
+        cyclic: Vec::new(),
     })
 }
 
