@@ -1,7 +1,11 @@
 //! `eom-gen linearize --sweep NAME=a:b:n`: the eigenvalues against a
 //! parameter, as a table, JSON, CSV and an SVG of their real and imaginary
 //! parts (one dot per eigenvalue and value: no tracking of branches, so
-//! crossings are drawn as they are).
+//! crossings are drawn as they are), and the stability boundaries: where
+//! the number of eigenvalues in the right half-plane changes between two
+//! points, the parameter is bisected (linearising again) to where an
+//! eigenvalue or a pair crosses the imaginary axis — a bicycle's weave and
+//! capsize speeds (`models/whipple.ron`).
 
 use eom_gen::linearize::Eigenvalue;
 use plotters::prelude::*;
@@ -10,12 +14,102 @@ use std::process::ExitCode;
 /// One value of the parameter: its eigenvalues, or why it has none.
 pub type SweepPoint = (f64, Result<Vec<Eigenvalue>, String>);
 
+/// A stability boundary: across `value`, the count of eigenvalues with a positive real part goes from
+/// `unstable_below` to `unstable_above` (in the sweep's direction).
+#[derive(Clone, Debug)]
+pub struct Crossing {
+    /// The parameter's value at the boundary.
+    pub value: f64,
+    /// The crossing eigenvalue's imaginary part (rad/s): zero for a real
+    /// one, else the frequency of the pair (a Hopf boundary).
+    pub frequency: f64,
+    /// Eigenvalues with positive real part just before the boundary.
+    pub unstable_below: usize,
+    /// And just after.
+    pub unstable_above: usize,
+}
+
+/// Eigenvalues with a real part above `1e-10` of the largest modulus
+/// (structural zeros — cyclic coordinates, conserved quantities — sit at
+/// round-off, far below).
+fn unstable(e: &[Eigenvalue]) -> usize {
+    let scale = e.iter().map(|l| l.natural_frequency).fold(1.0, f64::max);
+    e.iter().filter(|l| l.re > 1e-10 * scale).count()
+}
+
+/// The stability boundaries of a sweep: each change of [`unstable`]
+/// between neighbouring points, bisected with `at` (the eigenvalues at a
+/// value of the parameter) to `1e-7` relative, then a secant step on the
+/// crossing eigenvalue's real part to `Re λ = 0`. A value where `at` fails
+/// ends that bisection where it stands.
+pub fn crossings(
+    points: &[SweepPoint],
+    at: &dyn Fn(f64) -> Option<Vec<Eigenvalue>>,
+) -> Vec<Crossing> {
+    let mut out = Vec::new();
+    for pair in points.windows(2) {
+        let ((a, Ok(ea)), (b, Ok(eb))) = (&pair[0], &pair[1]) else {
+            continue;
+        };
+        let (na, nb) = (unstable(ea), unstable(eb));
+        if na == nb {
+            continue;
+        }
+        let (mut lo, mut hi) = (*a, *b);
+        let (mut e_lo, mut e_hi) = (ea.clone(), eb.clone());
+        let tol = 1e-7 * a.abs().max(b.abs()).max(1e-300);
+        while (hi - lo).abs() > tol {
+            let mid = 0.5 * (lo + hi);
+            let Some(e) = at(mid) else { break };
+            if unstable(&e) == na {
+                (lo, e_lo) = (mid, e);
+            } else {
+                (hi, e_hi) = (mid, e);
+            }
+        }
+        // The crossing eigenvalue: on the side with more unstable ones,
+        // the unstable one nearest the axis. The count's threshold is a
+        // hair right of the axis, so the last step is a secant on its real
+        // part to Re λ = 0, from that side and a point ten brackets
+        // further in (on the other side a structural zero can sit beside
+        // it and be mistaken for it).
+        let ((vu, eu), vs) = if nb > na {
+            ((hi, &e_hi), lo)
+        } else {
+            ((lo, &e_lo), hi)
+        };
+        let nearest_unstable = |e: &[Eigenvalue]| {
+            let scale = e.iter().map(|l| l.natural_frequency).fold(1.0, f64::max);
+            e.iter()
+                .filter(|l| l.re > 1e-10 * scale)
+                .min_by(|x, y| x.re.total_cmp(&y.re))
+                .copied()
+        };
+        let Some(lu) = nearest_unstable(eu) else {
+            continue;
+        };
+        let v2 = vu + 10.0 * (vu - vs);
+        let value = match at(v2).as_deref().and_then(nearest_unstable) {
+            Some(l2) if l2.re != lu.re => vu - lu.re * (v2 - vu) / (l2.re - lu.re),
+            _ => 0.5 * (vu + vs),
+        };
+        out.push(Crossing {
+            value,
+            frequency: lu.im.abs(),
+            unstable_below: na,
+            unstable_above: nb,
+        });
+    }
+    out
+}
+
 /// Prints (text or `json`) and writes (`csv`, `svg`) a sweep; exit status
 /// 0 when every point was linearised, 3 when some were not (each said why
 /// on stderr and in the report), 1 if a file cannot be written.
 pub fn report(
     name: &str,
     points: &[SweepPoint],
+    crossings: &[Crossing],
     json: bool,
     csv: Option<&str>,
     svg: Option<&str>,
@@ -58,10 +152,17 @@ pub fn report(
             "values": points.iter().map(|(v, _)| *v).collect::<Vec<_>>(),
             "eigenvalues": eig,
             "errors": errors,
+            "crossings": crossings.iter().map(|c| serde_json::json!({
+                "value": c.value,
+                "frequency": c.frequency,
+                "unstable_below": c.unstable_below,
+                "unstable_above": c.unstable_above,
+            })).collect::<Vec<_>>(),
         });
         println!("{v}");
     } else {
         print!("{}", table(name, points));
+        print!("{}", boundaries(name, crossings));
     }
     if points.iter().all(|(_, r)| r.is_ok()) {
         ExitCode::SUCCESS
@@ -82,6 +183,26 @@ fn table(name: &str, points: &[SweepPoint]) -> String {
             Err(why) => format!("— ({why})"),
         };
         s += &format!("{v:>12.6}  {row}\n");
+    }
+    s
+}
+
+/// The stability boundaries, one line each.
+fn boundaries(name: &str, crossings: &[Crossing]) -> String {
+    let mut s = String::from("stability boundaries (eigenvalues with Re λ > 0 change)\n");
+    if crossings.is_empty() {
+        s += "  none in the range\n";
+    }
+    for c in crossings {
+        let what = if c.frequency > 0.0 {
+            format!("a pair crosses the imaginary axis at ±{:.6}i rad/s", c.frequency)
+        } else {
+            "a real eigenvalue crosses zero".to_string()
+        };
+        s += &format!(
+            "  {name} = {:.9}: {what}; unstable eigenvalues {} → {}\n",
+            c.value, c.unstable_below, c.unstable_above
+        );
     }
     s
 }

@@ -15,12 +15,17 @@
 //!   `±Ω √((I₂−I₁)(I₃−I₂)/(I₁I₃))` about the intermediate axis (unstable)
 //!   and `±iΩ √((I₃−I₁)(I₃−I₂)/(I₁I₂))` about the major one, with the
 //!   chart's own `0, ±iΩ/2` of the attitude.
+//! - **A disk rolling upright** (Appell, Korteweg; built with its spin on
+//!   a revolute joint, so that the spin angle is cyclic): the lean
+//!   oscillates at `ω² = (A(A + mR²)Ω² − B m g R) / (B(B + mR²))` above
+//!   the critical spin and diverges below it (the thin disk's `Ω² = g/3R`).
 //! - A constrained state that is no steady motion is refused.
 
 use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::interpret::Point;
 use eom_gen::linearize::{Eigenvalue, LinearizeError, eigenvalues, linearize};
 use eom_gen::mech::{Formulation, formulate};
+use eom_gen::model::{Source, check};
 use eom_gen::{System, check_file};
 use nalgebra::{Complex, DMatrix};
 
@@ -296,4 +301,80 @@ fn bicycle_away_from_a_steady_motion_is_refused() {
     ];
     let err = linearize(&bike.f, &point(&bike.sys, &q, &[0.0; 9])).expect_err("falls");
     assert!(matches!(err, LinearizeError::NotSteady { .. }), "{err}");
+}
+
+/// A uniform thin disk (m = 1 kg, R = 0.1 m, axial A = mR²/2, diametral
+/// B = mR²/4) rolling upright along x with spin Ω: translations, heading,
+/// lean and spin as a chain of joints (the links between them weigh
+/// 1e-9 kg, which moves the eigenvalues by about 1e-9 relative), so the
+/// position and spin angle are cyclic. The lean's exponents:
+/// `λ² = −ω²`, `ω² = (A(A + mR²)Ω² − B m g R) / (B(B + mR²))`.
+fn rolling_disk(spin: f64) -> (System, Vec<f64>) {
+    let text = format!(
+        r#"Model(
+    name: "upright_disk",
+    gravity: (0, 0, -9.81),
+    parameters: [(name: "R", value: 0.1), (name: "m", value: 1.0), (name: "e", value: 1e-9)],
+    bodies: [
+        (name: "sx", mass: "e"), (name: "sy", mass: "e"), (name: "sz", mass: "e"),
+        (name: "heading", mass: "e"), (name: "leaning", mass: "e"),
+        (name: "disk", mass: "m", inertia: Diag("m*R^2/4", "m*R^2/2", "m*R^2/4")),
+    ],
+    joints: [
+        (name: "x", kind: Prismatic(axis: (1, 0, 0)), parent: "ground", child: "sx", u0: [{v}]),
+        (name: "y", kind: Prismatic(axis: (0, 1, 0)), parent: "sx", child: "sy"),
+        (name: "z", kind: Prismatic(axis: (0, 0, 1)), parent: "sy", child: "sz", q0: ["R"]),
+        (name: "psi", kind: Revolute(axis: (0, 0, 1)), parent: "sz", child: "heading"),
+        (name: "phi", kind: Revolute(axis: (1, 0, 0)), parent: "heading", child: "leaning"),
+        (name: "spin", kind: Revolute(axis: (0, 1, 0)), parent: "leaning", child: "disk", u0: [{spin}]),
+    ],
+    constraints: [RollingDisk(name: "contact", body: "disk", radius: "R", axis: (0, 1, 0))],
+)"#,
+        v = spin * 0.1,
+    );
+    let sys = check(&Source::new("upright_disk", text))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let u = sys.u0();
+    (sys, u)
+}
+
+#[test]
+fn upright_rolling_disk_lean_frequency() {
+    let (m, r, g) = (1.0f64, 0.1f64, 9.81f64);
+    let (a, b) = (m * r * r / 2.0, m * r * r / 4.0);
+    let critical = (g / (3.0 * r)).sqrt();
+    for spin in [6.86, 10.0, 4.0] {
+        let (sys, u) = rolling_disk(spin);
+        let f = with_derivatives(&sys);
+        let q = sys.q0();
+        let lin = linearize(&f, &point(&sys, &q, &u)).unwrap_or_else(|e| panic!("Ω = {spin}: {e}"));
+        // The heading is not cyclic here: the rolling conditions in the
+        // world-axis speeds ẋ, ẏ depend on it (it stays a state, with a
+        // zero eigenvalue).
+        assert_eq!(
+            lin.cyclic,
+            ["x", "y", "spin"],
+            "position and spin angle are cyclic"
+        );
+        let e = eigenvalues(&lin.a).expect("converges");
+        let w2 = (a * (a + m * r * r) * spin * spin - b * m * g * r) / (b * (b + m * r * r));
+        let want = if w2 > 0.0 {
+            Complex::new(0.0, w2.sqrt())
+        } else {
+            Complex::new((-w2).sqrt(), 0.0)
+        };
+        assert_eq!(spin > critical, w2 > 0.0);
+        let d = e
+            .iter()
+            .map(|l| (complex(l) - want).norm())
+            .fold(f64::INFINITY, f64::min);
+        assert!(d < 1e-7 * want.norm(), "Ω = {spin}: {want} missing from {e:?}");
+        // The rest: the lean's partner and zeros (the speed, conserved).
+        assert!(
+            e.iter()
+                .all(|l| l.natural_frequency < 1e-7 || (l.natural_frequency - want.norm()).abs() < 1e-6),
+            "Ω = {spin}: {e:?}"
+        );
+    }
 }

@@ -109,9 +109,16 @@ pub fn run(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             }
         }
     }
+    let relinearize = |value: f64| {
+        let mut vary = vary.clone();
+        vary.params.push((name.clone(), value));
+        at(a, urdf, &vary).ok().map(|p| p.eig)
+    };
+    let crossings = crate::linearize_sweep::crossings(&points, &relinearize);
     crate::linearize_sweep::report(
         &name,
         &points,
+        &crossings,
         a.json,
         a.csv.as_deref(),
         a.svg.as_deref(),
@@ -206,6 +213,21 @@ fn at(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> Result<A
     if !problems.is_empty() {
         return Err(Fail::Exit(crate::output::fail(&Error::Usage(problems))));
     }
+    // The default state of a constrained model is the assembled initial
+    // state (where `simulate` starts); a state given is used as given.
+    let (q, u) = if (a.state.q.is_none() || a.state.u.is_none())
+        && (!sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty())
+    {
+        match eom_gen::mech::Numeric::new(&sys).and_then(|n| n.assemble(&q, &u, a.state.t)) {
+            Ok(asm) => (
+                if a.state.q.is_none() { asm.q } else { q },
+                if a.state.u.is_none() { asm.u } else { u },
+            ),
+            Err(_) => (q, u),
+        }
+    } else {
+        (q, u)
+    };
     let request = checked.request().with(Function::ForwardDynamicsDerivatives);
     let f = eom_gen::mech::formulate(&sys, request).map_err(|e| {
         let report = eom_gen::Report {

@@ -161,7 +161,7 @@ impl fmt::Display for LinearizeError {
                 leak,
             } => write!(
                 f,
-                "`{model}`: the state is neither an equilibrium nor a steady motion (max |u| = {speed:.3e}, max |u̇| = {acceleration:.3e}; the linearised flow leaves the constraint manifold by {leak:.1e} relative): a constrained model is linearised about an equilibrium (`--u` zeros) or a steady motion whose moving coordinates are cyclic"
+                "`{model}`: the state is neither an equilibrium nor a steady motion (max |u| = {speed:.3e}, max |u̇| = {acceleration:.3e}; the linearised flow leaves the constraint manifold by {leak:.1e} relative): a constrained model is linearised about an equilibrium (`--u` zeros) or a steady motion whose moving coordinates are cyclic, nothing depending on them (a wheel's angle on a revolute joint, as in models/whipple.ron; not a spin carried in a free joint's quaternion, whose body-axis speeds are periodic)"
             ),
             LinearizeError::NotAssembled { model, residual } => write!(
                 f,
@@ -511,7 +511,7 @@ pub fn eigenvalues(a: &DMatrix<f64>) -> Option<Vec<Eigenvalue>> {
 /// `basis` when given (`δq = Z z`), scaled so that the entry of largest
 /// modulus is `1`; by inverse iteration on `A − μI` in complex arithmetic
 /// (`μ` a hair away from `l`, so the solve is regular). `None` if it does
-/// not converge to a finite vector.
+/// not converge to a finite vector, or if the mode moves the speeds only.
 pub fn mode_shape(
     a: &DMatrix<f64>,
     l: &Eigenvalue,
@@ -540,6 +540,11 @@ pub fn mode_shape(
         v /= Complex::new(norm, 0.0);
     }
     let head: Vec<Complex<f64>> = v.iter().take(positions).copied().collect();
+    // A mode of the speeds alone (a conserved speed's zero eigenvalue)
+    // displaces nothing: no shape, rather than normalised round-off.
+    if head.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt() < 1e-8 {
+        return None;
+    }
     let shape: Vec<Complex<f64>> = match basis {
         Some(z) if z.ncols() == positions => (0..z.nrows())
             .map(|r| {
