@@ -5,7 +5,7 @@
 use eom_gen::model::{Source, check, check_file, closure_gaps, initial_poses, parse};
 use std::f64::consts::PI;
 
-const MODELS: [&str; 13] = [
+const MODELS: [&str; 14] = [
     "pendulum",
     "double_pendulum",
     "arm7",
@@ -19,6 +19,7 @@ const MODELS: [&str; 13] = [
     "stewart",
     "stewart_driven",
     "rolling_disk",
+    "whipple",
 ];
 
 fn path(name: &str) -> String {
@@ -48,6 +49,8 @@ fn expected(name: &str) -> (usize, usize, &'static [&'static str], i64, bool) {
         "stewart_driven" => (16, 15, &["S2", "S3", "S4", "S5", "S6"], 0, false),
         // Free joint minus the holonomic contact condition.
         "rolling_disk" => (7, 6, &[], 5, false),
+        // Free joint and three hinges minus the two contact conditions.
+        "whipple" => (10, 9, &[], 7, false),
         other => panic!("no expectation for {other}"),
     }
 }

@@ -195,7 +195,10 @@ fn boundaries(name: &str, crossings: &[Crossing]) -> String {
     }
     for c in crossings {
         let what = if c.frequency > 0.0 {
-            format!("a pair crosses the imaginary axis at ±{:.6}i rad/s", c.frequency)
+            format!(
+                "a pair crosses the imaginary axis at ±{:.6}i rad/s",
+                c.frequency
+            )
         } else {
             "a real eigenvalue crosses zero".to_string()
         };

@@ -19,6 +19,9 @@
 //!   a revolute joint, so that the spin angle is cyclic): the lean
 //!   oscillates at `ω² = (A(A + mR²)Ω² − B m g R) / (B(B + mR²))` above
 //!   the critical spin and diverges below it (the thin disk's `Ω² = g/3R`).
+//! - **Outputs** `δh = C y + D w`: the pendulum's tip and hinge
+//!   reaction against the hand derivation (the reaction's tangential
+//!   component `τ/l` depends on the input alone, `D = 1/l`).
 //! - A constrained state that is no steady motion is refused.
 
 use eom_gen::functions::{Function, FunctionSet};
@@ -30,9 +33,12 @@ use eom_gen::{System, check_file};
 use nalgebra::{Complex, DMatrix};
 
 fn system(name: &str) -> System {
-    check_file(&format!("{}/../models/{name}.ron", env!("CARGO_MANIFEST_DIR")))
-        .unwrap_or_else(|r| panic!("{r}"))
-        .system
+    check_file(&format!(
+        "{}/../models/{name}.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap_or_else(|r| panic!("{r}"))
+    .system
 }
 
 fn with_derivatives(sys: &System) -> Formulation {
@@ -65,7 +71,12 @@ fn benchmark(v: f64) -> DMatrix<f64> {
     let m = DMatrix::from_row_slice(
         2,
         2,
-        &[80.81722, 2.31941332208709, 2.31941332208709, 0.29784188199686],
+        &[
+            80.81722,
+            2.31941332208709,
+            2.31941332208709,
+            0.29784188199686,
+        ],
     );
     let c1 = DMatrix::from_row_slice(
         2,
@@ -75,7 +86,12 @@ fn benchmark(v: f64) -> DMatrix<f64> {
     let k0 = DMatrix::from_row_slice(
         2,
         2,
-        &[-80.95, -2.59951685249872, -2.59951685249872, -0.80329488458618],
+        &[
+            -80.95,
+            -2.59951685249872,
+            -2.59951685249872,
+            -0.80329488458618,
+        ],
     );
     let k2 = DMatrix::from_row_slice(2, 2, &[0.0, 76.59734589573222, 0.0, 2.65431523794604]);
     let mi = m.try_inverse().expect("M is regular");
@@ -123,7 +139,10 @@ fn complex(l: &Eigenvalue) -> Complex<f64> {
 /// concerned.
 fn bisect(mut lo: f64, mut hi: f64, f: impl Fn(f64) -> f64) -> f64 {
     let (flo, fhi) = (f(lo), f(hi));
-    assert!(flo * fhi < 0.0, "no sign change on [{lo}, {hi}]: {flo}, {fhi}");
+    assert!(
+        flo * fhi < 0.0,
+        "no sign change on [{lo}, {hi}]: {flo}, {fhi}"
+    );
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
         if f(mid) * flo > 0.0 {
@@ -188,7 +207,10 @@ fn whipple_bicycle_matches_the_benchmark_eigenvalues() {
             );
         }
         let rest = ours[used.iter().position(|u| !u).expect("one left")];
-        assert!(rest.norm() < 1e-11, "v = {v}: the fifth eigenvalue {rest} is not zero");
+        assert!(
+            rest.norm() < 1e-11,
+            "v = {v}: the fifth eigenvalue {rest} is not zero"
+        );
     }
     println!("largest eigenvalue difference against the benchmark, 0..10 m/s: {worst:.2e}");
 }
@@ -221,8 +243,14 @@ fn whipple_bicycle_weave_and_capsize_speeds() {
     println!("weave speed {weave_ours:.12} m/s (benchmark matrices {weave_theirs:.12})");
     println!("capsize speed {capsize_ours:.12} m/s (benchmark matrices {capsize_theirs:.12})");
     // The paper: v_w = 4.292 382 5, v_c = 6.024 262 0 m/s.
-    assert!((weave_ours - weave_theirs).abs() < 1e-10, "weave {weave_ours} vs {weave_theirs}");
-    assert!((capsize_ours - capsize_theirs).abs() < 1e-10, "capsize {capsize_ours} vs {capsize_theirs}");
+    assert!(
+        (weave_ours - weave_theirs).abs() < 1e-10,
+        "weave {weave_ours} vs {weave_theirs}"
+    );
+    assert!(
+        (capsize_ours - capsize_theirs).abs() < 1e-10,
+        "capsize {capsize_ours} vs {capsize_theirs}"
+    );
     assert!((weave_theirs - 4.2923825).abs() < 1e-7);
     assert!((capsize_theirs - 6.0242620).abs() < 1e-7);
 }
@@ -369,12 +397,53 @@ fn upright_rolling_disk_lean_frequency() {
             .iter()
             .map(|l| (complex(l) - want).norm())
             .fold(f64::INFINITY, f64::min);
-        assert!(d < 1e-7 * want.norm(), "Ω = {spin}: {want} missing from {e:?}");
+        assert!(
+            d < 1e-7 * want.norm(),
+            "Ω = {spin}: {want} missing from {e:?}"
+        );
         // The rest: the lean's partner and zeros (the speed, conserved).
         assert!(
             e.iter()
-                .all(|l| l.natural_frequency < 1e-7 || (l.natural_frequency - want.norm()).abs() < 1e-6),
+                .all(|l| l.natural_frequency < 1e-7
+                    || (l.natural_frequency - want.norm()).abs() < 1e-6),
             "Ω = {spin}: {e:?}"
         );
+    }
+}
+
+/// The bundled pendulum (point mass m = 1 kg at l = 1 m, g = 9.81, outputs
+/// tip and hinge reaction; the energy is a function of its own, not an
+/// output row) at θ = 0.3, θ̇ = 0.7: tip `(l sin θ, −l cos θ)`, so
+/// `C = (l cos θ, 0)`, `(l sin θ, 0)`; the hinge's
+/// force on the bob in its frame `F = m a − m g` is `(τ/l,
+/// m l θ̇² + m g cos θ)` with `θ̈ = −(g/l) sin θ + τ/(m l²)`.
+#[test]
+fn pendulum_outputs_c_and_d_are_the_hand_derivation() {
+    let sys = system("pendulum");
+    let f = with_derivatives(&sys);
+    let (m, l, g, th, w) = (1.0f64, 1.0f64, 9.81f64, 0.3f64, 0.7f64);
+    let lin = linearize(&f, &point(&sys, &[th], &[w])).unwrap_or_else(|e| panic!("{e}"));
+    let row = |name: &str| {
+        let i = lin
+            .outputs
+            .iter()
+            .position(|o| o == name)
+            .unwrap_or_else(|| panic!("{name} in {:?}", lin.outputs));
+        (lin.c[(i, 0)], lin.c[(i, 1)], lin.d[(i, 0)])
+    };
+    let cases = [
+        ("bob_tip_x", (l * th.cos(), 0.0, 0.0)),
+        ("bob_tip_y", (l * th.sin(), 0.0, 0.0)),
+        ("hinge_fx", (0.0, 0.0, 1.0 / l)),
+        ("hinge_fy", (-m * g * th.sin(), 2.0 * m * l * w, 0.0)),
+    ];
+    for (name, want) in cases {
+        let got = row(name);
+        for (k, (a, b)) in [(got.0, want.0), (got.1, want.1), (got.2, want.2)]
+            .into_iter()
+            .enumerate()
+        {
+            assert!((a - b).abs() < 1e-9, "{name} [{k}]: {a} vs {b}");
+        }
     }
 }

@@ -62,6 +62,9 @@ pub mod stewart;
 /// Model `stewart_driven`, generated from `models/stewart_driven.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod stewart_driven;
+/// Model `whipple`, generated from `models/whipple.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod whipple;
 /// Model `pendulum_rod`, generated from `models/ancf/pendulum_rod.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod pendulum_rod;

@@ -328,6 +328,9 @@ fn json(
         },
         "A": rows(&lin.a),
         "B": rows(&lin.b),
+        "outputs": lin.outputs,
+        "C": rows(&lin.c),
+        "D": rows(&lin.d),
         "eigenvalues": eig.iter().map(|e| [e.re, e.im]).collect::<Vec<_>>(),
         "natural_frequencies": eig.iter().map(|e| number(e.natural_frequency)).collect::<Vec<_>>(),
         "damping_ratios": eig.iter().map(|e| number(e.damping_ratio)).collect::<Vec<_>>(),
@@ -406,6 +409,15 @@ fn text(sys: &eom_gen::System, lin: &Linearization, eig: &[Eigenvalue], shapes: 
     }
     s += &matrix("A", &lin.a, &lin.states, &lin.states);
     s += &matrix("B", &lin.b, &lin.states, &lin.inputs);
+    if !lin.outputs.is_empty() {
+        s += &matrix(
+            "C (outputs: δh = C y + D w)",
+            &lin.c,
+            &lin.outputs,
+            &lin.states,
+        );
+        s += &matrix("D", &lin.d, &lin.outputs, &lin.inputs);
+    }
     let _ = writeln!(
         s,
         "eigenvalues\n  {:>14} {:>14} {:>14} {:>12} {:>10}",

@@ -49,6 +49,7 @@ use crate::mech::Formulation;
 use nalgebra::DMatrix;
 use std::fmt;
 
+mod outputs;
 mod steady;
 mod tangent;
 
@@ -88,6 +89,15 @@ pub struct Linearization {
     /// Cyclic coordinates left out of a steady motion's linearisation
     /// (each with a zero eigenvalue).
     pub cyclic: Vec<String>,
+    /// The states in the full tangent state `(δq, u)`: `y_full = T y`
+    /// (`2 NU × N`; the identity for a tree).
+    pub state_basis: DMatrix<f64>,
+    /// The model's outputs, the rows of `C` and `D`.
+    pub outputs: Vec<String>,
+    /// `C` (`outputs × N`): `δh = C y + D w` (empty without outputs).
+    pub c: DMatrix<f64>,
+    /// `D` (`outputs × NW`).
+    pub d: DMatrix<f64>,
 }
 
 /// Why a model cannot be linearised here.
@@ -190,6 +200,17 @@ impl std::error::Error for LinearizeError {}
 /// parameters; `x.tau` is the operating point of `τ`, zero if empty).
 /// `f` must hold `forward_dynamics_derivatives`.
 pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError> {
+    let mut lin = states(f, x)?;
+    if let Some((c, d)) = outputs::linearize(f, x, &lin.state_basis, lin.input_kind)? {
+        lin.outputs = f.output_names.clone();
+        lin.c = c;
+        lin.d = d;
+    }
+    Ok(lin)
+}
+
+/// `A`, `B` (and the basis) without the outputs.
+fn states(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError> {
     let sys = x.sys;
     let (nq, nu, ni) = (sys.nq(), sys.nu(), sys.inputs.len());
     if !sys.cables.is_empty() {
@@ -268,6 +289,10 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
         basis: None,
         basis_rows: Vec::new(),
         cyclic: Vec::new(),
+        state_basis: DMatrix::identity(n, n),
+        outputs: Vec::new(),
+        c: DMatrix::zeros(0, n),
+        d: DMatrix::zeros(0, nw),
     })
 }
 
@@ -453,8 +478,21 @@ fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError
         positions: dof,
         inputs,
         input_kind,
+        state_basis: {
+            let mut t = DMatrix::<f64>::zeros(2 * nu, 2 * dof);
+            t.view_mut((0, 0), (nu, dof)).copy_from(&z);
+            t.view_mut((nu, dof), (nu, dof)).copy_from(&z);
+            t
+        },
+        outputs: Vec::new(),
+        c: DMatrix::zeros(0, n),
+        d: DMatrix::zeros(0, input.ncols()),
         basis: Some(z),
-        basis_rows: sys.coordinate_names().into_iter().map(String::from).collect(),
+        basis_rows: sys
+            .coordinate_names()
+            .into_iter()
+            .map(String::from)
+            .collect(),
         cyclic: Vec::new(),
     })
 }

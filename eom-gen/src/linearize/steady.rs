@@ -168,8 +168,7 @@ pub(super) fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization,
             let p = parts(f, &Point { q: &q, ..x.clone() })?;
             let mut v = DVector::zeros(nu + 2 * nc);
             v.rows_mut(0, nu).copy_from(&(p.j.transpose() * &lambda));
-            v.rows_mut(nu, nc)
-                .copy_from(&(&p.gamma - &p.j * &udot));
+            v.rows_mut(nu, nc).copy_from(&(&p.gamma - &p.j * &udot));
             v.rows_mut(nu + nc, nc).copy_from(&p.phidot);
             Some(v)
         })?;
@@ -235,8 +234,7 @@ pub(super) fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization,
     let zero_tol = 1e-8 * full.amax().max(tangent.amax()).max(1.0);
     let mut cyclic: Vec<bool> = (0..nu)
         .map(|k| {
-            tangent.column(k).amax() <= zero_tol
-                && full.view((nu, k), (nu, 1)).amax() <= zero_tol
+            tangent.column(k).amax() <= zero_tol && full.view((nu, k), (nu, 1)).amax() <= zero_tol
         })
         .collect();
     loop {
@@ -319,7 +317,11 @@ pub(super) fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization,
     }
 
     // The rates of the independent coordinates and speeds.
-    let rows: Vec<usize> = ind_q.iter().copied().chain(ind_u.iter().map(|&i| nu + i)).collect();
+    let rows: Vec<usize> = ind_q
+        .iter()
+        .copied()
+        .chain(ind_u.iter().map(|&i| nu + i))
+        .collect();
     let a = DMatrix::from_fn(nz + ns, nz + ns, |r, c| flow[(rows[r], c)]);
     let bm = DMatrix::from_fn(nz + ns, nw, |r, c| input[(rows[r], c)]);
     if not_finite(&a) || not_finite(&bm) {
@@ -342,6 +344,10 @@ pub(super) fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization,
         positions: nz,
         inputs,
         input_kind,
+        outputs: Vec::new(),
+        c: DMatrix::zeros(0, nz + ns),
+        d: DMatrix::zeros(0, nw),
+        state_basis: basis,
         basis: Some(z),
         basis_rows: tangent_names.clone(),
         cyclic: (0..nu)

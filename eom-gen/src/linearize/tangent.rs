@@ -81,7 +81,11 @@ impl Chart {
                     }
                     JointType::Free => {
                         let (p, quat) = (q, q + 3);
-                        directions.extend((0..3).map(|axis| Direction::Translation { p, quat, axis }));
+                        directions.extend((0..3).map(|axis| Direction::Translation {
+                            p,
+                            quat,
+                            axis,
+                        }));
                         directions.extend((0..3).map(|axis| Direction::Rotation { quat, axis }));
                         q += 7;
                     }

@@ -1,0 +1,131 @@
+//! The model's outputs linearised with the state: `δh = C y + D w`.
+//!
+//! An output `h(q, u, u̇, λ)` (marker positions and velocities, energy,
+//! joint reactions, …) depends on the state directly and, through the
+//! accelerations and multipliers, on the state and the inputs. `C` and `D`
+//! are fourth-order central differences of that composite — positions
+//! moved along the chart of [`super::tangent`], `u̇` and `λ` from the
+//! generated mass matrix, bias and constraints at each point (the KKT
+//! system of the runtime) — mapped onto the linearisation's states by its
+//! basis `T` (`C = ∂h/∂y_full · T`).
+
+use super::tangent::Chart;
+use super::{InputKind, LinearizeError};
+use crate::functions::Function;
+use crate::interpret::{Point, evaluate_function};
+use crate::mech::Formulation;
+use nalgebra::{DMatrix, DVector};
+
+/// The outputs at `x` with the accelerations and multipliers of its
+/// forward dynamics.
+fn outputs_at(f: &Formulation, x: &Point<'_>) -> Option<DVector<f64>> {
+    let nu = x.sys.nu();
+    let nc = f.constraint_names.len();
+    let m = DMatrix::from_row_slice(nu, nu, &evaluate_function(f, Function::MassMatrix, x)?);
+    let b = evaluate_function(f, Function::Bias, x)?;
+    let force = DVector::from_iterator(
+        nu,
+        (0..nu).map(|k| x.tau.get(k).copied().unwrap_or(0.0) - b[k]),
+    );
+    let (j, gamma) = if nc > 0 {
+        let c = evaluate_function(f, Function::Constraints, x)?;
+        (
+            DMatrix::from_row_slice(nc, nu, c.get(3 * nc..)?),
+            DVector::from_column_slice(c.get(2 * nc..3 * nc)?),
+        )
+    } else {
+        (DMatrix::zeros(0, nu), DVector::zeros(0))
+    };
+    let (udot, lambda, _) = eom_sim::constrained::accelerations(&m, &force, &j, &gamma)?;
+    let values = evaluate_function(
+        f,
+        Function::Outputs,
+        &Point {
+            udot: udot.as_slice(),
+            multipliers: lambda.as_slice(),
+            ..x.clone()
+        },
+    )?;
+    values
+        .iter()
+        .all(|v| v.is_finite())
+        .then(|| DVector::from_vec(values))
+}
+
+/// `(C, D)` at `x` for states `y = T z` (`basis`: `2 NU × N`) and inputs
+/// of `kind`; `None` when the model has no outputs.
+pub(super) fn linearize(
+    f: &Formulation,
+    x: &Point<'_>,
+    basis: &DMatrix<f64>,
+    kind: InputKind,
+) -> Result<Option<(DMatrix<f64>, DMatrix<f64>)>, LinearizeError> {
+    if f.output_names.is_empty() {
+        return Ok(None);
+    }
+    let nu = x.sys.nu();
+    let ny = f.output_names.len();
+    let chart = Chart::new(x.sys);
+    let derivative = |h: f64, g: &dyn Fn(f64) -> Option<DVector<f64>>| {
+        let at = |s: f64| g(s).ok_or(LinearizeError::NotFinite);
+        let (p2, p1, m1, m2) = (at(2.0 * h)?, at(h)?, at(-h)?, at(-2.0 * h)?);
+        Ok::<_, LinearizeError>((p1 - m1) * (8.0 / (12.0 * h)) - (p2 - m2) * (1.0 / (12.0 * h)))
+    };
+    let step = |v: f64| 1e-3 * v.abs().max(1.0);
+    let mut full = DMatrix::<f64>::zeros(ny, 2 * nu);
+    for k in 0..nu {
+        let column = derivative(1e-3, &|s| {
+            let q = chart.displaced(x.q, k, s);
+            outputs_at(f, &Point { q: &q, ..x.clone() })
+        })?;
+        full.set_column(k, &column);
+        let column = derivative(step(x.u[k]), &|s| {
+            let mut u = x.u.to_vec();
+            u[k] += s;
+            outputs_at(f, &Point { u: &u, ..x.clone() })
+        })?;
+        full.set_column(nu + k, &column);
+    }
+    let (nw, tau0): (usize, Vec<f64>) = match kind {
+        InputKind::Inputs => (x.inputs.len(), Vec::new()),
+        InputKind::GeneralizedForces => (
+            nu,
+            (0..nu)
+                .map(|k| x.tau.get(k).copied().unwrap_or(0.0))
+                .collect(),
+        ),
+    };
+    let mut d = DMatrix::<f64>::zeros(ny, nw);
+    for k in 0..nw {
+        let column = match kind {
+            InputKind::Inputs => derivative(step(x.inputs[k]), &|s| {
+                let mut w = x.inputs.to_vec();
+                w[k] += s;
+                outputs_at(
+                    f,
+                    &Point {
+                        inputs: &w,
+                        ..x.clone()
+                    },
+                )
+            })?,
+            InputKind::GeneralizedForces => derivative(step(tau0[k]), &|s| {
+                let mut w = tau0.clone();
+                w[k] += s;
+                outputs_at(
+                    f,
+                    &Point {
+                        tau: &w,
+                        ..x.clone()
+                    },
+                )
+            })?,
+        };
+        d.set_column(k, &column);
+    }
+    let c = full * basis;
+    if c.iter().chain(d.iter()).any(|v| !v.is_finite()) {
+        return Err(LinearizeError::NotFinite);
+    }
+    Ok(Some((c, d)))
+}
