@@ -125,6 +125,62 @@ pub fn solve_static_cmd(
     }
 }
 
+/// `eom-gen linearize` on a model with cables: about the static
+/// equilibrium (as `solve-static` finds it, default options), the element
+/// runtime's linear equations (`eom_sim::large::second_order`) in minimal
+/// coordinates (`eom_gen::linearize::structural`). Returns the
+/// linearisation and the state (`q` the structure's free coordinates, then
+/// a mixed model's rigid ones; `u` zero).
+pub fn linearize_cmd(
+    checked: &Checked,
+) -> Result<(eom_gen::linearize::Linearization, Vec<f64>, Vec<f64>), Error> {
+    use eom_sim::large::{State, second_order, solve_static, solve_static_mixed};
+    let sys = &checked.system;
+    let refused = |e: eom_gen::cables::CableError| Error::Refused(e.to_string());
+    let dynamics = |e: eom_sim::large::DynamicsError| {
+        Error::Refused(format!("model `{}` at its equilibrium: {e}", sys.name))
+    };
+    let opts = StaticOptions::default();
+    let (eq, state, names) = if eom_gen::cables::has_mounts(sys) {
+        let f = rigid_part(sys).map_err(Error::Refused)?;
+        let mixed = mixed_model(sys, &f).map_err(Error::Refused)?;
+        let (q0, _) = eom_gen::cables::rigid_start(sys, &f).map_err(refused)?;
+        let coordinates = sys.coordinate_names();
+        let sol = solve_static_mixed(&mixed.model, 0.0, &q0, &opts)
+            .map_err(|e| refusal(&sys.name, &coordinates, &e))?;
+        let n = sol.y.len();
+        let state = State {
+            t: 0.0,
+            q: sol.y,
+            v: vec![0.0; n],
+        };
+        let eq = second_order(&mixed.model, &state).map_err(dynamics)?;
+        let rigid = coordinates.len().min(n);
+        let names: Vec<String> = (1..=n - rigid)
+            .map(|k| format!("y{k}"))
+            .chain(coordinates.iter().map(|c| c.to_string()))
+            .collect();
+        (eq, state, names)
+    } else {
+        cables_alone(checked)?;
+        let (built, _) = eom_gen::cables::structure(sys).map_err(refused)?;
+        let sol = solve_static(&built.model, &opts)
+            .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
+        let q = built.model.restrict(&sol.q);
+        let n = q.len();
+        let state = State {
+            t: 0.0,
+            q,
+            v: vec![0.0; n],
+        };
+        let eq = second_order(&built.model, &state).map_err(dynamics)?;
+        (eq, state, (1..=n).map(|k| format!("y{k}")).collect())
+    };
+    let lin = eom_gen::linearize::structural::linearize(&sys.name, &eq, &state.v, names)
+        .map_err(|e| Error::Refused(e.to_string()))?;
+    Ok((lin, state.q, state.v))
+}
+
 /// `eom-gen simulate` on a model with cables: cables alone run as one
 /// structure of every cable, cables hung at markers as one mixed model
 /// with the rigid part interpreted; both through the element runtime's

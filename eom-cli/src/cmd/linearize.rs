@@ -181,15 +181,44 @@ fn single(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> Exit
 /// (default: the model's initial state with these parameter values).
 fn at(a: &LinearizeArgs, urdf: &eom_gen::urdf::Options, vary: &Vary) -> Result<At, Fail> {
     let opened = crate::open::open(&a.model, urdf, vary).map_err(Fail::Exit)?;
-    if let Some(code) = crate::open::cables_only_refusal(&opened.checked, "linearize") {
-        return Err(Fail::Exit(code));
-    }
     let mut checked = opened.checked.clone();
     if !checked.system.cables.is_empty() {
-        let e = LinearizeError::Cables {
-            model: checked.system.name.clone(),
-        };
-        return Err(Fail::Point(e.to_string(), true));
+        // About the static equilibrium, from the element runtime.
+        let given: Vec<&str> = [
+            (a.state.q.is_some(), "--q"),
+            (a.state.u.is_some(), "--u"),
+            (
+                !vary.drives.is_empty() || !opened.inputs.is_empty(),
+                "--input",
+            ),
+        ]
+        .into_iter()
+        .filter_map(|(g, name)| g.then_some(name))
+        .collect();
+        if !given.is_empty() {
+            return Err(Fail::Exit(crate::output::fail(&Error::Usage(vec![
+                format!(
+                    "{}: a model with cables is linearised about its static equilibrium, which `linearize` finds itself (as `solve-static` does); leave out {}",
+                    given.join(", "),
+                    given.join(", ")
+                ),
+            ]))));
+        }
+        let (lin, q, u) =
+            crate::ancf::linearize_cmd(&checked).map_err(|e| Fail::Point(e.to_string(), false))?;
+        let eig = eom_gen::linearize::eigenvalues(&lin.a).ok_or_else(|| {
+            Fail::Point(
+                "the eigenvalue iteration (real Schur form of A) did not converge".into(),
+                false,
+            )
+        })?;
+        return Ok(At {
+            sys: checked.system.clone(),
+            lin,
+            eig,
+            q,
+            u,
+        });
     }
     // Checked by `open` (exit 2); driven inputs leave the model.
     if let Err(errors) = eom_gen::model::drive_inputs(&mut checked, &vary.drives) {
@@ -275,15 +304,25 @@ struct Shapes {
     shapes: Vec<Option<Vec<nalgebra::Complex<f64>>>>,
 }
 
+/// Mode shapes are computed for the lowest this many eigenvalues (by
+/// natural frequency); the rest are `null` in JSON and `—` in text.
+const MODE_SHAPES: usize = 24;
+
 fn mode_shapes(lin: &Linearization, eig: &[Eigenvalue]) -> Shapes {
     let dof = lin.positions;
     let over = match &lin.basis {
         Some(_) => lin.basis_rows.clone(),
         None => lin.states[..dof].to_vec(),
     };
+    // The lowest modes only: a structure of cables has hundreds.
     let shapes = eig
         .iter()
-        .map(|l| eom_gen::linearize::mode_shape(&lin.a, l, dof, lin.basis.as_ref()))
+        .enumerate()
+        .map(|(k, l)| {
+            (k < MODE_SHAPES)
+                .then(|| eom_gen::linearize::mode_shape(&lin.a, l, dof, lin.basis.as_ref()))
+                .flatten()
+        })
         .collect();
     Shapes { over, shapes }
 }

@@ -51,6 +51,8 @@ use std::fmt;
 
 mod outputs;
 mod steady;
+#[cfg(feature = "cables")]
+pub mod structural;
 mod tangent;
 
 /// What `w` (the columns of `B`) is.
@@ -125,6 +127,15 @@ pub enum LinearizeError {
         /// How far the flow leaves the tangent space (relative).
         leak: f64,
     },
+    /// A model with cables at a state that is not a static equilibrium.
+    NotStatic {
+        /// The model.
+        model: String,
+        /// `max |ẏ|` at the state.
+        speed: f64,
+        /// `max |ÿ|` there.
+        acceleration: f64,
+    },
     /// A model with loops at a state that does not close them.
     NotAssembled {
         /// The model.
@@ -172,6 +183,14 @@ impl fmt::Display for LinearizeError {
             } => write!(
                 f,
                 "`{model}`: the state is neither an equilibrium nor a steady motion (max |u| = {speed:.3e}, max |u̇| = {acceleration:.3e}; the linearised flow leaves the constraint manifold by {leak:.1e} relative): a constrained model is linearised about an equilibrium (`--u` zeros) or a steady motion whose moving coordinates are cyclic, nothing depending on them (a wheel's angle on a revolute joint, as in models/whipple.ron; not a spin carried in a free joint's quaternion, whose body-axis speeds are periodic)"
+            ),
+            LinearizeError::NotStatic {
+                model,
+                speed,
+                acceleration,
+            } => write!(
+                f,
+                "`{model}` is not at rest in a static equilibrium (max |ẏ| = {speed:.3e}, max |ÿ| = {acceleration:.3e}): a model with cables is linearised about its static equilibrium"
             ),
             LinearizeError::NotAssembled { model, residual } => write!(
                 f,

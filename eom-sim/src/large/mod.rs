@@ -26,6 +26,7 @@ pub mod alpha;
 pub mod ancf;
 pub mod dynamics;
 pub mod elastica;
+pub mod linear;
 pub mod mixed;
 pub mod model;
 pub mod run;
@@ -35,6 +36,7 @@ pub mod statics;
 
 pub use alpha::{AlphaModel, GeneralizedAlpha};
 pub use dynamics::integrate_rk4;
+pub use linear::{SecondOrder, second_order};
 pub use mixed::statics::{MixedStaticError, MixedStaticSolution, Stability, solve_static_mixed};
 pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, RigidPart};
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
