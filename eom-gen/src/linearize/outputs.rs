@@ -52,6 +52,9 @@ fn outputs_at(f: &Formulation, x: &Point<'_>) -> Option<DVector<f64>> {
         .then(|| DVector::from_vec(values))
 }
 
+/// `C` and `D`.
+type OutputMatrices = (DMatrix<f64>, DMatrix<f64>);
+
 /// `(C, D)` at `x` for states `y = T z` (`basis`: `2 NU × N`) and inputs
 /// of `kind`; `None` when the model has no outputs.
 pub(super) fn linearize(
@@ -59,7 +62,7 @@ pub(super) fn linearize(
     x: &Point<'_>,
     basis: &DMatrix<f64>,
     kind: InputKind,
-) -> Result<Option<(DMatrix<f64>, DMatrix<f64>)>, LinearizeError> {
+) -> Result<Option<OutputMatrices>, LinearizeError> {
     if f.output_names.is_empty() {
         return Ok(None);
     }
