@@ -605,7 +605,8 @@ fn whipple_sweep_finds_the_weave_and_capsize_speeds() {
 /// `ω_n = (β_n L)² √(EI/(ρA L⁴))` (`β₁L = 1.8751`, `β₂L = 4.6941`), the
 /// error falling by more than 8× from 4 to 8 elements, and its first axial
 /// frequency to the bar's `π/(2L) √(E/ρ)` at first order in the element
-/// length (the element's averaged axial strain): the error halves.
+/// length: the error halves (`Clamped` holds the gradient's length at the
+/// root too, so the axial strain there is held at zero — BENCHMARKS.md).
 #[test]
 fn cable_cantilever_frequencies_converge_to_the_beam_and_bar() {
     let frequencies = |elements: usize| -> Vec<f64> {
