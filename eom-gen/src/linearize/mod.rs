@@ -231,7 +231,7 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
 /// `A`, `B` (and the basis) without the outputs.
 fn states(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError> {
     let sys = x.sys;
-    let (nq, nu, ni) = (sys.nq(), sys.nu(), sys.inputs.len());
+    let (nq, nu) = (sys.nq(), sys.nu());
     if !sys.cables.is_empty() {
         return Err(LinearizeError::Cables {
             model: sys.name.clone(),
@@ -252,40 +252,23 @@ fn states(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeErro
             steady::linearize(f, x)
         };
     }
-    let p = f
-        .program(Function::ForwardDynamicsDerivatives)
-        .ok_or(LinearizeError::NoDerivatives)?;
-    let flat = run(p, x);
-    if flat.len() != 3 * nu * nu + nu * ni {
-        return Err(LinearizeError::NoDerivatives);
-    }
-    let block = |k: usize, i: usize, j: usize| flat[k * nu * nu + i * nu + j];
-    let n = 2 * nu;
+    let Blocks {
+        dq,
+        du,
+        dw,
+        input_kind,
+    } = derivative_blocks(f, x)?;
+    let (n, nw) = (2 * nu, dw.ncols());
     let chart = tangent::Chart::new(sys);
     let mut a = DMatrix::<f64>::zeros(n, n);
     a.view_mut((0, 0), (nu, nu))
         .copy_from(&chart.kinematics(x.u));
-    for i in 0..nu {
-        a[(i, nu + i)] = 1.0;
-        for j in 0..nu {
-            a[(nu + i, j)] = block(0, i, j);
-            a[(nu + i, nu + j)] = block(1, i, j);
-        }
-    }
-    let (input_kind, nw) = if ni > 0 {
-        (InputKind::Inputs, ni)
-    } else {
-        (InputKind::GeneralizedForces, nu)
-    };
+    a.view_mut((0, nu), (nu, nu))
+        .copy_from(&DMatrix::identity(nu, nu));
+    a.view_mut((nu, 0), (nu, nu)).copy_from(&dq);
+    a.view_mut((nu, nu), (nu, nu)).copy_from(&du);
     let mut b = DMatrix::<f64>::zeros(n, nw);
-    for i in 0..nu {
-        for j in 0..nw {
-            b[(nu + i, j)] = match input_kind {
-                InputKind::Inputs => flat[3 * nu * nu + i * ni + j],
-                InputKind::GeneralizedForces => block(2, i, j),
-            };
-        }
-    }
+    b.view_mut((nu, 0), (nu, nw)).copy_from(&dw);
     if a.iter().chain(b.iter()).any(|v| !v.is_finite()) {
         return Err(LinearizeError::NotFinite);
     }
@@ -351,6 +334,34 @@ fn derivative_blocks(f: &Formulation, x: &Point<'_>) -> Result<Blocks, Linearize
     })
 }
 
+/// `M` and the forces `τ − b` at `x` (`τ` zero where `x.tau` is short).
+fn mass_and_force(
+    f: &Formulation,
+    x: &Point<'_>,
+) -> Option<(DMatrix<f64>, nalgebra::DVector<f64>)> {
+    use crate::interpret::evaluate_function;
+    let nu = x.sys.nu();
+    let m = DMatrix::from_row_slice(nu, nu, &evaluate_function(f, Function::MassMatrix, x)?);
+    let b = evaluate_function(f, Function::Bias, x)?;
+    let force = nalgebra::DVector::from_iterator(
+        nu,
+        (0..nu).map(|k| x.tau.get(k).copied().unwrap_or(0.0) - b[k]),
+    );
+    Some((m, force))
+}
+
+/// The fourth-order central difference of `g` at `0` with step `h`,
+/// `(−g(2h) + 8g(h) − 8g(−h) + g(−2h)) / 12h`: truncation `h⁴`, so steps
+/// near 1e-3 leave errors near 1e-12 of the derivative's scale.
+fn central(
+    h: f64,
+    g: impl Fn(f64) -> Option<nalgebra::DVector<f64>>,
+) -> Result<nalgebra::DVector<f64>, LinearizeError> {
+    let at = |s: f64| g(s).ok_or(LinearizeError::NotFinite);
+    let (p2, p1, m1, m2) = (at(2.0 * h)?, at(h)?, at(-h)?, at(-2.0 * h)?);
+    Ok((p1 - m1) * (8.0 / (12.0 * h)) - (p2 - m2) * (1.0 / (12.0 * h)))
+}
+
 /// `Φ` and `J` (holonomic rows) at `q`.
 fn constraint_values(f: &Formulation, x: &Point<'_>) -> Option<(Vec<f64>, DMatrix<f64>)> {
     let nu = x.sys.nu();
@@ -368,7 +379,6 @@ fn constraint_values(f: &Formulation, x: &Point<'_>) -> Option<(Vec<f64>, DMatri
 /// Holonomic loops about an equilibrium, in minimal coordinates (see the
 /// module documentation).
 fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError> {
-    use crate::interpret::evaluate_function;
     let sys = x.sys;
     let nu = sys.nu();
     let model = sys.name.clone();
@@ -379,11 +389,7 @@ fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError
     if residual.is_nan() || residual > 1e-8 {
         return Err(LinearizeError::NotAssembled { model, residual });
     }
-    let m = evaluate_function(f, Function::MassMatrix, x)
-        .map(|v| DMatrix::from_row_slice(nu, nu, &v))
-        .ok_or(LinearizeError::NotFinite)?;
-    let b = evaluate_function(f, Function::Bias, x).ok_or(LinearizeError::NotFinite)?;
-    let force = nalgebra::DVector::from_iterator(nu, b.iter().map(|b| -b));
+    let (m, force) = mass_and_force(f, x).ok_or(LinearizeError::NotFinite)?;
     let gamma = nalgebra::DVector::zeros(j.nrows());
     if not_finite(&m) || not_finite(&j) {
         return Err(LinearizeError::NotFinite);

@@ -10,7 +10,7 @@
 //! basis `T` (`C = ∂h/∂y_full · T`).
 
 use super::tangent::Chart;
-use super::{InputKind, LinearizeError};
+use super::{InputKind, LinearizeError, central, mass_and_force};
 use crate::functions::Function;
 use crate::interpret::{Point, evaluate_function};
 use crate::mech::Formulation;
@@ -21,12 +21,7 @@ use nalgebra::{DMatrix, DVector};
 fn outputs_at(f: &Formulation, x: &Point<'_>) -> Option<DVector<f64>> {
     let nu = x.sys.nu();
     let nc = f.constraint_names.len();
-    let m = DMatrix::from_row_slice(nu, nu, &evaluate_function(f, Function::MassMatrix, x)?);
-    let b = evaluate_function(f, Function::Bias, x)?;
-    let force = DVector::from_iterator(
-        nu,
-        (0..nu).map(|k| x.tau.get(k).copied().unwrap_or(0.0) - b[k]),
-    );
+    let (m, force) = mass_and_force(f, x)?;
     let (j, gamma) = if nc > 0 {
         let c = evaluate_function(f, Function::Constraints, x)?;
         (
@@ -69,20 +64,15 @@ pub(super) fn linearize(
     let nu = x.sys.nu();
     let ny = f.output_names.len();
     let chart = Chart::new(x.sys);
-    let derivative = |h: f64, g: &dyn Fn(f64) -> Option<DVector<f64>>| {
-        let at = |s: f64| g(s).ok_or(LinearizeError::NotFinite);
-        let (p2, p1, m1, m2) = (at(2.0 * h)?, at(h)?, at(-h)?, at(-2.0 * h)?);
-        Ok::<_, LinearizeError>((p1 - m1) * (8.0 / (12.0 * h)) - (p2 - m2) * (1.0 / (12.0 * h)))
-    };
     let step = |v: f64| 1e-3 * v.abs().max(1.0);
     let mut full = DMatrix::<f64>::zeros(ny, 2 * nu);
     for k in 0..nu {
-        let column = derivative(1e-3, &|s| {
+        let column = central(1e-3, |s| {
             let q = chart.displaced(x.q, k, s);
             outputs_at(f, &Point { q: &q, ..x.clone() })
         })?;
         full.set_column(k, &column);
-        let column = derivative(step(x.u[k]), &|s| {
+        let column = central(step(x.u[k]), |s| {
             let mut u = x.u.to_vec();
             u[k] += s;
             outputs_at(f, &Point { u: &u, ..x.clone() })
@@ -101,7 +91,7 @@ pub(super) fn linearize(
     let mut d = DMatrix::<f64>::zeros(ny, nw);
     for k in 0..nw {
         let column = match kind {
-            InputKind::Inputs => derivative(step(x.inputs[k]), &|s| {
+            InputKind::Inputs => central(step(x.inputs[k]), |s| {
                 let mut w = x.inputs.to_vec();
                 w[k] += s;
                 outputs_at(
@@ -112,7 +102,7 @@ pub(super) fn linearize(
                     },
                 )
             })?,
-            InputKind::GeneralizedForces => derivative(step(tau0[k]), &|s| {
+            InputKind::GeneralizedForces => central(step(tau0[k]), |s| {
                 let mut w = tau0.clone();
                 w[k] += s;
                 outputs_at(

@@ -42,7 +42,9 @@
 //! ([`LinearizeError::NotSteady`]) rather than linearised wrongly.
 
 use super::tangent::Chart;
-use super::{Blocks, InputKind, Linearization, LinearizeError, derivative_blocks};
+use super::{
+    Blocks, InputKind, Linearization, LinearizeError, central, derivative_blocks, mass_and_force,
+};
 use crate::functions::Function;
 use crate::interpret::{Point, evaluate_function};
 use crate::mech::Formulation;
@@ -70,17 +72,6 @@ fn parts(f: &Formulation, x: &Point<'_>) -> Option<Parts> {
         gamma: DVector::from_column_slice(&c[2 * nc..3 * nc]),
         j: DMatrix::from_row_slice(nc, nu, &c[3 * nc..]),
     })
-}
-
-/// Fourth-order central difference of `g` at `0` with step `h`:
-/// `(−g(2h) + 8g(h) − 8g(−h) + g(−2h)) / 12h`.
-fn derivative(
-    h: f64,
-    g: impl Fn(f64) -> Option<DVector<f64>>,
-) -> Result<DVector<f64>, LinearizeError> {
-    let at = |s: f64| g(s).ok_or(LinearizeError::NotFinite);
-    let (p2, p1, m1, m2) = (at(2.0 * h)?, at(h)?, at(-h)?, at(-2.0 * h)?);
-    Ok((p1 - m1) * (8.0 / (12.0 * h)) - (p2 - m2) * (1.0 / (12.0 * h)))
 }
 
 /// Step of the central differences (m, rad, or the coordinate's unit):
@@ -130,12 +121,8 @@ pub(super) fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization,
     if residual.is_nan() || residual > 1e-8 {
         return Err(LinearizeError::NotAssembled { model, residual });
     }
-    let m = evaluate_function(f, Function::MassMatrix, x)
-        .map(|v| DMatrix::from_row_slice(nu, nu, &v))
-        .ok_or(LinearizeError::NotFinite)?;
-    let b = evaluate_function(f, Function::Bias, x).ok_or(LinearizeError::NotFinite)?;
+    let (m, force) = mass_and_force(f, x).ok_or(LinearizeError::NotFinite)?;
     let tau = DVector::from_iterator(nu, (0..nu).map(|k| x.tau.get(k).copied().unwrap_or(0.0)));
-    let force = tau.clone() - DVector::from_column_slice(&b);
     if not_finite(&m) || not_finite(&p0.j) {
         return Err(LinearizeError::NotFinite);
     }
@@ -163,7 +150,7 @@ pub(super) fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization,
     let mut kq = DMatrix::<f64>::zeros(nc, nu); // ∂Φ̇/∂δq
     let mut gu = DMatrix::<f64>::zeros(nc, nu); // ∂γ/∂u
     for k in 0..nu {
-        let column = derivative(STEP, |s| {
+        let column = central(STEP, |s| {
             let q = chart.displaced(x.q, k, s);
             let p = parts(f, &Point { q: &q, ..x.clone() })?;
             let mut v = DVector::zeros(nu + 2 * nc);
@@ -176,7 +163,7 @@ pub(super) fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization,
         gq.set_column(k, &column.rows(nu, nc));
         kq.set_column(k, &column.rows(nu + nc, nc));
         let step = STEP * x.u[k].abs().max(1.0);
-        let column = derivative(step, |s| {
+        let column = central(step, |s| {
             let mut u = x.u.to_vec();
             u[k] += s;
             Some(parts(f, &Point { u: &u, ..x.clone() })?.gamma)
