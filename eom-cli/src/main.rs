@@ -10,6 +10,7 @@ mod cable_report;
 mod cmd;
 mod compiled;
 mod error;
+mod history;
 mod linearize_sweep;
 mod open;
 mod output;
@@ -42,6 +43,7 @@ enum Command {
     SolveStatic(cmd::solve_static::SolveStaticArgs),
     Stats(cmd::stats::StatsArgs),
     Linearize(cmd::linearize::LinearizeArgs),
+    Plot(cmd::plot::PlotArgs),
 }
 
 fn main() -> ExitCode {
@@ -57,5 +59,6 @@ fn main() -> ExitCode {
         Command::SolveStatic(a) => cmd::solve_static::run(&a, &urdf),
         Command::Stats(a) => cmd::stats::run(&a, &urdf),
         Command::Linearize(a) => cmd::linearize::run(&a, &urdf),
+        Command::Plot(a) => cmd::plot::run(&a, &urdf),
     }
 }
