@@ -131,7 +131,10 @@ pub fn parse_panels(spec: &[String], table: &Table) -> Result<Vec<Panel>, Error>
 pub fn default_panels(table: &Table, coordinates: &[&str], units: &Units) -> Vec<Panel> {
     let mut panels: Vec<Panel> = Vec::new();
     let mut by_unit: Vec<(String, Vec<String>)> = Vec::new();
-    for c in coordinates.iter().filter(|c| table.header.iter().any(|h| h == *c)) {
+    for c in coordinates
+        .iter()
+        .filter(|c| table.header.iter().any(|h| h == *c))
+    {
         let u = unit(c, units);
         match by_unit.iter_mut().find(|(x, _)| *x == u) {
             Some((_, v)) => v.push(c.to_string()),
@@ -257,8 +260,8 @@ fn draw(
             .build_cartesian_2d(t0..t1, y0..y1)?;
         // Enough digits that neighbouring ticks differ (a small drift
         // about a large value).
-        let digits = ((y0.abs().max(y1.abs()) / (y1 - y0)).log10().ceil() + 1.0).clamp(2.0, 12.0)
-            as usize;
+        let digits =
+            ((y0.abs().max(y1.abs()) / (y1 - y0)).log10().ceil() + 1.0).clamp(2.0, 12.0) as usize;
         let fmt = move |y: &f64| format!("{y:.digits$e}");
         let mut mesh = chart.configure_mesh();
         mesh.y_desc(y_desc.as_str()).y_label_formatter(&fmt);
@@ -325,7 +328,10 @@ mod tests {
             .unwrap_or_default();
         assert!(e.contains("no column `phi`, `psi`"), "{e}");
         assert!(e.contains("t, theta, kinetic_energy"), "{e}");
-        let p = parse_panels(&["theta".into(), "kinetic_energy+potential_energy".into()], &t);
+        let p = parse_panels(
+            &["theta".into(), "kinetic_energy+potential_energy".into()],
+            &t,
+        );
         assert_eq!(p.map(|p| p.len()).ok(), Some(2));
     }
 

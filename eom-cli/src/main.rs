@@ -16,6 +16,7 @@ mod open;
 mod output;
 mod plot;
 mod report;
+mod study;
 mod summary;
 mod sweep;
 
@@ -44,6 +45,7 @@ enum Command {
     Stats(cmd::stats::StatsArgs),
     Linearize(cmd::linearize::LinearizeArgs),
     Plot(cmd::plot::PlotArgs),
+    Sweep(cmd::sweep::SweepArgs),
 }
 
 fn main() -> ExitCode {
@@ -60,5 +62,6 @@ fn main() -> ExitCode {
         Command::Stats(a) => cmd::stats::run(&a, &urdf),
         Command::Linearize(a) => cmd::linearize::run(&a, &urdf),
         Command::Plot(a) => cmd::plot::run(&a, &urdf),
+        Command::Sweep(a) => cmd::sweep::run(&a, &urdf),
     }
 }

@@ -50,7 +50,10 @@ impl Table {
     /// or a field that is not a number is an error naming its line and
     /// column.
     pub fn from_csv(text: &str) -> Result<Table, String> {
-        let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty());
         let Some((_, first)) = lines.next() else {
             return Err("the file is empty: expected a header line of column names".into());
         };
@@ -125,7 +128,9 @@ mod tests {
 
     #[test]
     fn malformed_csv_names_line_and_column() {
-        let e = Table::from_csv("t,x\n0,1\n0.1,abc\n").err().unwrap_or_default();
+        let e = Table::from_csv("t,x\n0,1\n0.1,abc\n")
+            .err()
+            .unwrap_or_default();
         assert_eq!(e, "line 3: column `x`: `abc` is not a number");
         let e = Table::from_csv("t,x\n0,1,2\n").err().unwrap_or_default();
         assert_eq!(e, "line 2: 3 value(s) under a header of 2 column(s)");

@@ -11,3 +11,4 @@ pub mod plot;
 pub mod simulate;
 pub mod solve_static;
 pub mod stats;
+pub mod sweep;
