@@ -489,4 +489,41 @@ mod tests {
         assert_eq!(back.table.rows[0], r.table.rows[0]);
         assert!(back.table.rows[1][1].is_nan());
     }
+
+    #[cfg(feature = "parquet")]
+    #[test]
+    fn parquet_reads_back_with_its_names_and_values() {
+        use parquet::file::reader::{FileReader, SerializedFileReader};
+        let mut table = eom_sim::table::Table::new(vec!["case".into(), "bob.x".into()]);
+        table.push(vec![0.0, 1.5]);
+        table.push(vec![1.0, -2.25]);
+        let r = Results {
+            table,
+            stop: vec!["finished".into(), "failed: why".into()],
+        };
+        let path = std::env::temp_dir().join(format!("eom-study-{}.parquet", std::process::id()));
+        assert_eq!(r.write_parquet(&path), Ok(()));
+        let file = std::fs::File::open(&path).expect("written");
+        let reader = SerializedFileReader::new(file).expect("a parquet file");
+        let names: Vec<String> = reader
+            .metadata()
+            .file_metadata()
+            .schema()
+            .get_fields()
+            .iter()
+            .map(|f| f.name().to_string())
+            .collect();
+        assert_eq!(names, ["case", "bob.x", "stop"]);
+        let rows: Vec<String> = reader
+            .get_row_iter(None)
+            .expect("rows")
+            .map(|r| r.map(|r| r.to_string()).unwrap_or_default())
+            .collect();
+        assert_eq!(rows.len(), 2);
+        assert!(
+            rows[1].contains("-2.25") && rows[1].contains("failed: why"),
+            "{rows:?}"
+        );
+        let _ = std::fs::remove_file(path);
+    }
 }
