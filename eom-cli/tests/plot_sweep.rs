@@ -298,3 +298,54 @@ fn shards_merged_equal_one_run() {
         let _ = std::fs::remove_dir_all(d);
     }
 }
+
+#[test]
+fn derived_parameters_follow_the_swept_one() {
+    // Bricard's inertias are defined through its mass (`il = m(b²+b²)/12`,
+    // `it = m(a²+b²)/12`): a case with another `m` changes them, so it is
+    // formulated on its own and equals `simulate --param m=2`. Scaling
+    // every mass and inertia by one factor scales M and the gravity
+    // forces alike: the motion is the same for m = 1 and m = 2.
+    let dir = temp_path("bricard");
+    let out = ok(&[
+        "sweep",
+        "models/bricard.ron",
+        "--param",
+        "m=1,2",
+        "--t-end",
+        "0.2",
+        "--out",
+        &dir,
+    ]);
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("1 formulated on their own"),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let (h, rows) = results(&dir);
+    let single = ok(&[
+        "simulate",
+        "models/bricard.ron",
+        "--interpret",
+        "--param",
+        "m=2",
+        "--t-end",
+        "0.2",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_slice(&single.stdout).expect("json");
+    for k in 1..=5 {
+        let name = format!("q{k}");
+        let (a, b) = (value(&h, &rows[0], &name), value(&h, &rows[1], &name));
+        assert!(
+            (a - b).abs() < 1e-10,
+            "{name}: m = 1 gives {a}, m = 2 gives {b}"
+        );
+        let want = v["q"][k - 1].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            (b - want).abs() < 1e-12,
+            "{name}: sweep {b}, simulate {want}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(dir);
+}
