@@ -10,11 +10,13 @@ mod cable_report;
 mod cmd;
 mod compiled;
 mod error;
+mod history;
 mod linearize_sweep;
 mod open;
 mod output;
 mod plot;
 mod report;
+mod study;
 mod summary;
 mod sweep;
 
@@ -42,6 +44,8 @@ enum Command {
     SolveStatic(cmd::solve_static::SolveStaticArgs),
     Stats(cmd::stats::StatsArgs),
     Linearize(cmd::linearize::LinearizeArgs),
+    Plot(cmd::plot::PlotArgs),
+    Sweep(cmd::sweep::SweepArgs),
 }
 
 fn main() -> ExitCode {
@@ -57,5 +61,7 @@ fn main() -> ExitCode {
         Command::SolveStatic(a) => cmd::solve_static::run(&a, &urdf),
         Command::Stats(a) => cmd::stats::run(&a, &urdf),
         Command::Linearize(a) => cmd::linearize::run(&a, &urdf),
+        Command::Plot(a) => cmd::plot::run(&a, &urdf),
+        Command::Sweep(a) => cmd::sweep::run(&a, &urdf),
     }
 }

@@ -180,7 +180,9 @@ fn formulate_checked(checked: &Checked) -> Result<Formulation, GenerateError> {
     formulate_request(checked, checked.request())
 }
 
-fn formulate_request(
+/// The programs of a checked model for `request` (no emission): how
+/// `eom-gen sweep` formulates once and interprets every case.
+pub fn formulate_request(
     checked: &Checked,
     request: FunctionSet,
 ) -> Result<Formulation, GenerateError> {

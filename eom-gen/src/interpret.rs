@@ -242,6 +242,7 @@ pub struct Interpreted<'a> {
     nu: usize,
     quaternions: Vec<usize>,
     inputs: Vec<f64>,
+    params: Vec<(String, f64)>,
 }
 
 impl<'a> Interpreted<'a> {
@@ -254,7 +255,16 @@ impl<'a> Interpreted<'a> {
             nu: sys.nu(),
             quaternions: sys.quaternion_indices(),
             inputs: vec![0.0; sys.inputs.len()],
+            params: Vec::new(),
         }
+    }
+
+    /// The same with tunable parameters set away from their defaults
+    /// (`eom-gen sweep`: one formulation, a value per case). A name that
+    /// is not a tunable parameter of the formulation changes nothing.
+    pub fn with_params(mut self, params: &[(String, f64)]) -> Self {
+        self.params = params.to_vec();
+        self
     }
 
     /// The same with the model's runtime inputs set (in `System::inputs`
@@ -274,7 +284,7 @@ impl<'a> Interpreted<'a> {
             udot: &[],
             tau: &[],
             inputs: &self.inputs,
-            params: &[],
+            params: &self.params,
             multipliers: &[],
             t,
         }
@@ -368,7 +378,7 @@ impl eom_sim::Simulate for Interpreted<'_> {
             udot: at.udot,
             tau: at.tau,
             inputs: &self.inputs,
-            params: &[],
+            params: &self.params,
             multipliers: at.lambda,
             t: at.t,
         };
@@ -425,12 +435,21 @@ pub fn simulate_with_inputs(
     options: &eom_sim::RunOptions,
     inputs: &[f64],
 ) -> Result<eom_sim::RunReport, InterpretError> {
-    let model = Interpreted::new(f, sys).with_inputs(inputs);
-    let n = eom_sim::run::state_len(&model, options);
+    simulate_model(&Interpreted::new(f, sys).with_inputs(inputs), options)
+}
+
+/// Integrates an [`Interpreted`] model (inputs and tunable parameters
+/// set) through the runtime's runner.
+pub fn simulate_model(
+    model: &Interpreted<'_>,
+    options: &eom_sim::RunOptions,
+) -> Result<eom_sim::RunReport, InterpretError> {
+    let sys = model.sys;
+    let n = eom_sim::run::state_len(model, options);
     macro_rules! sized {
         ($($n:literal)*) => {
             match n {
-                $($n => eom_sim::simulate::<$n, _>(&model, options).map_err(InterpretError::Run),)*
+                $($n => eom_sim::simulate::<$n, _>(model, options).map_err(InterpretError::Run),)*
                 n => Err(InterpretError::TooLarge { model: sys.name.clone(), states: n }),
             }
         };

@@ -134,6 +134,12 @@ pub struct RunOptions {
     /// when the model requests the `Momentum` output).
     #[cfg_attr(feature = "serde", serde(default))]
     pub momentum_columns: bool,
+    /// Add the columns `constraint_residual` (`max |Φ|` of the holonomic
+    /// constraints) and `velocity_constraint_residual` (`max |Φ̇|` of all)
+    /// to the CSV, for models with constraints (`eom-gen simulate --plot`
+    /// sets it).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub constraint_columns: bool,
 }
 
 impl Default for RunOptions {
@@ -152,6 +158,7 @@ impl Default for RunOptions {
             every: None,
             energy_columns: false,
             momentum_columns: false,
+            constraint_columns: false,
         }
     }
 }
@@ -1176,6 +1183,12 @@ fn write_csv<const N: usize, S: Simulate + ?Sized>(
     } else {
         &[]
     };
+    let nc = model.nc();
+    let constraint_names = if options.constraint_columns && nc > 0 {
+        &CONSTRAINT_COLUMNS[..]
+    } else {
+        &[]
+    };
     let header: Vec<&str> = names
         .coordinates
         .iter()
@@ -1184,6 +1197,7 @@ fn write_csv<const N: usize, S: Simulate + ?Sized>(
         .map(String::as_str)
         .chain(energy_names.iter().copied())
         .chain(momentum_names.iter().copied())
+        .chain(constraint_names.iter().copied())
         .collect();
     let mut table = crate::table::Table::new(
         std::iter::once("t")
@@ -1240,12 +1254,23 @@ fn write_csv<const N: usize, S: Simulate + ?Sized>(
                 row.extend_from_slice(&v);
             }
         }
+        if !constraint_names.is_empty() {
+            let mut c = crate::constrained::ConstraintValues::zeros(nc, nu);
+            model.constraints(t, q, u, &mut c);
+            let largest = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            let nh = model.n_holonomic().min(nc);
+            row.push(largest(&c.phi.as_slice()[..nh]));
+            row.push(largest(c.phidot.as_slice()));
+        }
         table.push(row);
     }
     table
         .write(path)
         .map_err(|e| RunError::Csv(format!("cannot write `{path}`: {e}")))
 }
+
+/// The CSV columns of [`RunOptions::constraint_columns`].
+const CONSTRAINT_COLUMNS: [&str; 2] = ["constraint_residual", "velocity_constraint_residual"];
 
 /// The CSV columns of [`RunOptions::momentum_columns`].
 const MOMENTUM_COLUMNS: [&str; 6] = [

@@ -7,6 +7,8 @@ pub mod dump;
 pub mod eval;
 pub mod import;
 pub mod linearize;
+pub mod plot;
 pub mod simulate;
 pub mod solve_static;
 pub mod stats;
+pub mod sweep;

@@ -44,6 +44,11 @@ pub struct SimulateArgs {
     /// Write the trajectory (t, q, u) to this CSV file.
     #[arg(long)]
     pub csv: Option<String>,
+    /// Plot the run as SVG: the coordinates, the energy drift and the
+    /// constraint residuals (where the model has constraints); adds the
+    /// energy and residual columns to the CSV.
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<String>,
     /// Output interval of the CSV, using dense output (default: every step).
     #[arg(long, allow_hyphen_values = true)]
     pub every: Option<f64>,
@@ -140,6 +145,7 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         every: a.every,
         energy_columns: false,
         momentum_columns: false,
+        constraint_columns: false,
     };
     problems.extend(o.problems());
     for (what, given, names) in [
@@ -161,7 +167,7 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     if !problems.is_empty() {
         return fail(&Error::Usage(problems));
     }
-    simulate(&opened, &vary, &o, a.json, a.interpret)
+    simulate(&opened, &vary, &o, a.json, a.interpret, a.plot.as_deref())
 }
 
 /// `simulate` on a model with cables: the options of the large-model
@@ -180,7 +186,8 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 6] = [
+    let refused: [(&str, bool); 7] = [
+        ("--plot", a.plot.is_some()),
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--q0", a.initial.q0.is_some()),
@@ -235,6 +242,7 @@ fn simulate(
     o: &RunOptions,
     json: bool,
     interpret: bool,
+    plot: Option<&str>,
 ) -> ExitCode {
     let inputs = &opened.inputs;
     let g = match crate::open::generate(opened, vary, &Default::default()) {
@@ -247,6 +255,20 @@ fn simulate(
     // next to the marker and reaction outputs.
     o.energy_columns = sys.outputs.contains(&eom_gen::system::OutputKind::Energy);
     o.momentum_columns = sys.outputs.contains(&eom_gen::system::OutputKind::Momentum);
+    // A plot reads the trajectory back from the CSV (a temporary one
+    // when the user asked for none), with the energy and residuals.
+    let user_csv = o.csv.clone();
+    let plot_csv = plot.map(|_| {
+        o.energy_columns = true;
+        o.constraint_columns = true;
+        user_csv.clone().unwrap_or_else(|| {
+            std::env::temp_dir()
+                .join(format!("eom-plot-{}-{}.csv", sys.name, std::process::id()))
+                .display()
+                .to_string()
+        })
+    });
+    o.csv = plot_csv.clone().or(o.csv);
     let o = &o;
     let result = if interpret {
         eom_gen::interpret::simulate_with_inputs(&g.formulation, sys, o, inputs)
@@ -258,6 +280,15 @@ fn simulate(
         Ok(r) => r,
         Err(e) => return fail(&e),
     };
+    if let (Some(svg), Some(csv)) = (plot, &plot_csv) {
+        let drawn = plot_run(csv, svg, sys);
+        if user_csv.is_none() {
+            let _ = std::fs::remove_file(csv);
+        }
+        if let Err(code) = drawn {
+            return code;
+        }
+    }
     let detail = if o.integrator.is_adaptive() {
         format!("rtol {:e}, atol {:e}", o.rtol, o.atol)
     } else {
@@ -266,7 +297,7 @@ fn simulate(
     let setting = Setting {
         integrator: o.integrator,
         detail,
-        csv: o.csv.as_deref(),
+        csv: user_csv.as_deref(),
     };
     finish(
         &sys.name,
@@ -276,4 +307,19 @@ fn simulate(
         &r,
         json,
     )
+}
+
+/// `simulate --plot`: the default panels of the run's CSV drawn to `svg`.
+fn plot_run(csv: &str, svg: &str, sys: &eom_gen::system::System) -> Result<(), ExitCode> {
+    let text = std::fs::read_to_string(csv)
+        .map_err(|e| fail(&Error::io(csv, format!("cannot read the trajectory: {e}"))))?;
+    let mut table = eom_sim::table::Table::from_csv(&text)
+        .map_err(|e| fail(&Error::Format(format!("{csv}: {e}"))))?;
+    crate::history::derive_columns(&mut table);
+    let units = crate::history::model_units(sys);
+    let panels = crate::history::default_panels(&table, &sys.coordinate_names(), &units);
+    let text = crate::history::svg(&table, &panels, &units, &sys.name).map_err(|e| fail(&e))?;
+    crate::output::write_file(svg, &text)?;
+    eprintln!("plot written to {svg}");
+    Ok(())
 }
