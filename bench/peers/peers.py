@@ -74,7 +74,10 @@ def derivative_check(a, ron, peer, env):
         n = len(s["u"])
         big_a, big_b = lin["A"], lin["B"]
         if len(big_a) != 2 * n or len(big_b) != 2 * n or len(big_b[0]) != n:
-            sys.exit(f"{ron}: linearize gave A {len(big_a)}x{len(big_a[0])}, B {len(big_b)}x{len(big_b[0])}; expected {2 * n}, {2 * n}x{n}")
+            sys.exit(
+                f"{ron}: linearize gave A {len(big_a)}x{len(big_a[0])}, B {len(big_b)}x{len(big_b[0])}; "
+                f"expected {2 * n}, {2 * n}x{n}"
+            )
         dq = [big_a[n + i][j] for i in range(n) for j in range(n)]
         du = [big_a[n + i][n + j] for i in range(n) for j in range(n)]
         dtau = [big_b[n + i][j] for i in range(n) for j in range(n)]
@@ -104,7 +107,9 @@ def main():
     ap.add_argument("--csv", required=True)
     ap.add_argument("--deriv-csv", required=True)
     ap.add_argument(
-        "--native-only", action="store_true", help="skip eom's generic (no target-cpu=native) build: one compile less per model"
+        "--native-only",
+        action="store_true",
+        help="skip eom's generic (no target-cpu=native) build: one compile less per model",
     )
     a = ap.parse_args()
     if not 1 <= a.deriv_check <= a.check:
@@ -286,7 +291,8 @@ def main():
     print(
         "\n| model | dof | eom ∂u̇/∂(q, u, τ) ns (ops) | Pinocchio computeABADerivatives ns "
         "| MuJoCo mjd_transitionFD ns (forward / centred) | Pinocchio / eom (fastest passes) | MuJoCo forward / eom "
-        f"| ≥ {TARGET:g}× Pinocchio | max rel. diff Pinocchio (∂q / ∂u / M⁻¹) | max rel. diff MuJoCo FD (∂q / ∂u) |"
+        f"| ≥ {TARGET:g}× Pinocchio | max rel. diff Pinocchio (∂q / ∂u / M⁻¹) "
+        "| max rel. diff MuJoCo FD (∂q / ∂u) |"
     )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for r in drows:
