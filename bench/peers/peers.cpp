@@ -1,9 +1,12 @@
-// Times Pinocchio (ABA, RNEA, CRBA) and MuJoCo (mj_forward) on one model,
+// Times Pinocchio (ABA, RNEA, CRBA, computeABADerivatives) and MuJoCo
+// (mj_forward, mjd_transitionFD) on one model,
 // over the same random states as `eom-gen bench --per-call` (SplitMix64 with
 // the same seed and the same order of draws: per state nq positions in
 // [-pi, pi], then nv speeds, nv forces and nv accelerations in [-1, 1]),
 // and prints the accelerations of both at the first CHECK states for the
-// comparison with eom. No Python anywhere in here.
+// comparison with eom, and the derivatives of both at those states with zero
+// forces (what `eom-gen linearize` gives at a state). No Python anywhere in
+// here.
 //
 //   peers MODEL.urdf MODEL.xml STATES REPS SEED CHECK
 //
@@ -19,6 +22,7 @@
 // inertia rotated from the inertial frame). peers.py checks the result
 // against Pinocchio's own parser (through its Python bindings) as well.
 
+#include <pinocchio/algorithm/aba-derivatives.hpp>
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/crba.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
@@ -58,14 +62,21 @@ inline void keep(T const* p) {
 
 struct Stats {
   double median, q1, q3, min, max;
+  int passes;
 };
 
-// One warm-up pass, then REPS timed passes over N states; ns per call.
+// One warm-up pass, then REPS timed passes over N states; ns per call. With
+// a BUDGET (seconds, > 0), stops after at least 3 passes once the budget is
+// spent (MuJoCo's finite differences of a 50-link chain take a millisecond
+// per call).
 template <class F>
-Stats time_it(int n, int reps, F f) {
+Stats time_it(int n, int reps, F f, double budget = 0) {
+  auto start = std::chrono::steady_clock::now();
   for (int k = 0; k < n; ++k) f(k);
   std::vector<double> ns;
   for (int r = 0; r < reps; ++r) {
+    double spent = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (budget > 0 && r >= 3 && spent > budget) break;
     auto t0 = std::chrono::steady_clock::now();
     for (int k = 0; k < n; ++k) f(k);
     auto t1 = std::chrono::steady_clock::now();
@@ -77,14 +88,15 @@ Stats time_it(int n, int reps, F f) {
     size_t lo = size_t(std::floor(x)), hi = size_t(std::ceil(x));
     return ns[lo] + (ns[hi] - ns[lo]) * (x - double(lo));
   };
-  return {at(0.5), at(0.25), at(0.75), at(0.0), at(1.0)};
+  return {at(0.5), at(0.25), at(0.75), at(0.0), at(1.0), int(ns.size())};
 }
 
 std::string json(Stats const& s) {
   char buf[256];
   std::snprintf(buf, sizeof buf,
-                "{\"median\":%.6g,\"q1\":%.6g,\"q3\":%.6g,\"min\":%.6g,\"max\":%.6g}",
-                s.median, s.q1, s.q3, s.min, s.max);
+                "{\"median\":%.6g,\"q1\":%.6g,\"q3\":%.6g,\"min\":%.6g,\"max\":%.6g,"
+                "\"passes\":%d}",
+                s.median, s.q1, s.q3, s.min, s.max, s.passes);
   return buf;
 }
 
@@ -159,6 +171,18 @@ int main(int argc, char** argv) {
   };
 
   // Accelerations at the check states.
+  //
+  // And the derivatives at the same q, v with zero forces, by rows:
+  // Pinocchio's ddq_dq, ddq_dv and Minv (computeABADerivatives fills only
+  // the upper triangle of Minv; the lower is copied from it here), and
+  // MuJoCo's centred finite differences of its transition read back as
+  // derivatives of qacc. MuJoCo's Euler step is v' = v + h qacc(q, v),
+  // q' = q + h v' (no damping here), so the rows of v' in A are
+  // h dqacc/dq and I + h dqacc/dv.
+  int const nx = 2 * nv + m->na;
+  std::vector<mjtNum> A(size_t(nx) * nx);
+  double const h = m->opt.timestep;
+  Eigen::VectorXd const zero = Eigen::VectorXd::Zero(nv);
   std::string checks = "[";
   for (int k = 0; k < check; ++k) {
     pinocchio::aba(model, data, q[k], v[k], tau[k]);
@@ -166,8 +190,27 @@ int main(int argc, char** argv) {
     mj_forward(m, d);
     checks += std::string(k ? "," : "") + "{\"q\":" + json(q[k].data(), nq) +
               ",\"u\":" + json(v[k].data(), nv) + ",\"tau\":" + json(tau[k].data(), nv) +
-              ",\"pinocchio\":" + json(data.ddq.data(), nv) + ",\"mujoco\":" + json(d->qacc, nv) +
-              "}";
+              ",\"pinocchio\":" + json(data.ddq.data(), nv) + ",\"mujoco\":" + json(d->qacc, nv);
+    pinocchio::computeABADerivatives(model, data, q[k], v[k], zero);
+    Eigen::MatrixXd dq = data.ddq_dq, dv = data.ddq_dv, minv = data.Minv;
+    for (int i = 0; i < nv; ++i)
+      for (int j = 0; j < i; ++j) minv(i, j) = minv(j, i);
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rq = dq, rv = dv, rm = minv;
+    mju_copy(d->qpos, q[k].data(), nq);
+    mju_copy(d->qvel, v[k].data(), nv);
+    mju_zero(d->qfrc_applied, nv);
+    mjd_transitionFD(m, d, 1e-6, 1, A.data(), nullptr, nullptr, nullptr);
+    std::vector<double> mq(size_t(nv) * nv), mv(size_t(nv) * nv);
+    for (int i = 0; i < nv; ++i)
+      for (int j = 0; j < nv; ++j) {
+        mq[size_t(i) * nv + j] = A[size_t(nv + i) * nx + j] / h;
+        mv[size_t(i) * nv + j] = (A[size_t(nv + i) * nx + nv + j] - (i == j ? 1.0 : 0.0)) / h;
+      }
+    checks += ",\"pinocchio_ddq_dq\":" + json(rq.data(), nv * nv) +
+              ",\"pinocchio_ddq_dv\":" + json(rv.data(), nv * nv) +
+              ",\"pinocchio_minv_upper\":" + json(rm.data(), nv * nv) +
+              ",\"mujoco_fd_dq\":" + json(mq.data(), nv * nv) +
+              ",\"mujoco_fd_dv\":" + json(mv.data(), nv * nv) + "}";
   }
   checks += "]";
 
@@ -189,15 +232,46 @@ int main(int argc, char** argv) {
     keep(d->qacc);
   });
 
+  // Pinocchio's analytic derivatives of ABA: ddq_dq, ddq_dv, Minv (upper
+  // triangle) and ddq, at the timed states (with their forces).
+  Stats daba = time_it(n, reps, [&](int k) {
+    pinocchio::computeABADerivatives(model, data, q[k], v[k], tau[k]);
+    keep(data.ddq_dq.data());
+    keep(data.ddq_dv.data());
+    keep(data.Minv.data());
+  });
+  // MuJoCo's finite differences of its discrete-time transition
+  // x' = step(x, ctrl), x = (q, v, act) in the tangent space: A only (no
+  // actuators here, so B is empty; no sensors, so no C, D). Forward
+  // differences (one nominal step and one per state coordinate, 2 nv + 1
+  // steps, velocity perturbations skipping the position stages) are its
+  // cheapest setting; centred (4 nv + 1) shown too. eps = 1e-6 (the
+  // cost does not depend on it).
+  auto fd = [&](mjtByte centered) {
+    return time_it(
+        n, reps,
+        [&](int k) {
+          mj_set(k);
+          mjd_transitionFD(m, d, 1e-6, centered, A.data(), nullptr, nullptr, nullptr);
+          keep(A.data());
+        },
+        2.0);
+  };
+  Stats fd_forward = fd(0), fd_centered = fd(1);
+
   std::printf(
       "{\"nq\":%d,\"nv\":%d,\"pinocchio_version\":\"%s\",\"mujoco_version\":\"%s\",\"mujoco_max_armature\":%g,"
       "\"mujoco_max_damping\":%g,\"mujoco_disableflags\":%d,\"mujoco_gravity\":[%g,%g,%g],"
       "\"pinocchio_gravity\":[%g,%g,%g],\"pinocchio_aba\":%s,\"pinocchio_rnea\":%s,"
-      "\"pinocchio_crba\":%s,\"mujoco_forward\":%s,\"check\":%s}\n",
+      "\"pinocchio_crba\":%s,\"mujoco_forward\":%s,\"pinocchio_aba_derivatives\":%s,"
+      "\"mujoco_transition_fd_forward\":%s,\"mujoco_transition_fd_centered\":%s,"
+      "\"mujoco_integrator\":%d,\"mujoco_timestep\":%g,\"check\":%s}\n",
       nq, nv, PINOCCHIO_VERSION, mj_versionString(), max_armature, max_damping, m->opt.disableflags,
       m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2], model.gravity.linear()[0],
       model.gravity.linear()[1], model.gravity.linear()[2], json(aba).c_str(),
-      json(rnea).c_str(), json(crba).c_str(), json(fwd).c_str(), checks.c_str());
+      json(rnea).c_str(), json(crba).c_str(), json(fwd).c_str(), json(daba).c_str(),
+      json(fd_forward).c_str(), json(fd_centered).c_str(), m->opt.integrator, m->opt.timestep,
+      checks.c_str());
   mj_deleteData(d);
   mj_deleteModel(m);
   return 0;

@@ -4,13 +4,18 @@ Run by run.sh (which installs the peers, builds eom-gen, the chain models
 and the C++ timing program); see README.md. For each model:
 
 1. writes its URDF and MJCF (models.py);
-2. runs the C++ program: Pinocchio ABA/RNEA/CRBA and MuJoCo mj_forward over
-   the same random states as `eom-gen bench` (same generator and seed), and
-   the accelerations of both at the first few states;
+2. runs the C++ program: Pinocchio ABA/RNEA/CRBA/computeABADerivatives and
+   MuJoCo mj_forward/mjd_transitionFD over the same random states as
+   `eom-gen bench` (same generator and seed), and the accelerations and
+   derivatives of both at the first few states;
 3. checks those accelerations against `eom-gen eval` (compiled) at the same
-   states: max |difference| / max |eom's accelerations| <= 1e-10;
-4. runs `eom-gen bench MODEL --per-call --json` (and `--native`);
-5. prints a table and writes a CSV.
+   states: max |difference| / max |eom's accelerations| <= 1e-10; and eom's
+   derivatives (`eom-gen linearize --json` at the same q, u, zero forces)
+   against Pinocchio's ddq_dq, ddq_dv, Minv (<= 1e-10 relative to each
+   matrix's largest entry) and MuJoCo's centred differences (<= 1e-5);
+4. runs `eom-gen bench MODEL --per-call --json` (`--native --derivatives`,
+   and without both);
+5. prints two tables (functions; derivatives) and writes two CSVs.
 
 Besides the standard library, Pinocchio's Python bindings are used once per
 model to check that the C++ program's model (built from the URDF with
@@ -28,6 +33,12 @@ import sys
 import models
 
 TOLERANCE = 1e-10
+# MuJoCo's derivatives are centred differences (eps = 1e-6) of its Euler
+# step, divided by the step (1e-3): about 1e-7 relative is what they can do.
+FD_TOLERANCE = 1e-5
+# The issue's target (issue 27): eom's derivatives at least this many times
+# faster than Pinocchio's computeABADerivatives.
+TARGET = 5.0
 
 
 def run(cmd, **kw):
@@ -45,6 +56,42 @@ def ratio(a, b):
     return a / b if b > 0 else float("nan")
 
 
+def rel_diff(ours, theirs):
+    """max |ours - theirs| / max |theirs| over two flat lists."""
+    scale = max(abs(x) for x in theirs)
+    return max(abs(x - y) for x, y in zip(ours, theirs)) / scale
+
+
+def derivative_check(a, ron, peer, env):
+    """eom's dudot/dq, dudot/du, dudot/dtau (`linearize --json` at q, u of the
+    first --deriv-check states, zero forces: its operating point) against
+    Pinocchio's computeABADerivatives and MuJoCo's centred differences there.
+    Returns the largest relative difference per (tool, matrix)."""
+    err = {}
+    for s in peer["check"][: a.deriv_check]:
+        join = lambda v: ",".join(repr(x) for x in v)  # noqa: E731
+        lin = eom_json(a.eom, ["linearize", ron, "--q", join(s["q"]), "--u", join(s["u"]), "--json"], env)
+        n = len(s["u"])
+        big_a, big_b = lin["A"], lin["B"]
+        if len(big_a) != 2 * n or len(big_b) != 2 * n or len(big_b[0]) != n:
+            sys.exit(
+                f"{ron}: linearize gave A {len(big_a)}x{len(big_a[0])}, B {len(big_b)}x{len(big_b[0])}; "
+                f"expected {2 * n}, {2 * n}x{n}"
+            )
+        dq = [big_a[n + i][j] for i in range(n) for j in range(n)]
+        du = [big_a[n + i][n + j] for i in range(n) for j in range(n)]
+        dtau = [big_b[n + i][j] for i in range(n) for j in range(n)]
+        for key, ours, theirs in [
+            (("pinocchio", "dq"), dq, s["pinocchio_ddq_dq"]),
+            (("pinocchio", "du"), du, s["pinocchio_ddq_dv"]),
+            (("pinocchio", "dtau"), dtau, s["pinocchio_minv_upper"]),
+            (("mujoco_fd", "dq"), dq, s["mujoco_fd_dq"]),
+            (("mujoco_fd", "du"), du, s["mujoco_fd_dv"]),
+        ]:
+            err[key] = max(err.get(key, 0.0), rel_diff(ours, theirs))
+    return err
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--eom", required=True, help="the eom-gen binary")
@@ -55,14 +102,30 @@ def main():
     ap.add_argument("--reps", type=int, default=31)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--check", type=int, default=5, help="states whose accelerations are compared")
+    ap.add_argument("--deriv-check", type=int, default=3, help="states whose derivatives are compared")
     ap.add_argument("--only", nargs="*", help="model names (default: all)")
     ap.add_argument("--csv", required=True)
+    ap.add_argument("--deriv-csv", required=True)
+    ap.add_argument(
+        "--deriv-max-dof",
+        type=int,
+        default=10,
+        help="derivatives only for models with at most this many speeds (a 50-link chain's are ~5e5 operations)",
+    )
+    ap.add_argument(
+        "--native-only",
+        action="store_true",
+        help="skip eom's generic (no target-cpu=native) build: one compile less per model",
+    )
     a = ap.parse_args()
+    if not 1 <= a.deriv_check <= a.check:
+        sys.exit("--deriv-check must be between 1 and --check")
 
     env = dict(os.environ)
     table = models.models()
     names = a.only or list(table)
     rows = []
+    drows = []
     failures = []
     for name in names:
         links = table[name]
@@ -114,8 +177,18 @@ def main():
             if not x <= TOLERANCE:
                 failures.append(f"{name}: {tool} accelerations differ from eom's by {x:.2e} (relative)")
 
+        # Derivatives at the first check states.
+        deriv = peer["nv"] <= a.deriv_max_dof
+        derr = derivative_check(a, ron, peer, env) if deriv else {}
+        for (tool, what), x in derr.items():
+            limit = TOLERANCE if tool == "pinocchio" else FD_TOLERANCE
+            if not x <= limit:
+                failures.append(f"{name}: {tool} d(udot)/{what} differs from eom's by {x:.2e} (relative)")
+
         bench = {}
-        for flavour, extra in [("native", ["--native"]), ("generic", [])]:
+        native = ["--native"] + (["--derivatives"] if deriv else [])
+        flavours = [("native", native)] + ([] if a.native_only else [("generic", [])])
+        for flavour, extra in flavours:
             bench[flavour] = eom_json(
                 a.eom,
                 ["bench", ron, "--per-call", "--json", "--states", str(a.states), "--reps", str(a.reps),
@@ -127,7 +200,7 @@ def main():
             "model": name,
             "dof": peer["nv"],
             "eom_fd_ns": eom_fd,
-            "eom_fd_ns_generic": bench["generic"]["forward_dynamics_ns"],
+            "eom_fd_ns_generic": bench["generic"]["forward_dynamics_ns"] if "generic" in bench else float("nan"),
             "eom_fd_ops": bench["native"]["ops"]["forward_dynamics"],
             "eom_fd_form": bench["native"]["fd_form"],
             "pinocchio_aba_ns": peer["pinocchio_aba"]["median"],
@@ -148,6 +221,60 @@ def main():
             "seed": a.seed,
         }
         rows.append(row)
+        if deriv:
+            eom_d = bench["native"]["forward_dynamics_derivatives_ns"]
+            pin_d = peer["pinocchio_aba_derivatives"]["median"]
+            drow = {
+                "model": name,
+                "dof": peer["nv"],
+                "eom_derivatives_ns": eom_d,
+                "eom_derivatives_ops": bench["native"]["ops"]["forward_dynamics_derivatives"],
+                "pinocchio_aba_derivatives_ns": pin_d,
+                "mujoco_transition_fd_forward_ns": peer["mujoco_transition_fd_forward"]["median"],
+                "mujoco_transition_fd_centered_ns": peer["mujoco_transition_fd_centered"]["median"],
+                "mujoco_fd_passes": peer["mujoco_transition_fd_forward"]["passes"],
+                # The fastest pass of each (the figure a neighbour's build on the
+                # shared cores disturbs least).
+                "eom_derivatives_min_ns": bench["native"]["spread"]["forward_dynamics_derivatives"]["min"],
+                "pinocchio_aba_derivatives_min_ns": peer["pinocchio_aba_derivatives"]["min"],
+                "mujoco_transition_fd_forward_min_ns": peer["mujoco_transition_fd_forward"]["min"],
+                "pinocchio_over_eom": ratio(pin_d, eom_d),
+                "mujoco_fd_forward_over_eom": ratio(peer["mujoco_transition_fd_forward"]["median"], eom_d),
+                "pinocchio_over_eom_min": ratio(
+                    peer["pinocchio_aba_derivatives"]["min"],
+                    bench["native"]["spread"]["forward_dynamics_derivatives"]["min"],
+                ),
+                # Met only if both the medians and the fastest passes say so.
+                "target_met": min(
+                    ratio(pin_d, eom_d),
+                    ratio(
+                        peer["pinocchio_aba_derivatives"]["min"],
+                        bench["native"]["spread"]["forward_dynamics_derivatives"]["min"],
+                    ),
+                )
+                >= TARGET,
+                "max_rel_diff_pinocchio_dq": derr[("pinocchio", "dq")],
+                "max_rel_diff_pinocchio_du": derr[("pinocchio", "du")],
+                "max_rel_diff_pinocchio_minv": derr[("pinocchio", "dtau")],
+                "max_rel_diff_mujoco_fd_dq": derr[("mujoco_fd", "dq")],
+                "max_rel_diff_mujoco_fd_du": derr[("mujoco_fd", "du")],
+                "checked_states": a.deriv_check,
+                "mujoco_integrator": peer["mujoco_integrator"],
+                "mujoco_timestep": peer["mujoco_timestep"],
+                "pinocchio_version": peer["pinocchio_version"],
+                "mujoco_version": peer["mujoco_version"],
+                "states": a.states,
+                "reps": a.reps,
+                "seed": a.seed,
+            }
+            drows.append(drow)
+            print(
+                f"{name}: eom derivatives {eom_d:.0f} ns, Pinocchio computeABADerivatives {pin_d:.0f} ns, "
+                f"MuJoCo mjd_transitionFD {drow['mujoco_transition_fd_forward_ns']:.0f} ns (forward); "
+                f"max relative difference {max(v for (t, _), v in derr.items() if t == 'pinocchio'):.1e} (Pinocchio) "
+                f"/ {max(v for (t, _), v in derr.items() if t == 'mujoco_fd'):.1e} (MuJoCo FD)",
+                file=sys.stderr,
+            )
         print(
             f"{name}: eom FD {eom_fd:.0f} ns, Pinocchio ABA {row['pinocchio_aba_ns']:.0f} ns, "
             f"MuJoCo mj_forward {row['mujoco_forward_ns']:.0f} ns; "
@@ -155,12 +282,15 @@ def main():
             file=sys.stderr,
         )
 
-    os.makedirs(os.path.dirname(a.csv) or ".", exist_ok=True)
-    with open(a.csv, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    for path, table_rows in [(a.csv, rows), (a.deriv_csv, drows)]:
+        if not table_rows:
+            continue
+        os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+        with open(path, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=list(table_rows[0]))
+            w.writeheader()
+            for r in table_rows:
+                w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
 
     print(
         "| model | dof | eom FD ns (native / generic) | Pinocchio ABA ns | MuJoCo mj_forward ns "
@@ -177,9 +307,29 @@ def main():
             f"| {r['eom_mass_matrix_ns']:.0f} | {r['pinocchio_crba_ns']:.0f} "
             f"| {r['max_rel_diff_pinocchio']:.1e} / {r['max_rel_diff_mujoco']:.1e} |"
         )
-    print(f"\nwritten {a.csv}", file=sys.stderr)
+    print(
+        "\n| model | dof | eom ∂u̇/∂(q, u, τ) ns (ops) | Pinocchio computeABADerivatives ns "
+        "| MuJoCo mjd_transitionFD ns (forward / centred) | Pinocchio / eom (fastest passes) | MuJoCo forward / eom "
+        f"| ≥ {TARGET:g}× Pinocchio | max rel. diff Pinocchio (∂q / ∂u / M⁻¹) "
+        "| max rel. diff MuJoCo FD (∂q / ∂u) |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for r in drows:
+        print(
+            f"| {r['model']} | {r['dof']} | {r['eom_derivatives_ns']:.0f} ({r['eom_derivatives_ops']}) "
+            f"| {r['pinocchio_aba_derivatives_ns']:.0f} "
+            f"| {r['mujoco_transition_fd_forward_ns']:.0f} / {r['mujoco_transition_fd_centered_ns']:.0f} "
+            f"| {r['pinocchio_over_eom']:.1f}× ({r['pinocchio_over_eom_min']:.1f}×) "
+            f"| {r['mujoco_fd_forward_over_eom']:.0f}× "
+            f"| {'yes' if r['target_met'] else 'no'} "
+            f"| {r['max_rel_diff_pinocchio_dq']:.1e} / {r['max_rel_diff_pinocchio_du']:.1e} / "
+            f"{r['max_rel_diff_pinocchio_minv']:.1e} "
+            f"| {r['max_rel_diff_mujoco_fd_dq']:.1e} / {r['max_rel_diff_mujoco_fd_du']:.1e} |"
+        )
+    written = [path for path, table_rows in [(a.csv, rows), (a.deriv_csv, drows)] if table_rows]
+    print(f"\nwritten {', '.join(written)}", file=sys.stderr)
     if failures:
-        sys.exit("accelerations disagree:\n  " + "\n  ".join(failures))
+        sys.exit("results disagree:\n  " + "\n  ".join(failures))
 
 
 if __name__ == "__main__":

@@ -16,4 +16,5 @@ compile_peer "$here/peers.cpp" "$exe"
 # Check, time, tabulate.
 cd "$here"
 "$out/venv/bin/python" peers.py --eom "$bin/eom-gen" --peers "$exe" \
-    --models-dir "$out/models" --root "$root" --csv "$root/bench/results/peers.csv" "$@"
+    --models-dir "$out/models" --root "$root" --csv "$root/bench/results/peers.csv" \
+    --deriv-csv "$root/bench/results/peers_derivatives.csv" "$@"
