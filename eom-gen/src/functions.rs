@@ -46,6 +46,9 @@ pub enum Function {
     /// The markers holding cable ends: positions, clamp normals and their
     /// Jacobians `∂/∂q`.
     Attachments,
+    /// The unilateral contacts' gaps `g`, normal speeds `ġ = wᵀ u`, `γ`
+    /// (`g̈ = wᵀ u̇ − γ`) and rows `w`.
+    Contacts,
     /// Partial derivatives of forward dynamics: `∂u̇/∂q` (in the tangent
     /// space), `∂u̇/∂u`, `∂u̇/∂τ`, `∂u̇/∂(inputs)`.
     ForwardDynamicsDerivatives,
@@ -113,6 +116,8 @@ pub enum When {
     HasCutJoints,
     /// When cable ends are held at markers of rigid bodies.
     HasCableMounts,
+    /// When the model has unilateral contacts.
+    HasContacts,
     /// Only when asked for by name (a scene's `functions` list, or a
     /// caller's request such as `eom-gen linearize`'s); never by default,
     /// so a model without such a request generates what it did before.
@@ -277,6 +282,17 @@ pub const TABLE: &[Entry] = &[
         uses_multipliers: false,
         layout: Layout::Vector,
         when: When::HasCableMounts,
+        in_trait: false,
+        derived_from: &[],
+    },
+    Entry {
+        function: Function::Contacts,
+        name: "contacts",
+        doc: "the unilateral contacts (issue #26), `NK` gap rows in the order of the model's contacts (a joint limit's lower row before its upper): the gaps `g` (`NK`, m or rad, open when positive), the normal speeds `ġ = wᵀ u` (`NK`), `γ` with `g̈ = wᵀ u̇ − γ` (`NK`), then the rows `w = ∂ġ/∂u` (`NK × NU`, row by row)",
+        args: &[Arg::T, Arg::Q, Arg::U],
+        uses_multipliers: false,
+        layout: Layout::Vector,
+        when: When::HasContacts,
         in_trait: false,
         derived_from: &[],
     },

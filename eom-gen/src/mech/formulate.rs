@@ -204,6 +204,9 @@ pub struct Formulation {
     /// The cable mounts, in the order of `attachments` (`cable.start`,
     /// `cable.end`).
     pub mounts: Vec<String>,
+    /// The contacts' gap rows, in the order of `contacts` (`stop.lower`,
+    /// `ball_floor`).
+    pub contact_rows: Vec<String>,
     /// Wall time of formulation and lowering, seconds.
     pub seconds: f64,
 }
@@ -241,6 +244,7 @@ impl Formulation {
             Function::CutJointReactions => &self.cut_joints,
             Function::Constraints => &self.constraint_names,
             Function::Attachments => &self.mounts,
+            Function::Contacts => &self.contact_rows,
             _ => &[],
         }
     }
@@ -588,6 +592,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             .collect();
         (Some(cx.lower(&outs, opts)), labels)
     };
+    let contacts = contacts(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
     let programs: BTreeMap<Function, Program> = [
         (Function::Qdot, Some(qdot)),
         (Function::ForwardDynamics, forward_dynamics),
@@ -601,6 +606,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Function::Constraints, constraints),
         (Function::CutJointReactions, cut_reactions),
         (Function::Attachments, attachments),
+        (Function::Contacts, contacts),
         (Function::ForwardDynamicsDerivatives, fd_derivatives),
         (Function::InverseDynamicsDerivatives, id_derivatives),
     ]
@@ -620,6 +626,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         jacobian_rows: out.jacobian_rows,
         cut_joints,
         mounts,
+        contact_rows: sys.contact_rows().into_iter().map(|(_, r)| r).collect(),
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -888,4 +895,62 @@ fn closure<'cx>(
         names: equation_names,
         n_holonomic,
     }))
+}
+
+/// The program of `contacts` (see [`crate::functions`]): per gap row `g`,
+/// then per row `ġ`, then per row `γ = −d(ġ)/dt` at `u̇ = 0` (so that
+/// `g̈ = wᵀ u̇ − γ`), then the rows `w = ∂ġ/∂u`; `None` without contacts.
+#[allow(clippy::too_many_arguments)]
+fn contacts<'cx>(
+    sys: &System,
+    cx: &'cx Context,
+    tree: &TreeModel<Expr<'cx>>,
+    env: &dyn Env<Expr<'cx>>,
+    ev: &Evaluator<'_, Expr<'cx>>,
+    k: &Kinematics<Expr<'cx>>,
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Result<Option<Program>, FormulateError> {
+    use crate::sym::TimeDerivative;
+    if sys.contacts.is_empty() {
+        return Ok(None);
+    }
+    let rows = super::contacts::gaps(sys, tree, env, ev, k, q, u)?;
+    // q̇ along the motion: q_i → (N(q) u)_i, and u̇ = 0.
+    let mut second = TimeDerivative::new();
+    for (qi, qd) in q.iter().zip(qdot) {
+        if let Some(s) = cx.sym_id(*qi) {
+            second.rate(s, cx.id(*qd));
+        }
+    }
+    let zero = cx.id(Expr::zero());
+    for ui in u {
+        if let Some(s) = cx.sym_id(*ui) {
+            second.rate(s, zero);
+        }
+    }
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    for (i, (g, _)) in rows.iter().enumerate() {
+        names.push(format!("g{i}"));
+        values.push(*g);
+    }
+    for (i, (_, gd)) in rows.iter().enumerate() {
+        names.push(format!("gdot{i}"));
+        values.push(*gd);
+    }
+    for (i, (_, gd)) in rows.iter().enumerate() {
+        names.push(format!("gamma{i}"));
+        values.push(-cx.time_derivative(&mut second, *gd)?);
+    }
+    for (i, (_, gd)) in rows.iter().enumerate() {
+        for (kk, &uk) in u.iter().enumerate() {
+            names.push(format!("w_{i}_{kk}"));
+            values.push(cx.diff(*gd, uk));
+        }
+    }
+    let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
+    Ok(Some(cx.lower(&outs, opts)))
 }

@@ -1037,6 +1037,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         constraints,
         outputs: Vec::new(),
         cables: Vec::new(),
+        contacts: Vec::new(),
         inertia_policy: if lenient {
             InertiaPolicy::Lenient
         } else {
