@@ -47,7 +47,7 @@ pub enum Function {
     /// Jacobians `∂/∂q`.
     Attachments,
     /// The unilateral contacts' gaps `g`, normal speeds `ġ = wᵀ u`, `γ`
-    /// (`g̈ = wᵀ u̇ − γ`) and rows `w`.
+    /// (`g̈ = wᵀ u̇ − γ`), their `e` and `μ`, and rows `w`.
     Contacts,
     /// Partial derivatives of forward dynamics: `∂u̇/∂q` (in the tangent
     /// space), `∂u̇/∂u`, `∂u̇/∂τ`, `∂u̇/∂(inputs)`.
@@ -288,7 +288,7 @@ pub const TABLE: &[Entry] = &[
     Entry {
         function: Function::Contacts,
         name: "contacts",
-        doc: "the unilateral contacts (issue #26), `NK` gap rows in the order of the model's contacts (a joint limit's lower row before its upper): the gaps `g` (`NK`, m or rad, open when positive), the normal speeds `ġ = wᵀ u` (`NK`), `γ` with `g̈ = wᵀ u̇ − γ` (`NK`), then the rows `w = ∂ġ/∂u` (`NK × NU`, row by row)",
+        doc: "the unilateral contacts (issue #26), `NK` gap rows in the order of the model's contacts (a joint limit's lower row before its upper): the gaps `g` (`NK`, m or rad, open when positive), the normal speeds `ġ = wᵀ u` (`NK`), `γ` with `g̈ = wᵀ u̇ − γ` (`NK`), Newton's restitution coefficient `e` and Coulomb's `μ` of each row (`NK` each), then the rows `w = ∂ġ/∂u` (`NK × NU`, row by row)",
         args: &[Arg::T, Arg::Q, Arg::U],
         uses_multipliers: false,
         layout: Layout::Vector,

@@ -5,11 +5,11 @@
 //! of `g`), `γ` the second derivative's velocity part, and the evaluator
 //! agrees with the numeric twin.
 
+use eom_gen::System;
 use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::interpret::{Point, evaluate_function};
 use eom_gen::mech::{Numeric, formulate};
 use eom_gen::model::{Source, check};
-use eom_gen::System;
 
 /// A double pendulum in the x–y plane (gravity −y) with a ball on a slider
 /// below it: every kind of contact.
@@ -39,7 +39,10 @@ const BASE: &str = r#"Model(
 fn diagnose(edits: &[(&str, &str)]) -> String {
     let mut text = BASE.to_string();
     for (from, to) in edits {
-        assert!(text.contains(from), "test setup: `{from}` is not in the model");
+        assert!(
+            text.contains(from),
+            "test setup: `{from}` is not in the model"
+        );
         text = text.replacen(from, to, 1);
     }
     match check(&Source::new("models/contact_zoo.ron", text)) {
@@ -63,10 +66,20 @@ fn system() -> System {
 #[test]
 fn the_zoo_is_valid_and_has_five_gap_rows() {
     assert_eq!(diagnose(&[]), "valid");
-    let rows: Vec<String> = system().contact_rows().into_iter().map(|(_, r)| r).collect();
+    let rows: Vec<String> = system()
+        .contact_rows()
+        .into_iter()
+        .map(|(_, r)| r)
+        .collect();
     assert_eq!(
         rows,
-        ["elbow_stop.lower", "elbow_stop.upper", "wall", "knock", "rail.upper"]
+        [
+            "elbow_stop.lower",
+            "elbow_stop.upper",
+            "wall",
+            "knock",
+            "rail.upper"
+        ]
     );
 }
 
@@ -75,7 +88,10 @@ fn the_zoo_is_valid_and_has_five_gap_rows() {
 fn bad_contacts_are_all_reported_located() {
     let out = diagnose(&[
         (r#"joint: "elbow", lower"#, r#"joint: "elbo", lower"#),
-        (r#"body: "lower", marker: "tip"), radius: 0.05"#, r#"body: "lower", marker: "toe"), radius: 0.05"#),
+        (
+            r#"body: "lower", marker: "tip"), radius: 0.05"#,
+            r#"body: "lower", marker: "toe"), radius: 0.05"#,
+        ),
         ("normal: (-1, 0, 0), e: 0.3", "normal: (0, 0, 0), e: 1.3"),
         (r#"b: (body: "ball")"#, r#"b: (body: "bal")"#),
         ("e: 0, mu: 0.2", "e: 0, mu: -0.2"),
@@ -145,26 +161,43 @@ fn generated_rows_are_the_derivatives_of_the_gaps() {
     let u = [1.3, -0.6, 0.8];
     let ud = [0.5, 2.0, -1.0];
     let v = eval(&q, &u);
-    assert_eq!(v.len(), 3 * nk + nk * nu);
+    assert_eq!(v.len(), 5 * nk + nk * nu);
     let twin = num.contacts(&sys, &q, &u, 0.0).expect("twin");
     let h = 1e-4;
     let at = |s: f64| -> Vec<f64> {
-        let qs: Vec<f64> = (0..nu).map(|i| q[i] + s * u[i] + 0.5 * s * s * ud[i]).collect();
+        let qs: Vec<f64> = (0..nu)
+            .map(|i| q[i] + s * u[i] + 0.5 * s * s * ud[i])
+            .collect();
         eval(&qs, &u)[..nk].to_vec()
     };
     let (gp, gm, g0) = (at(h), at(-h), at(0.0));
     for r in 0..nk {
-        let w = &v[3 * nk + r * nu..3 * nk + (r + 1) * nu];
+        let w = &v[5 * nk + r * nu..5 * nk + (r + 1) * nu];
         let gdot: f64 = w.iter().zip(&u).map(|(a, b)| a * b).sum();
-        assert!((gdot - v[nk + r]).abs() < 1e-12, "row {r}: wᵀu {gdot} vs ġ {}", v[nk + r]);
+        assert!(
+            (gdot - v[nk + r]).abs() < 1e-12,
+            "row {r}: wᵀu {gdot} vs ġ {}",
+            v[nk + r]
+        );
         let fd1 = (gp[r] - gm[r]) / (2.0 * h);
-        assert!((fd1 - v[nk + r]).abs() < 1e-6, "row {r}: ġ {} vs dg/ds {fd1}", v[nk + r]);
+        assert!(
+            (fd1 - v[nk + r]).abs() < 1e-6,
+            "row {r}: ġ {} vs dg/ds {fd1}",
+            v[nk + r]
+        );
         let fd2 = (gp[r] - 2.0 * g0[r] + gm[r]) / (h * h);
         let gdd: f64 = w.iter().zip(&ud).map(|(a, b)| a * b).sum::<f64>() - v[2 * nk + r];
-        assert!((fd2 - gdd).abs() < 1e-5, "row {r}: g̈ {gdd} vs d²g/ds² {fd2}");
+        assert!(
+            (fd2 - gdd).abs() < 1e-5,
+            "row {r}: g̈ {gdd} vs d²g/ds² {fd2}"
+        );
         assert!((twin[r].0 - v[r]).abs() < 1e-13 && (twin[r].1 - v[nk + r]).abs() < 1e-13);
     }
+    assert_eq!(
+        &v[3 * nk..5 * nk],
+        &[0.5, 0.5, 0.3, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.2]
+    );
     // The joint limits' rows are ±1 on their speed.
-    assert_eq!(&v[3 * nk..3 * nk + nu], &[0.0, 1.0, 0.0]);
-    assert_eq!(&v[3 * nk + 4 * nu..], &[0.0, 0.0, -1.0]);
+    assert_eq!(&v[5 * nk..5 * nk + nu], &[0.0, 1.0, 0.0]);
+    assert_eq!(&v[5 * nk + 4 * nu..], &[0.0, 0.0, -1.0]);
 }

@@ -899,7 +899,8 @@ fn closure<'cx>(
 
 /// The program of `contacts` (see [`crate::functions`]): per gap row `g`,
 /// then per row `ġ`, then per row `γ = −d(ġ)/dt` at `u̇ = 0` (so that
-/// `g̈ = wᵀ u̇ − γ`), then the rows `w = ∂ġ/∂u`; `None` without contacts.
+/// `g̈ = wᵀ u̇ − γ`), per row `e` and `μ`, then the rows `w = ∂ġ/∂u`;
+/// `None` without contacts.
 #[allow(clippy::too_many_arguments)]
 fn contacts<'cx>(
     sys: &System,
@@ -944,6 +945,20 @@ fn contacts<'cx>(
     for (i, (_, gd)) in rows.iter().enumerate() {
         names.push(format!("gamma{i}"));
         values.push(-cx.time_derivative(&mut second, *gd)?);
+    }
+    // The contact laws travel with the model: Newton's `e`, Coulomb's `μ`.
+    let laws: Vec<(f64, f64)> = sys
+        .contact_rows()
+        .iter()
+        .map(|(c, _)| (sys.contacts[*c].e, sys.contacts[*c].mu))
+        .collect();
+    for (i, (e, _)) in laws.iter().enumerate() {
+        names.push(format!("e{i}"));
+        values.push(Expr::from_f64(*e));
+    }
+    for (i, (_, mu)) in laws.iter().enumerate() {
+        names.push(format!("mu{i}"));
+        values.push(Expr::from_f64(*mu));
     }
     for (i, (_, gd)) in rows.iter().enumerate() {
         for (kk, &uk) in u.iter().enumerate() {

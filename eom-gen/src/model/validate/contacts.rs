@@ -30,7 +30,10 @@ impl Ctx<'_> {
                     "Newton's coefficient of restitution is 0 (plastic: the contact stays closed) to 1 (elastic: no energy lost)",
                 )
             } else {
-                ("negative", "a Coulomb friction coefficient is 0 (frictionless) or positive")
+                (
+                    "negative",
+                    "a Coulomb friction coefficient is 0 (frictionless) or positive",
+                )
             };
             self.error(
                 path,
@@ -104,8 +107,18 @@ impl Ctx<'_> {
                 } => {
                     let pa = self.contact_anchor(a, bodies, &join(&path, &[f("a")]), name);
                     let pb = self.contact_anchor(b, bodies, &join(&path, &[f("b")]), name);
-                    let ra = self.nonnegative(radius_a, &join(&path, &[f("radius_a")]), "radius_a", name);
-                    let rb = self.nonnegative(radius_b, &join(&path, &[f("radius_b")]), "radius_b", name);
+                    let ra = self.nonnegative(
+                        radius_a,
+                        &join(&path, &[f("radius_a")]),
+                        "radius_a",
+                        name,
+                    );
+                    let rb = self.nonnegative(
+                        radius_b,
+                        &join(&path, &[f("radius_b")]),
+                        "radius_b",
+                        name,
+                    );
                     if let (Some(x), Some(y)) = (&pa, &pb)
                         && x.body == y.body
                     {
@@ -297,9 +310,7 @@ impl Ctx<'_> {
                     ),
                     format!(
                         "move bodies `{}` and `{}` at least {:.6e} m apart (the `q0` of the joints above them), or make the radii smaller",
-                        sys.bodies[a.body].name,
-                        sys.bodies[b.body].name,
-                        -g
+                        sys.bodies[a.body].name, sys.bodies[b.body].name, -g
                     ),
                 ),
             };
