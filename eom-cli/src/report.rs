@@ -4,9 +4,7 @@
 //! exit status (0 when the run reached its end time, 3 with the reason
 //! when it stopped early).
 
-use eom_sim::run::{
-    CableState, ContactEvent, ContactEventKind, MountForce, StaticReport,
-};
+use eom_sim::run::{CableState, ContactEvent, ContactEventKind, MountForce, StaticReport};
 use eom_sim::{Integrator, RunReport};
 use std::fmt::Write;
 use std::process::ExitCode;

@@ -360,3 +360,109 @@ fn double_pendulum_striking_a_wall_loses_carnots_energy() {
         report.stop
     );
 }
+
+/// Misuse and edge cases: friction is refused (not silently dropped), the
+/// index-3 method with contacts is refused, a contact that never closes
+/// gives no event, and a ball resting on the floor at the start stays
+/// there (a contact touching at `t = 0` is allowed and held).
+#[test]
+fn refusals_and_edge_cases() {
+    let text = std::fs::read_to_string(format!(
+        "{}/../models/bouncing_ball.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("model");
+    let rough = from_text(&text.replace(r#"e: "e")"#, r#"e: "e", mu: 0.4)"#));
+    let f = formulate(&rough, FunctionSet::all_requested()).expect("formulates");
+    let err = eom_gen::interpret::simulate(&f, &rough, &options(1.0))
+        .expect_err("friction is refused")
+        .to_string();
+    assert!(
+        err.contains("contact `floor` has Coulomb friction (mu = 0.4)"),
+        "{err}"
+    );
+    // Never touching: the floor far below.
+    let far = from_text(&text.replace(
+        "normal: (0, 0, 1)",
+        "point: (0, 0, -100), normal: (0, 0, 1)",
+    ));
+    let report = run(&far, &options(1.0));
+    assert!(report.stop.is_finished() && report.contact_events.is_empty());
+    let want_z = 1.1 - 0.5 * 9.81;
+    assert!(
+        (report.q[0] - want_z).abs() < 1e-9,
+        "free fall: {}",
+        report.q[0]
+    );
+    // Resting at the start (g = 0, pressed by gravity).
+    let resting = from_text(&text.replace(r#"q0: ["h0 + r"]"#, r#"q0: ["r"]"#));
+    let report = run(&resting, &options(2.0));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    assert_eq!(
+        report.contact_events.len(),
+        1,
+        "{:?}",
+        report.contact_events
+    );
+    assert_eq!(report.contact_events[0].kind, ContactEventKind::Rest);
+    assert!((report.q[0] - 0.1).abs() < 1e-12 && report.u[0].abs() < 1e-12);
+    // Index-3 with contacts: refused, naming what applies.
+    let looped = on_a_circle(0.5);
+    let f = formulate(&looped, FunctionSet::all_requested()).expect("formulates");
+    let o = RunOptions {
+        method: eom_sim::Method::Index3,
+        integrator: eom_sim::Integrator::Radau5,
+        ..options(1.0)
+    };
+    let err = eom_gen::interpret::simulate(&f, &looped, &o)
+        .expect_err("index-3 with contacts is refused")
+        .to_string();
+    assert!(
+        err.contains("the index-3 method does not apply impacts"),
+        "{err}"
+    );
+}
+
+/// A point mass held on the unit circle by a constraint (a planar joint
+/// and `x² + y² = 1`), gravity −y, released at 0.6 m off the bottom, striking
+/// the wall x = −0.5: the impact with the loop held at velocity level
+/// reverses the speed along the circle by `e`, so the kinetic energy drops
+/// by `e²`, and the mass stays on the circle.
+fn on_a_circle(e: f64) -> System {
+    from_text(&format!(
+        r#"Model(
+    name: "on_a_circle",
+    gravity: (0, -9.81, 0),
+    bodies: [(name: "bob", mass: 1, inertia: Diag(0.01, 0.01, 0.01))],
+    joints: [(name: "p", kind: Planar, parent: "ground", child: "bob", coordinates: ["x", "y", "a"], q0: [0.6, -0.8, 0])],
+    constraints: [Holonomic(name: "circle", expr: "x^2 + y^2 - 1")],
+    contacts: [Plane(name: "wall", at: (body: "bob"), point: (-0.5, 0, 0), normal: (1, 0, 0), e: {e})],
+    outputs: [Energy],
+)"#
+    ))
+}
+
+#[test]
+fn impact_with_a_loop_constraint_keeps_the_loop() {
+    let e = 0.5;
+    let sys = on_a_circle(e);
+    let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
+    let report = eom_gen::interpret::simulate(&f, &sys, &options(1.5)).expect("runs");
+    let ev = report
+        .contact_events
+        .iter()
+        .find(|ev| ev.kind == ContactEventKind::Impact)
+        .unwrap_or_else(|| panic!("strikes the wall: {}", report.stop));
+    // The potential energy is continuous: the kinetic part scales by e².
+    let ke_before = ev.energy_before - 9.81 * -(1.0f64 - 0.25).sqrt();
+    let ke_after = ev.energy_after - 9.81 * -(1.0f64 - 0.25).sqrt();
+    assert!(
+        (ke_after - e * e * ke_before).abs() < 1e-6 * ke_before,
+        "kinetic energy {ke_before} → {ke_after}, want × e² = {}",
+        e * e * ke_before
+    );
+    let c = &ev.contacts[0];
+    assert!((c.speed_after + e * c.speed_before).abs() < 1e-9);
+    let r = (report.q[0].powi(2) + report.q[1].powi(2)).sqrt();
+    assert!((r - 1.0).abs() < 1e-6, "on the circle at the end: r = {r}");
+}

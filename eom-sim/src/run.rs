@@ -30,7 +30,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 mod contact;
-pub use contact::{ContactEvent, ContactEventKind, ContactImpulse, lcp};
+pub use contact::{ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, MAX_LCP, lcp};
 mod elements;
 pub use elements::{
     CableState, ElementReport, LoadStepReport, MountForce, StabilityReport, StaticReport,
