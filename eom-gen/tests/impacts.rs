@@ -13,8 +13,7 @@
 //!   sequential resolution, contact by contact, gives the textbook
 //!   `(0, 0, v)`: a different answer of a different law);
 //! - a double pendulum striking a wall: the energy lost is Carnot's
-//!   `(1 − e²) ġ⁻² / (2 wᵀ M⁻¹ w)`, the elbow's share of the impulse
-//!   `w Λ`.
+//!   `(1 − e²) ġ⁻² / (2 wᵀ M⁻¹ w)`, and the joints' impulses by hand.
 
 use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::interpret::{Point, evaluate_function};
@@ -219,6 +218,21 @@ fn rod_striking_a_stop_has_no_pivot_impulse_at_the_centre_of_percussion() {
         if (d - 2.0 * l / 3.0).abs() < 1e-12 {
             assert!(pivot.abs() < 1e-9, "centre of percussion: {pivot}");
         }
+        // The runtime's joint impulse of the pivot (Wittenburg's, from the
+        // generated `joint_impulses`; child joint frame = world at θ = 0):
+        // the same force, and no torque about the hinge's axis.
+        let ji = &ev.joint_impulses[0];
+        assert_eq!(ji.joint, "pivot");
+        assert!(
+            (ji.force[1] - want).abs() < 1e-9 * (1.0 + want.abs()) && ji.force[0].abs() < 1e-9,
+            "d = {d}: joint impulse {:?}, closed form (0, {want}, 0)",
+            ji.force
+        );
+        assert!(
+            ji.torque[2].abs() < 1e-9,
+            "a hinge transmits no axial torque: {:?}",
+            ji.torque
+        );
         // The hinge's generalised impulse is the stop's moment −Λ d.
         assert!((ev.generalized_impulse[0] + lambda * d).abs() < 1e-9 * want.abs().max(1.0));
     }
@@ -352,6 +366,46 @@ fn double_pendulum_striking_a_wall_loses_carnots_energy() {
             "speed {k}: {} vs w Λ {}",
             ev.generalized_impulse[k],
             w[k] * c.impulse
+        );
+    }
+    // The elbow's impulse by hand: it gives the lower point mass (m₂ = 1,
+    // at the tip) its momentum change less the wall's impulse,
+    // `F = m₂ J_tip Δu − Λ n`, `Δu = M⁻¹ w Λ`, in the lower link's axes
+    // (turned by q₁ + q₂); the shoulder's is the change of both masses'
+    // momentum less the wall's impulse. Neither hinge transmits torque
+    // about its axis.
+    let (q1, q2) = (at_impact.q[0], at_impact.q[1]);
+    let du = minv * wv * c.impulse;
+    let j1 = nalgebra::Vector2::new(q1.cos(), q1.sin());
+    let j12 = nalgebra::Vector2::new((q1 + q2).cos(), (q1 + q2).sin());
+    let dv_tip = j1 * du[0] + j12 * (du[0] + du[1]);
+    let dv_mid = j1 * du[0];
+    let wall = nalgebra::Vector2::new(c.impulse, 0.0);
+    let elbow_world = dv_tip - wall;
+    let shoulder_world = dv_mid + dv_tip - wall;
+    let to_body = |v: nalgebra::Vector2<f64>, a: f64| {
+        nalgebra::Vector2::new(
+            a.cos() * v[0] + a.sin() * v[1],
+            -a.sin() * v[0] + a.cos() * v[1],
+        )
+    };
+    for (name, want) in [
+        ("shoulder", to_body(shoulder_world, q1)),
+        ("elbow", to_body(elbow_world, q1 + q2)),
+    ] {
+        let ji = ev
+            .joint_impulses
+            .iter()
+            .find(|j| j.joint == name)
+            .expect("every tree joint");
+        assert!(
+            (ji.force[0] - want[0]).abs() < 1e-6 && (ji.force[1] - want[1]).abs() < 1e-6,
+            "{name}: joint impulse {:?}, by hand {want:?}",
+            ji.force
+        );
+        assert!(
+            ji.force[2].abs() < 1e-9 && ji.torque[2].abs() < 1e-9,
+            "{name}: {ji:?}"
         );
     }
     assert!(

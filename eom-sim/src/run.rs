@@ -30,7 +30,9 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 mod contact;
-pub use contact::{ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, MAX_LCP, lcp};
+pub use contact::{
+    ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, JointImpulse, MAX_LCP, lcp,
+};
 mod elements;
 pub use elements::{
     CableState, ElementReport, LoadStepReport, MountForce, StabilityReport, StaticReport,
@@ -685,6 +687,8 @@ pub struct Names {
     pub cut_joints: Vec<String>,
     /// The contacts' gap rows (the labels of the generated `contacts`).
     pub contacts: Vec<String>,
+    /// The tree joints whose impulses `joint_impulses` gives.
+    pub impulse_joints: Vec<String>,
 }
 
 /// A model a run integrates: its [`Dynamics`] (for the constraint
@@ -715,10 +719,13 @@ impl<M: ConstrainedModel + Clone> Simulate for Generated<'_, M> {
             .iter()
             .find(|f| f.name == "cut_joint_reactions")
             .map_or_else(Vec::new, |f| own(f.labels));
-        let contacts = M::FUNCTIONS
-            .iter()
-            .find(|f| f.name == "contacts")
-            .map_or_else(Vec::new, |f| own(f.labels));
+        let labels = |name: &str| {
+            M::FUNCTIONS
+                .iter()
+                .find(|f| f.name == name)
+                .map_or_else(Vec::new, |f| own(f.labels))
+        };
+        let (contacts, impulse_joints) = (labels("contacts"), labels("joint_impulses"));
         Names {
             coordinates: own(M::COORDINATE_NAMES),
             speeds: own(M::SPEED_NAMES),
@@ -726,6 +733,7 @@ impl<M: ConstrainedModel + Clone> Simulate for Generated<'_, M> {
             constraints: own(M::CONSTRAINT_NAMES),
             cut_joints,
             contacts,
+            impulse_joints,
         }
     }
     fn initial_state(&self) -> (Vec<f64>, Vec<f64>) {
@@ -1123,6 +1131,7 @@ fn contact_run<'a, S: Simulate + ?Sized>(
     contact::Run {
         model,
         names: &names.contacts,
+        joints: &names.impulse_joints,
         nk,
         sustained,
         rest_height: options.atol.max(1e-14),
@@ -1168,8 +1177,8 @@ fn contact_problems<S: Simulate + ?Sized>(
 /// Writes the contact events to [`RunOptions::events_csv`]: one row per
 /// event with `t`, `kind` (0 impact, 1 rest, 2 release), the energies
 /// before and after, per contact row its impulse and normal speeds before
-/// and after (empty where the row took no part), and the generalised
-/// impulse per speed.
+/// and after (empty where the row took no part), the generalised impulse per
+/// speed, and every tree joint's impulse (force, torque).
 fn write_events_csv<S: Simulate + ?Sized>(
     model: &S,
     names: &Names,
@@ -1190,6 +1199,11 @@ fn write_events_csv<S: Simulate + ?Sized>(
     }
     for s in &names.speeds {
         header.push(format!("impulse_{s}"));
+    }
+    for j in &names.impulse_joints {
+        for c in ["fx", "fy", "fz", "nx", "ny", "nz"] {
+            header.push(format!("{j}.impulse_{c}"));
+        }
     }
     let mut table = crate::table::Table::new(header);
     for e in events {
@@ -1212,6 +1226,12 @@ fn write_events_csv<S: Simulate + ?Sized>(
                 .chain(std::iter::repeat(f64::NAN))
                 .take(model.nu()),
         );
+        for j in &names.impulse_joints {
+            match e.joint_impulses.iter().find(|x| &x.joint == j) {
+                Some(x) => row.extend(x.force.iter().chain(&x.torque)),
+                None => row.extend([f64::NAN; 6]),
+            }
+        }
         table.push(row);
     }
     table

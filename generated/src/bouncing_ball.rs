@@ -142,6 +142,12 @@ impl ::eom_sim::Model for BouncingBall {
             doc: "the unilateral contacts (issue #26), `NK` gap rows in the order of the model's contacts (a joint limit's lower row before its upper): the gaps `g` (`NK`, m or rad, open when positive), the normal speeds `ġ = wᵀ u` (`NK`), `γ` with `g\u{308} = wᵀ u\u{307} − γ` (`NK`), Newton's restitution coefficient `e` and Coulomb's `μ` of each row (`NK` each), then the rows `w = ∂ġ/∂u` (`NK × NU`, row by row)",
             labels: &["floor"],
         },
+        ::eom_sim::FunctionInfo {
+            name: "joint_impulses",
+            len: 12,
+            doc: "the impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint); a joint's impulse is the first block plus `Σ Λ_k` times the row blocks",
+            labels: &["drop"],
+        },
     ];
     fn evaluate(&self, name: &str, at: &::eom_sim::Point<'_>, out: &mut [f64]) -> bool {
         match name {
@@ -255,6 +261,22 @@ impl ::eom_sim::Model for BouncingBall {
                 this.contacts(t, &q, &u, out);
                 true
             }
+            "joint_impulses" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::__private::arg::<1>(at.q, false) else {
+                    return false
+                };
+                let Some(u) = ::eom_sim::__private::arg::<1>(at.u, false) else {
+                    return false
+                };
+                let Some(udot) = ::eom_sim::__private::arg::<1>(at.udot, true) else {
+                    return false
+                };
+                let Ok(out) = <&mut [f64; 12]>::try_from(out) else { return false };
+                let this = self;
+                this.joint_impulses(t, &q, &u, &udot, out);
+                true
+            }
             _ => false,
         }
     }
@@ -289,6 +311,28 @@ impl BouncingBall {
         out[3] = 0.8;
         out[4] = 0.0;
         out[5] = 1.0;
+    }
+    /// The impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint); a joint's impulse is the first block plus `Σ Λ_k` times the row blocks (0 operations); `drop`.
+    pub fn joint_impulses(
+        &self,
+        _t: f64,
+        _q: &[f64; 1],
+        _u: &[f64; 1],
+        udot: &[f64; 1],
+        out: &mut [f64; 12],
+    ) {
+        out[0] = 0.0;
+        out[1] = 0.0;
+        out[2] = udot[0];
+        out[3] = 0.0;
+        out[4] = 0.0;
+        out[5] = 0.0;
+        out[6] = 0.0;
+        out[7] = 0.0;
+        out[8] = -1.0;
+        out[9] = 0.0;
+        out[10] = 0.0;
+        out[11] = 0.0;
     }
 }
 /// The first-order system `y = (q, u)` of `bouncing_ball` (2 states) with `τ = 0`.

@@ -207,6 +207,8 @@ pub struct Formulation {
     /// The contacts' gap rows, in the order of `contacts` (`stop.lower`,
     /// `ball_floor`).
     pub contact_rows: Vec<String>,
+    /// The tree joints, in the order of `joint_impulses`.
+    pub impulse_joints: Vec<String>,
     /// Wall time of formulation and lowering, seconds.
     pub seconds: f64,
 }
@@ -245,6 +247,7 @@ impl Formulation {
             Function::Constraints => &self.constraint_names,
             Function::Attachments => &self.mounts,
             Function::Contacts => &self.contact_rows,
+            Function::JointImpulses => &self.impulse_joints,
             _ => &[],
         }
     }
@@ -593,6 +596,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Some(cx.lower(&outs, opts)), labels)
     };
     let contacts = contacts(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
+    let (joint_impulses, impulse_joints) = joint_impulses(sys, &cx, &tree, &env, &ev, &k, opts)?;
     let programs: BTreeMap<Function, Program> = [
         (Function::Qdot, Some(qdot)),
         (Function::ForwardDynamics, forward_dynamics),
@@ -607,6 +611,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Function::CutJointReactions, cut_reactions),
         (Function::Attachments, attachments),
         (Function::Contacts, contacts),
+        (Function::JointImpulses, joint_impulses),
         (Function::ForwardDynamicsDerivatives, fd_derivatives),
         (Function::InverseDynamicsDerivatives, id_derivatives),
     ]
@@ -627,6 +632,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         cut_joints,
         mounts,
         contact_rows: sys.contact_rows().into_iter().map(|(_, r)| r).collect(),
+        impulse_joints,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -968,4 +974,67 @@ fn contacts<'cx>(
     }
     let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
     Ok(Some(cx.lower(&outs, opts)))
+}
+
+/// The program of `joint_impulses` (see [`crate::functions`]): the spatial
+/// force RNEA's backward pass gives each tree joint for the accelerations
+/// `Δu` (the `udot` symbols) minus that at `Δu = 0` — velocity terms and
+/// gravity cancel, leaving `Σ I Δv` over the bodies the joint carries —,
+/// then per contact row the same difference for a unit normal impulse and
+/// no `Δu` (the row's load, with its sign in the transmitted force); all in
+/// the child joint frame as `JointReaction`. `None` without contacts.
+fn joint_impulses<'cx>(
+    sys: &System,
+    cx: &'cx Context,
+    tree: &TreeModel<Expr<'cx>>,
+    env: &dyn Env<Expr<'cx>>,
+    ev: &Evaluator<'_, Expr<'cx>>,
+    k: &Kinematics<Expr<'cx>>,
+    opts: LowerOptions,
+) -> Result<(Option<Program>, Vec<String>), FormulateError> {
+    if sys.contacts.is_empty() {
+        return Ok((None, Vec::new()));
+    }
+    let zero_loads = vec![Force::zero(); tree.loads()];
+    let zero_u = vec![Expr::zero(); tree.nu];
+    let du: Vec<Expr> = (0..tree.nu).map(|i| cx.ud(i as u32)).collect();
+    let (_, base) = ev.rnea(k, &zero_u, &zero_loads);
+    let in_child = |i: usize, f: Force<Expr<'cx>>| -> [Expr<'cx>; 6] {
+        let fc = tree.bodies[i].frame_child;
+        let (n, force) = (fc.e.tr_mul_vec(f.n - fc.r.cross(f.f)), fc.e.tr_mul_vec(f.f));
+        [force.0[0], force.0[1], force.0[2], n.0[0], n.0[1], n.0[2]]
+    };
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    let comps = ["fx", "fy", "fz", "nx", "ny", "nz"];
+    let mut block = |tag: &str, loads: &[Force<Expr<'cx>>], ud: &[Expr<'cx>]| {
+        let (_, f) = ev.rnea(k, ud, loads);
+        for i in 0..tree.bodies.len() {
+            let diff = Force {
+                n: f[i].n - base[i].n,
+                f: f[i].f - base[i].f,
+            };
+            for (c, v) in comps.iter().zip(in_child(i, diff)) {
+                names.push(format!(
+                    "{tag}_{}_{c}",
+                    sys.joints[tree.bodies[i].joint].name
+                ));
+                values.push(v);
+            }
+        }
+    };
+    block("dh", &zero_loads, &du);
+    for (r, loads) in super::contacts::unit_loads(sys, tree, env, ev, k)?
+        .iter()
+        .enumerate()
+    {
+        block(&format!("c{r}"), loads, &zero_u);
+    }
+    let joints = tree
+        .bodies
+        .iter()
+        .map(|b| sys.joints[b.joint].name.clone())
+        .collect();
+    let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
+    Ok((Some(cx.lower(&outs, opts)), joints))
 }

@@ -27,8 +27,11 @@
 //!
 //! Every event is reported ([`ContactEvent`]): time, kind, per contact row
 //! the normal speeds before and after and the impulse, the energy before and
-//! after, and the generalised impulse `M Δu` — per speed, the impulse each
-//! joint's free directions receive.
+//! after, the generalised impulse `M Δu` — per speed, the impulse each
+//! joint's free directions receive — and every tree joint's impulse
+//! (Wittenburg's joint impulses: from the generated `joint_impulses`, the
+//! inverse dynamics of the velocity jump with the contact impulses as
+//! loads).
 
 use super::{Simulate, energy};
 use crate::constrained::{ConstraintValues, DMatrix, DVector};
@@ -43,6 +46,9 @@ use serde::{Deserialize, Serialize};
 
 /// The generated function the runtime reads.
 pub(super) const CONTACTS: &str = "contacts";
+
+/// The generated function of the joints' impulses.
+const IMPULSES: &str = "joint_impulses";
 
 /// A contact row counts as closed when its gap is at most this (m or rad):
 /// located crossings end a few ulps past `g = 0`.
@@ -95,6 +101,20 @@ pub struct ContactImpulse {
     pub impulse: f64,
 }
 
+/// The impulse a tree joint transmits to the bodies it carries in an
+/// impact (Wittenburg's joint impulse), in the child joint frame's axes at
+/// its origin.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub struct JointImpulse {
+    /// The joint.
+    pub joint: String,
+    /// Force impulse, N s.
+    pub force: [f64; 3],
+    /// Torque impulse about the child joint frame's origin, N m s.
+    pub torque: [f64; 3],
+}
+
 /// A contact event of a run.
 #[derive(Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
@@ -113,6 +133,10 @@ pub struct ContactEvent {
     /// `M (u⁺ − u⁻) = Wᵀ Λ (+ Jᵀ Π)`: the generalised impulse per speed
     /// (N s or N m s).
     pub generalized_impulse: Vec<f64>,
+    /// Every tree joint's impulse (empty for a release; cut joints' are
+    /// not reported).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub joint_impulses: Vec<JointImpulse>,
 }
 
 /// Solves the linear complementarity problem `ξ = A x + b`, `x ≥ 0`,
@@ -329,6 +353,8 @@ fn append<const N: usize>(all: &mut Solution<N>, s: Solution<N>) {
 pub(super) struct Run<'a, S: ?Sized> {
     pub model: &'a S,
     pub names: &'a [String],
+    /// The tree joints of `joint_impulses`.
+    pub joints: &'a [String],
     pub nk: usize,
     /// Sustained contacts (and so contacts coming to rest) are supported:
     /// models without loop constraints.
@@ -393,6 +419,11 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                     set.len()
                 ))
             })?;
+            let mut full = vec![0.0; nk];
+            for (&i, &l) in set.iter().zip(lambda.iter()) {
+                full[i] = l;
+            }
+            let joint_impulses = self.joint_impulses(t, y, du.as_slice(), &full);
             for k in 0..nu {
                 y[nq + k] += du[k];
             }
@@ -413,6 +444,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                 energy_before: before,
                 energy_after: energy(self.model, t, &y[..]),
                 generalized_impulse: (&m * &du).as_slice().to_vec(),
+                joint_impulses,
             });
             Ok(())
         };
@@ -520,7 +552,53 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             energy_before: e,
             energy_after: e,
             generalized_impulse: vec![0.0; nu],
+            joint_impulses: Vec::new(),
         });
+    }
+
+    /// The tree joints' impulses of the jump `du` at `(t, y)` (before it)
+    /// from the contact impulses `lambda` (one per row), by the generated
+    /// `joint_impulses`; empty if the model has none.
+    fn joint_impulses<const N: usize>(
+        &self,
+        t: f64,
+        y: &[f64; N],
+        du: &[f64],
+        lambda: &[f64],
+    ) -> Vec<JointImpulse> {
+        let (nq, nu, nk, nj) = (self.model.nq(), self.model.nu(), self.nk, self.joints.len());
+        let len = 6 * nj * (1 + nk);
+        if nj == 0 || self.model.function_len(IMPULSES) != Some(len) {
+            return Vec::new();
+        }
+        let mut v = vec![0.0; len];
+        let at = Point {
+            t,
+            q: &y[..nq],
+            u: &y[nq..nq + nu],
+            udot: du,
+            ..Point::default()
+        };
+        if !self.model.evaluate(IMPULSES, &at, &mut v) {
+            return Vec::new();
+        }
+        (0..nj)
+            .map(|j| {
+                let c: Vec<f64> = (0..6)
+                    .map(|a| {
+                        v[6 * j + a]
+                            + (0..nk)
+                                .map(|r| lambda[r] * v[6 * nj * (1 + r) + 6 * j + a])
+                                .sum::<f64>()
+                    })
+                    .collect();
+                JointImpulse {
+                    joint: self.joints[j].clone(),
+                    force: [c[0], c[1], c[2]],
+                    torque: [c[3], c[4], c[5]],
+                }
+            })
+            .collect()
     }
 
     /// Integrates from `(0, y0)` to `t_end` through every contact event.
