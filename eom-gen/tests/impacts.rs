@@ -360,12 +360,11 @@ fn double_pendulum_striking_a_wall_loses_carnots_energy() {
     // Λ = (1 + e)|ġ⁻|/G and M Δu = w Λ (the elbow's: w₂ Λ).
     let lambda = (1.0 + e) * (-c.speed_before) / g;
     assert!((c.impulse - lambda).abs() < 1e-6 * lambda);
-    for k in 0..2 {
+    for (k, (got, wk)) in ev.generalized_impulse.iter().zip(w).enumerate() {
         assert!(
-            (ev.generalized_impulse[k] - w[k] * c.impulse).abs() < 1e-6 * lambda,
-            "speed {k}: {} vs w Λ {}",
-            ev.generalized_impulse[k],
-            w[k] * c.impulse
+            (got - wk * c.impulse).abs() < 1e-6 * lambda,
+            "speed {k}: {got} vs w Λ {}",
+            wk * c.impulse
         );
     }
     // The elbow's impulse by hand: it gives the lower point mass (m₂ = 1,
@@ -519,4 +518,49 @@ fn impact_with_a_loop_constraint_keeps_the_loop() {
     assert!((c.speed_after + e * c.speed_before).abs() < 1e-9);
     let r = (report.q[0].powi(2) + report.q[1].powi(2)).sqrt();
     assert!((r - 1.0).abs() < 1e-6, "on the circle at the end: r = {r}");
+}
+
+/// A URDF arm (the 2-link fixture; its shoulder limited to ±1.5 rad)
+/// imported with its limits (`Options::joint_limits`): swung at 2 rad/s it
+/// strikes the upper stop, which stops the shoulder (plastic, `ġ⁺ = 0`)
+/// and keeps it at or below 1.5 rad afterwards; without the option the
+/// limit is only a note.
+#[test]
+fn urdf_arm_swings_into_its_joint_limit_and_stops() {
+    let path = format!("{}/tests/urdf/arm2.urdf", env!("CARGO_MANIFEST_DIR"));
+    let with = eom_gen::urdf::Options {
+        joint_limits: true,
+        ..Default::default()
+    };
+    let sys = eom_gen::load_with(&path, &with)
+        .and_then(|l| l.check())
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let rows: Vec<String> = sys.contact_rows().into_iter().map(|(_, r)| r).collect();
+    assert_eq!(rows, ["shoulder_limit.lower", "shoulder_limit.upper"]);
+    let plain = eom_gen::load_with(&path, &Default::default())
+        .and_then(|l| l.check())
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    assert!(plain.contacts.is_empty());
+    let o = RunOptions {
+        u0: Some(vec![2.0, 0.0]),
+        ..options(2.0)
+    };
+    let report = run(&sys, &o);
+    assert!(
+        !matches!(report.stop, Stop::Failed { .. }),
+        "{}",
+        report.stop
+    );
+    let ev = report
+        .contact_events
+        .iter()
+        .find(|e| e.kind == ContactEventKind::Impact)
+        .expect("strikes the stop");
+    let c = &ev.contacts[0];
+    assert_eq!(c.contact, "shoulder_limit.upper");
+    assert!(c.speed_before < 0.0 && c.speed_after.abs() < 1e-12, "{c:?}");
+    assert!(ev.energy_after < ev.energy_before);
+    assert!(report.q[0] <= 1.5 + 1e-9, "shoulder at {}", report.q[0]);
 }
