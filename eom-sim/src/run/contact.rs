@@ -97,7 +97,9 @@ pub struct ContactImpulse {
     pub speed_before: f64,
     /// Normal speed `ġ` after.
     pub speed_after: f64,
-    /// Normal impulse `Λ ≥ 0` (N s, or N m s for a joint limit).
+    /// Normal impulse `Λ` (N s, or N m s for a joint limit): `≥ 0` at an
+    /// impact; at a contact coming to rest the impulse that takes its
+    /// remaining speed (below the rest speed), of either sign.
     pub impulse: f64,
 }
 
@@ -262,20 +264,28 @@ fn effective_inverse(
 }
 
 /// The generalised Newton law on the contact rows `set`: `Δu` and the
-/// impulses `Λ` (one per row of `set`) with `ġ⁺ + e ġ⁻ ≥ 0`.
+/// impulses `Λ` (one per row of `set`) with `ġ⁺ + e ġ⁻ ≥ 0`, or with
+/// `equality` `ġ⁺ = −e ġ⁻` on every row.
 fn impact_map(
     m: &DMatrix<f64>,
     j: Option<&DMatrix<f64>>,
     r: &Rows,
     set: &[usize],
     e: &dyn Fn(usize) -> f64,
+    equality: bool,
 ) -> Option<(DVector<f64>, DVector<f64>)> {
     let nu = m.nrows();
     let w = DMatrix::from_fn(set.len(), nu, |i, k| r.w[(set[i], k)]);
     let x = effective_inverse(m, j, &w.transpose())?;
     let g = &w * &x;
     let b = DVector::from_fn(set.len(), |i, _| (1.0 + e(set[i])) * r.gdot[set[i]]);
-    let lambda = lcp(&g, &b)?;
+    let lambda = if equality {
+        // Contacts coming to rest: ġ⁺ = 0 exactly on every row of `set`,
+        // an impulse of either sign (see `Run::settle`).
+        g.lu().solve(&(-b))?
+    } else {
+        lcp(&g, &b)?
+    };
     Some((&x * &lambda, lambda))
 }
 
@@ -413,7 +423,8 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             let m = mass(y);
             let j = self.jacobian(t, &y[..nq], &y[nq..nq + nu]);
             let before = energy(self.model, t, &y[..]);
-            let (du, lambda) = impact_map(&m, j.as_ref(), r, set, e).ok_or_else(|| {
+            let equality = kind == ContactEventKind::Rest;
+            let (du, lambda) = impact_map(&m, j.as_ref(), r, set, e, equality).ok_or_else(|| {
                 fail(&format!(
                     "the impact of {} contact(s) has no solution (a singular mass matrix, or more than {MAX_LCP} contacts closed at once)",
                     set.len()
@@ -517,8 +528,10 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             .filter(|i| !active.contains(i))
             .collect();
         if !arriving.is_empty() {
-            // The remaining normal speed of the arriving contacts taken by
-            // a plastic impulse (the sustained ones keep ġ = 0).
+            // The remaining normal speed of the arriving contacts (below
+            // the rest speed, of either sign: the tail of a Zeno sequence,
+            // whose bounces would exchange that momentum with the floor)
+            // taken by one impulse; the sustained ones keep ġ = 0.
             let plastic = |_: usize| 0.0;
             jump(y, &r, &now, &plastic, ContactEventKind::Rest, events)?;
         }
