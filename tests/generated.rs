@@ -519,6 +519,7 @@ fn every_bundled_model_compiled_equals_interpreted() {
     compiled_and_interpreted_agree::<g::andrews::Andrews>("andrews.ron");
     compiled_and_interpreted_agree::<g::arm7::Arm7>("arm7.ron");
     compiled_and_interpreted_agree::<g::arm7_flex::Arm7Flex>("arm7_flex.ron");
+    compiled_and_interpreted_agree::<g::bouncing_ball::BouncingBall>("bouncing_ball.ron");
     compiled_and_interpreted_agree::<g::bricard::Bricard>("bricard.ron");
     compiled_and_interpreted_agree::<g::double_pendulum::DoublePendulum>("double_pendulum.ron");
     compiled_and_interpreted_agree::<g::fourbar::Fourbar>("fourbar.ron");
@@ -544,4 +545,38 @@ fn every_bundled_model_compiled_equals_interpreted() {
     compiled_and_interpreted_agree::<g::stewart_driven::StewartDriven>("stewart_driven.ron");
     compiled_and_interpreted_agree::<g::pendulum_rod::PendulumRod>("ancf/pendulum_rod.ron");
     compiled_and_interpreted_agree::<g::fourbar_cable::FourbarCable>("ancf/fourbar_cable.ron");
+}
+
+/// The bouncing ball compiled runs through the same contact events as
+/// interpreted (issue #26): same impacts, same rest time.
+#[test]
+fn bouncing_ball_compiled_equals_interpreted() {
+    let sys = check_file(&format!(
+        "{}/models/bouncing_ball.ron",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap_or_else(|r| panic!("{r}"))
+    .system;
+    let f = eom_gen::mech::formulate(&sys, eom_gen::functions::FunctionSet::all_requested())
+        .expect("formulates");
+    let o = eom_sim::RunOptions {
+        t_end: 5.0,
+        ..eom_sim::RunOptions::default()
+    };
+    let model = g::bouncing_ball::BouncingBall::default();
+    let compiled = eom_sim::run::simulate_generated::<_, 2, 2>(&model, &o).expect("runs");
+    let interpreted = eom_gen::interpret::simulate(&f, &sys, &o).expect("runs");
+    assert_eq!(
+        compiled.contact_events.len(),
+        interpreted.contact_events.len()
+    );
+    assert!(compiled.contact_events.len() > 20);
+    for (a, b) in compiled
+        .contact_events
+        .iter()
+        .zip(&interpreted.contact_events)
+    {
+        assert_eq!(a.kind, b.kind);
+        assert!((a.t - b.t).abs() < 1e-9, "{} vs {}", a.t, b.t);
+    }
 }

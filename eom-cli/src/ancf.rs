@@ -238,6 +238,7 @@ pub fn simulate_cmd(
         integrator: run.integrator,
         detail,
         csv,
+        events_csv: None,
     };
     Ok(finish(
         &sys.name,

@@ -17,6 +17,11 @@ pub struct UrdfArgs {
     /// listed in the notes (like MuJoCo's `balanceinertia`).
     #[arg(long, global = true)]
     pub balance_inertia: bool,
+    /// URDF import: the `<limit lower upper>` of revolute and prismatic
+    /// joints become joint-limit contacts (plastic stops, `e = 0`); without
+    /// it they are listed in the notes and left off.
+    #[arg(long, global = true)]
+    pub urdf_limits: bool,
 }
 
 impl UrdfArgs {
@@ -25,6 +30,7 @@ impl UrdfArgs {
         eom_gen::urdf::Options {
             balance_inertia: self.balance_inertia,
             strict: self.strict_inertia,
+            joint_limits: self.urdf_limits,
         }
     }
 }

@@ -4,7 +4,7 @@
 //! exit status (0 when the run reached its end time, 3 with the reason
 //! when it stopped early).
 
-use eom_sim::run::{CableState, MountForce, StaticReport};
+use eom_sim::run::{CableState, ContactEvent, ContactEventKind, MountForce, StaticReport};
 use eom_sim::{Integrator, RunReport};
 use std::fmt::Write;
 use std::process::ExitCode;
@@ -20,6 +20,8 @@ pub struct Setting<'a> {
     pub detail: String,
     /// The CSV the trajectory went to.
     pub csv: Option<&'a str>,
+    /// The CSV the contact events went to.
+    pub events_csv: Option<&'a str>,
 }
 
 /// Prints the report (`json`: one object; else the summary) and returns
@@ -121,10 +123,56 @@ pub fn summary(name: &str, coordinates: &[&str], o: &Setting<'_>, r: &RunReport)
             );
         }
     }
+    write_contact_events(&mut s, &r.contact_events);
     if let Some(csv) = o.csv {
         let _ = writeln!(s, "  trajectory written to {csv}");
     }
+    if let Some(csv) = o.events_csv {
+        let _ = writeln!(s, "  contact events written to {csv}");
+    }
     s
+}
+
+/// The contact events in a few lines: how many of each kind, the first
+/// impact and the last event.
+fn write_contact_events(s: &mut String, events: &[ContactEvent]) {
+    if events.is_empty() {
+        return;
+    }
+    let count = |k: ContactEventKind| events.iter().filter(|e| e.kind == k).count();
+    let _ = writeln!(
+        s,
+        "  contact events: {} impact(s), {} coming to rest, {} release(s)",
+        count(ContactEventKind::Impact),
+        count(ContactEventKind::Rest),
+        count(ContactEventKind::Release)
+    );
+    let line = |e: &ContactEvent| {
+        let rows: Vec<String> = e
+            .contacts
+            .iter()
+            .map(|c| {
+                format!(
+                    "`{}` Λ = {:.6e}, ġ {:.6e} → {:.6e}",
+                    c.contact, c.impulse, c.speed_before, c.speed_after
+                )
+            })
+            .collect();
+        format!(
+            "{} at t = {:.9} s: {}; energy {:.9} → {:.9} J",
+            e.kind.name(),
+            e.t,
+            rows.join("; "),
+            e.energy_before,
+            e.energy_after
+        )
+    };
+    if let Some(first) = events.iter().find(|e| e.kind == ContactEventKind::Impact) {
+        let _ = writeln!(s, "    first {}", line(first));
+    }
+    if let Some(last) = events.last() {
+        let _ = writeln!(s, "    last {}", line(last));
+    }
 }
 
 /// The energy change for people: relative to the size of the energies

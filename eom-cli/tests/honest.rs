@@ -632,3 +632,46 @@ fn cable_every_samples_the_run_by_interpolation() {
     println!("largest node difference {worst:.2e} m");
     assert!(worst < 5e-6, "{worst:e}");
 }
+
+/// Contacts through the command line (issue #26): the JSON report lists the
+/// contact events, `--events-csv` writes them (one row per event), and the
+/// option is refused on a model without contacts.
+#[test]
+fn contact_events_in_the_report_and_the_events_csv() {
+    let csv = temp_path("ball-events.csv");
+    let v = ok_json(&[
+        "simulate",
+        "models/bouncing_ball.ron",
+        "--interpret",
+        "--t-end",
+        "1.2",
+        "--events-csv",
+        &csv,
+        "--json",
+    ]);
+    let events = v["contact_events"].as_array().cloned().unwrap_or_default();
+    assert_eq!(events.len(), 2, "two impacts before 1.2 s: {v}");
+    assert_eq!(events[0]["kind"], "impact");
+    assert_eq!(events[0]["contacts"][0]["contact"], "floor");
+    assert_eq!(events[0]["joint_impulses"][0]["joint"], "drop");
+    let text = std::fs::read_to_string(&csv).unwrap_or_default();
+    let _ = std::fs::remove_file(&csv);
+    let mut lines = text.lines();
+    let header = lines.next().unwrap_or_default();
+    assert!(
+        header.starts_with("t,kind,energy_before,energy_after,floor.impulse,"),
+        "{header}"
+    );
+    assert_eq!(lines.count(), 2, "{text}");
+    let out = eom_gen(&[
+        "simulate",
+        "models/pendulum.ron",
+        "--interpret",
+        "--t-end",
+        "0.1",
+        "--events-csv",
+        &csv,
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("`pendulum` has no contacts"));
+}

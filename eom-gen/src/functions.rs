@@ -46,6 +46,11 @@ pub enum Function {
     /// The markers holding cable ends: positions, clamp normals and their
     /// Jacobians `∂/∂q`.
     Attachments,
+    /// The unilateral contacts' gaps `g`, normal speeds `ġ = wᵀ u`, `γ`
+    /// (`g̈ = wᵀ u̇ − γ`), their `e` and `μ`, and rows `w`.
+    Contacts,
+    /// Joint impulses of a velocity jump (Wittenburg ch. 6).
+    JointImpulses,
     /// Partial derivatives of forward dynamics: `∂u̇/∂q` (in the tangent
     /// space), `∂u̇/∂u`, `∂u̇/∂τ`, `∂u̇/∂(inputs)`.
     ForwardDynamicsDerivatives,
@@ -113,6 +118,8 @@ pub enum When {
     HasCutJoints,
     /// When cable ends are held at markers of rigid bodies.
     HasCableMounts,
+    /// When the model has unilateral contacts.
+    HasContacts,
     /// Only when asked for by name (a scene's `functions` list, or a
     /// caller's request such as `eom-gen linearize`'s); never by default,
     /// so a model without such a request generates what it did before.
@@ -277,6 +284,28 @@ pub const TABLE: &[Entry] = &[
         uses_multipliers: false,
         layout: Layout::Vector,
         when: When::HasCableMounts,
+        in_trait: false,
+        derived_from: &[],
+    },
+    Entry {
+        function: Function::Contacts,
+        name: "contacts",
+        doc: "the unilateral contacts (issue #26), `NK` gap rows in the order of the model's contacts (a joint limit's lower row before its upper): the gaps `g` (`NK`, m or rad, open when positive), the normal speeds `ġ = wᵀ u` (`NK`), `γ` with `g̈ = wᵀ u̇ − γ` (`NK`), Newton's restitution coefficient `e` and Coulomb's `μ` of each row (`NK` each), then the rows `w = ∂ġ/∂u` (`NK × NU`, row by row)",
+        args: &[Arg::T, Arg::Q, Arg::U],
+        uses_multipliers: false,
+        layout: Layout::Vector,
+        when: When::HasContacts,
+        in_trait: false,
+        derived_from: &[],
+    },
+    Entry {
+        function: Function::JointImpulses,
+        name: "joint_impulses",
+        doc: "the impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint); a joint's impulse is the first block plus `Σ Λ_k` times the row blocks",
+        args: &[Arg::T, Arg::Q, Arg::U, Arg::Udot],
+        uses_multipliers: false,
+        layout: Layout::Vector,
+        when: When::HasContacts,
         in_trait: false,
         derived_from: &[],
     },

@@ -359,6 +359,8 @@ impl eom_sim::Simulate for Interpreted<'_> {
             outputs: self.f.output_names.clone(),
             constraints: self.f.constraint_names.clone(),
             cut_joints: self.f.cut_joints.clone(),
+            contacts: self.f.contact_rows.clone(),
+            impulse_joints: self.f.impulse_joints.clone(),
         }
     }
     fn initial_state(&self) -> (Vec<f64>, Vec<f64>) {

@@ -618,6 +618,78 @@ pub struct System {
     /// Chains of ANCF elements (issue #18), in file order: solved by the
     /// large-model runtime through `eom_gen::cables` (`chain_spec`), not by generated code.
     pub cables: Vec<CableInfo>,
+    /// Unilateral contacts (issue #26), in file order.
+    pub contacts: Vec<ContactInfo>,
+}
+
+/// What a unilateral contact's gap measures.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ContactKind {
+    /// End stops of a one-coordinate joint (revolute, prismatic):
+    /// `g = q − lower`, `g = upper − q`.
+    JointLimit {
+        /// The joint (a tree joint with one coordinate).
+        joint: JointId,
+        /// Lower limit, if any.
+        lower: Option<Quantity>,
+        /// Upper limit, if any.
+        upper: Option<Quantity>,
+    },
+    /// A sphere (a point for radius 0) against a world plane:
+    /// `g = n·(x − p) − r`.
+    Plane {
+        /// The sphere's centre.
+        at: Point,
+        /// Its radius.
+        radius: Quantity,
+        /// A point of the plane, world axes.
+        point: Vec3Q,
+        /// The unit normal towards the free side (at the defaults).
+        normal: Axis,
+    },
+    /// Two spheres: `g = |x_a − x_b| − r_a − r_b`.
+    Spheres {
+        /// Centre of the first.
+        a: Point,
+        /// Centre of the second.
+        b: Point,
+        /// Radius of the first.
+        radius_a: Quantity,
+        /// Radius of the second.
+        radius_b: Quantity,
+    },
+}
+
+/// A validated unilateral contact.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ContactInfo {
+    /// Name.
+    pub name: String,
+    /// Its gap.
+    pub kind: ContactKind,
+    /// Newton's coefficient of restitution, in `[0, 1]`.
+    pub e: f64,
+    /// Coulomb friction coefficient, `≥ 0`.
+    pub mu: f64,
+    /// Where it is defined.
+    pub span: Span,
+}
+
+impl ContactInfo {
+    /// The names of its gap rows: `name.lower`, `name.upper` for a joint
+    /// limit, the contact's name otherwise.
+    pub fn rows(&self) -> Vec<String> {
+        match &self.kind {
+            ContactKind::JointLimit { lower, upper, .. } => [
+                lower.as_ref().map(|_| format!("{}.lower", self.name)),
+                upper.as_ref().map(|_| format!("{}.upper", self.name)),
+            ]
+            .into_iter()
+            .flatten()
+            .collect(),
+            _ => vec![self.name.clone()],
+        }
+    }
 }
 
 /// A validated chain of ANCF elements.
@@ -718,6 +790,17 @@ pub struct CableMountInfo {
 }
 
 impl System {
+    /// The gap rows of the contacts, in order (contact by contact, a joint
+    /// limit's lower before its upper): contact index and row name. The
+    /// generated `contacts` function has one row per entry, in this order.
+    pub fn contact_rows(&self) -> Vec<(usize, String)> {
+        self.contacts
+            .iter()
+            .enumerate()
+            .flat_map(|(c, k)| k.rows().into_iter().map(move |r| (c, r)))
+            .collect()
+    }
+
     /// The cable ends held at markers of rigid bodies, in order (cable by
     /// cable, start before end): cable index, `true` for the second end,
     /// the mount. The generated `attachments` function has one block per

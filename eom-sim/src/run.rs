@@ -29,6 +29,10 @@ use std::time::Instant;
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
+mod contact;
+pub use contact::{
+    ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, JointImpulse, MAX_LCP, lcp,
+};
 mod elements;
 pub use elements::{
     CableState, ElementReport, LoadStepReport, MountForce, StabilityReport, StaticReport,
@@ -140,6 +144,10 @@ pub struct RunOptions {
     /// sets it).
     #[cfg_attr(feature = "serde", serde(default))]
     pub constraint_columns: bool,
+    /// Write the contact events (impacts, contacts coming to rest and
+    /// released) to this CSV file, one row per contact row and event.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub events_csv: Option<String>,
 }
 
 impl Default for RunOptions {
@@ -159,6 +167,7 @@ impl Default for RunOptions {
             energy_columns: false,
             momentum_columns: false,
             constraint_columns: false,
+            events_csv: None,
         }
     }
 }
@@ -662,6 +671,12 @@ pub struct RunReport {
         serde(flatten, default, skip_serializing_if = "Option::is_none")
     )]
     pub elements: Option<ElementReport>,
+    /// The contact events in the order of time (models with contacts).
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "Vec::is_empty")
+    )]
+    pub contact_events: Vec<ContactEvent>,
 }
 
 /// The names a run reports by.
@@ -677,6 +692,10 @@ pub struct Names {
     pub constraints: Vec<String>,
     /// Cut joints (six reaction components each in `cut_joint_reactions`).
     pub cut_joints: Vec<String>,
+    /// The contacts' gap rows (the labels of the generated `contacts`).
+    pub contacts: Vec<String>,
+    /// The tree joints whose impulses `joint_impulses` gives.
+    pub impulse_joints: Vec<String>,
 }
 
 /// A model a run integrates: its [`Dynamics`] (for the constraint
@@ -707,12 +726,21 @@ impl<M: ConstrainedModel + Clone> Simulate for Generated<'_, M> {
             .iter()
             .find(|f| f.name == "cut_joint_reactions")
             .map_or_else(Vec::new, |f| own(f.labels));
+        let labels = |name: &str| {
+            M::FUNCTIONS
+                .iter()
+                .find(|f| f.name == name)
+                .map_or_else(Vec::new, |f| own(f.labels))
+        };
+        let (contacts, impulse_joints) = (labels("contacts"), labels("joint_impulses"));
         Names {
             coordinates: own(M::COORDINATE_NAMES),
             speeds: own(M::SPEED_NAMES),
             outputs: own(M::OUTPUT_NAMES),
             constraints: own(M::CONSTRAINT_NAMES),
             cut_joints,
+            contacts,
+            impulse_joints,
         }
     }
     fn initial_state(&self) -> (Vec<f64>, Vec<f64>) {
@@ -962,11 +990,29 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         .chain(&names.speeds)
         .cloned()
         .collect();
+    let nk = contact::count(model);
+    if nk > 0 {
+        contact_problems(model, &names, nk, &q0, &u0, options)?;
+    }
     let start = Instant::now();
     if nc == 0 {
         let mut y0 = [0.0; N];
         for (d, s) in y0.iter_mut().zip(q0.iter().chain(&u0)) {
             *d = *s;
+        }
+        if nk > 0 {
+            let run = contact_run(model, &names, nk, true, options);
+            let (sol, events, failed) =
+                run.run(&Free(model), &settings, y0, options.t_end, &solve_options);
+            let cpu = start.elapsed().as_secs_f64();
+            let mut report = finish(model, &names, &state_names, &sol, &y0, cpu, None);
+            if let Some((t, message)) = failed {
+                report.stop = Stop::Failed { t, message };
+            }
+            report.contact_events = events;
+            write_csv(model, &names, options, &sol, &|_, _| None)?;
+            write_events_csv(model, &names, options, &report.contact_events)?;
+            return Ok(report);
         }
         let sol = solve(
             &settings,
@@ -1052,7 +1098,13 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
     for (d, s) in y0.iter_mut().zip(a.q.iter().chain(&a.u)) {
         *d = *s;
     }
-    let sol = solve(&settings, &cs, 0.0, y0, options.t_end, &solve_options);
+    let (sol, events, failed) = if nk > 0 {
+        let run = contact_run(model, &names, nk, false, options);
+        run.run(&cs, &settings, y0, options.t_end, &solve_options)
+    } else {
+        let sol = solve(&settings, &cs, 0.0, y0, options.t_end, &solve_options);
+        (sol, Vec::new(), None)
+    };
     let cpu = start.elapsed().as_secs_f64();
     let (q, u) = sol.y_final[..nq + nu].split_at(nq);
     let lambda = cs
@@ -1064,10 +1116,134 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
     if let Some(r) = cs.refusal() {
         report.stop = Stop::from(&r);
     }
+    if let Some((t, message)) = failed {
+        report.stop = Stop::Failed { t, message };
+    }
+    report.contact_events = events;
     write_csv(model, &names, options, &sol, &|t, y| {
         cs.accelerations(t, &y[..nq], &y[nq..nq + nu])
     })?;
+    write_events_csv(model, &names, options, &report.contact_events)?;
     Ok(report)
+}
+
+/// The contact runner of `model` (see [`contact`]).
+fn contact_run<'a, S: Simulate + ?Sized>(
+    model: &'a S,
+    names: &'a Names,
+    nk: usize,
+    sustained: bool,
+    options: &RunOptions,
+) -> contact::Run<'a, S> {
+    contact::Run {
+        model,
+        names: &names.contacts,
+        joints: &names.impulse_joints,
+        nk,
+        sustained,
+        rest_height: options.atol.max(1e-14),
+    }
+}
+
+/// What a run with contacts refuses: the index-3 method (its state holds
+/// multipliers that an impact would have to jump too) and Coulomb friction,
+/// which the runtime does not handle yet.
+fn contact_problems<S: Simulate + ?Sized>(
+    model: &S,
+    names: &Names,
+    nk: usize,
+    q0: &[f64],
+    u0: &[f64],
+    options: &RunOptions,
+) -> Result<(), RunError> {
+    let mut problems = Vec::new();
+    if model.nc() > 0 && options.method == Method::Index3 {
+        problems.push(
+            "the model has contacts: the index-3 method does not apply impacts; use --constraints projection (or another method)"
+                .to_string(),
+        );
+    }
+    match contact::rows(model, nk, 0.0, q0, u0) {
+        None => problems.push("the model's generated `contacts` could not be evaluated".into()),
+        Some(r) => {
+            for (i, mu) in r.mu.iter().enumerate().filter(|(_, mu)| **mu != 0.0) {
+                problems.push(format!(
+                    "contact `{}` has Coulomb friction (mu = {mu}), which the runtime does not handle yet: impacts and sustained contact are frictionless; set `mu: 0`",
+                    names.contacts.get(i).map_or("?", String::as_str)
+                ));
+            }
+        }
+    }
+    if problems.is_empty() {
+        Ok(())
+    } else {
+        Err(RunError::Options(problems))
+    }
+}
+
+/// Writes the contact events to [`RunOptions::events_csv`]: one row per
+/// event with `t`, `kind` (0 impact, 1 rest, 2 release), the energies
+/// before and after, per contact row its impulse and normal speeds before
+/// and after (empty where the row took no part), the generalised impulse per
+/// speed, and every tree joint's impulse (force, torque).
+fn write_events_csv<S: Simulate + ?Sized>(
+    model: &S,
+    names: &Names,
+    options: &RunOptions,
+    events: &[ContactEvent],
+) -> Result<(), RunError> {
+    let Some(path) = &options.events_csv else {
+        return Ok(());
+    };
+    let mut header: Vec<String> = ["t", "kind", "energy_before", "energy_after"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    for c in &names.contacts {
+        for what in ["impulse", "speed_before", "speed_after"] {
+            header.push(format!("{c}.{what}"));
+        }
+    }
+    for s in &names.speeds {
+        header.push(format!("impulse_{s}"));
+    }
+    for j in &names.impulse_joints {
+        for c in ["fx", "fy", "fz", "nx", "ny", "nz"] {
+            header.push(format!("{j}.impulse_{c}"));
+        }
+    }
+    let mut table = crate::table::Table::new(header);
+    for e in events {
+        let kind = match e.kind {
+            ContactEventKind::Impact => 0.0,
+            ContactEventKind::Rest => 1.0,
+            ContactEventKind::Release => 2.0,
+        };
+        let mut row = vec![e.t, kind, e.energy_before, e.energy_after];
+        for c in &names.contacts {
+            match e.contacts.iter().find(|x| &x.contact == c) {
+                Some(x) => row.extend([x.impulse, x.speed_before, x.speed_after]),
+                None => row.extend([f64::NAN; 3]),
+            }
+        }
+        row.extend(
+            e.generalized_impulse
+                .iter()
+                .copied()
+                .chain(std::iter::repeat(f64::NAN))
+                .take(model.nu()),
+        );
+        for j in &names.impulse_joints {
+            match e.joint_impulses.iter().find(|x| &x.joint == j) {
+                Some(x) => row.extend(x.force.iter().chain(&x.torque)),
+                None => row.extend([f64::NAN; 6]),
+            }
+        }
+        table.push(row);
+    }
+    table
+        .write(path)
+        .map_err(|e| RunError::Csv(format!("cannot write `{path}`: {e}")))
 }
 
 /// Total energy at a state; NaN if the model has no energy function.
@@ -1136,6 +1312,7 @@ fn finish<const N: usize, S: Simulate + ?Sized>(
         cpu_s: cpu,
         constrained,
         elements: None,
+        contact_events: Vec::new(),
     }
 }
 

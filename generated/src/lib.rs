@@ -11,6 +11,9 @@ pub mod arm7;
 /// Model `arm7_flex`, generated from `models/arm7_flex.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod arm7_flex;
+/// Model `bouncing_ball`, generated from `models/bouncing_ball.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod bouncing_ball;
 /// Model `bricard`, generated from `models/bricard.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod bricard;

@@ -52,6 +52,12 @@ pub struct SimulateArgs {
     /// Output interval of the CSV, using dense output (default: every step).
     #[arg(long, allow_hyphen_values = true)]
     pub every: Option<f64>,
+    /// Models with contacts: write the contact events (impacts, rest,
+    /// release: time, kind, energies, per contact row the impulse and the
+    /// normal speeds before and after, the generalised impulse per speed)
+    /// to this CSV file.
+    #[arg(long)]
+    pub events_csv: Option<String>,
     /// Run the programs in the evaluator instead of compiled code.
     #[arg(long)]
     pub interpret: bool,
@@ -146,7 +152,14 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         energy_columns: false,
         momentum_columns: false,
         constraint_columns: false,
+        events_csv: a.events_csv,
     };
+    if o.events_csv.is_some() && sys.contacts.is_empty() {
+        problems.push(format!(
+            "--events-csv writes the contact events; `{}` has no contacts",
+            sys.name
+        ));
+    }
     problems.extend(o.problems());
     for (what, given, names) in [
         ("q0", &o.q0, sys.coordinate_names()),
@@ -186,8 +199,9 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 7] = [
+    let refused: [(&str, bool); 8] = [
         ("--plot", a.plot.is_some()),
+        ("--events-csv", a.events_csv.is_some()),
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--q0", a.initial.q0.is_some()),
@@ -298,6 +312,7 @@ fn simulate(
         integrator: o.integrator,
         detail,
         csv: user_csv.as_deref(),
+        events_csv: o.events_csv.as_deref(),
     };
     finish(
         &sys.name,

@@ -204,6 +204,11 @@ pub struct Formulation {
     /// The cable mounts, in the order of `attachments` (`cable.start`,
     /// `cable.end`).
     pub mounts: Vec<String>,
+    /// The contacts' gap rows, in the order of `contacts` (`stop.lower`,
+    /// `ball_floor`).
+    pub contact_rows: Vec<String>,
+    /// The tree joints, in the order of `joint_impulses`.
+    pub impulse_joints: Vec<String>,
     /// Wall time of formulation and lowering, seconds.
     pub seconds: f64,
 }
@@ -241,6 +246,8 @@ impl Formulation {
             Function::CutJointReactions => &self.cut_joints,
             Function::Constraints => &self.constraint_names,
             Function::Attachments => &self.mounts,
+            Function::Contacts => &self.contact_rows,
+            Function::JointImpulses => &self.impulse_joints,
             _ => &[],
         }
     }
@@ -588,6 +595,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             .collect();
         (Some(cx.lower(&outs, opts)), labels)
     };
+    let contacts = contacts(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
+    let (joint_impulses, impulse_joints) = joint_impulses(sys, &cx, &tree, &env, &ev, &k, opts)?;
     let programs: BTreeMap<Function, Program> = [
         (Function::Qdot, Some(qdot)),
         (Function::ForwardDynamics, forward_dynamics),
@@ -601,6 +610,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Function::Constraints, constraints),
         (Function::CutJointReactions, cut_reactions),
         (Function::Attachments, attachments),
+        (Function::Contacts, contacts),
+        (Function::JointImpulses, joint_impulses),
         (Function::ForwardDynamicsDerivatives, fd_derivatives),
         (Function::InverseDynamicsDerivatives, id_derivatives),
     ]
@@ -620,6 +631,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         jacobian_rows: out.jacobian_rows,
         cut_joints,
         mounts,
+        contact_rows: sys.contact_rows().into_iter().map(|(_, r)| r).collect(),
+        impulse_joints,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -888,4 +901,140 @@ fn closure<'cx>(
         names: equation_names,
         n_holonomic,
     }))
+}
+
+/// The program of `contacts` (see [`crate::functions`]): per gap row `g`,
+/// then per row `ġ`, then per row `γ = −d(ġ)/dt` at `u̇ = 0` (so that
+/// `g̈ = wᵀ u̇ − γ`), per row `e` and `μ`, then the rows `w = ∂ġ/∂u`;
+/// `None` without contacts.
+#[allow(clippy::too_many_arguments)]
+fn contacts<'cx>(
+    sys: &System,
+    cx: &'cx Context,
+    tree: &TreeModel<Expr<'cx>>,
+    env: &dyn Env<Expr<'cx>>,
+    ev: &Evaluator<'_, Expr<'cx>>,
+    k: &Kinematics<Expr<'cx>>,
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Result<Option<Program>, FormulateError> {
+    use crate::sym::TimeDerivative;
+    if sys.contacts.is_empty() {
+        return Ok(None);
+    }
+    let rows = super::contacts::gaps(sys, tree, env, ev, k, q, u)?;
+    // q̇ along the motion: q_i → (N(q) u)_i, and u̇ = 0.
+    let mut second = TimeDerivative::new();
+    for (qi, qd) in q.iter().zip(qdot) {
+        if let Some(s) = cx.sym_id(*qi) {
+            second.rate(s, cx.id(*qd));
+        }
+    }
+    let zero = cx.id(Expr::zero());
+    for ui in u {
+        if let Some(s) = cx.sym_id(*ui) {
+            second.rate(s, zero);
+        }
+    }
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    for (i, (g, _)) in rows.iter().enumerate() {
+        names.push(format!("g{i}"));
+        values.push(*g);
+    }
+    for (i, (_, gd)) in rows.iter().enumerate() {
+        names.push(format!("gdot{i}"));
+        values.push(*gd);
+    }
+    for (i, (_, gd)) in rows.iter().enumerate() {
+        names.push(format!("gamma{i}"));
+        values.push(-cx.time_derivative(&mut second, *gd)?);
+    }
+    // The contact laws travel with the model: Newton's `e`, Coulomb's `μ`.
+    let laws: Vec<(f64, f64)> = sys
+        .contact_rows()
+        .iter()
+        .map(|(c, _)| (sys.contacts[*c].e, sys.contacts[*c].mu))
+        .collect();
+    for (i, (e, _)) in laws.iter().enumerate() {
+        names.push(format!("e{i}"));
+        values.push(Expr::from_f64(*e));
+    }
+    for (i, (_, mu)) in laws.iter().enumerate() {
+        names.push(format!("mu{i}"));
+        values.push(Expr::from_f64(*mu));
+    }
+    for (i, (_, gd)) in rows.iter().enumerate() {
+        for (kk, &uk) in u.iter().enumerate() {
+            names.push(format!("w_{i}_{kk}"));
+            values.push(cx.diff(*gd, uk));
+        }
+    }
+    let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
+    Ok(Some(cx.lower(&outs, opts)))
+}
+
+/// The program of `joint_impulses` (see [`crate::functions`]): the spatial
+/// force RNEA's backward pass gives each tree joint for the accelerations
+/// `Δu` (the `udot` symbols) minus that at `Δu = 0` — velocity terms and
+/// gravity cancel, leaving `Σ I Δv` over the bodies the joint carries —,
+/// then per contact row the same difference for a unit normal impulse and
+/// no `Δu` (the row's load, with its sign in the transmitted force); all in
+/// the child joint frame as `JointReaction`. `None` without contacts.
+fn joint_impulses<'cx>(
+    sys: &System,
+    cx: &'cx Context,
+    tree: &TreeModel<Expr<'cx>>,
+    env: &dyn Env<Expr<'cx>>,
+    ev: &Evaluator<'_, Expr<'cx>>,
+    k: &Kinematics<Expr<'cx>>,
+    opts: LowerOptions,
+) -> Result<(Option<Program>, Vec<String>), FormulateError> {
+    if sys.contacts.is_empty() {
+        return Ok((None, Vec::new()));
+    }
+    let zero_loads = vec![Force::zero(); tree.loads()];
+    let zero_u = vec![Expr::zero(); tree.nu];
+    let du: Vec<Expr> = (0..tree.nu).map(|i| cx.ud(i as u32)).collect();
+    let (_, base) = ev.rnea(k, &zero_u, &zero_loads);
+    let in_child = |i: usize, f: Force<Expr<'cx>>| -> [Expr<'cx>; 6] {
+        let fc = tree.bodies[i].frame_child;
+        let (n, force) = (fc.e.tr_mul_vec(f.n - fc.r.cross(f.f)), fc.e.tr_mul_vec(f.f));
+        [force.0[0], force.0[1], force.0[2], n.0[0], n.0[1], n.0[2]]
+    };
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    let comps = ["fx", "fy", "fz", "nx", "ny", "nz"];
+    let mut block = |tag: &str, loads: &[Force<Expr<'cx>>], ud: &[Expr<'cx>]| {
+        let (_, f) = ev.rnea(k, ud, loads);
+        for i in 0..tree.bodies.len() {
+            let diff = Force {
+                n: f[i].n - base[i].n,
+                f: f[i].f - base[i].f,
+            };
+            for (c, v) in comps.iter().zip(in_child(i, diff)) {
+                names.push(format!(
+                    "{tag}_{}_{c}",
+                    sys.joints[tree.bodies[i].joint].name
+                ));
+                values.push(v);
+            }
+        }
+    };
+    block("dh", &zero_loads, &du);
+    for (r, loads) in super::contacts::unit_loads(sys, tree, env, ev, k)?
+        .iter()
+        .enumerate()
+    {
+        block(&format!("c{r}"), loads, &zero_u);
+    }
+    let joints = tree
+        .bodies
+        .iter()
+        .map(|b| sys.joints[b.joint].name.clone())
+        .collect();
+    let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
+    Ok((Some(cx.lower(&outs, opts)), joints))
 }

@@ -23,6 +23,7 @@
 pub mod aba;
 pub mod applied;
 pub mod constraints;
+pub mod contacts;
 pub mod count;
 pub mod crba;
 pub mod dense;

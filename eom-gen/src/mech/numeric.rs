@@ -281,6 +281,26 @@ impl Numeric {
         super::mounts::mount_values(sys, &self.tree, &self.env, &k)
     }
 
+    /// The gap `g` and normal speed `ġ` of every contact row at `(q, u)`
+    /// (the generated `contacts` without `γ` and `w`; see
+    /// [`super::contacts`]).
+    pub fn contacts(
+        &self,
+        sys: &System,
+        q: &[f64],
+        u: &[f64],
+        t: f64,
+    ) -> Result<Vec<(f64, f64)>, MechError> {
+        let ev = self.eval();
+        let k = ev.kinematics(&State {
+            q,
+            u,
+            t,
+            inputs: &[],
+        })?;
+        super::contacts::gaps(sys, &self.tree, &self.env, &ev, &k, q, u)
+    }
+
     /// World position and velocity of `point` (body coordinates) on
     /// system body `body`.
     pub fn point(

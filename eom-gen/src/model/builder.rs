@@ -38,6 +38,7 @@ impl ModelBuilder {
                 outputs: Vec::new(),
                 inertia_policy: Default::default(),
                 cables: Vec::new(),
+                contacts: Vec::new(),
             },
         }
     }

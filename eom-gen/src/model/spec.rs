@@ -132,6 +132,89 @@ pub struct Spec {
     /// beams that bend far (issue #18).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub cables: Vec<Cable>,
+    /// Unilateral contacts (gaps `g(q) ≥ 0` with Newton restitution and
+    /// Coulomb friction; issue #26): joint limits, spheres or points
+    /// against world planes, spheres against spheres.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub contacts: Vec<Contact>,
+}
+
+/// A unilateral contact: a gap `g(q) ≥ 0` that the motion may close, then
+/// an impact by Newton's law `ġ⁺ = −e ġ⁻` and, if it stays closed, a
+/// contact force `λ ≥ 0`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Contact {
+    /// End stops of a revolute (rad) or prismatic (m) joint:
+    /// `g = q − lower` and `g = upper − q`; at least one of them.
+    JointLimit {
+        /// Unique contact name.
+        name: String,
+        /// The joint (revolute or prismatic).
+        joint: String,
+        /// Lower limit of the joint coordinate.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        lower: Option<Num>,
+        /// Upper limit of the joint coordinate.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        upper: Option<Num>,
+        /// Newton's coefficient of restitution, `0 ≤ e ≤ 1`.
+        e: Num,
+        /// Coulomb friction coefficient, `μ ≥ 0` (default 0).
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        mu: Num,
+    },
+    /// A point (or a sphere of `radius` about it) on a body against a plane
+    /// fixed in the world: `g = n·(x − point) − radius`, `n` the unit
+    /// normal pointing to the free side.
+    Plane {
+        /// Unique contact name.
+        name: String,
+        /// The sphere's centre (or the point): a body point or marker.
+        at: Anchor,
+        /// Radius of the sphere, m (default 0: a point).
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        radius: Num,
+        /// A point of the plane, world axes, m (default the origin).
+        #[serde(default, skip_serializing_if = "V3::is_zero")]
+        point: V3,
+        /// The plane's normal, world axes, towards the free side.
+        normal: V3,
+        /// Newton's coefficient of restitution, `0 ≤ e ≤ 1`.
+        e: Num,
+        /// Coulomb friction coefficient, `μ ≥ 0` (default 0).
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        mu: Num,
+    },
+    /// Two spheres: `g = |x_a − x_b| − radius_a − radius_b`.
+    Spheres {
+        /// Unique contact name.
+        name: String,
+        /// Centre of the first sphere: a body point or marker.
+        a: Anchor,
+        /// Centre of the second sphere (`ground` allowed).
+        b: Anchor,
+        /// Radius of the first sphere, m.
+        radius_a: Num,
+        /// Radius of the second sphere, m.
+        radius_b: Num,
+        /// Newton's coefficient of restitution, `0 ≤ e ≤ 1`.
+        e: Num,
+        /// Coulomb friction coefficient, `μ ≥ 0` (default 0).
+        #[serde(default, skip_serializing_if = "Num::is_zero")]
+        mu: Num,
+    },
+}
+
+impl Contact {
+    /// The contact's name.
+    pub fn name(&self) -> &str {
+        match self {
+            Contact::JointLimit { name, .. }
+            | Contact::Plane { name, .. }
+            | Contact::Spheres { name, .. } => name,
+        }
+    }
 }
 
 /// A chain of ANCF elements on the straight line between two points.

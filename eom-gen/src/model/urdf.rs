@@ -23,8 +23,11 @@
 //!   into link axes (`R I Rᵀ`) when the `origin rpy` is not zero;
 //! - `mimic` → a holonomic constraint `q - multiplier·q_other - offset = 0`;
 //! - `dynamics damping` → a `JointSpringDamper` with zero stiffness;
-//!   Coulomb `friction` and `limit`s have no place in the model format and
-//!   are listed in the notes (and in the header comment of the RON text);
+//!   Coulomb `friction` has no place in the model format and is listed in
+//!   the notes (and in the header comment of the RON text); so are the
+//!   `limit`s, unless `Options::joint_limits` imports the `lower` and
+//!   `upper` of revolute and prismatic joints as `JointLimit` contacts
+//!   (plastic stops, `e = 0`; not when `q = 0` lies outside them);
 //! - gravity is `(0, 0, -9.81)` (URDF has none), initial state zero.
 //!
 //! Every problem is reported at once: XML syntax, unknown joint types,
@@ -34,8 +37,8 @@
 
 use super::read::Format;
 use super::spec::{
-    Body, Constraint, Force, Frame, Inertia, InertiaPolicy, Joint, JointKind, Num, Orientation,
-    Spec, V3,
+    Body, Constraint, Contact, Force, Frame, Inertia, InertiaPolicy, Joint, JointKind, Num,
+    Orientation, Spec, V3,
 };
 use crate::diag::did_you_mean;
 use crate::diag::{Diagnostic, Report, Source, Span};
@@ -76,6 +79,10 @@ pub struct Options {
     pub balance_inertia: bool,
     /// Turn the warnings into errors.
     pub strict: bool,
+    /// Import the `<limit lower upper>` of revolute and prismatic joints
+    /// as joint-limit contacts (`JointLimit`, `e = 0`, issue #26) instead
+    /// of listing them in the notes.
+    pub joint_limits: bool,
 }
 
 /// True if `path` ends in `.urdf` (any case; see [`Format::of`]).
@@ -874,6 +881,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
     let mut forces = Vec::new();
     let mut constraints = Vec::new();
     let mut limits = Vec::new();
+    let mut contacts = Vec::new();
     for &k in &order {
         let j = &joints[k];
         let (Some((p, _)), Some((c, _)), Some(kind)) = (&j.parent, &j.child, j.kind) else {
@@ -958,9 +966,33 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
                 j.friction, j.raw
             ));
         }
-        if !j.limit.is_empty() {
-            let l: Vec<String> = j.limit.iter().map(|(a, v)| format!("{a} {v}")).collect();
-            limits.push(format!("`{}`: {}", j.raw, l.join(", ")));
+        let bound = |a: &str| j.limit.iter().find(|(n, _)| n == a).map(|(_, v)| *v);
+        let stops = matches!(kind, Kind::Revolute | Kind::Prismatic)
+            .then(|| bound("lower").zip(bound("upper")))
+            .flatten()
+            .filter(|(lo, hi)| lo < hi);
+        match stops {
+            // The import starts at q = 0: a limit that excludes it would
+            // be a contact closed at the start.
+            Some((lo, hi)) if options.joint_limits && lo <= 0.0 && 0.0 <= hi => {
+                contacts.push(Contact::JointLimit {
+                    name: format!("{}_limit", j.name),
+                    joint: j.name.clone(),
+                    lower: Some(lo.into()),
+                    upper: Some(hi.into()),
+                    e: 0.0.into(),
+                    mu: Num::default(),
+                });
+            }
+            Some((lo, hi)) if options.joint_limits => cx.notes.push(format!(
+                "limits [{lo}, {hi}] of joint `{}` are not imported: the initial state q = 0 lies outside them",
+                j.raw
+            )),
+            _ if !j.limit.is_empty() => {
+                let l: Vec<String> = j.limit.iter().map(|(a, v)| format!("{a} {v}")).collect();
+                limits.push(format!("`{}`: {}", j.raw, l.join(", ")));
+            }
+            _ => {}
         }
         if let Some(m) = &j.mimic {
             match joint_index.get(&m.joint).map(|&o| &joints[o]) {
@@ -1037,6 +1069,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         constraints,
         outputs: Vec::new(),
         cables: Vec::new(),
+        contacts,
         inertia_policy: if lenient {
             InertiaPolicy::Lenient
         } else {
@@ -1076,7 +1109,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
     }
     if !limits.is_empty() {
         notes.push(format!(
-            "joint limits are not part of the model format and are ignored: {}",
+            "joint limits are ignored (import them as joint-limit contacts with `--urdf-limits`, `Options::joint_limits`; revolute and prismatic joints with both bounds): {}",
             limits.join("; ")
         ));
     }

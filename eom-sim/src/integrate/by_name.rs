@@ -35,9 +35,23 @@ pub fn solve<const N: usize, S: OdeSystem<N>>(
     t_end: f64,
     opts: &SolveOptions,
 ) -> Solution<N> {
+    solve_with_events(s, sys, t0, y0, t_end, opts, &mut [])
+}
+
+/// [`solve`] with `events` located on the dense output (see
+/// [`integrate`]).
+pub fn solve_with_events<const N: usize, S: OdeSystem<N>>(
+    s: &Settings,
+    sys: &S,
+    t0: f64,
+    y0: [f64; N],
+    t_end: f64,
+    opts: &SolveOptions,
+    events: &mut [super::driver::Event<'_, N>],
+) -> Solution<N> {
     match s.integrator {
-        Integrator::Euler => integrate(&mut Euler::new(s.dt), sys, t0, y0, t_end, opts, &mut []),
-        Integrator::Rk4 => integrate(&mut Rk4::new(s.dt), sys, t0, y0, t_end, opts, &mut []),
+        Integrator::Euler => integrate(&mut Euler::new(s.dt), sys, t0, y0, t_end, opts, events),
+        Integrator::Rk4 => integrate(&mut Rk4::new(s.dt), sys, t0, y0, t_end, opts, events),
         Integrator::Midpoint => integrate(
             &mut ImplicitMidpoint::new(s.dt),
             sys,
@@ -45,7 +59,7 @@ pub fn solve<const N: usize, S: OdeSystem<N>>(
             y0,
             t_end,
             opts,
-            &mut [],
+            events,
         ),
         Integrator::Dopri5 => integrate(
             &mut Dopri5::new(s.rtol, s.atol),
@@ -54,7 +68,7 @@ pub fn solve<const N: usize, S: OdeSystem<N>>(
             y0,
             t_end,
             opts,
-            &mut [],
+            events,
         ),
         Integrator::Dop853 => integrate(
             &mut Dop853::new(s.rtol, s.atol),
@@ -63,12 +77,12 @@ pub fn solve<const N: usize, S: OdeSystem<N>>(
             y0,
             t_end,
             opts,
-            &mut [],
+            events,
         ),
         Integrator::Radau5 => {
             let mut r = Radau5::new(s.rtol, s.atol);
             (r.index2_vars, r.index3_vars) = s.index_vars;
-            integrate(&mut r, sys, t0, y0, t_end, opts, &mut [])
+            integrate(&mut r, sys, t0, y0, t_end, opts, events)
         }
         // Generalized-α integrates `M q̈ = f` of element models
         // (`crate::large::alpha`), not a first-order ODE: the run stops

@@ -388,6 +388,7 @@ fn report<M: Reported + ?Sized>(
             cables: cables.iter().map(|c| c.state(&q_full)).collect(),
             mounts: m.mounts(lambda),
         }),
+        contact_events: Vec::new(),
     }
 }
 

@@ -9,7 +9,7 @@
 //! `quantities` (parameters, expressions, frames), `bodies`, `flexible`
 //! (and `flex_sources` for assumed modes and modal files), `joints` (and
 //! the graph), `mobility` (Grübler–Kutzbach), `forces`, `constraints`,
-//! `outputs`, `cables`. `Ctx::system` runs them in order.
+//! `outputs`, `cables`, `contacts`. `Ctx::system` runs them in order.
 
 use super::locate::{Node, Seg};
 use super::spec::Spec;
@@ -39,6 +39,7 @@ fn join(path: &[Seg<'static>], more: &[Seg<'static>]) -> Path {
 mod bodies;
 mod cables;
 mod constraints;
+mod contacts;
 mod flex_sources;
 mod flexible;
 mod forces;
@@ -206,6 +207,7 @@ impl Ctx<'_> {
         let constraints = self.constraints(spec, &bodies);
         let outputs = self.outputs(spec, &bodies, &joints);
         let cables = self.cables(spec, gravity.as_ref(), &bodies);
+        let contacts = self.contacts(spec, &bodies, &joints);
         let (Some(graph), true) = (graph, joints_ok) else {
             return None;
         };
@@ -226,6 +228,7 @@ impl Ctx<'_> {
                 planar: false,
             },
             cables: cables?,
+            contacts: contacts?,
         };
         if self.diags.iter().any(Diagnostic::is_error) {
             return None;
@@ -233,6 +236,7 @@ impl Ctx<'_> {
         let poses = initial_poses(&system);
         system.grubler = grubler(&system, &poses);
         self.check_closure(&system, &poses);
+        self.check_contacts_open(&system);
         if self.diags.iter().any(Diagnostic::is_error) {
             return None;
         }

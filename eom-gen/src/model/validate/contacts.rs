@@ -1,0 +1,320 @@
+//! Unilateral contacts (issue #26): joint limits, spheres against world
+//! planes and against spheres, their restitution and friction
+//! coefficients, and no contact closed at the initial state.
+
+use super::{Ctx, Scope, f, i, join};
+use crate::model::spec::{self, Num, Spec};
+use crate::system::*;
+use std::collections::HashSet;
+
+/// Penetration (m or rad) at the initial state above which `check`
+/// refuses a contact.
+const PENETRATION_TOL: f64 = 1e-9;
+
+impl Ctx<'_> {
+    /// A coefficient in `[lo, hi]` (`hi` infinite: no upper bound).
+    fn coefficient(
+        &mut self,
+        n: &Num,
+        path: &[crate::model::locate::Seg<'static>],
+        what: &str,
+        contact: &str,
+        hi: f64,
+    ) -> Option<f64> {
+        let q = self.quantity(n, path, Scope::Params)?;
+        let v = q.value;
+        if !(0.0..=hi).contains(&v) {
+            let (range, help) = if hi.is_finite() {
+                (
+                    "outside [0, 1]",
+                    "Newton's coefficient of restitution is 0 (plastic: the contact stays closed) to 1 (elastic: no energy lost)",
+                )
+            } else {
+                (
+                    "negative",
+                    "a Coulomb friction coefficient is 0 (frictionless) or positive",
+                )
+            };
+            self.error(
+                path,
+                format!("{what} of contact `{contact}` is {v}, {range}"),
+                help,
+            );
+            return None;
+        }
+        Some(v)
+    }
+
+    pub(super) fn contacts(
+        &mut self,
+        spec: &Spec,
+        bodies: &[BodyInfo],
+        joints: &[JointInfo],
+    ) -> Option<Vec<ContactInfo>> {
+        let mut out = Vec::new();
+        let mut ok = true;
+        let mut names = HashSet::new();
+        for (k, c) in spec.contacts.iter().enumerate() {
+            let path = [f("contacts"), i(k)];
+            let name = c.name();
+            if !names.insert(name) {
+                self.error(
+                    &join(&path, &[f("name")]),
+                    format!("contact `{name}` is defined twice"),
+                    "contact names must be unique",
+                );
+            }
+            let (e, mu) = match c {
+                spec::Contact::JointLimit { e, mu, .. }
+                | spec::Contact::Plane { e, mu, .. }
+                | spec::Contact::Spheres { e, mu, .. } => (e, mu),
+            };
+            let e = self.coefficient(e, &join(&path, &[f("e")]), "`e`", name, 1.0);
+            let mu = self.coefficient(mu, &join(&path, &[f("mu")]), "`mu`", name, f64::INFINITY);
+            let kind = match c {
+                spec::Contact::JointLimit {
+                    joint,
+                    lower,
+                    upper,
+                    ..
+                } => self.joint_limit(joints, &path, name, joint, lower, upper),
+                spec::Contact::Plane {
+                    at,
+                    radius,
+                    point,
+                    normal,
+                    ..
+                } => {
+                    let at = self.contact_anchor(at, bodies, &join(&path, &[f("at")]), name);
+                    let r = self.nonnegative(radius, &join(&path, &[f("radius")]), "radius", name);
+                    let p = self.vec3(point, &join(&path, &[f("point")]), Scope::Params);
+                    let n = self.axis(normal, &join(&path, &[f("normal")]), "the plane's normal");
+                    (|| {
+                        Some(ContactKind::Plane {
+                            at: at?,
+                            radius: r?,
+                            point: p?,
+                            normal: n?,
+                        })
+                    })()
+                }
+                spec::Contact::Spheres {
+                    a,
+                    b,
+                    radius_a,
+                    radius_b,
+                    ..
+                } => {
+                    let pa = self.contact_anchor(a, bodies, &join(&path, &[f("a")]), name);
+                    let pb = self.contact_anchor(b, bodies, &join(&path, &[f("b")]), name);
+                    let ra = self.nonnegative(
+                        radius_a,
+                        &join(&path, &[f("radius_a")]),
+                        "radius_a",
+                        name,
+                    );
+                    let rb = self.nonnegative(
+                        radius_b,
+                        &join(&path, &[f("radius_b")]),
+                        "radius_b",
+                        name,
+                    );
+                    if let (Some(x), Some(y)) = (&pa, &pb)
+                        && x.body == y.body
+                    {
+                        self.error(
+                            &join(&path, &[f("b")]),
+                            format!(
+                                "both spheres of contact `{name}` are on body `{}`",
+                                bodies[x.body].name
+                            ),
+                            "a contact is between two bodies: put the second sphere on another body (or `ground`)",
+                        );
+                    }
+                    (|| {
+                        Some(ContactKind::Spheres {
+                            a: pa?,
+                            b: pb?,
+                            radius_a: ra?,
+                            radius_b: rb?,
+                        })
+                    })()
+                }
+            };
+            match (kind, e, mu) {
+                (Some(kind), Some(e), Some(mu)) => out.push(ContactInfo {
+                    name: name.to_string(),
+                    kind,
+                    e,
+                    mu,
+                    span: self.span(&path),
+                }),
+                _ => ok = false,
+            }
+        }
+        ok.then_some(out)
+    }
+
+    /// A sphere's centre: an anchor on a body that is not the ground
+    /// (except as the second sphere of a pair).
+    fn contact_anchor(
+        &mut self,
+        a: &spec::Anchor,
+        bodies: &[BodyInfo],
+        path: &[crate::model::locate::Seg<'static>],
+        name: &str,
+    ) -> Option<Point> {
+        let p = self.anchor(a, bodies, path)?;
+        let second = path.last() == Some(&f("b"));
+        if p.body == 0 && !second {
+            self.error(
+                &join(path, &[f("body")]),
+                format!("contact `{name}` is on the ground, which never moves"),
+                "name the moving body that touches (a sphere fixed in the world is the second, `b`, of `Spheres`)",
+            );
+            return None;
+        }
+        Some(p)
+    }
+
+    fn joint_limit(
+        &mut self,
+        joints: &[JointInfo],
+        path: &[crate::model::locate::Seg<'static>],
+        name: &str,
+        joint: &str,
+        lower: &Option<Num>,
+        upper: &Option<Num>,
+    ) -> Option<ContactKind> {
+        let j = self.joint_ref(joints, joint, &join(path, &[f("joint")]));
+        if let Some(j) = j {
+            let info = &joints[j];
+            if !matches!(info.kind, JointType::Revolute(_) | JointType::Prismatic(_)) {
+                self.error(
+                    &join(path, &[f("joint")]),
+                    format!(
+                        "joint limit `{name}` is on {} joint `{joint}`",
+                        info.kind.name()
+                    ),
+                    "joint limits apply to revolute and prismatic joints (one coordinate)",
+                );
+                return None;
+            }
+            if info.motion != Motion::Free {
+                self.error(
+                    &join(path, &[f("joint")]),
+                    format!(
+                        "joint limit `{name}` is on joint `{joint}`, which is {}",
+                        match info.motion {
+                            Motion::Locked => "locked",
+                            Motion::Prescribed(_) => "prescribed",
+                            _ => "cut (closing a loop)",
+                        }
+                    ),
+                    "a limit stops a free joint of the tree: limit another joint of the loop, or make this one a tree joint",
+                );
+                return None;
+            }
+        }
+        if lower.is_none() && upper.is_none() {
+            self.error(
+                path,
+                format!("joint limit `{name}` has neither `lower` nor `upper`"),
+                "give `lower`, `upper` or both (rad for revolute, m for prismatic joints)",
+            );
+            return None;
+        }
+        let lo = lower
+            .as_ref()
+            .map(|n| self.quantity(n, &join(path, &[f("lower")]), Scope::Params));
+        let hi = upper
+            .as_ref()
+            .map(|n| self.quantity(n, &join(path, &[f("upper")]), Scope::Params));
+        if let (Some(Some(l)), Some(Some(h))) = (&lo, &hi)
+            && l.value >= h.value
+        {
+            self.error(
+                &join(path, &[f("upper")]),
+                format!(
+                    "joint limit `{name}`: upper {} is not above lower {}",
+                    h.value, l.value
+                ),
+                "the upper limit must exceed the lower one",
+            );
+            return None;
+        }
+        let flat = |x: Option<Option<Quantity>>| match x {
+            None => Some(None),
+            Some(Some(q)) => Some(Some(q)),
+            Some(None) => None,
+        };
+        Some(ContactKind::JointLimit {
+            joint: j?,
+            lower: flat(lo)?,
+            upper: flat(hi)?,
+        })
+    }
+
+    /// Every contact row open (`g ≥ 0`) at the initial state: a closed one
+    /// is an error with its penetration and what would open it.
+    pub(super) fn check_contacts_open(&mut self, sys: &System) {
+        if sys.contacts.is_empty() {
+            return;
+        }
+        let Ok(num) = crate::mech::Numeric::new(sys) else {
+            return;
+        };
+        let Ok(rows) = num.contacts(sys, &sys.q0(), &sys.u0(), 0.0) else {
+            return;
+        };
+        for ((c, row), (g, _)) in sys.contact_rows().into_iter().zip(rows) {
+            if g.is_finite() && g >= -PENETRATION_TOL {
+                continue;
+            }
+            let contact = &sys.contacts[c];
+            let path = [f("contacts"), i(c)];
+            let (message, help) = match &contact.kind {
+                ContactKind::JointLimit { joint, .. } => {
+                    let j = &sys.joints[*joint];
+                    let unit = match j.kind {
+                        JointType::Revolute(_) => "rad",
+                        _ => "m",
+                    };
+                    let q = sys.q0()[j.q_index];
+                    (
+                        format!(
+                            "joint limit `{row}` is violated at the initial state: `{}` = {q} is {:.6e} {unit} beyond it",
+                            j.coordinate_names.first().map_or("?", String::as_str),
+                            -g
+                        ),
+                        format!(
+                            "start the joint inside its limits (`q0` of joint `{}`, or `--q0`), or move the limit",
+                            j.name
+                        ),
+                    )
+                }
+                ContactKind::Plane { at, .. } => (
+                    format!(
+                        "contact `{row}` penetrates its plane by {:.6e} m at the initial state",
+                        -g
+                    ),
+                    format!(
+                        "start body `{}` at least {:.6e} m further along the plane's normal (the `q0` of the joints above it), or move the plane",
+                        sys.bodies[at.body].name, -g
+                    ),
+                ),
+                ContactKind::Spheres { a, b, .. } => (
+                    format!(
+                        "the spheres of contact `{row}` overlap by {:.6e} m at the initial state",
+                        -g
+                    ),
+                    format!(
+                        "move bodies `{}` and `{}` at least {:.6e} m apart (the `q0` of the joints above them), or make the radii smaller",
+                        sys.bodies[a.body].name, sys.bodies[b.body].name, -g
+                    ),
+                ),
+            };
+            self.error(&path, message, help);
+        }
+    }
+}

@@ -1,0 +1,203 @@
+//! Unilateral contacts (issue #26): the model format's checks (every error
+//! at once, located, with what would be right) and the generated function
+//! `contacts` — its rows `w` are the partial derivatives of `ġ` and `ġ` is
+//! the time derivative of the gap `g` along the motion (finite differences
+//! of `g`), `γ` the second derivative's velocity part, and the evaluator
+//! agrees with the numeric twin.
+
+use eom_gen::System;
+use eom_gen::functions::{Function, FunctionSet};
+use eom_gen::interpret::{Point, evaluate_function};
+use eom_gen::mech::{Numeric, formulate};
+use eom_gen::model::{Source, check};
+
+/// A double pendulum in the x–y plane (gravity −y) with a ball on a slider
+/// below it: every kind of contact.
+const BASE: &str = r#"Model(
+    name: "contact_zoo",
+    gravity: (0, "-g", 0),
+    parameters: [(name: "g", value: 9.81), (name: "l", value: 1.0)],
+    bodies: [
+        (name: "upper", mass: 1, com: (0, "-l/2", 0), inertia: Diag(0.1, 0.1, 0.1), markers: [(name: "end", position: (0, "-l", 0))]),
+        (name: "lower", mass: 1, com: (0, "-l/2", 0), inertia: Diag(0.1, 0.1, 0.1), markers: [(name: "tip", position: (0, "-l", 0))]),
+        (name: "ball", mass: 2, inertia: Diag(0.01, 0.01, 0.01)),
+    ],
+    joints: [
+        (name: "shoulder", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "upper", coordinates: ["q1"], q0: [0.3]),
+        (name: "elbow", kind: Revolute(axis: (0, 0, 1)), parent: "upper", child: "lower", parent_frame: (position: (0, "-l", 0)), coordinates: ["q2"], q0: [0.2]),
+        (name: "slide", kind: Prismatic(axis: (1, 0, 0)), parent: "ground", child: "ball", parent_frame: (position: (0, -3, 0)), coordinates: ["x"], q0: [0.5]),
+    ],
+    contacts: [
+        JointLimit(name: "elbow_stop", joint: "elbow", lower: -1.5, upper: 1.5, e: 0.5),
+        Plane(name: "wall", at: (body: "lower", marker: "tip"), radius: 0.05, point: (1.5, 0, 0), normal: (-1, 0, 0), e: 0.3),
+        Spheres(name: "knock", a: (body: "lower", marker: "tip"), b: (body: "ball"), radius_a: 0.05, radius_b: 0.2, e: 1),
+        JointLimit(name: "rail", joint: "slide", upper: 2, e: 0, mu: 0.2),
+    ],
+)
+"#;
+
+fn diagnose(edits: &[(&str, &str)]) -> String {
+    let mut text = BASE.to_string();
+    for (from, to) in edits {
+        assert!(
+            text.contains(from),
+            "test setup: `{from}` is not in the model"
+        );
+        text = text.replacen(from, to, 1);
+    }
+    match check(&Source::new("models/contact_zoo.ron", text)) {
+        Ok(_) => "valid".into(),
+        Err(report) => {
+            assert!(
+                report.diagnostics.iter().all(|d| d.span.is_some()),
+                "every diagnostic has a location"
+            );
+            report.to_string()
+        }
+    }
+}
+
+fn system() -> System {
+    check(&Source::new("models/contact_zoo.ron", BASE.to_string()))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system
+}
+
+#[test]
+fn the_zoo_is_valid_and_has_five_gap_rows() {
+    assert_eq!(diagnose(&[]), "valid");
+    let rows: Vec<String> = system()
+        .contact_rows()
+        .into_iter()
+        .map(|(_, r)| r)
+        .collect();
+    assert_eq!(
+        rows,
+        [
+            "elbow_stop.lower",
+            "elbow_stop.upper",
+            "wall",
+            "knock",
+            "rail.upper"
+        ]
+    );
+}
+
+/// Every mistake reported at once, each at its `file:line:col`.
+#[test]
+fn bad_contacts_are_all_reported_located() {
+    let out = diagnose(&[
+        (r#"joint: "elbow", lower"#, r#"joint: "elbo", lower"#),
+        (
+            r#"body: "lower", marker: "tip"), radius: 0.05"#,
+            r#"body: "lower", marker: "toe"), radius: 0.05"#,
+        ),
+        ("normal: (-1, 0, 0), e: 0.3", "normal: (0, 0, 0), e: 1.3"),
+        (r#"b: (body: "ball")"#, r#"b: (body: "bal")"#),
+        ("e: 0, mu: 0.2", "e: 0, mu: -0.2"),
+    ]);
+    for want in [
+        "models/contact_zoo.ron:16:47: error: unknown joint `elbo`",
+        "error: body `lower` has no marker `toe`",
+        "error: the plane's normal has zero length",
+        "error: `e` of contact `wall` is 1.3, outside [0, 1]",
+        "error: unknown anchor body `bal`",
+        "error: `mu` of contact `rail` is -0.2, negative",
+    ] {
+        assert!(out.contains(want), "missing `{want}` in:\n{out}");
+    }
+    assert_eq!(out.matches("error:").count(), 6, "{out}");
+}
+
+/// A contact closed at the initial state is refused with its penetration
+/// and what would open it; a limit on a joint without one coordinate too.
+#[test]
+fn closed_at_the_start_is_refused_with_the_penetration() {
+    // The wall at x = 0.5: the tip (x = sin 0.3 + sin 0.5 = 0.7749) and its
+    // 0.05 m sphere are 0.3249 m through it.
+    let out = diagnose(&[("point: (1.5, 0, 0)", "point: (0.5, 0, 0)")]);
+    assert!(
+        out.contains("error: contact `wall` penetrates its plane by 3.249")
+            && out.contains("start body `lower` at least 3.249"),
+        "{out}"
+    );
+    let out = diagnose(&[("q0: [0.2]", "q0: [1.6]")]);
+    assert!(
+        out.contains("joint limit `elbow_stop.upper` is violated at the initial state: `q2` = 1.6 is 1.000000e-1 rad beyond it"),
+        "{out}"
+    );
+    let out = diagnose(&[("lower: -1.5, upper: 1.5", "lower: 1.5, upper: 1.5")]);
+    assert!(out.contains("upper 1.5 is not above lower 1.5"), "{out}");
+    let out = diagnose(&[(r#"upper: 2, e: 0"#, "e: 0")]);
+    assert!(out.contains("has neither `lower` nor `upper`"), "{out}");
+}
+
+/// `w = ∂ġ/∂u`, and `ġ` and `γ` against central differences of `g` along
+/// `q(s) = q + s u + s²/2 u̇` (here `q̇ = u`): `ġ = dg/ds`,
+/// `g̈ = d²g/ds² = wᵀ u̇ − γ`; the generated program against the numeric
+/// twin's `g`, `ġ`.
+#[test]
+fn generated_rows_are_the_derivatives_of_the_gaps() {
+    let sys = system();
+    let f = formulate(&sys, FunctionSet::default()).expect("formulate");
+    assert_eq!(f.labels(Function::Contacts).len(), 5);
+    let num = Numeric::new(&sys).expect("numeric");
+    let (nk, nu) = (5, sys.nu());
+    let eval = |q: &[f64], u: &[f64]| {
+        let x = Point {
+            sys: &sys,
+            q,
+            u,
+            udot: &[],
+            tau: &[],
+            inputs: &[],
+            params: &[],
+            multipliers: &[],
+            t: 0.0,
+        };
+        evaluate_function(&f, Function::Contacts, &x).expect("contacts")
+    };
+    let q = [0.4, -0.7, 0.9];
+    let u = [1.3, -0.6, 0.8];
+    let ud = [0.5, 2.0, -1.0];
+    let v = eval(&q, &u);
+    assert_eq!(v.len(), 5 * nk + nk * nu);
+    let twin = num.contacts(&sys, &q, &u, 0.0).expect("twin");
+    let h = 1e-4;
+    let at = |s: f64| -> Vec<f64> {
+        let qs: Vec<f64> = (0..nu)
+            .map(|i| q[i] + s * u[i] + 0.5 * s * s * ud[i])
+            .collect();
+        eval(&qs, &u)[..nk].to_vec()
+    };
+    let (gp, gm, g0) = (at(h), at(-h), at(0.0));
+    for r in 0..nk {
+        let w = &v[5 * nk + r * nu..5 * nk + (r + 1) * nu];
+        let gdot: f64 = w.iter().zip(&u).map(|(a, b)| a * b).sum();
+        assert!(
+            (gdot - v[nk + r]).abs() < 1e-12,
+            "row {r}: wᵀu {gdot} vs ġ {}",
+            v[nk + r]
+        );
+        let fd1 = (gp[r] - gm[r]) / (2.0 * h);
+        assert!(
+            (fd1 - v[nk + r]).abs() < 1e-6,
+            "row {r}: ġ {} vs dg/ds {fd1}",
+            v[nk + r]
+        );
+        let fd2 = (gp[r] - 2.0 * g0[r] + gm[r]) / (h * h);
+        let gdd: f64 = w.iter().zip(&ud).map(|(a, b)| a * b).sum::<f64>() - v[2 * nk + r];
+        assert!(
+            (fd2 - gdd).abs() < 1e-5,
+            "row {r}: g̈ {gdd} vs d²g/ds² {fd2}"
+        );
+        assert!((twin[r].0 - v[r]).abs() < 1e-13 && (twin[r].1 - v[nk + r]).abs() < 1e-13);
+    }
+    assert_eq!(
+        &v[3 * nk..5 * nk],
+        &[0.5, 0.5, 0.3, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.2]
+    );
+    // The joint limits' rows are ±1 on their speed.
+    assert_eq!(&v[5 * nk..5 * nk + nu], &[0.0, 1.0, 0.0]);
+    assert_eq!(&v[5 * nk + 4 * nu..], &[0.0, 0.0, -1.0]);
+}
