@@ -211,6 +211,67 @@ mod tests {
         }
     }
 
+    /// The page of the double pendulum: its data parses; one time and one
+    /// pose (position, unit quaternion) per body per frame; and the poses
+    /// are the pendulum's closed form: the lower body hangs at
+    /// l1 (sin q1, −cos q1, 0) turned by q1 + q2 about z.
+    #[test]
+    fn double_pendulum_page() {
+        let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/double_pendulum.ron");
+        let Ok(opened) = crate::open::open(model, &Default::default(), &Default::default()) else {
+            panic!("cannot open {model}");
+        };
+        let sys = &opened.checked.system;
+        let mut table = Table::new(vec!["t".into(), "q1".into(), "q2".into(), "u1".into()]);
+        let frames = [(0.0, 2.0, -2.2), (0.5, 0.3, 1.1), (1.0, -1.0, 4.0)];
+        for (t, q1, q2) in frames {
+            table.push(vec![t, q1, q2, 0.0]);
+        }
+        let page = match html(sys, &table) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        };
+        assert!(page.starts_with("<!DOCTYPE html>"));
+        assert!(!page.contains("{{"), "a placeholder is left");
+        assert!(!page.contains("src=\"http"), "the page loads nothing");
+        let start = page.find(r#"type="application/json">"#).map(|i| i + 24);
+        let data = start.and_then(|s| Some(&page[s..s + page[s..].find("</script>")?]));
+        let data: serde_json::Value = match data.map(serde_json::from_str) {
+            Some(Ok(v)) => v,
+            other => panic!("the page's data does not parse: {other:?}"),
+        };
+        let bodies = data["bodies"].as_array().map(Vec::len);
+        assert_eq!(bodies, Some(2));
+        assert_eq!(data["t"].as_array().map(Vec::len), Some(3));
+        let poses = data["poses"].as_array().cloned().unwrap_or_default();
+        assert_eq!(poses.len(), 3);
+        for (pose, (_, q1, q2)) in poses.iter().zip(frames) {
+            let p: Vec<f64> = pose
+                .as_array()
+                .map(|v| v.iter().filter_map(|x| x.as_f64()).collect())
+                .unwrap_or_default();
+            assert_eq!(p.len(), 14, "two bodies × (position, quaternion)");
+            let lower = &p[7..];
+            let want = [
+                q1.sin(),
+                -q1.cos(),
+                0.0,
+                0.0,
+                0.0,
+                ((q1 + q2) / 2.0).sin(),
+                ((q1 + q2) / 2.0).cos(),
+            ];
+            let sign = if lower[6] * want[6] < 0.0 { -1.0 } else { 1.0 };
+            for (k, (a, b)) in lower.iter().zip(want).enumerate() {
+                let a = if k >= 3 { sign * a } else { *a };
+                assert!(
+                    (a - b).abs() < 1e-6,
+                    "lower body: {lower:?}, closed form {want:?}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn numbers_are_short() {
         assert_eq!(number(1.0).ok().as_deref(), Some("1"));
