@@ -2,9 +2,9 @@
 //! drawn from a run's CSV (the energy drift of a conservative four-bar and
 //! its constraint residuals, which projection keeps at round-off), unknown
 //! columns named with the ones there are; sweeps of a pendulum against the
+//! same runs made one by one with `--param`, a failed case a row with its
 //! reason, and shards merged equal to one run; `animate` writing its page
 //! of poses, and refusing what does not apply.
-//! reason, and shards merged equal to one run.
 
 use std::process::{Command, Output};
 
