@@ -9,7 +9,7 @@
 //! rounded to 6 decimals. The frames are the rows of the run's CSV.
 
 use crate::error::Error;
-use eom_gen::mech::numeric::{Numeric, SceneBody};
+use eom_gen::mech::numeric::{Numeric, Scene};
 use eom_sim::table::Table;
 use std::fmt::Write;
 
@@ -75,10 +75,11 @@ pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Erro
     let mut data = String::new();
     let _ = write!(
         data,
-        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"t\":{times},\"poses\":{frames}}}",
+        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"t\":{times},\"poses\":{frames}}}",
         serde_json::to_string(&sys.name).unwrap_or_default(),
         serde_json::to_string(&gravity(&num)).unwrap_or_default(),
         bodies_json(&scene),
+        serde_json::to_string(&scene.ground).unwrap_or_else(|_| "[]".into()),
     );
     // The data sits in a <script> element: no `</` may close it early.
     let data = data.replace("</", "<\\/");
@@ -94,8 +95,9 @@ fn gravity(num: &Numeric) -> [f64; 3] {
     num.tree().gravity.0
 }
 
-fn bodies_json(scene: &[SceneBody]) -> String {
+fn bodies_json(scene: &Scene) -> String {
     let list: Vec<serde_json::Value> = scene
+        .bodies
         .iter()
         .map(|b| {
             serde_json::json!({
@@ -109,6 +111,7 @@ fn bodies_json(scene: &[SceneBody]) -> String {
                 "com": b.com,
                 "mass": b.mass,
                 "markers": b.markers,
+                "loops": b.loop_joints,
             })
         })
         .collect();
@@ -270,6 +273,23 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The four-bar's loop is closed by one cut joint: the page draws it
+    /// on both bodies it joins (two points; none on ground).
+    #[test]
+    fn fourbar_page_draws_its_cut_joint() {
+        let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/fourbar.ron");
+        let Ok(opened) = crate::open::open(model, &Default::default(), &Default::default()) else {
+            panic!("cannot open {model}");
+        };
+        let sys = &opened.checked.system;
+        let Ok(scene) = Numeric::new(sys).and_then(|n| n.scene(sys)) else {
+            panic!("no scene");
+        };
+        assert_eq!(sys.graph.cut_joints().len(), 1);
+        let held: usize = scene.bodies.iter().map(|b| b.loop_joints.len()).sum();
+        assert_eq!((held, scene.ground.len()), (2, 0));
     }
 
     #[test]

@@ -289,8 +289,9 @@ impl Numeric {
 
     /// What an animation draws of each tree body, in its own coordinates:
     /// its joint frame, the joint frames of its children, its centre of
-    /// mass, its joint's axis and its markers.
-    pub fn scene(&self, sys: &System) -> Result<Vec<SceneBody>, MechError> {
+    /// mass, its joint's axis, its markers and where loop-closing (cut)
+    /// joints hold it; and the points of ground that cut joints hold.
+    pub fn scene(&self, sys: &System) -> Result<Scene, MechError> {
         use super::joint::JointModel;
         let low = super::lower::Lowering::new(&self.env);
         let mut out = Vec::with_capacity(self.tree.bodies.len());
@@ -325,9 +326,22 @@ impl Numeric {
                 com,
                 mass: m,
                 markers,
+                loop_joints: Vec::new(),
             });
         }
-        Ok(out)
+        let mut ground = Vec::new();
+        for c in &self.cuts {
+            for (side, frame) in [(c.parent, &c.frame_parent), (c.child, &c.frame_child)] {
+                match side.and_then(|i| out.get_mut(i)) {
+                    Some(b) => b.loop_joints.push(frame.r.0),
+                    None => ground.push(frame.r.0),
+                }
+            }
+        }
+        Ok(Scene {
+            bodies: out,
+            ground,
+        })
     }
 
     /// The values of the cable mounts at `q`, `t` (the generated
@@ -687,4 +701,15 @@ pub struct SceneBody {
     pub mass: f64,
     /// The markers: name and position.
     pub markers: Vec<(String, [f64; 3])>,
+    /// Where loop-closing (cut) joints hold it.
+    pub loop_joints: Vec<[f64; 3]>,
+}
+
+/// What an animation draws (see [`Numeric::scene`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The tree bodies, in tree order.
+    pub bodies: Vec<SceneBody>,
+    /// The points of ground (world coordinates) that cut joints hold.
+    pub ground: Vec<[f64; 3]>,
 }
