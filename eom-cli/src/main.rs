@@ -4,6 +4,7 @@
 //! `args`; a model is read and checked once (`open`) and handed down.
 
 mod ancf;
+mod animate;
 mod args;
 mod bench;
 mod cable_report;
@@ -46,6 +47,7 @@ enum Command {
     Linearize(cmd::linearize::LinearizeArgs),
     Plot(cmd::plot::PlotArgs),
     Sweep(cmd::sweep::SweepArgs),
+    Animate(cmd::animate::AnimateArgs),
 }
 
 fn main() -> ExitCode {
@@ -63,5 +65,6 @@ fn main() -> ExitCode {
         Command::Linearize(a) => cmd::linearize::run(&a, &urdf),
         Command::Plot(a) => cmd::plot::run(&a, &urdf),
         Command::Sweep(a) => cmd::sweep::run(&a, &urdf),
+        Command::Animate(a) => cmd::animate::run(a, &urdf),
     }
 }

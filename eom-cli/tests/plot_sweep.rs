@@ -3,7 +3,8 @@
 //! its constraint residuals, which projection keeps at round-off), unknown
 //! columns named with the ones there are; sweeps of a pendulum against the
 //! same runs made one by one with `--param`, a failed case a row with its
-//! reason, and shards merged equal to one run.
+//! reason, and shards merged equal to one run; `animate` writing its page
+//! of poses, and refusing what does not apply.
 
 use std::process::{Command, Output};
 
@@ -348,4 +349,59 @@ fn derived_parameters_follow_the_swept_one() {
         );
     }
     let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn animate_writes_one_page_of_poses() {
+    // `animate` is `simulate` writing its page: 1 s every 50 ms is 21
+    // frames of two bodies; the CSV asked for alongside is still written.
+    let (csv, html) = (temp_path("dp.csv"), temp_path("dp.html"));
+    ok(&[
+        "animate",
+        "models/double_pendulum.ron",
+        "--t-end",
+        "1",
+        "--every",
+        "0.05",
+        "--interpret",
+        "--csv",
+        &csv,
+        "-o",
+        &html,
+    ]);
+    let page = std::fs::read_to_string(&html).expect("html");
+    assert!(page.contains(r#"<script id="eom-data" type="application/json">"#));
+    assert!(page.contains("OrbitControls"), "three.js is inlined");
+    assert_eq!(
+        column(&std::fs::read_to_string(&csv).expect("csv"), "t").len(),
+        21
+    );
+    let _ = std::fs::remove_file(csv);
+    let _ = std::fs::remove_file(html);
+    // --html is simulate's; a model with cables has no animation yet.
+    let out = eom_gen(&[
+        "animate",
+        "models/pendulum.ron",
+        "--t-end",
+        "1",
+        "--html",
+        "a.html",
+        "-o",
+        "b.html",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("writes its page to -o"), "{err}");
+    let out = eom_gen(&[
+        "simulate",
+        "models/ancf/cantilever.ron",
+        "--t-end",
+        "0.01",
+        "--html",
+        "c.html",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--html does not apply"), "{err}");
+    assert!(!std::path::Path::new("c.html").exists());
 }

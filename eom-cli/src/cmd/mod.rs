@@ -1,6 +1,7 @@
 //! One file per command of `eom-gen`: its arguments (a clap `Args`
 //! struct, the shared ones flattened from `crate::args`) and its `run`.
 
+pub mod animate;
 pub mod bench;
 pub mod check;
 pub mod dump;

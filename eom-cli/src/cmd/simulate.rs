@@ -49,6 +49,11 @@ pub struct SimulateArgs {
     /// energy and residual columns to the CSV.
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<String>,
+    /// Write the motion as one self-contained HTML page that plays it in
+    /// 3-D (orbit, zoom, play/pause, time slider, speed); its frames are
+    /// the CSV's rows (`--every` sets their interval).
+    #[arg(long, value_name = "FILE.html")]
+    pub html: Option<String>,
     /// Output interval of the CSV, using dense output (default: every step).
     #[arg(long, allow_hyphen_values = true)]
     pub every: Option<f64>,
@@ -180,7 +185,11 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     if !problems.is_empty() {
         return fail(&Error::Usage(problems));
     }
-    simulate(&opened, &vary, &o, a.json, a.interpret, a.plot.as_deref())
+    let pictures = Pictures {
+        plot: a.plot.as_deref(),
+        html: a.html.as_deref(),
+    };
+    simulate(&opened, &vary, &o, a.json, a.interpret, &pictures)
 }
 
 /// `simulate` on a model with cables: the options of the large-model
@@ -199,9 +208,10 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 8] = [
+    let refused: [(&str, bool); 9] = [
         ("--plot", a.plot.is_some()),
         ("--events-csv", a.events_csv.is_some()),
+        ("--html", a.html.is_some()),
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--q0", a.initial.q0.is_some()),
@@ -256,8 +266,9 @@ fn simulate(
     o: &RunOptions,
     json: bool,
     interpret: bool,
-    plot: Option<&str>,
+    pictures: &Pictures<'_>,
 ) -> ExitCode {
+    let plot = pictures.plot;
     let inputs = &opened.inputs;
     let g = match crate::open::generate(opened, vary, &Default::default()) {
         Ok(g) => g,
@@ -269,12 +280,15 @@ fn simulate(
     // next to the marker and reaction outputs.
     o.energy_columns = sys.outputs.contains(&eom_gen::system::OutputKind::Energy);
     o.momentum_columns = sys.outputs.contains(&eom_gen::system::OutputKind::Momentum);
-    // A plot reads the trajectory back from the CSV (a temporary one
-    // when the user asked for none), with the energy and residuals.
+    // A plot and an animation read the trajectory back from the CSV (a
+    // temporary one when the user asked for none); a plot with the
+    // energy and residuals.
     let user_csv = o.csv.clone();
-    let plot_csv = plot.map(|_| {
+    if plot.is_some() {
         o.energy_columns = true;
         o.constraint_columns = true;
+    }
+    let plot_csv = (plot.is_some() || pictures.html.is_some()).then(|| {
         user_csv.clone().unwrap_or_else(|| {
             std::env::temp_dir()
                 .join(format!("eom-plot-{}-{}.csv", sys.name, std::process::id()))
@@ -294,8 +308,14 @@ fn simulate(
         Ok(r) => r,
         Err(e) => return fail(&e),
     };
-    if let (Some(svg), Some(csv)) = (plot, &plot_csv) {
-        let drawn = plot_run(csv, svg, sys);
+    if let Some(csv) = &plot_csv {
+        let mut drawn = match plot {
+            Some(svg) => plot_run(csv, svg, sys),
+            None => Ok(()),
+        };
+        if let (Ok(()), Some(html)) = (&drawn, pictures.html) {
+            drawn = animate_run(csv, html, sys);
+        }
         if user_csv.is_none() {
             let _ = std::fs::remove_file(csv);
         }
@@ -322,6 +342,30 @@ fn simulate(
         &r,
         json,
     )
+}
+
+/// The pictures `simulate` draws of a run, each to its file.
+pub struct Pictures<'a> {
+    /// `--plot FILE.svg`.
+    pub plot: Option<&'a str>,
+    /// `--html FILE.html` (and `eom-gen animate -o`).
+    pub html: Option<&'a str>,
+}
+
+/// `simulate --html`: the animation page of the run's CSV.
+fn animate_run(csv: &str, html: &str, sys: &eom_gen::system::System) -> Result<(), ExitCode> {
+    let text = std::fs::read_to_string(csv)
+        .map_err(|e| fail(&Error::io(csv, format!("cannot read the trajectory: {e}"))))?;
+    let table = eom_sim::table::Table::from_csv(&text)
+        .map_err(|e| fail(&Error::Format(format!("{csv}: {e}"))))?;
+    let page = crate::animate::html(sys, &table).map_err(|e| fail(&e))?;
+    crate::output::write_file(html, &page)?;
+    eprintln!(
+        "animation written to {html} ({} frames, {} bytes)",
+        table.rows.len(),
+        page.len()
+    );
+    Ok(())
 }
 
 /// `simulate --plot`: the default panels of the run's CSV drawn to `svg`.

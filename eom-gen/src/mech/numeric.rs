@@ -267,6 +267,83 @@ impl Numeric {
         })
     }
 
+    /// The world pose of every tree body at `q`, `t` (tree order, as
+    /// [`Numeric::scene`]): rotation (columns: body axes in world axes)
+    /// and origin. What an animation sends per frame.
+    pub fn world_poses(&self, q: &[f64], t: f64) -> Result<Vec<WorldPose>, MechError> {
+        let u = vec![0.0; self.tree.nu];
+        let k = self.eval().kinematics(&State {
+            q,
+            u: &u,
+            t,
+            inputs: &[],
+        })?;
+        Ok(k.world
+            .iter()
+            .map(|w| WorldPose {
+                rotation: w.e.0,
+                origin: w.r.0,
+            })
+            .collect())
+    }
+
+    /// What an animation draws of each tree body, in its own coordinates:
+    /// its joint frame, the joint frames of its children, its centre of
+    /// mass, its joint's axis, its markers and where loop-closing (cut)
+    /// joints hold it; and the points of ground that cut joints hold.
+    pub fn scene(&self, sys: &System) -> Result<Scene, MechError> {
+        use super::joint::JointModel;
+        let low = super::lower::Lowering::new(&self.env);
+        let mut out = Vec::with_capacity(self.tree.bodies.len());
+        for b in &self.tree.bodies {
+            let info = &sys.bodies[b.body];
+            let axis = match &b.kind {
+                JointModel::Revolute(a)
+                | JointModel::Prismatic(a)
+                | JointModel::Cylindrical(a)
+                | JointModel::Screw(a, _) => Some(b.frame_child.e.mul_vec(*a).0),
+                _ => None,
+            };
+            let m = b.inertia.m;
+            let com = if m > 0.0 {
+                b.inertia.h.scale(1.0 / m).0
+            } else {
+                b.frame_child.r.0
+            };
+            let markers = info
+                .markers
+                .iter()
+                .map(|mk| Ok((mk.name.clone(), low.frame(&mk.frame)?.r.0)))
+                .collect::<Result<Vec<_>, MechError>>()?;
+            out.push(SceneBody {
+                name: info.name.clone(),
+                joint: sys.joints[b.joint].name.clone(),
+                parent: b.parent,
+                joint_on_parent: b.frame_parent.r.0,
+                joint_on_body: b.frame_child.r.0,
+                axis,
+                prismatic: matches!(b.kind, JointModel::Prismatic(_)),
+                com,
+                mass: m,
+                markers,
+                loop_joints: Vec::new(),
+            });
+        }
+        let mut ground = Vec::new();
+        for c in &self.cuts {
+            for (side, frame) in [(c.parent, &c.frame_parent), (c.child, &c.frame_child)] {
+                match side.and_then(|i| out.get_mut(i)) {
+                    Some(b) => b.loop_joints.push(frame.r.0),
+                    None => ground.push(frame.r.0),
+                }
+            }
+        }
+        Ok(Scene {
+            bodies: out,
+            ground,
+        })
+    }
+
     /// The values of the cable mounts at `q`, `t` (the generated
     /// `attachments` without its Jacobians; see [`super::mounts`]).
     pub fn mounts(&self, sys: &System, q: &[f64], t: f64) -> Result<Vec<f64>, MechError> {
@@ -607,4 +684,52 @@ impl eom_sim::constrained::Assemble for Numeric {
     fn unit_quaternions(&self, q: &mut [f64]) {
         self.normalize(q);
     }
+}
+
+/// A body's pose in the world (see [`Numeric::world_poses`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WorldPose {
+    /// Rotation, rows of the matrix whose columns are the body axes in
+    /// world axes.
+    pub rotation: [[f64; 3]; 3],
+    /// The body origin in world coordinates.
+    pub origin: [f64; 3],
+}
+
+/// What an animation draws of one tree body (see [`Numeric::scene`]);
+/// points and directions in the body's coordinates except
+/// `joint_on_parent`, in its parent's (the world's for a body on ground).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneBody {
+    /// The body's name.
+    pub name: String,
+    /// The name of the joint above it.
+    pub joint: String,
+    /// The parent's tree index (`None`: ground).
+    pub parent: Option<usize>,
+    /// The joint frame's origin on the parent.
+    pub joint_on_parent: [f64; 3],
+    /// The joint frame's origin on this body.
+    pub joint_on_body: [f64; 3],
+    /// The joint's axis (revolute, prismatic, cylindrical, screw).
+    pub axis: Option<[f64; 3]>,
+    /// True for a prismatic joint (its axis drawn as a slide).
+    pub prismatic: bool,
+    /// The centre of mass (the joint frame's origin for a massless body).
+    pub com: [f64; 3],
+    /// The mass.
+    pub mass: f64,
+    /// The markers: name and position.
+    pub markers: Vec<(String, [f64; 3])>,
+    /// Where loop-closing (cut) joints hold it.
+    pub loop_joints: Vec<[f64; 3]>,
+}
+
+/// What an animation draws (see [`Numeric::scene`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The tree bodies, in tree order.
+    pub bodies: Vec<SceneBody>,
+    /// The points of ground (world coordinates) that cut joints hold.
+    pub ground: Vec<[f64; 3]>,
 }

@@ -1,0 +1,302 @@
+//! The animation page of a run (`eom-gen animate`, `simulate --html`):
+//! one self-contained HTML file that plays the motion in 3-D with
+//! three.js (inlined from `assets/three.bundle.min.js`, made by
+//! `assets/bundle.sh`), orbit, zoom, play/pause, a time slider and speed.
+//!
+//! The page gets poses, not vertices: the scene (per body its joint
+//! frames, centre of mass, joint axis and markers, in body coordinates)
+//! once, then per frame each body's world position and quaternion,
+//! rounded to 6 decimals. The frames are the rows of the run's CSV.
+
+use crate::error::Error;
+use eom_gen::mech::numeric::{Numeric, Scene};
+use eom_sim::table::Table;
+use std::fmt::Write;
+
+const THREE: &str = include_str!("../assets/three.bundle.min.js");
+const PAGE: &str = include_str!("../assets/animate.html");
+
+/// The page for the trajectory `table` (columns `t` and the coordinates)
+/// of `sys`.
+pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Error> {
+    let num = Numeric::new(sys).map_err(|e| Error::Refused(format!("{}: {e}", sys.name)))?;
+    let scene = num
+        .scene(sys)
+        .map_err(|e| Error::Refused(format!("{}: {e}", sys.name)))?;
+    let names = sys.coordinate_names();
+    let column = |name: &str| {
+        table
+            .header
+            .iter()
+            .position(|h| h == name)
+            .ok_or_else(|| Error::Format(format!("the trajectory has no column `{name}`")))
+    };
+    let t_col = column("t")?;
+    let q_cols = names
+        .iter()
+        .map(|n| column(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut frames = String::from("[");
+    let mut times = String::from("[");
+    let mut q = vec![0.0; q_cols.len()];
+    for (k, row) in table.rows.iter().enumerate() {
+        for (x, &c) in q.iter_mut().zip(&q_cols) {
+            *x = row[c];
+        }
+        let t = row[t_col];
+        let poses = num
+            .world_poses(&q, t)
+            .map_err(|e| Error::Refused(format!("{} at t = {t}: {e}", sys.name)))?;
+        if k > 0 {
+            frames.push(',');
+            times.push(',');
+        }
+        times.push_str(&number(t)?);
+        frames.push('[');
+        for (i, p) in poses.iter().enumerate() {
+            let quat = quaternion(&p.rotation);
+            for (j, v) in p.origin.iter().chain(&quat).enumerate() {
+                if i + j > 0 {
+                    frames.push(',');
+                }
+                frames.push_str(&number(*v)?);
+            }
+        }
+        frames.push(']');
+    }
+    frames.push(']');
+    times.push(']');
+    if table.rows.is_empty() {
+        return Err(Error::Refused(format!(
+            "{}: the run recorded no frames to animate",
+            sys.name
+        )));
+    }
+    let mut data = String::new();
+    let _ = write!(
+        data,
+        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"t\":{times},\"poses\":{frames}}}",
+        serde_json::to_string(&sys.name).unwrap_or_default(),
+        serde_json::to_string(&gravity(&num)).unwrap_or_default(),
+        bodies_json(&scene),
+        serde_json::to_string(&scene.ground).unwrap_or_else(|_| "[]".into()),
+    );
+    // The data sits in a <script> element: no `</` may close it early.
+    let data = data.replace("</", "<\\/");
+    let title = sys.name.replace('&', "&amp;").replace('<', "&lt;");
+    Ok(PAGE
+        .replace("{{TITLE}}", &title)
+        .replace("{{DATA}}", &data)
+        .replace("{{THREE}}", THREE))
+}
+
+/// Gravity in world axes (zero vector if none).
+fn gravity(num: &Numeric) -> [f64; 3] {
+    num.tree().gravity.0
+}
+
+fn bodies_json(scene: &Scene) -> String {
+    let list: Vec<serde_json::Value> = scene
+        .bodies
+        .iter()
+        .map(|b| {
+            serde_json::json!({
+                "name": b.name,
+                "joint": b.joint,
+                "parent": b.parent,
+                "jp": b.joint_on_parent,
+                "jb": b.joint_on_body,
+                "axis": b.axis,
+                "prismatic": b.prismatic,
+                "com": b.com,
+                "mass": b.mass,
+                "markers": b.markers,
+                "loops": b.loop_joints,
+            })
+        })
+        .collect();
+    serde_json::to_string(&list).unwrap_or_else(|_| "[]".into())
+}
+
+/// `x` with 6 decimals, trailing zeros dropped; a value that is not
+/// finite cannot be drawn and refuses.
+fn number(x: f64) -> Result<String, Error> {
+    if !x.is_finite() {
+        return Err(Error::Refused(format!(
+            "the trajectory holds {x}: nothing to animate"
+        )));
+    }
+    let mut s = format!("{x:.6}");
+    while s.ends_with('0') {
+        s.pop();
+    }
+    if s.ends_with('.') {
+        s.pop();
+    }
+    if s == "-0" {
+        s = "0".into();
+    }
+    Ok(s)
+}
+
+/// The unit quaternion `[x, y, z, w]` of the rotation matrix `r` (rows;
+/// Shepperd's method, the largest of the four candidates first).
+pub fn quaternion(r: &[[f64; 3]; 3]) -> [f64; 4] {
+    let tr = r[0][0] + r[1][1] + r[2][2];
+    let q = if tr > r[0][0].max(r[1][1]).max(r[2][2]) {
+        let s = 2.0 * (1.0 + tr).sqrt();
+        [
+            (r[2][1] - r[1][2]) / s,
+            (r[0][2] - r[2][0]) / s,
+            (r[1][0] - r[0][1]) / s,
+            s / 4.0,
+        ]
+    } else if r[0][0] >= r[1][1] && r[0][0] >= r[2][2] {
+        let s = 2.0 * (1.0 + r[0][0] - r[1][1] - r[2][2]).sqrt();
+        [
+            s / 4.0,
+            (r[0][1] + r[1][0]) / s,
+            (r[0][2] + r[2][0]) / s,
+            (r[2][1] - r[1][2]) / s,
+        ]
+    } else if r[1][1] >= r[2][2] {
+        let s = 2.0 * (1.0 + r[1][1] - r[0][0] - r[2][2]).sqrt();
+        [
+            (r[0][1] + r[1][0]) / s,
+            s / 4.0,
+            (r[1][2] + r[2][1]) / s,
+            (r[0][2] - r[2][0]) / s,
+        ]
+    } else {
+        let s = 2.0 * (1.0 + r[2][2] - r[0][0] - r[1][1]).sqrt();
+        [
+            (r[0][2] + r[2][0]) / s,
+            (r[1][2] + r[2][1]) / s,
+            s / 4.0,
+            (r[1][0] - r[0][1]) / s,
+        ]
+    };
+    let n = q.iter().map(|x| x * x).sum::<f64>().sqrt();
+    q.map(|x| x / n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quaternion of a rotation by θ about a unit axis n is
+    /// (n sin θ/2, cos θ/2), through every branch of Shepperd's method.
+    #[test]
+    fn quaternion_of_axis_angle() {
+        for (n, theta) in [
+            ([0.0, 0.0, 1.0], 0.3),
+            ([1.0, 0.0, 0.0], 3.0),
+            ([0.0, 1.0, 0.0], 3.1),
+            ([0.0, 0.0, 1.0], 3.1),
+            ([0.6, 0.0, 0.8], 2.0),
+        ] {
+            let (s, c) = (f64::sin(theta), f64::cos(theta));
+            let k = [[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]];
+            let mut r = [[0.0; 3]; 3];
+            for i in 0..3 {
+                for j in 0..3 {
+                    let kk: f64 = (0..3).map(|m| k[i][m] * k[m][j]).sum();
+                    r[i][j] = f64::from(u8::from(i == j)) + s * k[i][j] + (1.0 - c) * kk;
+                }
+            }
+            let q = quaternion(&r);
+            let h = theta / 2.0;
+            let want = [n[0] * h.sin(), n[1] * h.sin(), n[2] * h.sin(), h.cos()];
+            let sign = if q[3] * want[3] < 0.0 { -1.0 } else { 1.0 };
+            for (a, b) in q.iter().zip(want) {
+                assert!((sign * a - b).abs() < 1e-12, "{q:?} vs {want:?}");
+            }
+        }
+    }
+
+    /// The page of the double pendulum: its data parses; one time and one
+    /// pose (position, unit quaternion) per body per frame; and the poses
+    /// are the pendulum's closed form: the lower body hangs at
+    /// l1 (sin q1, −cos q1, 0) turned by q1 + q2 about z.
+    #[test]
+    fn double_pendulum_page() {
+        let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/double_pendulum.ron");
+        let Ok(opened) = crate::open::open(model, &Default::default(), &Default::default()) else {
+            panic!("cannot open {model}");
+        };
+        let sys = &opened.checked.system;
+        let mut table = Table::new(vec!["t".into(), "q1".into(), "q2".into(), "u1".into()]);
+        let frames = [(0.0, 2.0, -2.2), (0.5, 0.3, 1.1), (1.0, -1.0, 4.0)];
+        for (t, q1, q2) in frames {
+            table.push(vec![t, q1, q2, 0.0]);
+        }
+        let page = match html(sys, &table) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        };
+        assert!(page.starts_with("<!DOCTYPE html>"));
+        assert!(!page.contains("{{"), "a placeholder is left");
+        assert!(!page.contains("src=\"http"), "the page loads nothing");
+        let start = page.find(r#"type="application/json">"#).map(|i| i + 24);
+        let data = start.and_then(|s| Some(&page[s..s + page[s..].find("</script>")?]));
+        let data: serde_json::Value = match data.map(serde_json::from_str) {
+            Some(Ok(v)) => v,
+            other => panic!("the page's data does not parse: {other:?}"),
+        };
+        let bodies = data["bodies"].as_array().map(Vec::len);
+        assert_eq!(bodies, Some(2));
+        assert_eq!(data["t"].as_array().map(Vec::len), Some(3));
+        let poses = data["poses"].as_array().cloned().unwrap_or_default();
+        assert_eq!(poses.len(), 3);
+        for (pose, (_, q1, q2)) in poses.iter().zip(frames) {
+            let p: Vec<f64> = pose
+                .as_array()
+                .map(|v| v.iter().filter_map(|x| x.as_f64()).collect())
+                .unwrap_or_default();
+            assert_eq!(p.len(), 14, "two bodies × (position, quaternion)");
+            let lower = &p[7..];
+            let want = [
+                q1.sin(),
+                -q1.cos(),
+                0.0,
+                0.0,
+                0.0,
+                ((q1 + q2) / 2.0).sin(),
+                ((q1 + q2) / 2.0).cos(),
+            ];
+            let sign = if lower[6] * want[6] < 0.0 { -1.0 } else { 1.0 };
+            for (k, (a, b)) in lower.iter().zip(want).enumerate() {
+                let a = if k >= 3 { sign * a } else { *a };
+                assert!(
+                    (a - b).abs() < 1e-6,
+                    "lower body: {lower:?}, closed form {want:?}"
+                );
+            }
+        }
+    }
+
+    /// The four-bar's loop is closed by one cut joint: the page draws it
+    /// on both bodies it joins (two points; none on ground).
+    #[test]
+    fn fourbar_page_draws_its_cut_joint() {
+        let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/fourbar.ron");
+        let Ok(opened) = crate::open::open(model, &Default::default(), &Default::default()) else {
+            panic!("cannot open {model}");
+        };
+        let sys = &opened.checked.system;
+        let Ok(scene) = Numeric::new(sys).and_then(|n| n.scene(sys)) else {
+            panic!("no scene");
+        };
+        assert_eq!(sys.graph.cut_joints().len(), 1);
+        let held: usize = scene.bodies.iter().map(|b| b.loop_joints.len()).sum();
+        assert_eq!((held, scene.ground.len()), (2, 0));
+    }
+
+    #[test]
+    fn numbers_are_short() {
+        assert_eq!(number(1.0).ok().as_deref(), Some("1"));
+        assert_eq!(number(-0.0000001).ok().as_deref(), Some("0"));
+        assert_eq!(number(0.1234567).ok().as_deref(), Some("0.123457"));
+        assert!(number(f64::NAN).is_err());
+    }
+}
