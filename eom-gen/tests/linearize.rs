@@ -22,7 +22,9 @@
 //! - **Outputs** `δh = C y + D w`: the pendulum's tip and hinge
 //!   reaction against the hand derivation (the reaction's tangential
 //!   component `τ/l` depends on the input alone, `D = 1/l`).
-//! - A constrained state that is no steady motion is refused.
+//! - A constrained state that is no steady motion is refused; so is a
+//!   state with a unilateral contact closed (the ball on the floor), while
+//!   the ball in flight is free fall.
 
 use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::interpret::Point;
@@ -446,4 +448,27 @@ fn pendulum_outputs_c_and_d_are_the_hand_derivation() {
             assert!((a - b).abs() < 1e-9, "{name} [{k}]: {a} vs {b}");
         }
     }
+}
+
+/// `models/bouncing_ball.ron` (a ball of radius 0.1 m on a prismatic joint
+/// along z, the floor a unilateral contact): in flight every contact is
+/// open and the linearisation is free fall (`A = [[0, 1], [0, 0]]`); resting
+/// on the floor (`z = r`, the gap zero) the contact is closed and the state
+/// is refused, naming the contact.
+#[test]
+fn closed_contacts_are_refused_open_ones_left_out() {
+    let sys = system("bouncing_ball");
+    let f = with_derivatives(&sys);
+    let lin = linearize(&f, &point(&sys, &[1.1], &[0.0])).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        lin.a.as_slice(),
+        &[0.0, 0.0, 1.0, 0.0],
+        "free fall (column-major)"
+    );
+    let err = linearize(&f, &point(&sys, &[0.1], &[0.0])).expect_err("resting on the floor");
+    assert!(
+        matches!(&err, LinearizeError::ClosedContacts { rows, .. } if rows.len() == 1),
+        "{err}"
+    );
+    assert!(err.to_string().contains("floor"), "{err}");
 }

@@ -143,6 +143,13 @@ pub enum LinearizeError {
         /// `max |Φ|`.
         residual: f64,
     },
+    /// Unilateral contacts closed at the state: `(row, gap)`.
+    ClosedContacts {
+        /// The model.
+        model: String,
+        /// The closed gap rows and their gaps.
+        rows: Vec<(String, f64)>,
+    },
     /// The model has cables.
     Cables {
         /// The model.
@@ -196,6 +203,14 @@ impl fmt::Display for LinearizeError {
                 f,
                 "`{model}`: the state does not satisfy the constraints (max |Φ|, |Φ̇| = {residual:.3e}); give `--q` and `--u` that satisfy them"
             ),
+            LinearizeError::ClosedContacts { model, rows } => write!(
+                f,
+                "`{model}`: unilateral contact(s) closed at this state ({}): a sustained contact's constraint is not part of the linearisation, not implemented; linearise where every contact is open (gap > 0)",
+                rows.iter()
+                    .map(|(r, g)| format!("`{r}` gap {g:.3e}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
             LinearizeError::Cables { model } => write!(
                 f,
                 "`{model}` has cables: linearisation supports trees of rigid and flexible bodies without cables"
@@ -219,6 +234,7 @@ impl std::error::Error for LinearizeError {}
 /// parameters; `x.tau` is the operating point of `τ`, zero if empty).
 /// `f` must hold `forward_dynamics_derivatives`.
 pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError> {
+    closed_contacts(f, x)?;
     let mut lin = states(f, x)?;
     if let Some((c, d)) = outputs::linearize(f, x, &lin.state_basis, lin.input_kind)? {
         lin.outputs = f.output_names.clone();
@@ -226,6 +242,33 @@ pub fn linearize(f: &Formulation, x: &Point<'_>) -> Result<Linearization, Linear
         lin.d = d;
     }
     Ok(lin)
+}
+
+/// Unilateral contacts (#26) take part in the motion only where they are
+/// closed: a state with every contact open is linearised without them (a
+/// small motion keeps them open), one with a contact closed is refused —
+/// the sustained contact's constraint is not part of the linearisation.
+fn closed_contacts(f: &Formulation, x: &Point<'_>) -> Result<(), LinearizeError> {
+    let rows = &f.contact_rows;
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let c = crate::interpret::evaluate_function(f, Function::Contacts, x)
+        .ok_or(LinearizeError::NotFinite)?;
+    let closed: Vec<(String, f64)> = rows
+        .iter()
+        .zip(&c)
+        .filter(|(_, g)| !(**g > eom_sim::run::GAP_TOL))
+        .map(|(name, g)| (name.clone(), *g))
+        .collect();
+    if closed.is_empty() {
+        Ok(())
+    } else {
+        Err(LinearizeError::ClosedContacts {
+            model: x.sys.name.clone(),
+            rows: closed,
+        })
+    }
 }
 
 /// `A`, `B` (and the basis) without the outputs.
