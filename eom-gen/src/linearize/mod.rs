@@ -258,7 +258,7 @@ fn closed_contacts(f: &Formulation, x: &Point<'_>) -> Result<(), LinearizeError>
     let closed: Vec<(String, f64)> = rows
         .iter()
         .zip(&c)
-        .filter(|(_, g)| !(**g > eom_sim::run::GAP_TOL))
+        .filter(|(_, g)| g.is_nan() || **g <= eom_sim::run::GAP_TOL)
         .map(|(name, g)| (name.clone(), *g))
         .collect();
     if closed.is_empty() {
