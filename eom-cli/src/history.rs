@@ -168,18 +168,6 @@ pub fn default_panels(table: &Table, coordinates: &[&str], units: &Units) -> Vec
     panels
 }
 
-/// Distinct colours (Okabe–Ito, then darker shades), in series order.
-const COLORS: [RGBColor; 8] = [
-    RGBColor(0, 114, 178),
-    RGBColor(213, 94, 0),
-    RGBColor(0, 158, 115),
-    RGBColor(204, 121, 167),
-    RGBColor(86, 180, 233),
-    RGBColor(230, 159, 0),
-    RGBColor(0, 0, 0),
-    RGBColor(120, 60, 20),
-];
-
 /// The panels drawn against `t` as one SVG document titled `title`.
 pub fn svg(table: &Table, panels: &[Panel], units: &Units, title: &str) -> Result<String, Error> {
     let t = table.column("t").ok_or_else(|| {
@@ -270,7 +258,7 @@ fn draw(
         }
         mesh.draw()?;
         for (j, (name, pts)) in series.into_iter().enumerate() {
-            let color = COLORS[j % COLORS.len()].to_rgba();
+            let color = crate::plot::COLORS[j % crate::plot::COLORS.len()].to_rgba();
             let u = &panel_units[j];
             let label = if shared || u.is_empty() {
                 name

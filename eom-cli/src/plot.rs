@@ -38,8 +38,9 @@ fn series(w: &WorkPrecision, path: bool) -> Series {
     out
 }
 
-/// Distinct colours (Okabe–Ito, then darker shades), in series order.
-const COLORS: [RGBColor; 10] = [
+/// Distinct colours (Okabe–Ito, then darker shades), in series order:
+/// every plot of the CLI draws its series in these.
+pub(crate) const COLORS: [RGBColor; 10] = [
     RGBColor(0, 114, 178),
     RGBColor(213, 94, 0),
     RGBColor(0, 158, 115),

@@ -405,6 +405,33 @@ fn central(
     Ok((p1 - m1) * (8.0 / (12.0 * h)) - (p2 - m2) * (1.0 / (12.0 * h)))
 }
 
+/// An orthonormal basis of the null space of `j` (`n × f`), from the
+/// eigenvectors of `jᵀj` whose eigenvalues are below `1e-12` of the
+/// largest (at least 1): deterministic signs (largest entry positive) and
+/// order (by the index of that entry). All of `ℝⁿ` for a `j` without rows.
+fn null_space(j: &DMatrix<f64>) -> DMatrix<f64> {
+    let n = j.ncols();
+    let eig = nalgebra::SymmetricEigen::new(j.transpose() * j);
+    let largest = eig.eigenvalues.amax().max(1.0);
+    let mut columns: Vec<nalgebra::DVector<f64>> = (0..n)
+        .filter(|&k| eig.eigenvalues[k] <= 1e-12 * largest)
+        .map(|k| {
+            let mut v = eig.eigenvectors.column(k).into_owned();
+            let imax = v.iamax();
+            if v[imax] < 0.0 {
+                v.neg_mut();
+            }
+            v
+        })
+        .collect();
+    columns.sort_by_key(|v| v.iamax());
+    if columns.is_empty() {
+        DMatrix::zeros(n, 0)
+    } else {
+        DMatrix::from_columns(&columns)
+    }
+}
+
 /// `Φ` and `J` (holonomic rows) at `q`.
 fn constraint_values(f: &Formulation, x: &Point<'_>) -> Option<(Vec<f64>, DMatrix<f64>)> {
     let nu = x.sys.nu();
@@ -484,29 +511,8 @@ fn loops(f: &Formulation, x: &Point<'_>) -> Result<Linearization, LinearizeError
         );
         h.set_column(k, &((plus - minus) / (2.0 * step)));
     }
-    // Z: the null space of J, from the eigenvectors of JᵀJ.
-    let jtj = j.transpose() * &j;
-    let eig = nalgebra::SymmetricEigen::new(jtj);
-    let largest = eig.eigenvalues.amax().max(1.0);
-    let mut columns: Vec<nalgebra::DVector<f64>> = (0..nu)
-        .filter(|&k| eig.eigenvalues[k] <= 1e-12 * largest)
-        .map(|k| {
-            let mut v = eig.eigenvectors.column(k).into_owned();
-            // A deterministic sign: the largest entry positive.
-            let imax = v.iamax();
-            if v[imax] < 0.0 {
-                v.neg_mut();
-            }
-            v
-        })
-        .collect();
-    columns.sort_by_key(|v| v.iamax());
-    let dof = columns.len();
-    let z = if dof == 0 {
-        DMatrix::<f64>::zeros(nu, 0)
-    } else {
-        DMatrix::from_columns(&columns)
-    };
+    let z = null_space(&j);
+    let dof = z.ncols();
     let mr = z.transpose() * &m * &z;
     let Some(mr_inv) = mr.clone().try_inverse() else {
         return Err(LinearizeError::NotFinite);

@@ -43,22 +43,11 @@ pub fn linearize(
     if !(finite(&eq.m) && finite(&eq.k) && finite(&eq.d) && finite(&eq.g)) {
         return Err(LinearizeError::NotFinite);
     }
-    // Z: the null space of G.
+    // Z: the null space of G (all coordinates without attachments).
     let z = if eq.g.nrows() == 0 {
         DMatrix::identity(n, n)
     } else {
-        let gtg = eq.g.transpose() * &eq.g;
-        let eig = nalgebra::SymmetricEigen::new(gtg);
-        let largest = eig.eigenvalues.amax().max(1e-300);
-        let columns: Vec<_> = (0..n)
-            .filter(|&k| eig.eigenvalues[k] <= 1e-12 * largest)
-            .map(|k| eig.eigenvectors.column(k).into_owned())
-            .collect();
-        if columns.is_empty() {
-            DMatrix::zeros(n, 0)
-        } else {
-            DMatrix::from_columns(&columns)
-        }
+        super::null_space(&eq.g)
     };
     let f = z.ncols();
     let zt = z.transpose();
