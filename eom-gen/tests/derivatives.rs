@@ -512,6 +512,46 @@ fn radau5_with_the_generated_jacobian_needs_fewer_rhs_for_the_same_run() {
     }
 }
 
+/// The library's run refuses `Jacobian::Generated` where there is none (a
+/// formulation without the derivatives, an explicit integrator) with the
+/// reason, and reports which Jacobian it used.
+#[test]
+fn a_generated_jacobian_the_run_cannot_have_is_refused() {
+    let sys = system("double_pendulum");
+    let radau5 = eom_sim::RunOptions {
+        integrator: "radau5".parse().expect("a known integrator"),
+        t_end: 0.01,
+        jacobian: eom_sim::Jacobian::Generated,
+        ..Default::default()
+    };
+    let without = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
+    match eom_gen::interpret::simulate(&without, &sys, &radau5) {
+        Err(eom_gen::interpret::InterpretError::Run(eom_sim::RunError::Options(p))) => {
+            assert!(p[0].contains("forward_dynamics_derivatives"), "{p:?}")
+        }
+        other => panic!("no derivatives, yet {other:?}"),
+    }
+    let dopri5 = eom_sim::RunOptions {
+        integrator: eom_sim::Integrator::Dopri5,
+        ..radau5.clone()
+    };
+    assert!(matches!(
+        eom_gen::interpret::simulate(&without, &sys, &dopri5),
+        Err(eom_gen::interpret::InterpretError::Run(
+            eom_sim::RunError::Options(_)
+        ))
+    ));
+    let with = with_derivatives(&sys, "double_pendulum");
+    let r = eom_gen::interpret::simulate(&with, &sys, &radau5).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.stats.jacobian, Some(eom_sim::Jacobian::Generated));
+    let auto = eom_sim::RunOptions {
+        jacobian: eom_sim::Jacobian::Auto,
+        ..radau5
+    };
+    let r = eom_gen::interpret::simulate(&without, &sys, &auto).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.stats.jacobian, Some(eom_sim::Jacobian::Differences));
+}
+
 /// `inverse_dynamics_derivatives` of `sys` against central differences of
 /// the `f64` inverse dynamics (Newton–Euler run on numbers), coordinates
 /// moved along `N(q) e_j` as above, and `∂τ/∂u̇` against the `f64` mass

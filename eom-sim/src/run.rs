@@ -98,6 +98,73 @@ impl<'de> Deserialize<'de> for Method {
     }
 }
 
+/// Where an implicit integrator (RADAU5, the implicit midpoint rule) gets
+/// the Jacobian `∂(q̇, u̇)/∂(q, u)` of an unconstrained model.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Jacobian {
+    /// The generated one where the model has `forward_dynamics_derivatives`
+    /// and `q̇ = u` (no quaternions) and no constraints, forward differences
+    /// of the right-hand side otherwise.
+    #[default]
+    Auto,
+    /// The generated `[[0, I], [∂u̇/∂q, ∂u̇/∂u]]`; a run that cannot have it
+    /// refuses to start ([`RunError::Options`]).
+    Generated,
+    /// Forward differences of the right-hand side (Hairer's increment), `N`
+    /// right-hand sides per Jacobian.
+    Differences,
+}
+
+impl Jacobian {
+    /// Every choice, in the order of the docs.
+    pub const ALL: [Jacobian; 3] = [Jacobian::Auto, Jacobian::Generated, Jacobian::Differences];
+
+    /// Its name (as `eom-gen simulate --jacobian` takes it).
+    pub fn name(self) -> &'static str {
+        match self {
+            Jacobian::Auto => "auto",
+            Jacobian::Generated => "generated",
+            Jacobian::Differences => "differences",
+        }
+    }
+}
+
+impl fmt::Display for Jacobian {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Jacobian {
+    type Err = UnknownName;
+    fn from_str(s: &str) -> Result<Self, UnknownName> {
+        Jacobian::ALL
+            .into_iter()
+            .find(|j| j.name() == s)
+            .ok_or_else(|| UnknownName {
+                what: "Jacobian",
+                name: s.to_string(),
+                known: Jacobian::ALL.iter().map(|j| j.name()).collect(),
+                hint: matches!(s, "fd" | "finite-differences" | "numeric").then_some("differences"),
+            })
+    }
+}
+
+#[cfg(feature = "serde")]
+impl Serialize for Jacobian {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+#[cfg(feature = "serde")]
+impl<'de> Deserialize<'de> for Jacobian {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        s.parse().map_err(serde::de::Error::custom)
+    }
+}
+
 /// How to run: integrator, its settings, the constraint method, the end
 /// time and what to record.
 #[derive(Clone, Debug, PartialEq)]
@@ -148,6 +215,9 @@ pub struct RunOptions {
     /// released) to this CSV file, one row per contact row and event.
     #[cfg_attr(feature = "serde", serde(default))]
     pub events_csv: Option<String>,
+    /// Where RADAU5 and the implicit midpoint rule get their Jacobian.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub jacobian: Jacobian,
 }
 
 impl Default for RunOptions {
@@ -168,6 +238,7 @@ impl Default for RunOptions {
             momentum_columns: false,
             constraint_columns: false,
             events_csv: None,
+            jacobian: Jacobian::Auto,
         }
     }
 }
@@ -532,6 +603,13 @@ pub struct RunStats {
     pub rhs_evals: usize,
     /// Jacobian evaluations.
     pub jacobian_evals: usize,
+    /// Where the Jacobians came from (`generated` or `differences`), for
+    /// the integrators that use one.
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "Option::is_none")
+    )]
+    pub jacobian: Option<Jacobian>,
     /// LU decompositions.
     pub lu_decompositions: usize,
     /// Newton iterations.
@@ -767,8 +845,10 @@ impl<M: ConstrainedModel + Clone> Simulate for Generated<'_, M> {
     }
 }
 
-/// The unconstrained first-order system `y = (q, u)` of a [`Simulate`].
-struct Free<'a, S: ?Sized>(&'a S);
+/// The unconstrained first-order system `y = (q, u)` of a [`Simulate`];
+/// the flag: whether its Jacobian is the generated one (see
+/// [`jacobian_source`]).
+struct Free<'a, S: ?Sized>(&'a S, bool);
 
 impl<const N: usize, S: Simulate + ?Sized> OdeSystem<N> for Free<'_, S> {
     fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
@@ -789,15 +869,12 @@ impl<const N: usize, S: Simulate + ?Sized> OdeSystem<N> for Free<'_, S> {
     /// methods difference `rhs`.
     fn jacobian(&self, t: f64, y: &[f64; N], jac: &mut nalgebra::SMatrix<f64, N, N>) -> bool {
         let (nq, nu) = (self.0.nq(), self.0.nu());
-        if nq != nu || nq + nu != N || !self.0.quaternions().is_empty() {
+        if !self.1 || nq + nu != N {
             return false;
         }
         let Some(len) = self.0.function_len(DERIVATIVES) else {
             return false;
         };
-        if len < 2 * nu * nu {
-            return false;
-        }
         let mut d = vec![0.0; len];
         let (q, u) = y.split_at(nq);
         let at = Point {
@@ -820,6 +897,52 @@ impl<const N: usize, S: Simulate + ?Sized> OdeSystem<N> for Free<'_, S> {
             }
         }
         true
+    }
+}
+
+/// Whether a run of `model` with `options` uses the generated Jacobian:
+/// `Ok(None)` for an integrator that uses none, `Ok(Some(_))` the source
+/// it uses, `Err` with the reason when [`Jacobian::Generated`] or
+/// [`Jacobian::Differences`] was asked for where it does not apply.
+fn jacobian_source<S: Simulate + ?Sized>(
+    model: &S,
+    options: &RunOptions,
+) -> Result<Option<Jacobian>, String> {
+    let (nq, nu) = (model.nq(), model.nu());
+    if !options.integrator.uses_jacobian() {
+        return match options.jacobian {
+            Jacobian::Auto => Ok(None),
+            asked => Err(format!(
+                "--jacobian {asked} applies to the integrators that use a Jacobian ({}); \
+                 {} uses none",
+                Integrator::names_where(Integrator::uses_jacobian),
+                options.integrator
+            )),
+        };
+    }
+    let why_not = if model.nc() > 0 {
+        Some("the model has constraints (their Jacobian is differenced)".to_string())
+    } else if nq != nu || !model.quaternions().is_empty() {
+        Some("the model has quaternion coordinates (`q̇ ≠ u`)".to_string())
+    } else if model
+        .function_len(DERIVATIVES)
+        .is_none_or(|len| len < 2 * nu * nu)
+    {
+        Some(format!(
+            "the model has no `{DERIVATIVES}` (`eom-gen simulate` generates them for \
+             --integrator {})",
+            Integrator::names_where(Integrator::uses_jacobian)
+        ))
+    } else {
+        None
+    };
+    match (options.jacobian, why_not) {
+        (Jacobian::Differences, _) | (Jacobian::Auto, Some(_)) => Ok(Some(Jacobian::Differences)),
+        (Jacobian::Generated, Some(why)) => Err(format!(
+            "--jacobian generated: not for this run: {why}; --jacobian differences \
+             differences the right-hand side"
+        )),
+        (Jacobian::Generated | Jacobian::Auto, None) => Ok(Some(Jacobian::Generated)),
     }
 }
 
@@ -990,6 +1113,8 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         .chain(&names.speeds)
         .cloned()
         .collect();
+    let jacobian = jacobian_source(model, options).map_err(|e| RunError::Options(vec![e]))?;
+    let generated = jacobian == Some(Jacobian::Generated);
     let nk = contact::count(model);
     if nk > 0 {
         contact_problems(model, &names, nk, &q0, &u0, options)?;
@@ -1002,10 +1127,16 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         }
         if nk > 0 {
             let run = contact_run(model, &names, nk, true, options);
-            let (sol, events, failed) =
-                run.run(&Free(model), &settings, y0, options.t_end, &solve_options);
+            let (sol, events, failed) = run.run(
+                &Free(model, generated),
+                &settings,
+                y0,
+                options.t_end,
+                &solve_options,
+            );
             let cpu = start.elapsed().as_secs_f64();
             let mut report = finish(model, &names, &state_names, &sol, &y0, cpu, None);
+            report.stats.jacobian = jacobian;
             if let Some((t, message)) = failed {
                 report.stop = Stop::Failed { t, message };
             }
@@ -1016,14 +1147,15 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         }
         let sol = solve(
             &settings,
-            &Free(model),
+            &Free(model, generated),
             0.0,
             y0,
             options.t_end,
             &solve_options,
         );
         let cpu = start.elapsed().as_secs_f64();
-        let report = finish(model, &names, &state_names, &sol, &y0, cpu, None);
+        let mut report = finish(model, &names, &state_names, &sol, &y0, cpu, None);
+        report.stats.jacobian = jacobian;
         write_csv(model, &names, options, &sol, &|_, _| None)?;
         return Ok(report);
     }
@@ -1084,6 +1216,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         let lambda = dae.multipliers(&sol.y_final);
         let c = constrained(dae.stats(), lambda, &sol.y_final[..nq], sol.t_final);
         let mut report = finish(model, &names, &state_names, &sol, &y0, cpu, Some(c));
+        report.stats.jacobian = jacobian;
         if let Some(r) = dae.refusal() {
             report.stop = Stop::from(&r);
         }
@@ -1113,6 +1246,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         .unwrap_or_else(|| vec![f64::NAN; nc]);
     let c = constrained(cs.stats(), lambda, q, sol.t_final);
     let mut report = finish(model, &names, &state_names, &sol, &y0, cpu, Some(c));
+    report.stats.jacobian = jacobian;
     if let Some(r) = cs.refusal() {
         report.stop = Stop::from(&r);
     }
@@ -1304,6 +1438,7 @@ fn finish<const N: usize, S: Simulate + ?Sized>(
             rejected: s.rejected,
             rhs_evals: s.rhs_evals,
             jacobian_evals: s.jac_evals,
+            jacobian: None,
             lu_decompositions: s.lu_decomps,
             newton_iterations: s.newton_iters,
             stiffness_detections: s.stiffness_detections,

@@ -75,6 +75,13 @@ pub struct SimulateArgs {
     /// Default projection.
     #[arg(long)]
     pub constraints: Option<String>,
+    /// Where radau5 and midpoint get the Jacobian `∂(q̇, u̇)/∂(q, u)`:
+    /// `generated` (the symbolic derivatives, generated for the run;
+    /// unconstrained models without quaternions), `differences` (forward
+    /// differences of the right-hand side) or `auto` (generated where it
+    /// applies and the model has at most 12 speeds; the default).
+    #[arg(long)]
+    pub jacobian: Option<String>,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     pub json: bool,
@@ -142,6 +149,12 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     )
     .pop()
     .unwrap_or(Method::Projection);
+    let jacobian = parse_names(
+        &[a.jacobian.unwrap_or_else(|| "auto".into())],
+        &mut problems,
+    )
+    .pop()
+    .unwrap_or_default();
     let o = RunOptions {
         integrator,
         rtol: a.rtol.unwrap_or(1e-8),
@@ -158,6 +171,7 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         momentum_columns: false,
         constraint_columns: false,
         events_csv: a.events_csv,
+        jacobian,
     };
     if o.events_csv.is_some() && sys.contacts.is_empty() {
         problems.push(format!(
@@ -166,6 +180,9 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         ));
     }
     problems.extend(o.problems());
+    if let Some(why) = jacobian_problem(sys, &o) {
+        problems.push(why);
+    }
     for (what, given, names) in [
         ("q0", &o.q0, sys.coordinate_names()),
         ("u0", &o.u0, sys.speed_names()),
@@ -208,8 +225,9 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 9] = [
+    let refused: [(&str, bool); 10] = [
         ("--plot", a.plot.is_some()),
+        ("--jacobian", a.jacobian.is_some()),
         ("--events-csv", a.events_csv.is_some()),
         ("--html", a.html.is_some()),
         ("--max-steps", a.max_steps.is_some()),
@@ -270,7 +288,23 @@ fn simulate(
 ) -> ExitCode {
     let plot = pictures.plot;
     let inputs = &opened.inputs;
-    let g = match crate::open::generate(opened, vary, &Default::default()) {
+    // RADAU5 and the implicit midpoint rule get the generated Jacobian
+    // where it applies (`eom_sim::Jacobian`): its derivatives are generated
+    // for the run.
+    let sys = &opened.checked.system;
+    let derivatives = o.integrator.uses_jacobian()
+        && (o.jacobian == eom_sim::Jacobian::Generated
+            || (o.jacobian == eom_sim::Jacobian::Auto && sys.nu() <= AUTO_DERIVATIVES_MAX_NU))
+        && sys.constraints.is_empty()
+        && sys.graph.cut_joints().is_empty()
+        && sys.nq() == sys.nu();
+    let also = if derivatives {
+        eom_gen::functions::FunctionSet::default()
+            .with(eom_gen::functions::Function::ForwardDynamicsDerivatives)
+    } else {
+        eom_gen::functions::FunctionSet::default()
+    };
+    let g = match crate::open::generate_asking(opened, vary, &Default::default(), also) {
         Ok(g) => g,
         Err(code) => return code,
     };
@@ -323,11 +357,14 @@ fn simulate(
             return code;
         }
     }
-    let detail = if o.integrator.is_adaptive() {
+    let mut detail = if o.integrator.is_adaptive() {
         format!("rtol {:e}, atol {:e}", o.rtol, o.atol)
     } else {
         format!("step {:e} s", o.dt)
     };
+    if let Some(j) = r.stats.jacobian {
+        detail.push_str(&format!(", {j} Jacobian"));
+    }
     let setting = Setting {
         integrator: o.integrator,
         detail,
@@ -381,4 +418,43 @@ fn plot_run(csv: &str, svg: &str, sys: &eom_gen::system::System) -> Result<(), E
     crate::output::write_file(svg, &text)?;
     eprintln!("plot written to {svg}");
     Ok(())
+}
+
+/// The most speeds for which `--jacobian auto` generates the derivatives:
+/// their program grows about as `NU³` (arm7, 7 speeds: 12 780 operations,
+/// 1.6 s more formulation in a debug build), forward differences cost `2 NU`
+/// right-hand sides per Jacobian, and an implicit run evaluates few
+/// Jacobians; above this `--jacobian generated` asks for them.
+const AUTO_DERIVATIVES_MAX_NU: usize = 12;
+
+/// Why `--jacobian` does not apply to this run, if it does not: asked for
+/// an integrator that uses no Jacobian, or `generated` where there is none
+/// (the library's run refuses the same; here it is said before anything is
+/// generated, with the other usage problems).
+fn jacobian_problem(sys: &eom_gen::system::System, o: &RunOptions) -> Option<String> {
+    use eom_sim::Jacobian;
+    if o.jacobian == Jacobian::Auto {
+        return None;
+    }
+    if !o.integrator.uses_jacobian() {
+        return Some(format!(
+            "--jacobian applies to the integrators that use a Jacobian ({}); {} uses none",
+            Integrator::names_where(Integrator::uses_jacobian),
+            o.integrator
+        ));
+    }
+    let why = if !sys.constraints.is_empty() || !sys.graph.cut_joints().is_empty() {
+        "it has constraints (their Jacobian is differenced)"
+    } else if sys.nq() != sys.nu() {
+        "it has quaternion coordinates (q̇ ≠ u)"
+    } else {
+        return None;
+    };
+    (o.jacobian == Jacobian::Generated).then(|| {
+        format!(
+            "--jacobian generated: `{}` has no generated Jacobian: {why}; \
+             --jacobian differences (or auto) differences the right-hand side",
+            sys.name
+        )
+    })
 }

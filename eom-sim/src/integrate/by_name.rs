@@ -176,6 +176,13 @@ impl Integrator {
             .join(", ")
     }
 
+    /// Whether it solves with a Jacobian of the right-hand side (RADAU5
+    /// and the implicit midpoint rule): generated or by differences, see
+    /// [`crate::Jacobian`].
+    pub fn uses_jacobian(self) -> bool {
+        matches!(self, Integrator::Radau5 | Integrator::Midpoint)
+    }
+
     /// True for the methods with error control (tolerances), false for the
     /// fixed-step ones (a step size).
     pub fn is_adaptive(self) -> bool {

@@ -375,6 +375,10 @@ fn report<M: Reported + ?Sized>(
             rejected: stats.rejected,
             rhs_evals: stats.force_evaluations,
             jacobian_evals: stats.factorizations,
+            // Generalized-α's Newton matrix: the elements' generated
+            // kernels, a rigid part's block by differences (not one of
+            // `run::Jacobian`'s choices).
+            jacobian: None,
             lu_decompositions: stats.factorizations,
             newton_iterations: stats.newton_iterations,
             stiffness_detections: 0,
