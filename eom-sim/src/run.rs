@@ -920,8 +920,14 @@ fn jacobian_source<S: Simulate + ?Sized>(
             )),
         };
     }
-    let why_not = if model.nc() > 0 {
-        Some("the model has constraints (their Jacobian is differenced)".to_string())
+    let why_not = if model.nc() > 0 && options.method != Method::Index3 {
+        Some(format!(
+            "the model has constraints, kept by {} (a right-hand side through the \
+             constraint solver, differenced); --constraints index3 has a generated Jacobian",
+            options.method
+        ))
+    } else if model.nc() > model.n_holonomic() {
+        Some("the model has nonholonomic constraints (their Jacobian is differenced)".to_string())
     } else if nq != nu || !model.quaternions().is_empty() {
         Some("the model has quaternion coordinates (`q̇ ≠ u`)".to_string())
     } else if model
@@ -1203,7 +1209,25 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         }
     };
     if options.method == Method::Index3 {
-        let dae = Index3System::new(model);
+        let derivatives = |t: f64, q: &[f64], u: &[f64], tau: &[f64], out: &mut [f64]| {
+            let at = Point {
+                t,
+                q,
+                u,
+                tau,
+                ..Point::default()
+            };
+            let len = model.function_len(DERIVATIVES).unwrap_or(0);
+            let mut all = vec![0.0; len];
+            let ok = len >= out.len() && model.evaluate(DERIVATIVES, &at, &mut all);
+            out.iter_mut().zip(&all).for_each(|(d, s)| *d = *s);
+            ok
+        };
+        let dae = if generated {
+            Index3System::new(model).with_derivatives(&derivatives)
+        } else {
+            Index3System::new(model)
+        };
         let y0 = dae
             .initial::<N>(0.0, &a.q, &a.u)
             .ok_or(RunError::SingularMass)?;

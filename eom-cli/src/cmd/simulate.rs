@@ -295,9 +295,14 @@ fn simulate(
     let derivatives = o.integrator.uses_jacobian()
         && (o.jacobian == eom_sim::Jacobian::Generated
             || (o.jacobian == eom_sim::Jacobian::Auto && sys.nu() <= AUTO_DERIVATIVES_MAX_NU))
-        && sys.constraints.is_empty()
-        && sys.graph.cut_joints().is_empty()
-        && sys.nq() == sys.nu();
+        && jacobian_problem(
+            sys,
+            &RunOptions {
+                jacobian: eom_sim::Jacobian::Generated,
+                ..o.clone()
+            },
+        )
+        .is_none();
     let also = if derivatives {
         eom_gen::functions::FunctionSet::default()
             .with(eom_gen::functions::Function::ForwardDynamicsDerivatives)
@@ -443,10 +448,18 @@ fn jacobian_problem(sys: &eom_gen::system::System, o: &RunOptions) -> Option<Str
             o.integrator
         ));
     }
-    let why = if !sys.constraints.is_empty() || !sys.graph.cut_joints().is_empty() {
-        "it has constraints (their Jacobian is differenced)"
+    let constrained = !sys.constraints.is_empty() || !sys.graph.cut_joints().is_empty();
+    let nonholonomic = sys.constraints.iter().any(|c| c.equations().1 > 0);
+    let why = if constrained && o.method != eom_sim::Method::Index3 {
+        format!(
+            "it has constraints, kept by {} (the constrained right-hand side is differenced; \
+             --constraints index3 has a generated Jacobian)",
+            o.method
+        )
+    } else if nonholonomic {
+        "it has nonholonomic constraints (their Jacobian is differenced)".into()
     } else if sys.nq() != sys.nu() {
-        "it has quaternion coordinates (q̇ ≠ u)"
+        "it has quaternion coordinates (q̇ ≠ u)".into()
     } else {
         return None;
     };

@@ -24,7 +24,14 @@ pub struct Index3System<'a, D: ?Sized> {
     d: &'a D,
     stats: Recorder,
     start_rank: std::cell::Cell<Option<usize>>,
+    derivatives: Option<&'a Derivatives<'a>>,
 }
+
+/// The generated derivatives of forward dynamics at an extra force `τ`:
+/// `(t, q, u, τ, out)` fills `out` with `∂u̇/∂q`, `∂u̇/∂u` and `∂u̇/∂τ =
+/// M⁻¹` (each `NU × NU` by rows, then any input block), `false` if they
+/// cannot be evaluated.
+pub type Derivatives<'a> = dyn Fn(f64, &[f64], &[f64], &[f64], &mut [f64]) -> bool + 'a;
 
 impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
     /// The DAE of `d`.
@@ -33,7 +40,23 @@ impl<'a, D: Dynamics + ?Sized> Index3System<'a, D> {
             d,
             stats: Recorder::new(),
             start_rank: std::cell::Cell::new(None),
+            derivatives: None,
         }
+    }
+
+    /// The same DAE with its Jacobian from the generated derivatives of
+    /// forward dynamics instead of differences of the right-hand side, where
+    /// [`Index3System::has_generated_jacobian`] holds (see
+    /// [`OdeSystem::jacobian`] below).
+    pub fn with_derivatives(mut self, derivatives: &'a Derivatives<'a>) -> Self {
+        self.derivatives = Some(derivatives);
+        self
+    }
+
+    /// Whether a model of this shape can have the generated Jacobian: every
+    /// constraint holonomic and `q̇ = u` (no quaternions).
+    pub fn has_generated_jacobian(d: &D) -> bool {
+        d.nc() == d.n_holonomic() && d.nq() == d.nu() && d.quaternions().is_empty()
     }
 
     /// Why the run was stopped, if the DAE refused to go on (near a
@@ -131,6 +154,83 @@ impl<const N: usize, D: Dynamics + ?Sized> OdeSystem<N> for Index3System<'_, D> 
             let residual = if k < nh { c.phi[k] } else { c.phidot[k] };
             dy[self.slot(k, nq + nu, nc, nh)] = residual;
         }
+    }
+
+    /// `∂f/∂y` of `f = (u, M⁻¹(Jᵀλ − b), Φ)` on `y = (q, u, λ)` from the
+    /// generated derivatives, for models with holonomic constraints only and
+    /// `q̇ = u`:
+    ///
+    /// ```text
+    ///        q                       u          λ
+    /// q̇   [  0                       I          0        ]
+    /// u̇   [  D_q(τ) + M⁻¹ ∂(Jᵀλ)/∂q  D_u(τ)     M⁻¹ Jᵀ   ]
+    /// Φ   [  J                       0          0        ]
+    /// ```
+    ///
+    /// with `D_q`, `D_u`, `M⁻¹` the generated `forward_dynamics_derivatives`
+    /// at `τ = Jᵀλ`, and `∂(Jᵀλ)/∂q` (the constraints' curvature, `Σ λ_k
+    /// ∂²Φ_k/∂q²`) by central differences of the generated `J`, `2 n_q`
+    /// evaluations of the constraints. `false` (RADAU5 then differences the
+    /// right-hand side) without derivatives or where they fail.
+    fn jacobian(&self, t: f64, y: &[f64; N], jac: &mut SMatrix<f64, N, N>) -> bool {
+        let Some(derivatives) = self.derivatives else {
+            return false;
+        };
+        let d = self.d;
+        let (nq, nu, nc) = (d.nq(), d.nu(), d.nc());
+        if !Self::has_generated_jacobian(d) || N != nq + nu + nc {
+            return false;
+        }
+        let q = &y[..nq];
+        let u = &y[nq..nq + nu];
+        let lambda = DVector::from_iterator(nc, self.multipliers(y));
+        let mut c = ConstraintValues::zeros(nc, nu);
+        d.constraints(t, q, u, &mut c);
+        let tau = c.jacobian.transpose() * &lambda;
+        let mut flat = vec![0.0; 3 * nu * nu];
+        if !derivatives(t, q, u, tau.as_slice(), &mut flat) || flat.iter().any(|x| !x.is_finite()) {
+            return false;
+        }
+        let block =
+            |k: usize| DMatrix::from_row_slice(nu, nu, &flat[k * nu * nu..(k + 1) * nu * nu]);
+        let (dq, du, minv) = (block(0), block(1), block(2));
+        // ∂(Jᵀλ)/∂q by central differences of J.
+        let mut curvature = DMatrix::zeros(nu, nq);
+        let mut qh = q.to_vec();
+        let mut cp = ConstraintValues::zeros(nc, nu);
+        for j in 0..nq {
+            let h = f64::EPSILON.cbrt() * q[j].abs().max(1.0);
+            qh[j] = q[j] + h;
+            d.constraints(t, &qh, u, &mut cp);
+            let plus = cp.jacobian.transpose() * &lambda;
+            qh[j] = q[j] - h;
+            d.constraints(t, &qh, u, &mut cp);
+            let minus = cp.jacobian.transpose() * &lambda;
+            qh[j] = q[j];
+            curvature.set_column(j, &((plus - minus) / (2.0 * h)));
+        }
+        let dq = dq + &minv * curvature;
+        let dlambda = &minv * c.jacobian.transpose();
+        jac.fill(0.0);
+        for i in 0..nu {
+            jac[(i, nq + i)] = 1.0;
+            for j in 0..nq {
+                jac[(nq + i, j)] = dq[(i, j)];
+            }
+            for j in 0..nu {
+                jac[(nq + i, nq + j)] = du[(i, j)];
+            }
+            for k in 0..nc {
+                jac[(nq + i, self.slot(k, nq + nu, nc, nc))] = dlambda[(i, k)];
+            }
+        }
+        for k in 0..nc {
+            let row = self.slot(k, nq + nu, nc, nc);
+            for j in 0..nq {
+                jac[(row, j)] = c.jacobian[(k, j)];
+            }
+        }
+        jac.iter().all(|x| x.is_finite())
     }
 
     fn mass_matrix(&self, m: &mut SMatrix<f64, N, N>) -> bool {

@@ -42,7 +42,7 @@ pub use nalgebra::{DMatrix, DVector};
 pub use assembly::{Assembly, assemble};
 pub use generated::Generated;
 pub(crate) use generated::load;
-pub use index3::{INDEX3_SINGULAR_LIMIT, Index3System};
+pub use index3::{Derivatives, INDEX3_SINGULAR_LIMIT, Index3System};
 pub use linalg::{accelerations, al_solve, min_norm_solve, weighted_min_norm};
 pub use method::Method;
 pub use stats::{ConstraintStats, Refusal};
