@@ -271,3 +271,97 @@ fn tangential_rows_of_the_wall_are_the_touching_points_speed() {
         );
     }
 }
+
+/// A plane fixed on a body (`on`): a paddle turning about z carries the
+/// plane `y = 0.1` of its axes (normal +y), a ball on a planar joint
+/// touches it. `g = n·(x − p) − r` with `n`, `p` turning with the paddle;
+/// `ġ` against central differences of `g` along `q + s u` (so it includes
+/// the plane's own motion), `w = ∂ġ/∂u` and `γ` as for world planes; a
+/// plane on the contact's own body and an unknown `on` body are errors.
+#[test]
+fn a_plane_on_a_moving_body() {
+    let text = r#"Model(
+    name: "paddle",
+    bodies: [
+        (name: "paddle", mass: 1, inertia: Diag(0.1, 0.1, 0.1)),
+        (name: "ball", mass: 1, inertia: Diag(0.01, 0.01, 0.01)),
+    ],
+    joints: [
+        (name: "turn", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "paddle", coordinates: ["th"], q0: [0.2]),
+        (name: "p", kind: Planar, parent: "ground", child: "ball", coordinates: ["x", "y", "a"], q0: [0.5, 0.8, 0]),
+    ],
+    contacts: [Plane(name: "hit", at: (body: "ball"), radius: 0.05, point: (0, 0.1, 0), normal: (0, 1, 0), on: "paddle", e: 0.5, mu: 0.3)],
+)"#;
+    let sys = check(&Source::new("models/paddle.ron", text.to_string()))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let f = formulate(&sys, FunctionSet::default()).expect("formulate");
+    let nu = sys.nu();
+    let eval = |q: &[f64], u: &[f64], func: Function| {
+        let x = Point {
+            sys: &sys,
+            q,
+            u,
+            udot: &[],
+            tau: &[],
+            inputs: &[],
+            params: &[],
+            multipliers: &[],
+            t: 0.0,
+        };
+        evaluate_function(&f, func, &x).expect("evaluates")
+    };
+    let q = [0.3, 0.4, 0.9, 0.2];
+    let u = [1.5, -0.7, 0.4, 2.0];
+    let ud = [0.3, -1.0, 0.5, 0.2];
+    let v = eval(&q, &u, Function::Contacts);
+    // g by hand: n = (−sin θ, cos θ), p = 0.1 n.
+    let (s, c) = q[0].sin_cos();
+    let g = -s * q[1] + c * q[2] - 0.1 - 0.05;
+    assert!((v[0] - g).abs() < 1e-14, "g {} vs {g}", v[0]);
+    let h = 1e-4;
+    let at = |t: f64| {
+        let qs: Vec<f64> = (0..nu)
+            .map(|i| q[i] + t * u[i] + 0.5 * t * t * ud[i])
+            .collect();
+        eval(&qs, &u, Function::Contacts)[0]
+    };
+    let fd1 = (at(h) - at(-h)) / (2.0 * h);
+    assert!((fd1 - v[1]).abs() < 1e-7, "ġ {} vs dg/ds {fd1}", v[1]);
+    let w = &v[5..5 + nu];
+    let wu: f64 = w.iter().zip(&u).map(|(a, b)| a * b).sum();
+    assert!((wu - v[1]).abs() < 1e-13, "wᵀu {wu} vs ġ {}", v[1]);
+    let fd2 = (at(h) - 2.0 * at(0.0) + at(-h)) / (h * h);
+    let gdd: f64 = w.iter().zip(&ud).map(|(a, b)| a * b).sum::<f64>() - v[2];
+    assert!((fd2 - gdd).abs() < 1e-5, "g̈ {gdd} vs {fd2}");
+    // Friction: the touching point's speed relative to the paddle, along
+    // t1 = the paddle's x axis (for n = +y): W_t u = v_t.
+    let t = eval(&q, &u, Function::Friction);
+    let wt: f64 = t[4..4 + nu].iter().zip(&u).map(|(a, b)| a * b).sum();
+    assert!((wt - t[0]).abs() < 1e-13);
+    // By hand: the ball's touching point x_c = x − r n moves at
+    // v + ȧ ẑ × (−r n), less the paddle's point there, θ̇ ẑ × x_c; along
+    // t1 = (cos θ, sin θ).
+    let n = [-s, c];
+    let xc = [q[1] - 0.05 * n[0], q[2] - 0.05 * n[1]];
+    let vc = [u[1] + 0.05 * u[3] * n[1], u[2] - 0.05 * u[3] * n[0]];
+    let vp = [-u[0] * xc[1], u[0] * xc[0]];
+    let want = (vc[0] - vp[0]) * c + (vc[1] - vp[1]) * s;
+    assert!((t[0] - want).abs() < 1e-13, "v_t1 {} vs {want}", t[0]);
+    // Errors at the field.
+    let own = text.replace(r#"on: "paddle""#, r#"on: "ball""#);
+    let out = check(&Source::new("models/paddle.ron", own))
+        .err()
+        .map(|r| r.to_string())
+        .unwrap_or_default();
+    assert!(
+        out.contains("contact `hit` touches a plane on its own body `ball`"),
+        "{out}"
+    );
+    let unknown = text.replace(r#"on: "paddle""#, r#"on: "padle""#);
+    let out = check(&Source::new("models/paddle.ron", unknown))
+        .err()
+        .map(|r| r.to_string())
+        .unwrap_or_default();
+    assert!(out.contains("unknown plane body `padle`"), "{out}");
+}

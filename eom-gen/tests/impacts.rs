@@ -661,3 +661,91 @@ fn urdf_arm_swings_into_its_joint_limits_and_rests_on_them() {
         &report.contact_events[last_rest..]
     );
 }
+
+/// A wall fixed on a cart (a plane `on` a body): a ball of mass `m` at `v`
+/// strikes the wall of a cart of mass `M` at rest, both on horizontal
+/// sliders. The generalised Newton law is the two-body collision:
+/// `v⁺ = (m − e M) v/(m + M)`, `V⁺ = m (1 + e) v/(m + M)`; momentum kept,
+/// the impulse `Λ = m M (1 + e) v/(m + M)` on both.
+#[test]
+fn ball_strikes_a_wall_on_a_cart() {
+    let (m, cart, e, v) = (1.0, 3.0, 0.5, 2.0);
+    let sys = from_text(&format!(
+        r#"Model(
+    name: "cart",
+    bodies: [
+        (name: "cart", mass: {cart}, inertia: Diag(0.1, 0.1, 0.1)),
+        (name: "ball", mass: {m}, inertia: Diag(0.01, 0.01, 0.01)),
+    ],
+    joints: [
+        (name: "c", kind: Prismatic(axis: (1, 0, 0)), parent: "ground", child: "cart", coordinates: ["X"], q0: [0]),
+        (name: "b", kind: Prismatic(axis: (1, 0, 0)), parent: "ground", child: "ball", coordinates: ["x"], q0: [-1], u0: [{v}]),
+    ],
+    contacts: [Plane(name: "wall", at: (body: "ball"), radius: 0.1, point: (-0.2, 0, 0), normal: (-1, 0, 0), on: "cart", e: {e})],
+)"#
+    ));
+    let report = run(&sys, &options(1.0));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    let ev = report
+        .contact_events
+        .iter()
+        .find(|e| e.kind == ContactEventKind::Impact)
+        .expect("the ball strikes the wall");
+    // Gap 1 − 0.2 − 0.1 = 0.7 m closed at v: t = 0.35 s.
+    assert!((ev.t - 0.35).abs() < 1e-9, "impact at {}", ev.t);
+    let lambda = m * cart * (1.0 + e) * v / (m + cart);
+    assert!(
+        (ev.contacts[0].impulse - lambda).abs() < 1e-12,
+        "{:?}",
+        ev.contacts[0]
+    );
+    let (vb, vc) = (
+        (m - e * cart) * v / (m + cart),
+        m * (1.0 + e) * v / (m + cart),
+    );
+    assert!(
+        (report.u[1] - vb).abs() < 1e-12 && (report.u[0] - vc).abs() < 1e-12,
+        "after: ball {}, cart {}; want {vb}, {vc}",
+        report.u[1],
+        report.u[0]
+    );
+    assert!((ev.generalized_impulse[0] - lambda).abs() < 1e-12);
+    assert!((ev.generalized_impulse[1] + lambda).abs() < 1e-12);
+}
+
+/// Sustained contact with a loop constraint: the bob held on the unit
+/// circle (`x² + y² = 1`) swings down from `(0.6, −0.8)` onto the floor
+/// `y = −0.9` (plastic, `e = 0`) and rests there, pressed by gravity
+/// against both the floor and the circle: at `(√0.19, −0.9)` with `u = 0`,
+/// on the circle, no release after the rest (in equilibrium the circle's
+/// force `λ (x, y)` balances nothing horizontal, so the floor carries
+/// `m g`).
+#[test]
+fn resting_on_a_floor_while_held_on_a_circle() {
+    let text = r#"Model(
+    name: "on_a_circle_floor",
+    gravity: (0, -9.81, 0),
+    bodies: [(name: "bob", mass: 1, inertia: Diag(0.01, 0.01, 0.01))],
+    joints: [(name: "p", kind: Planar, parent: "ground", child: "bob", coordinates: ["x", "y", "a"], q0: [0.6, -0.8, 0])],
+    constraints: [Holonomic(name: "circle", expr: "x^2 + y^2 - 1")],
+    contacts: [Plane(name: "floor", at: (body: "bob"), point: (0, -0.9, 0), normal: (0, 1, 0), e: 0)],
+    outputs: [Energy],
+)"#;
+    let sys = from_text(text);
+    let report = run(&sys, &options(2.0));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    let want = [0.19f64.sqrt(), -0.9];
+    assert!(
+        (report.q[0] - want[0]).abs() < 1e-8 && (report.q[1] - want[1]).abs() < 1e-9,
+        "rests at {:?}, want {want:?}",
+        &report.q[..2]
+    );
+    assert!(
+        report.u.iter().all(|u| u.abs() < 1e-8),
+        "at rest: {:?}",
+        report.u
+    );
+    let kinds: Vec<_> = report.contact_events.iter().map(|e| e.kind).collect();
+    assert_eq!(kinds.first(), Some(&ContactEventKind::Impact), "{kinds:?}");
+    assert_eq!(kinds.last(), Some(&ContactEventKind::Rest), "{kinds:?}");
+}

@@ -1001,7 +1001,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
             *d = *s;
         }
         if nk > 0 {
-            let run = contact_run(model, &names, nk, true, options);
+            let run = contact_run(model, &names, nk, options);
             let (sol, events, failed) =
                 run.run(&Free(model), &settings, y0, options.t_end, &solve_options);
             let cpu = start.elapsed().as_secs_f64();
@@ -1099,7 +1099,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         *d = *s;
     }
     let (sol, events, failed) = if nk > 0 {
-        let run = contact_run(model, &names, nk, false, options);
+        let run = contact_run(model, &names, nk, options);
         run.run(&cs, &settings, y0, options.t_end, &solve_options)
     } else {
         let sol = solve(&settings, &cs, 0.0, y0, options.t_end, &solve_options);
@@ -1132,7 +1132,6 @@ fn contact_run<'a, S: Simulate + ?Sized>(
     model: &'a S,
     names: &'a Names,
     nk: usize,
-    sustained: bool,
     options: &RunOptions,
 ) -> contact::Run<'a, S> {
     contact::Run {
@@ -1140,7 +1139,6 @@ fn contact_run<'a, S: Simulate + ?Sized>(
         names: &names.contacts,
         joints: &names.impulse_joints,
         nk,
-        sustained,
         rest_height: options.atol.max(1e-14),
     }
 }

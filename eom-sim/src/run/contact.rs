@@ -23,7 +23,19 @@
 //!    `e = 0`) loses that speed by a plastic impulse and becomes a
 //!    sustained unilateral constraint: `g̈ = 0` with `λ ≥ 0` (again an
 //!    LCP, on the accelerations), kept until its force `λ` falls through
-//!    zero (**release**).
+//!    zero (**release**). In a model with loop constraints the contact
+//!    forces act through the inverse that holds the loops, on top of the
+//!    run's constrained ODE (its projection included).
+//! 3. **Friction** — a row with Coulomb's `μ > 0` (plane contacts; the
+//!    generated `friction` gives its tangential rows `W_t`): at an impact
+//!    the Newton–Coulomb law (stick, `v_t⁺ = 0`, if the impulse fits the
+//!    cone `‖Λ_t‖ ≤ μ Λ`, else slide with `Λ_t = −μ Λ s`); in sustained
+//!    contact a [`Slide`], stick (`v_t = 0` held, `‖λ_t‖ ≤ μ λ`) or slip
+//!    (`λ_t = −μ λ s` along the sliding direction), with the stop of a
+//!    slide (**stick**) and the break of a stick (**slip**) located as
+//!    events. Each is one [`Problem`]: the normal rows complementary, the
+//!    tangential ones by their mode (Pfeiffer and Glocker's formulation
+//!    with the modes enumerated, not a regularised friction law).
 //!
 //! Every event is reported ([`ContactEvent`]): time, kind, per contact row
 //! the normal speeds before and after and the impulse, the energy before and
@@ -117,8 +129,8 @@ pub struct ContactImpulse {
     /// `t1`, `t2` (N s; zero without friction).
     #[cfg_attr(feature = "serde", serde(default))]
     pub tangential_impulse: [f64; 2],
-    /// Tangential speeds `v_t` of the touching point before (m/s; zero
-    /// without friction).
+    /// Tangential speeds `v_t` of the touching point, along `t1` and `t2`,
+    /// before (m/s; zero without friction).
     #[cfg_attr(feature = "serde", serde(default))]
     pub tangential_speed_before: [f64; 2],
     /// Tangential speeds after.
@@ -575,10 +587,13 @@ fn impact(
 }
 
 /// A model whose sustained contacts `active` hold `g̈ = 0`, those with
-/// friction by their [`Slide`]: `M u̇ = τ − b + Wᵀ λ + W_tᵀ λ_t` (models
-/// without loop constraints).
-struct Contacting<'a, S: ?Sized> {
+/// friction by their [`Slide`]: the run's ODE `free` (the tree, or the
+/// tree with its loop constraints and their projection) plus the contact
+/// forces, `u̇ = u̇_free + M⁻¹ (Wᵀ λ + W_tᵀ λ_t)` with `M⁻¹` the inverse
+/// that holds the loops (`J Δu̇ = 0`).
+struct Contacting<'a, S: ?Sized, O> {
     model: &'a S,
+    free: &'a O,
     nk: usize,
     active: Vec<usize>,
     /// Per active row (`None`: frictionless); a sliding row's direction is
@@ -586,14 +601,49 @@ struct Contacting<'a, S: ?Sized> {
     slides: Vec<Option<Slide>>,
 }
 
-impl<S: Simulate + ?Sized> Contacting<'_, S> {
+/// The speeds' rates of the ODE `free` at `(t, y)`.
+fn free_rates<const N: usize, S: Simulate + ?Sized, O: OdeSystem<N>>(
+    model: &S,
+    free: &O,
+    t: f64,
+    y: &[f64; N],
+) -> DVector<f64> {
+    let (nq, nu) = (model.nq(), model.nu());
+    let mut dy = [0.0; N];
+    free.rhs(t, y, &mut dy);
+    DVector::from_column_slice(&dy[nq..nq + nu])
+}
+
+/// The loop constraints' Jacobian of `model` at `(t, q, u)`, if it has any.
+fn loop_jacobian<S: Simulate + ?Sized>(
+    model: &S,
+    t: f64,
+    q: &[f64],
+    u: &[f64],
+) -> Option<DMatrix<f64>> {
+    let (nc, nu) = (model.nc(), model.nu());
+    (nc > 0).then(|| {
+        let mut c = ConstraintValues::zeros(nc, nu);
+        model.constraints(t, q, u, &mut c);
+        c.jacobian
+    })
+}
+
+impl<S: Simulate + ?Sized, O> Contacting<'_, S, O> {
     /// `u̇`, the normal forces `λ` of the active rows and their friction
     /// forces `λ_t`, and the rows.
-    fn accelerations(&self, t: f64, q: &[f64], u: &[f64]) -> Option<(DVector<f64>, Solved, Rows)> {
-        let nu = self.model.nu();
-        let mut free = vec![0.0; nu];
-        self.model.forward_dynamics(t, q, u, &mut free);
-        let free = DVector::from_vec(free);
+    fn accelerations<const N: usize>(
+        &self,
+        t: f64,
+        y: &[f64; N],
+    ) -> Option<(DVector<f64>, Solved, Rows)>
+    where
+        O: OdeSystem<N>,
+    {
+        let (nq, nu) = (self.model.nq(), self.model.nu());
+        let (q, u) = (&y[..nq], &y[nq..nq + nu]);
+        let free = free_rates(self.model, self.free, t, y);
+        let j = loop_jacobian(self.model, t, q, u);
         let r = rows(self.model, self.nk, t, q, u)?;
         let mut m = DMatrix::zeros(nu, nu);
         self.model.mass_matrix(t, q, &mut m);
@@ -625,7 +675,7 @@ impl<S: Simulate + ?Sized> Contacting<'_, S> {
             .collect();
         let sol = Problem {
             m: &m,
-            j: None,
+            j: j.as_ref(),
             r: &r,
             set,
             slide: &slide,
@@ -638,20 +688,21 @@ impl<S: Simulate + ?Sized> Contacting<'_, S> {
     }
 }
 
-impl<const N: usize, S: Simulate + ?Sized> OdeSystem<N> for Contacting<'_, S> {
+impl<const N: usize, S: Simulate + ?Sized, O: OdeSystem<N>> OdeSystem<N> for Contacting<'_, S, O> {
     fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
         let (nq, nu) = (self.model.nq(), self.model.nu());
         let (q, u) = y.split_at(nq);
         let (dq, du) = dy.split_at_mut(nq);
         self.model.qdot(q, &u[..nu], dq);
-        match self.accelerations(t, q, &u[..nu]) {
+        match self.accelerations(t, y) {
             Some((a, _, _)) => du[..nu].copy_from_slice(a.as_slice()),
             None => du.iter_mut().for_each(|x| *x = f64::NAN),
         }
     }
-    fn project(&self, _t: f64, y: &mut [f64; N]) -> bool {
-        self.model.normalize(&mut y[..self.model.nq()]);
-        !self.model.quaternions().is_empty()
+    fn project(&self, t: f64, y: &mut [f64; N]) -> bool {
+        // The free system's projection: quaternion norms, and for models
+        // with loops their position and velocity constraints.
+        self.free.project(t, y)
     }
 }
 
@@ -685,18 +736,13 @@ pub(super) struct Sustained {
     slides: Vec<Option<Slide>>,
 }
 
-/// How a run with contacts goes: the model, its rows, the ODE without
-/// sustained contacts, whether sustained contacts are possible (no loop
-/// constraints), the rest height.
+/// How a run with contacts goes: the model, its rows, the rest height.
 pub(super) struct Run<'a, S: ?Sized> {
     pub model: &'a S,
     pub names: &'a [String],
     /// The tree joints of `joint_impulses`.
     pub joints: &'a [String],
     pub nk: usize,
-    /// Sustained contacts (and so contacts coming to rest) are supported:
-    /// models without loop constraints.
-    pub sustained: bool,
     /// The height below which a rebound is a contact at rest, m or rad;
     /// likewise the distance below which a slide is a contact sticking.
     pub rest_height: f64,
@@ -712,12 +758,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
 
     /// The loop constraints' Jacobian at `(t, q, u)`, if the model has any.
     fn jacobian(&self, t: f64, q: &[f64], u: &[f64]) -> Option<DMatrix<f64>> {
-        let (nc, nu) = (self.model.nc(), self.model.nu());
-        (nc > 0).then(|| {
-            let mut c = ConstraintValues::zeros(nc, nu);
-            self.model.constraints(t, q, u, &mut c);
-            c.jacobian
-        })
+        loop_jacobian(self.model, t, q, u)
     }
 
     /// The event record of a jump `sol` on the rows `set` from `y` (before
@@ -775,8 +816,9 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
     /// Resolves the contacts at `(t, y)`: impacts, contacts coming to rest,
     /// sticking, slipping and released; updates `y`'s speeds and the
     /// sustained contacts.
-    fn settle<const N: usize>(
+    fn settle<const N: usize, O: OdeSystem<N>>(
         &self,
+        free_ode: &O,
         t: f64,
         y: &mut [f64; N],
         state: &mut Sustained,
@@ -831,10 +873,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
         }
         // Contacts at rest: closed rows too slow to lift off by more than
         // the rest height against their acceleration.
-        let (q, u) = (y[..nq].to_vec(), y[nq..nq + nu].to_vec());
-        let mut free = vec![0.0; nu];
-        self.model.forward_dynamics(t, &q, &u, &mut free);
-        let free = DVector::from_vec(free);
+        let free = free_rates(self.model, free_ode, t, y);
         let resting: Vec<usize> = closed
             .iter()
             .copied()
@@ -849,19 +888,13 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             }
             return Ok(());
         }
-        if !self.sustained {
-            return Err(fail(&format!(
-                "contact `{}` comes to rest (its rebounds lift it less than {:e}); sustained contact in models with loop constraints is not implemented",
-                self.name(resting[0]),
-                self.rest_height
-            )));
-        }
         // The force problem: g̈ = W M⁻¹ (Wᵀ λ + W_tᵀ λ_t) + (W u̇_free − γ)
         // ≥ 0, λ ≥ 0; rows with friction slide along v_t if faster than
         // their slip speed, else stick if the force they need fits the
         // cone (with a margin, so that a stick that has just broken is not
         // taken up again), else slide the way that force would push them.
         let m = mass(y);
+        let j = self.jacobian(t, &y[..nq], &y[nq..nq + nu]);
         let mut slides: Vec<Option<Slide>> = resting
             .iter()
             .map(|&i| {
@@ -886,7 +919,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
         for _ in 0..(2 + 2 * resting.len()) {
             let sol = Problem {
                 m: &m,
-                j: None,
+                j: j.as_ref(),
                 r: &r,
                 set: &resting,
                 slide: &slides,
@@ -962,7 +995,6 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             // and the remaining sliding speed of the sticking ones taken by
             // one impulse; the sustained ones keep ġ = 0.
             let plastic = |_: usize| 0.0;
-            let j = self.jacobian(t, &y[..nq], &y[nq..nq + nu]);
             let sol = impact(&m, j.as_ref(), &r, &now, &plastic, true, &now_slides)
                 .ok_or_else(|| no_solution(now.len()))?;
             let before = *y;
@@ -1132,7 +1164,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
         let mut stalled = 0;
         let mut opts = opts.clone();
         loop {
-            if let Err(message) = self.settle(t, &mut y, &mut state, &mut events) {
+            if let Err(message) = self.settle(free, t, &mut y, &mut state, &mut events) {
                 all.t_final = t;
                 all.y_final = y;
                 return (all, events, Some((t, message)));
@@ -1147,6 +1179,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             let active = state.active.clone();
             let contacting = Contacting {
                 model: self.model,
+                free,
                 nk,
                 active: active.clone(),
                 slides: active.iter().map(|&i| state.slides[i]).collect(),
@@ -1179,7 +1212,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                 // Release: the normal force falls through zero.
                 list.push(Event::new(
                     move |t: f64, y: &[f64; N]| {
-                        c.accelerations(t, &y[..nq], &y[nq..nq + nu])
+                        c.accelerations(t, y)
                             .map_or(f64::NAN, |(_, s, _)| s.ln[pos])
                     },
                     Direction::Falling,
@@ -1190,10 +1223,9 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                     // the cone, μ λ − ‖λ_t‖ falls through zero.
                     Some(Slide::Stick) => list.push(Event::new(
                         move |t: f64, y: &[f64; N]| {
-                            c.accelerations(t, &y[..nq], &y[nq..nq + nu])
-                                .map_or(f64::NAN, |(_, s, r)| {
-                                    r.mu[i] * s.ln[pos] - norm2(s.lt[pos])
-                                })
+                            c.accelerations(t, y).map_or(f64::NAN, |(_, s, r)| {
+                                r.mu[i] * s.ln[pos] - norm2(s.lt[pos])
+                            })
                         },
                         Direction::Falling,
                         EventAction::Stop,
