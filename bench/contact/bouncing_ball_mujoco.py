@@ -19,7 +19,8 @@ never leaves the floor by more than 1e-6 m again) against t*, and CPU time
 (process time of the stepping loop; for eom the report's cpu_s, which is
 the integration alone, the compiled model).
 
-Usage (from the repository root, after bench/contact/run.sh built eom-gen):
+Usage (from the repository root; bench/contact/run.sh installs MuJoCo and
+builds eom-gen):
     python3 bench/contact/bouncing_ball_mujoco.py EOM_GEN_BINARY
 """
 import json
@@ -89,7 +90,7 @@ def eom_run(binary, atol):
     impacts = [e for e in events if e["kind"] == "impact"]
     heights = [e["contacts"][0]["speed_after"] ** 2 / (2 * G) for e in impacts[:N_HEIGHTS]]
     rest = next((e["t"] for e in events if e["kind"] == "rest"), float("nan"))
-    return heights, rest, report["cpu_s"], report["steps"], len(impacts)
+    return heights, rest, report["cpu_s"], report["stats"]["steps"], len(impacts)
 
 
 def errors(heights, rest):

@@ -11,6 +11,8 @@
 //!   it rolls off (`v_t⁺ = 0`, `vx⁺ = 5V/7`, `ω⁺ = −5V/(7r)`) when
 //!   `2V/7 ≤ μ (1 + e) W`, else slides through the impact with
 //!   `Λ_t = −μ Λ` (`vx⁺ = V − μ (1 + e) W`, `ω⁺ = −5 μ (1 + e) W/(2r)`);
+//!   the joint of the free ball transmits no impulse (the contact's normal
+//!   and friction impulses are its momentum change);
 //! - the tangential rows: `v_t` of the touching point and `W_t = ∂v_t/∂u`,
 //!   and `γ_t` against differences along the motion.
 
@@ -210,6 +212,21 @@ fn oblique_ball_impact_rolls_off_or_slides_by_newton_coulomb() {
         }
         // Energy: never gained.
         assert!(impact.energy_after <= impact.energy_before + 1e-12);
+        // Wittenburg's joint impulse of the planar joint: the ball's
+        // momentum change is the contact's impulse (normal and friction,
+        // the friction's moment about the centre included), so the joint,
+        // free in the plane, transmits nothing.
+        let ji = &impact.joint_impulses;
+        assert_eq!(ji.len(), 1, "{ji:?}");
+        assert!(
+            ji[0]
+                .force
+                .iter()
+                .chain(&ji[0].torque)
+                .all(|x| x.abs() < 1e-10),
+            "mu {mu}: {:?}",
+            ji[0]
+        );
     }
 }
 
