@@ -26,9 +26,9 @@ best() { # best CPU (s) and the steps and events of REPS runs of "$@"
 arm=eom-gen/tests/urdf/swing_arm.urdf
 "$bin" simulate "$arm" --t-end 0.1 --json > /dev/null
 "$bin" simulate "$arm" --no-urdf-limits --t-end 0.1 --json > /dev/null
-read -r c1 s1 e1 <<< "$(best "$arm" --t-end 0.3 --rtol 1e-8 --atol 1e-10)"
-read -r c0 s0 e0 <<< "$(best "$arm" --no-urdf-limits --t-end 0.3 --rtol 1e-8 --atol 1e-10)"
-echo "swing arm, 0.3 s: with limits ${c1} s, ${s1} steps, ${e1} events; without ${c0} s, ${s0} steps"
+read -r c1 s1 e1 <<< "$(best "$arm" --t-end 0.15 --rtol 1e-8 --atol 1e-10)"
+read -r c0 s0 e0 <<< "$(best "$arm" --no-urdf-limits --t-end 0.15 --rtol 1e-8 --atol 1e-10)"
+echo "swing arm, 0.15 s: with limits ${c1} s, ${s1} steps, ${e1} events; without ${c0} s, ${s0} steps"
 python3 -c "print(f'event location: {($c1 - $c0) / $s1 * 1e6:.2f} us per step (4 rows), run {$c0 / $s0 * 1e6:.2f} us per step without')"
 far="$(mktemp -d)/ball_far.ron"
 sed 's/normal: (0, 0, 1)/point: (0, 0, -100), normal: (0, 0, 1)/' models/bouncing_ball.ron > "$far"

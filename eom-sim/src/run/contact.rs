@@ -1114,11 +1114,10 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                         let mut x = block(0, j, a)
                             + (0..nk).map(|r| ln[r] * block(1 + r, j, a)).sum::<f64>();
                         if len == rough {
-                            for d in 0..2 {
-                                x += (0..nk)
-                                    .map(|r| lt[r][d] * block(1 + nk + d * nk + r, j, a))
-                                    .sum::<f64>();
-                            }
+                            x += (0..2)
+                                .flat_map(|d| (0..nk).map(move |r| (d, r)))
+                                .map(|(d, r)| lt[r][d] * block(1 + nk + d * nk + r, j, a))
+                                .sum::<f64>();
                         }
                         x
                     })
