@@ -17,9 +17,13 @@ pub struct UrdfArgs {
     /// listed in the notes (like MuJoCo's `balanceinertia`).
     #[arg(long, global = true)]
     pub balance_inertia: bool,
-    /// URDF import: the `<limit lower upper>` of revolute and prismatic
-    /// joints become joint-limit contacts (plastic stops, `e = 0`); without
-    /// it they are listed in the notes and left off.
+    /// URDF import: leave the `<limit lower upper>` of revolute and
+    /// prismatic joints off (listed in the notes); by default they become
+    /// joint-limit contacts (plastic stops, `e = 0`).
+    #[arg(long, global = true, conflicts_with = "urdf_limits")]
+    pub no_urdf_limits: bool,
+    /// URDF import: import the joint limits (the default; kept so that
+    /// scripts written when it was needed still run).
     #[arg(long, global = true)]
     pub urdf_limits: bool,
 }
@@ -30,7 +34,7 @@ impl UrdfArgs {
         eom_gen::urdf::Options {
             balance_inertia: self.balance_inertia,
             strict: self.strict_inertia,
-            joint_limits: self.urdf_limits,
+            joint_limits: !self.no_urdf_limits,
         }
     }
 }

@@ -140,22 +140,35 @@ fn write_contact_events(s: &mut String, events: &[ContactEvent]) {
         return;
     }
     let count = |k: ContactEventKind| events.iter().filter(|e| e.kind == k).count();
-    let _ = writeln!(
+    let _ = write!(
         s,
         "  contact events: {} impact(s), {} coming to rest, {} release(s)",
         count(ContactEventKind::Impact),
         count(ContactEventKind::Rest),
         count(ContactEventKind::Release)
     );
+    let (stick, slip) = (
+        count(ContactEventKind::Stick),
+        count(ContactEventKind::Slip),
+    );
+    if stick + slip > 0 {
+        let _ = write!(s, ", {stick} stick(s), {slip} slip(s)");
+    }
+    let _ = writeln!(s);
     let line = |e: &ContactEvent| {
         let rows: Vec<String> = e
             .contacts
             .iter()
             .map(|c| {
-                format!(
+                let mut text = format!(
                     "`{}` Λ = {:.6e}, ġ {:.6e} → {:.6e}",
                     c.contact, c.impulse, c.speed_before, c.speed_after
-                )
+                );
+                if c.tangential_impulse != [0.0; 2] {
+                    let [a, b] = c.tangential_impulse;
+                    let _ = write!(text, ", Λ_t = ({a:.6e}, {b:.6e})");
+                }
+                text
             })
             .collect();
         format!(

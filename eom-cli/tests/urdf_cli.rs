@@ -191,3 +191,49 @@ fn inertia_policy_flags() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+/// Joint limits are imported by default (issue #26): `import` writes the
+/// shoulder's `JointLimit`; `--no-urdf-limits` leaves it off (a note);
+/// `--urdf-limits`, once needed for them, still runs and changes nothing;
+/// both together are refused.
+#[test]
+fn joint_limits_by_default_and_left_off_on_request() {
+    let dir = std::env::temp_dir().join(format!("eom-urdf-limits-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let file = dir.join("arm2.ron").to_string_lossy().to_string();
+    let import = |extra: &[&str]| {
+        let mut args = vec!["import", "-o", file.as_str()];
+        args.extend_from_slice(extra);
+        let p = path("arm2.urdf");
+        args.push(p.as_str());
+        let o = eom_gen_cli(&args);
+        let text = std::fs::read_to_string(&file).unwrap_or_default();
+        let _ = std::fs::remove_file(&file);
+        (o, text)
+    };
+    let (o, text) = import(&[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        text.contains("JointLimit(") && text.contains("shoulder_limit"),
+        "{text}"
+    );
+    let (o, same) = import(&["--urdf-limits"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(same, text);
+    let (o, text) = import(&["--no-urdf-limits"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!text.contains("JointLimit("), "{text}");
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("left off by `--no-urdf-limits`"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let (o, _) = import(&["--urdf-limits", "--no-urdf-limits"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("cannot be used with"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -51,6 +51,9 @@ pub enum Function {
     Contacts,
     /// Joint impulses of a velocity jump (Wittenburg ch. 6).
     JointImpulses,
+    /// The contacts' tangential speeds `v_t = W_t u`, `γ_t` and rows `W_t`
+    /// (Coulomb friction).
+    Friction,
     /// Partial derivatives of forward dynamics: `∂u̇/∂q` (in the tangent
     /// space), `∂u̇/∂u`, `∂u̇/∂τ`, `∂u̇/∂(inputs)`.
     ForwardDynamicsDerivatives,
@@ -120,6 +123,8 @@ pub enum When {
     HasCableMounts,
     /// When the model has unilateral contacts.
     HasContacts,
+    /// When a contact has Coulomb friction (`μ > 0`).
+    HasFriction,
     /// Only when asked for by name (a scene's `functions` list, or a
     /// caller's request such as `eom-gen linearize`'s); never by default,
     /// so a model without such a request generates what it did before.
@@ -301,11 +306,22 @@ pub const TABLE: &[Entry] = &[
     Entry {
         function: Function::JointImpulses,
         name: "joint_impulses",
-        doc: "the impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint); a joint's impulse is the first block plus `Σ Λ_k` times the row blocks",
+        doc: "the impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint), and for a model with friction then per contact row the parts per unit tangential impulse along `t1` and along `t2` (blocks `NK` times two, as in `friction`); a joint's impulse is the first block plus the impulses times the row blocks",
         args: &[Arg::T, Arg::Q, Arg::U, Arg::Udot],
         uses_multipliers: false,
         layout: Layout::Vector,
         when: When::HasContacts,
+        in_trait: false,
+        derived_from: &[],
+    },
+    Entry {
+        function: Function::Friction,
+        name: "friction",
+        doc: "the tangential rows of the contacts with Coulomb friction (issue #26), per gap row of `contacts` (`NK`, zero for rows without friction): the tangential speeds `v_t1 = t1·v_c`, `v_t2 = t2·v_c` of the touching material point `c` (`NK` each, m/s), `γ_t1`, `γ_t2` with `v̇_t = W_t u̇ − γ_t` (`NK` each), then the rows `W_t1 = ∂v_t1/∂u` and `W_t2 = ∂v_t2/∂u` (`NK × NU` each, row by row); `t1` is the world axis least aligned with the plane's normal `n` projected onto the plane, `t2 = n × t1`",
+        args: &[Arg::T, Arg::Q, Arg::U],
+        uses_multipliers: false,
+        layout: Layout::Vector,
+        when: When::HasFriction,
         in_trait: false,
         derived_from: &[],
     },

@@ -635,17 +635,20 @@ pub enum ContactKind {
         /// Upper limit, if any.
         upper: Option<Quantity>,
     },
-    /// A sphere (a point for radius 0) against a world plane:
-    /// `g = n·(x − p) − r`.
+    /// A sphere (a point for radius 0) against a plane fixed in the world
+    /// or on a body: `g = n·(x − p) − r` (`n`, `p` in world axes).
     Plane {
         /// The sphere's centre.
         at: Point,
         /// Its radius.
         radius: Quantity,
-        /// A point of the plane, world axes.
+        /// A point of the plane, world axes (or `on`'s).
         point: Vec3Q,
-        /// The unit normal towards the free side (at the defaults).
+        /// The unit normal towards the free side (at the defaults), world
+        /// axes (or `on`'s).
         normal: Axis,
+        /// The body the plane is fixed on (0: the ground).
+        on: usize,
     },
     /// Two spheres: `g = |x_a − x_b| − r_a − r_b`.
     Spheres {

@@ -431,10 +431,10 @@ fn double_pendulum_striking_a_wall_loses_carnots_energy() {
     );
 }
 
-/// Misuse and edge cases: friction is refused (not silently dropped), the
-/// index-3 method with contacts is refused, a contact that never closes
-/// gives no event, and a ball resting on the floor at the start stays
-/// there (a contact touching at `t = 0` is allowed and held).
+/// Misuse and edge cases: friction without a tangential motion changes
+/// nothing, the index-3 method with contacts is refused, a contact that
+/// never closes gives no event, and a ball resting on the floor at the
+/// start stays there (a contact touching at `t = 0` is allowed and held).
 #[test]
 fn refusals_and_edge_cases() {
     let text = std::fs::read_to_string(format!(
@@ -442,14 +442,18 @@ fn refusals_and_edge_cases() {
         env!("CARGO_MANIFEST_DIR")
     ))
     .expect("model");
+    // Friction on a ball that cannot move along the floor (a vertical
+    // slider: `W_t = 0`) changes nothing.
     let rough = from_text(&text.replace(r#"e: "e")"#, r#"e: "e", mu: 0.4)"#));
-    let f = formulate(&rough, FunctionSet::all_requested()).expect("formulates");
-    let err = eom_gen::interpret::simulate(&f, &rough, &options(1.0))
-        .expect_err("friction is refused")
-        .to_string();
+    let smooth = run(&bundled("bouncing_ball"), &options(1.0));
+    let report = run(&rough, &options(1.0));
+    assert!(report.stop.is_finished(), "{}", report.stop);
     assert!(
-        err.contains("contact `floor` has Coulomb friction (mu = 0.4)"),
-        "{err}"
+        (report.q[0] - smooth.q[0]).abs() < 1e-12
+            && report.contact_events.len() == smooth.contact_events.len(),
+        "with friction {:?}, without {:?}",
+        report.q,
+        smooth.q
     );
     // Never touching: the floor far below.
     let far = from_text(&text.replace(
@@ -538,24 +542,24 @@ fn impact_with_a_loop_constraint_keeps_the_loop() {
 }
 
 /// A URDF arm (the 2-link fixture; its shoulder limited to ±1.5 rad)
-/// imported with its limits (`Options::joint_limits`): swung at 2 rad/s it
-/// strikes the upper stop, which stops the shoulder (plastic, `ġ⁺ = 0`)
-/// and keeps it at or below 1.5 rad afterwards; without the option the
-/// limit is only a note.
+/// imported with its limits (the default, `Options::joint_limits`): swung
+/// at 2 rad/s it strikes the upper stop, which stops the shoulder
+/// (plastic, `ġ⁺ = 0`) and keeps it at or below 1.5 rad afterwards; with
+/// the option off the limit is only a note.
 #[test]
 fn urdf_arm_swings_into_its_joint_limit_and_stops() {
     let path = format!("{}/tests/urdf/arm2.urdf", env!("CARGO_MANIFEST_DIR"));
-    let with = eom_gen::urdf::Options {
-        joint_limits: true,
-        ..Default::default()
-    };
-    let sys = eom_gen::load_with(&path, &with)
+    let sys = eom_gen::load(&path)
         .and_then(|l| l.check())
         .unwrap_or_else(|r| panic!("{r}"))
         .system;
     let rows: Vec<String> = sys.contact_rows().into_iter().map(|(_, r)| r).collect();
     assert_eq!(rows, ["shoulder_limit.lower", "shoulder_limit.upper"]);
-    let plain = eom_gen::load_with(&path, &Default::default())
+    let off = eom_gen::urdf::Options {
+        joint_limits: false,
+        ..Default::default()
+    };
+    let plain = eom_gen::load_with(&path, &off)
         .and_then(|l| l.check())
         .unwrap_or_else(|r| panic!("{r}"))
         .system;
@@ -580,4 +584,168 @@ fn urdf_arm_swings_into_its_joint_limit_and_stops() {
     assert!(c.speed_before < 0.0 && c.speed_after.abs() < 1e-12, "{c:?}");
     assert!(ev.energy_after < ev.energy_before);
     assert!(report.q[0] <= 1.5 + 1e-9, "shoulder at {}", report.q[0]);
+}
+
+/// A URDF arm swinging in a vertical plane into its joint limits, stopping
+/// and resting on them (`tests/urdf/swing_arm.urdf`, limits imported by
+/// default): released horizontal, gravity swings the shoulder and the
+/// elbow onto their upper stops (1.0 and 0.4 rad: the forearm would hang
+/// plumb at π/2 − 1 = 0.5708 rad, beyond it); the plastic stops
+/// (`e = 0`) take the speed, gravity holds the arm there (both limits
+/// sustained at the end, pressed by a positive force), and energy only
+/// falls at each event.
+#[test]
+fn urdf_arm_swings_into_its_joint_limits_and_rests_on_them() {
+    let path = format!("{}/tests/urdf/swing_arm.urdf", env!("CARGO_MANIFEST_DIR"));
+    let sys = eom_gen::load(&path)
+        .and_then(|l| l.check())
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let rows: Vec<String> = sys.contact_rows().into_iter().map(|(_, r)| r).collect();
+    assert_eq!(
+        rows,
+        [
+            "shoulder_limit.lower",
+            "shoulder_limit.upper",
+            "elbow_limit.lower",
+            "elbow_limit.upper"
+        ]
+    );
+    let report = run(&sys, &options(5.0));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    assert!(
+        (report.q[0] - 1.0).abs() < 1e-9 && (report.q[1] - 0.4).abs() < 1e-9,
+        "resting on the upper limits: q = {:?}",
+        report.q
+    );
+    assert!(
+        report.u.iter().all(|u| u.abs() < 1e-9),
+        "at rest: u = {:?}",
+        report.u
+    );
+    let hit = |row: &str| {
+        report.contact_events.iter().any(|e| {
+            e.kind == ContactEventKind::Impact
+                && e.contacts
+                    .iter()
+                    .any(|c| c.contact == row && c.impulse > 0.0)
+        })
+    };
+    assert!(
+        hit("shoulder_limit.upper") && hit("elbow_limit.upper"),
+        "{:?}",
+        report.contact_events
+    );
+    for e in &report.contact_events {
+        assert!(
+            e.energy_after <= e.energy_before + 1e-9,
+            "energy gained at {:?} t = {}: {} → {}",
+            e.kind,
+            e.t,
+            e.energy_before,
+            e.energy_after
+        );
+    }
+    // The last state: both upper limits sustained (a rest after the last
+    // impact, no release after it).
+    let last_rest = report
+        .contact_events
+        .iter()
+        .rposition(|e| e.kind == ContactEventKind::Rest)
+        .expect("comes to rest");
+    assert!(
+        report.contact_events[last_rest..]
+            .iter()
+            .all(|e| e.kind != ContactEventKind::Release),
+        "{:?}",
+        &report.contact_events[last_rest..]
+    );
+}
+
+/// A wall fixed on a cart (a plane `on` a body): a ball of mass `m` at `v`
+/// strikes the wall of a cart of mass `M` at rest, both on horizontal
+/// sliders. The generalised Newton law is the two-body collision:
+/// `v⁺ = (m − e M) v/(m + M)`, `V⁺ = m (1 + e) v/(m + M)`; momentum kept,
+/// the impulse `Λ = m M (1 + e) v/(m + M)` on both.
+#[test]
+fn ball_strikes_a_wall_on_a_cart() {
+    let (m, cart, e, v) = (1.0, 3.0, 0.5, 2.0);
+    let sys = from_text(&format!(
+        r#"Model(
+    name: "cart",
+    bodies: [
+        (name: "cart", mass: {cart}, inertia: Diag(0.1, 0.1, 0.1)),
+        (name: "ball", mass: {m}, inertia: Diag(0.01, 0.01, 0.01)),
+    ],
+    joints: [
+        (name: "c", kind: Prismatic(axis: (1, 0, 0)), parent: "ground", child: "cart", coordinates: ["X"], q0: [0]),
+        (name: "b", kind: Prismatic(axis: (1, 0, 0)), parent: "ground", child: "ball", coordinates: ["x"], q0: [-1], u0: [{v}]),
+    ],
+    contacts: [Plane(name: "wall", at: (body: "ball"), radius: 0.1, point: (-0.2, 0, 0), normal: (-1, 0, 0), on: "cart", e: {e})],
+)"#
+    ));
+    let report = run(&sys, &options(1.0));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    let ev = report
+        .contact_events
+        .iter()
+        .find(|e| e.kind == ContactEventKind::Impact)
+        .expect("the ball strikes the wall");
+    // Gap 1 − 0.2 − 0.1 = 0.7 m closed at v: t = 0.35 s.
+    assert!((ev.t - 0.35).abs() < 1e-9, "impact at {}", ev.t);
+    let lambda = m * cart * (1.0 + e) * v / (m + cart);
+    assert!(
+        (ev.contacts[0].impulse - lambda).abs() < 1e-12,
+        "{:?}",
+        ev.contacts[0]
+    );
+    let (vb, vc) = (
+        (m - e * cart) * v / (m + cart),
+        m * (1.0 + e) * v / (m + cart),
+    );
+    assert!(
+        (report.u[1] - vb).abs() < 1e-12 && (report.u[0] - vc).abs() < 1e-12,
+        "after: ball {}, cart {}; want {vb}, {vc}",
+        report.u[1],
+        report.u[0]
+    );
+    assert!((ev.generalized_impulse[0] - lambda).abs() < 1e-12);
+    assert!((ev.generalized_impulse[1] + lambda).abs() < 1e-12);
+}
+
+/// Sustained contact with a loop constraint: the bob held on the unit
+/// circle (`x² + y² = 1`) swings down from `(0.6, −0.8)` onto the floor
+/// `y = −0.9` (plastic, `e = 0`) and rests there, pressed by gravity
+/// against both the floor and the circle: at `(√0.19, −0.9)` with `u = 0`,
+/// on the circle, no release after the rest (in equilibrium the circle's
+/// force `λ (x, y)` balances nothing horizontal, so the floor carries
+/// `m g`).
+#[test]
+fn resting_on_a_floor_while_held_on_a_circle() {
+    let text = r#"Model(
+    name: "on_a_circle_floor",
+    gravity: (0, -9.81, 0),
+    bodies: [(name: "bob", mass: 1, inertia: Diag(0.01, 0.01, 0.01))],
+    joints: [(name: "p", kind: Planar, parent: "ground", child: "bob", coordinates: ["x", "y", "a"], q0: [0.6, -0.8, 0])],
+    constraints: [Holonomic(name: "circle", expr: "x^2 + y^2 - 1")],
+    contacts: [Plane(name: "floor", at: (body: "bob"), point: (0, -0.9, 0), normal: (0, 1, 0), e: 0)],
+    outputs: [Energy],
+)"#;
+    let sys = from_text(text);
+    let report = run(&sys, &options(2.0));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    let want = [0.19f64.sqrt(), -0.9];
+    assert!(
+        (report.q[0] - want[0]).abs() < 1e-8 && (report.q[1] - want[1]).abs() < 1e-9,
+        "rests at {:?}, want {want:?}",
+        &report.q[..2]
+    );
+    assert!(
+        report.u.iter().all(|u| u.abs() < 1e-8),
+        "at rest: {:?}",
+        report.u
+    );
+    let kinds: Vec<_> = report.contact_events.iter().map(|e| e.kind).collect();
+    assert_eq!(kinds.first(), Some(&ContactEventKind::Impact), "{kinds:?}");
+    assert_eq!(kinds.last(), Some(&ContactEventKind::Rest), "{kinds:?}");
 }

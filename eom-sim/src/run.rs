@@ -1123,7 +1123,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
     let generated = jacobian == Some(Jacobian::Generated);
     let nk = contact::count(model);
     if nk > 0 {
-        contact_problems(model, &names, nk, &q0, &u0, options)?;
+        contact_problems(model, nk, &q0, &u0, options)?;
     }
     let start = Instant::now();
     if nc == 0 {
@@ -1132,7 +1132,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
             *d = *s;
         }
         if nk > 0 {
-            let run = contact_run(model, &names, nk, true, options);
+            let run = contact_run(model, &names, nk, options);
             let (sol, events, failed) = run.run(
                 &Free(model, generated),
                 &settings,
@@ -1256,7 +1256,7 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         *d = *s;
     }
     let (sol, events, failed) = if nk > 0 {
-        let run = contact_run(model, &names, nk, false, options);
+        let run = contact_run(model, &names, nk, options);
         run.run(&cs, &settings, y0, options.t_end, &solve_options)
     } else {
         let sol = solve(&settings, &cs, 0.0, y0, options.t_end, &solve_options);
@@ -1290,7 +1290,6 @@ fn contact_run<'a, S: Simulate + ?Sized>(
     model: &'a S,
     names: &'a Names,
     nk: usize,
-    sustained: bool,
     options: &RunOptions,
 ) -> contact::Run<'a, S> {
     contact::Run {
@@ -1298,17 +1297,14 @@ fn contact_run<'a, S: Simulate + ?Sized>(
         names: &names.contacts,
         joints: &names.impulse_joints,
         nk,
-        sustained,
         rest_height: options.atol.max(1e-14),
     }
 }
 
 /// What a run with contacts refuses: the index-3 method (its state holds
-/// multipliers that an impact would have to jump too) and Coulomb friction,
-/// which the runtime does not handle yet.
+/// multipliers that an impact would have to jump too).
 fn contact_problems<S: Simulate + ?Sized>(
     model: &S,
-    names: &Names,
     nk: usize,
     q0: &[f64],
     u0: &[f64],
@@ -1321,16 +1317,8 @@ fn contact_problems<S: Simulate + ?Sized>(
                 .to_string(),
         );
     }
-    match contact::rows(model, nk, 0.0, q0, u0) {
-        None => problems.push("the model's generated `contacts` could not be evaluated".into()),
-        Some(r) => {
-            for (i, mu) in r.mu.iter().enumerate().filter(|(_, mu)| **mu != 0.0) {
-                problems.push(format!(
-                    "contact `{}` has Coulomb friction (mu = {mu}), which the runtime does not handle yet: impacts and sustained contact are frictionless; set `mu: 0`",
-                    names.contacts.get(i).map_or("?", String::as_str)
-                ));
-            }
-        }
+    if contact::rows(model, nk, 0.0, q0, u0).is_none() {
+        problems.push("the model's generated `contacts` could not be evaluated".into());
     }
     if problems.is_empty() {
         Ok(())
@@ -1340,9 +1328,11 @@ fn contact_problems<S: Simulate + ?Sized>(
 }
 
 /// Writes the contact events to [`RunOptions::events_csv`]: one row per
-/// event with `t`, `kind` (0 impact, 1 rest, 2 release), the energies
-/// before and after, per contact row its impulse and normal speeds before
-/// and after (empty where the row took no part), the generalised impulse per
+/// event with `t`, `kind` (0 impact, 1 rest, 2 release, 3 stick, 4 slip),
+/// the energies before and after, per contact row its impulse and normal
+/// speeds before and after (empty where the row took no part; with
+/// friction also its tangential impulses `impulse_t1`, `impulse_t2`), the
+/// generalised impulse per
 /// speed, and every tree joint's impulse (force, torque).
 fn write_events_csv<S: Simulate + ?Sized>(
     model: &S,
@@ -1357,8 +1347,20 @@ fn write_events_csv<S: Simulate + ?Sized>(
         .iter()
         .map(|s| s.to_string())
         .collect();
+    let rough = model.function_len("friction").is_some();
+    let per_row: &[&str] = if rough {
+        &[
+            "impulse",
+            "speed_before",
+            "speed_after",
+            "impulse_t1",
+            "impulse_t2",
+        ]
+    } else {
+        &["impulse", "speed_before", "speed_after"]
+    };
     for c in &names.contacts {
-        for what in ["impulse", "speed_before", "speed_after"] {
+        for what in per_row {
             header.push(format!("{c}.{what}"));
         }
     }
@@ -1376,12 +1378,19 @@ fn write_events_csv<S: Simulate + ?Sized>(
             ContactEventKind::Impact => 0.0,
             ContactEventKind::Rest => 1.0,
             ContactEventKind::Release => 2.0,
+            ContactEventKind::Stick => 3.0,
+            ContactEventKind::Slip => 4.0,
         };
         let mut row = vec![e.t, kind, e.energy_before, e.energy_after];
         for c in &names.contacts {
             match e.contacts.iter().find(|x| &x.contact == c) {
-                Some(x) => row.extend([x.impulse, x.speed_before, x.speed_after]),
-                None => row.extend([f64::NAN; 3]),
+                Some(x) => {
+                    row.extend([x.impulse, x.speed_before, x.speed_after]);
+                    if rough {
+                        row.extend(x.tangential_impulse);
+                    }
+                }
+                None => row.extend(vec![f64::NAN; per_row.len()]),
             }
         }
         row.extend(

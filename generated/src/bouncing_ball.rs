@@ -145,7 +145,7 @@ impl ::eom_sim::Model for BouncingBall {
         ::eom_sim::FunctionInfo {
             name: "joint_impulses",
             len: 12,
-            doc: "the impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint); a joint's impulse is the first block plus `Σ Λ_k` times the row blocks",
+            doc: "the impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint), and for a model with friction then per contact row the parts per unit tangential impulse along `t1` and along `t2` (blocks `NK` times two, as in `friction`); a joint's impulse is the first block plus the impulses times the row blocks",
             labels: &["drop"],
         },
     ];
@@ -312,7 +312,7 @@ impl BouncingBall {
         out[4] = 0.0;
         out[5] = 1.0;
     }
-    /// The impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint); a joint's impulse is the first block plus `Σ Λ_k` times the row blocks (0 operations); `drop`.
+    /// The impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint), and for a model with friction then per contact row the parts per unit tangential impulse along `t1` and along `t2` (blocks `NK` times two, as in `friction`); a joint's impulse is the first block plus the impulses times the row blocks (0 operations); `drop`.
     pub fn joint_impulses(
         &self,
         _t: f64,

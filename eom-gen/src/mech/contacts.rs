@@ -58,13 +58,17 @@ pub fn gaps<S: Scalar>(
                 radius,
                 point,
                 normal,
+                on,
             } => {
                 let (x, v) = site(at)?;
-                let n = Vec3::from_f64(
-                    [normal.unit.x, normal.unit.y, normal.unit.z].map(super::lower::snap),
-                );
-                let p = low.vec3(point)?;
-                out.push((n.dot(x - p) - low.quantity(radius)?, n.dot(v)));
+                let plane = PlaneAt::new(tree, &low, k, point, normal, *on)?;
+                // ġ = n·(v − v_b(x)): the plane's own motion at x (its
+                // normal turning included: ṅ·(x − p) = n·(ω × (x − p))).
+                let vb = plane.velocity(ev, k, x);
+                out.push((
+                    plane.n.dot(x - plane.p) - low.quantity(radius)?,
+                    plane.n.dot(v - vb),
+                ));
             }
             ContactKind::Spheres {
                 a,
@@ -127,12 +131,24 @@ pub fn unit_loads<S: Scalar>(
                     out.push(fresh());
                 }
             }
-            ContactKind::Plane { at, normal, .. } => {
-                let n = Vec3::from_f64(
-                    [normal.unit.x, normal.unit.y, normal.unit.z].map(super::lower::snap),
-                );
+            ContactKind::Plane {
+                at,
+                normal,
+                point,
+                on,
+                ..
+            } => {
+                let plane = PlaneAt::new(tree, &low, k, point, normal, *on)?;
                 let mut l = fresh();
-                apply(&mut l, at, n)?;
+                apply(&mut l, at, plane.n)?;
+                // The reaction on the plane's body, on the same line.
+                let s = Site {
+                    body: tree.index_of_body[at.body],
+                    node: at.node,
+                    point: low.vec3(&at.position)?,
+                };
+                let x = ev.site(k, &s).0;
+                plane.react(&mut l, k, x, -plane.n);
                 out.push(l);
             }
             ContactKind::Spheres { a, b, .. } => {
@@ -154,4 +170,253 @@ pub fn unit_loads<S: Scalar>(
         }
     }
     Ok(out)
+}
+
+/// The tangent axes `t₁`, `t₂` of a plane with unit normal `n` (world
+/// axes): `t₁` the world axis least aligned with `n` (ties: x before y
+/// before z) projected onto the plane and normalised, `t₂ = n × t₁`; so a
+/// floor with `n = +z` has `t₁ = +x`, `t₂ = +y`.
+pub fn tangent_axes(n: [f64; 3]) -> [[f64; 3]; 2] {
+    let mut axis = 0;
+    for k in 1..3 {
+        if n[k].abs() < n[axis].abs() {
+            axis = k;
+        }
+    }
+    let mut t1 = [0.0; 3];
+    t1[axis] = 1.0;
+    let along = n[axis];
+    for k in 0..3 {
+        t1[k] -= along * n[k];
+    }
+    let len = (t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]).sqrt();
+    let t1 = t1.map(|x| super::lower::snap(x / len));
+    let t2 = [
+        n[1] * t1[2] - n[2] * t1[1],
+        n[2] * t1[0] - n[0] * t1[2],
+        n[0] * t1[1] - n[1] * t1[0],
+    ]
+    .map(super::lower::snap);
+    [t1, t2]
+}
+
+/// Whether gap row `r`'s contact has tangential rows: a plane contact with
+/// `μ > 0` (validation refuses friction on the other kinds).
+pub fn has_friction(sys: &System) -> bool {
+    sys.contacts
+        .iter()
+        .any(|c| c.mu > 0.0 && matches!(c.kind, ContactKind::Plane { .. }))
+}
+
+/// The material point of the body carrying `at` that touches the plane:
+/// `at`'s position less `radius · n`, in the coordinates of the frame `at`
+/// is given in (the body's, or its node's).
+fn touching_point<S: Scalar>(
+    tree: &TreeModel<S>,
+    low: &Lowering<'_, S>,
+    ev: &Evaluator<'_, S>,
+    k: &Kinematics<S>,
+    at: &Point,
+    radius: S,
+    n: Vec3<S>,
+) -> Result<Site<S>, MechError> {
+    let body = tree.index_of_body[at.body];
+    let point = low.vec3(&at.position)?;
+    let rot = body.map(|i| {
+        at.node
+            .and_then(|node| ev.node_frame(k, i, node))
+            .map_or(k.world[i].e, |f| f.0.e)
+    });
+    let offset = rot.map_or(n.scale(radius), |e| e.tr_mul_vec(n.scale(radius)));
+    Ok(Site {
+        body,
+        node: at.node,
+        point: point - offset,
+    })
+}
+
+/// Per gap row (in the order of [`gaps`]) the tangential speeds
+/// `v_t = (t₁·v_c, t₂·v_c)` of the touching material point `c` (the
+/// anchor less `radius · n`, so a rolling sphere has `v_t = 0`) for a plane
+/// contact with friction (`μ > 0`); zero for every other row.
+pub fn tangential_speeds<S: Scalar>(
+    sys: &System,
+    tree: &TreeModel<S>,
+    env: &dyn Env<S>,
+    ev: &Evaluator<'_, S>,
+    k: &Kinematics<S>,
+) -> Result<Vec<[S; 2]>, MechError> {
+    let low = Lowering::new(env);
+    let mut out = Vec::new();
+    for c in &sys.contacts {
+        match &c.kind {
+            ContactKind::Plane {
+                at,
+                radius,
+                normal,
+                point,
+                on,
+            } if c.mu > 0.0 => {
+                let plane = PlaneAt::new(tree, &low, k, point, normal, *on)?;
+                let site = touching_point(tree, &low, ev, k, at, low.quantity(radius)?, plane.n)?;
+                let (xc, v) = ev.site(k, &site);
+                let v = v - plane.velocity(ev, k, xc);
+                let [t1, t2] = plane.tangents();
+                out.push([t1.dot(v), t2.dot(v)]);
+            }
+            _ => {
+                for _ in c.rows() {
+                    out.push([S::zero(), S::zero()]);
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Per gap row the loads of a unit tangential impulse along `t₁` and along
+/// `t₂`, at the touching material point (see [`tangential_speeds`]); no
+/// load for rows without friction.
+pub fn tangential_unit_loads<S: Scalar>(
+    sys: &System,
+    tree: &TreeModel<S>,
+    env: &dyn Env<S>,
+    ev: &Evaluator<'_, S>,
+    k: &Kinematics<S>,
+) -> Result<Vec<[Vec<super::spatial::Force<S>>; 2]>, MechError> {
+    use super::spatial::Force;
+    let low = Lowering::new(env);
+    let mut out = Vec::new();
+    for c in &sys.contacts {
+        let fresh = || vec![Force::zero(); tree.loads()];
+        match &c.kind {
+            ContactKind::Plane {
+                at,
+                radius,
+                normal,
+                point,
+                on,
+            } if c.mu > 0.0 => {
+                let plane = PlaneAt::new(tree, &low, k, point, normal, *on)?;
+                let site = touching_point(tree, &low, ev, k, at, low.quantity(radius)?, plane.n)?;
+                let xc = ev.site(k, &site).0;
+                let tangents = plane.tangents();
+                let mut pair = [fresh(), fresh()];
+                for (l, t) in pair.iter_mut().zip(tangents) {
+                    plane.react(l, k, xc, -t);
+                }
+                if let Some(i) = site.body {
+                    let (slot, frame) = match at.node {
+                        Some(node) => match tree.node_load(i, node) {
+                            Some(slot) => (slot, ev.node_frame(k, i, node).map(|x| x.0)),
+                            None => (i, None),
+                        },
+                        None => (i, None),
+                    };
+                    let e = frame.map_or(k.world[i].e, |f| f.e);
+                    for (l, t) in pair.iter_mut().zip(tangents) {
+                        let fb = e.tr_mul_vec(t);
+                        l[slot] = l[slot].add(Force {
+                            n: site.point.cross(fb),
+                            f: fb,
+                        });
+                    }
+                }
+                out.push(pair);
+            }
+            _ => {
+                for _ in c.rows() {
+                    out.push([fresh(), fresh()]);
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The plane of a `Plane` contact at a state: its unit normal `n` and a
+/// point `p` in world axes, its tangent axes, and the tree body it is
+/// fixed on (`None`: the ground).
+struct PlaneAt<S> {
+    n: Vec3<S>,
+    p: Vec3<S>,
+    body: Option<usize>,
+    /// The normal as written (world axes, or the body's).
+    n0: [f64; 3],
+    /// The body's axes in the world (`None`: the ground).
+    axes: Option<crate::sym::Mat3<S>>,
+}
+
+impl<S: Scalar> PlaneAt<S> {
+    fn new(
+        tree: &TreeModel<S>,
+        low: &Lowering<'_, S>,
+        k: &Kinematics<S>,
+        point: &crate::system::Vec3Q,
+        normal: &crate::system::Axis,
+        on: usize,
+    ) -> Result<Self, MechError> {
+        let n0 = [normal.unit.x, normal.unit.y, normal.unit.z].map(super::lower::snap);
+        let (n, p) = (Vec3::from_f64(n0), low.vec3(point)?);
+        let body = tree.index_of_body[on];
+        Ok(match body {
+            None => PlaneAt {
+                n,
+                p,
+                body,
+                n0,
+                axes: None,
+            },
+            Some(i) => {
+                let w = &k.world[i];
+                PlaneAt {
+                    n: w.e.mul_vec(n),
+                    p: w.point(p),
+                    body,
+                    n0,
+                    axes: Some(w.e),
+                }
+            }
+        })
+    }
+
+    /// The world velocity of the plane's material point at world `x`.
+    fn velocity(&self, ev: &Evaluator<'_, S>, k: &Kinematics<S>, x: Vec3<S>) -> Vec3<S> {
+        match self.body {
+            None => Vec3::zero(),
+            Some(i) => {
+                let w = &k.world[i];
+                ev.point(k, Some(i), w.e.tr_mul_vec(x - w.r)).1
+            }
+        }
+    }
+
+    /// The tangent axes `t₁`, `t₂` in world axes ([`tangent_axes`] of the
+    /// written normal, turned with the plane's body).
+    fn tangents(&self) -> [Vec3<S>; 2] {
+        tangent_axes(self.n0).map(|t| {
+            let t = Vec3::from_f64(t);
+            self.axes.as_ref().map_or(t, |e| e.mul_vec(t))
+        })
+    }
+
+    /// Adds the world force `fw` at world point `x` to the plane's body
+    /// (nothing for the ground).
+    fn react(
+        &self,
+        loads: &mut [super::spatial::Force<S>],
+        k: &Kinematics<S>,
+        x: Vec3<S>,
+        fw: Vec3<S>,
+    ) {
+        if let Some(i) = self.body {
+            let w = &k.world[i];
+            let fb = w.e.tr_mul_vec(fw);
+            let point = w.e.tr_mul_vec(x - w.r);
+            loads[i] = loads[i].add(super::spatial::Force {
+                n: point.cross(fb),
+                f: fb,
+            });
+        }
+    }
 }

@@ -248,6 +248,7 @@ impl Formulation {
             Function::Attachments => &self.mounts,
             Function::Contacts => &self.contact_rows,
             Function::JointImpulses => &self.impulse_joints,
+            Function::Friction => &self.contact_rows,
             _ => &[],
         }
     }
@@ -596,6 +597,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Some(cx.lower(&outs, opts)), labels)
     };
     let contacts = contacts(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
+    let friction = friction(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
     let (joint_impulses, impulse_joints) = joint_impulses(sys, &cx, &tree, &env, &ev, &k, opts)?;
     let programs: BTreeMap<Function, Program> = [
         (Function::Qdot, Some(qdot)),
@@ -612,6 +614,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Function::Attachments, attachments),
         (Function::Contacts, contacts),
         (Function::JointImpulses, joint_impulses),
+        (Function::Friction, friction),
         (Function::ForwardDynamicsDerivatives, fd_derivatives),
         (Function::InverseDynamicsDerivatives, id_derivatives),
     ]
@@ -976,6 +979,66 @@ fn contacts<'cx>(
     Ok(Some(cx.lower(&outs, opts)))
 }
 
+/// The program of `friction` (see [`crate::functions`]): per gap row the
+/// tangential speeds `v_t1`, `v_t2` of the touching point, then `γ_t1`,
+/// `γ_t2` (`−dv_t/dt` at `u̇ = 0`), then the rows `W_t1 = ∂v_t1/∂u` and
+/// `W_t2 = ∂v_t2/∂u`; `None` unless a contact has friction.
+#[allow(clippy::too_many_arguments)]
+fn friction<'cx>(
+    sys: &System,
+    cx: &'cx Context,
+    tree: &TreeModel<Expr<'cx>>,
+    env: &dyn Env<Expr<'cx>>,
+    ev: &Evaluator<'_, Expr<'cx>>,
+    k: &Kinematics<Expr<'cx>>,
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Result<Option<Program>, FormulateError> {
+    use crate::sym::TimeDerivative;
+    if !super::contacts::has_friction(sys) {
+        return Ok(None);
+    }
+    let rows = super::contacts::tangential_speeds(sys, tree, env, ev, k)?;
+    let mut second = TimeDerivative::new();
+    for (qi, qd) in q.iter().zip(qdot) {
+        if let Some(s) = cx.sym_id(*qi) {
+            second.rate(s, cx.id(*qd));
+        }
+    }
+    let zero = cx.id(Expr::zero());
+    for ui in u {
+        if let Some(s) = cx.sym_id(*ui) {
+            second.rate(s, zero);
+        }
+    }
+    let mut names = Vec::new();
+    let mut values = Vec::new();
+    for a in 0..2 {
+        for (i, v) in rows.iter().enumerate() {
+            names.push(format!("vt{}_{i}", a + 1));
+            values.push(v[a]);
+        }
+    }
+    for a in 0..2 {
+        for (i, v) in rows.iter().enumerate() {
+            names.push(format!("gamma_t{}_{i}", a + 1));
+            values.push(-cx.time_derivative(&mut second, v[a])?);
+        }
+    }
+    for a in 0..2 {
+        for (i, v) in rows.iter().enumerate() {
+            for (kk, &uk) in u.iter().enumerate() {
+                names.push(format!("wt{}_{i}_{kk}", a + 1));
+                values.push(cx.diff(v[a], uk));
+            }
+        }
+    }
+    let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
+    Ok(Some(cx.lower(&outs, opts)))
+}
+
 /// The program of `joint_impulses` (see [`crate::functions`]): the spatial
 /// force RNEA's backward pass gives each tree joint for the accelerations
 /// `Δu` (the `udot` symbols) minus that at `Δu = 0` — velocity terms and
@@ -1029,6 +1092,15 @@ fn joint_impulses<'cx>(
         .enumerate()
     {
         block(&format!("c{r}"), loads, &zero_u);
+    }
+    // With friction: per row the unit tangential impulses along t₁, t₂.
+    if super::contacts::has_friction(sys) {
+        let tangential = super::contacts::tangential_unit_loads(sys, tree, env, ev, k)?;
+        for a in 0..2 {
+            for (r, pair) in tangential.iter().enumerate() {
+                block(&format!("t{}_{r}", a + 1), &pair[a], &zero_u);
+            }
+        }
     }
     let joints = tree
         .bodies

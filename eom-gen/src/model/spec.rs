@@ -175,11 +175,18 @@ pub enum Contact {
         /// Radius of the sphere, m (default 0: a point).
         #[serde(default, skip_serializing_if = "Num::is_zero")]
         radius: Num,
-        /// A point of the plane, world axes, m (default the origin).
+        /// A point of the plane, world axes (or `on`'s), m (default the
+        /// origin).
         #[serde(default, skip_serializing_if = "V3::is_zero")]
         point: V3,
-        /// The plane's normal, world axes, towards the free side.
+        /// The plane's normal, world axes (or `on`'s), towards the free
+        /// side.
         normal: V3,
+        /// The body the plane is fixed on (default the ground): then
+        /// `point` and `normal` are in that body's axes and the plane moves
+        /// with it.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        on: Option<String>,
         /// Newton's coefficient of restitution, `0 ≤ e ≤ 1`.
         e: Num,
         /// Coulomb friction coefficient, `μ ≥ 0` (default 0).

@@ -24,10 +24,12 @@
 //! - `mimic` → a holonomic constraint `q - multiplier·q_other - offset = 0`;
 //! - `dynamics damping` → a `JointSpringDamper` with zero stiffness;
 //!   Coulomb `friction` has no place in the model format and is listed in
-//!   the notes (and in the header comment of the RON text); so are the
-//!   `limit`s, unless `Options::joint_limits` imports the `lower` and
-//!   `upper` of revolute and prismatic joints as `JointLimit` contacts
-//!   (plastic stops, `e = 0`; not when `q = 0` lies outside them);
+//!   the notes (and in the header comment of the RON text); the `lower`
+//!   and `upper` `limit`s of revolute and prismatic joints become
+//!   `JointLimit` contacts (plastic stops, `e = 0`; not when `q = 0` lies
+//!   outside them), unless `Options::joint_limits` is off
+//!   (`--no-urdf-limits`); other limits and `effort`, `velocity` are
+//!   listed in the notes;
 //! - gravity is `(0, 0, -9.81)` (URDF has none), initial state zero.
 //!
 //! Every problem is reported at once: XML syntax, unknown joint types,
@@ -70,7 +72,9 @@ pub struct Import {
 }
 
 /// How a URDF is imported (see `docs/model-format.md`, "Inertia policy").
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// The default imports the joint limits and leaves the inertias as
+/// written (warnings).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Options {
     /// Fix physically inconsistent inertias of moving links instead of
     /// warning (like MuJoCo's `balanceinertia`): negative principal moments
@@ -80,9 +84,19 @@ pub struct Options {
     /// Turn the warnings into errors.
     pub strict: bool,
     /// Import the `<limit lower upper>` of revolute and prismatic joints
-    /// as joint-limit contacts (`JointLimit`, `e = 0`, issue #26) instead
-    /// of listing them in the notes.
+    /// as joint-limit contacts (`JointLimit`, `e = 0`, issue #26; the
+    /// default); `false` lists them in the notes and leaves them off.
     pub joint_limits: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            balance_inertia: false,
+            strict: false,
+            joint_limits: true,
+        }
+    }
 }
 
 /// True if `path` ends in `.urdf` (any case; see [`Format::of`]).
@@ -975,6 +989,22 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
             // The import starts at q = 0: a limit that excludes it would
             // be a contact closed at the start.
             Some((lo, hi)) if options.joint_limits && lo <= 0.0 && 0.0 <= hi => {
+                let rest: Vec<String> = j
+                    .limit
+                    .iter()
+                    .filter(|(a, _)| a != "lower" && a != "upper")
+                    .map(|(a, v)| format!("{a} {v}"))
+                    .collect();
+                cx.notes.push(format!(
+                    "limits [{lo}, {hi}] of joint `{}` imported as the plastic joint-limit contact `{}_limit` (e = 0; leave them off with `--no-urdf-limits`, `Options::joint_limits: false`){}",
+                    j.raw,
+                    j.name,
+                    if rest.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; ignored: {}", rest.join(", "))
+                    }
+                ));
                 contacts.push(Contact::JointLimit {
                     name: format!("{}_limit", j.name),
                     joint: j.name.clone(),
@@ -1109,7 +1139,12 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
     }
     if !limits.is_empty() {
         notes.push(format!(
-            "joint limits are ignored (import them as joint-limit contacts with `--urdf-limits`, `Options::joint_limits`; revolute and prismatic joints with both bounds): {}",
+            "joint limits are not imported ({}): {}",
+            if options.joint_limits {
+                "only revolute and prismatic joints with both bounds are"
+            } else {
+                "left off by `--no-urdf-limits`, `Options::joint_limits: false`"
+            },
             limits.join("; ")
         ));
     }

@@ -23,7 +23,19 @@
 //!    `e = 0`) loses that speed by a plastic impulse and becomes a
 //!    sustained unilateral constraint: `g̈ = 0` with `λ ≥ 0` (again an
 //!    LCP, on the accelerations), kept until its force `λ` falls through
-//!    zero (**release**).
+//!    zero (**release**). In a model with loop constraints the contact
+//!    forces act through the inverse that holds the loops, on top of the
+//!    run's constrained ODE (its projection included).
+//! 3. **Friction** — a row with Coulomb's `μ > 0` (plane contacts; the
+//!    generated `friction` gives its tangential rows `W_t`): at an impact
+//!    the Newton–Coulomb law (stick, `v_t⁺ = 0`, if the impulse fits the
+//!    cone `‖Λ_t‖ ≤ μ Λ`, else slide with `Λ_t = −μ Λ s`); in sustained
+//!    contact a [`Slide`], stick (`v_t = 0` held, `‖λ_t‖ ≤ μ λ`) or slip
+//!    (`λ_t = −μ λ s` along the sliding direction), with the stop of a
+//!    slide (**stick**) and the break of a stick (**slip**) located as
+//!    events. Each is one [`Problem`]: the normal rows complementary, the
+//!    tangential ones by their mode (Pfeiffer and Glocker's formulation
+//!    with the modes enumerated, not a regularised friction law).
 //!
 //! Every event is reported ([`ContactEvent`]): time, kind, per contact row
 //! the normal speeds before and after and the impulse, the energy before and
@@ -50,6 +62,9 @@ pub(super) const CONTACTS: &str = "contacts";
 /// The generated function of the joints' impulses.
 const IMPULSES: &str = "joint_impulses";
 
+/// The generated function of the contacts' tangential rows (friction).
+const FRICTION: &str = "friction";
+
 /// A contact row counts as closed when its gap is at most this (m or rad):
 /// located crossings end a few ulps past `g = 0`.
 pub const GAP_TOL: f64 = 1e-9;
@@ -74,6 +89,13 @@ pub enum ContactEventKind {
     Rest,
     /// Sustained contacts whose force fell to zero, released.
     Release,
+    /// A sliding contact stopped and is held by friction (`v_t = 0`,
+    /// `‖λ_t‖ ≤ μ λ`); a tangential impulse takes what is left of its
+    /// sliding speed (below the slip speed, see `Run::settle`).
+    Stick,
+    /// A sticking contact starts to slide: the friction force it needs
+    /// reached the cone `‖λ_t‖ = μ λ`.
+    Slip,
 }
 
 impl ContactEventKind {
@@ -83,6 +105,8 @@ impl ContactEventKind {
             ContactEventKind::Impact => "impact",
             ContactEventKind::Rest => "rest",
             ContactEventKind::Release => "release",
+            ContactEventKind::Stick => "stick",
+            ContactEventKind::Slip => "slip",
         }
     }
 }
@@ -101,6 +125,17 @@ pub struct ContactImpulse {
     /// impact; at a contact coming to rest the impulse that takes its
     /// remaining speed (below the rest speed), of either sign.
     pub impulse: f64,
+    /// Tangential (friction) impulse along the contact's tangent axes
+    /// `t1`, `t2` (N s; zero without friction).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub tangential_impulse: [f64; 2],
+    /// Tangential speeds `v_t` of the touching point, along `t1` and `t2`,
+    /// before (m/s; zero without friction).
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub tangential_speed_before: [f64; 2],
+    /// Tangential speeds after.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub tangential_speed_after: [f64; 2],
 }
 
 /// The impulse a tree joint transmits to the bodies it carries in an
@@ -189,7 +224,8 @@ pub fn lcp(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
     None
 }
 
-/// One evaluation of the generated `contacts`.
+/// One evaluation of the generated `contacts` (and `friction`, if the
+/// model has it).
 pub(super) struct Rows {
     pub g: Vec<f64>,
     pub gdot: Vec<f64>,
@@ -198,6 +234,31 @@ pub(super) struct Rows {
     pub mu: Vec<f64>,
     /// `nk × nu`.
     pub w: DMatrix<f64>,
+    /// Tangential speeds `v_t` per row (zero without friction).
+    pub vt: Vec<[f64; 2]>,
+    /// `γ_t` with `v̇_t = W_t u̇ − γ_t`, per row.
+    pub gamma_t: Vec<[f64; 2]>,
+    /// `2 nk × nu`: row `2 i + a` is row `i`'s `W_t` along tangent `a`.
+    pub wt: DMatrix<f64>,
+}
+
+impl Rows {
+    /// Row `i` has Coulomb friction.
+    fn rough(&self, i: usize) -> bool {
+        self.mu[i] > 0.0
+    }
+
+    /// `W_n` of the rows `set` (`set.len() × nu`).
+    fn normal(&self, set: &[usize]) -> DMatrix<f64> {
+        DMatrix::from_fn(set.len(), self.w.ncols(), |i, k| self.w[(set[i], k)])
+    }
+
+    /// `W_t,a` of row `i` dotted with `x`.
+    fn tangential_dot(&self, i: usize, a: usize, x: &DVector<f64>) -> f64 {
+        (0..self.wt.ncols())
+            .map(|k| self.wt[(2 * i + a, k)] * x[k])
+            .sum()
+    }
 }
 
 /// The number of contact rows of `model` (0 without contacts).
@@ -226,6 +287,25 @@ pub(super) fn rows<S: Simulate + ?Sized>(
         return None;
     }
     let part = |k: usize| v[k * nk..(k + 1) * nk].to_vec();
+    let mut vt = vec![[0.0; 2]; nk];
+    let mut gamma_t = vec![[0.0; 2]; nk];
+    let mut wt = DMatrix::zeros(2 * nk, nu);
+    let len = nk * (4 + 2 * nu);
+    if model.function_len(FRICTION) == Some(len) {
+        let mut f = vec![0.0; len];
+        if !model.evaluate(FRICTION, &at, &mut f) {
+            return None;
+        }
+        for i in 0..nk {
+            for a in 0..2 {
+                vt[i][a] = f[a * nk + i];
+                gamma_t[i][a] = f[(2 + a) * nk + i];
+                for k in 0..nu {
+                    wt[(2 * i + a, k)] = f[4 * nk + a * nk * nu + i * nu + k];
+                }
+            }
+        }
+    }
     Some(Rows {
         g: part(0),
         gdot: part(1),
@@ -233,6 +313,9 @@ pub(super) fn rows<S: Simulate + ?Sized>(
         e: part(3),
         mu: part(4),
         w: DMatrix::from_row_slice(nk, nu, &v[5 * nk..]),
+        vt,
+        gamma_t,
+        wt,
     })
 }
 
@@ -263,74 +346,363 @@ fn effective_inverse(
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
-/// The generalised Newton law on the contact rows `set`: `Δu` and the
-/// impulses `Λ` (one per row of `set`) with `ġ⁺ + e ġ⁻ ≥ 0`, or with
-/// `equality` `ġ⁺ = −e ġ⁻` on every row.
-fn impact_map(
+/// How a contact with Coulomb friction moves along its plane.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Slide {
+    /// `v_t = 0`, held by a tangential force (impulse) `λ_t` inside the
+    /// cone `‖λ_t‖ ≤ μ λ`.
+    Stick,
+    /// Sliding along the unit direction `s` of `v_t` (at the start of a
+    /// slide from rest: the direction it starts to slide in): friction
+    /// `λ_t = −μ λ s`.
+    Slip([f64; 2]),
+}
+
+/// A contact problem on the rows `set` (Pfeiffer and Glocker): normal
+/// unknowns `Λ ≥ 0` with `ξ = W Δ + b ≥ 0`, complementary (or all held,
+/// `ξ = 0` with `Λ` of either sign); per row with friction, by its
+/// [`Slide`] (`None`: frictionless here), `Stick`: tangential unknowns
+/// `Λ_t` with `ξ_t = W_t Δ + b_t = 0`, or `Slip(s)`: `Λ_t = −μ Λ s`; and
+/// `Δ = M⁻¹ (Wᵀ Λ + W_tᵀ Λ_t)`, the loop constraints held (`j`). For an
+/// impact `Δ` is the jump of the speeds and `b` the speeds it is measured
+/// from; for sustained contact `Δ` is the accelerations' part from the
+/// contact forces and `b` the free accelerations' `g̈`.
+struct Problem<'a> {
+    m: &'a DMatrix<f64>,
+    j: Option<&'a DMatrix<f64>>,
+    r: &'a Rows,
+    set: &'a [usize],
+    slide: &'a [Option<Slide>],
+    b: DVector<f64>,
+    bt: Vec<[f64; 2]>,
+    held: bool,
+}
+
+/// A solved [`Problem`], per element of its `set`.
+struct Solved {
+    du: DVector<f64>,
+    ln: DVector<f64>,
+    lt: Vec<[f64; 2]>,
+    /// `ξ_t = W_t Δ + b_t` (for an impact, the tangential speeds after).
+    xi_t: Vec<[f64; 2]>,
+}
+
+impl Problem<'_> {
+    fn solve(&self) -> Option<Solved> {
+        let (r, set) = (self.r, self.set);
+        let (n, nu) = (set.len(), self.m.nrows());
+        if n == 0 {
+            return Some(Solved {
+                du: DVector::zeros(nu),
+                ln: DVector::zeros(0),
+                lt: Vec::new(),
+                xi_t: Vec::new(),
+            });
+        }
+        if n > MAX_LCP {
+            return None;
+        }
+        // Unknowns: the normal impulses, then two per sticking row.
+        let stick: Vec<usize> = (0..n)
+            .filter(|&k| self.slide[k] == Some(Slide::Stick))
+            .collect();
+        let cols = n + 2 * stick.len();
+        let mut d = DMatrix::zeros(nu, cols);
+        let mut rows_b = DMatrix::zeros(cols, nu);
+        let mut b = DVector::zeros(cols);
+        for (k, &i) in set.iter().enumerate() {
+            for c in 0..nu {
+                let mut col = r.w[(i, c)];
+                if let Some(Slide::Slip(s)) = self.slide[k] {
+                    col -= r.mu[i] * (s[0] * r.wt[(2 * i, c)] + s[1] * r.wt[(2 * i + 1, c)]);
+                }
+                d[(c, k)] = col;
+                rows_b[(k, c)] = r.w[(i, c)];
+            }
+            b[k] = self.b[k];
+        }
+        for (p, &k) in stick.iter().enumerate() {
+            let i = set[k];
+            for a in 0..2 {
+                let col = n + 2 * p + a;
+                for c in 0..nu {
+                    d[(c, col)] = r.wt[(2 * i + a, c)];
+                    rows_b[(col, c)] = r.wt[(2 * i + a, c)];
+                }
+                b[col] = self.bt[k][a];
+            }
+        }
+        let x = effective_inverse(self.m, self.j, &d)?;
+        let g = &rows_b * &x;
+        let scale = b.amax().max(g.amax() * f64::EPSILON).max(f64::MIN_POSITIVE);
+        let mut masks: Vec<u32> = if self.held {
+            vec![(1u32 << n) - 1]
+        } else {
+            (0..1u32 << n).collect()
+        };
+        masks.sort_by_key(|m| (m.count_ones(), *m));
+        for mask in masks {
+            let on = |k: usize| mask >> k & 1 == 1;
+            let mut idx: Vec<usize> = (0..n).filter(|&k| on(k)).collect();
+            for (p, &k) in stick.iter().enumerate() {
+                if on(k) {
+                    idx.extend([n + 2 * p, n + 2 * p + 1]);
+                }
+            }
+            let mut z = DVector::zeros(cols);
+            if !idx.is_empty() {
+                let sub = DMatrix::from_fn(idx.len(), idx.len(), |a, c| g[(idx[a], idx[c])]);
+                let rhs = DVector::from_fn(idx.len(), |a, _| -b[idx[a]]);
+                let eps = 1e-13 * sub.amax().max(f64::MIN_POSITIVE);
+                let Ok(sol) = sub.clone().svd(true, true).solve(&rhs, eps) else {
+                    continue;
+                };
+                if sol.iter().any(|v| !v.is_finite()) || (&sub * &sol - &rhs).amax() > 1e-9 * scale
+                {
+                    continue;
+                }
+                let big = sol.amax();
+                if !self.held && (0..idx.len()).any(|a| idx[a] < n && sol[a] < -1e-10 * big) {
+                    continue;
+                }
+                for (a, &c) in idx.iter().enumerate() {
+                    z[c] = if !self.held && c < n {
+                        sol[a].max(0.0)
+                    } else {
+                        sol[a]
+                    };
+                }
+            }
+            let xi = &g * &z + &b;
+            if !self.held && (0..n).any(|k| !on(k) && xi[k] < -1e-10 * scale) {
+                continue;
+            }
+            let du = &x * &z;
+            let ln = DVector::from_fn(n, |k, _| z[k]);
+            let mut lt = vec![[0.0; 2]; n];
+            for (k, slide) in self.slide.iter().enumerate() {
+                if let Some(Slide::Slip(s)) = slide {
+                    let l = r.mu[set[k]] * ln[k];
+                    lt[k] = [-l * s[0], -l * s[1]];
+                }
+            }
+            for (p, &k) in stick.iter().enumerate() {
+                lt[k] = [z[n + 2 * p], z[n + 2 * p + 1]];
+            }
+            let xi_t = (0..n)
+                .map(|k| {
+                    let i = set[k];
+                    [0, 1].map(|a| r.tangential_dot(i, a, &du) + self.bt[k][a])
+                })
+                .collect();
+            return Some(Solved { du, ln, lt, xi_t });
+        }
+        None
+    }
+}
+
+/// `‖v‖` of a tangential pair.
+fn norm2(v: [f64; 2]) -> f64 {
+    v[0].hypot(v[1])
+}
+
+/// The impact on the closed rows `set` (the generalised Newton law,
+/// `ξ = ġ⁺ + e ġ⁻`, `b = (1 + e) ġ⁻`) with Coulomb friction on the
+/// tangential speeds after it (Newton–Coulomb: a row sticks, `v_t⁺ = 0`,
+/// if its impulse fits the cone `‖Λ_t‖ ≤ μ Λ`, else it slides with
+/// `Λ_t = −μ Λ s`, `s` the direction of `v_t⁺`): the sliding directions
+/// found by fixed-point iteration from all rows sticking. With `held`
+/// (contacts coming to rest, `e = 0` on every row) sliding rows take no
+/// tangential impulse.
+fn impact(
     m: &DMatrix<f64>,
     j: Option<&DMatrix<f64>>,
     r: &Rows,
     set: &[usize],
     e: &dyn Fn(usize) -> f64,
-    equality: bool,
-) -> Option<(DVector<f64>, DVector<f64>)> {
-    let nu = m.nrows();
-    let w = DMatrix::from_fn(set.len(), nu, |i, k| r.w[(set[i], k)]);
-    let x = effective_inverse(m, j, &w.transpose())?;
-    let g = &w * &x;
-    let b = DVector::from_fn(set.len(), |i, _| (1.0 + e(set[i])) * r.gdot[set[i]]);
-    let lambda = if equality {
-        // Contacts coming to rest: ġ⁺ = 0 exactly on every row of `set`,
-        // an impulse of either sign (see `Run::settle`).
-        g.lu().solve(&(-b))?
-    } else {
-        lcp(&g, &b)?
-    };
-    Some((&x * &lambda, lambda))
+    held: bool,
+    slides: &[Option<Slide>],
+) -> Option<Solved> {
+    let b = DVector::from_fn(set.len(), |k, _| (1.0 + e(set[k])) * r.gdot[set[k]]);
+    let bt: Vec<[f64; 2]> = set.iter().map(|&i| r.vt[i]).collect();
+    let mut slide: Vec<Option<Slide>> = slides.to_vec();
+    if held {
+        for s in slide.iter_mut() {
+            if matches!(s, Some(Slide::Slip(_))) {
+                *s = None;
+            }
+        }
+    }
+    let mut refused_stick = vec![false; set.len()];
+    for _ in 0..(8 + 8 * set.len()) {
+        let p = Problem {
+            m,
+            j,
+            r,
+            set,
+            slide: &slide,
+            b: b.clone(),
+            bt: bt.clone(),
+            held,
+        };
+        let sol = p.solve()?;
+        if held {
+            return Some(sol);
+        }
+        let mut changed = false;
+        for k in 0..set.len() {
+            let mu = r.mu[set[k]];
+            let ln = sol.ln[k];
+            match slide[k] {
+                Some(Slide::Stick) if norm2(sol.lt[k]) > mu * ln * (1.0 + 1e-9) + 1e-300 => {
+                    let l = norm2(sol.lt[k]);
+                    slide[k] = Some(Slide::Slip([-sol.lt[k][0] / l, -sol.lt[k][1] / l]));
+                    refused_stick[k] = true;
+                    changed = true;
+                }
+                Some(Slide::Slip(s)) => {
+                    let v = sol.xi_t[k];
+                    let nv = norm2(v);
+                    if nv == 0.0 || v[0] * s[0] + v[1] * s[1] <= 0.0 {
+                        if !refused_stick[k] {
+                            slide[k] = Some(Slide::Stick);
+                            changed = true;
+                        }
+                    } else {
+                        let t = [v[0] / nv, v[1] / nv];
+                        if (t[0] - s[0]).abs() + (t[1] - s[1]).abs() > 1e-12 {
+                            slide[k] = Some(Slide::Slip(t));
+                            changed = true;
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        if !changed {
+            return Some(sol);
+        }
+    }
+    None
 }
 
-/// A model whose sustained contacts `active` hold `g̈ = 0`:
-/// `M u̇ = τ − b + W_Aᵀ λ` (models without loop constraints).
-struct Contacting<'a, S: ?Sized> {
+/// A model whose sustained contacts `active` hold `g̈ = 0`, those with
+/// friction by their [`Slide`]: the run's ODE `free` (the tree, or the
+/// tree with its loop constraints and their projection) plus the contact
+/// forces, `u̇ = u̇_free + M⁻¹ (Wᵀ λ + W_tᵀ λ_t)` with `M⁻¹` the inverse
+/// that holds the loops (`J Δu̇ = 0`).
+struct Contacting<'a, S: ?Sized, O> {
     model: &'a S,
+    free: &'a O,
     nk: usize,
     active: Vec<usize>,
+    /// Per active row (`None`: frictionless); a sliding row's direction is
+    /// the one it started with, followed by `v_t` while `v_t · s > 0`.
+    slides: Vec<Option<Slide>>,
 }
 
-impl<S: Simulate + ?Sized> Contacting<'_, S> {
-    /// `u̇` and the forces `λ` of the active rows.
-    fn accelerations(&self, t: f64, q: &[f64], u: &[f64]) -> Option<(DVector<f64>, DVector<f64>)> {
-        let nu = self.model.nu();
-        let mut free = vec![0.0; nu];
-        self.model.forward_dynamics(t, q, u, &mut free);
-        let free = DVector::from_vec(free);
+/// The speeds' rates of the ODE `free` at `(t, y)`.
+fn free_rates<const N: usize, S: Simulate + ?Sized, O: OdeSystem<N>>(
+    model: &S,
+    free: &O,
+    t: f64,
+    y: &[f64; N],
+) -> DVector<f64> {
+    let (nq, nu) = (model.nq(), model.nu());
+    let mut dy = [0.0; N];
+    free.rhs(t, y, &mut dy);
+    DVector::from_column_slice(&dy[nq..nq + nu])
+}
+
+/// The loop constraints' Jacobian of `model` at `(t, q, u)`, if it has any.
+fn loop_jacobian<S: Simulate + ?Sized>(
+    model: &S,
+    t: f64,
+    q: &[f64],
+    u: &[f64],
+) -> Option<DMatrix<f64>> {
+    let (nc, nu) = (model.nc(), model.nu());
+    (nc > 0).then(|| {
+        let mut c = ConstraintValues::zeros(nc, nu);
+        model.constraints(t, q, u, &mut c);
+        c.jacobian
+    })
+}
+
+impl<S: Simulate + ?Sized, O> Contacting<'_, S, O> {
+    /// `u̇`, the normal forces `λ` of the active rows and their friction
+    /// forces `λ_t`, and the rows.
+    fn accelerations<const N: usize>(
+        &self,
+        t: f64,
+        y: &[f64; N],
+    ) -> Option<(DVector<f64>, Solved, Rows)>
+    where
+        O: OdeSystem<N>,
+    {
+        let (nq, nu) = (self.model.nq(), self.model.nu());
+        let (q, u) = (&y[..nq], &y[nq..nq + nu]);
+        let free = free_rates(self.model, self.free, t, y);
+        let j = loop_jacobian(self.model, t, q, u);
         let r = rows(self.model, self.nk, t, q, u)?;
         let mut m = DMatrix::zeros(nu, nu);
         self.model.mass_matrix(t, q, &mut m);
+        let slide: Vec<Option<Slide>> = self
+            .active
+            .iter()
+            .zip(&self.slides)
+            .map(|(&i, s)| match s {
+                Some(Slide::Slip(s0)) => {
+                    let v = r.vt[i];
+                    let nv = norm2(v);
+                    Some(Slide::Slip(
+                        if nv > 0.0 && v[0] * s0[0] + v[1] * s0[1] > 0.0 {
+                            [v[0] / nv, v[1] / nv]
+                        } else {
+                            *s0
+                        },
+                    ))
+                }
+                other => *other,
+            })
+            .collect();
         let set = &self.active;
-        let w = DMatrix::from_fn(set.len(), nu, |i, k| r.w[(set[i], k)]);
-        let x = effective_inverse(&m, None, &w.transpose())?;
-        let a = &w * &x;
-        let rhs = DVector::from_fn(set.len(), |i, _| r.gamma[set[i]]) - &w * &free;
-        let lambda = a.lu().solve(&rhs)?;
-        Some((free + x * &lambda, lambda))
+        let wn = r.normal(set);
+        let b = &wn * &free - DVector::from_fn(set.len(), |k, _| r.gamma[set[k]]);
+        let bt = set
+            .iter()
+            .map(|&i| [0, 1].map(|a| r.tangential_dot(i, a, &free) - r.gamma_t[i][a]))
+            .collect();
+        let sol = Problem {
+            m: &m,
+            j: j.as_ref(),
+            r: &r,
+            set,
+            slide: &slide,
+            b,
+            bt,
+            held: true,
+        }
+        .solve()?;
+        Some((free + &sol.du, sol, r))
     }
 }
 
-impl<const N: usize, S: Simulate + ?Sized> OdeSystem<N> for Contacting<'_, S> {
+impl<const N: usize, S: Simulate + ?Sized, O: OdeSystem<N>> OdeSystem<N> for Contacting<'_, S, O> {
     fn rhs(&self, t: f64, y: &[f64; N], dy: &mut [f64; N]) {
         let (nq, nu) = (self.model.nq(), self.model.nu());
         let (q, u) = y.split_at(nq);
         let (dq, du) = dy.split_at_mut(nq);
         self.model.qdot(q, &u[..nu], dq);
-        match self.accelerations(t, q, &u[..nu]) {
-            Some((a, _)) => du[..nu].copy_from_slice(a.as_slice()),
+        match self.accelerations(t, y) {
+            Some((a, _, _)) => du[..nu].copy_from_slice(a.as_slice()),
             None => du.iter_mut().for_each(|x| *x = f64::NAN),
         }
     }
-    fn project(&self, _t: f64, y: &mut [f64; N]) -> bool {
-        self.model.normalize(&mut y[..self.model.nq()]);
-        !self.model.quaternions().is_empty()
+    fn project(&self, t: f64, y: &mut [f64; N]) -> bool {
+        // The free system's projection: quaternion norms, and for models
+        // with loops their position and velocity constraints.
+        self.free.project(t, y)
     }
 }
 
@@ -357,19 +729,22 @@ fn append<const N: usize>(all: &mut Solution<N>, s: Solution<N>) {
     all.stop = s.stop;
 }
 
-/// How a run with contacts goes: the model, its rows, the ODE without
-/// sustained contacts, whether sustained contacts are possible (no loop
-/// constraints), the rest height.
+/// The sustained contacts between segments: the active rows and, per
+/// contact row, its [`Slide`] while active with friction.
+pub(super) struct Sustained {
+    active: Vec<usize>,
+    slides: Vec<Option<Slide>>,
+}
+
+/// How a run with contacts goes: the model, its rows, the rest height.
 pub(super) struct Run<'a, S: ?Sized> {
     pub model: &'a S,
     pub names: &'a [String],
     /// The tree joints of `joint_impulses`.
     pub joints: &'a [String],
     pub nk: usize,
-    /// Sustained contacts (and so contacts coming to rest) are supported:
-    /// models without loop constraints.
-    pub sustained: bool,
-    /// The height below which a rebound is a contact at rest, m or rad.
+    /// The height below which a rebound is a contact at rest, m or rad;
+    /// likewise the distance below which a slide is a contact sticking.
     pub rest_height: f64,
 }
 
@@ -383,21 +758,70 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
 
     /// The loop constraints' Jacobian at `(t, q, u)`, if the model has any.
     fn jacobian(&self, t: f64, q: &[f64], u: &[f64]) -> Option<DMatrix<f64>> {
-        let (nc, nu) = (self.model.nc(), self.model.nu());
-        (nc > 0).then(|| {
-            let mut c = ConstraintValues::zeros(nc, nu);
-            self.model.constraints(t, q, u, &mut c);
-            c.jacobian
-        })
+        loop_jacobian(self.model, t, q, u)
     }
 
-    /// Resolves the contacts at `(t, y)`: impacts, contacts coming to rest
-    /// and released; updates `y`'s speeds and the active set.
-    fn settle<const N: usize>(
+    /// The event record of a jump `sol` on the rows `set` from `y` (before
+    /// it) to `after`.
+    #[allow(clippy::too_many_arguments)]
+    fn record<const N: usize>(
         &self,
         t: f64,
+        kind: ContactEventKind,
+        set: &[usize],
+        before: (&Rows, &[f64; N]),
+        after: (&Rows, &[f64; N]),
+        sol: &Solved,
+        m: &DMatrix<f64>,
+    ) -> ContactEvent {
+        let nk = self.nk;
+        let mut ln = vec![0.0; nk];
+        let mut lt = vec![[0.0; 2]; nk];
+        for (k, &i) in set.iter().enumerate() {
+            ln[i] = sol.ln[k];
+            lt[i] = sol.lt[k];
+        }
+        ContactEvent {
+            t,
+            kind,
+            contacts: set
+                .iter()
+                .enumerate()
+                .map(|(k, &i)| ContactImpulse {
+                    contact: self.name(i),
+                    speed_before: before.0.gdot[i],
+                    speed_after: after.0.gdot[i],
+                    impulse: sol.ln[k],
+                    tangential_impulse: sol.lt[k],
+                    tangential_speed_before: before.0.vt[i],
+                    tangential_speed_after: after.0.vt[i],
+                })
+                .collect(),
+            energy_before: energy(self.model, t, &before.1[..]),
+            energy_after: energy(self.model, t, &after.1[..]),
+            generalized_impulse: (m * &sol.du).as_slice().to_vec(),
+            joint_impulses: self.joint_impulses(t, before.1, sol.du.as_slice(), &ln, &lt),
+        }
+    }
+
+    /// The slip speed of row `i`: a slide slower than this would stop
+    /// within the rest height against its friction and drive, so the row is
+    /// tested for sticking (`v_t² ≤ 2 a h`).
+    fn slip_speed(&self, r: &Rows, i: usize, free: &DVector<f64>) -> f64 {
+        let drive = norm2([0, 1].map(|a| r.tangential_dot(i, a, free) - r.gamma_t[i][a]));
+        let normal: f64 = (0..free.len()).map(|k| r.w[(i, k)] * free[k]).sum::<f64>() - r.gamma[i];
+        (2.0 * (drive + r.mu[i] * normal.abs()) * self.rest_height).sqrt()
+    }
+
+    /// Resolves the contacts at `(t, y)`: impacts, contacts coming to rest,
+    /// sticking, slipping and released; updates `y`'s speeds and the
+    /// sustained contacts.
+    fn settle<const N: usize, O: OdeSystem<N>>(
+        &self,
+        free_ode: &O,
+        t: f64,
         y: &mut [f64; N],
-        active: &mut Vec<usize>,
+        state: &mut Sustained,
         events: &mut Vec<ContactEvent>,
     ) -> Result<(), String> {
         let (nq, nu, nk) = (self.model.nq(), self.model.nu(), self.nk);
@@ -411,68 +835,45 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             self.model.mass_matrix(t, &y[..nq], &mut m);
             m
         };
+        let no_solution = |n: usize| {
+            fail(&format!(
+                "the impact of {n} contact(s) has no solution (a singular mass matrix, more than {MAX_LCP} contacts closed at once, or sliding directions that do not settle)"
+            ))
+        };
         let mut r = read(y)?;
         let closed: Vec<usize> = (0..nk).filter(|&i| r.g[i] <= GAP_TOL).collect();
-        let jump = |y: &mut [f64; N],
-                    r: &Rows,
-                    set: &[usize],
-                    e: &dyn Fn(usize) -> f64,
-                    kind: ContactEventKind,
-                    events: &mut Vec<ContactEvent>|
-         -> Result<(), String> {
-            let m = mass(y);
-            let j = self.jacobian(t, &y[..nq], &y[nq..nq + nu]);
-            let before = energy(self.model, t, &y[..]);
-            let equality = kind == ContactEventKind::Rest;
-            let (du, lambda) = impact_map(&m, j.as_ref(), r, set, e, equality).ok_or_else(|| {
-                fail(&format!(
-                    "the impact of {} contact(s) has no solution (a singular mass matrix, or more than {MAX_LCP} contacts closed at once)",
-                    set.len()
-                ))
-            })?;
-            let mut full = vec![0.0; nk];
-            for (&i, &l) in set.iter().zip(lambda.iter()) {
-                full[i] = l;
-            }
-            let joint_impulses = self.joint_impulses(t, y, du.as_slice(), &full);
-            for k in 0..nu {
-                y[nq + k] += du[k];
-            }
-            let after = read(y)?;
-            events.push(ContactEvent {
-                t,
-                kind,
-                contacts: set
-                    .iter()
-                    .zip(lambda.iter())
-                    .map(|(&i, &l)| ContactImpulse {
-                        contact: self.name(i),
-                        speed_before: r.gdot[i],
-                        speed_after: after.gdot[i],
-                        impulse: l,
-                    })
-                    .collect(),
-                energy_before: before,
-                energy_after: energy(self.model, t, &y[..]),
-                generalized_impulse: (&m * &du).as_slice().to_vec(),
-                joint_impulses,
-            });
-            Ok(())
-        };
         if closed
             .iter()
-            .any(|&i| r.gdot[i] < 0.0 && !active.contains(&i))
+            .any(|&i| r.gdot[i] < 0.0 && !state.active.contains(&i))
         {
+            let m = mass(y);
+            let j = self.jacobian(t, &y[..nq], &y[nq..nq + nu]);
+            let slides: Vec<Option<Slide>> = closed
+                .iter()
+                .map(|&i| r.rough(i).then_some(Slide::Stick))
+                .collect();
             let e = |i: usize| r.e[i];
-            jump(y, &r, &closed, &e, ContactEventKind::Impact, events)?;
-            r = read(y)?;
+            let sol = impact(&m, j.as_ref(), &r, &closed, &e, false, &slides)
+                .ok_or_else(|| no_solution(closed.len()))?;
+            let before = *y;
+            for k in 0..nu {
+                y[nq + k] += sol.du[k];
+            }
+            let after = read(y)?;
+            events.push(self.record(
+                t,
+                ContactEventKind::Impact,
+                &closed,
+                (&r, &before),
+                (&after, y),
+                &sol,
+                &m,
+            ));
+            r = after;
         }
         // Contacts at rest: closed rows too slow to lift off by more than
         // the rest height against their acceleration.
-        let (q, u) = (y[..nq].to_vec(), y[nq..nq + nu].to_vec());
-        let mut free = vec![0.0; nu];
-        self.model.forward_dynamics(t, &q, &u, &mut free);
-        let free = DVector::from_vec(free);
+        let free = free_rates(self.model, free_ode, t, y);
         let resting: Vec<usize> = closed
             .iter()
             .copied()
@@ -482,39 +883,86 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             })
             .collect();
         if resting.is_empty() {
-            if !active.is_empty() {
-                self.release(t, y, std::mem::take(active), events);
+            if !state.active.is_empty() {
+                self.release(t, y, std::mem::take(&mut state.active), events);
             }
             return Ok(());
         }
-        if !self.sustained {
-            return Err(fail(&format!(
-                "contact `{}` comes to rest (its rebounds lift it less than {:e}); sustained contact in models with loop constraints is not implemented",
-                self.name(resting[0]),
-                self.rest_height
-            )));
-        }
-        // The force problem: g̈ = W M⁻¹ Wᵀ λ + (W u̇_free − γ) ≥ 0, λ ≥ 0.
+        // The force problem: g̈ = W M⁻¹ (Wᵀ λ + W_tᵀ λ_t) + (W u̇_free − γ)
+        // ≥ 0, λ ≥ 0; rows with friction slide along v_t if faster than
+        // their slip speed, else stick if the force they need fits the
+        // cone (with a margin, so that a stick that has just broken is not
+        // taken up again), else slide the way that force would push them.
         let m = mass(y);
-        let w = DMatrix::from_fn(resting.len(), nu, |i, k| r.w[(resting[i], k)]);
-        let x = effective_inverse(&m, None, &w.transpose())
-            .ok_or_else(|| fail("the mass matrix is singular"))?;
-        let a = &w * &x;
-        let b = &w * &free - DVector::from_fn(resting.len(), |i, _| r.gamma[resting[i]]);
-        let lambda = lcp(&a, &b).ok_or_else(|| {
-            fail(&format!(
-                "the contact forces of {} resting contact(s) have no solution",
-                resting.len()
-            ))
-        })?;
-        let scale = lambda.amax().max(f64::MIN_POSITIVE);
-        let now: Vec<usize> = resting
+        let j = self.jacobian(t, &y[..nq], &y[nq..nq + nu]);
+        let mut slides: Vec<Option<Slide>> = resting
             .iter()
-            .zip(lambda.iter())
-            .filter(|(_, l)| **l > 1e-12 * scale && **l > 0.0)
-            .map(|(&i, _)| i)
+            .map(|&i| {
+                r.rough(i).then(|| {
+                    let v = r.vt[i];
+                    let nv = norm2(v);
+                    if nv > self.slip_speed(&r, i, &free) {
+                        Slide::Slip([v[0] / nv, v[1] / nv])
+                    } else {
+                        Slide::Stick
+                    }
+                })
+            })
             .collect();
-        let released: Vec<usize> = active
+        let wn = r.normal(&resting);
+        let b = &wn * &free - DVector::from_fn(resting.len(), |k, _| r.gamma[resting[k]]);
+        let bt: Vec<[f64; 2]> = resting
+            .iter()
+            .map(|&i| [0, 1].map(|a| r.tangential_dot(i, a, &free) - r.gamma_t[i][a]))
+            .collect();
+        let mut forces = None;
+        for _ in 0..(2 + 2 * resting.len()) {
+            let sol = Problem {
+                m: &m,
+                j: j.as_ref(),
+                r: &r,
+                set: &resting,
+                slide: &slides,
+                b: b.clone(),
+                bt: bt.clone(),
+                held: false,
+            }
+            .solve()
+            .ok_or_else(|| {
+                fail(&format!(
+                    "the contact forces of {} resting contact(s) have no solution",
+                    resting.len()
+                ))
+            })?;
+            let mut changed = false;
+            for k in 0..resting.len() {
+                let (ln, lt) = (sol.ln[k], sol.lt[k]);
+                let l = norm2(lt);
+                if slides[k] == Some(Slide::Stick)
+                    && ln > 0.0
+                    && l > 0.0
+                    && l >= r.mu[resting[k]] * ln * (1.0 - 1e-6)
+                {
+                    slides[k] = Some(Slide::Slip([-lt[0] / l, -lt[1] / l]));
+                    changed = true;
+                }
+            }
+            forces = Some(sol);
+            if !changed {
+                break;
+            }
+        }
+        let Some(forces) = forces else {
+            return Err(fail("no resting contact"));
+        };
+        let scale = forces.ln.amax().max(f64::MIN_POSITIVE);
+        let carrying: Vec<usize> = (0..resting.len())
+            .filter(|&k| forces.ln[k] > 1e-12 * scale && forces.ln[k] > 0.0)
+            .collect();
+        let now: Vec<usize> = carrying.iter().map(|&k| resting[k]).collect();
+        let now_slides: Vec<Option<Slide>> = carrying.iter().map(|&k| slides[k]).collect();
+        let released: Vec<usize> = state
+            .active
             .iter()
             .copied()
             .filter(|i| !now.contains(i))
@@ -525,18 +973,97 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
         let arriving: Vec<usize> = now
             .iter()
             .copied()
-            .filter(|i| !active.contains(i))
+            .filter(|i| !state.active.contains(i))
             .collect();
-        if !arriving.is_empty() {
+        // Rows that stay and change between sticking and sliding.
+        let mut to_stick = Vec::new();
+        let mut to_slip = Vec::new();
+        for (k, &i) in now.iter().enumerate() {
+            if !state.active.contains(&i) {
+                continue;
+            }
+            match (state.slides[i], now_slides[k]) {
+                (Some(Slide::Slip(_)), Some(Slide::Stick)) => to_stick.push(i),
+                (Some(Slide::Stick), Some(Slide::Slip(_))) => to_slip.push(i),
+                _ => {}
+            }
+        }
+        if !arriving.is_empty() || !to_stick.is_empty() {
             // The remaining normal speed of the arriving contacts (below
             // the rest speed, of either sign: the tail of a Zeno sequence,
             // whose bounces would exchange that momentum with the floor)
-            // taken by one impulse; the sustained ones keep ġ = 0.
+            // and the remaining sliding speed of the sticking ones taken by
+            // one impulse; the sustained ones keep ġ = 0.
             let plastic = |_: usize| 0.0;
-            jump(y, &r, &now, &plastic, ContactEventKind::Rest, events)?;
+            let sol = impact(&m, j.as_ref(), &r, &now, &plastic, true, &now_slides)
+                .ok_or_else(|| no_solution(now.len()))?;
+            let before = *y;
+            for k in 0..nu {
+                y[nq + k] += sol.du[k];
+            }
+            let after = read(y)?;
+            let kind = if arriving.is_empty() {
+                ContactEventKind::Stick
+            } else {
+                ContactEventKind::Rest
+            };
+            events.push(self.record(t, kind, &now, (&r, &before), (&after, y), &sol, &m));
         }
-        *active = now;
+        if !to_slip.is_empty() {
+            let mut ev = self.quiet(t, y, &to_slip, ContactEventKind::Slip);
+            for c in ev.contacts.iter_mut() {
+                if let Some(k) = now.iter().position(|&i| self.name(i) == c.contact) {
+                    c.impulse = forces.ln[carrying[k]];
+                    c.tangential_impulse = forces.lt[carrying[k]];
+                }
+            }
+            events.push(ev);
+        }
+        state.slides = vec![None; nk];
+        for (&i, s) in now.iter().zip(&now_slides) {
+            state.slides[i] = *s;
+        }
+        state.active = now;
         Ok(())
+    }
+
+    /// An event without a velocity jump on the rows `set` (a release, the
+    /// start of a slide): impulses zero.
+    fn quiet<const N: usize>(
+        &self,
+        t: f64,
+        y: &[f64; N],
+        set: &[usize],
+        kind: ContactEventKind,
+    ) -> ContactEvent {
+        let (nq, nu) = (self.model.nq(), self.model.nu());
+        let r = rows(self.model, self.nk, t, &y[..nq], &y[nq..nq + nu]);
+        let e = energy(self.model, t, &y[..]);
+        ContactEvent {
+            t,
+            kind,
+            contacts: set
+                .iter()
+                .map(|&i| {
+                    let (gd, vt) = r
+                        .as_ref()
+                        .map_or((f64::NAN, [f64::NAN; 2]), |r| (r.gdot[i], r.vt[i]));
+                    ContactImpulse {
+                        contact: self.name(i),
+                        speed_before: gd,
+                        speed_after: gd,
+                        impulse: 0.0,
+                        tangential_impulse: [0.0; 2],
+                        tangential_speed_before: vt,
+                        tangential_speed_after: vt,
+                    }
+                })
+                .collect(),
+            energy_before: e,
+            energy_after: e,
+            generalized_impulse: vec![0.0; nu],
+            joint_impulses: Vec::new(),
+        }
     }
 
     fn release<const N: usize>(
@@ -546,44 +1073,28 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
         rows_released: Vec<usize>,
         events: &mut Vec<ContactEvent>,
     ) {
-        let (nq, nu) = (self.model.nq(), self.model.nu());
-        let speeds = rows(self.model, self.nk, t, &y[..nq], &y[nq..nq + nu])
-            .map_or_else(|| vec![f64::NAN; self.nk], |r| r.gdot);
-        let e = energy(self.model, t, &y[..]);
-        events.push(ContactEvent {
-            t,
-            kind: ContactEventKind::Release,
-            contacts: rows_released
-                .iter()
-                .map(|&i| ContactImpulse {
-                    contact: self.name(i),
-                    speed_before: speeds[i],
-                    speed_after: speeds[i],
-                    impulse: 0.0,
-                })
-                .collect(),
-            energy_before: e,
-            energy_after: e,
-            generalized_impulse: vec![0.0; nu],
-            joint_impulses: Vec::new(),
-        });
+        events.push(self.quiet(t, y, &rows_released, ContactEventKind::Release));
     }
 
     /// The tree joints' impulses of the jump `du` at `(t, y)` (before it)
-    /// from the contact impulses `lambda` (one per row), by the generated
-    /// `joint_impulses`; empty if the model has none.
+    /// from the contact impulses `ln` and, with friction, `lt` (one per
+    /// row), by the generated `joint_impulses`; empty if the model has
+    /// none.
     fn joint_impulses<const N: usize>(
         &self,
         t: f64,
         y: &[f64; N],
         du: &[f64],
-        lambda: &[f64],
+        ln: &[f64],
+        lt: &[[f64; 2]],
     ) -> Vec<JointImpulse> {
         let (nq, nu, nk, nj) = (self.model.nq(), self.model.nu(), self.nk, self.joints.len());
-        let len = 6 * nj * (1 + nk);
-        if nj == 0 || self.model.function_len(IMPULSES) != Some(len) {
-            return Vec::new();
-        }
+        let plain = 6 * nj * (1 + nk);
+        let rough = 6 * nj * (1 + 3 * nk);
+        let len = match self.model.function_len(IMPULSES) {
+            Some(l) if nj > 0 && (l == plain || l == rough) => l,
+            _ => return Vec::new(),
+        };
         let mut v = vec![0.0; len];
         let at = Point {
             t,
@@ -595,14 +1106,20 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
         if !self.model.evaluate(IMPULSES, &at, &mut v) {
             return Vec::new();
         }
+        let block = |b: usize, j: usize, a: usize| v[6 * nj * b + 6 * j + a];
         (0..nj)
             .map(|j| {
                 let c: Vec<f64> = (0..6)
                     .map(|a| {
-                        v[6 * j + a]
-                            + (0..nk)
-                                .map(|r| lambda[r] * v[6 * nj * (1 + r) + 6 * j + a])
-                                .sum::<f64>()
+                        let mut x = block(0, j, a)
+                            + (0..nk).map(|r| ln[r] * block(1 + r, j, a)).sum::<f64>();
+                        if len == rough {
+                            x += (0..2)
+                                .flat_map(|d| (0..nk).map(move |r| (d, r)))
+                                .map(|(d, r)| lt[r][d] * block(1 + nk + d * nk + r, j, a))
+                                .sum::<f64>();
+                        }
+                        x
                     })
                     .collect();
                 JointImpulse {
@@ -638,12 +1155,15 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             stop: crate::integrate::StopReason::Finished,
         };
         let mut events = Vec::new();
-        let mut active: Vec<usize> = Vec::new();
+        let mut state = Sustained {
+            active: Vec::new(),
+            slides: vec![None; nk],
+        };
         let mut t = 0.0;
         let mut stalled = 0;
         let mut opts = opts.clone();
         loop {
-            if let Err(message) = self.settle(t, &mut y, &mut active, &mut events) {
+            if let Err(message) = self.settle(free, t, &mut y, &mut state, &mut events) {
                 all.t_final = t;
                 all.y_final = y;
                 return (all, events, Some((t, message)));
@@ -655,10 +1175,13 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                     rows(self.model, nk, t, &y[..nq], &y[nq..nq + nu]).map_or(f64::NAN, |r| r.g[i])
                 }
             };
+            let active = state.active.clone();
             let contacting = Contacting {
                 model: self.model,
+                free,
                 nk,
                 active: active.clone(),
+                slides: active.iter().map(|&i| state.slides[i]).collect(),
             };
             let mut list: Vec<Event<'_, N>> = (0..nk)
                 .filter(|i| !active.contains(i))
@@ -683,16 +1206,41 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                     ));
                 }
             }
-            for pos in 0..active.len() {
+            for (pos, &i) in active.iter().enumerate() {
                 let c = &contacting;
+                // Release: the normal force falls through zero.
                 list.push(Event::new(
                     move |t: f64, y: &[f64; N]| {
-                        c.accelerations(t, &y[..nq], &y[nq..nq + nu])
-                            .map_or(f64::NAN, |(_, l)| l[pos])
+                        c.accelerations(t, y)
+                            .map_or(f64::NAN, |(_, s, _)| s.ln[pos])
                     },
                     Direction::Falling,
                     EventAction::Stop,
                 ));
+                match state.slides[i] {
+                    // Slip: the friction force the stick needs reaches
+                    // the cone, μ λ − ‖λ_t‖ falls through zero.
+                    Some(Slide::Stick) => list.push(Event::new(
+                        move |t: f64, y: &[f64; N]| {
+                            c.accelerations(t, y).map_or(f64::NAN, |(_, s, r)| {
+                                r.mu[i] * s.ln[pos] - norm2(s.lt[pos])
+                            })
+                        },
+                        Direction::Falling,
+                        EventAction::Stop,
+                    )),
+                    // A slide stops (or turns by more than a right angle):
+                    // v_t · s falls through zero.
+                    Some(Slide::Slip(s0)) => list.push(Event::new(
+                        move |t: f64, y: &[f64; N]| {
+                            rows(self.model, nk, t, &y[..nq], &y[nq..nq + nu])
+                                .map_or(f64::NAN, |r| r.vt[i][0] * s0[0] + r.vt[i][1] * s0[1])
+                        },
+                        Direction::Falling,
+                        EventAction::Stop,
+                    )),
+                    None => {}
+                }
             }
             let seg = if active.is_empty() {
                 solve_with_events(settings, free, t, y, t_end, &opts, &mut list)

@@ -83,9 +83,27 @@ impl Ctx<'_> {
                     radius,
                     point,
                     normal,
+                    on,
                     ..
                 } => {
                     let at = self.contact_anchor(at, bodies, &join(&path, &[f("at")]), name);
+                    let on = match on {
+                        None => Some(0),
+                        Some(b) => self.body_ref(bodies, b, &join(&path, &[f("on")]), "plane"),
+                    };
+                    if let (Some(a), Some(b)) = (&at, on)
+                        && b != 0
+                        && a.body == b
+                    {
+                        self.error(
+                            &join(&path, &[f("on")]),
+                            format!(
+                                "contact `{name}` touches a plane on its own body `{}`",
+                                bodies[b].name
+                            ),
+                            "a contact is between two bodies: fix the plane on another body (or leave `on` out for the ground)",
+                        );
+                    }
                     let r = self.nonnegative(radius, &join(&path, &[f("radius")]), "radius", name);
                     let p = self.vec3(point, &join(&path, &[f("point")]), Scope::Params);
                     let n = self.axis(normal, &join(&path, &[f("normal")]), "the plane's normal");
@@ -95,6 +113,7 @@ impl Ctx<'_> {
                             radius: r?,
                             point: p?,
                             normal: n?,
+                            on: on?,
                         })
                     })()
                 }
@@ -140,6 +159,28 @@ impl Ctx<'_> {
                         })
                     })()
                 }
+            };
+            // Coulomb friction acts along a contact's tangent plane: a plane
+            // contact has one; a joint limit acts inside its joint, and the
+            // tangents between two spheres are not generated yet.
+            let mu = match (c, mu) {
+                (spec::Contact::JointLimit { .. }, Some(m)) if m > 0.0 => {
+                    self.error(
+                        &join(&path, &[f("mu")]),
+                        format!("joint limit `{name}` has Coulomb friction (mu = {m})"),
+                        "a joint limit stops its joint's coordinate and has no tangential direction: set `mu: 0` (or leave it out); joint friction is a force element",
+                    );
+                    None
+                }
+                (spec::Contact::Spheres { .. }, Some(m)) if m > 0.0 => {
+                    self.error(
+                        &join(&path, &[f("mu")]),
+                        format!("contact `{name}` between two spheres has Coulomb friction (mu = {m}), which is not implemented"),
+                        "friction applies to `Plane` contacts; set `mu: 0` (or leave it out) here",
+                    );
+                    None
+                }
+                (_, mu) => mu,
             };
             match (kind, e, mu) {
                 (Some(kind), Some(e), Some(mu)) => out.push(ContactInfo {

@@ -1,0 +1,269 @@
+//! Coulomb friction at contacts (issue #26), through the one runner on the
+//! evaluator: stick and slip as a complementarity problem with the
+//! transitions located as events, against closed forms.
+//!
+//! - a block on an incline of angle `θ` sticks for `tan θ < μ` and slides
+//!   with `g (sin θ − μ cos θ)` otherwise;
+//! - a block pushed along a floor at `v₀` stops after `v₀²/(2 μ g)`, at
+//!   `t = v₀/(μ g)`, and stays there;
+//! - a solid ball (`I = 2/5 m r²`) striking a floor obliquely at `(V, −W)`
+//!   without spin (Newton–Coulomb): the normal impulse is `m (1 + e) W`;
+//!   it rolls off (`v_t⁺ = 0`, `vx⁺ = 5V/7`, `ω⁺ = −5V/(7r)`) when
+//!   `2V/7 ≤ μ (1 + e) W`, else slides through the impact with
+//!   `Λ_t = −μ Λ` (`vx⁺ = V − μ (1 + e) W`, `ω⁺ = −5 μ (1 + e) W/(2r)`);
+//!   the joint of the free ball transmits no impulse (the contact's normal
+//!   and friction impulses are its momentum change);
+//! - the tangential rows: `v_t` of the touching point and `W_t = ∂v_t/∂u`,
+//!   and `γ_t` against differences along the motion.
+
+use eom_gen::System;
+use eom_gen::functions::{Function, FunctionSet};
+use eom_gen::interpret::{Point, evaluate_function};
+use eom_gen::mech::formulate;
+use eom_gen::model::{Source, check};
+use eom_sim::run::ContactEventKind;
+use eom_sim::{RunOptions, RunReport};
+
+const G: f64 = 9.81;
+
+fn from_text(text: &str) -> System {
+    check(&Source::new("models/test.ron", text.to_string()))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system
+}
+
+fn run(sys: &System, o: &RunOptions) -> RunReport {
+    let f = formulate(sys, FunctionSet::all_requested()).expect("formulates");
+    eom_gen::interpret::simulate(&f, sys, o).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn options(t_end: f64) -> RunOptions {
+    RunOptions {
+        t_end,
+        rtol: 1e-10,
+        atol: 1e-12,
+        ..RunOptions::default()
+    }
+}
+
+/// A 2 kg block on a planar joint (x, y, angle; gravity −y) touching, at its
+/// origin, a plane through the origin with normal `(nx, ny, 0)`; friction
+/// `mu`; initial speeds `u0`.
+fn block(nx: f64, ny: f64, mu: f64, u0: [f64; 3]) -> System {
+    from_text(&format!(
+        r#"Model(
+    name: "block",
+    gravity: (0, -{G}, 0),
+    bodies: [(name: "block", mass: 2, inertia: Diag(0.1, 0.1, 0.1))],
+    joints: [(name: "p", kind: Planar, parent: "ground", child: "block", coordinates: ["x", "y", "a"], q0: [0, 0, 0], u0: [{}, {}, {}])],
+    contacts: [Plane(name: "ground_contact", at: (body: "block"), normal: ({nx}, {ny}, 0), e: 0, mu: {mu})],
+)"#,
+        u0[0], u0[1], u0[2]
+    ))
+}
+
+/// `tan θ < μ`: the block stays at rest; `tan θ > μ`: it slides down the
+/// slope with `a = g (sin θ − μ cos θ)`.
+#[test]
+fn block_on_an_incline_sticks_below_the_friction_angle_and_slides_above() {
+    let theta: f64 = 0.4; // tan θ = 0.4228
+    let (s, c) = theta.sin_cos();
+    let t_end = 1.0;
+    // Sticks: μ = 0.5 > tan θ.
+    let report = run(&block(-s, c, 0.5, [0.0; 3]), &options(t_end));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    assert!(
+        report.q.iter().chain(&report.u).all(|v| v.abs() < 1e-10),
+        "sticks: q {:?}, u {:?}",
+        report.q,
+        report.u
+    );
+    assert!(
+        report
+            .contact_events
+            .iter()
+            .all(|e| e.kind == ContactEventKind::Rest),
+        "{:?}",
+        report.contact_events
+    );
+    // Slides: μ = 0.3 < tan θ.
+    let mu = 0.3;
+    let report = run(&block(-s, c, mu, [0.0; 3]), &options(t_end));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    let a = G * (s - mu * c);
+    let dist = 0.5 * a * t_end * t_end;
+    let (x, y) = (report.q[0], report.q[1]);
+    assert!(
+        (x + dist * c).abs() < 1e-9 && (y + dist * s).abs() < 1e-9,
+        "slid to ({x}, {y}), want {dist} m down the slope: ({}, {})",
+        -dist * c,
+        -dist * s
+    );
+    let speed = report.u[0].hypot(report.u[1]);
+    assert!(
+        (speed - a * t_end).abs() < 1e-9,
+        "speed {speed}, want g (sin θ − μ cos θ) t = {}",
+        a * t_end
+    );
+    assert!(report.q[2].abs() < 1e-12, "no turning: {}", report.q[2]);
+}
+
+/// Pushed at `v₀` along a floor: decelerates at `μ g`, stops after
+/// `v₀²/(2 μ g)` at `t = v₀/(μ g)` (a located `stick` event) and stays.
+#[test]
+fn block_pushed_along_a_floor_stops_after_v0_squared_over_2_mu_g() {
+    let (v0, mu) = (2.0, 0.3);
+    let report = run(&block(0.0, 1.0, mu, [v0, 0.0, 0.0]), &options(1.5));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    let want = v0 * v0 / (2.0 * mu * G);
+    assert!(
+        (report.q[0] - want).abs() < 1e-9,
+        "stopped at {}, want v0²/(2 μ g) = {want}",
+        report.q[0]
+    );
+    assert!(
+        report.u.iter().all(|v| v.abs() < 1e-12) && report.q[1].abs() < 1e-12,
+        "at rest on the floor: q {:?}, u {:?}",
+        report.q,
+        report.u
+    );
+    let stick = report
+        .contact_events
+        .iter()
+        .find(|e| e.kind == ContactEventKind::Stick)
+        .unwrap_or_else(|| panic!("a stick event: {:?}", report.contact_events));
+    let t_stop = v0 / (mu * G);
+    assert!(
+        (stick.t - t_stop).abs() < 1e-9,
+        "stopped at t = {}, want v0/(μ g) = {t_stop}",
+        stick.t
+    );
+    // Nothing after it: the block stays stuck.
+    assert_eq!(
+        report.contact_events.last().map(|e| e.kind),
+        Some(ContactEventKind::Stick)
+    );
+}
+
+/// A solid ball of radius `r` on a planar joint (x, y, spin), gravity −y,
+/// striking the floor `y = 0` from `(V, −W0)` at height `h`.
+fn ball(mu: f64, e: f64) -> System {
+    from_text(&format!(
+        r#"Model(
+    name: "ball",
+    gravity: (0, -{G}, 0),
+    parameters: [(name: "m", value: 1.5), (name: "r", value: 0.2)],
+    bodies: [(name: "ball", mass: "m", inertia: Diag("2/5*m*r^2", "2/5*m*r^2", "2/5*m*r^2"))],
+    joints: [(name: "p", kind: Planar, parent: "ground", child: "ball", coordinates: ["x", "y", "a"], q0: [0, 0.3, 0], u0: [1, -2, 0])],
+    contacts: [Plane(name: "floor", at: (body: "ball"), radius: "r", normal: (0, 1, 0), e: {e}, mu: {mu})],
+)"#
+    ))
+}
+
+#[test]
+fn oblique_ball_impact_rolls_off_or_slides_by_newton_coulomb() {
+    let (m, r, e, v) = (1.5, 0.2, 0.5, 1.0);
+    for (mu, sticks) in [(0.5, true), (0.05, false)] {
+        let report = run(&ball(mu, e), &options(0.07));
+        let impact = report
+            .contact_events
+            .iter()
+            .find(|ev| ev.kind == ContactEventKind::Impact)
+            .unwrap_or_else(|| panic!("mu {mu}: an impact: {:?}", report.contact_events));
+        let c = &impact.contacts[0];
+        let w = -c.speed_before;
+        assert!(w > 0.0, "closing: {w}");
+        let ln = m * (1.0 + e) * w;
+        assert!(
+            (c.impulse - ln).abs() < 1e-10 * ln,
+            "mu {mu}: normal impulse {}, want m (1 + e) W = {ln}",
+            c.impulse
+        );
+        assert_eq!(sticks, 2.0 * v / 7.0 <= mu * (1.0 + e) * w, "test setup");
+        // The impulse per speed: m Δvx = Λ_t, I Δω = r Λ_t.
+        let (lt, vx, om) = if sticks {
+            (-2.0 * m * v / 7.0, 5.0 * v / 7.0, -5.0 * v / (7.0 * r))
+        } else {
+            let lt = -mu * ln;
+            (lt, v + lt / m, 5.0 * lt / (2.0 * m * r))
+        };
+        // t1 = x for the normal +y; the touching point moves at vx + r ω.
+        assert!(
+            (c.tangential_impulse[0] - lt).abs() < 1e-10 && c.tangential_impulse[1].abs() < 1e-12,
+            "mu {mu}: tangential impulse {:?}, want ({lt}, 0)",
+            c.tangential_impulse
+        );
+        let gi = &impact.generalized_impulse;
+        let i = 0.4 * m * r * r;
+        assert!(
+            (gi[0] / m + v - vx).abs() < 1e-10 && (gi[2] / i - om).abs() < 1e-9,
+            "mu {mu}: after the impact vx = {}, ω = {}; want {vx}, {om}",
+            gi[0] / m + v,
+            gi[2] / i
+        );
+        let slip = c.tangential_speed_after[0];
+        if sticks {
+            assert!(slip.abs() < 1e-10, "rolls off: v_t⁺ = {slip}");
+        } else {
+            assert!(
+                (slip - (vx + r * om)).abs() < 1e-10 && slip > 0.0,
+                "slides through: v_t⁺ = {slip}"
+            );
+        }
+        // Energy: never gained.
+        assert!(impact.energy_after <= impact.energy_before + 1e-12);
+        // Wittenburg's joint impulse of the planar joint: the ball's
+        // momentum change is the contact's impulse (normal and friction,
+        // the friction's moment about the centre included), so the joint,
+        // free in the plane, transmits nothing.
+        let ji = &impact.joint_impulses;
+        assert_eq!(ji.len(), 1, "{ji:?}");
+        assert!(
+            ji[0]
+                .force
+                .iter()
+                .chain(&ji[0].torque)
+                .all(|x| x.abs() < 1e-10),
+            "mu {mu}: {:?}",
+            ji[0]
+        );
+    }
+}
+
+/// The generated tangential rows: `v_t = W_t u` of the touching point (for
+/// the ball on the floor `vx + r ω` and 0), and `γ_t` against differences of
+/// `v_t` along the motion at `u̇ = 0`.
+#[test]
+fn tangential_rows_are_the_touching_points_speeds() {
+    let sys = ball(0.3, 0.5);
+    let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
+    let eval = |q: &[f64], u: &[f64]| {
+        let x = Point {
+            sys: &sys,
+            q,
+            u,
+            udot: &[],
+            tau: &[],
+            inputs: &[],
+            params: &[],
+            multipliers: &[],
+            t: 0.0,
+        };
+        evaluate_function(&f, Function::Friction, &x).expect("friction")
+    };
+    let (q, u) = ([0.3, 0.5, 0.7], [1.1, -0.4, 2.5]);
+    let v = eval(&q, &u);
+    assert_eq!(v.len(), 4 + 2 * 3);
+    assert!(
+        (v[0] - (u[0] + 0.2 * u[2])).abs() < 1e-14,
+        "v_t1 = {}",
+        v[0]
+    );
+    assert!(v[1].abs() < 1e-14, "v_t2 = {}", v[1]);
+    assert_eq!(&v[4..7], &[1.0, 0.0, 0.2]);
+    // γ_t: −d v_t/dt at u̇ = 0 along q̇ = u (here v_t does not depend on q).
+    let h = 1e-5;
+    let qs: Vec<f64> = q.iter().zip(&u).map(|(a, b)| a + h * b).collect();
+    let dv = (eval(&qs, &u)[0] - v[0]) / h;
+    assert!((dv + v[2]).abs() < 1e-8, "γ_t1 {} vs −dv/dt {}", v[2], -dv);
+}
