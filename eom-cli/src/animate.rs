@@ -9,7 +9,8 @@
 //! rounded to 6 decimals. The frames are the rows of the run's CSV.
 
 use crate::error::Error;
-use eom_gen::mech::numeric::{Numeric, Scene};
+use eom_gen::mech::numeric::{Numeric, PlacedShape, Scene};
+use eom_gen::system::Shape;
 use eom_sim::table::Table;
 use std::fmt::Write;
 
@@ -72,14 +73,19 @@ pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Erro
             sys.name
         )));
     }
+    let mut meshes = Meshes::default();
+    let bodies = bodies_json(&scene, &mut meshes)?;
+    let ground_geometry = shapes_json(&scene.ground_geometry, "ground", &mut meshes)?;
     let mut data = String::new();
     let _ = write!(
         data,
-        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"t\":{times},\"poses\":{frames}}}",
+        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"t\":{times},\"poses\":{frames}}}",
         serde_json::to_string(&sys.name).unwrap_or_default(),
         serde_json::to_string(&gravity(&num)).unwrap_or_default(),
-        bodies_json(&scene),
+        bodies,
         serde_json::to_string(&scene.ground).unwrap_or_else(|_| "[]".into()),
+        serde_json::to_string(&ground_geometry).unwrap_or_else(|_| "[]".into()),
+        serde_json::to_string(&meshes.list).unwrap_or_else(|_| "[]".into()),
     );
     // The data sits in a <script> element: no `</` may close it early.
     let data = data.replace("</", "<\\/");
@@ -95,12 +101,71 @@ fn gravity(num: &Numeric) -> [f64; 3] {
     num.tree().gravity.0
 }
 
-fn bodies_json(scene: &Scene) -> String {
+/// The meshes of the page, each file once (base64 of little-endian
+/// `f32` positions and `u32` triangle indices).
+#[derive(Default)]
+struct Meshes {
+    index: std::collections::HashMap<std::path::PathBuf, usize>,
+    list: Vec<serde_json::Value>,
+}
+
+impl Meshes {
+    fn get(&mut self, path: &std::path::Path) -> Result<usize, String> {
+        if let Some(&k) = self.index.get(path) {
+            return Ok(k);
+        }
+        let m = crate::mesh::read(path)?;
+        let v: Vec<u8> = m.positions.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let i: Vec<u8> = m.indices.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.list.push(serde_json::json!({
+            "v": crate::mesh::base64(&v),
+            "i": crate::mesh::base64(&i),
+        }));
+        self.index.insert(path.to_path_buf(), self.list.len() - 1);
+        Ok(self.list.len() - 1)
+    }
+}
+
+/// The shapes of `owner` for the page: kind and sizes, origin and unit
+/// quaternion in the body, colour; a mesh by its index in `meshes`.
+fn shapes_json(
+    shapes: &[PlacedShape],
+    owner: &str,
+    meshes: &mut Meshes,
+) -> Result<Vec<serde_json::Value>, Error> {
+    shapes
+        .iter()
+        .map(|s| {
+            let mut g = match &s.shape {
+                Shape::Box(size) => serde_json::json!({ "box": size }),
+                Shape::Cylinder { radius, length } => {
+                    serde_json::json!({ "cylinder": [radius, length] })
+                }
+                Shape::Sphere(r) => serde_json::json!({ "sphere": r }),
+                Shape::Mesh { file, path, scale } => {
+                    let k = meshes.get(path).map_err(|e| {
+                        Error::Refused(format!("`{owner}`: mesh `{file}`: {e}"))
+                    })?;
+                    serde_json::json!({ "mesh": k, "scale": scale })
+                }
+            };
+            g["p"] = serde_json::json!(s.origin);
+            g["q"] = serde_json::json!(quaternion(&s.rotation));
+            if let Some(c) = s.color {
+                g["color"] = serde_json::json!(c);
+            }
+            Ok(g)
+        })
+        .collect()
+}
+
+fn bodies_json(scene: &Scene, meshes: &mut Meshes) -> Result<String, Error> {
     let list: Vec<serde_json::Value> = scene
         .bodies
         .iter()
         .map(|b| {
-            serde_json::json!({
+            let geometry = shapes_json(&b.geometry, &b.name, meshes)?;
+            Ok(serde_json::json!({
                 "name": b.name,
                 "joint": b.joint,
                 "parent": b.parent,
@@ -112,10 +177,11 @@ fn bodies_json(scene: &Scene) -> String {
                 "mass": b.mass,
                 "markers": b.markers,
                 "loops": b.loop_joints,
-            })
+                "geometry": geometry,
+            }))
         })
-        .collect();
-    serde_json::to_string(&list).unwrap_or_else(|_| "[]".into())
+        .collect::<Result<_, Error>>()?;
+    Ok(serde_json::to_string(&list).unwrap_or_else(|_| "[]".into()))
 }
 
 /// `x` with 6 decimals, trailing zeros dropped; a value that is not

@@ -287,8 +287,49 @@ pub struct BodyInfo {
     /// The deformable part of a flexible body; `None` for a rigid one
     /// (whose `mass`, `com` and `inertia` are then the whole body).
     pub flexible: Option<Box<FlexInfo>>,
+    /// What an animation draws of it (for ground: the model's
+    /// `ground_geometry`).
+    pub geometry: Vec<GeometryInfo>,
     /// Where the body is defined.
     pub span: Span,
+}
+
+/// A shape drawn for a body (`eom-gen animate`; no dynamics), at the
+/// parameters' defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeometryInfo {
+    /// The shape.
+    pub shape: Shape,
+    /// Where it sits on the body.
+    pub frame: FrameInfo,
+    /// Colour `(r, g, b)` in `[0, 1]`, if given.
+    pub color: Option<[f64; 3]>,
+}
+
+/// A shape of [`GeometryInfo`], lengths in m.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// Edge lengths along the frame's axes, centred.
+    Box([f64; 3]),
+    /// Radius and length along the frame's z, centred.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Length.
+        length: f64,
+    },
+    /// Radius, centred.
+    Sphere(f64),
+    /// A mesh file.
+    Mesh {
+        /// The path as written in the model.
+        file: String,
+        /// The path to read it from (relative to the model file's
+        /// directory, or as a URDF import resolved it).
+        path: std::path::PathBuf,
+        /// Scale per axis.
+        scale: [f64; 3],
+    },
 }
 
 /// A joint kind with its unit axes (as written and normalised at defaults).

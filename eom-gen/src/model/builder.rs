@@ -39,6 +39,7 @@ impl ModelBuilder {
                 inertia_policy: Default::default(),
                 cables: Vec::new(),
                 contacts: Vec::new(),
+                ground_geometry: Vec::new(),
             },
         }
     }
@@ -127,7 +128,14 @@ impl Body {
             inertia: None,
             markers: Vec::new(),
             flexible: None,
+            geometry: Vec::new(),
         }
+    }
+
+    /// Adds a shape drawn by `eom-gen animate`.
+    pub fn geometry(mut self, g: Geometry) -> Self {
+        self.geometry.push(g);
+        self
     }
 
     /// Centre of mass in body axes.

@@ -20,8 +20,10 @@ impl Ctx<'_> {
             inertia: None,
             markers: Vec::new(),
             flexible: None,
+            geometry: Vec::new(),
             span: Span::default(),
         }];
+        bodies[0].geometry = self.geometries(&spec.ground_geometry, &[f("ground_geometry")], "ground");
         let mut seen: HashMap<&str, usize> = HashMap::new();
         for (k, b) in spec.bodies.iter().enumerate() {
             let path = [f("bodies"), i(k)];
@@ -130,6 +132,7 @@ impl Ctx<'_> {
                 inertia,
                 markers,
                 flexible,
+                geometry: self.geometries(&b.geometry, &join(&path, &[f("geometry")]), &b.name),
                 span: self.span(&path),
             });
         }
