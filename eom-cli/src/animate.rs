@@ -143,9 +143,9 @@ fn shapes_json(
                 }
                 Shape::Sphere(r) => serde_json::json!({ "sphere": r }),
                 Shape::Mesh { file, path, scale } => {
-                    let k = meshes.get(path).map_err(|e| {
-                        Error::Refused(format!("`{owner}`: mesh `{file}`: {e}"))
-                    })?;
+                    let k = meshes
+                        .get(path)
+                        .map_err(|e| Error::Refused(format!("`{owner}`: mesh `{file}`: {e}")))?;
                     serde_json::json!({ "mesh": k, "scale": scale })
                 }
             };
@@ -356,6 +356,108 @@ mod tests {
         assert_eq!(sys.graph.cut_joints().len(), 1);
         let held: usize = scene.bodies.iter().map(|b| b.loop_joints.len()).sum();
         assert_eq!((held, scene.ground.len()), (2, 0));
+    }
+
+    /// The page of a URDF with every kind of `<visual>`: each shape on
+    /// its body (the welded base's box on the ground), each mesh file once,
+    /// and the binary STL pyramid decoded back: 5 shared vertices, 6
+    /// triangles, in mm as in the file (the scale 0.001 is the shape's).
+    #[test]
+    fn urdf_visuals_page() {
+        let model = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../eom-gen/tests/urdf/visual_pkg/robots/visuals.urdf"
+        );
+        let Ok(opened) = crate::open::open(model, &Default::default(), &Default::default()) else {
+            panic!("cannot open {model}");
+        };
+        let sys = &opened.checked.system;
+        let mut table = Table::new(vec!["t".into(), "joint_0_0".into()]);
+        table.push(vec![0.0, 0.5]);
+        table.push(vec![0.1, 0.6]);
+        let page = match html(sys, &table) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        };
+        let start = page.find(r#"type="application/json">"#).map(|i| i + 24);
+        let data = start.and_then(|s| Some(&page[s..s + page[s..].find("</script>")?]));
+        let data: serde_json::Value = match data.map(serde_json::from_str) {
+            Some(Ok(v)) => v,
+            other => panic!("the page's data does not parse: {other:?}"),
+        };
+        let shapes = &data["bodies"][0]["geometry"];
+        let kinds: Vec<&str> = shapes
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|g| {
+                        ["box", "cylinder", "sphere", "mesh"]
+                            .into_iter()
+                            .find(|k| g.get(k).is_some())
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        assert_eq!(kinds, ["cylinder", "sphere", "mesh", "mesh"]);
+        assert_eq!(shapes[2]["mesh"], 0);
+        assert_eq!(shapes[3]["mesh"], 1);
+        assert_eq!(
+            data["groundGeometry"][0]["box"],
+            serde_json::json!([0.3, 0.3, 0.1])
+        );
+        assert_eq!(data["meshes"].as_array().map(Vec::len), Some(2));
+        let decode = |s: &serde_json::Value| -> Vec<u8> {
+            let s = s.as_str().unwrap_or("");
+            let a = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+            let sextets: Vec<u32> = s
+                .bytes()
+                .filter(|&c| c != b'=')
+                .filter_map(|c| a.iter().position(|&x| x == c).map(|p| p as u32))
+                .collect();
+            let mut out = Vec::new();
+            for c in sextets.chunks(4) {
+                let n = c
+                    .iter()
+                    .enumerate()
+                    .fold(0u32, |n, (k, &x)| n | (x << (18 - 6 * k)));
+                out.extend(&n.to_be_bytes()[1..c.len()]);
+            }
+            out
+        };
+        let v = decode(&data["meshes"][0]["v"]);
+        let i = decode(&data["meshes"][0]["i"]);
+        assert_eq!((v.len() / 12, i.len() / 12), (5, 6), "vertices, triangles");
+        let top = v
+            .chunks(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .fold(f32::MIN, f32::max);
+        assert_eq!(top, 150.0);
+    }
+
+    /// A COLLADA mesh refuses the page, saying what to do.
+    #[test]
+    fn collada_is_refused() {
+        let dir = std::env::temp_dir().join(format!("eom-dae-{}", std::process::id()));
+        let _ = std::fs::create_dir_all(&dir);
+        let _ = std::fs::write(dir.join("arm.dae"), "<COLLADA/>");
+        let model = dir.join("m.ron");
+        let _ = std::fs::write(
+            &model,
+            r#"(name: "m", bodies: [(name: "b", mass: 1, geometry: [Mesh(file: "arm.dae")])],
+               joints: [(name: "j", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "b")])"#,
+        );
+        let path = model.display().to_string();
+        let Ok(opened) = crate::open::open(&path, &Default::default(), &Default::default()) else {
+            panic!("cannot open {path}");
+        };
+        let mut table = Table::new(vec!["t".into(), "j".into()]);
+        table.push(vec![0.0, 0.0]);
+        let out = html(&opened.checked.system, &table);
+        let _ = std::fs::remove_dir_all(&dir);
+        match out {
+            Err(e) => assert!(e.to_string().contains("COLLADA"), "{e}"),
+            Ok(_) => panic!("a COLLADA mesh was accepted"),
+        }
     }
 
     #[test]

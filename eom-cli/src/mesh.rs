@@ -73,7 +73,8 @@ pub fn stl(bytes: &[u8]) -> Result<Mesh, String> {
     if bytes.len() >= 84 {
         let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
         if n.checked_mul(50).and_then(|b| b.checked_add(84)) == Some(bytes.len()) {
-            let f = |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+            let f =
+                |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
             let tris = (0..n).map(|k| {
                 let o = 84 + 50 * k + 12;
                 [0, 1, 2].map(|v| [0, 1, 2].map(|c| f(o + 12 * v + 4 * c)))
@@ -81,8 +82,9 @@ pub fn stl(bytes: &[u8]) -> Result<Mesh, String> {
             return Ok(Mesh::from_triangles(tris));
         }
     }
-    let text = std::str::from_utf8(bytes)
-        .map_err(|_| "neither a binary STL (its size does not match its triangle count) nor ASCII".to_string())?;
+    let text = std::str::from_utf8(bytes).map_err(|_| {
+        "neither a binary STL (its size does not match its triangle count) nor ASCII".to_string()
+    })?;
     if !text.trim_start().starts_with("solid") {
         return Err("neither a binary STL (its size does not match its triangle count) nor an ASCII one (`solid …`)".into());
     }
@@ -92,7 +94,10 @@ pub fn stl(bytes: &[u8]) -> Result<Mesh, String> {
         if w.next() == Some("vertex") {
             let v: Vec<f32> = w.filter_map(|x| x.parse().ok()).collect();
             let [x, y, z] = v[..] else {
-                return Err(format!("line {}: a vertex needs three numbers", line_no + 1));
+                return Err(format!(
+                    "line {}: a vertex needs three numbers",
+                    line_no + 1
+                ));
             };
             verts.push([x, y, z]);
         }
@@ -135,7 +140,9 @@ pub fn obj(text: &str) -> Result<Mesh, String> {
                     let p = usize::try_from(k)
                         .ok()
                         .and_then(|k| pos.get(k))
-                        .ok_or_else(|| format!("{}: face vertex `{item}` is not a vertex so far", at()))?;
+                        .ok_or_else(|| {
+                            format!("{}: face vertex `{item}` is not a vertex so far", at())
+                        })?;
                     face.push(*p);
                 }
                 if face.len() < 3 {
@@ -180,7 +187,12 @@ mod tests {
     /// vertices, four triangles, the same in every format.
     #[test]
     fn tetrahedron_in_every_format() {
-        let p = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+        let p = [
+            [0.0f32, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
         let tris = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         let mut ascii = String::from("solid t\n");
         let mut binary = vec![0u8; 80];

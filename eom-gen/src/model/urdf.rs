@@ -37,8 +37,8 @@
 
 use super::read::Format;
 use super::spec::{
-    Body, Constraint, Contact, Force, Frame, Geometry, Inertia, InertiaPolicy, Joint, JointKind, Num,
-    Orientation, Spec, V3,
+    Body, Constraint, Contact, Force, Frame, Geometry, Inertia, InertiaPolicy, Joint, JointKind,
+    Num, Orientation, Spec, V3,
 };
 use crate::diag::did_you_mean;
 use crate::diag::{Diagnostic, Report, Source, Span};
@@ -1255,9 +1255,8 @@ impl Ctx {
         urdf_path: &str,
     ) -> Option<Visual> {
         let origin = self.origin(v);
-        let color = child(v, "material").and_then(|m| {
-            rgb(m).or_else(|| materials.get(m.attribute("name")?).copied())
-        });
+        let color = child(v, "material")
+            .and_then(|m| rgb(m).or_else(|| materials.get(m.attribute("name")?).copied()));
         let Some(g) = child(v, "geometry") else {
             self.notes.push(format!(
                 "a `<visual>` of link `{link}` has no `<geometry>`: not drawn"

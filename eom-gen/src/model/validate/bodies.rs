@@ -23,7 +23,8 @@ impl Ctx<'_> {
             geometry: Vec::new(),
             span: Span::default(),
         }];
-        bodies[0].geometry = self.geometries(&spec.ground_geometry, &[f("ground_geometry")], "ground");
+        bodies[0].geometry =
+            self.geometries(&spec.ground_geometry, &[f("ground_geometry")], "ground");
         let mut seen: HashMap<&str, usize> = HashMap::new();
         for (k, b) in spec.bodies.iter().enumerate() {
             let path = [f("bodies"), i(k)];
