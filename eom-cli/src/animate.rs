@@ -74,7 +74,7 @@ pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Erro
         )));
     }
     let mut meshes = Meshes::default();
-    let bodies = bodies_json(&scene, &mut meshes)?;
+    let bodies = bodies_json(sys, &scene, &mut meshes)?;
     let ground_geometry = shapes_json(&scene.ground_geometry, "ground", &mut meshes)?;
     let mut data = String::new();
     let _ = write!(
@@ -159,7 +159,26 @@ fn shapes_json(
         .collect()
 }
 
-fn bodies_json(scene: &Scene, meshes: &mut Meshes) -> Result<String, Error> {
+fn bodies_json(
+    sys: &eom_gen::system::System,
+    scene: &Scene,
+    meshes: &mut Meshes,
+) -> Result<String, Error> {
+    // Names as the user wrote them (a URDF's `link 1`, `joint_0.0`).
+    let body_label = |name: &str| {
+        sys.bodies
+            .iter()
+            .find(|b| b.name == name)
+            .and_then(|b| b.label.clone())
+            .unwrap_or_else(|| name.to_string())
+    };
+    let joint_label = |name: &str| {
+        sys.joints
+            .iter()
+            .find(|j| j.name == name)
+            .and_then(|j| j.label.clone())
+            .unwrap_or_else(|| name.to_string())
+    };
     let list: Vec<serde_json::Value> = scene
         .bodies
         .iter()
@@ -167,7 +186,9 @@ fn bodies_json(scene: &Scene, meshes: &mut Meshes) -> Result<String, Error> {
             let geometry = shapes_json(&b.geometry, &b.name, meshes)?;
             Ok(serde_json::json!({
                 "name": b.name,
+                "label": body_label(&b.name),
                 "joint": b.joint,
+                "jointLabel": joint_label(&b.joint),
                 "parent": b.parent,
                 "jp": b.joint_on_parent,
                 "jb": b.joint_on_body,

@@ -276,6 +276,8 @@ pub enum FlexSource {
 pub struct BodyInfo {
     /// Name (`ground` for body 0).
     pub name: String,
+    /// The name as written, if the model gives one (`label`).
+    pub label: Option<String>,
     /// Mass, kg (zero for ground).
     pub mass: Option<Quantity>,
     /// Centre of mass in body axes, m.
@@ -420,6 +422,8 @@ pub enum Motion {
 pub struct JointInfo {
     /// Name.
     pub name: String,
+    /// The name as written, if the model gives one (`label`).
+    pub label: Option<String>,
     /// Kind and axes.
     pub kind: JointType,
     /// Parent body.
@@ -946,6 +950,56 @@ impl System {
             Some((false, _)) => InitialValue::NotFree,
             None => InitialValue::Unknown,
         }
+    }
+
+    /// The coordinates `q` as the user would name them: a coordinate of
+    /// a joint with a `label` (a URDF joint renamed to an identifier) is
+    /// named after the label (`joint_0.0` for `joint_0_0`, `base.0_x` for
+    /// `base_0_x`), any other by its name.
+    pub fn coordinate_labels(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for b in self.coordinate_blocks() {
+            let names = b.coordinate_names();
+            match b {
+                Block::Joint(j) => {
+                    for n in names {
+                        out.push(match (&j.label, n.strip_prefix(j.name.as_str())) {
+                            (Some(l), Some(rest)) => format!("{l}{rest}"),
+                            _ => n.clone(),
+                        });
+                    }
+                }
+                Block::Elastic(_) => out.extend(names.iter().cloned()),
+            }
+        }
+        out
+    }
+
+    /// The coordinates, bodies and joints whose names were made
+    /// identifiers, with the names as written (`label`s): `(kind, name,
+    /// label)`, kind `"coordinate"`, `"body"` or `"joint"`.
+    pub fn renamed(&self) -> Vec<(&'static str, String, String)> {
+        let mut out = Vec::new();
+        for (n, l) in self
+            .coordinate_names()
+            .into_iter()
+            .zip(self.coordinate_labels())
+        {
+            if n != l {
+                out.push(("coordinate", n.to_string(), l));
+            }
+        }
+        for b in &self.bodies {
+            if let Some(l) = &b.label {
+                out.push(("body", b.name.clone(), l.clone()));
+            }
+        }
+        for j in &self.joints {
+            if let Some(l) = &j.label {
+                out.push(("joint", j.name.clone(), l.clone()));
+            }
+        }
+        out
     }
 
     /// Names of the position coordinates `q`, in order.

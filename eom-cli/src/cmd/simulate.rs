@@ -377,7 +377,9 @@ fn plot_run(csv: &str, svg: &str, sys: &eom_gen::system::System) -> Result<(), E
     crate::history::derive_columns(&mut table);
     let units = crate::history::model_units(sys);
     let panels = crate::history::default_panels(&table, &sys.coordinate_names(), &units);
-    let text = crate::history::svg(&table, &panels, &units, &sys.name).map_err(|e| fail(&e))?;
+    let labels = crate::history::model_labels(sys);
+    let text =
+        crate::history::svg(&table, &panels, &units, &labels, &sys.name).map_err(|e| fail(&e))?;
     crate::output::write_file(svg, &text)?;
     eprintln!("plot written to {svg}");
     Ok(())

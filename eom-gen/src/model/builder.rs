@@ -123,6 +123,7 @@ impl Body {
     pub fn new(name: impl Into<String>, mass: impl Into<Num>) -> Self {
         Body {
             name: name.into(),
+            label: None,
             mass: Some(mass.into()),
             com: V3::default(),
             inertia: None,
@@ -196,6 +197,7 @@ impl Joint {
     ) -> Self {
         Joint {
             name: name.into(),
+            label: None,
             kind,
             parent: parent.into(),
             child: child.into(),

@@ -381,6 +381,11 @@ pub struct Parameter {
 pub struct Body {
     /// Unique name (`ground` is reserved).
     pub name: String,
+    /// The name as the user wrote it, when `name` had to become an
+    /// identifier (a URDF's `link 1`): shown by `check --json` and
+    /// animations.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
     /// Mass, kg (> 0); required for a rigid body, for a flexible one the
     /// mass of a rigid part fixed to its frame (default none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -843,6 +848,11 @@ impl JointKind {
 pub struct Joint {
     /// Unique name.
     pub name: String,
+    /// The name as the user wrote it, when `name` had to become an
+    /// identifier (a URDF's `joint_0.0`): shown by `check --json`, plots
+    /// and animations.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
     /// Kind and axes.
     pub kind: JointKind,
     /// Parent body (`ground` is the inertial body).

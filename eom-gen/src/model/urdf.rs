@@ -886,6 +886,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         let (com, inertia) = composite(ps, mass);
         spec_bodies.push(Body {
             name: links[l].name.clone(),
+            label: (links[l].name != links[l].raw).then(|| links[l].raw.clone()),
             mass: Some(mass.into()),
             com: v3(&com),
             inertia: inertia_spec(&inertia),
@@ -963,6 +964,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         };
         spec_joints.push(Joint {
             name: j.name.clone(),
+            label: (j.name != j.raw).then(|| j.raw.clone()),
             kind: kind_spec,
             parent: body_name(pb),
             child: links[c].name.clone(),

@@ -15,6 +15,7 @@ impl Ctx<'_> {
     pub(super) fn bodies(&mut self, spec: &Spec) -> Vec<BodyInfo> {
         let mut bodies = vec![BodyInfo {
             name: "ground".into(),
+            label: None,
             mass: None,
             com: None,
             inertia: None,
@@ -128,6 +129,7 @@ impl Ctx<'_> {
             }
             bodies.push(BodyInfo {
                 name: b.name.clone(),
+                label: b.label.clone(),
                 mass,
                 com,
                 inertia,
