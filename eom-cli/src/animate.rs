@@ -18,8 +18,13 @@ const THREE: &str = include_str!("../assets/three.bundle.min.js");
 const PAGE: &str = include_str!("../assets/animate.html");
 
 /// The page for the trajectory `table` (columns `t` and the coordinates)
-/// of `sys`.
-pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Error> {
+/// of `sys`, with the run's contact `events` (impacts flash the bodies
+/// they hit).
+pub fn html(
+    sys: &eom_gen::system::System,
+    table: &Table,
+    events: &[eom_sim::run::ContactEvent],
+) -> Result<String, Error> {
     let num = Numeric::new(sys).map_err(|e| Error::Refused(format!("{}: {e}", sys.name)))?;
     let scene = num
         .scene(sys)
@@ -79,13 +84,14 @@ pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Erro
     let mut data = String::new();
     let _ = write!(
         data,
-        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"t\":{times},\"poses\":{frames}}}",
+        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"impacts\":{},\"t\":{times},\"poses\":{frames}}}",
         serde_json::to_string(&sys.name).unwrap_or_default(),
         serde_json::to_string(&gravity(&num)).unwrap_or_default(),
         bodies,
         serde_json::to_string(&scene.ground).unwrap_or_else(|_| "[]".into()),
         serde_json::to_string(&ground_geometry).unwrap_or_else(|_| "[]".into()),
         serde_json::to_string(&meshes.list).unwrap_or_else(|_| "[]".into()),
+        serde_json::to_string(&impacts(sys, &scene, events)).unwrap_or_else(|_| "[]".into()),
     );
     // The data sits in a <script> element: no `</` may close it early.
     let data = data.replace("</", "<\\/");
@@ -94,6 +100,47 @@ pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Erro
         .replace("{{TITLE}}", &title)
         .replace("{{DATA}}", &data)
         .replace("{{THREE}}", THREE))
+}
+
+/// The impacts of the run: `[t, [scene body indices]]` for every impact
+/// event, the bodies of each contact row that took an impulse (a joint
+/// limit's child body; a sphere's body; both spheres' bodies).
+pub fn impacts(
+    sys: &eom_gen::system::System,
+    scene: &Scene,
+    events: &[eom_sim::run::ContactEvent],
+) -> Vec<(f64, Vec<usize>)> {
+    use eom_gen::system::ContactKind;
+    let scene_index = |id: usize| {
+        let name = &sys.bodies.get(id)?.name;
+        scene.bodies.iter().position(|b| &b.name == name)
+    };
+    events
+        .iter()
+        .filter(|e| matches!(e.kind, eom_sim::run::ContactEventKind::Impact) && e.t.is_finite())
+        .map(|e| {
+            let mut hit: Vec<usize> = e
+                .contacts
+                .iter()
+                .filter(|c| c.impulse > 0.0)
+                .filter_map(|c| {
+                    let name = c.contact.split('.').next().unwrap_or("");
+                    sys.contacts.iter().find(|k| k.name == name)
+                })
+                .flat_map(|k| match &k.kind {
+                    ContactKind::JointLimit { joint, .. } => {
+                        vec![sys.joints.get(*joint).map_or(0, |j| j.child)]
+                    }
+                    ContactKind::Plane { at, .. } => vec![at.body],
+                    ContactKind::Spheres { a, b, .. } => vec![a.body, b.body],
+                })
+                .filter_map(scene_index)
+                .collect();
+            hit.sort_unstable();
+            hit.dedup();
+            (e.t, hit)
+        })
+        .collect()
 }
 
 /// Gravity in world axes (zero vector if none).
@@ -317,7 +364,7 @@ mod tests {
         for (t, q1, q2) in frames {
             table.push(vec![t, q1, q2, 0.0]);
         }
-        let page = match html(sys, &table) {
+        let page = match html(sys, &table, &[]) {
             Ok(p) => p,
             Err(e) => panic!("{e}"),
         };
@@ -396,7 +443,7 @@ mod tests {
         let mut table = Table::new(vec!["t".into(), "joint_0_0".into()]);
         table.push(vec![0.0, 0.5]);
         table.push(vec![0.1, 0.6]);
-        let page = match html(sys, &table) {
+        let page = match html(sys, &table, &[]) {
             Ok(p) => p,
             Err(e) => panic!("{e}"),
         };
@@ -455,6 +502,38 @@ mod tests {
         assert_eq!(top, 150.0);
     }
 
+    /// An impact event of the bouncing ball's floor contact names the
+    /// ball (scene body 0) when its row took an impulse, and no body when
+    /// it took none.
+    #[test]
+    fn impacts_name_the_bodies_they_hit() {
+        let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/bouncing_ball.ron");
+        let Ok(opened) = crate::open::open(model, &Default::default(), &Default::default()) else {
+            panic!("cannot open {model}");
+        };
+        let sys = &opened.checked.system;
+        let Ok(scene) = Numeric::new(sys).and_then(|n| n.scene(sys)) else {
+            panic!("no scene");
+        };
+        let contact = |t: f64, impulse: f64| eom_sim::run::ContactEvent {
+            t,
+            kind: eom_sim::run::ContactEventKind::Impact,
+            contacts: vec![eom_sim::run::ContactImpulse {
+                contact: sys.contacts[0].name.clone(),
+                speed_before: -1.0,
+                speed_after: 0.5,
+                impulse,
+            }],
+            energy_before: 0.0,
+            energy_after: 0.0,
+            generalized_impulse: Vec::new(),
+            joint_impulses: Vec::new(),
+        };
+        let events = [contact(0.45, 1.0), contact(0.9, 0.0)];
+        let hits = impacts(sys, &scene, &events);
+        assert_eq!(hits, [(0.45, vec![0]), (0.9, vec![])]);
+    }
+
     /// A COLLADA mesh refuses the page, saying what to do.
     #[test]
     fn collada_is_refused() {
@@ -473,7 +552,7 @@ mod tests {
         };
         let mut table = Table::new(vec!["t".into(), "j".into()]);
         table.push(vec![0.0, 0.0]);
-        let out = html(&opened.checked.system, &table);
+        let out = html(&opened.checked.system, &table, &[]);
         let _ = std::fs::remove_dir_all(&dir);
         match out {
             Err(e) => assert!(e.to_string().contains("COLLADA"), "{e}"),

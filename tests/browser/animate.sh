@@ -5,7 +5,8 @@
 # meshes), opens each headless at t = 0 and t = 1 s (the page honours
 # `#t=SECONDS`), requires no console error and no uncaught exception, and
 # checks that both screenshots show the mechanism and differ
-# (tests/browser/png_check.py).
+# (tests/browser/png_check.py); and that the bouncing ball flashes at its
+# impact and not before.
 #   tests/browser/animate.sh            (from the repository root)
 # EOM_GEN=path/to/eom-gen uses that binary instead of `cargo run`.
 set -eu
@@ -55,3 +56,10 @@ check pendulum
 gen animate eom-gen/tests/urdf/visual_pkg/robots/visuals.urdf --interpret \
     --q0 1.2 --t-end 2 -o "$out/visuals.html"
 check visuals
+# Contacts flash on impact: the bouncing ball's first impact is at
+# t = √(2·1 m/9.81 m/s²) = 0.4515 s; a red halo at t = 0.5, none at 0.3.
+gen animate models/bouncing_ball.ron --interpret --t-end 1 -o "$out/ball.html"
+shot "$out/ball.html" 0.5 "$out/ball-impact.png"
+shot "$out/ball.html" 0.3 "$out/ball-before.png"
+python3 "$here/png_check.py" --flash "$out/ball-impact.png" "$out/ball-before.png"
+echo "ball: the impact flashes"

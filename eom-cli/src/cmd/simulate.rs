@@ -314,7 +314,7 @@ fn simulate(
             None => Ok(()),
         };
         if let (Ok(()), Some(html)) = (&drawn, pictures.html) {
-            drawn = animate_run(csv, html, sys);
+            drawn = animate_run(csv, html, sys, &r.contact_events);
         }
         if user_csv.is_none() {
             let _ = std::fs::remove_file(csv);
@@ -353,12 +353,17 @@ pub struct Pictures<'a> {
 }
 
 /// `simulate --html`: the animation page of the run's CSV.
-fn animate_run(csv: &str, html: &str, sys: &eom_gen::system::System) -> Result<(), ExitCode> {
+fn animate_run(
+    csv: &str,
+    html: &str,
+    sys: &eom_gen::system::System,
+    events: &[eom_sim::run::ContactEvent],
+) -> Result<(), ExitCode> {
     let text = std::fs::read_to_string(csv)
         .map_err(|e| fail(&Error::io(csv, format!("cannot read the trajectory: {e}"))))?;
     let table = eom_sim::table::Table::from_csv(&text)
         .map_err(|e| fail(&Error::Format(format!("{csv}: {e}"))))?;
-    let page = crate::animate::html(sys, &table).map_err(|e| fail(&e))?;
+    let page = crate::animate::html(sys, &table, events).map_err(|e| fail(&e))?;
     crate::output::write_file(html, &page)?;
     eprintln!(
         "animation written to {html} ({} frames, {} bytes)",
