@@ -42,6 +42,30 @@ pub fn html(
         .iter()
         .map(|n| column(n))
         .collect::<Result<Vec<_>, _>>()?;
+    // Cables: their nodes' positions per frame (columns `CABLE.nodeK.x`,
+    // `.y`, `.z` of the run's table), drawn as the deformed chain.
+    let mut cables = Vec::new();
+    for c in &sys.cables {
+        let mut cols = Vec::new();
+        for k in 0.. {
+            let at = |a: &str| {
+                let name = format!("{}.node{k}.{a}", c.name);
+                table.header.iter().position(|h| *h == name)
+            };
+            match (at("x"), at("y"), at("z")) {
+                (Some(x), Some(y), Some(z)) => cols.extend([x, y, z]),
+                _ => break,
+            }
+        }
+        if cols.len() < 6 {
+            return Err(Error::Format(format!(
+                "the trajectory has no node positions of cable `{}` (`{}.node0.x`, …)",
+                c.name, c.name
+            )));
+        }
+        cables.push((c.name.clone(), cols));
+    }
+    let mut cable_frames = String::from("[");
     let mut frames = String::from("[");
     let mut times = String::from("[");
     let mut q = vec![0.0; q_cols.len()];
@@ -56,7 +80,16 @@ pub fn html(
         if k > 0 {
             frames.push(',');
             times.push(',');
+            cable_frames.push(',');
         }
+        cable_frames.push('[');
+        for (j, &c) in cables.iter().flat_map(|(_, cols)| cols).enumerate() {
+            if j > 0 {
+                cable_frames.push(',');
+            }
+            cable_frames.push_str(&number(row[c])?);
+        }
+        cable_frames.push(']');
         times.push_str(&number(t)?);
         frames.push('[');
         for (i, p) in poses.iter().enumerate() {
@@ -72,6 +105,11 @@ pub fn html(
     }
     frames.push(']');
     times.push(']');
+    cable_frames.push(']');
+    let cable_list: Vec<serde_json::Value> = cables
+        .iter()
+        .map(|(name, cols)| serde_json::json!({ "name": name, "nodes": cols.len() / 3 }))
+        .collect();
     if table.rows.is_empty() {
         return Err(Error::Refused(format!(
             "{}: the run recorded no frames to animate",
@@ -84,7 +122,7 @@ pub fn html(
     let mut data = String::new();
     let _ = write!(
         data,
-        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"impacts\":{},\"t\":{times},\"poses\":{frames}}}",
+        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"impacts\":{},\"cables\":{},\"cableFrames\":{cable_frames},\"t\":{times},\"poses\":{frames}}}",
         serde_json::to_string(&sys.name).unwrap_or_default(),
         serde_json::to_string(&gravity(&num)).unwrap_or_default(),
         bodies,
@@ -92,6 +130,7 @@ pub fn html(
         serde_json::to_string(&ground_geometry).unwrap_or_else(|_| "[]".into()),
         serde_json::to_string(&meshes.list).unwrap_or_else(|_| "[]".into()),
         serde_json::to_string(&impacts(sys, &scene, events)).unwrap_or_else(|_| "[]".into()),
+        serde_json::to_string(&cable_list).unwrap_or_else(|_| "[]".into()),
     );
     // The data sits in a <script> element: no `</` may close it early.
     let data = data.replace("</", "<\\/");

@@ -2,7 +2,8 @@
 # The animation page in a real browser: installs Debian's chromium if
 # missing, writes the pages of 2 s runs of the double pendulum (drawn from
 # its joint frames) and of a URDF with every kind of `<visual>` (shapes and
-# meshes), opens each headless at t = 0 and t = 1 s (the page honours
+# meshes) and of the crane's rope (a cable's deformed shape on a rigid
+# boom), opens each headless at t = 0 and t = 1 s (the page honours
 # `#t=SECONDS`), requires no console error and no uncaught exception, and
 # checks that both screenshots show the mechanism and differ
 # (tests/browser/png_check.py); and that the bouncing ball flashes at its
@@ -56,6 +57,10 @@ check pendulum
 gen animate eom-gen/tests/urdf/visual_pkg/robots/visuals.urdf --interpret \
     --q0 1.2 --t-end 2 -o "$out/visuals.html"
 check visuals
+# A cable's deformed shape: the crane's rope (ANCF nodes, their line) on
+# its rigid boom.
+gen animate models/ancf/crane_rope.ron --t-end 1 -o "$out/crane.html"
+check crane
 # Contacts flash on impact: the bouncing ball's first impact is at
 # t = √(2·1 m/9.81 m/s²) = 0.4515 s; a red halo at t = 0.5, none at 0.3.
 gen animate models/bouncing_ball.ron --interpret --t-end 1 -o "$out/ball.html"

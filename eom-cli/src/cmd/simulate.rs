@@ -208,10 +208,9 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 9] = [
+    let refused: [(&str, bool); 8] = [
         ("--plot", a.plot.is_some()),
         ("--events-csv", a.events_csv.is_some()),
-        ("--html", a.html.is_some()),
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--q0", a.initial.q0.is_some()),
@@ -225,7 +224,7 @@ fn simulate_cables(
                 "{option} does not apply to `{}`, a model with cables: it runs generalized-α \
                  (fixed step, or step control with --rtol/--atol) or rk4 (fixed step); its \
                  options are --t-end, --dt, --rtol, --atol, --integrator generalized-alpha|rk4, \
-                 --rho-inf, --param, --csv, --every and --json",
+                 --rho-inf, --param, --csv, --every, --html and --json",
                 checked.system.name
             ));
         }
@@ -251,12 +250,39 @@ fn simulate_cables(
             let rtol = a.rtol.unwrap_or(1e-6);
             eom_sim::large::StepControl::new(rtol, a.atol.unwrap_or(rtol))
         }),
-        record: a.csv.is_some(),
+        record: a.csv.is_some() || a.html.is_some(),
         every: a.every,
     };
-    match crate::ancf::simulate_cmd(checked, &run, a.csv.as_deref(), a.json) {
+    // The page reads the nodes back from the CSV (a temporary one when
+    // the user asked for none).
+    let csv = a.csv.clone().or_else(|| {
+        a.html.as_ref().map(|_| {
+            std::env::temp_dir()
+                .join(format!(
+                    "eom-html-{}-{}.csv",
+                    checked.system.name,
+                    std::process::id()
+                ))
+                .display()
+                .to_string()
+        })
+    });
+    let code = match crate::ancf::simulate_cmd(checked, &run, csv.as_deref(), a.json) {
         Ok(code) => code,
-        Err(e) => fail(&e),
+        Err(e) => return fail(&e),
+    };
+    let drawn = match (&a.html, &csv) {
+        (Some(html), Some(path)) => animate_run(path, html, &checked.system, &[]),
+        _ => Ok(()),
+    };
+    if a.csv.is_none()
+        && let Some(path) = &csv
+    {
+        let _ = std::fs::remove_file(path);
+    }
+    match drawn {
+        Ok(()) => code,
+        Err(code) => code,
     }
 }
 
