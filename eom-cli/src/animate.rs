@@ -9,7 +9,8 @@
 //! rounded to 6 decimals. The frames are the rows of the run's CSV.
 
 use crate::error::Error;
-use eom_gen::mech::numeric::{Numeric, Scene};
+use eom_gen::mech::numeric::{Numeric, PlacedShape, Scene};
+use eom_gen::system::Shape;
 use eom_sim::table::Table;
 use std::fmt::Write;
 
@@ -17,8 +18,13 @@ const THREE: &str = include_str!("../assets/three.bundle.min.js");
 const PAGE: &str = include_str!("../assets/animate.html");
 
 /// The page for the trajectory `table` (columns `t` and the coordinates)
-/// of `sys`.
-pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Error> {
+/// of `sys`, with the run's contact `events` (impacts flash the bodies
+/// they hit).
+pub fn html(
+    sys: &eom_gen::system::System,
+    table: &Table,
+    events: &[eom_sim::run::ContactEvent],
+) -> Result<String, Error> {
     let num = Numeric::new(sys).map_err(|e| Error::Refused(format!("{}: {e}", sys.name)))?;
     let scene = num
         .scene(sys)
@@ -36,6 +42,30 @@ pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Erro
         .iter()
         .map(|n| column(n))
         .collect::<Result<Vec<_>, _>>()?;
+    // Cables: their nodes' positions per frame (columns `CABLE.nodeK.x`,
+    // `.y`, `.z` of the run's table), drawn as the deformed chain.
+    let mut cables = Vec::new();
+    for c in &sys.cables {
+        let mut cols = Vec::new();
+        for k in 0.. {
+            let at = |a: &str| {
+                let name = format!("{}.node{k}.{a}", c.name);
+                table.header.iter().position(|h| *h == name)
+            };
+            match (at("x"), at("y"), at("z")) {
+                (Some(x), Some(y), Some(z)) => cols.extend([x, y, z]),
+                _ => break,
+            }
+        }
+        if cols.len() < 6 {
+            return Err(Error::Format(format!(
+                "the trajectory has no node positions of cable `{}` (`{}.node0.x`, …)",
+                c.name, c.name
+            )));
+        }
+        cables.push((c.name.clone(), cols));
+    }
+    let mut cable_frames = String::from("[");
     let mut frames = String::from("[");
     let mut times = String::from("[");
     let mut q = vec![0.0; q_cols.len()];
@@ -50,7 +80,16 @@ pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Erro
         if k > 0 {
             frames.push(',');
             times.push(',');
+            cable_frames.push(',');
         }
+        cable_frames.push('[');
+        for (j, &c) in cables.iter().flat_map(|(_, cols)| cols).enumerate() {
+            if j > 0 {
+                cable_frames.push(',');
+            }
+            cable_frames.push_str(&number(row[c])?);
+        }
+        cable_frames.push(']');
         times.push_str(&number(t)?);
         frames.push('[');
         for (i, p) in poses.iter().enumerate() {
@@ -66,20 +105,32 @@ pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Erro
     }
     frames.push(']');
     times.push(']');
+    cable_frames.push(']');
+    let cable_list: Vec<serde_json::Value> = cables
+        .iter()
+        .map(|(name, cols)| serde_json::json!({ "name": name, "nodes": cols.len() / 3 }))
+        .collect();
     if table.rows.is_empty() {
         return Err(Error::Refused(format!(
             "{}: the run recorded no frames to animate",
             sys.name
         )));
     }
+    let mut meshes = Meshes::default();
+    let bodies = bodies_json(sys, &scene, &mut meshes)?;
+    let ground_geometry = shapes_json(&scene.ground_geometry, "ground", &mut meshes)?;
     let mut data = String::new();
     let _ = write!(
         data,
-        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"t\":{times},\"poses\":{frames}}}",
+        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"impacts\":{},\"cables\":{},\"cableFrames\":{cable_frames},\"t\":{times},\"poses\":{frames}}}",
         serde_json::to_string(&sys.name).unwrap_or_default(),
         serde_json::to_string(&gravity(&num)).unwrap_or_default(),
-        bodies_json(&scene),
+        bodies,
         serde_json::to_string(&scene.ground).unwrap_or_else(|_| "[]".into()),
+        serde_json::to_string(&ground_geometry).unwrap_or_else(|_| "[]".into()),
+        serde_json::to_string(&meshes.list).unwrap_or_else(|_| "[]".into()),
+        serde_json::to_string(&impacts(sys, &scene, events)).unwrap_or_else(|_| "[]".into()),
+        serde_json::to_string(&cable_list).unwrap_or_else(|_| "[]".into()),
     );
     // The data sits in a <script> element: no `</` may close it early.
     let data = data.replace("</", "<\\/");
@@ -90,19 +141,140 @@ pub fn html(sys: &eom_gen::system::System, table: &Table) -> Result<String, Erro
         .replace("{{THREE}}", THREE))
 }
 
+/// The impacts of the run: `[t, [scene body indices]]` for every impact
+/// event, the bodies of each contact row that took an impulse (a joint
+/// limit's child body; a sphere's body; both spheres' bodies).
+pub fn impacts(
+    sys: &eom_gen::system::System,
+    scene: &Scene,
+    events: &[eom_sim::run::ContactEvent],
+) -> Vec<(f64, Vec<usize>)> {
+    use eom_gen::system::ContactKind;
+    let scene_index = |id: usize| {
+        let name = &sys.bodies.get(id)?.name;
+        scene.bodies.iter().position(|b| &b.name == name)
+    };
+    events
+        .iter()
+        .filter(|e| matches!(e.kind, eom_sim::run::ContactEventKind::Impact) && e.t.is_finite())
+        .map(|e| {
+            let mut hit: Vec<usize> = e
+                .contacts
+                .iter()
+                .filter(|c| c.impulse > 0.0)
+                .filter_map(|c| {
+                    let name = c.contact.split('.').next().unwrap_or("");
+                    sys.contacts.iter().find(|k| k.name == name)
+                })
+                .flat_map(|k| match &k.kind {
+                    ContactKind::JointLimit { joint, .. } => {
+                        vec![sys.joints.get(*joint).map_or(0, |j| j.child)]
+                    }
+                    ContactKind::Plane { at, .. } => vec![at.body],
+                    ContactKind::Spheres { a, b, .. } => vec![a.body, b.body],
+                })
+                .filter_map(scene_index)
+                .collect();
+            hit.sort_unstable();
+            hit.dedup();
+            (e.t, hit)
+        })
+        .collect()
+}
+
 /// Gravity in world axes (zero vector if none).
 fn gravity(num: &Numeric) -> [f64; 3] {
     num.tree().gravity.0
 }
 
-fn bodies_json(scene: &Scene) -> String {
+/// The meshes of the page, each file once (base64 of little-endian
+/// `f32` positions and `u32` triangle indices).
+#[derive(Default)]
+struct Meshes {
+    index: std::collections::HashMap<std::path::PathBuf, usize>,
+    list: Vec<serde_json::Value>,
+}
+
+impl Meshes {
+    fn get(&mut self, path: &std::path::Path) -> Result<usize, String> {
+        if let Some(&k) = self.index.get(path) {
+            return Ok(k);
+        }
+        let m = crate::mesh::read(path)?;
+        let v: Vec<u8> = m.positions.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let i: Vec<u8> = m.indices.iter().flat_map(|x| x.to_le_bytes()).collect();
+        self.list.push(serde_json::json!({
+            "v": crate::mesh::base64(&v),
+            "i": crate::mesh::base64(&i),
+        }));
+        self.index.insert(path.to_path_buf(), self.list.len() - 1);
+        Ok(self.list.len() - 1)
+    }
+}
+
+/// The shapes of `owner` for the page: kind and sizes, origin and unit
+/// quaternion in the body, colour; a mesh by its index in `meshes`.
+fn shapes_json(
+    shapes: &[PlacedShape],
+    owner: &str,
+    meshes: &mut Meshes,
+) -> Result<Vec<serde_json::Value>, Error> {
+    shapes
+        .iter()
+        .map(|s| {
+            let mut g = match &s.shape {
+                Shape::Box(size) => serde_json::json!({ "box": size }),
+                Shape::Cylinder { radius, length } => {
+                    serde_json::json!({ "cylinder": [radius, length] })
+                }
+                Shape::Sphere(r) => serde_json::json!({ "sphere": r }),
+                Shape::Mesh { file, path, scale } => {
+                    let k = meshes
+                        .get(path)
+                        .map_err(|e| Error::Refused(format!("`{owner}`: mesh `{file}`: {e}")))?;
+                    serde_json::json!({ "mesh": k, "scale": scale })
+                }
+            };
+            g["p"] = serde_json::json!(s.origin);
+            g["q"] = serde_json::json!(quaternion(&s.rotation));
+            if let Some(c) = s.color {
+                g["color"] = serde_json::json!(c);
+            }
+            Ok(g)
+        })
+        .collect()
+}
+
+fn bodies_json(
+    sys: &eom_gen::system::System,
+    scene: &Scene,
+    meshes: &mut Meshes,
+) -> Result<String, Error> {
+    // Names as the user wrote them (a URDF's `link 1`, `joint_0.0`).
+    let body_label = |name: &str| {
+        sys.bodies
+            .iter()
+            .find(|b| b.name == name)
+            .and_then(|b| b.label.clone())
+            .unwrap_or_else(|| name.to_string())
+    };
+    let joint_label = |name: &str| {
+        sys.joints
+            .iter()
+            .find(|j| j.name == name)
+            .and_then(|j| j.label.clone())
+            .unwrap_or_else(|| name.to_string())
+    };
     let list: Vec<serde_json::Value> = scene
         .bodies
         .iter()
         .map(|b| {
-            serde_json::json!({
+            let geometry = shapes_json(&b.geometry, &b.name, meshes)?;
+            Ok(serde_json::json!({
                 "name": b.name,
+                "label": body_label(&b.name),
                 "joint": b.joint,
+                "jointLabel": joint_label(&b.joint),
                 "parent": b.parent,
                 "jp": b.joint_on_parent,
                 "jb": b.joint_on_body,
@@ -112,10 +284,11 @@ fn bodies_json(scene: &Scene) -> String {
                 "mass": b.mass,
                 "markers": b.markers,
                 "loops": b.loop_joints,
-            })
+                "geometry": geometry,
+            }))
         })
-        .collect();
-    serde_json::to_string(&list).unwrap_or_else(|_| "[]".into())
+        .collect::<Result<_, Error>>()?;
+    Ok(serde_json::to_string(&list).unwrap_or_else(|_| "[]".into()))
 }
 
 /// `x` with 6 decimals, trailing zeros dropped; a value that is not
@@ -230,7 +403,7 @@ mod tests {
         for (t, q1, q2) in frames {
             table.push(vec![t, q1, q2, 0.0]);
         }
-        let page = match html(sys, &table) {
+        let page = match html(sys, &table, &[]) {
             Ok(p) => p,
             Err(e) => panic!("{e}"),
         };
@@ -290,6 +463,143 @@ mod tests {
         assert_eq!(sys.graph.cut_joints().len(), 1);
         let held: usize = scene.bodies.iter().map(|b| b.loop_joints.len()).sum();
         assert_eq!((held, scene.ground.len()), (2, 0));
+    }
+
+    /// The page of a URDF with every kind of `<visual>`: each shape on
+    /// its body (the welded base's box on the ground), each mesh file once,
+    /// and the binary STL pyramid decoded back: 5 shared vertices, 6
+    /// triangles, in mm as in the file (the scale 0.001 is the shape's).
+    #[test]
+    fn urdf_visuals_page() {
+        let model = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../eom-gen/tests/urdf/visual_pkg/robots/visuals.urdf"
+        );
+        let Ok(opened) = crate::open::open(model, &Default::default(), &Default::default()) else {
+            panic!("cannot open {model}");
+        };
+        let sys = &opened.checked.system;
+        let mut table = Table::new(vec!["t".into(), "joint_0_0".into()]);
+        table.push(vec![0.0, 0.5]);
+        table.push(vec![0.1, 0.6]);
+        let page = match html(sys, &table, &[]) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        };
+        let start = page.find(r#"type="application/json">"#).map(|i| i + 24);
+        let data = start.and_then(|s| Some(&page[s..s + page[s..].find("</script>")?]));
+        let data: serde_json::Value = match data.map(serde_json::from_str) {
+            Some(Ok(v)) => v,
+            other => panic!("the page's data does not parse: {other:?}"),
+        };
+        let shapes = &data["bodies"][0]["geometry"];
+        let kinds: Vec<&str> = shapes
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|g| {
+                        ["box", "cylinder", "sphere", "mesh"]
+                            .into_iter()
+                            .find(|k| g.get(k).is_some())
+                    })
+                    .collect()
+            })
+            .unwrap_or_default();
+        assert_eq!(kinds, ["cylinder", "sphere", "mesh", "mesh"]);
+        assert_eq!(shapes[2]["mesh"], 0);
+        assert_eq!(shapes[3]["mesh"], 1);
+        assert_eq!(
+            data["groundGeometry"][0]["box"],
+            serde_json::json!([0.3, 0.3, 0.1])
+        );
+        assert_eq!(data["meshes"].as_array().map(Vec::len), Some(2));
+        let decode = |s: &serde_json::Value| -> Vec<u8> {
+            let s = s.as_str().unwrap_or("");
+            let a = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+            let sextets: Vec<u32> = s
+                .bytes()
+                .filter(|&c| c != b'=')
+                .filter_map(|c| a.iter().position(|&x| x == c).map(|p| p as u32))
+                .collect();
+            let mut out = Vec::new();
+            for c in sextets.chunks(4) {
+                let n = c
+                    .iter()
+                    .enumerate()
+                    .fold(0u32, |n, (k, &x)| n | (x << (18 - 6 * k)));
+                out.extend(&n.to_be_bytes()[1..c.len()]);
+            }
+            out
+        };
+        let v = decode(&data["meshes"][0]["v"]);
+        let i = decode(&data["meshes"][0]["i"]);
+        assert_eq!((v.len() / 12, i.len() / 12), (5, 6), "vertices, triangles");
+        let top = v
+            .chunks(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .fold(f32::MIN, f32::max);
+        assert_eq!(top, 150.0);
+    }
+
+    /// An impact event of the bouncing ball's floor contact names the
+    /// ball (scene body 0) when its row took an impulse, and no body when
+    /// it took none.
+    #[test]
+    fn impacts_name_the_bodies_they_hit() {
+        let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/bouncing_ball.ron");
+        let Ok(opened) = crate::open::open(model, &Default::default(), &Default::default()) else {
+            panic!("cannot open {model}");
+        };
+        let sys = &opened.checked.system;
+        let Ok(scene) = Numeric::new(sys).and_then(|n| n.scene(sys)) else {
+            panic!("no scene");
+        };
+        let contact = |t: f64, impulse: f64| eom_sim::run::ContactEvent {
+            t,
+            kind: eom_sim::run::ContactEventKind::Impact,
+            contacts: vec![eom_sim::run::ContactImpulse {
+                contact: sys.contacts[0].name.clone(),
+                speed_before: -1.0,
+                speed_after: 0.5,
+                impulse,
+                tangential_impulse: [0.0; 2],
+                tangential_speed_before: [0.0; 2],
+                tangential_speed_after: [0.0; 2],
+            }],
+            energy_before: 0.0,
+            energy_after: 0.0,
+            generalized_impulse: Vec::new(),
+            joint_impulses: Vec::new(),
+        };
+        let events = [contact(0.45, 1.0), contact(0.9, 0.0)];
+        let hits = impacts(sys, &scene, &events);
+        assert_eq!(hits, [(0.45, vec![0]), (0.9, vec![])]);
+    }
+
+    /// A COLLADA mesh refuses the page, saying what to do.
+    #[test]
+    fn collada_is_refused() {
+        let dir = std::env::temp_dir().join(format!("eom-dae-{}", std::process::id()));
+        let _ = std::fs::create_dir_all(&dir);
+        let _ = std::fs::write(dir.join("arm.dae"), "<COLLADA/>");
+        let model = dir.join("m.ron");
+        let _ = std::fs::write(
+            &model,
+            r#"(name: "m", bodies: [(name: "b", mass: 1, geometry: [Mesh(file: "arm.dae")])],
+               joints: [(name: "j", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "b")])"#,
+        );
+        let path = model.display().to_string();
+        let Ok(opened) = crate::open::open(&path, &Default::default(), &Default::default()) else {
+            panic!("cannot open {path}");
+        };
+        let mut table = Table::new(vec!["t".into(), "j".into()]);
+        table.push(vec![0.0, 0.0]);
+        let out = html(&opened.checked.system, &table, &[]);
+        let _ = std::fs::remove_dir_all(&dir);
+        match out {
+            Err(e) => assert!(e.to_string().contains("COLLADA"), "{e}"),
+            Ok(_) => panic!("a COLLADA mesh was accepted"),
+        }
     }
 
     #[test]

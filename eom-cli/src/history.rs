@@ -36,6 +36,31 @@ pub fn derive_columns(table: &mut Table) {
     }
 }
 
+/// Names of columns as the user wrote them (from the model: the joints
+/// a URDF import renamed, `joint_0_0` → `joint_0.0`), for legends.
+pub type Labels = Vec<(String, String)>;
+
+/// The renamed joints of a model: `(identifier, as written)`.
+pub fn model_labels(sys: &eom_gen::system::System) -> Labels {
+    sys.joints
+        .iter()
+        .filter_map(|j| Some((j.name.clone(), j.label.clone()?)))
+        .collect()
+}
+
+/// A column's name in a legend: a renamed joint's identifier in it
+/// replaced by the name as written (the longest that matches).
+pub fn label_of(column: &str, labels: &Labels) -> String {
+    let best = labels
+        .iter()
+        .filter(|(name, _)| column.contains(name.as_str()))
+        .max_by_key(|(name, _)| name.len());
+    match best {
+        Some((name, label)) => column.replacen(name.as_str(), label, 1),
+        None => column.to_string(),
+    }
+}
+
 /// The unit of a column: the model's (`units`), else by the name the
 /// runtime gives it, else none.
 pub fn unit(column: &str, units: &Units) -> String {
@@ -169,7 +194,13 @@ pub fn default_panels(table: &Table, coordinates: &[&str], units: &Units) -> Vec
 }
 
 /// The panels drawn against `t` as one SVG document titled `title`.
-pub fn svg(table: &Table, panels: &[Panel], units: &Units, title: &str) -> Result<String, Error> {
+pub fn svg(
+    table: &Table,
+    panels: &[Panel],
+    units: &Units,
+    labels: &Labels,
+    title: &str,
+) -> Result<String, Error> {
     let t = table.column("t").ok_or_else(|| {
         Error::Format(format!(
             "the file has no column `t` to plot against; its columns: {}",
@@ -177,7 +208,7 @@ pub fn svg(table: &Table, panels: &[Panel], units: &Units, title: &str) -> Resul
         ))
     })?;
     let mut out = String::new();
-    draw(table, &t, panels, units, title, &mut out)
+    draw(table, &t, panels, labels, units, title, &mut out)
         .map_err(|e| Error::Plot(format!("plotting {title}: {e}")))?;
     Ok(out)
 }
@@ -204,6 +235,7 @@ fn draw(
     table: &Table,
     t: &[f64],
     panels: &[Panel],
+    labels: &Labels,
     units: &Units,
     title: &str,
     out: &mut String,
@@ -260,6 +292,7 @@ fn draw(
         for (j, (name, pts)) in series.into_iter().enumerate() {
             let color = crate::plot::COLORS[j % crate::plot::COLORS.len()].to_rgba();
             let u = &panel_units[j];
+            let name = label_of(&name, labels);
             let label = if shared || u.is_empty() {
                 name
             } else {
@@ -323,12 +356,30 @@ mod tests {
         assert_eq!(p.map(|p| p.len()).ok(), Some(2));
     }
 
+    /// A URDF joint renamed to an identifier is named as written in the
+    /// legend.
+    #[test]
+    fn legends_name_joints_as_written() {
+        let labels: Labels = vec![
+            ("joint_0_0".into(), "joint_0.0".into()),
+            ("j".into(), "J!".into()),
+        ];
+        assert_eq!(label_of("joint_0_0", &labels), "joint_0.0");
+        assert_eq!(label_of("joint_0_0_dot", &labels), "joint_0.0_dot");
+        assert_eq!(label_of("energy", &labels), "energy");
+        let t = table();
+        let panels = parse_panels(&["theta".into()], &t).unwrap_or_default();
+        let labels: Labels = vec![("theta".into(), "θ (shoulder.1)".into())];
+        let s = svg(&t, &panels, &Units::new(), &labels, "test").unwrap_or_default();
+        assert!(s.contains("θ (shoulder.1)"), "{s}");
+    }
+
     #[test]
     fn a_plot_has_its_panels_units_and_legend() {
         let t = table();
         let panels = parse_panels(&["theta,energy+energy_drift".into()], &t).unwrap_or_default();
         let units: Units = [("theta".to_string(), "rad".to_string())].into();
-        let s = svg(&t, &panels, &units, "test").unwrap_or_default();
+        let s = svg(&t, &panels, &units, &Labels::new(), "test").unwrap_or_default();
         for text in ["rad", "energy_drift", "t, s", "\nJ\n"] {
             assert!(s.contains(text), "no `{text}` in the SVG");
         }

@@ -13,6 +13,7 @@ mod compiled;
 mod error;
 mod history;
 mod linearize_sweep;
+mod mesh;
 mod open;
 mod output;
 mod plot;

@@ -24,6 +24,10 @@ pub fn json(checked: &Checked) -> Value {
         "nq": sys.nq(),
         "nu": sys.nu(),
         "coordinate_names": sys.coordinate_names(),
+        // The coordinates as the user wrote them (a URDF joint `joint_0.0`
+        // made the identifier `joint_0_0`); the same as `coordinate_names`
+        // when nothing was renamed.
+        "coordinate_labels": sys.coordinate_labels(),
         "speed_names": sys.speed_names(),
         "q0": sys.q0(),
         "u0": sys.u0(),
@@ -34,6 +38,10 @@ pub fn json(checked: &Checked) -> Value {
         "grubler_elastic": sys.grubler.elastic,
         "grubler_space": if sys.grubler.planar { "planar" } else { "spatial" },
         "body_names": sys.bodies.iter().skip(1).map(|b| b.name.as_str()).collect::<Vec<_>>(),
+        // Every renamed coordinate, body and joint: identifier → as written.
+        "original_names": sys.renamed().into_iter().map(|(kind, name, label)| json!({
+            "kind": kind, "name": name, "original": label,
+        })).collect::<Vec<_>>(),
         "tree": sys.graph.tree_joints().iter().map(|&j| {
             let joint = &sys.joints[j];
             json!({

@@ -378,7 +378,7 @@ fn animate_writes_one_page_of_poses() {
     );
     let _ = std::fs::remove_file(csv);
     let _ = std::fs::remove_file(html);
-    // --html is simulate's; a model with cables has no animation yet.
+    // --html is simulate's.
     let out = eom_gen(&[
         "animate",
         "models/pendulum.ron",
@@ -392,16 +392,55 @@ fn animate_writes_one_page_of_poses() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("writes its page to -o"), "{err}");
-    let out = eom_gen(&[
-        "simulate",
-        "models/ancf/cantilever.ron",
+}
+
+/// A cable's deformed shape is in the page: the falling ANCF pendulum
+/// (16 elements, 17 nodes, pinned at the origin, released along +x) has
+/// its 17 nodes per frame; the pinned node stays at the origin and at
+/// t = 0 the nodes lie on the undeformed rod, x = 1.2 k/16, y = z = 0.
+#[test]
+fn animate_draws_a_cable_deformed() {
+    let html = temp_path("cable.html");
+    ok(&[
+        "animate",
+        "models/ancf/pendulum.ron",
         "--t-end",
-        "0.01",
-        "--html",
-        "c.html",
+        "0.1",
+        "--dt",
+        "1e-3",
+        "-o",
+        &html,
     ]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("--html does not apply"), "{err}");
-    assert!(!std::path::Path::new("c.html").exists());
+    let page = std::fs::read_to_string(&html).expect("html");
+    let _ = std::fs::remove_file(&html);
+    let start = page.find(r#"type="application/json">"#).map(|i| i + 24);
+    let data = start.and_then(|s| Some(&page[s..s + page[s..].find("</script>")?]));
+    let v: serde_json::Value = serde_json::from_str(data.unwrap_or("")).expect("the page's data");
+    assert_eq!(
+        v["cables"],
+        serde_json::json!([{ "name": "rod", "nodes": 17 }])
+    );
+    let frames = v["cableFrames"].as_array().cloned().unwrap_or_default();
+    assert_eq!(frames.len(), v["t"].as_array().map_or(0, Vec::len));
+    assert_eq!(frames.len(), 11, "every 10 ms over 0.1 s");
+    let at = |f: &serde_json::Value, k: usize| -> Vec<f64> {
+        (0..3)
+            .map(|c| f[3 * k + c].as_f64().unwrap_or(f64::NAN))
+            .collect()
+    };
+    for k in 0..17 {
+        let p = at(&frames[0], k);
+        let want = [1.2 * k as f64 / 16.0, 0.0, 0.0];
+        for (a, b) in p.iter().zip(want) {
+            assert!((a - b).abs() < 1e-6, "node {k} at t = 0: {p:?}");
+        }
+    }
+    for f in &frames {
+        assert!(
+            at(f, 0).iter().all(|x| x.abs() < 1e-6),
+            "the pinned node moved"
+        );
+    }
+    // The tip falls under gravity (−y).
+    assert!(at(&frames[10], 16)[1] < -1e-3);
 }

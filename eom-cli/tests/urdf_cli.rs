@@ -237,3 +237,70 @@ fn joint_limits_by_default_and_left_off_on_request() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Names as the user wrote them: the URDF's joint `joint_0.0` and link
+/// `link 1` are the identifiers `joint_0_0` and `link_1` in the model, and
+/// `check --json` gives the originals (`coordinate_labels`,
+/// `original_names`); `simulate --plot` names the joint as written in the
+/// legend; the animation page labels the body and joint as written.
+#[test]
+fn renamed_joints_keep_their_names() {
+    let urdf = path("visual_pkg/robots/visuals.urdf");
+    let o = eom_gen_cli(&["check", "--json", &urdf]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+    assert_eq!(v["coordinate_names"], serde_json::json!(["joint_0_0"]));
+    assert_eq!(v["coordinate_labels"], serde_json::json!(["joint_0.0"]));
+    let renamed: Vec<(String, String, String)> = v["original_names"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .map(|x| {
+                    let s = |k: &str| x[k].as_str().unwrap_or("").to_string();
+                    (s("kind"), s("name"), s("original"))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let want = [
+        ("coordinate", "joint_0_0", "joint_0.0"),
+        ("body", "link_1", "link 1"),
+        ("joint", "joint_0_0", "joint_0.0"),
+    ]
+    .map(|(a, b, c)| (a.to_string(), b.to_string(), c.to_string()));
+    assert_eq!(renamed, want);
+
+    let dir = std::env::temp_dir().join(format!("eom-names-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("tmp");
+    let svg = dir.join("run.svg").to_string_lossy().to_string();
+    let html = dir.join("run.html").to_string_lossy().to_string();
+    let o = eom_gen_cli(&[
+        "simulate",
+        "--interpret",
+        &urdf,
+        "--q0",
+        "1",
+        "--t-end",
+        "0.2",
+        "--plot",
+        &svg,
+        "--html",
+        &html,
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let svg = std::fs::read_to_string(&svg).expect("svg");
+    assert!(
+        svg.contains("joint_0.0"),
+        "the legend names the joint as written"
+    );
+    let page = std::fs::read_to_string(&html).expect("html");
+    assert!(
+        page.contains(r#""label":"link 1""#),
+        "the page labels the body"
+    );
+    assert!(
+        page.contains(r#""jointLabel":"joint_0.0""#),
+        "and its joint"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

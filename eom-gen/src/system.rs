@@ -276,6 +276,8 @@ pub enum FlexSource {
 pub struct BodyInfo {
     /// Name (`ground` for body 0).
     pub name: String,
+    /// The name as written, if the model gives one (`label`).
+    pub label: Option<String>,
     /// Mass, kg (zero for ground).
     pub mass: Option<Quantity>,
     /// Centre of mass in body axes, m.
@@ -287,8 +289,49 @@ pub struct BodyInfo {
     /// The deformable part of a flexible body; `None` for a rigid one
     /// (whose `mass`, `com` and `inertia` are then the whole body).
     pub flexible: Option<Box<FlexInfo>>,
+    /// What an animation draws of it (for ground: the model's
+    /// `ground_geometry`).
+    pub geometry: Vec<GeometryInfo>,
     /// Where the body is defined.
     pub span: Span,
+}
+
+/// A shape drawn for a body (`eom-gen animate`; no dynamics), at the
+/// parameters' defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GeometryInfo {
+    /// The shape.
+    pub shape: Shape,
+    /// Where it sits on the body.
+    pub frame: FrameInfo,
+    /// Colour `(r, g, b)` in `[0, 1]`, if given.
+    pub color: Option<[f64; 3]>,
+}
+
+/// A shape of [`GeometryInfo`], lengths in m.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// Edge lengths along the frame's axes, centred.
+    Box([f64; 3]),
+    /// Radius and length along the frame's z, centred.
+    Cylinder {
+        /// Radius.
+        radius: f64,
+        /// Length.
+        length: f64,
+    },
+    /// Radius, centred.
+    Sphere(f64),
+    /// A mesh file.
+    Mesh {
+        /// The path as written in the model.
+        file: String,
+        /// The path to read it from (relative to the model file's
+        /// directory, or as a URDF import resolved it).
+        path: std::path::PathBuf,
+        /// Scale per axis.
+        scale: [f64; 3],
+    },
 }
 
 /// A joint kind with its unit axes (as written and normalised at defaults).
@@ -379,6 +422,8 @@ pub enum Motion {
 pub struct JointInfo {
     /// Name.
     pub name: String,
+    /// The name as written, if the model gives one (`label`).
+    pub label: Option<String>,
     /// Kind and axes.
     pub kind: JointType,
     /// Parent body.
@@ -908,6 +953,56 @@ impl System {
             Some((false, _)) => InitialValue::NotFree,
             None => InitialValue::Unknown,
         }
+    }
+
+    /// The coordinates `q` as the user would name them: a coordinate of
+    /// a joint with a `label` (a URDF joint renamed to an identifier) is
+    /// named after the label (`joint_0.0` for `joint_0_0`, `base.0_x` for
+    /// `base_0_x`), any other by its name.
+    pub fn coordinate_labels(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for b in self.coordinate_blocks() {
+            let names = b.coordinate_names();
+            match b {
+                Block::Joint(j) => {
+                    for n in names {
+                        out.push(match (&j.label, n.strip_prefix(j.name.as_str())) {
+                            (Some(l), Some(rest)) => format!("{l}{rest}"),
+                            _ => n.clone(),
+                        });
+                    }
+                }
+                Block::Elastic(_) => out.extend(names.iter().cloned()),
+            }
+        }
+        out
+    }
+
+    /// The coordinates, bodies and joints whose names were made
+    /// identifiers, with the names as written (`label`s): `(kind, name,
+    /// label)`, kind `"coordinate"`, `"body"` or `"joint"`.
+    pub fn renamed(&self) -> Vec<(&'static str, String, String)> {
+        let mut out = Vec::new();
+        for (n, l) in self
+            .coordinate_names()
+            .into_iter()
+            .zip(self.coordinate_labels())
+        {
+            if n != l {
+                out.push(("coordinate", n.to_string(), l));
+            }
+        }
+        for b in &self.bodies {
+            if let Some(l) = &b.label {
+                out.push(("body", b.name.clone(), l.clone()));
+            }
+        }
+        for j in &self.joints {
+            if let Some(l) = &j.label {
+                out.push(("joint", j.name.clone(), l.clone()));
+            }
+        }
+        out
     }
 
     /// Names of the position coordinates `q`, in order.

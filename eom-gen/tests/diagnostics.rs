@@ -101,6 +101,16 @@ fn regression_spring_damper_rest_len_is_rejected_not_a_zero_rest_length() {
     assert!(out.contains("did you mean `rest_length`?"), "got:\n{out}");
 }
 
+// Geometry (drawn by `animate`): every bad value at once, each at its
+// place; an unknown field inside a shape; a mesh file that is not there
+// is a warning (the dynamics do not need it).
+pin!(
+    geometry_bad_values,
+    "inertia: Diag(0.02, 0.02, 0.005), markers" => "inertia: Diag(0.02, 0.02, 0.005), geometry: [Box(size: (0.1, 0, \"l\")), Cylinder(radius: -1, length: \"l\"), Mesh(file: \"link.step\"), Mesh(file: \"link.stl\", scale: (1, 0, 1)), Sphere(radius: 0.05, color: (2, 0, 0))], markers"
+);
+pin!(geometry_unknown_field, "inertia: Diag(0.02, 0.02, 0.005), markers" => "inertia: Diag(0.02, 0.02, 0.005), geometry: [Sphere(radius: 0.05, colour: (1, 0, 0))], markers");
+pin!(geometry_missing_mesh, "inertia: Diag(0.02, 0.02, 0.005), markers" => "inertia: Diag(0.02, 0.02, 0.005), geometry: [Mesh(file: \"meshes/link2.stl\")], markers");
+
 // Names.
 pin!(unknown_body, "child: \"link2\"" => "child: \"lnk2\"");
 pin!(duplicate_body, "(name: \"link2\", mass" => "(name: \"link1\", mass");

@@ -2,7 +2,8 @@
 """Checks two screenshots of the animation page (stdlib only): each shows
 the mechanism (enough pixels of the links' blue and the masses' orange in
 the 3-D view) and the view differs between them (the mechanism moved).
-Usage: png_check.py A.png B.png"""
+Usage: png_check.py A.png B.png
+       png_check.py --flash AT_IMPACT.png BEFORE.png   (the impact halo)"""
 import struct
 import sys
 import zlib
@@ -60,5 +61,23 @@ def main(a, b):
         sys.exit("the two screenshots show the same picture: nothing moved")
 
 
+def flash(at_impact, before):
+    """The impact halo (translucent red) is drawn at an impact and not
+    before it."""
+    counts = []
+    for path in (at_impact, before):
+        img = read_png(path)
+        view = len(img) - 50
+        n = sum(1 for row in img[:view] for (r, g, b) in row
+                if r > 220 and 100 < g < 190 and abs(g - b) < 25)
+        print(f"{path}: {n} halo pixels")
+        counts.append(n)
+    if counts[0] < 100 or counts[1] > 10:
+        sys.exit("the impact does not flash (or something flashes without one)")
+
+
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2])
+    if sys.argv[1] == "--flash":
+        flash(sys.argv[2], sys.argv[3])
+    else:
+        main(sys.argv[1], sys.argv[2])

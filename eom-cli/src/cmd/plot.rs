@@ -40,14 +40,17 @@ pub fn run(a: &PlotArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         Ok(p) => p,
         Err(e) => return fail(&e),
     };
-    let units = match &a.model {
+    let (units, labels) = match &a.model {
         Some(m) => match crate::open::open(m, urdf, &Vary::default()) {
-            Ok(o) => crate::history::model_units(&o.checked.system),
+            Ok(o) => (
+                crate::history::model_units(&o.checked.system),
+                crate::history::model_labels(&o.checked.system),
+            ),
             Err(code) => return code,
         },
         None => Default::default(),
     };
-    match crate::history::svg(&table, &panels, &units, &a.csv) {
+    match crate::history::svg(&table, &panels, &units, &labels, &a.csv) {
         Ok(svg) => match crate::output::write_file(&a.output, &svg) {
             Ok(()) => {
                 eprintln!("plot written to {}", a.output);

@@ -225,11 +225,10 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 10] = [
+    let refused: [(&str, bool); 9] = [
         ("--plot", a.plot.is_some()),
         ("--jacobian", a.jacobian.is_some()),
         ("--events-csv", a.events_csv.is_some()),
-        ("--html", a.html.is_some()),
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--q0", a.initial.q0.is_some()),
@@ -243,7 +242,7 @@ fn simulate_cables(
                 "{option} does not apply to `{}`, a model with cables: it runs generalized-α \
                  (fixed step, or step control with --rtol/--atol) or rk4 (fixed step); its \
                  options are --t-end, --dt, --rtol, --atol, --integrator generalized-alpha|rk4, \
-                 --rho-inf, --param, --csv, --every and --json",
+                 --rho-inf, --param, --csv, --every, --html and --json",
                 checked.system.name
             ));
         }
@@ -269,12 +268,39 @@ fn simulate_cables(
             let rtol = a.rtol.unwrap_or(1e-6);
             eom_sim::large::StepControl::new(rtol, a.atol.unwrap_or(rtol))
         }),
-        record: a.csv.is_some(),
+        record: a.csv.is_some() || a.html.is_some(),
         every: a.every,
     };
-    match crate::ancf::simulate_cmd(checked, &run, a.csv.as_deref(), a.json) {
+    // The page reads the nodes back from the CSV (a temporary one when
+    // the user asked for none).
+    let csv = a.csv.clone().or_else(|| {
+        a.html.as_ref().map(|_| {
+            std::env::temp_dir()
+                .join(format!(
+                    "eom-html-{}-{}.csv",
+                    checked.system.name,
+                    std::process::id()
+                ))
+                .display()
+                .to_string()
+        })
+    });
+    let code = match crate::ancf::simulate_cmd(checked, &run, csv.as_deref(), a.json) {
         Ok(code) => code,
-        Err(e) => fail(&e),
+        Err(e) => return fail(&e),
+    };
+    let drawn = match (&a.html, &csv) {
+        (Some(html), Some(path)) => animate_run(path, html, &checked.system, &[]),
+        _ => Ok(()),
+    };
+    if a.csv.is_none()
+        && let Some(path) = &csv
+    {
+        let _ = std::fs::remove_file(path);
+    }
+    match drawn {
+        Ok(()) => code,
+        Err(code) => code,
     }
 }
 
@@ -353,7 +379,7 @@ fn simulate(
             None => Ok(()),
         };
         if let (Ok(()), Some(html)) = (&drawn, pictures.html) {
-            drawn = animate_run(csv, html, sys);
+            drawn = animate_run(csv, html, sys, &r.contact_events);
         }
         if user_csv.is_none() {
             let _ = std::fs::remove_file(csv);
@@ -395,12 +421,17 @@ pub struct Pictures<'a> {
 }
 
 /// `simulate --html`: the animation page of the run's CSV.
-fn animate_run(csv: &str, html: &str, sys: &eom_gen::system::System) -> Result<(), ExitCode> {
+fn animate_run(
+    csv: &str,
+    html: &str,
+    sys: &eom_gen::system::System,
+    events: &[eom_sim::run::ContactEvent],
+) -> Result<(), ExitCode> {
     let text = std::fs::read_to_string(csv)
         .map_err(|e| fail(&Error::io(csv, format!("cannot read the trajectory: {e}"))))?;
     let table = eom_sim::table::Table::from_csv(&text)
         .map_err(|e| fail(&Error::Format(format!("{csv}: {e}"))))?;
-    let page = crate::animate::html(sys, &table).map_err(|e| fail(&e))?;
+    let page = crate::animate::html(sys, &table, events).map_err(|e| fail(&e))?;
     crate::output::write_file(html, &page)?;
     eprintln!(
         "animation written to {html} ({} frames, {} bytes)",
@@ -419,7 +450,9 @@ fn plot_run(csv: &str, svg: &str, sys: &eom_gen::system::System) -> Result<(), E
     crate::history::derive_columns(&mut table);
     let units = crate::history::model_units(sys);
     let panels = crate::history::default_panels(&table, &sys.coordinate_names(), &units);
-    let text = crate::history::svg(&table, &panels, &units, &sys.name).map_err(|e| fail(&e))?;
+    let labels = crate::history::model_labels(sys);
+    let text =
+        crate::history::svg(&table, &panels, &units, &labels, &sys.name).map_err(|e| fail(&e))?;
     crate::output::write_file(svg, &text)?;
     eprintln!("plot written to {svg}");
     Ok(())

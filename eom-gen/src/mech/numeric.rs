@@ -327,6 +327,11 @@ impl Numeric {
                 mass: m,
                 markers,
                 loop_joints: Vec::new(),
+                geometry: info
+                    .geometry
+                    .iter()
+                    .map(|g| placed(&low, g))
+                    .collect::<Result<_, _>>()?,
             });
         }
         let mut ground = Vec::new();
@@ -338,9 +343,15 @@ impl Numeric {
                 }
             }
         }
+        let ground_geometry = sys.bodies[0]
+            .geometry
+            .iter()
+            .map(|g| placed(&low, g))
+            .collect::<Result<_, _>>()?;
         Ok(Scene {
             bodies: out,
             ground,
+            ground_geometry,
         })
     }
 
@@ -723,6 +734,34 @@ pub struct SceneBody {
     pub markers: Vec<(String, [f64; 3])>,
     /// Where loop-closing (cut) joints hold it.
     pub loop_joints: Vec<[f64; 3]>,
+    /// Its shapes, placed on it.
+    pub geometry: Vec<PlacedShape>,
+}
+
+/// A shape of a body's `geometry` where it sits on the body.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlacedShape {
+    /// The shape.
+    pub shape: crate::system::Shape,
+    /// Its frame's origin in body axes.
+    pub origin: [f64; 3],
+    /// Its frame's axes in body axes (rows).
+    pub rotation: [[f64; 3]; 3],
+    /// Colour, if given.
+    pub color: Option<[f64; 3]>,
+}
+
+fn placed(
+    low: &super::lower::Lowering<'_, f64>,
+    g: &crate::system::GeometryInfo,
+) -> Result<PlacedShape, MechError> {
+    let pose = low.frame(&g.frame)?;
+    Ok(PlacedShape {
+        shape: g.shape.clone(),
+        origin: pose.r.0,
+        rotation: pose.e.0,
+        color: g.color,
+    })
 }
 
 /// What an animation draws (see [`Numeric::scene`]).
@@ -732,4 +771,6 @@ pub struct Scene {
     pub bodies: Vec<SceneBody>,
     /// The points of ground (world coordinates) that cut joints hold.
     pub ground: Vec<[f64; 3]>,
+    /// Shapes fixed to the ground (world axes).
+    pub ground_geometry: Vec<PlacedShape>,
 }

@@ -39,6 +39,7 @@ impl ModelBuilder {
                 inertia_policy: Default::default(),
                 cables: Vec::new(),
                 contacts: Vec::new(),
+                ground_geometry: Vec::new(),
             },
         }
     }
@@ -122,12 +123,20 @@ impl Body {
     pub fn new(name: impl Into<String>, mass: impl Into<Num>) -> Self {
         Body {
             name: name.into(),
+            label: None,
             mass: Some(mass.into()),
             com: V3::default(),
             inertia: None,
             markers: Vec::new(),
             flexible: None,
+            geometry: Vec::new(),
         }
+    }
+
+    /// Adds a shape drawn by `eom-gen animate`.
+    pub fn geometry(mut self, g: Geometry) -> Self {
+        self.geometry.push(g);
+        self
     }
 
     /// Centre of mass in body axes.
@@ -188,6 +197,7 @@ impl Joint {
     ) -> Self {
         Joint {
             name: name.into(),
+            label: None,
             kind,
             parent: parent.into(),
             child: child.into(),

@@ -92,6 +92,7 @@ impl Loaded {
                     // place in the URDF; not again in the converted text.
                     checked.warnings.retain(|d| {
                         !d.message.starts_with("inertia of body")
+                            && !d.message.ends_with("is a ROS package path")
                             && !d.message.starts_with("the mass matrix is singular")
                     });
                     checked.urdf_warnings = Some(w.clone());

@@ -137,6 +137,10 @@ pub struct Spec {
     /// against world planes, spheres against spheres.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub contacts: Vec<Contact>,
+    /// Shapes drawn fixed to the ground by `eom-gen animate` (world axes;
+    /// a URDF's links welded to the ground).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ground_geometry: Vec<Geometry>,
 }
 
 /// A unilateral contact: a gap `g(q) ≥ 0` that the motion may close, then
@@ -384,6 +388,11 @@ pub struct Parameter {
 pub struct Body {
     /// Unique name (`ground` is reserved).
     pub name: String,
+    /// The name as the user wrote it, when `name` had to become an
+    /// identifier (a URDF's `link 1`): shown by `check --json` and
+    /// animations.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
     /// Mass, kg (> 0); required for a rigid body, for a flexible one the
     /// mass of a rigid part fixed to its frame (default none).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -402,6 +411,73 @@ pub struct Body {
     /// coordinates (issue #17); absent = rigid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub flexible: Option<Flexible>,
+    /// What `eom-gen animate` draws of the body (no dynamics: the mass and
+    /// inertia are the fields above); absent = links between its joint
+    /// frames and centre of mass.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub geometry: Vec<Geometry>,
+}
+
+/// A shape drawn for a body by `eom-gen animate`, in a frame of the body
+/// (no dynamics). Lengths in m.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Geometry {
+    /// A box centred on the frame's origin with edge lengths `size` along
+    /// its axes.
+    Box {
+        /// Edge lengths along the frame's x, y, z (each > 0), m.
+        size: V3,
+        /// Where the box sits on the body (default: the body frame).
+        #[serde(default, skip_serializing_if = "Frame::is_identity")]
+        frame: Frame,
+        /// Colour `(r, g, b)`, each in `[0, 1]`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        color: Option<(f64, f64, f64)>,
+    },
+    /// A cylinder along the frame's z axis, centred on its origin.
+    Cylinder {
+        /// Radius (> 0), m.
+        radius: Num,
+        /// Length along z (> 0), m.
+        length: Num,
+        /// Where the cylinder sits on the body (default: the body frame).
+        #[serde(default, skip_serializing_if = "Frame::is_identity")]
+        frame: Frame,
+        /// Colour `(r, g, b)`, each in `[0, 1]`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        color: Option<(f64, f64, f64)>,
+    },
+    /// A sphere centred on the frame's origin.
+    Sphere {
+        /// Radius (> 0), m.
+        radius: Num,
+        /// Where the sphere sits on the body (default: the body frame).
+        #[serde(default, skip_serializing_if = "Frame::is_identity")]
+        frame: Frame,
+        /// Colour `(r, g, b)`, each in `[0, 1]`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        color: Option<(f64, f64, f64)>,
+    },
+    /// A triangle mesh read from a file (STL binary or ASCII, OBJ; COLLADA
+    /// `.dae` is refused by `animate`), its vertices in the frame's axes
+    /// times `scale`.
+    Mesh {
+        /// The mesh file, relative to this model file (a URDF's
+        /// `package://` paths are resolved on import).
+        file: String,
+        /// Scale per axis (each ≠ 0; default `(1, 1, 1)`): a mesh in mm
+        /// is scaled by 0.001.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        scale: Option<V3>,
+        /// Where the mesh's origin sits on the body (default: the body
+        /// frame).
+        #[serde(default, skip_serializing_if = "Frame::is_identity")]
+        frame: Frame,
+        /// Colour `(r, g, b)`, each in `[0, 1]`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        color: Option<(f64, f64, f64)>,
+    },
 }
 
 /// How a flexible body deforms (floating frame of reference, Shabana ch. 5–6).
@@ -779,6 +855,11 @@ impl JointKind {
 pub struct Joint {
     /// Unique name.
     pub name: String,
+    /// The name as the user wrote it, when `name` had to become an
+    /// identifier (a URDF's `joint_0.0`): shown by `check --json`, plots
+    /// and animations.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
     /// Kind and axes.
     pub kind: JointKind,
     /// Parent body (`ground` is the inertial body).

@@ -39,8 +39,8 @@
 
 use super::read::Format;
 use super::spec::{
-    Body, Constraint, Contact, Force, Frame, Inertia, InertiaPolicy, Joint, JointKind, Num,
-    Orientation, Spec, V3,
+    Body, Constraint, Contact, Force, Frame, Geometry, Inertia, InertiaPolicy, Joint, JointKind,
+    Num, Orientation, Spec, V3,
 };
 use crate::diag::did_you_mean;
 use crate::diag::{Diagnostic, Report, Source, Span};
@@ -224,6 +224,15 @@ struct Link {
     name: String,
     span: Span,
     inertial: Option<Inertial>,
+    /// Its `<visual>` shapes, each in the link frame.
+    visuals: Vec<Visual>,
+}
+
+/// A `<visual>`: where it sits on its link and the shape (its `frame`
+/// field is filled in once the link's place on its body is known).
+struct Visual {
+    origin: Placement,
+    shape: Geometry,
 }
 
 struct Mimic {
@@ -579,9 +588,16 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         match n.tag_name().name() {
             "link" => link_nodes.push(n),
             "joint" => joint_nodes.push(n),
+            "material" => {} // named colours, read below
             other => *ignored.entry(format!("<{other}>")).or_default() += 1,
         }
     }
+    // Named colours: `<material name><color rgba/></material>` under `<robot>`.
+    let materials: HashMap<String, (f64, f64, f64)> = robot_el
+        .children()
+        .filter(|n| n.is_element() && n.tag_name().name() == "material")
+        .filter_map(|m| Some((m.attribute("name")?.to_string(), rgb(m)?)))
+        .collect();
     let mut taken = Vec::new();
     let mut link_index: HashMap<String, usize> = HashMap::new();
     for n in &link_nodes {
@@ -596,15 +612,18 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
             );
             continue;
         }
-        for g in ["visual", "collision"] {
-            let count = n
-                .children()
-                .filter(|c| c.is_element() && c.tag_name().name() == g)
-                .count();
-            if count > 0 {
-                *ignored.entry(format!("<{g}>")).or_default() += count;
-            }
+        let count = n
+            .children()
+            .filter(|c| c.is_element() && c.tag_name().name() == "collision")
+            .count();
+        if count > 0 {
+            *ignored.entry("<collision>".to_string()).or_default() += count;
         }
+        let visuals = n
+            .children()
+            .filter(|c| c.is_element() && c.tag_name().name() == "visual")
+            .filter_map(|v| cx.visual(&raw, v, &materials, &src.path))
+            .collect();
         let inertial = child(*n, "inertial").and_then(|i| cx.inertial(&raw, i));
         link_index.insert(raw.clone(), links.len());
         links.push(Link {
@@ -612,6 +631,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
             name: String::new(),
             span: cx.attr_span(*n, "name"),
             inertial,
+            visuals,
         });
     }
     let names = unique_names(links.iter().map(|l| l.raw.as_str()), &mut taken);
@@ -880,12 +900,28 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         let (com, inertia) = composite(ps, mass);
         spec_bodies.push(Body {
             name: links[l].name.clone(),
+            label: (links[l].name != links[l].raw).then(|| links[l].raw.clone()),
             mass: Some(mass.into()),
             com: v3(&com),
             inertia: inertia_spec(&inertia),
             markers: Vec::new(),
             flexible: None,
+            geometry: Vec::new(),
         });
+    }
+    // Visuals: on the body their link is part of, or on the ground.
+    let mut ground_geometry = Vec::new();
+    for (l, link) in links.iter().enumerate() {
+        let Some((b, pose)) = &assign[l] else {
+            continue;
+        };
+        for v in &link.visuals {
+            let g = with_frame(&v.shape, pose.then(&v.origin).frame());
+            match b {
+                Some(b) => spec_bodies[*b].geometry.push(g),
+                None => ground_geometry.push(g),
+            }
+        }
     }
 
     // Joints, forces, constraints.
@@ -942,6 +978,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         };
         spec_joints.push(Joint {
             name: j.name.clone(),
+            label: (j.name != j.raw).then(|| j.raw.clone()),
             kind: kind_spec,
             parent: body_name(pb),
             child: links[c].name.clone(),
@@ -1105,6 +1142,7 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         } else {
             InertiaPolicy::Strict
         },
+        ground_geometry,
     };
     // Always: positive masses do not make it positive definite (a point
     // mass on a joint axis).
@@ -1170,6 +1208,218 @@ pub fn convert_with(src: &Source, options: &Options) -> Result<Import, Report> {
         notes,
         warnings: cx.warnings,
     })
+}
+
+/// The `rgb` of a `<material>`'s `<color rgba>` (None if absent or bad:
+/// colour is decoration).
+fn rgb(m: Node<'_, '_>) -> Option<(f64, f64, f64)> {
+    let text = child(m, "color")?.attribute("rgba")?;
+    let v: Vec<f64> = text
+        .split_whitespace()
+        .map(str::parse::<f64>)
+        .collect::<Result<_, _>>()
+        .ok()?;
+    match v[..] {
+        [r, g, b, _] if [r, g, b].iter().all(|c| (0.0..=1.0).contains(c)) => Some((r, g, b)),
+        _ => None,
+    }
+}
+
+/// `g` with its frame replaced by `frame`.
+fn with_frame(g: &Geometry, frame: Frame) -> Geometry {
+    let mut g = g.clone();
+    match &mut g {
+        Geometry::Box { frame: f, .. }
+        | Geometry::Cylinder { frame: f, .. }
+        | Geometry::Sphere { frame: f, .. }
+        | Geometry::Mesh { frame: f, .. } => *f = frame,
+    }
+    g
+}
+
+/// A URDF mesh `filename` as a path relative to the URDF's directory
+/// (`urdf_dir`, as given): `package://PKG/REST` is `REST` under the
+/// nearest directory, going up from the URDF's, that is named `PKG` or
+/// has a subdirectory `PKG` (the layout of a ROS package and of
+/// example-robot-data); `file://PATH` is `PATH`; anything else is
+/// relative to the URDF already. `Err` says why a package path does not
+/// resolve.
+pub fn resolve_mesh(filename: &str, urdf_dir: &std::path::Path) -> Result<String, String> {
+    if let Some(p) = filename.strip_prefix("file://") {
+        return Ok(p.to_string());
+    }
+    let Some(rest) = filename.strip_prefix("package://") else {
+        return Ok(filename.to_string());
+    };
+    let (pkg, rel) = rest.split_once('/').unwrap_or((rest, ""));
+    let start = if urdf_dir.as_os_str().is_empty() {
+        std::path::Path::new(".")
+    } else {
+        urdf_dir
+    };
+    let abs = std::fs::canonicalize(start)
+        .map_err(|e| format!("the URDF's directory `{}`: {e}", start.display()))?;
+    let mut up = String::new();
+    for dir in abs.ancestors() {
+        let found = if dir.file_name().is_some_and(|n| n == pkg) {
+            Some(format!("{up}{rel}"))
+        } else if dir.join(pkg).is_dir() {
+            Some(format!("{up}{pkg}/{rel}"))
+        } else {
+            None
+        };
+        if let Some(found) = found
+            && urdf_dir.join(&found).is_file()
+        {
+            return Ok(found);
+        }
+        up += "../";
+    }
+    Err(format!(
+        "no directory `{pkg}` holding `{rel}` at or above `{}`, nor beside one of those directories",
+        abs.display()
+    ))
+}
+
+impl Ctx {
+    /// One `<visual>` of link `link` (None if it has no shape eom draws;
+    /// bad numbers are errors).
+    fn visual(
+        &mut self,
+        link: &str,
+        v: Node<'_, '_>,
+        materials: &HashMap<String, (f64, f64, f64)>,
+        urdf_path: &str,
+    ) -> Option<Visual> {
+        let origin = self.origin(v);
+        let color = child(v, "material")
+            .and_then(|m| rgb(m).or_else(|| materials.get(m.attribute("name")?).copied()));
+        let Some(g) = child(v, "geometry") else {
+            self.notes.push(format!(
+                "a `<visual>` of link `{link}` has no `<geometry>`: not drawn"
+            ));
+            return None;
+        };
+        let Some(shape) = g.children().find(|c| c.is_element()) else {
+            self.notes.push(format!(
+                "a `<visual>` of link `{link}` has an empty `<geometry>`: not drawn"
+            ));
+            return None;
+        };
+        let frame = Frame::default();
+        let positive = |cx: &mut Ctx, name: &str| -> Option<f64> {
+            let x = cx.numbers(shape, name, 1)?[0];
+            if x > 0.0 {
+                Some(x)
+            } else {
+                cx.error(
+                    cx.attr_span(shape, name),
+                    format!("`{name}` of a `<visual>` of link `{link}` is {x}"),
+                    format!("a {name} is positive, in m"),
+                );
+                None
+            }
+        };
+        let missing = |cx: &mut Ctx, name: &str| {
+            if shape.attribute(name).is_none() {
+                cx.error(
+                    tag_span(shape),
+                    format!("`<{}>` has no `{name}`", shape.tag_name().name()),
+                    format!("add `{name}=\"…\"` (see the URDF specification)"),
+                );
+            }
+        };
+        let geometry = match shape.tag_name().name() {
+            "box" => {
+                missing(self, "size");
+                let size = self.numbers(shape, "size", 3)?;
+                if size.iter().any(|x| *x <= 0.0) {
+                    self.error(
+                        self.attr_span(shape, "size"),
+                        format!("`size` of a `<visual>` box of link `{link}` is not positive"),
+                        "a box's edge lengths are positive, in m",
+                    );
+                    return None;
+                }
+                Geometry::Box {
+                    size: V3(size[0].into(), size[1].into(), size[2].into()),
+                    frame,
+                    color,
+                }
+            }
+            "cylinder" => {
+                missing(self, "radius");
+                missing(self, "length");
+                let (r, l) = (positive(self, "radius"), positive(self, "length"));
+                Geometry::Cylinder {
+                    radius: r?.into(),
+                    length: l?.into(),
+                    frame,
+                    color,
+                }
+            }
+            "sphere" => {
+                missing(self, "radius");
+                Geometry::Sphere {
+                    radius: positive(self, "radius")?.into(),
+                    frame,
+                    color,
+                }
+            }
+            "mesh" => {
+                let file = self.required(shape, "filename", "the mesh file")?;
+                let scale = match shape.attribute("scale") {
+                    None => None,
+                    Some(_) => {
+                        let s = self.numbers(shape, "scale", 3)?;
+                        if s.contains(&0.0) {
+                            self.error(
+                                self.attr_span(shape, "scale"),
+                                format!("`scale` of a `<visual>` mesh of link `{link}` has a 0"),
+                                "each scale factor is a number other than 0",
+                            );
+                            return None;
+                        }
+                        Some(V3(s[0].into(), s[1].into(), s[2].into()))
+                    }
+                };
+                let dir = std::path::Path::new(urdf_path)
+                    .parent()
+                    .unwrap_or(std::path::Path::new(""));
+                let file = match resolve_mesh(&file, dir) {
+                    Ok(f) => f,
+                    Err(why) => {
+                        self.warnings.push(
+                            Diagnostic::warning(
+                                self.attr_span(shape, "filename"),
+                                format!("mesh `{file}` of link `{link}` does not resolve: {why}"),
+                            )
+                            .with_help(
+                                "`eom-gen animate` refuses the model until it does: `package://PKG/…` is looked up in the directories at and above the URDF's, each itself named PKG or holding PKG (docs/model-format.md, URDF)",
+                            ),
+                        );
+                        file
+                    }
+                };
+                Geometry::Mesh {
+                    file,
+                    scale,
+                    frame,
+                    color,
+                }
+            }
+            other => {
+                self.notes.push(format!(
+                    "a `<visual>` `<{other}>` of link `{link}` is not drawn (boxes, cylinders, spheres and meshes are)"
+                ));
+                return None;
+            }
+        };
+        Some(Visual {
+            origin,
+            shape: geometry,
+        })
+    }
 }
 
 /// Reads one `<joint>` (None without a name; every problem is reported).

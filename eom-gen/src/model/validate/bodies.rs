@@ -15,13 +15,17 @@ impl Ctx<'_> {
     pub(super) fn bodies(&mut self, spec: &Spec) -> Vec<BodyInfo> {
         let mut bodies = vec![BodyInfo {
             name: "ground".into(),
+            label: None,
             mass: None,
             com: None,
             inertia: None,
             markers: Vec::new(),
             flexible: None,
+            geometry: Vec::new(),
             span: Span::default(),
         }];
+        bodies[0].geometry =
+            self.geometries(&spec.ground_geometry, &[f("ground_geometry")], "ground");
         let mut seen: HashMap<&str, usize> = HashMap::new();
         for (k, b) in spec.bodies.iter().enumerate() {
             let path = [f("bodies"), i(k)];
@@ -125,11 +129,13 @@ impl Ctx<'_> {
             }
             bodies.push(BodyInfo {
                 name: b.name.clone(),
+                label: b.label.clone(),
                 mass,
                 com,
                 inertia,
                 markers,
                 flexible,
+                geometry: self.geometries(&b.geometry, &join(&path, &[f("geometry")]), &b.name),
                 span: self.span(&path),
             });
         }

@@ -245,6 +245,7 @@ impl Ctx<'_> {
         }
         Some(JointInfo {
             name: j.name.clone(),
+            label: j.label.clone(),
             kind: kind?,
             parent: parent?,
             child: child?,

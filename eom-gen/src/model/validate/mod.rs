@@ -43,6 +43,7 @@ mod contacts;
 mod flex_sources;
 mod flexible;
 mod forces;
+mod geometry;
 mod joints;
 mod mobility;
 mod outputs;

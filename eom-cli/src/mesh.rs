@@ -1,0 +1,263 @@
+//! Triangle meshes for the animation page (`crate::animate`): STL (binary
+//! and ASCII) and Wavefront OBJ, read into shared vertices and triangles.
+//! COLLADA (`.dae`) is refused with a way out: its scene graph, units and
+//! up axis would need a reader of their own.
+
+use std::collections::HashMap;
+
+/// A triangle mesh: vertex positions `[x, y, z]` (as in the file, before
+/// any scale) and triangles as three vertex indices.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    /// Vertex positions, 3 per vertex.
+    pub positions: Vec<f32>,
+    /// Triangles, 3 indices per triangle.
+    pub indices: Vec<u32>,
+}
+
+impl Mesh {
+    /// Adds a vertex, sharing one already there at the same position.
+    fn vertex(&mut self, seen: &mut HashMap<[u32; 3], u32>, p: [f32; 3]) -> u32 {
+        let key = p.map(|x| (x + 0.0).to_bits());
+        *seen.entry(key).or_insert_with(|| {
+            self.positions.extend_from_slice(&p);
+            (self.positions.len() / 3 - 1) as u32
+        })
+    }
+
+    fn from_triangles(tris: impl Iterator<Item = [[f32; 3]; 3]>) -> Mesh {
+        let mut m = Mesh::default();
+        let mut seen = HashMap::new();
+        for t in tris {
+            for p in t {
+                let k = m.vertex(&mut seen, p);
+                m.indices.push(k);
+            }
+        }
+        m
+    }
+}
+
+/// Reads the mesh file at `path` (format by extension, any case).
+pub fn read(path: &std::path::Path) -> Result<Mesh, String> {
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let shown = path.display();
+    if ext == "dae" {
+        return Err(format!(
+            "`{shown}` is a COLLADA file, which eom does not read: convert it to STL or OBJ (e.g. `assimp export in.dae out.stl`, or MeshLab) and name that file instead"
+        ));
+    }
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read `{shown}`: {e}"))?;
+    let mesh = match ext.as_str() {
+        "stl" => stl(&bytes),
+        "obj" => obj(&String::from_utf8_lossy(&bytes)),
+        _ => Err("not an STL or OBJ file (by its extension)".to_string()),
+    }
+    .map_err(|e| format!("`{shown}`: {e}"))?;
+    if mesh.indices.is_empty() {
+        return Err(format!("`{shown}` has no triangles"));
+    }
+    if mesh.positions.iter().any(|x| !x.is_finite()) {
+        return Err(format!("`{shown}` has a vertex that is not finite"));
+    }
+    Ok(mesh)
+}
+
+/// An STL file: binary (80-byte header, count, 50 bytes per triangle) if
+/// its size says so, else ASCII (`solid … facet … vertex x y z …`).
+pub fn stl(bytes: &[u8]) -> Result<Mesh, String> {
+    if bytes.len() >= 84 {
+        let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;
+        if n.checked_mul(50).and_then(|b| b.checked_add(84)) == Some(bytes.len()) {
+            let f =
+                |o: usize| f32::from_le_bytes([bytes[o], bytes[o + 1], bytes[o + 2], bytes[o + 3]]);
+            let tris = (0..n).map(|k| {
+                let o = 84 + 50 * k + 12;
+                [0, 1, 2].map(|v| [0, 1, 2].map(|c| f(o + 12 * v + 4 * c)))
+            });
+            return Ok(Mesh::from_triangles(tris));
+        }
+    }
+    let text = std::str::from_utf8(bytes).map_err(|_| {
+        "neither a binary STL (its size does not match its triangle count) nor ASCII".to_string()
+    })?;
+    if !text.trim_start().starts_with("solid") {
+        return Err("neither a binary STL (its size does not match its triangle count) nor an ASCII one (`solid …`)".into());
+    }
+    let mut verts = Vec::new();
+    for (line_no, line) in text.lines().enumerate() {
+        let mut w = line.split_whitespace();
+        if w.next() == Some("vertex") {
+            let v: Vec<f32> = w.filter_map(|x| x.parse().ok()).collect();
+            let [x, y, z] = v[..] else {
+                return Err(format!(
+                    "line {}: a vertex needs three numbers",
+                    line_no + 1
+                ));
+            };
+            verts.push([x, y, z]);
+        }
+    }
+    if verts.len() % 3 != 0 {
+        return Err(format!("{} vertices: not whole triangles", verts.len()));
+    }
+    Ok(Mesh::from_triangles(
+        verts.chunks_exact(3).map(|t| [t[0], t[1], t[2]]),
+    ))
+}
+
+/// A Wavefront OBJ file: `v x y z` and `f a b c …` (polygons fanned into
+/// triangles; `a/b/c` takes the vertex index; negative indices count from
+/// the end).
+pub fn obj(text: &str) -> Result<Mesh, String> {
+    let mut pos: Vec<[f32; 3]> = Vec::new();
+    let mut m = Mesh::default();
+    let mut seen = HashMap::new();
+    for (line_no, line) in text.lines().enumerate() {
+        let at = || format!("line {}", line_no + 1);
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("v") => {
+                let v: Vec<f32> = w.take(3).filter_map(|x| x.parse().ok()).collect();
+                let [x, y, z] = v[..] else {
+                    return Err(format!("{}: a vertex needs three numbers", at()));
+                };
+                pos.push([x, y, z]);
+            }
+            Some("f") => {
+                let mut face = Vec::new();
+                for item in w {
+                    let first = item.split('/').next().unwrap_or("");
+                    let k: i64 = first
+                        .parse()
+                        .map_err(|_| format!("{}: face vertex `{item}` is not an index", at()))?;
+                    let n = pos.len() as i64;
+                    let k = if k < 0 { n + k } else { k - 1 };
+                    let p = usize::try_from(k)
+                        .ok()
+                        .and_then(|k| pos.get(k))
+                        .ok_or_else(|| {
+                            format!("{}: face vertex `{item}` is not a vertex so far", at())
+                        })?;
+                    face.push(*p);
+                }
+                if face.len() < 3 {
+                    return Err(format!("{}: a face needs three vertices", at()));
+                }
+                for j in 1..face.len() - 1 {
+                    for p in [face[0], face[j], face[j + 1]] {
+                        let k = m.vertex(&mut seen, p);
+                        m.indices.push(k);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(m)
+}
+
+/// Standard base64 (RFC 4648, with padding) of `bytes`.
+pub fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for c in bytes.chunks(3) {
+        let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for k in 0..4 {
+            if k <= c.len() {
+                out.push(char::from(A[(n >> (18 - 6 * k)) as usize & 63]));
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A unit tetrahedron in ASCII STL, binary STL and OBJ: four shared
+    /// vertices, four triangles, the same in every format.
+    #[test]
+    fn tetrahedron_in_every_format() {
+        let p = [
+            [0.0f32, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let tris = [[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+        let mut ascii = String::from("solid t\n");
+        let mut binary = vec![0u8; 80];
+        binary.extend_from_slice(&4u32.to_le_bytes());
+        let mut objtext = String::new();
+        for v in p {
+            objtext += &format!("v {} {} {}\n", v[0], v[1], v[2]);
+        }
+        for t in tris {
+            ascii += "facet normal 0 0 0\nouter loop\n";
+            binary.extend_from_slice(&[0u8; 12]);
+            for k in t {
+                ascii += &format!("vertex {} {} {}\n", p[k][0], p[k][1], p[k][2]);
+                for c in p[k] {
+                    binary.extend_from_slice(&c.to_le_bytes());
+                }
+            }
+            ascii += "endloop\nendfacet\n";
+            binary.extend_from_slice(&[0u8; 2]);
+            objtext += &format!("f {}/1 {} {}//3\n", t[0] + 1, t[1] + 1, t[2] as i64 - 4);
+        }
+        ascii += "endsolid t\n";
+        for m in [stl(ascii.as_bytes()), stl(&binary), obj(&objtext)] {
+            let m = match m {
+                Ok(m) => m,
+                Err(e) => panic!("{e}"),
+            };
+            assert_eq!(m.positions.len(), 12, "four shared vertices");
+            assert_eq!(m.indices.len(), 12, "four triangles");
+            let back: Vec<[f32; 3]> = m
+                .indices
+                .iter()
+                .map(|&k| {
+                    let k = k as usize * 3;
+                    [m.positions[k], m.positions[k + 1], m.positions[k + 2]]
+                })
+                .collect();
+            let want: Vec<[f32; 3]> = tris.iter().flatten().map(|&k| p[k]).collect();
+            assert_eq!(back, want);
+        }
+    }
+
+    #[test]
+    fn bad_meshes_are_errors() {
+        assert!(stl(b"not a mesh").is_err());
+        assert!(stl(b"solid x\nvertex 1 2\n").is_err());
+        assert!(obj("v 0 0 0\nf 1 2 3\n").is_err());
+        assert!(obj("v 0 0 0\nf 1 1\n").is_err());
+        assert!(obj("f a b c\n").is_err());
+        let dae = read(std::path::Path::new("robot.DAE"));
+        assert!(dae.is_err_and(|e| e.contains("COLLADA")));
+    }
+
+    #[test]
+    fn base64_of_rfc_4648_examples() {
+        for (raw, enc) in [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ] {
+            assert_eq!(base64(raw.as_bytes()), enc);
+        }
+    }
+}
