@@ -18,8 +18,10 @@ use crate::mech::Formulation;
 use crate::sym::{SymKind, Symbol};
 use lower::{Arg, Style, lower};
 
+mod loops;
 pub(crate) mod lower;
 mod names;
+pub use loops::LoopChoice;
 use crate::system::{Motion, System};
 pub use names::{is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
@@ -47,6 +49,11 @@ pub struct EmitOptions {
     /// only when compiling with FMA (`-C target-feature=+fma` or a
     /// `target-cpu` that has it); otherwise `mul_add` is a libm call.
     pub fma: bool,
+    /// Emit forward dynamics, the mass matrix, the bias and inverse
+    /// dynamics of long chains as loops over body steps
+    /// (`eom_gen::mech::looped`): where they pay (default), always (where
+    /// the model is such a chain) or never.
+    pub loops: LoopChoice,
 }
 
 impl Binding<'_> {
@@ -349,6 +356,39 @@ pub fn emit_tokens(
         quote!(#(#items)*)
     };
 
+    // Long chains as loops, where chosen: these functions are not lowered
+    // straight.
+    let chain_loops = match opts.loops {
+        LoopChoice::Never => None,
+        LoopChoice::Auto => f.loops.clone(),
+        LoopChoice::Always => f.loops.clone().or_else(|| {
+            crate::mech::looped::ChainLoops::build(sys, f.functions().collect())
+                .ok()
+                .flatten()
+        }),
+    };
+    let straight_ops: Vec<(Function, usize)> = crate::mech::looped::LOOPED
+        .iter()
+        .filter_map(|&g| f.program(g).map(|p| (g, p.op_count().total())))
+        .collect();
+    let mut looped: std::collections::BTreeMap<Function, loops::Looped> = chain_loops
+        .as_ref()
+        .map(|cl| loops::looped(cl, &straight_ops, opts.loops, opts.fma))
+        .unwrap_or_default()
+        .into_iter()
+        .collect();
+    let mut loop_items = TokenStream::new();
+    let mut take_loop = |g: Function| {
+        looped.remove(&g).map(|l| {
+            loop_items.extend(l.items);
+            l.method
+        })
+    };
+    let fd_loop = take_loop(Function::ForwardDynamics);
+    let mm_loop = take_loop(Function::MassMatrix);
+    let bias_loop = take_loop(Function::Bias);
+    let id_loop = take_loop(Function::InverseDynamics);
+
     // q̇ = N(q) u
     let args = [arg_q(), arg_u()];
     let Some(qdot_program) = f.program(Function::Qdot) else {
@@ -364,7 +404,7 @@ pub fn emit_tokens(
         }
     };
 
-    let fd_fn = f.program(Function::ForwardDynamics).map(|p| {
+    let fd_fn = fd_loop.or_else(|| f.program(Function::ForwardDynamics).map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
         let l = lower(&style, p, "forward_dynamics", &args);
         parts.extend(l.parts.clone());
@@ -381,8 +421,8 @@ pub fn emit_tokens(
                 #assign
             }
         }
-    });
-    let mm_fn = f.program(Function::MassMatrix).map(|p| {
+    }));
+    let mm_fn = mm_loop.or_else(|| f.program(Function::MassMatrix).map(|p| {
         let args = [arg_t(), arg_q()];
         let l = lower(&style, p, "mass_matrix", &args);
         parts.extend(l.parts.clone());
@@ -406,8 +446,8 @@ pub fn emit_tokens(
                 #assign
             }
         }
-    });
-    let bias_fn = f.program(Function::Bias).map(|p| {
+    }));
+    let bias_fn = bias_loop.or_else(|| f.program(Function::Bias).map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
         let l = lower(&style, p, "bias", &args);
         parts.extend(l.parts.clone());
@@ -418,8 +458,8 @@ pub fn emit_tokens(
                 #assign
             }
         }
-    });
-    let id_fn = f.program(Function::InverseDynamics).map(|p| {
+    }));
+    let id_fn = id_loop.or_else(|| f.program(Function::InverseDynamics).map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
         let l = lower(&style, p, "inverse_dynamics", &args);
         parts.extend(l.parts.clone());
@@ -430,7 +470,7 @@ pub fn emit_tokens(
                 #assign
             }
         }
-    });
+    }));
     // Functions the scene leaves out, computed from the generated ones
     // (formulate guarantees inverse dynamics, or both M and b).
     let mm_fn = mm_fn.unwrap_or_else(|| {
@@ -691,6 +731,17 @@ pub fn emit_tokens(
         )
     };
     let output_names_l = output_names.iter();
+    let loops_impl = if loop_items.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! {
+            /// Body steps and class tables of the functions emitted as loops
+            /// over the chain's bodies (see `eom_gen::mech::looped`).
+            impl #ty {
+                #loop_items
+            }
+        }
+    };
     let parts_impl = if parts.is_empty() {
         TokenStream::new()
     } else {
@@ -848,6 +899,8 @@ pub fn emit_tokens(
         #inherent_impl
 
         #parts_impl
+
+        #loops_impl
 
         #[doc = #ode_doc]
         impl ::eom_sim::OdeSystem<#ny_l> for #ty {
