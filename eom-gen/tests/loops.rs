@@ -103,17 +103,27 @@ fn check_loops(name: &str, sys: &System, f: &Formulation) {
         let program = |g: Function| f.program(g).expect("generated");
 
         // Forward dynamics: u̇ from the third pass.
-        let st = loops.get(Function::ForwardDynamics).expect("fd").run(&q, &u, &tau);
+        let st = loops
+            .get(Function::ForwardDynamics)
+            .expect("fd")
+            .run(&q, &u, &tau);
         let fd: Vec<f64> = st[2].iter().map(|s| s[0]).collect();
-        let want = twin.forward_dynamics(&q, &u, 0.0, &tau, &[]).expect("twin fd");
+        let want = twin
+            .forward_dynamics(&q, &u, 0.0, &tau, &[])
+            .expect("twin fd");
         assert_close(&format!("{name} u̇ against the twin"), &fd, &want);
         let straight = run(program(Function::ForwardDynamics), &q, &u, &tau, &udot);
         assert_close(&format!("{name} u̇ against straight-line"), &fd, &straight);
 
         // Inverse dynamics and bias: τ from the second pass.
-        let st = loops.get(Function::InverseDynamics).expect("id").run(&q, &u, &udot);
+        let st = loops
+            .get(Function::InverseDynamics)
+            .expect("id")
+            .run(&q, &u, &udot);
         let id: Vec<f64> = st[1].iter().map(|s| s[0]).collect();
-        let want = twin.inverse_dynamics(&q, &u, &udot, 0.0, &[]).expect("twin id");
+        let want = twin
+            .inverse_dynamics(&q, &u, &udot, 0.0, &[])
+            .expect("twin id");
         assert_close(&format!("{name} τ against the twin"), &id, &want);
         let straight = run(program(Function::InverseDynamics), &q, &u, &tau, &udot);
         assert_close(&format!("{name} τ against straight-line"), &id, &straight);
@@ -126,7 +136,10 @@ fn check_loops(name: &str, sys: &System, f: &Formulation) {
 
         // Mass matrix, lower triangle by rows: M_ii from the second pass,
         // M_ij (j < i) from the third.
-        let st = loops.get(Function::MassMatrix).expect("m").run(&q, &[], &[]);
+        let st = loops
+            .get(Function::MassMatrix)
+            .expect("m")
+            .run(&q, &[], &[]);
         let mut m = Vec::new();
         let mut want = Vec::new();
         for i in 0..n {
@@ -146,7 +159,11 @@ fn looped_chains_match_straight_line_and_twin() {
     for (n, spatial) in [(5, true), (10, true), (50, true), (5, false), (10, false)] {
         let sys = chain(n, spatial);
         let f = formulate(&sys, FunctionSet::all_requested()).expect("formulates");
-        check_loops(&format!("{}{n}", if spatial { "spatial" } else { "planar" }), &sys, &f);
+        check_loops(
+            &format!("{}{n}", if spatial { "spatial" } else { "planar" }),
+            &sys,
+            &f,
+        );
     }
 }
 
@@ -171,13 +188,20 @@ fn code_stops_growing_with_the_number_of_links() {
             .collect::<Vec<_>>()
     };
     let (a, b) = (steps(10), steps(50));
-    assert_eq!(a, b, "distinct steps and their operations, 10 against 50 links");
+    assert_eq!(
+        a, b,
+        "distinct steps and their operations, 10 against 50 links"
+    );
     // A chain whose links all differ gets one step per body and pass.
     let mixed = ChainLoops::build(&mixed_chain(9), FunctionSet::all_requested())
         .expect("builds")
         .expect("a chain");
     let fd = mixed.get(Function::ForwardDynamics).expect("fd");
-    assert!(fd.steps() > 3 * 4, "unequal links share few steps: {}", fd.steps());
+    assert!(
+        fd.steps() > 3 * 4,
+        "unequal links share few steps: {}",
+        fd.steps()
+    );
 }
 
 #[test]
@@ -185,7 +209,10 @@ fn loops_are_chosen_for_long_chains_only() {
     // The rule: straight-line code of at least LOOP_MIN_OPS operations,
     // loop code a quarter of it at most, at most 1.5× its operations.
     let f5 = formulate(&chain(5, true), FunctionSet::all_requested()).expect("5");
-    assert!(f5.loops.is_none(), "5 links: every program below {LOOP_MIN_OPS} ops");
+    assert!(
+        f5.loops.is_none(),
+        "5 links: every program below {LOOP_MIN_OPS} ops"
+    );
     let f50 = formulate(&chain(50, true), FunctionSet::all_requested()).expect("50");
     let loops = f50.loops.as_ref().expect("50 links: loops offered");
     let fd_ops = f50
@@ -193,7 +220,10 @@ fn loops_are_chosen_for_long_chains_only() {
         .expect("fd")
         .op_count()
         .total();
-    assert!(loops.pays(Function::ForwardDynamics, fd_ops), "50-link FD loops");
+    assert!(
+        loops.pays(Function::ForwardDynamics, fd_ops),
+        "50-link FD loops"
+    );
     // Models that are not plain chains get none: a spring between links.
     let arm7 = eom_gen::check_file(concat!(env!("CARGO_MANIFEST_DIR"), "/../models/arm7.ron"))
         .map(|c| c.system)
@@ -223,7 +253,10 @@ fn emitted_loops_are_formatted_and_deterministic() {
         assert!(a.contains(name), "{name} emitted");
     }
     let straight = eom_gen::emit::emit_with(&sys, &f, "", &EmitOptions::default());
-    assert!(!straight.contains("_p0_s0("), "5 links stay straight by default");
+    assert!(
+        !straight.contains("_p0_s0("),
+        "5 links stay straight by default"
+    );
 }
 
 #[test]

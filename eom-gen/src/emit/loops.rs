@@ -58,7 +58,10 @@ fn step_fn(fname: &str, p: usize, k: usize, l: &Loop, fma: bool) -> TokenStream 
                 let mut parts = s.name.trim_start_matches('s').splitn(2, '_');
                 match (parts.next().and_then(idx), parts.next().and_then(idx)) {
                     (Some(r), Some(i)) if r < STORE_ARGS.len() => {
-                        let (a, i) = (format_ident!("{}", STORE_ARGS[r]), Literal::usize_unsuffixed(i));
+                        let (a, i) = (
+                            format_ident!("{}", STORE_ARGS[r]),
+                            Literal::usize_unsuffixed(i),
+                        );
                         quote!(#a[#i])
                     }
                     _ => {
@@ -161,7 +164,10 @@ fn emit_loop(fname: &str, l: &Loop, n: usize, fma: bool) -> (TokenStream, TokenS
             items.extend(step_fn(fname, p, k, l, fma));
         }
         let table = format_ident!("{}_P{p}", fname.to_uppercase());
-        let classes = pass.class.iter().map(|&k| Literal::u16_unsuffixed(k as u16));
+        let classes = pass
+            .class
+            .iter()
+            .map(|&k| Literal::u16_unsuffixed(k as u16));
         if pass.steps.len() > 1 {
             let doc = format!(" The body step of each body in pass {p} of `{fname}`.");
             items.extend(quote! {
@@ -242,7 +248,11 @@ fn emit_loop(fname: &str, l: &Loop, n: usize, fma: bool) -> (TokenStream, TokenS
         };
         let init = pass.init.iter().map(|&x| super::float(x));
         let c_decl = if pass.carry > 0 && pass.order != Order::Ancestors {
-            quote!(let mut c: [f64; #ncl] = [#(#init),*];)
+            if pass.init.iter().all(|&x| x == 0.0) {
+                quote!(let mut c = [0.0f64; #ncl];)
+            } else {
+                quote!(let mut c: [f64; #ncl] = [#(#init),*];)
+            }
         } else {
             TokenStream::new()
         };
@@ -316,7 +326,8 @@ pub(crate) fn looped(
         let doc = format!(
             " {} as loops over the {n} bodies of the chain ({} operations per call in {} body steps of {} operations; straight-line: {ops}; see `eom_gen::mech::looped`).",
             match f {
-                Function::ForwardDynamics => "Forward dynamics by the articulated-body algorithm, `u̇ = M⁻¹ (τ − b)`,",
+                Function::ForwardDynamics =>
+                    "Forward dynamics by the articulated-body algorithm, `u̇ = M⁻¹ (τ − b)`,",
                 Function::MassMatrix => "The mass matrix by composite rigid bodies",
                 Function::Bias => "The bias `b = ID(q, u, 0)` by recursive Newton–Euler",
                 _ => "Inverse dynamics by recursive Newton–Euler, `τ = M u̇ + b`,",

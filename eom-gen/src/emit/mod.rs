@@ -21,8 +21,8 @@ use lower::{Arg, Style, lower};
 mod loops;
 pub(crate) mod lower;
 mod names;
-pub use loops::LoopChoice;
 use crate::system::{Motion, System};
+pub use loops::LoopChoice;
 pub use names::{is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
@@ -404,7 +404,10 @@ pub fn emit_tokens(
         }
     };
 
-    let fd_fn = fd_loop.or_else(|| f.program(Function::ForwardDynamics).map(|p| {
+    let fd_straight = f
+        .program(Function::ForwardDynamics)
+        .filter(|_| fd_loop.is_none());
+    let fd_fn = fd_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
         let l = lower(&style, p, "forward_dynamics", &args);
         parts.extend(l.parts.clone());
@@ -421,8 +424,12 @@ pub fn emit_tokens(
                 #assign
             }
         }
-    }));
-    let mm_fn = mm_loop.or_else(|| f.program(Function::MassMatrix).map(|p| {
+    });
+    let fd_fn = fd_loop.or(fd_fn);
+    let mm_straight = f
+        .program(Function::MassMatrix)
+        .filter(|_| mm_loop.is_none());
+    let mm_fn = mm_straight.map(|p| {
         let args = [arg_t(), arg_q()];
         let l = lower(&style, p, "mass_matrix", &args);
         parts.extend(l.parts.clone());
@@ -446,8 +453,10 @@ pub fn emit_tokens(
                 #assign
             }
         }
-    }));
-    let bias_fn = bias_loop.or_else(|| f.program(Function::Bias).map(|p| {
+    });
+    let mm_fn = mm_loop.or(mm_fn);
+    let bias_straight = f.program(Function::Bias).filter(|_| bias_loop.is_none());
+    let bias_fn = bias_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
         let l = lower(&style, p, "bias", &args);
         parts.extend(l.parts.clone());
@@ -458,8 +467,12 @@ pub fn emit_tokens(
                 #assign
             }
         }
-    }));
-    let id_fn = id_loop.or_else(|| f.program(Function::InverseDynamics).map(|p| {
+    });
+    let bias_fn = bias_loop.or(bias_fn);
+    let id_straight = f
+        .program(Function::InverseDynamics)
+        .filter(|_| id_loop.is_none());
+    let id_fn = id_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
         let l = lower(&style, p, "inverse_dynamics", &args);
         parts.extend(l.parts.clone());
@@ -470,7 +483,8 @@ pub fn emit_tokens(
                 #assign
             }
         }
-    }));
+    });
+    let id_fn = id_loop.or(id_fn);
     // Functions the scene leaves out, computed from the generated ones
     // (formulate guarantees inverse dynamics, or both M and b).
     let mm_fn = mm_fn.unwrap_or_else(|| {

@@ -627,9 +627,11 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     .collect();
     not_finite(sys, &programs)?;
     // Loops only where some straight-line program outgrows the cache.
-    let long = LOOPED
-        .iter()
-        .any(|f| programs.get(f).is_some_and(|p| p.op_count().total() >= LOOP_MIN_OPS));
+    let long = LOOPED.iter().any(|f| {
+        programs
+            .get(f)
+            .is_some_and(|p| p.op_count().total() >= LOOP_MIN_OPS)
+    });
     let loops = if long {
         ChainLoops::build(sys, request)?
     } else {

@@ -436,7 +436,10 @@ impl<'cx> Builder<'_, 'cx> {
         let b = self.body(i);
         let (q, u) = ([self.cx.q(0)], [self.cx.u(0)]);
         let fc = b.frame_child;
-        let x = b.frame_parent.then(&b.kind.transform(&q)).then(&fc.inverse());
+        let x = b
+            .frame_parent
+            .then(&b.kind.transform(&q))
+            .then(&fc.inverse());
         let s: Vec<Motion<Expr>> = b
             .kind
             .subspace(&q)
@@ -452,7 +455,11 @@ impl<'cx> Builder<'_, 'cx> {
     }
 
     fn base_acceleration(&self) -> Vec<f64> {
-        let g = self.tree.gravity.0.map(|e| e.as_num().map_or(0.0, |n| n.to_f64()));
+        let g = self
+            .tree
+            .gravity
+            .0
+            .map(|e| e.as_num().map_or(0.0, |n| n.to_f64()));
         vec![0.0, 0.0, 0.0, -g[0], -g[1], -g[2]]
     }
 
@@ -468,9 +475,7 @@ impl<'cx> Builder<'_, 'cx> {
             let v = j.x.motion_to_child(vp).add(j.vj);
             let inertia = self.body(i).inertia;
             let cv = j.c.add(v.cross_motion(j.vj));
-            let pa = v
-                .cross_force(inertia.mul_motion(v))
-                .sub(Force::zero());
+            let pa = v.cross_force(inertia.mul_motion(v)).sub(Force::zero());
             let mut store = pose_values(&j.x);
             store.extend(motion_values(&cv));
             store.extend(force_values(&pa));
@@ -484,7 +489,11 @@ impl<'cx> Builder<'_, 'cx> {
         for i in 0..n {
             let j = self.joint(i);
             let s0 = self.stored(0, &stored0[i]);
-            let (x, cv, pa0) = (pose_from(&s0[0..12]), motion_from(&s0[12..18]), force_from(&s0[18..24]));
+            let (x, cv, pa0) = (
+                pose_from(&s0[0..12]),
+                motion_from(&s0[12..18]),
+                force_from(&s0[18..24]),
+            );
             let carry = self.carry(27, (i + 1 == n).then_some(&[0.0; 27][..]));
             let ia = Inertia6::from_rigid(&self.body(i).inertia).add(inertia6_from(&carry[0..21]));
             let pa = pa0.add(force_from(&carry[21..27]));
@@ -544,12 +553,11 @@ impl<'cx> Builder<'_, 'cx> {
             } else {
                 Expr::zero()
             };
-            let a = j
-                .x
-                .motion_to_child(ap)
-                .add(j.c)
-                .add(v.cross_motion(j.vj))
-                .add(j.s.scale(ud));
+            let a =
+                j.x.motion_to_child(ap)
+                    .add(j.c)
+                    .add(v.cross_motion(j.vj))
+                    .add(j.s.scale(ud));
             let inertia = self.body(i).inertia;
             let f = inertia
                 .mul_motion(a)
