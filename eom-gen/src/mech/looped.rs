@@ -46,6 +46,9 @@
 //! or prescribed), without force elements besides gravity, inputs or
 //! tunable parameters. Whether the emitter uses them is [`ChainLoops::pays`].
 
+// Index loops over the bodies read like the passes they cut.
+#![allow(clippy::needless_range_loop)]
+
 use super::env::NumericEnv;
 use super::error::MechError;
 use super::spatial::{Force, Inertia6, Motion, Pose, RigidInertia};
