@@ -89,6 +89,7 @@ fn assert_close(what: &str, got: &[f64], want: &[f64]) {
 
 /// The loops of `sys` against the straight-line programs of `f` and the
 /// numeric twin at three random states.
+#[allow(clippy::needless_range_loop)]
 fn check_loops(name: &str, sys: &System, f: &Formulation) {
     let n = sys.nu();
     let loops = ChainLoops::build(sys, FunctionSet::all_requested())
