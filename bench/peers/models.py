@@ -139,4 +139,6 @@ def models():
     for n in (5, 10, 50):
         table[f"planar_chain{n}"] = chain(n, False)
         table[f"spatial_chain{n}"] = chain(n, True)
+    # The long chain of issue 28 (emitted as loops over its bodies).
+    table["spatial_chain200"] = chain(200, True)
     return table

@@ -34,6 +34,7 @@ for n in 5 10 50; do
     "$bin/examples/build_chain" "$n" "$out/models/planar_chain$n.ron" --planar 2>/dev/null
     "$bin/examples/build_chain" "$n" "$out/models/spatial_chain$n.ron" 2>/dev/null
 done
+"$bin/examples/build_chain" 200 "$out/models/spatial_chain200.ron" 2>/dev/null
 
 # 3. compile_peer SRC EXE: Pinocchio header-only and MuJoCo's libmujoco,
 # -O3 -march=native (see the head of peers.cpp for why the URDF is read with

@@ -20,6 +20,54 @@ pub mod chain10_fma {
 mod tests {
     use eom_sim::{Model, Vector};
 
+    /// The 50-link chain is emitted as loops over its bodies (forward
+    /// dynamics, mass matrix, bias, inverse dynamics; `eom_gen::mech::looped`,
+    /// chosen because its straight-line programs outgrow the instruction
+    /// cache): compiled, they give the `f64` algorithms' ABA, CRBA and
+    /// RNEA results at random states.
+    #[test]
+    fn compiled_loops_of_the_50_link_chain_match_the_twin() {
+        use eom_gen::model::{Source, check};
+        let mut spec = eom_gen::model::builder::n_link_chain(50, true);
+        spec.name = "chain50".into();
+        let sys = check(&Source::new("chain50", spec.to_ron()))
+            .unwrap_or_else(|r| panic!("{r}"))
+            .system;
+        let twin = eom_gen::mech::Numeric::new(&sys).expect("twin");
+        let model = super::chain50::Chain50::default();
+        let mut rng = eom_gen::testkit::Rng(3);
+        let close = |what: &str, got: &[f64], want: &[f64]| {
+            let scale = want.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+            for (k, (g, w)) in got.iter().zip(want).enumerate() {
+                assert!(
+                    (g - w).abs() <= 1e-10 * scale,
+                    "{what}[{k}]: got {g} want {w}"
+                );
+            }
+        };
+        for _ in 0..3 {
+            let (qv, uv) = eom_gen::testkit::random_state(&sys, &mut rng);
+            let (tv, av) = (rng.vec(50, 1.0), rng.vec(50, 1.0));
+            let arr = |v: &[f64]| -> [f64; 50] { std::array::from_fn(|k| v[k]) };
+            let (q, u, tau, udot) = (arr(&qv), arr(&uv), arr(&tv), arr(&av));
+            let mut out = [0.0; 50];
+            model.forward_dynamics(0.0, &q, &u, &tau, &mut out);
+            let want = twin.forward_dynamics(&qv, &uv, 0.0, &tv, &[]).expect("fd");
+            close("u̇", &out, &want);
+            model.inverse_dynamics(0.0, &q, &u, &udot, &mut out);
+            let want = twin.inverse_dynamics(&qv, &uv, &av, 0.0, &[]).expect("id");
+            close("τ", &out, &want);
+            let terms = twin.terms(&qv, &uv, 0.0, &[]).expect("terms");
+            model.bias(0.0, &q, &u, &mut out);
+            close("b", &out, &terms.bias);
+            let mut m = [[0.0; 50]; 50];
+            model.mass_matrix(0.0, &q, &mut m);
+            for (i, row) in m.iter().enumerate() {
+                close(&format!("M[{i}]"), row, &terms.mass_matrix[i]);
+            }
+        }
+    }
+
     #[test]
     fn fused_multiply_adds_give_the_same_dynamics() {
         // mul_add rounds once instead of twice: results agree to round-off.

@@ -86,8 +86,8 @@ impl Builder {
         for path in &self.models {
             println!("cargo:rerun-if-changed={path}");
             let opts = crate::EmitOptions {
-                type_name: None,
                 fma: self.fma,
+                ..Default::default()
             };
             let g = generate_file_with(path, &opts).map_err(BuildError::Generate)?;
             if let Some(scene) = &g.checked.scene {

@@ -42,7 +42,7 @@ pub mod system;
 pub mod testkit;
 
 pub use builder::{BuildError, Builder};
-pub use emit::EmitOptions;
+pub use emit::{EmitOptions, LoopChoice};
 pub use generate::{
     GenerateError, Generated, generate, generate_checked, generate_checked_for, generate_file,
     generate_file_with, generate_file_with_values, generate_tokens, generate_tokens_checked,

@@ -75,8 +75,36 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         .iter()
         .map(|(form, c)| (format!("{form:?}"), op_json(c)))
         .collect();
+    // Functions emitted as loops over a long chain's bodies (`emit`'s
+    // default choice, `ChainLoops::pays`).
+    let looped: Vec<(Function, &eom_gen::mech::looped::Loop)> = f
+        .loops
+        .as_ref()
+        .map(|cl| {
+            cl.loops
+                .iter()
+                .filter(|(g, _)| {
+                    f.program(**g)
+                        .is_some_and(|p| cl.pays(**g, p.op_count().total()))
+                })
+                .map(|(g, l)| (*g, l))
+                .collect()
+        })
+        .unwrap_or_default();
+    let loops_json: serde_json::Map<String, serde_json::Value> = looped
+        .iter()
+        .map(|(g, l)| {
+            let v = serde_json::json!({
+                "ops_per_call": l.ops(),
+                "steps": l.steps(),
+                "step_ops": l.code_ops(),
+            });
+            (g.name().to_string(), v)
+        })
+        .collect();
     let (cable_text, cable_json) = crate::cable_report::stats(&g.checked.system);
     let v = serde_json::json!({
+        "loops": loops_json,
         "name": g.checked.system.name,
         "cables": cable_json,
         "formulation": format!("{}", f.fd_form),
@@ -103,6 +131,15 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         print!("{cable_text}");
     } else {
         print!("{}", table(&g, &program));
+        for (g, l) in &looped {
+            println!(
+                "  {} emitted as loops over the bodies: {} operations per call, {} body steps of {} operations",
+                g.name(),
+                l.ops(),
+                l.steps(),
+                l.code_ops()
+            );
+        }
         for (form, c) in &with_derivatives.derivative_candidates {
             let chosen = with_derivatives.derivative_form == Some(*form);
             println!(

@@ -18,9 +18,11 @@ use crate::mech::Formulation;
 use crate::sym::{SymKind, Symbol};
 use lower::{Arg, Style, lower};
 
+mod loops;
 pub(crate) mod lower;
 mod names;
 use crate::system::{Motion, System};
+pub use loops::LoopChoice;
 pub use names::{is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
@@ -47,6 +49,11 @@ pub struct EmitOptions {
     /// only when compiling with FMA (`-C target-feature=+fma` or a
     /// `target-cpu` that has it); otherwise `mul_add` is a libm call.
     pub fma: bool,
+    /// Emit forward dynamics, the mass matrix, the bias and inverse
+    /// dynamics of long chains as loops over body steps
+    /// (`eom_gen::mech::looped`): where they pay (default), always (where
+    /// the model is such a chain) or never.
+    pub loops: LoopChoice,
 }
 
 impl Binding<'_> {
@@ -349,6 +356,39 @@ pub fn emit_tokens(
         quote!(#(#items)*)
     };
 
+    // Long chains as loops, where chosen: these functions are not lowered
+    // straight.
+    let chain_loops = match opts.loops {
+        LoopChoice::Never => None,
+        LoopChoice::Auto => f.loops.clone(),
+        LoopChoice::Always => f.loops.clone().or_else(|| {
+            crate::mech::looped::ChainLoops::build(sys, f.functions().collect())
+                .ok()
+                .flatten()
+        }),
+    };
+    let straight_ops: Vec<(Function, usize)> = crate::mech::looped::LOOPED
+        .iter()
+        .filter_map(|&g| f.program(g).map(|p| (g, p.op_count().total())))
+        .collect();
+    let mut looped: std::collections::BTreeMap<Function, loops::Looped> = chain_loops
+        .as_ref()
+        .map(|cl| loops::looped(cl, &straight_ops, opts.loops, opts.fma))
+        .unwrap_or_default()
+        .into_iter()
+        .collect();
+    let mut loop_items = TokenStream::new();
+    let mut take_loop = |g: Function| {
+        looped.remove(&g).map(|l| {
+            loop_items.extend(l.items);
+            l.method
+        })
+    };
+    let fd_loop = take_loop(Function::ForwardDynamics);
+    let mm_loop = take_loop(Function::MassMatrix);
+    let bias_loop = take_loop(Function::Bias);
+    let id_loop = take_loop(Function::InverseDynamics);
+
     // q̇ = N(q) u
     let args = [arg_q(), arg_u()];
     let Some(qdot_program) = f.program(Function::Qdot) else {
@@ -364,7 +404,10 @@ pub fn emit_tokens(
         }
     };
 
-    let fd_fn = f.program(Function::ForwardDynamics).map(|p| {
+    let fd_straight = f
+        .program(Function::ForwardDynamics)
+        .filter(|_| fd_loop.is_none());
+    let fd_fn = fd_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
         let l = lower(&style, p, "forward_dynamics", &args);
         parts.extend(l.parts.clone());
@@ -382,7 +425,11 @@ pub fn emit_tokens(
             }
         }
     });
-    let mm_fn = f.program(Function::MassMatrix).map(|p| {
+    let fd_fn = fd_loop.or(fd_fn);
+    let mm_straight = f
+        .program(Function::MassMatrix)
+        .filter(|_| mm_loop.is_none());
+    let mm_fn = mm_straight.map(|p| {
         let args = [arg_t(), arg_q()];
         let l = lower(&style, p, "mass_matrix", &args);
         parts.extend(l.parts.clone());
@@ -407,7 +454,9 @@ pub fn emit_tokens(
             }
         }
     });
-    let bias_fn = f.program(Function::Bias).map(|p| {
+    let mm_fn = mm_loop.or(mm_fn);
+    let bias_straight = f.program(Function::Bias).filter(|_| bias_loop.is_none());
+    let bias_fn = bias_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
         let l = lower(&style, p, "bias", &args);
         parts.extend(l.parts.clone());
@@ -419,7 +468,11 @@ pub fn emit_tokens(
             }
         }
     });
-    let id_fn = f.program(Function::InverseDynamics).map(|p| {
+    let bias_fn = bias_loop.or(bias_fn);
+    let id_straight = f
+        .program(Function::InverseDynamics)
+        .filter(|_| id_loop.is_none());
+    let id_fn = id_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
         let l = lower(&style, p, "inverse_dynamics", &args);
         parts.extend(l.parts.clone());
@@ -431,6 +484,7 @@ pub fn emit_tokens(
             }
         }
     });
+    let id_fn = id_loop.or(id_fn);
     // Functions the scene leaves out, computed from the generated ones
     // (formulate guarantees inverse dynamics, or both M and b).
     let mm_fn = mm_fn.unwrap_or_else(|| {
@@ -691,6 +745,17 @@ pub fn emit_tokens(
         )
     };
     let output_names_l = output_names.iter();
+    let loops_impl = if loop_items.is_empty() {
+        TokenStream::new()
+    } else {
+        quote! {
+            /// Body steps and class tables of the functions emitted as loops
+            /// over the chain's bodies (see `eom_gen::mech::looped`).
+            impl #ty {
+                #loop_items
+            }
+        }
+    };
     let parts_impl = if parts.is_empty() {
         TokenStream::new()
     } else {
@@ -848,6 +913,8 @@ pub fn emit_tokens(
         #inherent_impl
 
         #parts_impl
+
+        #loops_impl
 
         #[doc = #ode_doc]
         impl ::eom_sim::OdeSystem<#ny_l> for #ty {

@@ -11,6 +11,7 @@ use super::applied::Applied;
 use super::env::{Env, NumericEnv};
 use super::error::MechError;
 use super::kinematics::{Evaluator, Kinematics, State};
+use super::looped::{ChainLoops, LOOP_MIN_OPS, LOOPED};
 use super::ltdl::{ltdl, ltdl_solve};
 use super::spatial::Force;
 use super::tree::TreeModel;
@@ -209,6 +210,12 @@ pub struct Formulation {
     pub contact_rows: Vec<String>,
     /// The tree joints, in the order of `joint_impulses`.
     pub impulse_joints: Vec<String>,
+    /// The model's forward dynamics, mass matrix, bias and inverse
+    /// dynamics as loops over body steps, when it is a chain
+    /// ([`super::looped`]) whose straight-line programs are long enough
+    /// for loops to pay ([`ChainLoops::pays`]); emission chooses per
+    /// function.
+    pub loops: Option<ChainLoops>,
     /// Wall time of formulation and lowering, seconds.
     pub seconds: f64,
 }
@@ -622,6 +629,17 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     .filter_map(|(f, p)| p.map(|p| (f, p)))
     .collect();
     not_finite(sys, &programs)?;
+    // Loops only where some straight-line program outgrows the cache.
+    let long = LOOPED.iter().any(|f| {
+        programs
+            .get(f)
+            .is_some_and(|p| p.op_count().total() >= LOOP_MIN_OPS)
+    });
+    let loops = if long {
+        ChainLoops::build(sys, request)?
+    } else {
+        None
+    };
     Ok(Formulation {
         programs,
         fd_form,
@@ -636,6 +654,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         mounts,
         contact_rows: sys.contact_rows().into_iter().map(|(_, r)| r).collect(),
         impulse_joints,
+        loops,
         seconds: start.elapsed().as_secs_f64(),
     })
 }

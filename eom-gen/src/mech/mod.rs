@@ -14,6 +14,8 @@
 //! - [`ltdl`]: the sparse `LᵀDL` factorisation of the mass matrix that
 //!   follows the tree (§6.5), the other forward-dynamics route;
 //! - [`energy`], [`loads`] (the force elements of [`applied`] at a state);
+//! - [`looped`]: forward dynamics, mass matrix, inverse dynamics and bias
+//!   of long serial chains as loops over generated body steps;
 //! - [`derivatives`]: `∂u̇/∂(q, u, τ, inputs)` of the generated forward
 //!   dynamics, symbolically.
 //!
@@ -40,6 +42,7 @@ pub mod initial;
 pub mod joint;
 pub mod kinematics;
 pub mod loads;
+pub mod looped;
 pub mod lower;
 pub mod ltdl;
 pub mod mounts;

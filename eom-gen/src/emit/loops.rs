@@ -1,0 +1,381 @@
+//! Emission of long chains as loops ([`crate::mech::looped`]): each
+//! distinct body step becomes an associated function of the model type
+//! (`forward_dynamics_p1_s0`, through the one lowering of `lower.rs`), each
+//! pass a `for` loop over the bodies that calls the step of each body's
+//! class (a table `FORWARD_DYNAMICS_P1: [u16; N]`), with the carried value
+//! in a small array and what a pass stores per body in `[[f64; K]; N]` on
+//! the stack. The code does not grow with the number of bodies once the
+//! bodies repeat; nothing allocates, every index is below its array's
+//! length by construction.
+
+use super::lower::{Arg, Style, lower};
+use crate::functions::Function;
+use crate::mech::looped::{ChainLoops, Loop, Order, Own, Pass};
+use crate::sym::{SymKind, Symbol};
+use proc_macro2::{Literal, TokenStream};
+use quote::{format_ident, quote};
+
+/// Whether to emit long chains as loops.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LoopChoice {
+    /// Where the formulation offers loops and they pay
+    /// (`ChainLoops::pays`).
+    #[default]
+    Auto,
+    /// Wherever the model is a chain the loops handle (for tests and
+    /// measurements).
+    Always,
+    /// Never: straight-line code throughout.
+    Never,
+}
+
+/// A looped function: the trait method and the items it uses.
+pub(crate) struct Looped {
+    /// The method.
+    pub method: TokenStream,
+    /// Step functions and class tables (associated items).
+    pub items: TokenStream,
+}
+
+const STORE_ARGS: [&str; 4] = ["s0", "s1", "s2", "s3"];
+
+/// The step function of one pass's class `k`.
+fn step_fn(fname: &str, p: usize, k: usize, l: &Loop, fma: bool) -> TokenStream {
+    let pass = &l.passes[p];
+    let prog = &pass.steps[k];
+    let input = |s: &Symbol| -> TokenStream {
+        match s.kind {
+            SymKind::Coord(_) => quote!(q),
+            SymKind::Speed(_) => quote!(u),
+            SymKind::Tau(_) => quote!(tau),
+            SymKind::SpeedRate(_) => quote!(udot),
+            _ => {
+                let idx = |r: &str| r.parse::<usize>().ok();
+                if let Some(i) = s.name.strip_prefix("c_").and_then(idx) {
+                    let i = Literal::usize_unsuffixed(i);
+                    return quote!(c[#i]);
+                }
+                let mut parts = s.name.trim_start_matches('s').splitn(2, '_');
+                match (parts.next().and_then(idx), parts.next().and_then(idx)) {
+                    (Some(r), Some(i)) if r < STORE_ARGS.len() => {
+                        let (a, i) = (
+                            format_ident!("{}", STORE_ARGS[r]),
+                            Literal::usize_unsuffixed(i),
+                        );
+                        quote!(#a[#i])
+                    }
+                    _ => {
+                        let msg = format!("eom-gen: step input `{}` has no argument", s.name);
+                        quote!(::core::compile_error!(#msg))
+                    }
+                }
+            }
+        }
+    };
+    let style = Style {
+        input: &input,
+        fma,
+        lanes: false,
+        methods: false,
+    };
+    let args = step_args(l, pass);
+    let name = format!("{fname}_p{p}_s{k}");
+    let l = lower(&style, prog, &name, &args);
+    let params = l.params(&args);
+    let body = &l.body;
+    let (nc, ns) = (pass.carry, pass.store);
+    let assigns = l.outputs.iter().enumerate().map(|(j, v)| {
+        if j < nc {
+            let j = Literal::usize_unsuffixed(j);
+            quote!(co[#j] = #v;)
+        } else {
+            let j = Literal::usize_unsuffixed(j - nc);
+            quote!(so[#j] = #v;)
+        }
+    });
+    let (ncl, nsl) = (Literal::usize_unsuffixed(nc), Literal::usize_unsuffixed(ns));
+    let outs = if nc > 0 {
+        quote!(co: &mut [f64; #ncl], so: &mut [f64; #nsl])
+    } else {
+        quote!(so: &mut [f64; #nsl])
+    };
+    let ident = format_ident!("{name}");
+    let doc = format!(
+        " Body step {k} of pass {p} of `{fname}` ({} operations; see `eom_gen::mech::looped`).",
+        prog.op_count().total()
+    );
+    quote! {
+        #[doc = #doc]
+        #[allow(clippy::too_many_arguments)]
+        fn #ident(#params, #outs) {
+            #body
+            #(#assigns)*
+        }
+    }
+}
+
+/// The arguments of a pass's steps, in order (outputs follow).
+fn step_args(l: &Loop, pass: &Pass) -> Vec<Arg<'static>> {
+    let mut args = Vec::new();
+    if pass.carry > 0 {
+        let n = Literal::usize_unsuffixed(pass.carry);
+        args.push(Arg {
+            name: "c",
+            ty: quote!(&[f64; #n]),
+            carries: Box::new(|s: &Symbol| s.name.starts_with("c_")),
+        });
+    }
+    for &r in &pass.reads {
+        let name = STORE_ARGS[r.min(STORE_ARGS.len() - 1)];
+        let prefix = format!("s{r}_");
+        let len = Literal::usize_unsuffixed(l.passes.get(r).map_or(0, |q| q.store));
+        args.push(Arg {
+            name,
+            ty: quote!(&[f64; #len]),
+            carries: Box::new(move |s: &Symbol| s.name.starts_with(&prefix)),
+        });
+    }
+    let scalar = |name: &'static str, f: fn(&SymKind) -> bool| Arg {
+        name,
+        ty: quote!(f64),
+        carries: Box::new(move |s: &Symbol| f(&s.kind)),
+    };
+    if pass.own.0 {
+        args.push(scalar("q", |k| matches!(k, SymKind::Coord(_))));
+    }
+    if pass.own.1 {
+        args.push(scalar("u", |k| matches!(k, SymKind::Speed(_))));
+    }
+    match pass.own.2 {
+        Some(Own::Tau) => args.push(scalar("tau", |k| matches!(k, SymKind::Tau(_)))),
+        Some(Own::Udot) => args.push(scalar("udot", |k| matches!(k, SymKind::SpeedRate(_)))),
+        None => {}
+    }
+    args
+}
+
+/// The loop of `fname` (`f`) on a chain of `n` bodies.
+fn emit_loop(fname: &str, l: &Loop, n: usize, fma: bool) -> (TokenStream, TokenStream) {
+    let nl = Literal::usize_unsuffixed(n);
+    let mut items = TokenStream::new();
+    let mut body = TokenStream::new();
+    for (p, pass) in l.passes.iter().enumerate() {
+        for k in 0..pass.steps.len() {
+            items.extend(step_fn(fname, p, k, l, fma));
+        }
+        let table = format_ident!("{}_P{p}", fname.to_uppercase());
+        let classes = pass
+            .class
+            .iter()
+            .map(|&k| Literal::u16_unsuffixed(k as u16));
+        if pass.steps.len() > 1 {
+            let doc = format!(" The body step of each body in pass {p} of `{fname}`.");
+            items.extend(quote! {
+                #[doc = #doc]
+                const #table: [u16; #nl] = [#(#classes),*];
+            });
+        }
+        let idx = |order: Order| match order {
+            Order::Ancestors => quote!(j),
+            _ => quote!(i),
+        };
+        let i = idx(pass.order);
+        let mut call_args = Vec::new();
+        if pass.carry > 0 {
+            call_args.push(quote!(&c));
+        }
+        for &r in &pass.reads {
+            let st = format_ident!("st{r}");
+            call_args.push(quote!(&#st[#i]));
+        }
+        if pass.own.0 {
+            call_args.push(quote!(q[#i]));
+        }
+        if pass.own.1 {
+            call_args.push(quote!(u[#i]));
+        }
+        match pass.own.2 {
+            Some(Own::Tau) => call_args.push(quote!(tau[#i])),
+            Some(Own::Udot) => call_args.push(quote!(udot[#i])),
+            None => {}
+        }
+        let st = format_ident!("st{p}");
+        let (store_out, so_decl, so_after) = match pass.order {
+            Order::Ancestors => (
+                quote!(&mut so),
+                {
+                    let ns = Literal::usize_unsuffixed(pass.store);
+                    quote!(let mut so = [0.0f64; #ns];)
+                },
+                quote! {
+                    m[i][j - 1] = so[0];
+                    m[j - 1][i] = so[0];
+                },
+            ),
+            _ => (quote!(&mut #st[i]), TokenStream::new(), TokenStream::new()),
+        };
+        if pass.carry > 0 {
+            call_args.push(quote!(&mut co));
+        }
+        call_args.push(store_out);
+        let call_of = |k: usize| {
+            let f = format_ident!("{fname}_p{p}_s{k}");
+            quote!(Self::#f(#(#call_args),*))
+        };
+        let dispatch = if pass.steps.len() == 1 {
+            let c = call_of(0);
+            quote!(#c;)
+        } else {
+            let last = pass.steps.len() - 1;
+            let arms = (0..last).map(|k| {
+                let kl = Literal::u16_unsuffixed(k as u16);
+                let c = call_of(k);
+                quote!(#kl => #c,)
+            });
+            let c = call_of(last);
+            quote! {
+                match Self::#table[#i] {
+                    #(#arms)*
+                    _ => #c,
+                }
+            }
+        };
+        let ncl = Literal::usize_unsuffixed(pass.carry);
+        let (co_decl, co_after) = if pass.carry > 0 {
+            (quote!(let mut co = [0.0f64; #ncl];), quote!(c = co;))
+        } else {
+            (TokenStream::new(), TokenStream::new())
+        };
+        let init = pass.init.iter().map(|&x| super::float(x));
+        let c_decl = if pass.carry > 0 && pass.order != Order::Ancestors {
+            if pass.init.iter().all(|&x| x == 0.0) {
+                quote!(let mut c = [0.0f64; #ncl];)
+            } else {
+                quote!(let mut c: [f64; #ncl] = [#(#init),*];)
+            }
+        } else {
+            TokenStream::new()
+        };
+        let nsl = Literal::usize_unsuffixed(pass.store);
+        body.extend(match pass.order {
+            Order::Forward | Order::Backward => {
+                let range = if pass.order == Order::Forward {
+                    quote!(0..#nl)
+                } else {
+                    quote!((0..#nl).rev())
+                };
+                quote! {
+                    let mut #st = [[0.0f64; #nsl]; #nl];
+                    #c_decl
+                    for i in #range {
+                        #co_decl
+                        #dispatch
+                        #co_after
+                    }
+                }
+            }
+            Order::Ancestors => {
+                let seed = format_ident!("st{}", pass.seed);
+                let seeds = (0..pass.carry).map(|k| {
+                    let k = Literal::usize_unsuffixed(k);
+                    quote!(#seed[i][#k])
+                });
+                let diag = Literal::usize_unsuffixed(pass.carry);
+                quote! {
+                    for i in 0..#nl {
+                        let mut c: [f64; #ncl] = [#(#seeds),*];
+                        m[i][i] = #seed[i][#diag];
+                        for j in (1..=i).rev() {
+                            #co_decl
+                            #so_decl
+                            #dispatch
+                            #co_after
+                            #so_after
+                        }
+                    }
+                }
+            }
+        });
+    }
+    (body, items)
+}
+
+/// The looped functions of `f`'s chain that `choice` selects, with the
+/// straight-line operation count of each.
+pub(crate) fn looped(
+    loops: &ChainLoops,
+    straight: &[(Function, usize)],
+    choice: LoopChoice,
+    fma: bool,
+) -> Vec<(Function, Looped)> {
+    let mut out = Vec::new();
+    for &(f, ops) in straight {
+        let Some(l) = loops.get(f) else { continue };
+        let take = match choice {
+            LoopChoice::Never => false,
+            LoopChoice::Always => true,
+            LoopChoice::Auto => loops.pays(f, ops),
+        };
+        if !take {
+            continue;
+        }
+        let n = loops.n;
+        let nl = Literal::usize_unsuffixed(n);
+        let fname = f.name();
+        let (body, items) = emit_loop(fname, l, n, fma);
+        let doc = format!(
+            " {} as loops over the {n} bodies of the chain ({} operations per call in {} body steps of {} operations; straight-line: {ops}; see `eom_gen::mech::looped`).",
+            match f {
+                Function::ForwardDynamics =>
+                    "Forward dynamics by the articulated-body algorithm, `u̇ = M⁻¹ (τ − b)`,",
+                Function::MassMatrix => "The mass matrix by composite rigid bodies",
+                Function::Bias => "The bias `b = ID(q, u, 0)` by recursive Newton–Euler",
+                _ => "Inverse dynamics by recursive Newton–Euler, `τ = M u̇ + b`,",
+            },
+            l.ops(),
+            l.steps(),
+            l.code_ops()
+        );
+        let method = match f {
+            Function::ForwardDynamics => quote! {
+                #[doc = #doc]
+                #[allow(clippy::needless_range_loop)]
+                fn forward_dynamics(&self, _t: f64, q: &[f64; #nl], u: &[f64; #nl], tau: &[f64; #nl], udot: &mut [f64; #nl]) {
+                    #body
+                    for (o, s) in udot.iter_mut().zip(&st2) {
+                        *o = s[0];
+                    }
+                }
+            },
+            Function::MassMatrix => quote! {
+                #[doc = #doc]
+                #[allow(clippy::needless_range_loop)]
+                fn mass_matrix(&self, _t: f64, q: &[f64; #nl], m: &mut [[f64; #nl]; #nl]) {
+                    #body
+                }
+            },
+            Function::Bias => quote! {
+                #[doc = #doc]
+                #[allow(clippy::needless_range_loop)]
+                fn bias(&self, _t: f64, q: &[f64; #nl], u: &[f64; #nl], b: &mut [f64; #nl]) {
+                    #body
+                    for (o, s) in b.iter_mut().zip(&st1) {
+                        *o = s[0];
+                    }
+                }
+            },
+            _ => quote! {
+                #[doc = #doc]
+                #[allow(clippy::needless_range_loop)]
+                fn inverse_dynamics(&self, _t: f64, q: &[f64; #nl], u: &[f64; #nl], udot: &[f64; #nl], tau: &mut [f64; #nl]) {
+                    #body
+                    for (o, s) in tau.iter_mut().zip(&st1) {
+                        *o = s[0];
+                    }
+                }
+            },
+        };
+        out.push((f, Looped { method, items }));
+    }
+    out
+}
