@@ -172,6 +172,7 @@ pub fn generate_tokens_checked(
         &emit::EmitOptions {
             type_name: Some(type_name.to_string()),
             fma: false,
+            lanes: false,
         },
     ))
 }

@@ -152,4 +152,3 @@ impl<const W: usize> core::ops::Neg for Lanes<W> {
         self.map(|x| -x)
     }
 }
-

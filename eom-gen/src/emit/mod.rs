@@ -18,6 +18,7 @@ use crate::mech::Formulation;
 use crate::sym::{SymKind, Symbol};
 use lower::{Arg, Style, lower};
 
+mod batch;
 pub(crate) mod lower;
 mod names;
 use crate::system::{Motion, System};
@@ -47,6 +48,11 @@ pub struct EmitOptions {
     /// only when compiling with FMA (`-C target-feature=+fma` or a
     /// `target-cpu` that has it); otherwise `mul_add` is a libm call.
     pub fma: bool,
+    /// Also emit every generated function over lanes, `W` states per call
+    /// (`NAME_lanes::<W>`, `eom_sim::Batched`, `eom_sim::OdeLanes`; see
+    /// `emit::batch`). Off by default: it doubles the source a model
+    /// compiles from.
+    pub lanes: bool,
 }
 
 impl Binding<'_> {
@@ -291,7 +297,7 @@ pub fn emit_tokens(
     let style = Style {
         input: &input,
         fma: opts.fma,
-        lanes: false,
+        lanes: None,
         methods: true,
     };
     let q_doc = format!("`q` = ({})", list(&coords));
@@ -676,6 +682,11 @@ pub fn emit_tokens(
         }
     };
     let (functions_const, evaluate_fn) = evaluate_dispatch(sys, f);
+    let batched = if opts.lanes {
+        batch::emit(sys, f, &ty, &b, opts.fma)
+    } else {
+        TokenStream::new()
+    };
     let (multipliers_field, multipliers_default) = if f.constraint_names.is_empty() {
         (TokenStream::new(), TokenStream::new())
     } else {
@@ -848,6 +859,8 @@ pub fn emit_tokens(
         #inherent_impl
 
         #parts_impl
+
+        #batched
 
         #[doc = #ode_doc]
         impl ::eom_sim::OdeSystem<#ny_l> for #ty {
