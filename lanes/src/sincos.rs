@@ -15,25 +15,26 @@ pub const REDUCTION_LIMIT: f64 = 1.0e6;
 /// Below this magnitude `sin x` rounds to `x`.
 const TINY: f64 = 1.0 / 67_108_864.0;
 const TOINT: f64 = 1.5 / f64::EPSILON;
-const INVPIO2: f64 = 6.366_197_723_675_813_824_33e-1;
-const PIO2_1: f64 = 1.570_796_326_734_125_614_17e0;
-const PIO2_2: f64 = 6.077_100_506_303_965_976_60e-11;
-const PIO2_3: f64 = 2.022_266_248_711_166_455_80e-21;
-const PIO2_3T: f64 = 8.478_427_660_368_899_569_97e-32;
+const INVPIO2: f64 = core::f64::consts::FRAC_2_PI;
+// The constants as fdlibm writes them (hex words of the doubles).
+const PIO2_1: f64 = f64::from_bits(0x3ff921fb54400000); // 1.5707963267341256
+const PIO2_2: f64 = f64::from_bits(0x3dd0b4611a600000); // 6.077100506303966e-11
+const PIO2_3: f64 = f64::from_bits(0x3ba3198a2e000000); // 2.0222662487111665e-21
+const PIO2_3T: f64 = f64::from_bits(0x397b839a252049c1); // 8.4784276603689e-32
 
-const S1: f64 = -1.666_666_666_666_663_243_48e-1;
-const S2: f64 = 8.333_333_333_322_489_461_24e-3;
-const S3: f64 = -1.984_126_982_985_794_931_34e-4;
-const S4: f64 = 2.755_731_370_707_006_767_89e-6;
-const S5: f64 = -2.505_076_025_340_686_341_95e-8;
-const S6: f64 = 1.589_690_995_211_550_102_21e-10;
+const S1: f64 = f64::from_bits(0xbfc5555555555549); // -0.16666666666666632
+const S2: f64 = f64::from_bits(0x3f8111111110f8a6); // 0.00833333333332249
+const S3: f64 = f64::from_bits(0xbf2a01a019c161d5); // -0.0001984126982985795
+const S4: f64 = f64::from_bits(0x3ec71de357b1fe7d); // 2.7557313707070068e-06
+const S5: f64 = f64::from_bits(0xbe5ae5e68a2b9ceb); // -2.5050760253406863e-08
+const S6: f64 = f64::from_bits(0x3de5d93a5acfd57c); // 1.58969099521155e-10
 
-const C1: f64 = 4.166_666_666_666_660_190_37e-2;
-const C2: f64 = -1.388_888_888_887_410_957_49e-3;
-const C3: f64 = 2.480_158_728_947_672_941_78e-5;
-const C4: f64 = -2.755_731_435_139_066_330_35e-7;
-const C5: f64 = 2.087_572_321_298_174_827_90e-9;
-const C6: f64 = -1.135_964_755_778_819_482_65e-11;
+const C1: f64 = f64::from_bits(0x3fa555555555554c); // 0.0416666666666666
+const C2: f64 = f64::from_bits(0xbf56c16c16c15177); // -0.001388888888887411
+const C3: f64 = f64::from_bits(0x3efa01a019cb1590); // 2.480158728947673e-05
+const C4: f64 = f64::from_bits(0xbe927e4f809c52ad); // -2.7557314351390663e-07
+const C5: f64 = f64::from_bits(0x3e21ee9ebdb4b1c4); // 2.087572321298175e-09
+const C6: f64 = f64::from_bits(0xbda8fae9be8838d4); // -1.1359647557788195e-11
 
 /// `a + b` as `(s, e)` with `s + e = a + b` exactly (Knuth's TwoSum; no
 /// condition on the magnitudes).
@@ -104,6 +105,12 @@ pub fn sin_cos_reduced(x: f64) -> (f64, f64) {
     (s, f64::from_bits(c.to_bits() ^ cos_sign))
 }
 
+/// `|x| < REDUCTION_LIMIT`, false for NaN.
+#[inline(always)]
+fn reducible(x: f64) -> bool {
+    x.abs() < REDUCTION_LIMIT
+}
+
 /// `(sin x, cos x)` of every lane: [`sin_cos_reduced`] on all lanes (one
 /// vectorised pass), then `f64::sin_cos` on any lane outside its range.
 #[inline(always)]
@@ -116,11 +123,11 @@ pub fn sin_cos_lanes<const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
     }
     let mut outside = false;
     for v in x {
-        outside |= !(v.abs() < REDUCTION_LIMIT);
+        outside |= !reducible(v);
     }
     if outside {
         for i in 0..W {
-            if !(x[i].abs() < REDUCTION_LIMIT) {
+            if !reducible(x[i]) {
                 (s[i], c[i]) = f64::sin_cos(x[i]);
             }
         }

@@ -34,21 +34,20 @@ impl Rng {
 /// Checks 8 arguments at once (lanes of different values) against libm.
 fn check(xs: [f64; 8], worst: &mut (u64, f64)) {
     let (s, c) = Lanes(xs).sin_cos();
-    for l in 0..8 {
-        let (ws, wc) = f64::sin_cos(xs[l]);
+    for (l, &x) in xs.iter().enumerate() {
+        let (ws, wc) = f64::sin_cos(x);
         for (got, want, what) in [(s.0[l], ws, "sin"), (c.0[l], wc, "cos")] {
             if want.is_nan() {
-                assert!(got.is_nan(), "{what}({:e}): got {got:e}, want NaN", xs[l]);
+                assert!(got.is_nan(), "{what}({x:e}): got {got:e}, want NaN");
                 continue;
             }
             let d = ulps(got, want);
             assert!(
                 d <= 1,
-                "{what}({:e}) = {got:e}, libm {want:e}: {d} ulp apart",
-                xs[l]
+                "{what}({x:e}) = {got:e}, libm {want:e}: {d} ulp apart"
             );
             if d > worst.0 {
-                *worst = (d, xs[l]);
+                *worst = (d, x);
             }
         }
     }
@@ -115,12 +114,11 @@ fn signs_of_zero_and_the_pythagorean_identity() {
     for _ in 0..10_000 {
         let xs: [f64; 4] = std::array::from_fn(|_| (rng.unit() - 0.5) * 1e4);
         let (s, c) = Lanes(xs).sin_cos();
-        for l in 0..4 {
-            let one = s.0[l] * s.0[l] + c.0[l] * c.0[l];
+        for (x, (s, c)) in xs.iter().zip(s.0.iter().zip(c.0)) {
+            let one = s * s + c * c;
             assert!(
                 (one - 1.0).abs() <= 4.0 * f64::EPSILON,
-                "sin² + cos² at {} = {one}",
-                xs[l]
+                "sin² + cos² at {x} = {one}"
             );
         }
     }
