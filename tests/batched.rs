@@ -8,11 +8,14 @@
 
 use eom_gen::testkit::Rng;
 use eom_generated as g;
-use eom_sim::{Batched, Lanes, OdeLanes, OdeSystem, PointLanes, Vector};
+use eom_sim::{Batched, Lanes, OdeLanes, OdeSystem, PointLanes};
 
 /// Relative agreement asked of every entry, against the largest entry of
 /// the single-state result (and at least 1).
 const TOL: f64 = 1e-11;
+
+/// One state: `t`, `q`, `u`, `u̇`, `τ`, `λ`.
+type State = (f64, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
 
 /// `W` random states of `M` (positions about `q0`, unit quaternions),
 /// their pack, and a random pack of every other argument; compares every
@@ -46,14 +49,11 @@ fn lanes_match<M: Batched + Default, const W: usize>(name: &str) {
             v(&mut rng, nc),
         ));
     }
-    let pack =
-        |f: &dyn Fn(&(f64, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>)) -> &Vec<f64>,
-         n: usize|
-         -> Vec<Lanes<W>> {
-            (0..n)
-                .map(|k| Lanes(std::array::from_fn(|l| f(&states[l])[k])))
-                .collect()
-        };
+    let pack = |f: &dyn Fn(&State) -> &Vec<f64>, n: usize| -> Vec<Lanes<W>> {
+        (0..n)
+            .map(|k| Lanes(std::array::from_fn(|l| f(&states[l])[k])))
+            .collect()
+    };
     let (q, u) = (pack(&|s| &s.1, M::NQ), pack(&|s| &s.2, M::NU));
     let (udot, tau, lambda) = (
         pack(&|s| &s.3, M::NU),

@@ -1,7 +1,7 @@
 //! Many states per call: the batched functions of generated models.
 //!
 //! With batched emission (`eom_gen::EmitOptions::lanes`, `Builder::lanes`,
-//! `#[multibody(lanes)]`) every generated function of the table also
+//! `eom-gen dump --lanes`; not yet from `#[multibody]`) every generated function of the table also
 //! exists as `NAME_lanes::<W>`, an associated function of the model that
 //! evaluates `W` states at once, one per SIMD lane ([`Lanes<W>`]), by the
 //! same straight-line program as the single-state method. Its arguments are
