@@ -193,7 +193,11 @@ fn generated_sources_are_fresh() {
             .next()
             .unwrap_or(file);
         let text = std::fs::read_to_string(format!("{dir}/{file}")).unwrap_or_default();
-        let fresh = generate(&Source::new(format!("models/{file}"), text))
+        let opts = eom_gen::EmitOptions {
+            lanes: true,
+            ..Default::default()
+        };
+        let fresh = eom_gen::generate_with(&Source::new(format!("models/{file}"), text), &opts)
             .unwrap_or_else(|e| panic!("{e}"))
             .source;
         let committed = std::fs::read_to_string(format!(

@@ -31,7 +31,14 @@ pub struct PerCallOptions {
     pub native: bool,
     /// Also generate and time `forward_dynamics_derivatives`.
     pub derivatives: bool,
+    /// Also emit the batched functions and time `forward_dynamics_lanes`
+    /// at every pack width of [`WIDTHS`] (ns per state).
+    pub batch: bool,
 }
+
+/// The pack widths `--batch` times: 2 lanes fill an SSE2 register, 4 an
+/// AVX2 one, 8 an AVX-512 one, 16 two of them.
+pub const WIDTHS: [usize; 4] = [2, 4, 8, 16];
 
 impl Default for PerCallOptions {
     fn default() -> Self {
@@ -41,6 +48,7 @@ impl Default for PerCallOptions {
             seed: 1,
             native: false,
             derivatives: false,
+            batch: false,
         }
     }
 }
@@ -71,6 +79,18 @@ pub struct PerCall {
     pub inverse_dynamics: Timing,
     /// `forward_dynamics_derivatives`, when asked for.
     pub derivatives: Option<Timing>,
+    /// `forward_dynamics_lanes` per pack width (ns per state), with `--batch`.
+    pub batched: Vec<(usize, Timing)>,
+}
+
+impl PerCall {
+    /// The pack width with the lowest median ns per state, and its timing.
+    pub fn best_batched(&self) -> Option<(usize, Timing)> {
+        self.batched
+            .iter()
+            .copied()
+            .min_by(|a, b| a.1.median.total_cmp(&b.1.median))
+    }
 }
 
 const MAIN: &str = r#"//! Times the generated model's forward dynamics, mass matrix and inverse
@@ -105,8 +125,9 @@ impl Rng {
     }
 }
 
-/// One warm-up pass, then `reps` timed passes over `n` states; ns per call.
-fn time(n: usize, reps: usize, mut f: impl FnMut(usize)) -> String {
+/// One warm-up pass, then `reps` timed passes over `n` calls of `per`
+/// states each; ns per state.
+fn time(n: usize, per: usize, reps: usize, mut f: impl FnMut(usize)) -> String {
     for k in 0..n {
         f(k);
     }
@@ -116,7 +137,7 @@ fn time(n: usize, reps: usize, mut f: impl FnMut(usize)) -> String {
             for k in 0..n {
                 f(k);
             }
-            start.elapsed().as_secs_f64() * 1e9 / n as f64
+            start.elapsed().as_secs_f64() * 1e9 / (n * per) as f64
         })
         .collect();
     ns.sort_by(f64::total_cmp);
@@ -145,36 +166,95 @@ fn main() {
         })
         .collect();
     let mut udot = U::ZERO;
-    let fd = time(n, reps, |k| {
+    let fd = time(n, 1, reps, |k| {
         let (q, u, tau, _) = &states[k];
         m.forward_dynamics(0.0, black_box(q), black_box(u), black_box(tau), &mut udot);
         black_box(&mut udot);
     });
     let mut mm = <model::MODEL as Model>::MASS_ZERO;
-    let mass = time(n, reps, |k| {
+    let mass = time(n, 1, reps, |k| {
         m.mass_matrix(0.0, black_box(&states[k].0), &mut mm);
         black_box(&mut mm);
     });
     let mut tau = U::ZERO;
-    let id = time(n, reps, |k| {
+    let id = time(n, 1, reps, |k| {
         let (q, u, _, a) = &states[k];
         m.inverse_dynamics(0.0, black_box(q), black_box(u), black_box(a), &mut tau);
         black_box(&mut tau);
     });
-    println!("{{\"forward_dynamics\":{fd},\"mass_matrix\":{mass},\"inverse_dynamics\":{id}}}");
+    let extra = extra(n, reps, &m, &states);
+    println!("{{\"forward_dynamics\":{fd},\"mass_matrix\":{mass},\"inverse_dynamics\":{id}{extra}}}");
+}
+"#;
+
+/// `MAIN`'s `extra` without `--batch`: nothing more to time.
+const NO_EXTRA: &str = r#"
+fn extra(_n: usize, _reps: usize, _m: &model::MODEL, _states: &[(Q, U, U, U)]) -> String {
+    String::new()
+}
+"#;
+
+/// `MAIN`'s `extra` with `--batch`: `forward_dynamics_lanes` at every pack
+/// width, the states packed `W` at a time (lane `l` of pack `k` is state
+/// `W k + l`), ns per state.
+const BATCHED: &str = r#"
+use eom_sim::Lanes;
+const NQ: usize = <model::MODEL as Model>::NQ;
+const NU: usize = <model::MODEL as Model>::NU;
+
+type Pack<const W: usize> = ([Lanes<W>; NQ], [Lanes<W>; NU], [Lanes<W>; NU]);
+
+fn batched<const W: usize>(reps: usize, m: &model::MODEL, states: &[(Q, U, U, U)]) -> String {
+    let models = [*m; W];
+    let lanes = |c: &[(Q, U, U, U)], f: &dyn Fn(&(Q, U, U, U)) -> Vec<f64>, k: usize| {
+        Lanes::<W>(std::array::from_fn(|l| f(&c[l])[k]))
+    };
+    let packs: Vec<Pack<W>> = states
+        .chunks_exact(W)
+        .map(|c| {
+            (
+                std::array::from_fn(|k| lanes(c, &|s| s.0.as_ref().to_vec(), k)),
+                std::array::from_fn(|k| lanes(c, &|s| s.1.as_ref().to_vec(), k)),
+                std::array::from_fn(|k| lanes(c, &|s| s.2.as_ref().to_vec(), k)),
+            )
+        })
+        .collect();
+    let mut udot = [Lanes::<W>::splat(0.0); NU];
+    time(packs.len(), W, reps, |k| {
+        let (q, u, tau) = &packs[k];
+        model::MODEL::forward_dynamics_lanes(
+            &models,
+            Lanes::splat(0.0),
+            black_box(q),
+            black_box(u),
+            black_box(tau),
+            &mut udot,
+        );
+        black_box(&mut udot);
+    })
+}
+
+fn extra(_n: usize, reps: usize, m: &model::MODEL, states: &[(Q, U, U, U)]) -> String {
+    format!(
+        ",\"batched_forward_dynamics\":{{\"2\":{},\"4\":{},\"8\":{},\"16\":{}}}",
+        batched::<2>(reps, m, states),
+        batched::<4>(reps, m, states),
+        batched::<8>(reps, m, states),
+        batched::<16>(reps, m, states),
+    )
 }
 "#;
 
 /// What replaces `MAIN`'s last line when the derivatives are timed too (the
 /// model file then defines `DERIVATIVES_LEN`).
-const PRINT: &str = r#"    println!("{{\"forward_dynamics\":{fd},\"mass_matrix\":{mass},\"inverse_dynamics\":{id}}}");"#;
+const PRINT: &str = r#"    println!("{{\"forward_dynamics\":{fd},\"mass_matrix\":{mass},\"inverse_dynamics\":{id}{extra}}}");"#;
 const PRINT_WITH_DERIVATIVES: &str = r#"    let mut jac = [0.0; model::DERIVATIVES_LEN];
-    let dfd = time(n, reps, |k| {
+    let dfd = time(n, 1, reps, |k| {
         let (q, u, tau, _) = &states[k];
         m.forward_dynamics_derivatives(0.0, black_box(q), black_box(u), black_box(tau), &mut jac);
         black_box(&mut jac);
     });
-    println!("{{\"forward_dynamics\":{fd},\"mass_matrix\":{mass},\"inverse_dynamics\":{id},\"forward_dynamics_derivatives\":{dfd}}}");"#;
+    println!("{{\"forward_dynamics\":{fd},\"mass_matrix\":{mass},\"inverse_dynamics\":{id},\"forward_dynamics_derivatives\":{dfd}{extra}}}");"#;
 
 /// Builds (once, cached) the timing program of a generated model and runs it.
 pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, Error> {
@@ -184,13 +264,14 @@ pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, Error> {
         .formulation
         .program(eom_gen::functions::Function::ForwardDynamicsDerivatives)
         .filter(|_| o.derivatives);
-    let main = match derivatives {
+    let mut main = match derivatives {
         Some(p) => {
             model += &format!("pub const DERIVATIVES_LEN: usize = {};\n", p.outputs.len());
             MAIN.replace(PRINT, PRINT_WITH_DERIVATIVES)
         }
         None => MAIN.to_string(),
     };
+    main += if o.batch { BATCHED } else { NO_EXTRA };
     if derivatives.is_some() && !MAIN.contains(PRINT) {
         return Err(Error::Program(
             "internal: the timing program's last line changed; `PRINT` must match it".into(),
@@ -219,7 +300,8 @@ pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, Error> {
         .map_err(|e| Error::Program(format!("unexpected output of {}: {e}", exe.display())))?;
     let timing = |f: &str| -> Result<Timing, Error> {
         let x = |k: &str| {
-            v[f][k]
+            let at = f.split('/').fold(&v, |v, key| &v[key]);
+            at[k]
                 .as_f64()
                 .ok_or_else(|| Error::Program(format!("{} printed no `{f}.{k}`", exe.display())))
         };
@@ -238,6 +320,14 @@ pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, Error> {
         derivatives: match derivatives {
             Some(_) => Some(timing("forward_dynamics_derivatives")?),
             None => None,
+        },
+        batched: if o.batch {
+            WIDTHS
+                .iter()
+                .map(|w| Ok((*w, timing(&format!("batched_forward_dynamics/{w}"))?)))
+                .collect::<Result<_, Error>>()?
+        } else {
+            Vec::new()
         },
     })
 }
@@ -258,7 +348,10 @@ pub fn op_totals(g: &Generated) -> [Option<usize>; 3] {
 /// "inverse_dynamics_ns"` (with `--derivatives` also
 /// `"forward_dynamics_derivatives_ns"`, in `ops` and `spread` too)`,
 /// "ops": {…}, "fd_form", "spread", "states",
-/// "reps", "seed", "target_cpu_native"}`.
+/// "reps", "seed", "target_cpu_native"}`; with `--batch` also
+/// `"batched_forward_dynamics_ns"` (the median ns per state of the fastest
+/// pack width), `"batched_width"` (that width) and
+/// `"batched_forward_dynamics_ns_by_width"`.
 pub fn json(g: &Generated, o: &PerCallOptions, r: &PerCall) -> serde_json::Value {
     let [fd, mm, id] = op_totals(g);
     let spread =
@@ -288,6 +381,17 @@ pub fn json(g: &Generated, o: &PerCallOptions, r: &PerCall) -> serde_json::Value
         v["forward_dynamics_derivatives_ns"] = serde_json::json!(t.median);
         v["ops"]["forward_dynamics_derivatives"] = serde_json::json!(ops);
         v["spread"]["forward_dynamics_derivatives"] = spread(t);
+    }
+    if let Some((w, best)) = r.best_batched() {
+        v["batched_forward_dynamics_ns"] = serde_json::json!(best.median);
+        v["batched_width"] = serde_json::json!(w);
+        v["batched_forward_dynamics_ns_by_width"] = r
+            .batched
+            .iter()
+            .map(|(w, t)| (w.to_string(), serde_json::json!(t.median)))
+            .collect::<serde_json::Map<_, _>>()
+            .into();
+        v["spread"]["batched_forward_dynamics"] = spread(&best);
     }
     v
 }
@@ -331,6 +435,20 @@ pub fn table(g: &Generated, o: &PerCallOptions, r: &PerCall) -> String {
             "  {f:<28} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {n:>8} {rate:>7}\n",
             t.median, t.q1, t.q3, t.min, t.max
         );
+    }
+    for (w, t) in &r.batched {
+        let f = format!("forward_dynamics_lanes W={w}");
+        let (n, rate) = match ops[0] {
+            Some(n) => (n.to_string(), format!("{:.2}", n as f64 / t.median)),
+            None => ("-".into(), "-".into()),
+        };
+        s += &format!(
+            "  {f:<28} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {n:>8} {rate:>7}\n",
+            t.median, t.q1, t.q3, t.min, t.max
+        );
+    }
+    if let Some((w, _)) = r.best_batched() {
+        s += &format!("  batched rows: ns per state, {w} states per call the fastest\n");
     }
     s += &format!("  forward dynamics: {}\n", g.formulation.fd_form);
     if !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty() {

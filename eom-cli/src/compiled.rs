@@ -44,7 +44,8 @@ fn eom_sim_dependency() -> String {
 }
 
 /// A hash of the local runtime's sources (empty without a checkout), so a
-/// changed `eom-sim` rebuilds the cached crates.
+/// changed `eom-sim` (or its lane type, `eom-lanes`) rebuilds the cached
+/// crates.
 fn runtime_fingerprint() -> String {
     fn walk(dir: &std::path::Path, out: &mut Vec<(PathBuf, Vec<u8>)>) {
         let Ok(entries) = std::fs::read_dir(dir) else {
@@ -60,10 +61,12 @@ fn runtime_fingerprint() -> String {
         }
     }
     let mut files = Vec::new();
-    walk(
-        &PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../eom-sim/src")),
-        &mut files,
-    );
+    for dir in ["/../eom-sim/src", "/../lanes/src"] {
+        walk(
+            &PathBuf::from(format!("{}{dir}", env!("CARGO_MANIFEST_DIR"))),
+            &mut files,
+        );
+    }
     files.sort();
     let mut bytes = Vec::new();
     for (p, text) in files {

@@ -72,7 +72,13 @@ fn main() -> ExitCode {
                 return ExitCode::from(1);
             }
         };
-        match eom_gen::generate(&src) {
+        // With the batched functions (`NAME_lanes`), which the tests run
+        // lane by lane against the single-state ones.
+        let opts = eom_gen::EmitOptions {
+            lanes: true,
+            ..Default::default()
+        };
+        match eom_gen::generate_with(&src, &opts) {
             Ok(g) => {
                 if let Err(e) = std::fs::write(format!("{root}/generated/src/{name}.rs"), g.source)
                 {

@@ -21,6 +21,7 @@ pub struct Builder {
     models: Vec<String>,
     out_dir: Option<PathBuf>,
     fma: bool,
+    lanes: bool,
 }
 
 /// Why a build step failed.
@@ -74,6 +75,13 @@ impl Builder {
         self
     }
 
+    /// Also emits every function over lanes, `W` states per call (see
+    /// [`crate::EmitOptions::lanes`] and `eom_sim::batch`).
+    pub fn lanes(mut self, on: bool) -> Self {
+        self.lanes = on;
+        self
+    }
+
     /// Generates every model into `<out_dir>/<model name>.rs` and prints
     /// `cargo:rerun-if-changed=<model>` for each (and for a scene's model). Reports the first model
     /// that fails, with all of its diagnostics.
@@ -87,6 +95,7 @@ impl Builder {
             println!("cargo:rerun-if-changed={path}");
             let opts = crate::EmitOptions {
                 fma: self.fma,
+                lanes: self.lanes,
                 ..Default::default()
             };
             let g = generate_file_with(path, &opts).map_err(BuildError::Generate)?;

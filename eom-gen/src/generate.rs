@@ -171,6 +171,7 @@ pub fn generate_tokens_checked(
         &checked.content(),
         &emit::EmitOptions {
             type_name: Some(type_name.to_string()),
+            lanes: false,
             ..Default::default()
         },
     ))

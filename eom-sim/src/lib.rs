@@ -48,6 +48,7 @@
 //! println!("{:?}", sol.stats);
 //! ```
 
+pub mod batch;
 pub mod constrained;
 /// The element kernels (the `eom-elements` crate), with the `cables`
 /// feature.
@@ -62,6 +63,7 @@ pub mod state;
 pub mod table;
 pub mod work_precision;
 
+pub use batch::{Batched, Lanes, OdeLanes, PointLanes};
 pub use constrained::{
     Assembly, ConstrainedModel, ConstrainedSystem, ConstraintStats, ConstraintValues, Dynamics,
     Generated, Index3System, Method, Refusal,

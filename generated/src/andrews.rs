@@ -1707,6 +1707,1637 @@ impl Andrews {
         out[17] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl Andrews {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (7 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 7],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+        out[2] = u[2];
+        out[3] = u[3];
+        out[4] = u[4];
+        out[5] = u[5];
+        out[6] = u[6];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (214 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (7 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 7],
+        tau: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 7],
+    ) {
+        let (x0, x1) = q[1].sin_cos();
+        let x2 = u[0] + u[1];
+        let (x3, x4) = q[2].sin_cos();
+        let (x5, x6) = q[4].sin_cos();
+        let x7 = u[3] + u[4];
+        let (x8, x9) = q[6].sin_cos();
+        let x10 = u[5] + u[6];
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.02) * x4;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.018) * x3;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.02) * x3;
+        let x14 = x11 + x12;
+        let x15 = x14 - ::eom_sim::Lanes::<W>::splat(0.05035);
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.018) * x4;
+        let x17 = x13 - ::eom_sim::Lanes::<W>::splat(0.03926999999999999);
+        let x18 = x17 - x16;
+        let x19 = x15 * x15;
+        let x20 = x18 * x18;
+        let x21 = x19 + x20;
+        let x22 = x21.sqrt();
+        let x23 = ::eom_sim::Lanes::<W>::splat(4530.0) * x22;
+        let x24 = ::eom_sim::Lanes::<W>::splat(352.6605) - x23;
+        let x25 = x9 * x9;
+        let x26 = x8 * x8;
+        let x27 = x6 * x6;
+        let x28 = x5 * x5;
+        let x29 = x1 * x1;
+        let x30 = x0 * x0;
+        let x31 = u[0] * u[0];
+        let x32 = u[0] * u[1];
+        let x33 = x1 * x32;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x33;
+        let x35 = u[0] * x1;
+        let x36 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x35;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[1];
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[0];
+        let x39 = x36 - x37;
+        let x40 = x39 - x38;
+        let x41 = x2 * x40;
+        let x42 = u[0] * x2;
+        let x43 = x0 * x42;
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x43;
+        let x45 = x34 - x41;
+        let x46 = u[3] * u[3];
+        let x47 = u[3] * x5;
+        let x48 = u[4] * x47;
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x47;
+        let x50 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[4];
+        let x51 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[3];
+        let x52 = x50 + x51;
+        let x53 = x49 + x52;
+        let x54 = u[3] * x7;
+        let x55 = x6 * x54;
+        let x56 = x7 * x53;
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x48;
+        let x58 = x56 - x57;
+        let x59 = u[5] * u[5];
+        let x60 = u[5] * x8;
+        let x61 = u[6] * x60;
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[5];
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[6];
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x60;
+        let x65 = x62 + x63;
+        let x66 = x65 - x64;
+        let x67 = x10 * x66;
+        let x68 = u[5] * x9;
+        let x69 = x10 * x68;
+        let x70 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x69;
+        let x71 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x61;
+        let x72 = x67 + x71;
+        let x73 = -x72;
+        let x74 = x9 * x73;
+        let x75 = u[6] * x68;
+        let x76 = x66 * x68;
+        let x77 = x9 * x59;
+        let x78 = x8 * x77;
+        let x79 = ::eom_sim::Lanes::<W>::splat(1244740.7431948164) * tau[6];
+        let x80 = ::eom_sim::Lanes::<W>::splat(50.88176525587179) * tau[6];
+        let x81 = ::eom_sim::Lanes::<W>::splat(0.0005747604203303278) * x78;
+        let x82 = ::eom_sim::Lanes::<W>::splat(2.0352706102348717) * x76;
+        let x83 = ::eom_sim::Lanes::<W>::splat(0.0001992034291571851) * x75;
+        let x84 = x70 + x80;
+        let x85 = x84 - x81;
+        let x86 = x85 - x82;
+        let x87 = x86 - x83;
+        let x88 = ::eom_sim::Lanes::<W>::splat(0.000007968137166287403) * x26;
+        let x89 = ::eom_sim::Lanes::<W>::splat(0.000011296000000000002) * x25;
+        let x90 = ::eom_sim::Lanes::<W>::splat(0.00002851929833) + x89;
+        let x91 = x88 + x90;
+        let x92 = x8 * x87;
+        let x93 = ::eom_sim::Lanes::<W>::splat(0.04) * x92;
+        let x94 = ::eom_sim::Lanes::<W>::splat(0.0000000000000000000016940658945086007)
+            * x78;
+        let x95 = ::eom_sim::Lanes::<W>::splat(0.04) * x74;
+        let x96 = x93 + x94;
+        let x97 = tau[5] + x96;
+        let x98 = x97 - tau[6];
+        let x99 = x98 - x95;
+        let x100 = ::eom_sim::Lanes::<W>::splat(1.0) / x91;
+        let x101 = x99 * x100;
+        let x102 = u[3] * u[4];
+        let x103 = x6 * x102;
+        let x104 = ::eom_sim::Lanes::<W>::splat(0.0001992034291571851) * x103;
+        let x105 = ::eom_sim::Lanes::<W>::splat(1244740.7431948164) * tau[4];
+        let x106 = x5 * x46;
+        let x107 = x6 * x106;
+        let x108 = u[3] * x6;
+        let x109 = x53 * x108;
+        let x110 = ::eom_sim::Lanes::<W>::splat(49789.62972779266) * x109;
+        let x111 = ::eom_sim::Lanes::<W>::splat(2.0352706102348717) * x109;
+        let x112 = ::eom_sim::Lanes::<W>::splat(50.88176525587179) * tau[4];
+        let x113 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x55;
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.0005747604203303278) * x107;
+        let x115 = x111 + x112;
+        let x116 = x104 + x115;
+        let x117 = x116 - x113;
+        let x118 = x117 - x114;
+        let x119 = ::eom_sim::Lanes::<W>::splat(0.000011296000000000002) * x27;
+        let x120 = ::eom_sim::Lanes::<W>::splat(0.000007968137166287403) * x28;
+        let x121 = ::eom_sim::Lanes::<W>::splat(0.00005515973599999999) + x120;
+        let x122 = x119 + x121;
+        let x123 = x6 * x58;
+        let x124 = ::eom_sim::Lanes::<W>::splat(0.0000000000000000000016940658945086007)
+            * x107;
+        let x125 = x5 * x118;
+        let x126 = ::eom_sim::Lanes::<W>::splat(0.04) * x125;
+        let x127 = ::eom_sim::Lanes::<W>::splat(0.04) * x123;
+        let x128 = tau[3] + x124;
+        let x129 = x128 - tau[4];
+        let x130 = x129 - x126;
+        let x131 = x130 - x127;
+        let x132 = ::eom_sim::Lanes::<W>::splat(1.0) / x122;
+        let x133 = x131 * x132;
+        let x134 = x4 * x18;
+        let x135 = x24 * x134;
+        let x136 = ::eom_sim::Lanes::<W>::splat(1.0) / x22;
+        let x137 = x135 * x136;
+        let x138 = ::eom_sim::Lanes::<W>::splat(1236.8471031425986) * x137;
+        let x139 = x4 * x24;
+        let x140 = x15 * x139;
+        let x141 = x140 * x136;
+        let x142 = ::eom_sim::Lanes::<W>::splat(1113.1623928283386) * x141;
+        let x143 = x3 * x24;
+        let x144 = x15 * x143;
+        let x145 = x144 * x136;
+        let x146 = ::eom_sim::Lanes::<W>::splat(61842.35515712993) * tau[2];
+        let x147 = x3 * x18;
+        let x148 = x24 * x147;
+        let x149 = x148 * x136;
+        let x150 = ::eom_sim::Lanes::<W>::splat(1113.1623928283386) * x149;
+        let x151 = ::eom_sim::Lanes::<W>::splat(1236.8471031425986) * x145;
+        let x152 = x138 + x150;
+        let x153 = x146 + x152;
+        let x154 = x142 + x153;
+        let x155 = x154 - x151;
+        let x156 = u[0] * x0;
+        let x157 = u[1] * x156;
+        let x158 = x40 * x156;
+        let x159 = ::eom_sim::Lanes::<W>::splat(1082587.9264381505) * tau[1];
+        let x160 = x0 * x31;
+        let x161 = x1 * x160;
+        let x162 = ::eom_sim::Lanes::<W>::splat(0.19362085064346324) * x161;
+        let x163 = ::eom_sim::Lanes::<W>::splat(0.31809139748568954) * x158;
+        let x164 = ::eom_sim::Lanes::<W>::splat(0.00000812723520575937) * x161;
+        let x165 = ::eom_sim::Lanes::<W>::splat(0.000012198113590538184) * x157;
+        let x166 = ::eom_sim::Lanes::<W>::splat(45.44162821224136) * tau[1];
+        let x167 = x44 + x163;
+        let x168 = x167 - x164;
+        let x169 = x168 - x165;
+        let x170 = x169 - x166;
+        let x171 = ::eom_sim::Lanes::<W>::splat(0.00000008538679513376729) * x29;
+        let x172 = ::eom_sim::Lanes::<W>::splat(0.00000017885000000000002) * x30;
+        let x173 = ::eom_sim::Lanes::<W>::splat(0.0000022306068) + x172;
+        let x174 = x171 + x173;
+        let x175 = x1 * x170;
+        let x176 = x0 * x45;
+        let x177 = ::eom_sim::Lanes::<W>::splat(0.007) * x176;
+        let x178 = ::eom_sim::Lanes::<W>::splat(0.007) * x175;
+        let x179 = ::eom_sim::Lanes::<
+            W,
+        >::splat(0.000000000000000000000026469779601696886) * x161;
+        let x180 = ::eom_sim::Lanes::<W>::splat(0.033) + tau[0];
+        let x181 = x180 - x177;
+        let x182 = x181 - x178;
+        let x183 = x182 - tau[1];
+        let x184 = x183 - x179;
+        let x185 = ::eom_sim::Lanes::<W>::splat(1.0) / x174;
+        let x186 = x184 * x185;
+        let x187 = x1 * x184;
+        let x188 = x187 * x185;
+        let x189 = ::eom_sim::Lanes::<W>::splat(0.31809139748568954) * x188;
+        let x190 = ::eom_sim::Lanes::<W>::splat(7578.115485067054) * x158;
+        let x191 = ::eom_sim::Lanes::<W>::splat(0.31809139748568954) * x157;
+        let x192 = x162 + x189;
+        let x193 = x159 + x192;
+        let x194 = x193 - x186;
+        let x195 = x194 - x190;
+        let x196 = x195 - x191;
+        let x197 = x5 * x131;
+        let x198 = x197 * x132;
+        let x199 = ::eom_sim::Lanes::<W>::splat(14.060591435128648) * x107;
+        let x200 = ::eom_sim::Lanes::<W>::splat(2.0352706102348717) * x103;
+        let x201 = ::eom_sim::Lanes::<W>::splat(2.0352706102348717) * x198;
+        let x202 = x105 + x110;
+        let x203 = x202 - x199;
+        let x204 = x203 - x200;
+        let x205 = x204 - x201;
+        let x206 = x205 - x133;
+        let x207 = x8 * x99;
+        let x208 = x207 * x100;
+        let x209 = ::eom_sim::Lanes::<W>::splat(2.0352706102348717) * x208;
+        let x210 = ::eom_sim::Lanes::<W>::splat(2.0352706102348717) * x75;
+        let x211 = ::eom_sim::Lanes::<W>::splat(49789.62972779266) * x76;
+        let x212 = ::eom_sim::Lanes::<W>::splat(14.060591435128648) * x78;
+        let x213 = x209 + x210;
+        let x214 = x79 + x213;
+        let x215 = x214 - x211;
+        let x216 = x215 - x101;
+        let x217 = x216 - x212;
+        out[0] = x186;
+        out[1] = x196;
+        out[2] = x155;
+        out[3] = x133;
+        out[4] = x206;
+        out[5] = x101;
+        out[6] = x217;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (15 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (49 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 49],
+    ) {
+        let x0 = q[1].cos();
+        let x1 = q[4].sin();
+        let x2 = q[6].sin();
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.0000032701920000000002) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.000040618678476) - x3;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x1;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.0000032701920000000002) * x1;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.00006725911614599999) + x6;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.00000058765) * x0;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.0000033331692999999997) - x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.000000293825) * x0;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.0000009237125) - x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) + x5;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x2;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) - x13;
+        out[0] = x9;
+        out[7] = x11;
+        out[1] = out[7];
+        out[8] = ::eom_sim::Lanes::<W>::splat(0.0000009237125);
+        out[14] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[14];
+        out[15] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = out[15];
+        out[16] = ::eom_sim::Lanes::<W>::splat(0.000016170147425);
+        out[21] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = out[21];
+        out[22] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = out[22];
+        out[23] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[17] = out[23];
+        out[24] = x7;
+        out[28] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = out[28];
+        out[29] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = out[29];
+        out[30] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[18] = out[30];
+        out[31] = x12;
+        out[25] = out[31];
+        out[32] = ::eom_sim::Lanes::<W>::splat(0.000000803380146);
+        out[35] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = out[35];
+        out[36] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[12] = out[36];
+        out[37] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[19] = out[37];
+        out[38] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[26] = out[38];
+        out[39] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[33] = out[39];
+        out[40] = x4;
+        out[42] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[6] = out[42];
+        out[43] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[13] = out[43];
+        out[44] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[20] = out[44];
+        out[45] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[27] = out[45];
+        out[46] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[34] = out[46];
+        out[47] = x14;
+        out[41] = out[47];
+        out[48] = ::eom_sim::Lanes::<W>::splat(0.000000803380146);
+    }
+    /// `bias` of `W` states at once, one per lane (146 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (7 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 7],
+    ) {
+        let (x0, x1) = q[1].sin_cos();
+        let x2 = u[0] + u[1];
+        let (x3, x4) = q[2].sin_cos();
+        let (x5, x6) = q[4].sin_cos();
+        let x7 = u[3] + u[4];
+        let (x8, x9) = q[6].sin_cos();
+        let x10 = u[5] + u[6];
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.02) * x4;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.018) * x3;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.02) * x3;
+        let x14 = x11 + x12;
+        let x15 = x14 - ::eom_sim::Lanes::<W>::splat(0.05035);
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.018) * x4;
+        let x17 = x13 - ::eom_sim::Lanes::<W>::splat(0.03926999999999999);
+        let x18 = x17 - x16;
+        let x19 = x15 * x15;
+        let x20 = x18 * x18;
+        let x21 = x19 + x20;
+        let x22 = x21.sqrt();
+        let x23 = ::eom_sim::Lanes::<W>::splat(4530.0) * x22;
+        let x24 = ::eom_sim::Lanes::<W>::splat(352.6605) - x23;
+        let x25 = x4 * x24;
+        let x26 = x15 * x25;
+        let x27 = ::eom_sim::Lanes::<W>::splat(1.0) / x22;
+        let x28 = x26 * x27;
+        let x29 = x3 * x18;
+        let x30 = x24 * x29;
+        let x31 = x30 * x27;
+        let x32 = u[0] * u[0];
+        let x33 = u[0] * x0;
+        let x34 = u[1] * x33;
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.000000293825) * x34;
+        let x36 = u[0] * u[1];
+        let x37 = x1 * x36;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x37;
+        let x39 = u[0] * x1;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x39;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[1];
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[0];
+        let x43 = x40 - x41;
+        let x44 = x43 - x42;
+        let x45 = x33 * x44;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.007) * x45;
+        let x47 = x0 * x32;
+        let x48 = x1 * x47;
+        let x49 = x2 * x44;
+        let x50 = u[0] * x2;
+        let x51 = x0 * x50;
+        let x52 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x51;
+        let x53 = ::eom_sim::Lanes::<W>::splat(0.00000017885000000000002) * x48;
+        let x54 = x35 + x46;
+        let x55 = x54 - x53;
+        let x56 = x38 - x49;
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x34;
+        let x58 = x52 - x57;
+        let x59 = x4 * x18;
+        let x60 = x24 * x59;
+        let x61 = x60 * x27;
+        let x62 = x3 * x24;
+        let x63 = x15 * x62;
+        let x64 = x63 * x27;
+        let x65 = ::eom_sim::Lanes::<W>::splat(0.02) * x64;
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.018) * x31;
+        let x67 = ::eom_sim::Lanes::<W>::splat(0.02) * x61;
+        let x68 = ::eom_sim::Lanes::<W>::splat(0.018) * x28;
+        let x69 = x65 - x66;
+        let x70 = x69 - x67;
+        let x71 = x70 - x68;
+        let x72 = u[3] * u[3];
+        let x73 = u[3] * u[4];
+        let x74 = x6 * x73;
+        let x75 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x74;
+        let x76 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x74;
+        let x77 = u[3] * x5;
+        let x78 = u[4] * x77;
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x77;
+        let x80 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[4];
+        let x81 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[3];
+        let x82 = x80 + x81;
+        let x83 = x79 + x82;
+        let x84 = x5 * x72;
+        let x85 = x6 * x84;
+        let x86 = ::eom_sim::Lanes::<W>::splat(0.000011296000000000002) * x85;
+        let x87 = u[3] * x6;
+        let x88 = x83 * x87;
+        let x89 = u[3] * x7;
+        let x90 = x6 * x89;
+        let x91 = x7 * x83;
+        let x92 = ::eom_sim::Lanes::<W>::splat(0.04) * x88;
+        let x93 = x75 + x86;
+        let x94 = x93 - x92;
+        let x95 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x90;
+        let x96 = x76 - x95;
+        let x97 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x78;
+        let x98 = x91 - x97;
+        let x99 = u[5] * u[5];
+        let x100 = u[5] * x9;
+        let x101 = u[6] * x100;
+        let x102 = u[5] * x8;
+        let x103 = u[6] * x102;
+        let x104 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[5];
+        let x105 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[6];
+        let x106 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x102;
+        let x107 = x104 + x105;
+        let x108 = x107 - x106;
+        let x109 = x100 * x108;
+        let x110 = ::eom_sim::Lanes::<W>::splat(0.04) * x109;
+        let x111 = x9 * x99;
+        let x112 = x8 * x111;
+        let x113 = ::eom_sim::Lanes::<W>::splat(0.000011296000000000002) * x112;
+        let x114 = x10 * x108;
+        let x115 = x10 * x100;
+        let x116 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x115;
+        let x117 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x101;
+        let x118 = x110 + x113;
+        let x119 = x118 - x117;
+        let x120 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x103;
+        let x121 = x114 + x120;
+        let x122 = -x121;
+        let x123 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x101;
+        let x124 = x116 - x123;
+        let x125 = x9 * x122;
+        let x126 = ::eom_sim::Lanes::<W>::splat(0.04) * x125;
+        let x127 = x8 * x124;
+        let x128 = ::eom_sim::Lanes::<W>::splat(0.04) * x127;
+        let x129 = x110 + x126;
+        let x130 = x113 + x129;
+        let x131 = x130 - x117;
+        let x132 = x131 - x128;
+        let x133 = x6 * x98;
+        let x134 = ::eom_sim::Lanes::<W>::splat(0.04) * x133;
+        let x135 = x5 * x96;
+        let x136 = ::eom_sim::Lanes::<W>::splat(0.04) * x135;
+        let x137 = x134 + x136;
+        let x138 = x75 + x137;
+        let x139 = x86 + x138;
+        let x140 = x139 - x92;
+        let x141 = x0 * x56;
+        let x142 = ::eom_sim::Lanes::<W>::splat(0.007) * x141;
+        let x143 = x1 * x58;
+        let x144 = ::eom_sim::Lanes::<W>::splat(0.007) * x143;
+        let x145 = x35 + x144;
+        let x146 = x142 + x145;
+        let x147 = x46 + x146;
+        let x148 = x147 - ::eom_sim::Lanes::<W>::splat(0.033);
+        let x149 = x148 - x53;
+        out[0] = x149;
+        out[1] = x55;
+        out[2] = x71;
+        out[3] = x140;
+        out[4] = x94;
+        out[5] = x132;
+        out[6] = x119;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (206 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (7 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 7],
+        udot: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 7],
+    ) {
+        let (x0, x1) = q[1].sin_cos();
+        let x2 = u[0] + u[1];
+        let (x3, x4) = q[2].sin_cos();
+        let (x5, x6) = q[4].sin_cos();
+        let x7 = u[3] + u[4];
+        let (x8, x9) = q[6].sin_cos();
+        let x10 = u[5] + u[6];
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.02) * x4;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.018) * x3;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.02) * x3;
+        let x14 = x11 + x12;
+        let x15 = x14 - ::eom_sim::Lanes::<W>::splat(0.05035);
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.018) * x4;
+        let x17 = x13 - ::eom_sim::Lanes::<W>::splat(0.03926999999999999);
+        let x18 = x17 - x16;
+        let x19 = x15 * x15;
+        let x20 = x18 * x18;
+        let x21 = x19 + x20;
+        let x22 = x21.sqrt();
+        let x23 = ::eom_sim::Lanes::<W>::splat(4530.0) * x22;
+        let x24 = ::eom_sim::Lanes::<W>::splat(352.6605) - x23;
+        let x25 = x4 * x24;
+        let x26 = x15 * x25;
+        let x27 = ::eom_sim::Lanes::<W>::splat(1.0) / x22;
+        let x28 = x26 * x27;
+        let x29 = x3 * x18;
+        let x30 = x24 * x29;
+        let x31 = x30 * x27;
+        let x32 = u[0] * u[0];
+        let x33 = u[0] * x0;
+        let x34 = u[1] * x33;
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.000000293825) * x34;
+        let x36 = u[0] * u[1];
+        let x37 = x1 * x36;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x37;
+        let x39 = u[0] * x1;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x39;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[1];
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[0];
+        let x43 = x40 - x41;
+        let x44 = x43 - x42;
+        let x45 = x33 * x44;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.007) * x45;
+        let x47 = x0 * x32;
+        let x48 = x1 * x47;
+        let x49 = x2 * x44;
+        let x50 = u[0] * x2;
+        let x51 = x0 * x50;
+        let x52 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x51;
+        let x53 = x4 * x18;
+        let x54 = x24 * x53;
+        let x55 = x54 * x27;
+        let x56 = x3 * x24;
+        let x57 = x15 * x56;
+        let x58 = x57 * x27;
+        let x59 = ::eom_sim::Lanes::<W>::splat(0.02) * x58;
+        let x60 = u[3] * u[3];
+        let x61 = u[3] * u[4];
+        let x62 = x6 * x61;
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x62;
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x62;
+        let x65 = u[3] * x5;
+        let x66 = u[4] * x65;
+        let x67 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x65;
+        let x68 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[4];
+        let x69 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[3];
+        let x70 = x68 + x69;
+        let x71 = x67 + x70;
+        let x72 = x5 * x60;
+        let x73 = x6 * x72;
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.000011296000000000002) * x73;
+        let x75 = u[3] * x6;
+        let x76 = x71 * x75;
+        let x77 = u[3] * x7;
+        let x78 = x6 * x77;
+        let x79 = x7 * x71;
+        let x80 = u[5] * u[5];
+        let x81 = u[5] * x9;
+        let x82 = u[6] * x81;
+        let x83 = u[5] * x8;
+        let x84 = u[6] * x83;
+        let x85 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[5];
+        let x86 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[6];
+        let x87 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x83;
+        let x88 = x85 + x86;
+        let x89 = x88 - x87;
+        let x90 = x81 * x89;
+        let x91 = ::eom_sim::Lanes::<W>::splat(0.04) * x90;
+        let x92 = x9 * x80;
+        let x93 = x8 * x92;
+        let x94 = ::eom_sim::Lanes::<W>::splat(0.000011296000000000002) * x93;
+        let x95 = x10 * x89;
+        let x96 = x10 * x81;
+        let x97 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x96;
+        let x98 = ::eom_sim::Lanes::<W>::splat(0.0000009237125) * udot[0];
+        let x99 = ::eom_sim::Lanes::<W>::splat(0.0000009237125) * udot[1];
+        let x100 = udot[0] * x1;
+        let x101 = udot[0] * x0;
+        let x102 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x101;
+        let x103 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x100;
+        let x104 = ::eom_sim::Lanes::<W>::splat(0.000000293825) * x100;
+        let x105 = ::eom_sim::Lanes::<W>::splat(0.00000017885000000000002) * x48;
+        let x106 = x35 + x99;
+        let x107 = x98 + x106;
+        let x108 = x46 + x107;
+        let x109 = x108 - x104;
+        let x110 = x109 - x105;
+        let x111 = x38 + x102;
+        let x112 = x111 - x49;
+        let x113 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x34;
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.000041975) * udot[1];
+        let x115 = ::eom_sim::Lanes::<W>::splat(0.000041975) * udot[0];
+        let x116 = x52 + x103;
+        let x117 = x116 - x113;
+        let x118 = x117 - x114;
+        let x119 = x118 - x115;
+        let x120 = ::eom_sim::Lanes::<W>::splat(0.000016170147425) * udot[2];
+        let x121 = ::eom_sim::Lanes::<W>::splat(0.018) * x31;
+        let x122 = ::eom_sim::Lanes::<W>::splat(0.02) * x55;
+        let x123 = ::eom_sim::Lanes::<W>::splat(0.018) * x28;
+        let x124 = x59 + x120;
+        let x125 = x124 - x121;
+        let x126 = x125 - x122;
+        let x127 = x126 - x123;
+        let x128 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * udot[3];
+        let x129 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * udot[4];
+        let x130 = udot[3] * x5;
+        let x131 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x130;
+        let x132 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x130;
+        let x133 = udot[3] * x6;
+        let x134 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x133;
+        let x135 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * udot[3];
+        let x136 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * udot[4];
+        let x137 = ::eom_sim::Lanes::<W>::splat(0.04) * x76;
+        let x138 = x128 + x131;
+        let x139 = x129 + x138;
+        let x140 = x63 + x139;
+        let x141 = x74 + x140;
+        let x142 = x141 - x137;
+        let x143 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x78;
+        let x144 = x64 + x136;
+        let x145 = x135 + x144;
+        let x146 = x132 + x145;
+        let x147 = x146 - x143;
+        let x148 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x66;
+        let x149 = x79 + x134;
+        let x150 = x149 - x148;
+        let x151 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * udot[6];
+        let x152 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * udot[5];
+        let x153 = udot[5] * x8;
+        let x154 = udot[5] * x9;
+        let x155 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x154;
+        let x156 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * udot[6];
+        let x157 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * udot[5];
+        let x158 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x82;
+        let x159 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x153;
+        let x160 = x91 + x151;
+        let x161 = x152 + x160;
+        let x162 = x94 + x161;
+        let x163 = x162 - x158;
+        let x164 = x163 - x159;
+        let x165 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x84;
+        let x166 = x155 - x95;
+        let x167 = x166 - x165;
+        let x168 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x153;
+        let x169 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x82;
+        let x170 = x156 + x157;
+        let x171 = x97 + x170;
+        let x172 = x171 - x168;
+        let x173 = x172 - x169;
+        let x174 = x8 * x173;
+        let x175 = x9 * x167;
+        let x176 = ::eom_sim::Lanes::<W>::splat(0.04) * x175;
+        let x177 = ::eom_sim::Lanes::<W>::splat(0.000029322678476) * udot[5];
+        let x178 = ::eom_sim::Lanes::<W>::splat(0.04) * x174;
+        let x179 = x151 + x177;
+        let x180 = x91 + x179;
+        let x181 = x94 + x180;
+        let x182 = x176 + x181;
+        let x183 = x182 - x158;
+        let x184 = x183 - x159;
+        let x185 = x184 - x178;
+        let x186 = x6 * x150;
+        let x187 = ::eom_sim::Lanes::<W>::splat(0.04) * x186;
+        let x188 = x5 * x147;
+        let x189 = ::eom_sim::Lanes::<W>::splat(0.04) * x188;
+        let x190 = ::eom_sim::Lanes::<W>::splat(0.00005596311614599999) * udot[3];
+        let x191 = x131 + x187;
+        let x192 = x129 + x191;
+        let x193 = x189 + x192;
+        let x194 = x63 + x193;
+        let x195 = x74 + x194;
+        let x196 = x190 + x195;
+        let x197 = x196 - x137;
+        let x198 = x0 * x112;
+        let x199 = ::eom_sim::Lanes::<W>::splat(0.007) * x198;
+        let x200 = x1 * x119;
+        let x201 = ::eom_sim::Lanes::<W>::splat(0.007) * x200;
+        let x202 = ::eom_sim::Lanes::<W>::splat(0.0000031543192999999997) * udot[0];
+        let x203 = x106 + x202;
+        let x204 = x201 + x203;
+        let x205 = x46 + x204;
+        let x206 = x199 + x205;
+        let x207 = x206 - ::eom_sim::Lanes::<W>::splat(0.033);
+        let x208 = x207 - x104;
+        let x209 = x208 - x105;
+        out[0] = x209;
+        out[1] = x110;
+        out[2] = x127;
+        out[3] = x197;
+        out[4] = x142;
+        out[5] = x185;
+        out[6] = x164;
+    }
+    /// `energy` of `W` states at once, one per lane (97 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let (x0, x1) = q[1].sin_cos();
+        let x2 = u[0] + u[1];
+        let (x3, x4) = q[2].sin_cos();
+        let (x5, x6) = q[4].sin_cos();
+        let x7 = u[3] + u[4];
+        let (x8, x9) = q[6].sin_cos();
+        let x10 = u[5] + u[6];
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.02) * x4;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.018) * x3;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.02) * x3;
+        let x14 = x11 + x12;
+        let x15 = x14 - ::eom_sim::Lanes::<W>::splat(0.05035);
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.018) * x4;
+        let x17 = x13 - ::eom_sim::Lanes::<W>::splat(0.03926999999999999);
+        let x18 = x17 - x16;
+        let x19 = x15 * x15;
+        let x20 = x18 * x18;
+        let x21 = x19 + x20;
+        let x22 = x21.sqrt();
+        let x23 = x22 - ::eom_sim::Lanes::<W>::splat(0.07785);
+        let x24 = ::eom_sim::Lanes::<W>::splat(2265.0) * x22;
+        let x25 = x24 - ::eom_sim::Lanes::<W>::splat(176.33025);
+        let x26 = x23 * x25;
+        let x27 = x9 * x9;
+        let x28 = x6 * x6;
+        let x29 = x0 * x0;
+        let x30 = u[0] * u[0];
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.0000009237125) * u[0];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.0000009237125) * u[1];
+        let x33 = u[0] * x1;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.000000293825) * x33;
+        let x35 = x31 + x32;
+        let x36 = x35 - x34;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x33;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[1];
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[0];
+        let x40 = x37 - x38;
+        let x41 = x40 - x39;
+        let x42 = u[2] * u[2];
+        let x43 = u[3] * u[3];
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * u[3];
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * u[4];
+        let x46 = u[3] * x5;
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x46;
+        let x48 = x45 + x47;
+        let x49 = x44 + x48;
+        let x50 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x46;
+        let x51 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[4];
+        let x52 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[3];
+        let x53 = x51 + x52;
+        let x54 = x50 + x53;
+        let x55 = u[5] * u[5];
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * u[5];
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * u[6];
+        let x58 = u[5] * x8;
+        let x59 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x58;
+        let x60 = x56 + x57;
+        let x61 = x60 - x59;
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[5];
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[6];
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x58;
+        let x65 = x62 + x63;
+        let x66 = x65 - x64;
+        let x67 = ::eom_sim::Lanes::<W>::splat(0.0000011153034) * x30;
+        let x68 = x2 * x36;
+        let x69 = ::eom_sim::Lanes::<W>::splat(0.5) * x68;
+        let x70 = x33 * x41;
+        let x71 = ::eom_sim::Lanes::<W>::splat(0.0035) * x70;
+        let x72 = x29 * x30;
+        let x73 = ::eom_sim::Lanes::<W>::splat(0.00000008942500000000001) * x72;
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.0000080850737125) * x42;
+        let x75 = ::eom_sim::Lanes::<W>::splat(0.000027579867999999996) * x43;
+        let x76 = x46 * x54;
+        let x77 = ::eom_sim::Lanes::<W>::splat(0.02) * x76;
+        let x78 = x28 * x43;
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.000005648000000000001) * x78;
+        let x80 = x7 * x49;
+        let x81 = ::eom_sim::Lanes::<W>::splat(0.5) * x80;
+        let x82 = x67 + x73;
+        let x83 = x71 + x82;
+        let x84 = x69 + x83;
+        let x85 = x79 + x84;
+        let x86 = x77 + x85;
+        let x87 = x74 + x86;
+        let x88 = x81 + x87;
+        let x89 = x75 + x88;
+        let x90 = ::eom_sim::Lanes::<W>::splat(0.000014259649165) * x55;
+        let x91 = x58 * x66;
+        let x92 = x10 * x61;
+        let x93 = ::eom_sim::Lanes::<W>::splat(0.5) * x92;
+        let x94 = x27 * x55;
+        let x95 = ::eom_sim::Lanes::<W>::splat(0.000005648000000000001) * x94;
+        let x96 = ::eom_sim::Lanes::<W>::splat(0.02) * x91;
+        let x97 = x89 + x90;
+        let x98 = x93 + x97;
+        let x99 = x95 + x98;
+        let x100 = x99 - x96;
+        out[0] = x100;
+        out[1] = x26;
+    }
+    /// `momentum` of `W` states at once, one per lane (164 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = q[0] + q[1];
+        let (x5, x6) = x4.sin_cos();
+        let (x7, x8) = q[2].sin_cos();
+        let (x9, x10) = q[3].sin_cos();
+        let (x11, x12) = q[4].sin_cos();
+        let x13 = q[3] + q[4];
+        let (x14, x15) = x13.sin_cos();
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.04) * x10;
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.04) * x9;
+        let x18 = x16 - ::eom_sim::Lanes::<W>::splat(0.06934);
+        let x19 = x17 - ::eom_sim::Lanes::<W>::splat(0.00227);
+        let (x20, x21) = q[5].sin_cos();
+        let (x22, x23) = q[6].sin_cos();
+        let x24 = q[5] + q[6];
+        let (x25, x26) = x24.sin_cos();
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.04) * x20;
+        let x28 = x27 - ::eom_sim::Lanes::<W>::splat(0.06934);
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.04) * x21;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.00227) + x29;
+        let x31 = -x30;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.0000009237125) * u[1];
+        let x33 = u[0] * x3;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x33;
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[1];
+        let x36 = ::eom_sim::Lanes::<W>::splat(0.000041975) * u[0];
+        let x37 = x34 - x35;
+        let x38 = x37 - x36;
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.000016170147425) * u[2];
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.00005515973599999999) * u[3];
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * u[3];
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * u[4];
+        let x43 = u[3] * x11;
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x43;
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x43;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[4];
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[3];
+        let x48 = x46 + x47;
+        let x49 = x45 + x48;
+        let x50 = ::eom_sim::Lanes::<W>::splat(0.00002851929833) * u[5];
+        let x51 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * u[5];
+        let x52 = ::eom_sim::Lanes::<W>::splat(0.000000803380146) * u[6];
+        let x53 = u[5] * x22;
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[5];
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.0000408774) * u[6];
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x53;
+        let x57 = x54 + x55;
+        let x58 = x57 - x56;
+        let x59 = u[0] * x0;
+        let x60 = u[0] * x1;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.00003979) * x60;
+        let x62 = u[0] * x6;
+        let x63 = x2 * x62;
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x63;
+        let x65 = x5 * x38;
+        let x66 = x64 - x65;
+        let x67 = u[0] * x5;
+        let x68 = x2 * x67;
+        let x69 = ::eom_sim::Lanes::<W>::splat(0.00002555) * x68;
+        let x70 = x6 * x38;
+        let x71 = x69 + x70;
+        let x72 = x1 * x71;
+        let x73 = ::eom_sim::Lanes::<W>::splat(0.007) * x72;
+        let x74 = x0 * x66;
+        let x75 = ::eom_sim::Lanes::<W>::splat(0.0000031543192999999997) * u[0];
+        let x76 = u[2] * x8;
+        let x77 = u[2] * x7;
+        let x78 = ::eom_sim::Lanes::<W>::splat(0.00044470020000000004) * x76;
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.000023551804311000003) * x77;
+        let x80 = u[3] * x10;
+        let x81 = u[3] * x9;
+        let x82 = ::eom_sim::Lanes::<W>::splat(0.0016271399999999998) * x80;
+        let x83 = ::eom_sim::Lanes::<W>::splat(0.000041084777399999993) * x81;
+        let x84 = ::eom_sim::Lanes::<W>::splat(0.000000293825) * x33;
+        let x85 = ::eom_sim::Lanes::<W>::splat(0.007) * x74;
+        let x86 = ::eom_sim::Lanes::<W>::splat(0.00011429180819999999) * x80;
+        let x87 = ::eom_sim::Lanes::<W>::splat(0.000008064049623) * x76;
+        let x88 = x39 + x83;
+        let x89 = x75 + x88;
+        let x90 = x79 + x89;
+        let x91 = x32 + x90;
+        let x92 = x40 + x91;
+        let x93 = x73 + x92;
+        let x94 = x93 - x84;
+        let x95 = x94 - x85;
+        let x96 = x95 - x86;
+        let x97 = x96 - x87;
+        let x98 = x15 * x49;
+        let x99 = u[3] * x14;
+        let x100 = x12 * x99;
+        let x101 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x100;
+        let x102 = x98 - x101;
+        let x103 = x14 * x49;
+        let x104 = u[3] * x15;
+        let x105 = x12 * x104;
+        let x106 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x105;
+        let x107 = x103 + x106;
+        let x108 = x18 * x107;
+        let x109 = x19 * x102;
+        let x110 = ::eom_sim::Lanes::<W>::splat(0.00003979) * x59;
+        let x111 = ::eom_sim::Lanes::<W>::splat(0.0006457799999999999) * x80;
+        let x112 = ::eom_sim::Lanes::<W>::splat(0.00044470020000000004) * x77;
+        let x113 = ::eom_sim::Lanes::<W>::splat(0.00024750390000000003) * x76;
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.0016271399999999998) * x81;
+        let x115 = x64 + x98;
+        let x116 = x115 - x110;
+        let x117 = x116 - x111;
+        let x118 = x117 - x101;
+        let x119 = x118 - x112;
+        let x120 = x119 - x65;
+        let x121 = x120 - x113;
+        let x122 = x121 - x114;
+        let x123 = ::eom_sim::Lanes::<W>::splat(0.00024750390000000003) * x77;
+        let x124 = ::eom_sim::Lanes::<W>::splat(0.0006457799999999999) * x81;
+        let x125 = x78 + x82;
+        let x126 = x103 + x125;
+        let x127 = x61 + x126;
+        let x128 = x70 + x127;
+        let x129 = x106 + x128;
+        let x130 = x69 + x129;
+        let x131 = x130 - x123;
+        let x132 = x131 - x124;
+        let x133 = u[5] * x21;
+        let x134 = u[5] * x20;
+        let x135 = ::eom_sim::Lanes::<W>::splat(0.0006751544) * x133;
+        let x136 = ::eom_sim::Lanes::<W>::splat(0.000015584685780000002) * x134;
+        let x137 = ::eom_sim::Lanes::<W>::splat(0.00004737557875) * x133;
+        let x138 = x44 + x108;
+        let x139 = x42 + x138;
+        let x140 = x136 + x139;
+        let x141 = x50 + x140;
+        let x142 = x41 + x141;
+        let x143 = x97 + x142;
+        let x144 = x143 - x137;
+        let x145 = x144 - x109;
+        let x146 = u[5] * x23;
+        let x147 = x26 * x146;
+        let x148 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x147;
+        let x149 = x25 * x58;
+        let x150 = x148 - x149;
+        let x151 = x25 * x146;
+        let x152 = ::eom_sim::Lanes::<W>::splat(0.00028240000000000003) * x151;
+        let x153 = x26 * x58;
+        let x154 = x152 + x153;
+        let x155 = x28 * x154;
+        let x156 = x31 * x150;
+        let x157 = ::eom_sim::Lanes::<W>::splat(0.0000016350960000000001) * x53;
+        let x158 = x51 + x155;
+        let x159 = x145 + x158;
+        let x160 = x52 + x159;
+        let x161 = x160 - x157;
+        let x162 = x161 - x156;
+        let x163 = ::eom_sim::Lanes::<W>::splat(0.0002468602) * x133;
+        let x164 = ::eom_sim::Lanes::<W>::splat(0.0006751544) * x134;
+        let x165 = x122 + x148;
+        let x166 = x165 - x163;
+        let x167 = x166 - x164;
+        let x168 = x167 - x149;
+        let x169 = ::eom_sim::Lanes::<W>::splat(0.0002468602) * x134;
+        let x170 = x132 + x152;
+        let x171 = x135 + x170;
+        let x172 = x153 + x171;
+        let x173 = x172 - x169;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x162;
+        out[3] = x168;
+        out[4] = x173;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `constraints` of `W` states at once, one per lane (354 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (60 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    pub fn constraints_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 60],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = u[0] + u[1];
+        let x3 = q[0] + q[1];
+        let (x4, x5) = x3.sin_cos();
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.007) * x0;
+        let (x7, x8) = q[2].sin_cos();
+        let (x9, x10) = q[3].sin_cos();
+        let x11 = u[3] + u[4];
+        let x12 = q[3] + q[4];
+        let (x13, x14) = x12.sin_cos();
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.04) * x10;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.04) * x9;
+        let (x17, x18) = q[5].sin_cos();
+        let x19 = u[5] + u[6];
+        let x20 = q[5] + q[6];
+        let (x21, x22) = x20.sin_cos();
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.04) * x17;
+        let x24 = u[0] * u[0];
+        let x25 = u[2] * u[2];
+        let x26 = u[3] * u[3];
+        let x27 = u[5] * u[5];
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.028) * x4;
+        let x29 = x6 - x28;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.035) * x7;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.028) * x5;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.007) * x1;
+        let x33 = x31 - x32;
+        let x34 = x30 + x31;
+        let x35 = x34 - ::eom_sim::Lanes::<W>::splat(0.03635);
+        let x36 = x35 - x32;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.035) * x8;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.03273) + x28;
+        let x39 = x38 - x6;
+        let x40 = x39 - x37;
+        let x41 = x5 * x36;
+        let x42 = x4 * x40;
+        let x43 = x41 + x42;
+        let x44 = x4 * x36;
+        let x45 = x5 * x40;
+        let x46 = x45 - x44;
+        let x47 = q[2] - q[1];
+        let x48 = x47 - q[0];
+        let (x49, x50) = x48.sin_cos();
+        let x51 = ::eom_sim::Lanes::<W>::splat(0.02) * x13;
+        let x52 = x31 + x51;
+        let x53 = x15 + x52;
+        let x54 = x53 - ::eom_sim::Lanes::<W>::splat(0.06934);
+        let x55 = x54 - x32;
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.02) * x14;
+        let x57 = x16 + x28;
+        let x58 = x57 - ::eom_sim::Lanes::<W>::splat(0.00227);
+        let x59 = x58 - x6;
+        let x60 = x59 - x56;
+        let x61 = x5 * x55;
+        let x62 = x4 * x60;
+        let x63 = x61 + x62;
+        let x64 = x4 * x55;
+        let x65 = x5 * x60;
+        let x66 = x65 - x64;
+        let x67 = x12 - q[1];
+        let x68 = x67 - q[0];
+        let (x69, x70) = x68.sin_cos();
+        let x71 = ::eom_sim::Lanes::<W>::splat(0.02) * x22;
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.02) * x21;
+        let x73 = x31 + x71;
+        let x74 = x23 + x73;
+        let x75 = x74 - ::eom_sim::Lanes::<W>::splat(0.06934);
+        let x76 = x75 - x32;
+        let x77 = ::eom_sim::Lanes::<W>::splat(0.04) * x18;
+        let x78 = x28 + x72;
+        let x79 = x78 - ::eom_sim::Lanes::<W>::splat(0.00227);
+        let x80 = x79 - x6;
+        let x81 = x80 - x77;
+        let x82 = x5 * x76;
+        let x83 = x4 * x81;
+        let x84 = x82 + x83;
+        let x85 = x4 * x76;
+        let x86 = x5 * x81;
+        let x87 = x86 - x85;
+        let x88 = x20 - q[1];
+        let x89 = x88 - q[0];
+        let (x90, x91) = x89.sin_cos();
+        let x92 = u[2] * x8;
+        let x93 = ::eom_sim::Lanes::<W>::splat(0.035) * x92;
+        let x94 = u[2] * x7;
+        let x95 = ::eom_sim::Lanes::<W>::splat(0.035) * x94;
+        let x96 = x2 * x4;
+        let x97 = u[0] * x0;
+        let x98 = ::eom_sim::Lanes::<W>::splat(0.007) * x97;
+        let x99 = ::eom_sim::Lanes::<W>::splat(0.028) * x96;
+        let x100 = x93 + x98;
+        let x101 = x100 - x99;
+        let x102 = x2 * x5;
+        let x103 = ::eom_sim::Lanes::<W>::splat(0.028) * x102;
+        let x104 = u[0] * x1;
+        let x105 = ::eom_sim::Lanes::<W>::splat(0.007) * x104;
+        let x106 = x95 + x103;
+        let x107 = x106 - x105;
+        let x108 = x36 * x96;
+        let x109 = x5 * x101;
+        let x110 = x40 * x102;
+        let x111 = x4 * x107;
+        let x112 = x109 + x110;
+        let x113 = x111 + x112;
+        let x114 = x113 - x108;
+        let x115 = x7 * x25;
+        let x116 = x8 * x25;
+        let x117 = ::eom_sim::Lanes::<W>::splat(0.035) * x116;
+        let x118 = x2 * x2;
+        let x119 = x5 * x118;
+        let x120 = x1 * x24;
+        let x121 = ::eom_sim::Lanes::<W>::splat(0.007) * x120;
+        let x122 = ::eom_sim::Lanes::<W>::splat(0.035) * x115;
+        let x123 = ::eom_sim::Lanes::<W>::splat(0.028) * x119;
+        let x124 = x121 - x122;
+        let x125 = x124 - x123;
+        let x126 = x4 * x118;
+        let x127 = x0 * x24;
+        let x128 = ::eom_sim::Lanes::<W>::splat(0.007) * x127;
+        let x129 = ::eom_sim::Lanes::<W>::splat(0.028) * x126;
+        let x130 = x117 + x128;
+        let x131 = x130 - x129;
+        let x132 = x4 * x131;
+        let x133 = x2 * x107;
+        let x134 = x5 * x133;
+        let x135 = x2 * x101;
+        let x136 = x4 * x135;
+        let x137 = ::eom_sim::Lanes::<W>::splat(2.0) * x136;
+        let x138 = x5 * x125;
+        let x139 = x36 * x119;
+        let x140 = x40 * x126;
+        let x141 = ::eom_sim::Lanes::<W>::splat(2.0) * x134;
+        let x142 = x139 + x140;
+        let x143 = x137 + x142;
+        let x144 = x143 - x138;
+        let x145 = x144 - x141;
+        let x146 = x145 - x132;
+        let x147 = x36 * x102;
+        let x148 = x4 * x101;
+        let x149 = x40 * x96;
+        let x150 = x5 * x107;
+        let x151 = x150 - x147;
+        let x152 = x151 - x149;
+        let x153 = x152 - x148;
+        let x154 = x5 * x135;
+        let x155 = ::eom_sim::Lanes::<W>::splat(2.0) * x154;
+        let x156 = x40 * x119;
+        let x157 = x4 * x133;
+        let x158 = ::eom_sim::Lanes::<W>::splat(2.0) * x157;
+        let x159 = x4 * x125;
+        let x160 = x36 * x126;
+        let x161 = x5 * x131;
+        let x162 = x158 + x159;
+        let x163 = x155 + x162;
+        let x164 = x156 + x163;
+        let x165 = x164 - x160;
+        let x166 = x165 - x161;
+        let x167 = u[3] * x9;
+        let x168 = u[3] * x10;
+        let x169 = ::eom_sim::Lanes::<W>::splat(0.04) * x168;
+        let x170 = x11 * x14;
+        let x171 = ::eom_sim::Lanes::<W>::splat(0.02) * x170;
+        let x172 = x11 * x13;
+        let x173 = ::eom_sim::Lanes::<W>::splat(0.02) * x172;
+        let x174 = ::eom_sim::Lanes::<W>::splat(0.04) * x167;
+        let x175 = x98 + x171;
+        let x176 = x175 - x174;
+        let x177 = x176 - x99;
+        let x178 = x103 + x173;
+        let x179 = x169 + x178;
+        let x180 = x179 - x105;
+        let x181 = x5 * x177;
+        let x182 = x2 * x55;
+        let x183 = x4 * x182;
+        let x184 = x60 * x102;
+        let x185 = x4 * x180;
+        let x186 = x181 + x185;
+        let x187 = x184 + x186;
+        let x188 = x187 - x183;
+        let x189 = x10 * x26;
+        let x190 = x9 * x26;
+        let x191 = x11 * x11;
+        let x192 = x13 * x191;
+        let x193 = x14 * x191;
+        let x194 = ::eom_sim::Lanes::<W>::splat(0.02) * x193;
+        let x195 = ::eom_sim::Lanes::<W>::splat(0.04) * x189;
+        let x196 = ::eom_sim::Lanes::<W>::splat(0.02) * x192;
+        let x197 = x121 - x123;
+        let x198 = x197 - x195;
+        let x199 = x198 - x196;
+        let x200 = ::eom_sim::Lanes::<W>::splat(0.04) * x190;
+        let x201 = x128 + x194;
+        let x202 = x201 - x129;
+        let x203 = x202 - x200;
+        let x204 = x5 * x199;
+        let x205 = x96 * x177;
+        let x206 = ::eom_sim::Lanes::<W>::splat(2.0) * x205;
+        let x207 = x55 * x118;
+        let x208 = x5 * x207;
+        let x209 = x60 * x126;
+        let x210 = x4 * x203;
+        let x211 = x2 * x180;
+        let x212 = x5 * x211;
+        let x213 = ::eom_sim::Lanes::<W>::splat(2.0) * x212;
+        let x214 = x206 + x208;
+        let x215 = x209 + x214;
+        let x216 = x215 - x213;
+        let x217 = x216 - x210;
+        let x218 = x217 - x204;
+        let x219 = x4 * x177;
+        let x220 = x5 * x182;
+        let x221 = x60 * x96;
+        let x222 = x5 * x180;
+        let x223 = x222 - x220;
+        let x224 = x223 - x221;
+        let x225 = x224 - x219;
+        let x226 = x4 * x207;
+        let x227 = x4 * x211;
+        let x228 = ::eom_sim::Lanes::<W>::splat(2.0) * x227;
+        let x229 = x4 * x199;
+        let x230 = x5 * x203;
+        let x231 = x60 * x119;
+        let x232 = x102 * x177;
+        let x233 = ::eom_sim::Lanes::<W>::splat(2.0) * x232;
+        let x234 = x228 + x233;
+        let x235 = x231 + x234;
+        let x236 = x229 + x235;
+        let x237 = x236 - x226;
+        let x238 = x237 - x230;
+        let x239 = u[5] * x18;
+        let x240 = ::eom_sim::Lanes::<W>::splat(0.04) * x239;
+        let x241 = u[5] * x17;
+        let x242 = ::eom_sim::Lanes::<W>::splat(0.04) * x241;
+        let x243 = x19 * x21;
+        let x244 = x19 * x22;
+        let x245 = ::eom_sim::Lanes::<W>::splat(0.02) * x244;
+        let x246 = ::eom_sim::Lanes::<W>::splat(0.02) * x243;
+        let x247 = x98 + x240;
+        let x248 = x247 - x246;
+        let x249 = x248 - x99;
+        let x250 = x103 + x245;
+        let x251 = x242 + x250;
+        let x252 = x251 - x105;
+        let x253 = x5 * x249;
+        let x254 = x2 * x76;
+        let x255 = x4 * x254;
+        let x256 = x4 * x252;
+        let x257 = x2 * x81;
+        let x258 = x5 * x257;
+        let x259 = x253 + x258;
+        let x260 = x256 + x259;
+        let x261 = x260 - x255;
+        let x262 = x17 * x27;
+        let x263 = x18 * x27;
+        let x264 = ::eom_sim::Lanes::<W>::splat(0.04) * x263;
+        let x265 = x19 * x19;
+        let x266 = x22 * x265;
+        let x267 = x21 * x265;
+        let x268 = ::eom_sim::Lanes::<W>::splat(0.02) * x266;
+        let x269 = ::eom_sim::Lanes::<W>::splat(0.04) * x262;
+        let x270 = x121 - x268;
+        let x271 = x270 - x269;
+        let x272 = x271 - x123;
+        let x273 = ::eom_sim::Lanes::<W>::splat(0.02) * x267;
+        let x274 = x128 + x264;
+        let x275 = x274 - x273;
+        let x276 = x275 - x129;
+        let x277 = x81 * x118;
+        let x278 = x4 * x277;
+        let x279 = x76 * x118;
+        let x280 = x5 * x279;
+        let x281 = x2 * x249;
+        let x282 = x4 * x281;
+        let x283 = ::eom_sim::Lanes::<W>::splat(2.0) * x282;
+        let x284 = x2 * x252;
+        let x285 = x5 * x284;
+        let x286 = x4 * x276;
+        let x287 = x5 * x272;
+        let x288 = ::eom_sim::Lanes::<W>::splat(2.0) * x285;
+        let x289 = x278 + x283;
+        let x290 = x280 + x289;
+        let x291 = x290 - x288;
+        let x292 = x291 - x286;
+        let x293 = x292 - x287;
+        let x294 = x4 * x249;
+        let x295 = x5 * x254;
+        let x296 = x5 * x252;
+        let x297 = x4 * x257;
+        let x298 = x296 - x297;
+        let x299 = x298 - x295;
+        let x300 = x299 - x294;
+        let x301 = x5 * x281;
+        let x302 = ::eom_sim::Lanes::<W>::splat(2.0) * x301;
+        let x303 = x4 * x279;
+        let x304 = x5 * x276;
+        let x305 = x4 * x284;
+        let x306 = ::eom_sim::Lanes::<W>::splat(2.0) * x305;
+        let x307 = x5 * x277;
+        let x308 = x4 * x272;
+        let x309 = x302 + x307;
+        let x310 = x308 + x309;
+        let x311 = x306 + x310;
+        let x312 = x311 - x304;
+        let x313 = x312 - x303;
+        let x314 = x5 * x29;
+        let x315 = x4 * x33;
+        let x316 = x45 + x315;
+        let x317 = x314 + x316;
+        let x318 = x317 - x44;
+        let x319 = ::eom_sim::Lanes::<W>::splat(0.035) * x50;
+        let x320 = x4 * x29;
+        let x321 = x5 * x33;
+        let x322 = x321 - x41;
+        let x323 = x322 - x320;
+        let x324 = x323 - x42;
+        let x325 = ::eom_sim::Lanes::<W>::splat(0.028) - x41;
+        let x326 = x325 - x42;
+        let x327 = ::eom_sim::Lanes::<W>::splat(0.035) * x49;
+        let x328 = x65 + x315;
+        let x329 = x314 + x328;
+        let x330 = x329 - x64;
+        let x331 = x56 - x16;
+        let x332 = x15 + x51;
+        let x333 = x5 * x331;
+        let x334 = x4 * x332;
+        let x335 = x333 + x334;
+        let x336 = ::eom_sim::Lanes::<W>::splat(0.02) * x70;
+        let x337 = x321 - x61;
+        let x338 = x337 - x320;
+        let x339 = x338 - x62;
+        let x340 = ::eom_sim::Lanes::<W>::splat(0.028) - x61;
+        let x341 = x340 - x62;
+        let x342 = x4 * x331;
+        let x343 = x5 * x332;
+        let x344 = x343 - x342;
+        let x345 = ::eom_sim::Lanes::<W>::splat(0.02) * x69;
+        let x346 = x314 + x315;
+        let x347 = x86 + x346;
+        let x348 = x347 - x85;
+        let x349 = x77 - x72;
+        let x350 = x23 + x71;
+        let x351 = x5 * x349;
+        let x352 = x4 * x350;
+        let x353 = x351 + x352;
+        let x354 = ::eom_sim::Lanes::<W>::splat(-0.02) * x90;
+        let x355 = x321 - x320;
+        let x356 = x355 - x83;
+        let x357 = x356 - x82;
+        let x358 = ::eom_sim::Lanes::<W>::splat(0.028) - x83;
+        let x359 = x358 - x82;
+        let x360 = x4 * x349;
+        let x361 = x5 * x350;
+        let x362 = x361 - x360;
+        let x363 = ::eom_sim::Lanes::<W>::splat(0.02) * x91;
+        out[0] = x43;
+        out[6] = x114;
+        out[12] = x146;
+        out[1] = x46;
+        out[7] = x153;
+        out[13] = x166;
+        out[2] = x63;
+        out[8] = x188;
+        out[14] = x218;
+        out[3] = x66;
+        out[9] = x225;
+        out[15] = x238;
+        out[4] = x84;
+        out[10] = x261;
+        out[16] = x293;
+        out[5] = x87;
+        out[11] = x300;
+        out[17] = x313;
+        out[18] = x318;
+        out[19] = x46;
+        out[20] = x319;
+        out[21] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[22] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[23] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[24] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[25] = x324;
+        out[26] = x326;
+        out[27] = x327;
+        out[28] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[29] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[30] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[31] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[32] = x330;
+        out[33] = x66;
+        out[34] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[35] = x335;
+        out[36] = x336;
+        out[37] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[38] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[39] = x339;
+        out[40] = x341;
+        out[41] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[42] = x344;
+        out[43] = x345;
+        out[44] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[45] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[46] = x348;
+        out[47] = x87;
+        out[48] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[49] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[50] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[51] = x353;
+        out[52] = x354;
+        out[53] = x357;
+        out[54] = x359;
+        out[55] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[56] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[57] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[58] = x362;
+        out[59] = x363;
+    }
+    /// `cut_joint_reactions` of `W` states at once, one per lane (0 operations per state): force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint. Arguments `t`, `q` as `cut_joint_reactions`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (18 entries per lane) laid out as `Model::evaluate("cut_joint_reactions")`'s result.
+    pub fn cut_joint_reactions_lanes<const W: usize>(
+        m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 18],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[0]);
+        out[1] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[1]);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[6] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[2]);
+        out[7] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[3]);
+        out[8] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[12] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[4]);
+        out[13] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[5]);
+        out[14] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[15] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[16] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[17] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `constraints`, `cut_joint_reactions`.
+impl ::eom_sim::Batched for Andrews {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 7]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    7,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 7]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 49]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 7]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    7,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 7]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 60]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::constraints_lanes(this, t, &q, &u, out);
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 18]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::cut_joint_reactions_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `andrews` (14 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<14> for Andrews {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 14],
+        dy: &mut [::eom_sim::Lanes<W>; 14],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 7] = [y[0], y[1], y[2], y[3], y[4], y[5], y[6]];
+        let u: [::eom_sim::Lanes<W>; 7] = [y[7], y[8], y[9], y[10], y[11], y[12], y[13]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 7];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 7];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 7],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = qdot[3];
+        dy[4] = qdot[4];
+        dy[5] = qdot[5];
+        dy[6] = qdot[6];
+        dy[7] = udot[0];
+        dy[8] = udot[1];
+        dy[9] = udot[2];
+        dy[10] = udot[3];
+        dy[11] = udot[4];
+        dy[12] = udot[5];
+        dy[13] = udot[6];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 14],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `andrews` (14 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<14> for Andrews {
     fn rhs(&self, t: f64, y: &[f64; 14], dy: &mut [f64; 14]) {

@@ -335,6 +335,299 @@ impl BouncingBall {
         out[11] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl BouncingBall {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 1],
+        u: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        out[0] = u[0];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (1 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 1],
+        _u: &[::eom_sim::Lanes<W>; 1],
+        tau: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        let x0 = tau[0] - ::eom_sim::Lanes::<W>::splat(9.81);
+        out[0] = x0;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(1.0);
+    }
+    /// `bias` of `W` states at once, one per lane (0 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 1],
+        _u: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(9.81);
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (1 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 1],
+        _u: &[::eom_sim::Lanes<W>; 1],
+        udot: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(9.81) + udot[0];
+        out[0] = x0;
+    }
+    /// `energy` of `W` states at once, one per lane (3 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 1],
+        u: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = u[0] * u[0];
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x2 = ::eom_sim::Lanes::<W>::splat(9.81) * q[0];
+        out[0] = x1;
+        out[1] = x2;
+    }
+    /// `momentum` of `W` states at once, one per lane (0 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 1],
+        u: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = u[0];
+    }
+    /// `contacts` of `W` states at once, one per lane (1 operations per state): the unilateral contacts (issue #26), `NK` gap rows in the order of the model's contacts (a joint limit's lower row before its upper): the gaps `g` (`NK`, m or rad, open when positive), the normal speeds `ġ = wᵀ u` (`NK`), `γ` with `g̈ = wᵀ u̇ − γ` (`NK`), Newton's restitution coefficient `e` and Coulomb's `μ` of each row (`NK` each), then the rows `w = ∂ġ/∂u` (`NK × NU`, row by row). Arguments `t`, `q`, `u` as `contacts`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("contacts")`'s result.
+    pub fn contacts_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 1],
+        u: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = q[0] - ::eom_sim::Lanes::<W>::splat(0.1);
+        out[0] = x0;
+        out[1] = u[0];
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.8);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(1.0);
+    }
+    /// `joint_impulses` of `W` states at once, one per lane (0 operations per state): the impulses the tree joints transmit in a velocity jump `Δu` (passed as `udot`) caused by contact impulses `Λ` (Wittenburg ch. 6), in the child joint frame's axes at its origin, force then torque (N s, N m s), six per tree joint: first the part `Σ ΔH` of the momentum change of the bodies the joint carries, then per contact row the part per unit `Λ_k` (`−` its load, zero for joint limits, which act inside their joint); a joint's impulse is the first block plus `Σ Λ_k` times the row blocks. Arguments `t`, `q`, `u`, `udot` as `joint_impulses`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (12 entries per lane) laid out as `Model::evaluate("joint_impulses")`'s result.
+    pub fn joint_impulses_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 1],
+        _u: &[::eom_sim::Lanes<W>; 1],
+        udot: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 12],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = udot[0];
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = ::eom_sim::Lanes::<W>::splat(-1.0);
+        out[9] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `contacts`, `joint_impulses`.
+impl ::eom_sim::Batched for BouncingBall {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    1,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    1,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "contacts" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::contacts_lanes(this, t, &q, &u, out);
+                true
+            }
+            "joint_impulses" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    1,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 12]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::joint_impulses_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `bouncing_ball` (2 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<2> for BouncingBall {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 2],
+        dy: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 1] = [y[0]];
+        let u: [::eom_sim::Lanes<W>; 1] = [y[1]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 1];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 1];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 1],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = udot[0];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 2],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `bouncing_ball` (2 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<2> for BouncingBall {
     fn rhs(&self, t: f64, y: &[f64; 2], dy: &mut [f64; 2]) {

@@ -523,6 +523,494 @@ impl DoublePendulum {
         out[5] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl DoublePendulum {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (46 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        tau: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = u[0] * x3;
+        let x5 = u[0] + u[1];
+        let x6 = x2 * x2;
+        let x7 = ::eom_sim::Lanes::<W>::splat(9.8) * x0;
+        let x8 = u[0] * u[0];
+        let x9 = u[0] * u[1];
+        let x10 = x3 * x9;
+        let x11 = u[0] * x2;
+        let x12 = u[1] * x11;
+        let x13 = u[0] + x4;
+        let x14 = u[1] + x13;
+        let x15 = x11 * x14;
+        let x16 = u[0] * x5;
+        let x17 = x2 * x16;
+        let x18 = x5 * x14;
+        let x19 = x2 * x8;
+        let x20 = x3 * x19;
+        let x21 = x18 - x10;
+        let x22 = tau[1] + x17;
+        let x23 = x20 + x22;
+        let x24 = x23 - x15;
+        let x25 = ::eom_sim::Lanes::<W>::splat(1.0) + x6;
+        let x26 = x3 * x24;
+        let x27 = x2 * x21;
+        let x28 = x1 * x2;
+        let x29 = x3 * x28;
+        let x30 = ::eom_sim::Lanes::<W>::splat(9.8) * x29;
+        let x31 = x0 * x25;
+        let x32 = ::eom_sim::Lanes::<W>::splat(9.8) * x31;
+        let x33 = x27 + x30;
+        let x34 = tau[0] + x33;
+        let x35 = x34 - x32;
+        let x36 = x35 - tau[1];
+        let x37 = x36 - x26;
+        let x38 = x37 / x25;
+        let x39 = x7 + x38;
+        let x40 = x3 * x39;
+        let x41 = ::eom_sim::Lanes::<W>::splat(9.8) * x28;
+        let x42 = tau[1] + x12;
+        let x43 = x20 + x42;
+        let x44 = x43 - x41;
+        let x45 = x44 - x38;
+        let x46 = x45 - x15;
+        let x47 = x46 - x40;
+        out[0] = x38;
+        out[1] = x47;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (4 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (4 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 4],
+    ) {
+        let x0 = q[1].cos();
+        let x1 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x2 = ::eom_sim::Lanes::<W>::splat(3.0) + x1;
+        let x3 = ::eom_sim::Lanes::<W>::splat(1.0) + x0;
+        out[0] = x2;
+        out[2] = x3;
+        out[1] = out[2];
+        out[3] = ::eom_sim::Lanes::<W>::splat(1.0);
+    }
+    /// `bias` of `W` states at once, one per lane (37 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = q[0].sin();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = u[0] * x2;
+        let x4 = u[0] + u[1];
+        let x5 = q[0] + q[1];
+        let (x6, x7) = x5.sin_cos();
+        let x8 = ::eom_sim::Lanes::<W>::splat(9.8) * x0;
+        let x9 = u[0] * u[0];
+        let x10 = ::eom_sim::Lanes::<W>::splat(9.8) * x6;
+        let x11 = ::eom_sim::Lanes::<W>::splat(9.8) * x7;
+        let x12 = u[0] * x1;
+        let x13 = u[1] * x12;
+        let x14 = u[0] * u[1];
+        let x15 = x2 * x14;
+        let x16 = u[0] + x3;
+        let x17 = u[1] + x16;
+        let x18 = x1 * x9;
+        let x19 = x2 * x18;
+        let x20 = x12 * x17;
+        let x21 = u[0] * x4;
+        let x22 = x1 * x21;
+        let x23 = x4 * x17;
+        let x24 = x10 + x20;
+        let x25 = x24 - x19;
+        let x26 = x25 - x13;
+        let x27 = x10 + x22;
+        let x28 = x27 - x13;
+        let x29 = x11 + x23;
+        let x30 = x29 - x15;
+        let x31 = x2 * x28;
+        let x32 = x1 * x30;
+        let x33 = x20 + x31;
+        let x34 = x8 + x33;
+        let x35 = x10 + x34;
+        let x36 = x35 - x19;
+        let x37 = x36 - x32;
+        let x38 = x37 - x13;
+        out[0] = x38;
+        out[1] = x26;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (48 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        udot: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = u[0] * x3;
+        let x5 = u[0] + u[1];
+        let x6 = ::eom_sim::Lanes::<W>::splat(9.8) * x0;
+        let x7 = u[0] * u[0];
+        let x8 = x1 * x2;
+        let x9 = ::eom_sim::Lanes::<W>::splat(9.8) * x8;
+        let x10 = x1 * x3;
+        let x11 = ::eom_sim::Lanes::<W>::splat(9.8) * x10;
+        let x12 = u[0] * x2;
+        let x13 = u[1] * x12;
+        let x14 = u[0] * u[1];
+        let x15 = x3 * x14;
+        let x16 = u[0] + x4;
+        let x17 = u[1] + x16;
+        let x18 = x2 * x7;
+        let x19 = x3 * x18;
+        let x20 = x12 * x17;
+        let x21 = u[0] * x5;
+        let x22 = x2 * x21;
+        let x23 = x5 * x17;
+        let x24 = udot[0] + x6;
+        let x25 = x3 * x24;
+        let x26 = x2 * x24;
+        let x27 = udot[0] + x20;
+        let x28 = udot[1] + x27;
+        let x29 = x9 + x28;
+        let x30 = x25 + x29;
+        let x31 = x30 - x19;
+        let x32 = x31 - x13;
+        let x33 = udot[0] + udot[1];
+        let x34 = x22 + x33;
+        let x35 = x9 + x34;
+        let x36 = x25 + x35;
+        let x37 = x36 - x13;
+        let x38 = x11 + x23;
+        let x39 = x38 - x15;
+        let x40 = x39 - x26;
+        let x41 = x3 * x37;
+        let x42 = x2 * x40;
+        let x43 = x28 + x41;
+        let x44 = x9 + x43;
+        let x45 = x25 + x44;
+        let x46 = x45 - x19;
+        let x47 = x46 - x13;
+        let x48 = x47 - x42;
+        let x49 = x24 + x48;
+        out[0] = x49;
+        out[1] = x32;
+    }
+    /// `energy` of `W` states at once, one per lane (25 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = q[0].cos();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = u[0] * x2;
+        let x4 = u[0] + u[1];
+        let x5 = q[0] + q[1];
+        let x6 = x5.cos();
+        let x7 = x1 * x1;
+        let x8 = u[0] * u[0];
+        let x9 = u[0] + x3;
+        let x10 = u[1] + x9;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.5) * x8;
+        let x12 = u[0] * x10;
+        let x13 = x2 * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x13;
+        let x15 = x7 * x8;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.5) * x15;
+        let x17 = x4 * x10;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
+        let x19 = x11 + x18;
+        let x20 = x14 + x19;
+        let x21 = x16 + x20;
+        let x22 = ::eom_sim::Lanes::<W>::splat(19.6) * x0;
+        let x23 = ::eom_sim::Lanes::<W>::splat(9.8) * x6;
+        let x24 = x22 + x23;
+        let x25 = -x24;
+        out[0] = x21;
+        out[1] = x25;
+    }
+    /// `momentum` of `W` states at once, one per lane (28 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = u[0] * x3;
+        let x5 = q[0] + q[1];
+        let (x6, x7) = x5.sin_cos();
+        let x8 = u[0] + x4;
+        let x9 = u[1] + x8;
+        let x10 = u[0] * x1;
+        let x11 = u[0] * x0;
+        let x12 = x7 * x9;
+        let x13 = u[0] * x6;
+        let x14 = x2 * x13;
+        let x15 = x12 + x14;
+        let x16 = x6 * x9;
+        let x17 = u[0] * x7;
+        let x18 = x2 * x17;
+        let x19 = x16 - x18;
+        let x20 = x0 * x19;
+        let x21 = x1 * x15;
+        let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * u[0];
+        let x23 = x20 + x21;
+        let x24 = x4 + x23;
+        let x25 = x22 + x24;
+        let x26 = u[1] + x25;
+        let x27 = x10 + x12;
+        let x28 = x14 + x27;
+        let x29 = x11 + x16;
+        let x30 = x29 - x18;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x26;
+        out[3] = x28;
+        out[4] = x30;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `outputs` of `W` states at once, one per lane (6 operations per state): the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame). Arguments `t`, `q`, `u`, `udot` as `outputs`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("outputs")`'s result.
+    pub fn outputs_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        _u: &[::eom_sim::Lanes<W>; 2],
+        _udot: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = q[0] + q[1];
+        let (x3, x4) = x2.sin_cos();
+        let x5 = x0 + x3;
+        let x6 = x1 + x4;
+        let x7 = -x6;
+        out[0] = x5;
+        out[1] = x7;
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `marker_jacobians` of `W` states at once, one per lane (10 operations per state): partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed. Arguments `t`, `q` as `marker_jacobians`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("marker_jacobians")`'s result.
+    pub fn marker_jacobians_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[1].sin_cos();
+        let x2 = q[0] + q[1];
+        let (x3, x4) = x2.sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(1.0) + x1;
+        let x6 = x4 * x5;
+        let x7 = x0 * x3;
+        let x8 = x6 + x7;
+        let x9 = x3 * x5;
+        let x10 = x0 * x4;
+        let x11 = x9 - x10;
+        out[0] = x8;
+        out[1] = x4;
+        out[2] = x11;
+        out[3] = x3;
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `outputs`, `marker_jacobians`.
+impl ::eom_sim::Batched for DoublePendulum {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 4]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "outputs" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::outputs_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "marker_jacobians" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::marker_jacobians_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `double_pendulum` (4 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<4> for DoublePendulum {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 4],
+        dy: &mut [::eom_sim::Lanes<W>; 4],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 2] = [y[0], y[1]];
+        let u: [::eom_sim::Lanes<W>; 2] = [y[2], y[3]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 2];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 2];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 2],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = udot[0];
+        dy[3] = udot[1];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 4],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `double_pendulum` (4 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<4> for DoublePendulum {
     fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) {

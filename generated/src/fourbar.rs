@@ -916,6 +916,865 @@ impl Fourbar {
         out[5] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl Fourbar {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+        out[2] = u[2];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (97 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        tau: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let x0 = q[0].sin();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) + x3;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x6 = u[0] * x4;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x8 = x6 + x7;
+        let x9 = -x8;
+        let x10 = x2 * x9;
+        let x11 = u[0] * x1;
+        let x12 = x2 * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.5) * x12;
+        let x14 = x10 + x13;
+        let x15 = x1 * x9;
+        let x16 = x2 * x2;
+        let x17 = u[0] * x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
+        let x19 = u[0] + u[1];
+        let x20 = x5 + x18;
+        let x21 = x20 - x15;
+        let x22 = q[0] + q[1];
+        let (x23, x24) = x22.sin_cos();
+        let x25 = q[2].sin();
+        let x26 = -x4;
+        let x27 = x4 * x26;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.25) * x16;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.25) * x1;
+        let x30 = x1 * x4;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.5) * x30;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) + x28;
+        let x33 = x29 + x32;
+        let x34 = x31 + x33;
+        let x35 = ::eom_sim::Lanes::<W>::splat(9.81) * x23;
+        let x36 = ::eom_sim::Lanes::<W>::splat(9.81) * x24;
+        let x37 = u[1] * x19;
+        let x38 = u[1] * x21;
+        let x39 = u[1] * x14;
+        let x40 = x19 * x21;
+        let x41 = x14 * x19;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.5) * x37;
+        let x43 = x35 + x38;
+        let x44 = x43 - x42;
+        let x45 = x44 - x40;
+        let x46 = x36 + x41;
+        let x47 = x46 - x39;
+        let x48 = x2 * x45;
+        let x49 = x1 * x47;
+        let x50 = x48 - x49;
+        let x51 = x1 * x45;
+        let x52 = x2 * x47;
+        let x53 = x51 + x52;
+        let x54 = x4 * x50;
+        let x55 = ::eom_sim::Lanes::<W>::splat(3.0) * tau[2];
+        let x56 = ::eom_sim::Lanes::<W>::splat(3.0) * tau[1];
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.5) * x39;
+        let x58 = ::eom_sim::Lanes::<W>::splat(1.5) * x39;
+        let x59 = ::eom_sim::Lanes::<W>::splat(14.715) * x25;
+        let x60 = x55 + x59;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.75) * x16;
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.75) * x1;
+        let x63 = ::eom_sim::Lanes::<W>::splat(1.5) * x30;
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.25) + x62;
+        let x65 = x61 + x64;
+        let x66 = x63 + x65;
+        let x67 = x34 * x66;
+        let x68 = ::eom_sim::Lanes::<W>::splat(1.1666666666666665) + x28;
+        let x69 = x3 + x68;
+        let x70 = x69 - x27;
+        let x71 = x70 - x67;
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.5) * x48;
+        let x73 = ::eom_sim::Lanes::<W>::splat(4.905) * x0;
+        let x74 = x2 * x53;
+        let x75 = ::eom_sim::Lanes::<W>::splat(4.905) * x24;
+        let x76 = ::eom_sim::Lanes::<W>::splat(0.5) * x41;
+        let x77 = tau[1] + x57;
+        let x78 = x77 - x75;
+        let x79 = x78 - x76;
+        let x80 = x66 * x79;
+        let x81 = ::eom_sim::Lanes::<W>::splat(0.5) * x74;
+        let x82 = ::eom_sim::Lanes::<W>::splat(0.5) * x49;
+        let x83 = x54 + x73;
+        let x84 = tau[0] + x83;
+        let x85 = x72 + x84;
+        let x86 = x85 - x81;
+        let x87 = x86 - x82;
+        let x88 = x87 - x80;
+        let x89 = ::eom_sim::Lanes::<W>::splat(1.0) / x71;
+        let x90 = x88 * x89;
+        let x91 = x66 * x88;
+        let x92 = x91 * x89;
+        let x93 = ::eom_sim::Lanes::<W>::splat(1.5) * x41;
+        let x94 = ::eom_sim::Lanes::<W>::splat(14.715) * x24;
+        let x95 = x56 + x58;
+        let x96 = x95 - x93;
+        let x97 = x96 - x94;
+        let x98 = x97 - x92;
+        out[0] = x90;
+        out[1] = x98;
+        out[2] = x60;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (16 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 9],
+    ) {
+        let (x0, x1) = q[1].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.5) + x2;
+        let x4 = x1 * x1;
+        let x5 = -x3;
+        let x6 = x3 * x5;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.25) * x4;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.25) * x0;
+        let x9 = ::eom_sim::Lanes::<W>::splat(1.1666666666666665) + x7;
+        let x10 = x2 + x9;
+        let x11 = x10 - x6;
+        let x12 = x0 * x3;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.5) * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) + x7;
+        let x15 = x8 + x14;
+        let x16 = x13 + x15;
+        out[0] = x11;
+        out[3] = x16;
+        out[1] = out[3];
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.3333333333333333);
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[6];
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = out[7];
+        out[8] = ::eom_sim::Lanes::<W>::splat(0.3333333333333333);
+    }
+    /// `bias` of `W` states at once, one per lane (59 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let x0 = q[0].sin();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) + x3;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x6 = u[0] * x4;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x8 = x6 + x7;
+        let x9 = -x8;
+        let x10 = x2 * x9;
+        let x11 = u[0] * x1;
+        let x12 = x2 * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.5) * x12;
+        let x14 = x10 + x13;
+        let x15 = x1 * x9;
+        let x16 = x2 * x2;
+        let x17 = u[0] * x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
+        let x19 = u[0] + u[1];
+        let x20 = x5 + x18;
+        let x21 = x20 - x15;
+        let x22 = q[0] + q[1];
+        let (x23, x24) = x22.sin_cos();
+        let x25 = q[2].sin();
+        let x26 = ::eom_sim::Lanes::<W>::splat(9.81) * x23;
+        let x27 = ::eom_sim::Lanes::<W>::splat(9.81) * x24;
+        let x28 = u[1] * x19;
+        let x29 = u[1] * x21;
+        let x30 = u[1] * x14;
+        let x31 = x19 * x21;
+        let x32 = x14 * x19;
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.5) * x28;
+        let x34 = x26 + x29;
+        let x35 = x34 - x33;
+        let x36 = x35 - x31;
+        let x37 = x27 + x32;
+        let x38 = x37 - x30;
+        let x39 = ::eom_sim::Lanes::<W>::splat(-4.905) * x25;
+        let x40 = ::eom_sim::Lanes::<W>::splat(4.905) * x24;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.5) * x32;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.5) * x30;
+        let x43 = x40 + x41;
+        let x44 = x43 - x42;
+        let x45 = x2 * x36;
+        let x46 = x1 * x38;
+        let x47 = x45 - x46;
+        let x48 = x1 * x36;
+        let x49 = x2 * x38;
+        let x50 = x48 + x49;
+        let x51 = x2 * x50;
+        let x52 = ::eom_sim::Lanes::<W>::splat(0.5) * x51;
+        let x53 = x4 * x47;
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.5) * x46;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.5) * x45;
+        let x56 = ::eom_sim::Lanes::<W>::splat(4.905) * x0;
+        let x57 = x52 + x54;
+        let x58 = x57 - x55;
+        let x59 = x58 - x56;
+        let x60 = x59 - x53;
+        out[0] = x60;
+        out[1] = x44;
+        out[2] = x39;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (84 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        udot: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) * x2;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) + x4;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x7 = u[0] * x5;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x9 = x7 + x8;
+        let x10 = -x9;
+        let x11 = x3 * x10;
+        let x12 = u[0] * x2;
+        let x13 = x3 * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x13;
+        let x15 = x11 + x14;
+        let x16 = x2 * x10;
+        let x17 = x3 * x3;
+        let x18 = u[0] * x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.5) * x18;
+        let x20 = u[0] + u[1];
+        let x21 = x6 + x19;
+        let x22 = x21 - x16;
+        let x23 = q[2].sin();
+        let x24 = ::eom_sim::Lanes::<W>::splat(9.81) * x0;
+        let x25 = ::eom_sim::Lanes::<W>::splat(9.81) * x1;
+        let x26 = u[1] * x20;
+        let x27 = u[1] * x22;
+        let x28 = u[1] * x15;
+        let x29 = x20 * x22;
+        let x30 = x15 * x20;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.5) * x30;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * udot[0];
+        let x33 = udot[0] * x5;
+        let x34 = udot[0] * x3;
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.5) * x34;
+        let x36 = ::eom_sim::Lanes::<W>::splat(0.5) * udot[0];
+        let x37 = x24 - x33;
+        let x38 = x37 - x36;
+        let x39 = x25 + x35;
+        let x40 = x3 * x38;
+        let x41 = x2 * x39;
+        let x42 = x2 * x38;
+        let x43 = x3 * x39;
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.5) * udot[1];
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * udot[1];
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.5) * x26;
+        let x47 = x27 + x40;
+        let x48 = x41 + x47;
+        let x49 = x48 - x46;
+        let x50 = x49 - x29;
+        let x51 = x30 + x43;
+        let x52 = x44 + x51;
+        let x53 = x52 - x28;
+        let x54 = x53 - x42;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * udot[2];
+        let x56 = ::eom_sim::Lanes::<W>::splat(4.905) * x23;
+        let x57 = x55 - x56;
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.5) * x43;
+        let x59 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * udot[1];
+        let x60 = ::eom_sim::Lanes::<W>::splat(0.5) * x28;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.5) * x42;
+        let x62 = x32 + x59;
+        let x63 = x58 + x62;
+        let x64 = x31 + x63;
+        let x65 = x64 - x60;
+        let x66 = x65 - x61;
+        let x67 = x3 * x50;
+        let x68 = x2 * x54;
+        let x69 = x67 - x68;
+        let x70 = x2 * x50;
+        let x71 = x3 * x54;
+        let x72 = x70 + x71;
+        let x73 = x3 * x72;
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.5) * x73;
+        let x75 = x5 * x69;
+        let x76 = ::eom_sim::Lanes::<W>::splat(0.5) * x68;
+        let x77 = ::eom_sim::Lanes::<W>::splat(0.41666666666666663) * udot[0];
+        let x78 = ::eom_sim::Lanes::<W>::splat(4.905) * x0;
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.5) * x67;
+        let x80 = x76 + x77;
+        let x81 = x74 + x80;
+        let x82 = x45 + x81;
+        let x83 = x82 - x75;
+        let x84 = x83 - x78;
+        let x85 = x84 - x79;
+        out[0] = x85;
+        out[1] = x66;
+        out[2] = x57;
+    }
+    /// `energy` of `W` states at once, one per lane (48 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) * x2;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) + x4;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x7 = u[0] * x5;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x9 = x7 + x8;
+        let x10 = -x9;
+        let x11 = x3 * x10;
+        let x12 = u[0] * x2;
+        let x13 = x3 * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x13;
+        let x15 = x11 + x14;
+        let x16 = x2 * x10;
+        let x17 = x3 * x3;
+        let x18 = u[0] * x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.5) * x18;
+        let x20 = u[0] + u[1];
+        let x21 = x6 + x19;
+        let x22 = x21 - x16;
+        let x23 = q[2].cos();
+        let x24 = ::eom_sim::Lanes::<W>::splat(9.81) * x1;
+        let x25 = u[0] * u[0];
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[0];
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[1];
+        let x28 = x26 + x27;
+        let x29 = u[2] * u[2];
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.16666666666666666) * x25;
+        let x31 = x15 * x15;
+        let x32 = x22 * x22;
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.5) * x31;
+        let x34 = x20 * x28;
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.5) * x34;
+        let x36 = ::eom_sim::Lanes::<W>::splat(0.5) * x32;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.16666666666666666) * x29;
+        let x38 = x33 + x35;
+        let x39 = x36 + x38;
+        let x40 = x30 + x39;
+        let x41 = x37 + x40;
+        let x42 = x1 * x5;
+        let x43 = ::eom_sim::Lanes::<W>::splat(9.81) * x42;
+        let x44 = x0 * x3;
+        let x45 = ::eom_sim::Lanes::<W>::splat(4.905) * x44;
+        let x46 = ::eom_sim::Lanes::<W>::splat(4.905) * x23;
+        let x47 = x24 + x46;
+        let x48 = x45 + x47;
+        let x49 = x43 + x48;
+        out[0] = x41;
+        out[1] = x49;
+    }
+    /// `momentum` of `W` states at once, one per lane (73 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let (x3, x4) = q[1].sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * x3;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) + x5;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x8 = u[0] * x6;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x10 = x8 + x9;
+        let x11 = -x10;
+        let x12 = x4 * x11;
+        let x13 = u[0] * x3;
+        let x14 = x4 * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.5) * x14;
+        let x16 = x12 + x15;
+        let x17 = x3 * x11;
+        let x18 = x4 * x4;
+        let x19 = u[0] * x18;
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.5) * x19;
+        let x21 = x7 + x20;
+        let x22 = x21 - x17;
+        let x23 = q[0] + q[1];
+        let (x24, x25) = x23.sin_cos();
+        let x26 = x1 * x4;
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.5) * x26;
+        let x28 = x0 * x6;
+        let x29 = x0 * x4;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.5) * x29;
+        let x31 = x1 * x6;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x33 = x27 - x28;
+        let x34 = x33 - x32;
+        let x35 = x30 + x31;
+        let x36 = x2 + x35;
+        let (x37, x38) = q[2].sin_cos();
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.5) * x37;
+        let x40 = ::eom_sim::Lanes::<W>::splat(1.0) - x39;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[1];
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[2];
+        let x43 = u[0] * x1;
+        let x44 = u[0] * x0;
+        let x45 = x16 * x25;
+        let x46 = x22 * x24;
+        let x47 = x45 - x46;
+        let x48 = x16 * x24;
+        let x49 = x22 * x25;
+        let x50 = x48 + x49;
+        let x51 = x34 * x50;
+        let x52 = x36 * x47;
+        let x53 = ::eom_sim::Lanes::<W>::splat(0.41666666666666663) * u[0];
+        let x54 = u[2] * x38;
+        let x55 = u[2] * x37;
+        let x56 = x37 * x40;
+        let x57 = u[2] * x56;
+        let x58 = x38 * x38;
+        let x59 = u[2] * x58;
+        let x60 = ::eom_sim::Lanes::<W>::splat(0.25) * x59;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.5) * x57;
+        let x62 = x42 + x60;
+        let x63 = x51 + x62;
+        let x64 = x41 + x63;
+        let x65 = x53 + x64;
+        let x66 = x65 - x61;
+        let x67 = x66 - x52;
+        let x68 = ::eom_sim::Lanes::<W>::splat(0.5) * x43;
+        let x69 = ::eom_sim::Lanes::<W>::splat(0.5) * x54;
+        let x70 = x45 - x68;
+        let x71 = x70 - x69;
+        let x72 = x71 - x46;
+        let x73 = ::eom_sim::Lanes::<W>::splat(0.5) * x55;
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.5) * x44;
+        let x75 = x50 - x73;
+        let x76 = x75 - x74;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x67;
+        out[3] = x72;
+        out[4] = x76;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `constraints` of `W` states at once, one per lane (175 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (12 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    pub fn constraints_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 12],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let (x3, x4) = q[1].sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * x3;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) + x5;
+        let x7 = u[0] + u[1];
+        let x8 = q[0] + q[1];
+        let (x9, x10) = x8.sin_cos();
+        let x11 = x0 * x4;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.5) * x11;
+        let x13 = x1 * x6;
+        let (x14, x15) = q[2].sin_cos();
+        let x16 = u[0] * u[0];
+        let x17 = u[2] * u[2];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x9;
+        let x19 = x12 + x13;
+        let x20 = x2 + x19;
+        let x21 = x18 + x20;
+        let x22 = x0 * x6;
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x24 = x1 * x4;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.5) * x10;
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.5) * x24;
+        let x27 = x22 + x23;
+        let x28 = x27 - x25;
+        let x29 = x28 - x26;
+        let x30 = ::eom_sim::Lanes::<W>::splat(1.0) + x22;
+        let x31 = x23 + x30;
+        let x32 = x31 - x25;
+        let x33 = x32 - x14;
+        let x34 = x33 - x26;
+        let x35 = x15 - x13;
+        let x36 = x35 - x2;
+        let x37 = x36 - x12;
+        let x38 = x37 - x18;
+        let x39 = x10 * x34;
+        let x40 = x9 * x38;
+        let x41 = x39 + x40;
+        let x42 = x9 * x34;
+        let x43 = x10 * x38;
+        let x44 = x43 - x42;
+        let x45 = q[2] - q[1];
+        let x46 = x45 - q[0];
+        let (x47, x48) = x46.sin_cos();
+        let x49 = -x47;
+        let x50 = u[2] * x14;
+        let x51 = u[2] * x15;
+        let x52 = u[0] * x6;
+        let x53 = x1 * x52;
+        let x54 = u[0] * x1;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.5) * x54;
+        let x56 = u[0] * x0;
+        let x57 = x4 * x56;
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.5) * x57;
+        let x59 = x7 * x9;
+        let x60 = ::eom_sim::Lanes::<W>::splat(0.5) * x59;
+        let x61 = u[1] * x9;
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.5) * x61;
+        let x63 = x53 + x55;
+        let x64 = x58 + x63;
+        let x65 = x62 + x64;
+        let x66 = x60 + x65;
+        let x67 = x66 - x51;
+        let x68 = x0 * x52;
+        let x69 = x4 * x54;
+        let x70 = ::eom_sim::Lanes::<W>::splat(0.5) * x56;
+        let x71 = x7 * x10;
+        let x72 = u[1] * x10;
+        let x73 = ::eom_sim::Lanes::<W>::splat(0.5) * x69;
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.5) * x72;
+        let x75 = ::eom_sim::Lanes::<W>::splat(0.5) * x71;
+        let x76 = x68 + x70;
+        let x77 = x76 - x73;
+        let x78 = x77 - x50;
+        let x79 = x78 - x74;
+        let x80 = x79 - x75;
+        let x81 = x7 * x34;
+        let x82 = x9 * x81;
+        let x83 = x10 * x67;
+        let x84 = x9 * x80;
+        let x85 = x7 * x38;
+        let x86 = x10 * x85;
+        let x87 = x83 + x86;
+        let x88 = x84 + x87;
+        let x89 = x88 - x82;
+        let x90 = x15 * x17;
+        let x91 = x14 * x17;
+        let x92 = x16 * x22;
+        let x93 = x0 * x16;
+        let x94 = x1 * x16;
+        let x95 = x4 * x94;
+        let x96 = ::eom_sim::Lanes::<W>::splat(0.5) * x95;
+        let x97 = x7 * x7;
+        let x98 = x10 * x97;
+        let x99 = ::eom_sim::Lanes::<W>::splat(0.5) * x98;
+        let x100 = u[1] * x71;
+        let x101 = ::eom_sim::Lanes::<W>::splat(0.5) * x100;
+        let x102 = u[0] * x10;
+        let x103 = u[1] * x102;
+        let x104 = ::eom_sim::Lanes::<W>::splat(0.5) * x103;
+        let x105 = ::eom_sim::Lanes::<W>::splat(0.5) * x93;
+        let x106 = x101 + x104;
+        let x107 = x99 + x106;
+        let x108 = x96 + x107;
+        let x109 = x91 + x108;
+        let x110 = x109 - x105;
+        let x111 = x110 - x92;
+        let x112 = x13 * x16;
+        let x113 = x4 * x93;
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.5) * x113;
+        let x115 = ::eom_sim::Lanes::<W>::splat(0.5) * x94;
+        let x116 = x9 * x97;
+        let x117 = ::eom_sim::Lanes::<W>::splat(0.5) * x116;
+        let x118 = u[1] * x59;
+        let x119 = ::eom_sim::Lanes::<W>::splat(0.5) * x118;
+        let x120 = u[0] * x9;
+        let x121 = u[1] * x120;
+        let x122 = ::eom_sim::Lanes::<W>::splat(0.5) * x121;
+        let x123 = x114 + x122;
+        let x124 = x115 + x123;
+        let x125 = x119 + x124;
+        let x126 = x117 + x125;
+        let x127 = x112 + x126;
+        let x128 = x127 - x90;
+        let x129 = x38 * x97;
+        let x130 = x9 * x129;
+        let x131 = x7 * x67;
+        let x132 = x9 * x131;
+        let x133 = ::eom_sim::Lanes::<W>::splat(2.0) * x132;
+        let x134 = x9 * x128;
+        let x135 = x10 * x111;
+        let x136 = x34 * x98;
+        let x137 = x71 * x80;
+        let x138 = ::eom_sim::Lanes::<W>::splat(2.0) * x137;
+        let x139 = x130 + x136;
+        let x140 = x133 + x139;
+        let x141 = x140 - x138;
+        let x142 = x141 - x134;
+        let x143 = x142 - x135;
+        let x144 = x9 * x67;
+        let x145 = x34 * x71;
+        let x146 = x10 * x80;
+        let x147 = x9 * x85;
+        let x148 = x146 - x147;
+        let x149 = x148 - x144;
+        let x150 = x149 - x145;
+        let x151 = x10 * x128;
+        let x152 = x7 * x80;
+        let x153 = x9 * x152;
+        let x154 = ::eom_sim::Lanes::<W>::splat(2.0) * x153;
+        let x155 = x10 * x129;
+        let x156 = x9 * x111;
+        let x157 = x10 * x131;
+        let x158 = ::eom_sim::Lanes::<W>::splat(2.0) * x157;
+        let x159 = x34 * x97;
+        let x160 = x9 * x159;
+        let x161 = x155 + x158;
+        let x162 = x154 + x161;
+        let x163 = x156 + x162;
+        let x164 = x163 - x160;
+        let x165 = x164 - x151;
+        let x166 = x10 * x21;
+        let x167 = x9 * x29;
+        let x168 = x43 + x167;
+        let x169 = x166 + x168;
+        let x170 = x169 - x42;
+        let x171 = -x48;
+        let x172 = x9 * x21;
+        let x173 = x10 * x29;
+        let x174 = x173 - x40;
+        let x175 = x174 - x172;
+        let x176 = x175 - x39;
+        let x177 = ::eom_sim::Lanes::<W>::splat(1.0) + x40;
+        let x178 = x39 + x177;
+        let x179 = -x178;
+        out[0] = x41;
+        out[2] = x89;
+        out[4] = x143;
+        out[1] = x44;
+        out[3] = x150;
+        out[5] = x165;
+        out[6] = x170;
+        out[7] = x44;
+        out[8] = x171;
+        out[9] = x176;
+        out[10] = x179;
+        out[11] = x49;
+    }
+    /// `cut_joint_reactions` of `W` states at once, one per lane (0 operations per state): force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint. Arguments `t`, `q` as `cut_joint_reactions`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("cut_joint_reactions")`'s result.
+    pub fn cut_joint_reactions_lanes<const W: usize>(
+        m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[0]);
+        out[1] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[1]);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `constraints`, `cut_joint_reactions`.
+impl ::eom_sim::Batched for Fourbar {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 9]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 12]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::constraints_lanes(this, t, &q, &u, out);
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::cut_joint_reactions_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `fourbar` (6 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<6> for Fourbar {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 6],
+        dy: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 3] = [y[0], y[1], y[2]];
+        let u: [::eom_sim::Lanes<W>; 3] = [y[3], y[4], y[5]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 3];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 3];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 3],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = udot[0];
+        dy[4] = udot[1];
+        dy[5] = udot[2];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 6],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `fourbar` (6 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<6> for Fourbar {
     fn rhs(&self, t: f64, y: &[f64; 6], dy: &mut [f64; 6]) {

@@ -831,6 +831,781 @@ impl FourbarCable {
         out[11] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl FourbarCable {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+        out[2] = u[2];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (79 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        tau: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = u[0] + u[1];
+        let x5 = q[2].cos();
+        let x6 = x2 * x2;
+        let x7 = x3 * x3;
+        let x8 = ::eom_sim::Lanes::<W>::splat(9.81) * x1;
+        let x9 = u[0] * u[0];
+        let x10 = u[0] * u[1];
+        let x11 = x3 * x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x11;
+        let x13 = u[0] * x3;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.225) * u[0];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.225) * u[1];
+        let x17 = x14 + x15;
+        let x18 = x16 + x17;
+        let x19 = x4 * x18;
+        let x20 = u[0] * x4;
+        let x21 = x2 * x20;
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(24.0) * tau[2];
+        let x24 = u[0] * x2;
+        let x25 = u[1] * x24;
+        let x26 = x12 - x19;
+        let x27 = x2 * x9;
+        let x28 = x3 * x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.2666666666666667) * x28;
+        let x30 = ::eom_sim::Lanes::<W>::splat(9.938079899999066) * tau[1];
+        let x31 = u[0] * x18;
+        let x32 = x2 * x31;
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.06000000000000001) * x28;
+        let x34 = ::eom_sim::Lanes::<W>::splat(2.23606797749979) * tau[1];
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.033541019662496833) * x25;
+        let x36 = ::eom_sim::Lanes::<W>::splat(0.447213595499958) * x32;
+        let x37 = x33 + x34;
+        let x38 = x22 + x37;
+        let x39 = x38 - x35;
+        let x40 = x39 - x36;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x6;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.033541019662496833) * x7;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.02683281572999748) * x6;
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.006708203932499367) * x7;
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.0026666666666666536) + x44;
+        let x46 = x43 + x45;
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.020000000000000004) + x42;
+        let x48 = x41 + x47;
+        let x49 = x3 * x40;
+        let x50 = x2 * x26;
+        let x51 = x0 * x2;
+        let x52 = x3 * x51;
+        let x53 = x1 * x48;
+        let x54 = ::eom_sim::Lanes::<W>::splat(9.81) * x53;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.000000000000000003469446951953614)
+            * x28;
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.9871122086672824) * x52;
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.2) * x50;
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.2) * x49;
+        let x59 = tau[0] - x54;
+        let x60 = x59 - x55;
+        let x61 = x60 - tau[1];
+        let x62 = x61 - x56;
+        let x63 = x62 - x57;
+        let x64 = x63 - x58;
+        let x65 = x64 / x46;
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.2) * x65;
+        let x67 = x8 + x66;
+        let x68 = ::eom_sim::Lanes::<W>::splat(0.447213595499958) * x25;
+        let x69 = x3 * x67;
+        let x70 = ::eom_sim::Lanes::<W>::splat(21.93582685927294) * x51;
+        let x71 = ::eom_sim::Lanes::<W>::splat(1.9876159799998132) * x32;
+        let x72 = ::eom_sim::Lanes::<W>::splat(2.23606797749979) * x69;
+        let x73 = x68 + x70;
+        let x74 = x29 + x73;
+        let x75 = x30 + x74;
+        let x76 = x75 - x71;
+        let x77 = x76 - x65;
+        let x78 = x77 - x72;
+        let x79 = ::eom_sim::Lanes::<W>::splat(29.43) * x5;
+        let x80 = x23 - x79;
+        out[0] = x65;
+        out[1] = x78;
+        out[2] = x80;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (5 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 9],
+    ) {
+        let x0 = q[1].cos();
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.045000000000000005) * x0;
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.09000000000000001) * x0;
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.1301225413841547) + x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.10062305898749054) + x1;
+        out[0] = x3;
+        out[3] = x4;
+        out[1] = out[3];
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.10062305898749054);
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[6];
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = out[7];
+        out[8] = ::eom_sim::Lanes::<W>::splat(0.041666666666666664);
+    }
+    /// `bias` of `W` states at once, one per lane (52 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let x0 = q[0].cos();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = u[0] + u[1];
+        let x4 = q[0] + q[1];
+        let (x5, x6) = x4.sin_cos();
+        let x7 = q[2].cos();
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.19620000000000004) * x0;
+        let x9 = u[0] * u[0];
+        let x10 = u[0] * x1;
+        let x11 = u[1] * x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(2.20725) * x6;
+        let x13 = u[0] * u[1];
+        let x14 = x2 * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x14;
+        let x16 = ::eom_sim::Lanes::<W>::splat(6.580748057781881) * x5;
+        let x17 = ::eom_sim::Lanes::<W>::splat(6.580748057781881) * x6;
+        let x18 = u[0] * x2;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x18;
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.225) * u[0];
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.225) * u[1];
+        let x22 = x19 + x20;
+        let x23 = x21 + x22;
+        let x24 = u[0] * x23;
+        let x25 = x1 * x24;
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.2) * x25;
+        let x27 = x1 * x9;
+        let x28 = x2 * x27;
+        let x29 = x3 * x23;
+        let x30 = u[0] * x3;
+        let x31 = x1 * x30;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x31;
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.045000000000000005) * x11;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.02683281572999748) * x28;
+        let x35 = x12 + x26;
+        let x36 = x35 - x33;
+        let x37 = x36 - x34;
+        let x38 = x15 + x16;
+        let x39 = x38 - x29;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x11;
+        let x41 = x17 + x32;
+        let x42 = x41 - x40;
+        let x43 = ::eom_sim::Lanes::<W>::splat(1.22625) * x7;
+        let x44 = x2 * x42;
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.2) * x44;
+        let x46 = x1 * x39;
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.2) * x46;
+        let x48 = x8 + x47;
+        let x49 = x12 + x48;
+        let x50 = x26 + x49;
+        let x51 = x45 + x50;
+        let x52 = x51 - x33;
+        let x53 = x52 - x34;
+        out[0] = x53;
+        out[1] = x37;
+        out[2] = x43;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (78 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        udot: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = u[0] + u[1];
+        let x5 = q[2].cos();
+        let x6 = ::eom_sim::Lanes::<W>::splat(9.81) * x1;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.19620000000000004) * x1;
+        let x8 = u[0] * u[0];
+        let x9 = u[0] * x2;
+        let x10 = u[1] * x9;
+        let x11 = u[0] * u[1];
+        let x12 = x3 * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x12;
+        let x14 = u[0] * x3;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x14;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.225) * u[0];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.225) * u[1];
+        let x18 = x15 + x16;
+        let x19 = x17 + x18;
+        let x20 = u[0] * x19;
+        let x21 = x2 * x20;
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.2) * x21;
+        let x23 = x2 * x8;
+        let x24 = x3 * x23;
+        let x25 = x4 * x19;
+        let x26 = u[0] * x4;
+        let x27 = x2 * x26;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(1.22625) * x5;
+        let x30 = x0 * x2;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.0026666666666666674) * udot[0];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.2) * udot[0];
+        let x33 = x6 + x32;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.10062305898749054) * udot[0];
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.10062305898749054) * udot[1];
+        let x36 = x3 * x33;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.225) * x36;
+        let x38 = x0 * x3;
+        let x39 = ::eom_sim::Lanes::<W>::splat(6.580748057781881) * x38;
+        let x40 = x2 * x33;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.6708203932499369) * x40;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.6708203932499369) * x36;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.225) * udot[0];
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.225) * udot[1];
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.045000000000000005) * x10;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.02683281572999748) * x24;
+        let x47 = ::eom_sim::Lanes::<W>::splat(2.20725) * x30;
+        let x48 = x22 + x35;
+        let x49 = x37 + x48;
+        let x50 = x34 + x49;
+        let x51 = x50 - x45;
+        let x52 = x51 - x46;
+        let x53 = x52 - x47;
+        let x54 = x39 + x41;
+        let x55 = x13 + x54;
+        let x56 = x55 - x25;
+        let x57 = ::eom_sim::Lanes::<W>::splat(6.580748057781881) * x30;
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x10;
+        let x59 = x28 + x43;
+        let x60 = x42 + x59;
+        let x61 = x44 + x60;
+        let x62 = x61 - x57;
+        let x63 = x62 - x58;
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.041666666666666664) * udot[2];
+        let x65 = x29 + x64;
+        let x66 = x2 * x56;
+        let x67 = ::eom_sim::Lanes::<W>::splat(0.2) * x66;
+        let x68 = x3 * x63;
+        let x69 = ::eom_sim::Lanes::<W>::splat(0.2) * x68;
+        let x70 = x35 + x67;
+        let x71 = x22 + x70;
+        let x72 = x69 + x71;
+        let x73 = x37 + x72;
+        let x74 = x34 + x73;
+        let x75 = x74 - x45;
+        let x76 = x75 - x46;
+        let x77 = x76 - x47;
+        let x78 = x7 + x77;
+        let x79 = x31 + x78;
+        out[0] = x79;
+        out[1] = x53;
+        out[2] = x65;
+    }
+    /// `energy` of `W` states at once, one per lane (38 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = q[0].sin();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = u[0] + u[1];
+        let x4 = q[0] + q[1];
+        let x5 = x4.sin();
+        let x6 = q[2].sin();
+        let x7 = x1 * x1;
+        let x8 = u[0] * u[0];
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.10062305898749054) * u[0];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.10062305898749054) * u[1];
+        let x11 = u[0] * x2;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.045000000000000005) * x11;
+        let x13 = x9 + x12;
+        let x14 = x10 + x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x11;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.225) * u[0];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.225) * u[1];
+        let x18 = x15 + x16;
+        let x19 = x17 + x18;
+        let x20 = u[2] * u[2];
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.0013333333333333337) * x8;
+        let x22 = x7 * x8;
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.01341640786499874) * x22;
+        let x24 = x3 * x14;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.5) * x24;
+        let x26 = u[0] * x19;
+        let x27 = x2 * x26;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.1) * x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.020833333333333332) * x20;
+        let x30 = x21 + x28;
+        let x31 = x25 + x30;
+        let x32 = x29 + x31;
+        let x33 = x23 + x32;
+        let x34 = ::eom_sim::Lanes::<W>::splat(2.20725) * x5;
+        let x35 = ::eom_sim::Lanes::<W>::splat(1.5123496115563766) * x0;
+        let x36 = ::eom_sim::Lanes::<W>::splat(1.22625) * x6;
+        let x37 = x34 + x35;
+        let x38 = x36 + x37;
+        out[0] = x33;
+        out[1] = x38;
+    }
+    /// `momentum` of `W` states at once, one per lane (49 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = q[0] + q[1];
+        let (x5, x6) = x4.sin_cos();
+        let (x7, x8) = q[2].sin_cos();
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.10062305898749054) * u[1];
+        let x10 = u[0] * x3;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.045000000000000005) * x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x10;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.225) * u[0];
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.225) * u[1];
+        let x15 = x12 + x13;
+        let x16 = x14 + x15;
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.041666666666666664) * u[2];
+        let x18 = u[0] * x0;
+        let x19 = u[0] * x1;
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.020000000000000004) * x19;
+        let x21 = u[0] * x6;
+        let x22 = x2 * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x22;
+        let x24 = x5 * x16;
+        let x25 = x23 - x24;
+        let x26 = u[0] * x5;
+        let x27 = x2 * x26;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.1341640786499874) * x27;
+        let x29 = x6 * x16;
+        let x30 = x28 + x29;
+        let x31 = x1 * x30;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.2) * x31;
+        let x33 = x0 * x25;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.1032897256541572) * u[0];
+        let x35 = u[2] * x7;
+        let x36 = u[2] * x8;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.125) * x36;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.075) * x36;
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.2) * x33;
+        let x40 = x11 + x32;
+        let x41 = x34 + x40;
+        let x42 = x38 + x41;
+        let x43 = x17 + x42;
+        let x44 = x9 + x43;
+        let x45 = x44 - x39;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.125) * x35;
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.020000000000000004) * x18;
+        let x48 = x23 - x46;
+        let x49 = x48 - x24;
+        let x50 = x49 - x47;
+        let x51 = x30 + x37;
+        let x52 = x20 + x51;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x45;
+        out[3] = x50;
+        out[4] = x52;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `constraints` of `W` states at once, one per lane (124 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (12 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    pub fn constraints_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 12],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = u[0] + u[1];
+        let x3 = q[0] + q[1];
+        let (x4, x5) = x3.sin_cos();
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.2) * x0;
+        let (x7, x8) = q[2].sin_cos();
+        let x9 = u[0] * u[0];
+        let x10 = u[2] * u[2];
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.6708203932499369) * x4;
+        let x12 = x6 + x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.5) * x8;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x7;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.6708203932499369) * x5;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.2) * x1;
+        let x17 = x15 + x16;
+        let x18 = -x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.6) + x13;
+        let x20 = x19 - x15;
+        let x21 = x20 - x16;
+        let x22 = x14 - x6;
+        let x23 = x22 - x11;
+        let x24 = x5 * x21;
+        let x25 = x4 * x23;
+        let x26 = x24 + x25;
+        let x27 = x4 * x21;
+        let x28 = x5 * x23;
+        let x29 = x28 - x27;
+        let x30 = q[2] - q[1];
+        let x31 = x30 - q[0];
+        let (x32, x33) = x31.sin_cos();
+        let x34 = u[2] * x7;
+        let x35 = u[2] * x8;
+        let x36 = ::eom_sim::Lanes::<W>::splat(0.5) * x35;
+        let x37 = u[0] * x0;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.2) * x37;
+        let x39 = x2 * x4;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.6708203932499369) * x39;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.5) * x34;
+        let x42 = x38 + x40;
+        let x43 = x42 - x41;
+        let x44 = u[0] * x1;
+        let x45 = x2 * x5;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.6708203932499369) * x45;
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.2) * x44;
+        let x48 = x36 - x46;
+        let x49 = x48 - x47;
+        let x50 = x5 * x43;
+        let x51 = x2 * x21;
+        let x52 = x4 * x51;
+        let x53 = x4 * x49;
+        let x54 = x2 * x23;
+        let x55 = x5 * x54;
+        let x56 = x53 + x55;
+        let x57 = x50 + x56;
+        let x58 = x57 - x52;
+        let x59 = x8 * x10;
+        let x60 = x7 * x10;
+        let x61 = x1 * x9;
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.2) * x61;
+        let x63 = x2 * x2;
+        let x64 = x5 * x63;
+        let x65 = ::eom_sim::Lanes::<W>::splat(0.6708203932499369) * x64;
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.5) * x59;
+        let x67 = x62 + x65;
+        let x68 = x67 - x66;
+        let x69 = x0 * x9;
+        let x70 = ::eom_sim::Lanes::<W>::splat(0.2) * x69;
+        let x71 = x4 * x63;
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.6708203932499369) * x71;
+        let x73 = ::eom_sim::Lanes::<W>::splat(0.5) * x60;
+        let x74 = x70 + x72;
+        let x75 = x74 - x73;
+        let x76 = x4 * x75;
+        let x77 = x5 * x68;
+        let x78 = x2 * x49;
+        let x79 = x5 * x78;
+        let x80 = x23 * x63;
+        let x81 = x4 * x80;
+        let x82 = x2 * x43;
+        let x83 = x4 * x82;
+        let x84 = ::eom_sim::Lanes::<W>::splat(2.0) * x83;
+        let x85 = x21 * x63;
+        let x86 = x5 * x85;
+        let x87 = ::eom_sim::Lanes::<W>::splat(2.0) * x79;
+        let x88 = x81 + x86;
+        let x89 = x84 + x88;
+        let x90 = x89 - x87;
+        let x91 = x90 - x76;
+        let x92 = x91 - x77;
+        let x93 = x4 * x43;
+        let x94 = x5 * x51;
+        let x95 = x5 * x49;
+        let x96 = x4 * x54;
+        let x97 = x95 - x96;
+        let x98 = x97 - x93;
+        let x99 = x98 - x94;
+        let x100 = x5 * x82;
+        let x101 = ::eom_sim::Lanes::<W>::splat(2.0) * x100;
+        let x102 = x5 * x75;
+        let x103 = x4 * x68;
+        let x104 = x4 * x78;
+        let x105 = ::eom_sim::Lanes::<W>::splat(2.0) * x104;
+        let x106 = x5 * x80;
+        let x107 = x4 * x85;
+        let x108 = x101 + x105;
+        let x109 = x106 + x108;
+        let x110 = x103 + x109;
+        let x111 = x110 - x102;
+        let x112 = x111 - x107;
+        let x113 = x5 * x12;
+        let x114 = x4 * x18;
+        let x115 = x28 + x113;
+        let x116 = x114 + x115;
+        let x117 = x116 - x27;
+        let x118 = ::eom_sim::Lanes::<W>::splat(-0.5) * x32;
+        let x119 = x4 * x12;
+        let x120 = x5 * x18;
+        let x121 = x120 - x24;
+        let x122 = x121 - x119;
+        let x123 = x122 - x25;
+        let x124 = ::eom_sim::Lanes::<W>::splat(0.6708203932499369) + x24;
+        let x125 = x25 + x124;
+        let x126 = -x125;
+        let x127 = ::eom_sim::Lanes::<W>::splat(0.5) * x33;
+        out[0] = x26;
+        out[2] = x58;
+        out[4] = x92;
+        out[1] = x29;
+        out[3] = x99;
+        out[5] = x112;
+        out[6] = x117;
+        out[7] = x29;
+        out[8] = x118;
+        out[9] = x123;
+        out[10] = x126;
+        out[11] = x127;
+    }
+    /// `cut_joint_reactions` of `W` states at once, one per lane (0 operations per state): force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint. Arguments `t`, `q` as `cut_joint_reactions`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("cut_joint_reactions")`'s result.
+    pub fn cut_joint_reactions_lanes<const W: usize>(
+        m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[0]);
+        out[1] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[1]);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `attachments` of `W` states at once, one per lane (11 operations per state): the markers holding cable ends (issue #18), mount by mount: world position, and for a clamped end the unit normals `n1`, `n2` of the clamp's axis (world axes); each value followed by its partial derivatives `∂/∂q_k`. Arguments `t`, `q` as `attachments`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (12 entries per lane) laid out as `Model::evaluate("attachments")`'s result.
+    pub fn attachments_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 12],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = q[0] + q[1];
+        let (x3, x4) = x2.sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.2) * x1;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.2) * x0;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.33541019662496846) * x4;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.33541019662496846) * x3;
+        let x9 = x5 + x7;
+        let x10 = x6 + x8;
+        let x11 = ::eom_sim::Lanes::<W>::splat(-0.33541019662496846) * x3;
+        let x12 = -x10;
+        out[0] = x9;
+        out[1] = x12;
+        out[2] = x11;
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = x10;
+        out[5] = x9;
+        out[6] = x7;
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `constraints`, `cut_joint_reactions`, `attachments`.
+impl ::eom_sim::Batched for FourbarCable {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 9]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 12]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::constraints_lanes(this, t, &q, &u, out);
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::cut_joint_reactions_lanes(this, t, &q, out);
+                true
+            }
+            "attachments" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 12]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::attachments_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `fourbar_cable` (6 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<6> for FourbarCable {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 6],
+        dy: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 3] = [y[0], y[1], y[2]];
+        let u: [::eom_sim::Lanes<W>; 3] = [y[3], y[4], y[5]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 3];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 3];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 3],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = udot[0];
+        dy[4] = udot[1];
+        dy[5] = udot[2];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 6],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `fourbar_cable` (6 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<6> for FourbarCable {
     fn rhs(&self, t: f64, y: &[f64; 6], dy: &mut [f64; 6]) {

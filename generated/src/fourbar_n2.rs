@@ -1493,6 +1493,1434 @@ impl FourbarN2 {
         out[11] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl FourbarN2 {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 5],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+        out[2] = u[2];
+        out[3] = u[3];
+        out[4] = u[4];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (190 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        tau: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 5],
+    ) {
+        let x0 = q[0].sin();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) + x3;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x6 = u[0] * x4;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x8 = x6 + x7;
+        let x9 = -x8;
+        let x10 = x2 * x9;
+        let x11 = u[0] * x1;
+        let x12 = x2 * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.5) * x12;
+        let x14 = x10 + x13;
+        let x15 = x1 * x9;
+        let x16 = x2 * x2;
+        let x17 = u[0] * x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
+        let x19 = u[0] + u[1];
+        let x20 = x5 + x18;
+        let x21 = x20 - x15;
+        let x22 = q[0] + q[1];
+        let (x23, x24) = x22.sin_cos();
+        let x25 = q[2].sin();
+        let (x26, x27) = q[3].sin_cos();
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.5) * x26;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.5) + x28;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.5) * u[3];
+        let x31 = u[2] * x29;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.5) * u[2];
+        let x33 = x31 + x32;
+        let x34 = -x33;
+        let x35 = x27 * x34;
+        let x36 = u[2] * x26;
+        let x37 = x27 * x36;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.5) * x37;
+        let x39 = x35 + x38;
+        let x40 = x26 * x34;
+        let x41 = x27 * x27;
+        let x42 = u[2] * x41;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.5) * x42;
+        let x44 = u[2] + u[3];
+        let x45 = x30 + x43;
+        let x46 = x45 - x40;
+        let x47 = q[2] + q[3];
+        let (x48, x49) = x47.sin_cos();
+        let x50 = q[4].sin();
+        let x51 = -x29;
+        let x52 = x29 * x51;
+        let x53 = ::eom_sim::Lanes::<W>::splat(0.25) * x41;
+        let x54 = -x4;
+        let x55 = x4 * x54;
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.25) * x16;
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.25) * x1;
+        let x58 = x1 * x4;
+        let x59 = ::eom_sim::Lanes::<W>::splat(0.5) * x58;
+        let x60 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) + x56;
+        let x61 = x57 + x60;
+        let x62 = x59 + x61;
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.25) * x26;
+        let x64 = x26 * x29;
+        let x65 = ::eom_sim::Lanes::<W>::splat(0.5) * x64;
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) + x53;
+        let x67 = x63 + x66;
+        let x68 = x65 + x67;
+        let x69 = ::eom_sim::Lanes::<W>::splat(9.81) * x23;
+        let x70 = ::eom_sim::Lanes::<W>::splat(9.81) * x24;
+        let x71 = u[1] * x19;
+        let x72 = u[1] * x21;
+        let x73 = u[1] * x14;
+        let x74 = x19 * x21;
+        let x75 = x14 * x19;
+        let x76 = ::eom_sim::Lanes::<W>::splat(0.5) * x71;
+        let x77 = x69 + x72;
+        let x78 = x77 - x76;
+        let x79 = x78 - x74;
+        let x80 = x70 + x75;
+        let x81 = x80 - x73;
+        let x82 = ::eom_sim::Lanes::<W>::splat(9.81) * x48;
+        let x83 = ::eom_sim::Lanes::<W>::splat(9.81) * x49;
+        let x84 = u[3] * x44;
+        let x85 = u[3] * x46;
+        let x86 = u[3] * x39;
+        let x87 = x44 * x46;
+        let x88 = x39 * x44;
+        let x89 = ::eom_sim::Lanes::<W>::splat(0.5) * x84;
+        let x90 = x82 + x85;
+        let x91 = x90 - x87;
+        let x92 = x91 - x89;
+        let x93 = x83 + x88;
+        let x94 = x93 - x86;
+        let x95 = x27 * x92;
+        let x96 = x26 * x94;
+        let x97 = x95 - x96;
+        let x98 = x26 * x92;
+        let x99 = x27 * x94;
+        let x100 = x98 + x99;
+        let x101 = x29 * x97;
+        let x102 = x2 * x79;
+        let x103 = x1 * x81;
+        let x104 = x102 - x103;
+        let x105 = x1 * x79;
+        let x106 = x2 * x81;
+        let x107 = x105 + x106;
+        let x108 = x4 * x104;
+        let x109 = ::eom_sim::Lanes::<W>::splat(3.0) * tau[4];
+        let x110 = ::eom_sim::Lanes::<W>::splat(3.0) * tau[3];
+        let x111 = ::eom_sim::Lanes::<W>::splat(3.0) * tau[1];
+        let x112 = ::eom_sim::Lanes::<W>::splat(0.5) * x73;
+        let x113 = ::eom_sim::Lanes::<W>::splat(1.5) * x73;
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.5) * x86;
+        let x115 = ::eom_sim::Lanes::<W>::splat(1.5) * x86;
+        let x116 = ::eom_sim::Lanes::<W>::splat(14.715) * x50;
+        let x117 = x109 + x116;
+        let x118 = ::eom_sim::Lanes::<W>::splat(0.75) * x41;
+        let x119 = ::eom_sim::Lanes::<W>::splat(0.75) * x26;
+        let x120 = ::eom_sim::Lanes::<W>::splat(1.5) * x64;
+        let x121 = ::eom_sim::Lanes::<W>::splat(0.25) + x119;
+        let x122 = x118 + x121;
+        let x123 = x120 + x122;
+        let x124 = x68 * x123;
+        let x125 = ::eom_sim::Lanes::<W>::splat(1.1666666666666665) + x53;
+        let x126 = x28 + x125;
+        let x127 = x126 - x52;
+        let x128 = x127 - x124;
+        let x129 = ::eom_sim::Lanes::<W>::splat(0.75) * x16;
+        let x130 = ::eom_sim::Lanes::<W>::splat(0.75) * x1;
+        let x131 = ::eom_sim::Lanes::<W>::splat(1.5) * x58;
+        let x132 = ::eom_sim::Lanes::<W>::splat(0.25) + x130;
+        let x133 = x129 + x132;
+        let x134 = x131 + x133;
+        let x135 = x62 * x134;
+        let x136 = ::eom_sim::Lanes::<W>::splat(1.1666666666666665) + x56;
+        let x137 = x3 + x136;
+        let x138 = x137 - x55;
+        let x139 = x138 - x135;
+        let x140 = ::eom_sim::Lanes::<W>::splat(0.5) * x102;
+        let x141 = ::eom_sim::Lanes::<W>::splat(4.905) * x0;
+        let x142 = x2 * x107;
+        let x143 = ::eom_sim::Lanes::<W>::splat(4.905) * x24;
+        let x144 = ::eom_sim::Lanes::<W>::splat(0.5) * x75;
+        let x145 = tau[1] + x112;
+        let x146 = x145 - x143;
+        let x147 = x146 - x144;
+        let x148 = ::eom_sim::Lanes::<W>::splat(4.905) * x25;
+        let x149 = x27 * x100;
+        let x150 = ::eom_sim::Lanes::<W>::splat(0.5) * x95;
+        let x151 = ::eom_sim::Lanes::<W>::splat(0.5) * x88;
+        let x152 = ::eom_sim::Lanes::<W>::splat(4.905) * x49;
+        let x153 = tau[3] + x114;
+        let x154 = x153 - x151;
+        let x155 = x154 - x152;
+        let x156 = x123 * x155;
+        let x157 = ::eom_sim::Lanes::<W>::splat(0.5) * x96;
+        let x158 = ::eom_sim::Lanes::<W>::splat(0.5) * x149;
+        let x159 = x148 + x150;
+        let x160 = tau[2] + x159;
+        let x161 = x101 + x160;
+        let x162 = x161 - x156;
+        let x163 = x162 - x157;
+        let x164 = x163 - x158;
+        let x165 = x134 * x147;
+        let x166 = ::eom_sim::Lanes::<W>::splat(0.5) * x142;
+        let x167 = ::eom_sim::Lanes::<W>::splat(0.5) * x103;
+        let x168 = x108 + x141;
+        let x169 = tau[0] + x168;
+        let x170 = x140 + x169;
+        let x171 = x170 - x166;
+        let x172 = x171 - x167;
+        let x173 = x172 - x165;
+        let x174 = ::eom_sim::Lanes::<W>::splat(1.0) / x139;
+        let x175 = x173 * x174;
+        let x176 = ::eom_sim::Lanes::<W>::splat(1.0) / x128;
+        let x177 = x164 * x176;
+        let x178 = x134 * x173;
+        let x179 = x178 * x174;
+        let x180 = ::eom_sim::Lanes::<W>::splat(1.5) * x75;
+        let x181 = ::eom_sim::Lanes::<W>::splat(14.715) * x24;
+        let x182 = x111 + x113;
+        let x183 = x182 - x180;
+        let x184 = x183 - x181;
+        let x185 = x184 - x179;
+        let x186 = x123 * x164;
+        let x187 = x186 * x176;
+        let x188 = ::eom_sim::Lanes::<W>::splat(14.715) * x49;
+        let x189 = ::eom_sim::Lanes::<W>::splat(1.5) * x88;
+        let x190 = x110 + x115;
+        let x191 = x190 - x187;
+        let x192 = x191 - x188;
+        let x193 = x192 - x189;
+        out[0] = x175;
+        out[1] = x185;
+        out[2] = x177;
+        out[3] = x193;
+        out[4] = x117;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (32 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (25 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 25],
+    ) {
+        let (x0, x1) = q[1].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.5) + x2;
+        let x4 = x1 * x1;
+        let (x5, x6) = q[3].sin_cos();
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.5) * x5;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.5) + x7;
+        let x9 = x6 * x6;
+        let x10 = -x8;
+        let x11 = x8 * x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.25) * x9;
+        let x13 = -x3;
+        let x14 = x3 * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.25) * x4;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.25) * x0;
+        let x17 = ::eom_sim::Lanes::<W>::splat(1.1666666666666665) + x15;
+        let x18 = x2 + x17;
+        let x19 = x18 - x14;
+        let x20 = x0 * x3;
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.5) * x20;
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) + x15;
+        let x23 = x16 + x22;
+        let x24 = x21 + x23;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.25) * x5;
+        let x26 = ::eom_sim::Lanes::<W>::splat(1.1666666666666665) + x12;
+        let x27 = x7 + x26;
+        let x28 = x27 - x11;
+        let x29 = x5 * x8;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.5) * x29;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) + x12;
+        let x32 = x25 + x31;
+        let x33 = x30 + x32;
+        out[0] = x19;
+        out[5] = x24;
+        out[1] = out[5];
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.3333333333333333);
+        out[10] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[10];
+        out[11] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[7] = out[11];
+        out[12] = x28;
+        out[15] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = out[15];
+        out[16] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = out[16];
+        out[17] = x33;
+        out[13] = out[17];
+        out[18] = ::eom_sim::Lanes::<W>::splat(0.3333333333333333);
+        out[20] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = out[20];
+        out[21] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = out[21];
+        out[22] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[14] = out[22];
+        out[23] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[19] = out[23];
+        out[24] = ::eom_sim::Lanes::<W>::splat(0.3333333333333333);
+    }
+    /// `bias` of `W` states at once, one per lane (116 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 5],
+    ) {
+        let x0 = q[0].sin();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) + x3;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x6 = u[0] * x4;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x8 = x6 + x7;
+        let x9 = -x8;
+        let x10 = x2 * x9;
+        let x11 = u[0] * x1;
+        let x12 = x2 * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.5) * x12;
+        let x14 = x10 + x13;
+        let x15 = x1 * x9;
+        let x16 = x2 * x2;
+        let x17 = u[0] * x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
+        let x19 = u[0] + u[1];
+        let x20 = x5 + x18;
+        let x21 = x20 - x15;
+        let x22 = q[0] + q[1];
+        let (x23, x24) = x22.sin_cos();
+        let x25 = q[2].sin();
+        let (x26, x27) = q[3].sin_cos();
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.5) * x26;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.5) + x28;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.5) * u[3];
+        let x31 = u[2] * x29;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.5) * u[2];
+        let x33 = x31 + x32;
+        let x34 = -x33;
+        let x35 = x27 * x34;
+        let x36 = u[2] * x26;
+        let x37 = x27 * x36;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.5) * x37;
+        let x39 = x35 + x38;
+        let x40 = x26 * x34;
+        let x41 = x27 * x27;
+        let x42 = u[2] * x41;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.5) * x42;
+        let x44 = u[2] + u[3];
+        let x45 = x30 + x43;
+        let x46 = x45 - x40;
+        let x47 = q[2] + q[3];
+        let (x48, x49) = x47.sin_cos();
+        let x50 = q[4].sin();
+        let x51 = ::eom_sim::Lanes::<W>::splat(9.81) * x23;
+        let x52 = ::eom_sim::Lanes::<W>::splat(9.81) * x24;
+        let x53 = u[1] * x19;
+        let x54 = u[1] * x21;
+        let x55 = u[1] * x14;
+        let x56 = x19 * x21;
+        let x57 = x14 * x19;
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.5) * x53;
+        let x59 = x51 + x54;
+        let x60 = x59 - x58;
+        let x61 = x60 - x56;
+        let x62 = x52 + x57;
+        let x63 = x62 - x55;
+        let x64 = ::eom_sim::Lanes::<W>::splat(9.81) * x48;
+        let x65 = ::eom_sim::Lanes::<W>::splat(9.81) * x49;
+        let x66 = u[3] * x44;
+        let x67 = u[3] * x46;
+        let x68 = u[3] * x39;
+        let x69 = x44 * x46;
+        let x70 = x39 * x44;
+        let x71 = ::eom_sim::Lanes::<W>::splat(0.5) * x66;
+        let x72 = x64 + x67;
+        let x73 = x72 - x69;
+        let x74 = x73 - x71;
+        let x75 = x65 + x70;
+        let x76 = x75 - x68;
+        let x77 = ::eom_sim::Lanes::<W>::splat(-4.905) * x50;
+        let x78 = ::eom_sim::Lanes::<W>::splat(4.905) * x49;
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.5) * x70;
+        let x80 = ::eom_sim::Lanes::<W>::splat(0.5) * x68;
+        let x81 = x78 + x79;
+        let x82 = x81 - x80;
+        let x83 = x27 * x74;
+        let x84 = x26 * x76;
+        let x85 = x83 - x84;
+        let x86 = x26 * x74;
+        let x87 = x27 * x76;
+        let x88 = x86 + x87;
+        let x89 = x27 * x88;
+        let x90 = ::eom_sim::Lanes::<W>::splat(0.5) * x89;
+        let x91 = x29 * x85;
+        let x92 = ::eom_sim::Lanes::<W>::splat(0.5) * x84;
+        let x93 = ::eom_sim::Lanes::<W>::splat(4.905) * x25;
+        let x94 = ::eom_sim::Lanes::<W>::splat(0.5) * x83;
+        let x95 = x90 + x92;
+        let x96 = x95 - x93;
+        let x97 = x96 - x91;
+        let x98 = x97 - x94;
+        let x99 = ::eom_sim::Lanes::<W>::splat(4.905) * x24;
+        let x100 = ::eom_sim::Lanes::<W>::splat(0.5) * x57;
+        let x101 = ::eom_sim::Lanes::<W>::splat(0.5) * x55;
+        let x102 = x99 + x100;
+        let x103 = x102 - x101;
+        let x104 = x2 * x61;
+        let x105 = x1 * x63;
+        let x106 = x104 - x105;
+        let x107 = x1 * x61;
+        let x108 = x2 * x63;
+        let x109 = x107 + x108;
+        let x110 = x2 * x109;
+        let x111 = ::eom_sim::Lanes::<W>::splat(0.5) * x110;
+        let x112 = x4 * x106;
+        let x113 = ::eom_sim::Lanes::<W>::splat(0.5) * x105;
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.5) * x104;
+        let x115 = ::eom_sim::Lanes::<W>::splat(4.905) * x0;
+        let x116 = x111 + x113;
+        let x117 = x116 - x114;
+        let x118 = x117 - x115;
+        let x119 = x118 - x112;
+        out[0] = x119;
+        out[1] = x103;
+        out[2] = x98;
+        out[3] = x82;
+        out[4] = x77;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (164 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        udot: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 5],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) * x2;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) + x4;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x7 = u[0] * x5;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x9 = x7 + x8;
+        let x10 = -x9;
+        let x11 = x3 * x10;
+        let x12 = u[0] * x2;
+        let x13 = x3 * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x13;
+        let x15 = x11 + x14;
+        let x16 = x2 * x10;
+        let x17 = x3 * x3;
+        let x18 = u[0] * x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.5) * x18;
+        let x20 = u[0] + u[1];
+        let x21 = x6 + x19;
+        let x22 = x21 - x16;
+        let (x23, x24) = q[2].sin_cos();
+        let (x25, x26) = q[3].sin_cos();
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.5) * x25;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.5) + x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.5) * u[3];
+        let x30 = u[2] * x28;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.5) * u[2];
+        let x32 = x30 + x31;
+        let x33 = -x32;
+        let x34 = x26 * x33;
+        let x35 = u[2] * x25;
+        let x36 = x26 * x35;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.5) * x36;
+        let x38 = x34 + x37;
+        let x39 = x25 * x33;
+        let x40 = x26 * x26;
+        let x41 = u[2] * x40;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.5) * x41;
+        let x43 = u[2] + u[3];
+        let x44 = x29 + x42;
+        let x45 = x44 - x39;
+        let x46 = q[4].sin();
+        let x47 = ::eom_sim::Lanes::<W>::splat(9.81) * x0;
+        let x48 = ::eom_sim::Lanes::<W>::splat(9.81) * x1;
+        let x49 = u[1] * x20;
+        let x50 = u[1] * x22;
+        let x51 = u[1] * x15;
+        let x52 = x20 * x22;
+        let x53 = x15 * x20;
+        let x54 = ::eom_sim::Lanes::<W>::splat(9.81) * x23;
+        let x55 = ::eom_sim::Lanes::<W>::splat(9.81) * x24;
+        let x56 = u[3] * x43;
+        let x57 = u[3] * x45;
+        let x58 = u[3] * x38;
+        let x59 = x43 * x45;
+        let x60 = x38 * x43;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.5) * x60;
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.5) * x53;
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * udot[0];
+        let x64 = udot[0] * x5;
+        let x65 = udot[0] * x3;
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.5) * x65;
+        let x67 = ::eom_sim::Lanes::<W>::splat(0.5) * udot[0];
+        let x68 = x47 - x64;
+        let x69 = x68 - x67;
+        let x70 = x48 + x66;
+        let x71 = x3 * x69;
+        let x72 = x2 * x70;
+        let x73 = x2 * x69;
+        let x74 = x3 * x70;
+        let x75 = ::eom_sim::Lanes::<W>::splat(0.5) * udot[1];
+        let x76 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * udot[1];
+        let x77 = ::eom_sim::Lanes::<W>::splat(0.5) * x49;
+        let x78 = x50 + x71;
+        let x79 = x72 + x78;
+        let x80 = x79 - x77;
+        let x81 = x80 - x52;
+        let x82 = x53 + x74;
+        let x83 = x75 + x82;
+        let x84 = x83 - x51;
+        let x85 = x84 - x73;
+        let x86 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * udot[2];
+        let x87 = udot[2] * x28;
+        let x88 = udot[2] * x26;
+        let x89 = ::eom_sim::Lanes::<W>::splat(0.5) * x88;
+        let x90 = ::eom_sim::Lanes::<W>::splat(0.5) * udot[2];
+        let x91 = x54 - x87;
+        let x92 = x91 - x90;
+        let x93 = x55 + x89;
+        let x94 = x26 * x92;
+        let x95 = x25 * x93;
+        let x96 = x25 * x92;
+        let x97 = x26 * x93;
+        let x98 = ::eom_sim::Lanes::<W>::splat(0.5) * udot[3];
+        let x99 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * udot[3];
+        let x100 = ::eom_sim::Lanes::<W>::splat(0.5) * x56;
+        let x101 = x57 + x95;
+        let x102 = x94 + x101;
+        let x103 = x102 - x59;
+        let x104 = x103 - x100;
+        let x105 = x97 + x98;
+        let x106 = x60 + x105;
+        let x107 = x106 - x96;
+        let x108 = x107 - x58;
+        let x109 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * udot[4];
+        let x110 = ::eom_sim::Lanes::<W>::splat(4.905) * x46;
+        let x111 = x109 - x110;
+        let x112 = ::eom_sim::Lanes::<W>::splat(0.5) * x97;
+        let x113 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * udot[3];
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.5) * x58;
+        let x115 = ::eom_sim::Lanes::<W>::splat(0.5) * x96;
+        let x116 = x86 + x112;
+        let x117 = x61 + x116;
+        let x118 = x113 + x117;
+        let x119 = x118 - x114;
+        let x120 = x119 - x115;
+        let x121 = x26 * x104;
+        let x122 = x25 * x108;
+        let x123 = x121 - x122;
+        let x124 = x25 * x104;
+        let x125 = x26 * x108;
+        let x126 = x124 + x125;
+        let x127 = x26 * x126;
+        let x128 = ::eom_sim::Lanes::<W>::splat(0.5) * x127;
+        let x129 = x28 * x123;
+        let x130 = ::eom_sim::Lanes::<W>::splat(0.5) * x122;
+        let x131 = ::eom_sim::Lanes::<W>::splat(0.41666666666666663) * udot[2];
+        let x132 = ::eom_sim::Lanes::<W>::splat(4.905) * x23;
+        let x133 = ::eom_sim::Lanes::<W>::splat(0.5) * x121;
+        let x134 = x128 + x131;
+        let x135 = x99 + x134;
+        let x136 = x130 + x135;
+        let x137 = x136 - x132;
+        let x138 = x137 - x129;
+        let x139 = x138 - x133;
+        let x140 = ::eom_sim::Lanes::<W>::splat(0.5) * x74;
+        let x141 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * udot[1];
+        let x142 = ::eom_sim::Lanes::<W>::splat(0.5) * x51;
+        let x143 = ::eom_sim::Lanes::<W>::splat(0.5) * x73;
+        let x144 = x63 + x141;
+        let x145 = x140 + x144;
+        let x146 = x62 + x145;
+        let x147 = x146 - x142;
+        let x148 = x147 - x143;
+        let x149 = x3 * x81;
+        let x150 = x2 * x85;
+        let x151 = x149 - x150;
+        let x152 = x2 * x81;
+        let x153 = x3 * x85;
+        let x154 = x152 + x153;
+        let x155 = x3 * x154;
+        let x156 = ::eom_sim::Lanes::<W>::splat(0.5) * x155;
+        let x157 = x5 * x151;
+        let x158 = ::eom_sim::Lanes::<W>::splat(0.5) * x150;
+        let x159 = ::eom_sim::Lanes::<W>::splat(0.41666666666666663) * udot[0];
+        let x160 = ::eom_sim::Lanes::<W>::splat(4.905) * x0;
+        let x161 = ::eom_sim::Lanes::<W>::splat(0.5) * x149;
+        let x162 = x158 + x159;
+        let x163 = x156 + x162;
+        let x164 = x76 + x163;
+        let x165 = x164 - x157;
+        let x166 = x165 - x160;
+        let x167 = x166 - x161;
+        out[0] = x167;
+        out[1] = x148;
+        out[2] = x139;
+        out[3] = x120;
+        out[4] = x111;
+    }
+    /// `energy` of `W` states at once, one per lane (92 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) * x2;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) + x4;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x7 = u[0] * x5;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x9 = x7 + x8;
+        let x10 = -x9;
+        let x11 = x3 * x10;
+        let x12 = u[0] * x2;
+        let x13 = x3 * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x13;
+        let x15 = x11 + x14;
+        let x16 = x2 * x10;
+        let x17 = x3 * x3;
+        let x18 = u[0] * x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.5) * x18;
+        let x20 = u[0] + u[1];
+        let x21 = x6 + x19;
+        let x22 = x21 - x16;
+        let (x23, x24) = q[2].sin_cos();
+        let (x25, x26) = q[3].sin_cos();
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.5) * x25;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.5) + x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.5) * u[3];
+        let x30 = u[2] * x28;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.5) * u[2];
+        let x32 = x30 + x31;
+        let x33 = -x32;
+        let x34 = x26 * x33;
+        let x35 = u[2] * x25;
+        let x36 = x26 * x35;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.5) * x36;
+        let x38 = x34 + x37;
+        let x39 = x25 * x33;
+        let x40 = x26 * x26;
+        let x41 = u[2] * x40;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.5) * x41;
+        let x43 = u[2] + u[3];
+        let x44 = x29 + x42;
+        let x45 = x44 - x39;
+        let x46 = q[4].cos();
+        let x47 = ::eom_sim::Lanes::<W>::splat(9.81) * x1;
+        let x48 = u[0] * u[0];
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[0];
+        let x50 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[1];
+        let x51 = x49 + x50;
+        let x52 = ::eom_sim::Lanes::<W>::splat(9.81) * x24;
+        let x53 = u[2] * u[2];
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[2];
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[3];
+        let x56 = x54 + x55;
+        let x57 = u[4] * u[4];
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.16666666666666666) * x48;
+        let x59 = x15 * x15;
+        let x60 = x22 * x22;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.5) * x59;
+        let x62 = x20 * x51;
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.5) * x62;
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.5) * x60;
+        let x65 = ::eom_sim::Lanes::<W>::splat(0.16666666666666666) * x53;
+        let x66 = x38 * x38;
+        let x67 = x45 * x45;
+        let x68 = x43 * x56;
+        let x69 = ::eom_sim::Lanes::<W>::splat(0.5) * x68;
+        let x70 = ::eom_sim::Lanes::<W>::splat(0.5) * x66;
+        let x71 = ::eom_sim::Lanes::<W>::splat(0.5) * x67;
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.16666666666666666) * x57;
+        let x73 = x69 + x70;
+        let x74 = x72 + x73;
+        let x75 = x61 + x74;
+        let x76 = x63 + x75;
+        let x77 = x71 + x76;
+        let x78 = x64 + x77;
+        let x79 = x58 + x78;
+        let x80 = x65 + x79;
+        let x81 = x1 * x5;
+        let x82 = ::eom_sim::Lanes::<W>::splat(9.81) * x81;
+        let x83 = x0 * x3;
+        let x84 = ::eom_sim::Lanes::<W>::splat(4.905) * x83;
+        let x85 = x23 * x26;
+        let x86 = ::eom_sim::Lanes::<W>::splat(4.905) * x85;
+        let x87 = x24 * x28;
+        let x88 = ::eom_sim::Lanes::<W>::splat(9.81) * x87;
+        let x89 = ::eom_sim::Lanes::<W>::splat(4.905) * x46;
+        let x90 = x47 + x52;
+        let x91 = x84 + x90;
+        let x92 = x86 + x91;
+        let x93 = x89 + x92;
+        let x94 = x88 + x93;
+        let x95 = x82 + x94;
+        out[0] = x80;
+        out[1] = x95;
+    }
+    /// `momentum` of `W` states at once, one per lane (140 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let (x3, x4) = q[1].sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * x3;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) + x5;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.5) * u[1];
+        let x8 = u[0] * x6;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x10 = x8 + x9;
+        let x11 = -x10;
+        let x12 = x4 * x11;
+        let x13 = u[0] * x3;
+        let x14 = x4 * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.5) * x14;
+        let x16 = x12 + x15;
+        let x17 = x3 * x11;
+        let x18 = x4 * x4;
+        let x19 = u[0] * x18;
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.5) * x19;
+        let x21 = x7 + x20;
+        let x22 = x21 - x17;
+        let x23 = q[0] + q[1];
+        let (x24, x25) = x23.sin_cos();
+        let x26 = x1 * x4;
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.5) * x26;
+        let x28 = x0 * x6;
+        let x29 = x0 * x4;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.5) * x29;
+        let x31 = x1 * x6;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x33 = x27 - x28;
+        let x34 = x33 - x32;
+        let x35 = x30 + x31;
+        let x36 = x2 + x35;
+        let (x37, x38) = q[2].sin_cos();
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.5) * x38;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.5) * x37;
+        let x41 = ::eom_sim::Lanes::<W>::splat(1.0) - x40;
+        let (x42, x43) = q[3].sin_cos();
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.5) * x42;
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.5) + x44;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.5) * u[3];
+        let x47 = u[2] * x45;
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.5) * u[2];
+        let x49 = x47 + x48;
+        let x50 = -x49;
+        let x51 = x43 * x50;
+        let x52 = u[2] * x42;
+        let x53 = x43 * x52;
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.5) * x53;
+        let x55 = x51 + x54;
+        let x56 = x42 * x50;
+        let x57 = x43 * x43;
+        let x58 = u[2] * x57;
+        let x59 = ::eom_sim::Lanes::<W>::splat(0.5) * x58;
+        let x60 = x46 + x59;
+        let x61 = x60 - x56;
+        let x62 = q[2] + q[3];
+        let (x63, x64) = x62.sin_cos();
+        let x65 = x38 * x43;
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.5) * x65;
+        let x67 = x37 * x45;
+        let x68 = x37 * x43;
+        let x69 = ::eom_sim::Lanes::<W>::splat(0.5) * x68;
+        let x70 = x38 * x45;
+        let x71 = ::eom_sim::Lanes::<W>::splat(1.0) + x66;
+        let x72 = x71 - x67;
+        let x73 = x72 - x40;
+        let x74 = x39 + x70;
+        let x75 = x69 + x74;
+        let (x76, x77) = q[4].sin_cos();
+        let x78 = ::eom_sim::Lanes::<W>::splat(0.5) * x76;
+        let x79 = ::eom_sim::Lanes::<W>::splat(2.0) - x78;
+        let x80 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[1];
+        let x81 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[3];
+        let x82 = ::eom_sim::Lanes::<W>::splat(0.08333333333333333) * u[4];
+        let x83 = u[0] * x1;
+        let x84 = u[0] * x0;
+        let x85 = x16 * x25;
+        let x86 = x22 * x24;
+        let x87 = x85 - x86;
+        let x88 = x16 * x24;
+        let x89 = x22 * x25;
+        let x90 = x88 + x89;
+        let x91 = x34 * x90;
+        let x92 = x36 * x87;
+        let x93 = ::eom_sim::Lanes::<W>::splat(0.41666666666666663) * u[0];
+        let x94 = u[2] * x38;
+        let x95 = u[2] * x37;
+        let x96 = x37 * x41;
+        let x97 = u[2] * x96;
+        let x98 = x38 * x38;
+        let x99 = u[2] * x98;
+        let x100 = ::eom_sim::Lanes::<W>::splat(0.25) * x99;
+        let x101 = x55 * x64;
+        let x102 = x61 * x63;
+        let x103 = x101 - x102;
+        let x104 = x55 * x63;
+        let x105 = x61 * x64;
+        let x106 = x104 + x105;
+        let x107 = x73 * x106;
+        let x108 = x75 * x103;
+        let x109 = ::eom_sim::Lanes::<W>::splat(0.16666666666666666) * u[2];
+        let x110 = ::eom_sim::Lanes::<W>::splat(0.5) * x97;
+        let x111 = x100 + x107;
+        let x112 = x91 + x111;
+        let x113 = x80 + x112;
+        let x114 = x109 + x113;
+        let x115 = x93 + x114;
+        let x116 = x81 + x115;
+        let x117 = x116 - x110;
+        let x118 = x117 - x108;
+        let x119 = x118 - x92;
+        let x120 = u[4] * x77;
+        let x121 = u[4] * x76;
+        let x122 = x79 * x121;
+        let x123 = x77 * x77;
+        let x124 = u[4] * x123;
+        let x125 = ::eom_sim::Lanes::<W>::splat(0.25) * x124;
+        let x126 = ::eom_sim::Lanes::<W>::splat(0.5) * x122;
+        let x127 = x82 + x125;
+        let x128 = x119 + x127;
+        let x129 = x128 - x126;
+        let x130 = ::eom_sim::Lanes::<W>::splat(0.5) * x83;
+        let x131 = ::eom_sim::Lanes::<W>::splat(0.5) * x94;
+        let x132 = ::eom_sim::Lanes::<W>::splat(0.5) * x120;
+        let x133 = x85 + x101;
+        let x134 = x133 - x102;
+        let x135 = x134 - x130;
+        let x136 = x135 - x131;
+        let x137 = x136 - x86;
+        let x138 = x137 - x132;
+        let x139 = ::eom_sim::Lanes::<W>::splat(0.5) * x121;
+        let x140 = ::eom_sim::Lanes::<W>::splat(0.5) * x95;
+        let x141 = ::eom_sim::Lanes::<W>::splat(0.5) * x84;
+        let x142 = x88 + x106;
+        let x143 = x89 + x142;
+        let x144 = x143 - x139;
+        let x145 = x144 - x140;
+        let x146 = x145 - x141;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x129;
+        out[3] = x138;
+        out[4] = x146;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `constraints` of `W` states at once, one per lane (333 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (32 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    pub fn constraints_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 32],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let (x3, x4) = q[1].sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * x3;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) + x5;
+        let x7 = u[0] + u[1];
+        let x8 = q[0] + q[1];
+        let (x9, x10) = x8.sin_cos();
+        let x11 = x0 * x4;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.5) * x11;
+        let x13 = x1 * x6;
+        let (x14, x15) = q[2].sin_cos();
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.5) * x15;
+        let (x17, x18) = q[3].sin_cos();
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.5) + x19;
+        let x21 = u[2] + u[3];
+        let x22 = q[2] + q[3];
+        let (x23, x24) = x22.sin_cos();
+        let x25 = x14 * x18;
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.5) * x25;
+        let x27 = x15 * x20;
+        let (x28, x29) = q[4].sin_cos();
+        let x30 = u[0] * u[0];
+        let x31 = u[2] * u[2];
+        let x32 = u[4] * u[4];
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.5) * x9;
+        let x34 = x12 + x13;
+        let x35 = x2 + x34;
+        let x36 = x33 + x35;
+        let x37 = x0 * x6;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x39 = x1 * x4;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.5) * x10;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.5) * x39;
+        let x42 = x37 + x38;
+        let x43 = x42 - x40;
+        let x44 = x43 - x41;
+        let x45 = ::eom_sim::Lanes::<W>::splat(1.0) + x37;
+        let x46 = x38 + x45;
+        let x47 = x46 - x40;
+        let x48 = x47 - x14;
+        let x49 = x48 - x41;
+        let x50 = x15 - x13;
+        let x51 = x50 - x2;
+        let x52 = x51 - x12;
+        let x53 = x52 - x33;
+        let x54 = x10 * x49;
+        let x55 = x9 * x53;
+        let x56 = x54 + x55;
+        let x57 = x9 * x49;
+        let x58 = x10 * x53;
+        let x59 = x58 - x57;
+        let x60 = q[2] - q[1];
+        let x61 = x60 - q[0];
+        let (x62, x63) = x61.sin_cos();
+        let x64 = -x62;
+        let x65 = ::eom_sim::Lanes::<W>::splat(0.5) * x23;
+        let x66 = x16 + x27;
+        let x67 = x26 + x66;
+        let x68 = x65 + x67;
+        let x69 = x15 * x18;
+        let x70 = x14 * x20;
+        let x71 = ::eom_sim::Lanes::<W>::splat(0.5) * x14;
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.5) * x69;
+        let x73 = ::eom_sim::Lanes::<W>::splat(0.5) * x24;
+        let x74 = ::eom_sim::Lanes::<W>::splat(1.0) + x71;
+        let x75 = x70 + x74;
+        let x76 = x75 - x72;
+        let x77 = x76 - x28;
+        let x78 = x77 - x73;
+        let x79 = x29 - x26;
+        let x80 = x79 - x65;
+        let x81 = x80 - x16;
+        let x82 = x81 - x27;
+        let x83 = x24 * x78;
+        let x84 = x23 * x82;
+        let x85 = x83 + x84;
+        let x86 = x23 * x78;
+        let x87 = x24 * x82;
+        let x88 = x87 - x86;
+        let x89 = x22 - q[4];
+        let (x90, x91) = x89.sin_cos();
+        let x92 = u[2] * x14;
+        let x93 = u[2] * x15;
+        let x94 = u[0] * x6;
+        let x95 = x1 * x94;
+        let x96 = u[0] * x1;
+        let x97 = ::eom_sim::Lanes::<W>::splat(0.5) * x96;
+        let x98 = u[0] * x0;
+        let x99 = x4 * x98;
+        let x100 = ::eom_sim::Lanes::<W>::splat(0.5) * x99;
+        let x101 = x7 * x9;
+        let x102 = ::eom_sim::Lanes::<W>::splat(0.5) * x101;
+        let x103 = u[1] * x9;
+        let x104 = ::eom_sim::Lanes::<W>::splat(0.5) * x103;
+        let x105 = x95 + x97;
+        let x106 = x100 + x105;
+        let x107 = x104 + x106;
+        let x108 = x102 + x107;
+        let x109 = x108 - x93;
+        let x110 = x0 * x94;
+        let x111 = x4 * x96;
+        let x112 = ::eom_sim::Lanes::<W>::splat(0.5) * x98;
+        let x113 = x7 * x10;
+        let x114 = u[1] * x10;
+        let x115 = ::eom_sim::Lanes::<W>::splat(0.5) * x111;
+        let x116 = ::eom_sim::Lanes::<W>::splat(0.5) * x114;
+        let x117 = ::eom_sim::Lanes::<W>::splat(0.5) * x113;
+        let x118 = x110 + x112;
+        let x119 = x118 - x115;
+        let x120 = x119 - x92;
+        let x121 = x120 - x116;
+        let x122 = x121 - x117;
+        let x123 = x7 * x49;
+        let x124 = x9 * x123;
+        let x125 = x10 * x109;
+        let x126 = x9 * x122;
+        let x127 = x7 * x53;
+        let x128 = x10 * x127;
+        let x129 = x125 + x128;
+        let x130 = x126 + x129;
+        let x131 = x130 - x124;
+        let x132 = x15 * x31;
+        let x133 = x14 * x31;
+        let x134 = x30 * x37;
+        let x135 = x0 * x30;
+        let x136 = x1 * x30;
+        let x137 = x4 * x136;
+        let x138 = ::eom_sim::Lanes::<W>::splat(0.5) * x137;
+        let x139 = x7 * x7;
+        let x140 = x10 * x139;
+        let x141 = ::eom_sim::Lanes::<W>::splat(0.5) * x140;
+        let x142 = u[1] * x113;
+        let x143 = ::eom_sim::Lanes::<W>::splat(0.5) * x142;
+        let x144 = u[0] * x10;
+        let x145 = u[1] * x144;
+        let x146 = ::eom_sim::Lanes::<W>::splat(0.5) * x145;
+        let x147 = ::eom_sim::Lanes::<W>::splat(0.5) * x135;
+        let x148 = x143 + x146;
+        let x149 = x141 + x148;
+        let x150 = x138 + x149;
+        let x151 = x133 + x150;
+        let x152 = x151 - x147;
+        let x153 = x152 - x134;
+        let x154 = x13 * x30;
+        let x155 = x4 * x135;
+        let x156 = ::eom_sim::Lanes::<W>::splat(0.5) * x155;
+        let x157 = ::eom_sim::Lanes::<W>::splat(0.5) * x136;
+        let x158 = x9 * x139;
+        let x159 = ::eom_sim::Lanes::<W>::splat(0.5) * x158;
+        let x160 = u[1] * x101;
+        let x161 = ::eom_sim::Lanes::<W>::splat(0.5) * x160;
+        let x162 = u[0] * x9;
+        let x163 = u[1] * x162;
+        let x164 = ::eom_sim::Lanes::<W>::splat(0.5) * x163;
+        let x165 = x156 + x164;
+        let x166 = x157 + x165;
+        let x167 = x161 + x166;
+        let x168 = x159 + x167;
+        let x169 = x154 + x168;
+        let x170 = x169 - x132;
+        let x171 = x53 * x139;
+        let x172 = x9 * x171;
+        let x173 = x7 * x109;
+        let x174 = x9 * x173;
+        let x175 = ::eom_sim::Lanes::<W>::splat(2.0) * x174;
+        let x176 = x9 * x170;
+        let x177 = x10 * x153;
+        let x178 = x49 * x140;
+        let x179 = x113 * x122;
+        let x180 = ::eom_sim::Lanes::<W>::splat(2.0) * x179;
+        let x181 = x172 + x178;
+        let x182 = x175 + x181;
+        let x183 = x182 - x180;
+        let x184 = x183 - x176;
+        let x185 = x184 - x177;
+        let x186 = x9 * x109;
+        let x187 = x49 * x113;
+        let x188 = x10 * x122;
+        let x189 = x9 * x127;
+        let x190 = x188 - x189;
+        let x191 = x190 - x186;
+        let x192 = x191 - x187;
+        let x193 = x10 * x170;
+        let x194 = x7 * x122;
+        let x195 = x9 * x194;
+        let x196 = ::eom_sim::Lanes::<W>::splat(2.0) * x195;
+        let x197 = x10 * x171;
+        let x198 = x9 * x153;
+        let x199 = x10 * x173;
+        let x200 = ::eom_sim::Lanes::<W>::splat(2.0) * x199;
+        let x201 = x49 * x139;
+        let x202 = x9 * x201;
+        let x203 = x197 + x200;
+        let x204 = x196 + x203;
+        let x205 = x198 + x204;
+        let x206 = x205 - x202;
+        let x207 = x206 - x193;
+        let x208 = u[4] * x28;
+        let x209 = u[4] * x29;
+        let x210 = x18 * x92;
+        let x211 = ::eom_sim::Lanes::<W>::splat(0.5) * x210;
+        let x212 = x21 * x23;
+        let x213 = ::eom_sim::Lanes::<W>::splat(0.5) * x212;
+        let x214 = x20 * x93;
+        let x215 = ::eom_sim::Lanes::<W>::splat(0.5) * x93;
+        let x216 = u[3] * x23;
+        let x217 = ::eom_sim::Lanes::<W>::splat(0.5) * x216;
+        let x218 = x211 + x215;
+        let x219 = x213 + x218;
+        let x220 = x217 + x219;
+        let x221 = x214 + x220;
+        let x222 = x221 - x209;
+        let x223 = ::eom_sim::Lanes::<W>::splat(0.5) * x92;
+        let x224 = x20 * x92;
+        let x225 = x18 * x93;
+        let x226 = x21 * x24;
+        let x227 = u[3] * x24;
+        let x228 = ::eom_sim::Lanes::<W>::splat(0.5) * x226;
+        let x229 = ::eom_sim::Lanes::<W>::splat(0.5) * x225;
+        let x230 = ::eom_sim::Lanes::<W>::splat(0.5) * x227;
+        let x231 = x223 + x224;
+        let x232 = x231 - x228;
+        let x233 = x232 - x208;
+        let x234 = x233 - x229;
+        let x235 = x234 - x230;
+        let x236 = x24 * x222;
+        let x237 = x21 * x86;
+        let x238 = x21 * x87;
+        let x239 = x23 * x235;
+        let x240 = x236 + x238;
+        let x241 = x239 + x240;
+        let x242 = x241 - x237;
+        let x243 = x29 * x32;
+        let x244 = x28 * x32;
+        let x245 = x18 * x132;
+        let x246 = ::eom_sim::Lanes::<W>::splat(0.5) * x245;
+        let x247 = x21 * x21;
+        let x248 = x24 * x247;
+        let x249 = ::eom_sim::Lanes::<W>::splat(0.5) * x248;
+        let x250 = x20 * x133;
+        let x251 = x21 * x227;
+        let x252 = ::eom_sim::Lanes::<W>::splat(0.5) * x251;
+        let x253 = u[2] * x227;
+        let x254 = ::eom_sim::Lanes::<W>::splat(0.5) * x253;
+        let x255 = ::eom_sim::Lanes::<W>::splat(0.5) * x133;
+        let x256 = x244 + x252;
+        let x257 = x246 + x256;
+        let x258 = x249 + x257;
+        let x259 = x254 + x258;
+        let x260 = x259 - x255;
+        let x261 = x260 - x250;
+        let x262 = ::eom_sim::Lanes::<W>::splat(0.5) * x132;
+        let x263 = x20 * x132;
+        let x264 = x18 * x133;
+        let x265 = ::eom_sim::Lanes::<W>::splat(0.5) * x264;
+        let x266 = x23 * x247;
+        let x267 = ::eom_sim::Lanes::<W>::splat(0.5) * x266;
+        let x268 = x21 * x216;
+        let x269 = ::eom_sim::Lanes::<W>::splat(0.5) * x268;
+        let x270 = u[2] * x216;
+        let x271 = ::eom_sim::Lanes::<W>::splat(0.5) * x270;
+        let x272 = x262 + x271;
+        let x273 = x263 + x272;
+        let x274 = x267 + x273;
+        let x275 = x265 + x274;
+        let x276 = x269 + x275;
+        let x277 = x276 - x243;
+        let x278 = x83 * x247;
+        let x279 = x82 * x266;
+        let x280 = x24 * x235;
+        let x281 = x21 * x280;
+        let x282 = x23 * x277;
+        let x283 = x23 * x222;
+        let x284 = x21 * x283;
+        let x285 = ::eom_sim::Lanes::<W>::splat(2.0) * x284;
+        let x286 = x24 * x261;
+        let x287 = ::eom_sim::Lanes::<W>::splat(2.0) * x281;
+        let x288 = x279 + x285;
+        let x289 = x278 + x288;
+        let x290 = x289 - x286;
+        let x291 = x290 - x282;
+        let x292 = x291 - x287;
+        let x293 = x21 * x83;
+        let x294 = x21 * x84;
+        let x295 = x280 - x294;
+        let x296 = x295 - x293;
+        let x297 = x296 - x283;
+        let x298 = x82 * x248;
+        let x299 = x86 * x247;
+        let x300 = x21 * x236;
+        let x301 = ::eom_sim::Lanes::<W>::splat(2.0) * x300;
+        let x302 = x23 * x261;
+        let x303 = x24 * x277;
+        let x304 = x21 * x239;
+        let x305 = ::eom_sim::Lanes::<W>::splat(2.0) * x304;
+        let x306 = x302 + x305;
+        let x307 = x301 + x306;
+        let x308 = x298 + x307;
+        let x309 = x308 - x303;
+        let x310 = x309 - x299;
+        let x311 = x10 * x36;
+        let x312 = x9 * x44;
+        let x313 = x58 + x312;
+        let x314 = x311 + x313;
+        let x315 = x314 - x57;
+        let x316 = -x63;
+        let x317 = x9 * x36;
+        let x318 = x10 * x44;
+        let x319 = x318 - x55;
+        let x320 = x319 - x317;
+        let x321 = x320 - x54;
+        let x322 = ::eom_sim::Lanes::<W>::splat(1.0) + x55;
+        let x323 = x54 + x322;
+        let x324 = -x323;
+        let x325 = x70 + x71;
+        let x326 = x325 - x72;
+        let x327 = x326 - x73;
+        let x328 = x24 * x68;
+        let x329 = x23 * x327;
+        let x330 = x87 + x328;
+        let x331 = x329 + x330;
+        let x332 = x331 - x86;
+        let x333 = -x91;
+        let x334 = x23 * x68;
+        let x335 = x24 * x327;
+        let x336 = x335 - x84;
+        let x337 = x336 - x334;
+        let x338 = x337 - x83;
+        let x339 = ::eom_sim::Lanes::<W>::splat(1.0) + x84;
+        let x340 = x83 + x339;
+        let x341 = -x340;
+        out[0] = x56;
+        out[4] = x131;
+        out[8] = x185;
+        out[1] = x59;
+        out[5] = x192;
+        out[9] = x207;
+        out[2] = x85;
+        out[6] = x242;
+        out[10] = x292;
+        out[3] = x88;
+        out[7] = x297;
+        out[11] = x310;
+        out[12] = x315;
+        out[13] = x59;
+        out[14] = x316;
+        out[15] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[16] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[17] = x321;
+        out[18] = x324;
+        out[19] = x64;
+        out[20] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[21] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[22] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[23] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[24] = x332;
+        out[25] = x88;
+        out[26] = x333;
+        out[27] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[28] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[29] = x338;
+        out[30] = x341;
+        out[31] = x90;
+    }
+    /// `cut_joint_reactions` of `W` states at once, one per lane (0 operations per state): force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint. Arguments `t`, `q` as `cut_joint_reactions`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (12 entries per lane) laid out as `Model::evaluate("cut_joint_reactions")`'s result.
+    pub fn cut_joint_reactions_lanes<const W: usize>(
+        m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 12],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[0]);
+        out[1] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[1]);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[6] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[2]);
+        out[7] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[3]);
+        out[8] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `constraints`, `cut_joint_reactions`.
+impl ::eom_sim::Batched for FourbarN2 {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 5]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    5,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 5]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 25]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 5]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    5,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 5]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 32]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::constraints_lanes(this, t, &q, &u, out);
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 12]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    4,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::cut_joint_reactions_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `fourbar_n2` (10 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<10> for FourbarN2 {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 10],
+        dy: &mut [::eom_sim::Lanes<W>; 10],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 5] = [y[0], y[1], y[2], y[3], y[4]];
+        let u: [::eom_sim::Lanes<W>; 5] = [y[5], y[6], y[7], y[8], y[9]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 5];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 5];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 5],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = qdot[3];
+        dy[4] = qdot[4];
+        dy[5] = udot[0];
+        dy[6] = udot[1];
+        dy[7] = udot[2];
+        dy[8] = udot[3];
+        dy[9] = udot[4];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 10],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `fourbar_n2` (10 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<10> for FourbarN2 {
     fn rhs(&self, t: f64, y: &[f64; 10], dy: &mut [f64; 10]) {

@@ -550,6 +550,530 @@ impl ::eom_sim::ConstrainedModel for FreeBody {
         _jacobian: &mut [f64; 0],
     ) {}
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl FreeBody {
+    /// `qdot` of `W` states at once, one per lane (77 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (7 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 7],
+    ) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = q[6] * q[6];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
+        let x5 = ::eom_sim::Lanes::<W>::splat(1.0) - x3;
+        let x6 = x5 - x4;
+        let x7 = q[3] * q[6];
+        let x8 = q[4] * q[5];
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(2.0) * x7;
+        let x11 = x9 - x10;
+        let x12 = q[4] * q[6];
+        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
+        let x14 = q[3] * q[5];
+        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x14;
+        let x16 = x13 + x15;
+        let x17 = x9 + x10;
+        let x18 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x19 = x5 - x18;
+        let x20 = q[3] * q[4];
+        let x21 = q[5] * q[6];
+        let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x20;
+        let x24 = x22 - x23;
+        let x25 = x13 - x15;
+        let x26 = x22 + x23;
+        let x27 = ::eom_sim::Lanes::<W>::splat(1.0) - x4;
+        let x28 = x27 - x18;
+        let x29 = u[0] * x6;
+        let x30 = u[1] * x11;
+        let x31 = u[2] * x16;
+        let x32 = x29 + x30;
+        let x33 = x31 + x32;
+        let x34 = u[0] * x17;
+        let x35 = u[1] * x19;
+        let x36 = u[2] * x24;
+        let x37 = x35 + x36;
+        let x38 = x34 + x37;
+        let x39 = u[0] * x25;
+        let x40 = u[1] * x26;
+        let x41 = u[2] * x28;
+        let x42 = x40 + x41;
+        let x43 = x39 + x42;
+        let x44 = q[4] * u[3];
+        let x45 = q[6] * u[5];
+        let x46 = q[5] * u[4];
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.5) * x46;
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.5) * x44;
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.5) * x45;
+        let x50 = x47 + x48;
+        let x51 = x49 + x50;
+        let x52 = -x51;
+        let x53 = q[6] * u[4];
+        let x54 = q[3] * u[3];
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.5) * x54;
+        let x56 = q[5] * u[5];
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.5) * x56;
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.5) * x53;
+        let x59 = x55 + x57;
+        let x60 = x59 - x58;
+        let x61 = q[3] * u[4];
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.5) * x61;
+        let x63 = q[6] * u[3];
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.5) * x63;
+        let x65 = q[4] * u[5];
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.5) * x65;
+        let x67 = x62 + x64;
+        let x68 = x67 - x66;
+        let x69 = q[3] * u[5];
+        let x70 = ::eom_sim::Lanes::<W>::splat(0.5) * x69;
+        let x71 = q[4] * u[4];
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.5) * x71;
+        let x73 = q[5] * u[3];
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.5) * x73;
+        let x75 = x70 + x72;
+        let x76 = x75 - x74;
+        out[0] = x33;
+        out[1] = x38;
+        out[2] = x43;
+        out[3] = x52;
+        out[4] = x60;
+        out[5] = x68;
+        out[6] = x76;
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (21 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        tau: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = u[4] * u[5];
+        let x1 = u[3] * u[5];
+        let x2 = u[1] * u[5];
+        let x3 = u[2] * u[3];
+        let x4 = u[0] * u[4];
+        let x5 = u[2] * u[4];
+        let x6 = u[0] * u[5];
+        let x7 = u[1] * u[3];
+        let x8 = tau[0] + x2;
+        let x9 = x8 - x5;
+        let x10 = tau[1] + x3;
+        let x11 = x10 - x6;
+        let x12 = tau[2] + x4;
+        let x13 = x12 - x7;
+        let x14 = tau[3] - x0;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.5) * tau[4];
+        let x16 = x1 + x15;
+        let x17 = u[3] * u[4];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * tau[5];
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * x17;
+        let x20 = x18 - x19;
+        out[0] = x9;
+        out[1] = x11;
+        out[2] = x13;
+        out[3] = x14;
+        out[4] = x16;
+        out[5] = x20;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (36 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 36],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(1.0);
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = out[6];
+        out[7] = ::eom_sim::Lanes::<W>::splat(1.0);
+        out[12] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[12];
+        out[13] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = out[13];
+        out[14] = ::eom_sim::Lanes::<W>::splat(1.0);
+        out[18] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = out[18];
+        out[19] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = out[19];
+        out[20] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[15] = out[20];
+        out[21] = ::eom_sim::Lanes::<W>::splat(1.0);
+        out[24] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = out[24];
+        out[25] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = out[25];
+        out[26] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[16] = out[26];
+        out[27] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[22] = out[27];
+        out[28] = ::eom_sim::Lanes::<W>::splat(2.0);
+        out[30] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = out[30];
+        out[31] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = out[31];
+        out[32] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[17] = out[32];
+        out[33] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[23] = out[33];
+        out[34] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[29] = out[34];
+        out[35] = ::eom_sim::Lanes::<W>::splat(3.0);
+    }
+    /// `bias` of `W` states at once, one per lane (13 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = u[4] * u[5];
+        let x1 = u[3] * u[4];
+        let x2 = u[2] * u[4];
+        let x3 = u[1] * u[5];
+        let x4 = x2 - x3;
+        let x5 = u[0] * u[5];
+        let x6 = u[2] * u[3];
+        let x7 = x5 - x6;
+        let x8 = u[1] * u[3];
+        let x9 = u[0] * u[4];
+        let x10 = x8 - x9;
+        let x11 = u[3] * u[5];
+        let x12 = ::eom_sim::Lanes::<W>::splat(-2.0) * x11;
+        out[0] = x4;
+        out[1] = x7;
+        out[2] = x10;
+        out[3] = x0;
+        out[4] = x12;
+        out[5] = x1;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (21 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        udot: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = u[4] * u[5];
+        let x1 = u[3] * u[4];
+        let x2 = u[2] * u[4];
+        let x3 = u[1] * u[5];
+        let x4 = u[0] * u[5];
+        let x5 = u[2] * u[3];
+        let x6 = u[1] * u[3];
+        let x7 = u[0] * u[4];
+        let x8 = u[3] * u[5];
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * udot[4];
+        let x10 = ::eom_sim::Lanes::<W>::splat(3.0) * udot[5];
+        let x11 = udot[3] + x0;
+        let x12 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x13 = x9 - x12;
+        let x14 = x1 + x10;
+        let x15 = udot[0] + x2;
+        let x16 = x15 - x3;
+        let x17 = udot[1] + x4;
+        let x18 = x17 - x5;
+        let x19 = udot[2] + x6;
+        let x20 = x19 - x7;
+        out[0] = x16;
+        out[1] = x18;
+        out[2] = x20;
+        out[3] = x11;
+        out[4] = x13;
+        out[5] = x14;
+    }
+    /// `energy` of `W` states at once, one per lane (16 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = u[3] * u[3];
+        let x1 = u[4] * u[4];
+        let x2 = u[5] * u[5];
+        let x3 = u[0] * u[0];
+        let x4 = u[1] * u[1];
+        let x5 = u[2] * u[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x7 = ::eom_sim::Lanes::<W>::splat(1.5) * x2;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.5) * x5;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.5) * x3;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.5) * x4;
+        let x11 = x1 + x9;
+        let x12 = x6 + x11;
+        let x13 = x10 + x12;
+        let x14 = x8 + x13;
+        let x15 = x7 + x14;
+        out[0] = x15;
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `momentum` of `W` states at once, one per lane (77 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = q[6] * q[6];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
+        let x5 = ::eom_sim::Lanes::<W>::splat(1.0) - x3;
+        let x6 = x5 - x4;
+        let x7 = q[3] * q[6];
+        let x8 = q[4] * q[5];
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(2.0) * x7;
+        let x11 = x9 - x10;
+        let x12 = q[4] * q[6];
+        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
+        let x14 = q[3] * q[5];
+        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x14;
+        let x16 = x13 + x15;
+        let x17 = x9 + x10;
+        let x18 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x19 = x5 - x18;
+        let x20 = q[3] * q[4];
+        let x21 = q[5] * q[6];
+        let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x20;
+        let x24 = x22 - x23;
+        let x25 = x13 - x15;
+        let x26 = x22 + x23;
+        let x27 = ::eom_sim::Lanes::<W>::splat(1.0) - x4;
+        let x28 = x27 - x18;
+        let x29 = u[0] * x6;
+        let x30 = u[1] * x11;
+        let x31 = u[2] * x16;
+        let x32 = x29 + x30;
+        let x33 = x31 + x32;
+        let x34 = u[0] * x17;
+        let x35 = u[1] * x19;
+        let x36 = u[2] * x24;
+        let x37 = x35 + x36;
+        let x38 = x34 + x37;
+        let x39 = u[0] * x25;
+        let x40 = u[1] * x26;
+        let x41 = u[2] * x28;
+        let x42 = x40 + x41;
+        let x43 = x39 + x42;
+        let x44 = u[3] * x6;
+        let x45 = u[4] * x11;
+        let x46 = ::eom_sim::Lanes::<W>::splat(2.0) * x45;
+        let x47 = u[5] * x16;
+        let x48 = ::eom_sim::Lanes::<W>::splat(3.0) * x47;
+        let x49 = u[3] * x17;
+        let x50 = u[4] * x19;
+        let x51 = ::eom_sim::Lanes::<W>::splat(2.0) * x50;
+        let x52 = u[5] * x24;
+        let x53 = ::eom_sim::Lanes::<W>::splat(3.0) * x52;
+        let x54 = u[3] * x25;
+        let x55 = u[4] * x26;
+        let x56 = ::eom_sim::Lanes::<W>::splat(2.0) * x55;
+        let x57 = u[5] * x28;
+        let x58 = ::eom_sim::Lanes::<W>::splat(3.0) * x57;
+        let x59 = q[1] * x43;
+        let x60 = q[2] * x38;
+        let x61 = q[2] * x33;
+        let x62 = q[0] * x43;
+        let x63 = q[0] * x38;
+        let x64 = q[1] * x33;
+        let x65 = x44 + x48;
+        let x66 = x46 + x65;
+        let x67 = x59 + x66;
+        let x68 = x67 - x60;
+        let x69 = x53 + x61;
+        let x70 = x49 + x69;
+        let x71 = x51 + x70;
+        let x72 = x71 - x62;
+        let x73 = x54 + x58;
+        let x74 = x56 + x73;
+        let x75 = x63 + x74;
+        let x76 = x75 - x64;
+        out[0] = x68;
+        out[1] = x72;
+        out[2] = x76;
+        out[3] = x33;
+        out[4] = x38;
+        out[5] = x43;
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`.
+impl ::eom_sim::Batched for FreeBody {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 7]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 36]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `free_body` (13 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<13> for FreeBody {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 13],
+        dy: &mut [::eom_sim::Lanes<W>; 13],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 7] = [y[0], y[1], y[2], y[3], y[4], y[5], y[6]];
+        let u: [::eom_sim::Lanes<W>; 6] = [y[7], y[8], y[9], y[10], y[11], y[12]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 7];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 6];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 6],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = qdot[3];
+        dy[4] = qdot[4];
+        dy[5] = qdot[5];
+        dy[6] = qdot[6];
+        dy[7] = udot[0];
+        dy[8] = udot[1];
+        dy[9] = udot[2];
+        dy[10] = udot[3];
+        dy[11] = udot[4];
+        dy[12] = udot[5];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        y: &mut [::eom_sim::Lanes<W>; 13],
+    ) -> bool {
+        for l in 0..W {
+            let n = f64::sqrt(
+                y[3].0[l] * y[3].0[l] + y[4].0[l] * y[4].0[l] + y[5].0[l] * y[5].0[l]
+                    + y[6].0[l] * y[6].0[l],
+            );
+            if n > 0.0 && n.is_finite() {
+                y[3].0[l] /= n;
+                y[4].0[l] /= n;
+                y[5].0[l] /= n;
+                y[6].0[l] /= n;
+            }
+        }
+        true
+    }
+}
 /// The first-order system `y = (q, u)` of `free_body` (13 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<13> for FreeBody {
     fn rhs(&self, t: f64, y: &[f64; 13], dy: &mut [f64; 13]) {

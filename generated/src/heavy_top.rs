@@ -550,6 +550,536 @@ impl HeavyTop {
         out[8] = x26;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl HeavyTop {
+    /// `qdot` of `W` states at once, one per lane (33 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (4 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 4],
+    ) {
+        let x0 = q[1] * u[0];
+        let x1 = q[3] * u[2];
+        let x2 = q[2] * u[1];
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * x2;
+        let x6 = x3 + x4;
+        let x7 = x5 + x6;
+        let x8 = -x7;
+        let x9 = q[0] * u[0];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.5) * x9;
+        let x11 = q[3] * u[1];
+        let x12 = q[2] * u[2];
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.5) * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x11;
+        let x15 = x10 + x13;
+        let x16 = x15 - x14;
+        let x17 = q[3] * u[0];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
+        let x19 = q[1] * u[2];
+        let x20 = q[0] * u[1];
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.5) * x20;
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.5) * x19;
+        let x23 = x18 + x21;
+        let x24 = x23 - x22;
+        let x25 = q[0] * u[2];
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.5) * x25;
+        let x27 = q[1] * u[1];
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.5) * x27;
+        let x29 = q[2] * u[0];
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.5) * x29;
+        let x31 = x26 + x28;
+        let x32 = x31 - x30;
+        out[0] = x8;
+        out[1] = x16;
+        out[2] = x24;
+        out[3] = x32;
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (22 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 3],
+        tau: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = q[2] * q[2];
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.06564102564102564) * tau[0];
+        let x3 = u[1] * u[2];
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.1333333333333333) * tau[1];
+        let x5 = u[0] * u[1];
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.9692307692307692) * x5;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.06564102564102564) * tau[2];
+        let x8 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x0;
+        let x9 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x1;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.9692307692307692) * x3;
+        let x11 = x2 + x9;
+        let x12 = x8 + x11;
+        let x13 = x12 - ::eom_sim::Lanes::<W>::splat(9.659076923076924);
+        let x14 = x13 - x10;
+        let x15 = q[1] * q[3];
+        let x16 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x15;
+        let x17 = q[0] * q[2];
+        let x18 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x17;
+        let x19 = x6 + x16;
+        let x20 = x7 + x19;
+        let x21 = x20 - x18;
+        out[0] = x14;
+        out[1] = x4;
+        out[2] = x21;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 9],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(15.234375);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = out[3];
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.46875);
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[6];
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = out[7];
+        out[8] = ::eom_sim::Lanes::<W>::splat(15.234375);
+    }
+    /// `bias` of `W` states at once, one per lane (17 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = q[2] * q[2];
+        let x2 = q[1] * q[3];
+        let x3 = q[0] * q[2];
+        let x4 = ::eom_sim::Lanes::<W>::splat(294.3) * x3;
+        let x5 = u[1] * u[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(14.765625) * x5;
+        let x7 = u[0] * u[1];
+        let x8 = ::eom_sim::Lanes::<W>::splat(294.3) * x0;
+        let x9 = ::eom_sim::Lanes::<W>::splat(294.3) * x1;
+        let x10 = ::eom_sim::Lanes::<W>::splat(147.15) + x6;
+        let x11 = x10 - x8;
+        let x12 = x11 - x9;
+        let x13 = ::eom_sim::Lanes::<W>::splat(14.765625) * x7;
+        let x14 = ::eom_sim::Lanes::<W>::splat(294.3) * x2;
+        let x15 = x4 - x13;
+        let x16 = x15 - x14;
+        out[0] = x12;
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x16;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (22 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 3],
+        udot: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = q[2] * q[2];
+        let x2 = q[1] * q[3];
+        let x3 = q[0] * q[2];
+        let x4 = ::eom_sim::Lanes::<W>::splat(294.3) * x3;
+        let x5 = u[1] * u[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(14.765625) * x5;
+        let x7 = u[0] * u[1];
+        let x8 = ::eom_sim::Lanes::<W>::splat(15.234375) * udot[0];
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.46875) * udot[1];
+        let x10 = ::eom_sim::Lanes::<W>::splat(15.234375) * udot[2];
+        let x11 = ::eom_sim::Lanes::<W>::splat(294.3) * x0;
+        let x12 = ::eom_sim::Lanes::<W>::splat(294.3) * x1;
+        let x13 = ::eom_sim::Lanes::<W>::splat(147.15) + x8;
+        let x14 = x6 + x13;
+        let x15 = x14 - x11;
+        let x16 = x15 - x12;
+        let x17 = ::eom_sim::Lanes::<W>::splat(14.765625) * x7;
+        let x18 = ::eom_sim::Lanes::<W>::splat(294.3) * x2;
+        let x19 = x4 + x10;
+        let x20 = x19 - x17;
+        let x21 = x20 - x18;
+        out[0] = x16;
+        out[1] = x9;
+        out[2] = x21;
+    }
+    /// `energy` of `W` states at once, one per lane (13 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = q[2] * q[3];
+        let x1 = ::eom_sim::Lanes::<W>::splat(294.3) * x0;
+        let x2 = q[0] * q[1];
+        let x3 = ::eom_sim::Lanes::<W>::splat(294.3) * x2;
+        let x4 = x1 + x3;
+        let x5 = u[2] * u[2];
+        let x6 = u[0] * u[0];
+        let x7 = u[1] * u[1];
+        let x8 = ::eom_sim::Lanes::<W>::splat(7.6171875) * x5;
+        let x9 = ::eom_sim::Lanes::<W>::splat(7.6171875) * x6;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.234375) * x7;
+        let x11 = x8 + x10;
+        let x12 = x9 + x11;
+        out[0] = x12;
+        out[1] = x4;
+    }
+    /// `momentum` of `W` states at once, one per lane (68 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = q[2] * q[2];
+        let x2 = q[3] * q[3];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
+        let x5 = ::eom_sim::Lanes::<W>::splat(1.0) - x3;
+        let x6 = x5 - x4;
+        let x7 = q[0] * q[3];
+        let x8 = q[1] * q[2];
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(2.0) * x7;
+        let x11 = x9 - x10;
+        let x12 = q[0] * q[2];
+        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
+        let x14 = q[1] * q[3];
+        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x14;
+        let x16 = x13 + x15;
+        let x17 = x9 + x10;
+        let x18 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x19 = ::eom_sim::Lanes::<W>::splat(1.0) - x18;
+        let x20 = x19 - x3;
+        let x21 = q[0] * q[1];
+        let x22 = q[2] * q[3];
+        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x22;
+        let x24 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
+        let x25 = x23 - x24;
+        let x26 = x15 - x13;
+        let x27 = x23 + x24;
+        let x28 = x19 - x4;
+        let x29 = u[2] * x6;
+        let x30 = u[0] * x16;
+        let x31 = ::eom_sim::Lanes::<W>::splat(15.0) * x30;
+        let x32 = ::eom_sim::Lanes::<W>::splat(15.0) * x29;
+        let x33 = x31 - x32;
+        let x34 = u[2] * x17;
+        let x35 = u[0] * x25;
+        let x36 = ::eom_sim::Lanes::<W>::splat(15.0) * x35;
+        let x37 = ::eom_sim::Lanes::<W>::splat(15.0) * x34;
+        let x38 = x36 - x37;
+        let x39 = u[2] * x26;
+        let x40 = u[0] * x28;
+        let x41 = ::eom_sim::Lanes::<W>::splat(15.0) * x40;
+        let x42 = ::eom_sim::Lanes::<W>::splat(15.0) * x39;
+        let x43 = x41 - x42;
+        let x44 = u[0] * x6;
+        let x45 = ::eom_sim::Lanes::<W>::splat(15.234375) * x44;
+        let x46 = u[1] * x11;
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.46875) * x46;
+        let x48 = u[2] * x16;
+        let x49 = ::eom_sim::Lanes::<W>::splat(15.234375) * x48;
+        let x50 = x45 + x47;
+        let x51 = x49 + x50;
+        let x52 = u[0] * x17;
+        let x53 = ::eom_sim::Lanes::<W>::splat(15.234375) * x52;
+        let x54 = u[1] * x20;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.46875) * x54;
+        let x56 = u[2] * x25;
+        let x57 = ::eom_sim::Lanes::<W>::splat(15.234375) * x56;
+        let x58 = x55 + x57;
+        let x59 = x53 + x58;
+        let x60 = u[0] * x26;
+        let x61 = ::eom_sim::Lanes::<W>::splat(15.234375) * x60;
+        let x62 = u[1] * x27;
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.46875) * x62;
+        let x64 = u[2] * x28;
+        let x65 = ::eom_sim::Lanes::<W>::splat(15.234375) * x64;
+        let x66 = x63 + x65;
+        let x67 = x61 + x66;
+        out[0] = x51;
+        out[1] = x59;
+        out[2] = x67;
+        out[3] = x33;
+        out[4] = x38;
+        out[5] = x43;
+    }
+    /// `outputs` of `W` states at once, one per lane (16 operations per state): the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame). Arguments `t`, `q`, `u`, `udot` as `outputs`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("outputs")`'s result.
+    pub fn outputs_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        _u: &[::eom_sim::Lanes<W>; 3],
+        _udot: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = q[3] * q[3];
+        let x2 = q[0] * q[3];
+        let x3 = q[1] * q[2];
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x3;
+        let x5 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
+        let x6 = x4 - x5;
+        let x7 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x8 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
+        let x9 = ::eom_sim::Lanes::<W>::splat(1.0) - x7;
+        let x10 = x9 - x8;
+        let x11 = q[2] * q[3];
+        let x12 = ::eom_sim::Lanes::<W>::splat(2.0) * x11;
+        let x13 = q[0] * q[1];
+        let x14 = ::eom_sim::Lanes::<W>::splat(2.0) * x13;
+        let x15 = x12 + x14;
+        out[0] = x6;
+        out[1] = x10;
+        out[2] = x15;
+    }
+    /// `marker_jacobians` of `W` states at once, one per lane (27 operations per state): partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed. Arguments `t`, `q` as `marker_jacobians`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("marker_jacobians")`'s result.
+    pub fn marker_jacobians_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 9],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = q[2] * q[2];
+        let x2 = q[3] * q[3];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
+        let x5 = q[0] * q[3];
+        let x6 = q[0] * q[2];
+        let x7 = ::eom_sim::Lanes::<W>::splat(2.0) * x6;
+        let x8 = q[1] * q[3];
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x10 = x7 + x9;
+        let x11 = q[0] * q[1];
+        let x12 = q[2] * q[3];
+        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(2.0) * x11;
+        let x15 = x13 - x14;
+        let x16 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x17 = ::eom_sim::Lanes::<W>::splat(1.0) - x16;
+        let x18 = x17 - x4;
+        let x19 = x3 + x4;
+        let x20 = x19 - ::eom_sim::Lanes::<W>::splat(1.0);
+        let x21 = q[1] * q[2];
+        let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x5;
+        let x24 = x22 + x23;
+        let x25 = -x24;
+        let x26 = x7 - x9;
+        out[0] = x10;
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x20;
+        out[3] = x15;
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = x25;
+        out[6] = x18;
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = x26;
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `outputs`, `marker_jacobians`.
+impl ::eom_sim::Batched for HeavyTop {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 4]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 9]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "outputs" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::outputs_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "marker_jacobians" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 9]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::marker_jacobians_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `heavy_top` (7 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<7> for HeavyTop {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 7],
+        dy: &mut [::eom_sim::Lanes<W>; 7],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 4] = [y[0], y[1], y[2], y[3]];
+        let u: [::eom_sim::Lanes<W>; 3] = [y[4], y[5], y[6]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 4];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 3];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 3],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = qdot[3];
+        dy[4] = udot[0];
+        dy[5] = udot[1];
+        dy[6] = udot[2];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        y: &mut [::eom_sim::Lanes<W>; 7],
+    ) -> bool {
+        for l in 0..W {
+            let n = f64::sqrt(
+                y[0].0[l] * y[0].0[l] + y[1].0[l] * y[1].0[l] + y[2].0[l] * y[2].0[l]
+                    + y[3].0[l] * y[3].0[l],
+            );
+            if n > 0.0 && n.is_finite() {
+                y[0].0[l] /= n;
+                y[1].0[l] /= n;
+                y[2].0[l] /= n;
+                y[3].0[l] /= n;
+            }
+        }
+        true
+    }
+}
 /// The first-order system `y = (q, u)` of `heavy_top` (7 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<7> for HeavyTop {
     fn rhs(&self, t: f64, y: &[f64; 7], dy: &mut [f64; 7]) {

@@ -792,6 +792,760 @@ impl ::eom_sim::ConstrainedModel for HubBeam {
         _jacobian: &mut [f64; 0],
     ) {}
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl HubBeam {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 5],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+        out[2] = u[2];
+        out[3] = u[3];
+        out[4] = u[4];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (115 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        tau: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 5],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x0;
+        let x2 = q[3] * q[3];
+        let x3 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x2;
+        let x4 = q[4] * q[4];
+        let x5 = q[2] * q[2];
+        let x6 = q[1] * u[1];
+        let x7 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x6;
+        let x8 = q[3] * u[3];
+        let x9 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x8;
+        let x10 = q[4] * u[4];
+        let x11 = x7 + x9;
+        let x12 = x10 + x11;
+        let x13 = u[0] * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(2.0) * x13;
+        let x15 = u[0] * u[0];
+        let x16 = ::eom_sim::Lanes::<W>::splat(1.1933363815498328) * q[1];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[3];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[4];
+        let x19 = x16 + x17;
+        let x20 = x19 - x18;
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[1];
+        let x22 = ::eom_sim::Lanes::<W>::splat(6.4782233515761165) * q[3];
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[4];
+        let x24 = x21 + x22;
+        let x25 = x24 - x23;
+        let x26 = ::eom_sim::Lanes::<W>::splat(17.85946726263257) * q[4];
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[1];
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[3];
+        let x29 = x26 - x27;
+        let x30 = x29 - x28;
+        let x31 = q[4] * x30;
+        let x32 = q[3] * x25;
+        let x33 = q[1] * x20;
+        let x34 = u[1] * x20;
+        let x35 = ::eom_sim::Lanes::<W>::splat(2.0) * x34;
+        let x36 = u[3] * x25;
+        let x37 = ::eom_sim::Lanes::<W>::splat(2.0) * x36;
+        let x38 = u[4] * x30;
+        let x39 = ::eom_sim::Lanes::<W>::splat(2.0) * x38;
+        let x40 = q[2] * u[2];
+        let x41 = ::eom_sim::Lanes::<W>::splat(2.3866727630996616) * x40;
+        let x42 = x37 + x41;
+        let x43 = x39 + x42;
+        let x44 = x35 + x43;
+        let x45 = u[0] * x44;
+        let x46 = x15 * x30;
+        let x47 = q[4] * x15;
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.9999999999999998) * tau[1];
+        let x49 = x15 * x20;
+        let x50 = q[1] * x15;
+        let x51 = ::eom_sim::Lanes::<W>::splat(0.5023732934567654) * tau[1];
+        let x52 = ::eom_sim::Lanes::<W>::splat(0.5023732934567655) * x50;
+        let x53 = q[2] * x15;
+        let x54 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * tau[2];
+        let x55 = ::eom_sim::Lanes::<W>::splat(1.1933363815498317) * x53;
+        let x56 = ::eom_sim::Lanes::<W>::splat(11094.447637739599) * q[2];
+        let x57 = x54 - x55;
+        let x58 = x57 - x56;
+        let x59 = x15 * x25;
+        let x60 = q[3] * x15;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.9999999999999998) * tau[3];
+        let x62 = ::eom_sim::Lanes::<W>::splat(2183.1943714499876) * q[3];
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.08016303147756354) * x59;
+        let x64 = ::eom_sim::Lanes::<W>::splat(348.34713742882366) * q[1];
+        let x65 = ::eom_sim::Lanes::<W>::splat(0.08016303147756355) * x60;
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.08016303147756354) * tau[3];
+        let x67 = ::eom_sim::Lanes::<W>::splat(0.5023732934567654) * x49;
+        let x68 = x14 + x51;
+        let x69 = x62 + x68;
+        let x70 = x52 + x69;
+        let x71 = x63 + x70;
+        let x72 = x71 - x64;
+        let x73 = x72 - x65;
+        let x74 = x73 - x66;
+        let x75 = x74 - x67;
+        let x76 = x75 - x45;
+        let x77 = ::eom_sim::Lanes::<W>::splat(1.1933363815498308) * x5;
+        let x78 = ::eom_sim::Lanes::<W>::splat(0.05037532901263102) + x4;
+        let x79 = x3 + x78;
+        let x80 = x1 + x79;
+        let x81 = x80 - x31;
+        let x82 = x81 - x32;
+        let x83 = x82 - x33;
+        let x84 = x83 - x77;
+        let x85 = ::eom_sim::Lanes::<W>::splat(6115.690663433373) * q[4];
+        let x86 = ::eom_sim::Lanes::<W>::splat(0.028629240176763437) * x46;
+        let x87 = ::eom_sim::Lanes::<W>::splat(0.028629240176763437) * x47;
+        let x88 = ::eom_sim::Lanes::<W>::splat(0.028629240176763437) * tau[4];
+        let x89 = x85 + x86;
+        let x90 = tau[0] + x89;
+        let x91 = x90 - x87;
+        let x92 = x91 - x88;
+        let x93 = x92 - x76;
+        let x94 = x93 / x84;
+        let x95 = ::eom_sim::Lanes::<W>::splat(0.028629240176763437) * x94;
+        let x96 = ::eom_sim::Lanes::<W>::splat(213616.93938343137) * q[4];
+        let x97 = tau[4] + x47;
+        let x98 = x97 - x46;
+        let x99 = x98 - x95;
+        let x100 = x99 - x96;
+        let x101 = ::eom_sim::Lanes::<W>::splat(693.4029773595092) * q[1];
+        let x102 = ::eom_sim::Lanes::<W>::splat(0.5023732934567654) * x94;
+        let x103 = ::eom_sim::Lanes::<W>::splat(0.9999999999999998) * x49;
+        let x104 = x48 + x50;
+        let x105 = x104 - x101;
+        let x106 = x105 - x102;
+        let x107 = x106 - x103;
+        let x108 = ::eom_sim::Lanes::<W>::splat(0.08016303147756354) * x94;
+        let x109 = ::eom_sim::Lanes::<W>::splat(27234.42877857022) * q[3];
+        let x110 = ::eom_sim::Lanes::<W>::splat(0.9999999999999998) * x59;
+        let x111 = x61 + x108;
+        let x112 = x60 + x111;
+        let x113 = x112 - x109;
+        let x114 = x113 - x110;
+        out[0] = x94;
+        out[1] = x107;
+        out[2] = x58;
+        out[3] = x114;
+        out[4] = x100;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (32 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (25 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 25],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x0;
+        let x2 = q[3] * q[3];
+        let x3 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x2;
+        let x4 = q[4] * q[4];
+        let x5 = q[2] * q[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(1.1933363815498328) * q[1];
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[3];
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[4];
+        let x9 = x6 + x7;
+        let x10 = x9 - x8;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[1];
+        let x12 = ::eom_sim::Lanes::<W>::splat(6.4782233515761165) * q[3];
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[4];
+        let x14 = x11 + x12;
+        let x15 = x14 - x13;
+        let x16 = ::eom_sim::Lanes::<W>::splat(17.85946726263257) * q[4];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[1];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[3];
+        let x19 = x16 - x17;
+        let x20 = x19 - x18;
+        let x21 = q[4] * x20;
+        let x22 = q[3] * x15;
+        let x23 = q[1] * x10;
+        let x24 = ::eom_sim::Lanes::<W>::splat(1.1933363815498308) * x5;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.31000000000000005) + x4;
+        let x26 = x3 + x25;
+        let x27 = x1 + x26;
+        let x28 = x27 - x21;
+        let x29 = x28 - x22;
+        let x30 = x29 - x23;
+        let x31 = x30 - x24;
+        out[0] = x31;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.5023732934567655);
+        out[1] = out[5];
+        out[6] = ::eom_sim::Lanes::<W>::splat(1.0000000000000002);
+        out[10] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[10];
+        out[11] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[7] = out[11];
+        out[12] = ::eom_sim::Lanes::<W>::splat(0.9999999999999993);
+        out[15] = ::eom_sim::Lanes::<W>::splat(-0.08016303147756355);
+        out[3] = out[15];
+        out[16] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = out[16];
+        out[17] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[13] = out[17];
+        out[18] = ::eom_sim::Lanes::<W>::splat(1.0000000000000002);
+        out[20] = ::eom_sim::Lanes::<W>::splat(0.028629240176763437);
+        out[4] = out[20];
+        out[21] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = out[21];
+        out[22] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[14] = out[22];
+        out[23] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[19] = out[23];
+        out[24] = ::eom_sim::Lanes::<W>::splat(1.0);
+    }
+    /// `bias` of `W` states at once, one per lane (59 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 5],
+    ) {
+        let x0 = q[1] * u[1];
+        let x1 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x0;
+        let x2 = q[3] * u[3];
+        let x3 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x2;
+        let x4 = q[4] * u[4];
+        let x5 = x1 + x3;
+        let x6 = x4 + x5;
+        let x7 = u[0] * x6;
+        let x8 = ::eom_sim::Lanes::<W>::splat(2.0) * x7;
+        let x9 = u[0] * u[0];
+        let x10 = q[1] * x9;
+        let x11 = q[3] * x9;
+        let x12 = q[4] * x9;
+        let x13 = ::eom_sim::Lanes::<W>::splat(1.1933363815498328) * q[1];
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[3];
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[4];
+        let x16 = x13 + x14;
+        let x17 = x16 - x15;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[1];
+        let x19 = ::eom_sim::Lanes::<W>::splat(6.4782233515761165) * q[3];
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[4];
+        let x21 = x18 + x19;
+        let x22 = x21 - x20;
+        let x23 = ::eom_sim::Lanes::<W>::splat(17.85946726263257) * q[4];
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[1];
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[3];
+        let x26 = x23 - x24;
+        let x27 = x26 - x25;
+        let x28 = u[1] * x17;
+        let x29 = ::eom_sim::Lanes::<W>::splat(2.0) * x28;
+        let x30 = u[3] * x22;
+        let x31 = ::eom_sim::Lanes::<W>::splat(2.0) * x30;
+        let x32 = u[4] * x27;
+        let x33 = ::eom_sim::Lanes::<W>::splat(2.0) * x32;
+        let x34 = q[2] * u[2];
+        let x35 = ::eom_sim::Lanes::<W>::splat(2.3866727630996616) * x34;
+        let x36 = x31 + x35;
+        let x37 = x33 + x36;
+        let x38 = x29 + x37;
+        let x39 = u[0] * x38;
+        let x40 = x8 - x39;
+        let x41 = x9 * x17;
+        let x42 = q[2] * x9;
+        let x43 = ::eom_sim::Lanes::<W>::splat(1.1933363815498308) * x42;
+        let x44 = x9 * x22;
+        let x45 = x9 * x27;
+        let x46 = ::eom_sim::Lanes::<W>::splat(693.4029773595094) * q[1];
+        let x47 = ::eom_sim::Lanes::<W>::splat(11094.447637739591) * q[2];
+        let x48 = ::eom_sim::Lanes::<W>::splat(27234.42877857023) * q[3];
+        let x49 = ::eom_sim::Lanes::<W>::splat(213616.93938343137) * q[4];
+        let x50 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x10;
+        let x51 = x41 + x46;
+        let x52 = x51 - x50;
+        let x53 = x43 + x47;
+        let x54 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x11;
+        let x55 = x44 + x48;
+        let x56 = x55 - x54;
+        let x57 = x45 + x49;
+        let x58 = x57 - x12;
+        out[0] = x40;
+        out[1] = x52;
+        out[2] = x53;
+        out[3] = x56;
+        out[4] = x58;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (99 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        udot: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 5],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x0;
+        let x2 = q[3] * q[3];
+        let x3 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x2;
+        let x4 = q[4] * q[4];
+        let x5 = q[2] * q[2];
+        let x6 = q[1] * u[1];
+        let x7 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x6;
+        let x8 = q[3] * u[3];
+        let x9 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x8;
+        let x10 = q[4] * u[4];
+        let x11 = x7 + x9;
+        let x12 = x10 + x11;
+        let x13 = u[0] * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(2.0) * x13;
+        let x15 = u[0] * u[0];
+        let x16 = q[1] * x15;
+        let x17 = q[3] * x15;
+        let x18 = q[4] * x15;
+        let x19 = ::eom_sim::Lanes::<W>::splat(1.1933363815498328) * q[1];
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[3];
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[4];
+        let x22 = x19 + x20;
+        let x23 = x22 - x21;
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[1];
+        let x25 = ::eom_sim::Lanes::<W>::splat(6.4782233515761165) * q[3];
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[4];
+        let x27 = x24 + x25;
+        let x28 = x27 - x26;
+        let x29 = ::eom_sim::Lanes::<W>::splat(17.85946726263257) * q[4];
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[1];
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[3];
+        let x32 = x29 - x30;
+        let x33 = x32 - x31;
+        let x34 = q[4] * x33;
+        let x35 = q[3] * x28;
+        let x36 = q[1] * x23;
+        let x37 = ::eom_sim::Lanes::<W>::splat(1.1933363815498308) * x5;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.26000000000000006) + x4;
+        let x39 = x3 + x38;
+        let x40 = x1 + x39;
+        let x41 = x40 - x34;
+        let x42 = x41 - x35;
+        let x43 = x42 - x36;
+        let x44 = x43 - x37;
+        let x45 = u[1] * x23;
+        let x46 = ::eom_sim::Lanes::<W>::splat(2.0) * x45;
+        let x47 = u[3] * x28;
+        let x48 = ::eom_sim::Lanes::<W>::splat(2.0) * x47;
+        let x49 = u[4] * x33;
+        let x50 = ::eom_sim::Lanes::<W>::splat(2.0) * x49;
+        let x51 = q[2] * u[2];
+        let x52 = ::eom_sim::Lanes::<W>::splat(2.3866727630996616) * x51;
+        let x53 = x48 + x52;
+        let x54 = x50 + x53;
+        let x55 = x46 + x54;
+        let x56 = u[0] * x55;
+        let x57 = x15 * x23;
+        let x58 = q[2] * x15;
+        let x59 = ::eom_sim::Lanes::<W>::splat(1.1933363815498308) * x58;
+        let x60 = x15 * x28;
+        let x61 = x15 * x33;
+        let x62 = ::eom_sim::Lanes::<W>::splat(693.4029773595094) * q[1];
+        let x63 = ::eom_sim::Lanes::<W>::splat(11094.447637739591) * q[2];
+        let x64 = ::eom_sim::Lanes::<W>::splat(27234.42877857023) * q[3];
+        let x65 = ::eom_sim::Lanes::<W>::splat(213616.93938343137) * q[4];
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.05) * udot[0];
+        let x67 = udot[0] * x44;
+        let x68 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * udot[1];
+        let x69 = ::eom_sim::Lanes::<W>::splat(0.9999999999999993) * udot[2];
+        let x70 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * udot[3];
+        let x71 = ::eom_sim::Lanes::<W>::splat(0.5023732934567655) * udot[1];
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.5023732934567655) * udot[0];
+        let x73 = ::eom_sim::Lanes::<W>::splat(0.028629240176763437) * udot[4];
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.028629240176763437) * udot[0];
+        let x75 = ::eom_sim::Lanes::<W>::splat(0.08016303147756355) * udot[3];
+        let x76 = x14 + x67;
+        let x77 = x73 + x76;
+        let x78 = x66 + x77;
+        let x79 = x71 + x78;
+        let x80 = x79 - x75;
+        let x81 = x80 - x56;
+        let x82 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x16;
+        let x83 = x57 + x62;
+        let x84 = x72 + x83;
+        let x85 = x68 + x84;
+        let x86 = x85 - x82;
+        let x87 = x63 + x69;
+        let x88 = x59 + x87;
+        let x89 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x17;
+        let x90 = ::eom_sim::Lanes::<W>::splat(0.08016303147756355) * udot[0];
+        let x91 = x60 + x64;
+        let x92 = x70 + x91;
+        let x93 = x92 - x89;
+        let x94 = x93 - x90;
+        let x95 = x61 + x74;
+        let x96 = x65 + x95;
+        let x97 = udot[4] + x96;
+        let x98 = x97 - x18;
+        out[0] = x81;
+        out[1] = x86;
+        out[2] = x88;
+        out[3] = x94;
+        out[4] = x98;
+    }
+    /// `energy` of `W` states at once, one per lane (63 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x0;
+        let x2 = q[3] * q[3];
+        let x3 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x2;
+        let x4 = q[4] * q[4];
+        let x5 = q[2] * q[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5023732934567655) * u[1];
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.028629240176763437) * u[4];
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.08016303147756355) * u[3];
+        let x9 = x6 + x7;
+        let x10 = x9 - x8;
+        let x11 = u[0] * u[0];
+        let x12 = ::eom_sim::Lanes::<W>::splat(1.1933363815498328) * q[1];
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[3];
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[4];
+        let x15 = x12 + x13;
+        let x16 = x15 - x14;
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[1];
+        let x18 = ::eom_sim::Lanes::<W>::splat(6.4782233515761165) * q[3];
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[4];
+        let x20 = x17 + x18;
+        let x21 = x20 - x19;
+        let x22 = ::eom_sim::Lanes::<W>::splat(17.85946726263257) * q[4];
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[1];
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[3];
+        let x25 = x22 - x23;
+        let x26 = x25 - x24;
+        let x27 = u[2] * u[2];
+        let x28 = q[4] * x26;
+        let x29 = q[3] * x21;
+        let x30 = q[1] * x16;
+        let x31 = ::eom_sim::Lanes::<W>::splat(1.1933363815498308) * x5;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.26000000000000006) + x4;
+        let x33 = x3 + x32;
+        let x34 = x1 + x33;
+        let x35 = x34 - x28;
+        let x36 = x35 - x29;
+        let x37 = x36 - x30;
+        let x38 = x37 - x31;
+        let x39 = ::eom_sim::Lanes::<W>::splat(346.7014886797547) * x0;
+        let x40 = ::eom_sim::Lanes::<W>::splat(106808.46969171568) * x4;
+        let x41 = ::eom_sim::Lanes::<W>::splat(13617.214389285115) * x2;
+        let x42 = ::eom_sim::Lanes::<W>::splat(5547.223818869796) * x5;
+        let x43 = x39 + x41;
+        let x44 = x40 + x43;
+        let x45 = x42 + x44;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.025) * x11;
+        let x47 = x11 * x38;
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.5) * x47;
+        let x49 = u[1] * u[1];
+        let x50 = u[3] * u[3];
+        let x51 = u[4] * u[4];
+        let x52 = ::eom_sim::Lanes::<W>::splat(0.5) * x51;
+        let x53 = ::eom_sim::Lanes::<W>::splat(0.49999999999999967) * x27;
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.5000000000000001) * x50;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.5000000000000001) * x49;
+        let x56 = u[0] * x10;
+        let x57 = x48 + x53;
+        let x58 = x52 + x57;
+        let x59 = x54 + x58;
+        let x60 = x46 + x59;
+        let x61 = x55 + x60;
+        let x62 = x56 + x61;
+        out[0] = x62;
+        out[1] = x45;
+    }
+    /// `momentum` of `W` states at once, one per lane (118 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 5],
+        u: &[::eom_sim::Lanes<W>; 5],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = q[1] * q[1];
+        let x3 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x2;
+        let x4 = q[3] * q[3];
+        let x5 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x4;
+        let x6 = q[4] * q[4];
+        let x7 = q[2] * q[2];
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.691519591141154) * q[1];
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.22469957768847007) * q[4];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.38324154047777015) * q[3];
+        let x11 = x8 + x9;
+        let x12 = x11 - x10;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.5023732934567655) * u[1];
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.028629240176763437) * u[4];
+        let x15 = q[1] * u[2];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.691519591141154) * u[1];
+        let x17 = ::eom_sim::Lanes::<W>::splat(-0.6915195911411537) * u[2];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.22469957768847007) * u[4];
+        let x19 = q[2] * u[1];
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.5023732934567654) * u[2];
+        let x21 = ::eom_sim::Lanes::<W>::splat(1.1933363815498328) * q[1];
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[3];
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[4];
+        let x24 = x21 + x22;
+        let x25 = x24 - x23;
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.685854232554136) * q[1];
+        let x27 = ::eom_sim::Lanes::<W>::splat(6.4782233515761165) * q[3];
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[4];
+        let x29 = x26 + x27;
+        let x30 = x29 - x28;
+        let x31 = ::eom_sim::Lanes::<W>::splat(17.85946726263257) * q[4];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.7923688192154538) * q[1];
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.16949150170632982) * q[3];
+        let x34 = x31 - x32;
+        let x35 = x34 - x33;
+        let x36 = ::eom_sim::Lanes::<W>::splat(1.5708781897069632) * q[1];
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.4223188929469246) * q[3];
+        let x38 = ::eom_sim::Lanes::<W>::splat(1.0720659121783864) * q[4];
+        let x39 = x36 + x37;
+        let x40 = x39 - x38;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.4223188929469246) * q[1];
+        let x42 = ::eom_sim::Lanes::<W>::splat(8.64713928368637) * q[3];
+        let x43 = ::eom_sim::Lanes::<W>::splat(1.8901756828604492) * q[4];
+        let x44 = x41 + x42;
+        let x45 = x44 - x43;
+        let x46 = ::eom_sim::Lanes::<W>::splat(24.95205308343512) * q[4];
+        let x47 = ::eom_sim::Lanes::<W>::splat(1.0720659121783864) * q[1];
+        let x48 = ::eom_sim::Lanes::<W>::splat(1.8901756828604492) * q[3];
+        let x49 = x46 - x47;
+        let x50 = x49 - x48;
+        let x51 = q[1] * x40;
+        let x52 = q[4] * x50;
+        let x53 = q[3] * x45;
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.5) * x51;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.5) * x52;
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.5) * x53;
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.785439094853483) * x7;
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.39000000000000007) - x54;
+        let x59 = x58 - x55;
+        let x60 = x59 - x56;
+        let x61 = x60 - x57;
+        let x62 = q[4] * x35;
+        let x63 = q[3] * x30;
+        let x64 = q[1] * x25;
+        let x65 = ::eom_sim::Lanes::<W>::splat(1.1933363815498308) * x7;
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.26000000000000006) + x6;
+        let x67 = x5 + x66;
+        let x68 = x3 + x67;
+        let x69 = x68 - x62;
+        let x70 = x69 - x63;
+        let x71 = x70 - x64;
+        let x72 = x71 - x65;
+        let x73 = x38 - x36;
+        let x74 = x73 - x37;
+        let x75 = x43 - x41;
+        let x76 = x75 - x42;
+        let x77 = x47 + x48;
+        let x78 = x77 - x46;
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.05) * u[0];
+        let x80 = q[2] * u[0];
+        let x81 = ::eom_sim::Lanes::<W>::splat(0.5023732934567654) * x80;
+        let x82 = q[1] * x80;
+        let x83 = u[0] * x72;
+        let x84 = u[0] * x61;
+        let x85 = u[0] * x12;
+        let x86 = u[1] * x74;
+        let x87 = q[2] * u[2];
+        let x88 = u[3] * x76;
+        let x89 = u[4] * x78;
+        let x90 = x19 + x81;
+        let x91 = x90 - x15;
+        let x92 = x20 + x82;
+        let x93 = ::eom_sim::Lanes::<W>::splat(1.570878189706966) * x87;
+        let x94 = x88 + x89;
+        let x95 = x86 + x94;
+        let x96 = x95 - x85;
+        let x97 = x96 - x93;
+        let x98 = ::eom_sim::Lanes::<W>::splat(0.38324154047777015) * u[3];
+        let x99 = x18 + x84;
+        let x100 = x16 + x99;
+        let x101 = x100 - x98;
+        let x102 = x1 * x97;
+        let x103 = x0 * x101;
+        let x104 = x102 - x103;
+        let x105 = x0 * x97;
+        let x106 = x1 * x101;
+        let x107 = x105 + x106;
+        let x108 = x1 * x91;
+        let x109 = x0 * x92;
+        let x110 = x108 - x109;
+        let x111 = x0 * x91;
+        let x112 = x1 * x92;
+        let x113 = x111 + x112;
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.08016303147756355) * u[3];
+        let x115 = x13 + x79;
+        let x116 = x14 + x115;
+        let x117 = x83 + x116;
+        let x118 = x117 - x114;
+        out[0] = x110;
+        out[1] = x113;
+        out[2] = x118;
+        out[3] = x104;
+        out[4] = x107;
+        out[5] = x17;
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`.
+impl ::eom_sim::Batched for HubBeam {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 5]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    5,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 5]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 25]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 5]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    5,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 5]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<5, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `hub_beam` (10 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<10> for HubBeam {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 10],
+        dy: &mut [::eom_sim::Lanes<W>; 10],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 5] = [y[0], y[1], y[2], y[3], y[4]];
+        let u: [::eom_sim::Lanes<W>; 5] = [y[5], y[6], y[7], y[8], y[9]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 5];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 5];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 5],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = qdot[3];
+        dy[4] = qdot[4];
+        dy[5] = udot[0];
+        dy[6] = udot[1];
+        dy[7] = udot[2];
+        dy[8] = udot[3];
+        dy[9] = udot[4];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 10],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `hub_beam` (10 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<10> for HubBeam {
     fn rhs(&self, t: f64, y: &[f64; 10], dy: &mut [f64; 10]) {

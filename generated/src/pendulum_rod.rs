@@ -306,6 +306,275 @@ impl PendulumRod {
         out[5] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl PendulumRod {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 1],
+        u: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        out[0] = u[0];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (4 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 1],
+        _u: &[::eom_sim::Lanes<W>; 1],
+        tau: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        let x0 = q[0].cos();
+        let x1 = ::eom_sim::Lanes::<W>::splat(66.66666666666667) * tau[0];
+        let x2 = ::eom_sim::Lanes::<W>::splat(49.050000000000004) * x0;
+        let x3 = x1 - x2;
+        out[0] = x3;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.015);
+    }
+    /// `bias` of `W` states at once, one per lane (2 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 1],
+        _u: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        let x0 = q[0].cos();
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.73575) * x0;
+        out[0] = x1;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (4 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (1 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 1],
+        _u: &[::eom_sim::Lanes<W>; 1],
+        udot: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 1],
+    ) {
+        let x0 = q[0].cos();
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.73575) * x0;
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.015) * udot[0];
+        let x3 = x1 + x2;
+        out[0] = x3;
+    }
+    /// `energy` of `W` states at once, one per lane (4 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 1],
+        u: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = q[0].sin();
+        let x1 = u[0] * u[0];
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.0075) * x1;
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.73575) * x0;
+        out[0] = x2;
+        out[1] = x3;
+    }
+    /// `momentum` of `W` states at once, one per lane (6 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 1],
+        u: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.015) * u[0];
+        let x3 = u[0] * x0;
+        let x4 = ::eom_sim::Lanes::<W>::splat(-0.075) * x3;
+        let x5 = u[0] * x1;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.075) * x5;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x2;
+        out[3] = x4;
+        out[4] = x6;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `attachments` of `W` states at once, one per lane (4 operations per state): the markers holding cable ends (issue #18), mount by mount: world position, and for a clamped end the unit normals `n1`, `n2` of the clamp's axis (world axes); each value followed by its partial derivatives `∂/∂q_k`. Arguments `t`, `q` as `attachments`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("attachments")`'s result.
+    pub fn attachments_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 1],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.3) * x1;
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.3) * x0;
+        let x4 = ::eom_sim::Lanes::<W>::splat(-0.3) * x0;
+        out[0] = x2;
+        out[1] = x4;
+        out[2] = x3;
+        out[3] = x2;
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `attachments`.
+impl ::eom_sim::Batched for PendulumRod {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    1,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    1,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 1]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "attachments" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<1, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::attachments_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `pendulum_rod` (2 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<2> for PendulumRod {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 2],
+        dy: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 1] = [y[0]];
+        let u: [::eom_sim::Lanes<W>; 1] = [y[1]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 1];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 1];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 1],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = udot[0];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 2],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `pendulum_rod` (2 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<2> for PendulumRod {
     fn rhs(&self, t: f64, y: &[f64; 2], dy: &mut [f64; 2]) {

@@ -1190,6 +1190,1132 @@ impl RollingDisk {
         out[17] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl RollingDisk {
+    /// `qdot` of `W` states at once, one per lane (77 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (7 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 7],
+    ) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = q[6] * q[6];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
+        let x5 = ::eom_sim::Lanes::<W>::splat(1.0) - x3;
+        let x6 = x5 - x4;
+        let x7 = q[3] * q[6];
+        let x8 = q[4] * q[5];
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(2.0) * x7;
+        let x11 = x9 - x10;
+        let x12 = q[4] * q[6];
+        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
+        let x14 = q[3] * q[5];
+        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x14;
+        let x16 = x13 + x15;
+        let x17 = x9 + x10;
+        let x18 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x19 = x5 - x18;
+        let x20 = q[3] * q[4];
+        let x21 = q[5] * q[6];
+        let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x20;
+        let x24 = x22 - x23;
+        let x25 = x13 - x15;
+        let x26 = x22 + x23;
+        let x27 = ::eom_sim::Lanes::<W>::splat(1.0) - x4;
+        let x28 = x27 - x18;
+        let x29 = u[0] * x6;
+        let x30 = u[1] * x11;
+        let x31 = u[2] * x16;
+        let x32 = x29 + x30;
+        let x33 = x31 + x32;
+        let x34 = u[0] * x17;
+        let x35 = u[1] * x19;
+        let x36 = u[2] * x24;
+        let x37 = x35 + x36;
+        let x38 = x34 + x37;
+        let x39 = u[0] * x25;
+        let x40 = u[1] * x26;
+        let x41 = u[2] * x28;
+        let x42 = x40 + x41;
+        let x43 = x39 + x42;
+        let x44 = q[4] * u[3];
+        let x45 = q[6] * u[5];
+        let x46 = q[5] * u[4];
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.5) * x46;
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.5) * x44;
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.5) * x45;
+        let x50 = x47 + x48;
+        let x51 = x49 + x50;
+        let x52 = -x51;
+        let x53 = q[6] * u[4];
+        let x54 = q[3] * u[3];
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.5) * x54;
+        let x56 = q[5] * u[5];
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.5) * x56;
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.5) * x53;
+        let x59 = x55 + x57;
+        let x60 = x59 - x58;
+        let x61 = q[3] * u[4];
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.5) * x61;
+        let x63 = q[6] * u[3];
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.5) * x63;
+        let x65 = q[4] * u[5];
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.5) * x65;
+        let x67 = x62 + x64;
+        let x68 = x67 - x66;
+        let x69 = q[3] * u[5];
+        let x70 = ::eom_sim::Lanes::<W>::splat(0.5) * x69;
+        let x71 = q[4] * u[4];
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.5) * x71;
+        let x73 = q[5] * u[3];
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.5) * x73;
+        let x75 = x70 + x72;
+        let x76 = x75 - x74;
+        out[0] = x33;
+        out[1] = x38;
+        out[2] = x43;
+        out[3] = x52;
+        out[4] = x60;
+        out[5] = x68;
+        out[6] = x76;
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (38 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        tau: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = u[4] * u[5];
+        let x3 = u[3] * u[4];
+        let x4 = u[1] * u[5];
+        let x5 = u[2] * u[3];
+        let x6 = u[0] * u[4];
+        let x7 = u[2] * u[4];
+        let x8 = u[0] * u[5];
+        let x9 = u[1] * u[3];
+        let x10 = ::eom_sim::Lanes::<W>::splat(399.99999999999994) * tau[3];
+        let x11 = x2 + x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(199.99999999999997) * tau[4];
+        let x13 = ::eom_sim::Lanes::<W>::splat(399.99999999999994) * tau[5];
+        let x14 = x13 - x3;
+        let x15 = q[4] * q[6];
+        let x16 = q[3] * q[5];
+        let x17 = ::eom_sim::Lanes::<W>::splat(19.62) * x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(19.62) * x15;
+        let x19 = x4 + x17;
+        let x20 = tau[0] + x19;
+        let x21 = x20 - x18;
+        let x22 = x21 - x7;
+        let x23 = q[3] * q[4];
+        let x24 = q[5] * q[6];
+        let x25 = ::eom_sim::Lanes::<W>::splat(19.62) * x24;
+        let x26 = ::eom_sim::Lanes::<W>::splat(19.62) * x23;
+        let x27 = tau[1] + x5;
+        let x28 = x27 - x25;
+        let x29 = x28 - x8;
+        let x30 = x29 - x26;
+        let x31 = ::eom_sim::Lanes::<W>::splat(19.62) * x1;
+        let x32 = ::eom_sim::Lanes::<W>::splat(19.62) * x0;
+        let x33 = x6 + x31;
+        let x34 = x32 + x33;
+        let x35 = tau[2] + x34;
+        let x36 = x35 - ::eom_sim::Lanes::<W>::splat(9.81);
+        let x37 = x36 - x9;
+        out[0] = x22;
+        out[1] = x30;
+        out[2] = x37;
+        out[3] = x11;
+        out[4] = x12;
+        out[5] = x14;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (36 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 36],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(1.0);
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = out[6];
+        out[7] = ::eom_sim::Lanes::<W>::splat(1.0);
+        out[12] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[12];
+        out[13] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = out[13];
+        out[14] = ::eom_sim::Lanes::<W>::splat(1.0);
+        out[18] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = out[18];
+        out[19] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = out[19];
+        out[20] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[15] = out[20];
+        out[21] = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005);
+        out[24] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = out[24];
+        out[25] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = out[25];
+        out[26] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[16] = out[26];
+        out[27] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[22] = out[27];
+        out[28] = ::eom_sim::Lanes::<W>::splat(0.005000000000000001);
+        out[30] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = out[30];
+        out[31] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = out[31];
+        out[32] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[17] = out[32];
+        out[33] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[23] = out[33];
+        out[34] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[29] = out[34];
+        out[35] = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005);
+    }
+    /// `bias` of `W` states at once, one per lane (32 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = q[4] * q[6];
+        let x3 = ::eom_sim::Lanes::<W>::splat(19.62) * x2;
+        let x4 = q[3] * q[5];
+        let x5 = q[3] * q[4];
+        let x6 = ::eom_sim::Lanes::<W>::splat(19.62) * x5;
+        let x7 = q[5] * q[6];
+        let x8 = ::eom_sim::Lanes::<W>::splat(19.62) * x7;
+        let x9 = u[2] * u[4];
+        let x10 = u[1] * u[5];
+        let x11 = u[0] * u[5];
+        let x12 = u[2] * u[3];
+        let x13 = u[1] * u[3];
+        let x14 = u[0] * u[4];
+        let x15 = u[4] * u[5];
+        let x16 = ::eom_sim::Lanes::<W>::splat(-0.0025000000000000005) * x15;
+        let x17 = u[3] * u[4];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(19.62) * x4;
+        let x20 = x3 + x9;
+        let x21 = x20 - x19;
+        let x22 = x21 - x10;
+        let x23 = x6 + x8;
+        let x24 = x11 + x23;
+        let x25 = x24 - x12;
+        let x26 = ::eom_sim::Lanes::<W>::splat(19.62) * x1;
+        let x27 = ::eom_sim::Lanes::<W>::splat(19.62) * x0;
+        let x28 = ::eom_sim::Lanes::<W>::splat(9.81) + x13;
+        let x29 = x28 - x26;
+        let x30 = x29 - x27;
+        let x31 = x30 - x14;
+        out[0] = x22;
+        out[1] = x25;
+        out[2] = x31;
+        out[3] = x16;
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = x18;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (40 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        udot: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = q[4] * q[6];
+        let x3 = ::eom_sim::Lanes::<W>::splat(19.62) * x2;
+        let x4 = q[3] * q[5];
+        let x5 = q[3] * q[4];
+        let x6 = ::eom_sim::Lanes::<W>::splat(19.62) * x5;
+        let x7 = q[5] * q[6];
+        let x8 = ::eom_sim::Lanes::<W>::splat(19.62) * x7;
+        let x9 = u[2] * u[4];
+        let x10 = u[1] * u[5];
+        let x11 = u[0] * u[5];
+        let x12 = u[2] * u[3];
+        let x13 = u[1] * u[3];
+        let x14 = u[0] * u[4];
+        let x15 = u[4] * u[5];
+        let x16 = u[3] * u[4];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * udot[3];
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.005000000000000001) * udot[4];
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * udot[5];
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x15;
+        let x22 = x18 - x21;
+        let x23 = x17 + x20;
+        let x24 = ::eom_sim::Lanes::<W>::splat(19.62) * x4;
+        let x25 = udot[0] + x9;
+        let x26 = x3 + x25;
+        let x27 = x26 - x24;
+        let x28 = x27 - x10;
+        let x29 = udot[1] + x6;
+        let x30 = x8 + x29;
+        let x31 = x11 + x30;
+        let x32 = x31 - x12;
+        let x33 = ::eom_sim::Lanes::<W>::splat(19.62) * x1;
+        let x34 = ::eom_sim::Lanes::<W>::splat(19.62) * x0;
+        let x35 = ::eom_sim::Lanes::<W>::splat(9.81) + udot[2];
+        let x36 = x13 + x35;
+        let x37 = x36 - x33;
+        let x38 = x37 - x34;
+        let x39 = x38 - x14;
+        out[0] = x28;
+        out[1] = x32;
+        out[2] = x39;
+        out[3] = x22;
+        out[4] = x19;
+        out[5] = x23;
+    }
+    /// `energy` of `W` states at once, one per lane (18 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = u[3] * u[3];
+        let x1 = u[4] * u[4];
+        let x2 = u[5] * u[5];
+        let x3 = u[0] * u[0];
+        let x4 = u[1] * u[1];
+        let x5 = u[2] * u[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) * x5;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.5) * x3;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.0012500000000000002) * x2;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.5) * x4;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x1;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.0012500000000000002) * x0;
+        let x12 = x7 + x11;
+        let x13 = x9 + x12;
+        let x14 = x8 + x13;
+        let x15 = x10 + x14;
+        let x16 = x6 + x15;
+        let x17 = ::eom_sim::Lanes::<W>::splat(9.81) * q[2];
+        out[0] = x16;
+        out[1] = x17;
+    }
+    /// `momentum` of `W` states at once, one per lane (80 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = q[6] * q[6];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
+        let x5 = ::eom_sim::Lanes::<W>::splat(1.0) - x3;
+        let x6 = x5 - x4;
+        let x7 = q[3] * q[6];
+        let x8 = q[4] * q[5];
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(2.0) * x7;
+        let x11 = x9 - x10;
+        let x12 = q[4] * q[6];
+        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
+        let x14 = q[3] * q[5];
+        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x14;
+        let x16 = x13 + x15;
+        let x17 = x9 + x10;
+        let x18 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x19 = x5 - x18;
+        let x20 = q[3] * q[4];
+        let x21 = q[5] * q[6];
+        let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x20;
+        let x24 = x22 - x23;
+        let x25 = x13 - x15;
+        let x26 = x22 + x23;
+        let x27 = ::eom_sim::Lanes::<W>::splat(1.0) - x4;
+        let x28 = x27 - x18;
+        let x29 = u[0] * x6;
+        let x30 = u[1] * x11;
+        let x31 = u[2] * x16;
+        let x32 = x29 + x30;
+        let x33 = x31 + x32;
+        let x34 = u[0] * x17;
+        let x35 = u[1] * x19;
+        let x36 = u[2] * x24;
+        let x37 = x35 + x36;
+        let x38 = x34 + x37;
+        let x39 = u[0] * x25;
+        let x40 = u[1] * x26;
+        let x41 = u[2] * x28;
+        let x42 = x40 + x41;
+        let x43 = x39 + x42;
+        let x44 = u[3] * x6;
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x44;
+        let x46 = u[4] * x11;
+        let x47 = ::eom_sim::Lanes::<W>::splat(0.005000000000000001) * x46;
+        let x48 = u[5] * x16;
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x48;
+        let x50 = u[3] * x17;
+        let x51 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x50;
+        let x52 = u[4] * x19;
+        let x53 = ::eom_sim::Lanes::<W>::splat(0.005000000000000001) * x52;
+        let x54 = u[5] * x24;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x54;
+        let x56 = u[3] * x25;
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x56;
+        let x58 = u[4] * x26;
+        let x59 = ::eom_sim::Lanes::<W>::splat(0.005000000000000001) * x58;
+        let x60 = u[5] * x28;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x60;
+        let x62 = q[1] * x43;
+        let x63 = q[2] * x38;
+        let x64 = q[2] * x33;
+        let x65 = q[0] * x43;
+        let x66 = q[0] * x38;
+        let x67 = q[1] * x33;
+        let x68 = x45 + x49;
+        let x69 = x62 + x68;
+        let x70 = x47 + x69;
+        let x71 = x70 - x63;
+        let x72 = x51 + x64;
+        let x73 = x55 + x72;
+        let x74 = x53 + x73;
+        let x75 = x74 - x65;
+        let x76 = x59 + x61;
+        let x77 = x57 + x76;
+        let x78 = x66 + x77;
+        let x79 = x78 - x67;
+        out[0] = x71;
+        out[1] = x75;
+        out[2] = x79;
+        out[3] = x33;
+        out[4] = x38;
+        out[5] = x43;
+    }
+    /// `outputs` of `W` states at once, one per lane (0 operations per state): the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame). Arguments `t`, `q`, `u`, `udot` as `outputs`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("outputs")`'s result.
+    pub fn outputs_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        _u: &[::eom_sim::Lanes<W>; 6],
+        _udot: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        out[0] = q[0];
+        out[1] = q[1];
+        out[2] = q[2];
+    }
+    /// `marker_jacobians` of `W` states at once, one per lane (29 operations per state): partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed. Arguments `t`, `q` as `marker_jacobians`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (18 entries per lane) laid out as `Model::evaluate("marker_jacobians")`'s result.
+    pub fn marker_jacobians_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        out: &mut [::eom_sim::Lanes<W>; 18],
+    ) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = q[6] * q[6];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
+        let x5 = ::eom_sim::Lanes::<W>::splat(1.0) - x3;
+        let x6 = x5 - x4;
+        let x7 = q[3] * q[6];
+        let x8 = q[4] * q[5];
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(2.0) * x7;
+        let x11 = x9 - x10;
+        let x12 = q[4] * q[6];
+        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
+        let x14 = q[3] * q[5];
+        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x14;
+        let x16 = x13 + x15;
+        let x17 = x9 + x10;
+        let x18 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x19 = x5 - x18;
+        let x20 = q[3] * q[4];
+        let x21 = q[5] * q[6];
+        let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x20;
+        let x24 = x22 - x23;
+        let x25 = x13 - x15;
+        let x26 = x22 + x23;
+        let x27 = ::eom_sim::Lanes::<W>::splat(1.0) - x4;
+        let x28 = x27 - x18;
+        out[0] = x6;
+        out[1] = x11;
+        out[2] = x16;
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[6] = x17;
+        out[7] = x19;
+        out[8] = x24;
+        out[9] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[12] = x25;
+        out[13] = x26;
+        out[14] = x28;
+        out[15] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[16] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[17] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `constraints` of `W` states at once, one per lane (389 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (27 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    pub fn constraints_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 7],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 27],
+    ) {
+        let x0 = q[4] * q[4];
+        let x1 = q[5] * q[5];
+        let x2 = q[6] * q[6];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
+        let x5 = ::eom_sim::Lanes::<W>::splat(1.0) - x3;
+        let x6 = x5 - x4;
+        let x7 = q[3] * q[6];
+        let x8 = q[4] * q[5];
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(2.0) * x7;
+        let x11 = x9 - x10;
+        let x12 = q[4] * q[6];
+        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
+        let x14 = q[3] * q[5];
+        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x14;
+        let x16 = x13 + x15;
+        let x17 = x9 + x10;
+        let x18 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x19 = x5 - x18;
+        let x20 = q[3] * q[4];
+        let x21 = q[5] * q[6];
+        let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x20;
+        let x24 = x22 - x23;
+        let x25 = x13 - x15;
+        let x26 = x22 + x23;
+        let x27 = ::eom_sim::Lanes::<W>::splat(1.0) - x4;
+        let x28 = x27 - x18;
+        let x29 = u[0] * x6;
+        let x30 = u[1] * x11;
+        let x31 = u[2] * x16;
+        let x32 = u[0] * x17;
+        let x33 = u[1] * x19;
+        let x34 = u[2] * x24;
+        let x35 = u[0] * x25;
+        let x36 = u[1] * x26;
+        let x37 = u[2] * x28;
+        let x38 = q[4] * u[3];
+        let x39 = q[6] * u[5];
+        let x40 = q[5] * u[4];
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.5) * x40;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.5) * x38;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.5) * x39;
+        let x44 = x41 + x42;
+        let x45 = x43 + x44;
+        let x46 = -x45;
+        let x47 = q[6] * u[4];
+        let x48 = q[3] * u[3];
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.5) * x48;
+        let x50 = q[5] * u[5];
+        let x51 = ::eom_sim::Lanes::<W>::splat(0.5) * x50;
+        let x52 = ::eom_sim::Lanes::<W>::splat(0.5) * x47;
+        let x53 = x49 + x51;
+        let x54 = x53 - x52;
+        let x55 = q[3] * u[4];
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.5) * x55;
+        let x57 = q[6] * u[3];
+        let x58 = ::eom_sim::Lanes::<W>::splat(0.5) * x57;
+        let x59 = q[4] * u[5];
+        let x60 = ::eom_sim::Lanes::<W>::splat(0.5) * x59;
+        let x61 = x56 + x58;
+        let x62 = x61 - x60;
+        let x63 = q[3] * u[5];
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.5) * x63;
+        let x65 = q[4] * u[4];
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.5) * x65;
+        let x67 = q[5] * u[3];
+        let x68 = ::eom_sim::Lanes::<W>::splat(0.5) * x67;
+        let x69 = x64 + x66;
+        let x70 = x69 - x68;
+        let x71 = x26 * x26;
+        let x72 = ::eom_sim::Lanes::<W>::splat(1.0) - x71;
+        let x73 = x72.sqrt();
+        let x74 = -x26;
+        let x75 = u[3] * x6;
+        let x76 = u[4] * x11;
+        let x77 = u[5] * x16;
+        let x78 = x75 + x76;
+        let x79 = x77 + x78;
+        let x80 = u[3] * x17;
+        let x81 = u[4] * x19;
+        let x82 = u[5] * x24;
+        let x83 = x81 + x82;
+        let x84 = x80 + x83;
+        let x85 = u[3] * x25;
+        let x86 = u[4] * x26;
+        let x87 = u[5] * x28;
+        let x88 = x85 + x87;
+        let x89 = x86 + x88;
+        let x90 = x72 * x84;
+        let x91 = ::eom_sim::Lanes::<W>::splat(1.0) / x73;
+        let x92 = x90 * x91;
+        let x93 = x19 * x89;
+        let x94 = x74 * x93;
+        let x95 = x94 * x91;
+        let x96 = ::eom_sim::Lanes::<W>::splat(0.1) * x95;
+        let x97 = x11 * x89;
+        let x98 = x74 * x97;
+        let x99 = x98 * x91;
+        let x100 = x72 * x79;
+        let x101 = x100 * x91;
+        let x102 = ::eom_sim::Lanes::<W>::splat(0.1) * x101;
+        let x103 = ::eom_sim::Lanes::<W>::splat(0.1) * x92;
+        let x104 = x29 + x30;
+        let x105 = x31 + x104;
+        let x106 = x96 + x105;
+        let x107 = x106 - x103;
+        let x108 = ::eom_sim::Lanes::<W>::splat(0.1) * x99;
+        let x109 = x34 + x102;
+        let x110 = x33 + x109;
+        let x111 = x32 + x110;
+        let x112 = x111 - x108;
+        let x113 = ::eom_sim::Lanes::<W>::splat(0.1) * x73;
+        let x114 = q[2] - x113;
+        let x115 = q[5] * x70;
+        let x116 = ::eom_sim::Lanes::<W>::splat(2.0) * x115;
+        let x117 = q[6] * x62;
+        let x118 = ::eom_sim::Lanes::<W>::splat(2.0) * x117;
+        let x119 = q[3] * x54;
+        let x120 = ::eom_sim::Lanes::<W>::splat(2.0) * x119;
+        let x121 = q[4] * x46;
+        let x122 = ::eom_sim::Lanes::<W>::splat(2.0) * x121;
+        let x123 = x118 + x122;
+        let x124 = x120 + x123;
+        let x125 = x116 + x124;
+        let x126 = x26 * x125;
+        let x127 = x126 * x91;
+        let x128 = ::eom_sim::Lanes::<W>::splat(0.1) * x127;
+        let x129 = x36 + x128;
+        let x130 = x37 + x129;
+        let x131 = x35 + x130;
+        let x132 = q[5] * x62;
+        let x133 = q[4] * x70;
+        let x134 = ::eom_sim::Lanes::<W>::splat(2.0) * x133;
+        let x135 = q[6] * x54;
+        let x136 = ::eom_sim::Lanes::<W>::splat(2.0) * x135;
+        let x137 = q[4] * x54;
+        let x138 = q[3] * x62;
+        let x139 = q[5] * x46;
+        let x140 = ::eom_sim::Lanes::<W>::splat(2.0) * x139;
+        let x141 = ::eom_sim::Lanes::<W>::splat(2.0) * x138;
+        let x142 = x134 + x136;
+        let x143 = x142 - x140;
+        let x144 = x143 - x141;
+        let x145 = ::eom_sim::Lanes::<W>::splat(4.0) * x132;
+        let x146 = ::eom_sim::Lanes::<W>::splat(4.0) * x137;
+        let x147 = x145 + x146;
+        let x148 = -x147;
+        let x149 = u[3] * x54;
+        let x150 = u[5] * x70;
+        let x151 = u[4] * x62;
+        let x152 = ::eom_sim::Lanes::<W>::splat(0.5) * x150;
+        let x153 = ::eom_sim::Lanes::<W>::splat(0.5) * x149;
+        let x154 = ::eom_sim::Lanes::<W>::splat(0.5) * x151;
+        let x155 = x152 + x153;
+        let x156 = x154 + x155;
+        let x157 = -x156;
+        let x158 = u[4] * x70;
+        let x159 = u[3] * x46;
+        let x160 = ::eom_sim::Lanes::<W>::splat(0.5) * x159;
+        let x161 = u[5] * x62;
+        let x162 = ::eom_sim::Lanes::<W>::splat(0.5) * x161;
+        let x163 = ::eom_sim::Lanes::<W>::splat(0.5) * x158;
+        let x164 = x160 + x162;
+        let x165 = x164 - x163;
+        let x166 = u[4] * x46;
+        let x167 = ::eom_sim::Lanes::<W>::splat(0.5) * x166;
+        let x168 = u[3] * x70;
+        let x169 = ::eom_sim::Lanes::<W>::splat(0.5) * x168;
+        let x170 = u[5] * x54;
+        let x171 = ::eom_sim::Lanes::<W>::splat(0.5) * x170;
+        let x172 = x167 + x169;
+        let x173 = x172 - x171;
+        let x174 = u[5] * x46;
+        let x175 = ::eom_sim::Lanes::<W>::splat(0.5) * x174;
+        let x176 = u[4] * x54;
+        let x177 = ::eom_sim::Lanes::<W>::splat(0.5) * x176;
+        let x178 = u[3] * x62;
+        let x179 = ::eom_sim::Lanes::<W>::splat(0.5) * x178;
+        let x180 = x175 + x177;
+        let x181 = x180 - x179;
+        let x182 = q[5] * x181;
+        let x183 = ::eom_sim::Lanes::<W>::splat(2.0) * x182;
+        let x184 = q[6] * x173;
+        let x185 = ::eom_sim::Lanes::<W>::splat(2.0) * x184;
+        let x186 = q[3] * x165;
+        let x187 = ::eom_sim::Lanes::<W>::splat(2.0) * x186;
+        let x188 = q[4] * x157;
+        let x189 = ::eom_sim::Lanes::<W>::splat(2.0) * x188;
+        let x190 = x46 * x54;
+        let x191 = ::eom_sim::Lanes::<W>::splat(4.0) * x190;
+        let x192 = x62 * x70;
+        let x193 = ::eom_sim::Lanes::<W>::splat(4.0) * x192;
+        let x194 = x185 + x187;
+        let x195 = x189 + x194;
+        let x196 = x193 + x195;
+        let x197 = x191 + x196;
+        let x198 = x183 + x197;
+        let x199 = x125 * x125;
+        let x200 = u[0] * x144;
+        let x201 = u[1] * x125;
+        let x202 = x72 * x73;
+        let x203 = x71 * x199;
+        let x204 = ::eom_sim::Lanes::<W>::splat(1.0) / x202;
+        let x205 = x203 * x204;
+        let x206 = u[2] * x148;
+        let x207 = x199 * x91;
+        let x208 = x26 * x198;
+        let x209 = x208 * x91;
+        let x210 = ::eom_sim::Lanes::<W>::splat(0.1) * x209;
+        let x211 = ::eom_sim::Lanes::<W>::splat(0.1) * x207;
+        let x212 = ::eom_sim::Lanes::<W>::splat(0.1) * x205;
+        let x213 = x200 + x206;
+        let x214 = x210 + x213;
+        let x215 = x211 + x214;
+        let x216 = x201 + x215;
+        let x217 = x212 + x216;
+        let x218 = -x217;
+        let x219 = q[6] * x70;
+        let x220 = ::eom_sim::Lanes::<W>::splat(4.0) * x219;
+        let x221 = x145 + x220;
+        let x222 = -x221;
+        let x223 = q[3] * x70;
+        let x224 = q[6] * x46;
+        let x225 = q[5] * x54;
+        let x226 = ::eom_sim::Lanes::<W>::splat(2.0) * x225;
+        let x227 = q[4] * x62;
+        let x228 = ::eom_sim::Lanes::<W>::splat(2.0) * x227;
+        let x229 = ::eom_sim::Lanes::<W>::splat(2.0) * x223;
+        let x230 = ::eom_sim::Lanes::<W>::splat(2.0) * x224;
+        let x231 = x226 + x228;
+        let x232 = x231 - x229;
+        let x233 = x232 - x230;
+        let x234 = x140 + x141;
+        let x235 = x134 + x234;
+        let x236 = x136 + x235;
+        let x237 = x228 + x229;
+        let x238 = x230 + x237;
+        let x239 = x226 + x238;
+        let x240 = x146 + x220;
+        let x241 = -x240;
+        let x242 = x116 + x118;
+        let x243 = x242 - x120;
+        let x244 = x243 - x122;
+        let x245 = u[0] * x222;
+        let x246 = u[1] * x233;
+        let x247 = u[2] * x236;
+        let x248 = x118 + x120;
+        let x249 = x116 + x248;
+        let x250 = x122 + x249;
+        let x251 = -x250;
+        let x252 = u[3] * x239;
+        let x253 = u[4] * x241;
+        let x254 = u[5] * x244;
+        let x255 = x252 + x253;
+        let x256 = x254 + x255;
+        let x257 = u[3] * x144;
+        let x258 = u[4] * x125;
+        let x259 = u[5] * x148;
+        let x260 = x257 + x258;
+        let x261 = x259 + x260;
+        let x262 = x72 * x256;
+        let x263 = x262 * x91;
+        let x264 = x84 * x126;
+        let x265 = x264 * x91;
+        let x266 = ::eom_sim::Lanes::<W>::splat(0.1) * x265;
+        let x267 = x19 * x74;
+        let x268 = x261 * x267;
+        let x269 = x268 * x91;
+        let x270 = ::eom_sim::Lanes::<W>::splat(0.1) * x269;
+        let x271 = x89 * x241;
+        let x272 = x74 * x271;
+        let x273 = x272 * x91;
+        let x274 = ::eom_sim::Lanes::<W>::splat(0.1) * x273;
+        let x275 = x89 * x125;
+        let x276 = x19 * x275;
+        let x277 = x26 * x276;
+        let x278 = x74 * x277;
+        let x279 = x278 * x204;
+        let x280 = ::eom_sim::Lanes::<W>::splat(0.1) * x279;
+        let x281 = x93 * x251;
+        let x282 = x281 * x91;
+        let x283 = ::eom_sim::Lanes::<W>::splat(0.1) * x282;
+        let x284 = ::eom_sim::Lanes::<W>::splat(0.1) * x263;
+        let x285 = x246 + x280;
+        let x286 = x266 + x285;
+        let x287 = x283 + x286;
+        let x288 = x245 + x287;
+        let x289 = x270 + x288;
+        let x290 = x274 + x289;
+        let x291 = x247 + x290;
+        let x292 = x291 - x284;
+        let x293 = -x292;
+        let x294 = u[0] * x239;
+        let x295 = u[1] * x241;
+        let x296 = u[2] * x244;
+        let x297 = u[3] * x222;
+        let x298 = u[4] * x233;
+        let x299 = u[5] * x236;
+        let x300 = x297 + x299;
+        let x301 = x298 + x300;
+        let x302 = x11 * x74;
+        let x303 = x261 * x302;
+        let x304 = x303 * x91;
+        let x305 = x26 * x275;
+        let x306 = x11 * x305;
+        let x307 = x74 * x306;
+        let x308 = x307 * x204;
+        let x309 = x89 * x233;
+        let x310 = x74 * x309;
+        let x311 = x310 * x91;
+        let x312 = x89 * x251;
+        let x313 = x11 * x312;
+        let x314 = x313 * x91;
+        let x315 = x72 * x301;
+        let x316 = x315 * x91;
+        let x317 = ::eom_sim::Lanes::<W>::splat(0.1) * x316;
+        let x318 = x79 * x126;
+        let x319 = x318 * x91;
+        let x320 = ::eom_sim::Lanes::<W>::splat(0.1) * x314;
+        let x321 = ::eom_sim::Lanes::<W>::splat(0.1) * x311;
+        let x322 = ::eom_sim::Lanes::<W>::splat(0.1) * x304;
+        let x323 = ::eom_sim::Lanes::<W>::splat(0.1) * x319;
+        let x324 = ::eom_sim::Lanes::<W>::splat(0.1) * x308;
+        let x325 = x295 + x317;
+        let x326 = x294 + x325;
+        let x327 = x296 + x326;
+        let x328 = x327 - x320;
+        let x329 = x328 - x321;
+        let x330 = x329 - x322;
+        let x331 = x330 - x323;
+        let x332 = x331 - x324;
+        let x333 = -x332;
+        let x334 = q[3] * q[3];
+        let x335 = x2 + x334;
+        let x336 = x335 - x0;
+        let x337 = x336 - x1;
+        let x338 = x26 * x337;
+        let x339 = x338 * x91;
+        let x340 = ::eom_sim::Lanes::<W>::splat(0.1) * x339;
+        let x341 = x15 - x13;
+        let x342 = x26 * x341;
+        let x343 = x342 * x91;
+        let x344 = ::eom_sim::Lanes::<W>::splat(0.1) * x343;
+        let x345 = x17 * x72;
+        let x346 = x345 * x91;
+        let x347 = x25 * x267;
+        let x348 = x347 * x91;
+        let x349 = ::eom_sim::Lanes::<W>::splat(0.1) * x348;
+        let x350 = ::eom_sim::Lanes::<W>::splat(0.1) * x346;
+        let x351 = x349 - x350;
+        let x352 = x19 * x72;
+        let x353 = x352 * x91;
+        let x354 = x19 * x26;
+        let x355 = x74 * x354;
+        let x356 = x355 * x91;
+        let x357 = ::eom_sim::Lanes::<W>::splat(0.1) * x356;
+        let x358 = ::eom_sim::Lanes::<W>::splat(0.1) * x353;
+        let x359 = x357 - x358;
+        let x360 = x24 * x72;
+        let x361 = x360 * x91;
+        let x362 = x28 * x267;
+        let x363 = x362 * x91;
+        let x364 = ::eom_sim::Lanes::<W>::splat(0.1) * x363;
+        let x365 = ::eom_sim::Lanes::<W>::splat(0.1) * x361;
+        let x366 = x364 - x365;
+        let x367 = x25 * x302;
+        let x368 = x367 * x91;
+        let x369 = x6 * x72;
+        let x370 = x369 * x91;
+        let x371 = ::eom_sim::Lanes::<W>::splat(0.1) * x370;
+        let x372 = ::eom_sim::Lanes::<W>::splat(0.1) * x368;
+        let x373 = x371 - x372;
+        let x374 = x11 * x26;
+        let x375 = x74 * x374;
+        let x376 = x375 * x91;
+        let x377 = x11 * x72;
+        let x378 = x377 * x91;
+        let x379 = ::eom_sim::Lanes::<W>::splat(0.1) * x378;
+        let x380 = ::eom_sim::Lanes::<W>::splat(0.1) * x376;
+        let x381 = x379 - x380;
+        let x382 = x28 * x302;
+        let x383 = x382 * x91;
+        let x384 = x16 * x72;
+        let x385 = x384 * x91;
+        let x386 = ::eom_sim::Lanes::<W>::splat(0.1) * x385;
+        let x387 = ::eom_sim::Lanes::<W>::splat(0.1) * x383;
+        let x388 = x386 - x387;
+        out[0] = x114;
+        out[3] = x131;
+        out[6] = x218;
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = x107;
+        out[7] = x293;
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = x112;
+        out[8] = x333;
+        out[9] = x25;
+        out[10] = x26;
+        out[11] = x28;
+        out[12] = x340;
+        out[13] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[14] = x344;
+        out[15] = x6;
+        out[16] = x11;
+        out[17] = x16;
+        out[18] = x351;
+        out[19] = x359;
+        out[20] = x366;
+        out[21] = x17;
+        out[22] = x19;
+        out[23] = x24;
+        out[24] = x373;
+        out[25] = x381;
+        out[26] = x388;
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `outputs`, `marker_jacobians`, `constraints`.
+impl ::eom_sim::Batched for RollingDisk {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 7]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 36]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "outputs" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::outputs_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "marker_jacobians" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 18]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::marker_jacobians_lanes(this, t, &q, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<7, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 27]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::constraints_lanes(this, t, &q, &u, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `rolling_disk` (13 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<13> for RollingDisk {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 13],
+        dy: &mut [::eom_sim::Lanes<W>; 13],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 7] = [y[0], y[1], y[2], y[3], y[4], y[5], y[6]];
+        let u: [::eom_sim::Lanes<W>; 6] = [y[7], y[8], y[9], y[10], y[11], y[12]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 7];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 6];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 6],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = qdot[3];
+        dy[4] = qdot[4];
+        dy[5] = qdot[5];
+        dy[6] = qdot[6];
+        dy[7] = udot[0];
+        dy[8] = udot[1];
+        dy[9] = udot[2];
+        dy[10] = udot[3];
+        dy[11] = udot[4];
+        dy[12] = udot[5];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        y: &mut [::eom_sim::Lanes<W>; 13],
+    ) -> bool {
+        for l in 0..W {
+            let n = f64::sqrt(
+                y[3].0[l] * y[3].0[l] + y[4].0[l] * y[4].0[l] + y[5].0[l] * y[5].0[l]
+                    + y[6].0[l] * y[6].0[l],
+            );
+            if n > 0.0 && n.is_finite() {
+                y[3].0[l] /= n;
+                y[4].0[l] /= n;
+                y[5].0[l] /= n;
+                y[6].0[l] /= n;
+            }
+        }
+        true
+    }
+}
 /// The first-order system `y = (q, u)` of `rolling_disk` (13 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<13> for RollingDisk {
     fn rhs(&self, t: f64, y: &[f64; 13], dy: &mut [f64; 13]) {

@@ -743,6 +743,693 @@ impl SliderCrank {
         out[5] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl SliderCrank {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+        out[2] = u[2];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (75 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        tau: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = u[0] + u[1];
+        let x5 = x2 * x2;
+        let x6 = x3 * x3;
+        let x7 = ::eom_sim::Lanes::<W>::splat(9.81) * x1;
+        let x8 = u[0] * u[0];
+        let x9 = u[0] * u[1];
+        let x10 = x3 * x9;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.05) * x10;
+        let x12 = u[0] * x3;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.05) * x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.075) * u[1];
+        let x16 = x13 + x15;
+        let x17 = x14 + x16;
+        let x18 = x4 * x17;
+        let x19 = u[0] * x4;
+        let x20 = x2 * x19;
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.05) * x20;
+        let x22 = ::eom_sim::Lanes::<W>::splat(3.3333333333333335) * tau[2];
+        let x23 = u[0] * x2;
+        let x24 = u[1] * x23;
+        let x25 = x11 - x18;
+        let x26 = ::eom_sim::Lanes::<W>::splat(66.66666666666667) * tau[1];
+        let x27 = x2 * x8;
+        let x28 = x3 * x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.3333333333333334) * x28;
+        let x30 = x17 * x23;
+        let x31 = ::eom_sim::Lanes::<W>::splat(5.0) * tau[1];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.025000000000000005) * x28;
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.0125) * x24;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.5000000000000001) * x30;
+        let x35 = x21 + x32;
+        let x36 = x31 + x35;
+        let x37 = x36 - x33;
+        let x38 = x37 - x34;
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.05) * x5;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.0125) * x6;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.005000000000000001) * x5;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.0012500000000000002) * x6;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.0003999999999999983) + x42;
+        let x44 = x41 + x43;
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.006) + x40;
+        let x46 = x39 + x45;
+        let x47 = x2 * x25;
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.000000000000000013877787807814457)
+            * x30;
+        let x49 = x3 * x38;
+        let x50 = x1 * x46;
+        let x51 = x0 * x2;
+        let x52 = x3 * x51;
+        let x53 = ::eom_sim::Lanes::<W>::splat(0.36787500000000006) * x52;
+        let x54 = ::eom_sim::Lanes::<W>::splat(9.81) * x50;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.1) * x49;
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.1) * x47;
+        let x57 = tau[0] + x48;
+        let x58 = x57 - x53;
+        let x59 = x58 - tau[1];
+        let x60 = x59 - x54;
+        let x61 = x60 - x55;
+        let x62 = x61 - x56;
+        let x63 = x62 / x44;
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.1) * x63;
+        let x65 = x7 + x64;
+        let x66 = ::eom_sim::Lanes::<W>::splat(0.5) * x24;
+        let x67 = ::eom_sim::Lanes::<W>::splat(49.050000000000004) * x51;
+        let x68 = x3 * x65;
+        let x69 = ::eom_sim::Lanes::<W>::splat(6.666666666666668) * x30;
+        let x70 = ::eom_sim::Lanes::<W>::splat(5.0) * x68;
+        let x71 = x26 + x67;
+        let x72 = x29 + x71;
+        let x73 = x66 + x72;
+        let x74 = x73 - x63;
+        let x75 = x74 - x69;
+        let x76 = x75 - x70;
+        out[0] = x63;
+        out[1] = x76;
+        out[2] = x22;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (5 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 9],
+    ) {
+        let x0 = q[1].cos();
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.015) * x0;
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.0075) * x0;
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.0204) + x1;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.015) + x2;
+        out[0] = x3;
+        out[3] = x4;
+        out[1] = out[3];
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.015);
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[6];
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = out[7];
+        out[8] = ::eom_sim::Lanes::<W>::splat(0.3);
+    }
+    /// `bias` of `W` states at once, one per lane (48 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let x0 = q[0].cos();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = u[0] + u[1];
+        let x4 = q[0] + q[1];
+        let (x5, x6) = x4.sin_cos();
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.05886) * x0;
+        let x8 = u[0] * u[0];
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.73575) * x6;
+        let x10 = u[0] * x1;
+        let x11 = u[1] * x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(4.905) * x5;
+        let x13 = u[0] * u[1];
+        let x14 = x2 * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.05) * x14;
+        let x16 = ::eom_sim::Lanes::<W>::splat(4.905) * x6;
+        let x17 = u[0] * x2;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.05) * x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.075) * u[1];
+        let x21 = x18 + x20;
+        let x22 = x19 + x21;
+        let x23 = x10 * x22;
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.1) * x23;
+        let x25 = x1 * x8;
+        let x26 = x2 * x25;
+        let x27 = x3 * x22;
+        let x28 = u[0] * x3;
+        let x29 = x1 * x28;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.05) * x29;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.005000000000000001) * x26;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.0075) * x11;
+        let x33 = x9 + x24;
+        let x34 = x33 - x31;
+        let x35 = x34 - x32;
+        let x36 = x12 + x15;
+        let x37 = x36 - x27;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.05) * x11;
+        let x39 = x16 + x30;
+        let x40 = x39 - x38;
+        let x41 = x1 * x37;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.1) * x41;
+        let x43 = x2 * x40;
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.1) * x43;
+        let x45 = x33 + x44;
+        let x46 = x7 + x45;
+        let x47 = x42 + x46;
+        let x48 = x47 - x31;
+        let x49 = x48 - x32;
+        out[0] = x49;
+        out[1] = x35;
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (72 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        udot: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = u[0] + u[1];
+        let x5 = ::eom_sim::Lanes::<W>::splat(9.81) * x1;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.05886) * x1;
+        let x7 = u[0] * u[0];
+        let x8 = u[0] * x2;
+        let x9 = u[1] * x8;
+        let x10 = u[0] * u[1];
+        let x11 = x3 * x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.05) * x11;
+        let x13 = u[0] * x3;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.05) * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.075) * u[1];
+        let x17 = x14 + x16;
+        let x18 = x15 + x17;
+        let x19 = x8 * x18;
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.1) * x19;
+        let x21 = x2 * x7;
+        let x22 = x3 * x21;
+        let x23 = x4 * x18;
+        let x24 = u[0] * x4;
+        let x25 = x2 * x24;
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.05) * x25;
+        let x27 = x0 * x2;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.0004) * udot[0];
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.1) * udot[0];
+        let x30 = x5 + x29;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.015) * udot[0];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.015) * udot[1];
+        let x33 = x3 * x30;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.075) * x33;
+        let x35 = x0 * x3;
+        let x36 = ::eom_sim::Lanes::<W>::splat(4.905) * x35;
+        let x37 = x2 * x30;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.5) * x37;
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.5) * x33;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.075) * udot[0];
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.075) * udot[1];
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.005000000000000001) * x22;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.73575) * x27;
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.0075) * x9;
+        let x45 = x20 + x32;
+        let x46 = x34 + x45;
+        let x47 = x31 + x46;
+        let x48 = x47 - x42;
+        let x49 = x48 - x43;
+        let x50 = x49 - x44;
+        let x51 = x36 + x38;
+        let x52 = x12 + x51;
+        let x53 = x52 - x23;
+        let x54 = ::eom_sim::Lanes::<W>::splat(4.905) * x27;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.05) * x9;
+        let x56 = x26 + x41;
+        let x57 = x40 + x56;
+        let x58 = x39 + x57;
+        let x59 = x58 - x54;
+        let x60 = x59 - x55;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.3) * udot[2];
+        let x62 = x2 * x53;
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.1) * x62;
+        let x64 = x3 * x60;
+        let x65 = ::eom_sim::Lanes::<W>::splat(0.1) * x64;
+        let x66 = x46 + x63;
+        let x67 = x31 + x66;
+        let x68 = x65 + x67;
+        let x69 = x68 - x42;
+        let x70 = x69 - x43;
+        let x71 = x70 - x44;
+        let x72 = x6 + x71;
+        let x73 = x28 + x72;
+        out[0] = x73;
+        out[1] = x50;
+        out[2] = x61;
+    }
+    /// `energy` of `W` states at once, one per lane (34 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = q[0].sin();
+        let (x1, x2) = q[1].sin_cos();
+        let x3 = u[0] + u[1];
+        let x4 = q[0] + q[1];
+        let x5 = x4.sin();
+        let x6 = x1 * x1;
+        let x7 = u[0] * u[0];
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.015) * u[0];
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.015) * u[1];
+        let x10 = u[0] * x2;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.0075) * x10;
+        let x12 = x9 + x11;
+        let x13 = x8 + x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.05) * x10;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.075) * u[1];
+        let x17 = x14 + x16;
+        let x18 = x15 + x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.0002) * x7;
+        let x20 = x3 * x13;
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.5) * x20;
+        let x22 = x10 * x18;
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.05) * x22;
+        let x24 = x6 * x7;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.0025000000000000005) * x24;
+        let x26 = u[2] * u[2];
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.15) * x26;
+        let x28 = x19 + x21;
+        let x29 = x23 + x28;
+        let x30 = x25 + x29;
+        let x31 = x27 + x30;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.73575) * x5;
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.5493600000000001) * x0;
+        let x34 = x32 + x33;
+        out[0] = x31;
+        out[1] = x34;
+    }
+    /// `momentum` of `W` states at once, one per lane (41 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let (x2, x3) = q[1].sin_cos();
+        let x4 = q[0] + q[1];
+        let (x5, x6) = x4.sin_cos();
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.015) * u[1];
+        let x8 = u[0] * x3;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.0075) * x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.05) * x8;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.075) * u[1];
+        let x13 = x10 + x12;
+        let x14 = x11 + x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.3) * u[2];
+        let x16 = u[0] * x0;
+        let x17 = u[0] * x1;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.006) * x17;
+        let x19 = u[0] * x6;
+        let x20 = x2 * x19;
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.05) * x20;
+        let x22 = x5 * x14;
+        let x23 = x21 - x22;
+        let x24 = u[0] * x5;
+        let x25 = x2 * x24;
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.05) * x25;
+        let x27 = x6 * x14;
+        let x28 = x26 + x27;
+        let x29 = x1 * x28;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.1) * x29;
+        let x31 = x0 * x23;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.015399999999999999) * u[0];
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.1) * x31;
+        let x34 = x9 + x30;
+        let x35 = x7 + x34;
+        let x36 = x32 + x35;
+        let x37 = x36 - x33;
+        let x38 = x18 + x26;
+        let x39 = x27 + x38;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.006) * x16;
+        let x41 = x15 + x21;
+        let x42 = x41 - x22;
+        let x43 = x42 - x40;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x37;
+        out[3] = x43;
+        out[4] = x39;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `constraints` of `W` states at once, one per lane (104 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (12 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    pub fn constraints_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 3],
+        u: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 12],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = u[0] + u[1];
+        let x3 = q[0] + q[1];
+        let (x4, x5) = x3.sin_cos();
+        let x6 = -x4;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.1) * x0;
+        let x8 = u[0] * u[0];
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.3) * x4;
+        let x10 = x7 + x9;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.3) * x5;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.1) * x1;
+        let x13 = x11 + x12;
+        let x14 = -x13;
+        let x15 = q[2] - x11;
+        let x16 = x15 - x12;
+        let x17 = -x10;
+        let x18 = x5 * x16;
+        let x19 = x4 * x17;
+        let x20 = x18 + x19;
+        let x21 = x4 * x16;
+        let x22 = x5 * x17;
+        let x23 = x22 - x21;
+        let x24 = u[0] * x0;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.1) * x24;
+        let x26 = x2 * x4;
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.3) * x26;
+        let x28 = u[2] + x25;
+        let x29 = x27 + x28;
+        let x30 = x2 * x5;
+        let x31 = u[0] * x1;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.1) * x31;
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.3) * x30;
+        let x34 = x32 + x33;
+        let x35 = -x34;
+        let x36 = x2 * x16;
+        let x37 = x4 * x36;
+        let x38 = x5 * x29;
+        let x39 = x4 * x35;
+        let x40 = x2 * x17;
+        let x41 = x5 * x40;
+        let x42 = x38 + x41;
+        let x43 = x39 + x42;
+        let x44 = x43 - x37;
+        let x45 = x1 * x8;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.1) * x45;
+        let x47 = x2 * x2;
+        let x48 = x5 * x47;
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.3) * x48;
+        let x50 = x46 + x49;
+        let x51 = x4 * x47;
+        let x52 = ::eom_sim::Lanes::<W>::splat(0.3) * x51;
+        let x53 = x0 * x8;
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.1) * x53;
+        let x55 = x52 + x54;
+        let x56 = x17 * x47;
+        let x57 = x4 * x56;
+        let x58 = x16 * x48;
+        let x59 = x2 * x35;
+        let x60 = x5 * x59;
+        let x61 = x5 * x50;
+        let x62 = x4 * x55;
+        let x63 = x2 * x29;
+        let x64 = x4 * x63;
+        let x65 = ::eom_sim::Lanes::<W>::splat(2.0) * x64;
+        let x66 = ::eom_sim::Lanes::<W>::splat(2.0) * x60;
+        let x67 = x57 + x65;
+        let x68 = x58 + x67;
+        let x69 = x68 - x66;
+        let x70 = x69 - x62;
+        let x71 = x70 - x61;
+        let x72 = x4 * x29;
+        let x73 = x16 * x30;
+        let x74 = x5 * x35;
+        let x75 = x4 * x40;
+        let x76 = x74 - x73;
+        let x77 = x76 - x75;
+        let x78 = x77 - x72;
+        let x79 = x5 * x55;
+        let x80 = x4 * x50;
+        let x81 = x5 * x63;
+        let x82 = ::eom_sim::Lanes::<W>::splat(2.0) * x81;
+        let x83 = x16 * x47;
+        let x84 = x4 * x83;
+        let x85 = x5 * x56;
+        let x86 = x4 * x59;
+        let x87 = ::eom_sim::Lanes::<W>::splat(2.0) * x86;
+        let x88 = x82 + x85;
+        let x89 = x87 + x88;
+        let x90 = x80 + x89;
+        let x91 = x90 - x84;
+        let x92 = x91 - x79;
+        let x93 = x5 * x10;
+        let x94 = x4 * x14;
+        let x95 = x93 + x94;
+        let x96 = x22 + x95;
+        let x97 = x96 - x21;
+        let x98 = x4 * x10;
+        let x99 = x5 * x14;
+        let x100 = x99 - x19;
+        let x101 = x100 - x18;
+        let x102 = x101 - x98;
+        let x103 = ::eom_sim::Lanes::<W>::splat(0.3) + x19;
+        let x104 = x18 + x103;
+        let x105 = -x104;
+        out[0] = x20;
+        out[2] = x44;
+        out[4] = x71;
+        out[1] = x23;
+        out[3] = x78;
+        out[5] = x92;
+        out[6] = x97;
+        out[7] = x23;
+        out[8] = x5;
+        out[9] = x102;
+        out[10] = x105;
+        out[11] = x6;
+    }
+    /// `cut_joint_reactions` of `W` states at once, one per lane (0 operations per state): force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint. Arguments `t`, `q` as `cut_joint_reactions`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("cut_joint_reactions")`'s result.
+    pub fn cut_joint_reactions_lanes<const W: usize>(
+        m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 3],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[0]);
+        out[1] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[1]);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `constraints`, `cut_joint_reactions`.
+impl ::eom_sim::Batched for SliderCrank {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 9]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    3,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 12]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::constraints_lanes(this, t, &q, &u, out);
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<3, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::cut_joint_reactions_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `slider_crank` (6 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<6> for SliderCrank {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 6],
+        dy: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 3] = [y[0], y[1], y[2]];
+        let u: [::eom_sim::Lanes<W>; 3] = [y[3], y[4], y[5]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 3];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 3];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 3],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = udot[0];
+        dy[4] = udot[1];
+        dy[5] = udot[2];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 6],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `slider_crank` (6 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<6> for SliderCrank {
     fn rhs(&self, t: f64, y: &[f64; 6], dy: &mut [f64; 6]) {

@@ -571,6 +571,518 @@ impl SliderCrankDriven {
         out[5] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl SliderCrankDriven {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (22 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        tau: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::TAU) * t;
+        let (x1, x2) = q[0].sin_cos();
+        let x3 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::FRAC_PI_2) + x0;
+        let x4 = q[0] + x3;
+        let x5 = x4.cos();
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.3141592653589793) * x2;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.47123889803846897) + x6;
+        let x9 = x7 + x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(3.3333333333333335) * tau[1];
+        let x11 = x1 * x2;
+        let x12 = ::eom_sim::Lanes::<W>::splat(13.159472534785811) * x11;
+        let x13 = x1 * x9;
+        let x14 = ::eom_sim::Lanes::<W>::splat(66.66666666666667) * tau[0];
+        let x15 = u[0] * x1;
+        let x16 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::PI) * x15;
+        let x17 = ::eom_sim::Lanes::<W>::splat(41.88790204786391) * x13;
+        let x18 = ::eom_sim::Lanes::<W>::splat(49.050000000000004) * x5;
+        let x19 = x14 + x16;
+        let x20 = x12 + x19;
+        let x21 = x20 - x17;
+        let x22 = x21 - x18;
+        out[0] = x22;
+        out[1] = x10;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (4 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 4],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.015);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = out[2];
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.3);
+    }
+    /// `bias` of `W` states at once, one per lane (19 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::TAU) * t;
+        let (x1, x2) = q[0].sin_cos();
+        let x3 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::FRAC_PI_2) + x0;
+        let x4 = q[0] + x3;
+        let x5 = x4.cos();
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.73575) * x5;
+        let x7 = u[0] * x1;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.3141592653589793) * x2;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.47123889803846897) + x8;
+        let x11 = x9 + x10;
+        let x12 = x1 * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.6283185307179586) * x12;
+        let x14 = x1 * x2;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.19739208802178715) * x14;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.047123889803846894) * x7;
+        let x17 = x6 + x13;
+        let x18 = x17 - x15;
+        let x19 = x18 - x16;
+        out[0] = x19;
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (22 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        udot: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::TAU) * t;
+        let (x1, x2) = q[0].sin_cos();
+        let x3 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::FRAC_PI_2) + x0;
+        let x4 = q[0] + x3;
+        let x5 = x4.cos();
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.73575) * x5;
+        let x7 = u[0] * x1;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.3141592653589793) * x2;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.47123889803846897) + x8;
+        let x11 = x9 + x10;
+        let x12 = x1 * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.6283185307179586) * x12;
+        let x14 = x1 * x2;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.015) * udot[0];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.19739208802178715) * x14;
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.047123889803846894) * x7;
+        let x18 = x6 + x13;
+        let x19 = x15 + x18;
+        let x20 = x19 - x16;
+        let x21 = x20 - x17;
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.3) * udot[1];
+        out[0] = x21;
+        out[1] = x22;
+    }
+    /// `energy` of `W` states at once, one per lane (30 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::TAU) * t;
+        let x1 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::FRAC_PI_2) + x0;
+        let x2 = x1.sin();
+        let (x3, x4) = q[0].sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::TAU) + u[0];
+        let x6 = q[0] + x1;
+        let x7 = x6.sin();
+        let x8 = x3 * x3;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.015) * u[0];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.047123889803846894) * x4;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.09424777960769379) + x10;
+        let x12 = x9 + x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.3141592653589793) * x4;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.47123889803846897) + x13;
+        let x16 = x14 + x15;
+        let x17 = x4 * x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.3141592653589793) * x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.09869604401089357) * x8;
+        let x20 = x5 * x12;
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.5) * x20;
+        let x22 = u[1] * u[1];
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.15) * x22;
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.007895683520871485) + x23;
+        let x25 = x21 + x24;
+        let x26 = x18 + x25;
+        let x27 = x19 + x26;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.73575) * x7;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.5493600000000001) * x2;
+        let x30 = x28 + x29;
+        out[0] = x27;
+        out[1] = x30;
+    }
+    /// `momentum` of `W` states at once, one per lane (36 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::TAU) * t;
+        let x1 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::FRAC_PI_2) + x0;
+        let (x2, x3) = x1.sin_cos();
+        let (x4, x5) = q[0].sin_cos();
+        let x6 = q[0] + x1;
+        let (x7, x8) = x6.sin_cos();
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.015) * u[0];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.047123889803846894) * x5;
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.3141592653589793) * x5;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.47123889803846897) + x11;
+        let x14 = x12 + x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.3) * u[1];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.03769911184307752) * x3;
+        let x17 = x4 * x8;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.3141592653589793) * x17;
+        let x19 = x7 * x14;
+        let x20 = x18 - x19;
+        let x21 = x4 * x7;
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.3141592653589793) * x21;
+        let x23 = x8 * x14;
+        let x24 = x22 + x23;
+        let x25 = x3 * x24;
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.1) * x25;
+        let x27 = x2 * x20;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.1) * x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.09676105373056562) + x26;
+        let x30 = x10 + x29;
+        let x31 = x9 + x30;
+        let x32 = x31 - x28;
+        let x33 = x16 + x23;
+        let x34 = x22 + x33;
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.03769911184307752) * x2;
+        let x36 = x15 + x18;
+        let x37 = x36 - x19;
+        let x38 = x37 - x35;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x32;
+        out[3] = x38;
+        out[4] = x34;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `constraints` of `W` states at once, one per lane (89 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (10 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    pub fn constraints_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 2],
+        u: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 10],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::TAU) * t;
+        let x1 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::FRAC_PI_2) + x0;
+        let (x2, x3) = x1.sin_cos();
+        let x4 = ::eom_sim::Lanes::<W>::splat(::core::f64::consts::TAU) + u[0];
+        let x5 = q[0] + x1;
+        let (x6, x7) = x5.sin_cos();
+        let x8 = -x6;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.3) * x7;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.1) * x3;
+        let x11 = q[1] - x9;
+        let x12 = x11 - x10;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.3) * x6;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.1) * x2;
+        let x15 = x13 + x14;
+        let x16 = -x15;
+        let x17 = x7 * x12;
+        let x18 = x6 * x16;
+        let x19 = x17 + x18;
+        let x20 = x6 * x12;
+        let x21 = x7 * x16;
+        let x22 = x21 - x20;
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.6283185307179586) * x2;
+        let x24 = x4 * x6;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.3) * x24;
+        let x26 = u[1] + x23;
+        let x27 = x25 + x26;
+        let x28 = x4 * x7;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.6283185307179586) * x3;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.3) * x28;
+        let x31 = x29 + x30;
+        let x32 = -x31;
+        let x33 = x7 * x27;
+        let x34 = x4 * x12;
+        let x35 = x6 * x34;
+        let x36 = x6 * x32;
+        let x37 = x4 * x16;
+        let x38 = x7 * x37;
+        let x39 = x33 + x36;
+        let x40 = x38 + x39;
+        let x41 = x40 - x35;
+        let x42 = ::eom_sim::Lanes::<W>::splat(3.947841760435743) * x3;
+        let x43 = x4 * x4;
+        let x44 = x7 * x43;
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.3) * x44;
+        let x46 = x42 + x45;
+        let x47 = ::eom_sim::Lanes::<W>::splat(3.947841760435743) * x2;
+        let x48 = x6 * x43;
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.3) * x48;
+        let x50 = x47 + x49;
+        let x51 = x7 * x46;
+        let x52 = x16 * x43;
+        let x53 = x6 * x52;
+        let x54 = x4 * x27;
+        let x55 = x6 * x54;
+        let x56 = ::eom_sim::Lanes::<W>::splat(2.0) * x55;
+        let x57 = x4 * x32;
+        let x58 = x7 * x57;
+        let x59 = x6 * x50;
+        let x60 = x12 * x43;
+        let x61 = x7 * x60;
+        let x62 = ::eom_sim::Lanes::<W>::splat(2.0) * x58;
+        let x63 = x53 + x61;
+        let x64 = x56 + x63;
+        let x65 = x64 - x59;
+        let x66 = x65 - x62;
+        let x67 = x66 - x51;
+        let x68 = x6 * x27;
+        let x69 = x7 * x34;
+        let x70 = x7 * x32;
+        let x71 = x6 * x37;
+        let x72 = x70 - x68;
+        let x73 = x72 - x71;
+        let x74 = x73 - x69;
+        let x75 = x6 * x57;
+        let x76 = ::eom_sim::Lanes::<W>::splat(2.0) * x75;
+        let x77 = x7 * x52;
+        let x78 = x6 * x60;
+        let x79 = x6 * x46;
+        let x80 = x7 * x50;
+        let x81 = x7 * x54;
+        let x82 = ::eom_sim::Lanes::<W>::splat(2.0) * x81;
+        let x83 = x76 + x82;
+        let x84 = x77 + x83;
+        let x85 = x79 + x84;
+        let x86 = x85 - x80;
+        let x87 = x86 - x78;
+        let x88 = ::eom_sim::Lanes::<W>::splat(0.3) + x18;
+        let x89 = x17 + x88;
+        let x90 = -x89;
+        out[0] = x19;
+        out[2] = x41;
+        out[4] = x67;
+        out[1] = x22;
+        out[3] = x74;
+        out[5] = x87;
+        out[6] = x22;
+        out[7] = x7;
+        out[8] = x90;
+        out[9] = x8;
+    }
+    /// `cut_joint_reactions` of `W` states at once, one per lane (0 operations per state): force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint. Arguments `t`, `q` as `cut_joint_reactions`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("cut_joint_reactions")`'s result.
+    pub fn cut_joint_reactions_lanes<const W: usize>(
+        m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 2],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[0]);
+        out[1] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[1]);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `constraints`, `cut_joint_reactions`.
+impl ::eom_sim::Batched for SliderCrankDriven {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 4]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 10]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::constraints_lanes(this, t, &q, &u, out);
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<2, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::cut_joint_reactions_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `slider_crank_driven` (4 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<4> for SliderCrankDriven {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 4],
+        dy: &mut [::eom_sim::Lanes<W>; 4],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 2] = [y[0], y[1]];
+        let u: [::eom_sim::Lanes<W>; 2] = [y[2], y[3]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 2];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 2];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 2],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = udot[0];
+        dy[3] = udot[1];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 4],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `slider_crank_driven` (4 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<4> for SliderCrankDriven {
     fn rhs(&self, t: f64, y: &[f64; 4], dy: &mut [f64; 4]) {

@@ -924,6 +924,881 @@ impl SliderCrankFlex {
         out[5] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl SliderCrankFlex {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (4 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 4],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+        out[2] = u[2];
+        out[3] = u[3];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (74 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (4 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 4],
+        tau: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 4],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x3 = q[1] * q[1];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x3;
+        let x5 = q[2] * q[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x5;
+        let x7 = q[1] * u[1];
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x7;
+        let x9 = q[2] * u[2];
+        let x10 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x9;
+        let x11 = x8 + x10;
+        let x12 = x2 * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
+        let x14 = -x2;
+        let x15 = u[0] * x1;
+        let x16 = q[1] * x15;
+        let x17 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x0;
+        let x19 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x1;
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.0226656) * u[0];
+        let x21 = q[1] * x2;
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.3499717468698293) * x21;
+        let x23 = x18 - x22;
+        let x24 = ::eom_sim::Lanes::<W>::splat(3.39984) + x20;
+        let x25 = x19 + x24;
+        let x26 = x0 * x25;
+        let x27 = ::eom_sim::Lanes::<W>::splat(22.5) * x26;
+        let x28 = x1 * x23;
+        let x29 = ::eom_sim::Lanes::<W>::splat(13.235916984328675) * tau[3];
+        let x30 = x0 * x2;
+        let x31 = ::eom_sim::Lanes::<W>::splat(1.0000000000000004) * tau[1];
+        let x32 = x2 * x14;
+        let x33 = q[1] * x32;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.052495762030474354) * tau[1];
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.0010883870363797622) + x6;
+        let x36 = x4 + x35;
+        let x37 = q[2] * x32;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.9999999999999993) * tau[2];
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.02624743668360865) * tau[2];
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.4133707546740293) * x30;
+        let x41 = ::eom_sim::Lanes::<W>::splat(22.5) * x28;
+        let x42 = ::eom_sim::Lanes::<W>::splat(684858.5043082716) * q[2];
+        let x43 = ::eom_sim::Lanes::<W>::splat(85567.13463747373) * q[1];
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.05249576203047433) * x33;
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.02624743668360867) * x37;
+        let x46 = x13 + x39;
+        let x47 = x27 + x46;
+        let x48 = x34 + x47;
+        let x49 = x48 - x40;
+        let x50 = x49 - x41;
+        let x51 = x50 - x42;
+        let x52 = x51 - x43;
+        let x53 = x52 - x44;
+        let x54 = x53 - x45;
+        let x55 = u[0] * x0;
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.09660524532597076) * x55;
+        let x57 = x17 + x56;
+        let x58 = tau[0] + x57;
+        let x59 = x58 - x54;
+        let x60 = x59 / x36;
+        let x61 = ::eom_sim::Lanes::<W>::splat(7.874364304571163) * x55;
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.052495762030474354) * x60;
+        let x63 = ::eom_sim::Lanes::<W>::splat(7.874364304571163) * x30;
+        let x64 = ::eom_sim::Lanes::<W>::splat(1629981.7609619827) * q[1];
+        let x65 = x31 + x61;
+        let x66 = x65 - x62;
+        let x67 = x66 - x33;
+        let x68 = x67 - x63;
+        let x69 = x68 - x64;
+        let x70 = ::eom_sim::Lanes::<W>::splat(0.02624743668360865) * x60;
+        let x71 = ::eom_sim::Lanes::<W>::splat(26092395.70948125) * q[2];
+        let x72 = x38 - x70;
+        let x73 = x72 - x71;
+        let x74 = x73 - x37;
+        out[0] = x60;
+        out[1] = x69;
+        out[2] = x74;
+        out[3] = x29;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (6 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (16 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 16],
+    ) {
+        let x0 = q[1] * q[1];
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x0;
+        let x2 = q[2] * q[2];
+        let x3 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.00453312) + x3;
+        let x5 = x1 + x4;
+        out[0] = x5;
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.05249576203047433);
+        out[1] = out[4];
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.9999999999999996);
+        out[8] = ::eom_sim::Lanes::<W>::splat(0.02624743668360867);
+        out[2] = out[8];
+        out[9] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[6] = out[9];
+        out[10] = ::eom_sim::Lanes::<W>::splat(1.0000000000000007);
+        out[12] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = out[12];
+        out[13] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[7] = out[13];
+        out[14] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = out[14];
+        out[15] = ::eom_sim::Lanes::<W>::splat(0.075552);
+    }
+    /// `bias` of `W` states at once, one per lane (45 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (4 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 4],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x3 = q[1] * u[1];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x3;
+        let x5 = q[2] * u[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x5;
+        let x7 = x4 + x6;
+        let x8 = x2 * x7;
+        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
+        let x10 = -x2;
+        let x11 = x0 * x2;
+        let x12 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x11;
+        let x13 = x2 * x10;
+        let x14 = q[1] * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x14;
+        let x16 = q[2] * x13;
+        let x17 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(1629981.760961982) * q[1];
+        let x19 = ::eom_sim::Lanes::<W>::splat(26092395.70948127) * q[2];
+        let x20 = u[0] * x0;
+        let x21 = u[0] * x1;
+        let x22 = q[1] * x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x0;
+        let x24 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x1;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.0226656) * u[0];
+        let x26 = q[1] * x2;
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.3499717468698293) * x26;
+        let x28 = x23 - x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(3.39984) + x25;
+        let x30 = x24 + x29;
+        let x31 = x0 * x30;
+        let x32 = ::eom_sim::Lanes::<W>::splat(22.5) * x31;
+        let x33 = x1 * x28;
+        let x34 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x22;
+        let x35 = ::eom_sim::Lanes::<W>::splat(22.5) * x33;
+        let x36 = ::eom_sim::Lanes::<W>::splat(0.509976) * x20;
+        let x37 = x9 + x32;
+        let x38 = x37 - x34;
+        let x39 = x38 - x35;
+        let x40 = x39 - x36;
+        let x41 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x20;
+        let x42 = x15 + x18;
+        let x43 = x12 + x42;
+        let x44 = x43 - x41;
+        let x45 = x17 + x19;
+        out[0] = x40;
+        out[1] = x44;
+        out[2] = x45;
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (66 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (4 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 4],
+        udot: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 4],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x3 = q[1] * q[1];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x3;
+        let x5 = q[2] * q[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x5;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.00453312) + x6;
+        let x8 = x4 + x7;
+        let x9 = q[1] * u[1];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x9;
+        let x11 = q[2] * u[2];
+        let x12 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x11;
+        let x13 = x10 + x12;
+        let x14 = x2 * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x14;
+        let x16 = -x2;
+        let x17 = x0 * x2;
+        let x18 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x17;
+        let x19 = x2 * x16;
+        let x20 = q[1] * x19;
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x20;
+        let x22 = q[2] * x19;
+        let x23 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x22;
+        let x24 = ::eom_sim::Lanes::<W>::splat(1629981.760961982) * q[1];
+        let x25 = ::eom_sim::Lanes::<W>::splat(26092395.70948127) * q[2];
+        let x26 = u[0] * x0;
+        let x27 = u[0] * x1;
+        let x28 = q[1] * x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x0;
+        let x30 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x1;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.0226656) * u[0];
+        let x32 = q[1] * x2;
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.3499717468698293) * x32;
+        let x34 = x29 - x33;
+        let x35 = ::eom_sim::Lanes::<W>::splat(3.39984) + x31;
+        let x36 = x30 + x35;
+        let x37 = x0 * x36;
+        let x38 = ::eom_sim::Lanes::<W>::splat(22.5) * x37;
+        let x39 = x1 * x34;
+        let x40 = udot[0] * x8;
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * udot[1];
+        let x42 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * udot[2];
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.05249576203047433) * udot[1];
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.05249576203047433) * udot[0];
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.02624743668360867) * udot[2];
+        let x46 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x28;
+        let x47 = ::eom_sim::Lanes::<W>::splat(22.5) * x39;
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.509976) * x26;
+        let x49 = x15 + x40;
+        let x50 = x43 + x49;
+        let x51 = x45 + x50;
+        let x52 = x38 + x51;
+        let x53 = x52 - x46;
+        let x54 = x53 - x47;
+        let x55 = x54 - x48;
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.02624743668360867) * udot[0];
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.075552) * udot[3];
+        let x58 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x26;
+        let x59 = x21 + x44;
+        let x60 = x24 + x59;
+        let x61 = x18 + x60;
+        let x62 = x41 + x61;
+        let x63 = x62 - x58;
+        let x64 = x23 + x42;
+        let x65 = x25 + x64;
+        let x66 = x56 + x65;
+        out[0] = x55;
+        out[1] = x63;
+        out[2] = x66;
+        out[3] = x57;
+    }
+    /// `energy` of `W` states at once, one per lane (51 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x3 = q[1] * q[1];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x3;
+        let x5 = q[2] * q[2];
+        let x6 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x5;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.00453312) + x6;
+        let x8 = x4 + x7;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.05249576203047433) * u[1];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.02624743668360867) * u[2];
+        let x11 = x9 + x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(814990.880480991) * x3;
+        let x13 = ::eom_sim::Lanes::<W>::splat(13046197.854740635) * x5;
+        let x14 = x12 + x13;
+        let x15 = x2 * x8;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.509976) * x1;
+        let x17 = q[1] * x0;
+        let x18 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x17;
+        let x19 = x15 + x16;
+        let x20 = x19 - x18;
+        let x21 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x0;
+        let x22 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x1;
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.0226656) * u[0];
+        let x24 = q[1] * x2;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.3499717468698293) * x24;
+        let x26 = x21 - x25;
+        let x27 = ::eom_sim::Lanes::<W>::splat(3.39984) + x23;
+        let x28 = x22 + x27;
+        let x29 = x2 * x20;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.5) * x29;
+        let x31 = x1 * x28;
+        let x32 = ::eom_sim::Lanes::<W>::splat(11.25) * x31;
+        let x33 = x0 * x26;
+        let x34 = ::eom_sim::Lanes::<W>::splat(11.25) * x33;
+        let x35 = u[1] * u[1];
+        let x36 = u[2] * u[2];
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.5000000000000003) * x36;
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.4999999999999998) * x35;
+        let x39 = x2 * x11;
+        let x40 = u[1] * x1;
+        let x41 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x40;
+        let x42 = u[3] * u[3];
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.037776) * x42;
+        let x44 = ::eom_sim::Lanes::<W>::splat(30.678749999999997) + x30;
+        let x45 = x43 + x44;
+        let x46 = x37 + x45;
+        let x47 = x32 + x46;
+        let x48 = x39 + x47;
+        let x49 = x34 + x48;
+        let x50 = x38 + x49;
+        let x51 = x41 + x50;
+        out[0] = x51;
+        out[1] = x14;
+    }
+    /// `momentum` of `W` states at once, one per lane (53 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(150.0) * t;
+        let (x1, x2) = x0.sin_cos();
+        let (x3, x4) = q[0].sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x6 = q[0] + x0;
+        let (x7, x8) = x6.sin_cos();
+        let x9 = q[1] * q[1];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.9999999999999996) * x9;
+        let x11 = q[2] * q[2];
+        let x12 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.00453312) + x12;
+        let x14 = x10 + x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.05249576203047433) * u[1];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.02624743668360867) * u[2];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.3499717468698293) * u[1];
+        let x18 = x5 * x14;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.509976) * x4;
+        let x20 = q[1] * x3;
+        let x21 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x3;
+        let x22 = ::eom_sim::Lanes::<W>::splat(3.3998399999999998) * x4;
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.0226656) * u[0];
+        let x24 = q[1] * x5;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.3499717468698293) * x24;
+        let x26 = x21 - x25;
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.075552) * u[3];
+        let x28 = ::eom_sim::Lanes::<W>::splat(4.05) * x2;
+        let x29 = ::eom_sim::Lanes::<W>::splat(3.39984) + x23;
+        let x30 = x22 + x29;
+        let x31 = x17 + x30;
+        let x32 = x8 * x26;
+        let x33 = x7 * x31;
+        let x34 = x32 - x33;
+        let x35 = x7 * x26;
+        let x36 = x8 * x31;
+        let x37 = x35 + x36;
+        let x38 = x2 * x37;
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.15) * x38;
+        let x40 = x1 * x34;
+        let x41 = ::eom_sim::Lanes::<W>::splat(7.874364304571159) * x20;
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.15) * x40;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.40904999999999997) + x39;
+        let x44 = x16 + x43;
+        let x45 = x18 + x44;
+        let x46 = x19 + x45;
+        let x47 = x15 + x46;
+        let x48 = x47 - x41;
+        let x49 = x48 - x42;
+        let x50 = x28 + x36;
+        let x51 = x35 + x50;
+        let x52 = ::eom_sim::Lanes::<W>::splat(4.05) * x1;
+        let x53 = x27 + x32;
+        let x54 = x53 - x33;
+        let x55 = x54 - x52;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x49;
+        out[3] = x55;
+        out[4] = x51;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `outputs` of `W` states at once, one per lane (16 operations per state): the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame). Arguments `t`, `q`, `u`, `udot` as `outputs`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("outputs")`'s result.
+    pub fn outputs_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        _u: &[::eom_sim::Lanes<W>; 4],
+        _udot: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 3],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(150.0) * t;
+        let (x1, x2) = x0.sin_cos();
+        let x3 = q[0] + x0;
+        let (x4, x5) = x3.sin_cos();
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.15) * x2;
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.15) * x1;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.15) * x5;
+        let x9 = q[1] * x4;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.15) * x4;
+        let x11 = q[1] * x5;
+        let x12 = ::eom_sim::Lanes::<W>::splat(3.6382396209006016) * x11;
+        let x13 = ::eom_sim::Lanes::<W>::splat(3.6382396209006016) * x9;
+        let x14 = x6 + x8;
+        let x15 = x14 - x13;
+        let x16 = x7 + x12;
+        let x17 = x10 + x16;
+        out[0] = x15;
+        out[1] = x17;
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `marker_jacobians` of `W` states at once, one per lane (24 operations per state): partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed. Arguments `t`, `q` as `marker_jacobians`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (12 entries per lane) laid out as `Model::evaluate("marker_jacobians")`'s result.
+    pub fn marker_jacobians_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 12],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(150.0) * t;
+        let x1 = q[0] + x0;
+        let (x2, x3) = x1.sin_cos();
+        let x4 = ::eom_sim::Lanes::<W>::splat(76.23613616035054) * q[2];
+        let (x5, x6) = x4.sin_cos();
+        let x7 = x0 + x4;
+        let x8 = q[0] + x7;
+        let (x9, x10) = x8.sin_cos();
+        let x11 = q[1] * x6;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.15) * x5;
+        let x13 = q[1] * x5;
+        let x14 = ::eom_sim::Lanes::<W>::splat(3.6382396209006016) * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.15) * x6;
+        let x16 = ::eom_sim::Lanes::<W>::splat(3.6382396209006016) * x11;
+        let x17 = x12 - x16;
+        let x18 = x14 + x15;
+        let x19 = x10 * x17;
+        let x20 = x9 * x18;
+        let x21 = x19 - x20;
+        let x22 = ::eom_sim::Lanes::<W>::splat(-3.6382396209006016) * x2;
+        let x23 = x9 * x17;
+        let x24 = x10 * x18;
+        let x25 = x23 + x24;
+        let x26 = ::eom_sim::Lanes::<W>::splat(3.6382396209006016) * x3;
+        out[0] = x21;
+        out[1] = x22;
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = x25;
+        out[5] = x26;
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `constraints` of `W` states at once, one per lane (141 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (14 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    pub fn constraints_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 4],
+        u: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 14],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(150.0) * t;
+        let (x1, x2) = x0.sin_cos();
+        let x3 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x4 = q[0] + x0;
+        let (x5, x6) = x4.sin_cos();
+        let x7 = ::eom_sim::Lanes::<W>::splat(38.099556119621745) * q[1];
+        let x8 = ::eom_sim::Lanes::<W>::splat(76.23613616035047) * q[2];
+        let x9 = x7 + x8;
+        let (x10, x11) = x9.sin_cos();
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.0000000000000000000003521260160147477)
+            * q[1];
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.00000000000000000009314472450667663)
+            * q[2];
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.3) + x13;
+        let x15 = x12 + x14;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.0000000000000000000003521260160147477)
+            * u[1];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.00000000000000000009314472450667663)
+            * u[2];
+        let x18 = x16 + x17;
+        let x19 = x9 - q[0];
+        let x20 = x19 - x0;
+        let (x21, x22) = x20.sin_cos();
+        let x23 = x6 * x15;
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.15) * x2;
+        let x25 = q[3] - x23;
+        let x26 = x25 - x24;
+        let x27 = x5 * x15;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.15) * x1;
+        let x29 = x27 + x28;
+        let x30 = -x29;
+        let x31 = x22 * x26;
+        let x32 = x21 * x30;
+        let x33 = x31 - x32;
+        let x34 = x21 * x26;
+        let x35 = x22 * x30;
+        let x36 = x34 + x35;
+        let x37 = ::eom_sim::Lanes::<W>::splat(38.099556119621745) * u[1];
+        let x38 = ::eom_sim::Lanes::<W>::splat(76.23613616035047) * u[2];
+        let x39 = x37 + x38;
+        let x40 = x39 - ::eom_sim::Lanes::<W>::splat(150.0);
+        let x41 = x40 - u[0];
+        let x42 = x3 * x5;
+        let x43 = x15 * x42;
+        let x44 = x6 * x18;
+        let x45 = ::eom_sim::Lanes::<W>::splat(22.5) * x1;
+        let x46 = x43 + x45;
+        let x47 = u[3] + x46;
+        let x48 = x47 - x44;
+        let x49 = x3 * x6;
+        let x50 = x15 * x49;
+        let x51 = x5 * x18;
+        let x52 = ::eom_sim::Lanes::<W>::splat(22.5) * x2;
+        let x53 = x50 + x51;
+        let x54 = x52 + x53;
+        let x55 = -x54;
+        let x56 = x21 * x41;
+        let x57 = x26 * x56;
+        let x58 = x22 * x48;
+        let x59 = x21 * x55;
+        let x60 = x35 * x41;
+        let x61 = x58 - x59;
+        let x62 = x61 - x60;
+        let x63 = x62 - x57;
+        let x64 = x3 * x3;
+        let x65 = x6 * x64;
+        let x66 = x15 * x65;
+        let x67 = ::eom_sim::Lanes::<W>::splat(3375.0) * x2;
+        let x68 = x18 * x42;
+        let x69 = ::eom_sim::Lanes::<W>::splat(2.0) * x68;
+        let x70 = x66 + x69;
+        let x71 = x67 + x70;
+        let x72 = x5 * x64;
+        let x73 = x15 * x72;
+        let x74 = ::eom_sim::Lanes::<W>::splat(3375.0) * x1;
+        let x75 = x18 * x49;
+        let x76 = ::eom_sim::Lanes::<W>::splat(2.0) * x75;
+        let x77 = x73 + x74;
+        let x78 = x77 - x76;
+        let x79 = x41 * x41;
+        let x80 = x21 * x78;
+        let x81 = x22 * x55;
+        let x82 = x41 * x81;
+        let x83 = ::eom_sim::Lanes::<W>::splat(2.0) * x82;
+        let x84 = x22 * x71;
+        let x85 = x22 * x79;
+        let x86 = x26 * x85;
+        let x87 = x32 * x79;
+        let x88 = x21 * x48;
+        let x89 = x41 * x88;
+        let x90 = ::eom_sim::Lanes::<W>::splat(2.0) * x89;
+        let x91 = x80 + x83;
+        let x92 = x90 + x91;
+        let x93 = x86 + x92;
+        let x94 = x93 - x84;
+        let x95 = x94 - x87;
+        let x96 = x22 * x41;
+        let x97 = x26 * x96;
+        let x98 = x32 * x41;
+        let x99 = x81 + x97;
+        let x100 = x88 + x99;
+        let x101 = x100 - x98;
+        let x102 = x41 * x59;
+        let x103 = ::eom_sim::Lanes::<W>::splat(2.0) * x102;
+        let x104 = x22 * x78;
+        let x105 = x21 * x79;
+        let x106 = x26 * x105;
+        let x107 = x30 * x79;
+        let x108 = x22 * x107;
+        let x109 = x41 * x58;
+        let x110 = x21 * x71;
+        let x111 = ::eom_sim::Lanes::<W>::splat(2.0) * x109;
+        let x112 = x103 + x106;
+        let x113 = x108 + x112;
+        let x114 = x113 - x110;
+        let x115 = x114 - x111;
+        let x116 = x115 - x104;
+        let x117 = x10 * x15;
+        let x118 = x34 + x117;
+        let x119 = x35 + x118;
+        let x120 = ::eom_sim::Lanes::<W>::splat(38.099556119621745) * x35;
+        let x121 = ::eom_sim::Lanes::<W>::splat(38.099556119621745) * x34;
+        let x122 = ::eom_sim::Lanes::<W>::splat(0.0000000000000000000003521260160147477)
+            * x11;
+        let x123 = x120 + x121;
+        let x124 = x122 + x123;
+        let x125 = -x124;
+        let x126 = ::eom_sim::Lanes::<W>::splat(76.23613616035047) * x35;
+        let x127 = ::eom_sim::Lanes::<W>::splat(76.23613616035047) * x34;
+        let x128 = ::eom_sim::Lanes::<W>::splat(0.00000000000000000009314472450667663)
+            * x11;
+        let x129 = x126 + x127;
+        let x130 = x128 + x129;
+        let x131 = -x130;
+        let x132 = x11 * x15;
+        let x133 = x32 - x31;
+        let x134 = x133 - x132;
+        let x135 = ::eom_sim::Lanes::<W>::splat(38.099556119621745) * x31;
+        let x136 = ::eom_sim::Lanes::<W>::splat(0.0000000000000000000003521260160147477)
+            * x10;
+        let x137 = ::eom_sim::Lanes::<W>::splat(38.099556119621745) * x32;
+        let x138 = x135 - x136;
+        let x139 = x138 - x137;
+        let x140 = ::eom_sim::Lanes::<W>::splat(76.23613616035047) * x31;
+        let x141 = ::eom_sim::Lanes::<W>::splat(0.00000000000000000009314472450667663)
+            * x10;
+        let x142 = ::eom_sim::Lanes::<W>::splat(76.23613616035047) * x32;
+        let x143 = x140 - x141;
+        let x144 = x143 - x142;
+        out[0] = x33;
+        out[2] = x63;
+        out[4] = x95;
+        out[1] = x36;
+        out[3] = x101;
+        out[5] = x116;
+        out[6] = x119;
+        out[7] = x125;
+        out[8] = x131;
+        out[9] = x22;
+        out[10] = x134;
+        out[11] = x139;
+        out[12] = x144;
+        out[13] = x21;
+    }
+    /// `cut_joint_reactions` of `W` states at once, one per lane (0 operations per state): force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint. Arguments `t`, `q` as `cut_joint_reactions`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("cut_joint_reactions")`'s result.
+    pub fn cut_joint_reactions_lanes<const W: usize>(
+        m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 4],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[0]);
+        out[1] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[1]);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `outputs`, `marker_jacobians`, `constraints`, `cut_joint_reactions`.
+impl ::eom_sim::Batched for SliderCrankFlex {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 4]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    4,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 4]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 16]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 4]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    4,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 4]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "outputs" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    4,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 3]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::outputs_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "marker_jacobians" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 12]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::marker_jacobians_lanes(this, t, &q, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 14]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::constraints_lanes(this, t, &q, &u, out);
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<4, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::cut_joint_reactions_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `slider_crank_flex` (8 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<8> for SliderCrankFlex {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 8],
+        dy: &mut [::eom_sim::Lanes<W>; 8],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 4] = [y[0], y[1], y[2], y[3]];
+        let u: [::eom_sim::Lanes<W>; 4] = [y[4], y[5], y[6], y[7]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 4];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 4];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 4],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = qdot[3];
+        dy[4] = udot[0];
+        dy[5] = udot[1];
+        dy[6] = udot[2];
+        dy[7] = udot[3];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 8],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `slider_crank_flex` (8 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<8> for SliderCrankFlex {
     fn rhs(&self, t: f64, y: &[f64; 8], dy: &mut [f64; 8]) {

@@ -1301,6 +1301,1242 @@ impl SliderCrankSimeon {
         out[5] = 0.0;
     }
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl SliderCrankSimeon {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+        out[2] = u[2];
+        out[3] = u[3];
+        out[4] = u[4];
+        out[5] = u[5];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (232 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        tau: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * q[3];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[4];
+        let x5 = x3 + x4;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[3];
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * q[4];
+        let x8 = x6 + x7;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * q[3];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[4];
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * u[3];
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * u[4];
+        let x13 = x11 + x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * u[3];
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * u[4];
+        let x16 = x14 + x15;
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * u[1];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * u[2];
+        let x19 = x17 - x18;
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * u[3];
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * u[4];
+        let x22 = x20 + x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.03022080000000002) * q[3];
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.015110400000000001) * q[4];
+        let x25 = q[3] * x5;
+        let x26 = q[4] * x8;
+        let x27 = q[1] * q[1];
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x27;
+        let x29 = q[2] * q[2];
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x29;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.10073600000000002) * q[3];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.025183999999999998) * q[4];
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.0226656) + x31;
+        let x34 = x32 + x33;
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.014429369112574654) + x9;
+        let x36 = x10 + x35;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[4];
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.007214684556287328) + x37;
+        let x39 = -x38;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[2];
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[1];
+        let x42 = x40 - x41;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.01511040000000001) * u[3];
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.007555200000000001) * u[4];
+        let x45 = q[3] * x13;
+        let x46 = q[4] * x16;
+        let x47 = q[1] * u[1];
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x47;
+        let x49 = q[2] * u[2];
+        let x50 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x49;
+        let x51 = x46 + x50;
+        let x52 = x45 + x51;
+        let x53 = x43 + x52;
+        let x54 = x44 + x53;
+        let x55 = x48 + x54;
+        let x56 = -x2;
+        let x57 = ::eom_sim::Lanes::<W>::splat(2.0) * u[0];
+        let x58 = ::eom_sim::Lanes::<W>::splat(300.0) + x57;
+        let x59 = -x58;
+        let x60 = ::eom_sim::Lanes::<W>::splat(113777777.77777782) * q[3];
+        let x61 = u[0] * x1;
+        let x62 = q[1] * x61;
+        let x63 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x62;
+        let x64 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x0;
+        let x65 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x1;
+        let x66 = x2 * x34;
+        let x67 = q[1] * x2;
+        let x68 = ::eom_sim::Lanes::<W>::splat(0.09619579408383098) * x67;
+        let x69 = x64 - x68;
+        let x70 = x65 + x66;
+        let x71 = x1 * x69;
+        let x72 = ::eom_sim::Lanes::<W>::splat(22.5) * x71;
+        let x73 = ::eom_sim::Lanes::<W>::splat(13.235916984328675) * tau[5];
+        let x74 = x0 * x2;
+        let x75 = x22 * x58;
+        let x76 = x2 * x56;
+        let x77 = q[1] * x76;
+        let x78 = u[4] * x58;
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * x78;
+        let x80 = q[2] * x76;
+        let x81 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x80;
+        let x82 = ::eom_sim::Lanes::<W>::splat(1970309.3179025871) * q[2];
+        let x83 = tau[2] + x79;
+        let x84 = x83 - x81;
+        let x85 = x84 - x82;
+        let x86 = x2 * x5;
+        let x87 = x56 * x86;
+        let x88 = u[1] * x59;
+        let x89 = x1 * x2;
+        let x90 = ::eom_sim::Lanes::<W>::splat(0.5666399999999999) * x89;
+        let x91 = x19 * x59;
+        let x92 = x8 * x76;
+        let x93 = ::eom_sim::Lanes::<W>::splat(13.23591698432868) * tau[1];
+        let x94 = ::eom_sim::Lanes::<W>::splat(0.3183098861837905) * x78;
+        let x95 = ::eom_sim::Lanes::<W>::splat(13.235916984328673) * tau[2];
+        let x96 = x0 * x70;
+        let x97 = x2 * x55;
+        let x98 = u[0] * x0;
+        let x99 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x98;
+        let x100 = ::eom_sim::Lanes::<W>::splat(28.64788975654117) * x98;
+        let x101 = ::eom_sim::Lanes::<W>::splat(0.07341776865892574) * q[1];
+        let x102 = ::eom_sim::Lanes::<W>::splat(0.01202447426047887) * q[2];
+        let x103 = x101 + x102;
+        let x104 = -x103;
+        let x105 = ::eom_sim::Lanes::<W>::splat(1.193662073189214) * q[2];
+        let x106 = ::eom_sim::Lanes::<W>::splat(0.45223208038646057) * q[1];
+        let x107 = x105 - x106;
+        let x108 = x42 * x107;
+        let x109 = ::eom_sim::Lanes::<W>::splat(0.9717514911441892) * q[1];
+        let x110 = ::eom_sim::Lanes::<W>::splat(0.15915494309189535) * q[2];
+        let x111 = x109 + x110;
+        let x112 = -x111;
+        let x113 = x104 * x112;
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.004533925887999999) + x28;
+        let x115 = x25 + x114;
+        let x116 = x30 + x115;
+        let x117 = x26 + x116;
+        let x118 = x23 + x117;
+        let x119 = x24 + x118;
+        let x120 = x119 - x113;
+        let x121 = x120 - x108;
+        let x122 = ::eom_sim::Lanes::<W>::splat(0.3183098861837905) * q[4];
+        let x123 = ::eom_sim::Lanes::<W>::splat(0.09549296585513722) + x122;
+        let x124 = -x123;
+        let x125 = x39 * x124;
+        let x126 = ::eom_sim::Lanes::<W>::splat(1.0320491018623839) * q[3];
+        let x127 = ::eom_sim::Lanes::<W>::splat(0.12059522143638958) * q[4];
+        let x128 = ::eom_sim::Lanes::<W>::splat(0.1909859317102745) + x127;
+        let x129 = x126 + x128;
+        let x130 = x36 * x129;
+        let x131 = x121 - x130;
+        let x132 = x131 - x125;
+        let x133 = x34 * x98;
+        let x134 = ::eom_sim::Lanes::<W>::splat(22.5) * x133;
+        let x135 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x74;
+        let x136 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x77;
+        let x137 = ::eom_sim::Lanes::<W>::splat(123144.33236891183) * q[1];
+        let x138 = tau[1] + x99;
+        let x139 = x138 - x135;
+        let x140 = x139 - x136;
+        let x141 = x140 - x75;
+        let x142 = x141 - x137;
+        let x143 = ::eom_sim::Lanes::<W>::splat(0.007555200000000001) * x76;
+        let x144 = ::eom_sim::Lanes::<W>::splat(0.5666399999999999) * x61;
+        let x145 = ::eom_sim::Lanes::<W>::splat(99555555.5555556) * q[4];
+        let x146 = tau[4] + x90;
+        let x147 = x60 + x146;
+        let x148 = x147 - x91;
+        let x149 = x148 - x143;
+        let x150 = x149 - x144;
+        let x151 = x150 - x145;
+        let x152 = x151 - x92;
+        let x153 = ::eom_sim::Lanes::<W>::splat(0.49999999999999994) * x91;
+        let x154 = ::eom_sim::Lanes::<W>::splat(0.49999999999999994) * x92;
+        let x155 = ::eom_sim::Lanes::<W>::splat(163555555.5555556) * q[4];
+        let x156 = ::eom_sim::Lanes::<W>::splat(1.9832400000000008) * x89;
+        let x157 = ::eom_sim::Lanes::<W>::splat(0.49999999999999994) * tau[4];
+        let x158 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * x88;
+        let x159 = ::eom_sim::Lanes::<W>::splat(0.011332800000000011) * x76;
+        let x160 = ::eom_sim::Lanes::<W>::splat(284444444.44444436) * q[3];
+        let x161 = ::eom_sim::Lanes::<W>::splat(1.9832400000000008) * x61;
+        let x162 = x153 + x155;
+        let x163 = x154 + x162;
+        let x164 = x156 + x163;
+        let x165 = tau[3] + x164;
+        let x166 = x165 - x157;
+        let x167 = x166 - x158;
+        let x168 = x167 - x159;
+        let x169 = x168 - x160;
+        let x170 = x169 - x161;
+        let x171 = x170 - x87;
+        let x172 = x107 * x152;
+        let x173 = x112 * x171;
+        let x174 = x85 * x124;
+        let x175 = ::eom_sim::Lanes::<W>::splat(2.0) * x97;
+        let x176 = ::eom_sim::Lanes::<W>::splat(22.5) * x96;
+        let x177 = x63 + x134;
+        let x178 = x72 + x177;
+        let x179 = tau[0] + x178;
+        let x180 = x179 - x172;
+        let x181 = x180 - x175;
+        let x182 = x181 - x173;
+        let x183 = x182 - x176;
+        let x184 = x183 - x174;
+        let x185 = x129 * x142;
+        let x186 = x184 - x185;
+        let x187 = ::eom_sim::Lanes::<W>::splat(1.0) / x132;
+        let x188 = x186 * x187;
+        let x189 = ::eom_sim::Lanes::<W>::splat(13.235916984328682) * x171;
+        let x190 = ::eom_sim::Lanes::<W>::splat(49.63468869123251) * tau[4];
+        let x191 = ::eom_sim::Lanes::<W>::splat(28.124999999999986) * x89;
+        let x192 = ::eom_sim::Lanes::<W>::splat(5647324579.980234) * q[3];
+        let x193 = x129 * x186;
+        let x194 = x193 * x187;
+        let x195 = ::eom_sim::Lanes::<W>::splat(1629928.1603254962) * q[1];
+        let x196 = ::eom_sim::Lanes::<W>::splat(28.64788975654117) * x74;
+        let x197 = ::eom_sim::Lanes::<W>::splat(13.23591698432868) * x75;
+        let x198 = x93 + x100;
+        let x199 = x198 - x195;
+        let x200 = x199 - x77;
+        let x201 = x200 - x196;
+        let x202 = x201 - x197;
+        let x203 = x202 - x194;
+        let x204 = x124 * x186;
+        let x205 = x204 * x187;
+        let x206 = ::eom_sim::Lanes::<W>::splat(26078850.565207895) * q[2];
+        let x207 = x94 + x95;
+        let x208 = x207 - x206;
+        let x209 = x208 - x205;
+        let x210 = x209 - x80;
+        let x211 = x112 * x186;
+        let x212 = x211 * x187;
+        let x213 = x189 - x212;
+        let x214 = ::eom_sim::Lanes::<W>::splat(0.49999999999999994) * x212;
+        let x215 = ::eom_sim::Lanes::<W>::splat(49.63468869123251) * x92;
+        let x216 = ::eom_sim::Lanes::<W>::splat(0.3749999999999999) * x76;
+        let x217 = ::eom_sim::Lanes::<W>::splat(49.63468869123251) * x91;
+        let x218 = ::eom_sim::Lanes::<W>::splat(28.124999999999986) * x61;
+        let x219 = ::eom_sim::Lanes::<W>::splat(6.61795849216434) * x171;
+        let x220 = ::eom_sim::Lanes::<W>::splat(4941409007.482705) * q[4];
+        let x221 = x191 + x214;
+        let x222 = x192 + x221;
+        let x223 = x190 + x222;
+        let x224 = x223 - x215;
+        let x225 = x224 - x216;
+        let x226 = x225 - x217;
+        let x227 = x226 - x218;
+        let x228 = x227 - x219;
+        let x229 = x228 - x220;
+        let x230 = x107 * x186;
+        let x231 = x230 * x187;
+        let x232 = x229 - x231;
+        out[0] = x188;
+        out[1] = x203;
+        out[2] = x210;
+        out[3] = x213;
+        out[4] = x232;
+        out[5] = x73;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (31 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (36 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 36],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * q[3];
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[4];
+        let x2 = x0 + x1;
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[3];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * q[4];
+        let x5 = x3 + x4;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * q[3];
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[4];
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.03022080000000002) * q[3];
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.015110400000000001) * q[4];
+        let x10 = q[3] * x2;
+        let x11 = q[4] * x5;
+        let x12 = q[1] * q[1];
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x12;
+        let x14 = q[2] * q[2];
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x14;
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.014429369112574654) + x6;
+        let x17 = x7 + x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[4];
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.007214684556287328) + x18;
+        let x20 = -x19;
+        let x21 = ::eom_sim::Lanes::<W>::splat(-0.0779733737439068) * q[1];
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[2];
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[1];
+        let x24 = x22 - x23;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.004533925887999999) + x13;
+        let x26 = x10 + x25;
+        let x27 = x15 + x26;
+        let x28 = x11 + x27;
+        let x29 = x8 + x28;
+        let x30 = x9 + x29;
+        out[0] = x30;
+        out[6] = x17;
+        out[1] = out[6];
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.07555199999999997);
+        out[12] = x20;
+        out[2] = out[12];
+        out[13] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = out[13];
+        out[14] = ::eom_sim::Lanes::<W>::splat(0.07555200000000001);
+        out[18] = x21;
+        out[3] = out[18];
+        out[19] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = out[19];
+        out[20] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[15] = out[20];
+        out[21] = ::eom_sim::Lanes::<W>::splat(0.08058879999999995);
+        out[24] = x24;
+        out[4] = out[24];
+        out[25] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = out[25];
+        out[26] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[16] = out[26];
+        out[27] = ::eom_sim::Lanes::<W>::splat(0.010073600000000002);
+        out[22] = out[27];
+        out[28] = ::eom_sim::Lanes::<W>::splat(0.020147200000000007);
+        out[30] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = out[30];
+        out[31] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = out[31];
+        out[32] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[17] = out[32];
+        out[33] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[23] = out[33];
+        out[34] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[29] = out[34];
+        out[35] = ::eom_sim::Lanes::<W>::splat(0.075552);
+    }
+    /// `bias` of `W` states at once, one per lane (112 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * q[3];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[4];
+        let x5 = x3 + x4;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[3];
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * q[4];
+        let x8 = x6 + x7;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * u[3];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * u[4];
+        let x11 = x9 + x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * u[3];
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * u[4];
+        let x14 = x12 + x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * u[1];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * u[2];
+        let x17 = x15 - x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * u[3];
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * u[4];
+        let x20 = x18 + x19;
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.10073600000000002) * q[3];
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.025183999999999998) * q[4];
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.0226656) + x21;
+        let x24 = x22 + x23;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.01511040000000001) * u[3];
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.007555200000000001) * u[4];
+        let x27 = q[3] * x11;
+        let x28 = q[4] * x14;
+        let x29 = q[1] * u[1];
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x29;
+        let x31 = q[2] * u[2];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x31;
+        let x33 = x28 + x32;
+        let x34 = x27 + x33;
+        let x35 = x25 + x34;
+        let x36 = x26 + x35;
+        let x37 = x30 + x36;
+        let x38 = x2 * x37;
+        let x39 = ::eom_sim::Lanes::<W>::splat(2.0) * x38;
+        let x40 = -x2;
+        let x41 = x0 * x2;
+        let x42 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x41;
+        let x43 = x1 * x2;
+        let x44 = x2 * x40;
+        let x45 = ::eom_sim::Lanes::<W>::splat(0.01511040000000001) * x44;
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.007555200000000001) * x44;
+        let x47 = x2 * x5;
+        let x48 = x40 * x47;
+        let x49 = x8 * x44;
+        let x50 = ::eom_sim::Lanes::<W>::splat(2.0) * u[0];
+        let x51 = ::eom_sim::Lanes::<W>::splat(300.0) + x50;
+        let x52 = -x51;
+        let x53 = u[1] * x52;
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * x53;
+        let x55 = x17 * x52;
+        let x56 = x20 * x51;
+        let x57 = u[4] * x51;
+        let x58 = q[1] * x44;
+        let x59 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x58;
+        let x60 = q[2] * x44;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x60;
+        let x62 = ::eom_sim::Lanes::<W>::splat(123144.33236891183) * q[1];
+        let x63 = ::eom_sim::Lanes::<W>::splat(1970309.3179025871) * q[2];
+        let x64 = ::eom_sim::Lanes::<W>::splat(227555555.55555543) * q[3];
+        let x65 = ::eom_sim::Lanes::<W>::splat(99555555.5555556) * q[4];
+        let x66 = u[0] * x0;
+        let x67 = x24 * x66;
+        let x68 = u[0] * x1;
+        let x69 = q[1] * x68;
+        let x70 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x0;
+        let x71 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x1;
+        let x72 = x2 * x24;
+        let x73 = q[1] * x2;
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.09619579408383098) * x73;
+        let x75 = x70 - x74;
+        let x76 = x71 + x72;
+        let x77 = x0 * x76;
+        let x78 = ::eom_sim::Lanes::<W>::splat(22.5) * x77;
+        let x79 = x1 * x75;
+        let x80 = ::eom_sim::Lanes::<W>::splat(22.5) * x79;
+        let x81 = ::eom_sim::Lanes::<W>::splat(22.5) * x67;
+        let x82 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x69;
+        let x83 = x39 + x78;
+        let x84 = x83 - x80;
+        let x85 = x84 - x81;
+        let x86 = x85 - x82;
+        let x87 = ::eom_sim::Lanes::<W>::splat(2.2665600000000006) * x68;
+        let x88 = ::eom_sim::Lanes::<W>::splat(0.5666399999999999) * x68;
+        let x89 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x66;
+        let x90 = x42 + x56;
+        let x91 = x59 + x90;
+        let x92 = x62 + x91;
+        let x93 = x92 - x89;
+        let x94 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * x57;
+        let x95 = x61 + x63;
+        let x96 = x95 - x94;
+        let x97 = ::eom_sim::Lanes::<W>::splat(113777777.77777782) * q[4];
+        let x98 = ::eom_sim::Lanes::<W>::splat(2.2665600000000006) * x43;
+        let x99 = x64 + x87;
+        let x100 = x48 + x99;
+        let x101 = x45 + x100;
+        let x102 = x54 + x101;
+        let x103 = x102 - x97;
+        let x104 = x103 - x98;
+        let x105 = ::eom_sim::Lanes::<W>::splat(0.5666399999999999) * x43;
+        let x106 = ::eom_sim::Lanes::<W>::splat(113777777.77777782) * q[3];
+        let x107 = x46 + x55;
+        let x108 = x88 + x107;
+        let x109 = x49 + x108;
+        let x110 = x65 + x109;
+        let x111 = x110 - x105;
+        let x112 = x111 - x106;
+        out[0] = x86;
+        out[1] = x93;
+        out[2] = x96;
+        out[3] = x104;
+        out[4] = x112;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (169 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        udot: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * q[3];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[4];
+        let x5 = x3 + x4;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[3];
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * q[4];
+        let x8 = x6 + x7;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * q[3];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[4];
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * u[3];
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * u[4];
+        let x13 = x11 + x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * u[3];
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * u[4];
+        let x16 = x14 + x15;
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * u[1];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * u[2];
+        let x19 = x17 - x18;
+        let x20 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * u[3];
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * u[4];
+        let x22 = x20 + x21;
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.03022080000000002) * q[3];
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.015110400000000001) * q[4];
+        let x25 = q[3] * x5;
+        let x26 = q[4] * x8;
+        let x27 = q[1] * q[1];
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x27;
+        let x29 = q[2] * q[2];
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x29;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.10073600000000002) * q[3];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.025183999999999998) * q[4];
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.0226656) + x31;
+        let x34 = x32 + x33;
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.014429369112574654) + x9;
+        let x36 = x10 + x35;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[4];
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.007214684556287328) + x37;
+        let x39 = -x38;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[2];
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[1];
+        let x42 = x40 - x41;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.01511040000000001) * u[3];
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.007555200000000001) * u[4];
+        let x45 = q[3] * x13;
+        let x46 = q[4] * x16;
+        let x47 = q[1] * u[1];
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x47;
+        let x49 = q[2] * u[2];
+        let x50 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x49;
+        let x51 = x46 + x50;
+        let x52 = x45 + x51;
+        let x53 = x43 + x52;
+        let x54 = x44 + x53;
+        let x55 = x48 + x54;
+        let x56 = x2 * x55;
+        let x57 = ::eom_sim::Lanes::<W>::splat(2.0) * x56;
+        let x58 = -x2;
+        let x59 = x0 * x2;
+        let x60 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x59;
+        let x61 = x1 * x2;
+        let x62 = x2 * x58;
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.01511040000000001) * x62;
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.007555200000000001) * x62;
+        let x65 = x2 * x5;
+        let x66 = x58 * x65;
+        let x67 = x8 * x62;
+        let x68 = ::eom_sim::Lanes::<W>::splat(2.0) * u[0];
+        let x69 = ::eom_sim::Lanes::<W>::splat(300.0) + x68;
+        let x70 = -x69;
+        let x71 = u[1] * x70;
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * x71;
+        let x73 = x19 * x70;
+        let x74 = x22 * x69;
+        let x75 = u[4] * x69;
+        let x76 = q[1] * x62;
+        let x77 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x76;
+        let x78 = q[2] * x62;
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x78;
+        let x80 = ::eom_sim::Lanes::<W>::splat(0.004533925887999999) + x28;
+        let x81 = x25 + x80;
+        let x82 = x30 + x81;
+        let x83 = x26 + x82;
+        let x84 = x23 + x83;
+        let x85 = x24 + x84;
+        let x86 = ::eom_sim::Lanes::<W>::splat(123144.33236891183) * q[1];
+        let x87 = ::eom_sim::Lanes::<W>::splat(1970309.3179025871) * q[2];
+        let x88 = ::eom_sim::Lanes::<W>::splat(227555555.55555543) * q[3];
+        let x89 = ::eom_sim::Lanes::<W>::splat(99555555.5555556) * q[4];
+        let x90 = u[0] * x0;
+        let x91 = x34 * x90;
+        let x92 = u[0] * x1;
+        let x93 = q[1] * x92;
+        let x94 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x0;
+        let x95 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x1;
+        let x96 = x2 * x34;
+        let x97 = q[1] * x2;
+        let x98 = ::eom_sim::Lanes::<W>::splat(0.09619579408383098) * x97;
+        let x99 = x94 - x98;
+        let x100 = x95 + x96;
+        let x101 = x0 * x100;
+        let x102 = ::eom_sim::Lanes::<W>::splat(22.5) * x101;
+        let x103 = x1 * x99;
+        let x104 = ::eom_sim::Lanes::<W>::splat(2.2665600000000006) * x92;
+        let x105 = ::eom_sim::Lanes::<W>::splat(0.5666399999999999) * x92;
+        let x106 = udot[0] * x85;
+        let x107 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * udot[1];
+        let x108 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * udot[2];
+        let x109 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * udot[3];
+        let x110 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * udot[4];
+        let x111 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * udot[3];
+        let x112 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * udot[4];
+        let x113 = udot[1] * x36;
+        let x114 = udot[0] * x36;
+        let x115 = udot[2] * x39;
+        let x116 = udot[0] * x39;
+        let x117 = q[1] * udot[3];
+        let x118 = ::eom_sim::Lanes::<W>::splat(22.5) * x103;
+        let x119 = ::eom_sim::Lanes::<W>::splat(22.5) * x91;
+        let x120 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * x117;
+        let x121 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x93;
+        let x122 = x102 + x115;
+        let x123 = x57 + x122;
+        let x124 = x106 + x123;
+        let x125 = x113 + x124;
+        let x126 = x125 - x118;
+        let x127 = x126 - x119;
+        let x128 = x127 - x120;
+        let x129 = x128 - x121;
+        let x130 = q[1] * udot[0];
+        let x131 = udot[4] * x42;
+        let x132 = x129 + x131;
+        let x133 = udot[0] * x42;
+        let x134 = ::eom_sim::Lanes::<W>::splat(0.075552) * udot[5];
+        let x135 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x90;
+        let x136 = x60 + x114;
+        let x137 = x74 + x136;
+        let x138 = x77 + x137;
+        let x139 = x107 + x138;
+        let x140 = x86 + x139;
+        let x141 = x140 - x135;
+        let x142 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * x75;
+        let x143 = x87 + x108;
+        let x144 = x116 + x143;
+        let x145 = x79 + x144;
+        let x146 = x145 - x142;
+        let x147 = ::eom_sim::Lanes::<W>::splat(113777777.77777782) * q[4];
+        let x148 = ::eom_sim::Lanes::<W>::splat(2.2665600000000006) * x61;
+        let x149 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * x130;
+        let x150 = x88 + x110;
+        let x151 = x104 + x150;
+        let x152 = x66 + x151;
+        let x153 = x63 + x152;
+        let x154 = x72 + x153;
+        let x155 = x109 + x154;
+        let x156 = x155 - x147;
+        let x157 = x156 - x148;
+        let x158 = x157 - x149;
+        let x159 = ::eom_sim::Lanes::<W>::splat(0.5666399999999999) * x61;
+        let x160 = ::eom_sim::Lanes::<W>::splat(113777777.77777782) * q[3];
+        let x161 = x64 + x73;
+        let x162 = x111 + x161;
+        let x163 = x105 + x162;
+        let x164 = x67 + x163;
+        let x165 = x133 + x164;
+        let x166 = x112 + x165;
+        let x167 = x89 + x166;
+        let x168 = x167 - x159;
+        let x169 = x168 - x160;
+        out[0] = x132;
+        out[1] = x141;
+        out[2] = x146;
+        out[3] = x158;
+        out[4] = x169;
+        out[5] = x134;
+    }
+    /// `energy` of `W` states at once, one per lane (114 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let (x0, x1) = q[0].sin_cos();
+        let x2 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * q[3];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[4];
+        let x5 = x3 + x4;
+        let x6 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[3];
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * q[4];
+        let x8 = x6 + x7;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * q[3];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[4];
+        let x11 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * u[3];
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * u[4];
+        let x13 = x11 + x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * u[3];
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * u[4];
+        let x16 = x14 + x15;
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.03022080000000002) * q[3];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.015110400000000001) * q[4];
+        let x19 = q[3] * x5;
+        let x20 = q[4] * x8;
+        let x21 = q[1] * q[1];
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x21;
+        let x23 = q[2] * q[2];
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x23;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.10073600000000002) * q[3];
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.025183999999999998) * q[4];
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.0226656) + x25;
+        let x28 = x26 + x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.014429369112574654) + x9;
+        let x30 = x10 + x29;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[4];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.007214684556287328) + x31;
+        let x33 = -x32;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[2];
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[1];
+        let x36 = x34 - x35;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.10073600000000002) * u[3];
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.025183999999999998) * u[4];
+        let x39 = x37 + x38;
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.004533925887999999) + x22;
+        let x41 = x19 + x40;
+        let x42 = x24 + x41;
+        let x43 = x20 + x42;
+        let x44 = x17 + x43;
+        let x45 = x18 + x44;
+        let x46 = ::eom_sim::Lanes::<W>::splat(227555555.55555543) * q[3];
+        let x47 = ::eom_sim::Lanes::<W>::splat(113777777.77777782) * q[4];
+        let x48 = x46 - x47;
+        let x49 = ::eom_sim::Lanes::<W>::splat(99555555.5555556) * q[4];
+        let x50 = ::eom_sim::Lanes::<W>::splat(113777777.77777782) * q[3];
+        let x51 = x49 - x50;
+        let x52 = q[4] * x51;
+        let x53 = ::eom_sim::Lanes::<W>::splat(0.5) * x52;
+        let x54 = q[3] * x48;
+        let x55 = ::eom_sim::Lanes::<W>::splat(0.5) * x54;
+        let x56 = ::eom_sim::Lanes::<W>::splat(61572.16618445591) * x21;
+        let x57 = ::eom_sim::Lanes::<W>::splat(985154.6589512936) * x23;
+        let x58 = x53 + x55;
+        let x59 = x56 + x58;
+        let x60 = x57 + x59;
+        let x61 = x2 * x45;
+        let x62 = x1 * x28;
+        let x63 = ::eom_sim::Lanes::<W>::splat(22.5) * x62;
+        let x64 = q[1] * x0;
+        let x65 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x64;
+        let x66 = x61 + x63;
+        let x67 = x66 - x65;
+        let x68 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x0;
+        let x69 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x1;
+        let x70 = x2 * x28;
+        let x71 = q[1] * x2;
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.09619579408383098) * x71;
+        let x73 = x68 - x72;
+        let x74 = x69 + x70;
+        let x75 = x1 * x74;
+        let x76 = ::eom_sim::Lanes::<W>::splat(11.25) * x75;
+        let x77 = x0 * x73;
+        let x78 = ::eom_sim::Lanes::<W>::splat(11.25) * x77;
+        let x79 = x2 * x67;
+        let x80 = ::eom_sim::Lanes::<W>::splat(0.5) * x79;
+        let x81 = u[1] * x30;
+        let x82 = u[2] * x33;
+        let x83 = q[1] * u[3];
+        let x84 = u[4] * x36;
+        let x85 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * x83;
+        let x86 = x81 + x82;
+        let x87 = x84 + x86;
+        let x88 = x87 - x85;
+        let x89 = u[1] * u[1];
+        let x90 = u[2] * u[2];
+        let x91 = u[3] * x13;
+        let x92 = ::eom_sim::Lanes::<W>::splat(0.5) * x91;
+        let x93 = u[4] * x16;
+        let x94 = ::eom_sim::Lanes::<W>::splat(0.5) * x93;
+        let x95 = ::eom_sim::Lanes::<W>::splat(0.03777599999999998) * x89;
+        let x96 = ::eom_sim::Lanes::<W>::splat(0.037776000000000004) * x90;
+        let x97 = x2 * x88;
+        let x98 = x0 * x39;
+        let x99 = ::eom_sim::Lanes::<W>::splat(22.5) * x98;
+        let x100 = u[1] * x1;
+        let x101 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x100;
+        let x102 = ::eom_sim::Lanes::<W>::splat(30.678749999999997) + x99;
+        let x103 = x97 + x102;
+        let x104 = x80 + x103;
+        let x105 = x92 + x104;
+        let x106 = x95 + x105;
+        let x107 = x78 + x106;
+        let x108 = x76 + x107;
+        let x109 = x101 + x108;
+        let x110 = x94 + x109;
+        let x111 = x96 + x110;
+        let x112 = u[5] * u[5];
+        let x113 = ::eom_sim::Lanes::<W>::splat(0.037776) * x112;
+        let x114 = x111 + x113;
+        out[0] = x114;
+        out[1] = x60;
+    }
+    /// `momentum` of `W` states at once, one per lane (90 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(150.0) * t;
+        let (x1, x2) = x0.sin_cos();
+        let (x3, x4) = q[0].sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x6 = q[0] + x0;
+        let (x7, x8) = x6.sin_cos();
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.08058879999999995) * q[3];
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[4];
+        let x11 = x9 + x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.010073600000000002) * q[3];
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.020147200000000007) * q[4];
+        let x14 = x12 + x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * q[3];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[4];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.03022080000000002) * q[3];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.015110400000000001) * q[4];
+        let x19 = q[3] * x11;
+        let x20 = q[4] * x14;
+        let x21 = q[1] * q[1];
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.07555199999999997) * x21;
+        let x23 = q[2] * q[2];
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.07555200000000001) * x23;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.10073600000000002) * q[3];
+        let x26 = ::eom_sim::Lanes::<W>::splat(0.025183999999999998) * q[4];
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.0226656) + x25;
+        let x28 = x26 + x27;
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.014429369112574654) + x15;
+        let x30 = x16 + x29;
+        let x31 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[4];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.007214684556287328) + x31;
+        let x33 = -x32;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.024048948520957743) * q[2];
+        let x35 = ::eom_sim::Lanes::<W>::splat(0.009111210169962101) * q[1];
+        let x36 = x34 - x35;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.09619579408383098) * u[1];
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.10073600000000002) * u[3];
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.025183999999999998) * u[4];
+        let x40 = ::eom_sim::Lanes::<W>::splat(0.004533925887999999) + x22;
+        let x41 = x19 + x40;
+        let x42 = x24 + x41;
+        let x43 = x20 + x42;
+        let x44 = x17 + x43;
+        let x45 = x18 + x44;
+        let x46 = x5 * x45;
+        let x47 = x4 * x28;
+        let x48 = ::eom_sim::Lanes::<W>::splat(22.5) * x47;
+        let x49 = q[1] * x3;
+        let x50 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x3;
+        let x51 = ::eom_sim::Lanes::<W>::splat(3.3998400000000024) * x4;
+        let x52 = x5 * x28;
+        let x53 = q[1] * x5;
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.075552) * u[5];
+        let x55 = u[1] * x30;
+        let x56 = u[2] * x33;
+        let x57 = q[1] * u[3];
+        let x58 = u[4] * x36;
+        let x59 = ::eom_sim::Lanes::<W>::splat(4.05) * x2;
+        let x60 = ::eom_sim::Lanes::<W>::splat(0.09619579408383098) * x53;
+        let x61 = x38 + x39;
+        let x62 = x50 + x61;
+        let x63 = x62 - x60;
+        let x64 = x37 + x51;
+        let x65 = x52 + x64;
+        let x66 = x8 * x63;
+        let x67 = x7 * x65;
+        let x68 = x66 - x67;
+        let x69 = x7 * x63;
+        let x70 = x8 * x65;
+        let x71 = x69 + x70;
+        let x72 = x2 * x71;
+        let x73 = ::eom_sim::Lanes::<W>::splat(0.15) * x72;
+        let x74 = x1 * x68;
+        let x75 = ::eom_sim::Lanes::<W>::splat(0.0779733737439068) * x57;
+        let x76 = ::eom_sim::Lanes::<W>::splat(2.1644053668861973) * x49;
+        let x77 = ::eom_sim::Lanes::<W>::splat(0.15) * x74;
+        let x78 = x48 + x56;
+        let x79 = x55 + x78;
+        let x80 = x46 + x79;
+        let x81 = x58 + x80;
+        let x82 = x73 + x81;
+        let x83 = x82 - x75;
+        let x84 = x83 - x76;
+        let x85 = x84 - x77;
+        let x86 = ::eom_sim::Lanes::<W>::splat(0.40904999999999997) + x85;
+        let x87 = x59 + x70;
+        let x88 = x69 + x87;
+        let x89 = ::eom_sim::Lanes::<W>::splat(4.05) * x1;
+        let x90 = x54 + x66;
+        let x91 = x90 - x67;
+        let x92 = x91 - x89;
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = x86;
+        out[3] = x92;
+        out[4] = x88;
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+    /// `constraints` of `W` states at once, one per lane (130 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (18 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    pub fn constraints_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 18],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(150.0) * t;
+        let (x1, x2) = x0.sin_cos();
+        let x3 = ::eom_sim::Lanes::<W>::splat(150.0) + u[0];
+        let x4 = q[0] + x0;
+        let (x5, x6) = x4.sin_cos();
+        let x7 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * q[2];
+        let x8 = ::eom_sim::Lanes::<W>::splat(10.471975511965978) * q[1];
+        let x9 = x7 - x8;
+        let (x10, x11) = x9.sin_cos();
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.3) + q[4];
+        let x13 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * u[2];
+        let x14 = ::eom_sim::Lanes::<W>::splat(10.471975511965978) * u[1];
+        let x15 = x3 + x13;
+        let x16 = x15 - x14;
+        let x17 = x0 + x7;
+        let x18 = q[0] + x17;
+        let x19 = x18 - x8;
+        let (x20, x21) = x19.sin_cos();
+        let x22 = -x20;
+        let x23 = x6 * x12;
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.15) * x2;
+        let x25 = q[5] - x23;
+        let x26 = x25 - x24;
+        let x27 = x5 * x12;
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.15) * x1;
+        let x29 = x27 + x28;
+        let x30 = -x29;
+        let x31 = x21 * x26;
+        let x32 = x20 * x30;
+        let x33 = x31 + x32;
+        let x34 = x20 * x26;
+        let x35 = x21 * x30;
+        let x36 = x35 - x34;
+        let x37 = u[4] * x6;
+        let x38 = x3 * x5;
+        let x39 = x12 * x38;
+        let x40 = ::eom_sim::Lanes::<W>::splat(22.5) * x1;
+        let x41 = u[5] + x40;
+        let x42 = x39 + x41;
+        let x43 = x42 - x37;
+        let x44 = x3 * x12;
+        let x45 = x6 * x44;
+        let x46 = u[4] * x5;
+        let x47 = ::eom_sim::Lanes::<W>::splat(22.5) * x2;
+        let x48 = x45 + x46;
+        let x49 = x47 + x48;
+        let x50 = -x49;
+        let x51 = x16 * x20;
+        let x52 = x26 * x51;
+        let x53 = x21 * x43;
+        let x54 = x20 * x50;
+        let x55 = x16 * x35;
+        let x56 = x53 + x54;
+        let x57 = x55 + x56;
+        let x58 = x57 - x52;
+        let x59 = x3 * x3;
+        let x60 = x12 * x59;
+        let x61 = x6 * x60;
+        let x62 = ::eom_sim::Lanes::<W>::splat(3375.0) * x2;
+        let x63 = u[4] * x38;
+        let x64 = ::eom_sim::Lanes::<W>::splat(2.0) * x63;
+        let x65 = x61 + x64;
+        let x66 = x62 + x65;
+        let x67 = x5 * x59;
+        let x68 = x12 * x67;
+        let x69 = ::eom_sim::Lanes::<W>::splat(3375.0) * x1;
+        let x70 = u[4] * x3;
+        let x71 = x6 * x70;
+        let x72 = ::eom_sim::Lanes::<W>::splat(2.0) * x71;
+        let x73 = x68 + x69;
+        let x74 = x73 - x72;
+        let x75 = x16 * x16;
+        let x76 = x16 * x21;
+        let x77 = x50 * x76;
+        let x78 = x21 * x75;
+        let x79 = x26 * x78;
+        let x80 = x20 * x74;
+        let x81 = x30 * x75;
+        let x82 = x20 * x81;
+        let x83 = x21 * x66;
+        let x84 = x20 * x43;
+        let x85 = x16 * x84;
+        let x86 = ::eom_sim::Lanes::<W>::splat(2.0) * x85;
+        let x87 = ::eom_sim::Lanes::<W>::splat(2.0) * x77;
+        let x88 = x82 + x86;
+        let x89 = x79 + x88;
+        let x90 = x89 - x87;
+        let x91 = x90 - x83;
+        let x92 = x91 - x80;
+        let x93 = x26 * x76;
+        let x94 = x21 * x50;
+        let x95 = x16 * x32;
+        let x96 = x94 - x84;
+        let x97 = x96 - x95;
+        let x98 = x97 - x93;
+        let x99 = x21 * x81;
+        let x100 = x16 * x53;
+        let x101 = ::eom_sim::Lanes::<W>::splat(2.0) * x100;
+        let x102 = x50 * x51;
+        let x103 = ::eom_sim::Lanes::<W>::splat(2.0) * x102;
+        let x104 = x20 * x66;
+        let x105 = x20 * x75;
+        let x106 = x26 * x105;
+        let x107 = x21 * x74;
+        let x108 = x101 + x104;
+        let x109 = x99 + x108;
+        let x110 = x103 + x109;
+        let x111 = x110 - x106;
+        let x112 = x111 - x107;
+        let x113 = x10 * x12;
+        let x114 = x35 - x113;
+        let x115 = x114 - x34;
+        let x116 = ::eom_sim::Lanes::<W>::splat(10.471975511965978) * x34;
+        let x117 = ::eom_sim::Lanes::<W>::splat(10.471975511965978) * x35;
+        let x118 = x116 - x117;
+        let x119 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * x35;
+        let x120 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * x34;
+        let x121 = x119 - x120;
+        let x122 = -x11;
+        let x123 = x11 * x12;
+        let x124 = x32 + x123;
+        let x125 = x31 + x124;
+        let x126 = -x125;
+        let x127 = ::eom_sim::Lanes::<W>::splat(10.471975511965978) * x31;
+        let x128 = ::eom_sim::Lanes::<W>::splat(10.471975511965978) * x32;
+        let x129 = x127 + x128;
+        let x130 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * x32;
+        let x131 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * x31;
+        let x132 = x130 + x131;
+        let x133 = -x132;
+        out[0] = x33;
+        out[2] = x58;
+        out[4] = x92;
+        out[1] = x36;
+        out[3] = x98;
+        out[5] = x112;
+        out[6] = x115;
+        out[7] = x118;
+        out[8] = x121;
+        out[9] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = x122;
+        out[11] = x21;
+        out[12] = x126;
+        out[13] = x129;
+        out[14] = x133;
+        out[15] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[16] = x10;
+        out[17] = x22;
+    }
+    /// `cut_joint_reactions` of `W` states at once, one per lane (0 operations per state): force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint. Arguments `t`, `q` as `cut_joint_reactions`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("cut_joint_reactions")`'s result.
+    pub fn cut_joint_reactions_lanes<const W: usize>(
+        m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[0]);
+        out[1] = ::eom_sim::Lanes::<W>::from_fn(|l| m[l].multipliers[1]);
+        out[2] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `constraints`, `cut_joint_reactions`.
+impl ::eom_sim::Batched for SliderCrankSimeon {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 36]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            "constraints" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 18]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::constraints_lanes(this, t, &q, &u, out);
+                true
+            }
+            "cut_joint_reactions" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let Some(lambda) = ::eom_sim::batch::__private::arg_lanes::<
+                    2,
+                    W,
+                >(at.lambda, true) else { return false };
+                let mut with_lambda = *models;
+                for (l, m) in with_lambda.iter_mut().enumerate() {
+                    m.multipliers = ::eom_sim::batch::__private::lane(&lambda, l);
+                }
+                let this = &with_lambda;
+                Self::cut_joint_reactions_lanes(this, t, &q, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `slider_crank_simeon` (12 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<12> for SliderCrankSimeon {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 12],
+        dy: &mut [::eom_sim::Lanes<W>; 12],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 6] = [y[0], y[1], y[2], y[3], y[4], y[5]];
+        let u: [::eom_sim::Lanes<W>; 6] = [y[6], y[7], y[8], y[9], y[10], y[11]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 6];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 6];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 6],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = qdot[3];
+        dy[4] = qdot[4];
+        dy[5] = qdot[5];
+        dy[6] = udot[0];
+        dy[7] = udot[1];
+        dy[8] = udot[2];
+        dy[9] = udot[3];
+        dy[10] = udot[4];
+        dy[11] = udot[5];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 12],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `slider_crank_simeon` (12 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<12> for SliderCrankSimeon {
     fn rhs(&self, t: f64, y: &[f64; 12], dy: &mut [f64; 12]) {

@@ -888,6 +888,856 @@ impl ::eom_sim::ConstrainedModel for SpinUp {
         _jacobian: &mut [f64; 0],
     ) {}
 }
+/// The generated functions over lanes: `W` states per call (see
+/// `eom_sim::batch`).
+impl SpinUp {
+    /// `qdot` of `W` states at once, one per lane (0 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    pub fn qdot_lanes<const W: usize>(
+        _m: &[Self; W],
+        _q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        out[0] = u[0];
+        out[1] = u[1];
+        out[2] = u[2];
+        out[3] = u[3];
+        out[4] = u[4];
+        out[5] = u[5];
+    }
+    /// `forward_dynamics` of `W` states at once, one per lane (89 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    pub fn forward_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        _u: &[::eom_sim::Lanes<W>; 6],
+        tau: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(15.0) - t;
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.41887902047863906) * t;
+        let (x2, x3) = x1.sin_cos();
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.4) * t;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.9549296585513721) * x2;
+        let x6 = x4 - x5;
+        let x7 = ::eom_sim::Lanes::select(x0, x6, ::eom_sim::Lanes::<W>::splat(6.0));
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.4) * x3;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.4) - x8;
+        let x10 = ::eom_sim::Lanes::select(x0, x9, ::eom_sim::Lanes::<W>::splat(0.0));
+        let x11 = x7 * x7;
+        let x12 = ::eom_sim::Lanes::<W>::splat(1.1933363815498474) * q[0];
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[2];
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[4];
+        let x15 = x12 + x13;
+        let x16 = x15 - x14;
+        let x17 = ::eom_sim::Lanes::<W>::splat(1.1933363815498466) * q[1];
+        let x18 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[3];
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[5];
+        let x20 = x17 + x18;
+        let x21 = x20 - x19;
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[0];
+        let x23 = ::eom_sim::Lanes::<W>::splat(6.478223351576099) * q[2];
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[4];
+        let x25 = x22 + x23;
+        let x26 = x25 - x24;
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[1];
+        let x28 = ::eom_sim::Lanes::<W>::splat(6.4782233515760925) * q[3];
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[5];
+        let x30 = x27 + x28;
+        let x31 = x30 - x29;
+        let x32 = ::eom_sim::Lanes::<W>::splat(17.859467262632677) * q[4];
+        let x33 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[2];
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[0];
+        let x35 = x32 - x33;
+        let x36 = x35 - x34;
+        let x37 = ::eom_sim::Lanes::<W>::splat(17.859467262632528) * q[5];
+        let x38 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[3];
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[1];
+        let x40 = x37 - x38;
+        let x41 = x40 - x39;
+        let x42 = q[0] * x11;
+        let x43 = x11 * x16;
+        let x44 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * tau[0];
+        let x45 = ::eom_sim::Lanes::<W>::splat(1.000000000000001) * tau[1];
+        let x46 = x11 * x21;
+        let x47 = ::eom_sim::Lanes::<W>::splat(1.000000000000001) * x46;
+        let x48 = ::eom_sim::Lanes::<W>::splat(14.422781929063435) * q[1];
+        let x49 = x45 - x47;
+        let x50 = x49 - x48;
+        let x51 = x11 * x26;
+        let x52 = q[2] * x11;
+        let x53 = ::eom_sim::Lanes::<W>::splat(0.9999999999999989) * tau[2];
+        let x54 = x11 * x31;
+        let x55 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * tau[3];
+        let x56 = ::eom_sim::Lanes::<W>::splat(1.0000000000000002) * x54;
+        let x57 = ::eom_sim::Lanes::<W>::splat(566.4761185942555) * q[3];
+        let x58 = x55 - x56;
+        let x59 = x58 - x57;
+        let x60 = q[4] * x11;
+        let x61 = ::eom_sim::Lanes::<W>::splat(0.9999999999999944) * tau[4];
+        let x62 = x11 * x36;
+        let x63 = x11 * x41;
+        let x64 = ::eom_sim::Lanes::<W>::splat(1.0000000000000024) * tau[5];
+        let x65 = ::eom_sim::Lanes::<W>::splat(4443.232339175356) * q[5];
+        let x66 = ::eom_sim::Lanes::<W>::splat(1.0000000000000024) * x63;
+        let x67 = x64 - x65;
+        let x68 = x67 - x66;
+        let x69 = ::eom_sim::Lanes::<W>::splat(19.70470174187628) * x10;
+        let x70 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x43;
+        let x71 = ::eom_sim::Lanes::<W>::splat(14.42278192906703) * q[0];
+        let x72 = x42 + x44;
+        let x73 = x72 - x69;
+        let x74 = x73 - x70;
+        let x75 = x74 - x71;
+        let x76 = ::eom_sim::Lanes::<W>::splat(3.144252782868361) * x10;
+        let x77 = ::eom_sim::Lanes::<W>::splat(566.4761185942589) * q[2];
+        let x78 = ::eom_sim::Lanes::<W>::splat(0.9999999999999989) * x51;
+        let x79 = x53 + x76;
+        let x80 = x52 + x79;
+        let x81 = x80 - x77;
+        let x82 = x81 - x78;
+        let x83 = ::eom_sim::Lanes::<W>::splat(4443.232339175373) * q[4];
+        let x84 = ::eom_sim::Lanes::<W>::splat(1.1229311870818812) * x10;
+        let x85 = ::eom_sim::Lanes::<W>::splat(0.9999999999999944) * x62;
+        let x86 = x60 + x61;
+        let x87 = x86 - x83;
+        let x88 = x87 - x84;
+        let x89 = x88 - x85;
+        out[0] = x75;
+        out[1] = x50;
+        out[2] = x82;
+        out[3] = x59;
+        out[4] = x89;
+        out[5] = x68;
+    }
+    /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (36 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
+    pub fn mass_matrix_lanes<const W: usize>(
+        _m: &[Self; W],
+        _t: ::eom_sim::Lanes<W>,
+        _q: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 36],
+    ) {
+        out[0] = ::eom_sim::Lanes::<W>::splat(0.9999999999999994);
+        out[6] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[1] = out[6];
+        out[7] = ::eom_sim::Lanes::<W>::splat(0.999999999999999);
+        out[12] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[2] = out[12];
+        out[13] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[8] = out[13];
+        out[14] = ::eom_sim::Lanes::<W>::splat(1.000000000000001);
+        out[18] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[3] = out[18];
+        out[19] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[9] = out[19];
+        out[20] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[15] = out[20];
+        out[21] = ::eom_sim::Lanes::<W>::splat(0.9999999999999999);
+        out[24] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[4] = out[24];
+        out[25] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[10] = out[25];
+        out[26] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[16] = out[26];
+        out[27] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[22] = out[27];
+        out[28] = ::eom_sim::Lanes::<W>::splat(1.0000000000000056);
+        out[30] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[5] = out[30];
+        out[31] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[11] = out[31];
+        out[32] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[17] = out[32];
+        out[33] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[23] = out[33];
+        out[34] = ::eom_sim::Lanes::<W>::splat(0.0);
+        out[29] = out[34];
+        out[35] = ::eom_sim::Lanes::<W>::splat(0.9999999999999977);
+    }
+    /// `bias` of `W` states at once, one per lane (74 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    pub fn bias_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        _u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(15.0) - t;
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.41887902047863906) * t;
+        let (x2, x3) = x1.sin_cos();
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.4) * t;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.9549296585513721) * x2;
+        let x6 = x4 - x5;
+        let x7 = ::eom_sim::Lanes::select(x0, x6, ::eom_sim::Lanes::<W>::splat(6.0));
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.4) * x3;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.4) - x8;
+        let x10 = ::eom_sim::Lanes::select(x0, x9, ::eom_sim::Lanes::<W>::splat(0.0));
+        let x11 = x7 * x7;
+        let x12 = q[0] * x11;
+        let x13 = q[2] * x11;
+        let x14 = q[4] * x11;
+        let x15 = ::eom_sim::Lanes::<W>::splat(1.1933363815498474) * q[0];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[2];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[4];
+        let x18 = x15 + x16;
+        let x19 = x18 - x17;
+        let x20 = ::eom_sim::Lanes::<W>::splat(1.1933363815498466) * q[1];
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[3];
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[5];
+        let x23 = x20 + x21;
+        let x24 = x23 - x22;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[0];
+        let x26 = ::eom_sim::Lanes::<W>::splat(6.478223351576099) * q[2];
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[4];
+        let x28 = x25 + x26;
+        let x29 = x28 - x27;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[1];
+        let x31 = ::eom_sim::Lanes::<W>::splat(6.4782233515760925) * q[3];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[5];
+        let x33 = x30 + x31;
+        let x34 = x33 - x32;
+        let x35 = ::eom_sim::Lanes::<W>::splat(17.859467262632677) * q[4];
+        let x36 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[2];
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[0];
+        let x38 = x35 - x36;
+        let x39 = x38 - x37;
+        let x40 = ::eom_sim::Lanes::<W>::splat(17.859467262632528) * q[5];
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[3];
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[1];
+        let x43 = x40 - x41;
+        let x44 = x43 - x42;
+        let x45 = x11 * x19;
+        let x46 = x11 * x24;
+        let x47 = x11 * x29;
+        let x48 = x11 * x34;
+        let x49 = x11 * x39;
+        let x50 = x11 * x44;
+        let x51 = ::eom_sim::Lanes::<W>::splat(14.422781929067021) * q[0];
+        let x52 = ::eom_sim::Lanes::<W>::splat(14.422781929063419) * q[1];
+        let x53 = ::eom_sim::Lanes::<W>::splat(566.4761185942596) * q[2];
+        let x54 = ::eom_sim::Lanes::<W>::splat(566.4761185942554) * q[3];
+        let x55 = ::eom_sim::Lanes::<W>::splat(4443.232339175398) * q[4];
+        let x56 = ::eom_sim::Lanes::<W>::splat(4443.232339175345) * q[5];
+        let x57 = ::eom_sim::Lanes::<W>::splat(19.704701741876267) * x10;
+        let x58 = ::eom_sim::Lanes::<W>::splat(1.1229311870818874) * x10;
+        let x59 = ::eom_sim::Lanes::<W>::splat(0.9999999999999994) * x12;
+        let x60 = x45 + x51;
+        let x61 = x57 + x60;
+        let x62 = x61 - x59;
+        let x63 = x46 + x52;
+        let x64 = ::eom_sim::Lanes::<W>::splat(1.000000000000001) * x13;
+        let x65 = ::eom_sim::Lanes::<W>::splat(3.1442527828683646) * x10;
+        let x66 = x47 + x53;
+        let x67 = x66 - x64;
+        let x68 = x67 - x65;
+        let x69 = x48 + x54;
+        let x70 = ::eom_sim::Lanes::<W>::splat(1.0000000000000056) * x14;
+        let x71 = x55 + x58;
+        let x72 = x49 + x71;
+        let x73 = x72 - x70;
+        let x74 = x50 + x56;
+        out[0] = x62;
+        out[1] = x63;
+        out[2] = x68;
+        out[3] = x69;
+        out[4] = x73;
+        out[5] = x74;
+    }
+    /// `inverse_dynamics` of `W` states at once, one per lane (86 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    pub fn inverse_dynamics_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        _u: &[::eom_sim::Lanes<W>; 6],
+        udot: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(15.0) - t;
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.41887902047863906) * t;
+        let (x2, x3) = x1.sin_cos();
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.4) * t;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.9549296585513721) * x2;
+        let x6 = x4 - x5;
+        let x7 = ::eom_sim::Lanes::select(x0, x6, ::eom_sim::Lanes::<W>::splat(6.0));
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.4) * x3;
+        let x9 = ::eom_sim::Lanes::<W>::splat(0.4) - x8;
+        let x10 = ::eom_sim::Lanes::select(x0, x9, ::eom_sim::Lanes::<W>::splat(0.0));
+        let x11 = x7 * x7;
+        let x12 = q[0] * x11;
+        let x13 = q[2] * x11;
+        let x14 = q[4] * x11;
+        let x15 = ::eom_sim::Lanes::<W>::splat(1.1933363815498474) * q[0];
+        let x16 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[2];
+        let x17 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[4];
+        let x18 = x15 + x16;
+        let x19 = x18 - x17;
+        let x20 = ::eom_sim::Lanes::<W>::splat(1.1933363815498466) * q[1];
+        let x21 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[3];
+        let x22 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[5];
+        let x23 = x20 + x21;
+        let x24 = x23 - x22;
+        let x25 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[0];
+        let x26 = ::eom_sim::Lanes::<W>::splat(6.478223351576099) * q[2];
+        let x27 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[4];
+        let x28 = x25 + x26;
+        let x29 = x28 - x27;
+        let x30 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[1];
+        let x31 = ::eom_sim::Lanes::<W>::splat(6.4782233515760925) * q[3];
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[5];
+        let x33 = x30 + x31;
+        let x34 = x33 - x32;
+        let x35 = ::eom_sim::Lanes::<W>::splat(17.859467262632677) * q[4];
+        let x36 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[2];
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[0];
+        let x38 = x35 - x36;
+        let x39 = x38 - x37;
+        let x40 = ::eom_sim::Lanes::<W>::splat(17.859467262632528) * q[5];
+        let x41 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[3];
+        let x42 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[1];
+        let x43 = x40 - x41;
+        let x44 = x43 - x42;
+        let x45 = x11 * x19;
+        let x46 = x11 * x24;
+        let x47 = x11 * x29;
+        let x48 = x11 * x34;
+        let x49 = x11 * x39;
+        let x50 = x11 * x44;
+        let x51 = ::eom_sim::Lanes::<W>::splat(14.422781929067021) * q[0];
+        let x52 = ::eom_sim::Lanes::<W>::splat(14.422781929063419) * q[1];
+        let x53 = ::eom_sim::Lanes::<W>::splat(566.4761185942596) * q[2];
+        let x54 = ::eom_sim::Lanes::<W>::splat(566.4761185942554) * q[3];
+        let x55 = ::eom_sim::Lanes::<W>::splat(4443.232339175398) * q[4];
+        let x56 = ::eom_sim::Lanes::<W>::splat(4443.232339175345) * q[5];
+        let x57 = ::eom_sim::Lanes::<W>::splat(19.704701741876267) * x10;
+        let x58 = ::eom_sim::Lanes::<W>::splat(1.1229311870818874) * x10;
+        let x59 = ::eom_sim::Lanes::<W>::splat(0.9999999999999994) * udot[0];
+        let x60 = ::eom_sim::Lanes::<W>::splat(0.999999999999999) * udot[1];
+        let x61 = ::eom_sim::Lanes::<W>::splat(1.000000000000001) * udot[2];
+        let x62 = ::eom_sim::Lanes::<W>::splat(0.9999999999999999) * udot[3];
+        let x63 = ::eom_sim::Lanes::<W>::splat(1.0000000000000056) * udot[4];
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.9999999999999977) * udot[5];
+        let x65 = ::eom_sim::Lanes::<W>::splat(0.9999999999999994) * x12;
+        let x66 = x45 + x51;
+        let x67 = x59 + x66;
+        let x68 = x57 + x67;
+        let x69 = x68 - x65;
+        let x70 = x46 + x52;
+        let x71 = x60 + x70;
+        let x72 = ::eom_sim::Lanes::<W>::splat(1.000000000000001) * x13;
+        let x73 = ::eom_sim::Lanes::<W>::splat(3.1442527828683646) * x10;
+        let x74 = x47 + x53;
+        let x75 = x61 + x74;
+        let x76 = x75 - x72;
+        let x77 = x76 - x73;
+        let x78 = x48 + x54;
+        let x79 = x62 + x78;
+        let x80 = ::eom_sim::Lanes::<W>::splat(1.0000000000000056) * x14;
+        let x81 = x58 + x63;
+        let x82 = x55 + x81;
+        let x83 = x49 + x82;
+        let x84 = x83 - x80;
+        let x85 = x50 + x64;
+        let x86 = x56 + x85;
+        out[0] = x69;
+        out[1] = x71;
+        out[2] = x77;
+        out[3] = x79;
+        out[4] = x84;
+        out[5] = x86;
+    }
+    /// `energy` of `W` states at once, one per lane (100 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    pub fn energy_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 2],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(15.0) - t;
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.41887902047863906) * t;
+        let x2 = x1.sin();
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.4) * t;
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.9549296585513721) * x2;
+        let x5 = x3 - x4;
+        let x6 = ::eom_sim::Lanes::select(x0, x5, ::eom_sim::Lanes::<W>::splat(6.0));
+        let x7 = q[0] * q[0];
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.9999999999999994) * x7;
+        let x9 = q[2] * q[2];
+        let x10 = ::eom_sim::Lanes::<W>::splat(1.000000000000001) * x9;
+        let x11 = q[4] * q[4];
+        let x12 = ::eom_sim::Lanes::<W>::splat(1.0000000000000056) * x11;
+        let x13 = q[1] * q[1];
+        let x14 = q[3] * q[3];
+        let x15 = q[5] * q[5];
+        let x16 = ::eom_sim::Lanes::<W>::splat(19.704701741876267) * u[0];
+        let x17 = ::eom_sim::Lanes::<W>::splat(1.1229311870818874) * u[4];
+        let x18 = ::eom_sim::Lanes::<W>::splat(3.1442527828683646) * u[2];
+        let x19 = x16 + x17;
+        let x20 = x19 - x18;
+        let x21 = x6 * x6;
+        let x22 = ::eom_sim::Lanes::<W>::splat(1.1933363815498474) * q[0];
+        let x23 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[2];
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[4];
+        let x25 = x22 + x23;
+        let x26 = x25 - x24;
+        let x27 = ::eom_sim::Lanes::<W>::splat(1.1933363815498466) * q[1];
+        let x28 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[3];
+        let x29 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[5];
+        let x30 = x27 + x28;
+        let x31 = x30 - x29;
+        let x32 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[0];
+        let x33 = ::eom_sim::Lanes::<W>::splat(6.478223351576099) * q[2];
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[4];
+        let x35 = x32 + x33;
+        let x36 = x35 - x34;
+        let x37 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[1];
+        let x38 = ::eom_sim::Lanes::<W>::splat(6.4782233515760925) * q[3];
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[5];
+        let x40 = x37 + x38;
+        let x41 = x40 - x39;
+        let x42 = ::eom_sim::Lanes::<W>::splat(17.859467262632677) * q[4];
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[2];
+        let x44 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[0];
+        let x45 = x42 - x43;
+        let x46 = x45 - x44;
+        let x47 = ::eom_sim::Lanes::<W>::splat(17.859467262632528) * q[5];
+        let x48 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[3];
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[1];
+        let x50 = x47 - x48;
+        let x51 = x50 - x49;
+        let x52 = q[5] * x51;
+        let x53 = q[3] * x41;
+        let x54 = q[4] * x46;
+        let x55 = q[2] * x36;
+        let x56 = q[0] * x26;
+        let x57 = q[1] * x31;
+        let x58 = ::eom_sim::Lanes::<W>::splat(400.0) + x10;
+        let x59 = x12 + x58;
+        let x60 = x8 + x59;
+        let x61 = x60 - x57;
+        let x62 = x61 - x52;
+        let x63 = x62 - x54;
+        let x64 = x63 - x56;
+        let x65 = x64 - x53;
+        let x66 = x65 - x55;
+        let x67 = ::eom_sim::Lanes::<W>::splat(7.211390964531709) * x13;
+        let x68 = ::eom_sim::Lanes::<W>::splat(2221.6161695876726) * x15;
+        let x69 = ::eom_sim::Lanes::<W>::splat(283.2380592971298) * x9;
+        let x70 = ::eom_sim::Lanes::<W>::splat(7.211390964533511) * x7;
+        let x71 = ::eom_sim::Lanes::<W>::splat(283.2380592971277) * x14;
+        let x72 = ::eom_sim::Lanes::<W>::splat(2221.616169587699) * x11;
+        let x73 = x69 + x72;
+        let x74 = x67 + x73;
+        let x75 = x71 + x74;
+        let x76 = x68 + x75;
+        let x77 = x70 + x76;
+        let x78 = x21 * x66;
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.5) * x78;
+        let x80 = u[0] * u[0];
+        let x81 = u[1] * u[1];
+        let x82 = u[2] * u[2];
+        let x83 = u[3] * u[3];
+        let x84 = u[4] * u[4];
+        let x85 = u[5] * u[5];
+        let x86 = ::eom_sim::Lanes::<W>::splat(0.4999999999999997) * x80;
+        let x87 = ::eom_sim::Lanes::<W>::splat(0.49999999999999883) * x85;
+        let x88 = ::eom_sim::Lanes::<W>::splat(0.4999999999999995) * x81;
+        let x89 = ::eom_sim::Lanes::<W>::splat(0.5000000000000006) * x82;
+        let x90 = ::eom_sim::Lanes::<W>::splat(0.5000000000000028) * x84;
+        let x91 = ::eom_sim::Lanes::<W>::splat(0.49999999999999994) * x83;
+        let x92 = x6 * x20;
+        let x93 = x91 + x92;
+        let x94 = x87 + x93;
+        let x95 = x90 + x94;
+        let x96 = x89 + x95;
+        let x97 = x88 + x96;
+        let x98 = x86 + x97;
+        let x99 = x79 + x98;
+        out[0] = x99;
+        out[1] = x77;
+    }
+    /// `momentum` of `W` states at once, one per lane (216 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    pub fn momentum_lanes<const W: usize>(
+        _m: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        q: &[::eom_sim::Lanes<W>; 6],
+        u: &[::eom_sim::Lanes<W>; 6],
+        out: &mut [::eom_sim::Lanes<W>; 6],
+    ) {
+        let x0 = ::eom_sim::Lanes::<W>::splat(15.0) - t;
+        let x1 = t * t;
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.41887902047863906) * t;
+        let (x3, x4) = x2.sin_cos();
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.2) * x1;
+        let x6 = ::eom_sim::Lanes::<W>::splat(2.2797266319526) * x4;
+        let x7 = x5 + x6;
+        let x8 = x7 - ::eom_sim::Lanes::<W>::splat(2.2797266319526);
+        let x9 = ::eom_sim::Lanes::<W>::splat(6.0) * t;
+        let x10 = x9 - ::eom_sim::Lanes::<W>::splat(45.0);
+        let x11 = ::eom_sim::Lanes::select(x0, x8, x10);
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.4) * t;
+        let x13 = ::eom_sim::Lanes::<W>::splat(0.9549296585513721) * x3;
+        let x14 = x12 - x13;
+        let x15 = ::eom_sim::Lanes::select(x0, x14, ::eom_sim::Lanes::<W>::splat(6.0));
+        let (x16, x17) = x11.sin_cos();
+        let x18 = q[0] * q[0];
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.9999999999999994) * x18;
+        let x20 = q[2] * q[2];
+        let x21 = ::eom_sim::Lanes::<W>::splat(1.000000000000001) * x20;
+        let x22 = q[4] * q[4];
+        let x23 = ::eom_sim::Lanes::<W>::splat(1.0000000000000056) * x22;
+        let x24 = ::eom_sim::Lanes::<W>::splat(3.1442527828683358) * q[3];
+        let x25 = ::eom_sim::Lanes::<W>::splat(19.704701741876267) * q[1];
+        let x26 = ::eom_sim::Lanes::<W>::splat(1.1229311870819811) * q[5];
+        let x27 = x24 - x25;
+        let x28 = x27 - x26;
+        let x29 = q[4] * q[5];
+        let x30 = q[0] * q[1];
+        let x31 = q[2] * q[3];
+        let x32 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x31;
+        let x33 = ::eom_sim::Lanes::<W>::splat(1.000000000000002) * x29;
+        let x34 = ::eom_sim::Lanes::<W>::splat(0.9999999999999992) * x30;
+        let x35 = x32 + x33;
+        let x36 = x34 + x35;
+        let x37 = -x36;
+        let x38 = ::eom_sim::Lanes::<W>::splat(2.7123629917387855) * q[0];
+        let x39 = ::eom_sim::Lanes::<W>::splat(0.881344254868898) * q[4];
+        let x40 = ::eom_sim::Lanes::<W>::splat(1.5031969948581219) * q[2];
+        let x41 = x38 + x39;
+        let x42 = x41 - x40;
+        let x43 = ::eom_sim::Lanes::<W>::splat(19.704701741876267) * u[0];
+        let x44 = ::eom_sim::Lanes::<W>::splat(1.1229311870818874) * u[4];
+        let x45 = q[0] * u[1];
+        let x46 = ::eom_sim::Lanes::<W>::splat(0.9999999999999992) * x45;
+        let x47 = q[2] * u[3];
+        let x48 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x47;
+        let x49 = q[4] * u[5];
+        let x50 = ::eom_sim::Lanes::<W>::splat(1.000000000000002) * x49;
+        let x51 = ::eom_sim::Lanes::<W>::splat(2.7123629917387855) * u[0];
+        let x52 = ::eom_sim::Lanes::<W>::splat(2.712362991738784) * u[1];
+        let x53 = ::eom_sim::Lanes::<W>::splat(0.881344254868898) * u[4];
+        let x54 = ::eom_sim::Lanes::<W>::splat(0.8813442548689078) * u[5];
+        let x55 = ::eom_sim::Lanes::<W>::splat(1.5031969948581172) * u[3];
+        let x56 = x52 + x54;
+        let x57 = x56 - x55;
+        let x58 = q[1] * u[0];
+        let x59 = q[5] * u[4];
+        let x60 = q[3] * u[2];
+        let x61 = ::eom_sim::Lanes::<W>::splat(3.1442527828683358) * u[3];
+        let x62 = ::eom_sim::Lanes::<W>::splat(1.1933363815498474) * q[0];
+        let x63 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[2];
+        let x64 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[4];
+        let x65 = x62 + x63;
+        let x66 = x65 - x64;
+        let x67 = ::eom_sim::Lanes::<W>::splat(1.1933363815498466) * q[1];
+        let x68 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[3];
+        let x69 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[5];
+        let x70 = x67 + x68;
+        let x71 = x70 - x69;
+        let x72 = ::eom_sim::Lanes::<W>::splat(0.6858542325542006) * q[0];
+        let x73 = ::eom_sim::Lanes::<W>::splat(6.478223351576099) * q[2];
+        let x74 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[4];
+        let x75 = x72 + x73;
+        let x76 = x75 - x74;
+        let x77 = ::eom_sim::Lanes::<W>::splat(0.6858542325542023) * q[1];
+        let x78 = ::eom_sim::Lanes::<W>::splat(6.4782233515760925) * q[3];
+        let x79 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[5];
+        let x80 = x77 + x78;
+        let x81 = x80 - x79;
+        let x82 = ::eom_sim::Lanes::<W>::splat(17.859467262632677) * q[4];
+        let x83 = ::eom_sim::Lanes::<W>::splat(0.16949150170627408) * q[2];
+        let x84 = ::eom_sim::Lanes::<W>::splat(0.7923688192154683) * q[0];
+        let x85 = x82 - x83;
+        let x86 = x85 - x84;
+        let x87 = ::eom_sim::Lanes::<W>::splat(17.859467262632528) * q[5];
+        let x88 = ::eom_sim::Lanes::<W>::splat(0.16949150170628274) * q[3];
+        let x89 = ::eom_sim::Lanes::<W>::splat(0.7923688192154588) * q[1];
+        let x90 = x87 - x88;
+        let x91 = x90 - x89;
+        let x92 = ::eom_sim::Lanes::<W>::splat(0.1570878189706974) * q[0];
+        let x93 = ::eom_sim::Lanes::<W>::splat(0.042231889294701314) * q[2];
+        let x94 = ::eom_sim::Lanes::<W>::splat(0.10720659121784246) * q[4];
+        let x95 = x92 + x93;
+        let x96 = x95 - x94;
+        let x97 = ::eom_sim::Lanes::<W>::splat(0.15708781897069732) * q[1];
+        let x98 = ::eom_sim::Lanes::<W>::splat(0.04223188929470153) * q[3];
+        let x99 = ::eom_sim::Lanes::<W>::splat(0.1072065912178411) * q[5];
+        let x100 = x97 + x98;
+        let x101 = x100 - x99;
+        let x102 = ::eom_sim::Lanes::<W>::splat(0.042231889294701314) * q[0];
+        let x103 = ::eom_sim::Lanes::<W>::splat(0.864713928368634) * q[2];
+        let x104 = ::eom_sim::Lanes::<W>::splat(0.1890175682860375) * q[4];
+        let x105 = x102 + x103;
+        let x106 = x105 - x104;
+        let x107 = ::eom_sim::Lanes::<W>::splat(0.04223188929470153) * q[1];
+        let x108 = ::eom_sim::Lanes::<W>::splat(0.8647139283686331) * q[3];
+        let x109 = ::eom_sim::Lanes::<W>::splat(0.18901756828603816) * q[5];
+        let x110 = x107 + x108;
+        let x111 = x110 - x109;
+        let x112 = ::eom_sim::Lanes::<W>::splat(2.4952053083435266) * q[4];
+        let x113 = ::eom_sim::Lanes::<W>::splat(0.1890175682860375) * q[2];
+        let x114 = ::eom_sim::Lanes::<W>::splat(0.10720659121784246) * q[0];
+        let x115 = x112 - x113;
+        let x116 = x115 - x114;
+        let x117 = ::eom_sim::Lanes::<W>::splat(2.495205308343504) * q[5];
+        let x118 = ::eom_sim::Lanes::<W>::splat(0.18901756828603816) * q[3];
+        let x119 = ::eom_sim::Lanes::<W>::splat(0.1072065912178411) * q[1];
+        let x120 = x117 - x118;
+        let x121 = x120 - x119;
+        let x122 = q[1] * x101;
+        let x123 = q[3] * x111;
+        let x124 = q[2] * x106;
+        let x125 = q[5] * x121;
+        let x126 = q[0] * x96;
+        let x127 = q[4] * x116;
+        let x128 = ::eom_sim::Lanes::<W>::splat(0.5) * x125;
+        let x129 = ::eom_sim::Lanes::<W>::splat(0.5) * x127;
+        let x130 = ::eom_sim::Lanes::<W>::splat(0.5) * x126;
+        let x131 = ::eom_sim::Lanes::<W>::splat(0.5) * x123;
+        let x132 = ::eom_sim::Lanes::<W>::splat(0.5) * x122;
+        let x133 = ::eom_sim::Lanes::<W>::splat(0.5) * x124;
+        let x134 = ::eom_sim::Lanes::<W>::splat(59.999999999999986) - x128;
+        let x135 = x134 - x129;
+        let x136 = x135 - x130;
+        let x137 = x136 - x131;
+        let x138 = x137 - x132;
+        let x139 = x138 - x133;
+        let x140 = q[5] * x91;
+        let x141 = q[3] * x81;
+        let x142 = q[4] * x86;
+        let x143 = q[2] * x76;
+        let x144 = q[0] * x66;
+        let x145 = q[1] * x71;
+        let x146 = ::eom_sim::Lanes::<W>::splat(400.0) + x21;
+        let x147 = x23 + x146;
+        let x148 = x19 + x147;
+        let x149 = x148 - x145;
+        let x150 = x149 - x140;
+        let x151 = x150 - x142;
+        let x152 = x151 - x144;
+        let x153 = x152 - x141;
+        let x154 = x153 - x143;
+        let x155 = x94 - x92;
+        let x156 = x155 - x93;
+        let x157 = x99 - x97;
+        let x158 = x157 - x98;
+        let x159 = x104 - x102;
+        let x160 = x159 - x103;
+        let x161 = x109 - x108;
+        let x162 = x161 - x107;
+        let x163 = x113 + x114;
+        let x164 = x163 - x112;
+        let x165 = x118 + x119;
+        let x166 = x165 - x117;
+        let x167 = x15 * x28;
+        let x168 = x15 * x37;
+        let x169 = x15 * x154;
+        let x170 = x15 * x139;
+        let x171 = x15 * x42;
+        let x172 = u[0] * x156;
+        let x173 = u[1] * x158;
+        let x174 = u[2] * x160;
+        let x175 = u[3] * x162;
+        let x176 = u[4] * x164;
+        let x177 = u[5] * x166;
+        let x178 = ::eom_sim::Lanes::<W>::splat(1.0000000000000007) * x60;
+        let x179 = ::eom_sim::Lanes::<W>::splat(0.9999999999999992) * x58;
+        let x180 = ::eom_sim::Lanes::<W>::splat(1.000000000000002) * x59;
+        let x181 = x48 + x50;
+        let x182 = x167 + x181;
+        let x183 = x46 + x182;
+        let x184 = x183 - x178;
+        let x185 = x184 - x179;
+        let x186 = x185 - x180;
+        let x187 = ::eom_sim::Lanes::<W>::splat(19.704701741876267) * u[1];
+        let x188 = ::eom_sim::Lanes::<W>::splat(1.1229311870819811) * u[5];
+        let x189 = x61 + x168;
+        let x190 = x189 - x187;
+        let x191 = x190 - x188;
+        let x192 = ::eom_sim::Lanes::<W>::splat(3.1442527828683646) * u[2];
+        let x193 = x43 + x44;
+        let x194 = x169 + x193;
+        let x195 = x194 - x192;
+        let x196 = x175 + x177;
+        let x197 = x174 + x196;
+        let x198 = x172 + x197;
+        let x199 = x173 + x198;
+        let x200 = x176 + x199;
+        let x201 = x200 - x171;
+        let x202 = ::eom_sim::Lanes::<W>::splat(1.5031969948581219) * u[2];
+        let x203 = x53 + x170;
+        let x204 = x51 + x203;
+        let x205 = x204 - x202;
+        let x206 = x17 * x201;
+        let x207 = x16 * x205;
+        let x208 = x206 - x207;
+        let x209 = x16 * x201;
+        let x210 = x17 * x205;
+        let x211 = x209 + x210;
+        let x212 = x17 * x186;
+        let x213 = x16 * x191;
+        let x214 = x212 - x213;
+        let x215 = x16 * x186;
+        let x216 = x17 * x191;
+        let x217 = x215 + x216;
+        out[0] = x214;
+        out[1] = x217;
+        out[2] = x195;
+        out[3] = x208;
+        out[4] = x211;
+        out[5] = x57;
+    }
+}
+/// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`.
+impl ::eom_sim::Batched for SpinUp {
+    fn evaluate_lanes<const W: usize>(
+        models: &[Self; W],
+        name: &str,
+        at: &::eom_sim::PointLanes<'_, W>,
+        out: &mut [::eom_sim::Lanes<W>],
+    ) -> bool {
+        match name {
+            "qdot" => {
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::qdot_lanes(this, &q, &u, out);
+                true
+            }
+            "forward_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Some(tau) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.tau, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::forward_dynamics_lanes(this, t, &q, &u, &tau, out);
+                true
+            }
+            "mass_matrix" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 36]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::mass_matrix_lanes(this, t, &q, out);
+                true
+            }
+            "bias" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::bias_lanes(this, t, &q, &u, out);
+                true
+            }
+            "inverse_dynamics" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Some(udot) = ::eom_sim::batch::__private::arg_lanes::<
+                    6,
+                    W,
+                >(at.udot, true) else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::inverse_dynamics_lanes(this, t, &q, &u, &udot, out);
+                true
+            }
+            "energy" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 2]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::energy_lanes(this, t, &q, &u, out);
+                true
+            }
+            "momentum" => {
+                let t = at.t;
+                let Some(q) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.q, false)
+                else { return false };
+                let Some(u) = ::eom_sim::batch::__private::arg_lanes::<6, W>(at.u, false)
+                else { return false };
+                let Ok(out) = <&mut [::eom_sim::Lanes<W>; 6]>::try_from(out) else {
+                    return false
+                };
+                let this = models;
+                Self::momentum_lanes(this, t, &q, &u, out);
+                true
+            }
+            _ => false,
+        }
+    }
+}
+/// The first-order system `y = (q, u)` of `spin_up` (12 states) with `τ = 0`, `W` states per call.
+impl ::eom_sim::OdeLanes<12> for SpinUp {
+    fn rhs_lanes<const W: usize>(
+        models: &[Self; W],
+        t: ::eom_sim::Lanes<W>,
+        y: &[::eom_sim::Lanes<W>; 12],
+        dy: &mut [::eom_sim::Lanes<W>; 12],
+    ) {
+        let q: [::eom_sim::Lanes<W>; 6] = [y[0], y[1], y[2], y[3], y[4], y[5]];
+        let u: [::eom_sim::Lanes<W>; 6] = [y[6], y[7], y[8], y[9], y[10], y[11]];
+        let mut qdot = [::eom_sim::Lanes::<W>::splat(0.0); 6];
+        let mut udot = [::eom_sim::Lanes::<W>::splat(0.0); 6];
+        Self::qdot_lanes(models, &q, &u, &mut qdot);
+        Self::forward_dynamics_lanes(
+            models,
+            t,
+            &q,
+            &u,
+            &[::eom_sim::Lanes::<W>::splat(0.0); 6],
+            &mut udot,
+        );
+        dy[0] = qdot[0];
+        dy[1] = qdot[1];
+        dy[2] = qdot[2];
+        dy[3] = qdot[3];
+        dy[4] = qdot[4];
+        dy[5] = qdot[5];
+        dy[6] = udot[0];
+        dy[7] = udot[1];
+        dy[8] = udot[2];
+        dy[9] = udot[3];
+        dy[10] = udot[4];
+        dy[11] = udot[5];
+    }
+    fn project_lanes<const W: usize>(
+        _models: &[Self; W],
+        _y: &mut [::eom_sim::Lanes<W>; 12],
+    ) -> bool {
+        false
+    }
+}
 /// The first-order system `y = (q, u)` of `spin_up` (12 states) with `τ = 0`.
 impl ::eom_sim::OdeSystem<12> for SpinUp {
     fn rhs(&self, t: f64, y: &[f64; 12], dy: &mut [f64; 12]) {

@@ -52,6 +52,11 @@ pub struct BenchArgs {
     /// reported as `forward_dynamics_derivatives_ns`).
     #[arg(long)]
     pub derivatives: bool,
+    /// Also time the batched forward dynamics, `W` states per call in SIMD
+    /// lanes for W = 2, 4, 8, 16 (`--per-call`; reported as
+    /// `batched_forward_dynamics_ns`, ns per state at the fastest width).
+    #[arg(long)]
+    pub batch: bool,
     /// Integrators to sweep, comma-separated (default rk4,dopri5,dop853,radau5).
     #[arg(long, value_delimiter = ',')]
     pub integrators: Vec<String>,
@@ -199,7 +204,7 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             if given {
                 problems.push(format!(
                     "{option} sets the --work-precision sweep; --per-call times the generated \
-                     functions at random states (its options: --states, --reps, --seed, --native, --derivatives, --json)"
+                     functions at random states (its options: --states, --reps, --seed, --native, --derivatives, --batch, --json)"
                 ));
             }
         }
@@ -209,6 +214,16 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             "--derivatives times the derivatives with --per-call; not with --work-precision or --suite"
                 .into(),
         );
+    }
+    if a.batch && !a.per_call {
+        problems.push(
+            "--batch times the batched forward dynamics with --per-call; not with --work-precision or --suite"
+                .into(),
+        );
+    }
+    if a.batch && a.states.is_some_and(|n| n < 16) {
+        problems
+            .push("--batch packs the states up to 16 per call: give --states 16 or more".into());
     }
     if a.native && !a.per_call {
         problems.push(
@@ -273,6 +288,7 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         seed: a.seed.unwrap_or(1),
         native: a.native,
         derivatives: a.derivatives,
+        batch: a.batch,
     };
     per_call(&model, urdf, &vary, a.per_call, &o, a.json)
 }
@@ -316,7 +332,11 @@ fn per_call(
     } else {
         eom_gen::functions::FunctionSet::default()
     };
-    let g = match crate::open::generate_asking(&opened, vary, &Default::default(), also) {
+    let emit = eom_gen::EmitOptions {
+        lanes: o.batch,
+        ..Default::default()
+    };
+    let g = match crate::open::generate_asking(&opened, vary, &emit, also) {
         Ok(g) => g,
         Err(code) => return code,
     };

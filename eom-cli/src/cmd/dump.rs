@@ -15,6 +15,10 @@ pub struct DumpArgs {
     /// Emit `f64::mul_add` for `a·b + c` (compile with FMA enabled).
     #[arg(long)]
     pub fma: bool,
+    /// Also emit every function over SIMD lanes (`NAME_lanes::<W>`: `W`
+    /// states per call; `eom_sim::Batched`, `eom_sim::OdeLanes`).
+    #[arg(long)]
+    pub lanes: bool,
 }
 
 pub fn run(a: &DumpArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
@@ -25,6 +29,7 @@ pub fn run(a: &DumpArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     };
     let options = eom_gen::EmitOptions {
         fma: a.fma,
+        lanes: a.lanes,
         ..Default::default()
     };
     let g = match crate::open::generate(&opened, &vary, &options) {

@@ -85,7 +85,7 @@ fn body(
     let style = Style {
         input: &read,
         fma: false,
-        lanes,
+        lanes: lanes.then(|| quote!(Lanes)),
         methods: false,
     };
     let args: Vec<Arg<'_>> = args

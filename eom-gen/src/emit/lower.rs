@@ -29,20 +29,23 @@ pub struct Style<'a> {
     /// Fuse `a·b + c` into `f64::mul_add` where the product is used only
     /// there.
     pub fma: bool,
-    /// Every value is a `Lanes<W>` (`W` elements by the same straight-line
-    /// code): constants are splatted, functions are the lane-wise methods,
-    /// parts are generic in `W`.
-    pub lanes: bool,
-    /// Parts are methods of `&self` (else free functions).
+    /// Every value is a `Lanes<W>` (`W` elements, or states, by the same
+    /// straight-line code), written through this path (`Lanes` in the
+    /// element kernels, `::eom_sim::Lanes` in models): constants are
+    /// splatted, functions are the lane-wise methods, parts are generic in
+    /// `W`.
+    pub lanes: Option<TokenStream>,
+    /// Parts are methods of `&self` (else free functions); with `lanes`,
+    /// associated functions called through `Self::`.
     pub methods: bool,
 }
 
 impl Style<'_> {
     /// A constant in operand position.
     fn constant(&self, c: f64) -> TokenStream {
-        if self.lanes {
+        if let Some(lt) = &self.lanes {
             let c = float(c);
-            quote!(Lanes::<W>::splat(#c))
+            quote!(#lt::<W>::splat(#c))
         } else {
             float_operand(c)
         }
@@ -50,9 +53,9 @@ impl Style<'_> {
 
     /// A constant as an output value.
     fn output_constant(&self, c: f64) -> TokenStream {
-        if self.lanes {
+        if let Some(lt) = &self.lanes {
             let c = float(c);
-            quote!(Lanes::<W>::splat(#c))
+            quote!(#lt::<W>::splat(#c))
         } else {
             float(c)
         }
@@ -61,7 +64,7 @@ impl Style<'_> {
     /// `f(x)` of a one-argument function.
     fn unary(&self, f: &str, x: TokenStream) -> TokenStream {
         let f = format_ident!("{f}");
-        if self.lanes {
+        if self.lanes.is_some() {
             quote!(#x.#f())
         } else {
             quote!(f64::#f(#x))
@@ -153,13 +156,17 @@ fn statements(
     } else {
         HashMap::new()
     };
+    let mul_add = match &b.lanes {
+        Some(lt) => quote!(#lt::mul_add),
+        None => quote!(f64::mul_add),
+    };
     let fma = |m: u32, c: TokenStream, negate_product: bool| -> TokenStream {
         let (x, y) = fused[&m];
         let (x, y) = (o(x), o(y));
         if negate_product {
-            quote!(f64::mul_add(-#x, #y, #c))
+            quote!(#mul_add(-#x, #y, #c))
         } else {
-            quote!(f64::mul_add(#x, #y, #c))
+            quote!(#mul_add(#x, #y, #c))
         }
     };
     let is_fused = |x: Operand| matches!(x, Operand::Tmp(t) if fused.contains_key(&t));
@@ -202,17 +209,17 @@ fn statements(
             Op::Exp(x) => b.unary("exp", o(x)),
             Op::Ln(x) => b.unary("ln", o(x)),
             Op::Abs(x) => b.unary("abs", o(x)),
-            Op::Atan2(y, x) if b.lanes => {
-                let (y, x) = (o(y), o(x));
-                quote!(Lanes::atan2(#y, #x))
+            Op::Atan2(y, x) if b.lanes.is_some() => {
+                let (lt, y, x) = (&b.lanes, o(y), o(x));
+                quote!(#lt::atan2(#y, #x))
             }
             Op::Atan2(y, x) => {
                 let (y, x) = (o(y), o(x));
                 quote!(f64::atan2(#y, #x))
             }
-            Op::Select(c, x, y) if b.lanes => {
-                let (c, x, y) = (o(c), o(x), o(y));
-                quote!(Lanes::select(#c, #x, #y))
+            Op::Select(c, x, y) if b.lanes.is_some() => {
+                let (lt, c, x, y) = (&b.lanes, o(c), o(x), o(y));
+                quote!(#lt::select(#c, #x, #y))
             }
             Op::Select(c, x, y) => {
                 let (c, x, y) = (o(c), o(x), o(y));
@@ -220,7 +227,7 @@ fn statements(
             }
             Op::SinCos(x) => {
                 let (sn, cs, x) = (tmp(ins.dst), tmp(ins.dst + 1), o(x));
-                if b.lanes {
+                if b.lanes.is_some() {
                     out.extend(quote!(let (#sn, #cs) = #x.sin_cos();));
                 } else {
                     out.extend(quote!(let (#sn, #cs) = f64::sin_cos(#x);));
@@ -393,11 +400,11 @@ pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowere
             r.end - 1
         );
         let names = args.iter().map(|a| format_ident!("{}", a.name));
-        if b.lanes {
+        if let Some(lt) = &b.lanes {
             methods.extend(quote! {
                 #[doc = #doc]
                 #[inline(never)]
-                fn #fname<const W: usize>(#(#params,)* s: &mut [Lanes<W>; #ns]) {
+                fn #fname<const W: usize>(#(#params,)* s: &mut [#lt<W>; #ns]) {
                     #body
                 }
             });
@@ -418,14 +425,16 @@ pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowere
                 }
             });
         }
-        calls.extend(if b.methods {
+        calls.extend(if b.methods && b.lanes.is_some() {
+            quote!(Self::#fname(#(#names,)* &mut s);)
+        } else if b.methods {
             quote!(self.#fname(#(#names,)* &mut s);)
         } else {
             quote!(#fname(#(#names,)* &mut s);)
         });
     }
-    let init = if b.lanes {
-        quote!(Lanes::<W>::splat(0.0))
+    let init = if let Some(lt) = &b.lanes {
+        quote!(#lt::<W>::splat(0.0))
     } else {
         quote!(0.0f64)
     };

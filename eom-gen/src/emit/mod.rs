@@ -18,6 +18,7 @@ use crate::mech::Formulation;
 use crate::sym::{SymKind, Symbol};
 use lower::{Arg, Style, lower};
 
+mod batch;
 mod loops;
 pub(crate) mod lower;
 mod names;
@@ -54,6 +55,11 @@ pub struct EmitOptions {
     /// (`eom_gen::mech::looped`): where they pay (default), always (where
     /// the model is such a chain) or never.
     pub loops: LoopChoice,
+    /// Also emit every generated function over lanes, `W` states per call
+    /// (`NAME_lanes::<W>`, `eom_sim::Batched`, `eom_sim::OdeLanes`; see
+    /// `emit::batch`). Off by default: it doubles the source a model
+    /// compiles from.
+    pub lanes: bool,
 }
 
 impl Binding<'_> {
@@ -298,7 +304,7 @@ pub fn emit_tokens(
     let style = Style {
         input: &input,
         fma: opts.fma,
-        lanes: false,
+        lanes: None,
         methods: true,
     };
     let q_doc = format!("`q` = ({})", list(&coords));
@@ -730,6 +736,11 @@ pub fn emit_tokens(
         }
     };
     let (functions_const, evaluate_fn) = evaluate_dispatch(sys, f);
+    let batched = if opts.lanes {
+        batch::emit(sys, f, &ty, &b, opts.fma)
+    } else {
+        TokenStream::new()
+    };
     let (multipliers_field, multipliers_default) = if f.constraint_names.is_empty() {
         (TokenStream::new(), TokenStream::new())
     } else {
@@ -915,6 +926,7 @@ pub fn emit_tokens(
         #parts_impl
 
         #loops_impl
+        #batched
 
         #[doc = #ode_doc]
         impl ::eom_sim::OdeSystem<#ny_l> for #ty {
