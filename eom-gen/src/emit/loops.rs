@@ -75,7 +75,7 @@ fn step_fn(fname: &str, p: usize, k: usize, l: &Loop, fma: bool) -> TokenStream 
     let style = Style {
         input: &input,
         fma,
-        lanes: false,
+        lanes: None,
         methods: false,
     };
     let args = step_args(l, pass);

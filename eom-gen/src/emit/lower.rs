@@ -304,6 +304,44 @@ fn store(slots: &HashMap<u32, usize>, t: u32, split: bool) -> TokenStream {
     }
 }
 
+/// Slots for the values `last_read` names (temporary → the last part that
+/// reads it, `usize::MAX` for outputs), defined in the parts
+/// `part_of_tmp` gives: in order of definition, each takes a slot whose
+/// previous value was last read in an earlier part than its own (a value
+/// read in part `k` and one stored in part `k` never share one), else a new
+/// slot. Deterministic: ties broken by temporary number.
+fn allocate_slots(
+    last_read: &HashMap<u32, usize>,
+    part_of_tmp: &HashMap<u32, usize>,
+) -> HashMap<u32, usize> {
+    let mut values: Vec<(usize, u32, usize)> = last_read
+        .iter()
+        .map(|(&t, &last)| (part_of_tmp.get(&t).copied().unwrap_or(0), t, last))
+        .collect();
+    values.sort_unstable();
+    let mut slots = HashMap::new();
+    // (last part read, slot) of the slots in use; slots free again.
+    let mut busy: Vec<(usize, usize)> = Vec::new();
+    let mut free: std::collections::BTreeSet<usize> = std::collections::BTreeSet::new();
+    let mut count = 0;
+    for (def, t, last) in values {
+        busy.retain(|&(until, k)| {
+            let done = until < def;
+            if done {
+                free.insert(k);
+            }
+            !done
+        });
+        let k = free.pop_first().unwrap_or_else(|| {
+            count += 1;
+            count - 1
+        });
+        busy.push((last, k));
+        slots.insert(t, k);
+    }
+    slots
+}
+
 /// Lowers `p` for a function called `name` with arguments `args`.
 pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
     let used: Vec<bool> = args
@@ -352,28 +390,31 @@ pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowere
         }
     }
     // Slots: temporaries read in a later part, and temporary outputs.
-    let mut slots: HashMap<u32, usize> = HashMap::new();
-    let add = |t: u32, slots: &mut HashMap<u32, usize>| {
-        let n = slots.len();
-        slots.entry(t).or_insert(n);
-    };
+    // Each is live from its defining part to the last part that reads it
+    // (outputs to the end); a slot is reused by a value defined in a part
+    // after the last read of its previous value, so the scratch array the
+    // caller zeroes on every call is as short as the most values live
+    // across one part boundary, not the count of all of them.
+    let mut last_read: HashMap<u32, usize> = HashMap::new();
     for (k, r) in parts.iter().enumerate() {
         for ins in &p.instrs[r.clone()] {
             for o in ins.op.operands() {
                 if let Operand::Tmp(t) = o
                     && part_of_tmp.get(&t).is_some_and(|&d| d < k)
                 {
-                    add(t, &mut slots);
+                    let last = last_read.entry(t).or_insert(k);
+                    *last = (*last).max(k);
                 }
             }
         }
     }
     for &(_, o) in &p.outputs {
         if let Operand::Tmp(t) = o {
-            add(t, &mut slots);
+            last_read.insert(t, usize::MAX);
         }
     }
-    let ns = Literal::usize_unsuffixed(slots.len().max(1));
+    let slots = allocate_slots(&last_read, &part_of_tmp);
+    let ns = Literal::usize_unsuffixed(slots.values().map(|&k| k + 1).max().unwrap_or(1));
     let mut methods = TokenStream::new();
     let mut calls = TokenStream::new();
     for (k, r) in parts.iter().enumerate() {
