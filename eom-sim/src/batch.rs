@@ -15,7 +15,8 @@
 //!
 //! [`Batched`] reaches them by name, as `Model::evaluate` does the
 //! single-state ones; [`OdeLanes`] is the first-order system `y = (q, u)`
-//! over lanes that the ensemble runs integrate.
+//! over lanes, for an integrator that advances many states in lockstep (no
+//! such ensemble integrator exists yet: issue #28).
 
 pub use eom_lanes::Lanes;
 
