@@ -147,7 +147,7 @@ fn jacobian_where_it_does_not_apply_is_refused() {
                 "--jacobian",
                 "generated",
             ],
-            "it has constraints",
+            "the model has constraints",
         ),
         (
             &[

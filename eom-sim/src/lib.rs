@@ -72,8 +72,8 @@ pub use model::{__private, FunctionInfo, Model, Point, Vector};
 /// Fixed-size matrices of the integrators' Jacobians and mass matrices.
 pub use nalgebra::SMatrix;
 pub use run::{
-    ASSEMBLY_TOL, Integrator, Jacobian, RunError, RunOptions, RunReport, Simulate, Stop,
-    UnknownName, simulate, simulate_generated,
+    ASSEMBLY_TOL, Integrator, Jacobian, JacobianShape, RunError, RunOptions, RunReport, Simulate,
+    Stop, UnknownName, jacobian_choice, simulate, simulate_generated,
 };
 
 pub use integrate::by_name::{Settings, solve};

@@ -847,7 +847,7 @@ impl<M: ConstrainedModel + Clone> Simulate for Generated<'_, M> {
 
 /// The unconstrained first-order system `y = (q, u)` of a [`Simulate`];
 /// the flag: whether its Jacobian is the generated one (see
-/// [`jacobian_source`]).
+/// [`jacobian_choice`]).
 struct Free<'a, S: ?Sized>(&'a S, bool);
 
 impl<const N: usize, S: Simulate + ?Sized> OdeSystem<N> for Free<'_, S> {
@@ -900,15 +900,44 @@ impl<const N: usize, S: Simulate + ?Sized> OdeSystem<N> for Free<'_, S> {
     }
 }
 
-/// Whether a run of `model` with `options` uses the generated Jacobian:
+/// What decides whether a run can have the generated Jacobian: the
+/// model's shape, known before its functions are generated (so that
+/// `eom-gen simulate` refuses `--jacobian` and chooses what to generate by
+/// the same rule as the run).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct JacobianShape {
+    /// Loop or closure constraints (holonomic or not).
+    pub constrained: bool,
+    /// Nonholonomic constraints among them.
+    pub nonholonomic: bool,
+    /// Quaternion coordinates (`q̇ ≠ u`).
+    pub quaternions: bool,
+    /// `forward_dynamics_derivatives` is (or will be) generated.
+    pub derivatives: bool,
+}
+
+impl JacobianShape {
+    fn of<S: Simulate + ?Sized>(model: &S) -> Self {
+        let nu = model.nu();
+        JacobianShape {
+            constrained: model.nc() > 0,
+            nonholonomic: model.nc() > model.n_holonomic(),
+            quaternions: model.nq() != nu || !model.quaternions().is_empty(),
+            derivatives: model
+                .function_len(DERIVATIVES)
+                .is_some_and(|len| len >= 2 * nu * nu),
+        }
+    }
+}
+
+/// Which Jacobian a run of a model of this `shape` with `options` uses:
 /// `Ok(None)` for an integrator that uses none, `Ok(Some(_))` the source
 /// it uses, `Err` with the reason when [`Jacobian::Generated`] or
 /// [`Jacobian::Differences`] was asked for where it does not apply.
-fn jacobian_source<S: Simulate + ?Sized>(
-    model: &S,
+pub fn jacobian_choice(
+    shape: JacobianShape,
     options: &RunOptions,
 ) -> Result<Option<Jacobian>, String> {
-    let (nq, nu) = (model.nq(), model.nu());
     if !options.integrator.uses_jacobian() {
         return match options.jacobian {
             Jacobian::Auto => Ok(None),
@@ -920,20 +949,17 @@ fn jacobian_source<S: Simulate + ?Sized>(
             )),
         };
     }
-    let why_not = if model.nc() > 0 && options.method != Method::Index3 {
+    let why_not = if shape.constrained && options.method != Method::Index3 {
         Some(format!(
             "the model has constraints, kept by {} (a right-hand side through the \
              constraint solver, differenced); --constraints index3 has a generated Jacobian",
             options.method
         ))
-    } else if model.nc() > model.n_holonomic() {
+    } else if shape.nonholonomic {
         Some("the model has nonholonomic constraints (their Jacobian is differenced)".to_string())
-    } else if nq != nu || !model.quaternions().is_empty() {
+    } else if shape.quaternions {
         Some("the model has quaternion coordinates (`q̇ ≠ u`)".to_string())
-    } else if model
-        .function_len(DERIVATIVES)
-        .is_none_or(|len| len < 2 * nu * nu)
-    {
+    } else if !shape.derivatives {
         Some(format!(
             "the model has no `{DERIVATIVES}` (`eom-gen simulate` generates them for \
              --integrator {})",
@@ -1119,7 +1145,8 @@ pub fn simulate<const N: usize, S: Simulate + ?Sized>(
         .chain(&names.speeds)
         .cloned()
         .collect();
-    let jacobian = jacobian_source(model, options).map_err(|e| RunError::Options(vec![e]))?;
+    let jacobian = jacobian_choice(JacobianShape::of(model), options)
+        .map_err(|e| RunError::Options(vec![e]))?;
     let generated = jacobian == Some(Jacobian::Generated);
     let nk = contact::count(model);
     if nk > 0 {

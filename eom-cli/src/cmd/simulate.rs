@@ -470,37 +470,14 @@ const AUTO_DERIVATIVES_MAX_NU: usize = 12;
 /// (the library's run refuses the same; here it is said before anything is
 /// generated, with the other usage problems).
 fn jacobian_problem(sys: &eom_gen::system::System, o: &RunOptions) -> Option<String> {
-    use eom_sim::Jacobian;
-    if o.jacobian == Jacobian::Auto {
-        return None;
-    }
-    if !o.integrator.uses_jacobian() {
-        return Some(format!(
-            "--jacobian applies to the integrators that use a Jacobian ({}); {} uses none",
-            Integrator::names_where(Integrator::uses_jacobian),
-            o.integrator
-        ));
-    }
-    let constrained = !sys.constraints.is_empty() || !sys.graph.cut_joints().is_empty();
-    let nonholonomic = sys.constraints.iter().any(|c| c.equations().1 > 0);
-    let why = if constrained && o.method != eom_sim::Method::Index3 {
-        format!(
-            "it has constraints, kept by {} (the constrained right-hand side is differenced; \
-             --constraints index3 has a generated Jacobian)",
-            o.method
-        )
-    } else if nonholonomic {
-        "it has nonholonomic constraints (their Jacobian is differenced)".into()
-    } else if sys.nq() != sys.nu() {
-        "it has quaternion coordinates (q̇ ≠ u)".into()
-    } else {
-        return None;
+    // The run's own rule (`eom_sim::jacobian_choice`), asked before
+    // generation: the derivatives are generated for the run when it can
+    // use them.
+    let shape = eom_sim::JacobianShape {
+        constrained: !sys.constraints.is_empty() || !sys.graph.cut_joints().is_empty(),
+        nonholonomic: sys.constraints.iter().any(|c| c.equations().1 > 0),
+        quaternions: sys.nq() != sys.nu(),
+        derivatives: true,
     };
-    (o.jacobian == Jacobian::Generated).then(|| {
-        format!(
-            "--jacobian generated: `{}` has no generated Jacobian: {why}; \
-             --jacobian differences (or auto) differences the right-hand side",
-            sys.name
-        )
-    })
+    eom_sim::jacobian_choice(shape, o).err()
 }

@@ -877,19 +877,12 @@ fn closure<'cx>(
     }
     // q̇ along the motion: q_i → (N(q) u)_i; for γ also u̇ = 0.
     let mut first = TimeDerivative::new();
-    let mut second = TimeDerivative::new();
     for (qi, qd) in q.iter().zip(qdot) {
         if let Some(s) = cx.sym_id(*qi) {
             first.rate(s, cx.id(*qd));
-            second.rate(s, cx.id(*qd));
         }
     }
-    let zero = cx.id(Expr::zero());
-    for ui in u {
-        if let Some(s) = cx.sym_id(*ui) {
-            second.rate(s, zero);
-        }
-    }
+    let mut second = at_rest_along_the_motion(cx, q, u, qdot);
     let mut names = Vec::new();
     let mut values = Vec::new();
     let mut phidots = Vec::new();
@@ -925,6 +918,29 @@ fn closure<'cx>(
     }))
 }
 
+/// `d/dt` along the motion with `u̇ = 0`: `q_i → (N(q) u)_i`, `u_i → 0`;
+/// applied to a row's speed `ẋ = w(q) u` it gives `−γ` (`ẍ = wᵀ u̇ − γ`).
+fn at_rest_along_the_motion<'cx>(
+    cx: &'cx Context,
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+) -> crate::sym::TimeDerivative {
+    let mut d = crate::sym::TimeDerivative::new();
+    for (qi, qd) in q.iter().zip(qdot) {
+        if let Some(s) = cx.sym_id(*qi) {
+            d.rate(s, cx.id(*qd));
+        }
+    }
+    let zero = cx.id(Expr::zero());
+    for ui in u {
+        if let Some(s) = cx.sym_id(*ui) {
+            d.rate(s, zero);
+        }
+    }
+    d
+}
+
 /// The program of `contacts` (see [`crate::functions`]): per gap row `g`,
 /// then per row `ġ`, then per row `γ = −d(ġ)/dt` at `u̇ = 0` (so that
 /// `g̈ = wᵀ u̇ − γ`), per row `e` and `μ`, then the rows `w = ∂ġ/∂u`;
@@ -942,24 +958,12 @@ fn contacts<'cx>(
     qdot: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Result<Option<Program>, FormulateError> {
-    use crate::sym::TimeDerivative;
     if sys.contacts.is_empty() {
         return Ok(None);
     }
     let rows = super::contacts::gaps(sys, tree, env, ev, k, q, u)?;
     // q̇ along the motion: q_i → (N(q) u)_i, and u̇ = 0.
-    let mut second = TimeDerivative::new();
-    for (qi, qd) in q.iter().zip(qdot) {
-        if let Some(s) = cx.sym_id(*qi) {
-            second.rate(s, cx.id(*qd));
-        }
-    }
-    let zero = cx.id(Expr::zero());
-    for ui in u {
-        if let Some(s) = cx.sym_id(*ui) {
-            second.rate(s, zero);
-        }
-    }
+    let mut second = at_rest_along_the_motion(cx, q, u, qdot);
     let mut names = Vec::new();
     let mut values = Vec::new();
     for (i, (g, _)) in rows.iter().enumerate() {
@@ -1015,23 +1019,11 @@ fn friction<'cx>(
     qdot: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Result<Option<Program>, FormulateError> {
-    use crate::sym::TimeDerivative;
     if !super::contacts::has_friction(sys) {
         return Ok(None);
     }
     let rows = super::contacts::tangential_speeds(sys, tree, env, ev, k)?;
-    let mut second = TimeDerivative::new();
-    for (qi, qd) in q.iter().zip(qdot) {
-        if let Some(s) = cx.sym_id(*qi) {
-            second.rate(s, cx.id(*qd));
-        }
-    }
-    let zero = cx.id(Expr::zero());
-    for ui in u {
-        if let Some(s) = cx.sym_id(*ui) {
-            second.rate(s, zero);
-        }
-    }
+    let mut second = at_rest_along_the_motion(cx, q, u, qdot);
     let mut names = Vec::new();
     let mut values = Vec::new();
     for a in 0..2 {
