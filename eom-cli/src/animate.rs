@@ -65,6 +65,8 @@ pub fn html(
         }
         cables.push((c.name.clone(), cols));
     }
+    let flexes = flex_bodies(sys, &scene)?;
+    let mut flex_frames = String::from("[");
     let mut cable_frames = String::from("[");
     let mut frames = String::from("[");
     let mut times = String::from("[");
@@ -81,7 +83,20 @@ pub fn html(
             frames.push(',');
             times.push(',');
             cable_frames.push(',');
+            flex_frames.push(',');
         }
+        flex_frames.push('[');
+        for (j, x) in flexes
+            .iter()
+            .flat_map(|f| &q[f.q_index..f.q_index + f.k])
+            .enumerate()
+        {
+            if j > 0 {
+                flex_frames.push(',');
+            }
+            flex_frames.push_str(&significant(*x)?);
+        }
+        flex_frames.push(']');
         cable_frames.push('[');
         for (j, &c) in cables.iter().flat_map(|(_, cols)| cols).enumerate() {
             if j > 0 {
@@ -106,6 +121,7 @@ pub fn html(
     frames.push(']');
     times.push(']');
     cable_frames.push(']');
+    flex_frames.push(']');
     let cable_list: Vec<serde_json::Value> = cables
         .iter()
         .map(|(name, cols)| serde_json::json!({ "name": name, "nodes": cols.len() / 3 }))
@@ -122,7 +138,7 @@ pub fn html(
     let mut data = String::new();
     let _ = write!(
         data,
-        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"impacts\":{},\"cables\":{},\"cableFrames\":{cable_frames},\"t\":{times},\"poses\":{frames}}}",
+        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"impacts\":{},\"cables\":{},\"cableFrames\":{cable_frames},\"flex\":{},\"flexFrames\":{flex_frames},\"t\":{times},\"poses\":{frames}}}",
         serde_json::to_string(&sys.name).unwrap_or_default(),
         serde_json::to_string(&gravity(&num)).unwrap_or_default(),
         bodies,
@@ -131,6 +147,7 @@ pub fn html(
         serde_json::to_string(&meshes.list).unwrap_or_else(|_| "[]".into()),
         serde_json::to_string(&impacts(sys, &scene, events)).unwrap_or_else(|_| "[]".into()),
         serde_json::to_string(&cable_list).unwrap_or_else(|_| "[]".into()),
+        flex_json(&flexes)?,
     );
     // The data sits in a <script> element: no `</` may close it early.
     let data = data.replace("</", "<\\/");
@@ -180,6 +197,158 @@ pub fn impacts(
             (e.t, hit)
         })
         .collect()
+}
+
+/// A flexible (floating-frame) body as the page draws it: stations along
+/// it, each at `p + S q_f` in the body frame (`S` the station's
+/// translational shapes, 3 × k, linear in the elastic coordinates), so the
+/// page gets the shapes once and per frame only the body's pose and its
+/// `k` elastic coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlexDrawing {
+    /// The body's index in the scene (tree order).
+    pub body: usize,
+    /// Its first elastic coordinate in the system's `q`.
+    pub q_index: usize,
+    /// Number of elastic coordinates `k`.
+    pub k: usize,
+    /// The stations' undeformed places, body axes.
+    pub places: Vec<[f64; 3]>,
+    /// Per station, the rows `x, y, z` of its shapes (each `k` long).
+    pub shapes: Vec<[Vec<f64>; 3]>,
+    /// Which stations are finite-element (or named) nodes.
+    pub nodes: Vec<usize>,
+}
+
+/// Stations per element of a built-in beam: the Hermite cubics between
+/// the nodes drawn by this many straight pieces.
+pub const PIECES_PER_ELEMENT: usize = 4;
+
+/// The flexible bodies of the scene: a built-in beam at
+/// [`PIECES_PER_ELEMENT`] stations per element (the elements' cubic
+/// interpolation of the mode shapes, `flex_outputs::deformation`);
+/// assumed modes and imported modal data at their nodes
+/// (`flex_outputs::node_point`, where their shapes are known).
+pub fn flex_bodies(
+    sys: &eom_gen::system::System,
+    scene: &Scene,
+) -> Result<Vec<FlexDrawing>, Error> {
+    use eom_gen::mech::flex_outputs::{deformation, node_point};
+    use eom_gen::system::FlexSource;
+    let mut out = Vec::new();
+    for (i, b) in scene.bodies.iter().enumerate() {
+        let Some(flex) = sys
+            .bodies
+            .iter()
+            .find(|s| s.name == b.name)
+            .and_then(|s| s.flexible.as_deref())
+        else {
+            continue;
+        };
+        let k = flex.count();
+        let unit = |j: usize| -> Vec<f64> { (0..k).map(|m| f64::from(u8::from(m == j))).collect() };
+        let zero = vec![0.0; k];
+        let mut places = Vec::new();
+        let mut shapes = Vec::new();
+        let mut nodes = Vec::new();
+        match flex.source {
+            FlexSource::Beam => {
+                let beam = &flex.beam;
+                let n = beam.elements * PIECES_PER_ELEMENT;
+                for s in 0..=n {
+                    let x = beam.length * s as f64 / n as f64;
+                    if s % PIECES_PER_ELEMENT == 0 {
+                        nodes.push(places.len());
+                    }
+                    places.push([x, 0.0, 0.0]);
+                    let cols: Vec<[f64; 6]> =
+                        (0..k).map(|j| deformation(flex, x, &unit(j))).collect();
+                    shapes.push(std::array::from_fn(|r| cols.iter().map(|c| c[r]).collect()));
+                }
+            }
+            _ => {
+                for node in 0..flex.modes.shapes.nrows() / 6 {
+                    let p = node_point(flex, node, &zero).0;
+                    nodes.push(places.len());
+                    places.push(p);
+                    let cols: Vec<[f64; 3]> = (0..k)
+                        .map(|j| {
+                            let d = node_point(flex, node, &unit(j)).0;
+                            [d[0] - p[0], d[1] - p[1], d[2] - p[2]]
+                        })
+                        .collect();
+                    shapes.push(std::array::from_fn(|r| cols.iter().map(|c| c[r]).collect()));
+                }
+            }
+        }
+        if places.len() < 2 {
+            continue;
+        }
+        out.push(FlexDrawing {
+            body: i,
+            q_index: flex.q_index,
+            k,
+            places,
+            shapes,
+            nodes,
+        });
+    }
+    Ok(out)
+}
+
+/// The page's `flex`: per flexible body its scene index, `k`, where its
+/// coordinates sit in a row of `flexFrames`, the stations' places `p`
+/// (3 per station), their shapes `s` (3 × k per station, row-major) and
+/// the node stations.
+fn flex_json(flexes: &[FlexDrawing]) -> Result<String, Error> {
+    let mut s = String::from("[");
+    let mut at = 0;
+    for (n, f) in flexes.iter().enumerate() {
+        if n > 0 {
+            s.push(',');
+        }
+        let list = |v: &mut dyn Iterator<Item = &f64>| -> Result<String, Error> {
+            let items: Vec<String> = v.map(|x| significant(*x)).collect::<Result<_, _>>()?;
+            Ok(items.join(","))
+        };
+        let p = list(&mut f.places.iter().flatten())?;
+        let sh = list(&mut f.shapes.iter().flatten().flatten())?;
+        let _ = write!(
+            s,
+            "{{\"body\":{},\"k\":{},\"at\":{at},\"p\":[{p}],\"s\":[{sh}],\"nodes\":{}}}",
+            f.body,
+            f.k,
+            serde_json::to_string(&f.nodes).unwrap_or_else(|_| "[]".into()),
+        );
+        at += f.k;
+    }
+    s.push(']');
+    Ok(s)
+}
+
+/// `x` with 7 significant digits (elastic coordinates and shapes can be
+/// far below the 6 decimals of a pose); not finite refuses.
+fn significant(x: f64) -> Result<String, Error> {
+    if !x.is_finite() {
+        return Err(Error::Refused(format!(
+            "the trajectory holds {x}: nothing to animate"
+        )));
+    }
+    if x == 0.0 {
+        return Ok("0".into());
+    }
+    let s = format!("{x:.6e}");
+    let (mantissa, exp) = s.split_once('e').unwrap_or((&s, "0"));
+    let mut m = mantissa.to_string();
+    if m.contains('.') {
+        while m.ends_with('0') {
+            m.pop();
+        }
+        if m.ends_with('.') {
+            m.pop();
+        }
+    }
+    Ok(if exp == "0" { m } else { format!("{m}e{exp}") })
 }
 
 /// Gravity in world axes (zero vector if none).
@@ -446,6 +615,167 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The page of the hub and beam draws the beam deformed: per frame the
+    /// body frame's pose and the 4 modal coordinates, once the stations'
+    /// mode shapes. Evaluated as the page does (`R (p + S q_f) + r`), the
+    /// places of the beam's root, middle and tip nodes agree with the
+    /// model's own outputs `NodePosition` (the formulated `outputs`,
+    /// interpreted) to the page's rounding, while the bending moves the
+    /// tip by centimetres.
+    #[test]
+    fn hub_beam_page_carries_the_deformation() {
+        // models/hub_beam.ron with node outputs.
+        let text = include_str!("../../models/hub_beam.ron").replace(
+                "    joints: [",
+                "    outputs: [NodePosition(body: \"beam\", node: 0), \
+                 NodePosition(body: \"beam\", node: 5), NodePosition(body: \"beam\", node: 10)],\n    joints: [",
+            );
+        let dir = std::env::temp_dir().join(format!("eom-flexpage-{}", std::process::id()));
+        let _ = std::fs::create_dir_all(&dir);
+        let path = dir.join("hub_beam.ron");
+        let _ = std::fs::write(&path, text);
+        let opened = crate::open::open(
+            &path.display().to_string(),
+            &Default::default(),
+            &Default::default(),
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+        let Ok(opened) = opened else {
+            panic!("cannot open the hub and beam with outputs");
+        };
+        let sys = &opened.checked.system;
+        let f =
+            match eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested()) {
+                Ok(f) => f,
+                Err(e) => panic!("{e}"),
+            };
+        let names: Vec<String> = sys
+            .coordinate_names()
+            .iter()
+            .map(|n| n.to_string())
+            .collect();
+        assert_eq!(
+            names.len(),
+            5,
+            "hub angle and 4 modal coordinates: {names:?}"
+        );
+        let mut header = vec!["t".to_string()];
+        header.extend(names);
+        let mut table = Table::new(header);
+        let frames = [
+            [0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+            [0.5, 0.7, 0.06, -0.01, 0.004, 0.001],
+            [1.0, 2.0, -0.05, 0.02, -0.003, 0.0005],
+        ];
+        for f in frames {
+            table.push(f.to_vec());
+        }
+        let page = match html(sys, &table, &[]) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        };
+        let start = page.find(r#"type="application/json">"#).map(|i| i + 24);
+        let data = start.and_then(|s| Some(&page[s..s + page[s..].find("</script>")?]));
+        let data: serde_json::Value = match data.map(serde_json::from_str) {
+            Some(Ok(v)) => v,
+            other => panic!("the page's data does not parse: {other:?}"),
+        };
+        let nums = |v: &serde_json::Value| -> Vec<f64> {
+            v.as_array()
+                .map(|a| a.iter().filter_map(serde_json::Value::as_f64).collect())
+                .unwrap_or_default()
+        };
+        let flex = &data["flex"][0];
+        let (body, k) = (flex["body"].as_u64(), flex["k"].as_u64());
+        assert_eq!(k, Some(4));
+        let body = body.unwrap_or(0) as usize;
+        assert_eq!(data["bodies"][body]["name"], "beam");
+        let (p, shapes) = (nums(&flex["p"]), nums(&flex["s"]));
+        let nodes: Vec<usize> = nums(&flex["nodes"]).iter().map(|&x| x as usize).collect();
+        assert_eq!(nodes.len(), 11, "10 elements: 11 nodes");
+        assert_eq!(p.len(), 3 * (10 * PIECES_PER_ELEMENT + 1));
+        assert_eq!(shapes.len(), 4 * p.len());
+        let mut tip_bend: f64 = 0.0;
+        for (frame, row) in frames.iter().enumerate() {
+            let pose = nums(&data["poses"][frame]);
+            let qf = nums(&data["flexFrames"][frame]);
+            assert_eq!(qf, row[2..], "the elastic coordinates, frame {frame}");
+            let (r, quat) = (
+                &pose[7 * body..7 * body + 3],
+                &pose[7 * body + 3..7 * body + 7],
+            );
+            // v' = v + 2w (u × v) + 2 u × (u × v), u = (x, y, z).
+            let turn = |v: [f64; 3]| {
+                let u = [quat[0], quat[1], quat[2]];
+                let cross = |a: [f64; 3], b: [f64; 3]| {
+                    [
+                        a[1] * b[2] - a[2] * b[1],
+                        a[2] * b[0] - a[0] * b[2],
+                        a[0] * b[1] - a[1] * b[0],
+                    ]
+                };
+                let c = cross(u, v);
+                let cc = cross(u, c);
+                std::array::from_fn::<f64, 3, _>(|i| v[i] + 2.0 * quat[3] * c[i] + 2.0 * cc[i])
+            };
+            let x = eom_gen::interpret::Point {
+                sys,
+                q: &row[1..],
+                u: &[0.0; 5],
+                udot: &[0.0; 5],
+                tau: &[],
+                inputs: &[],
+                params: &[],
+                multipliers: &[],
+                t: row[0],
+            };
+            let outputs = eom_gen::interpret::evaluate_function(
+                &f,
+                eom_gen::functions::Function::Outputs,
+                &x,
+            )
+            .unwrap_or_default();
+            let mut compared = 0;
+            for (node, &st) in nodes.iter().enumerate() {
+                let local: [f64; 3] = std::array::from_fn(|a| {
+                    p[3 * st + a]
+                        + (0..4)
+                            .map(|m| shapes[12 * st + 4 * a + m] * qf[m])
+                            .sum::<f64>()
+                });
+                let drawn: [f64; 3] = std::array::from_fn(|a| r[a] + turn(local)[a]);
+                let rigid: [f64; 3] = std::array::from_fn(|a| {
+                    r[a] + turn([p[3 * st], p[3 * st + 1], p[3 * st + 2]])[a]
+                });
+                let Some(at) = f
+                    .output_names
+                    .iter()
+                    .position(|n| *n == format!("beam_node{node}_x"))
+                else {
+                    continue;
+                };
+                let want = &outputs[at..at + 3];
+                let err = (0..3)
+                    .map(|a| (drawn[a] - want[a]).abs())
+                    .fold(0.0, f64::max);
+                assert!(
+                    err < 2e-6,
+                    "frame {frame}, node {node}: drawn {drawn:?}, output {want:?}"
+                );
+                compared += 1;
+                let bend = (0..3)
+                    .map(|a| (rigid[a] - want[a]).abs())
+                    .fold(0.0, f64::max);
+                tip_bend = tip_bend.max(bend);
+            }
+            assert_eq!(compared, 3, "nodes 0, 5 and 10");
+        }
+        assert!(
+            tip_bend > 0.01,
+            "the frames bend the beam by only {tip_bend} m"
+        );
     }
 
     /// The four-bar's loop is closed by one cut joint: the page draws it
