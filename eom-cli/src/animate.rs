@@ -66,6 +66,13 @@ pub fn html(
         cables.push((c.name.clone(), cols));
     }
     let flexes = flex_bodies(sys, &scene)?;
+    if let Some(f) = flexes.iter().find(|f| f.q_index + f.k > q_cols.len()) {
+        return Err(Error::Format(format!(
+            "the elastic coordinates of `{}` lie past the model's {} coordinates",
+            scene.bodies[f.body].name,
+            q_cols.len()
+        )));
+    }
     let mut flex_frames = String::from("[");
     let mut cable_frames = String::from("[");
     let mut frames = String::from("[");
