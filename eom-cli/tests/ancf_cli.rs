@@ -645,7 +645,55 @@ fn sweep_of_a_falling_cable_is_free_fall_for_every_case() {
             );
         }
     }
-    let _ = std::fs::remove_dir_all(dir);
+    // Shards of the study merge into the same cases (study.json records
+    // generalized-α's ρ∞ with the run options).
+    let mut shards = Vec::new();
+    for i in 0..2 {
+        let shard = format!("{dir}.{i}");
+        let _ = eom_gen(&[
+            "sweep",
+            &path,
+            "--param",
+            "E=1e7,1e9",
+            "--param",
+            "rho=-1,1000,3000",
+            "--t-end",
+            "0.1",
+            "--dt",
+            "0.01",
+            "--shard",
+            &format!("{i}/2"),
+            "--out",
+            &shard,
+        ]);
+        shards.push(shard);
+    }
+    let merged = format!("{dir}.all");
+    let out = eom_gen(&["sweep", "--merge", &shards[0], &shards[1], "--out", &merged]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (hm, merged_rows) = sweep_results(&merged);
+    assert_eq!(hm, h);
+    let cells = |r: &[String]| -> Vec<String> {
+        let cpu = h.iter().position(|c| c == "cpu_s").unwrap_or(0);
+        r.iter()
+            .enumerate()
+            .filter(|(k, _)| *k != cpu)
+            .map(|(_, c)| c.clone())
+            .collect()
+    };
+    assert_eq!(
+        merged_rows.iter().map(|r| cells(r)).collect::<Vec<_>>(),
+        rows.iter().map(|r| cells(r)).collect::<Vec<_>>()
+    );
+    let study = std::fs::read_to_string(format!("{merged}/study.json")).unwrap_or_default();
+    assert!(study.contains("\"rho_inf\": 1.0"), "{study}");
+    for d in shards.iter().chain([&merged, &dir]) {
+        let _ = std::fs::remove_dir_all(d);
+    }
 }
 
 /// `sweep` of a mixed model (the bundled rod on a pendulum link): the
