@@ -231,11 +231,16 @@ pub struct FlexDrawing {
 /// the nodes drawn by this many straight pieces.
 pub const PIECES_PER_ELEMENT: usize = 4;
 
+/// Stations along a body with assumed modes (its shape functions of `x`
+/// evaluated at each).
+pub const ASSUMED_PIECES: usize = 32;
+
 /// The flexible bodies of the scene: a built-in beam at
 /// [`PIECES_PER_ELEMENT`] stations per element (the elements' cubic
 /// interpolation of the mode shapes, `flex_outputs::deformation`);
-/// assumed modes and imported modal data at their nodes
-/// (`flex_outputs::node_point`, where their shapes are known).
+/// assumed modes at [`ASSUMED_PIECES`]` + 1` stations (their shape
+/// functions, `flex::assumed::section`); imported modal data at their
+/// nodes (`flex_outputs::node_point`, where their shapes are known).
 pub fn flex_bodies(
     sys: &eom_gen::system::System,
     scene: &Scene,
@@ -256,7 +261,7 @@ pub fn flex_bodies(
         let unit = |j: usize| -> Vec<f64> { (0..k).map(|m| f64::from(u8::from(m == j))).collect() };
         let zero = vec![0.0; k];
         let mut places = Vec::new();
-        let mut shapes = Vec::new();
+        let mut shapes_at = Vec::new();
         let mut nodes = Vec::new();
         match flex.source {
             FlexSource::Beam => {
@@ -270,10 +275,27 @@ pub fn flex_bodies(
                     places.push([x, 0.0, 0.0]);
                     let cols: Vec<[f64; 6]> =
                         (0..k).map(|j| deformation(flex, x, &unit(j))).collect();
-                    shapes.push(std::array::from_fn(|r| cols.iter().map(|c| c[r]).collect()));
+                    shapes_at.push(std::array::from_fn(|r| cols.iter().map(|c| c[r]).collect()));
                 }
             }
-            _ => {
+            FlexSource::Assumed { ref shapes, .. } => {
+                // The shape functions of `x` along the body.
+                let n = ASSUMED_PIECES;
+                for s in 0..=n {
+                    let x = flex.beam.length * s as f64 / n as f64;
+                    let Some(sec) = eom_gen::flex::assumed::section(shapes, x) else {
+                        continue;
+                    };
+                    if s == 0 || s == n {
+                        nodes.push(places.len());
+                    }
+                    places.push([x, 0.0, 0.0]);
+                    shapes_at.push(std::array::from_fn(|r| {
+                        (0..k).map(|j| sec.translation[(r, j)]).collect()
+                    }));
+                }
+            }
+            FlexSource::Modal { .. } => {
                 for node in 0..flex.modes.shapes.nrows() / 6 {
                     let p = node_point(flex, node, &zero).0;
                     nodes.push(places.len());
@@ -284,7 +306,7 @@ pub fn flex_bodies(
                             [d[0] - p[0], d[1] - p[1], d[2] - p[2]]
                         })
                         .collect();
-                    shapes.push(std::array::from_fn(|r| cols.iter().map(|c| c[r]).collect()));
+                    shapes_at.push(std::array::from_fn(|r| cols.iter().map(|c| c[r]).collect()));
                 }
             }
         }
@@ -296,7 +318,7 @@ pub fn flex_bodies(
             q_index: flex.q_index,
             k,
             places,
-            shapes,
+            shapes: shapes_at,
             nodes,
         });
     }
@@ -783,6 +805,118 @@ mod tests {
             tip_bend > 0.01,
             "the frames bend the beam by only {tip_bend} m"
         );
+    }
+
+    /// A rod with assumed modes (docs/model-format.md's example, turned on
+    /// a hub) is drawn along its shape functions: the station at `L/2`
+    /// of the page, evaluated as the page does, is the model's own
+    /// `NodePosition` output of a named node there, and its first shape
+    /// `v = sin(πx/L)` bends it by `q₁` in the body's `y` there.
+    #[test]
+    fn assumed_modes_are_drawn_along_their_shapes() {
+        let text = r#"Model(name: "assumed_rod", parameters: [(name: "L", value: 10.0)],
+            bodies: [(name: "rod", flexible: AssumedModes(
+                length: "L", rho_a: 1.2, rho_ip: 1e-4, ea: 2.8e7, ei_y: 1.4e4, ei_z: 1.4e4, gj: 1e4,
+                shapes: [(v: "sin(pi*x/L)"), (v: "sin(2*pi*x/L)", w: "0"),
+                         (u: "sin(pi*x/(2*L))"), (phi: "sin(pi*x/(2*L))")],
+                nodes: [(name: "mid", x: "L/2")]))],
+            joints: [(name: "hub", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "rod")],
+            outputs: [NodePosition(body: "rod", node: 0)])"#;
+        let dir = std::env::temp_dir().join(format!("eom-assumed-{}", std::process::id()));
+        let _ = std::fs::create_dir_all(&dir);
+        let path = dir.join("assumed_rod.ron");
+        let _ = std::fs::write(&path, text);
+        let opened = crate::open::open(
+            &path.display().to_string(),
+            &Default::default(),
+            &Default::default(),
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+        let opened = match opened {
+            Ok(o) => o,
+            Err(_) => panic!("cannot open the assumed-modes rod"),
+        };
+        let sys = &opened.checked.system;
+        let f =
+            match eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested()) {
+                Ok(f) => f,
+                Err(e) => panic!("{e}"),
+            };
+        let q = [0.4, 0.3, -0.1, 0.02, 0.05];
+        let mut header = vec!["t".to_string()];
+        header.extend(sys.coordinate_names().iter().map(|n| n.to_string()));
+        let mut table = Table::new(header);
+        table.push([0.0].into_iter().chain(q).collect());
+        let page = match html(sys, &table, &[]) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        };
+        let start = page.find(r#"type="application/json">"#).map(|i| i + 24);
+        let data = start.and_then(|s| Some(&page[s..s + page[s..].find("</script>")?]));
+        let data: serde_json::Value = match data.map(serde_json::from_str) {
+            Some(Ok(v)) => v,
+            other => panic!("the page's data does not parse: {other:?}"),
+        };
+        let nums = |v: &serde_json::Value| -> Vec<f64> {
+            v.as_array()
+                .map(|a| a.iter().filter_map(serde_json::Value::as_f64).collect())
+                .unwrap_or_default()
+        };
+        let flex = &data["flex"][0];
+        let (p, shapes, qf) = (
+            nums(&flex["p"]),
+            nums(&flex["s"]),
+            nums(&data["flexFrames"][0]),
+        );
+        assert_eq!(p.len(), 3 * (ASSUMED_PIECES + 1));
+        assert_eq!(qf, q[1..]);
+        let st = ASSUMED_PIECES / 2;
+        let local: [f64; 3] = std::array::from_fn(|a| {
+            p[3 * st + a]
+                + (0..4)
+                    .map(|m| shapes[12 * st + 4 * a + m] * qf[m])
+                    .sum::<f64>()
+        });
+        // u = q₃ sin(π/4), v = q₁ sin(π/2) + q₂ sin(π) at x = L/2.
+        let want_local = [5.0 + q[3] * (std::f64::consts::PI / 4.0).sin(), q[1], 0.0];
+        for a in 0..3 {
+            assert!(
+                (local[a] - want_local[a]).abs() < 1e-6,
+                "{local:?} vs {want_local:?}"
+            );
+        }
+        let pose = nums(&data["poses"][0]);
+        let (c, s) = (q[0].cos(), q[0].sin());
+        assert!((pose[0..3].iter().map(|x| x.abs()).sum::<f64>()) < 1e-12);
+        let drawn = [
+            c * local[0] - s * local[1],
+            s * local[0] + c * local[1],
+            local[2],
+        ];
+        let x = eom_gen::interpret::Point {
+            sys,
+            q: &q,
+            u: &[0.0; 5],
+            udot: &[0.0; 5],
+            tau: &[],
+            inputs: &[],
+            params: &[],
+            multipliers: &[],
+            t: 0.0,
+        };
+        let out =
+            eom_gen::interpret::evaluate_function(&f, eom_gen::functions::Function::Outputs, &x)
+                .unwrap_or_default();
+        let Some(at) = f.output_names.iter().position(|n| n == "rod_node0_x") else {
+            panic!("outputs {:?}", f.output_names)
+        };
+        for a in 0..3 {
+            assert!(
+                (drawn[a] - out[at + a]).abs() < 2e-6,
+                "drawn {drawn:?}, output {:?}",
+                &out[at..at + 3]
+            );
+        }
     }
 
     /// The four-bar's loop is closed by one cut joint: the page draws it
