@@ -225,6 +225,10 @@ pub struct FlexDrawing {
     pub shapes: Vec<[Vec<f64>; 3]>,
     /// Which stations are finite-element (or named) nodes.
     pub nodes: Vec<usize>,
+    /// Stations along an axis, joined by rods (a beam, assumed modes);
+    /// `false`: an imported model's nodes, drawn as balls alone (no
+    /// element connectivity is read).
+    pub line: bool,
 }
 
 /// Stations per element of a built-in beam: the Hermite cubics between
@@ -320,6 +324,7 @@ pub fn flex_bodies(
             places,
             shapes: shapes_at,
             nodes,
+            line: !matches!(flex.source, FlexSource::Modal { .. }),
         });
     }
     Ok(out)
@@ -344,10 +349,11 @@ fn flex_json(flexes: &[FlexDrawing]) -> Result<String, Error> {
         let sh = list(&mut f.shapes.iter().flatten().flatten())?;
         let _ = write!(
             s,
-            "{{\"body\":{},\"k\":{},\"at\":{at},\"p\":[{p}],\"s\":[{sh}],\"nodes\":{}}}",
+            "{{\"body\":{},\"k\":{},\"at\":{at},\"p\":[{p}],\"s\":[{sh}],\"nodes\":{},\"line\":{}}}",
             f.body,
             f.k,
             serde_json::to_string(&f.nodes).unwrap_or_else(|_| "[]".into()),
+            f.line,
         );
         at += f.k;
     }
@@ -719,6 +725,7 @@ mod tests {
         let flex = &data["flex"][0];
         let (body, k) = (flex["body"].as_u64(), flex["k"].as_u64());
         assert_eq!(k, Some(4));
+        assert_eq!(flex["line"], true, "a beam is drawn along its axis");
         let body = body.unwrap_or(0) as usize;
         assert_eq!(data["bodies"][body]["name"], "beam");
         let (p, shapes) = (nums(&flex["p"]), nums(&flex["s"]));
