@@ -14,6 +14,9 @@ use eom_gen::system::Shape;
 use eom_sim::table::Table;
 use std::fmt::Write;
 
+mod flex;
+use flex::{flex_bodies, flex_json, significant};
+
 const THREE: &str = include_str!("../assets/three.bundle.min.js");
 const PAGE: &str = include_str!("../assets/animate.html");
 
@@ -65,6 +68,15 @@ pub fn html(
         }
         cables.push((c.name.clone(), cols));
     }
+    let flexes = flex_bodies(sys, &scene)?;
+    if let Some(f) = flexes.iter().find(|f| f.q_index + f.k > q_cols.len()) {
+        return Err(Error::Format(format!(
+            "the elastic coordinates of `{}` lie past the model's {} coordinates",
+            scene.bodies[f.body].name,
+            q_cols.len()
+        )));
+    }
+    let mut flex_frames = String::from("[");
     let mut cable_frames = String::from("[");
     let mut frames = String::from("[");
     let mut times = String::from("[");
@@ -81,7 +93,20 @@ pub fn html(
             frames.push(',');
             times.push(',');
             cable_frames.push(',');
+            flex_frames.push(',');
         }
+        flex_frames.push('[');
+        for (j, x) in flexes
+            .iter()
+            .flat_map(|f| &q[f.q_index..f.q_index + f.k])
+            .enumerate()
+        {
+            if j > 0 {
+                flex_frames.push(',');
+            }
+            flex_frames.push_str(&significant(*x)?);
+        }
+        flex_frames.push(']');
         cable_frames.push('[');
         for (j, &c) in cables.iter().flat_map(|(_, cols)| cols).enumerate() {
             if j > 0 {
@@ -106,6 +131,7 @@ pub fn html(
     frames.push(']');
     times.push(']');
     cable_frames.push(']');
+    flex_frames.push(']');
     let cable_list: Vec<serde_json::Value> = cables
         .iter()
         .map(|(name, cols)| serde_json::json!({ "name": name, "nodes": cols.len() / 3 }))
@@ -122,7 +148,7 @@ pub fn html(
     let mut data = String::new();
     let _ = write!(
         data,
-        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"impacts\":{},\"cables\":{},\"cableFrames\":{cable_frames},\"t\":{times},\"poses\":{frames}}}",
+        "{{\"name\":{},\"gravity\":{},\"bodies\":{},\"ground\":{},\"groundGeometry\":{},\"meshes\":{},\"impacts\":{},\"cables\":{},\"cableFrames\":{cable_frames},\"flex\":{},\"flexFrames\":{flex_frames},\"t\":{times},\"poses\":{frames}}}",
         serde_json::to_string(&sys.name).unwrap_or_default(),
         serde_json::to_string(&gravity(&num)).unwrap_or_default(),
         bodies,
@@ -131,6 +157,7 @@ pub fn html(
         serde_json::to_string(&meshes.list).unwrap_or_else(|_| "[]".into()),
         serde_json::to_string(&impacts(sys, &scene, events)).unwrap_or_else(|_| "[]".into()),
         serde_json::to_string(&cable_list).unwrap_or_else(|_| "[]".into()),
+        flex_json(&flexes)?,
     );
     // The data sits in a <script> element: no `</` may close it early.
     let data = data.replace("</", "<\\/");

@@ -8,6 +8,7 @@ mod animate;
 mod args;
 mod bench;
 mod cable_report;
+mod cable_sweep;
 mod cmd;
 mod compiled;
 mod error;

@@ -91,6 +91,9 @@ pub struct Study {
     pub outputs: Vec<String>,
     /// Number of cases of the whole study.
     pub cases: usize,
+    /// Generalized-α's spectral radius at infinity (models with cables).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rho_inf: Option<f64>,
 }
 
 /// splitmix64: a 64-bit mix with good avalanche (Steele, Lea and Flood

@@ -543,3 +543,252 @@ fn eval_of_a_model_with_a_cable_says_its_scope_and_gives_the_whole_model() {
         "free end y = {y_end}"
     );
 }
+
+/// The results of a sweep: header and rows (the quoted `stop` last).
+fn sweep_results(dir: &str) -> (Vec<String>, Vec<Vec<String>>) {
+    let text = std::fs::read_to_string(format!("{dir}/results.csv")).unwrap_or_default();
+    let mut lines = text.lines();
+    let header = lines
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(String::from)
+        .collect();
+    let rows = lines
+        .map(|l| {
+            let (numbers, stop) = l.split_once(",\"").unwrap_or((l, ""));
+            numbers
+                .split(',')
+                .map(String::from)
+                .chain([stop.trim_end_matches('"').to_string()])
+                .collect()
+        })
+        .collect();
+    (header, rows)
+}
+
+fn cell(header: &[String], row: &[String], name: &str) -> f64 {
+    let Some(k) = header.iter().position(|h| h == name) else {
+        panic!("no column `{name}` in {header:?}")
+    };
+    row[k].parse().unwrap_or(f64::NAN)
+}
+
+/// `sweep` of cables alone: a free cable in uniform gravity falls as a
+/// rigid body, every node by g t²/2 without deformation, whatever its
+/// stiffness and density; generalized-α with ρ∞ = 1 (the trapezoidal
+/// rule on a constant acceleration) reaches it to round-off. Each case's
+/// chain is assembled from its own values (`young`, `density` swept); a
+/// value the check refuses is a row with the reason, exit 3.
+#[test]
+fn sweep_of_a_falling_cable_is_free_fall_for_every_case() {
+    let path = write(
+        "falling.ron",
+        r#"Model(name: "falling", gravity: (0, -9.81, 0),
+            parameters: [(name: "E", value: 1e9), (name: "rho", value: 1000)],
+            bodies: [], joints: [], cables: [
+            Cable(name: "c", element: Cable2D, from: (0, 0, 0), to: (1, 0, 0), elements: 3,
+                  young: "E", density: "rho", width: 0.01, height: 0.01, start: Free)])"#,
+    );
+    let dir = format!("{path}.sweep");
+    let out = eom_gen(&[
+        "sweep",
+        &path,
+        "--param",
+        "E=1e7,1e9",
+        "--param",
+        "rho=-1,1000,3000",
+        "--t-end",
+        "0.1",
+        "--dt",
+        "0.01",
+        "--jobs",
+        "2",
+        "--out",
+        &dir,
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (h, rows) = sweep_results(&dir);
+    assert_eq!(rows.len(), 6);
+    let fall = -0.5 * 9.81 * 0.1 * 0.1;
+    for r in &rows {
+        let stop = r.last().map(String::as_str).unwrap_or_default();
+        if cell(&h, r, "rho") < 0.0 {
+            assert!(
+                stop.starts_with("failed: ") && stop.contains("density"),
+                "{stop}"
+            );
+            assert!(cell(&h, r, "c.node0.y").is_nan());
+            continue;
+        }
+        assert_eq!(stop, "finished");
+        assert!(
+            (cell(&h, r, "t") - 0.1).abs() < 1e-12,
+            "t = {}",
+            cell(&h, r, "t")
+        );
+        for k in 0..4 {
+            let (x, y) = (
+                cell(&h, r, &format!("c.node{k}.x")),
+                cell(&h, r, &format!("c.node{k}.y")),
+            );
+            assert!(
+                (y - fall).abs() < 1e-10 && (x - k as f64 / 3.0).abs() < 1e-10,
+                "case {}, node {k}: ({x}, {y}), free fall ({}, {fall})",
+                r[0],
+                k as f64 / 3.0
+            );
+        }
+    }
+    // Shards of the study merge into the same cases (study.json records
+    // generalized-α's ρ∞ with the run options).
+    let mut shards = Vec::new();
+    for i in 0..2 {
+        let shard = format!("{dir}.{i}");
+        let _ = eom_gen(&[
+            "sweep",
+            &path,
+            "--param",
+            "E=1e7,1e9",
+            "--param",
+            "rho=-1,1000,3000",
+            "--t-end",
+            "0.1",
+            "--dt",
+            "0.01",
+            "--shard",
+            &format!("{i}/2"),
+            "--out",
+            &shard,
+        ]);
+        shards.push(shard);
+    }
+    let merged = format!("{dir}.all");
+    let out = eom_gen(&["sweep", "--merge", &shards[0], &shards[1], "--out", &merged]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (hm, merged_rows) = sweep_results(&merged);
+    assert_eq!(hm, h);
+    let cells = |r: &[String]| -> Vec<String> {
+        let cpu = h.iter().position(|c| c == "cpu_s").unwrap_or(0);
+        r.iter()
+            .enumerate()
+            .filter(|(k, _)| *k != cpu)
+            .map(|(_, c)| c.clone())
+            .collect()
+    };
+    assert_eq!(
+        merged_rows.iter().map(|r| cells(r)).collect::<Vec<_>>(),
+        rows.iter().map(|r| cells(r)).collect::<Vec<_>>()
+    );
+    let study = std::fs::read_to_string(format!("{merged}/study.json")).unwrap_or_default();
+    assert!(study.contains("\"rho_inf\": 1.0"), "{study}");
+    for d in shards.iter().chain([&merged, &dir]) {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+/// `sweep` of a mixed model (the bundled rod on a pendulum link): the
+/// rigid part formulated once with `m` tunable, the rod's chain from each
+/// case's `L`; every finished row equals `simulate --param` of that case
+/// (the model checked and formulated with the values inlined) to
+/// round-off, a negative mass is a row with the reason; options that do
+/// not apply are refused (exit 2).
+#[test]
+fn sweep_of_a_mixed_model_equals_runs_one_by_one() {
+    let dir = write("mixed.sweep", "");
+    let _ = std::fs::remove_file(&dir);
+    let model = "models/ancf/pendulum_rod.ron";
+    let out = eom_gen(&[
+        "sweep",
+        model,
+        "--param",
+        "m=-1,0.5,0.8",
+        "--param",
+        "L=1.0,1.2",
+        "--t-end",
+        "0.02",
+        "--out",
+        &dir,
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(3),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let (h, rows) = sweep_results(&dir);
+    assert_eq!(rows.len(), 6);
+    let mut compared = 0;
+    for r in &rows {
+        let (m, l) = (cell(&h, r, "m"), cell(&h, r, "L"));
+        let stop = r.last().map(String::as_str).unwrap_or_default();
+        if m < 0.0 {
+            assert!(stop.contains("mass of body `link` is -1 kg"), "{stop}");
+            continue;
+        }
+        assert_eq!(stop, "finished");
+        let out = eom_gen(&[
+            "simulate",
+            model,
+            "--t-end",
+            "0.02",
+            "--json",
+            "--param",
+            &format!("m={m}"),
+            "--param",
+            &format!("L={l}"),
+        ]);
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap_or_default();
+        let (theta, want) = (cell(&h, r, "theta"), v["q"][0].as_f64().unwrap_or(f64::NAN));
+        assert!(
+            theta != 0.0 && (theta - want).abs() < 1e-12,
+            "m = {m}, L = {l}: sweep {theta}, simulate {want}"
+        );
+        let last = v["cables"][0]["last_node"][0].as_f64().unwrap_or(f64::NAN);
+        assert!(
+            (cell(&h, r, "rod.node8.x") - last).abs() < 1e-12,
+            "m = {m}, L = {l}"
+        );
+        compared += 1;
+    }
+    assert_eq!(compared, 4);
+    let _ = std::fs::remove_dir_all(&dir);
+    for (extra, says) in [
+        (&["--integrator", "rk4"][..], "index-3"),
+        (&["--max-steps", "10"][..], "--max-steps does not apply"),
+        (&["--output", "x"][..], "--output does not apply"),
+    ] {
+        let mut args = vec![
+            "sweep", model, "--param", "m=1", "--t-end", "0.01", "--out", &dir,
+        ];
+        args.extend(extra);
+        let out = eom_gen(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(err.contains(says), "{extra:?}: {err}");
+    }
+    let out = eom_gen(&[
+        "sweep",
+        "models/pendulum.ron",
+        "--param",
+        "m=1",
+        "--t-end",
+        "0.01",
+        "--rho-inf",
+        "0.5",
+        "--out",
+        &dir,
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("--rho-inf sets generalized-α"), "{err}");
+}

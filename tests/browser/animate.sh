@@ -3,8 +3,9 @@
 # missing, writes the pages of 2 s runs of the double pendulum (drawn from
 # its joint frames) and of a URDF with every kind of `<visual>` (shapes and
 # meshes) and of the crane's rope (a cable's deformed shape on a rigid
-# boom), opens each headless at t = 0 and t = 1 s (the page honours
-# `#t=SECONDS`), requires no console error and no uncaught exception, and
+# boom) and of the hub and beam (a flexible body's deformed shape), opens
+# each headless at t = 0 and t = 1 s (the page honours `#t=SECONDS`;
+# `#deform=10` scales flexible bodies' deformation), requires no console error and no uncaught exception, and
 # checks that both screenshots show the mechanism and differ
 # (tests/browser/png_check.py); and that the bouncing ball flashes at its
 # impact and not before.
@@ -61,6 +62,15 @@ check visuals
 # its rigid boom.
 gen animate models/ancf/crane_rope.ron --t-end 1 -o "$out/crane.html"
 check crane
+# A flexible body's deformed shape: the hub and beam (floating frame,
+# 4 modes) with its first mode excited; and at t = 0.5 s the beam drawn
+# at 1× and 10× its deformation (`#deform=`) differs: the bending is drawn.
+gen animate models/hub_beam.ron --interpret --q0 0,0.02,0,0,0 --t-end 1 -o "$out/hub_beam.html"
+check hub_beam
+shot "$out/hub_beam.html" "0.5&deform=1" "$out/hub-x1.png"
+shot "$out/hub_beam.html" "0.5&deform=10" "$out/hub-x10.png"
+python3 "$here/png_check.py" "$out/hub-x1.png" "$out/hub-x10.png"
+echo "hub_beam: the beam's bending is drawn"
 # Contacts flash on impact: the bouncing ball's first impact is at
 # t = √(2·1 m/9.81 m/s²) = 0.4515 s; a red halo at t = 0.5, none at 0.3.
 gen animate models/bouncing_ball.ron --interpret --t-end 1 -o "$out/ball.html"

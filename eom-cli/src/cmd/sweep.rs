@@ -59,6 +59,10 @@ pub struct SweepArgs {
     /// How closed loops are kept (as `simulate --constraints`).
     #[arg(long)]
     pub constraints: Option<String>,
+    /// Spectral radius at infinity of generalized-α (models with cables;
+    /// default 1).
+    #[arg(long, allow_hyphen_values = true)]
+    pub rho_inf: Option<f64>,
     /// Outputs of the model recorded at the end time (comma-separated
     /// names of `simulate --csv` columns after the speeds; models without
     /// constraints).
@@ -142,7 +146,6 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         method,
         ..RunOptions::default()
     };
-    problems.extend(options.problems());
     let all = match study::cases(&axes, a.samples, a.seed.unwrap_or(0)) {
         Ok(c) => c,
         Err(e) => {
@@ -170,11 +173,29 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             }
         }
     }
-    let sys = &opened.checked.system;
+    // Models with cables: the large-model runtime (`crate::cable_sweep`).
     if crate::ancf::has_cables(&opened.checked) {
+        if !problems.is_empty() {
+            return fail(&Error::Usage(problems));
+        }
+        let indices = study::shard(all.len(), shard);
+        let plan = crate::cable_sweep::Plan {
+            model: &model,
+            checked: &opened.checked,
+            urdf,
+            names: &names,
+            all: &all,
+            indices: &indices,
+            t_end,
+        };
+        return crate::cable_sweep::run(a, &plan);
+    }
+    problems.extend(options.problems());
+    let sys = &opened.checked.system;
+    if a.rho_inf.is_some() {
         problems.push(format!(
-            "`{}` has cables: sweeps run rigid and flexible models in the evaluator; run cases \
-             with `simulate --param` (the large-model runtime)",
+            "--rho-inf sets generalized-α, which runs models with cables; `{}` has none (its \
+             integrators: --integrator)",
             sys.name
         ));
     }
@@ -253,6 +274,7 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         run: options.clone(),
         outputs: a.output.clone(),
         cases: all.len(),
+        rho_inf: None,
     };
     let bar = progress(indices.len(), &sys.name);
     let reformulated = AtomicUsize::new(0);
@@ -451,7 +473,7 @@ impl Context<'_> {
 }
 
 /// A bar of cases with the time left, on a terminal.
-fn progress(n: usize, name: &str) -> indicatif::ProgressBar {
+pub(crate) fn progress(n: usize, name: &str) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(n as u64);
     let style = indicatif::ProgressStyle::with_template(
         "{prefix} [{bar:30}] {pos}/{len} cases, {elapsed} elapsed, {eta} left",
@@ -475,6 +497,7 @@ fn merge(a: &SweepArgs) -> ExitCode {
         ("--output", !a.output.is_empty()),
         ("--integrator", a.integrator.is_some()),
         ("--jobs", a.jobs.is_some()),
+        ("--rho-inf", a.rho_inf.is_some()),
     ]
     .iter()
     .filter(|(_, g)| *g)
