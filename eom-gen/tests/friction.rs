@@ -406,7 +406,11 @@ fn a_point_on_a_sphere_sticks_below_the_friction_angle_and_slides_above() {
             );
             // Along the tangent, down the sphere, still on it.
             let r = (report.q[0].powi(2) + report.q[1].powi(2)).sqrt();
-            assert!((r - 1.0).abs() < 1e-9 && report.q[0] > s, "r = {r}, x = {}", report.q[0]);
+            assert!(
+                (r - 1.0).abs() < 1e-9 && report.q[0] > s,
+                "r = {r}, x = {}",
+                report.q[0]
+            );
         }
     }
 }

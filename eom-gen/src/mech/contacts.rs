@@ -212,7 +212,11 @@ pub fn least_aligned_axis(n: [f64; 3]) -> usize {
 /// spheres with `μ > 0` (validation refuses friction on joint limits).
 pub fn has_friction(sys: &System) -> bool {
     sys.contacts.iter().any(|c| {
-        c.mu > 0.0 && matches!(c.kind, ContactKind::Plane { .. } | ContactKind::Spheres { .. })
+        c.mu > 0.0
+            && matches!(
+                c.kind,
+                ContactKind::Plane { .. } | ContactKind::Spheres { .. }
+            )
     })
 }
 

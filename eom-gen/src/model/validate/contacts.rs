@@ -323,9 +323,12 @@ impl Ctx<'_> {
             return;
         };
         for (c, n) in sys.contacts.iter_mut().zip(normals) {
-            if let (ContactKind::Spheres {
-                tangent_reference, ..
-            }, Some(n)) = (&mut c.kind, n)
+            if let (
+                ContactKind::Spheres {
+                    tangent_reference, ..
+                },
+                Some(n),
+            ) = (&mut c.kind, n)
             {
                 let mut a = [0.0; 3];
                 a[crate::mech::contacts::least_aligned_axis(n)] = 1.0;
