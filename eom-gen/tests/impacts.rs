@@ -753,7 +753,7 @@ fn resting_on_a_floor_while_held_on_a_circle() {
 /// A flexible beam (floating frame, 4 elements, 3 modes) pinned at its
 /// root about y at the angle `θ₀`, whose tip node carries a point marker
 /// over a stop `z = z₀` (issue #26 on the nodes of flexible bodies).
-fn flex_stop(e: f64, theta0: f64, z0: f64) -> System {
+fn flex_stop(e: f64, mu: f64, theta0: f64, z0: f64) -> System {
     from_text(&format!(
         r#"Model(
     name: "flex_stop",
@@ -768,15 +768,15 @@ fn flex_stop(e: f64, theta0: f64, z0: f64) -> System {
         (name: "pin", kind: Revolute(axis: (0, 1, 0)), parent: "ground", child: "beam", q0: [{theta0}]),
     ],
     contacts: [
-        Plane(name: "stop", at: (body: "beam", marker: "tipm"), point: (0, 0, {z0:.17e}), normal: (0, 0, 1), e: {e}),
+        Plane(name: "stop", at: (body: "beam", marker: "tipm"), point: (0, 0, {z0:.17e}), normal: (0, 0, 1), e: {e}, mu: {mu}),
     ],
 )"#
     ))
 }
 
-/// The tip node's height `z = [R_y(θ) ((L, 0, 0) + S_tip q_f)]_z`, from
+/// The tip node's world position `R_y(θ) ((L, 0, 0) + S_tip q_f)`, from
 /// the nodal mode shapes (rows `u_x, u_y, u_z` of the tip node).
-fn flex_tip_z(sys: &System, q: &[f64]) -> f64 {
+fn flex_tip(sys: &System, q: &[f64]) -> [f64; 3] {
     let shape = sys
         .bodies
         .iter()
@@ -790,8 +790,26 @@ fn flex_tip_z(sys: &System, q: &[f64]) -> f64 {
             *dr += shape[(r, j)] * qj;
         }
     }
-    // R_y(θ): z' = −sin θ x + cos θ z.
-    -q[0].sin() * d[0] + q[0].cos() * d[2]
+    // R_y(θ): x' = cos θ x + sin θ z, z' = −sin θ x + cos θ z.
+    let (s, c) = q[0].sin_cos();
+    [c * d[0] + s * d[2], d[1], -s * d[0] + c * d[2]]
+}
+
+/// The central-difference row `∂f/∂q` at `q` (`q̇ = u` here).
+fn row(f: impl Fn(&[f64]) -> f64, q: &[f64; 4]) -> Vec<f64> {
+    let h = 1e-6;
+    (0..4)
+        .map(|j| {
+            let (mut qp, mut qm) = (*q, *q);
+            qp[j] += h;
+            qm[j] -= h;
+            (f(&qp) - f(&qm)) / (2.0 * h)
+        })
+        .collect()
+}
+
+fn flex_tip_z(sys: &System, q: &[f64]) -> f64 {
+    flex_tip(sys, q)[2]
 }
 
 /// A flexible beam's tip node strikes a stop (the generalised Newton law
@@ -801,25 +819,18 @@ fn flex_tip_z(sys: &System, q: &[f64]) -> f64 {
 /// its share), `ġ⁺ = −e ġ⁻` and the energy lost is Carnot's
 /// `(1 − e²) ġ⁻²/(2 wᵀ M⁻¹ w)`. With `e = 0` the tip then rests on the
 /// stop, released and struck again as the beam vibrates, never below it.
+/// With friction, the node's tangential row `w_t = ∂x/∂q` enters as well.
 #[test]
 fn flexible_beams_tip_node_strikes_a_stop() {
     use nalgebra::{DMatrix, DVector};
     let theta0 = 0.3;
     // The tip touching the stop at the start (g = 0), moving into it:
     // rigid rotation down and the first modes moving.
-    let probe = flex_stop(0.5, theta0, -10.0);
+    let probe = flex_stop(0.5, 0.0, theta0, -10.0);
     let q0 = [theta0, 0.0, 0.0, 0.0];
     let z0 = flex_tip_z(&probe, &q0);
     let u0 = vec![2.0, 0.3, 0.0, -0.2];
-    let h = 1e-6;
-    let w: Vec<f64> = (0..4)
-        .map(|j| {
-            let (mut qp, mut qm) = (q0, q0);
-            qp[j] += h;
-            qm[j] -= h;
-            (flex_tip_z(&probe, &qp) - flex_tip_z(&probe, &qm)) / (2.0 * h)
-        })
-        .collect();
+    let w = row(|q| flex_tip_z(&probe, q), &q0);
     let gdot: f64 = w.iter().zip(&u0).map(|(a, b)| a * b).sum();
     assert!(gdot < -1.0, "moving into the stop: ġ = {gdot}");
     let num = eom_gen::mech::Numeric::new(&probe).expect("numeric");
@@ -829,7 +840,7 @@ fn flexible_beams_tip_node_strikes_a_stop() {
     let minv_w = m.clone().lu().solve(&wv).expect("M is regular");
     let a = wv.dot(&minv_w);
     for e in [0.5, 1.0] {
-        let sys = flex_stop(e, theta0, z0);
+        let sys = flex_stop(e, 0.0, theta0, z0);
         let report = run(
             &sys,
             &RunOptions {
@@ -876,7 +887,7 @@ fn flexible_beams_tip_node_strikes_a_stop() {
     // Plastic: it rests on the stop, released and struck again as the
     // beam vibrates; energy only falls at the events, and at the end the
     // tip is on the stop or above it.
-    let sys = flex_stop(0.0, theta0, z0);
+    let sys = flex_stop(0.0, 0.0, theta0, z0);
     let report = run(
         &sys,
         &RunOptions {
@@ -903,4 +914,73 @@ fn flexible_beams_tip_node_strikes_a_stop() {
     }
     let g = flex_tip_z(&sys, &report.q) - z0;
     assert!(g > -1e-8, "the tip ends {g} m inside the stop");
+    // With Coulomb friction at the node (the floor's t₁ = +x, t₂ = +y),
+    // the beam level at the start so that the tip's lateral bending is
+    // free along the floor: the sliding speeds before are `W_t u`, the
+    // rows `∂x/∂q`, `∂y/∂q` from the mode shapes; with a wide cone it
+    // leaves without sliding (`v_t⁺ = 0`) and `M Δu = w Λ + W_tᵀ Λ_t`
+    // with `‖Λ_t‖ ≤ μ Λ`.
+    let q0 = [0.0; 4];
+    let probe = flex_stop(0.5, 0.0, 0.0, -10.0);
+    let z0 = flex_tip_z(&probe, &q0);
+    let u0 = vec![2.0, 0.3, 0.5, -0.2];
+    let w = row(|q| flex_tip(&probe, q)[2], &q0);
+    let wt = [0, 1].map(|a| row(|q| flex_tip(&probe, q)[a], &q0));
+    let dot = |r: &[f64]| -> f64 { r.iter().zip(&u0).map(|(a, b)| a * b).sum() };
+    let vt = [dot(&wt[0]), dot(&wt[1])];
+    assert!(vt[1].abs() > 0.1, "sliding sideways before: {vt:?}");
+    let mu = 5.0;
+    let report = run(
+        &flex_stop(0.5, mu, 0.0, z0),
+        &RunOptions {
+            u0: Some(u0.clone()),
+            ..options(1e-3)
+        },
+    );
+    let ev = report
+        .contact_events
+        .iter()
+        .find(|ev| ev.kind == ContactEventKind::Impact)
+        .unwrap_or_else(|| {
+            panic!(
+                "the tip strikes the stop at t = 0: {}, {:?}",
+                report.stop, report.contact_events
+            )
+        });
+    let c = &ev.contacts[0];
+    assert!(
+        (c.speed_before - dot(&w)).abs() < 1e-6 && c.speed_before < 0.0,
+        "ġ⁻ {} vs w·u {}",
+        c.speed_before,
+        dot(&w)
+    );
+    for a in 0..2 {
+        assert!(
+            (c.tangential_speed_before[a] - vt[a]).abs() < 1e-6,
+            "v_t⁻: got {:?}, want {vt:?}",
+            c.tangential_speed_before
+        );
+        assert!(
+            c.tangential_speed_after[a].abs() < 1e-10,
+            "sticks: v_t⁺ = {:?}",
+            c.tangential_speed_after
+        );
+    }
+    let lt = c.tangential_impulse;
+    assert!(
+        lt[0].hypot(lt[1]) <= mu * c.impulse,
+        "Λ_t {lt:?} inside μΛ = {}",
+        mu * c.impulse
+    );
+    assert!(
+        (c.speed_after + 0.5 * c.speed_before).abs() < 1e-12,
+        "Newton's law: {c:?}"
+    );
+    for (k, got) in ev.generalized_impulse.iter().enumerate() {
+        let want = w[k] * c.impulse + wt[0][k] * lt[0] + wt[1][k] * lt[1];
+        assert!(
+            (got - want).abs() < 1e-6 * c.impulse,
+            "M Δu = w Λ + w_t Λ_t, speed {k}: got {got}, want {want}"
+        );
+    }
 }
