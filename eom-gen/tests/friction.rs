@@ -414,3 +414,56 @@ fn a_point_on_a_sphere_sticks_below_the_friction_angle_and_slides_above() {
         }
     }
 }
+
+/// A rod (m = 1 kg, L = 1 m, `I = m L²/3` about its pin) pinned at one end
+/// about y, whose tip touches a floor at the start at `θ₀` below the
+/// horizontal, swinging down at `θ̇⁻` (gravity −z). The tip can only move
+/// across the rod, so leaving without sliding would stop it (`v_t⁺ = 0`
+/// means `θ̇⁺ = 0`, against `ġ⁺ = −e ġ⁻`): Newton–Coulomb makes it slide
+/// through the impact. One coordinate: `θ̇⁺ = −e θ̇⁻`, the tip's slide
+/// after, `v_t⁺ = e sin θ₀ θ̇⁻ > 0` (along `t₁ = +x`), sets
+/// `Λ_t = −μ Λ`, and `I (θ̇⁺ − θ̇⁻) = (−cos θ₀) Λ + (−sin θ₀) Λ_t` gives
+/// `Λ = I (1 + e) θ̇⁻/(cos θ₀ − μ sin θ₀)`. A regression: the impact used to
+/// have "no solution" because it first tried sticking and gave up.
+#[test]
+fn pinned_rod_striking_a_floor_slides_through_the_impact() {
+    let (theta0, om, e, mu, i) = (0.3f64, 2.0, 0.5, 0.5, 1.0 / 3.0);
+    let sys = from_text(&format!(
+        r#"Model(
+    name: "rod_floor",
+    gravity: (0, 0, -{G}),
+    bodies: [(name: "rod", mass: 1, com: (0.5, 0, 0), inertia: Diag(0.001, "1/12", "1/12"), markers: [(name: "tip", position: (1, 0, 0))])],
+    joints: [(name: "pin", kind: Revolute(axis: (0, 1, 0)), parent: "ground", child: "rod", q0: [{theta0}], u0: [{om}])],
+    contacts: [Plane(name: "floor", at: (body: "rod", marker: "tip"), point: (0, 0, {:.17e}), normal: (0, 0, 1), e: {e}, mu: {mu})],
+)"#,
+        -theta0.sin()
+    ));
+    let report = run(&sys, &options(1e-3));
+    let impact = report
+        .contact_events
+        .iter()
+        .find(|ev| ev.kind == ContactEventKind::Impact)
+        .unwrap_or_else(|| panic!("an impact: {}, {:?}", report.stop, report.contact_events));
+    let c = &impact.contacts[0];
+    let (s, co) = theta0.sin_cos();
+    assert!((c.speed_before + co * om).abs() < 1e-12, "{c:?}");
+    assert!((c.speed_after - e * co * om).abs() < 1e-12, "{c:?}");
+    let ln = i * (1.0 + e) * om / (co - mu * s);
+    assert!(
+        (c.impulse - ln).abs() < 1e-10 * ln,
+        "Λ: got {}, want I (1 + e) θ̇⁻/(cos θ₀ − μ sin θ₀) = {ln}",
+        c.impulse
+    );
+    assert!(
+        (c.tangential_impulse[0] + mu * ln).abs() < 1e-10 * ln && c.tangential_impulse[1] == 0.0,
+        "Λ_t: got {:?}, want (−μΛ, 0)",
+        c.tangential_impulse
+    );
+    assert!(
+        (c.tangential_speed_before[0] + s * om).abs() < 1e-12
+            && (c.tangential_speed_after[0] - e * s * om).abs() < 1e-12,
+        "{c:?}"
+    );
+    assert!((impact.generalized_impulse[0] + i * (1.0 + e) * om).abs() < 1e-10);
+    assert!(impact.energy_after < impact.energy_before);
+}
