@@ -983,4 +983,33 @@ fn flexible_beams_tip_node_strikes_a_stop() {
             "M Δu = w Λ + w_t Λ_t, speed {k}: got {got}, want {want}"
         );
     }
+    // Released above the stop and left to swing onto it with friction
+    // (μ = 0.5): impacts that slide (the tip's motion along x is tied to
+    // its motion along z), rests and releases, never a failure; no event
+    // gains energy, and the tip ends on or above the stop (a regression:
+    // impacts and rests whose sticking had no solution stopped the run).
+    let sys = flex_stop(0.5, 0.5, -0.3, -0.5);
+    let report = run(&sys, &options(1.0));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    assert!(
+        report
+            .contact_events
+            .iter()
+            .any(|e| e.kind == ContactEventKind::Impact
+                && e.contacts.iter().any(|c| c.tangential_impulse[0] != 0.0)),
+        "{:?}",
+        report.contact_events
+    );
+    for e in &report.contact_events {
+        assert!(
+            e.energy_after <= e.energy_before + 1e-9,
+            "energy gained at {:?} t = {}: {} → {}",
+            e.kind,
+            e.t,
+            e.energy_before,
+            e.energy_after
+        );
+    }
+    let g = flex_tip_z(&sys, &report.q) + 0.5;
+    assert!(g > -1e-8, "the tip ends {g} m inside the stop");
 }

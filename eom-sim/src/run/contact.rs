@@ -939,7 +939,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             .collect();
         let mut forces = None;
         for _ in 0..(2 + 2 * resting.len()) {
-            let sol = Problem {
+            let Some(sol) = (Problem {
                 m: &m,
                 j: j.as_ref(),
                 r: &r,
@@ -948,14 +948,29 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                 b: b.clone(),
                 bt: bt.clone(),
                 held: false,
-            }
-            .solve()
-            .ok_or_else(|| {
-                fail(&format!(
+            })
+            .solve() else {
+                // Sticking has no solution (a row whose tangential row is
+                // nearly a multiple of its normal one): those rows slide,
+                // along their sliding speed, or from rest the way they
+                // would accelerate without friction.
+                let mut changed = false;
+                for (k, &i) in resting.iter().enumerate() {
+                    let v = if norm2(r.vt[i]) > 0.0 { r.vt[i] } else { bt[k] };
+                    let nv = norm2(v);
+                    if slides[k] == Some(Slide::Stick) && nv > 0.0 {
+                        slides[k] = Some(Slide::Slip([v[0] / nv, v[1] / nv]));
+                        changed = true;
+                    }
+                }
+                if changed {
+                    continue;
+                }
+                return Err(fail(&format!(
                     "the contact forces of {} resting contact(s) have no solution",
                     resting.len()
-                ))
-            })?;
+                )));
+            };
             let mut changed = false;
             for k in 0..resting.len() {
                 let (ln, lt) = (sol.ln[k], sol.lt[k]);
