@@ -705,6 +705,11 @@ pub enum ContactKind {
         radius_a: Quantity,
         /// Radius of the second.
         radius_b: Quantity,
+        /// The world axis the tangent axes of its friction are taken from
+        /// (`t₁ ∝ a − (a·n) n`, `t₂ = n × t₁`, `n` the unit line of centres
+        /// from `b` to `a`): the world axis least aligned with `n` at the
+        /// initial state (see [`crate::mech::contacts::tangent_axes`]).
+        tangent_reference: [f64; 3],
     },
 }
 

@@ -267,3 +267,203 @@ fn tangential_rows_are_the_touching_points_speeds() {
     let dv = (eval(&qs, &u)[0] - v[0]) / h;
     assert!((dv + v[2]).abs() < 1e-8, "γ_t1 {} vs −dv/dt {}", v[2], -dv);
 }
+
+/// Ball `a` (m = 1.5 kg, r_a = 0.2 m, solid) on a planar joint, touching at
+/// the start from above ball `b` (r_b = 0.3 m): on its own planar joint
+/// (M = 2 kg, solid) or fixed in the world (`b` on the ground). `a` moves
+/// at `(V, −W)`, `b` at rest; gravity −y; friction `mu` between them.
+fn two_spheres(mu: f64, e: f64, b_free: bool, v: f64, w: f64) -> System {
+    let (body_b, joint_b, anchor_b) = if b_free {
+        (
+            r#"(name: "b", mass: 2, inertia: Diag(0.072, 0.072, 0.072)),"#,
+            r#"(name: "pb", kind: Planar, parent: "ground", child: "b", coordinates: ["xb", "yb", "ab"], q0: [0, -0.3, 0]),"#,
+            r#"(body: "b")"#,
+        )
+    } else {
+        ("", "", r#"(body: "ground", point: (0, -0.3, 0))"#)
+    };
+    from_text(&format!(
+        r#"Model(
+    name: "two_spheres",
+    gravity: (0, -{G}, 0),
+    bodies: [(name: "a", mass: 1.5, inertia: Diag(0.024, 0.024, 0.024)), {body_b}],
+    joints: [
+        (name: "pa", kind: Planar, parent: "ground", child: "a", coordinates: ["xa", "ya", "aa"], q0: [0, 0.2, 0], u0: [{v}, -{w}, 0]),
+        {joint_b}
+    ],
+    contacts: [Spheres(name: "knock", a: (body: "a"), b: {anchor_b}, radius_a: 0.2, radius_b: 0.3, e: {e}, mu: {mu})],
+)"#
+    ))
+}
+
+/// Two spheres striking obliquely (Newton–Coulomb on the line of centres
+/// `n = +y` at the impact, `t₁ = +x`): the normal impulse is
+/// `(1 + e) W/(1/m + 1/M)` (`M = ∞` for the fixed sphere); the touching
+/// points slide at `s = v_xa + r_a ω_a − v_xb + r_b ω_b`, which a
+/// tangential impulse `Λ_t` changes by `k_t Λ_t`,
+/// `k_t = 7/(2m) + 7/(2M)` (each solid ball `1/m + r²/I`). They leave
+/// without sliding (`Λ_t = −s⁻/k_t`) when that fits the cone
+/// `|Λ_t| ≤ μ Λ`, else slide through with `Λ_t = −μ Λ sign s⁻`. The
+/// generalised impulse is then `(Λ_t, Λ, r_a Λ_t)` on `a` and
+/// `(−Λ_t, −Λ, r_b Λ_t)` on `b`: the linear momentum of the pair is kept.
+#[test]
+fn two_spheres_strike_obliquely_by_newton_coulomb() {
+    let (m, ra, rb, e, v, w) = (1.5, 0.2, 0.3, 0.5, 1.0, 2.0);
+    for b_free in [false, true] {
+        let big_m = if b_free { 2.0 } else { f64::INFINITY };
+        let ln = (1.0 + e) * w / (1.0 / m + 1.0 / big_m);
+        let kt = 3.5 / m + 3.5 / big_m;
+        for (mu, sticks) in [(0.5, true), (0.05, false)] {
+            let report = run(&two_spheres(mu, e, b_free, v, w), &options(1e-3));
+            let impact = report
+                .contact_events
+                .iter()
+                .find(|ev| ev.kind == ContactEventKind::Impact)
+                .unwrap_or_else(|| panic!("an impact: {:?}", report.contact_events));
+            assert!(impact.t.abs() < 1e-12, "at the start: {}", impact.t);
+            let c = &impact.contacts[0];
+            assert!(
+                (c.speed_before + w).abs() < 1e-12,
+                "ġ⁻ = {}",
+                c.speed_before
+            );
+            assert!(
+                (c.impulse - ln).abs() < 1e-10 * ln,
+                "b free {b_free}, mu {mu}: normal impulse {}, want {ln}",
+                c.impulse
+            );
+            assert!(
+                (c.tangential_speed_before[0] - v).abs() < 1e-12
+                    && c.tangential_speed_before[1].abs() < 1e-12,
+                "s⁻ = {:?}, want ({v}, 0)",
+                c.tangential_speed_before
+            );
+            assert_eq!(sticks, v / kt <= mu * ln, "test setup");
+            let lt = if sticks { -v / kt } else { -mu * ln };
+            assert!(
+                (c.tangential_impulse[0] - lt).abs() < 1e-10
+                    && c.tangential_impulse[1].abs() < 1e-12
+                    && c.tangential_impulse[0].abs() <= mu * c.impulse * (1.0 + 1e-12),
+                "b free {b_free}, mu {mu}: tangential impulse {:?}, want ({lt}, 0) inside μΛ = {}",
+                c.tangential_impulse,
+                mu * c.impulse
+            );
+            let s_after = v + kt * lt;
+            assert!(
+                (c.tangential_speed_after[0] - s_after).abs() < 1e-10,
+                "s⁺ = {:?}, want {s_after}",
+                c.tangential_speed_after
+            );
+            let mut want = vec![lt, ln, ra * lt];
+            if b_free {
+                want.extend([-lt, -ln, rb * lt]);
+            }
+            let gi = &impact.generalized_impulse;
+            assert_eq!(gi.len(), want.len());
+            for (k, (got, want)) in gi.iter().zip(&want).enumerate() {
+                assert!(
+                    (got - want).abs() < 1e-10,
+                    "b free {b_free}, mu {mu}: generalised impulse {k}: got {got}, want {want}"
+                );
+            }
+            assert!(impact.energy_after <= impact.energy_before + 1e-12);
+        }
+    }
+}
+
+/// A point (radius 0) on a planar joint resting on a fixed sphere of
+/// radius 1 at the angle `θ` from its top (gravity −y): sustained contact
+/// with friction between spheres. Like a block on an incline of angle `θ`,
+/// it sticks for `tan θ < μ` (and stays put); otherwise it starts sliding
+/// down the tangent with `g (sin θ − μ cos θ)` (at rest the normal force
+/// is `m g cos θ`), so over a short `τ` it covers `½ a τ²`.
+#[test]
+fn a_point_on_a_sphere_sticks_below_the_friction_angle_and_slides_above() {
+    let theta: f64 = 0.4;
+    let (s, c) = theta.sin_cos();
+    for mu in [0.6, 0.2] {
+        let sys = from_text(&format!(
+            r#"Model(
+    name: "on_a_sphere",
+    gravity: (0, -{G}, 0),
+    bodies: [(name: "p", mass: 2, inertia: Diag(0.1, 0.1, 0.1))],
+    joints: [(name: "pl", kind: Planar, parent: "ground", child: "p", coordinates: ["x", "y", "a"], q0: [{:.17e}, {:.17e}, 0])],
+    contacts: [Spheres(name: "cap", a: (body: "p"), b: (body: "ground"), radius_a: 0, radius_b: 1, e: 0, mu: {mu})],
+)"#,
+            s, c
+        ));
+        let tau = 1e-3;
+        let report = run(&sys, &options(tau));
+        assert!(report.stop.is_finished(), "{}", report.stop);
+        let moved = ((report.q[0] - s).powi(2) + (report.q[1] - c).powi(2)).sqrt();
+        if theta.tan() < mu {
+            assert!(moved < 1e-12, "mu {mu}: sticks, moved {moved}");
+        } else {
+            let want = 0.5 * G * (s - mu * c) * tau * tau;
+            assert!(
+                (moved - want).abs() < 1e-2 * want,
+                "mu {mu}: slid {moved}, want ½ g (sin θ − μ cos θ) τ² = {want}"
+            );
+            // Along the tangent, down the sphere, still on it.
+            let r = (report.q[0].powi(2) + report.q[1].powi(2)).sqrt();
+            assert!(
+                (r - 1.0).abs() < 1e-9 && report.q[0] > s,
+                "r = {r}, x = {}",
+                report.q[0]
+            );
+        }
+    }
+}
+
+/// A rod (m = 1 kg, L = 1 m, `I = m L²/3` about its pin) pinned at one end
+/// about y, whose tip touches a floor at the start at `θ₀` below the
+/// horizontal, swinging down at `θ̇⁻` (gravity −z). The tip can only move
+/// across the rod, so leaving without sliding would stop it (`v_t⁺ = 0`
+/// means `θ̇⁺ = 0`, against `ġ⁺ = −e ġ⁻`): Newton–Coulomb makes it slide
+/// through the impact. One coordinate: `θ̇⁺ = −e θ̇⁻`, the tip's slide
+/// after, `v_t⁺ = e sin θ₀ θ̇⁻ > 0` (along `t₁ = +x`), sets
+/// `Λ_t = −μ Λ`, and `I (θ̇⁺ − θ̇⁻) = (−cos θ₀) Λ + (−sin θ₀) Λ_t` gives
+/// `Λ = I (1 + e) θ̇⁻/(cos θ₀ − μ sin θ₀)`. A regression: the impact used to
+/// have "no solution" because it first tried sticking and gave up.
+#[test]
+fn pinned_rod_striking_a_floor_slides_through_the_impact() {
+    let (theta0, om, e, mu, i) = (0.3f64, 2.0, 0.5, 0.5, 1.0 / 3.0);
+    let sys = from_text(&format!(
+        r#"Model(
+    name: "rod_floor",
+    gravity: (0, 0, -{G}),
+    bodies: [(name: "rod", mass: 1, com: (0.5, 0, 0), inertia: Diag(0.001, "1/12", "1/12"), markers: [(name: "tip", position: (1, 0, 0))])],
+    joints: [(name: "pin", kind: Revolute(axis: (0, 1, 0)), parent: "ground", child: "rod", q0: [{theta0}], u0: [{om}])],
+    contacts: [Plane(name: "floor", at: (body: "rod", marker: "tip"), point: (0, 0, {:.17e}), normal: (0, 0, 1), e: {e}, mu: {mu})],
+)"#,
+        -theta0.sin()
+    ));
+    let report = run(&sys, &options(1e-3));
+    let impact = report
+        .contact_events
+        .iter()
+        .find(|ev| ev.kind == ContactEventKind::Impact)
+        .unwrap_or_else(|| panic!("an impact: {}, {:?}", report.stop, report.contact_events));
+    let c = &impact.contacts[0];
+    let (s, co) = theta0.sin_cos();
+    assert!((c.speed_before + co * om).abs() < 1e-12, "{c:?}");
+    assert!((c.speed_after - e * co * om).abs() < 1e-12, "{c:?}");
+    let ln = i * (1.0 + e) * om / (co - mu * s);
+    assert!(
+        (c.impulse - ln).abs() < 1e-10 * ln,
+        "Λ: got {}, want I (1 + e) θ̇⁻/(cos θ₀ − μ sin θ₀) = {ln}",
+        c.impulse
+    );
+    assert!(
+        (c.tangential_impulse[0] + mu * ln).abs() < 1e-10 * ln && c.tangential_impulse[1] == 0.0,
+        "Λ_t: got {:?}, want (−μΛ, 0)",
+        c.tangential_impulse
+    );
+    assert!(
+        (c.tangential_speed_before[0] + s * om).abs() < 1e-12
+            && (c.tangential_speed_after[0] - e * s * om).abs() < 1e-12,
+        "{c:?}"
+    );
+    assert!((impact.generalized_impulse[0] + i * (1.0 + e) * om).abs() < 1e-10);
+    assert!(impact.energy_after < impact.energy_before);
+}

@@ -75,6 +75,7 @@ pub fn gaps<S: Scalar>(
                 b,
                 radius_a,
                 radius_b,
+                ..
             } => {
                 let (xa, va) = site(a)?;
                 let (xb, vb) = site(b)?;
@@ -177,12 +178,7 @@ pub fn unit_loads<S: Scalar>(
 /// before z) projected onto the plane and normalised, `t₂ = n × t₁`; so a
 /// floor with `n = +z` has `t₁ = +x`, `t₂ = +y`.
 pub fn tangent_axes(n: [f64; 3]) -> [[f64; 3]; 2] {
-    let mut axis = 0;
-    for k in 1..3 {
-        if n[k].abs() < n[axis].abs() {
-            axis = k;
-        }
-    }
+    let axis = least_aligned_axis(n);
     let mut t1 = [0.0; 3];
     t1[axis] = 1.0;
     let along = n[axis];
@@ -200,12 +196,120 @@ pub fn tangent_axes(n: [f64; 3]) -> [[f64; 3]; 2] {
     [t1, t2]
 }
 
-/// Whether gap row `r`'s contact has tangential rows: a plane contact with
-/// `μ > 0` (validation refuses friction on the other kinds).
+/// The world axis (0 x, 1 y, 2 z) least aligned with `n`; ties: x before
+/// y before z.
+pub fn least_aligned_axis(n: [f64; 3]) -> usize {
+    let mut axis = 0;
+    for k in 1..3 {
+        if n[k].abs() < n[axis].abs() {
+            axis = k;
+        }
+    }
+    axis
+}
+
+/// Whether any contact has tangential rows: a plane contact or two
+/// spheres with `μ > 0` (validation refuses friction on joint limits).
 pub fn has_friction(sys: &System) -> bool {
-    sys.contacts
-        .iter()
-        .any(|c| c.mu > 0.0 && matches!(c.kind, ContactKind::Plane { .. }))
+    sys.contacts.iter().any(|c| {
+        c.mu > 0.0
+            && matches!(
+                c.kind,
+                ContactKind::Plane { .. } | ContactKind::Spheres { .. }
+            )
+    })
+}
+
+/// The unit line of centres `n = (x_a − x_b)/‖x_a − x_b‖` of every
+/// `Spheres` contact (`None` for the other kinds).
+pub fn sphere_normals<S: Scalar>(
+    sys: &System,
+    tree: &TreeModel<S>,
+    env: &dyn Env<S>,
+    ev: &Evaluator<'_, S>,
+    k: &Kinematics<S>,
+) -> Result<Vec<Option<Vec3<S>>>, MechError> {
+    let low = Lowering::new(env);
+    let mut out = Vec::new();
+    for c in &sys.contacts {
+        out.push(match &c.kind {
+            ContactKind::Spheres { a, b, .. } => {
+                let (xa, _) = site_of(tree, &low, ev, k, a)?;
+                let (xb, _) = site_of(tree, &low, ev, k, b)?;
+                let d = xa - xb;
+                Some(d.scale(S::one() / d.norm()))
+            }
+            _ => None,
+        });
+    }
+    Ok(out)
+}
+
+/// World position and velocity of an anchor.
+fn site_of<S: Scalar>(
+    tree: &TreeModel<S>,
+    low: &Lowering<'_, S>,
+    ev: &Evaluator<'_, S>,
+    k: &Kinematics<S>,
+    p: &Point,
+) -> Result<(Vec3<S>, Vec3<S>), MechError> {
+    let s = Site {
+        body: tree.index_of_body[p.body],
+        node: p.node,
+        point: low.vec3(&p.position)?,
+    };
+    Ok(ev.site(k, &s))
+}
+
+/// The tangent axes of two spheres touching along the unit line of
+/// centres `n`: `t₁ = (a − (a·n) n)/‖…‖` from the contact's world axis
+/// `a` (`tangent_reference`), `t₂ = n × t₁`.
+fn sphere_tangents<S: Scalar>(n: Vec3<S>, reference: [f64; 3]) -> [Vec3<S>; 2] {
+    let a = Vec3::from_f64(reference);
+    let t = a - n.scale(a.dot(n));
+    let t1 = t.scale(S::one() / t.norm());
+    [t1, n.cross(t1)]
+}
+
+/// The loads of a world force `fw` at the material point `site` (body or
+/// node coordinates) into `loads`; nothing on the ground.
+fn load_at<S: Scalar>(
+    tree: &TreeModel<S>,
+    ev: &Evaluator<'_, S>,
+    k: &Kinematics<S>,
+    loads: &mut [super::spatial::Force<S>],
+    site: &Site<S>,
+    fw: Vec3<S>,
+) {
+    let Some(i) = site.body else {
+        return;
+    };
+    let (slot, frame) = match site.node {
+        Some(node) => match tree.node_load(i, node) {
+            Some(slot) => (slot, ev.node_frame(k, i, node).map(|x| x.0)),
+            None => (i, None),
+        },
+        None => (i, None),
+    };
+    let e = frame.map_or(k.world[i].e, |f| f.e);
+    let fb = e.tr_mul_vec(fw);
+    loads[slot] = loads[slot].add(super::spatial::Force {
+        n: site.point.cross(fb),
+        f: fb,
+    });
+}
+
+/// The unit line of centres from `b` to `a`.
+fn unit_line<S: Scalar>(
+    tree: &TreeModel<S>,
+    low: &Lowering<'_, S>,
+    ev: &Evaluator<'_, S>,
+    k: &Kinematics<S>,
+    a: &Point,
+    b: &Point,
+) -> Result<Vec3<S>, MechError> {
+    let d = site_of(tree, low, ev, k, a)?.0 - site_of(tree, low, ev, k, b)?.0;
+    Ok(d.scale(S::one() / d.norm()))
 }
 
 /// The material point of the body carrying `at` that touches the plane:
@@ -238,7 +342,9 @@ fn touching_point<S: Scalar>(
 /// Per gap row (in the order of [`gaps`]) the tangential speeds
 /// `v_t = (t₁·v_c, t₂·v_c)` of the touching material point `c` (the
 /// anchor less `radius · n`, so a rolling sphere has `v_t = 0`) for a plane
-/// contact with friction (`μ > 0`); zero for every other row.
+/// contact with friction (`μ > 0`); for two spheres with friction, of a's
+/// touching point relative to b's along [`sphere_tangents`]; zero for every
+/// other row.
 pub fn tangential_speeds<S: Scalar>(
     sys: &System,
     tree: &TreeModel<S>,
@@ -262,6 +368,22 @@ pub fn tangential_speeds<S: Scalar>(
                 let (xc, v) = ev.site(k, &site);
                 let v = v - plane.velocity(ev, k, xc);
                 let [t1, t2] = plane.tangents();
+                out.push([t1.dot(v), t2.dot(v)]);
+            }
+            ContactKind::Spheres {
+                a,
+                b,
+                radius_a,
+                radius_b,
+                tangent_reference,
+            } if c.mu > 0.0 => {
+                // The touching material points: a's surface towards b,
+                // b's towards a; v_t is a's point relative to b's.
+                let n = unit_line(tree, &low, ev, k, a, b)?;
+                let ca = touching_point(tree, &low, ev, k, a, low.quantity(radius_a)?, n)?;
+                let cb = touching_point(tree, &low, ev, k, b, low.quantity(radius_b)?, -n)?;
+                let v = ev.site(k, &ca).1 - ev.site(k, &cb).1;
+                let [t1, t2] = sphere_tangents(n, *tangent_reference);
                 out.push([t1.dot(v), t2.dot(v)]);
             }
             _ => {
@@ -321,6 +443,23 @@ pub fn tangential_unit_loads<S: Scalar>(
                             f: fb,
                         });
                     }
+                }
+                out.push(pair);
+            }
+            ContactKind::Spheres {
+                a,
+                b,
+                radius_a,
+                radius_b,
+                tangent_reference,
+            } if c.mu > 0.0 => {
+                let n = unit_line(tree, &low, ev, k, a, b)?;
+                let ca = touching_point(tree, &low, ev, k, a, low.quantity(radius_a)?, n)?;
+                let cb = touching_point(tree, &low, ev, k, b, low.quantity(radius_b)?, -n)?;
+                let mut pair = [fresh(), fresh()];
+                for (l, t) in pair.iter_mut().zip(sphere_tangents(n, *tangent_reference)) {
+                    load_at(tree, ev, k, l, &ca, t);
+                    load_at(tree, ev, k, l, &cb, -t);
                 }
                 out.push(pair);
             }

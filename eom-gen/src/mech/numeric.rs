@@ -389,6 +389,29 @@ impl Numeric {
         super::contacts::gaps(sys, &self.tree, &self.env, &ev, &k, q, u)
     }
 
+    /// The unit line of centres of every `Spheres` contact at `q` (`None`
+    /// for the other kinds; see [`super::contacts::sphere_normals`]).
+    pub fn sphere_normals(
+        &self,
+        sys: &System,
+        q: &[f64],
+    ) -> Result<Vec<Option<[f64; 3]>>, MechError> {
+        let ev = self.eval();
+        let u = vec![0.0; sys.nu()];
+        let k = ev.kinematics(&State {
+            q,
+            u: &u,
+            t: 0.0,
+            inputs: &[],
+        })?;
+        Ok(
+            super::contacts::sphere_normals(sys, &self.tree, &self.env, &ev, &k)?
+                .into_iter()
+                .map(|n| n.map(|n| n.0))
+                .collect(),
+        )
+    }
+
     /// World position and velocity of `point` (body coordinates) on
     /// system body `body`.
     pub fn point(

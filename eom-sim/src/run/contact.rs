@@ -511,7 +511,10 @@ fn norm2(v: [f64; 2]) -> f64 {
 /// tangential speeds after it (Newton–Coulomb: a row sticks, `v_t⁺ = 0`,
 /// if its impulse fits the cone `‖Λ_t‖ ≤ μ Λ`, else it slides with
 /// `Λ_t = −μ Λ s`, `s` the direction of `v_t⁺`): the sliding directions
-/// found by fixed-point iteration from all rows sticking. With `held`
+/// found by fixed-point iteration from all rows sticking (a row that
+/// cannot stick, its tangential row a multiple of its normal one, slides
+/// from the direction of its sliding speed before, then of the one after
+/// it). With `held`
 /// (contacts coming to rest, `e = 0` on every row) sliding rows take no
 /// tangential impulse.
 fn impact(
@@ -545,7 +548,26 @@ fn impact(
             bt: bt.clone(),
             held,
         };
-        let sol = p.solve()?;
+        let Some(sol) = p.solve() else {
+            // Leaving without sliding has no solution (a row whose
+            // tangential row is a multiple of its normal one: `v_t⁺ = 0`
+            // would stop `ġ⁺ = −e ġ⁻` too): those rows slide, starting
+            // from the direction of their sliding speed before.
+            let mut changed = false;
+            for k in 0..set.len() {
+                let v = r.vt[set[k]];
+                let nv = norm2(v);
+                if slide[k] == Some(Slide::Stick) && !refused_stick[k] && nv > 0.0 {
+                    slide[k] = Some(Slide::Slip([v[0] / nv, v[1] / nv]));
+                    refused_stick[k] = true;
+                    changed = true;
+                }
+            }
+            if changed && !held {
+                continue;
+            }
+            return None;
+        };
         if held {
             return Some(sol);
         }
@@ -563,7 +585,7 @@ fn impact(
                 Some(Slide::Slip(s)) => {
                     let v = sol.xi_t[k];
                     let nv = norm2(v);
-                    if nv == 0.0 || v[0] * s[0] + v[1] * s[1] <= 0.0 {
+                    if nv == 0.0 || v[0] * s[0] + v[1] * s[1] <= 0.0 && !refused_stick[k] {
                         if !refused_stick[k] {
                             slide[k] = Some(Slide::Stick);
                             changed = true;
@@ -917,7 +939,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             .collect();
         let mut forces = None;
         for _ in 0..(2 + 2 * resting.len()) {
-            let sol = Problem {
+            let Some(sol) = (Problem {
                 m: &m,
                 j: j.as_ref(),
                 r: &r,
@@ -926,14 +948,29 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                 b: b.clone(),
                 bt: bt.clone(),
                 held: false,
-            }
-            .solve()
-            .ok_or_else(|| {
-                fail(&format!(
+            })
+            .solve() else {
+                // Sticking has no solution (a row whose tangential row is
+                // nearly a multiple of its normal one): those rows slide,
+                // along their sliding speed, or from rest the way they
+                // would accelerate without friction.
+                let mut changed = false;
+                for (k, &i) in resting.iter().enumerate() {
+                    let v = if norm2(r.vt[i]) > 0.0 { r.vt[i] } else { bt[k] };
+                    let nv = norm2(v);
+                    if slides[k] == Some(Slide::Stick) && nv > 0.0 {
+                        slides[k] = Some(Slide::Slip([v[0] / nv, v[1] / nv]));
+                        changed = true;
+                    }
+                }
+                if changed {
+                    continue;
+                }
+                return Err(fail(&format!(
                     "the contact forces of {} resting contact(s) have no solution",
                     resting.len()
-                ))
-            })?;
+                )));
+            };
             let mut changed = false;
             for k in 0..resting.len() {
                 let (ln, lt) = (sol.ln[k], sol.lt[k]);

@@ -57,6 +57,20 @@ impl Ctx<'_> {
         for (k, c) in spec.contacts.iter().enumerate() {
             let path = [f("contacts"), i(k)];
             let name = c.name();
+            // The cables' runner (generalized-α over the rigid part and the
+            // cables' nodes) has no event location or impact map: the
+            // contact would be ignored, and a cable node is no anchor.
+            if let Some(cable) = spec.cables.first() {
+                self.error(
+                    &path,
+                    format!(
+                        "contact `{name}` is in a model with cables (`{}`), whose runner does not handle contacts",
+                        cable.name
+                    ),
+                    "contacts work on rigid and flexible (floating-frame) bodies and their nodes: leave the contacts out of a model with cables, or the cables out of a model with contacts",
+                );
+                ok = false;
+            }
             if !names.insert(name) {
                 self.error(
                     &join(&path, &[f("name")]),
@@ -156,27 +170,22 @@ impl Ctx<'_> {
                             b: pb?,
                             radius_a: ra?,
                             radius_b: rb?,
+                            // Set from the initial state once the system
+                            // is built (`orient_spheres`).
+                            tangent_reference: [1.0, 0.0, 0.0],
                         })
                     })()
                 }
             };
             // Coulomb friction acts along a contact's tangent plane: a plane
-            // contact has one; a joint limit acts inside its joint, and the
-            // tangents between two spheres are not generated yet.
+            // contact and two spheres have one; a joint limit acts inside
+            // its joint.
             let mu = match (c, mu) {
                 (spec::Contact::JointLimit { .. }, Some(m)) if m > 0.0 => {
                     self.error(
                         &join(&path, &[f("mu")]),
                         format!("joint limit `{name}` has Coulomb friction (mu = {m})"),
                         "a joint limit stops its joint's coordinate and has no tangential direction: set `mu: 0` (or leave it out); joint friction is a force element",
-                    );
-                    None
-                }
-                (spec::Contact::Spheres { .. }, Some(m)) if m > 0.0 => {
-                    self.error(
-                        &join(&path, &[f("mu")]),
-                        format!("contact `{name}` between two spheres has Coulomb friction (mu = {m}), which is not implemented"),
-                        "friction applies to `Plane` contacts; set `mu: 0` (or leave it out) here",
                     );
                     None
                 }
@@ -294,6 +303,38 @@ impl Ctx<'_> {
             lower: flat(lo)?,
             upper: flat(hi)?,
         })
+    }
+
+    /// Per `Spheres` contact, the world axis its friction's tangent axes
+    /// are taken from: the one least aligned with the line of centres at
+    /// the initial state ([`crate::mech::contacts::tangent_axes`]).
+    pub(super) fn orient_spheres(&mut self, sys: &mut System) {
+        if !sys
+            .contacts
+            .iter()
+            .any(|c| matches!(c.kind, ContactKind::Spheres { .. }))
+        {
+            return;
+        }
+        let Ok(num) = crate::mech::Numeric::new(sys) else {
+            return;
+        };
+        let Ok(normals) = num.sphere_normals(sys, &sys.q0()) else {
+            return;
+        };
+        for (c, n) in sys.contacts.iter_mut().zip(normals) {
+            if let (
+                ContactKind::Spheres {
+                    tangent_reference, ..
+                },
+                Some(n),
+            ) = (&mut c.kind, n)
+            {
+                let mut a = [0.0; 3];
+                a[crate::mech::contacts::least_aligned_axis(n)] = 1.0;
+                *tangent_reference = a;
+            }
+        }
     }
 
     /// Every contact row open (`g ≥ 0`) at the initial state: a closed one

@@ -238,6 +238,7 @@ impl Ctx<'_> {
         system.grubler = grubler(&system, &poses);
         self.check_closure(&system, &poses);
         self.check_contacts_open(&system);
+        self.orient_spheres(&mut system);
         if self.diags.iter().any(Diagnostic::is_error) {
             return None;
         }
