@@ -13,7 +13,9 @@
 //! - [`forward_dynamics_derivatives_recursive`]: the same `−M⁻¹ ∂ID/∂x`
 //!   with `∂ID/∂(q, u)` of the Newton–Euler forces built by the recursion of
 //!   Carpentier and Mansard over the tree ([`super::rnea_derivatives`]),
-//!   and only the force elements' terms differentiated as expressions.
+//!   and only the force elements' terms differentiated as expressions
+//!   (`∂ID/∂u` of Newton–Euler may also be differentiated instead, where
+//!   that counts fewer operations: the formulation tries both).
 //!
 //! Coordinates are differentiated in the tangent space: column `j` of
 //! `∂u̇/∂q` is the derivative along `δq = N(q) e_j`, where `q̇ = N(q) u`,

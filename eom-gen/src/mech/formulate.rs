@@ -453,19 +453,49 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             (DerivativeForm::ForwardDynamics, direct),
             (DerivativeForm::InverseDynamics, via_rnea),
         ];
-        if let Some(g) = ev.rnea_derivatives(&k, &udot) {
+        if let Some((gq, gu)) = ev.rnea_derivatives(&k, &udot) {
             let loads: Vec<Expr> = ev
                 .load_torques(&k, &fext)
                 .iter()
                 .zip(&generalized)
                 .map(|(&l, &g)| l - g)
                 .collect();
-            programs.push((
-                DerivativeForm::Recursive,
-                forward_dynamics_derivatives_recursive(
-                    &cx, &udot, g, &loads, &qdot, &q, &u, &tau, &inputs, opts,
-                ),
-            ));
+            // `∂ID/∂u` by the recursion, or differentiated (Newton–Euler
+            // without the loads; free of `u̇`, as `ID` is affine in `u̇`
+            // with `M(q)`): whichever counts fewer.
+            let no_loads = vec![Force::zero(); fext.len()];
+            let (inertial, _) = ev.rnea(&k, &ud, &no_loads);
+            let gu_differentiated = cx.jacobian(&inertial, &u);
+            let by_recursion = forward_dynamics_derivatives_recursive(
+                &cx,
+                &udot,
+                (gq.clone(), gu),
+                &loads,
+                &qdot,
+                &q,
+                &u,
+                &tau,
+                &inputs,
+                opts,
+            );
+            let mixed = forward_dynamics_derivatives_recursive(
+                &cx,
+                &udot,
+                (gq, gu_differentiated),
+                &loads,
+                &qdot,
+                &q,
+                &u,
+                &tau,
+                &inputs,
+                opts,
+            );
+            let p = if mixed.op_count().total() < by_recursion.op_count().total() {
+                mixed
+            } else {
+                by_recursion
+            };
+            programs.push((DerivativeForm::Recursive, p));
         }
         let candidates: Vec<(DerivativeForm, OpCount)> =
             programs.iter().map(|(f, p)| (*f, p.op_count())).collect();

@@ -178,10 +178,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             let psi = al.cross_motion(s).sub(w.cross_motion(vl));
             let beta = vl.add(vw[j]).cross_motion(s);
             let bc = |x: Motion<S>| ydc[j].mul_motion(x).add(x.cross_force(hc[j]));
-            let dq_j = s
-                .cross_force(fc[j])
-                .add(yc[j].mul_motion(psi))
-                .add(bc(w));
+            let dq_j = s.cross_force(fc[j]).add(yc[j].mul_motion(psi)).add(bc(w));
             let du_j = yc[j].mul_motion(beta).add(bc(s));
             for (&(i, row, si), &(p, q)) in cols.iter().zip(&pq) {
                 if self.descends(i, j) {
