@@ -48,7 +48,7 @@
 
 use super::joint::JointModel;
 use super::kinematics::{Evaluator, Kinematics};
-use super::spatial::{Force, Motion, RigidInertia};
+use super::spatial::{Force, Motion, Pose, RigidInertia};
 use super::tree::Coords;
 use crate::sym::{Mat3, Scalar, Vec3};
 use std::ops::{Add, Sub};
@@ -56,22 +56,59 @@ use std::ops::{Add, Sub};
 /// `∂τ/∂q` (tangent space) and `∂τ/∂u` of Newton–Euler, `nu × nu` by rows.
 pub type RneaDerivatives<S> = (Vec<Vec<S>>, Vec<Vec<S>>);
 
+/// A symmetric 3×3 matrix from its upper triangle `f(r, c)`, `r ≤ c`
+/// (each entry built once).
+fn symmetric<S: Scalar>(f: impl Fn(usize, usize) -> S) -> Mat3<S> {
+    let mut m = Mat3::zero();
+    for r in 0..3 {
+        for c in r..3 {
+            let x = f(r, c);
+            m.0[r][c] = x;
+            m.0[c][r] = x;
+        }
+    }
+    m
+}
+
+/// `Xᵀ Y X`: a rigid inertia about the body origin in the parent frame
+/// of `pose` (eq. 2.66), built for symmetry: with `h' = E h`,
+/// `Ī' = E Ī Eᵀ − m([r×]²) − [r×][h'×] − [h'×][r×]` and
+/// `[a×][b×] = b aᵀ − (a·b) 1`.
+fn inertia_to_parent<S: Scalar>(y: &RigidInertia<S>, pose: &Pose<S>) -> RigidInertia<S> {
+    let (e, r) = (pose.e, pose.r);
+    let h = e.mul_vec(y.h);
+    let ei = e * y.i;
+    let (rr, rh) = (r.dot(r), r.dot(h));
+    let i = symmetric(|a, b| {
+        let rot = (0..3).fold(S::zero(), |acc, k| acc + ei.0[a][k] * e.0[b][k]);
+        let outer = (r.0[a] * r.0[b]) * y.m + h.0[a] * r.0[b] + r.0[a] * h.0[b];
+        let diag = if a == b {
+            rr * y.m + rh + rh
+        } else {
+            S::zero()
+        };
+        rot - outer + diag
+    });
+    RigidInertia {
+        m: y.m,
+        h: h + r.scale(y.m),
+        i,
+    }
+}
+
 /// `Ẏ = v ×* Y − Y v ×` of a rigid inertia `Y` moving with `v` (same
 /// frame): a rigid inertia of zero mass, first moment `ω × h + m ν` and
 /// rotational part `ω×Ī − Īω× − ν×h× − h×ν×`.
 fn inertia_rate<S: Scalar>(y: &RigidInertia<S>, v: Motion<S>) -> RigidInertia<S> {
     let (w, nu, h) = (v.w, v.v, y.h);
     let m = w.skew() * y.i;
-    // [ν×][h×] = h νᵀ − (ν·h) 1; the sum with its transpose.
+    // ω×Ī − Īω× = M + Mᵀ; [ν×][h×] = h νᵀ − (ν·h) 1, plus its transpose.
     let nh = nu.dot(h);
-    let i = Mat3([0, 1, 2].map(|r| {
-        [0, 1, 2].map(|c| {
-            let sym = m.0[r][c] + m.0[c][r];
-            let outer = h.0[r] * nu.0[c] + nu.0[r] * h.0[c];
-            let diag = if r == c { nh + nh } else { S::zero() };
-            sym - outer + diag
-        })
-    }));
+    let i = symmetric(|r, c| {
+        let outer = h.0[r] * nu.0[c] + nu.0[r] * h.0[c];
+        let diag = if r == c { nh + nh } else { S::zero() };
+        m.0[r][c] + m.0[c][r] - outer + diag
+    });
     RigidInertia {
         m: S::zero(),
         h: w.cross(h) + nu.scale(y.m),
@@ -134,7 +171,10 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             let inertia = &k.inertia[i];
             let h = inertia.mul_motion(k.v[i]);
             let f = inertia.mul_motion(ai).add(k.v[i].cross_force(h));
-            let (v, y) = (pose.motion_to_parent(k.v[i]), inertia.to_parent(pose));
+            let (v, y) = (
+                pose.motion_to_parent(k.v[i]),
+                inertia_to_parent(inertia, pose),
+            );
             sw.push(k.s[i].iter().map(|c| pose.motion_to_parent(*c)).collect());
             vw.push(v);
             aw.push(pose.motion_to_parent(ai));
