@@ -1,6 +1,6 @@
 //! Partial derivatives of forward dynamics, `∂u̇/∂q`, `∂u̇/∂u`,
-//! `∂u̇/∂τ`, `∂u̇/∂(inputs)`, two ways (the formulation keeps the one with
-//! fewer counted operations, [`DerivativeForm`]):
+//! `∂u̇/∂τ`, `∂u̇/∂(inputs)`, three ways (the formulation keeps the one
+//! with fewer counted operations, [`DerivativeForm`]):
 //!
 //! - [`forward_dynamics_derivatives`]: differentiate the expressions of
 //!   the form forward dynamics was generated in (articulated bodies or
@@ -9,7 +9,13 @@
 //!   (recursive Newton–Euler) instead, as Carpentier and Mansard (2018) do:
 //!   from `ID(q, u, FD(q, u, τ)) = τ`,
 //!   `∂u̇/∂x = −M⁻¹ ∂ID/∂x |_{u̇ = FD}` for `x = q, u, inputs`, with
-//!   `M⁻¹ = ∂u̇/∂τ` (forward dynamics is linear in `τ`).
+//!   `M⁻¹ = ∂u̇/∂τ` (forward dynamics is linear in `τ`);
+//! - [`forward_dynamics_derivatives_recursive`]: the same `−M⁻¹ ∂ID/∂x`
+//!   with `∂ID/∂(q, u)` of the Newton–Euler forces built by the recursion of
+//!   Carpentier and Mansard over the tree ([`super::rnea_derivatives`]),
+//!   and only the force elements' terms differentiated as expressions
+//!   (`∂ID/∂u` of Newton–Euler may also be differentiated instead, where
+//!   that counts fewer operations: the formulation tries both).
 //!
 //! Coordinates are differentiated in the tangent space: column `j` of
 //! `∂u̇/∂q` is the derivative along `δq = N(q) e_j`, where `q̇ = N(q) u`,
@@ -47,6 +53,9 @@ pub enum DerivativeForm {
     ForwardDynamics,
     /// `−M⁻¹ ∂ID/∂x` at `u̇ = FD`: differentiating recursive Newton–Euler.
     InverseDynamics,
+    /// `−M⁻¹ ∂ID/∂x` at `u̇ = FD`, `∂ID/∂x` by the recursion of Carpentier
+    /// and Mansard (rigid trees of joints with constant subspaces).
+    Recursive,
 }
 
 impl fmt::Display for DerivativeForm {
@@ -54,6 +63,7 @@ impl fmt::Display for DerivativeForm {
         f.write_str(match self {
             DerivativeForm::ForwardDynamics => "differentiated forward dynamics",
             DerivativeForm::InverseDynamics => "−M⁻¹ ∂ID/∂x (differentiated RNEA)",
+            DerivativeForm::Recursive => "−M⁻¹ ∂ID/∂x (RNEA derivatives by recursion)",
         })
     }
 }
@@ -158,7 +168,6 @@ pub fn forward_dynamics_derivatives_rnea<'cx>(
     inputs: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Program {
-    let nu = u.len();
     let minv = cx.jacobian(udot, tau);
     // ∂ID/∂x with u̇ symbolic, by rows; then u̇ = FD substituted.
     let gq = tangent_jacobian(cx, inverse, qdot, q, u);
@@ -180,27 +189,7 @@ pub fn forward_dynamics_derivatives_rnea<'cx>(
             .map(|c| c.iter().map(|&id| cx.expr(id)).collect())
             .collect()
     };
-    // −M⁻¹ G, with G's columns `cols` wide.
-    let solve = |g: Vec<Vec<Expr<'cx>>>, cols: usize| -> Vec<Vec<Expr<'cx>>> {
-        (0..nu)
-            .map(|i| {
-                (0..cols)
-                    .map(|j| {
-                        let mut sum = Expr::zero();
-                        for (k, gk) in g.iter().enumerate() {
-                            let (m, x) = (minv[i][k], gk[j]);
-                            if m.is_zero() || x.is_zero() {
-                                continue;
-                            }
-                            sum = sum + m * x;
-                        }
-                        -sum
-                    })
-                    .collect()
-            })
-            .collect()
-    };
-    let ni = inputs.len();
+    let (nu, ni) = (u.len(), inputs.len());
     let (gq, gu) = (at_fd(gq), at_fd(gu));
     let gi = if ni == 0 {
         vec![Vec::new(); nu]
@@ -210,10 +199,82 @@ pub fn forward_dynamics_derivatives_rnea<'cx>(
     lower_blocks(
         cx,
         [
-            ("dq", solve(gq, nu)),
-            ("du", solve(gu, nu)),
+            ("dq", minus_solve(&minv, gq, nu)),
+            ("du", minus_solve(&minv, gu, nu)),
             ("dtau", minv.clone()),
-            ("dinput", solve(gi, ni)),
+            ("dinput", minus_solve(&minv, gi, ni)),
+        ],
+        opts,
+    )
+}
+
+/// `−M⁻¹ G` for `G` with `cols` columns (structural zeros skipped).
+fn minus_solve<'cx>(
+    minv: &[Vec<Expr<'cx>>],
+    g: Vec<Vec<Expr<'cx>>>,
+    cols: usize,
+) -> Vec<Vec<Expr<'cx>>> {
+    minv.iter()
+        .map(|mrow| {
+            (0..cols)
+                .map(|j| {
+                    let mut sum = Expr::zero();
+                    for (gk, &m) in g.iter().zip(mrow) {
+                        let x = gk[j];
+                        if m.is_zero() || x.is_zero() {
+                            continue;
+                        }
+                        sum = sum + m * x;
+                    }
+                    -sum
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// The same program with `∂ID/∂q` (tangent space) and `∂ID/∂u` of the
+/// Newton–Euler forces given, `gq` and `gu` (`NU × NU` by rows, at
+/// `u̇ = FD`, by [`crate::mech::Evaluator::rnea_derivatives`]), and `loads`
+/// the rest of inverse dynamics (`−Jᵀ f_ext − Q`, force elements and
+/// inputs, no `u̇`), differentiated here as expressions.
+#[allow(clippy::too_many_arguments)]
+pub fn forward_dynamics_derivatives_recursive<'cx>(
+    cx: &'cx Context,
+    udot: &[Expr<'cx>],
+    (gq, gu): (Vec<Vec<Expr<'cx>>>, Vec<Vec<Expr<'cx>>>),
+    loads: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    tau: &[Expr<'cx>],
+    inputs: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Program {
+    let minv = cx.jacobian(udot, tau);
+    let add = |a: Vec<Vec<Expr<'cx>>>, b: Vec<Vec<Expr<'cx>>>| -> Vec<Vec<Expr<'cx>>> {
+        a.into_iter()
+            .zip(b)
+            .map(|(ra, rb)| ra.into_iter().zip(rb).map(|(x, y)| x + y).collect())
+            .collect()
+    };
+    let (gq, gu, gi) = if loads.iter().all(|l| l.is_zero()) {
+        (gq, gu, vec![vec![Expr::zero(); inputs.len()]; u.len()])
+    } else {
+        (
+            add(gq, tangent_jacobian(cx, loads, qdot, q, u)),
+            add(gu, cx.jacobian(loads, u)),
+            cx.jacobian(loads, inputs),
+        )
+    };
+    let ni = inputs.len();
+    lower_blocks(
+        cx,
+        [
+            ("dq", minus_solve(&minv, gq, u.len())),
+            ("du", minus_solve(&minv, gu, u.len())),
+            ("dtau", minv.clone()),
+            ("dinput", minus_solve(&minv, gi, ni)),
         ],
         opts,
     )

@@ -189,8 +189,12 @@ pub struct Formulation {
     pub fd_candidates: Vec<(FdForm, OpCount)>,
     /// The form chosen for `forward_dynamics_derivatives`, when generated.
     pub derivative_form: Option<super::derivatives::DerivativeForm>,
-    /// Operation counts of both forms of the derivatives, when generated.
+    /// Operation counts of every form of the derivatives that applies,
+    /// when generated.
     pub derivative_candidates: Vec<(super::derivatives::DerivativeForm, OpCount)>,
+    /// The programs of the forms not kept (to check one form against
+    /// another).
+    pub derivative_alternatives: Vec<(super::derivatives::DerivativeForm, Program)>,
     /// Names of the constraint equations (`joint.k`, the constraint's name,
     /// `disk.contact` / `disk.slip_x` / `disk.slip_y`); holonomic first.
     pub constraint_names: Vec<String>,
@@ -427,13 +431,15 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         } else {
             (None, FdForm::Aba, Vec::new(), Vec::new())
         };
-    // Both ways, the one with fewer counted operations kept (the
-    // differentiated forward dynamics on a tie).
-    let (fd_derivatives, derivative_candidates) = if request
+    // Every way that applies, the one with fewer counted operations kept
+    // (the first listed on a tie: differentiated forward dynamics, then
+    // differentiated Newton–Euler, then its recursion).
+    let (fd_derivatives, derivative_candidates, derivative_alternatives) = if request
         .contains(Function::ForwardDynamicsDerivatives)
     {
         use super::derivatives::{
-            DerivativeForm, forward_dynamics_derivatives, forward_dynamics_derivatives_rnea,
+            DerivativeForm, forward_dynamics_derivatives, forward_dynamics_derivatives_recursive,
+            forward_dynamics_derivatives_rnea,
         };
         let qdot = ev.qdot(&st);
         let direct = forward_dynamics_derivatives(&cx, &udot, &qdot, &q, &u, &tau, &inputs, opts);
@@ -443,18 +449,63 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         let via_rnea = forward_dynamics_derivatives_rnea(
             &cx, &udot, &inverse, &ud, &qdot, &q, &u, &tau, &inputs, opts,
         );
-        let candidates = vec![
-            (DerivativeForm::ForwardDynamics, direct.op_count()),
-            (DerivativeForm::InverseDynamics, via_rnea.op_count()),
+        let mut programs = vec![
+            (DerivativeForm::ForwardDynamics, direct),
+            (DerivativeForm::InverseDynamics, via_rnea),
         ];
-        let keep = if via_rnea.op_count().total() < direct.op_count().total() {
-            (via_rnea, DerivativeForm::InverseDynamics)
-        } else {
-            (direct, DerivativeForm::ForwardDynamics)
-        };
-        (Some(keep), candidates)
+        if let Some((gq, gu)) = ev.rnea_derivatives(&k, &udot) {
+            let loads: Vec<Expr> = ev
+                .load_torques(&k, &fext)
+                .iter()
+                .zip(&generalized)
+                .map(|(&l, &g)| l - g)
+                .collect();
+            // `∂ID/∂u` by the recursion, or differentiated (Newton–Euler
+            // without the loads; free of `u̇`, as `ID` is affine in `u̇`
+            // with `M(q)`): whichever counts fewer.
+            let no_loads = vec![Force::zero(); fext.len()];
+            let (inertial, _) = ev.rnea(&k, &ud, &no_loads);
+            let gu_differentiated = cx.jacobian(&inertial, &u);
+            let by_recursion = forward_dynamics_derivatives_recursive(
+                &cx,
+                &udot,
+                (gq.clone(), gu),
+                &loads,
+                &qdot,
+                &q,
+                &u,
+                &tau,
+                &inputs,
+                opts,
+            );
+            let mixed = forward_dynamics_derivatives_recursive(
+                &cx,
+                &udot,
+                (gq, gu_differentiated),
+                &loads,
+                &qdot,
+                &q,
+                &u,
+                &tau,
+                &inputs,
+                opts,
+            );
+            let p = if mixed.op_count().total() < by_recursion.op_count().total() {
+                mixed
+            } else {
+                by_recursion
+            };
+            programs.push((DerivativeForm::Recursive, p));
+        }
+        let candidates: Vec<(DerivativeForm, OpCount)> =
+            programs.iter().map(|(f, p)| (*f, p.op_count())).collect();
+        let best = (0..programs.len())
+            .min_by_key(|&i| (candidates[i].1.total(), i))
+            .unwrap_or(0);
+        let kept = programs.remove(best);
+        (Some((kept.1, kept.0)), candidates, programs)
     } else {
-        (None, Vec::new())
+        (None, Vec::new(), Vec::new())
     };
     let id_derivatives = request
         .contains(Function::InverseDynamicsDerivatives)
@@ -646,6 +697,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         fd_candidates,
         derivative_form,
         derivative_candidates,
+        derivative_alternatives,
         constraint_names,
         n_holonomic,
         output_names: out.names,

@@ -17,7 +17,9 @@
 //! - [`looped`]: forward dynamics, mass matrix, inverse dynamics and bias
 //!   of long serial chains as loops over generated body steps;
 //! - [`derivatives`]: `∂u̇/∂(q, u, τ, inputs)` of the generated forward
-//!   dynamics, symbolically.
+//!   dynamics, symbolically;
+//! - [`rnea_derivatives`]: `∂τ/∂(q, u)` of Newton–Euler by recursion
+//!   (Carpentier and Mansard 2018), one of the routes of [`derivatives`].
 //!
 //! Building the tree: [`env`] (what parameters are), [`lower`] (model
 //! expressions as scalars), [`error`] (why a system cannot be formulated).
@@ -48,6 +50,7 @@ pub mod ltdl;
 pub mod mounts;
 pub mod numeric;
 pub mod rnea;
+pub mod rnea_derivatives;
 pub mod spatial;
 pub mod stiffening;
 pub mod tree;

@@ -95,7 +95,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         (tau, f)
     }
 
-    fn joint_ud(&self, i: usize, k: &Kinematics<S>, ud: &[S]) -> Vec<S> {
+    pub(super) fn joint_ud(&self, i: usize, k: &Kinematics<S>, ud: &[S]) -> Vec<S> {
         match (&self.tree.bodies[i].coords, &k.known_ud[i]) {
             (Coords::Free { u, .. }, _) => ud[*u..*u + k.s[i].len()].to_vec(),
             (_, Some(known)) => known.clone(),
