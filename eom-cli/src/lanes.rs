@@ -78,7 +78,9 @@ pub struct LaneOutcome {
     pub rhs_evals: usize,
     /// Total energy at the start and at `t`.
     pub energy: [Option<f64>; 2],
-    /// This lane's share of its pack's time, s (the pack's time over `W`).
+    /// This case's share of its pack's time, s (the pack's time over
+    /// the cases it ran: the spare lanes of a short last pack are charged
+    /// to its cases).
     pub cpu_s: f64,
 }
 
@@ -153,7 +155,7 @@ fn pack<const W: usize>(r: &Request, method: eom_sim::LaneMethod, cases: &[Case]
     }
     let started = std::time::Instant::now();
     let rep = eom_sim::integrate_lanes(&models, method, 0.0, &y0, r.t_end, r.max_steps);
-    let cpu_s = started.elapsed().as_secs_f64() / W as f64;
+    let cpu_s = started.elapsed().as_secs_f64() / cases.len() as f64;
     rep.lanes
         .iter()
         .zip(&models)
