@@ -30,6 +30,8 @@ pub struct Spread {
     pub params: Vec<(String, f64)>,
     /// States per call.
     pub width: usize,
+    /// Build with `-C target-cpu=native`.
+    pub native: bool,
 }
 
 /// `--perturb q=σ,u=σ` (either part may be left out).
@@ -212,6 +214,7 @@ pub fn run(
         max_steps: o.max_steps,
         width: s.width,
         threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+        native: s.native,
     };
     let bar = indicatif::ProgressBar::new(s.n as u64);
     if let Ok(style) = indicatif::ProgressStyle::with_template(

@@ -46,6 +46,9 @@ pub struct LaneRun {
     pub width: usize,
     /// Threads sharing the packs.
     pub threads: usize,
+    /// Build with `-C target-cpu=native` (AVX2 / AVX-512 lanes; the
+    /// default build has SSE2's two lanes per instruction).
+    pub native: bool,
 }
 
 /// The integrators the lanes run.
@@ -256,6 +259,7 @@ pub fn state_names(sys: &eom_gen::system::System) -> Vec<String> {
 /// tunable parameters, in order, `tunable`) and runs `cases`;
 /// `progress(done)` after every pack. The outcomes are in the cases'
 /// order.
+#[allow(clippy::too_many_arguments)]
 pub fn run(
     sys: &eom_gen::system::System,
     source: &str,
@@ -272,7 +276,7 @@ pub fn run(
         name: &sys.name,
         main: MAIN,
         model: &model,
-        rustflags: None,
+        rustflags: o.native.then_some("-C target-cpu=native"),
     })?;
     let request = serde_json::json!({
         "integrator": o.integrator.to_string(), "rtol": o.rtol, "atol": o.atol, "dt": o.dt,

@@ -110,6 +110,10 @@ pub struct SimulateArgs {
     /// --ensemble: states per call, 1, 4 (default) or 8.
     #[arg(long, value_name = "W")]
     pub lanes: Option<usize>,
+    /// --ensemble: build with `-C target-cpu=native` (wider SIMD lanes;
+    /// the binary runs only on this kind of CPU).
+    #[arg(long)]
+    pub native: bool,
 }
 
 pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
@@ -255,12 +259,13 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 14] = [
+    let refused: [(&str, bool); 15] = [
         ("--ensemble", a.ensemble.is_some()),
         ("--seed", a.seed.is_some()),
         ("--perturb", a.perturb.is_some()),
         ("--param-spread", !a.param_spread.is_empty()),
         ("--lanes", a.lanes.is_some()),
+        ("--native", a.native),
         ("--plot", a.plot.is_some()),
         ("--jacobian", a.jacobian.is_some()),
         ("--events-csv", a.events_csv.is_some()),
@@ -454,6 +459,7 @@ pub struct EnsembleArgs {
     perturb: Option<String>,
     param_spread: Vec<String>,
     lanes: Option<usize>,
+    native: bool,
     others: Vec<(&'static str, bool)>,
 }
 
@@ -465,6 +471,7 @@ impl SimulateArgs {
             perturb: self.perturb.clone(),
             param_spread: self.param_spread.clone(),
             lanes: self.lanes,
+            native: self.native,
             others: vec![
                 ("--interpret", self.interpret),
                 ("--plot", self.plot.is_some()),
@@ -492,6 +499,7 @@ fn ensemble_options(
             ("--perturb", a.perturb.is_some()),
             ("--param-spread", !a.param_spread.is_empty()),
             ("--lanes", a.lanes.is_some()),
+            ("--native", a.native),
         ] {
             if given {
                 problems.push(format!("{name} sets up --ensemble N; give --ensemble"));
@@ -546,6 +554,7 @@ fn ensemble_options(
         u,
         params,
         width,
+        native: a.native,
     })
 }
 

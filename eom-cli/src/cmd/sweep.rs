@@ -82,6 +82,10 @@ pub struct SweepArgs {
     /// With --compiled: states per call, 1, 4 (default) or 8.
     #[arg(long, value_name = "W")]
     pub lanes: Option<usize>,
+    /// With --compiled: build with `-C target-cpu=native` (wider SIMD
+    /// lanes; the binary runs only on this kind of CPU).
+    #[arg(long)]
+    pub native: bool,
     /// Join the shards in these directories into --out instead of running.
     #[arg(long, num_args = 1.., value_name = "DIR")]
     pub merge: Vec<String>,
@@ -282,7 +286,7 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         match ctx.lane_rows(
             &indices,
             &all,
-            a.lanes.unwrap_or(4),
+            (a.lanes.unwrap_or(4), a.native),
             threads,
             &bar,
             &reformulated,
@@ -486,6 +490,9 @@ fn lanes_problems(
         if a.lanes.is_some() {
             problems.push("--lanes sets the states per call of --compiled; give --compiled".into());
         }
+        if a.native {
+            problems.push("--native sets how --compiled builds; give --compiled".into());
+        }
         return problems;
     }
     if let Some(w) = a.lanes
@@ -515,7 +522,7 @@ impl Context<'_> {
         &self,
         indices: &[usize],
         all: &[Vec<f64>],
-        width: usize,
+        (width, native): (usize, bool),
         threads: usize,
         bar: &indicatif::ProgressBar,
         reformulated: &AtomicUsize,
@@ -562,6 +569,7 @@ impl Context<'_> {
                 max_steps: self.options.max_steps,
                 width,
                 threads,
+                native,
             };
             let before = bar.position();
             let outcomes = crate::lanes::run(
@@ -679,6 +687,7 @@ fn merge(a: &SweepArgs) -> ExitCode {
         ("--jobs", a.jobs.is_some()),
         ("--compiled", a.compiled),
         ("--lanes", a.lanes.is_some()),
+        ("--native", a.native),
     ]
     .iter()
     .filter(|(_, g)| *g)
