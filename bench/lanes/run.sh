@@ -18,16 +18,16 @@ median() { sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
 # atol 1e-10, per-lane control) or rk4 (dt 1e-3), W states per call, one
 # thread per pack. From the runner's own pack times (`integration_s`):
 # state-steps per second and ns per state per right-hand side.
-ensemble() { # model t_end n integrator
+ensemble() { # model t_end n integrator [--native]
   for w in 1 4 8; do
     for r in $(seq "$REPS"); do
       "$EOM" simulate "models/$1.ron" --t-end "$2" --ensemble "$3" --seed 1 \
-        --perturb q=0.05,u=0.05 --integrator "$4" --dt 1e-3 --lanes "$w" --json 2>/dev/null |
+        --perturb q=0.05,u=0.05 --integrator "$4" --dt 1e-3 --lanes "$w" ${5:-} --json 2>/dev/null |
         python3 -c 'import json,sys; v=json.load(sys.stdin); print(v["integration_s"], v["steps"], v["rhs_evals"], v["finished"])'
     done > "$TMP/e"
     s=$(awk '{print $1}' "$TMP/e" | median)
     read -r _ steps rhs fin < "$TMP/e"
-    python3 -c "s=$s; print(f'ensemble $1 $4 W=$w: {fin} finished, {$steps} steps, {$rhs} rhs, {s:.4f} s: {$steps/s:.3e} state-steps/s, {s/$rhs*1e9:.1f} ns per state per rhs')"
+    python3 -c "s=$s; steps=$steps; rhs=$rhs; print(f'ensemble $1 $4 ${5:-} W=$w: $fin finished, {steps} steps, {rhs} rhs, {s:.4f} s: {steps/s:.3e} state-steps/s, {s/rhs*1e9:.1f} ns per state per rhs')"
   done
 }
 
@@ -47,9 +47,16 @@ sweep() { # model param t_end label extra...
   done
 }
 
-ensemble pendulum 10 64 dopri5
-ensemble pendulum 10 64 rk4
-ensemble arm7 2 64 dopri5
-ensemble arm7 2 16 rk4
-sweep pendulum l=0.5:2.495:0.005 10
-sweep arm7 g=1:10.9:0.1 1
+# `sh run.sh ensemble` or `sh run.sh sweep` for one part (default both).
+if [ "${1:-all}" != sweep ]; then
+  for native in "" --native; do
+    ensemble pendulum 10 1024 dopri5 $native
+    ensemble pendulum 10 1024 rk4 $native
+    ensemble arm7 2 256 dopri5 $native
+    ensemble arm7 2 256 rk4 $native
+  done
+fi
+if [ "${1:-all}" != ensemble ]; then
+  sweep pendulum l=0.5:2.495:0.005 10
+  sweep arm7 g=1:10.9:0.1 1
+fi

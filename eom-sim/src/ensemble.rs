@@ -111,11 +111,21 @@ fn get<const N: usize, const W: usize>(v: &[Lanes<W>; N], l: usize) -> [f64; N] 
     core::array::from_fn(|i| v[i].0[l])
 }
 
-/// Sets lane `l` of a pack.
+/// `to ← from` in the lanes marked in `mask` (a lane-wise select, which
+/// vectorises; every lane at once when all are marked).
 #[inline(always)]
-fn set<const N: usize, const W: usize>(v: &mut [Lanes<W>; N], l: usize, x: &[f64; N]) {
+fn take<const N: usize, const W: usize>(
+    mask: &[bool; W],
+    to: &mut [Lanes<W>; N],
+    from: &[Lanes<W>; N],
+) {
+    if mask.iter().all(|&m| m) {
+        *to = *from;
+        return;
+    }
+    let m = Lanes::from_fn(|l| if mask[l] { 1.0 } else { 0.0 });
     for i in 0..N {
-        v[i].0[l] = x[i];
+        to[i] = Lanes::select(m, from[i], to[i]);
     }
 }
 
@@ -189,10 +199,10 @@ fn project<M: OdeLanes<N>, const N: usize, const W: usize>(
     let mut fp = [Lanes::default(); N];
     M::rhs_lanes(models, *t, &yp, &mut fp);
     report.rhs_calls += 1;
+    take(moved, y, &yp);
+    take(moved, f, &fp);
     for l in 0..W {
         if moved[l] {
-            set(y, l, &get(&yp, l));
-            set(f, l, &get(&fp, l));
             report.lanes[l].stats.rhs_evals += 1;
         }
     }
@@ -294,9 +304,9 @@ fn rk4<M: OdeLanes<N>, const N: usize, const W: usize>(
                 continue;
             }
             moved[l] = true;
-            set(&mut y, l, &get(&y1, l));
-            set(&mut f, l, &get(&f1, l));
         }
+        take(&moved, &mut y, &y1);
+        take(&moved, &mut f, &f1);
         t = t1;
         project(models, &moved, &Lanes::splat(t), &mut y, &mut f, report);
     }
@@ -544,14 +554,14 @@ fn dopri5<M: OdeLanes<N>, const N: usize, const W: usize>(
                 Verdict::Reject => {}
                 Verdict::Accept { hnew } => {
                     t[l] = if ctl[l].last { t_end } else { tph.0[l] };
-                    set(&mut y, l, &get(&y1, l));
-                    set(&mut k1, l, &get(&k7, l));
                     ctl[l].h = hnew;
                     moved[l] = true;
                 }
             }
         }
         if moved.contains(&true) {
+            take(&moved, &mut y, &y1);
+            take(&moved, &mut k1, &k7);
             project(models, &moved, &Lanes(t), &mut y, &mut k1, report);
         }
     }
