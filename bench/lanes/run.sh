@@ -1,58 +1,84 @@
 #!/bin/sh
 # Ensembles and sweeps in SIMD lanes (#28, #29): BENCHMARKS.md "Ensembles
-# in lanes". Needs a release eom-gen:
+# and sweeps in lanes". Needs a release eom-gen for the sweep part:
 #   cargo build --release -p eom-cli
-#   EOM=target/release/eom-gen sh bench/lanes/run.sh > bench/results/lanes.txt
-# Every figure is the median of REPS runs (default 5); the machine may be
-# shared, so compare the ratios within one run.
+#   EOM=target/release/eom-gen sh bench/lanes/run.sh [ensemble|sweep]
+# The machine is shared: every figure is the median of REPS runs (default
+# 3) of **CPU time** (user + sys of the process, /usr/bin/time), which a
+# loaded machine inflates far less than wall time; compare ratios within
+# one run.
 set -eu
 EOM=${EOM:-target/release/eom-gen}
-REPS=${REPS:-5}
+REPS=${REPS:-3}
 export EOM_CACHE_DIR=${EOM_CACHE_DIR:-target/eom-cache}
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 
 median() { sort -g | awk '{a[NR]=$1} END {print a[int((NR+1)/2)]}'; }
 
-# Ensemble throughput: N members of MODEL to T s with dopri5 (rtol 1e-8,
-# atol 1e-10, per-lane control) or rk4 (dt 1e-3), W states per call, one
-# thread per pack. From the runner's own pack times (`integration_s`):
-# state-steps per second and ns per state per right-hand side.
+# Ensemble throughput: the lanes' runner of MODEL (built by one `simulate
+# --ensemble` run, whose members' drawn states it then integrates) run
+# directly on one thread with W = 1, 4, 8 states per call: state-steps per
+# CPU second and CPU ns per state per right-hand side.
 ensemble() { # model t_end n integrator [--native]
+  "$EOM" simulate "models/$1.ron" --t-end 0.01 --ensemble "$3" --seed 1 \
+    --perturb q=0.05,u=0.05 --integrator "$4" ${5:-} --json > "$TMP/m.json" 2>/dev/null || true
+  dir="$EOM_CACHE_DIR/target/release"
+  [ -n "${5:-}" ] && dir="$EOM_CACHE_DIR/target-flags/release"
+  exe=$(ls -t "$dir"/eom-lanes-"$1"-* | grep -v '\.d$' | head -1)
   for w in 1 4 8; do
+    python3 - "$TMP/m.json" "$4" "$2" "$w" > "$TMP/req.json" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1]))
+rows = m["members_results"]
+names = [f"y{i}" for i in range(len(rows[0]["q0"]) + len(rows[0]["u0"]))]
+print(json.dumps({"integrator": sys.argv[2], "rtol": 1e-8, "atol": 1e-10, "dt": 1e-3,
+  "t_end": float(sys.argv[3]), "max_steps": 10**7, "width": int(sys.argv[4]), "threads": 1,
+  "inputs": [], "params": [], "names": names,
+  "cases": [{"p": [], "y0": r["q0"] + r["u0"]} for r in rows]}))
+PY
     for r in $(seq "$REPS"); do
-      "$EOM" simulate "models/$1.ron" --t-end "$2" --ensemble "$3" --seed 1 \
-        --perturb q=0.05,u=0.05 --integrator "$4" --dt 1e-3 --lanes "$w" ${5:-} --json 2>/dev/null |
-        python3 -c 'import json,sys; v=json.load(sys.stdin); print(v["integration_s"], v["steps"], v["rhs_evals"], v["finished"])'
+      /usr/bin/time -f "%U %S" -o "$TMP/t" "$exe" < "$TMP/req.json" > "$TMP/out.json"
+      awk '{print $1 + $2}' "$TMP/t"
     done > "$TMP/e"
-    s=$(awk '{print $1}' "$TMP/e" | median)
-    read -r _ steps rhs fin < "$TMP/e"
-    python3 -c "s=$s; steps=$steps; rhs=$rhs; print(f'ensemble $1 $4 ${5:-} W=$w: $fin finished, {steps} steps, {rhs} rhs, {s:.4f} s: {steps/s:.3e} state-steps/s, {s/rhs*1e9:.1f} ns per state per rhs')"
+    s=$(median < "$TMP/e")
+    python3 - "$TMP/out.json" "$s" "$1 $4 ${5:-default} W=$w" <<'PY'
+import json, sys
+r = json.loads(open(sys.argv[1]).read().splitlines()[-1])["results"]
+s = float(sys.argv[2]); steps = sum(x["steps"] for x in r); rhs = sum(x["rhs_evals"] for x in r)
+fin = sum(1 for x in r if x["stop"] == "finished")
+print(f"ensemble {sys.argv[3]}: {len(r)} members ({fin} finished), {steps} steps, {rhs} rhs, "
+      f"{s:.2f} CPU s: {steps / s:.3e} state-steps/s, {s / rhs * 1e9:.0f} ns per state per rhs")
+PY
   done
 }
 
-# Sweep cases per second: interpreted, compiled one state per call, lanes.
-sweep() { # model param t_end label extra...
-  m=$1; p=$2; t=$3; shift 3
+# Sweep cases per second (the CLI's own figure, wall time) and per CPU
+# second: interpreted, compiled one state per call, lanes of 4 and 8.
+sweep() { # model param t_end
   for j in 1 2; do
     for mode in interpreted "--compiled --lanes 1" "--compiled --lanes 4" "--compiled --lanes 8"; do
       extra=""; [ "$mode" = interpreted ] || extra=$mode
       # One run to build the cached crate, then REPS timed.
-      "$EOM" sweep "models/$m.ron" --param "$p" --t-end "$t" --jobs "$j" $extra --out "$TMP/s" >/dev/null 2>&1 || true
+      "$EOM" sweep "models/$1.ron" --param "$2" --t-end "$3" --jobs "$j" $extra --out "$TMP/s" >/dev/null 2>&1 || true
       for r in $(seq "$REPS"); do
-        "$EOM" sweep "models/$m.ron" --param "$p" --t-end "$t" --jobs "$j" $extra --out "$TMP/s" 2>/dev/null |
-          sed -n 's/.*(\([0-9.]*\) cases\/s.*/\1/p'
-      done | median | sed "s/^/sweep $m jobs=$j $mode: /; s/$/ cases\/s/"
+        /usr/bin/time -f "%U %S" -o "$TMP/t" "$EOM" sweep "models/$1.ron" --param "$2" --t-end "$3" \
+          --jobs "$j" $extra --out "$TMP/s" > "$TMP/o" 2>/dev/null || true
+        n=$(sed -n 's/.*: \([0-9]*\) cases.*/\1/p' "$TMP/o")
+        w=$(sed -n 's/.*(\([0-9.]*\) cases\/s.*/\1/p' "$TMP/o")
+        awk -v n="$n" -v w="$w" '{printf "%s %.1f\n", w, n / ($1 + $2)}' "$TMP/t"
+      done > "$TMP/sw"
+      a=$(awk '{print $1}' "$TMP/sw" | median); b=$(awk '{print $2}' "$TMP/sw" | median)
+      echo "sweep $1 jobs=$j $mode: $a cases/s (wall), $b cases per CPU s"
     done
   done
 }
 
-# `sh run.sh ensemble` or `sh run.sh sweep` for one part (default both).
 if [ "${1:-all}" != sweep ]; then
   for native in "" --native; do
-    ensemble pendulum 10 1024 dopri5 $native
-    ensemble pendulum 10 1024 rk4 $native
-    ensemble arm7 2 256 dopri5 $native
+    ensemble pendulum 10 4096 dopri5 $native
+    ensemble pendulum 10 256 rk4 $native
+    ensemble arm7 2 1024 dopri5 $native
     ensemble arm7 2 256 rk4 $native
   done
 fi
