@@ -74,6 +74,43 @@ sweep() { # model param t_end
   done
 }
 
+# The compiled sweep's runner alone (what `sweep --compiled` spends past
+# the CLI's per-case check): the cases of `sweep MODEL --param NAME=a:b:step`
+# (the runner built by one `sweep --compiled` run), W = 1, 4, 8, on 1 and
+# 2 threads; cases per CPU second and per wall second.
+sweep_runner() { # model name a b step t_end
+  "$EOM" sweep "models/$1.ron" --param "$2=$3:$4:$5" --t-end "$6" --compiled --lanes 1 \
+    --out "$TMP/s" >/dev/null 2>&1 || true
+  "$EOM" simulate "models/$1.ron" --t-end 0.01 --ensemble 1 --json > "$TMP/m.json" 2>/dev/null || true
+  exe=$(ls -t "$EOM_CACHE_DIR"/target/release/eom-lanes-"$1"-* | grep -v '\.d$' | head -1)
+  for th in 1 2; do
+    for w in 1 4 8; do
+      python3 - "$TMP/m.json" "$2" "$3" "$4" "$5" "$6" "$w" "$th" > "$TMP/req.json" <<'PY'
+import json, sys
+m = json.load(open(sys.argv[1]))["members_results"][0]
+a, b, st = map(float, sys.argv[3:6]); n = int(round((b - a) / st)) + 1
+print(json.dumps({"integrator": "dopri5", "rtol": 1e-8, "atol": 1e-10, "dt": 1e-3,
+  "t_end": float(sys.argv[6]), "max_steps": 100000, "width": int(sys.argv[7]),
+  "threads": int(sys.argv[8]), "inputs": [], "params": [sys.argv[2]],
+  "names": ["y"] * (len(m["q0"]) + len(m["u0"])),
+  "cases": [{"p": [a + k * st], "y0": m["q0"] + m["u0"]} for k in range(n)]}))
+PY
+      n=$(python3 -c "import json; print(len(json.load(open('$TMP/req.json'))['cases']))")
+      for r in $(seq "$REPS"); do
+        /usr/bin/time -f "%e %U %S" -o "$TMP/t" "$exe" < "$TMP/req.json" > /dev/null
+        awk -v n="$n" '{printf "%.1f %.1f\n", n / $1, n / ($2 + $3)}' "$TMP/t"
+      done > "$TMP/sw"
+      a1=$(awk '{print $1}' "$TMP/sw" | median); b1=$(awk '{print $2}' "$TMP/sw" | median)
+      echo "sweep runner $1 threads=$th W=$w: $a1 cases/s (wall), $b1 cases per CPU s"
+    done
+  done
+}
+
+if [ "${1:-all}" = runner ]; then
+  sweep_runner pendulum l 0.5 2.4995 0.0005 10
+  sweep_runner arm7 g 1 10.99 0.01 1
+  exit 0
+fi
 if [ "${1:-all}" != sweep ]; then
   for native in "" --native; do
     ensemble pendulum 10 4096 dopri5 $native

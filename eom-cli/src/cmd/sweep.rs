@@ -531,8 +531,14 @@ impl Context<'_> {
         let mut rows: Vec<Option<Row>> = Vec::with_capacity(indices.len());
         let mut in_lanes = Vec::new();
         let y0: Vec<f64> = sys.q0().into_iter().chain(sys.u0()).collect();
-        for (k, &i) in indices.iter().enumerate() {
-            if self.shares_formulation(&all[i]) {
+        // The per-case check is most of a compiled case's cost: on every
+        // core.
+        let shares: Vec<bool> = indices
+            .par_iter()
+            .map(|&i| self.shares_formulation(&all[i]))
+            .collect();
+        for (k, (&i, shares)) in indices.iter().zip(shares).enumerate() {
+            if shares {
                 in_lanes.push((k, i));
                 rows.push(None);
             } else {
