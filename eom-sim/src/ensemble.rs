@@ -30,7 +30,8 @@
 //! (the smallest, with a step rejected when any lane rejects it), keeps the
 //! lanes busy but makes every lane take the worst lane's steps and gives a
 //! lane a different answer than its single-state run; it is not offered
-//! (see BENCHMARKS.md "Ensembles in lanes" for the measured utilisation).
+//! (see BENCHMARKS.md "Ensembles and sweeps in lanes" for the measured
+//! utilisation).
 //!
 //! # Failures
 //!
