@@ -226,6 +226,13 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         }
     }
     let spread = ensemble_options(&ensemble, &opened.checked, &o, &mut problems);
+    if ensemble.ensemble.is_some() && !vary.drives.is_empty() {
+        problems.push(
+            "--input NAME=EXPR drives an input by an expression; --ensemble takes constant \
+             inputs only (--input NAME=VALUE)"
+                .into(),
+        );
+    }
     if !problems.is_empty() {
         return fail(&Error::Usage(problems));
     }
