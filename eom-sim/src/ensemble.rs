@@ -112,10 +112,11 @@ fn get<const N: usize, const W: usize>(v: &[Lanes<W>; N], l: usize) -> [f64; N] 
     core::array::from_fn(|i| v[i].0[l])
 }
 
-/// The batched right-hand side, kept out of line: inlined into the step
-/// loops (four and six call sites of a long straight-line program), LLVM's
-/// register allocation of the packs suffers (measured: RK4 on arm7 at
-/// W = 4 was slower per state than at W = 1 before this).
+/// The batched right-hand side, kept out of line so that the step loops
+/// (four and six call sites of a long straight-line program) stay small.
+/// Its effect alone was not measured (the wall-clock comparison that
+/// prompted it was the machine's load, not the code; BENCHMARKS.md
+/// "Ensembles and sweeps in lanes" has the CPU-time figures with it).
 #[inline(never)]
 fn rhs<M: OdeLanes<N>, const N: usize, const W: usize>(
     models: &[M; W],
