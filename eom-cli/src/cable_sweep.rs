@@ -52,6 +52,9 @@ pub fn element_run(a: &SweepArgs, t_end: f64, mixed: bool) -> Result<ElementRun,
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--output", !a.output.is_empty()),
+        ("--compiled", a.compiled),
+        ("--lanes", a.lanes.is_some()),
+        ("--native", a.native),
     ] {
         if given {
             problems.push(format!(

@@ -15,8 +15,8 @@
 //!
 //! [`Batched`] reaches them by name, as `Model::evaluate` does the
 //! single-state ones; [`OdeLanes`] is the first-order system `y = (q, u)`
-//! over lanes, for an integrator that advances many states in lockstep (no
-//! such ensemble integrator exists yet: issue #28).
+//! over lanes, which [`crate::ensemble::integrate_lanes`] integrates, `W`
+//! states at a time (RK4 in lockstep, DOPRI5 with per-lane error control).
 
 pub use eom_lanes::Lanes;
 

@@ -50,6 +50,7 @@
 
 pub mod batch;
 pub mod constrained;
+pub mod ensemble;
 /// The element kernels (the `eom-elements` crate), with the `cables`
 /// feature.
 #[cfg(feature = "cables")]
@@ -68,6 +69,7 @@ pub use constrained::{
     Assembly, ConstrainedModel, ConstrainedSystem, ConstraintStats, ConstraintValues, Dynamics,
     Generated, Index3System, Method, Refusal,
 };
+pub use ensemble::{EnsembleReport, LaneMethod, LaneResult, integrate_lanes};
 pub use model::{__private, FunctionInfo, Model, Point, Vector};
 /// Fixed-size matrices of the integrators' Jacobians and mass matrices.
 pub use nalgebra::SMatrix;

@@ -392,7 +392,8 @@ impl Stop {
 
     /// The solver's stop in the run's terms; `names` are the state's
     /// (a component beyond them is a multiplier; without names, its index).
-    pub(crate) fn from_solver(s: StopReason, names: &[String]) -> Stop {
+    /// Public for runners outside this module (the ensemble's lanes).
+    pub fn from_solver(s: StopReason, names: &[String]) -> Stop {
         match s {
             StopReason::Finished => Stop::Finished,
             StopReason::EventStop { t, .. } => Stop::Event { t },

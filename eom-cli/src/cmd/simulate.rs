@@ -89,12 +89,38 @@ pub struct SimulateArgs {
     /// cables; 1 = no numerical damping; default 1).
     #[arg(long, allow_hyphen_values = true)]
     pub rho_inf: Option<f64>,
+    /// Run N perturbed copies of the initial state, compiled, several per
+    /// call in SIMD lanes (rk4 or dopri5; models without constraints,
+    /// contacts or cables); --csv then gets one row per member (final
+    /// state and statistics), --json the same as JSON.
+    #[arg(long, value_name = "N")]
+    pub ensemble: Option<usize>,
+    /// Seed of --ensemble's draws (default 0).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// --ensemble: standard deviations of the Gaussian perturbations of
+    /// every initial position and speed, `q=σ,u=σ` (unit quaternions
+    /// renormalised; default 0).
+    #[arg(long, value_name = "q=σ,u=σ")]
+    pub perturb: Option<String>,
+    /// --ensemble: a parameter drawn per member, Gaussian about its value
+    /// with this standard deviation (made tunable: one build); repeatable.
+    #[arg(long = "param-spread", value_name = "NAME=σ")]
+    pub param_spread: Vec<String>,
+    /// --ensemble: states per call, 1, 4 (default) or 8.
+    #[arg(long, value_name = "W")]
+    pub lanes: Option<usize>,
+    /// --ensemble: build with `-C target-cpu=native` (wider SIMD lanes;
+    /// the binary runs only on this kind of CPU).
+    #[arg(long)]
+    pub native: bool,
 }
 
 pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     // Every problem with the arguments is reported together, before
     // anything is generated or built.
     let mut problems = Vec::new();
+    let ensemble = a.ensemble_args();
     let vary = Vary::parse(&a.params.params, &a.inputs.inputs).unwrap_or_else(|p| {
         problems.extend(p);
         Vary::default()
@@ -199,8 +225,23 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             ));
         }
     }
+    let spread = ensemble_options(&ensemble, &opened.checked, &o, &mut problems);
+    if ensemble.ensemble.is_some() && !vary.drives.is_empty() {
+        problems.push(
+            "--input NAME=EXPR drives an input by an expression; --ensemble takes constant \
+             inputs only (--input NAME=VALUE)"
+                .into(),
+        );
+    }
     if !problems.is_empty() {
         return fail(&Error::Usage(problems));
+    }
+    if let Some(spread) = spread {
+        eprint!("{}", opened.checked.render_warnings());
+        return match crate::ensemble::run(&opened, &o, &spread, a.json) {
+            Ok(code) => code,
+            Err(e) => fail(&e),
+        };
     }
     let pictures = Pictures {
         plot: a.plot.as_deref(),
@@ -225,7 +266,13 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 9] = [
+    let refused: [(&str, bool); 15] = [
+        ("--ensemble", a.ensemble.is_some()),
+        ("--seed", a.seed.is_some()),
+        ("--perturb", a.perturb.is_some()),
+        ("--param-spread", !a.param_spread.is_empty()),
+        ("--lanes", a.lanes.is_some()),
+        ("--native", a.native),
         ("--plot", a.plot.is_some()),
         ("--jacobian", a.jacobian.is_some()),
         ("--events-csv", a.events_csv.is_some()),
@@ -410,6 +457,112 @@ fn simulate(
         &r,
         json,
     )
+}
+
+/// The `--ensemble` options and the others they meet.
+pub struct EnsembleArgs {
+    ensemble: Option<usize>,
+    seed: Option<u64>,
+    perturb: Option<String>,
+    param_spread: Vec<String>,
+    lanes: Option<usize>,
+    native: bool,
+    others: Vec<(&'static str, bool)>,
+}
+
+impl SimulateArgs {
+    fn ensemble_args(&self) -> EnsembleArgs {
+        EnsembleArgs {
+            ensemble: self.ensemble,
+            seed: self.seed,
+            perturb: self.perturb.clone(),
+            param_spread: self.param_spread.clone(),
+            lanes: self.lanes,
+            native: self.native,
+            others: vec![
+                ("--interpret", self.interpret),
+                ("--plot", self.plot.is_some()),
+                ("--html", self.html.is_some()),
+                ("--every", self.every.is_some()),
+                ("--events-csv", self.events_csv.is_some()),
+                ("--jacobian", self.jacobian.is_some()),
+                ("--constraints", self.constraints.is_some()),
+            ],
+        }
+    }
+}
+
+/// `--ensemble`'s settings, or the problems with them (every option of
+/// it without `--ensemble`, every option that does not apply with it).
+fn ensemble_options(
+    a: &EnsembleArgs,
+    checked: &eom_gen::Checked,
+    o: &RunOptions,
+    problems: &mut Vec<String>,
+) -> Option<crate::ensemble::Spread> {
+    let Some(n) = a.ensemble else {
+        for (name, given) in [
+            ("--seed", a.seed.is_some()),
+            ("--perturb", a.perturb.is_some()),
+            ("--param-spread", !a.param_spread.is_empty()),
+            ("--lanes", a.lanes.is_some()),
+            ("--native", a.native),
+        ] {
+            if given {
+                problems.push(format!("{name} sets up --ensemble N; give --ensemble"));
+            }
+        }
+        return None;
+    };
+    let before = problems.len();
+    if n == 0 {
+        problems.push("--ensemble N: N must be at least 1".into());
+    }
+    for (name, given) in &a.others {
+        if *given {
+            problems.push(format!(
+                "{name} does not apply to --ensemble (final states of many runs in lanes; its                  options: --seed, --perturb, --param-spread, --lanes, --csv, --json and the run's                  --t-end, --integrator, --rtol, --atol, --dt, --max-steps, --q0, --u0, --param,                  --input)"
+            ));
+        }
+    }
+    if let Some(why) = crate::lanes::refusal(checked) {
+        problems.push(format!("--ensemble: {why}"));
+    }
+    problems.extend(crate::lanes::integrator_refusal(o.integrator));
+    let width = a.lanes.unwrap_or(4);
+    if !crate::lanes::WIDTHS.contains(&width) {
+        problems.push(format!(
+            "--lanes {width}: the ensemble is built for {:?} states per call",
+            crate::lanes::WIDTHS
+        ));
+    }
+    let (q, u) = match a.perturb.as_deref().map(crate::ensemble::parse_perturb) {
+        Some(Ok(p)) => p,
+        Some(Err(e)) => {
+            problems.push(e);
+            (0.0, 0.0)
+        }
+        None => (0.0, 0.0),
+    };
+    let mut params = Vec::new();
+    for p in &a.param_spread {
+        match crate::ensemble::parse_param_spread(p) {
+            Ok(p) if params.iter().any(|(n, _)| *n == p.0) => {
+                problems.push(format!("--param-spread `{}` is given twice", p.0));
+            }
+            Ok(p) => params.push(p),
+            Err(e) => problems.push(e),
+        }
+    }
+    (problems.len() == before).then_some(crate::ensemble::Spread {
+        n,
+        seed: a.seed.unwrap_or(0),
+        q,
+        u,
+        params,
+        width,
+        native: a.native,
+    })
 }
 
 /// The pictures `simulate` draws of a run, each to its file.

@@ -77,6 +77,19 @@ pub struct SweepArgs {
     /// The directory for results.csv and study.json (created).
     #[arg(long)]
     pub out: String,
+    /// Run the cases compiled, `--lanes` at a time in SIMD lanes (the
+    /// ensemble integrator; rk4 or dopri5; models without constraints,
+    /// contacts or cables): the model is built once with its swept
+    /// parameters tunable (cached), no recompiling per case.
+    #[arg(long)]
+    pub compiled: bool,
+    /// With --compiled: states per call, 1, 4 (default) or 8.
+    #[arg(long, value_name = "W")]
+    pub lanes: Option<usize>,
+    /// With --compiled: build with `-C target-cpu=native` (wider SIMD
+    /// lanes; the binary runs only on this kind of CPU).
+    #[arg(long)]
+    pub native: bool,
     /// Join the shards in these directories into --out instead of running.
     #[arg(long, num_args = 1.., value_name = "DIR")]
     pub merge: Vec<String>,
@@ -205,6 +218,7 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             sys.name
         ));
     }
+    problems.extend(lanes_problems(a, &opened.checked, integrator));
     if !problems.is_empty() {
         return fail(&Error::Usage(problems));
     }
@@ -289,12 +303,27 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             })
             .collect()
     };
-    let rows = match a.jobs {
-        Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
-            Ok(pool) => pool.install(work),
-            Err(e) => return fail(&Error::Refused(format!("cannot start {n} threads: {e}"))),
-        },
-        None => work(),
+    let rows = if a.compiled {
+        let threads = a.jobs.unwrap_or_else(rayon::current_num_threads);
+        match ctx.lane_rows(
+            &indices,
+            &all,
+            (a.lanes.unwrap_or(4), a.native),
+            threads,
+            &bar,
+            &reformulated,
+        ) {
+            Ok(rows) => rows,
+            Err(e) => return fail(&e),
+        }
+    } else {
+        match a.jobs {
+            Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
+                Ok(pool) => pool.install(work),
+                Err(e) => return fail(&Error::Refused(format!("cannot start {n} threads: {e}"))),
+            },
+            None => work(),
+        }
     };
     bar.finish_and_clear();
     let wall = started.elapsed().as_secs_f64();
@@ -472,6 +501,193 @@ impl Context<'_> {
     }
 }
 
+/// Why `--compiled` / `--lanes` do not apply, if they do not.
+fn lanes_problems(
+    a: &SweepArgs,
+    checked: &eom_gen::Checked,
+    integrator: Integrator,
+) -> Vec<String> {
+    let mut problems = Vec::new();
+    if !a.compiled {
+        if a.lanes.is_some() {
+            problems.push("--lanes sets the states per call of --compiled; give --compiled".into());
+        }
+        if a.native {
+            problems.push("--native sets how --compiled builds; give --compiled".into());
+        }
+        return problems;
+    }
+    if let Some(w) = a.lanes
+        && !crate::lanes::WIDTHS.contains(&w)
+    {
+        problems.push(format!(
+            "--lanes {w}: the compiled sweep is built for {:?} states per call",
+            crate::lanes::WIDTHS
+        ));
+    }
+    problems.extend(
+        crate::lanes::refusal(checked)
+            .map(|why| format!("--compiled: {why}; sweep it without --compiled (the evaluator)")),
+    );
+    problems.extend(crate::lanes::integrator_refusal(integrator));
+    problems
+}
+
+impl Context<'_> {
+    /// `--compiled`: the cases the shared formulation is exact for run in
+    /// lanes, `width` per call, on `threads` threads (one build of the
+    /// model with the swept parameters tunable, cached); the others (a
+    /// value the check derives from a swept parameter changed, or one the
+    /// model forbids) as without `--compiled`. The rows are those of the
+    /// evaluator's sweep, `cpu_s` a lane's share of its pack's time.
+    fn lane_rows(
+        &self,
+        indices: &[usize],
+        all: &[Vec<f64>],
+        (width, native): (usize, bool),
+        threads: usize,
+        bar: &indicatif::ProgressBar,
+        reformulated: &AtomicUsize,
+    ) -> Result<Vec<Row>, Error> {
+        let sys = &self.shared.system;
+        let mut rows: Vec<Option<Row>> = Vec::with_capacity(indices.len());
+        let mut in_lanes = Vec::new();
+        let y0: Vec<f64> = sys.q0().into_iter().chain(sys.u0()).collect();
+        // The per-case check is most of a compiled case's cost: on every
+        // core.
+        let shares: Vec<bool> = indices
+            .par_iter()
+            .map(|&i| self.shares_formulation(&all[i]))
+            .collect();
+        for (k, (&i, shares)) in indices.iter().zip(shares).enumerate() {
+            if shares {
+                in_lanes.push((k, i));
+                rows.push(None);
+            } else {
+                rows.push(Some(self.case(i, &all[i], reformulated)));
+                bar.inc(1);
+            }
+        }
+        if !in_lanes.is_empty() {
+            let emit = eom_gen::EmitOptions {
+                lanes: true,
+                ..Default::default()
+            };
+            let source =
+                eom_gen::emit::emit_with(sys, self.formulation, &self.shared.content(), &emit);
+            let tunable: Vec<String> = sys
+                .parameters
+                .iter()
+                .filter(|p| p.tunable)
+                .map(|p| p.name.clone())
+                .collect();
+            let cases: Vec<crate::lanes::LaneCase> = in_lanes
+                .iter()
+                .map(|&(_, i)| crate::lanes::LaneCase {
+                    p: all[i].clone(),
+                    y0: y0.clone(),
+                })
+                .collect();
+            let o = crate::lanes::LaneRun {
+                integrator: self.options.integrator,
+                rtol: self.options.rtol,
+                atol: self.options.atol,
+                dt: self.options.dt,
+                t_end: self.options.t_end,
+                max_steps: self.options.max_steps,
+                width,
+                threads,
+                native,
+            };
+            let before = bar.position();
+            let outcomes = crate::lanes::run(
+                sys,
+                &source,
+                &tunable,
+                self.names,
+                self.inputs,
+                &o,
+                &cases,
+                &mut |n| bar.set_position(before + n as u64),
+            )?;
+            for (&(k, i), r) in in_lanes.iter().zip(outcomes) {
+                rows[k] = Some(self.lane_row(i, &all[i], &r));
+            }
+        }
+        Ok(rows.into_iter().flatten().collect())
+    }
+
+    /// True if case `values` passes the model's check and the shared
+    /// formulation is exact for it (what `case` tests).
+    fn shares_formulation(&self, values: &[f64]) -> bool {
+        let params: Vec<(String, f64)> = self
+            .names
+            .iter()
+            .cloned()
+            .zip(values.iter().copied())
+            .collect();
+        let Ok(checked) = self.loaded.check_with(std::path::Path::new(""), &params) else {
+            return false;
+        };
+        let (a, b) = (&checked.system, &self.shared.system);
+        a.q0() == b.q0()
+            && a.u0() == b.u0()
+            && a.parameters
+                .iter()
+                .zip(&b.parameters)
+                .all(|(x, y)| self.names.contains(&x.name) || x.value.value == y.value.value)
+    }
+
+    /// The row of case `i` from its lane's outcome (the columns of `case`).
+    fn lane_row(&self, i: usize, values: &[f64], r: &crate::lanes::LaneOutcome) -> Row {
+        let nan = |x: Option<f64>| x.unwrap_or(f64::NAN);
+        let nq = self.shared.system.nq();
+        let y: Vec<f64> = r.y.iter().map(|x| nan(*x)).collect();
+        let t = nan(r.t);
+        let mut v: Vec<f64> = std::iter::once(i as f64)
+            .chain(values.iter().copied())
+            .collect();
+        v.push(t);
+        v.extend(&y);
+        v.extend(r.energy.map(nan));
+        if !self.outputs.is_empty() {
+            let params: Vec<(String, f64)> = self
+                .names
+                .iter()
+                .cloned()
+                .zip(values.iter().copied())
+                .collect();
+            let model = Interpreted::new(self.formulation, &self.shared.system)
+                .with_inputs(self.inputs)
+                .with_params(&params);
+            let (q, u) = y.split_at(nq);
+            let mut udot = vec![0.0; u.len()];
+            model.forward_dynamics(t, q, u, &mut udot);
+            let mut out = vec![f64::NAN; self.formulation.output_names.len()];
+            let at = eom_sim::Point {
+                t,
+                q,
+                u,
+                udot: &udot,
+                ..Default::default()
+            };
+            model.evaluate("outputs", &at, &mut out);
+            v.extend(self.outputs.iter().map(|&k| out[k]));
+        }
+        v.extend([
+            r.steps as f64,
+            r.rejected as f64,
+            r.rhs_evals as f64,
+            r.cpu_s,
+        ]);
+        let stop = match &r.stop {
+            Stop::Finished => "finished".to_string(),
+            s => s.to_string(),
+        };
+        Row { values: v, stop }
+    }
+}
+
 /// A bar of cases with the time left, on a terminal.
 pub(crate) fn progress(n: usize, name: &str) -> indicatif::ProgressBar {
     let bar = indicatif::ProgressBar::new(n as u64);
@@ -498,6 +714,9 @@ fn merge(a: &SweepArgs) -> ExitCode {
         ("--integrator", a.integrator.is_some()),
         ("--jobs", a.jobs.is_some()),
         ("--rho-inf", a.rho_inf.is_some()),
+        ("--compiled", a.compiled),
+        ("--lanes", a.lanes.is_some()),
+        ("--native", a.native),
     ]
     .iter()
     .filter(|(_, g)| *g)

@@ -24,7 +24,7 @@ pub(crate) mod lower;
 mod names;
 use crate::system::{Motion, System};
 pub use loops::LoopChoice;
-pub use names::{is_keyword, type_name};
+pub use names::{field_names, is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
 
