@@ -390,6 +390,24 @@ mod tests {
         assert!((vol - 8.0).abs() < 1e-9, "volume: got {vol}, want 8");
     }
 
+    /// The cube from `<library_nodes>` by `<instance_node>` under a node
+    /// that translates by (10, 0, 0) then rotates 90° about z (applied to
+    /// the cube in reverse order): (x, y, z) → (10 − y, x, z), so
+    /// [9, 10] × [0, 1] × [0, 1]. X up turns −90° about Y,
+    /// (x, y, z) → (−z, y, x): [−1, 0] × [0, 1] × [9, 10].
+    #[test]
+    fn collada_cube_by_instance_node_x_up() {
+        let scene = r##"<library_nodes><node id="lib"><instance_geometry url="#cube"/></node></library_nodes>
+          <library_visual_scenes><visual_scene id="s">
+            <node><translate>10 0 0</translate><rotate>0 0 1 90</rotate>
+              <instance_node url="#lib"/>
+            </node>
+          </visual_scene></library_visual_scenes>"##;
+        let text = cube_dae("<up_axis>X_UP</up_axis>", false, scene);
+        let m = crate::dae::dae(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert_box(&m, [[-1.0, 0.0, 9.0], [0.0, 1.0, 10.0]]);
+    }
+
     /// Broken COLLADA files are errors naming the file and what is wrong.
     #[test]
     fn bad_collada_is_an_error_naming_the_file() {
