@@ -1,6 +1,6 @@
 //! COLLADA 1.4/1.5 (`.dae`) triangles for the animation page
-//! (`crate::mesh`): positions of `<triangles>`, `<polylist>` and
-//! `<polygons>` in `<library_geometries>`, placed by the visual scene's
+//! (`crate::mesh`): positions of `<triangles>`, `<polylist>`,
+//! `<polygons>`, `<trifans>` and `<tristrips>` in `<library_geometries>`, placed by the visual scene's
 //! node transforms (`<matrix>`, `<translate>`, `<rotate>`, `<scale>`,
 //! `<instance_geometry>`, `<instance_node>`), then scaled by
 //! `<asset><unit meter>` and turned from the file's `<up_axis>` into Z up
@@ -262,7 +262,10 @@ impl<'a, 'input> Reader<'a, 'input> {
         let mut tris = Vec::new();
         for prim in mesh.children().filter(Node::is_element) {
             let kind = prim.tag_name().name();
-            if !matches!(kind, "triangles" | "polylist" | "polygons") {
+            if !matches!(
+                kind,
+                "triangles" | "polylist" | "polygons" | "trifans" | "tristrips"
+            ) {
                 continue;
             }
             let inputs: Vec<Node> = children(prim, "input").collect();
@@ -289,7 +292,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             let pos = self.positions(mesh, vin)?;
             // Polygons as lists of position indices.
             let polys: Vec<(Node, Vec<usize>)> = match kind {
-                "polygons" => children(prim, "p")
+                "polygons" | "trifans" | "tristrips" => children(prim, "p")
                     .map(|p| Ok((p, self.counts(p)?)))
                     .collect::<Result<_, String>>()?,
                 _ => {
@@ -354,12 +357,27 @@ impl<'a, 'input> Reader<'a, 'input> {
                 };
                 let mut start = 0;
                 for s in sizes {
-                    if s < 3 && kind != "polygons" {
+                    if s < 3 && kind == "polylist" {
                         return Err(format!("{}: a polygon of {s} vertices", (self.at)(*p)));
                     }
-                    // Fan from the first corner.
                     for j in 1..s.saturating_sub(1) {
-                        tris.push([corner(start)?, corner(start + j)?, corner(start + j + 1)?]);
+                        tris.push(if kind != "tristrips" {
+                            // Fan from the first corner.
+                            [corner(start)?, corner(start + j)?, corner(start + j + 1)?]
+                        } else if j % 2 == 1 {
+                            // Strip: every other triangle turned back.
+                            [
+                                corner(start + j - 1)?,
+                                corner(start + j)?,
+                                corner(start + j + 1)?,
+                            ]
+                        } else {
+                            [
+                                corner(start + j)?,
+                                corner(start + j - 1)?,
+                                corner(start + j + 1)?,
+                            ]
+                        });
                     }
                     start += s;
                 }

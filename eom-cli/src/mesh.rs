@@ -408,6 +408,46 @@ mod tests {
         assert_box(&m, [[-1.0, 0.0, 9.0], [0.0, 1.0, 10.0]]);
     }
 
+    /// The cube's six faces as `<tristrips>` of four corners each (the
+    /// quad a, b, c, d as the strip a, b, d, c): the same box and the
+    /// outward winding kept, signed volume +1.
+    #[test]
+    fn collada_cube_as_tristrips() {
+        let tri = cube_dae("<up_axis>Z_UP</up_axis>", false, "");
+        let start = tri.find("<triangles").unwrap_or(0);
+        let end = tri
+            .find("</triangles>")
+            .map_or(0, |e| e + "</triangles>".len());
+        let strips: String = CUBE_QUADS
+            .iter()
+            .enumerate()
+            .map(|(f, q)| format!("<p>{} {f} {} {f} {} {f} {} {f}</p>", q[0], q[1], q[3], q[2]))
+            .collect();
+        let text = format!(
+            r##"{}<tristrips count="6"><input semantic="VERTEX" source="#cube-v" offset="0"/>
+            <input semantic="NORMAL" source="#cube-n" offset="1"/>{strips}</tristrips>{}"##,
+            &tri[..start],
+            &tri[end..]
+        );
+        let m = crate::dae::dae(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert_box(&m, [[0.0; 3], [1.0; 3]]);
+        let p = |k: u32| {
+            let k = k as usize * 3;
+            [m.positions[k], m.positions[k + 1], m.positions[k + 2]].map(f64::from)
+        };
+        let vol: f64 = m
+            .indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [p(t[0]), p(t[1]), p(t[2])];
+                (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                    + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                    / 6.0
+            })
+            .sum();
+        assert!((vol - 1.0).abs() < 1e-9, "volume: got {vol}, want 1");
+    }
+
     /// Broken COLLADA files are errors naming the file and what is wrong.
     #[test]
     fn bad_collada_is_an_error_naming_the_file() {
