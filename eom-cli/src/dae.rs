@@ -1,11 +1,14 @@
 //! COLLADA 1.4/1.5 (`.dae`) triangles for the animation page
 //! (`crate::mesh`): positions of `<triangles>`, `<polylist>`,
-//! `<polygons>`, `<trifans>` and `<tristrips>` in `<library_geometries>`, placed by the visual scene's
-//! node transforms (`<matrix>`, `<translate>`, `<rotate>`, `<scale>`,
-//! `<instance_geometry>`, `<instance_node>`), then scaled by
-//! `<asset><unit meter>` and turned from the file's `<up_axis>` into Z up
-//! (as ROS does for URDF meshes). Normals, texture coordinates, materials,
-//! skinning, morphs, lines and `<ph>` holes are not read.
+//! `<polygons>`, `<trifans>` and `<tristrips>` in
+//! `<library_geometries>`, placed by the visual scene's node transforms
+//! (`<matrix>`, `<translate>`, `<rotate>`, `<scale>`,
+//! `<instance_geometry>`, `<instance_node>`, `<instance_controller>` in
+//! its rest pose), then scaled by `<asset><unit meter>` and turned from
+//! the file's `<up_axis>` into Z up (as ROS does for URDF meshes).
+//! Normals, texture coordinates, materials, skinning weights and bones (a
+//! skin is its bind-shape geometry), morph targets, lines and `<ph>`
+//! holes are not read.
 
 use crate::mesh::Mesh;
 use nalgebra::{Matrix4, Rotation3, Unit, Vector3};
@@ -35,6 +38,7 @@ pub fn dae(text: &str) -> Result<Mesh, String> {
 
     let mut geometries: HashMap<&str, Node> = HashMap::new();
     let mut nodes: HashMap<&str, Node> = HashMap::new();
+    let mut controllers: HashMap<&str, Node> = HashMap::new();
     for n in root.descendants().filter(Node::is_element) {
         match (n.tag_name().name(), n.attribute("id")) {
             ("geometry", Some(id)) => {
@@ -43,6 +47,9 @@ pub fn dae(text: &str) -> Result<Mesh, String> {
             ("node", Some(id)) => {
                 nodes.insert(id, n);
             }
+            ("controller", Some(id)) => {
+                controllers.insert(id, n);
+            }
             _ => {}
         }
     }
@@ -50,6 +57,7 @@ pub fn dae(text: &str) -> Result<Mesh, String> {
         at: &at,
         geometries,
         nodes,
+        controllers,
         meshes: HashMap::new().into(),
     };
 
@@ -151,6 +159,7 @@ struct Reader<'a, 'input> {
     at: &'a dyn Fn(Node) -> String,
     geometries: HashMap<&'a str, Node<'a, 'input>>,
     nodes: HashMap<&'a str, Node<'a, 'input>>,
+    controllers: HashMap<&'a str, Node<'a, 'input>>,
     /// Each geometry's triangles once, however often it is instanced.
     meshes: std::cell::RefCell<HashMap<&'a str, std::rc::Rc<Vec<Tri>>>>,
 }
@@ -211,17 +220,24 @@ impl<'a, 'input> Reader<'a, 'input> {
             match c.tag_name().name() {
                 "instance_geometry" => {
                     let g = self.target(c, &self.geometries, "geometry")?;
-                    let id = g.attribute("id").unwrap_or("");
-                    let cached = self.meshes.borrow().get(id).cloned();
-                    let tris = match cached {
-                        Some(t) => t,
-                        None => {
-                            let t = std::rc::Rc::new(self.geometry(g)?);
-                            self.meshes.borrow_mut().insert(id, t.clone());
-                            t
-                        }
+                    self.place(g, &m, out)?;
+                }
+                "instance_controller" => {
+                    // A skin or morph drawn in its rest pose: the base
+                    // geometry (after a skin's bind-shape matrix).
+                    let ctrl = self.target(c, &self.controllers, "controller")?;
+                    let Some(kind) = ctrl
+                        .children()
+                        .find(|k| k.has_tag_name_local("skin") || k.has_tag_name_local("morph"))
+                    else {
+                        continue;
                     };
-                    out.extend(tris.iter().map(|t| t.map(|p| point(&m, p))));
+                    let mut at = m;
+                    if let Some(b) = child(kind, "bind_shape_matrix") {
+                        at *= Matrix4::from_row_slice(&self.floats(b, 16)?);
+                    }
+                    let g = self.target_by(kind, "source", &self.geometries, "geometry")?;
+                    self.place(g, &at, out)?;
                 }
                 "instance_node" => {
                     let target = self.target(c, &self.nodes, "node")?;
@@ -234,6 +250,27 @@ impl<'a, 'input> Reader<'a, 'input> {
         Ok(())
     }
 
+    /// A geometry's triangles (read once) placed by `m`.
+    fn place(
+        &self,
+        g: Node<'a, 'input>,
+        m: &Matrix4<f64>,
+        out: &mut Vec<Tri>,
+    ) -> Result<(), String> {
+        let id = g.attribute("id").unwrap_or("");
+        let cached = self.meshes.borrow().get(id).cloned();
+        let tris = match cached {
+            Some(t) => t,
+            None => {
+                let t = std::rc::Rc::new(self.geometry(g)?);
+                self.meshes.borrow_mut().insert(id, t.clone());
+                t
+            }
+        };
+        out.extend(tris.iter().map(|t| t.map(|p| point(m, p))));
+        Ok(())
+    }
+
     /// The element an instance's `url="#id"` names.
     fn target(
         &self,
@@ -241,12 +278,23 @@ impl<'a, 'input> Reader<'a, 'input> {
         table: &HashMap<&'a str, Node<'a, 'input>>,
         what: &str,
     ) -> Result<Node<'a, 'input>, String> {
-        let url = inst.attribute("url").unwrap_or("");
+        self.target_by(inst, "url", table, what)
+    }
+
+    /// The element `inst`'s attribute `attr="#id"` names.
+    fn target_by(
+        &self,
+        inst: Node,
+        attr: &str,
+        table: &HashMap<&'a str, Node<'a, 'input>>,
+        what: &str,
+    ) -> Result<Node<'a, 'input>, String> {
+        let url = inst.attribute(attr).unwrap_or("");
         url.strip_prefix('#')
             .and_then(|id| table.get(id).copied())
             .ok_or_else(|| {
                 format!(
-                    "{}: `<{}>` names `{url}`, not a `<{what}>` in this file (`#id`)",
+                    "{}: `<{} {attr}>` names `{url}`, not a `<{what}>` in this file (`#id`)",
                     (self.at)(inst),
                     inst.tag_name().name()
                 )

@@ -448,6 +448,22 @@ mod tests {
         assert!((vol - 1.0).abs() < 1e-9, "volume: got {vol}, want 1");
     }
 
+    /// A skinned cube (`<instance_controller>` of a `<skin>` with a
+    /// bind-shape matrix translating by (0, 0, 5)) is drawn in its rest
+    /// pose: [0, 1] × [0, 1] × [5, 6].
+    #[test]
+    fn collada_skin_in_rest_pose() {
+        let scene = r##"<library_controllers><controller id="c"><skin source="#cube">
+            <bind_shape_matrix>1 0 0 0  0 1 0 0  0 0 1 5  0 0 0 1</bind_shape_matrix>
+          </skin></controller></library_controllers>
+          <library_visual_scenes><visual_scene id="s">
+            <node><instance_controller url="#c"/></node>
+          </visual_scene></library_visual_scenes>"##;
+        let text = cube_dae("<up_axis>Z_UP</up_axis>", true, scene);
+        let m = crate::dae::dae(&text).unwrap_or_else(|e| panic!("{e}"));
+        assert_box(&m, [[0.0, 0.0, 5.0], [1.0, 1.0, 6.0]]);
+    }
+
     /// Broken COLLADA files are errors naming the file and what is wrong.
     #[test]
     fn bad_collada_is_an_error_naming_the_file() {
