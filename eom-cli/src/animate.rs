@@ -603,29 +603,61 @@ mod tests {
         assert_eq!(hits, [(0.45, vec![0]), (0.9, vec![])]);
     }
 
-    /// A COLLADA mesh refuses the page, saying what to do.
+    /// A COLLADA mesh is drawn: the page holds its one triangle (three
+    /// vertices, in metres from `<unit meter="0.5">`), and a COLLADA file
+    /// without triangles refuses the page naming the file.
     #[test]
-    fn collada_is_refused() {
+    fn collada_is_accepted() {
         let dir = std::env::temp_dir().join(format!("eom-dae-{}", std::process::id()));
         let _ = std::fs::create_dir_all(&dir);
-        let _ = std::fs::write(dir.join("arm.dae"), "<COLLADA/>");
-        let model = dir.join("m.ron");
         let _ = std::fs::write(
-            &model,
-            r#"(name: "m", bodies: [(name: "b", mass: 1, geometry: [Mesh(file: "arm.dae")])],
-               joints: [(name: "j", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "b")])"#,
+            dir.join("arm.dae"),
+            r##"<COLLADA version="1.5.0"><asset><unit meter="0.5"/><up_axis>Z_UP</up_axis></asset>
+              <library_geometries><geometry id="g"><mesh>
+                <source id="p"><float_array id="a" count="9">0 0 0 1 0 0 0 1 0</float_array>
+                  <technique_common><accessor source="#a" count="3" stride="3"/></technique_common></source>
+                <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+                <triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>
+              </mesh></geometry></library_geometries></COLLADA>"##,
         );
-        let path = model.display().to_string();
-        let Ok(opened) = crate::open::open(&path, &Default::default(), &Default::default()) else {
-            panic!("cannot open {path}");
+        let _ = std::fs::write(dir.join("empty.dae"), "<COLLADA/>");
+        let page = |file: &str| {
+            let model = dir.join("m.ron");
+            let _ = std::fs::write(
+                &model,
+                format!(
+                    r#"(name: "m", bodies: [(name: "b", mass: 1, geometry: [Mesh(file: "{file}")])],
+                   joints: [(name: "j", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "b")])"#
+                ),
+            );
+            let path = model.display().to_string();
+            let Ok(opened) = crate::open::open(&path, &Default::default(), &Default::default())
+            else {
+                panic!("cannot open {path}");
+            };
+            let mut table = Table::new(vec!["t".into(), "j".into()]);
+            table.push(vec![0.0, 0.0]);
+            html(&opened.checked.system, &table, &[]).map_err(|e| e.to_string())
         };
-        let mut table = Table::new(vec!["t".into(), "j".into()]);
-        table.push(vec![0.0, 0.0]);
-        let out = html(&opened.checked.system, &table, &[]);
+        let good = page("arm.dae");
+        let empty = page("empty.dae");
         let _ = std::fs::remove_dir_all(&dir);
-        match out {
-            Err(e) => assert!(e.to_string().contains("COLLADA"), "{e}"),
-            Ok(_) => panic!("a COLLADA mesh was accepted"),
+        let want = crate::mesh::base64(
+            &[0.0f32, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.5, 0.0]
+                .iter()
+                .flat_map(|x| x.to_le_bytes())
+                .collect::<Vec<u8>>(),
+        );
+        match good {
+            Ok(html) => assert!(
+                html.contains(&want),
+                "the triangle's vertices {want} are not in the page"
+            ),
+            Err(e) => panic!("a COLLADA mesh was refused: {e}"),
+        }
+        match empty {
+            Err(e) => assert!(e.contains("empty.dae") && e.contains("no triangles"), "{e}"),
+            Ok(_) => panic!("a COLLADA file without triangles was accepted"),
         }
     }
 

@@ -11,6 +11,7 @@ mod cable_report;
 mod cable_sweep;
 mod cmd;
 mod compiled;
+mod dae;
 mod ensemble;
 mod error;
 mod history;

@@ -459,9 +459,9 @@ pub enum Geometry {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         color: Option<(f64, f64, f64)>,
     },
-    /// A triangle mesh read from a file (STL binary or ASCII, OBJ; COLLADA
-    /// `.dae` is refused by `animate`), its vertices in the frame's axes
-    /// times `scale`.
+    /// A triangle mesh read from a file (STL binary or ASCII, OBJ, COLLADA
+    /// `.dae` with its unit and up axis applied), its vertices in the
+    /// frame's axes times `scale`.
     Mesh {
         /// The mesh file, relative to this model file (a URDF's
         /// `package://` paths are resolved on import).

@@ -8,7 +8,7 @@ use crate::model::locate::Seg;
 use crate::model::spec::{Frame, Geometry, Num, V3};
 use crate::system::{GeometryInfo, Shape};
 
-/// The mesh formats `eom-gen animate` knows (COLLADA is refused there).
+/// The mesh formats `eom-gen animate` reads (STL, OBJ and COLLADA).
 pub(crate) const MESH_FORMATS: [&str; 3] = ["stl", "obj", "dae"];
 
 impl Ctx<'_> {
