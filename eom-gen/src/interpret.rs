@@ -478,7 +478,7 @@ impl std::fmt::Display for InterpretError {
         match self {
             InterpretError::TooLarge { model, states } => write!(
                 f,
-                "the interpreter integrates up to {MAX_STATES} states, `{model}` has {states}; run it compiled (without --interpret)"
+                "the interpreter integrates up to {MAX_STATES} states, `{model}` has {states}; run it compiled (`simulate` without --interpret, `sweep --compiled`)"
             ),
             InterpretError::Run(e) => write!(f, "{e}"),
         }
