@@ -20,10 +20,10 @@
 //! at the end (`CABLE.nodeK.x/y/z`, as `simulate --csv` names them), then
 //! `steps`, `rejected`, `rhs_evals`, `cpu_s`, and `stop`.
 
-use crate::cmd::sweep::SweepArgs;
+use crate::cmd::sweep::{Done, Row, SweepArgs, finish, on_threads, results};
 use crate::error::Error;
 use crate::output::fail;
-use crate::study::{Results, Study};
+use crate::study::Study;
 use eom_gen::Checked;
 use eom_gen::cables::CableError;
 use eom_gen::mech::Formulation;
@@ -131,12 +131,6 @@ pub struct CableSweep<'a> {
     pub nodes: Vec<(String, usize)>,
 }
 
-/// One case's numbers and why it stopped or failed.
-pub struct CableRow {
-    values: Vec<f64>,
-    stop: String,
-}
-
 impl<'a> CableSweep<'a> {
     /// The sweep of `shared` (checked, the swept parameters tunable):
     /// the rigid part of a mixed model formulated once, and refused here
@@ -184,14 +178,14 @@ impl<'a> CableSweep<'a> {
     }
 
     /// Runs case `i` with `values`.
-    pub fn case(&self, i: usize, values: &[f64], reformulated: &AtomicUsize) -> CableRow {
+    pub fn case(&self, i: usize, values: &[f64], reformulated: &AtomicUsize) -> Row {
         let width = self.header().len();
         let mut v: Vec<f64> = std::iter::once(i as f64)
             .chain(values.iter().copied())
             .collect();
         let failed = |mut v: Vec<f64>, why: String| {
             v.resize(width, f64::NAN);
-            CableRow {
+            Row {
                 values: v,
                 stop: format!("failed: {why}"),
             }
@@ -292,18 +286,7 @@ impl<'a> CableSweep<'a> {
             Stop::Finished => "finished".to_string(),
             s => s.to_string(),
         };
-        CableRow { values: v, stop }
-    }
-
-    /// The results table of `rows`.
-    pub fn table(&self, rows: &[CableRow]) -> Results {
-        let mut table = eom_sim::table::Table::new(self.header());
-        let mut stop = Vec::new();
-        for r in rows {
-            table.push(r.values.clone());
-            stop.push(r.stop.clone());
-        }
-        Results { table, stop }
+        Row { values: v, stop }
     }
 }
 
@@ -457,7 +440,7 @@ pub fn run(a: &SweepArgs, plan: &Plan<'_>) -> ExitCode {
     let bar = crate::cmd::sweep::progress(plan.indices.len(), &sys.name);
     let reformulated = AtomicUsize::new(0);
     let started = std::time::Instant::now();
-    let work = || -> Vec<CableRow> {
+    let rows = on_threads(a.jobs, || {
         plan.indices
             .par_iter()
             .map(|&i| {
@@ -465,45 +448,18 @@ pub fn run(a: &SweepArgs, plan: &Plan<'_>) -> ExitCode {
                 bar.inc(1);
                 row
             })
-            .collect()
-    };
-    let rows = match a.jobs {
-        Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
-            Ok(pool) => pool.install(work),
-            Err(e) => return fail(&Error::Refused(format!("cannot start {n} threads: {e}"))),
-        },
-        None => work(),
-    };
+            .collect::<Vec<Row>>()
+    });
     bar.finish_and_clear();
-    let wall = started.elapsed().as_secs_f64();
-    let results = ctx.table(&rows);
-    let written = match results.write(std::path::Path::new(&a.out), &study) {
-        Ok(w) => w,
-        Err(e) => return fail(&Error::io(&a.out, e)),
+    let rows = match rows {
+        Ok(rows) => rows,
+        Err(e) => return fail(&e),
     };
-    let failed = rows.iter().filter(|r| r.stop != "finished").count();
-    let shard_text = match &a.shard {
-        Some(s) => format!(" (shard {s} of {})", plan.all.len()),
-        None => String::new(),
+    let done = Done {
+        name: &sys.name,
+        cases: plan.all.len(),
+        wall: started.elapsed().as_secs_f64(),
+        reformulated: reformulated.load(Ordering::Relaxed),
     };
-    println!(
-        "{}: {} cases{shard_text} in {wall:.2} s ({:.1} cases/s on {} threads), {} finished, {failed} stopped early or failed{}",
-        sys.name,
-        rows.len(),
-        rows.len() as f64 / wall.max(1e-9),
-        a.jobs.unwrap_or_else(rayon::current_num_threads),
-        rows.len() - failed,
-        match reformulated.load(Ordering::Relaxed) {
-            0 => String::new(),
-            n => format!(
-                "; {n} formulated on their own (values the check derives from a swept parameter changed)"
-            ),
-        }
-    );
-    println!("results: {}", written.join(", "));
-    if failed == 0 {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(3)
-    }
+    finish(a, results(ctx.header(), &rows), &rows, &study, &done)
 }

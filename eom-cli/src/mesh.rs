@@ -324,6 +324,25 @@ mod tests {
         b
     }
 
+    /// The volume a closed triangle mesh encloses, positive when its
+    /// triangles wind outward: the sum of the tetrahedra from the origin
+    /// to each triangle, `a · (b × c) / 6`.
+    fn signed_volume(m: &Mesh) -> f64 {
+        let p = |k: u32| {
+            let k = k as usize * 3;
+            [m.positions[k], m.positions[k + 1], m.positions[k + 2]].map(f64::from)
+        };
+        m.indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [p(t[0]), p(t[1]), p(t[2])];
+                (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                    + a[2] * (b[0] * c[1] - b[1] * c[0]))
+                    / 6.0
+            })
+            .sum()
+    }
+
     fn assert_box(m: &Mesh, want: [[f32; 3]; 2]) {
         let got = bounds(m);
         for e in 0..2 {
@@ -373,20 +392,7 @@ mod tests {
         assert_box(&m, [[2.0, -8.0, 4.0], [4.0, -6.0, 6.0]]);
         // Every triangle keeps the cube's outward winding under a proper
         // rotation: the signed volume stays +8 (side 2).
-        let p = |k: u32| {
-            let k = k as usize * 3;
-            [m.positions[k], m.positions[k + 1], m.positions[k + 2]].map(f64::from)
-        };
-        let vol: f64 = m
-            .indices
-            .chunks_exact(3)
-            .map(|t| {
-                let [a, b, c] = [p(t[0]), p(t[1]), p(t[2])];
-                (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                    + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                    / 6.0
-            })
-            .sum();
+        let vol = signed_volume(&m);
         assert!((vol - 8.0).abs() < 1e-9, "volume: got {vol}, want 8");
     }
 
@@ -431,20 +437,7 @@ mod tests {
         );
         let m = crate::dae::dae(&text).unwrap_or_else(|e| panic!("{e}"));
         assert_box(&m, [[0.0; 3], [1.0; 3]]);
-        let p = |k: u32| {
-            let k = k as usize * 3;
-            [m.positions[k], m.positions[k + 1], m.positions[k + 2]].map(f64::from)
-        };
-        let vol: f64 = m
-            .indices
-            .chunks_exact(3)
-            .map(|t| {
-                let [a, b, c] = [p(t[0]), p(t[1]), p(t[2])];
-                (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
-                    + a[2] * (b[0] * c[1] - b[1] * c[0]))
-                    / 6.0
-            })
-            .sum();
+        let vol = signed_volume(&m);
         assert!((vol - 1.0).abs() < 1e-9, "volume: got {vol}, want 1");
     }
 

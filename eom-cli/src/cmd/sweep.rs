@@ -293,58 +293,98 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     let bar = progress(indices.len(), &sys.name);
     let reformulated = AtomicUsize::new(0);
     let started = std::time::Instant::now();
-    let work = || -> Vec<Row> {
-        indices
-            .par_iter()
-            .map(|&i| {
-                let row = ctx.case(i, &all[i], &reformulated);
-                bar.inc(1);
-                row
-            })
-            .collect()
-    };
     let rows = if a.compiled {
         let threads = a.jobs.unwrap_or_else(rayon::current_num_threads);
-        match ctx.lane_rows(
+        ctx.lane_rows(
             &indices,
             &all,
             (a.lanes.unwrap_or(4), a.native),
             threads,
             &bar,
             &reformulated,
-        ) {
-            Ok(rows) => rows,
-            Err(e) => return fail(&e),
-        }
+        )
     } else {
-        match a.jobs {
-            Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
-                Ok(pool) => pool.install(work),
-                Err(e) => return fail(&Error::Refused(format!("cannot start {n} threads: {e}"))),
-            },
-            None => work(),
-        }
+        on_threads(a.jobs, || {
+            indices
+                .par_iter()
+                .map(|&i| {
+                    let row = ctx.case(i, &all[i], &reformulated);
+                    bar.inc(1);
+                    row
+                })
+                .collect()
+        })
     };
     bar.finish_and_clear();
-    let wall = started.elapsed().as_secs_f64();
-    let results = ctx.table(&rows);
-    let written = match results.write(std::path::Path::new(&a.out), &study) {
+    let rows = match rows {
+        Ok(rows) => rows,
+        Err(e) => return fail(&e),
+    };
+    let done = Done {
+        name: &sys.name,
+        cases: all.len(),
+        wall: started.elapsed().as_secs_f64(),
+        reformulated: reformulated.load(Ordering::Relaxed),
+    };
+    finish(a, results(ctx.header(), &rows), &rows, &study, &done)
+}
+
+/// `work` on `jobs` threads, or on rayon's global pool (every core) when
+/// not given.
+pub(crate) fn on_threads<R: Send>(
+    jobs: Option<usize>,
+    work: impl FnOnce() -> R + Send,
+) -> Result<R, Error> {
+    match jobs {
+        Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
+            Ok(pool) => Ok(pool.install(work)),
+            Err(e) => Err(Error::Refused(format!("cannot start {n} threads: {e}"))),
+        },
+        None => Ok(work()),
+    }
+}
+
+/// How a sweep's cases ran, for its summary line.
+pub(crate) struct Done<'a> {
+    /// The model's name.
+    pub name: &'a str,
+    /// Cases in the whole study (all shards).
+    pub cases: usize,
+    /// Wall time of the cases, s.
+    pub wall: f64,
+    /// Cases formulated on their own (a swept value changed what the
+    /// check derives).
+    pub reformulated: usize,
+}
+
+/// The end of every sweep: the table and `study.json` written to `--out`,
+/// one summary line, the files written, and exit status 3 when a case
+/// stopped early or failed.
+pub(crate) fn finish(
+    a: &SweepArgs,
+    results: Results,
+    rows: &[Row],
+    study: &Study,
+    done: &Done<'_>,
+) -> ExitCode {
+    let written = match results.write(std::path::Path::new(&a.out), study) {
         Ok(w) => w,
         Err(e) => return fail(&Error::io(&a.out, e)),
     };
     let failed = rows.iter().filter(|r| r.stop != "finished").count();
-    let shard_text = match a.shard {
-        Some(_) => format!(" (shard {}/{} of {})", shard.0, shard.1, all.len()),
-        None => String::new(),
+    let shard_text = match a.shard.as_deref().map(study::parse_shard) {
+        Some(Ok((i, n))) => format!(" (shard {i}/{n} of {})", done.cases),
+        _ => String::new(),
     };
     println!(
-        "{}: {} cases{shard_text} in {wall:.2} s ({:.1} cases/s on {} threads), {} finished, {failed} stopped early or failed{}",
-        sys.name,
+        "{}: {} cases{shard_text} in {:.2} s ({:.1} cases/s on {} threads), {} finished, {failed} stopped early or failed{}",
+        done.name,
         rows.len(),
-        rows.len() as f64 / wall.max(1e-9),
+        done.wall,
+        rows.len() as f64 / done.wall.max(1e-9),
         a.jobs.unwrap_or_else(rayon::current_num_threads),
         rows.len() - failed,
-        match reformulated.load(Ordering::Relaxed) {
+        match done.reformulated {
             0 => String::new(),
             n => format!(
                 "; {n} formulated on their own (values the check derives from a swept parameter changed)"
@@ -359,10 +399,23 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     }
 }
 
+/// The results table of `rows` under `header`.
+pub(crate) fn results(header: Vec<String>, rows: &[Row]) -> Results {
+    let mut table = eom_sim::table::Table::new(header);
+    let mut stop = Vec::new();
+    for r in rows {
+        table.push(r.values.clone());
+        stop.push(r.stop.clone());
+    }
+    Results { table, stop }
+}
+
 /// One case's numbers and why it stopped (`finished`) or failed.
-struct Row {
-    values: Vec<f64>,
-    stop: String,
+pub(crate) struct Row {
+    /// The row of the results table, `NaN` where a failed case has no value.
+    pub values: Vec<f64>,
+    /// `finished`, or why the case stopped early or failed.
+    pub stop: String,
 }
 
 /// What every case shares.
@@ -396,16 +449,6 @@ impl Context<'_> {
                 .map(|s| s.to_string()),
         );
         h
-    }
-
-    fn table(&self, rows: &[Row]) -> Results {
-        let mut table = eom_sim::table::Table::new(self.header());
-        let mut stop = Vec::new();
-        for r in rows {
-            table.push(r.values.clone());
-            stop.push(r.stop.clone());
-        }
-        Results { table, stop }
     }
 
     /// Runs case `i` with `values`.

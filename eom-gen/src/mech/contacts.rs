@@ -28,14 +28,7 @@ pub fn gaps<S: Scalar>(
     u: &[S],
 ) -> Result<Vec<(S, S)>, MechError> {
     let low = Lowering::new(env);
-    let site = |p: &Point| -> Result<(Vec3<S>, Vec3<S>), MechError> {
-        let s = Site {
-            body: tree.index_of_body[p.body],
-            node: p.node,
-            point: low.vec3(&p.position)?,
-        };
-        Ok(ev.site(k, &s))
-    };
+    let site = |p: &Point| site_of(tree, &low, ev, k, p);
     let mut out = Vec::new();
     for c in &sys.contacts {
         match &c.kind {
@@ -104,24 +97,9 @@ pub fn unit_loads<S: Scalar>(
     use super::spatial::Force;
     let low = Lowering::new(env);
     let mut out = Vec::new();
-    // A world force `fw` at body point `p` into `loads`.
+    // A world force `fw` at the anchor `p` into `loads`.
     let apply = |loads: &mut Vec<Force<S>>, p: &Point, fw: Vec3<S>| -> Result<(), MechError> {
-        let Some(i) = tree.index_of_body[p.body] else {
-            return Ok(());
-        };
-        let point = low.vec3(&p.position)?;
-        let (slot, frame) = match p.node {
-            Some(node) => match tree.node_load(i, node) {
-                Some(slot) => (slot, ev.node_frame(k, i, node).map(|x| x.0)),
-                None => (i, None),
-            },
-            None => (i, None),
-        };
-        let fb = frame.unwrap_or(k.world[i]).e.tr_mul_vec(fw);
-        loads[slot] = loads[slot].add(Force {
-            n: point.cross(fb),
-            f: fb,
-        });
+        load_at(tree, ev, k, loads, &anchor(tree, &low, p)?, fw);
         Ok(())
     };
     for c in &sys.contacts {
@@ -143,25 +121,12 @@ pub fn unit_loads<S: Scalar>(
                 let mut l = fresh();
                 apply(&mut l, at, plane.n)?;
                 // The reaction on the plane's body, on the same line.
-                let s = Site {
-                    body: tree.index_of_body[at.body],
-                    node: at.node,
-                    point: low.vec3(&at.position)?,
-                };
-                let x = ev.site(k, &s).0;
+                let x = site_of(tree, &low, ev, k, at)?.0;
                 plane.react(&mut l, k, x, -plane.n);
                 out.push(l);
             }
             ContactKind::Spheres { a, b, .. } => {
-                let site = |p: &Point| -> Result<Vec3<S>, MechError> {
-                    let s = Site {
-                        body: tree.index_of_body[p.body],
-                        node: p.node,
-                        point: low.vec3(&p.position)?,
-                    };
-                    Ok(ev.site(k, &s).0)
-                };
-                let d = site(a)? - site(b)?;
+                let d = site_of(tree, &low, ev, k, a)?.0 - site_of(tree, &low, ev, k, b)?.0;
                 let unit = d.scale(S::one() / d.norm());
                 let mut l = fresh();
                 apply(&mut l, a, unit)?;
@@ -245,6 +210,19 @@ pub fn sphere_normals<S: Scalar>(
     Ok(out)
 }
 
+/// The material point an anchor names (body or node coordinates).
+fn anchor<S: Scalar>(
+    tree: &TreeModel<S>,
+    low: &Lowering<'_, S>,
+    p: &Point,
+) -> Result<Site<S>, MechError> {
+    Ok(Site {
+        body: tree.index_of_body[p.body],
+        node: p.node,
+        point: low.vec3(&p.position)?,
+    })
+}
+
 /// World position and velocity of an anchor.
 fn site_of<S: Scalar>(
     tree: &TreeModel<S>,
@@ -253,12 +231,7 @@ fn site_of<S: Scalar>(
     k: &Kinematics<S>,
     p: &Point,
 ) -> Result<(Vec3<S>, Vec3<S>), MechError> {
-    let s = Site {
-        body: tree.index_of_body[p.body],
-        node: p.node,
-        point: low.vec3(&p.position)?,
-    };
-    Ok(ev.site(k, &s))
+    Ok(ev.site(k, &anchor(tree, low, p)?))
 }
 
 /// The tangent axes of two spheres touching along the unit line of
@@ -339,12 +312,82 @@ fn touching_point<S: Scalar>(
     })
 }
 
+/// Where a contact with friction touches, at a state: the touching
+/// material point `a`, what it slides on, and the tangent axes `t₁`, `t₂`
+/// (world axes).
+struct Touch<S> {
+    a: Site<S>,
+    on: Against<S>,
+    tangents: [Vec3<S>; 2],
+}
+
+/// What a touching point slides on.
+enum Against<S> {
+    /// A plane (fixed, or moving with its body).
+    Plane(PlaneAt<S>),
+    /// The other sphere's touching material point.
+    Point(Site<S>),
+}
+
+/// The touch of contact `c` if it has friction (`μ > 0`): for a plane the
+/// anchor less `radius · n` (so a rolling sphere has `v_t = 0`) and the
+/// plane's [`tangent_axes`]; for two spheres a's surface point towards b
+/// against b's towards a, along [`sphere_tangents`]. `None` for every
+/// contact without tangential rows.
+fn touch<S: Scalar>(
+    c: &crate::system::ContactInfo,
+    tree: &TreeModel<S>,
+    low: &Lowering<'_, S>,
+    ev: &Evaluator<'_, S>,
+    k: &Kinematics<S>,
+) -> Result<Option<Touch<S>>, MechError> {
+    if c.mu <= 0.0 {
+        return Ok(None);
+    }
+    Ok(match &c.kind {
+        ContactKind::Plane {
+            at,
+            radius,
+            normal,
+            point,
+            on,
+        } => {
+            let plane = PlaneAt::new(tree, low, k, point, normal, *on)?;
+            Some(Touch {
+                a: touching_point(tree, low, ev, k, at, low.quantity(radius)?, plane.n)?,
+                tangents: plane.tangents(),
+                on: Against::Plane(plane),
+            })
+        }
+        ContactKind::Spheres {
+            a,
+            b,
+            radius_a,
+            radius_b,
+            tangent_reference,
+        } => {
+            let n = unit_line(tree, low, ev, k, a, b)?;
+            Some(Touch {
+                a: touching_point(tree, low, ev, k, a, low.quantity(radius_a)?, n)?,
+                on: Against::Point(touching_point(
+                    tree,
+                    low,
+                    ev,
+                    k,
+                    b,
+                    low.quantity(radius_b)?,
+                    -n,
+                )?),
+                tangents: sphere_tangents(n, *tangent_reference),
+            })
+        }
+        ContactKind::JointLimit { .. } => None,
+    })
+}
+
 /// Per gap row (in the order of [`gaps`]) the tangential speeds
-/// `v_t = (t₁·v_c, t₂·v_c)` of the touching material point `c` (the
-/// anchor less `radius · n`, so a rolling sphere has `v_t = 0`) for a plane
-/// contact with friction (`μ > 0`); for two spheres with friction, of a's
-/// touching point relative to b's along [`sphere_tangents`]; zero for every
-/// other row.
+/// `v_t = (t₁·v, t₂·v)` of the touching material point relative to what
+/// it slides on (see [`touch`]); zero for every row without friction.
 pub fn tangential_speeds<S: Scalar>(
     sys: &System,
     tree: &TreeModel<S>,
@@ -355,38 +398,17 @@ pub fn tangential_speeds<S: Scalar>(
     let low = Lowering::new(env);
     let mut out = Vec::new();
     for c in &sys.contacts {
-        match &c.kind {
-            ContactKind::Plane {
-                at,
-                radius,
-                normal,
-                point,
-                on,
-            } if c.mu > 0.0 => {
-                let plane = PlaneAt::new(tree, &low, k, point, normal, *on)?;
-                let site = touching_point(tree, &low, ev, k, at, low.quantity(radius)?, plane.n)?;
-                let (xc, v) = ev.site(k, &site);
-                let v = v - plane.velocity(ev, k, xc);
-                let [t1, t2] = plane.tangents();
-                out.push([t1.dot(v), t2.dot(v)]);
+        match touch(c, tree, &low, ev, k)? {
+            Some(t) => {
+                let (xa, va) = ev.site(k, &t.a);
+                let v = va
+                    - match &t.on {
+                        Against::Plane(plane) => plane.velocity(ev, k, xa),
+                        Against::Point(b) => ev.site(k, b).1,
+                    };
+                out.push(t.tangents.map(|t| t.dot(v)));
             }
-            ContactKind::Spheres {
-                a,
-                b,
-                radius_a,
-                radius_b,
-                tangent_reference,
-            } if c.mu > 0.0 => {
-                // The touching material points: a's surface towards b,
-                // b's towards a; v_t is a's point relative to b's.
-                let n = unit_line(tree, &low, ev, k, a, b)?;
-                let ca = touching_point(tree, &low, ev, k, a, low.quantity(radius_a)?, n)?;
-                let cb = touching_point(tree, &low, ev, k, b, low.quantity(radius_b)?, -n)?;
-                let v = ev.site(k, &ca).1 - ev.site(k, &cb).1;
-                let [t1, t2] = sphere_tangents(n, *tangent_reference);
-                out.push([t1.dot(v), t2.dot(v)]);
-            }
-            _ => {
+            None => {
                 for _ in c.rows() {
                     out.push([S::zero(), S::zero()]);
                 }
@@ -397,8 +419,8 @@ pub fn tangential_speeds<S: Scalar>(
 }
 
 /// Per gap row the loads of a unit tangential impulse along `t₁` and along
-/// `t₂`, at the touching material point (see [`tangential_speeds`]); no
-/// load for rows without friction.
+/// `t₂` at the touching material point, and its reaction on what it slides
+/// on (see [`touch`]); no load for rows without friction.
 pub fn tangential_unit_loads<S: Scalar>(
     sys: &System,
     tree: &TreeModel<S>,
@@ -411,59 +433,20 @@ pub fn tangential_unit_loads<S: Scalar>(
     let mut out = Vec::new();
     for c in &sys.contacts {
         let fresh = || vec![Force::zero(); tree.loads()];
-        match &c.kind {
-            ContactKind::Plane {
-                at,
-                radius,
-                normal,
-                point,
-                on,
-            } if c.mu > 0.0 => {
-                let plane = PlaneAt::new(tree, &low, k, point, normal, *on)?;
-                let site = touching_point(tree, &low, ev, k, at, low.quantity(radius)?, plane.n)?;
-                let xc = ev.site(k, &site).0;
-                let tangents = plane.tangents();
+        match touch(c, tree, &low, ev, k)? {
+            Some(t) => {
+                let xa = ev.site(k, &t.a).0;
                 let mut pair = [fresh(), fresh()];
-                for (l, t) in pair.iter_mut().zip(tangents) {
-                    plane.react(l, k, xc, -t);
-                }
-                if let Some(i) = site.body {
-                    let (slot, frame) = match at.node {
-                        Some(node) => match tree.node_load(i, node) {
-                            Some(slot) => (slot, ev.node_frame(k, i, node).map(|x| x.0)),
-                            None => (i, None),
-                        },
-                        None => (i, None),
-                    };
-                    let e = frame.map_or(k.world[i].e, |f| f.e);
-                    for (l, t) in pair.iter_mut().zip(tangents) {
-                        let fb = e.tr_mul_vec(t);
-                        l[slot] = l[slot].add(Force {
-                            n: site.point.cross(fb),
-                            f: fb,
-                        });
+                for (l, dir) in pair.iter_mut().zip(t.tangents) {
+                    load_at(tree, ev, k, l, &t.a, dir);
+                    match &t.on {
+                        Against::Plane(plane) => plane.react(l, k, xa, -dir),
+                        Against::Point(b) => load_at(tree, ev, k, l, b, -dir),
                     }
                 }
                 out.push(pair);
             }
-            ContactKind::Spheres {
-                a,
-                b,
-                radius_a,
-                radius_b,
-                tangent_reference,
-            } if c.mu > 0.0 => {
-                let n = unit_line(tree, &low, ev, k, a, b)?;
-                let ca = touching_point(tree, &low, ev, k, a, low.quantity(radius_a)?, n)?;
-                let cb = touching_point(tree, &low, ev, k, b, low.quantity(radius_b)?, -n)?;
-                let mut pair = [fresh(), fresh()];
-                for (l, t) in pair.iter_mut().zip(sphere_tangents(n, *tangent_reference)) {
-                    load_at(tree, ev, k, l, &ca, t);
-                    load_at(tree, ev, k, l, &cb, -t);
-                }
-                out.push(pair);
-            }
-            _ => {
+            None => {
                 for _ in c.rows() {
                     out.push([fresh(), fresh()]);
                 }
