@@ -22,6 +22,7 @@ right-hand rule, in all three tools. The script's acceleration check
 agree; this file only has to be right for that check to pass.
 """
 
+import re
 from dataclasses import dataclass
 
 GRAVITY = 9.81
@@ -142,3 +143,44 @@ def models():
     # The long chain of issue 28 (emitted as loops over its bodies).
     table["spatial_chain200"] = chain(200, True)
     return table
+
+
+# Three real robots of example-robot-data (issue 28), by the path of their
+# URDF under the package's `robots` directory: a 7-DOF arm with its two
+# fingers (mimic removed: 9 DOF), a 6-DOF arm, and a 32-DOF humanoid (a tree).
+ROBOTS = {
+    "panda": "panda_description/urdf/panda.urdf",
+    "ur5": "ur_description/urdf/ur5_robot.urdf",
+    "talos_reduced": "talos_data/robots/talos_reduced.urdf",
+}
+
+
+def robot_urdf(text):
+    """A robot's URDF as all three tools read it here: as bench/robots loads
+    it (the `<mimic>` tags removed: Pinocchio's parser and MuJoCo ignore
+    them, eom would add a constraint for each), and without `<visual>` and
+    `<collision>` (meshes none of the dynamics reads, which MuJoCo would try
+    to open). Inertias, frames, axes and `<dynamics damping>` as shipped."""
+    text = re.sub(r"<mimic\b[^>]*/>|<mimic\b[^>]*>.*?</mimic>", "", text, flags=re.S)
+    return re.sub(r"<visual\b.*?</visual>|<collision\b.*?</collision>", "", text, flags=re.S)
+
+
+def robot_mujoco(urdf_text):
+    """The robot's URDF (`robot_urdf`) for MuJoCo's own URDF import (which
+    keeps every number at full precision; MJCF written back by MuJoCo has
+    six digits): a `<mujoco>` block with the options of `mjcf` — contacts,
+    all constraints (limits, equality, friction loss), actuation and springs
+    disabled, gravity 9.81 m/s^2 along -z. The base is fixed, the inertias
+    are the file's, armature zero, and `<dynamics damping>` becomes joint
+    damping with the damper left on: eom applies the URDF damping as a joint
+    damper, Pinocchio's ABA is given tau - D v."""
+    block = (
+        "<mujoco>\n"
+        '    <compiler angle="radian"/>\n'
+        f'    <option gravity="0 0 {f(-GRAVITY)}" timestep="0.001">\n'
+        '      <flag contact="disable" constraint="disable" limit="disable" equality="disable" '
+        'frictionloss="disable" actuation="disable" spring="disable"/>\n'
+        "    </option>\n"
+        "  </mujoco>"
+    )
+    return re.sub(r"(<robot\b[^>]*>)", lambda m: m.group(1) + "\n  " + block, urdf_text, count=1)

@@ -8,7 +8,10 @@
 // forces (what `eom-gen linearize` gives at a state). No Python anywhere in
 // here.
 //
-//   peers MODEL.urdf MODEL.xml STATES REPS SEED CHECK
+//   peers MODEL.urdf MODEL.xml STATES REPS SEED CHECK [DERIV]
+//
+// (DERIV 0 skips timing the derivatives, which peers.py does for the
+// models it gives no derivative row: over 10 speeds, and the robots.)
 //
 // Output: one JSON object on stdout.
 //
@@ -113,10 +116,12 @@ std::string json(double const* v, int n) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 7) {
-    std::fprintf(stderr, "usage: peers MODEL.urdf MODEL.xml STATES REPS SEED CHECK\n");
+  if (argc != 7 && argc != 8) {
+    std::fprintf(stderr, "usage: peers MODEL.urdf MODEL.xml STATES REPS SEED CHECK [DERIV]\n");
     return 2;
   }
+  // DERIV 0: the derivatives are not timed (their columns read 0 passes).
+  bool const time_derivatives = argc < 8 || std::atoi(argv[7]) != 0;
   int const n = std::atoi(argv[3]), reps = std::atoi(argv[4]);
   uint64_t const seed = std::strtoull(argv[5], nullptr, 10);
   int const check = std::atoi(argv[6]);
@@ -127,9 +132,14 @@ int main(int argc, char** argv) {
 
   // Pinocchio: fixed base, gravity (0, 0, -9.81) by default.
   pinocchio::Model model;
-  if (!peers::load_urdf(argv[1], model)) return 1;
+  std::vector<double> damping;  // per speed, Pinocchio's order (URDF <dynamics damping>)
+  if (!peers::load_urdf(argv[1], model, damping)) return 1;
   pinocchio::Data data(model);
   int const nq = model.nq, nv = model.nv;
+  if (int(damping.size()) != nv || nq != nv) {
+    std::fprintf(stderr, "only one coordinate and one speed per joint (nq %d, nv %d)\n", nq, nv);
+    return 1;
+  }
 
   // MuJoCo.
   char err[1000] = "";
@@ -149,10 +159,29 @@ int main(int argc, char** argv) {
     max_armature = std::max(max_armature, std::fabs(m->dof_armature[i]));
     max_damping = std::max(max_damping, std::fabs(m->dof_damping[i]));
   }
+  // MuJoCo's coordinate and speed of each of Pinocchio's joints, by name (a
+  // tree's bodies can come in another order); the identity on the chains.
+  std::vector<int> mj_q(nq), mj_v(nv);
+  std::vector<double> mj_damping(nv);
+  std::string names = "[";
+  for (pinocchio::JointIndex j = 1; j < model.njoints; ++j) {
+    std::string const& name = model.names[j];
+    int const id = mj_name2id(m, mjOBJ_JOINT, name.c_str());
+    if (id < 0) {
+      std::fprintf(stderr, "MuJoCo's model has no joint `%s`\n", name.c_str());
+      return 1;
+    }
+    int const iq = model.joints[j].idx_q(), iv = model.joints[j].idx_v();
+    mj_q[iq] = m->jnt_qposadr[id];
+    mj_v[iv] = m->jnt_dofadr[id];
+    mj_damping[iv] = m->dof_damping[m->jnt_dofadr[id]];
+    names += std::string(j > 1 ? "," : "") + "\"" + name + "\"";
+  }
+  names += "]";
 
   // The states, drawn in eom-gen's order.
   Rng rng{seed};
-  std::vector<Eigen::VectorXd> q(n), v(n), tau(n), a(n);
+  std::vector<Eigen::VectorXd> q(n), v(n), tau(n), a(n), tau_d(n);
   for (int k = 0; k < n; ++k) {
     q[k].resize(nq);
     v[k].resize(nv);
@@ -162,12 +191,24 @@ int main(int argc, char** argv) {
     for (int i = 0; i < nv; ++i) v[k][i] = rng.uniform();
     for (int i = 0; i < nv; ++i) tau[k][i] = rng.uniform();
     for (int i = 0; i < nv; ++i) a[k][i] = rng.uniform();
+    // Pinocchio's ABA is given the damper's force as well: τ − D v (drawn
+    // before the timing, the same for every pass; D = 0 on the chains).
+    tau_d[k] = tau[k];
+    for (int i = 0; i < nv; ++i) tau_d[k][i] -= damping[size_t(i)] * v[k][i];
   }
 
   auto mj_set = [&](int k) {
-    mju_copy(d->qpos, q[k].data(), nq);
-    mju_copy(d->qvel, v[k].data(), nv);
-    mju_copy(d->qfrc_applied, tau[k].data(), nv);
+    for (int i = 0; i < nq; ++i) d->qpos[mj_q[size_t(i)]] = q[k][i];
+    for (int i = 0; i < nv; ++i) {
+      d->qvel[mj_v[size_t(i)]] = v[k][i];
+      d->qfrc_applied[mj_v[size_t(i)]] = tau[k][i];
+    }
+  };
+  // MuJoCo's accelerations in Pinocchio's order.
+  std::vector<double> mj_acc(nv);
+  auto mj_qacc = [&]() {
+    for (int i = 0; i < nv; ++i) mj_acc[size_t(i)] = d->qacc[mj_v[size_t(i)]];
+    return mj_acc.data();
   };
 
   // Accelerations at the check states.
@@ -178,26 +219,27 @@ int main(int argc, char** argv) {
   // MuJoCo's centred finite differences of its transition read back as
   // derivatives of qacc. MuJoCo's Euler step is v' = v + h qacc(q, v),
   // q' = q + h v' (no damping here), so the rows of v' in A are
-  // h dqacc/dq and I + h dqacc/dv.
+  // h dqacc/dq and I + h dqacc/dv. (These are in MuJoCo's order and without
+  // the damping: peers.py compares them only on the chains, which have
+  // neither a reordering nor dampers.)
   int const nx = 2 * nv + m->na;
   std::vector<mjtNum> A(size_t(nx) * nx);
   double const h = m->opt.timestep;
   Eigen::VectorXd const zero = Eigen::VectorXd::Zero(nv);
   std::string checks = "[";
   for (int k = 0; k < check; ++k) {
-    pinocchio::aba(model, data, q[k], v[k], tau[k]);
+    pinocchio::aba(model, data, q[k], v[k], tau_d[k]);
     mj_set(k);
     mj_forward(m, d);
     checks += std::string(k ? "," : "") + "{\"q\":" + json(q[k].data(), nq) +
               ",\"u\":" + json(v[k].data(), nv) + ",\"tau\":" + json(tau[k].data(), nv) +
-              ",\"pinocchio\":" + json(data.ddq.data(), nv) + ",\"mujoco\":" + json(d->qacc, nv);
+              ",\"pinocchio\":" + json(data.ddq.data(), nv) + ",\"mujoco\":" + json(mj_qacc(), nv);
     pinocchio::computeABADerivatives(model, data, q[k], v[k], zero);
     Eigen::MatrixXd dq = data.ddq_dq, dv = data.ddq_dv, minv = data.Minv;
     for (int i = 0; i < nv; ++i)
       for (int j = 0; j < i; ++j) minv(i, j) = minv(j, i);
     Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> rq = dq, rv = dv, rm = minv;
-    mju_copy(d->qpos, q[k].data(), nq);
-    mju_copy(d->qvel, v[k].data(), nv);
+    mj_set(k);
     mju_zero(d->qfrc_applied, nv);
     mjd_transitionFD(m, d, 1e-6, 1, A.data(), nullptr, nullptr, nullptr);
     std::vector<double> mq(size_t(nv) * nv), mv(size_t(nv) * nv);
@@ -215,7 +257,7 @@ int main(int argc, char** argv) {
   checks += "]";
 
   Stats aba = time_it(n, reps, [&](int k) {
-    pinocchio::aba(model, data, q[k], v[k], tau[k]);
+    pinocchio::aba(model, data, q[k], v[k], tau_d[k]);
     keep(data.ddq.data());
   });
   Stats rnea = time_it(n, reps, [&](int k) {
@@ -234,7 +276,8 @@ int main(int argc, char** argv) {
 
   // Pinocchio's analytic derivatives of ABA: ddq_dq, ddq_dv, Minv (upper
   // triangle) and ddq, at the timed states (with their forces).
-  Stats daba = time_it(n, reps, [&](int k) {
+  Stats const skipped{0, 0, 0, 0, 0, 0};
+  Stats daba = !time_derivatives ? skipped : time_it(n, reps, [&](int k) {
     pinocchio::computeABADerivatives(model, data, q[k], v[k], tau[k]);
     keep(data.ddq_dq.data());
     keep(data.ddq_dv.data());
@@ -257,7 +300,8 @@ int main(int argc, char** argv) {
         },
         2.0);
   };
-  Stats fd_forward = fd(0), fd_centered = fd(1);
+  Stats fd_forward = time_derivatives ? fd(0) : skipped;
+  Stats fd_centered = time_derivatives ? fd(1) : skipped;
 
   std::printf(
       "{\"nq\":%d,\"nv\":%d,\"pinocchio_version\":\"%s\",\"mujoco_version\":\"%s\",\"mujoco_max_armature\":%g,"
@@ -265,12 +309,14 @@ int main(int argc, char** argv) {
       "\"pinocchio_gravity\":[%g,%g,%g],\"pinocchio_aba\":%s,\"pinocchio_rnea\":%s,"
       "\"pinocchio_crba\":%s,\"mujoco_forward\":%s,\"pinocchio_aba_derivatives\":%s,"
       "\"mujoco_transition_fd_forward\":%s,\"mujoco_transition_fd_centered\":%s,"
-      "\"mujoco_integrator\":%d,\"mujoco_timestep\":%g,\"check\":%s}\n",
+      "\"mujoco_integrator\":%d,\"mujoco_timestep\":%g,\"joints\":%s,\"damping\":%s,"
+      "\"mujoco_damping\":%s,\"check\":%s}\n",
       nq, nv, PINOCCHIO_VERSION, mj_versionString(), max_armature, max_damping, m->opt.disableflags,
       m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2], model.gravity.linear()[0],
       model.gravity.linear()[1], model.gravity.linear()[2], json(aba).c_str(),
       json(rnea).c_str(), json(crba).c_str(), json(fwd).c_str(), json(daba).c_str(),
       json(fd_forward).c_str(), json(fd_centered).c_str(), m->opt.integrator, m->opt.timestep,
+      names.c_str(), json(damping.data(), nv).c_str(), json(mj_damping.data(), nv).c_str(),
       checks.c_str());
   mj_deleteData(d);
   mj_deleteModel(m);

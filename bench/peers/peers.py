@@ -52,6 +52,30 @@ def eom_json(eom, args, env):
     return json.loads(run([eom, *args], env=env))
 
 
+# Names eom reserves get a trailing `_`; other characters than ASCII letters
+# and digits become `_` (`identifier` in eom-gen/src/model/urdf.rs, as
+# bench/robots/compare.py maps them).
+RESERVED = {"t", "pi", "ground", "sin", "cos", "tan", "asin", "acos", "atan", "atan2", "sqrt", "exp",
+            "ln", "log", "abs", "sign", "min", "max", "pow", "sinh", "cosh", "tanh", "floor", "ceil"}
+
+
+def identifier(name):
+    s = "".join(c if (c.isascii() and c.isalnum()) else "_" for c in name)
+    if not s or s[0].isdigit():
+        s = "_" + s
+    if s in RESERVED:
+        s += "_"
+    return s
+
+
+def robots_dir():
+    """example-robot-data's `robots` directory inside this venv's wheel."""
+    import sysconfig
+
+    site = sysconfig.get_paths()["purelib"]
+    return os.path.join(site, "cmeel.prefix", "share", "example-robot-data", "robots")
+
+
 def ratio(a, b):
     return a / b if b > 0 else float("nan")
 
@@ -123,27 +147,70 @@ def main():
 
     env = dict(os.environ)
     table = models.models()
-    names = a.only or list(table)
+    names = a.only or list(table) + list(models.ROBOTS)
+    unknown = [x for x in names if x not in table and x not in models.ROBOTS]
+    if unknown:
+        sys.exit(f"unknown models: {', '.join(unknown)}")
     rows = []
     drows = []
     failures = []
     for name in names:
-        links = table[name]
         base = os.path.join(a.models_dir, name)
-        with open(base + ".urdf", "w") as f:
-            f.write(models.urdf(name, links))
-        with open(base + ".xml", "w") as f:
-            f.write(models.mjcf(name, links))
-        ron = os.path.join(a.root, "models", "arm7.ron") if name == "arm7" else base + ".ron"
+        robot = name in models.ROBOTS
+        if robot:
+            # example-robot-data's URDF (mimics, visuals and collisions
+            # removed) for eom and Pinocchio; the same with MuJoCo's options
+            # for MuJoCo's own URDF import.
+            with open(os.path.join(robots_dir(), models.ROBOTS[name])) as f:
+                text = models.robot_urdf(f.read())
+            mj_path = base + ".mujoco.urdf"
+            with open(base + ".urdf", "w") as f:
+                f.write(text)
+            with open(mj_path, "w") as f:
+                f.write(models.robot_mujoco(text))
+            ron = base + ".urdf"
+        else:
+            links = table[name]
+            mj_path = base + ".xml"
+            with open(base + ".urdf", "w") as f:
+                f.write(models.urdf(name, links))
+            with open(mj_path, "w") as f:
+                f.write(models.mjcf(name, links))
+            ron = os.path.join(a.root, "models", "arm7.ron") if name == "arm7" else base + ".ron"
 
         info = eom_json(a.eom, ["check", ron, "--json"], env)
+        # (Not on the robots: the peers' derivative columns leave out the
+        # damping and MuJoCo's are in its own order; see peers.cpp.)
+        deriv = not robot and info["nu"] <= a.deriv_max_dof
         peer = json.loads(
-            run([a.peers, base + ".urdf", base + ".xml", str(a.states), str(a.reps), str(a.seed), str(a.check)])
+            run([a.peers, base + ".urdf", mj_path, str(a.states), str(a.reps), str(a.seed), str(a.check),
+                 "1" if deriv else "0"])
         )
         # The peers' models are what we meant them to be.
-        assert peer["nq"] == info["nq"] == len(links) and peer["nv"] == info["nu"], (name, peer["nq"], info["nq"])
+        assert peer["nq"] == info["nq"] and peer["nv"] == info["nu"], (name, peer["nq"], info["nq"])
+        assert robot or peer["nq"] == len(links), (name, peer["nq"])
         assert peer["mujoco_gravity"] == [0, 0, -9.81] and peer["pinocchio_gravity"] == [0, 0, -9.81], peer
-        assert peer["mujoco_max_armature"] == 0 and peer["mujoco_max_damping"] == 0, peer
+        assert peer["mujoco_max_armature"] == 0, peer
+        # Damping: none on the chains; on the robots MuJoCo's per joint is the
+        # URDF's (which Pinocchio's ABA is given as tau - D v).
+        assert peer["mujoco_damping"] == peer["damping"], (name, peer["mujoco_damping"], peer["damping"])
+        assert robot or peer["mujoco_max_damping"] == 0, peer
+        # eom's coordinate of each of Pinocchio's joints (Pinocchio's and
+        # MuJoCo's order: peers.cpp maps MuJoCo's by name). The identity on
+        # the chains; eom's own order on a tree may differ.
+        if robot:
+            index = {x: k for k, x in enumerate(info["coordinate_names"])}
+            perm = [index.get(identifier(j), -1) for j in peer["joints"]]
+        else:
+            perm = list(range(peer["nv"]))
+        if sorted(perm) != list(range(peer["nv"])):
+            sys.exit(f"{name}: joints {peer['joints']} do not match eom's coordinates {info.get('coordinate_names')}")
+
+        def eom_order(v):
+            out = [0.0] * len(v)
+            for k, x in zip(perm, v):
+                out[k] = x
+            return out
 
         # Pinocchio's own URDF parser agrees with the C++ program's model.
         import numpy as np
@@ -152,8 +219,10 @@ def main():
         pmodel = pin.buildModelFromUrdf(base + ".urdf")
         pdata = pmodel.createData()
         parser_diff = 0.0
+        damping = np.array(peer["damping"])
         for s in peer["check"]:
-            ref = pin.aba(pmodel, pdata, np.array(s["q"]), np.array(s["u"]), np.array(s["tau"]))
+            tau_d = np.array(s["tau"]) - damping * np.array(s["u"])
+            ref = pin.aba(pmodel, pdata, np.array(s["q"]), np.array(s["u"]), tau_d)
             scale = max(abs(x) for x in ref)
             parser_diff = max(parser_diff, max(abs(x - y) for x, y in zip(ref, s["pinocchio"])) / scale)
         if not parser_diff <= TOLERANCE:
@@ -165,10 +234,11 @@ def main():
             join = lambda v: ",".join(repr(x) for x in v)  # noqa: E731
             e = eom_json(
                 a.eom,
-                ["eval", ron, "--q", join(s["q"]), "--u", join(s["u"]), "--tau", join(s["tau"]), "--json"],
+                ["eval", ron, "--q", join(eom_order(s["q"])), "--u", join(eom_order(s["u"])),
+                 "--tau", join(eom_order(s["tau"])), "--json"],
                 env,
             )
-            ours = e["udot"]
+            ours = [e["udot"][k] for k in perm]  # Pinocchio's order
             scale = max(abs(x) for x in ours)
             for tool in err:
                 diff = max(abs(x - y) for x, y in zip(ours, s[tool]))
@@ -178,7 +248,6 @@ def main():
                 failures.append(f"{name}: {tool} accelerations differ from eom's by {x:.2e} (relative)")
 
         # Derivatives at the first check states.
-        deriv = peer["nv"] <= a.deriv_max_dof
         derr = derivative_check(a, ron, peer, env) if deriv else {}
         for (tool, what), x in derr.items():
             limit = TOLERANCE if tool == "pinocchio" else FD_TOLERANCE

@@ -1,12 +1,24 @@
 // The URDF of the benchmark models as a Pinocchio model, built with
 // Pinocchio's API from urdfdom's parse (see the head of peers.cpp for why not
 // with libpinocchio_parsers). Shared by peers.cpp and peers_wp.cpp.
+//
+// Mapped as Pinocchio's parser maps it (as bench/robots/aba_timing.cpp does):
+// revolute or continuous about x, y or z -> JointModelRX/RY/RZ, else
+// RevoluteUnaligned; prismatic likewise; a fixed joint appends its child's
+// inertia to the parent's joint at the composed placement (massless links
+// included). Continuous joints are mapped as revolute (one angle, like eom's
+// coordinate) where Pinocchio's parser uses the unbounded (cos, sin) joint.
+// Children in urdfdom's order, which is the parser's. The URDF damping of
+// each speed (`<dynamics damping>`) is returned beside the model: Pinocchio's
+// ABA does not apply it, so the programs give it τ − D v, as eom (a joint
+// damper) and MuJoCo (`damping`) apply it.
 #pragma once
 
 #include <pinocchio/multibody.hpp>
 #include <urdf_parser/urdf_parser.h>
 
 #include <cstdio>
+#include <vector>
 
 namespace peers {
 
@@ -16,55 +28,89 @@ inline pinocchio::SE3 se3(urdf::Pose const& p) {
                         Eigen::Vector3d(p.position.x, p.position.y, p.position.z));
 }
 
-// Adds the joints below `link` (depth first, children in document order).
+inline pinocchio::Inertia inertia_of(urdf::Link const& link) {
+  auto const& in = link.inertial;
+  if (!in) return pinocchio::Inertia::Zero();
+  pinocchio::SE3 const frame = se3(in->origin);
+  Eigen::Matrix3d i;
+  i << in->ixx, in->ixy, in->ixz, in->ixy, in->iyy, in->iyz, in->ixz, in->iyz, in->izz;
+  Eigen::Matrix3d const r = frame.rotation();
+  return pinocchio::Inertia(in->mass, frame.translation(), r * i * r.transpose());
+}
+
+// Adds the joints below `link`, which sits at `at` in the frame of joint
+// `parent` (depth first, children in urdfdom's order). Damping per speed
+// goes to `damping`.
 inline bool add_subtree(pinocchio::Model& model, urdf::LinkConstSharedPtr const& link,
-                        pinocchio::JointIndex parent) {
+                        pinocchio::JointIndex parent, pinocchio::SE3 const& at,
+                        std::vector<double>& damping) {
   for (auto const& joint : link->child_joints) {
-    if (joint->type != urdf::Joint::REVOLUTE && joint->type != urdf::Joint::CONTINUOUS) {
-      std::fprintf(stderr, "joint %s: only revolute joints are mapped here\n",
-                   joint->name.c_str());
-      return false;
-    }
-    Eigen::Vector3d axis(joint->axis.x, joint->axis.y, joint->axis.z);
-    pinocchio::SE3 const placement = se3(joint->parent_to_joint_origin_transform);
-    pinocchio::JointIndex id;
-    if (axis == Eigen::Vector3d::UnitX()) {
-      id = model.addJoint(parent, pinocchio::JointModelRX(), placement, joint->name);
-    } else if (axis == Eigen::Vector3d::UnitY()) {
-      id = model.addJoint(parent, pinocchio::JointModelRY(), placement, joint->name);
-    } else if (axis == Eigen::Vector3d::UnitZ()) {
-      id = model.addJoint(parent, pinocchio::JointModelRZ(), placement, joint->name);
-    } else {
-      id = model.addJoint(parent, pinocchio::JointModelRevoluteUnaligned(axis.normalized()),
-                          placement, joint->name);
-    }
     urdf::LinkConstSharedPtr child;
     for (auto const& c : link->child_links) {
       if (c->name == joint->child_link_name) child = c;
     }
     if (!child) return false;
-    if (auto const& in = child->inertial) {
-      pinocchio::SE3 const frame = se3(in->origin);
-      Eigen::Matrix3d inertia;
-      inertia << in->ixx, in->ixy, in->ixz, in->ixy, in->iyy, in->iyz, in->ixz, in->iyz, in->izz;
-      Eigen::Matrix3d const r = frame.rotation();
-      model.appendBodyToJoint(
-          id, pinocchio::Inertia(in->mass, frame.translation(), r * inertia * r.transpose()),
-          pinocchio::SE3::Identity());
+    pinocchio::SE3 const placement = at * se3(joint->parent_to_joint_origin_transform);
+    if (joint->type == urdf::Joint::FIXED) {
+      model.appendBodyToJoint(parent, inertia_of(*child), placement);
+      if (!add_subtree(model, child, parent, placement, damping)) return false;
+      continue;
     }
-    if (!add_subtree(model, child, id)) return false;
+    Eigen::Vector3d const axis(joint->axis.x, joint->axis.y, joint->axis.z);
+    bool const revolute =
+        joint->type == urdf::Joint::REVOLUTE || joint->type == urdf::Joint::CONTINUOUS;
+    if (!revolute && joint->type != urdf::Joint::PRISMATIC) {
+      std::fprintf(stderr, "joint %s: only revolute, continuous, prismatic and fixed joints\n",
+                   joint->name.c_str());
+      return false;
+    }
+    pinocchio::JointIndex id;
+    std::string const& name = joint->name;
+    if (revolute) {
+      if (axis == Eigen::Vector3d::UnitX()) {
+        id = model.addJoint(parent, pinocchio::JointModelRX(), placement, name);
+      } else if (axis == Eigen::Vector3d::UnitY()) {
+        id = model.addJoint(parent, pinocchio::JointModelRY(), placement, name);
+      } else if (axis == Eigen::Vector3d::UnitZ()) {
+        id = model.addJoint(parent, pinocchio::JointModelRZ(), placement, name);
+      } else {
+        id = model.addJoint(parent, pinocchio::JointModelRevoluteUnaligned(axis.normalized()),
+                            placement, name);
+      }
+    } else {
+      if (axis == Eigen::Vector3d::UnitX()) {
+        id = model.addJoint(parent, pinocchio::JointModelPX(), placement, name);
+      } else if (axis == Eigen::Vector3d::UnitY()) {
+        id = model.addJoint(parent, pinocchio::JointModelPY(), placement, name);
+      } else if (axis == Eigen::Vector3d::UnitZ()) {
+        id = model.addJoint(parent, pinocchio::JointModelPZ(), placement, name);
+      } else {
+        id = model.addJoint(parent, pinocchio::JointModelPrismaticUnaligned(axis.normalized()),
+                            placement, name);
+      }
+    }
+    damping.push_back(joint->dynamics ? joint->dynamics->damping : 0.0);
+    model.appendBodyToJoint(id, inertia_of(*child), pinocchio::SE3::Identity());
+    if (!add_subtree(model, child, id, pinocchio::SE3::Identity(), damping)) return false;
   }
   return true;
 }
 
-// The whole URDF file; false (with a message) if it cannot be mapped.
-inline bool load_urdf(char const* path, pinocchio::Model& model) {
+// The whole URDF file and the damping of each speed; false (with a message)
+// if it cannot be mapped.
+inline bool load_urdf(char const* path, pinocchio::Model& model, std::vector<double>& damping) {
   urdf::ModelInterfaceSharedPtr robot = urdf::parseURDFFile(path);
-  if (!robot || !add_subtree(model, robot->getRoot(), 0)) {
+  if (!robot || !add_subtree(model, robot->getRoot(), 0, pinocchio::SE3::Identity(), damping)) {
     std::fprintf(stderr, "cannot map %s into a Pinocchio model\n", path);
     return false;
   }
   return true;
+}
+
+// The same without the damping (the benchmark chains have none).
+inline bool load_urdf(char const* path, pinocchio::Model& model) {
+  std::vector<double> damping;
+  return load_urdf(path, model, damping);
 }
 
 }  // namespace peers

@@ -283,3 +283,25 @@ fn print_loop_counts() {
         }
     }
 }
+
+#[test]
+#[ignore = "prints the forward dynamics' steps of the 50-link chain; run with --ignored --nocapture"]
+fn print_forward_dynamics_steps() {
+    let sys = chain(50, true);
+    let loops = ChainLoops::build(&sys, FunctionSet::all_requested())
+        .expect("builds")
+        .expect("a chain");
+    let Some(l) = loops.get(Function::ForwardDynamics) else {
+        return;
+    };
+    for (p, pass) in l.passes.iter().enumerate() {
+        for (k, s) in pass.steps.iter().enumerate() {
+            let bodies = pass.class.iter().filter(|&&c| c == k).count();
+            println!(
+                "| pass {p} | step {k} | bodies {bodies} | inputs {} | {} |",
+                s.inputs.len(),
+                s.op_count()
+            );
+        }
+    }
+}

@@ -2,11 +2,15 @@
 //! distinct body step becomes an associated function of the model type
 //! (`forward_dynamics_p1_s0`, through the one lowering of `lower.rs`), each
 //! pass a `for` loop over the bodies that calls the step of each body's
-//! class (a table `FORWARD_DYNAMICS_P1: [u16; N]`), with the carried value
-//! in a small array and what a pass stores per body in `[[f64; K]; N]` on
-//! the stack. The code does not grow with the number of bodies once the
-//! bodies repeat; nothing allocates, every index is below its array's
-//! length by construction.
+//! class (a table `FORWARD_DYNAMICS_P1: [u16; N]`). A step reads and
+//! writes the carried value in place (`c: &mut [f64; K]`) and returns what
+//! it stores for its body; a pass storing several values per body fills
+//! `[[f64; K]; N]` on the stack with `core::array::from_fn` in pass order
+//! (no zeroing first: slot `k` is body `k` root to tip, body `N − 1 − k`
+//! tip to root, [`store_index`]), a pass storing one value writes it into
+//! the function's output. The code does not grow with the number of bodies
+//! once the bodies repeat; nothing allocates, every index is below its
+//! array's length by construction.
 
 use super::lower::{Arg, Style, lower};
 use crate::functions::Function;
@@ -81,23 +85,33 @@ fn step_fn(fname: &str, p: usize, k: usize, l: &Loop, fma: bool) -> TokenStream 
     let args = step_args(l, pass);
     let name = format!("{fname}_p{p}_s{k}");
     let l = lower(&style, prog, &name, &args);
-    let params = l.params(&args);
+    // The carried value is read and written in place (`c`, always named:
+    // the step writes it even where its body reads none of it, the first
+    // body of a pass); the stores are the return value, so the caller writes
+    // them where they go without zeroing an output array first.
+    let params = args.iter().zip(&l.used).map(|(a, &used)| {
+        let n = if used || a.name == "c" {
+            format_ident!("{}", a.name)
+        } else {
+            format_ident!("_{}", a.name)
+        };
+        let ty = &a.ty;
+        quote!(#n: #ty)
+    });
     let body = &l.body;
     let (nc, ns) = (pass.carry, pass.store);
-    let assigns = l.outputs.iter().enumerate().map(|(j, v)| {
-        if j < nc {
-            let j = Literal::usize_unsuffixed(j);
-            quote!(co[#j] = #v;)
-        } else {
-            let j = Literal::usize_unsuffixed(j - nc);
-            quote!(so[#j] = #v;)
-        }
-    });
-    let (ncl, nsl) = (Literal::usize_unsuffixed(nc), Literal::usize_unsuffixed(ns));
-    let outs = if nc > 0 {
-        quote!(co: &mut [f64; #ncl], so: &mut [f64; #nsl])
+    let carry_out = &l.outputs[..nc];
+    let store_out = &l.outputs[nc..];
+    let write_carry = if nc > 0 {
+        quote!(*c = [#(#carry_out),*];)
     } else {
-        quote!(so: &mut [f64; #nsl])
+        TokenStream::new()
+    };
+    let (ret, value) = if ns == 1 {
+        (quote!(f64), quote!(#(#store_out)*))
+    } else {
+        let nsl = Literal::usize_unsuffixed(ns);
+        (quote!([f64; #nsl]), quote!([#(#store_out),*]))
     };
     let ident = format_ident!("{name}");
     let doc = format!(
@@ -107,9 +121,11 @@ fn step_fn(fname: &str, p: usize, k: usize, l: &Loop, fma: bool) -> TokenStream 
     quote! {
         #[doc = #doc]
         #[allow(clippy::too_many_arguments)]
-        fn #ident(#params, #outs) {
+        fn #ident(#(#params),*) -> #ret {
             #body
-            #(#assigns)*
+            let value = #value;
+            #write_carry
+            value
         }
     }
 }
@@ -121,7 +137,7 @@ fn step_args(l: &Loop, pass: &Pass) -> Vec<Arg<'static>> {
         let n = Literal::usize_unsuffixed(pass.carry);
         args.push(Arg {
             name: "c",
-            ty: quote!(&[f64; #n]),
+            ty: quote!(&mut [f64; #n]),
             carries: Box::new(|s: &Symbol| s.name.starts_with("c_")),
         });
     }
@@ -154,8 +170,28 @@ fn step_args(l: &Loop, pass: &Pass) -> Vec<Arg<'static>> {
     args
 }
 
-/// The loop of `fname` (`f`) on a chain of `n` bodies.
-fn emit_loop(fname: &str, l: &Loop, n: usize, fma: bool) -> (TokenStream, TokenStream) {
+/// Where pass `r` stored body `i`'s values: slot `i` if it went root to
+/// tip, `N − 1 − i` if tip to root (its slots are filled in pass order).
+fn store_index(l: &Loop, r: usize, i: &TokenStream, n: usize) -> TokenStream {
+    match l.passes.get(r).map(|p| p.order) {
+        Some(Order::Backward) => {
+            let last = Literal::usize_unsuffixed(n - 1);
+            quote!(#last - #i)
+        }
+        _ => i.clone(),
+    }
+}
+
+/// The loop of `fname` (`f`) on a chain of `n` bodies. A pass that stores
+/// one value per body (the last of forward dynamics, inverse dynamics and
+/// the bias) writes it straight into `out[i]`.
+fn emit_loop(
+    fname: &str,
+    l: &Loop,
+    n: usize,
+    fma: bool,
+    out: &TokenStream,
+) -> (TokenStream, TokenStream) {
     let nl = Literal::usize_unsuffixed(n);
     let mut items = TokenStream::new();
     let mut body = TokenStream::new();
@@ -182,11 +218,12 @@ fn emit_loop(fname: &str, l: &Loop, n: usize, fma: bool) -> (TokenStream, TokenS
         let i = idx(pass.order);
         let mut call_args = Vec::new();
         if pass.carry > 0 {
-            call_args.push(quote!(&c));
+            call_args.push(quote!(&mut c));
         }
         for &r in &pass.reads {
             let st = format_ident!("st{r}");
-            call_args.push(quote!(&#st[#i]));
+            let at = store_index(l, r, &i, n);
+            call_args.push(quote!(&#st[#at]));
         }
         if pass.own.0 {
             call_args.push(quote!(q[#i]));
@@ -200,31 +237,12 @@ fn emit_loop(fname: &str, l: &Loop, n: usize, fma: bool) -> (TokenStream, TokenS
             None => {}
         }
         let st = format_ident!("st{p}");
-        let (store_out, so_decl, so_after) = match pass.order {
-            Order::Ancestors => (
-                quote!(&mut so),
-                {
-                    let ns = Literal::usize_unsuffixed(pass.store);
-                    quote!(let mut so = [0.0f64; #ns];)
-                },
-                quote! {
-                    m[i][j - 1] = so[0];
-                    m[j - 1][i] = so[0];
-                },
-            ),
-            _ => (quote!(&mut #st[i]), TokenStream::new(), TokenStream::new()),
-        };
-        if pass.carry > 0 {
-            call_args.push(quote!(&mut co));
-        }
-        call_args.push(store_out);
         let call_of = |k: usize| {
             let f = format_ident!("{fname}_p{p}_s{k}");
             quote!(Self::#f(#(#call_args),*))
         };
-        let dispatch = if pass.steps.len() == 1 {
-            let c = call_of(0);
-            quote!(#c;)
+        let value = if pass.steps.len() == 1 {
+            call_of(0)
         } else {
             let last = pass.steps.len() - 1;
             let arms = (0..last).map(|k| {
@@ -240,12 +258,18 @@ fn emit_loop(fname: &str, l: &Loop, n: usize, fma: bool) -> (TokenStream, TokenS
                 }
             }
         };
-        let ncl = Literal::usize_unsuffixed(pass.carry);
-        let (co_decl, co_after) = if pass.carry > 0 {
-            (quote!(let mut co = [0.0f64; #ncl];), quote!(c = co;))
-        } else {
-            (TokenStream::new(), TokenStream::new())
+        let single = pass.store == 1;
+        let dispatch = match pass.order {
+            Order::Ancestors => quote! {
+                let mij = #value;
+                m[i][j - 1] = mij;
+                m[j - 1][i] = mij;
+            },
+            _ if single => quote!(#out[i] = #value;),
+            // Filled in pass order by `core::array::from_fn` (below).
+            _ => value.clone(),
         };
+        let ncl = Literal::usize_unsuffixed(pass.carry);
         let init = pass.init.iter().map(|&x| super::float(x));
         let c_decl = if pass.carry > 0 && pass.order != Order::Ancestors {
             if pass.init.iter().all(|&x| x == 0.0) {
@@ -264,33 +288,47 @@ fn emit_loop(fname: &str, l: &Loop, n: usize, fma: bool) -> (TokenStream, TokenS
                 } else {
                     quote!((0..#nl).rev())
                 };
-                quote! {
-                    let mut #st = [[0.0f64; #nsl]; #nl];
-                    #c_decl
-                    for i in #range {
-                        #co_decl
-                        #dispatch
-                        #co_after
+                if single {
+                    quote! {
+                        #c_decl
+                        for i in #range {
+                            #dispatch
+                        }
+                    }
+                } else {
+                    // The stores of every body, written once each in pass
+                    // order (no zeroing first): slot `k` holds body `k`
+                    // going root to tip, body `N − 1 − k` going tip to root
+                    // (`store_index`).
+                    let body_of = if pass.order == Order::Forward {
+                        quote!(k)
+                    } else {
+                        quote!(#nl - 1 - k)
+                    };
+                    quote! {
+                        #c_decl
+                        let #st: [[f64; #nsl]; #nl] = ::core::array::from_fn(|k| {
+                            let i = #body_of;
+                            #dispatch
+                        });
                     }
                 }
             }
             Order::Ancestors => {
                 let seed = format_ident!("st{}", pass.seed);
+                let at = store_index(l, pass.seed, &quote!(i), n);
                 let seeds = (0..pass.carry).map(|k| {
                     let k = Literal::usize_unsuffixed(k);
-                    quote!(#seed[i][#k])
+                    quote!(s[#k])
                 });
                 let diag = Literal::usize_unsuffixed(pass.carry);
                 quote! {
                     for i in 0..#nl {
+                        let s = &#seed[#at];
                         let mut c: [f64; #ncl] = [#(#seeds),*];
-                        m[i][i] = #seed[i][#diag];
+                        m[i][i] = s[#diag];
                         for j in (1..=i).rev() {
-                            #co_decl
-                            #so_decl
                             #dispatch
-                            #co_after
-                            #so_after
                         }
                     }
                 }
@@ -322,7 +360,13 @@ pub(crate) fn looped(
         let n = loops.n;
         let nl = Literal::usize_unsuffixed(n);
         let fname = f.name();
-        let (body, items) = emit_loop(fname, l, n, fma);
+        let target = match f {
+            Function::ForwardDynamics => quote!(udot),
+            Function::Bias => quote!(b),
+            Function::InverseDynamics => quote!(tau),
+            _ => quote!(m),
+        };
+        let (body, items) = emit_loop(fname, l, n, fma, &target);
         let doc = format!(
             " {} as loops over the {n} bodies of the chain ({} operations per call in {} body steps of {} operations; straight-line: {ops}; see `eom_gen::mech::looped`).",
             match f {
@@ -342,9 +386,6 @@ pub(crate) fn looped(
                 #[allow(clippy::needless_range_loop)]
                 fn forward_dynamics(&self, _t: f64, q: &[f64; #nl], u: &[f64; #nl], tau: &[f64; #nl], udot: &mut [f64; #nl]) {
                     #body
-                    for (o, s) in udot.iter_mut().zip(&st2) {
-                        *o = s[0];
-                    }
                 }
             },
             Function::MassMatrix => quote! {
@@ -359,9 +400,6 @@ pub(crate) fn looped(
                 #[allow(clippy::needless_range_loop)]
                 fn bias(&self, _t: f64, q: &[f64; #nl], u: &[f64; #nl], b: &mut [f64; #nl]) {
                     #body
-                    for (o, s) in b.iter_mut().zip(&st1) {
-                        *o = s[0];
-                    }
                 }
             },
             _ => quote! {
@@ -369,9 +407,6 @@ pub(crate) fn looped(
                 #[allow(clippy::needless_range_loop)]
                 fn inverse_dynamics(&self, _t: f64, q: &[f64; #nl], u: &[f64; #nl], udot: &[f64; #nl], tau: &mut [f64; #nl]) {
                     #body
-                    for (o, s) in tau.iter_mut().zip(&st1) {
-                        *o = s[0];
-                    }
                 }
             },
         };
