@@ -134,14 +134,19 @@ def main():
             f.write(models.urdf(name, links))
         with open(base + ".xml", "w") as f:
             f.write(models.mjcf(name, links))
-        ron = os.path.join(a.root, "models", "arm7.ron") if name == "arm7" else base + ".ron"
+        if name == "arm7":
+            ron = os.path.join(a.root, "models", "arm7.ron")
+        elif isinstance(links, models.Robot):
+            ron = base + ".urdf"  # eom reads the same URDF as Pinocchio
+        else:
+            ron = base + ".ron"
 
         info = eom_json(a.eom, ["check", ron, "--json"], env)
         peer = json.loads(
             run([a.peers, base + ".urdf", base + ".xml", str(a.states), str(a.reps), str(a.seed), str(a.check)])
         )
         # The peers' models are what we meant them to be.
-        assert peer["nq"] == info["nq"] == len(links) and peer["nv"] == info["nu"], (name, peer["nq"], info["nq"])
+        assert peer["nq"] == info["nq"] == models.dof(links) and peer["nv"] == info["nu"], (name, peer["nq"], info["nq"])
         assert peer["mujoco_gravity"] == [0, 0, -9.81] and peer["pinocchio_gravity"] == [0, 0, -9.81], peer
         assert peer["mujoco_max_armature"] == 0 and peer["mujoco_max_damping"] == 0, peer
 
