@@ -14,7 +14,8 @@ specification as eom's model:
   ``bench/robots/compare.py`` does: Pinocchio's parser ignores it by default;
   eom would add a holonomic constraint) and the ``<dynamics>`` tags (joint
   damping: eom applies it, Pinocchio's ABA does not), ``<visual>`` and
-  ``<collision>`` removed: the rigid-body dynamics of its inertial data, the
+  ``<collision>`` removed, and its joint limits moved out of reach (±1e10, as
+  the chains'; eom makes a URDF limit a unilateral contact): the rigid-body dynamics of its inertial data, the
   same in all three. Its MJCF is written from that URDF (``mjcf_from_urdf``).
 * ``planar_chain{n}`` / ``spatial_chain{n}``:
   ``eom_gen::model::builder::n_link_chain(n, spatial)``: m = 1 kg,
@@ -104,6 +105,10 @@ def peers_urdf(robot):
         text = src.read()
     for tag in ("mimic", "dynamics", "visual", "collision"):
         text = re.sub(rf"<{tag}\b[^>]*/>|<{tag}\b[^>]*>.*?</{tag}>", "", text, flags=re.S)
+    # Joint limits far out of reach, as the chains' (eom makes a URDF limit a
+    # unilateral contact, which `linearize` refuses to linearise when closed).
+    text = re.sub(r'(<limit\b[^>]*?)\blower="[^"]*"', r'\1lower="-1e10"', text)
+    text = re.sub(r'(<limit\b[^>]*?)\bupper="[^"]*"', r'\1upper="1e10"', text)
     return text
 
 
