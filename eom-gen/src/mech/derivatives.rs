@@ -235,23 +235,23 @@ fn minus_solve<'cx>(
 
 /// The same program with `∂ID/∂q` (tangent space) and `∂ID/∂u` of the
 /// Newton–Euler forces given, `gq` and `gu` (`NU × NU` by rows, at
-/// `u̇ = FD`, by [`crate::mech::Evaluator::rnea_derivatives`]), and `loads`
-/// the rest of inverse dynamics (`−Jᵀ f_ext − Q`, force elements and
-/// inputs, no `u̇`), differentiated here as expressions.
+/// `u̇ = FD`, by [`crate::mech::Evaluator::rnea_derivatives`]), `minv` the
+/// inverse mass matrix (`∂FD/∂τ`, or from the `LᵀDL` factors of `M`,
+/// [`crate::mech::ltdl::ltdl_inverse`]), and `loads` the rest of inverse
+/// dynamics (`−Jᵀ f_ext − Q`, force elements and inputs, no `u̇`),
+/// differentiated here as expressions.
 #[allow(clippy::too_many_arguments)]
 pub fn forward_dynamics_derivatives_recursive<'cx>(
     cx: &'cx Context,
-    udot: &[Expr<'cx>],
+    minv: &[Vec<Expr<'cx>>],
     (gq, gu): (Vec<Vec<Expr<'cx>>>, Vec<Vec<Expr<'cx>>>),
     loads: &[Expr<'cx>],
     qdot: &[Expr<'cx>],
     q: &[Expr<'cx>],
     u: &[Expr<'cx>],
-    tau: &[Expr<'cx>],
     inputs: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Program {
-    let minv = cx.jacobian(udot, tau);
     let add = |a: Vec<Vec<Expr<'cx>>>, b: Vec<Vec<Expr<'cx>>>| -> Vec<Vec<Expr<'cx>>> {
         a.into_iter()
             .zip(b)
@@ -271,10 +271,10 @@ pub fn forward_dynamics_derivatives_recursive<'cx>(
     lower_blocks(
         cx,
         [
-            ("dq", minus_solve(&minv, gq, u.len())),
-            ("du", minus_solve(&minv, gu, u.len())),
-            ("dtau", minv.clone()),
-            ("dinput", minus_solve(&minv, gi, ni)),
+            ("dq", minus_solve(minv, gq, u.len())),
+            ("du", minus_solve(minv, gu, u.len())),
+            ("dtau", minv.to_vec()),
+            ("dinput", minus_solve(minv, gi, ni)),
         ],
         opts,
     )

@@ -12,7 +12,7 @@ use super::env::{Env, NumericEnv};
 use super::error::MechError;
 use super::kinematics::{Evaluator, Kinematics, State};
 use super::looped::{ChainLoops, LOOP_MIN_OPS, LOOPED};
-use super::ltdl::{ltdl, ltdl_solve};
+use super::ltdl::{ltdl, ltdl_inverse, ltdl_solve};
 use super::spatial::Force;
 use super::tree::TreeModel;
 use crate::diag::{Diagnostic, Span};
@@ -453,7 +453,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             (DerivativeForm::ForwardDynamics, direct),
             (DerivativeForm::InverseDynamics, via_rnea),
         ];
-        if let Some((gq, gu)) = ev.rnea_derivatives(&k, &udot) {
+        if let Some(rd) = ev.rnea_derivatives(&k, &udot) {
             let loads: Vec<Expr> = ev
                 .load_torques(&k, &fext)
                 .iter()
@@ -462,39 +462,52 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
                 .collect();
             // `∂ID/∂u` by the recursion, or differentiated (Newton–Euler
             // without the loads; free of `u̇`, as `ID` is affine in `u̇`
-            // with `M(q)`): whichever counts fewer.
+            // with `M(q)`): whichever counts fewer, with `M⁻¹ = ∂FD/∂τ`.
             let no_loads = vec![Force::zero(); fext.len()];
             let (inertial, _) = ev.rnea(&k, &ud, &no_loads);
             let gu_differentiated = cx.jacobian(&inertial, &u);
-            let by_recursion = forward_dynamics_derivatives_recursive(
-                &cx,
-                &udot,
-                (gq.clone(), gu),
-                &loads,
-                &qdot,
-                &q,
-                &u,
-                &tau,
-                &inputs,
-                opts,
-            );
-            let mixed = forward_dynamics_derivatives_recursive(
-                &cx,
-                &udot,
-                (gq, gu_differentiated),
-                &loads,
-                &qdot,
-                &q,
-                &u,
-                &tau,
-                &inputs,
-                opts,
-            );
-            let p = if mixed.op_count().total() < by_recursion.op_count().total() {
-                mixed
-            } else {
-                by_recursion
+            let minv_fd = cx.jacobian(&udot, &tau);
+            let lower_with = |minv: &[Vec<Expr>], gq: Vec<Vec<Expr>>, gu: Vec<Vec<Expr>>| {
+                forward_dynamics_derivatives_recursive(
+                    &cx,
+                    minv,
+                    (gq, gu),
+                    &loads,
+                    &qdot,
+                    &q,
+                    &u,
+                    &inputs,
+                    opts,
+                )
             };
+            let by_recursion = lower_with(&minv_fd, rd.dq.clone(), rd.du.clone());
+            let mixed = lower_with(&minv_fd, rd.dq.clone(), gu_differentiated.clone());
+            let (mut p, gu) = if mixed.op_count().total() < by_recursion.op_count().total() {
+                (mixed, gu_differentiated)
+            } else {
+                (by_recursion, rd.du.clone())
+            };
+            // Then `M⁻¹` from the `LᵀDL` factors of the recursion's own `M`
+            // (`S_i · Yc S_j`, world axes) instead of `∂FD/∂τ`; and also
+            // `u̇` itself through the same factors, `u̇ = M⁻¹ (τ − b)` with
+            // `b` Newton–Euler at `u̇ = 0` (Featherstone §6.5), in place of
+            // the forward dynamics kept above: each if it counts fewer.
+            let lambda = ev.speed_parents();
+            let mut m = rd.m.clone();
+            ltdl(&mut m, &lambda);
+            let minv_ltdl = ltdl_inverse(&m, &lambda);
+            let factored = lower_with(&minv_ltdl, rd.dq.clone(), gu.clone());
+            if factored.op_count().total() < p.op_count().total() {
+                p = factored;
+            }
+            let rhs: Vec<Expr> = tau.iter().zip(rnea_bias()).map(|(&t, b)| t - b).collect();
+            let udot_ltdl = ltdl_solve(&m, &lambda, rhs);
+            if let Some(at_ltdl) = ev.rnea_derivatives(&k, &udot_ltdl) {
+                let all_ltdl = lower_with(&minv_ltdl, at_ltdl.dq, gu);
+                if all_ltdl.op_count().total() < p.op_count().total() {
+                    p = all_ltdl;
+                }
+            }
             programs.push((DerivativeForm::Recursive, p));
         }
         let candidates: Vec<(DerivativeForm, OpCount)> =

@@ -33,7 +33,10 @@
 //! P_i = Yc_i S_i,   Q_i = Bc_iᵀ S_i = Ẏc_i S_i − S_i ×* Hc_i
 //! ```
 //!
-//! (zero otherwise). The per-pair work is two 6-vector dot products.
+//! (zero otherwise). The per-pair work is two 6-vector dot products. The
+//! same `P_i` give the mass matrix, `M_ij = S_j·P_i` for `i` in the subtree
+//! of `j` (Featherstone §6.2), one more dot product per pair: `M⁻¹` can then
+//! come from its `LᵀDL` factors ([`super::ltdl::ltdl_inverse`]).
 //!
 //! The recursion covers joints whose subspace is constant in body axes
 //! (revolute, prismatic, cylindrical, screw, spherical, free, fixed) on
@@ -53,8 +56,19 @@ use super::tree::Coords;
 use crate::sym::{Mat3, Scalar, Vec3};
 use std::ops::{Add, Sub};
 
-/// `∂τ/∂q` (tangent space) and `∂τ/∂u` of Newton–Euler, `nu × nu` by rows.
-pub type RneaDerivatives<S> = (Vec<Vec<S>>, Vec<Vec<S>>);
+/// `∂τ/∂q` (tangent space) and `∂τ/∂u` of Newton–Euler, and the mass
+/// matrix `M = ∂τ/∂u̇` from the same composites, each `nu × nu` by rows.
+pub struct RneaDerivatives<S> {
+    /// `∂τ/∂q` in the tangent space.
+    pub dq: Vec<Vec<S>>,
+    /// `∂τ/∂u`.
+    pub du: Vec<Vec<S>>,
+    /// `M`, `M_ij = S_i · Yc_k S_j` with `k` the deeper of the two joints'
+    /// bodies (zero where neither is an ancestor of the other): the
+    /// composite-rigid-body mass matrix (Featherstone §6.2) in world axes,
+    /// from the recursion's `P_k = Yc_k S_k`, exactly symmetric.
+    pub m: Vec<Vec<S>>,
+}
 
 /// A symmetric 3×3 matrix from its upper triangle `f(r, c)`, `r ≤ c`
 /// (each entry built once).
@@ -210,6 +224,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         let nu = self.tree.nu;
         let mut dq = vec![vec![S::zero(); nu]; nu];
         let mut du = vec![vec![S::zero(); nu]; nu];
+        let mut m = vec![vec![S::zero(); nu]; nu];
         // Per column: the pass over the rows.
         for &(j, col, s) in &cols {
             let parent = bodies[j].parent;
@@ -224,13 +239,16 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 if self.descends(i, j) {
                     dq[row][col] = psi.dot(p) + w.dot(q);
                     du[row][col] = beta.dot(p) + s.dot(q);
+                    let mij = s.dot(p);
+                    m[row][col] = mij;
+                    m[col][row] = mij;
                 } else if self.descends(j, i) {
                     dq[row][col] = si.dot(dq_j);
                     du[row][col] = si.dot(du_j);
                 }
             }
         }
-        Some((dq, du))
+        Some(RneaDerivatives { dq, du, m })
     }
 
     /// Is body `i` body `j` or in its subtree?
