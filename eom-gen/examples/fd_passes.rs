@@ -31,6 +31,9 @@ fn main() {
             use eom_gen::functions::{Function, FunctionSet};
             match eom_gen::mech::formulate(&sys, FunctionSet::default()) {
                 Ok(f) => {
+                    for (form, c) in &f.fd_candidates {
+                        println!("  forward dynamics as {form:?}: {c}");
+                    }
                     if let Some(p) = f.program(Function::ForwardDynamics) {
                         println!("{p}");
                     }
