@@ -1,6 +1,8 @@
 //! Forward dynamics' operations pass by pass (articulated bodies, rigid
 //! trees): `cargo run --release -p eom-gen --example fd_passes -- MODEL…`;
-//! with `--program` first, the lowered forward-dynamics program too.
+//! with `--program` first, both forms' counts and the lowered
+//! forward-dynamics program too. `chain:N:planar` and `chain:N:spatial`
+//! name the builder's chains (`n_link_chain`).
 
 use eom_gen::mech::passes::aba_pass_counts;
 use eom_gen::model::{Source, check};
@@ -12,12 +14,20 @@ fn main() {
         args.remove(0);
     }
     for path in args {
-        let text = match std::fs::read_to_string(&path) {
-            Ok(t) => t,
-            Err(e) => {
-                eprintln!("{path}: {e}");
-                std::process::exit(2);
-            }
+        // `chain:N:planar` or `chain:N:spatial`: the builder's chains.
+        let chain = path.strip_prefix("chain:").and_then(|rest| {
+            let (n, kind) = rest.split_once(':')?;
+            Some((n.parse::<usize>().ok()?, kind == "spatial"))
+        });
+        let text = match chain {
+            Some((n, spatial)) => eom_gen::model::builder::n_link_chain(n, spatial).to_ron(),
+            None => match std::fs::read_to_string(&path) {
+                Ok(t) => t,
+                Err(e) => {
+                    eprintln!("{path}: {e}");
+                    std::process::exit(2);
+                }
+            },
         };
         let sys = match check(&Source::new(&path, text)) {
             Ok(c) => c.system,
