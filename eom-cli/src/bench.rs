@@ -29,6 +29,9 @@ pub struct PerCallOptions {
     pub seed: u64,
     /// Build with `-C target-cpu=native` (a separate target directory).
     pub native: bool,
+    /// Emit `mul_add` for `a·b + c` (only with `native` on a machine with
+    /// FMA: see `crate::compiled::native_fma`).
+    pub fma: bool,
     /// Also generate and time `forward_dynamics_derivatives`.
     pub derivatives: bool,
     /// Also emit the batched functions and time `forward_dynamics_lanes`
@@ -47,6 +50,7 @@ impl Default for PerCallOptions {
             reps: 31,
             seed: 1,
             native: false,
+            fma: false,
             derivatives: false,
             batch: false,
         }
@@ -348,7 +352,7 @@ pub fn op_totals(g: &Generated) -> [Option<usize>; 3] {
 /// "inverse_dynamics_ns"` (with `--derivatives` also
 /// `"forward_dynamics_derivatives_ns"`, in `ops` and `spread` too)`,
 /// "ops": {…}, "fd_form", "spread", "states",
-/// "reps", "seed", "target_cpu_native"}`; with `--batch` also
+/// "reps", "seed", "target_cpu_native", "fma"}`; with `--batch` also
 /// `"batched_forward_dynamics_ns"` (the median ns per state of the fastest
 /// pack width), `"batched_width"` (that width) and
 /// `"batched_forward_dynamics_ns_by_width"`.
@@ -372,6 +376,7 @@ pub fn json(g: &Generated, o: &PerCallOptions, r: &PerCall) -> serde_json::Value
         "reps": o.reps,
         "seed": o.seed,
         "target_cpu_native": o.native,
+        "fma": o.fma,
     });
     if let Some(t) = &r.derivatives {
         let ops = g
@@ -404,7 +409,11 @@ pub fn table(g: &Generated, o: &PerCallOptions, r: &PerCall) -> String {
         sys.name,
         o.reps,
         o.states,
-        if o.native { " (target-cpu=native)" } else { "" }
+        match (o.native, o.fma) {
+            (true, true) => " (target-cpu=native, mul_add)",
+            (true, false) => " (target-cpu=native)",
+            _ => "",
+        }
     );
     s += &format!(
         "  {:<28} {:>10} {:>10} {:>10} {:>10} {:>10} {:>8} {:>7}\n",

@@ -180,6 +180,25 @@ pub fn executable(name: &str, source: &str, nq: usize, nu: usize) -> Result<Path
     })
 }
 
+/// Does the machine running this have fused multiply–add? Builds with
+/// `-C target-cpu=native` then compile `f64::mul_add` to one instruction,
+/// so the generated source may use it (`EmitOptions::fma`); without it
+/// `mul_add` would be a libm call.
+pub(crate) fn native_fma() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("fma")
+    }
+    #[cfg(target_arch = "aarch64")]
+    {
+        true
+    }
+    #[cfg(not(any(target_arch = "x86_64", target_arch = "aarch64")))]
+    {
+        false
+    }
+}
+
 /// A binary crate around a model's generated source, built in the cache.
 pub(crate) struct CachedCrate<'a> {
     /// First part of the binary's name (`eom-eval`, `eom-bench`).

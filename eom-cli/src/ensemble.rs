@@ -186,6 +186,7 @@ pub fn run(
         .map_err(|e| Error::Refused(e.to_string()))?;
     let emit = eom_gen::EmitOptions {
         lanes: true,
+        fma: s.native && crate::compiled::native_fma(),
         ..Default::default()
     };
     let sys = &checked.system;

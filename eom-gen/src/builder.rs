@@ -21,6 +21,7 @@ pub struct Builder {
     models: Vec<String>,
     out_dir: Option<PathBuf>,
     fma: bool,
+    fma_if_target_has_it: bool,
     lanes: bool,
 }
 
@@ -75,6 +76,16 @@ impl Builder {
         self
     }
 
+    /// Emits `f64::mul_add` for `a·b + c` when the crate is built for a
+    /// target with FMA (`-C target-cpu=native` on a machine that has it,
+    /// or `-C target-feature=+fma`), read from cargo's
+    /// `CARGO_CFG_TARGET_FEATURE`; elsewhere `mul_add` would be a libm call,
+    /// so the code stays unfused.
+    pub fn fma_if_target_has_it(mut self) -> Self {
+        self.fma_if_target_has_it = true;
+        self
+    }
+
     /// Also emits every function over lanes, `W` states per call (see
     /// [`crate::EmitOptions::lanes`] and `eom_sim::batch`).
     pub fn lanes(mut self, on: bool) -> Self {
@@ -90,11 +101,12 @@ impl Builder {
             Some(d) => d,
             None => PathBuf::from(std::env::var_os("OUT_DIR").ok_or(BuildError::NoOutDir)?),
         };
+        let fma = self.fma || (self.fma_if_target_has_it && target_has_fma());
         let mut written = Vec::new();
         for path in &self.models {
             println!("cargo:rerun-if-changed={path}");
             let opts = crate::EmitOptions {
-                fma: self.fma,
+                fma,
                 lanes: self.lanes,
                 ..Default::default()
             };
@@ -109,4 +121,10 @@ impl Builder {
         }
         Ok(written)
     }
+}
+
+/// Is the crate being built for a target with FMA? (cargo's
+/// `CARGO_CFG_TARGET_FEATURE`, set for build scripts.)
+fn target_has_fma() -> bool {
+    std::env::var("CARGO_CFG_TARGET_FEATURE").is_ok_and(|f| f.split(',').any(|x| x == "fma"))
 }

@@ -272,6 +272,41 @@ proptest! {
         }
     }
 
+    /// Factoring common multipliers out of sums (`a·x + a·y → a·(x + y)`)
+    /// keeps every value and never adds an operation: each expression
+    /// plus its multiples by a random factor `k`, summed in pairs, so
+    /// shared factors are there to find.
+    #[test]
+    fn factoring_sums_preserves_value(srcs in vec(expr(false), 2..5), k in expr(false), p in point()) {
+        let mut a = Arena::new();
+        let mut ids: Vec<_> = srcs.iter().map(|s| a.parse(s).unwrap()).collect();
+        let f = a.parse(&k).unwrap();
+        let scaled: Vec<_> = ids.iter().map(|&e| a.mul(&[f, e])).collect();
+        for w in scaled.windows(2) {
+            let s = a.add(&[w[0], w[1]]);
+            ids.push(s);
+        }
+        let vals = values(&a, &p);
+        let want = a.eval_many(&ids, &vals);
+        prop_assume!(want.iter().all(|w| w.is_finite() && w.abs() < 1e6));
+        let names: Vec<String> = (0..ids.len()).map(|i| format!("out{i}")).collect();
+        let outs: Vec<(&str, _)> = names.iter().map(|n| n.as_str()).zip(ids.iter().copied()).collect();
+        let mut p0 = a.lower(&outs, LowerOptions { optimize: false, ..LowerOptions::default() });
+        p0.optimize();
+        let mut factored = p0.clone();
+        factored.factor_sums();
+        factored.optimize();
+        let got = factored.eval_arena_values(&a, &vals);
+        for i in 0..ids.len() {
+            prop_assert!(close(got[i], want[i], TOL), "got {} want {}\n{factored}", got[i], want[i]);
+        }
+        // Through `lower` it is kept only where it lowers the count.
+        let full = a.lower(&outs, LowerOptions::default());
+        let mut reference = p0.clone();
+        reference.share_reciprocals();
+        prop_assert!(full.op_count().total() <= reference.op_count().total());
+    }
+
     /// ∂e/∂v against a central difference with step 1e-5 (error ~1e-10
     /// truncation + 1e-11 rounding); tolerance 1e-5 relative.
     #[test]

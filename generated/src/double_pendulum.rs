@@ -87,20 +87,20 @@ impl ::eom_sim::Model for DoublePendulum {
         let x25 = 1.0 + x6;
         let x26 = x3 * x24;
         let x27 = x2 * x21;
-        let x28 = x1 * x2;
-        let x29 = x3 * x28;
-        let x30 = 9.8 * x29;
+        let x28 = 1.0 / x25;
+        let x29 = x1 * x2;
+        let x30 = x3 * x29;
         let x31 = x0 * x25;
-        let x32 = 9.8 * x31;
-        let x33 = x27 + x30;
-        let x34 = tau[0] + x33;
-        let x35 = x34 - x32;
+        let x32 = x30 - x31;
+        let x33 = 9.8 * x32;
+        let x34 = tau[0] + x27;
+        let x35 = x33 + x34;
         let x36 = x35 - tau[1];
         let x37 = x36 - x26;
-        let x38 = x37 / x25;
+        let x38 = x28 * x37;
         let x39 = x7 + x38;
         let x40 = x3 * x39;
-        let x41 = 9.8 * x28;
+        let x41 = 9.8 * x29;
         let x42 = tau[1] + x12;
         let x43 = x20 + x42;
         let x44 = x43 - x41;
@@ -231,22 +231,19 @@ impl ::eom_sim::Model for DoublePendulum {
         let x8 = u[0] * u[0];
         let x9 = u[0] + x3;
         let x10 = u[1] + x9;
-        let x11 = 0.5 * x8;
-        let x12 = u[0] * x10;
-        let x13 = x2 * x12;
-        let x14 = 0.5 * x13;
-        let x15 = x7 * x8;
-        let x16 = 0.5 * x15;
-        let x17 = x4 * x10;
+        let x11 = u[0] * x10;
+        let x12 = x2 * x11;
+        let x13 = x7 * x8;
+        let x14 = x4 * x10;
+        let x15 = x12 + x13;
+        let x16 = x8 + x15;
+        let x17 = x14 + x16;
         let x18 = 0.5 * x17;
-        let x19 = x11 + x18;
-        let x20 = x14 + x19;
-        let x21 = x16 + x20;
-        let x22 = 19.6 * x0;
-        let x23 = 9.8 * x6;
-        let x24 = x22 + x23;
-        let x25 = -x24;
-        [x21, x25]
+        let x19 = 19.6 * x0;
+        let x20 = 9.8 * x6;
+        let x21 = x19 + x20;
+        let x22 = -x21;
+        [x18, x22]
     }
     fn momentum(&self, _t: f64, q: &[f64; 2], u: &[f64; 2]) -> [f64; 6] {
         let (x0, x1) = f64::sin_cos(q[0]);
@@ -571,20 +568,20 @@ impl DoublePendulum {
         let x25 = ::eom_sim::Lanes::<W>::splat(1.0) + x6;
         let x26 = x3 * x24;
         let x27 = x2 * x21;
-        let x28 = x1 * x2;
-        let x29 = x3 * x28;
-        let x30 = ::eom_sim::Lanes::<W>::splat(9.8) * x29;
+        let x28 = ::eom_sim::Lanes::<W>::splat(1.0) / x25;
+        let x29 = x1 * x2;
+        let x30 = x3 * x29;
         let x31 = x0 * x25;
-        let x32 = ::eom_sim::Lanes::<W>::splat(9.8) * x31;
-        let x33 = x27 + x30;
-        let x34 = tau[0] + x33;
-        let x35 = x34 - x32;
+        let x32 = x30 - x31;
+        let x33 = ::eom_sim::Lanes::<W>::splat(9.8) * x32;
+        let x34 = tau[0] + x27;
+        let x35 = x33 + x34;
         let x36 = x35 - tau[1];
         let x37 = x36 - x26;
-        let x38 = x37 / x25;
+        let x38 = x28 * x37;
         let x39 = x7 + x38;
         let x40 = x3 * x39;
-        let x41 = ::eom_sim::Lanes::<W>::splat(9.8) * x28;
+        let x41 = ::eom_sim::Lanes::<W>::splat(9.8) * x29;
         let x42 = tau[1] + x12;
         let x43 = x20 + x42;
         let x44 = x43 - x41;
@@ -718,7 +715,7 @@ impl DoublePendulum {
         out[0] = x49;
         out[1] = x32;
     }
-    /// `energy` of `W` states at once, one per lane (25 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    /// `energy` of `W` states at once, one per lane (22 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
     pub fn energy_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -736,23 +733,20 @@ impl DoublePendulum {
         let x8 = u[0] * u[0];
         let x9 = u[0] + x3;
         let x10 = u[1] + x9;
-        let x11 = ::eom_sim::Lanes::<W>::splat(0.5) * x8;
-        let x12 = u[0] * x10;
-        let x13 = x2 * x12;
-        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x13;
-        let x15 = x7 * x8;
-        let x16 = ::eom_sim::Lanes::<W>::splat(0.5) * x15;
-        let x17 = x4 * x10;
+        let x11 = u[0] * x10;
+        let x12 = x2 * x11;
+        let x13 = x7 * x8;
+        let x14 = x4 * x10;
+        let x15 = x12 + x13;
+        let x16 = x8 + x15;
+        let x17 = x14 + x16;
         let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
-        let x19 = x11 + x18;
-        let x20 = x14 + x19;
-        let x21 = x16 + x20;
-        let x22 = ::eom_sim::Lanes::<W>::splat(19.6) * x0;
-        let x23 = ::eom_sim::Lanes::<W>::splat(9.8) * x6;
-        let x24 = x22 + x23;
-        let x25 = -x24;
-        out[0] = x21;
-        out[1] = x25;
+        let x19 = ::eom_sim::Lanes::<W>::splat(19.6) * x0;
+        let x20 = ::eom_sim::Lanes::<W>::splat(9.8) * x6;
+        let x21 = x19 + x20;
+        let x22 = -x21;
+        out[0] = x18;
+        out[1] = x22;
     }
     /// `momentum` of `W` states at once, one per lane (28 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
     pub fn momentum_lanes<const W: usize>(

@@ -107,45 +107,37 @@ impl ::eom_sim::Model for FreeBody {
         let x44 = q[4] * u[3];
         let x45 = q[6] * u[5];
         let x46 = q[5] * u[4];
-        let x47 = 0.5 * x46;
-        let x48 = 0.5 * x44;
-        let x49 = 0.5 * x45;
-        let x50 = x47 + x48;
-        let x51 = x49 + x50;
-        let x52 = -x51;
-        let x53 = q[6] * u[4];
-        let x54 = q[3] * u[3];
-        let x55 = 0.5 * x54;
-        let x56 = q[5] * u[5];
-        let x57 = 0.5 * x56;
-        let x58 = 0.5 * x53;
-        let x59 = x55 + x57;
-        let x60 = x59 - x58;
-        let x61 = q[3] * u[4];
+        let x47 = x45 + x46;
+        let x48 = x44 + x47;
+        let x49 = 0.5 * x48;
+        let x50 = -x49;
+        let x51 = q[6] * u[4];
+        let x52 = q[3] * u[3];
+        let x53 = q[5] * u[5];
+        let x54 = x52 + x53;
+        let x55 = x54 - x51;
+        let x56 = 0.5 * x55;
+        let x57 = q[3] * u[4];
+        let x58 = q[6] * u[3];
+        let x59 = q[4] * u[5];
+        let x60 = x57 + x58;
+        let x61 = x60 - x59;
         let x62 = 0.5 * x61;
-        let x63 = q[6] * u[3];
-        let x64 = 0.5 * x63;
-        let x65 = q[4] * u[5];
-        let x66 = 0.5 * x65;
-        let x67 = x62 + x64;
-        let x68 = x67 - x66;
-        let x69 = q[3] * u[5];
-        let x70 = 0.5 * x69;
-        let x71 = q[4] * u[4];
-        let x72 = 0.5 * x71;
-        let x73 = q[5] * u[3];
-        let x74 = 0.5 * x73;
-        let x75 = x70 + x72;
-        let x76 = x75 - x74;
+        let x63 = q[3] * u[5];
+        let x64 = q[4] * u[4];
+        let x65 = q[5] * u[3];
+        let x66 = x63 + x64;
+        let x67 = x66 - x65;
+        let x68 = 0.5 * x67;
         qdot[0] = x33;
         qdot[1] = x38;
         qdot[2] = x43;
-        qdot[3] = x52;
-        qdot[4] = x60;
-        qdot[5] = x68;
-        qdot[6] = x76;
+        qdot[3] = x50;
+        qdot[4] = x56;
+        qdot[5] = x62;
+        qdot[6] = x68;
     }
-    /// Forward dynamics by the articulated-body algorithm (21 operations): `u̇ = M⁻¹ (τ − b)`.
+    /// Forward dynamics by the articulated-body algorithm (20 operations): `u̇ = M⁻¹ (τ − b)`.
     fn forward_dynamics(
         &self,
         _t: f64,
@@ -172,15 +164,14 @@ impl ::eom_sim::Model for FreeBody {
         let x15 = 0.5 * tau[4];
         let x16 = x1 + x15;
         let x17 = u[3] * u[4];
-        let x18 = 0.3333333333333333 * tau[5];
-        let x19 = 0.3333333333333333 * x17;
-        let x20 = x18 - x19;
+        let x18 = tau[5] - x17;
+        let x19 = 0.3333333333333333 * x18;
         udot[0] = x9;
         udot[1] = x11;
         udot[2] = x13;
         udot[3] = x14;
         udot[4] = x16;
-        udot[5] = x20;
+        udot[5] = x19;
     }
     fn mass_matrix(&self, _t: f64, _q: &[f64; 7], m: &mut [[f64; 6]; 6]) {
         m[0][0] = 1.0;
@@ -258,24 +249,23 @@ impl ::eom_sim::Model for FreeBody {
         let x6 = u[1] * u[3];
         let x7 = u[0] * u[4];
         let x8 = u[3] * u[5];
-        let x9 = 2.0 * udot[4];
-        let x10 = 3.0 * udot[5];
-        let x11 = udot[3] + x0;
-        let x12 = 2.0 * x8;
-        let x13 = x9 - x12;
-        let x14 = x1 + x10;
-        let x15 = udot[0] + x2;
-        let x16 = x15 - x3;
-        let x17 = udot[1] + x4;
-        let x18 = x17 - x5;
-        let x19 = udot[2] + x6;
-        let x20 = x19 - x7;
-        tau[0] = x16;
-        tau[1] = x18;
-        tau[2] = x20;
-        tau[3] = x11;
-        tau[4] = x13;
-        tau[5] = x14;
+        let x9 = 3.0 * udot[5];
+        let x10 = udot[3] + x0;
+        let x11 = udot[4] - x8;
+        let x12 = 2.0 * x11;
+        let x13 = x1 + x9;
+        let x14 = udot[0] + x2;
+        let x15 = x14 - x3;
+        let x16 = udot[1] + x4;
+        let x17 = x16 - x5;
+        let x18 = udot[2] + x6;
+        let x19 = x18 - x7;
+        tau[0] = x15;
+        tau[1] = x17;
+        tau[2] = x19;
+        tau[3] = x10;
+        tau[4] = x12;
+        tau[5] = x13;
     }
     fn energy(&self, _t: f64, _q: &[f64; 7], u: &[f64; 6]) -> [f64; 2] {
         let x0 = u[3] * u[3];
@@ -284,17 +274,14 @@ impl ::eom_sim::Model for FreeBody {
         let x3 = u[0] * u[0];
         let x4 = u[1] * u[1];
         let x5 = u[2] * u[2];
-        let x6 = 0.5 * x0;
-        let x7 = 1.5 * x2;
-        let x8 = 0.5 * x5;
-        let x9 = 0.5 * x3;
-        let x10 = 0.5 * x4;
-        let x11 = x1 + x9;
-        let x12 = x6 + x11;
-        let x13 = x10 + x12;
-        let x14 = x8 + x13;
-        let x15 = x7 + x14;
-        [x15, 0.0]
+        let x6 = 1.5 * x2;
+        let x7 = x4 + x5;
+        let x8 = x0 + x7;
+        let x9 = x3 + x8;
+        let x10 = 0.5 * x9;
+        let x11 = x1 + x6;
+        let x12 = x10 + x11;
+        [x12, 0.0]
     }
     fn momentum(&self, _t: f64, q: &[f64; 7], u: &[f64; 6]) -> [f64; 6] {
         let x0 = q[4] * q[4];
@@ -553,7 +540,7 @@ impl ::eom_sim::ConstrainedModel for FreeBody {
 /// The generated functions over lanes: `W` states per call (see
 /// `eom_sim::batch`).
 impl FreeBody {
-    /// `qdot` of `W` states at once, one per lane (77 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (7 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    /// `qdot` of `W` states at once, one per lane (69 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (7 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
     pub fn qdot_lanes<const W: usize>(
         _m: &[Self; W],
         q: &[::eom_sim::Lanes<W>; 7],
@@ -607,45 +594,37 @@ impl FreeBody {
         let x44 = q[4] * u[3];
         let x45 = q[6] * u[5];
         let x46 = q[5] * u[4];
-        let x47 = ::eom_sim::Lanes::<W>::splat(0.5) * x46;
-        let x48 = ::eom_sim::Lanes::<W>::splat(0.5) * x44;
-        let x49 = ::eom_sim::Lanes::<W>::splat(0.5) * x45;
-        let x50 = x47 + x48;
-        let x51 = x49 + x50;
-        let x52 = -x51;
-        let x53 = q[6] * u[4];
-        let x54 = q[3] * u[3];
-        let x55 = ::eom_sim::Lanes::<W>::splat(0.5) * x54;
-        let x56 = q[5] * u[5];
-        let x57 = ::eom_sim::Lanes::<W>::splat(0.5) * x56;
-        let x58 = ::eom_sim::Lanes::<W>::splat(0.5) * x53;
-        let x59 = x55 + x57;
-        let x60 = x59 - x58;
-        let x61 = q[3] * u[4];
+        let x47 = x45 + x46;
+        let x48 = x44 + x47;
+        let x49 = ::eom_sim::Lanes::<W>::splat(0.5) * x48;
+        let x50 = -x49;
+        let x51 = q[6] * u[4];
+        let x52 = q[3] * u[3];
+        let x53 = q[5] * u[5];
+        let x54 = x52 + x53;
+        let x55 = x54 - x51;
+        let x56 = ::eom_sim::Lanes::<W>::splat(0.5) * x55;
+        let x57 = q[3] * u[4];
+        let x58 = q[6] * u[3];
+        let x59 = q[4] * u[5];
+        let x60 = x57 + x58;
+        let x61 = x60 - x59;
         let x62 = ::eom_sim::Lanes::<W>::splat(0.5) * x61;
-        let x63 = q[6] * u[3];
-        let x64 = ::eom_sim::Lanes::<W>::splat(0.5) * x63;
-        let x65 = q[4] * u[5];
-        let x66 = ::eom_sim::Lanes::<W>::splat(0.5) * x65;
-        let x67 = x62 + x64;
-        let x68 = x67 - x66;
-        let x69 = q[3] * u[5];
-        let x70 = ::eom_sim::Lanes::<W>::splat(0.5) * x69;
-        let x71 = q[4] * u[4];
-        let x72 = ::eom_sim::Lanes::<W>::splat(0.5) * x71;
-        let x73 = q[5] * u[3];
-        let x74 = ::eom_sim::Lanes::<W>::splat(0.5) * x73;
-        let x75 = x70 + x72;
-        let x76 = x75 - x74;
+        let x63 = q[3] * u[5];
+        let x64 = q[4] * u[4];
+        let x65 = q[5] * u[3];
+        let x66 = x63 + x64;
+        let x67 = x66 - x65;
+        let x68 = ::eom_sim::Lanes::<W>::splat(0.5) * x67;
         out[0] = x33;
         out[1] = x38;
         out[2] = x43;
-        out[3] = x52;
-        out[4] = x60;
-        out[5] = x68;
-        out[6] = x76;
+        out[3] = x50;
+        out[4] = x56;
+        out[5] = x62;
+        out[6] = x68;
     }
-    /// `forward_dynamics` of `W` states at once, one per lane (21 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    /// `forward_dynamics` of `W` states at once, one per lane (20 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
     pub fn forward_dynamics_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -672,15 +651,14 @@ impl FreeBody {
         let x15 = ::eom_sim::Lanes::<W>::splat(0.5) * tau[4];
         let x16 = x1 + x15;
         let x17 = u[3] * u[4];
-        let x18 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * tau[5];
-        let x19 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * x17;
-        let x20 = x18 - x19;
+        let x18 = tau[5] - x17;
+        let x19 = ::eom_sim::Lanes::<W>::splat(0.3333333333333333) * x18;
         out[0] = x9;
         out[1] = x11;
         out[2] = x13;
         out[3] = x14;
         out[4] = x16;
-        out[5] = x20;
+        out[5] = x19;
     }
     /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (36 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
     pub fn mass_matrix_lanes<const W: usize>(
@@ -754,7 +732,7 @@ impl FreeBody {
         out[4] = x12;
         out[5] = x1;
     }
-    /// `inverse_dynamics` of `W` states at once, one per lane (21 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    /// `inverse_dynamics` of `W` states at once, one per lane (20 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
     pub fn inverse_dynamics_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -772,26 +750,25 @@ impl FreeBody {
         let x6 = u[1] * u[3];
         let x7 = u[0] * u[4];
         let x8 = u[3] * u[5];
-        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * udot[4];
-        let x10 = ::eom_sim::Lanes::<W>::splat(3.0) * udot[5];
-        let x11 = udot[3] + x0;
-        let x12 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
-        let x13 = x9 - x12;
-        let x14 = x1 + x10;
-        let x15 = udot[0] + x2;
-        let x16 = x15 - x3;
-        let x17 = udot[1] + x4;
-        let x18 = x17 - x5;
-        let x19 = udot[2] + x6;
-        let x20 = x19 - x7;
-        out[0] = x16;
-        out[1] = x18;
-        out[2] = x20;
-        out[3] = x11;
-        out[4] = x13;
-        out[5] = x14;
+        let x9 = ::eom_sim::Lanes::<W>::splat(3.0) * udot[5];
+        let x10 = udot[3] + x0;
+        let x11 = udot[4] - x8;
+        let x12 = ::eom_sim::Lanes::<W>::splat(2.0) * x11;
+        let x13 = x1 + x9;
+        let x14 = udot[0] + x2;
+        let x15 = x14 - x3;
+        let x16 = udot[1] + x4;
+        let x17 = x16 - x5;
+        let x18 = udot[2] + x6;
+        let x19 = x18 - x7;
+        out[0] = x15;
+        out[1] = x17;
+        out[2] = x19;
+        out[3] = x10;
+        out[4] = x12;
+        out[5] = x13;
     }
-    /// `energy` of `W` states at once, one per lane (16 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    /// `energy` of `W` states at once, one per lane (13 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
     pub fn energy_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -805,17 +782,14 @@ impl FreeBody {
         let x3 = u[0] * u[0];
         let x4 = u[1] * u[1];
         let x5 = u[2] * u[2];
-        let x6 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
-        let x7 = ::eom_sim::Lanes::<W>::splat(1.5) * x2;
-        let x8 = ::eom_sim::Lanes::<W>::splat(0.5) * x5;
-        let x9 = ::eom_sim::Lanes::<W>::splat(0.5) * x3;
-        let x10 = ::eom_sim::Lanes::<W>::splat(0.5) * x4;
-        let x11 = x1 + x9;
-        let x12 = x6 + x11;
-        let x13 = x10 + x12;
-        let x14 = x8 + x13;
-        let x15 = x7 + x14;
-        out[0] = x15;
+        let x6 = ::eom_sim::Lanes::<W>::splat(1.5) * x2;
+        let x7 = x4 + x5;
+        let x8 = x0 + x7;
+        let x9 = x3 + x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.5) * x9;
+        let x11 = x1 + x6;
+        let x12 = x10 + x11;
+        out[0] = x12;
         out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
     }
     /// `momentum` of `W` states at once, one per lane (77 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.

@@ -52,42 +52,34 @@ impl ::eom_sim::Model for HeavyTop {
         let x0 = q[1] * u[0];
         let x1 = q[3] * u[2];
         let x2 = q[2] * u[1];
-        let x3 = 0.5 * x0;
-        let x4 = 0.5 * x1;
-        let x5 = 0.5 * x2;
-        let x6 = x3 + x4;
-        let x7 = x5 + x6;
-        let x8 = -x7;
-        let x9 = q[0] * u[0];
-        let x10 = 0.5 * x9;
-        let x11 = q[3] * u[1];
-        let x12 = q[2] * u[2];
-        let x13 = 0.5 * x12;
-        let x14 = 0.5 * x11;
-        let x15 = x10 + x13;
-        let x16 = x15 - x14;
-        let x17 = q[3] * u[0];
+        let x3 = x0 + x2;
+        let x4 = x1 + x3;
+        let x5 = 0.5 * x4;
+        let x6 = -x5;
+        let x7 = q[0] * u[0];
+        let x8 = q[3] * u[1];
+        let x9 = q[2] * u[2];
+        let x10 = x7 + x9;
+        let x11 = x10 - x8;
+        let x12 = 0.5 * x11;
+        let x13 = q[3] * u[0];
+        let x14 = q[1] * u[2];
+        let x15 = q[0] * u[1];
+        let x16 = x13 + x15;
+        let x17 = x16 - x14;
         let x18 = 0.5 * x17;
-        let x19 = q[1] * u[2];
-        let x20 = q[0] * u[1];
-        let x21 = 0.5 * x20;
-        let x22 = 0.5 * x19;
-        let x23 = x18 + x21;
-        let x24 = x23 - x22;
-        let x25 = q[0] * u[2];
-        let x26 = 0.5 * x25;
-        let x27 = q[1] * u[1];
-        let x28 = 0.5 * x27;
-        let x29 = q[2] * u[0];
-        let x30 = 0.5 * x29;
-        let x31 = x26 + x28;
-        let x32 = x31 - x30;
-        qdot[0] = x8;
-        qdot[1] = x16;
-        qdot[2] = x24;
-        qdot[3] = x32;
+        let x19 = q[0] * u[2];
+        let x20 = q[1] * u[1];
+        let x21 = q[2] * u[0];
+        let x22 = x19 + x20;
+        let x23 = x22 - x21;
+        let x24 = 0.5 * x23;
+        qdot[0] = x6;
+        qdot[1] = x12;
+        qdot[2] = x18;
+        qdot[3] = x24;
     }
-    /// Forward dynamics by the articulated-body algorithm (22 operations): `u̇ = M⁻¹ (τ − b)`.
+    /// Forward dynamics by the articulated-body algorithm (20 operations): `u̇ = M⁻¹ (τ − b)`.
     fn forward_dynamics(
         &self,
         _t: f64,
@@ -104,23 +96,21 @@ impl ::eom_sim::Model for HeavyTop {
         let x5 = u[0] * u[1];
         let x6 = 0.9692307692307692 * x5;
         let x7 = 0.06564102564102564 * tau[2];
-        let x8 = 19.318153846153848 * x0;
-        let x9 = 19.318153846153848 * x1;
-        let x10 = 0.9692307692307692 * x3;
-        let x11 = x2 + x9;
-        let x12 = x8 + x11;
-        let x13 = x12 - 9.659076923076924;
-        let x14 = x13 - x10;
-        let x15 = q[1] * q[3];
-        let x16 = 19.318153846153848 * x15;
-        let x17 = q[0] * q[2];
-        let x18 = 19.318153846153848 * x17;
-        let x19 = x6 + x16;
-        let x20 = x7 + x19;
-        let x21 = x20 - x18;
-        udot[0] = x14;
+        let x8 = 0.9692307692307692 * x3;
+        let x9 = x0 + x1;
+        let x10 = 19.318153846153848 * x9;
+        let x11 = x2 + x10;
+        let x12 = x11 - 9.659076923076924;
+        let x13 = x12 - x8;
+        let x14 = q[1] * q[3];
+        let x15 = q[0] * q[2];
+        let x16 = x14 - x15;
+        let x17 = 19.318153846153848 * x16;
+        let x18 = x6 + x7;
+        let x19 = x17 + x18;
+        udot[0] = x13;
         udot[1] = x4;
-        udot[2] = x21;
+        udot[2] = x19;
     }
     fn mass_matrix(&self, _t: f64, _q: &[f64; 4], m: &mut [[f64; 3]; 3]) {
         m[0][0] = 15.234375;
@@ -138,22 +128,20 @@ impl ::eom_sim::Model for HeavyTop {
         let x1 = q[2] * q[2];
         let x2 = q[1] * q[3];
         let x3 = q[0] * q[2];
-        let x4 = 294.3 * x3;
-        let x5 = u[1] * u[2];
-        let x6 = 14.765625 * x5;
-        let x7 = u[0] * u[1];
-        let x8 = 294.3 * x0;
-        let x9 = 294.3 * x1;
-        let x10 = 147.15 + x6;
-        let x11 = x10 - x8;
-        let x12 = x11 - x9;
-        let x13 = 14.765625 * x7;
-        let x14 = 294.3 * x2;
-        let x15 = x4 - x13;
-        let x16 = x15 - x14;
-        b[0] = x12;
+        let x4 = u[1] * u[2];
+        let x5 = 14.765625 * x4;
+        let x6 = u[0] * u[1];
+        let x7 = 147.15 + x5;
+        let x8 = x0 + x1;
+        let x9 = 294.3 * x8;
+        let x10 = x7 - x9;
+        let x11 = 14.765625 * x6;
+        let x12 = x3 - x2;
+        let x13 = 294.3 * x12;
+        let x14 = x13 - x11;
+        b[0] = x10;
         b[1] = 0.0;
-        b[2] = x16;
+        b[2] = x14;
     }
     fn inverse_dynamics(
         &self,
@@ -167,43 +155,39 @@ impl ::eom_sim::Model for HeavyTop {
         let x1 = q[2] * q[2];
         let x2 = q[1] * q[3];
         let x3 = q[0] * q[2];
-        let x4 = 294.3 * x3;
-        let x5 = u[1] * u[2];
-        let x6 = 14.765625 * x5;
-        let x7 = u[0] * u[1];
-        let x8 = 15.234375 * udot[0];
-        let x9 = 0.46875 * udot[1];
-        let x10 = 15.234375 * udot[2];
-        let x11 = 294.3 * x0;
-        let x12 = 294.3 * x1;
-        let x13 = 147.15 + x8;
-        let x14 = x6 + x13;
-        let x15 = x14 - x11;
-        let x16 = x15 - x12;
-        let x17 = 14.765625 * x7;
-        let x18 = 294.3 * x2;
-        let x19 = x4 + x10;
-        let x20 = x19 - x17;
-        let x21 = x20 - x18;
-        tau[0] = x16;
-        tau[1] = x9;
-        tau[2] = x21;
+        let x4 = u[1] * u[2];
+        let x5 = 14.765625 * x4;
+        let x6 = u[0] * u[1];
+        let x7 = 15.234375 * udot[0];
+        let x8 = 0.46875 * udot[1];
+        let x9 = 15.234375 * udot[2];
+        let x10 = x0 + x1;
+        let x11 = 294.3 * x10;
+        let x12 = 147.15 + x5;
+        let x13 = x7 + x12;
+        let x14 = x13 - x11;
+        let x15 = 14.765625 * x6;
+        let x16 = x3 - x2;
+        let x17 = 294.3 * x16;
+        let x18 = x9 + x17;
+        let x19 = x18 - x15;
+        tau[0] = x14;
+        tau[1] = x8;
+        tau[2] = x19;
     }
     fn energy(&self, _t: f64, q: &[f64; 4], u: &[f64; 3]) -> [f64; 2] {
         let x0 = q[2] * q[3];
-        let x1 = 294.3 * x0;
-        let x2 = q[0] * q[1];
+        let x1 = q[0] * q[1];
+        let x2 = x0 + x1;
         let x3 = 294.3 * x2;
-        let x4 = x1 + x3;
-        let x5 = u[2] * u[2];
-        let x6 = u[0] * u[0];
-        let x7 = u[1] * u[1];
-        let x8 = 7.6171875 * x5;
-        let x9 = 7.6171875 * x6;
-        let x10 = 0.234375 * x7;
-        let x11 = x8 + x10;
-        let x12 = x9 + x11;
-        [x12, x4]
+        let x4 = u[2] * u[2];
+        let x5 = u[0] * u[0];
+        let x6 = u[1] * u[1];
+        let x7 = 0.234375 * x6;
+        let x8 = x4 + x5;
+        let x9 = 7.6171875 * x8;
+        let x10 = x7 + x9;
+        [x10, x3]
     }
     fn momentum(&self, _t: f64, q: &[f64; 4], u: &[f64; 3]) -> [f64; 6] {
         let x0 = q[1] * q[1];
@@ -237,44 +221,38 @@ impl ::eom_sim::Model for HeavyTop {
         let x28 = x19 - x4;
         let x29 = u[2] * x6;
         let x30 = u[0] * x16;
-        let x31 = 15.0 * x30;
-        let x32 = 15.0 * x29;
-        let x33 = x31 - x32;
-        let x34 = u[2] * x17;
-        let x35 = u[0] * x25;
+        let x31 = x30 - x29;
+        let x32 = 15.0 * x31;
+        let x33 = u[2] * x17;
+        let x34 = u[0] * x25;
+        let x35 = x34 - x33;
         let x36 = 15.0 * x35;
-        let x37 = 15.0 * x34;
-        let x38 = x36 - x37;
-        let x39 = u[2] * x26;
-        let x40 = u[0] * x28;
-        let x41 = 15.0 * x40;
-        let x42 = 15.0 * x39;
-        let x43 = x41 - x42;
-        let x44 = u[0] * x6;
-        let x45 = 15.234375 * x44;
-        let x46 = u[1] * x11;
-        let x47 = 0.46875 * x46;
-        let x48 = u[2] * x16;
-        let x49 = 15.234375 * x48;
-        let x50 = x45 + x47;
-        let x51 = x49 + x50;
-        let x52 = u[0] * x17;
+        let x37 = u[2] * x26;
+        let x38 = u[0] * x28;
+        let x39 = x38 - x37;
+        let x40 = 15.0 * x39;
+        let x41 = u[0] * x6;
+        let x42 = u[1] * x11;
+        let x43 = 0.46875 * x42;
+        let x44 = u[2] * x16;
+        let x45 = x41 + x44;
+        let x46 = 15.234375 * x45;
+        let x47 = x43 + x46;
+        let x48 = u[0] * x17;
+        let x49 = u[1] * x20;
+        let x50 = 0.46875 * x49;
+        let x51 = u[2] * x25;
+        let x52 = x48 + x51;
         let x53 = 15.234375 * x52;
-        let x54 = u[1] * x20;
-        let x55 = 0.46875 * x54;
-        let x56 = u[2] * x25;
-        let x57 = 15.234375 * x56;
-        let x58 = x55 + x57;
-        let x59 = x53 + x58;
-        let x60 = u[0] * x26;
-        let x61 = 15.234375 * x60;
-        let x62 = u[1] * x27;
-        let x63 = 0.46875 * x62;
-        let x64 = u[2] * x28;
-        let x65 = 15.234375 * x64;
-        let x66 = x63 + x65;
-        let x67 = x61 + x66;
-        [x51, x59, x67, x33, x38, x43]
+        let x54 = x50 + x53;
+        let x55 = u[0] * x26;
+        let x56 = u[1] * x27;
+        let x57 = 0.46875 * x56;
+        let x58 = u[2] * x28;
+        let x59 = x55 + x58;
+        let x60 = 15.234375 * x59;
+        let x61 = x57 + x60;
+        [x47, x54, x61, x32, x36, x40]
     }
     fn outputs(
         &self,
@@ -288,21 +266,18 @@ impl ::eom_sim::Model for HeavyTop {
         let x1 = q[3] * q[3];
         let x2 = q[0] * q[3];
         let x3 = q[1] * q[2];
-        let x4 = 2.0 * x3;
-        let x5 = 2.0 * x2;
-        let x6 = x4 - x5;
-        let x7 = 2.0 * x0;
-        let x8 = 2.0 * x1;
-        let x9 = 1.0 - x7;
-        let x10 = x9 - x8;
-        let x11 = q[2] * q[3];
+        let x4 = x3 - x2;
+        let x5 = 2.0 * x4;
+        let x6 = x0 + x1;
+        let x7 = 2.0 * x6;
+        let x8 = 1.0 - x7;
+        let x9 = q[2] * q[3];
+        let x10 = q[0] * q[1];
+        let x11 = x9 + x10;
         let x12 = 2.0 * x11;
-        let x13 = q[0] * q[1];
-        let x14 = 2.0 * x13;
-        let x15 = x12 + x14;
-        out[0] = x6;
-        out[1] = x10;
-        out[2] = x15;
+        out[0] = x5;
+        out[1] = x8;
+        out[2] = x12;
     }
     const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
         ::eom_sim::FunctionInfo {
@@ -510,7 +485,7 @@ impl ::eom_sim::ConstrainedModel for HeavyTop {
 }
 /// Generated functions beyond the model trait's.
 impl HeavyTop {
-    /// Partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed (27 operations); `top_tip_x`, `top_tip_y`, `top_tip_z`.
+    /// Partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed (25 operations); `top_tip_x`, `top_tip_y`, `top_tip_z`.
     pub fn marker_jacobians(&self, _t: f64, q: &[f64; 4], out: &mut [f64; 9]) {
         let x0 = q[1] * q[1];
         let x1 = q[2] * q[2];
@@ -525,35 +500,33 @@ impl HeavyTop {
         let x10 = x7 + x9;
         let x11 = q[0] * q[1];
         let x12 = q[2] * q[3];
-        let x13 = 2.0 * x12;
-        let x14 = 2.0 * x11;
-        let x15 = x13 - x14;
-        let x16 = 2.0 * x0;
-        let x17 = 1.0 - x16;
-        let x18 = x17 - x4;
-        let x19 = x3 + x4;
-        let x20 = x19 - 1.0;
-        let x21 = q[1] * q[2];
+        let x13 = x12 - x11;
+        let x14 = 2.0 * x13;
+        let x15 = 2.0 * x0;
+        let x16 = 1.0 - x15;
+        let x17 = x16 - x4;
+        let x18 = x3 + x4;
+        let x19 = x18 - 1.0;
+        let x20 = q[1] * q[2];
+        let x21 = x5 + x20;
         let x22 = 2.0 * x21;
-        let x23 = 2.0 * x5;
-        let x24 = x22 + x23;
-        let x25 = -x24;
-        let x26 = x7 - x9;
+        let x23 = -x22;
+        let x24 = x7 - x9;
         out[0] = x10;
         out[1] = 0.0;
-        out[2] = x20;
-        out[3] = x15;
+        out[2] = x19;
+        out[3] = x14;
         out[4] = 0.0;
-        out[5] = x25;
-        out[6] = x18;
+        out[5] = x23;
+        out[6] = x17;
         out[7] = 0.0;
-        out[8] = x26;
+        out[8] = x24;
     }
 }
 /// The generated functions over lanes: `W` states per call (see
 /// `eom_sim::batch`).
 impl HeavyTop {
-    /// `qdot` of `W` states at once, one per lane (33 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (4 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
+    /// `qdot` of `W` states at once, one per lane (25 operations per state): `q̇ = N(q) u`. Arguments `q`, `u` as `qdot`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (4 entries per lane) laid out as `Model::evaluate("qdot")`'s result.
     pub fn qdot_lanes<const W: usize>(
         _m: &[Self; W],
         q: &[::eom_sim::Lanes<W>; 4],
@@ -563,42 +536,34 @@ impl HeavyTop {
         let x0 = q[1] * u[0];
         let x1 = q[3] * u[2];
         let x2 = q[2] * u[1];
-        let x3 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
-        let x4 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
-        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * x2;
-        let x6 = x3 + x4;
-        let x7 = x5 + x6;
-        let x8 = -x7;
-        let x9 = q[0] * u[0];
-        let x10 = ::eom_sim::Lanes::<W>::splat(0.5) * x9;
-        let x11 = q[3] * u[1];
-        let x12 = q[2] * u[2];
-        let x13 = ::eom_sim::Lanes::<W>::splat(0.5) * x12;
-        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x11;
-        let x15 = x10 + x13;
-        let x16 = x15 - x14;
-        let x17 = q[3] * u[0];
+        let x3 = x0 + x2;
+        let x4 = x1 + x3;
+        let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * x4;
+        let x6 = -x5;
+        let x7 = q[0] * u[0];
+        let x8 = q[3] * u[1];
+        let x9 = q[2] * u[2];
+        let x10 = x7 + x9;
+        let x11 = x10 - x8;
+        let x12 = ::eom_sim::Lanes::<W>::splat(0.5) * x11;
+        let x13 = q[3] * u[0];
+        let x14 = q[1] * u[2];
+        let x15 = q[0] * u[1];
+        let x16 = x13 + x15;
+        let x17 = x16 - x14;
         let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
-        let x19 = q[1] * u[2];
-        let x20 = q[0] * u[1];
-        let x21 = ::eom_sim::Lanes::<W>::splat(0.5) * x20;
-        let x22 = ::eom_sim::Lanes::<W>::splat(0.5) * x19;
-        let x23 = x18 + x21;
-        let x24 = x23 - x22;
-        let x25 = q[0] * u[2];
-        let x26 = ::eom_sim::Lanes::<W>::splat(0.5) * x25;
-        let x27 = q[1] * u[1];
-        let x28 = ::eom_sim::Lanes::<W>::splat(0.5) * x27;
-        let x29 = q[2] * u[0];
-        let x30 = ::eom_sim::Lanes::<W>::splat(0.5) * x29;
-        let x31 = x26 + x28;
-        let x32 = x31 - x30;
-        out[0] = x8;
-        out[1] = x16;
-        out[2] = x24;
-        out[3] = x32;
+        let x19 = q[0] * u[2];
+        let x20 = q[1] * u[1];
+        let x21 = q[2] * u[0];
+        let x22 = x19 + x20;
+        let x23 = x22 - x21;
+        let x24 = ::eom_sim::Lanes::<W>::splat(0.5) * x23;
+        out[0] = x6;
+        out[1] = x12;
+        out[2] = x18;
+        out[3] = x24;
     }
-    /// `forward_dynamics` of `W` states at once, one per lane (22 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    /// `forward_dynamics` of `W` states at once, one per lane (20 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
     pub fn forward_dynamics_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -615,23 +580,21 @@ impl HeavyTop {
         let x5 = u[0] * u[1];
         let x6 = ::eom_sim::Lanes::<W>::splat(0.9692307692307692) * x5;
         let x7 = ::eom_sim::Lanes::<W>::splat(0.06564102564102564) * tau[2];
-        let x8 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x0;
-        let x9 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x1;
-        let x10 = ::eom_sim::Lanes::<W>::splat(0.9692307692307692) * x3;
-        let x11 = x2 + x9;
-        let x12 = x8 + x11;
-        let x13 = x12 - ::eom_sim::Lanes::<W>::splat(9.659076923076924);
-        let x14 = x13 - x10;
-        let x15 = q[1] * q[3];
-        let x16 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x15;
-        let x17 = q[0] * q[2];
-        let x18 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x17;
-        let x19 = x6 + x16;
-        let x20 = x7 + x19;
-        let x21 = x20 - x18;
-        out[0] = x14;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.9692307692307692) * x3;
+        let x9 = x0 + x1;
+        let x10 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x9;
+        let x11 = x2 + x10;
+        let x12 = x11 - ::eom_sim::Lanes::<W>::splat(9.659076923076924);
+        let x13 = x12 - x8;
+        let x14 = q[1] * q[3];
+        let x15 = q[0] * q[2];
+        let x16 = x14 - x15;
+        let x17 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x16;
+        let x18 = x6 + x7;
+        let x19 = x17 + x18;
+        out[0] = x13;
         out[1] = x4;
-        out[2] = x21;
+        out[2] = x19;
     }
     /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
     pub fn mass_matrix_lanes<const W: usize>(
@@ -650,7 +613,7 @@ impl HeavyTop {
         out[5] = out[7];
         out[8] = ::eom_sim::Lanes::<W>::splat(15.234375);
     }
-    /// `bias` of `W` states at once, one per lane (17 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("bias")`'s result.
+    /// `bias` of `W` states at once, one per lane (15 operations per state): bias `b(q, u, t)` of `M u̇ = τ − b`. Arguments `t`, `q`, `u` as `bias`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("bias")`'s result.
     pub fn bias_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -662,24 +625,22 @@ impl HeavyTop {
         let x1 = q[2] * q[2];
         let x2 = q[1] * q[3];
         let x3 = q[0] * q[2];
-        let x4 = ::eom_sim::Lanes::<W>::splat(294.3) * x3;
-        let x5 = u[1] * u[2];
-        let x6 = ::eom_sim::Lanes::<W>::splat(14.765625) * x5;
-        let x7 = u[0] * u[1];
-        let x8 = ::eom_sim::Lanes::<W>::splat(294.3) * x0;
-        let x9 = ::eom_sim::Lanes::<W>::splat(294.3) * x1;
-        let x10 = ::eom_sim::Lanes::<W>::splat(147.15) + x6;
-        let x11 = x10 - x8;
-        let x12 = x11 - x9;
-        let x13 = ::eom_sim::Lanes::<W>::splat(14.765625) * x7;
-        let x14 = ::eom_sim::Lanes::<W>::splat(294.3) * x2;
-        let x15 = x4 - x13;
-        let x16 = x15 - x14;
-        out[0] = x12;
+        let x4 = u[1] * u[2];
+        let x5 = ::eom_sim::Lanes::<W>::splat(14.765625) * x4;
+        let x6 = u[0] * u[1];
+        let x7 = ::eom_sim::Lanes::<W>::splat(147.15) + x5;
+        let x8 = x0 + x1;
+        let x9 = ::eom_sim::Lanes::<W>::splat(294.3) * x8;
+        let x10 = x7 - x9;
+        let x11 = ::eom_sim::Lanes::<W>::splat(14.765625) * x6;
+        let x12 = x3 - x2;
+        let x13 = ::eom_sim::Lanes::<W>::splat(294.3) * x12;
+        let x14 = x13 - x11;
+        out[0] = x10;
         out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
-        out[2] = x16;
+        out[2] = x14;
     }
-    /// `inverse_dynamics` of `W` states at once, one per lane (22 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    /// `inverse_dynamics` of `W` states at once, one per lane (20 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
     pub fn inverse_dynamics_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -692,29 +653,27 @@ impl HeavyTop {
         let x1 = q[2] * q[2];
         let x2 = q[1] * q[3];
         let x3 = q[0] * q[2];
-        let x4 = ::eom_sim::Lanes::<W>::splat(294.3) * x3;
-        let x5 = u[1] * u[2];
-        let x6 = ::eom_sim::Lanes::<W>::splat(14.765625) * x5;
-        let x7 = u[0] * u[1];
-        let x8 = ::eom_sim::Lanes::<W>::splat(15.234375) * udot[0];
-        let x9 = ::eom_sim::Lanes::<W>::splat(0.46875) * udot[1];
-        let x10 = ::eom_sim::Lanes::<W>::splat(15.234375) * udot[2];
-        let x11 = ::eom_sim::Lanes::<W>::splat(294.3) * x0;
-        let x12 = ::eom_sim::Lanes::<W>::splat(294.3) * x1;
-        let x13 = ::eom_sim::Lanes::<W>::splat(147.15) + x8;
-        let x14 = x6 + x13;
-        let x15 = x14 - x11;
-        let x16 = x15 - x12;
-        let x17 = ::eom_sim::Lanes::<W>::splat(14.765625) * x7;
-        let x18 = ::eom_sim::Lanes::<W>::splat(294.3) * x2;
-        let x19 = x4 + x10;
-        let x20 = x19 - x17;
-        let x21 = x20 - x18;
-        out[0] = x16;
-        out[1] = x9;
-        out[2] = x21;
+        let x4 = u[1] * u[2];
+        let x5 = ::eom_sim::Lanes::<W>::splat(14.765625) * x4;
+        let x6 = u[0] * u[1];
+        let x7 = ::eom_sim::Lanes::<W>::splat(15.234375) * udot[0];
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.46875) * udot[1];
+        let x9 = ::eom_sim::Lanes::<W>::splat(15.234375) * udot[2];
+        let x10 = x0 + x1;
+        let x11 = ::eom_sim::Lanes::<W>::splat(294.3) * x10;
+        let x12 = ::eom_sim::Lanes::<W>::splat(147.15) + x5;
+        let x13 = x7 + x12;
+        let x14 = x13 - x11;
+        let x15 = ::eom_sim::Lanes::<W>::splat(14.765625) * x6;
+        let x16 = x3 - x2;
+        let x17 = ::eom_sim::Lanes::<W>::splat(294.3) * x16;
+        let x18 = x9 + x17;
+        let x19 = x18 - x15;
+        out[0] = x14;
+        out[1] = x8;
+        out[2] = x19;
     }
-    /// `energy` of `W` states at once, one per lane (13 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    /// `energy` of `W` states at once, one per lane (11 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
     pub fn energy_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -723,22 +682,20 @@ impl HeavyTop {
         out: &mut [::eom_sim::Lanes<W>; 2],
     ) {
         let x0 = q[2] * q[3];
-        let x1 = ::eom_sim::Lanes::<W>::splat(294.3) * x0;
-        let x2 = q[0] * q[1];
+        let x1 = q[0] * q[1];
+        let x2 = x0 + x1;
         let x3 = ::eom_sim::Lanes::<W>::splat(294.3) * x2;
-        let x4 = x1 + x3;
-        let x5 = u[2] * u[2];
-        let x6 = u[0] * u[0];
-        let x7 = u[1] * u[1];
-        let x8 = ::eom_sim::Lanes::<W>::splat(7.6171875) * x5;
-        let x9 = ::eom_sim::Lanes::<W>::splat(7.6171875) * x6;
-        let x10 = ::eom_sim::Lanes::<W>::splat(0.234375) * x7;
-        let x11 = x8 + x10;
-        let x12 = x9 + x11;
-        out[0] = x12;
-        out[1] = x4;
+        let x4 = u[2] * u[2];
+        let x5 = u[0] * u[0];
+        let x6 = u[1] * u[1];
+        let x7 = ::eom_sim::Lanes::<W>::splat(0.234375) * x6;
+        let x8 = x4 + x5;
+        let x9 = ::eom_sim::Lanes::<W>::splat(7.6171875) * x8;
+        let x10 = x7 + x9;
+        out[0] = x10;
+        out[1] = x3;
     }
-    /// `momentum` of `W` states at once, one per lane (68 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    /// `momentum` of `W` states at once, one per lane (62 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
     pub fn momentum_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -777,51 +734,45 @@ impl HeavyTop {
         let x28 = x19 - x4;
         let x29 = u[2] * x6;
         let x30 = u[0] * x16;
-        let x31 = ::eom_sim::Lanes::<W>::splat(15.0) * x30;
-        let x32 = ::eom_sim::Lanes::<W>::splat(15.0) * x29;
-        let x33 = x31 - x32;
-        let x34 = u[2] * x17;
-        let x35 = u[0] * x25;
+        let x31 = x30 - x29;
+        let x32 = ::eom_sim::Lanes::<W>::splat(15.0) * x31;
+        let x33 = u[2] * x17;
+        let x34 = u[0] * x25;
+        let x35 = x34 - x33;
         let x36 = ::eom_sim::Lanes::<W>::splat(15.0) * x35;
-        let x37 = ::eom_sim::Lanes::<W>::splat(15.0) * x34;
-        let x38 = x36 - x37;
-        let x39 = u[2] * x26;
-        let x40 = u[0] * x28;
-        let x41 = ::eom_sim::Lanes::<W>::splat(15.0) * x40;
-        let x42 = ::eom_sim::Lanes::<W>::splat(15.0) * x39;
-        let x43 = x41 - x42;
-        let x44 = u[0] * x6;
-        let x45 = ::eom_sim::Lanes::<W>::splat(15.234375) * x44;
-        let x46 = u[1] * x11;
-        let x47 = ::eom_sim::Lanes::<W>::splat(0.46875) * x46;
-        let x48 = u[2] * x16;
-        let x49 = ::eom_sim::Lanes::<W>::splat(15.234375) * x48;
-        let x50 = x45 + x47;
-        let x51 = x49 + x50;
-        let x52 = u[0] * x17;
+        let x37 = u[2] * x26;
+        let x38 = u[0] * x28;
+        let x39 = x38 - x37;
+        let x40 = ::eom_sim::Lanes::<W>::splat(15.0) * x39;
+        let x41 = u[0] * x6;
+        let x42 = u[1] * x11;
+        let x43 = ::eom_sim::Lanes::<W>::splat(0.46875) * x42;
+        let x44 = u[2] * x16;
+        let x45 = x41 + x44;
+        let x46 = ::eom_sim::Lanes::<W>::splat(15.234375) * x45;
+        let x47 = x43 + x46;
+        let x48 = u[0] * x17;
+        let x49 = u[1] * x20;
+        let x50 = ::eom_sim::Lanes::<W>::splat(0.46875) * x49;
+        let x51 = u[2] * x25;
+        let x52 = x48 + x51;
         let x53 = ::eom_sim::Lanes::<W>::splat(15.234375) * x52;
-        let x54 = u[1] * x20;
-        let x55 = ::eom_sim::Lanes::<W>::splat(0.46875) * x54;
-        let x56 = u[2] * x25;
-        let x57 = ::eom_sim::Lanes::<W>::splat(15.234375) * x56;
-        let x58 = x55 + x57;
-        let x59 = x53 + x58;
-        let x60 = u[0] * x26;
-        let x61 = ::eom_sim::Lanes::<W>::splat(15.234375) * x60;
-        let x62 = u[1] * x27;
-        let x63 = ::eom_sim::Lanes::<W>::splat(0.46875) * x62;
-        let x64 = u[2] * x28;
-        let x65 = ::eom_sim::Lanes::<W>::splat(15.234375) * x64;
-        let x66 = x63 + x65;
-        let x67 = x61 + x66;
-        out[0] = x51;
-        out[1] = x59;
-        out[2] = x67;
-        out[3] = x33;
-        out[4] = x38;
-        out[5] = x43;
+        let x54 = x50 + x53;
+        let x55 = u[0] * x26;
+        let x56 = u[1] * x27;
+        let x57 = ::eom_sim::Lanes::<W>::splat(0.46875) * x56;
+        let x58 = u[2] * x28;
+        let x59 = x55 + x58;
+        let x60 = ::eom_sim::Lanes::<W>::splat(15.234375) * x59;
+        let x61 = x57 + x60;
+        out[0] = x47;
+        out[1] = x54;
+        out[2] = x61;
+        out[3] = x32;
+        out[4] = x36;
+        out[5] = x40;
     }
-    /// `outputs` of `W` states at once, one per lane (16 operations per state): the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame). Arguments `t`, `q`, `u`, `udot` as `outputs`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("outputs")`'s result.
+    /// `outputs` of `W` states at once, one per lane (13 operations per state): the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame). Arguments `t`, `q`, `u`, `udot` as `outputs`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("outputs")`'s result.
     pub fn outputs_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -834,23 +785,20 @@ impl HeavyTop {
         let x1 = q[3] * q[3];
         let x2 = q[0] * q[3];
         let x3 = q[1] * q[2];
-        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x3;
-        let x5 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
-        let x6 = x4 - x5;
-        let x7 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
-        let x8 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
-        let x9 = ::eom_sim::Lanes::<W>::splat(1.0) - x7;
-        let x10 = x9 - x8;
-        let x11 = q[2] * q[3];
+        let x4 = x3 - x2;
+        let x5 = ::eom_sim::Lanes::<W>::splat(2.0) * x4;
+        let x6 = x0 + x1;
+        let x7 = ::eom_sim::Lanes::<W>::splat(2.0) * x6;
+        let x8 = ::eom_sim::Lanes::<W>::splat(1.0) - x7;
+        let x9 = q[2] * q[3];
+        let x10 = q[0] * q[1];
+        let x11 = x9 + x10;
         let x12 = ::eom_sim::Lanes::<W>::splat(2.0) * x11;
-        let x13 = q[0] * q[1];
-        let x14 = ::eom_sim::Lanes::<W>::splat(2.0) * x13;
-        let x15 = x12 + x14;
-        out[0] = x6;
-        out[1] = x10;
-        out[2] = x15;
+        out[0] = x5;
+        out[1] = x8;
+        out[2] = x12;
     }
-    /// `marker_jacobians` of `W` states at once, one per lane (27 operations per state): partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed. Arguments `t`, `q` as `marker_jacobians`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("marker_jacobians")`'s result.
+    /// `marker_jacobians` of `W` states at once, one per lane (25 operations per state): partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed. Arguments `t`, `q` as `marker_jacobians`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("marker_jacobians")`'s result.
     pub fn marker_jacobians_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -870,29 +818,27 @@ impl HeavyTop {
         let x10 = x7 + x9;
         let x11 = q[0] * q[1];
         let x12 = q[2] * q[3];
-        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
-        let x14 = ::eom_sim::Lanes::<W>::splat(2.0) * x11;
-        let x15 = x13 - x14;
-        let x16 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
-        let x17 = ::eom_sim::Lanes::<W>::splat(1.0) - x16;
-        let x18 = x17 - x4;
-        let x19 = x3 + x4;
-        let x20 = x19 - ::eom_sim::Lanes::<W>::splat(1.0);
-        let x21 = q[1] * q[2];
+        let x13 = x12 - x11;
+        let x14 = ::eom_sim::Lanes::<W>::splat(2.0) * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x16 = ::eom_sim::Lanes::<W>::splat(1.0) - x15;
+        let x17 = x16 - x4;
+        let x18 = x3 + x4;
+        let x19 = x18 - ::eom_sim::Lanes::<W>::splat(1.0);
+        let x20 = q[1] * q[2];
+        let x21 = x5 + x20;
         let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
-        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x5;
-        let x24 = x22 + x23;
-        let x25 = -x24;
-        let x26 = x7 - x9;
+        let x23 = -x22;
+        let x24 = x7 - x9;
         out[0] = x10;
         out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
-        out[2] = x20;
-        out[3] = x15;
+        out[2] = x19;
+        out[3] = x14;
         out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
-        out[5] = x25;
-        out[6] = x18;
+        out[5] = x23;
+        out[6] = x17;
         out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
-        out[8] = x26;
+        out[8] = x24;
     }
 }
 /// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `outputs`, `marker_jacobians`.

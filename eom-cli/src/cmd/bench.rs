@@ -45,9 +45,14 @@ pub struct BenchArgs {
     /// Seed of the random states (`--per-call`; default 1).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Build the timing program with `-C target-cpu=native` (`--per-call`).
+    /// Build the timing program with `-C target-cpu=native` (`--per-call`);
+    /// the generated code then fuses `a·b + c` into `mul_add` where the
+    /// machine has FMA.
     #[arg(long)]
     pub native: bool,
+    /// With --native: keep `a·b + c` unfused (to measure what FMA gives).
+    #[arg(long)]
+    pub no_fma: bool,
     /// Also generate and time `forward_dynamics_derivatives` (`--per-call`;
     /// reported as `forward_dynamics_derivatives_ns`).
     #[arg(long)]
@@ -225,6 +230,10 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         problems
             .push("--batch packs the states up to 16 per call: give --states 16 or more".into());
     }
+    if a.no_fma && !a.native {
+        eprintln!("error: --no-fma goes with --native (without it the code has no mul_add)");
+        return ExitCode::from(2);
+    }
     if a.native && !a.per_call {
         problems.push(
             "--native builds the --per-call timing program; not with --work-precision or --suite"
@@ -287,6 +296,7 @@ pub fn run(a: BenchArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         reps: a.reps.unwrap_or(31),
         seed: a.seed.unwrap_or(1),
         native: a.native,
+        fma: a.native && !a.no_fma && crate::compiled::native_fma(),
         derivatives: a.derivatives,
         batch: a.batch,
     };
@@ -334,6 +344,7 @@ fn per_call(
     };
     let emit = eom_gen::EmitOptions {
         lanes: o.batch,
+        fma: o.fma,
         ..Default::default()
     };
     let g = match crate::open::generate_asking(&opened, vary, &emit, also) {

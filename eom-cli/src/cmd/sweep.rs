@@ -614,6 +614,7 @@ impl Context<'_> {
         if !in_lanes.is_empty() {
             let emit = eom_gen::EmitOptions {
                 lanes: true,
+                fma: native && crate::compiled::native_fma(),
                 ..Default::default()
             };
             let source =

@@ -280,9 +280,27 @@ struct ConstraintProgram {
     n_holonomic: usize,
 }
 
-struct SymEnv<'cx> {
+/// Parameters as the generator sees them: fixed ones as numbers, tunable
+/// ones as symbols of `cx`.
+pub(crate) struct SymEnv<'cx> {
     cx: &'cx Context,
     numeric: NumericEnv,
+}
+
+impl<'cx> SymEnv<'cx> {
+    /// The environment of `sys`, its tunable parameters declared in `cx`.
+    pub(crate) fn new(cx: &'cx Context, sys: &System) -> Result<Self, FormulateError> {
+        for p in sys.parameters.iter().filter(|p| p.tunable) {
+            cx.param(&p.name).map_err(|error| FormulateError::Sym {
+                error,
+                span: Some(p.span),
+            })?;
+        }
+        Ok(SymEnv {
+            cx,
+            numeric: NumericEnv::defaults(sys),
+        })
+    }
 }
 
 impl<'cx> Env<Expr<'cx>> for SymEnv<'cx> {
@@ -340,16 +358,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     let request = request.derivable();
     let start = Instant::now();
     let cx = Context::new();
-    let env = SymEnv {
-        cx: &cx,
-        numeric: NumericEnv::defaults(sys),
-    };
-    for p in sys.parameters.iter().filter(|p| p.tunable) {
-        cx.param(&p.name).map_err(|error| FormulateError::Sym {
-            error,
-            span: Some(p.span),
-        })?;
-    }
+    let env = SymEnv::new(&cx, sys)?;
     let tree = TreeModel::new(sys, &env)?;
     let applied = Applied::new(sys, &tree, &env)?;
     let ev = Evaluator::new(&tree, &applied, &env);

@@ -11,6 +11,7 @@
 //! - [`rnea`]: inverse dynamics by recursive Newton–Euler (§5.3);
 //! - [`crba`]: the joint-space mass matrix by composite rigid bodies (§6.2);
 //! - [`aba`]: forward dynamics in O(n) by articulated bodies (§7.3);
+//! - [`passes`]: the articulated-body algorithm's operations pass by pass;
 //! - [`ltdl`]: the sparse `LᵀDL` factorisation of the mass matrix that
 //!   follows the tree (§6.5), the other forward-dynamics route;
 //! - [`energy`], [`loads`] (the force elements of [`applied`] at a state);
@@ -49,6 +50,7 @@ pub mod lower;
 pub mod ltdl;
 pub mod mounts;
 pub mod numeric;
+pub mod passes;
 pub mod rnea;
 pub mod rnea_derivatives;
 pub mod spatial;

@@ -192,7 +192,7 @@ impl<S: Scalar> RigidInertia<S> {
     pub fn to_parent(&self, pose: &Pose<S>) -> Self {
         let e = pose.e;
         let h = e.mul_vec(self.h);
-        let rot = e * self.i * e.transpose();
+        let rot = congruence_sym(&e, &self.i);
         let (rx, hx) = (pose.r.skew(), h.skew());
         // Ī_p = E Ī Eᵀ − m [r×]² − [r×][h×] − [h×][r×], then h_p = E h + m r.
         let i = rot - (rx * rx).scale(self.m) - rx * hx - hx * rx;
@@ -254,18 +254,44 @@ impl<S: Scalar> Inertia6<S> {
         // then the shift of origin by r (X = [[1, 0], [−r×, 1]] on motions
         // expressed at the parent origin): with R = [r×],
         // A'' = A' + R B'ᵀ − B' R − R C' R,  B'' = B' + R C',  C'' = C'.
-        let (e, et) = (pose.e, pose.e.transpose());
-        let a = e * self.a * et;
-        let b = e * self.b * et;
-        let c = e * self.c * et;
+        // A, C and A'' are symmetric: their upper triangles are computed
+        // and mirrored (the lower ones are the same numbers, written as
+        // different sums).
+        let e = pose.e;
+        let a = congruence_sym(&e, &self.a);
+        let b = e * self.b * e.transpose();
+        let c = congruence_sym(&e, &self.c);
         let rx = pose.r.skew();
         let rc = rx * c;
+        // R B'ᵀ − B' R = M + Mᵀ with M = R B'ᵀ (R is skew).
+        let m = rx * b.transpose();
+        let rcr = rc * rx;
         Inertia6 {
-            a: a + rx * b.transpose() - b * rx - rc * rx,
+            a: sym_from_upper(|i, j| a.0[i][j] + m.0[i][j] + m.0[j][i] - rcr.0[i][j]),
             b: b + rc,
             c,
         }
     }
+}
+
+/// The symmetric matrix whose upper triangle (`i ≤ j`) is `f(i, j)`.
+fn sym_from_upper<S: Scalar>(f: impl Fn(usize, usize) -> S) -> Mat3<S> {
+    let mut out = Mat3::zero();
+    for i in 0..3 {
+        for j in i..3 {
+            let x = f(i, j);
+            out.0[i][j] = x;
+            out.0[j][i] = x;
+        }
+    }
+    out
+}
+
+/// `E M Eᵀ` of a symmetric `M`: `(E M)` once, then the upper triangle of
+/// its products with the rows of `E`, mirrored.
+fn congruence_sym<S: Scalar>(e: &Mat3<S>, m: &Mat3<S>) -> Mat3<S> {
+    let em = *e * *m;
+    sym_from_upper(|i, j| em.row(i).dot(e.row(j)))
 }
 
 impl<S: Scalar> Add for Motion<S> {

@@ -60,6 +60,7 @@ mod diff;
 mod eval;
 mod expand;
 mod expr;
+mod factor;
 mod linalg;
 mod node;
 mod num;

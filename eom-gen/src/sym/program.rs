@@ -16,7 +16,10 @@
 //!   identities (`x − x = 0`, `x·1`, `x·0`, …), value numbering with
 //!   canonical operand order, and dead-code elimination, repeated until
 //!   nothing changes. It catches temporaries that become constant only once
-//!   common subexpressions are named.
+//!   common subexpressions are named. With it, shared divisors become one
+//!   reciprocal ([`Program::share_reciprocals`]) and common factors leave
+//!   sums (`a·x + a·y → a·(x + y)`, [`Program::factor_sums`]) while that
+//!   lowers the count.
 //! - [`Program::resimplify`] (opt-in, `LowerOptions::second_round`): read the
 //!   program back into a fresh arena, so every assignment is canonicalised by
 //!   the smart constructors with its operands named, and lower again.
@@ -243,6 +246,9 @@ struct Lowerer<'a> {
     input_of: FxHashMap<SymId, u32>,
     /// Is the node (by id) reachable from the outputs?
     reach: Vec<bool>,
+    /// Negative powers that are factors of two or more reachable products:
+    /// computed once as reciprocals and multiplied first.
+    shared_recip: FxHashSet<Id>,
 }
 
 fn commutative_key(o: &Operand) -> (u8, u64) {
@@ -310,8 +316,19 @@ impl Lowerer<'_> {
         let mut coef = coef;
         let mut numer: Option<Operand> = None;
         let mut denom: Option<Operand> = None;
+        // A reciprocal shared with other products leads the chain, so the
+        // partial products `(1/d)·x` are shared too: the entries
+        // `uᵢ uⱼ / D` of a rank-one update cost one multiplication each
+        // after the six `uᵢ / D`, not two.
+        for &f in factors {
+            if self.shared_recip.contains(&f) {
+                let o = self.node(f);
+                numer = self.mul_opt(numer, o);
+            }
+        }
         for &f in factors {
             match self.arena.view(f) {
+                _ if self.shared_recip.contains(&f) => {}
                 View::Pow(b, e) if e < 0 => {
                     let ob = self.node(b);
                     let p = self.powi(ob, e.unsigned_abs());
@@ -502,6 +519,25 @@ impl Arena {
         n
     }
 
+    /// The negative powers among `order` that are factors of at least two
+    /// products of `order`.
+    fn shared_reciprocals(&self, order: &[Id]) -> FxHashSet<Id> {
+        let mut seen: FxHashMap<Id, usize> = FxHashMap::default();
+        for &id in order {
+            if let View::Mul(cs) = self.view(id) {
+                for &f in cs {
+                    if matches!(self.view(f), View::Pow(_, e) if e < 0) {
+                        *seen.entry(f).or_default() += 1;
+                    }
+                }
+            }
+        }
+        seen.into_iter()
+            .filter(|&(_, n)| n >= 2)
+            .map(|(f, _)| f)
+            .collect()
+    }
+
     /// Lower named outputs to one [`Program`] (CSE across all outputs).
     pub fn lower(&self, outputs: &[(&str, Id)], opts: LowerOptions) -> Program {
         let roots: Vec<Id> = outputs.iter().map(|&(_, id)| id).collect();
@@ -530,6 +566,11 @@ impl Arena {
                 }
                 r
             },
+            shared_recip: if opts.cse {
+                self.shared_reciprocals(&order)
+            } else {
+                FxHashSet::default()
+            },
         };
         if opts.cse {
             for &id in &order {
@@ -549,6 +590,18 @@ impl Arena {
         if opts.optimize {
             p.optimize();
             p.share_reciprocals();
+            // Common factors out of sums, kept while they pay.
+            for _ in 0..4 {
+                let mut q = p.clone();
+                if q.factor_sums() == 0 {
+                    break;
+                }
+                q.optimize();
+                if q.op_count().total() >= p.op_count().total() {
+                    break;
+                }
+                p = q;
+            }
         } else {
             p.remove_dead();
         }
