@@ -383,6 +383,7 @@ fn locate(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
 }
 
 impl ContactRun<'_> {
+    #[allow(clippy::too_many_arguments)]
     fn event(
         &self,
         t: f64,

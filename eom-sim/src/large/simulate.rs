@@ -653,7 +653,7 @@ pub fn simulate_mixed(
         return Err(RunError::Options(problems));
     }
     let state = model.initial_state(0.0, q0, u0);
-    let none = Gaps::new(&[], |i| Some(i), &[]);
+    let none = Gaps::new(&[], Some, &[]);
     run_alpha(model, cables, state, names, run, &none, progress)
 }
 
