@@ -32,7 +32,7 @@ print(cpu, r['stats']['steps'], sum(e['kind'] == 'impact' for e in ev), len(ev))
 }
 uptime
 opts=(--rtol 1e-10 --atol 1e-12)
-for model in ball box4; do
+for model in ${MODELS:-ball box4}; do
     t_end=4
     [ "$model" = box4 ] && t_end=2
     "$bin" simulate "$dir/$model.ron" --t-end 0.1 --json > /dev/null
