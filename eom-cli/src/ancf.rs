@@ -188,7 +188,7 @@ pub fn linearize_cmd(
 pub fn simulate_cmd(
     checked: &Checked,
     run: &ElementRun,
-    csv: Option<&str>,
+    (csv, events_csv): (Option<&str>, Option<&str>),
     json_out: bool,
 ) -> Result<ExitCode, Error> {
     let sys = &checked.system;
@@ -220,9 +220,23 @@ pub fn simulate_cmd(
     } else {
         cables_alone(checked)?;
         let (built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
-        simulate_structure(&built.model, &cables, run, &mut progress)
+        let contacts = eom_gen::cables::node_contacts(sys, &cables);
+        simulate_structure(&built.model, &cables, &contacts, run, &mut progress)
     }
     .map_err(run_error)?;
+    if let Some(path) = events_csv {
+        // The node contacts' rows, and the structure's free coordinates
+        // as the speeds of the generalised impulse.
+        let rows: Vec<String> = sys.cable_contacts.iter().map(|c| c.name.clone()).collect();
+        let n = report
+            .contact_events
+            .first()
+            .map_or(0, |e| e.generalized_impulse.len());
+        let speeds: Vec<String> = (1..=n).map(|k| format!("y{k}")).collect();
+        eom_sim::run::events_table(&rows, &speeds, &[], false, &report.contact_events)
+            .write(path)
+            .map_err(|e| Error::io(path, e))?;
+    }
     bar.finish_and_clear();
     if let (Some(path), Some(table)) = (csv, &table) {
         table.write(path).map_err(|e| Error::io(path, e))?;
@@ -238,7 +252,7 @@ pub fn simulate_cmd(
         integrator: run.integrator,
         detail,
         csv,
-        events_csv: None,
+        events_csv,
     };
     Ok(finish(
         &sys.name,

@@ -226,9 +226,16 @@ impl<'a> CableSweep<'a> {
             None => eom_gen::cables::structure(sys)
                 .map_err(|e| e.to_string())
                 .and_then(|(built, cables)| {
-                    eom_sim::large::simulate_structure(&built.model, &cables, self.run, &mut |_| {})
-                        .map(|(r, _)| r)
-                        .map_err(|e| e.to_string())
+                    let contacts = eom_gen::cables::node_contacts(sys, &cables);
+                    eom_sim::large::simulate_structure(
+                        &built.model,
+                        &cables,
+                        &contacts,
+                        self.run,
+                        &mut |_| {},
+                    )
+                    .map(|(r, _)| r)
+                    .map_err(|e| e.to_string())
                 }),
             Some(shared_f) => {
                 // The shared formulation is exact for this case when

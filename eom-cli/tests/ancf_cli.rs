@@ -792,3 +792,56 @@ fn sweep_of_a_mixed_model_equals_runs_one_by_one() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("--rho-inf sets generalized-α"), "{err}");
 }
+
+/// `simulate` on the bundled wire dropped onto a floor (contacts at cable
+/// nodes, issue #26): the events in the JSON report as for rigid models —
+/// the first an impact of all five nodes at once at `t₁ = √(2h₀/g)` —, the
+/// same events as CSV with `--events-csv`, and at the end the held nodes'
+/// normal forces carrying the wire's weight `ρ A L g`.
+#[test]
+fn simulate_reports_the_contact_events_of_a_cable_dropped_on_a_floor() {
+    let events = write("cable_drop_events.csv", "");
+    let out = eom_gen(&[
+        "simulate",
+        "models/ancf/cable_drop.ron",
+        "--t-end",
+        "0.6",
+        "--dt",
+        "1e-3",
+        "--rho-inf",
+        "0.5",
+        "--json",
+        "--events-csv",
+        &events,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let ev = r["contact_events"].as_array().expect("contact events");
+    let t1 = (2.0 * 0.2 / 9.81_f64).sqrt();
+    assert_eq!(ev[0]["kind"], "impact");
+    assert!((ev[0]["t"].as_f64().unwrap_or(f64::NAN) - t1).abs() < 1e-9);
+    assert_eq!(ev[0]["contacts"].as_array().map(Vec::len), Some(5));
+    let weight = 7850.0 * 8e-6 * 9.81;
+    let sum: f64 = r["contact_forces"]
+        .as_array()
+        .expect("the held nodes' forces")
+        .iter()
+        .filter_map(|c| c["force"].as_f64())
+        .sum();
+    assert!(
+        (sum - weight).abs() < 1e-3 * weight,
+        "{sum} N, want {weight} N"
+    );
+    let csv = std::fs::read_to_string(&events).expect("the events CSV");
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap_or_default();
+    assert!(
+        header.starts_with("t,kind,energy_before,energy_after,n0.impulse,n0.speed_before"),
+        "{header}"
+    );
+    assert_eq!(lines.count(), ev.len(), "one row per event");
+}

@@ -475,6 +475,27 @@ pub fn structure(sys: &System) -> Result<(Chains, Vec<MixedCable>), CableError> 
     Ok((built, cables))
 }
 
+/// The model's contacts at cable nodes over the structure `cables` lays
+/// out ([`structure`]): per contact the node's position coordinates along
+/// the plane's normal, `g = n·x − (n·p + r)` (a planar cable's `z = 0`).
+pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large::NodeContact> {
+    sys.cable_contacts
+        .iter()
+        .filter_map(|c| {
+            let layout = cables.get(c.cable)?;
+            let base = layout.offset + c.node * layout.node_coords;
+            let row = (0..layout.dim).map(|a| (base + a, c.normal[a])).collect();
+            let level = (0..3).map(|a| c.normal[a] * c.point[a]).sum::<f64>() + c.radius;
+            Some(eom_sim::large::NodeContact {
+                name: c.name.clone(),
+                row,
+                level,
+                e: c.e,
+            })
+        })
+        .collect()
+}
+
 /// Every cable of the model in one structure ([`structure`]), joined to
 /// the rigid part `rigid` at the cable
 /// ends held at markers (`System::cable_mounts` order, the order of the

@@ -665,6 +665,32 @@ pub struct System {
     pub cables: Vec<CableInfo>,
     /// Unilateral contacts (issue #26), in file order.
     pub contacts: Vec<ContactInfo>,
+    /// Contacts at cable nodes (issue #26), in file order: run by the
+    /// large-model runtime (`eom_gen::cables::node_contacts`), not by
+    /// generated code.
+    pub cable_contacts: Vec<CableContactInfo>,
+}
+
+/// A cable node (a point, or a sphere of `radius` about it) against a plane
+/// fixed in the world: `g = n·(x_node − point) − radius`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CableContactInfo {
+    /// Name.
+    pub name: String,
+    /// The cable (index into `System::cables`).
+    pub cable: usize,
+    /// Its node, `0..=elements`.
+    pub node: usize,
+    /// Radius of the sphere about the node, m.
+    pub radius: f64,
+    /// A point of the plane, world axes, m.
+    pub point: [f64; 3],
+    /// The plane's unit normal towards the free side.
+    pub normal: [f64; 3],
+    /// Newton's coefficient of restitution.
+    pub e: f64,
+    /// Where it is defined.
+    pub span: Span,
 }
 
 /// What a unilateral contact's gap measures.

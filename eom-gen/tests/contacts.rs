@@ -120,9 +120,11 @@ fn bad_contacts_are_all_reported_located() {
     assert_eq!(out.matches("error:").count(), 1, "{out}");
 }
 
-/// A model with cables: its runner (generalized-α) has no event location
-/// or impact map, so a contact there is refused at the contact, naming the
-/// cable (it used to be ignored: the stop let the boom through).
+/// A model with cables: its runner (generalized-α) handles contacts at
+/// cable nodes only (`eom-gen/tests/cable_contacts.rs`), so a contact on a
+/// body there is refused at the contact, naming the cable (it used to be
+/// ignored: the stop let the boom through); so is a node contact beside a
+/// rigid part (the rope hangs at the boom).
 #[test]
 fn contacts_beside_cables_are_refused() {
     let text = std::fs::read_to_string(format!(
@@ -135,14 +137,25 @@ fn contacts_beside_cables_are_refused() {
         "    contacts: [JointLimit(name: \"stop\", joint: \"pivot\", lower: -0.2, e: 0.5)],\n    cables: [",
         1,
     );
+    let out = check(&Source::new("models/crane.ron", text.clone()))
+        .map(|_| "valid".to_string())
+        .unwrap_or_else(|r| r.to_string());
+    assert!(
+        out.contains("error: contact `stop` is on a body in a model with cables (`rope`), whose runner handles contacts at cable nodes only"),
+        "{out}"
+    );
+    assert!(out.contains("models/crane.ron:"), "located: {out}");
+    let text = text.replace(
+        r#"JointLimit(name: "stop", joint: "pivot", lower: -0.2, e: 0.5)"#,
+        r#"Plane(name: "floor", at: (body: "rope", node: 1), point: (0, -50, 0), normal: (0, 1, 0), e: 0.5)"#,
+    );
     let out = check(&Source::new("models/crane.ron", text))
         .map(|_| "valid".to_string())
         .unwrap_or_else(|r| r.to_string());
     assert!(
-        out.contains("error: contact `stop` is in a model with cables (`rope`), whose runner does not handle contacts"),
+        out.contains("error: contact `floor` is at a cable node in a model whose cable `rope` hangs at a body"),
         "{out}"
     );
-    assert!(out.contains("models/crane.ron:"), "located: {out}");
 }
 
 /// A contact closed at the initial state is refused with its penetration

@@ -29,13 +29,14 @@ use std::time::Instant;
 #[cfg(feature = "serde")]
 use serde::{Deserialize, Serialize};
 
-mod contact;
+pub(crate) mod contact;
 pub use contact::{
     ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, JointImpulse, MAX_LCP, lcp,
 };
 mod elements;
 pub use elements::{
-    CableState, ElementReport, LoadStepReport, MountForce, StabilityReport, StaticReport,
+    CableState, ContactForce, ElementReport, LoadStepReport, MountForce, StabilityReport,
+    StaticReport,
 };
 
 impl Method {
@@ -1355,27 +1356,26 @@ fn contact_problems<S: Simulate + ?Sized>(
     }
 }
 
-/// Writes the contact events to [`RunOptions::events_csv`]: one row per
+/// The contact events as a table: one row per
 /// event with `t`, `kind` (0 impact, 1 rest, 2 release, 3 stick, 4 slip),
-/// the energies before and after, per contact row its impulse and normal
-/// speeds before and after (empty where the row took no part; with
-/// friction also its tangential impulses `impulse_t1`, `impulse_t2`), the
-/// generalised impulse per
-/// speed, and every tree joint's impulse (force, torque).
-fn write_events_csv<S: Simulate + ?Sized>(
-    model: &S,
-    names: &Names,
-    options: &RunOptions,
+/// the energies before and after, per contact row (`contacts`) its
+/// impulse and normal speeds before and after (empty where the row took
+/// no part; with friction, `rough`, also its tangential impulses
+/// `impulse_t1`, `impulse_t2`), the generalised impulse per speed
+/// (`speeds`), and every tree joint's impulse (force, torque). Rigid runs
+/// and the runs of cables (their node contacts, the free coordinates as
+/// speeds) write the same table.
+pub fn events_table(
+    contacts: &[String],
+    speeds: &[String],
+    impulse_joints: &[String],
+    rough: bool,
     events: &[ContactEvent],
-) -> Result<(), RunError> {
-    let Some(path) = &options.events_csv else {
-        return Ok(());
-    };
+) -> crate::table::Table {
     let mut header: Vec<String> = ["t", "kind", "energy_before", "energy_after"]
         .iter()
         .map(|s| s.to_string())
         .collect();
-    let rough = model.function_len("friction").is_some();
     let per_row: &[&str] = if rough {
         &[
             "impulse",
@@ -1387,15 +1387,15 @@ fn write_events_csv<S: Simulate + ?Sized>(
     } else {
         &["impulse", "speed_before", "speed_after"]
     };
-    for c in &names.contacts {
+    for c in contacts {
         for what in per_row {
             header.push(format!("{c}.{what}"));
         }
     }
-    for s in &names.speeds {
+    for s in speeds {
         header.push(format!("impulse_{s}"));
     }
-    for j in &names.impulse_joints {
+    for j in impulse_joints {
         for c in ["fx", "fy", "fz", "nx", "ny", "nz"] {
             header.push(format!("{j}.impulse_{c}"));
         }
@@ -1410,7 +1410,7 @@ fn write_events_csv<S: Simulate + ?Sized>(
             ContactEventKind::Slip => 4.0,
         };
         let mut row = vec![e.t, kind, e.energy_before, e.energy_after];
-        for c in &names.contacts {
+        for c in contacts {
             match e.contacts.iter().find(|x| &x.contact == c) {
                 Some(x) => {
                     row.extend([x.impulse, x.speed_before, x.speed_after]);
@@ -1426,9 +1426,9 @@ fn write_events_csv<S: Simulate + ?Sized>(
                 .iter()
                 .copied()
                 .chain(std::iter::repeat(f64::NAN))
-                .take(model.nu()),
+                .take(speeds.len()),
         );
-        for j in &names.impulse_joints {
+        for j in impulse_joints {
             match e.joint_impulses.iter().find(|x| &x.joint == j) {
                 Some(x) => row.extend(x.force.iter().chain(&x.torque)),
                 None => row.extend([f64::NAN; 6]),
@@ -1436,6 +1436,27 @@ fn write_events_csv<S: Simulate + ?Sized>(
         }
         table.push(row);
     }
+    table
+}
+
+/// Writes the contact events to [`RunOptions::events_csv`] ([`events_table`]).
+fn write_events_csv<S: Simulate + ?Sized>(
+    model: &S,
+    names: &Names,
+    options: &RunOptions,
+    events: &[ContactEvent],
+) -> Result<(), RunError> {
+    let Some(path) = &options.events_csv else {
+        return Ok(());
+    };
+    let rough = model.function_len("friction").is_some();
+    let table = events_table(
+        &names.contacts,
+        &names.speeds,
+        &names.impulse_joints,
+        rough,
+        events,
+    );
     table
         .write(path)
         .map_err(|e| RunError::Csv(format!("cannot write `{path}`: {e}")))

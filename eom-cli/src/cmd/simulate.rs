@@ -266,7 +266,13 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    let refused: [(&str, bool); 15] = [
+    if a.events_csv.is_some() && checked.system.cable_contacts.is_empty() {
+        problems.push(format!(
+            "--events-csv writes the contact events; `{}` has no contacts",
+            checked.system.name
+        ));
+    }
+    let refused: [(&str, bool); 14] = [
         ("--ensemble", a.ensemble.is_some()),
         ("--seed", a.seed.is_some()),
         ("--perturb", a.perturb.is_some()),
@@ -275,7 +281,6 @@ fn simulate_cables(
         ("--native", a.native),
         ("--plot", a.plot.is_some()),
         ("--jacobian", a.jacobian.is_some()),
-        ("--events-csv", a.events_csv.is_some()),
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--q0", a.initial.q0.is_some()),
@@ -289,7 +294,7 @@ fn simulate_cables(
                 "{option} does not apply to `{}`, a model with cables: it runs generalized-α \
                  (fixed step, or step control with --rtol/--atol) or rk4 (fixed step); its \
                  options are --t-end, --dt, --rtol, --atol, --integrator generalized-alpha|rk4, \
-                 --rho-inf, --param, --csv, --every, --html and --json",
+                 --rho-inf, --param, --csv, --every, --events-csv, --html and --json",
                 checked.system.name
             ));
         }
@@ -332,7 +337,12 @@ fn simulate_cables(
                 .to_string()
         })
     });
-    let code = match crate::ancf::simulate_cmd(checked, &run, csv.as_deref(), a.json) {
+    let code = match crate::ancf::simulate_cmd(
+        checked,
+        &run,
+        (csv.as_deref(), a.events_csv.as_deref()),
+        a.json,
+    ) {
         Ok(code) => code,
         Err(e) => return fail(&e),
     };

@@ -916,6 +916,11 @@ pub struct Anchor {
     /// A marker of the body instead of `point`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub marker: Option<String>,
+    /// A contact's cable node instead: `body` then names a cable and this
+    /// is its node, `0..=elements` (as `node_forces` and the CSV's
+    /// `CABLE.nodeK` count them).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub node: Option<usize>,
 }
 
 /// A force element.

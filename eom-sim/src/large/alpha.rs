@@ -203,10 +203,11 @@ impl<'m, M: AlphaModel + ?Sized> GeneralizedAlpha<'m, M> {
         self.step_within(f64::INFINITY)
     }
 
-    /// [`Self::step`], not past `t_max` (the step shortened to land on it).
-    fn step_within(&mut self, t_max: f64) -> Result<(), DynamicsError> {
+    /// [`Self::step`], not past `t_max` (the step shortened to land on it,
+    /// with the fixed step too; the next step is the full one again).
+    pub fn step_within(&mut self, t_max: f64) -> Result<(), DynamicsError> {
         let Some(control) = self.opts.control else {
-            let h = self.h;
+            let h = self.h.min(t_max - self.state.t);
             let attempt = self.newton_retrying(h)?;
             self.accept(h, attempt);
             return Ok(());

@@ -5,6 +5,8 @@
 //! with the symbolic factorisation reused.
 //!
 //! - [`ancf`]: chains of ANCF elements between two points, by kernel name.
+//! - [`contact`]: contacts at cable nodes (events, impacts, sustained
+//!   contact) through the rigid runtime's impact map and event types.
 //! - [`elastica`]: reference solutions of the planar elastica for tests.
 //! - [`model`]: element groups, fixed coordinates eliminated, loads.
 //! - [`statics`]: Newton with load stepping.
@@ -24,6 +26,7 @@
 
 pub mod alpha;
 pub mod ancf;
+pub mod contact;
 pub mod dynamics;
 pub mod elastica;
 pub mod linear;
@@ -35,6 +38,7 @@ pub mod sparse;
 pub mod statics;
 
 pub use alpha::{AlphaModel, GeneralizedAlpha};
+pub use contact::NodeContact;
 pub use dynamics::integrate_rk4;
 pub use linear::{SecondOrder, second_order};
 pub use mixed::statics::{MixedStaticError, MixedStaticSolution, Stability, solve_static_mixed};

@@ -94,6 +94,13 @@ pub enum DynamicsError {
         /// Its error estimate (1 = the tolerance).
         error: f64,
     },
+    /// A contact event (at a cable node) could not be resolved.
+    Contact {
+        /// Time of the event.
+        t: f64,
+        /// Why.
+        message: String,
+    },
 }
 
 impl fmt::Display for DynamicsError {
@@ -147,6 +154,7 @@ impl fmt::Display for DynamicsError {
                 Ok(())
             }
             DynamicsError::NonFinite { t } => write!(f, "the state became non-finite at t = {t}"),
+            DynamicsError::Contact { t, message } => write!(f, "at t = {t}: {message}"),
             DynamicsError::StepTooSmall { t, h, error } => write!(
                 f,
                 "step size {h:.1e} s still too large at t = {t} (error estimate {error:.1e} of the tolerance); loosen --rtol/--atol or check the model"

@@ -13,7 +13,8 @@
 //! alone (a mixed model's attachments are an index-3 system, which an
 //! explicit method does not solve).
 
-use super::alpha::{AlphaModel, GeneralizedAlpha};
+use super::alpha::GeneralizedAlpha;
+use super::contact::{ContactRun, Gaps, Impacts, NodeContact};
 use super::dynamics::integrate_rk4;
 use super::mixed::MixedModel;
 use super::mixed::statics::{MixedStaticError, Stability, solve_static_mixed};
@@ -21,6 +22,8 @@ use super::model::StructuralModel;
 use super::run::{AlphaOptions, DynamicsError, DynamicsStats, State, StepControl};
 use super::statics::{LoadStep, StaticError, StaticOptions, solve_static};
 use crate::Integrator;
+use crate::constrained::{DMatrix, DVector};
+use crate::run::ContactForce;
 use crate::run::{
     CableState, ElementReport, LoadStepReport, MountForce, RunError, RunReport, RunStats,
     StabilityReport, StaticReport, Stop,
@@ -155,7 +158,7 @@ impl ElementRun {
 }
 
 /// A vector model as a run reports it.
-trait Reported: AlphaModel {
+trait Reported: Impacts {
     /// The rigid part's coordinates and speeds at the end of `y`, `v`
     /// (none for a structure alone).
     fn rigid_len(&self) -> usize;
@@ -215,6 +218,49 @@ impl Reported for MixedModel<'_> {
                 force,
             })
             .collect()
+    }
+}
+
+impl Impacts for StructuralModel {
+    fn dense_mass(&self) -> Option<DMatrix<f64>> {
+        let n = self.n_free();
+        let mut m = DMatrix::zeros(n, n);
+        let mut e = vec![0.0; n];
+        let mut col = vec![0.0; n];
+        for j in 0..n {
+            e[j] = 1.0;
+            col.fill(0.0);
+            self.mass().sym_mul_add(1.0, &e, &mut col);
+            e[j] = 0.0;
+            for (i, c) in col.iter().enumerate() {
+                m[(i, j)] = *c;
+            }
+        }
+        Some(m)
+    }
+    fn free_acceleration(&self, s: &State) -> Option<DVector<f64>> {
+        let (q, v) = (self.expand(&s.q), self.expand_rate(&s.v));
+        let mut scratch = vec![0.0; self.n_full()];
+        let mut f = vec![0.0; self.n_free()];
+        self.internal(&q, &v, &mut scratch, &mut f);
+        let rhs =
+            DVector::from_iterator(f.len(), self.load_free().iter().zip(&f).map(|(a, b)| a - b));
+        self.dense_mass()?.cholesky().map(|c| c.solve(&rhs))
+    }
+    fn total_energy(&self, s: &State) -> f64 {
+        self.energies(s).0
+    }
+}
+
+impl Impacts for MixedModel<'_> {
+    fn dense_mass(&self) -> Option<DMatrix<f64>> {
+        None
+    }
+    fn free_acceleration(&self, _: &State) -> Option<DVector<f64>> {
+        None
+    }
+    fn total_energy(&self, s: &State) -> f64 {
+        self.energies(s).0
     }
 }
 
@@ -319,7 +365,7 @@ impl<'a> Recorder<'a> {
 /// Hermite interpolant of the positions through `(q, v)` at both ends
 /// (error `O(h⁴)` in the positions), its derivative as the speeds
 /// (`O(h³)`).
-fn hermite(a: &State, b: &State, t: f64) -> State {
+pub(super) fn hermite(a: &State, b: &State, t: f64) -> State {
     let h = b.t - a.t;
     let x = (t - a.t) / h;
     let (x2, x3) = (x * x, x * x * x);
@@ -391,6 +437,7 @@ fn report<M: Reported + ?Sized>(
             largest_constraint_residual: stats.max_constraint_residual,
             cables: cables.iter().map(|c| c.state(&q_full)).collect(),
             mounts: m.mounts(lambda),
+            contact_forces: Vec::new(),
         }),
         contact_events: Vec::new(),
     }
@@ -407,22 +454,28 @@ fn stop_of(e: DynamicsError) -> Stop {
         },
         DynamicsError::NewtonFailed { t, .. }
         | DynamicsError::Singular { t, .. }
-        | DynamicsError::Inconsistent { t, .. } => Stop::Failed {
+        | DynamicsError::Inconsistent { t, .. }
+        | DynamicsError::Contact { t, .. } => Stop::Failed {
             t,
             message: e.to_string(),
         },
     }
 }
 
-/// Generalized-α on `m` from `state`.
+/// Generalized-α on `m` from `state`; with contacts at cable nodes
+/// (`gaps`), through their events ([`ContactRun`]).
 fn run_alpha<M: Reported>(
     m: &M,
     cables: &[CableLayout],
     state: State,
     names: (&[String], &[String]),
     run: &ElementRun,
+    gaps: &Gaps,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(RunReport, Option<Table>), RunError> {
+    if gaps.len() > 0 {
+        return run_contacts(m, cables, state, names, run, gaps, progress);
+    }
     let clock = Instant::now();
     let start = state.clone();
     let mut ga =
@@ -450,15 +503,79 @@ fn run_alpha<M: Reported>(
     Ok((r, rec.table))
 }
 
+/// [`run_alpha`] through the contact events of `gaps`: the report's
+/// `contact_events` and the sustained contacts' forces at the end.
+fn run_contacts<M: Reported>(
+    m: &M,
+    cables: &[CableLayout],
+    state: State,
+    names: (&[String], &[String]),
+    run: &ElementRun,
+    gaps: &Gaps,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(RunReport, Option<Table>), RunError> {
+    let clock = Instant::now();
+    let start = state.clone();
+    let mut rec = Recorder::new(cables, names, run);
+    let mut contacts = ContactRun {
+        gaps,
+        active: Vec::new(),
+        events: Vec::new(),
+        stats: DynamicsStats::default(),
+        forces: Vec::new(),
+    };
+    let (end, error) = contacts.run(m, state, &run.alpha_options(), run.t_end, |s, q| {
+        progress(s.t);
+        match q {
+            Some(q) => rec.record(m, s, q),
+            None => rec.record(m, s, &m.full_of(&s.q)),
+        }
+    });
+    let cpu = clock.elapsed().as_secs_f64();
+    rec.finish(m, &end);
+    let stop = error.map_or(Stop::Finished, stop_of);
+    let mut r = report(
+        m,
+        cables,
+        &start,
+        &end,
+        &[],
+        stop,
+        &contacts.stats,
+        cpu,
+        run.rho_inf,
+    );
+    if let Some(el) = &mut r.elements {
+        el.contact_forces = contacts
+            .active
+            .iter()
+            .zip(&contacts.forces)
+            .map(|(&i, &force)| ContactForce {
+                contact: gaps.names[i].clone(),
+                force,
+            })
+            .collect();
+    }
+    r.contact_events = contacts.events;
+    Ok((r, rec.table))
+}
+
 /// Runs cables alone: `model` holds every cable (`cables` says where),
 /// from its reference configuration at rest.
 pub fn simulate_structure(
     model: &StructuralModel,
     cables: &[CableLayout],
+    contacts: &[NodeContact],
     run: &ElementRun,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(RunReport, Option<Table>), RunError> {
-    let problems = run.problems();
+    let mut problems = run.problems();
+    if !contacts.is_empty() && run.integrator == Integrator::Rk4 {
+        problems.push(
+            "contacts at cable nodes run on generalized-α (sustained contacts are index-3 constraints): use --integrator generalized-alpha"
+                .to_string(),
+        );
+    }
     if !problems.is_empty() {
         return Err(RunError::Options(problems));
     }
@@ -468,7 +585,8 @@ pub fn simulate_structure(
         v: vec![0.0; model.n_free()],
     };
     if run.integrator != Integrator::Rk4 {
-        return run_alpha(model, cables, state, (&[], &[]), run, progress);
+        let gaps = Gaps::new(contacts, |i| model.free_index(i), model.q0());
+        return run_alpha(model, cables, state, (&[], &[]), run, &gaps, progress);
     }
     let clock = Instant::now();
     let start = state.clone();
@@ -535,7 +653,8 @@ pub fn simulate_mixed(
         return Err(RunError::Options(problems));
     }
     let state = model.initial_state(0.0, q0, u0);
-    run_alpha(model, cables, state, names, run, progress)
+    let none = Gaps::new(&[], Some, &[]);
+    run_alpha(model, cables, state, names, run, &none, progress)
 }
 
 fn load_steps(steps: &[LoadStep]) -> Vec<LoadStepReport> {

@@ -226,7 +226,7 @@ pub fn lcp(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
 
 /// One evaluation of the generated `contacts` (and `friction`, if the
 /// model has it).
-pub(super) struct Rows {
+pub(crate) struct Rows {
     pub g: Vec<f64>,
     pub gdot: Vec<f64>,
     pub gamma: Vec<f64>,
@@ -348,7 +348,7 @@ fn effective_inverse(
 
 /// How a contact with Coulomb friction moves along its plane.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Slide {
+pub(crate) enum Slide {
     /// `v_t = 0`, held by a tangential force (impulse) `λ_t` inside the
     /// cone `‖λ_t‖ ≤ μ λ`.
     Stick,
@@ -379,12 +379,12 @@ struct Problem<'a> {
 }
 
 /// A solved [`Problem`], per element of its `set`.
-struct Solved {
-    du: DVector<f64>,
-    ln: DVector<f64>,
-    lt: Vec<[f64; 2]>,
+pub(crate) struct Solved {
+    pub du: DVector<f64>,
+    pub ln: DVector<f64>,
+    pub lt: Vec<[f64; 2]>,
     /// `ξ_t = W_t Δ + b_t` (for an impact, the tangential speeds after).
-    xi_t: Vec<[f64; 2]>,
+    pub xi_t: Vec<[f64; 2]>,
 }
 
 impl Problem<'_> {
@@ -517,7 +517,7 @@ fn norm2(v: [f64; 2]) -> f64 {
 /// it). With `held`
 /// (contacts coming to rest, `e = 0` on every row) sliding rows take no
 /// tangential impulse.
-fn impact(
+pub(crate) fn impact(
     m: &DMatrix<f64>,
     j: Option<&DMatrix<f64>>,
     r: &Rows,

@@ -51,6 +51,23 @@ pub struct ElementReport {
     pub cables: Vec<CableState>,
     /// Every marker holding a cable end (`System::cable_mounts` order).
     pub mounts: Vec<MountForce>,
+    /// The normal force of every contact at a cable node sustained at the
+    /// end of the run (N, `≥ 0`; contacts not touching are left out).
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "Vec::is_empty")
+    )]
+    pub contact_forces: Vec<ContactForce>,
+}
+
+/// The normal force a sustained contact carries.
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(Serialize, Deserialize))]
+pub struct ContactForce {
+    /// The contact.
+    pub contact: String,
+    /// Its normal force `λ ≥ 0`, N.
+    pub force: f64,
 }
 
 /// One load step of a static solve.

@@ -45,38 +45,63 @@ impl Ctx<'_> {
         Some(v)
     }
 
+    /// The model's contacts: those of its bodies (generated), and those at
+    /// cable nodes (run by the large-model runtime).
     pub(super) fn contacts(
         &mut self,
         spec: &Spec,
         bodies: &[BodyInfo],
         joints: &[JointInfo],
-    ) -> Option<Vec<ContactInfo>> {
+    ) -> (Option<Vec<ContactInfo>>, Option<Vec<CableContactInfo>>) {
         let mut out = Vec::new();
+        let mut at_nodes = Vec::new();
         let mut ok = true;
+        let mut nodes_ok = true;
         let mut names = HashSet::new();
         for (k, c) in spec.contacts.iter().enumerate() {
             let path = [f("contacts"), i(k)];
             let name = c.name();
-            // The cables' runner (generalized-α over the rigid part and the
-            // cables' nodes) has no event location or impact map: the
-            // contact would be ignored, and a cable node is no anchor.
-            if let Some(cable) = spec.cables.first() {
-                self.error(
-                    &path,
-                    format!(
-                        "contact `{name}` is in a model with cables (`{}`), whose runner does not handle contacts",
-                        cable.name
-                    ),
-                    "contacts work on rigid and flexible (floating-frame) bodies and their nodes: leave the contacts out of a model with cables, or the cables out of a model with contacts",
-                );
-                ok = false;
-            }
             if !names.insert(name) {
                 self.error(
                     &join(&path, &[f("name")]),
                     format!("contact `{name}` is defined twice"),
                     "contact names must be unique",
                 );
+            }
+            if let spec::Contact::Plane { at, .. } = c
+                && at.node.is_some()
+            {
+                match self.cable_contact(spec, c, &path) {
+                    Some(info) => at_nodes.push(info),
+                    None => nodes_ok = false,
+                }
+                continue;
+            }
+            if let spec::Contact::Spheres { a, b, .. } = c {
+                for (anchor, field) in [(a, "a"), (b, "b")] {
+                    if anchor.node.is_some() {
+                        self.error(
+                            &join(&path, &[f(field), f("node")]),
+                            format!("contact `{name}` puts a sphere on a cable node"),
+                            "a cable node touches a plane fixed in the world (`Plane` with `at: (body: CABLE, node: K)`); two spheres are on bodies",
+                        );
+                        ok = false;
+                    }
+                }
+            }
+            // The cables' runner (generalized-α over the rigid part and the
+            // cables' nodes) has no generated contacts: a body's contact
+            // would be ignored.
+            if let Some(cable) = spec.cables.first() {
+                self.error(
+                    &path,
+                    format!(
+                        "contact `{name}` is on a body in a model with cables (`{}`), whose runner handles contacts at cable nodes only",
+                        cable.name
+                    ),
+                    "contacts work on rigid and flexible (floating-frame) bodies and their nodes in models without cables, and at the nodes of cables alone (`at: (body: CABLE, node: K)`): leave this contact or the cables out",
+                );
+                ok = false;
             }
             let (e, mu) = match c {
                 spec::Contact::JointLimit { e, mu, .. }
@@ -202,7 +227,129 @@ impl Ctx<'_> {
                 _ => ok = false,
             }
         }
-        ok.then_some(out)
+        (ok.then_some(out), nodes_ok.then_some(at_nodes))
+    }
+
+    /// A `Plane` contact whose `at` is a cable node: the cable and node
+    /// exist, the cables run alone (no end at a body), the plane is fixed
+    /// in the world, no friction, and the node is not inside the plane at
+    /// the start (the cable straight from `from` to `to`).
+    fn cable_contact(
+        &mut self,
+        spec: &Spec,
+        c: &spec::Contact,
+        path: &[crate::model::locate::Seg<'static>],
+    ) -> Option<CableContactInfo> {
+        let spec::Contact::Plane {
+            name,
+            at,
+            radius,
+            point,
+            normal,
+            on,
+            e,
+            mu,
+        } = c
+        else {
+            return None;
+        };
+        let node = at.node?;
+        let at_path = join(path, &[f("at")]);
+        let mut ok = true;
+        let cable = spec.cables.iter().position(|x| x.name == at.body);
+        if cable.is_none() {
+            let names: Vec<String> = spec
+                .cables
+                .iter()
+                .map(|x| format!("`{}`", x.name))
+                .collect();
+            self.error(
+                &join(&at_path, &[f("body")]),
+                format!("contact `{name}` is at node {node} of `{}`, which is no cable", at.body),
+                if names.is_empty() {
+                    "`node` names a cable's node: this model has no cables (for a body's point, leave `node` out)".to_string()
+                } else {
+                    format!("the cables are {}", names.join(", "))
+                },
+            );
+            ok = false;
+        }
+        if at.point.is_some() || at.marker.is_some() {
+            self.error(
+                &at_path,
+                format!("contact `{name}` gives a cable node and a `point` or `marker`"),
+                "a cable node is the contact's point itself: give `body` (the cable) and `node` only",
+            );
+            ok = false;
+        }
+        if let Some(k) = cable {
+            let cab = &spec.cables[k];
+            if node > cab.elements {
+                self.error(
+                    &join(&at_path, &[f("node")]),
+                    format!(
+                        "contact `{name}` is at node {node} of cable `{}`, whose nodes are 0..={}",
+                        cab.name, cab.elements
+                    ),
+                    "a cable of n elements has nodes 0 (at `from`) to n (at `to`)",
+                );
+                ok = false;
+            }
+        }
+        if let Some(held) = spec
+            .cables
+            .iter()
+            .find(|x| x.start_at.is_some() || x.end_at.is_some())
+        {
+            self.error(
+                path,
+                format!(
+                    "contact `{name}` is at a cable node in a model whose cable `{}` hangs at a body",
+                    held.name
+                ),
+                "contacts at cable nodes run with cables alone (held to ground or free): the impact map with a rigid part's mass matrix and constraints is not implemented; hold the cable ends to ground (`start: Pinned`, no `start_at`)",
+            );
+            ok = false;
+        }
+        if let Some(b) = on {
+            self.error(
+                &join(path, &[f("on")]),
+                format!("contact `{name}` at a cable node touches a plane on body `{b}`"),
+                "a cable node touches a plane fixed in the world: leave `on` out",
+            );
+            ok = false;
+        }
+        let e = self.coefficient(e, &join(path, &[f("e")]), "`e`", name, 1.0);
+        let mu = self.coefficient(mu, &join(path, &[f("mu")]), "`mu`", name, f64::INFINITY);
+        if let Some(m) = mu
+            && m > 0.0
+        {
+            self.error(
+                &join(path, &[f("mu")]),
+                format!("contact `{name}` at a cable node has Coulomb friction (mu = {m})"),
+                "friction at cable nodes is not implemented (the cable runner holds sustained contacts as index-3 constraints, normal rows only): set `mu: 0`, or model the touching part as a body",
+            );
+            ok = false;
+        }
+        let r = self.nonnegative(radius, &join(path, &[f("radius")]), "radius", name);
+        let p = self.vec3(point, &join(path, &[f("point")]), Scope::Params);
+        let n = self.axis(normal, &join(path, &[f("normal")]), "the plane's normal");
+        let (cable, e, r, p, n) = (cable?, e?, r?, p?, n?);
+        if !ok {
+            return None;
+        }
+        let point = [p[0].value, p[1].value, p[2].value];
+        let normal = [n.unit[0], n.unit[1], n.unit[2]];
+        Some(CableContactInfo {
+            name: name.clone(),
+            cable,
+            node,
+            radius: r.value,
+            point,
+            normal,
+            e,
+            span: self.span(path),
+        })
     }
 
     /// A sphere's centre: an anchor on a body that is not the ground
@@ -334,6 +481,40 @@ impl Ctx<'_> {
                 a[crate::mech::contacts::least_aligned_axis(n)] = 1.0;
                 *tangent_reference = a;
             }
+        }
+    }
+
+    /// Every contact at a cable node open at the initial state (the cable
+    /// straight from its start to its end): a closed one is an error with
+    /// its penetration and what would open it.
+    pub(super) fn check_cable_contacts_open(&mut self, sys: &System) {
+        for (k, c) in sys.cable_contacts.iter().enumerate() {
+            let Some(cable) = sys.cables.get(c.cable) else {
+                continue;
+            };
+            let ch = &cable.chain;
+            let s = c.node as f64 / ch.elements.max(1) as f64;
+            let g: f64 = (0..3)
+                .map(|a| c.normal[a] * (ch.start[a] + s * (ch.end[a] - ch.start[a]) - c.point[a]))
+                .sum::<f64>()
+                - c.radius;
+            if g.is_finite() && g >= -PENETRATION_TOL {
+                continue;
+            }
+            let _ = k;
+            self.diags.push(
+                crate::diag::Diagnostic::error(
+                    c.span,
+                    format!(
+                        "contact `{}`: node {} of cable `{}` penetrates its plane by {:.6e} m at the initial state",
+                        c.name, c.node, cable.name, -g
+                    ),
+                )
+                .with_help(format!(
+                    "start the cable at least {:.6e} m further along the plane's normal (its `from` and `to`), or move the plane",
+                    -g
+                )),
+            );
         }
     }
 

@@ -16,6 +16,14 @@ impl Ctx<'_> {
         bodies: &[BodyInfo],
         path: &[Seg<'static>],
     ) -> Option<Point> {
+        if let Some(node) = a.node {
+            self.error(
+                &join(path, &[f("node")]),
+                format!("anchor on `{}` names a cable node ({node})", a.body),
+                "a cable node is the marker of a contact (`Plane`'s `at`) only: anchor on a body's point or marker here",
+            );
+            return None;
+        }
         let body = self.body_ref(bodies, &a.body, &join(path, &[f("body")]), "anchor")?;
         match (&a.point, &a.marker) {
             (Some(_), Some(_)) => {

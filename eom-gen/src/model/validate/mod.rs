@@ -229,7 +229,8 @@ impl Ctx<'_> {
                 planar: false,
             },
             cables: cables?,
-            contacts: contacts?,
+            contacts: contacts.0?,
+            cable_contacts: contacts.1?,
         };
         if self.diags.iter().any(Diagnostic::is_error) {
             return None;
@@ -238,6 +239,7 @@ impl Ctx<'_> {
         system.grubler = grubler(&system, &poses);
         self.check_closure(&system, &poses);
         self.check_contacts_open(&system);
+        self.check_cable_contacts_open(&system);
         self.orient_spheres(&mut system);
         if self.diags.iter().any(Diagnostic::is_error) {
             return None;

@@ -1,0 +1,348 @@
+//! Contacts at the nodes of ANCF cables (issue #26): a cable node against
+//! a plane fixed in the world, run by the large-model runtime through the
+//! rigid runtime's impact map and contact events.
+//!
+//! Physics checked:
+//! - **A straight free wire dropped flat onto a floor**: every node strikes
+//!   at `t₁ = √(2h₀/g)` with `ġ⁻ = −√(2gh₀)` (free fall is exact for
+//!   generalized-α and the gap's cubic interpolant); the five rows form one
+//!   simultaneous impact (an LCP). With `e = 1` every node leaves with
+//!   `ġ⁺ = −ġ⁻`, the energy is kept through the impact, and the impulses
+//!   are those of the Newton law solved independently,
+//!   `Λ = (1 + e) (W M⁻¹ Wᵀ)⁻¹ (−ġ⁻)`. With `e = 0` the nodes come to rest
+//!   and are held: the sustained normal forces carry the wire's weight
+//!   `ρ A L g`.
+//! - **A cable pendulum whose tip node strikes a floor**: the impulse against
+//!   `Λ = −(1 + e) ġ⁻ / (wᵀ M⁻¹ w)` and the energy lost against Carnot's
+//!   `½ (1 − e²) ġ⁻² / (wᵀ M⁻¹ w)`, with `M⁻¹` inverted here.
+//! - **Located refusals**: a node inside its plane at the start (with the
+//!   penetration), friction at a cable node, a node the cable does not
+//!   have, a cable that does not exist, a plane on a body, a node contact
+//!   in a model whose cable hangs at a body.
+
+use eom_gen::model::{Source, check};
+use eom_sim::Integrator;
+use eom_sim::large::{ElementRun, StructuralModel, simulate_structure};
+use eom_sim::run::ContactEventKind;
+use nalgebra::{DMatrix, DVector};
+
+const G: f64 = 9.81;
+const H0: f64 = 0.2;
+/// The wire: steel, 1 m, A = 8 mm².
+const RHO_A: f64 = 7850.0 * 8e-6;
+
+fn system(text: &str) -> eom_gen::System {
+    match check(&Source::new("drop.ron", text.to_string())) {
+        Ok(c) => c.system,
+        Err(r) => panic!("{r}"),
+    }
+}
+
+fn diagnose(text: &str) -> String {
+    match check(&Source::new("models/drop.ron", text.to_string())) {
+        Ok(_) => "valid".into(),
+        Err(report) => {
+            assert!(
+                report.diagnostics.iter().all(|d| d.span.is_some()),
+                "every diagnostic has a location"
+            );
+            report.to_string()
+        }
+    }
+}
+
+/// A free wire of `n` elements, level at height `h`, above the floor
+/// `y = 0`, a contact at every node with restitution `e` (and `extra`
+/// appended to each contact). Its bending damping (Kelvin–Voigt, about
+/// critical for the lowest span mode once it rests on its nodes) lets the
+/// sag set after it lands; a rigid translation does not strain it.
+fn wire_drop(n: usize, h: f64, e: f64, extra: &str) -> String {
+    let contacts: Vec<String> = (0..=n)
+        .map(|k| {
+            format!(
+                r#"Plane(name: "n{k}", at: (body: "wire", node: {k}), normal: (0, 1, 0), e: {e}{extra})"#
+            )
+        })
+        .collect();
+    format!(
+        r#"Model(
+    name: "wire_drop",
+    gravity: (0, -9.81, 0),
+    bodies: [],
+    joints: [],
+    cables: [Cable(name: "wire", element: Cable2D, from: (0, {h}, 0), to: (1, {h}, 0),
+        elements: {n}, young: 2e9, density: 7850, area: 8e-6, second_moment: 5e-12,
+        damping_bending: 2e-4, start: Free)],
+    contacts: [{}],
+)"#,
+        contacts.join(",\n        ")
+    )
+}
+
+fn run(t_end: f64, dt: f64, rho_inf: f64) -> ElementRun {
+    ElementRun {
+        integrator: Integrator::GeneralizedAlpha,
+        t_end,
+        dt,
+        rho_inf,
+        control: None,
+        record: false,
+        every: None,
+    }
+}
+
+/// The structure's mass matrix on its free coordinates, dense.
+fn dense_mass(m: &StructuralModel) -> DMatrix<f64> {
+    let n = m.n_free();
+    let mut out = DMatrix::zeros(n, n);
+    for j in 0..n {
+        let mut e = vec![0.0; n];
+        e[j] = 1.0;
+        let mut col = vec![0.0; n];
+        m.mass().sym_mul_add(1.0, &e, &mut col);
+        for i in 0..n {
+            out[(i, j)] = col[i];
+        }
+    }
+    out
+}
+
+/// Runs `text` and returns the report and the structure.
+fn simulate(
+    text: &str,
+    r: &ElementRun,
+) -> (
+    eom_sim::RunReport,
+    StructuralModel,
+    Vec<eom_sim::large::CableLayout>,
+) {
+    let sys = system(text);
+    let (built, cables) = eom_gen::cables::structure(&sys).expect("structure");
+    let contacts = eom_gen::cables::node_contacts(&sys, &cables);
+    assert_eq!(contacts.len(), sys.cable_contacts.len());
+    let (report, _) =
+        simulate_structure(&built.model, &cables, &contacts, r, &mut |_| {}).expect("runs");
+    (report, built.model, cables)
+}
+
+/// The free index of node `node`'s coordinate `axis`.
+fn free(m: &StructuralModel, c: &eom_sim::large::CableLayout, node: usize, axis: usize) -> usize {
+    m.free_index(c.offset + node * c.node_coords + axis)
+        .expect("a free coordinate")
+}
+
+#[test]
+fn a_wire_dropped_flat_rebounds_elastically_with_every_node_at_once() {
+    let n = 4;
+    let (report, model, cables) = simulate(&wire_drop(n, H0, 1.0, ""), &run(0.25, 1e-3, 1.0));
+    assert!(
+        matches!(report.stop, eom_sim::Stop::Finished),
+        "{:?}",
+        report.stop
+    );
+    let t1 = (2.0 * H0 / G).sqrt();
+    let v1 = (2.0 * G * H0).sqrt();
+    let ev = report
+        .contact_events
+        .first()
+        .expect("the wire strikes the floor");
+    assert_eq!(ev.kind, ContactEventKind::Impact);
+    assert!(
+        (ev.t - t1).abs() < 1e-9,
+        "impact at t = {}, want √(2h₀/g) = {t1}",
+        ev.t
+    );
+    assert_eq!(ev.contacts.len(), n + 1, "all nodes strike at once");
+    for c in &ev.contacts {
+        assert!(
+            (c.speed_before + v1).abs() < 1e-8,
+            "{}: ġ⁻ = {}, want −√(2gh₀) = {}",
+            c.contact,
+            c.speed_before,
+            -v1
+        );
+        assert!(
+            (c.speed_after - v1).abs() < 1e-8,
+            "{}: ġ⁺ = {}, want −ġ⁻ = {v1} (e = 1)",
+            c.contact,
+            c.speed_after
+        );
+    }
+    let scale = ev.energy_before.abs().max(RHO_A * G * H0);
+    assert!(
+        (ev.energy_after - ev.energy_before).abs() < 1e-10 * scale,
+        "energy before {} after {}: an elastic impact keeps it",
+        ev.energy_before,
+        ev.energy_after
+    );
+    // The Newton law solved here: Λ = (1 + e) (W M⁻¹ Wᵀ)⁻¹ v₁ 1 (every
+    // row active, so the LCP's answer is the linear solve's).
+    let m = dense_mass(&model);
+    let nf = model.n_free();
+    let w = DMatrix::from_fn(n + 1, nf, |k, j| {
+        if j == free(&model, &cables[0], k, 1) {
+            1.0
+        } else {
+            0.0
+        }
+    });
+    let minv = m.try_inverse().expect("M is invertible");
+    let a = &w * &minv * w.transpose();
+    let lam = a
+        .lu()
+        .solve(&DVector::from_element(n + 1, 2.0 * v1))
+        .expect("W M⁻¹ Wᵀ is invertible");
+    for (k, c) in ev.contacts.iter().enumerate() {
+        assert!(lam[k] > 0.0, "every node pushes");
+        assert!(
+            (c.impulse - lam[k]).abs() < 1e-9 * lam.amax(),
+            "{}: Λ = {}, want {}",
+            c.contact,
+            c.impulse,
+            lam[k]
+        );
+    }
+}
+
+#[test]
+fn a_wire_dropped_flat_with_e_0_comes_to_rest_on_its_nodes() {
+    let n = 4;
+    let (report, _, _) = simulate(&wire_drop(n, H0, 0.0, ""), &run(0.6, 1e-3, 0.5));
+    assert!(
+        matches!(report.stop, eom_sim::Stop::Finished),
+        "{:?}",
+        report.stop
+    );
+    let t1 = (2.0 * H0 / G).sqrt();
+    let kinds: Vec<_> = report.contact_events.iter().map(|e| e.kind).collect();
+    assert_eq!(
+        kinds[..2],
+        [ContactEventKind::Impact, ContactEventKind::Rest],
+        "{kinds:?}"
+    );
+    let impact = &report.contact_events[0];
+    assert!((impact.t - t1).abs() < 1e-9);
+    for c in &impact.contacts {
+        assert!(c.speed_after.abs() < 1e-9, "e = 0: {} stops", c.contact);
+    }
+    // The plastic impact stops the nodes but jolts the end slopes, and the
+    // spans start to sag: nodes lift off (released) and land again while
+    // the wire settles. The problem is mirror-symmetric about the middle,
+    // so every event takes node `k` with node `n − k`.
+    for ev in &report.contact_events {
+        let rows: Vec<String> = ev.contacts.iter().map(|c| c.contact.clone()).collect();
+        for r in &rows {
+            let k: usize = r[1..].parse().expect("n<k>");
+            assert!(
+                rows.contains(&format!("n{}", n - k)),
+                "{:?} at t = {}: {rows:?} is not symmetric",
+                ev.kind,
+                ev.t
+            );
+        }
+    }
+    let el = report.elements.as_ref().expect("an element report");
+    assert_eq!(
+        el.contact_forces.len(),
+        n + 1,
+        "every node is held at the end"
+    );
+    let weight = RHO_A * 1.0 * G;
+    let sum: f64 = el.contact_forces.iter().map(|c| c.force).sum();
+    for c in &el.contact_forces {
+        assert!(c.force > 0.0, "{} pushes: {}", c.contact, c.force);
+    }
+    assert!(
+        (sum - weight).abs() < 1e-3 * weight,
+        "the normal forces sum to {sum} N, want the weight ρ A L g = {weight} N"
+    );
+}
+
+/// A cable pendulum: pinned at the origin, level along +x, falling under
+/// gravity; its tip (node `n`) strikes the floor `y = −depth`.
+fn pendulum(n: usize, depth: f64, e: f64) -> String {
+    format!(
+        r#"Model(
+    name: "cable_pendulum",
+    gravity: (0, -9.81, 0),
+    bodies: [],
+    joints: [],
+    cables: [Cable(name: "rod", element: Cable2D, from: (0, 0, 0), to: (1, 0, 0),
+        elements: {n}, young: 2e9, density: 7850, area: 8e-6, second_moment: 5e-12, start: Pinned)],
+    contacts: [Plane(name: "stop", at: (body: "rod", node: {n}), point: (0, -{depth}, 0), normal: (0, 1, 0), e: {e})],
+)"#
+    )
+}
+
+#[test]
+fn a_cable_pendulum_striking_a_stop_loses_carnots_energy() {
+    let (n, e) = (4, 0.5);
+    let (report, model, cables) = simulate(&pendulum(n, 0.6, e), &run(0.35, 1e-3, 1.0));
+    let ev = report
+        .contact_events
+        .iter()
+        .find(|x| x.kind == ContactEventKind::Impact)
+        .expect("the tip strikes the floor");
+    let c = &ev.contacts[0];
+    assert_eq!(c.contact, "stop");
+    assert!(c.speed_before < 0.0, "approaching");
+    // wᵀ M⁻¹ w with w the tip's y coordinate, M inverted here.
+    let m = dense_mass(&model);
+    let minv = m.try_inverse().expect("M is invertible");
+    let k = free(&model, &cables[0], n, 1);
+    let wmw = minv[(k, k)];
+    let want = -(1.0 + e) * c.speed_before / wmw;
+    assert!(
+        (c.impulse - want).abs() < 1e-9 * want,
+        "Λ = {}, want −(1 + e) ġ⁻ / (wᵀ M⁻¹ w) = {want}",
+        c.impulse
+    );
+    assert!(
+        (c.speed_after + e * c.speed_before).abs() < 1e-9 * c.speed_before.abs(),
+        "ġ⁺ = {}, want −e ġ⁻",
+        c.speed_after
+    );
+    let lost = ev.energy_before - ev.energy_after;
+    let carnot = 0.5 * (1.0 - e * e) * c.speed_before * c.speed_before / wmw;
+    assert!(
+        (lost - carnot).abs() < 1e-9 * carnot,
+        "energy lost {lost}, want Carnot's ½ (1 − e²) ġ⁻² / (wᵀ M⁻¹ w) = {carnot}"
+    );
+}
+
+#[test]
+fn contacts_at_cable_nodes_refused_with_their_locations() {
+    // Inside the floor at the start: the penetration and what opens it.
+    let text = wire_drop(2, -0.01, 0.5, "");
+    let out = diagnose(&text);
+    assert!(
+        out.contains("node 0 of cable `wire` penetrates its plane by 1.000000e-2 m"),
+        "{out}"
+    );
+    assert!(out.contains("further along the plane's normal"), "{out}");
+    // Friction at a cable node.
+    let out = diagnose(&wire_drop(2, H0, 0.5, ", mu: 0.3"));
+    assert!(
+        out.contains("contact `n0` at a cable node has Coulomb friction (mu = 0.3)"),
+        "{out}"
+    );
+    assert!(out.contains("set `mu: 0`"), "{out}");
+    assert!(out.contains("models/drop.ron:"), "located: {out}");
+    // A node the cable does not have, and a cable that does not exist.
+    let bad = wire_drop(2, H0, 0.5, "")
+        .replace("node: 2)", "node: 7)")
+        .replace(r#"(body: "wire", node: 1)"#, r#"(body: "rope", node: 1)"#);
+    let out = diagnose(&bad);
+    assert!(
+        out.contains("contact `n2` is at node 7 of cable `wire`, whose nodes are 0..=2"),
+        "{out}"
+    );
+    assert!(
+        out.contains("contact `n1` is at node 1 of `rope`, which is no cable"),
+        "{out}"
+    );
+    // A plane on a body.
+    let on = wire_drop(1, H0, 0.5, r#", on: "table""#);
+    let out = diagnose(&on);
+    assert!(out.contains("touches a plane on body `table`"), "{out}");
+}
