@@ -118,14 +118,24 @@ fn step_fn(fname: &str, p: usize, k: usize, l: &Loop, fma: bool) -> TokenStream 
         " Body step {k} of pass {p} of `{fname}` ({} operations; see `eom_gen::mech::looped`).",
         prog.op_count().total()
     );
+    // The stores are read before the carried value is written (an output
+    // may be the carried value passed through); a step that carries
+    // nothing returns them directly.
+    let tail = if nc > 0 {
+        quote! {
+            let value = #value;
+            #write_carry
+            value
+        }
+    } else {
+        value
+    };
     quote! {
         #[doc = #doc]
         #[allow(clippy::too_many_arguments)]
         fn #ident(#(#params),*) -> #ret {
             #body
-            let value = #value;
-            #write_carry
-            value
+            #tail
         }
     }
 }
