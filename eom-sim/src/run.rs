@@ -34,6 +34,7 @@ pub use contact::{
     ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, JointImpulse, MAX_LCP, lcp,
 };
 mod elements;
+mod redundant;
 pub use elements::{
     CableState, ContactForce, ElementReport, LoadStepReport, MountForce, StabilityReport,
     StaticReport,

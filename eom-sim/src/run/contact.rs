@@ -45,6 +45,7 @@
 //! inverse dynamics of the velocity jump with the contact impulses as
 //! loads).
 
+use super::redundant::{Cone, min_norm_feasible};
 use super::{Simulate, energy};
 use crate::constrained::{ConstraintValues, DMatrix, DVector};
 use crate::integrate::Stats;
@@ -443,23 +444,30 @@ impl Problem<'_> {
         masks.sort_by_key(|m| (m.count_ones(), *m));
         for mask in masks {
             let on = |k: usize| mask >> k & 1 == 1;
-            let mut idx: Vec<usize> = (0..n).filter(|&k| on(k)).collect();
-            for (p, &k) in stick.iter().enumerate() {
-                if on(k) {
-                    idx.extend([n + 2 * p, n + 2 * p + 1]);
-                }
-            }
+            let idx = self.unknowns(mask, &stick);
             let mut z = DVector::zeros(cols);
             if !idx.is_empty() {
                 let sub = DMatrix::from_fn(idx.len(), idx.len(), |a, c| g[(idx[a], idx[c])]);
                 let rhs = DVector::from_fn(idx.len(), |a, _| -b[idx[a]]);
                 let eps = 1e-13 * sub.amax().max(f64::MIN_POSITIVE);
-                let Ok(sol) = sub.clone().svd(true, true).solve(&rhs, eps) else {
+                let svd = sub.clone().svd(true, true);
+                let Ok(sol) = svd.solve(&rhs, eps) else {
                     continue;
                 };
                 if sol.iter().any(|v| !v.is_finite()) || (&sub * &sol - &rhs).amax() > 1e-9 * scale
                 {
                     continue;
+                }
+                if !self.held && svd.singular_values.iter().any(|&s| s <= eps) {
+                    // Redundant rows: the speeds are unique, the impulses a
+                    // set, feasible if some point of it is.
+                    for (a, &c) in idx.iter().enumerate() {
+                        z[c] = sol[a];
+                    }
+                    match self.redundant(&g, &b, &x, mask, &stick, &z, scale) {
+                        Some(found) => return Some(found),
+                        None => continue,
+                    }
                 }
                 let big = sol.amax();
                 if !self.held && (0..idx.len()).any(|a| idx[a] < n && sol[a] < -1e-10 * big) {
@@ -477,27 +485,138 @@ impl Problem<'_> {
             if !self.held && (0..n).any(|k| !on(k) && xi[k] < -1e-10 * scale) {
                 continue;
             }
-            let du = &x * &z;
-            let ln = DVector::from_fn(n, |k, _| z[k]);
-            let mut lt = vec![[0.0; 2]; n];
-            for (k, slide) in self.slide.iter().enumerate() {
-                if let Some(Slide::Slip(s)) = slide {
-                    let l = r.mu[set[k]] * ln[k];
-                    lt[k] = [-l * s[0], -l * s[1]];
-                }
-            }
-            for (p, &k) in stick.iter().enumerate() {
-                lt[k] = [z[n + 2 * p], z[n + 2 * p + 1]];
-            }
-            let xi_t = (0..n)
-                .map(|k| {
-                    let i = set[k];
-                    [0, 1].map(|a| r.tangential_dot(i, a, &du) + self.bt[k][a])
-                })
-                .collect();
-            return Some(Solved { du, ln, lt, xi_t });
+            return Some(self.finish(&x, &stick, &z, &z));
         }
         None
+    }
+
+    /// The unknowns of the active rows `mask`: their normal impulses, then
+    /// the tangential ones of those that stick (`stick`, as in `solve`).
+    fn unknowns(&self, mask: u32, stick: &[usize]) -> Vec<usize> {
+        let n = self.set.len();
+        let on = |k: usize| mask >> k & 1 == 1;
+        let mut idx: Vec<usize> = (0..n).filter(|&k| on(k)).collect();
+        for (p, &k) in stick.iter().enumerate() {
+            if on(k) {
+                idx.extend([n + 2 * p, n + 2 * p + 1]);
+            }
+        }
+        idx
+    }
+
+    /// The mode `mask` of a singular block `g` (`ξ = g z + b`), `z0` its
+    /// minimum-norm solution (zero off the mask): feasible if some impulse
+    /// with the same speeds fits the signs and the cones (see
+    /// `redundant`). The mask is first widened to every row that `z0`
+    /// leaves closed (`ξ = 0`, and for a sticking row `ξ_t = 0`): a box
+    /// that lands flat is solved by three of its corners, the fourth one
+    /// closing with no impulse, and the impulses of all four are the set
+    /// to choose from. Of it the impulse of minimum norm fitting the cones
+    /// (failing that, the signs only: the caller then slides the rows
+    /// outside their cones) is returned, with the speeds of its projection
+    /// on the equations.
+    #[allow(clippy::too_many_arguments)]
+    fn redundant(
+        &self,
+        g: &DMatrix<f64>,
+        b: &DVector<f64>,
+        x: &DMatrix<f64>,
+        mask: u32,
+        stick: &[usize],
+        z0: &DVector<f64>,
+        scale: f64,
+    ) -> Option<Solved> {
+        let n = self.set.len();
+        let tol = 1e-10 * scale;
+        let xi = g * z0 + b;
+        if (0..n).any(|k| mask >> k & 1 == 0 && xi[k] < -tol) {
+            return None;
+        }
+        let mut wide = mask;
+        for k in 0..n {
+            let closed = match stick.iter().position(|&s| s == k) {
+                Some(p) => [k, n + 2 * p, n + 2 * p + 1]
+                    .iter()
+                    .all(|&c| xi[c].abs() <= tol),
+                None => xi[k].abs() <= tol,
+            };
+            if closed {
+                wide |= 1 << k;
+            }
+        }
+        let idx = self.unknowns(wide, stick);
+        let sub = DMatrix::from_fn(idx.len(), idx.len(), |a, c| g[(idx[a], idx[c])]);
+        let rhs = DVector::from_fn(idx.len(), |a, _| -b[idx[a]]);
+        let eps = 1e-13 * sub.amax().max(f64::MIN_POSITIVE);
+        let svd = sub.clone().svd(true, true);
+        let sol = svd.solve(&rhs, eps).ok()?;
+        if sol.iter().any(|v| !v.is_finite()) || (&sub * &sol - &rhs).amax() > 1e-9 * scale {
+            return None;
+        }
+        let v_t = svd.v_t.as_ref()?;
+        let free: Vec<usize> = (0..idx.len())
+            .filter(|&i| svd.singular_values[i] <= eps)
+            .collect();
+        let null = DMatrix::from_fn(idx.len(), free.len(), |a, c| v_t[(free[c], a)]);
+        let cones: Vec<Cone> = (0..n)
+            .filter(|&k| wide >> k & 1 == 1)
+            .map(|k| {
+                let at = |c: usize| idx.iter().position(|&i| i == c);
+                Cone {
+                    normal: at(k).unwrap_or(0),
+                    tangential: stick.iter().position(|&s| s == k).and_then(|p| {
+                        Some(([at(n + 2 * p)?, at(n + 2 * p + 1)?], self.r.mu[self.set[k]]))
+                    }),
+                }
+            })
+            .collect();
+        let (in_k, in_a) = min_norm_feasible(&sol, &null, &cones, true)
+            .or_else(|| min_norm_feasible(&sol, &null, &cones, false))?;
+        let (mut zk, mut za) = (DVector::zeros(b.len()), DVector::zeros(b.len()));
+        for (a, &c) in idx.iter().enumerate() {
+            zk[c] = in_k[a];
+            za[c] = in_a[a];
+        }
+        // The speeds after of the rows left open (unique unless sliding
+        // rows make the speeds depend on the choice).
+        let xi = g * &za + b;
+        if (0..n).any(|k| wide >> k & 1 == 0 && xi[k] < -tol) {
+            return None;
+        }
+        Some(self.finish(x, stick, &zk, &za))
+    }
+
+    /// The solution of the impulses (forces) `z` — normal, then tangential
+    /// of the sticking rows `stick` — with the speeds (accelerations) of
+    /// `z_speeds` (`Δ = x z_speeds`; the same as `z` but for a redundant
+    /// block, see `redundant`).
+    fn finish(
+        &self,
+        x: &DMatrix<f64>,
+        stick: &[usize],
+        z: &DVector<f64>,
+        z_speeds: &DVector<f64>,
+    ) -> Solved {
+        let (r, set, n) = (self.r, self.set, self.set.len());
+        let du = x * z_speeds;
+        let ln = DVector::from_fn(n, |k, _| z[k]);
+        let mut lt = vec![[0.0; 2]; n];
+        for (k, slide) in self.slide.iter().enumerate() {
+            if let Some(Slide::Slip(s)) = slide {
+                let l = r.mu[set[k]] * ln[k];
+                lt[k] = [-l * s[0], -l * s[1]];
+            }
+        }
+        for (p, &k) in stick.iter().enumerate() {
+            lt[k] = [z[n + 2 * p], z[n + 2 * p + 1]];
+        }
+        let xi_t = (0..n)
+            .map(|k| {
+                let i = set[k];
+                [0, 1].map(|a| r.tangential_dot(i, a, &du) + self.bt[k][a])
+            })
+            .collect();
+        Solved { du, ln, lt, xi_t }
     }
 }
 
