@@ -386,6 +386,8 @@ pub(crate) struct Solved {
     pub lt: Vec<[f64; 2]>,
     /// `ξ_t = W_t Δ + b_t` (for an impact, the tangential speeds after).
     pub xi_t: Vec<[f64; 2]>,
+    /// `ξ = W Δ + b` (for an impact, `ġ⁺ + e ġ⁻`).
+    pub xi: Vec<f64>,
 }
 
 impl Problem<'_> {
@@ -398,6 +400,7 @@ impl Problem<'_> {
                 ln: DVector::zeros(0),
                 lt: Vec::new(),
                 xi_t: Vec::new(),
+                xi: Vec::new(),
             });
         }
         if n > MAX_LCP {
@@ -464,7 +467,7 @@ impl Problem<'_> {
                     for (a, &c) in idx.iter().enumerate() {
                         z[c] = sol[a];
                     }
-                    match self.redundant(&g, &b, &x, mask, &stick, &z, scale) {
+                    match self.redundant(&g, &b, &x, mask, &stick, &z, scale, false) {
                         Some(found) => return Some(found),
                         None => continue,
                     }
@@ -484,6 +487,13 @@ impl Problem<'_> {
             let xi = &g * &z + &b;
             if !self.held && (0..n).any(|k| !on(k) && xi[k] < -1e-10 * scale) {
                 continue;
+            }
+            // Rows left closed without impulse: if with them the block is
+            // singular, the impulses are a set (see `redundant`).
+            if !self.held
+                && let Some(found) = self.redundant(&g, &b, &x, mask, &stick, &z, scale, true)
+            {
+                return Some(found);
             }
             return Some(self.finish(&x, &stick, &z, &z));
         }
@@ -514,7 +524,9 @@ impl Problem<'_> {
     /// to choose from. Of it the impulse of minimum norm fitting the cones
     /// (failing that, the signs only: the caller then slides the rows
     /// outside their cones) is returned, with the speeds of its projection
-    /// on the equations.
+    /// on the equations. With `widening` (a regular block's solution `z0`)
+    /// `None` unless the widened block is singular: the regular solution
+    /// stands.
     #[allow(clippy::too_many_arguments)]
     fn redundant(
         &self,
@@ -525,6 +537,7 @@ impl Problem<'_> {
         stick: &[usize],
         z0: &DVector<f64>,
         scale: f64,
+        widening: bool,
     ) -> Option<Solved> {
         let n = self.set.len();
         let tol = 1e-10 * scale;
@@ -544,6 +557,9 @@ impl Problem<'_> {
                 wide |= 1 << k;
             }
         }
+        if widening && wide == mask {
+            return None;
+        }
         let idx = self.unknowns(wide, stick);
         let sub = DMatrix::from_fn(idx.len(), idx.len(), |a, c| g[(idx[a], idx[c])]);
         let rhs = DVector::from_fn(idx.len(), |a, _| -b[idx[a]]);
@@ -557,6 +573,9 @@ impl Problem<'_> {
         let free: Vec<usize> = (0..idx.len())
             .filter(|&i| svd.singular_values[i] <= eps)
             .collect();
+        if widening && free.is_empty() {
+            return None;
+        }
         let null = DMatrix::from_fn(idx.len(), free.len(), |a, c| v_t[(free[c], a)]);
         let cones: Vec<Cone> = (0..n)
             .filter(|&k| wide >> k & 1 == 1)
@@ -616,7 +635,16 @@ impl Problem<'_> {
                 [0, 1].map(|a| r.tangential_dot(i, a, &du) + self.bt[k][a])
             })
             .collect();
-        Solved { du, ln, lt, xi_t }
+        let xi = (0..n)
+            .map(|k| (0..du.len()).map(|c| r.w[(set[k], c)] * du[c]).sum::<f64>() + self.b[k])
+            .collect();
+        Solved {
+            du,
+            ln,
+            lt,
+            xi_t,
+            xi,
+        }
     }
 }
 
@@ -691,10 +719,23 @@ pub(crate) fn impact(
             return Some(sol);
         }
         let mut changed = false;
+        let closed = 1e-10 * b.amax().max(f64::MIN_POSITIVE);
+        // (also the least sliding speed such a row is slid with)
         for k in 0..set.len() {
             let mu = r.mu[set[k]];
             let ln = sol.ln[k];
             match slide[k] {
+                // Closed without impulse but moving along the plane (a
+                // fourth corner of a box landing flat, its load taken by
+                // the other three): it slides, with the others, so that
+                // the impulses of all of them are the set to choose from.
+                Some(Slide::Stick)
+                    if ln == 0.0 && sol.xi[k].abs() <= closed && norm2(sol.xi_t[k]) > closed =>
+                {
+                    let (v, nv) = (sol.xi_t[k], norm2(sol.xi_t[k]));
+                    slide[k] = Some(Slide::Slip([v[0] / nv, v[1] / nv]));
+                    changed = true;
+                }
                 Some(Slide::Stick) if norm2(sol.lt[k]) > mu * ln * (1.0 + 1e-9) + 1e-300 => {
                     let l = norm2(sol.lt[k]);
                     slide[k] = Some(Slide::Slip([-sol.lt[k][0] / l, -sol.lt[k][1] / l]));

@@ -22,6 +22,11 @@ use crate::constrained::{DMatrix, DVector};
 /// Alternating projections before a block is declared infeasible.
 const MAX_ITER: usize = 20_000;
 
+/// Every this many projections the gap between the two sets is compared
+/// with the one before: an empty intersection shows as a gap that no
+/// longer shrinks (by 1 %), away from zero.
+const STALL_EVERY: usize = 500;
+
 /// The unknowns of one active contact row in the block: its normal
 /// impulse's position and, if it sticks, its two tangential ones' and `μ`.
 pub(super) struct Cone {
@@ -79,7 +84,8 @@ fn inside(z: &DVector<f64>, cones: &[Cone], with_friction: bool) -> bool {
 /// `(z_K, z_A)`, the point in `K` (the impulses to report) and its
 /// projection on the affine set (the one whose speeds to take), within
 /// `10⁻¹²` of each other relative to `z0`; `None` if the intersection is
-/// empty (or not reached within [`MAX_ITER`] projections).
+/// empty (the gap stalls, see [`STALL_EVERY`], or is not closed within
+/// [`MAX_ITER`] projections).
 pub(super) fn min_norm_feasible(
     z0: &DVector<f64>,
     null: &DMatrix<f64>,
@@ -98,7 +104,8 @@ pub(super) fn min_norm_feasible(
     // Dykstra from the origin: y = P_A(x), x' = P_K(y + q), q' = y + q − x'.
     let mut x = DVector::zeros(z0.len());
     let mut q = DVector::zeros(z0.len());
-    for _ in 0..MAX_ITER {
+    let mut last = f64::INFINITY;
+    for it in 1..=MAX_ITER {
         let y = affine(&x);
         let mut next = &y + &q;
         project_cones(&mut next, cones, with_friction);
@@ -111,6 +118,12 @@ pub(super) fn min_norm_feasible(
         if gap <= tol && moved <= tol {
             let y = affine(&x);
             return Some((x, y));
+        }
+        if it % STALL_EVERY == 0 {
+            if gap > 1e3 * tol && gap >= 0.99 * last {
+                return None;
+            }
+            last = gap;
         }
     }
     None
