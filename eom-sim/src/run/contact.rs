@@ -1467,3 +1467,135 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const G: f64 = 9.81;
+
+    /// A free box (m = 2 kg, `I = diag(0.02, 0.03, 0.04)`, speeds `v`, `ω`
+    /// in the world axes) on its four corners `(±0.2, ±0.15, −0.06)` on the
+    /// floor `z = 0`, μ = 0.5, e = 0.5, at the speeds `u` (`γ = 0`: no
+    /// spin): the mass matrix and the rows.
+    fn box_rows(u: [f64; 6]) -> (DMatrix<f64>, Rows) {
+        let h = -0.06;
+        let corners = [(0.2, 0.15), (-0.2, 0.15), (-0.2, -0.15), (0.2, -0.15)];
+        // Rows of v + ω × r, r = (x, y, h): along z, then x and y.
+        let w: Vec<f64> = corners
+            .iter()
+            .flat_map(|&(x, y)| [0.0, 0.0, 1.0, y, -x, 0.0])
+            .collect();
+        let wt: Vec<f64> = corners
+            .iter()
+            .flat_map(|&(x, y)| [1.0, 0.0, 0.0, 0.0, h, -y, 0.0, 1.0, 0.0, -h, 0.0, x])
+            .collect();
+        let (w, wt) = (
+            DMatrix::from_row_slice(4, 6, &w),
+            DMatrix::from_row_slice(8, 6, &wt),
+        );
+        let u = DVector::from_row_slice(&u);
+        let (gdot, vt) = (&w * &u, &wt * &u);
+        let m = DMatrix::from_diagonal(&DVector::from_vec(vec![2.0, 2.0, 2.0, 0.02, 0.03, 0.04]));
+        let rows = Rows {
+            g: vec![0.0; 4],
+            gdot: gdot.as_slice().to_vec(),
+            gamma: vec![0.0; 4],
+            e: vec![0.5; 4],
+            mu: vec![0.5; 4],
+            w,
+            vt: (0..4).map(|k| [vt[2 * k], vt[2 * k + 1]]).collect(),
+            gamma_t: vec![[0.0; 2]; 4],
+            wt,
+        };
+        (m, rows)
+    }
+
+    /// At rest under gravity (`u̇_free = (0, 0, −g, 0, 0, 0)`), pushed
+    /// along x by `p` N: the force problem `settle` solves (sticking rows,
+    /// complementary normals) and the held one of the sustained motion.
+    /// The four normal forces carry `m g`, the friction forces `−p`, and
+    /// the box does not accelerate; without a push the minimum-norm forces
+    /// are `m g/4` each and no friction. A redundant block (4 + 8 rows on
+    /// 6 speeds).
+    #[test]
+    fn resting_box_on_four_corners_carries_m_g() {
+        let set = [0, 1, 2, 3];
+        let slide = [Some(Slide::Stick); 4];
+        for p in [0.0, 5.0] {
+            let (m, r) = box_rows([0.0; 6]);
+            let free = DVector::from_vec(vec![p / 2.0, 0.0, -G, 0.0, 0.0, 0.0]);
+            let b = r.normal(&set) * &free;
+            let bt: Vec<[f64; 2]> = set
+                .iter()
+                .map(|&i| [0, 1].map(|a| r.tangential_dot(i, a, &free)))
+                .collect();
+            for held in [false, true] {
+                let sol = Problem {
+                    m: &m,
+                    j: None,
+                    r: &r,
+                    set: &set,
+                    slide: &slide,
+                    b: b.clone(),
+                    bt: bt.clone(),
+                    held,
+                }
+                .solve()
+                .unwrap_or_else(|| panic!("p {p}, held {held}: no solution"));
+                let sum: f64 = sol.ln.iter().sum();
+                let fx: f64 = sol.lt.iter().map(|l| l[0]).sum();
+                let fy: f64 = sol.lt.iter().map(|l| l[1]).sum();
+                assert!(
+                    (sum - 2.0 * G).abs() < 1e-12 && (fx + p).abs() < 1e-12 && fy.abs() < 1e-12,
+                    "p {p}, held {held}: Σ λ = {sum}, want m g = {}; Σ λ_t = ({fx}, {fy}), want ({}, 0)",
+                    2.0 * G,
+                    -p
+                );
+                let acc = &free + &sol.du;
+                assert!(acc.amax() < 1e-12, "p {p}, held {held}: u̇ = {acc}");
+                for k in 0..4 {
+                    assert!(
+                        sol.ln[k] > 0.0 && norm2(sol.lt[k]) <= 0.5 * sol.ln[k],
+                        "p {p}, held {held}: row {k}: λ = {}, λ_t = {:?}",
+                        sol.ln[k],
+                        sol.lt[k]
+                    );
+                    if p == 0.0 {
+                        assert!(
+                            (sol.ln[k] - 2.0 * G / 4.0).abs() < 1e-12 && norm2(sol.lt[k]) < 1e-12,
+                            "held {held}: row {k}: λ = {}, λ_t = {:?}; want m g/4, 0",
+                            sol.ln[k],
+                            sol.lt[k]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Dropped flat at 2 m/s onto four sticking corners (e = 0.5): the
+    /// impact map's impulses are `m (1 + e) v⁻/4 = 1.5` N s each (the
+    /// minimum-norm choice) and the box rebounds at `e v⁻` without turning.
+    #[test]
+    fn box_dropped_flat_gets_four_equal_impulses() {
+        let (m, r) = box_rows([0.0, 0.0, -2.0, 0.0, 0.0, 0.0]);
+        let set = [0, 1, 2, 3];
+        let slides = [Some(Slide::Stick); 4];
+        let sol = impact(&m, None, &r, &set, &|i| r.e[i], false, &slides).expect("solvable");
+        for k in 0..4 {
+            assert!(
+                (sol.ln[k] - 1.5).abs() < 1e-12 && norm2(sol.lt[k]) < 1e-12,
+                "row {k}: Λ = {}, Λ_t = {:?}; want 1.5, 0",
+                sol.ln[k],
+                sol.lt[k]
+            );
+        }
+        let want = [0.0, 0.0, 3.0, 0.0, 0.0, 0.0];
+        assert!(
+            sol.du.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12),
+            "Δu = {}, want {want:?}",
+            sol.du
+        );
+    }
+}
