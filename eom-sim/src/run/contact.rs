@@ -36,6 +36,11 @@
 //!    events. Each is one [`Problem`]: the normal rows complementary, the
 //!    tangential ones by their mode (Pfeiffer and Glocker's formulation
 //!    with the modes enumerated, not a regularised friction law).
+//! 4. **Redundant contacts** — several rows on few speeds (a box on four
+//!    corners: 12 rows, rank 6): a mode's speeds are unique, its impulses
+//!    (forces) a set; the mode is feasible if some member fits the signs
+//!    and cones, and the one of minimum norm is reported (see
+//!    `redundant.rs`).
 //!
 //! Every event is reported ([`ContactEvent`]): time, kind, per contact row
 //! the normal speeds before and after and the impulse, the energy before and
