@@ -450,6 +450,9 @@ impl Problem<'_> {
             (0..1u32 << n).collect()
         };
         masks.sort_by_key(|m| (m.count_ones(), *m));
+        // Widened modes of singular blocks found infeasible (several masks
+        // widen to the same one).
+        let mut refused = Vec::new();
         for mask in masks {
             let on = |k: usize| mask >> k & 1 == 1;
             let idx = self.unknowns(mask, &stick);
@@ -472,7 +475,7 @@ impl Problem<'_> {
                     for (a, &c) in idx.iter().enumerate() {
                         z[c] = sol[a];
                     }
-                    match self.redundant(&g, &b, &x, mask, &stick, &z, scale, false) {
+                    match self.redundant(&g, &b, &x, mask, &stick, &z, scale, false, &mut refused) {
                         Some(found) => return Some(found),
                         None => continue,
                     }
@@ -496,7 +499,8 @@ impl Problem<'_> {
             // Rows left closed without impulse: if with them the block is
             // singular, the impulses are a set (see `redundant`).
             if !self.held
-                && let Some(found) = self.redundant(&g, &b, &x, mask, &stick, &z, scale, true)
+                && let Some(found) =
+                    self.redundant(&g, &b, &x, mask, &stick, &z, scale, true, &mut refused)
             {
                 return Some(found);
             }
@@ -543,6 +547,7 @@ impl Problem<'_> {
         z0: &DVector<f64>,
         scale: f64,
         widening: bool,
+        refused: &mut Vec<u32>,
     ) -> Option<Solved> {
         let n = self.set.len();
         let tol = 1e-10 * scale;
@@ -562,7 +567,7 @@ impl Problem<'_> {
                 wide |= 1 << k;
             }
         }
-        if widening && wide == mask {
+        if (widening && wide == mask) || refused.contains(&wide) {
             return None;
         }
         let idx = self.unknowns(wide, stick);
@@ -594,8 +599,12 @@ impl Problem<'_> {
                 }
             })
             .collect();
-        let (in_k, in_a) = min_norm_feasible(&sol, &null, &cones, true)
-            .or_else(|| min_norm_feasible(&sol, &null, &cones, false))?;
+        let Some((in_k, in_a)) = min_norm_feasible(&sol, &null, &cones, true)
+            .or_else(|| min_norm_feasible(&sol, &null, &cones, false))
+        else {
+            refused.push(wide);
+            return None;
+        };
         let (mut zk, mut za) = (DVector::zeros(b.len()), DVector::zeros(b.len()));
         for (a, &c) in idx.iter().enumerate() {
             zk[c] = in_k[a];

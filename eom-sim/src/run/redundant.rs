@@ -25,7 +25,7 @@ const MAX_ITER: usize = 20_000;
 /// Every this many projections the gap between the two sets is compared
 /// with the one before: an empty intersection shows as a gap that no
 /// longer shrinks (by 1 %), away from zero.
-const STALL_EVERY: usize = 500;
+const STALL_EVERY: usize = 100;
 
 /// The unknowns of one active contact row in the block: its normal
 /// impulse's position and, if it sticks, its two tangential ones' and `μ`.
@@ -175,7 +175,10 @@ mod tests {
             tangential: Some(([1, 2], 0.5)),
         }];
         let (z, _) = min_norm_feasible(&z0, &null, &cones, true).expect("feasible");
-        assert!((z[0] - 2.0).abs() < 1e-10 && (z[1] - 1.0).abs() < 1e-10, "{z}");
+        assert!(
+            (z[0] - 2.0).abs() < 1e-10 && (z[1] - 1.0).abs() < 1e-10,
+            "{z}"
+        );
         // Without friction's cone only Λ ≥ 0: z0 itself.
         let (z, _) = min_norm_feasible(&z0, &null, &cones, false).expect("feasible");
         assert_eq!(z.as_slice(), z0.as_slice());
