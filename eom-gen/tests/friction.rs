@@ -757,3 +757,32 @@ fn tilted_box_landing_on_one_corner_keeps_its_impulses() {
         }
     }
 }
+
+/// The same tilted landing with μ = 0.5: the corner slides through the
+/// impact while friction turns the box, and the plain iteration of the
+/// sliding direction, `s ← v_t⁺/‖v_t⁺‖`, swung between two directions for
+/// ever ("the impact of 1 contact(s) has no solution", before the
+/// relaxed iteration). Newton–Coulomb: `ġ⁺ = −e ġ⁻`, `Λ_t = −μ Λ s` on
+/// the cone with `s` the direction of the slide after, energy not gained.
+#[test]
+fn tilted_box_sliding_through_a_one_corner_impact_settles_its_direction() {
+    let (c, s) = (0.05f64.cos(), 0.05f64.sin() / 2f64.sqrt());
+    let mu = 0.5;
+    let sys = box4(mu, 0.5, [c, s, s, 0.0], [0.5, 0.0, -1.0, 0.0, 0.0, 0.0]);
+    let report = run(&sys, &options(0.135));
+    assert!(report.stop.is_finished(), "{}", report.stop);
+    let impact = first_impact(&report);
+    let k = &impact.contacts[0];
+    assert!(
+        (k.speed_after + 0.5 * k.speed_before).abs() < 1e-12,
+        "ġ⁺ = −e ġ⁻: {k:?}"
+    );
+    let (lt, vt) = (k.tangential_impulse, k.tangential_speed_after);
+    assert!(norm(vt) > 0.1, "slides: {k:?}");
+    let want = [0, 1].map(|a| -mu * k.impulse * vt[a] / norm(vt));
+    assert!(
+        (0..2).all(|a| (lt[a] - want[a]).abs() < 1e-9 * k.impulse),
+        "Λ_t = {lt:?}, want −μ Λ v_t⁺/‖v_t⁺‖ = {want:?}"
+    );
+    assert!(impact.energy_after < impact.energy_before);
+}

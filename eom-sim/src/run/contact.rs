@@ -698,7 +698,13 @@ pub(crate) fn impact(
         }
     }
     let mut refused_stick = vec![false; set.len()];
-    for _ in 0..(8 + 8 * set.len()) {
+    // Past `plain` iterations the sliding directions are relaxed: turning
+    // the body, friction can make the plain iteration `s ← v̂_t⁺(s)` swing
+    // between two directions for ever (a box landing on one corner while
+    // moving sideways); `s ← (s + ω (v̂_t⁺ − s))/‖…‖`, ω = ½ then ⅕, has
+    // the same fixed point.
+    let plain = 8 + 8 * set.len();
+    for it in 0..plain + 400 {
         let p = Problem {
             m,
             j,
@@ -767,7 +773,7 @@ pub(crate) fn impact(
                     } else {
                         let t = [v[0] / nv, v[1] / nv];
                         if (t[0] - s[0]).abs() + (t[1] - s[1]).abs() > 1e-12 {
-                            slide[k] = Some(Slide::Slip(t));
+                            slide[k] = Some(Slide::Slip(relax(s, t, it, plain)));
                             changed = true;
                         }
                     }
@@ -780,6 +786,19 @@ pub(crate) fn impact(
         }
     }
     None
+}
+
+/// The sliding direction after `s` whose speed after points along `t`, at
+/// iteration `it` of `impact`: `t` for the first `plain` ones, then moved
+/// from `s` by ½ (the next 200) or ⅕ of the way (`t` if that cancels).
+fn relax(s: [f64; 2], t: [f64; 2], it: usize, plain: usize) -> [f64; 2] {
+    if it < plain {
+        return t;
+    }
+    let w = if it < plain + 200 { 0.5 } else { 0.2 };
+    let d = [s[0] + w * (t[0] - s[0]), s[1] + w * (t[1] - s[1])];
+    let n = norm2(d);
+    if n > 0.0 { [d[0] / n, d[1] / n] } else { t }
 }
 
 /// A model whose sustained contacts `active` hold `g̈ = 0`, those with
