@@ -370,14 +370,30 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 fc[p] = fc[p].add(x.force_to_parent(fc[i]));
             }
         }
-        // Per free column, in body axes then once to world axes: `S`, `w`,
-        // `ψ`, `β` (motions), `P`, `Q`, and the ancestor terms (forces).
+        // The common axes of the pairs: a single root body's own (its
+        // descendants' poses in it are one joint shorter than in the
+        // world, its own terms need no transform), else the world's.
+        let roots = bodies.iter().filter(|b| b.parent.is_none()).count();
+        let common: Vec<Pose<S>> = if roots == 1 {
+            let mut poses: Vec<Pose<S>> = Vec::with_capacity(n);
+            for (i, body) in bodies.iter().enumerate() {
+                let pose = body
+                    .parent
+                    .map_or_else(Pose::identity, |p| poses[p].then(&k.x[i]));
+                poses.push(pose);
+            }
+            poses
+        } else {
+            k.world.clone()
+        };
+        // Per free column, in body axes then once to the common axes: `S`,
+        // `w`, `ψ`, `β` (motions), `P`, `Q`, and the ancestor terms (forces).
         let mut cols: Vec<Column<S>> = Vec::new();
         for (j, body) in bodies.iter().enumerate() {
             let Coords::Free { u, .. } = body.coords else {
                 continue;
             };
-            let pose = &k.world[j];
+            let pose = &common[j];
             let (v, a) = (vl[j], al[j]);
             for (c, &s) in k.s[j].iter().enumerate() {
                 let w = v.cross_motion(s);
