@@ -114,7 +114,7 @@ struct Terms<S> {
 impl<S: Scalar> Terms<S> {
     /// The terms in the parent axes of `pose` (for a body's world pose, in
     /// world axes).
-    fn to_parent(&self, pose: &Pose<S>) -> Self {
+    fn to_parent(self, pose: &Pose<S>) -> Self {
         Terms {
             s: pose.motion_to_parent(self.s),
             w: pose.motion_to_parent(self.w),
