@@ -47,8 +47,11 @@
 //! `v_λ`, `a_λ` are the parent's velocity and acceleration in the child's
 //! axes, which Newton–Euler builds anyway. Only the per-pair dot products
 //! need common axes: each column's `s`, `w`, `ψ`, `β`, `P`, `Q` and the
-//! two ancestor terms are brought to world axes once (eight transforms per
-//! column). [`Axes::World`] instead brings each body's velocity,
+//! two ancestor terms are brought to them once (eight transforms per
+//! column), to the root body's own axes where the tree has a single root
+//! (poses one joint shorter than the world's), else to world axes; pairs
+//! of columns of one body (a column with itself included) stay in its
+//! own axes. [`Axes::World`] instead brings each body's velocity,
 //! acceleration, inertia, its rate, momentum and force to world axes and
 //! does the rest there (dense).
 //!
@@ -79,19 +82,20 @@ pub struct RneaDerivatives<S> {
     pub du: Vec<Vec<S>>,
     /// `M`, `M_ij = S_i · Yc_k S_j` with `k` the deeper of the two joints'
     /// bodies (zero where neither is an ancestor of the other): the
-    /// composite-rigid-body mass matrix (Featherstone §6.2) in world axes,
-    /// from the recursion's `P_k = Yc_k S_k`, exactly symmetric.
+    /// composite-rigid-body mass matrix (Featherstone §6.2) in the pairs'
+    /// common axes, from the recursion's `P_k = Yc_k S_k`, exactly symmetric.
     pub m: Vec<Vec<S>>,
 }
 
 /// Where [`Evaluator::rnea_derivatives`] does its per-body and per-column
-/// algebra (the pass over pairs is in world axes either way).
+/// algebra (the pass over pairs is in common axes either way).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Axes {
     /// World axes throughout: the composites add as they are.
     World,
     /// Body axes, where inertias are constant and subspace columns unit
-    /// axes; each column's terms brought to world axes once.
+    /// axes; each column's terms brought to common axes once (a single
+    /// root body's, else the world's).
     Body,
 }
 
@@ -128,12 +132,13 @@ impl<S: Scalar> Terms<S> {
     }
 }
 
-/// One free column: its body, speed index and terms in world axes, and
-/// in its body's own axes (for pairs of columns of the same body).
+/// One free column: its body, speed index and terms in the axes common
+/// to all columns, and in its body's own axes (for pairs of columns of the
+/// same body).
 struct Column<S> {
     body: usize,
     index: usize,
-    world: Terms<S>,
+    common: Terms<S>,
     own: Terms<S>,
 }
 
@@ -313,7 +318,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 cols.push(Column {
                     body: j,
                     index: u + c,
-                    world,
+                    common: world,
                     own: world,
                 });
             }
@@ -415,7 +420,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 cols.push(Column {
                     body: j,
                     index: u + c,
-                    world: own.to_parent(pose),
+                    common: own.to_parent(pose),
                     own,
                 });
             }
@@ -424,7 +429,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
     }
 
     /// The pass over pairs of columns (module documentation): `∂τ/∂q`,
-    /// `∂τ/∂u` and `M` from the columns' world-axis terms.
+    /// `∂τ/∂u` and `M` from the columns' terms.
     fn pairs(&self, cols: &[Column<S>]) -> RneaDerivatives<S> {
         let nu = self.tree.nu;
         let mut dq = vec![vec![S::zero(); nu]; nu];
@@ -439,7 +444,7 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 let (tj, ti) = if ci.body == cj.body {
                     (&cj.own, &ci.own)
                 } else {
-                    (&cj.world, &ci.world)
+                    (&cj.common, &ci.common)
                 };
                 if self.descends(ci.body, cj.body) {
                     dq[row][col] = tj.psi.dot(ti.p) + tj.w.dot(ti.q);
