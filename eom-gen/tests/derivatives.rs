@@ -16,6 +16,8 @@
 //! - the third form (`−M⁻¹ ∂ID/∂x` with `∂ID/∂(q, u)` by the recursion of
 //!   Carpentier and Mansard) against the other two on every bundled model
 //!   it applies to, and refused (not a candidate) where it does not;
+//! - the same recursion in body axes against the world-axis one and
+//!   central differences (revolute, spherical, free and prismatic joints);
 //! - inputs: `∂u̇/∂(inputs)` of an actuator;
 //! - `inverse_dynamics_derivatives` (`∂τ/∂q`, `∂τ/∂u`, `∂τ/∂u̇ = M`,
 //!   `∂τ/∂(inputs)`) against central differences of the `f64` inverse
@@ -59,13 +61,18 @@ struct Blocks {
 }
 
 fn blocks(f: &Formulation, x: &Point<'_>) -> Blocks {
-    let nu = x.sys.nu();
-    let ni = x.sys.inputs.len();
-    let flat = run(
+    program_blocks(
         f.program(Function::ForwardDynamicsDerivatives)
             .expect("derivatives generated"),
         x,
-    );
+    )
+}
+
+/// The blocks of one program of the derivatives at a state.
+fn program_blocks(p: &eom_gen::sym::Program, x: &Point<'_>) -> Blocks {
+    let nu = x.sys.nu();
+    let ni = x.sys.inputs.len();
+    let flat = run(p, x);
     assert_eq!(flat.len(), 3 * nu * nu + nu * ni, "result length");
     let rows = |start: usize, cols: usize| -> Vec<Vec<f64>> {
         (0..nu)
@@ -272,6 +279,22 @@ fn against_differences(
         counts.iter().min().copied(),
         "{name}: the cheaper kept"
     );
+    let p = f
+        .program(Function::ForwardDynamicsDerivatives)
+        .expect("derivatives generated");
+    program_against_differences(name, sys, p, rng, states);
+    f.derivative_form
+}
+
+/// Checks one program of the derivatives of `sys` against central
+/// differences of the `f64` forward dynamics (as [`against_differences`]).
+fn program_against_differences(
+    name: &str,
+    sys: &System,
+    p: &eom_gen::sym::Program,
+    rng: &mut Rng,
+    states: usize,
+) {
     let num = Numeric::new(sys).unwrap_or_else(|e| panic!("{name}: {e}"));
     let (nu, ni) = (sys.nu(), sys.inputs.len());
     for _ in 0..states {
@@ -284,7 +307,7 @@ fn against_differences(
             t,
             ..point(sys, &q, &u, &tau)
         };
-        let b = blocks(&f, &x);
+        let b = program_blocks(p, &x);
         let udot_norm = num
             .forward_dynamics(&q, &u, t, &tau, &inputs)
             .unwrap_or_else(|e| panic!("{name}: {e}"))
@@ -356,7 +379,6 @@ fn against_differences(
             }
         }
     }
-    f.derivative_form
 }
 
 /// Every bundled rigid model (closed loops as their spanning trees: the
@@ -518,6 +540,65 @@ fn check_forms_agree(
                 }
             }
         }
+    }
+}
+
+/// The recursion in body axes gives the numbers of the recursion in world
+/// axes (to 1e-9 of each block's largest entry) and of central
+/// differences of the `f64` forward dynamics, at random states: arm7 (a
+/// chain of revolute joints about various axes), heavy_top and free_body
+/// (a spherical and a free joint, quaternion coordinates), slider_crank
+/// (a prismatic joint, springs; as its spanning tree).
+#[test]
+fn body_axis_recursion_equals_world_axis_and_differences() {
+    let mut rng = Rng(0xB0D1_5EED_0000_0027);
+    for name in ["arm7", "heavy_top", "free_body", "slider_crank"] {
+        let sys = system(name);
+        let f = with_derivatives(&sys, name);
+        let form = |d: DerivativeForm| {
+            if f.derivative_form == Some(d) {
+                f.program(Function::ForwardDynamicsDerivatives)
+            } else {
+                f.derivative_alternatives
+                    .iter()
+                    .find(|(a, _)| *a == d)
+                    .map(|(_, p)| p)
+            }
+            .unwrap_or_else(|| panic!("{name}: no {d} form"))
+        };
+        let (world, body) = (
+            form(DerivativeForm::Recursive),
+            form(DerivativeForm::RecursiveBodyAxes),
+        );
+        let (nu, ni) = (sys.nu(), sys.inputs.len());
+        for _ in 0..2 {
+            let (q, u) = random_state(&sys, &mut rng);
+            let tau = rng.vec(nu, 1.0);
+            let inputs = rng.vec(ni, 1.0);
+            let x = Point {
+                inputs: &inputs,
+                t: rng.uniform().abs(),
+                ..point(&sys, &q, &u, &tau)
+            };
+            let (want, got) = (program_blocks(world, &x), program_blocks(body, &x));
+            for (block, w, g) in [
+                ("∂u̇/∂q", &want.dq, &got.dq),
+                ("∂u̇/∂u", &want.du, &got.du),
+                ("∂u̇/∂τ", &want.dtau, &got.dtau),
+                ("∂u̇/∂inputs", &want.dinput, &got.dinput),
+            ] {
+                let scale = w.iter().flatten().fold(1.0f64, |s, x| s.max(x.abs()));
+                for (i, (wr, gr)) in w.iter().zip(g).enumerate() {
+                    for (j, (a, b)) in wr.iter().zip(gr).enumerate() {
+                        assert!(
+                            (a - b).abs() <= 1e-9 * scale,
+                            "{name} {block}[{i}][{j}] at q = {q:?}, u = {u:?}: body axes {b}, world axes {a}"
+                        );
+                    }
+                }
+            }
+        }
+        program_against_differences(name, &sys, body, &mut rng, 2);
     }
 }
 

@@ -15,7 +15,9 @@
 //!   Carpentier and Mansard over the tree ([`super::rnea_derivatives`]),
 //!   and only the force elements' terms differentiated as expressions
 //!   (`∂ID/∂u` of Newton–Euler may also be differentiated instead, where
-//!   that counts fewer operations: the formulation tries both).
+//!   that counts fewer operations: the formulation tries both); the
+//!   recursion in world axes ([`DerivativeForm::Recursive`]) or in body
+//!   axes ([`DerivativeForm::RecursiveBodyAxes`]), two candidates.
 //!
 //! Coordinates are differentiated in the tangent space: column `j` of
 //! `∂u̇/∂q` is the derivative along `δq = N(q) e_j`, where `q̇ = N(q) u`,
@@ -54,8 +56,12 @@ pub enum DerivativeForm {
     /// `−M⁻¹ ∂ID/∂x` at `u̇ = FD`: differentiating recursive Newton–Euler.
     InverseDynamics,
     /// `−M⁻¹ ∂ID/∂x` at `u̇ = FD`, `∂ID/∂x` by the recursion of Carpentier
-    /// and Mansard (rigid trees of joints with constant subspaces).
+    /// and Mansard (rigid trees of joints with constant subspaces), in
+    /// world axes.
     Recursive,
+    /// The same recursion in body axes, where inertias are constant and
+    /// subspace columns unit axes ([`super::rnea_derivatives::Axes::Body`]).
+    RecursiveBodyAxes,
 }
 
 impl fmt::Display for DerivativeForm {
@@ -64,6 +70,9 @@ impl fmt::Display for DerivativeForm {
             DerivativeForm::ForwardDynamics => "differentiated forward dynamics",
             DerivativeForm::InverseDynamics => "−M⁻¹ ∂ID/∂x (differentiated RNEA)",
             DerivativeForm::Recursive => "−M⁻¹ ∂ID/∂x (RNEA derivatives by recursion)",
+            DerivativeForm::RecursiveBodyAxes => {
+                "−M⁻¹ ∂ID/∂x (RNEA derivatives by recursion in body axes)"
+            }
         })
     }
 }
@@ -189,20 +198,32 @@ pub fn forward_dynamics_derivatives_rnea<'cx>(
             .map(|c| c.iter().map(|&id| cx.expr(id)).collect())
             .collect()
     };
-    let (nu, ni) = (u.len(), inputs.len());
     let (gq, gu) = (at_fd(gq), at_fd(gu));
-    let gi = if ni == 0 {
-        vec![Vec::new(); nu]
+    let gi = if inputs.is_empty() {
+        vec![Vec::new(); u.len()]
     } else {
         at_fd(gi)
     };
+    lower_solved(cx, &minv, [gq, gu, gi], opts)
+}
+
+/// The outputs `−M⁻¹ ∂ID/∂q`, `−M⁻¹ ∂ID/∂u`, `M⁻¹`, `−M⁻¹ ∂ID/∂(inputs)`
+/// for the gradients `[gq, gu, gi]` (`NU` rows each, the columns of `gi`
+/// the inputs): the layout of `forward_dynamics_derivatives`.
+fn lower_solved<'cx>(
+    cx: &'cx Context,
+    minv: &[Vec<Expr<'cx>>],
+    [gq, gu, gi]: [Vec<Vec<Expr<'cx>>>; 3],
+    opts: LowerOptions,
+) -> Program {
+    let (nu, ni) = (minv.len(), gi.first().map_or(0, Vec::len));
     lower_blocks(
         cx,
         [
-            ("dq", minus_solve(&minv, gq, nu)),
-            ("du", minus_solve(&minv, gu, nu)),
-            ("dtau", minv.clone()),
-            ("dinput", minus_solve(&minv, gi, ni)),
+            ("dq", minus_solve(minv, gq, nu)),
+            ("du", minus_solve(minv, gu, nu)),
+            ("dtau", minv.to_vec()),
+            ("dinput", minus_solve(minv, gi, ni)),
         ],
         opts,
     )
@@ -267,17 +288,7 @@ pub fn forward_dynamics_derivatives_recursive<'cx>(
             cx.jacobian(loads, inputs),
         )
     };
-    let ni = inputs.len();
-    lower_blocks(
-        cx,
-        [
-            ("dq", minus_solve(minv, gq, u.len())),
-            ("du", minus_solve(minv, gu, u.len())),
-            ("dtau", minv.to_vec()),
-            ("dinput", minus_solve(minv, gi, ni)),
-        ],
-        opts,
-    )
+    lower_solved(cx, minv, [gq, gu, gi], opts)
 }
 
 /// The program of `inverse_dynamics_derivatives` for inverse dynamics

@@ -442,7 +442,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         };
     // Every way that applies, the one with fewer counted operations kept
     // (the first listed on a tie: differentiated forward dynamics, then
-    // differentiated Newton–Euler, then its recursion).
+    // differentiated Newton–Euler, then its recursion in world axes, then
+    // in body axes).
     let (fd_derivatives, derivative_candidates, derivative_alternatives) = if request
         .contains(Function::ForwardDynamicsDerivatives)
     {
@@ -450,6 +451,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             DerivativeForm, forward_dynamics_derivatives, forward_dynamics_derivatives_recursive,
             forward_dynamics_derivatives_rnea,
         };
+        use super::rnea_derivatives::Axes;
         let qdot = ev.qdot(&st);
         let direct = forward_dynamics_derivatives(&cx, &udot, &qdot, &q, &u, &tau, &inputs, opts);
         let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
@@ -462,7 +464,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             (DerivativeForm::ForwardDynamics, direct),
             (DerivativeForm::InverseDynamics, via_rnea),
         ];
-        if let Some(rd) = ev.rnea_derivatives(&k, &udot) {
+        if ev.recursive_derivatives_apply() {
             let loads: Vec<Expr> = ev
                 .load_torques(&k, &fext)
                 .iter()
@@ -489,35 +491,47 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
                     opts,
                 )
             };
-            let by_recursion = lower_with(&minv_fd, rd.dq.clone(), rd.du.clone());
-            let mixed = lower_with(&minv_fd, rd.dq.clone(), gu_differentiated.clone());
-            let (mut p, gu) = if mixed.op_count().total() < by_recursion.op_count().total() {
-                (mixed, gu_differentiated)
-            } else {
-                (by_recursion, rd.du.clone())
-            };
-            // Then `M⁻¹` from the `LᵀDL` factors of the recursion's own `M`
-            // (`S_i · Yc S_j`, world axes) instead of `∂FD/∂τ`; and also
-            // `u̇` itself through the same factors, `u̇ = M⁻¹ (τ − b)` with
-            // `b` Newton–Euler at `u̇ = 0` (Featherstone §6.5), in place of
-            // the forward dynamics kept above: each if it counts fewer.
             let lambda = ev.speed_parents();
-            let mut m = rd.m.clone();
-            ltdl(&mut m, &lambda);
-            let minv_ltdl = ltdl_inverse(&m, &lambda);
-            let factored = lower_with(&minv_ltdl, rd.dq.clone(), gu.clone());
-            if factored.op_count().total() < p.op_count().total() {
-                p = factored;
-            }
-            let rhs: Vec<Expr> = tau.iter().zip(rnea_bias()).map(|(&t, b)| t - b).collect();
-            let udot_ltdl = ltdl_solve(&m, &lambda, rhs);
-            if let Some(at_ltdl) = ev.rnea_derivatives(&k, &udot_ltdl) {
-                let all_ltdl = lower_with(&minv_ltdl, at_ltdl.dq, gu);
-                if all_ltdl.op_count().total() < p.op_count().total() {
-                    p = all_ltdl;
+            let bias_rhs: Vec<Expr> = tau.iter().zip(rnea_bias()).map(|(&t, b)| t - b).collect();
+            // The recursion's form in `axes`, the cheapest of its variants.
+            let recursive = |axes: Axes| -> Option<Program> {
+                let rd = ev.rnea_derivatives(&k, &udot, axes)?;
+                let by_recursion = lower_with(&minv_fd, rd.dq.clone(), rd.du.clone());
+                let mixed = lower_with(&minv_fd, rd.dq.clone(), gu_differentiated.clone());
+                let (mut p, gu) = if mixed.op_count().total() < by_recursion.op_count().total() {
+                    (mixed, gu_differentiated.clone())
+                } else {
+                    (by_recursion, rd.du.clone())
+                };
+                // Then `M⁻¹` from the `LᵀDL` factors of the recursion's own `M`
+                // (`S_i · Yc S_j`) instead of `∂FD/∂τ`; and also `u̇` itself
+                // through the same factors, `u̇ = M⁻¹ (τ − b)` with `b`
+                // Newton–Euler at `u̇ = 0` (Featherstone §6.5), in place of the
+                // forward dynamics kept above: each if it counts fewer.
+                let mut m = rd.m.clone();
+                ltdl(&mut m, &lambda);
+                let minv_ltdl = ltdl_inverse(&m, &lambda);
+                let factored = lower_with(&minv_ltdl, rd.dq.clone(), gu.clone());
+                if factored.op_count().total() < p.op_count().total() {
+                    p = factored;
+                }
+                let udot_ltdl = ltdl_solve(&m, &lambda, bias_rhs.clone());
+                if let Some(at_ltdl) = ev.rnea_derivatives(&k, &udot_ltdl, axes) {
+                    let all_ltdl = lower_with(&minv_ltdl, at_ltdl.dq, gu);
+                    if all_ltdl.op_count().total() < p.op_count().total() {
+                        p = all_ltdl;
+                    }
+                }
+                Some(p)
+            };
+            for (form, axes) in [
+                (DerivativeForm::Recursive, Axes::World),
+                (DerivativeForm::RecursiveBodyAxes, Axes::Body),
+            ] {
+                if let Some(p) = recursive(axes) {
+                    programs.push((form, p));
                 }
             }
-            programs.push((DerivativeForm::Recursive, p));
         }
         let candidates: Vec<(DerivativeForm, OpCount)> =
             programs.iter().map(|(f, p)| (*f, p.op_count())).collect();

@@ -38,6 +38,23 @@
 //! of `j` (Featherstone §6.2), one more dot product per pair: `M⁻¹` can then
 //! come from its `LᵀDL` factors ([`super::ltdl::ltdl_inverse`]).
 //!
+//! Body axes ([`Axes::Body`]): the formulas hold in any axes, as every
+//! term (`×`, `×*`, `Ẏ`, `B`) transforms with the frame. In a body's own
+//! axes its inertia is constant and a joint's subspace column a unit axis
+//! (for a coordinate axis `s × x` is a permutation of `x`, and `Yc s` a
+//! column of `Yc`); the composites add after the usual transform to the
+//! parent (`Xᵀ Y X`, eq. 2.66, with the joint's pose, itself sparse), and
+//! `v_λ`, `a_λ` are the parent's velocity and acceleration in the child's
+//! axes, which Newton–Euler builds anyway. Only the per-pair dot products
+//! need common axes: each column's `s`, `w`, `ψ`, `β`, `P`, `Q` and the
+//! two ancestor terms are brought to them once (eight transforms per
+//! column), to the root body's own axes where the tree has a single root
+//! (poses one joint shorter than the world's), else to world axes; pairs
+//! of columns of one body (a column with itself included) stay in its
+//! own axes. [`Axes::World`] instead brings each body's velocity,
+//! acceleration, inertia, its rate, momentum and force to world axes and
+//! does the rest there (dense).
+//!
 //! The recursion covers joints whose subspace is constant in body axes
 //! (revolute, prismatic, cylindrical, screw, spherical, free, fixed) on
 //! rigid bodies; [`Evaluator::rnea_derivatives`] returns `None` for trees
@@ -65,9 +82,64 @@ pub struct RneaDerivatives<S> {
     pub du: Vec<Vec<S>>,
     /// `M`, `M_ij = S_i · Yc_k S_j` with `k` the deeper of the two joints'
     /// bodies (zero where neither is an ancestor of the other): the
-    /// composite-rigid-body mass matrix (Featherstone §6.2) in world axes,
-    /// from the recursion's `P_k = Yc_k S_k`, exactly symmetric.
+    /// composite-rigid-body mass matrix (Featherstone §6.2) in the pairs'
+    /// common axes, from the recursion's `P_k = Yc_k S_k`, exactly symmetric.
     pub m: Vec<Vec<S>>,
+}
+
+/// Where [`Evaluator::rnea_derivatives`] does its per-body and per-column
+/// algebra (the pass over pairs is in common axes either way).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Axes {
+    /// World axes throughout: the composites add as they are.
+    World,
+    /// Body axes, where inertias are constant and subspace columns unit
+    /// axes; each column's terms brought to common axes once (a single
+    /// root body's, else the world's).
+    Body,
+}
+
+/// The terms of one free column `j` of the recursion (rows are the same
+/// speeds) in some axes: the subspace column `s` and `w`, `ψ`, `β`
+/// (motions), `P = Yc s`, `Q = Ẏc s − s ×* Hc` (its row's terms), and the
+/// terms its ancestors' rows take, `s ×* F + Yc ψ + Bc w` and `Yc β + Bc s`.
+#[derive(Clone, Copy)]
+struct Terms<S> {
+    s: Motion<S>,
+    w: Motion<S>,
+    psi: Motion<S>,
+    beta: Motion<S>,
+    p: Force<S>,
+    q: Force<S>,
+    dq: Force<S>,
+    du: Force<S>,
+}
+
+impl<S: Scalar> Terms<S> {
+    /// The terms in the parent axes of `pose` (for a body's world pose, in
+    /// world axes).
+    fn to_parent(self, pose: &Pose<S>) -> Self {
+        Terms {
+            s: pose.motion_to_parent(self.s),
+            w: pose.motion_to_parent(self.w),
+            psi: pose.motion_to_parent(self.psi),
+            beta: pose.motion_to_parent(self.beta),
+            p: pose.force_to_parent(self.p),
+            q: pose.force_to_parent(self.q),
+            dq: pose.force_to_parent(self.dq),
+            du: pose.force_to_parent(self.du),
+        }
+    }
+}
+
+/// One free column: its body, speed index and terms in the axes common
+/// to all columns, and in its body's own axes (for pairs of columns of the
+/// same body).
+struct Column<S> {
+    body: usize,
+    index: usize,
+    common: Terms<S>,
+    own: Terms<S>,
 }
 
 /// A symmetric 3×3 matrix from its upper triangle `f(r, c)`, `r ≤ c`
@@ -151,12 +223,25 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
 
     /// `∂τ/∂q` (tangent space) and `∂τ/∂u` of the Newton–Euler forces
     /// `M u̇ + C + g` at the accelerations `ud` (force elements left out),
-    /// by the recursion of the module documentation; `None` where it does
-    /// not apply ([`Self::recursive_derivatives_apply`]).
-    pub fn rnea_derivatives(&self, k: &Kinematics<S>, ud: &[S]) -> Option<RneaDerivatives<S>> {
+    /// by the recursion of the module documentation in `axes`; `None`
+    /// where it does not apply ([`Self::recursive_derivatives_apply`]).
+    pub fn rnea_derivatives(
+        &self,
+        k: &Kinematics<S>,
+        ud: &[S],
+        axes: Axes,
+    ) -> Option<RneaDerivatives<S>> {
         if !self.recursive_derivatives_apply() {
             return None;
         }
+        Some(match axes {
+            Axes::World => self.rnea_derivatives_world_axes(k, ud),
+            Axes::Body => self.rnea_derivatives_body_axes(k, ud),
+        })
+    }
+
+    /// [`Self::rnea_derivatives`] in world axes throughout.
+    fn rnea_derivatives_world_axes(&self, k: &Kinematics<S>, ud: &[S]) -> RneaDerivatives<S> {
         let bodies = &self.tree.bodies;
         let n = bodies.len();
         let base = Motion {
@@ -206,49 +291,174 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 fc[p] = fc[p].add(fc[i]);
             }
         }
-        // The free columns: (body, speed index, S in world axes).
-        let mut cols: Vec<(usize, usize, Motion<S>)> = Vec::new();
-        for (i, body) in bodies.iter().enumerate() {
-            if let Coords::Free { u, .. } = body.coords {
-                cols.extend(sw[i].iter().enumerate().map(|(c, s)| (i, u + c, *s)));
+        // Per free column: `S`, `w`, `ψ`, `β`, `P`, `Q` and the ancestor
+        // terms, all in world axes.
+        let mut cols: Vec<Column<S>> = Vec::new();
+        for (j, body) in bodies.iter().enumerate() {
+            let Coords::Free { u, .. } = body.coords else {
+                continue;
+            };
+            let parent = body.parent;
+            let (vl, al) = parent.map_or((Motion::zero(), base), |p| (vw[p], aw[p]));
+            for (c, &s) in sw[j].iter().enumerate() {
+                let w = vl.cross_motion(s);
+                let psi = al.cross_motion(s).sub(w.cross_motion(vl));
+                let beta = vl.add(vw[j]).cross_motion(s);
+                let bc = |x: Motion<S>| ydc[j].mul_motion(x).add(x.cross_force(hc[j]));
+                let world = Terms {
+                    s,
+                    w,
+                    psi,
+                    beta,
+                    p: yc[j].mul_motion(s),
+                    q: ydc[j].mul_motion(s).sub(s.cross_force(hc[j])),
+                    dq: s.cross_force(fc[j]).add(yc[j].mul_motion(psi)).add(bc(w)),
+                    du: yc[j].mul_motion(beta).add(bc(s)),
+                };
+                cols.push(Column {
+                    body: j,
+                    index: u + c,
+                    common: world,
+                    own: world,
+                });
             }
         }
-        // Per row: P = Yc S, Q = Ẏc S − S ×* Hc.
-        let pq: Vec<(Force<S>, Force<S>)> = cols
-            .iter()
-            .map(|&(i, _, s)| {
-                let q = ydc[i].mul_motion(s).sub(s.cross_force(hc[i]));
-                (yc[i].mul_motion(s), q)
-            })
-            .collect();
+        self.pairs(&cols)
+    }
+
+    /// [`Self::rnea_derivatives`] with the recursion in body axes (the
+    /// same formulas; see the module documentation, "Body axes").
+    fn rnea_derivatives_body_axes(&self, k: &Kinematics<S>, ud: &[S]) -> RneaDerivatives<S> {
+        let bodies = &self.tree.bodies;
+        let n = bodies.len();
+        let base = Motion {
+            w: Vec3::zero(),
+            v: -self.tree.gravity,
+        };
+        // Forward pass over bodies (body axes): the parent's velocity and
+        // acceleration in this body's axes (`v_λ`, `a_λ`; at the ground 0
+        // and `−g`), the acceleration, momentum, net force and inertia rate.
+        let mut a_body: Vec<Motion<S>> = Vec::with_capacity(n);
+        let (mut vl, mut al) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut yc, mut ydc) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        let (mut hc, mut fc) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for (i, body) in bodies.iter().enumerate() {
+            let (vp, ap) = match body.parent {
+                Some(p) => (
+                    k.x[i].motion_to_child(k.v[p]),
+                    k.x[i].motion_to_child(a_body[p]),
+                ),
+                None => (Motion::zero(), k.x[i].motion_to_child(base)),
+            };
+            let mut ai = ap.add(k.c[i]).add(k.v[i].cross_motion(k.vj[i]));
+            for (col, &x) in k.s[i].iter().zip(&self.joint_ud(i, k, ud)) {
+                ai = ai.add(col.scale(x));
+            }
+            a_body.push(ai);
+            let inertia = &k.inertia[i];
+            let h = inertia.mul_motion(k.v[i]);
+            fc.push(inertia.mul_motion(ai).add(k.v[i].cross_force(h)));
+            hc.push(h);
+            ydc.push(inertia_rate(inertia, k.v[i]));
+            yc.push(*inertia);
+            vl.push(vp);
+            al.push(ap);
+        }
+        // Backward pass over bodies: composites in body axes (a child's
+        // brought over by its joint's pose, Featherstone eq. 2.66).
+        for i in (0..n).rev() {
+            if let Some(p) = bodies[i].parent {
+                let x = &k.x[i];
+                yc[p] = yc[p] + inertia_to_parent(&yc[i], x);
+                ydc[p] = ydc[p] + inertia_to_parent(&ydc[i], x);
+                hc[p] = hc[p].add(x.force_to_parent(hc[i]));
+                fc[p] = fc[p].add(x.force_to_parent(fc[i]));
+            }
+        }
+        // The common axes of the pairs: a single root body's own (its
+        // descendants' poses in it are one joint shorter than in the
+        // world, its own terms need no transform), else the world's.
+        let roots = bodies.iter().filter(|b| b.parent.is_none()).count();
+        let common: Vec<Pose<S>> = if roots == 1 {
+            let mut poses: Vec<Pose<S>> = Vec::with_capacity(n);
+            for (i, body) in bodies.iter().enumerate() {
+                let pose = body
+                    .parent
+                    .map_or_else(Pose::identity, |p| poses[p].then(&k.x[i]));
+                poses.push(pose);
+            }
+            poses
+        } else {
+            k.world.clone()
+        };
+        // Per free column, in body axes then once to the common axes: `S`,
+        // `w`, `ψ`, `β` (motions), `P`, `Q`, and the ancestor terms (forces).
+        let mut cols: Vec<Column<S>> = Vec::new();
+        for (j, body) in bodies.iter().enumerate() {
+            let Coords::Free { u, .. } = body.coords else {
+                continue;
+            };
+            let pose = &common[j];
+            let (v, a) = (vl[j], al[j]);
+            for (c, &s) in k.s[j].iter().enumerate() {
+                let w = v.cross_motion(s);
+                let psi = a.cross_motion(s).sub(w.cross_motion(v));
+                let beta = v.add(k.v[j]).cross_motion(s);
+                let bc = |x: Motion<S>| ydc[j].mul_motion(x).add(x.cross_force(hc[j]));
+                let dq = s.cross_force(fc[j]).add(yc[j].mul_motion(psi)).add(bc(w));
+                let du = yc[j].mul_motion(beta).add(bc(s));
+                let own = Terms {
+                    s,
+                    w,
+                    psi,
+                    beta,
+                    p: yc[j].mul_motion(s),
+                    q: ydc[j].mul_motion(s).sub(s.cross_force(hc[j])),
+                    dq,
+                    du,
+                };
+                cols.push(Column {
+                    body: j,
+                    index: u + c,
+                    common: own.to_parent(pose),
+                    own,
+                });
+            }
+        }
+        self.pairs(&cols)
+    }
+
+    /// The pass over pairs of columns (module documentation): `∂τ/∂q`,
+    /// `∂τ/∂u` and `M` from the columns' terms.
+    fn pairs(&self, cols: &[Column<S>]) -> RneaDerivatives<S> {
         let nu = self.tree.nu;
         let mut dq = vec![vec![S::zero(); nu]; nu];
         let mut du = vec![vec![S::zero(); nu]; nu];
         let mut m = vec![vec![S::zero(); nu]; nu];
-        // Per column: the pass over the rows.
-        for &(j, col, s) in &cols {
-            let parent = bodies[j].parent;
-            let (vl, al) = parent.map_or((Motion::zero(), base), |p| (vw[p], aw[p]));
-            let w = vl.cross_motion(s);
-            let psi = al.cross_motion(s).sub(w.cross_motion(vl));
-            let beta = vl.add(vw[j]).cross_motion(s);
-            let bc = |x: Motion<S>| ydc[j].mul_motion(x).add(x.cross_force(hc[j]));
-            let dq_j = s.cross_force(fc[j]).add(yc[j].mul_motion(psi)).add(bc(w));
-            let du_j = yc[j].mul_motion(beta).add(bc(s));
-            for (&(i, row, si), &(p, q)) in cols.iter().zip(&pq) {
-                if self.descends(i, j) {
-                    dq[row][col] = psi.dot(p) + w.dot(q);
-                    du[row][col] = beta.dot(p) + s.dot(q);
-                    let mij = s.dot(p);
+        for cj in cols {
+            let col = cj.index;
+            for ci in cols {
+                let row = ci.index;
+                // Dot products in any common axes: a body's own where
+                // both columns are its.
+                let (tj, ti) = if ci.body == cj.body {
+                    (&cj.own, &ci.own)
+                } else {
+                    (&cj.common, &ci.common)
+                };
+                if self.descends(ci.body, cj.body) {
+                    dq[row][col] = tj.psi.dot(ti.p) + tj.w.dot(ti.q);
+                    du[row][col] = tj.beta.dot(ti.p) + tj.s.dot(ti.q);
+                    let mij = tj.s.dot(ti.p);
                     m[row][col] = mij;
                     m[col][row] = mij;
-                } else if self.descends(j, i) {
-                    dq[row][col] = si.dot(dq_j);
-                    du[row][col] = si.dot(du_j);
+                } else if self.descends(cj.body, ci.body) {
+                    dq[row][col] = ti.s.dot(tj.dq);
+                    du[row][col] = ti.s.dot(tj.du);
                 }
             }
         }
-        Some(RneaDerivatives { dq, du, m })
+        RneaDerivatives { dq, du, m }
     }
 
     /// Is body `i` body `j` or in its subtree?
