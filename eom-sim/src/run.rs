@@ -30,9 +30,9 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 pub(crate) mod contact;
-pub use contact::{
-    ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, JointImpulse, MAX_LCP, lcp,
-};
+pub use contact::{ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, JointImpulse, MAX_LCP};
+pub(crate) mod impulse;
+pub use impulse::lcp;
 mod elements;
 mod redundant;
 pub use elements::{

@@ -25,7 +25,8 @@
 use super::alpha::{AlphaModel, GeneralizedAlpha};
 use super::run::{AlphaOptions, DynamicsError, DynamicsStats, State};
 use crate::constrained::{DMatrix, DVector};
-use crate::run::contact::{Rows, impact};
+use crate::run::contact::Rows;
+use crate::run::impulse::impact;
 use crate::run::{ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, MAX_LCP, lcp};
 use nalgebra::Dyn;
 use nalgebra::linalg::LU;
