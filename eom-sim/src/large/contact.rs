@@ -417,11 +417,8 @@ fn on_the_steps(
             }
             side = -1;
         }
-        t = if fa > fb {
-            (a * fb - b * fa) / (fb - fa)
-        } else {
-            0.5 * (a + b)
-        };
+        // `fa > 0 > fb` throughout: the secant of the bracket.
+        t = (a * fb - b * fa) / (fb - fa);
         if !(t > a && t < b) {
             t = 0.5 * (a + b);
         }
