@@ -62,6 +62,11 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         .iter()
         .map(|(form, c)| (format!("{form:?}"), op_json(c)))
         .collect();
+    let id_derivative_candidates: serde_json::Map<String, serde_json::Value> = with_derivatives
+        .id_derivative_candidates
+        .iter()
+        .map(|(form, c)| (format!("{form:?}"), op_json(c)))
+        .collect();
     // Every function of the table, `null` where not generated.
     let ops: serde_json::Map<String, serde_json::Value> = TABLE
         .iter()
@@ -111,6 +116,8 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         "forward_dynamics_candidates": candidates,
         "derivative_form": with_derivatives.derivative_form.map(|d| format!("{d:?}")),
         "derivative_candidates": derivative_candidates,
+        "id_derivative_form": with_derivatives.id_derivative_form.map(|d| format!("{d:?}")),
+        "id_derivative_candidates": id_derivative_candidates,
         "ops": ops,
         "nq": g.checked.system.nq(),
         "nu": g.checked.system.nu(),
@@ -144,6 +151,14 @@ pub fn run(a: &StatsArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             let chosen = with_derivatives.derivative_form == Some(*form);
             println!(
                 "  derivatives by {form}: {} operations{}",
+                c.total(),
+                if chosen { " (kept)" } else { "" }
+            );
+        }
+        for (form, c) in &with_derivatives.id_derivative_candidates {
+            let chosen = with_derivatives.id_derivative_form == Some(*form);
+            println!(
+                "  inverse dynamics derivatives by {form}: {} operations{}",
                 c.total(),
                 if chosen { " (kept)" } else { "" }
             );

@@ -64,6 +64,29 @@ pub enum DerivativeForm {
     RecursiveBodyAxes,
 }
 
+/// How `inverse_dynamics_derivatives` was generated: the formulation
+/// counts every form that applies and keeps the cheapest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IdDerivativeForm {
+    /// Differentiating recursive Newton–Euler as generated.
+    Differentiated,
+    /// `∂ID/∂(q, u)` by the recursion of Carpentier and Mansard in world
+    /// axes, `∂ID/∂u̇ = M` from its composite inertias.
+    Recursive,
+    /// The same recursion in body axes.
+    RecursiveBodyAxes,
+}
+
+impl fmt::Display for IdDerivativeForm {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            IdDerivativeForm::Differentiated => "differentiated RNEA",
+            IdDerivativeForm::Recursive => "RNEA derivatives by recursion",
+            IdDerivativeForm::RecursiveBodyAxes => "RNEA derivatives by recursion in body axes",
+        })
+    }
+}
+
 impl fmt::Display for DerivativeForm {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
@@ -314,6 +337,49 @@ pub fn inverse_dynamics_derivatives<'cx>(
             ("du", cx.jacobian(inverse, u)),
             ("dud", cx.jacobian(inverse, ud)),
             ("dinput", cx.jacobian(inverse, inputs)),
+        ],
+        opts,
+    )
+}
+
+/// The program of `inverse_dynamics_derivatives` (layout of
+/// [`inverse_dynamics_derivatives`]) from the recursion's `∂ID/∂q`
+/// (tangent space), `∂ID/∂u` and `M = ∂ID/∂u̇` of the Newton–Euler forces
+/// at symbolic `u̇` ([`crate::mech::Evaluator::rnea_derivatives`]), and
+/// `loads`, the rest of inverse dynamics (`−Jᵀ f_ext − Q`: force elements
+/// and inputs, no `u̇`), differentiated here as expressions.
+#[allow(clippy::too_many_arguments)]
+pub fn inverse_dynamics_derivatives_recursive<'cx>(
+    cx: &'cx Context,
+    rd: super::rnea_derivatives::RneaDerivatives<Expr<'cx>>,
+    loads: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    inputs: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Program {
+    let add = |a: Vec<Vec<Expr<'cx>>>, b: Vec<Vec<Expr<'cx>>>| -> Vec<Vec<Expr<'cx>>> {
+        a.into_iter()
+            .zip(b)
+            .map(|(ra, rb)| ra.into_iter().zip(rb).map(|(x, y)| x + y).collect())
+            .collect()
+    };
+    let (gq, gu) = if loads.iter().all(|l| l.is_zero()) {
+        (rd.dq, rd.du)
+    } else {
+        (
+            add(rd.dq, tangent_jacobian(cx, loads, qdot, q, u)),
+            add(rd.du, cx.jacobian(loads, u)),
+        )
+    };
+    lower_blocks(
+        cx,
+        [
+            ("dq", gq),
+            ("du", gu),
+            ("dud", rd.m),
+            ("dinput", cx.jacobian(loads, inputs)),
         ],
         opts,
     )

@@ -195,6 +195,11 @@ pub struct Formulation {
     /// The programs of the forms not kept (to check one form against
     /// another).
     pub derivative_alternatives: Vec<(super::derivatives::DerivativeForm, Program)>,
+    /// The form chosen for `inverse_dynamics_derivatives`, when generated.
+    pub id_derivative_form: Option<super::derivatives::IdDerivativeForm>,
+    /// Operation counts of every form of inverse dynamics' derivatives that
+    /// applies, when generated.
+    pub id_derivative_candidates: Vec<(super::derivatives::IdDerivativeForm, OpCount)>,
     /// Names of the constraint equations (`joint.k`, the constraint's name,
     /// `disk.contact` / `disk.slip_x` / `disk.slip_y`); holonomic first.
     pub constraint_names: Vec<String>,
@@ -543,23 +548,57 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
     } else {
         (None, Vec::new(), Vec::new())
     };
-    let id_derivatives = request
-        .contains(Function::InverseDynamicsDerivatives)
-        .then(|| {
+    // Inverse dynamics' derivatives: differentiated Newton–Euler, or
+    // `∂ID/∂(q, u)` by the recursion with `∂ID/∂u̇ = M` from its composite
+    // inertias (world or body axes), whichever counts fewer operations
+    // (the first listed on a tie).
+    let (id_derivatives, id_derivative_candidates) =
+        if request.contains(Function::InverseDynamicsDerivatives) {
+            use super::derivatives::{IdDerivativeForm, inverse_dynamics_derivatives_recursive};
+            use super::rnea_derivatives::Axes;
             let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
+            let qdot = ev.qdot(&st);
             let (t, _) = ev.rnea(&k, &ud, &fext);
             let inverse: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
-            super::derivatives::inverse_dynamics_derivatives(
-                &cx,
-                &inverse,
-                &ud,
-                &ev.qdot(&st),
-                &q,
-                &u,
-                &inputs,
-                opts,
-            )
-        });
+            let mut programs = vec![(
+                IdDerivativeForm::Differentiated,
+                super::derivatives::inverse_dynamics_derivatives(
+                    &cx, &inverse, &ud, &qdot, &q, &u, &inputs, opts,
+                ),
+            )];
+            if ev.recursive_derivatives_apply() {
+                let loads: Vec<Expr> = ev
+                    .load_torques(&k, &fext)
+                    .iter()
+                    .zip(&generalized)
+                    .map(|(&l, &g)| l - g)
+                    .collect();
+                for (form, axes) in [
+                    (IdDerivativeForm::Recursive, Axes::World),
+                    (IdDerivativeForm::RecursiveBodyAxes, Axes::Body),
+                ] {
+                    if let Some(rd) = ev.rnea_derivatives(&k, &ud, axes) {
+                        let p = inverse_dynamics_derivatives_recursive(
+                            &cx, rd, &loads, &qdot, &q, &u, &inputs, opts,
+                        );
+                        programs.push((form, p));
+                    }
+                }
+            }
+            let candidates: Vec<(IdDerivativeForm, OpCount)> =
+                programs.iter().map(|(f, p)| (*f, p.op_count())).collect();
+            let best = (0..programs.len())
+                .min_by_key(|&i| (candidates[i].1.total(), i))
+                .unwrap_or(0);
+            let (form, kept) = programs.swap_remove(best);
+            (Some((kept, form)), candidates)
+        } else {
+            (None, Vec::new())
+        };
+    let (id_derivatives, id_derivative_form) = match id_derivatives {
+        Some((p, form)) => (Some(p), Some(form)),
+        None => (None, None),
+    };
     let (fd_derivatives, derivative_form) = match fd_derivatives {
         Some((p, form)) => (Some(p), Some(form)),
         None => (None, None),
@@ -734,6 +773,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         derivative_form,
         derivative_candidates,
         derivative_alternatives,
+        id_derivative_form,
+        id_derivative_candidates,
         constraint_names,
         n_holonomic,
         output_names: out.names,
