@@ -8,6 +8,7 @@
 
 use super::contact::{MAX_LCP, Rows};
 use super::redundant::{Cone, min_norm_feasible};
+use super::soccp;
 use crate::constrained::{DMatrix, DVector};
 
 /// Solves the linear complementarity problem `ξ = A x + b`, `x ≥ 0`,
@@ -130,7 +131,7 @@ pub(crate) struct Solved {
 
 impl Problem<'_> {
     pub(super) fn solve(&self) -> Option<Solved> {
-        let (r, set) = (self.r, self.set);
+        let set = self.set;
         let (n, nu) = (set.len(), self.m.nrows());
         if n == 0 {
             return Some(Solved {
@@ -148,34 +149,8 @@ impl Problem<'_> {
         let stick: Vec<usize> = (0..n)
             .filter(|&k| self.slide[k] == Some(Slide::Stick))
             .collect();
-        let cols = n + 2 * stick.len();
-        let mut d = DMatrix::zeros(nu, cols);
-        let mut rows_b = DMatrix::zeros(cols, nu);
-        let mut b = DVector::zeros(cols);
-        for (k, &i) in set.iter().enumerate() {
-            for c in 0..nu {
-                let mut col = r.w[(i, c)];
-                if let Some(Slide::Slip(s)) = self.slide[k] {
-                    col -= r.mu[i] * (s[0] * r.wt[(2 * i, c)] + s[1] * r.wt[(2 * i + 1, c)]);
-                }
-                d[(c, k)] = col;
-                rows_b[(k, c)] = r.w[(i, c)];
-            }
-            b[k] = self.b[k];
-        }
-        for (p, &k) in stick.iter().enumerate() {
-            let i = set[k];
-            for a in 0..2 {
-                let col = n + 2 * p + a;
-                for c in 0..nu {
-                    d[(c, col)] = r.wt[(2 * i + a, c)];
-                    rows_b[(col, c)] = r.wt[(2 * i + a, c)];
-                }
-                b[col] = self.bt[k][a];
-            }
-        }
-        let x = effective_inverse(self.m, self.j, &d)?;
-        let g = &rows_b * &x;
+        let (x, g, b) = self.block(&stick)?;
+        let cols = b.len();
         let scale = b.amax().max(g.amax() * f64::EPSILON).max(f64::MIN_POSITIVE);
         let mut masks: Vec<u32> = if self.held {
             vec![(1u32 << n) - 1]
@@ -240,6 +215,44 @@ impl Problem<'_> {
             return Some(self.finish(&x, &stick, &z, &z));
         }
         None
+    }
+
+    /// The block of the unknowns — the normal impulses, then two per
+    /// sticking row of `stick` (the others slide by their [`Slide`]) —
+    /// `(X, G, b)`: the speeds (accelerations) `Δ = X z` and
+    /// `ξ = G z + b`, normal rows then the sticking rows' tangential ones.
+    fn block(&self, stick: &[usize]) -> Option<(DMatrix<f64>, DMatrix<f64>, DVector<f64>)> {
+        let (r, set) = (self.r, self.set);
+        let (n, nu) = (set.len(), self.m.nrows());
+        let cols = n + 2 * stick.len();
+        let mut d = DMatrix::zeros(nu, cols);
+        let mut rows_b = DMatrix::zeros(cols, nu);
+        let mut b = DVector::zeros(cols);
+        for (k, &i) in set.iter().enumerate() {
+            for c in 0..nu {
+                let mut col = r.w[(i, c)];
+                if let Some(Slide::Slip(s)) = self.slide[k] {
+                    col -= r.mu[i] * (s[0] * r.wt[(2 * i, c)] + s[1] * r.wt[(2 * i + 1, c)]);
+                }
+                d[(c, k)] = col;
+                rows_b[(k, c)] = r.w[(i, c)];
+            }
+            b[k] = self.b[k];
+        }
+        for (p, &k) in stick.iter().enumerate() {
+            let i = set[k];
+            for a in 0..2 {
+                let col = n + 2 * p + a;
+                for c in 0..nu {
+                    d[(c, col)] = r.wt[(2 * i + a, c)];
+                    rows_b[(col, c)] = r.wt[(2 * i + a, c)];
+                }
+                b[col] = self.bt[k][a];
+            }
+        }
+        let x = effective_inverse(self.m, self.j, &d)?;
+        let g = &rows_b * &x;
+        Some((x, g, b))
     }
 
     /// The unknowns of the active rows `mask`: their normal impulses, then
@@ -410,8 +423,77 @@ pub(super) fn norm2(v: [f64; 2]) -> f64 {
 /// from the direction of its sliding speed before, then of the one after
 /// it). With `held`
 /// (contacts coming to rest, `e = 0` on every row) sliding rows take no
-/// tangential impulse.
+/// tangential impulse. Where that iteration finds no answer (an impact,
+/// not `held`), the impact is solved as the second-order-cone
+/// complementarity problem it is ([`cone_impact`]); `None` if that finds
+/// none either that satisfies every Newton–Coulomb condition.
 pub(crate) fn impact(
+    m: &DMatrix<f64>,
+    j: Option<&DMatrix<f64>>,
+    r: &Rows,
+    set: &[usize],
+    e: &dyn Fn(usize) -> f64,
+    held: bool,
+    slides: &[Option<Slide>],
+) -> Option<Solved> {
+    iterate_directions(m, j, r, set, e, held, slides).or_else(|| {
+        if held {
+            None
+        } else {
+            cone_impact(m, j, r, set, e, slides)
+        }
+    })
+}
+
+/// The impact of [`impact`] on the rows `set` as a second-order-cone
+/// complementarity problem on the Delassus operator of all their normal
+/// and tangential rows (rows with friction per `slides`, the others
+/// frictionless), solved by [`soccp::solve`] and accepted only if its
+/// Newton–Coulomb conditions hold ([`soccp::check`]).
+pub(crate) fn cone_impact(
+    m: &DMatrix<f64>,
+    j: Option<&DMatrix<f64>>,
+    r: &Rows,
+    set: &[usize],
+    e: &dyn Fn(usize) -> f64,
+    slides: &[Option<Slide>],
+) -> Option<Solved> {
+    let n = set.len();
+    if n == 0 || n > MAX_LCP || slides.len() != n {
+        return None;
+    }
+    let slide: Vec<Option<Slide>> = slides
+        .iter()
+        .map(|s| s.map(|_| Slide::Stick))
+        .collect();
+    let p = Problem {
+        m,
+        j,
+        r,
+        set,
+        slide: &slide,
+        b: DVector::from_fn(n, |k, _| (1.0 + e(set[k])) * r.gdot[set[k]]),
+        bt: set.iter().map(|&i| r.vt[i]).collect(),
+        held: false,
+    };
+    let stick: Vec<usize> = (0..n).filter(|&k| slide[k].is_some()).collect();
+    let (x, g, b) = p.block(&stick)?;
+    let cones: Vec<Cone> = (0..n)
+        .map(|k| Cone {
+            normal: k,
+            tangential: stick
+                .iter()
+                .position(|&s| s == k)
+                .map(|q| ([n + 2 * q, n + 2 * q + 1], r.mu[set[k]])),
+        })
+        .collect();
+    let z = soccp::solve(&g, &b, &cones, &[])?;
+    soccp::check(&g, &b, &cones, &z).ok()?;
+    Some(p.finish(&x, &stick, &z, &z))
+}
+
+/// The fixed-point iteration of the sliding directions of [`impact`].
+fn iterate_directions(
     m: &DMatrix<f64>,
     j: Option<&DMatrix<f64>>,
     r: &Rows,
