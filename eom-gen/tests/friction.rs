@@ -793,7 +793,11 @@ fn tilted_box_sliding_through_a_one_corner_impact_settles_its_direction() {
 /// `Λ_t = −μ Λ v_t⁺/‖v_t⁺‖`; the energy not gained. Impulses to 1e-9 of
 /// the largest, speeds to 1e-9 of the fastest before.
 fn assert_newton_coulomb(ev: &eom_sim::run::ContactEvent, e: f64, mu: f64, what: &str) {
-    let big = ev.contacts.iter().map(|c| c.impulse.abs()).fold(0.0, f64::max);
+    let big = ev
+        .contacts
+        .iter()
+        .map(|c| c.impulse.abs())
+        .fold(0.0, f64::max);
     let fast = ev
         .contacts
         .iter()
@@ -847,7 +851,11 @@ fn tilted_box_runs_a_second_through_its_one_corner_impacts() {
             .iter()
             .filter(|ev| ev.kind == ContactEventKind::Impact)
             .collect();
-        eprintln!("mu {mu}: {} impacts, {} events", impacts.len(), report.contact_events.len());
+        eprintln!(
+            "mu {mu}: {} impacts, {} events",
+            impacts.len(),
+            report.contact_events.len()
+        );
         assert!(!impacts.is_empty());
         for ev in &impacts {
             assert_newton_coulomb(ev, 0.5, mu, &format!("mu {mu}, t = {}", ev.t));

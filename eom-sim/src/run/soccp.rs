@@ -121,9 +121,7 @@ fn alart_curnier(
                     // P = R ŷ: dP = ŷ dR + (R/‖y‖)(I − ŷ ŷᵀ) dy.
                     let h = [yt[0] / ny, yt[1] / ny];
                     let proj: f64 = (0..2)
-                        .map(|m| {
-                            (f64::from(u8::from(i == m)) - h[i] * h[m]) * dyt(rows[m], col)
-                        })
+                        .map(|m| (f64::from(u8::from(i == m)) - h[i] * h[m]) * dyt(rows[m], col))
                         .sum();
                     h[i] * drad(col) + radius / ny * proj
                 } else {
@@ -152,12 +150,21 @@ fn newton(
 ) -> DVector<f64> {
     let floor = (1e-15 * b.amax()).powi(2);
     for _ in 0..NEWTON_STEPS {
+        // (nalgebra's SVD panics on NaN: a non-finite point stops here)
+        if !z.iter().all(|v| v.is_finite()) {
+            break;
+        }
         let (phi, jac) = alart_curnier(g, b, cones, rho, &z, true);
+        if !phi.iter().all(|v| v.is_finite()) {
+            break;
+        }
         let theta = 0.5 * phi.norm_squared();
         if theta <= floor {
             break;
         }
-        let Some(jac) = jac else { break };
+        let Some(jac) = jac.filter(|j| j.iter().all(|v| v.is_finite())) else {
+            break;
+        };
         let rhs = -&phi;
         let step = jac
             .clone()
@@ -380,13 +387,7 @@ mod tests {
             let g = &w * minv * w.transpose();
             let wu = &w * &u;
             let e = rng.next();
-            let b = DVector::from_fn(n, |i, _| {
-                if i < nc {
-                    (1.0 + e) * wu[i]
-                } else {
-                    wu[i]
-                }
-            });
+            let b = DVector::from_fn(n, |i, _| if i < nc { (1.0 + e) * wu[i] } else { wu[i] });
             let cs = cones(nc, &mu);
             let Some(z) = solve(&g, &b, &cs, &[]) else {
                 panic!("case {case}: no solution for G = {g}, b = {b}, μ = {mu:?}");
@@ -395,15 +396,23 @@ mod tests {
             let (tz, tv) = (1e-8 * z.amax(), 1e-8 * b.amax().max((&g * &z).amax()));
             for (k, c) in cs.iter().enumerate() {
                 let (l, v) = (z[c.normal], xi[c.normal]);
-                assert!(l >= -tz && v >= -tv, "case {case} contact {k}: Λ = {l}, ξ_n = {v}");
+                assert!(
+                    l >= -tz && v >= -tv,
+                    "case {case} contact {k}: Λ = {l}, ξ_n = {v}"
+                );
                 assert!(l.min(v / tv * tz) <= tz, "case {case}: Λ ξ_n ≠ 0: {l}, {v}");
                 let ([a, bb], m) = c.tangential.expect("rough");
                 let (lt, vt) = ([z[a], z[bb]], [xi[a], xi[bb]]);
                 let (nl, nv) = (lt[0].hypot(lt[1]), vt[0].hypot(vt[1]));
-                assert!(nl <= m * l + tz, "case {case}: ‖Λ_t‖ = {nl} > μ Λ = {}", m * l);
+                assert!(
+                    nl <= m * l + tz,
+                    "case {case}: ‖Λ_t‖ = {nl} > μ Λ = {}",
+                    m * l
+                );
                 if nv > tv {
                     assert!(
-                        (nl - m * l).abs() <= tz && lt[0] * vt[0] + lt[1] * vt[1] <= -(nl * nv) * (1.0 - 1e-6) + tz * nv,
+                        (nl - m * l).abs() <= tz
+                            && lt[0] * vt[0] + lt[1] * vt[1] <= -(nl * nv) * (1.0 - 1e-6) + tz * nv,
                         "case {case}: slides with Λ_t = {lt:?}, v_t = {vt:?}"
                     );
                 }
@@ -428,11 +437,7 @@ mod tests {
         let cs = cones(1, &[mu]);
         let dir = [0.6, -0.8];
         let edge = mu * (1.0 + e) * -vn;
-        for (vt, want_vt) in [
-            (edge, 0.0),
-            (1.5 * edge, 0.5 * edge),
-            (0.5 * edge, 0.0),
-        ] {
+        for (vt, want_vt) in [(edge, 0.0), (1.5 * edge, 0.5 * edge), (0.5 * edge, 0.0)] {
             let b = DVector::from_vec(vec![(1.0 + e) * vn, vt * dir[0], vt * dir[1]]);
             let z = solve(&g, &b, &cs, &[]).expect("solvable");
             let ln = m * (1.0 + e) * -vn;
