@@ -19,7 +19,9 @@
 //! (`P_B` the projection onto the disk of that radius), which is
 //! piecewise smooth: [`solve`] runs a damped semismooth Newton method on
 //! it, an element of its generalized Jacobian per step and an Armijo line
-//! search on `½ ‖Φ‖²`, and falls back on De Saxcé's projected fixed point
+//! search on `½ ‖Φ‖²` (where the Newton direction does not descend, as on
+//! the singular Jacobians of redundant blocks, its least-squares one,
+//! then a Levenberg–Marquardt one), and falls back on De Saxcé's projected fixed point
 //! `z ← P_K(z − ρ (ξ_n + μ ‖ξ_t‖, ξ_t))` (K the Coulomb cones), which it
 //! then polishes with Newton again. Unlike the iteration of the sliding
 //! direction in [`super::impulse::impact`], a slide that stops exactly on
@@ -165,29 +167,43 @@ fn newton(
         let Some(jac) = jac.filter(|j| j.iter().all(|v| v.is_finite())) else {
             break;
         };
+        // Directions, each tried with an Armijo line search on ½‖Φ‖²
+        // (slope `Φᵀ J d`): Newton's (LU), its least-squares solution (a
+        // singular Jacobian: redundant rows), and Levenberg–Marquardt's
+        // `(JᵀJ + λ I) d = −Jᵀ Φ`, a descent direction wherever `JᵀΦ ≠ 0`.
         let rhs = -&phi;
-        let step = jac
-            .clone()
-            .lu()
-            .solve(&rhs)
-            .filter(|d| d.iter().all(|v| v.is_finite()))
-            .or_else(|| {
-                let eps = 1e-13 * jac.amax().max(f64::MIN_POSITIVE);
-                jac.svd(true, true).solve(&rhs, eps).ok()
-            });
-        let Some(d) = step else { break };
-        // Armijo on ½‖Φ‖² along the Newton direction (a descent direction
-        // wherever Φ is differentiable: the slope is −‖Φ‖²).
-        let mut t = 1.0;
+        let nz = z.len();
+        let jtj = jac.transpose() * &jac;
+        let lambda = 1e-8 * jtj.diagonal().amax().max(f64::MIN_POSITIVE);
+        let newton_dir = jac.clone().lu().solve(&rhs);
+        let eps = 1e-13 * jac.amax().max(f64::MIN_POSITIVE);
+        let lsq = || jac.clone().svd(true, true).solve(&rhs, eps).ok();
+        let lm = || {
+            let a = &jtj + DMatrix::from_diagonal_element(nz, nz, lambda);
+            a.cholesky().map(|c| c.solve(&(jac.transpose() * &rhs)))
+        };
         let mut moved = false;
-        while t > 1e-12 {
-            let trial = &z + t * &d;
-            if merit(g, b, cones, rho, &trial) <= (1.0 - 1e-4 * t) * theta {
-                z = trial;
-                moved = true;
+        for d in [newton_dir, lsq(), lm()].into_iter().flatten() {
+            if !d.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            let slope = phi.dot(&(&jac * &d));
+            if slope >= 0.0 {
+                continue;
+            }
+            let mut t = 1.0;
+            while t > 1e-12 {
+                let trial = &z + t * &d;
+                if merit(g, b, cones, rho, &trial) <= theta + 1e-4 * t * slope {
+                    z = trial;
+                    moved = true;
+                    break;
+                }
+                t *= 0.5;
+            }
+            if moved {
                 break;
             }
-            t *= 0.5;
         }
         if !moved {
             break;
