@@ -35,6 +35,7 @@ pub(crate) mod impulse;
 pub use impulse::lcp;
 mod elements;
 mod redundant;
+mod soccp;
 pub use elements::{
     CableState, ContactForce, ElementReport, LoadStepReport, MountForce, StabilityReport,
     StaticReport,

@@ -528,7 +528,7 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
         };
         let no_solution = |n: usize| {
             fail(&format!(
-                "the impact of {n} contact(s) has no solution (a singular mass matrix, more than {MAX_LCP} contacts closed at once, or sliding directions that do not settle)"
+                "the impact of {n} contact(s) has no solution (a singular mass matrix, more than {MAX_LCP} contacts closed at once, or no impulse satisfying Newton–Coulomb found by the mode search or the cone solver)"
             ))
         };
         let mut r = read(y)?;

@@ -36,7 +36,7 @@ pub(super) struct Cone {
 
 /// Projects `z` onto the cones (`with_friction`) or only the signs
 /// (`Λ ≥ 0`, tangential impulses free) of `cones`, in place.
-fn project_cones(z: &mut DVector<f64>, cones: &[Cone], with_friction: bool) {
+pub(super) fn project_cones(z: &mut DVector<f64>, cones: &[Cone], with_friction: bool) {
     for c in cones {
         let x = z[c.normal];
         match c.tangential {
