@@ -29,8 +29,9 @@
 //! transitions are events as in the rigid runtime: a slide stops (`v_t·s`
 //! falling through 0, located linearly between the step's ends; **stick**,
 //! a tangential impulse takes the speed left), a stick breaks
-//! (`μ λ − ‖λ_t‖` falling through 0, likewise; **slip**), a force falls
-//! through 0 (**release**).
+//! (`μ λ − ‖λ_t‖` falling through 0, refined on the retaken steps'
+//! multipliers to a part in 10⁹; **slip**), a force falls through 0
+//! (**release**).
 //!
 //! Not here: cables hung at rigid bodies (the impact map would need the
 //! rigid part's mass matrix and constraints at velocity level; the
@@ -242,8 +243,8 @@ impl<'m, M: AlphaModel + ?Sized> Held<'m, M> {
         let mut holds: Vec<Hold> = active.iter().map(|&i| Hold::Normal(i)).collect();
         for &i in active {
             if slides.get(i) == Some(&Some(Slide::Stick)) {
-                for a in 0..2 {
-                    if !gaps.tangents[i][a].is_empty() {
+                for (a, row) in gaps.tangents[i].iter().enumerate() {
+                    if !row.is_empty() {
                         holds.push(Hold::Tangent(i, a, anchors[i][a]));
                     }
                 }
@@ -566,21 +567,23 @@ fn locate(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
 /// step: `step(τ)` is the step from the bracket's start `a` to `τ`, `gap`
 /// its gap above the level, positive at `a` and negative at `b`. Regula
 /// falsi (Illinois) from the interpolant's crossing `guess` until the gap
-/// is within half of [`GAP_TOL`] — a few steps retaken, where the cubic
-/// interpolant of a flexible cable's step missed by up to 0.3 mm —, or
-/// `None` if a retaken step fails.
-fn on_the_steps(
+/// is within `tol` (half of [`GAP_TOL`] for a gap — a few steps retaken,
+/// where the cubic interpolant of a flexible cable's step missed by up to
+/// 0.3 mm —; for a stick's distance to its cone, a force, a part in 10⁹
+/// of its friction force), or `None` if a retaken step fails.
+fn on_the_steps<T>(
     guess: f64,
     ((mut a, mut fa), (mut b, mut fb)): ((f64, f64), (f64, f64)),
-    step: impl Fn(f64) -> Option<State>,
-    gap: impl Fn(&State) -> f64,
-) -> Option<State> {
+    tol: f64,
+    step: impl Fn(f64) -> Option<T>,
+    gap: impl Fn(&T) -> f64,
+) -> Option<T> {
     let mut t = guess;
     let mut side = 0;
     for _ in 0..60 {
         let s = step(t)?;
         let f = gap(&s);
-        if f.abs() <= 0.5 * GAP_TOL || b - a <= 4.0 * f64::EPSILON * b.abs().max(1.0) {
+        if f.abs() <= tol || b - a <= 4.0 * f64::EPSILON * b.abs().max(1.0) {
             return Some(s);
         }
         if f > 0.0 {
@@ -1068,13 +1071,46 @@ impl<'g> ContactRun<'g> {
                                     .and_then(|mut g| g.step_within(t).map(|()| g.state().clone()))
                                     .ok()
                             };
-                            let located = match row {
-                                Some((i, level)) => {
+                            let located = match (row, breaks) {
+                                (Some((i, level)), _) => {
                                     let gap = |s: &State| self.gaps.gap(i, &s.q) - level;
                                     let ends = ((prev.t, gap(&prev)), (new.t, gap(&new)));
-                                    on_the_steps(t, ends, retake, gap)
+                                    on_the_steps(t, ends, 0.5 * GAP_TOL, retake, gap)
                                 }
-                                None => retake(t),
+                                // A stick leaving its cone: its distance to
+                                // the cone from the retaken step's
+                                // multipliers, brought to zero likewise (a
+                                // slide's stop stays linear: refined on the
+                                // retaken steps too, the oblique drop's
+                                // run failed in a later impact).
+                                (None, Some(i)) => {
+                                    let k = self.active.iter().position(|&j| j == i);
+                                    let margin = |x: &(State, Vec<f64>)| {
+                                        k.and_then(|k| held.cone_margins(&x.1)[k]).unwrap_or(0.0)
+                                    };
+                                    let retake_m = |t: f64| {
+                                        GeneralizedAlpha::new(&held, prev.clone(), opts.clone())
+                                            .and_then(|mut g| {
+                                                g.step_within(t).map(|()| {
+                                                    (g.state().clone(), g.multipliers().to_vec())
+                                                })
+                                            })
+                                            .ok()
+                                    };
+                                    let (a, b) = k
+                                        .and_then(|k| Some((c0[k]?, c1[k]?)))
+                                        .unwrap_or((0.0, 0.0));
+                                    let tol = 1e-9 * (a.abs() + b.abs());
+                                    on_the_steps(
+                                        t,
+                                        ((prev.t, a), (new.t, b)),
+                                        tol,
+                                        retake_m,
+                                        margin,
+                                    )
+                                    .map(|x| x.0)
+                                }
+                                (None, None) => retake(t),
                             };
                             located.unwrap_or_else(|| super::simulate::hermite(&prev, &new, t))
                         };
