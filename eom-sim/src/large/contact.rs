@@ -1038,12 +1038,21 @@ impl<'g> ContactRun<'g> {
                         take(t, None, Some(self.active[k]));
                     }
                     // A slide from rest starts at `v_t · s0 ≤ 0`: only a
-                    // slide under way stops.
+                    // slide under way stops. One that starts the step at
+                    // rest to round-off and ends it reversed (an axial
+                    // vibration turning it within the step) is taken at
+                    // the step's end: located at its start it would be
+                    // found there again.
                     if let (Some(a), Some(b)) = (p0[k], p1[k])
                         && a > 0.0
                         && b <= 0.0
                     {
-                        take(linear(a, b), None, None);
+                        let t = if a <= 1e-9 * (a - b) {
+                            new.t
+                        } else {
+                            linear(a, b)
+                        };
+                        take(t, None, None);
                     }
                 }
                 match first {
