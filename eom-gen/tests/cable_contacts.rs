@@ -29,7 +29,10 @@
 //!   μ = 0.3), every node's impulse lies in the cone and, sliding on,
 //!   `Λ_t = −μ Λ v̂_t⁺` (Newton–Coulomb), so every node leaves at
 //!   `u₀ − μ (1 + e) √(2 g h₀)` (the x and y blocks of `M` are equal) and
-//!   the energy is not gained.
+//!   the energy is not gained; with the weight distributed (gravity
+//!   turned by θ, tan θ = 0.3 < μ) the nodes stick and slip in turn as the
+//!   spans sag and the wire vibrates, each slip's stick force on the cone,
+//!   no event gaining energy, and the wire only creeps.
 //! - **Located refusals**: a node inside its plane at the start (with the
 //!   penetration), a negative friction coefficient, a node the cable does not
 //!   have, a cable that does not exist, a plane on a body, a node contact
@@ -661,6 +664,66 @@ fn a_wire_dropped_flat_while_moving_sideways_takes_coulomb_impulses() {
             ev.t,
             ev.energy_before,
             ev.energy_after
+        );
+    }
+}
+
+#[test]
+fn a_wire_with_its_weight_distributed_inside_the_friction_angle_creeps_by_stick_slip_only() {
+    // The wire's weight on its elements (gravity turned by θ, tan θ = 0.3
+    // < μ = 0.5): the spans sag between the held nodes and the end nodes
+    // unload as the end spans swing down, so the nodes stick and slip in
+    // turn while the wire vibrates (hundreds of events; the run used to
+    // stop at t = 0.024 s with 64 events at one time). The total friction
+    // a stick needs, m g sin θ, is inside μ m g cos θ: the wire does not
+    // slide away, the nodes only creep — by far less than the 8.0 mm it
+    // slides in the same 0.1 s at tan θ = 0.7 —; at a slip the stick force
+    // is on the cone, and no event gains energy.
+    let (n, mu) = (4, 0.5);
+    let (report, table, x0) = sliding(
+        n,
+        0.0,
+        0.0,
+        mu,
+        0.3_f64.atan(),
+        0.0,
+        false,
+        &run(0.1, 1e-3, 0.5),
+    );
+    let slips: Vec<_> = report
+        .contact_events
+        .iter()
+        .filter(|e| e.kind == ContactEventKind::Slip)
+        .collect();
+    assert!(!slips.is_empty(), "the end nodes slip");
+    for ev in &slips {
+        for c in &ev.contacts {
+            let l = c.tangential_impulse[0].hypot(c.tangential_impulse[1]);
+            assert!(
+                c.impulse > 0.0 && l >= mu * c.impulse * (1.0 - 1e-3),
+                "slip of {} at {}: ‖λ_t‖ = {l}, μ λ = {}",
+                c.contact,
+                ev.t,
+                mu * c.impulse
+            );
+        }
+    }
+    for ev in &report.contact_events {
+        assert!(
+            ev.energy_after <= ev.energy_before + 1e-12 * report.energy_scale,
+            "{:?} at {}: energy {} → {}",
+            ev.kind,
+            ev.t,
+            ev.energy_before,
+            ev.energy_after
+        );
+    }
+    for (k, &start) in x0.iter().enumerate() {
+        let x = xs(&table, k);
+        let creep = x[x.len() - 1] - start;
+        assert!(
+            creep.abs() < 1e-4,
+            "node {k} crept {creep} m inside the friction angle"
         );
     }
 }
