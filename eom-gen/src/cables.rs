@@ -477,13 +477,29 @@ pub fn structure(sys: &System) -> Result<(Chains, Vec<MixedCable>), CableError> 
 
 /// The model's contacts at cable nodes over the structure `cables` lays
 /// out ([`structure`]): per contact the node's position coordinates along
-/// the plane's normal, `g = n·x − (n·p + r)` (a planar cable's `z = 0`).
+/// the plane's normal, `g = n·x − (n·p + r)` (a planar cable's `z = 0`),
+/// and along the plane's tangent axes for Coulomb friction: `t1`, `t2` of
+/// the rigid contacts ([`crate::mech::contacts::tangent_axes`]) for a
+/// spatial cable; for a planar one `t1 = n × z` in its plane (`t2 = z`
+/// has no coordinate there, its row is empty).
 pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large::NodeContact> {
     sys.cable_contacts
         .iter()
         .filter_map(|c| {
             let layout = cables.get(c.cable)?;
             let base = layout.offset + c.node * layout.node_coords;
+            let along = |d: [f64; 3]| -> Vec<(usize, f64)> {
+                (0..layout.dim.min(3))
+                    .filter(|&a| d[a] != 0.0)
+                    .map(|a| (base + a, d[a]))
+                    .collect()
+            };
+            let n = c.normal;
+            let [t1, t2] = if layout.dim == 2 {
+                [[n[1], -n[0], 0.0], [0.0, 0.0, -1.0]]
+            } else {
+                crate::mech::contacts::tangent_axes(n)
+            };
             let row = (0..layout.dim).map(|a| (base + a, c.normal[a])).collect();
             let level = (0..3).map(|a| c.normal[a] * c.point[a]).sum::<f64>() + c.radius;
             Some(eom_sim::large::NodeContact {
@@ -491,6 +507,8 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
                 row,
                 level,
                 e: c.e,
+                mu: c.mu,
+                tangents: [along(t1), along(t2)],
             })
         })
         .collect()

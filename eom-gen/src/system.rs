@@ -689,6 +689,8 @@ pub struct CableContactInfo {
     pub normal: [f64; 3],
     /// Newton's coefficient of restitution.
     pub e: f64,
+    /// Coulomb's friction coefficient, `μ ≥ 0` (0: frictionless).
+    pub mu: f64,
     /// Where it is defined.
     pub span: Span,
 }

@@ -8,8 +8,9 @@
 //! (`impact`, the generalised Newton law on all closed rows with its
 //! exact LCP, `M` the structure's constant mass matrix) and the same
 //! sustained unilateral constraints with `λ ≥ 0` (the force problem solved
-//! by [`lcp`]). Between events generalized-α integrates the structure with
-//! the sustained rows as index-3 constraints ([`Held`]: `g = 0` appended to
+//! by [`lcp`], or with friction by the rigid runtime's [`Problem`]).
+//! Between events generalized-α integrates the structure with the
+//! sustained rows as index-3 constraints ([`Held`]: `g = 0` appended to
 //! the model's own constraint rows). After every accepted step the gaps of
 //! the open rows and the forces of the sustained ones are checked; the
 //! first to cross zero is located on the step's cubic Hermite interpolant
@@ -17,16 +18,32 @@
 //! force, linearly between the step's ends; the run restarts there with
 //! consistent accelerations.
 //!
-//! Not here: Coulomb friction at cable nodes (the validator refuses
-//! `mu > 0`), and cables hung at rigid bodies (the impact map would need
-//! the rigid part's mass matrix and constraints at velocity level; the
-//! validator refuses node contacts there).
+//! **Coulomb friction** (`mu > 0`): the plane's tangent axes `t1`, `t2`
+//! applied to the node's position coordinates are the tangential rows
+//! `W_t`, constant and exact like the normal one. An impact is the rigid
+//! runtime's Newton–Coulomb law (`impact` with every rough row starting to
+//! stick: `v_t⁺ = 0` if `‖Λ_t‖ ≤ μ Λ`, else `Λ_t = −μ Λ v̂_t⁺`); a
+//! sustained row is a [`Slide`]: sticking, its tangential position held
+//! as two more index-3 rows `t_a·y = c_a` (friction `λ_t` their
+//! multipliers), or sliding, `λ_t = −μ λ s` in its force column. The
+//! transitions are events as in the rigid runtime: a slide stops (`v_t·s`
+//! falling through 0, located linearly between the step's ends; **stick**,
+//! a tangential impulse takes the speed left), a stick breaks
+//! (`μ λ − ‖λ_t‖` falling through 0, refined on the retaken steps'
+//! multipliers to a part in 10⁹; **slip**), a force falls through 0
+//! (**release**).
+//!
+//! Not here: cables hung at rigid bodies (the impact map would need the
+//! rigid part's mass matrix and constraints at velocity level; the
+//! validator refuses node contacts there). A sliding row's direction is
+//! not differentiated in generalized-α's Newton matrix (exact for a slide
+//! along a fixed direction, a quasi-Newton one for a curving slide).
 
 use super::alpha::{AlphaModel, GeneralizedAlpha};
 use super::run::{AlphaOptions, DynamicsError, DynamicsStats, State};
 use crate::constrained::{DMatrix, DVector};
 use crate::run::contact::Rows;
-use crate::run::impulse::impact;
+use crate::run::impulse::{Problem, Slide, Solved, impact, norm2};
 use crate::run::{ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, MAX_LCP, lcp};
 use nalgebra::Dyn;
 use nalgebra::linalg::LU;
@@ -44,6 +61,12 @@ pub struct NodeContact {
     pub level: f64,
     /// Newton's coefficient of restitution, `0 ≤ e ≤ 1`.
     pub e: f64,
+    /// Coulomb's friction coefficient, `μ ≥ 0` (0: frictionless).
+    pub mu: f64,
+    /// The rows of the plane's tangent axes `t1`, `t2` on the node's
+    /// position coordinates, as `row` (an empty row: no coordinate along
+    /// that axis, as `t2 = z` of a planar cable).
+    pub tangents: [Vec<(usize, f64)>; 2],
 }
 
 /// The contacts' rows on a model's free coordinates (`y`, the structure's
@@ -54,6 +77,8 @@ pub(super) struct Gaps {
     pub rows: Vec<Vec<(usize, f64)>>,
     pub level: Vec<f64>,
     pub e: Vec<f64>,
+    pub mu: Vec<f64>,
+    pub tangents: Vec<[Vec<(usize, f64)>; 2]>,
 }
 
 impl Gaps {
@@ -69,6 +94,8 @@ impl Gaps {
             rows: Vec::new(),
             level: Vec::new(),
             e: Vec::new(),
+            mu: Vec::new(),
+            tangents: Vec::new(),
         };
         for c in contacts {
             let mut row = Vec::new();
@@ -83,6 +110,14 @@ impl Gaps {
             g.rows.push(row);
             g.level.push(level);
             g.e.push(c.e);
+            g.mu.push(c.mu);
+            // A tangential row's fixed coordinates move neither the speed
+            // nor (held from where a stick starts) the anchored position.
+            g.tangents.push(c.tangents.clone().map(|t| {
+                t.iter()
+                    .filter_map(|&(i, a)| Some((free_index(i)?, a)))
+                    .collect()
+            }));
         }
         g
     }
@@ -95,19 +130,40 @@ impl Gaps {
         self.rows[i].iter().map(|&(k, a)| a * x[k]).sum()
     }
 
+    /// Row `i`'s tangent axis `a` dotted with `x`.
+    fn tdot(&self, i: usize, a: usize, x: &[f64]) -> f64 {
+        self.tangents[i][a].iter().map(|&(k, c)| c * x[k]).sum()
+    }
+
+    /// Row `i`'s tangential speeds at speeds `v`.
+    fn vt(&self, i: usize, v: &[f64]) -> [f64; 2] {
+        [0, 1].map(|a| self.tdot(i, a, v))
+    }
+
+    /// Row `i` has Coulomb friction.
+    fn rough(&self, i: usize) -> bool {
+        self.mu[i] > 0.0
+    }
+
     /// The gap of row `i` at coordinates `y`.
     pub fn gap(&self, i: usize, y: &[f64]) -> f64 {
         self.dot(i, y) - self.level[i]
     }
 
-    /// The contact rows at `s` in the runtime's [`Rows`] (frictionless,
-    /// `γ = 0`: the rows are constant).
+    /// The contact rows at `s` in the runtime's [`Rows`] (`γ = γ_t = 0`:
+    /// the normal and tangential rows are constant).
     fn at(&self, s: &State) -> Rows {
         let (nk, n) = (self.len(), s.v.len());
         let mut w = DMatrix::zeros(nk, n);
-        for (i, row) in self.rows.iter().enumerate() {
-            for &(k, a) in row {
+        let mut wt = DMatrix::zeros(2 * nk, n);
+        for i in 0..nk {
+            for &(k, a) in &self.rows[i] {
                 w[(i, k)] += a;
+            }
+            for a in 0..2 {
+                for &(k, c) in &self.tangents[i][a] {
+                    wt[(2 * i + a, k)] += c;
+                }
             }
         }
         Rows {
@@ -115,28 +171,58 @@ impl Gaps {
             gdot: (0..nk).map(|i| self.dot(i, &s.v)).collect(),
             gamma: vec![0.0; nk],
             e: self.e.clone(),
-            mu: vec![0.0; nk],
+            mu: self.mu.clone(),
             w,
-            vt: vec![[0.0; 2]; nk],
+            vt: (0..nk).map(|i| self.vt(i, &s.v)).collect(),
             gamma_t: vec![[0.0; 2]; nk],
-            wt: DMatrix::zeros(2 * nk, n),
+            wt,
+        }
+    }
+
+    /// The sliding direction of row `i` at speeds `v` that started along
+    /// `s0`: `v̂_t` while `v_t · s0 > 0`, else `s0` (as the rigid runtime).
+    fn direction(&self, i: usize, s0: [f64; 2], v: &[f64]) -> [f64; 2] {
+        let vt = self.vt(i, v);
+        let nv = norm2(vt);
+        if nv > 0.0 && vt[0] * s0[0] + vt[1] * s0[1] > 0.0 {
+            [vt[0] / nv, vt[1] / nv]
+        } else {
+            s0
         }
     }
 }
 
+/// One held row of [`Held`]: a sustained contact's normal row `g = 0`,
+/// or a sticking one's tangent axis `a` held at its anchor `t_a·y = c`.
+#[derive(Clone, Copy, Debug)]
+enum Hold {
+    Normal(usize),
+    Tangent(usize, usize, f64),
+}
+
 /// A vector model with the sustained contact rows `active` held as
 /// index-3 constraints `g = 0` after its own rows: multipliers `μ`, the
-/// normal force of a row `λ = −μ` (the residual's `+wᵀ μ`). The iteration
+/// normal force of a row `λ = −μ` (the residual's `+wᵀ μ`). A sticking
+/// row (Coulomb friction, [`Slide::Stick`]) holds its tangential position
+/// too, `t_a·y = c_a` from where the stick started (friction force
+/// `λ_t,a = −μ_a`); a sliding one ([`Slide::Slip`]) has its friction
+/// `λ_t = −μ λ s` in its column, `w − μ sᵀ W_t` (`s` the sliding
+/// direction at the iterate's speeds, not differentiated). The iteration
 /// matrix is the model's, bordered by the rows and solved by their Schur
-/// complement `S = C A⁻¹ Cᵀ` (a few rows; `A` the model's factored
-/// matrix).
+/// complement `S = C A⁻¹ D` (a few rows; `A` the model's factored matrix,
+/// `C` the held rows, `D` their force columns).
 pub(super) struct Held<'m, M: ?Sized> {
     pub inner: &'m M,
     gaps: &'m Gaps,
+    /// The active rows' normal holds first, then the sticking rows'
+    /// tangential ones.
+    holds: Vec<Hold>,
     active: Vec<usize>,
+    /// Per contact row (all of them).
+    slides: Vec<Option<Slide>>,
 }
 
-/// [`Held`]'s scratch: the model's, and the bordered solve's `A⁻¹ Cᵀ`
+/// [`Held`]'s scratch: the model's, and the bordered solve's `A⁻¹ D`
 /// columns with the factored `S`.
 pub(super) struct HeldWork<W> {
     inner: W,
@@ -145,37 +231,129 @@ pub(super) struct HeldWork<W> {
 }
 
 impl<'m, M: AlphaModel + ?Sized> Held<'m, M> {
-    pub fn new(inner: &'m M, gaps: &'m Gaps, active: &[usize]) -> Self {
+    /// `slides` and `anchors` per contact row (`None`: frictionless or not
+    /// held).
+    pub fn new(
+        inner: &'m M,
+        gaps: &'m Gaps,
+        active: &[usize],
+        slides: &[Option<Slide>],
+        anchors: &[[f64; 2]],
+    ) -> Self {
+        let mut holds: Vec<Hold> = active.iter().map(|&i| Hold::Normal(i)).collect();
+        for &i in active {
+            if slides.get(i) == Some(&Some(Slide::Stick)) {
+                for (a, row) in gaps.tangents[i].iter().enumerate() {
+                    if !row.is_empty() {
+                        holds.push(Hold::Tangent(i, a, anchors[i][a]));
+                    }
+                }
+            }
+        }
         Held {
             inner,
             gaps,
+            holds,
             active: active.to_vec(),
+            slides: slides.to_vec(),
         }
     }
 
-    /// The normal forces of the held rows from the multipliers.
+    /// The constraint row of hold `h`.
+    fn row(&self, h: Hold) -> &[(usize, f64)] {
+        match h {
+            Hold::Normal(i) => &self.gaps.rows[i],
+            Hold::Tangent(i, a, _) => &self.gaps.tangents[i][a],
+        }
+    }
+
+    /// Hold `h`'s residual at `y`.
+    fn value(&self, h: Hold, y: &[f64]) -> f64 {
+        match h {
+            Hold::Normal(i) => self.gaps.gap(i, y),
+            Hold::Tangent(i, a, c) => self.gaps.tdot(i, a, y) - c,
+        }
+    }
+
+    /// `C_h x`.
+    fn dot(&self, h: Hold, x: &[f64]) -> f64 {
+        self.row(h).iter().map(|&(k, a)| a * x[k]).sum()
+    }
+
+    /// Adds `scale` times hold `h`'s force column at speeds `v` to `r`.
+    fn add_column(&self, h: Hold, v: &[f64], scale: f64, r: &mut [f64]) {
+        for &(c, a) in self.row(h) {
+            r[c] += a * scale;
+        }
+        if let Hold::Normal(i) = h
+            && let Some(Some(Slide::Slip(s0))) = self.slides.get(i)
+        {
+            let s = self.gaps.direction(i, *s0, v);
+            let mu = self.gaps.mu[i];
+            for (a, sa) in s.iter().enumerate() {
+                for &(c, t) in &self.gaps.tangents[i][a] {
+                    r[c] -= mu * sa * t * scale;
+                }
+            }
+        }
+    }
+
+    /// The normal forces of the active rows from the multipliers.
     pub fn forces(&self, lambda: &[f64]) -> Vec<f64> {
         let mi = self.inner.n_constraints();
         (0..self.active.len()).map(|k| -lambda[mi + k]).collect()
     }
 
-    /// `A⁻¹ [Cᵀ; 0]` and `S` at the matrix just factored.
-    fn border(&self, w: &mut HeldWork<M::Work>, t: f64) -> Result<(), DynamicsError> {
-        let (n, mi, k) = (
-            self.inner.n(),
-            self.inner.n_constraints(),
-            self.active.len(),
-        );
+    /// Per active row, `μ λ − ‖λ_t‖` for a sticking row (its distance to
+    /// the friction cone), `None` for the others.
+    pub fn cone_margins(&self, lambda: &[f64]) -> Vec<Option<f64>> {
+        let mi = self.inner.n_constraints();
+        self.active
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| {
+                (self.slides[i] == Some(Slide::Stick)).then(|| {
+                    let mut lt = [0.0; 2];
+                    for (b, h) in self.holds.iter().enumerate() {
+                        if let Hold::Tangent(j, a, _) = *h
+                            && j == i
+                        {
+                            lt[a] = -lambda[mi + b];
+                        }
+                    }
+                    self.gaps.mu[i] * (-lambda[mi + k]) - norm2(lt)
+                })
+            })
+            .collect()
+    }
+
+    /// Per active row, `v_t · s0` for a sliding row that started along
+    /// `s0` (falls through zero when the slide stops), `None` for the
+    /// others.
+    pub fn slip_speeds(&self, v: &[f64]) -> Vec<Option<f64>> {
+        self.active
+            .iter()
+            .map(|&i| match self.slides[i] {
+                Some(Slide::Slip(s0)) => {
+                    let vt = self.gaps.vt(i, v);
+                    Some(vt[0] * s0[0] + vt[1] * s0[1])
+                }
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// `A⁻¹ [D; 0]` and `S` at the matrix just factored.
+    fn border(&self, w: &mut HeldWork<M::Work>, t: f64, v: &[f64]) -> Result<(), DynamicsError> {
+        let (n, mi, k) = (self.inner.n(), self.inner.n_constraints(), self.holds.len());
         w.x.clear();
-        for &i in &self.active {
+        for &h in &self.holds {
             let mut col = vec![0.0; n + mi];
-            for &(c, a) in &self.gaps.rows[i] {
-                col[c] += a;
-            }
+            self.add_column(h, v, 1.0, &mut col);
             self.inner.solve(&mut w.inner, &mut col);
             w.x.push(col);
         }
-        let s = DMatrix::from_fn(k, k, |a, b| self.gaps.dot(self.active[a], &w.x[b][..n]));
+        let s = DMatrix::from_fn(k, k, |a, b| self.dot(self.holds[a], &w.x[b][..n]));
         let lu = s.lu();
         if !lu.is_invertible() {
             return Err(failed(
@@ -196,7 +374,7 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
     }
 
     fn n_constraints(&self) -> usize {
-        self.inner.n_constraints() + self.active.len()
+        self.inner.n_constraints() + self.holds.len()
     }
 
     fn work(&self, state: &State) -> Self::Work {
@@ -217,11 +395,11 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
         let (n, mi) = (self.inner.n(), self.inner.n_constraints());
         self.inner
             .start(&mut w.inner, state, acc, &mut lambda[..mi])?;
-        if self.active.is_empty() {
+        if self.holds.is_empty() {
             return Ok(());
         }
         // The held rows' accelerations `C a = 0` (the rows are constant):
-        // `[a; λ] −= A⁻¹ Cᵀ μ` with `S μ = C a₀`, `A` the model's matrix at
+        // `[a; λ] −= A⁻¹ D μ` with `S μ = C a₀`, `A` the model's matrix at
         // `β' = γ' = 0` (`M` with its own constraint rows).
         let mut r = vec![0.0; n + mi];
         self.inner.residual(
@@ -243,8 +421,8 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
             0.0,
             0.0,
         )?;
-        self.border(w, state.t)?;
-        let rhs = DVector::from_fn(self.active.len(), |a, _| self.gaps.dot(self.active[a], acc));
+        self.border(w, state.t, &state.v)?;
+        let rhs = DVector::from_fn(self.holds.len(), |a, _| self.dot(self.holds[a], acc));
         let Some(mu) = w.s.as_ref().and_then(|s| s.solve(&rhs)) else {
             return Err(failed(
                 state.t,
@@ -276,11 +454,9 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
         let (n, mi) = (self.inner.n(), self.inner.n_constraints());
         self.inner
             .residual(&mut w.inner, t, y, v, acc, &lambda[..mi], &mut r[..n + mi]);
-        for (b, &i) in self.active.iter().enumerate() {
-            for &(c, a) in &self.gaps.rows[i] {
-                r[c] += a * lambda[mi + b];
-            }
-            r[n + mi + b] = self.gaps.gap(i, y);
+        for (b, &h) in self.holds.iter().enumerate() {
+            self.add_column(h, v, lambda[mi + b], &mut r[..n]);
+            r[n + mi + b] = self.value(h, y);
         }
     }
 
@@ -298,23 +474,21 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
         let mi = self.inner.n_constraints();
         self.inner
             .factor(&mut w.inner, t, y, v, acc, &lambda[..mi], bp, gp)?;
-        if self.active.is_empty() {
+        if self.holds.is_empty() {
             return Ok(());
         }
-        self.border(w, t)
+        self.border(w, t, v)
     }
 
     fn solve(&self, w: &mut Self::Work, r: &mut [f64]) {
         let (n, mi) = (self.inner.n(), self.inner.n_constraints());
         self.inner.solve(&mut w.inner, &mut r[..n + mi]);
-        let k = self.active.len();
+        let k = self.holds.len();
         let Some(s) = w.s.as_ref().filter(|_| k > 0) else {
             return;
         };
-        // `μ = S⁻¹ (C A⁻¹ r₁ − r₂)`, `x = A⁻¹ r₁ − A⁻¹ Cᵀ μ`.
-        let rhs = DVector::from_fn(k, |a, _| {
-            self.gaps.dot(self.active[a], &r[..n]) - r[n + mi + a]
-        });
+        // `μ = S⁻¹ (C A⁻¹ r₁ − r₂)`, `x = A⁻¹ r₁ − A⁻¹ D μ`.
+        let rhs = DVector::from_fn(k, |a, _| self.dot(self.holds[a], &r[..n]) - r[n + mi + a]);
         let mu = s
             .solve(&rhs)
             .unwrap_or_else(|| DVector::from_element(k, f64::NAN));
@@ -328,9 +502,9 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
 
     fn accepted(&self, w: &mut Self::Work, state: &State) -> f64 {
         let own = self.inner.accepted(&mut w.inner, state);
-        self.active
+        self.holds
             .iter()
-            .map(|&i| self.gaps.gap(i, &state.q).abs())
+            .map(|&h| self.value(h, &state.q).abs())
             .fold(own, f64::max)
     }
 
@@ -364,6 +538,12 @@ pub(super) struct ContactRun<'g> {
     pub stats: DynamicsStats,
     /// The sustained rows' normal forces at the last accepted step.
     pub forces: Vec<f64>,
+    /// Per contact row, its [`Slide`] while active with friction.
+    pub slides: Vec<Option<Slide>>,
+    /// Per contact row, the tangential position `t_a·y` a stick holds.
+    pub anchors: Vec<[f64; 2]>,
+    /// Sticking rows whose force was located leaving the cone.
+    breaking: Vec<usize>,
 }
 
 /// The first crossing of `f` from `≥ 0` at `a` to `< 0` at `b` (bisection
@@ -387,21 +567,23 @@ fn locate(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
 /// step: `step(τ)` is the step from the bracket's start `a` to `τ`, `gap`
 /// its gap above the level, positive at `a` and negative at `b`. Regula
 /// falsi (Illinois) from the interpolant's crossing `guess` until the gap
-/// is within half of [`GAP_TOL`] — a few steps retaken, where the cubic
-/// interpolant of a flexible cable's step missed by up to 0.3 mm —, or
-/// `None` if a retaken step fails.
-fn on_the_steps(
+/// is within `tol` (half of [`GAP_TOL`] for a gap — a few steps retaken,
+/// where the cubic interpolant of a flexible cable's step missed by up to
+/// 0.3 mm —; for a stick's distance to its cone, a force, a part in 10⁹
+/// of its friction force), or `None` if a retaken step fails.
+fn on_the_steps<T>(
     guess: f64,
     ((mut a, mut fa), (mut b, mut fb)): ((f64, f64), (f64, f64)),
-    step: impl Fn(f64) -> Option<State>,
-    gap: impl Fn(&State) -> f64,
-) -> Option<State> {
+    tol: f64,
+    step: impl Fn(f64) -> Option<T>,
+    gap: impl Fn(&T) -> f64,
+) -> Option<T> {
     let mut t = guess;
     let mut side = 0;
     for _ in 0..60 {
         let s = step(t)?;
         let f = gap(&s);
-        if f.abs() <= 0.5 * GAP_TOL || b - a <= 4.0 * f64::EPSILON * b.abs().max(1.0) {
+        if f.abs() <= tol || b - a <= 4.0 * f64::EPSILON * b.abs().max(1.0) {
             return Some(s);
         }
         if f > 0.0 {
@@ -426,7 +608,22 @@ fn on_the_steps(
     step(t)
 }
 
-impl ContactRun<'_> {
+impl<'g> ContactRun<'g> {
+    /// A run on the rows `gaps`, no contact sustained yet.
+    pub fn new(gaps: &'g Gaps) -> Self {
+        ContactRun {
+            gaps,
+            active: Vec::new(),
+            events: Vec::new(),
+            stats: DynamicsStats::default(),
+            forces: Vec::new(),
+            slides: vec![None; gaps.len()],
+            anchors: vec![[0.0; 2]; gaps.len()],
+            breaking: Vec::new(),
+        }
+    }
+
+    /// The event record of the impulses `(ln, lt)` on the rows `set`.
     #[allow(clippy::too_many_arguments)]
     fn event(
         &self,
@@ -435,7 +632,7 @@ impl ContactRun<'_> {
         set: &[usize],
         before: (&Rows, f64),
         after: (&Rows, f64),
-        ln: &[f64],
+        (ln, lt): (&[f64], &[[f64; 2]]),
         generalized: Vec<f64>,
     ) -> ContactEvent {
         ContactEvent {
@@ -449,9 +646,9 @@ impl ContactRun<'_> {
                     speed_before: before.0.gdot[i],
                     speed_after: after.0.gdot[i],
                     impulse: ln[k],
-                    tangential_impulse: [0.0; 2],
-                    tangential_speed_before: [0.0; 2],
-                    tangential_speed_after: [0.0; 2],
+                    tangential_impulse: lt.get(k).copied().unwrap_or([0.0; 2]),
+                    tangential_speed_before: before.0.vt[i],
+                    tangential_speed_after: after.0.vt[i],
                 })
                 .collect(),
             energy_before: before.1,
@@ -461,13 +658,50 @@ impl ContactRun<'_> {
         }
     }
 
+    /// Applies the velocity jump `sol` on the rows `set` to `s` and records
+    /// it as a `kind` event; returns the rows after it.
+    fn jump<M: Impacts + ?Sized>(
+        &mut self,
+        m: &M,
+        s: &mut State,
+        kind: ContactEventKind,
+        set: &[usize],
+        (r, mm): (&Rows, &DMatrix<f64>),
+        sol: &Solved,
+    ) -> Rows {
+        let e0 = m.total_energy(s);
+        for (v, d) in s.v.iter_mut().zip(sol.du.iter()) {
+            *v += d;
+        }
+        let after = self.gaps.at(s);
+        let ln: Vec<f64> = sol.ln.iter().copied().collect();
+        let ev = self.event(
+            s.t,
+            kind,
+            set,
+            (r, e0),
+            (&after, m.total_energy(s)),
+            (&ln, &sol.lt),
+            (mm * &sol.du).as_slice().to_vec(),
+        );
+        self.events.push(ev);
+        after
+    }
+
     /// Resolves the contacts at `s` (as the rigid runtime's `settle`):
-    /// the impact of the closed rows if one approaches, then the force
-    /// problem of the rows at rest (a rebound that would land within one
-    /// step `h`, `ġ ≤ |g̈| h`): those that carry a force `λ > 0` are held
-    /// (those arriving lose their remaining speed by a plastic impulse),
-    /// the others released. `released` are rows whose force was located
-    /// falling through zero.
+    /// the impact of the closed rows if one approaches (Newton–Coulomb on
+    /// the rows with friction), then the force problem of the rows at rest
+    /// (a rebound that would land within one step `h`, `ġ ≤ |g̈| h`): those
+    /// that carry a force `λ > 0` are held (those arriving lose their
+    /// remaining speed by a plastic impulse), the others released. A row
+    /// with friction slides along `v_t` if faster than its slip speed (as
+    /// the rigid runtime's: a slide that would stop within the gap
+    /// tolerance against its friction and drive,
+    /// `‖v_t‖² ≤ 2 (‖t·a‖ + μ |w·a|) GAP_TOL`, `a` the free accelerations;
+    /// a slide's stop is located, so it arrives there at round-off speed),
+    /// else sticks if the force it needs fits the cone (those that stop
+    /// lose what is left of their sliding speed by the same plastic
+    /// impulse), else slides the way that force would push it.
     pub fn settle<M: Impacts + ?Sized>(
         &mut self,
         m: &M,
@@ -476,6 +710,7 @@ impl ContactRun<'_> {
     ) -> Result<(), DynamicsError> {
         let t = s.t;
         let nk = self.gaps.len();
+        let breaking = std::mem::take(&mut self.breaking);
         let mut r = self.gaps.at(s);
         let closed: Vec<usize> = (0..nk).filter(|&i| r.g[i] <= GAP_TOL).collect();
         let mass = || {
@@ -490,7 +725,7 @@ impl ContactRun<'_> {
             failed(
                 t,
                 format!(
-                    "the impact of {n} contact(s) at cable nodes has no solution (more than {MAX_LCP} contacts closed at once, or a singular mass matrix)"
+                    "the impact of {n} contact(s) at cable nodes has no solution (more than {MAX_LCP} contacts closed at once, a singular mass matrix, or sliding directions that do not settle)"
                 ),
             )
         };
@@ -499,41 +734,49 @@ impl ContactRun<'_> {
             .any(|&i| r.gdot[i] < 0.0 && !self.active.contains(&i))
         {
             let mm = mass()?;
-            let slides = vec![None; closed.len()];
+            let slides: Vec<Option<Slide>> = closed
+                .iter()
+                .map(|&i| self.gaps.rough(i).then_some(Slide::Stick))
+                .collect();
             let e = |i: usize| r.e[i];
             let sol = impact(&mm, None, &r, &closed, &e, false, &slides)
                 .ok_or_else(|| no_solution(closed.len()))?;
-            let e0 = m.total_energy(s);
-            for (v, d) in s.v.iter_mut().zip(sol.du.iter()) {
-                *v += d;
-            }
-            let after = self.gaps.at(s);
-            let ln: Vec<f64> = sol.ln.iter().copied().collect();
-            let ev = self.event(
-                t,
-                ContactEventKind::Impact,
-                &closed,
-                (&r, e0),
-                (&after, m.total_energy(s)),
-                &ln,
-                (&mm * &sol.du).as_slice().to_vec(),
-            );
-            self.events.push(ev);
-            r = after;
+            r = self.jump(m, s, ContactEventKind::Impact, &closed, (&r, &mm), &sol);
         }
         let free = m
             .free_acceleration(s)
             .ok_or_else(|| failed(t, "no accelerations at the contact event".into()))?;
-        let acc = |i: usize| -> f64 { (0..free.len()).map(|k| r.w[(i, k)] * free[k]).sum() };
+        let acc = |i: usize| -> f64 { self.gaps.dot(i, free.as_slice()) };
+        let tacc = |i: usize| -> [f64; 2] { self.gaps.vt(i, free.as_slice()) };
         let resting: Vec<usize> = closed
             .iter()
             .copied()
             .filter(|&i| r.gdot[i] <= acc(i).abs() * h)
             .collect();
-        // The force problem: g̈ = W M⁻¹ Wᵀ λ + W a_free ≥ 0, λ ≥ 0.
-        let now: Vec<usize> = if resting.is_empty() {
-            Vec::new()
-        } else {
+        let rough = resting.iter().any(|&i| self.gaps.rough(i));
+        // The force problem: g̈ = W M⁻¹ (Wᵀ λ + W_tᵀ λ_t) + W a_free ≥ 0,
+        // λ ≥ 0 (without friction the LCP of the normal rows alone).
+        let mut slides: Vec<Option<Slide>> = resting
+            .iter()
+            .map(|&i| {
+                self.gaps.rough(i).then(|| {
+                    let v = r.vt[i];
+                    let nv = norm2(v);
+                    let slip = (2.0 * (norm2(tacc(i)) + r.mu[i] * acc(i).abs()) * GAP_TOL).sqrt();
+                    if nv > slip {
+                        Slide::Slip([v[0] / nv, v[1] / nv])
+                    } else {
+                        Slide::Stick
+                    }
+                })
+            })
+            .collect();
+        let now: Vec<usize>;
+        let mut forces: Option<Solved> = None;
+        let mut carrying: Vec<usize> = Vec::new();
+        if resting.is_empty() {
+            now = Vec::new();
+        } else if !rough {
             let mm = mass()?;
             let wn = DMatrix::from_fn(resting.len(), free.len(), |a, k| r.w[(resting[a], k)]);
             let minv_wt = mm
@@ -545,11 +788,84 @@ impl ContactRun<'_> {
             let b = DVector::from_fn(resting.len(), |k, _| acc(resting[k]));
             let lambda = lcp(&a, &b).ok_or_else(|| no_solution(resting.len()))?;
             let scale = lambda.amax().max(f64::MIN_POSITIVE);
-            (0..resting.len())
+            carrying = (0..resting.len())
                 .filter(|&k| lambda[k] > 1e-12 * scale)
-                .map(|k| resting[k])
-                .collect()
-        };
+                .collect();
+            now = carrying.iter().map(|&k| resting[k]).collect();
+        } else {
+            let mm = mass()?;
+            let b = DVector::from_fn(resting.len(), |k, _| acc(resting[k]));
+            let bt: Vec<[f64; 2]> = resting.iter().map(|&i| tacc(i)).collect();
+            for _ in 0..(2 + 2 * resting.len()) {
+                let Some(sol) = (Problem {
+                    m: &mm,
+                    j: None,
+                    r: &r,
+                    set: &resting,
+                    slide: &slides,
+                    b: b.clone(),
+                    bt: bt.clone(),
+                    held: false,
+                })
+                .solve() else {
+                    // Sticking has no solution: those rows slide, along
+                    // their sliding speed, or from rest the way they would
+                    // accelerate without friction.
+                    let mut changed = false;
+                    for (k, &i) in resting.iter().enumerate() {
+                        let v = if norm2(r.vt[i]) > 0.0 { r.vt[i] } else { bt[k] };
+                        let nv = norm2(v);
+                        if slides[k] == Some(Slide::Stick) && nv > 0.0 {
+                            slides[k] = Some(Slide::Slip([v[0] / nv, v[1] / nv]));
+                            changed = true;
+                        }
+                    }
+                    if changed {
+                        continue;
+                    }
+                    return Err(failed(
+                        t,
+                        format!(
+                            "the contact forces of {} resting contact(s) at cable nodes have no solution",
+                            resting.len()
+                        ),
+                    ));
+                };
+                let mut changed = false;
+                for k in 0..resting.len() {
+                    let (ln, lt) = (sol.ln[k], sol.lt[k]);
+                    let l = norm2(lt);
+                    // A stick located breaking leaves the cone at once (the
+                    // located time is that of the step's linear force).
+                    let margin = if breaking.contains(&resting[k]) {
+                        1e-3
+                    } else {
+                        1e-6
+                    };
+                    if slides[k] == Some(Slide::Stick)
+                        && ln > 0.0
+                        && l > 0.0
+                        && l >= r.mu[resting[k]] * ln * (1.0 - margin)
+                    {
+                        slides[k] = Some(Slide::Slip([-lt[0] / l, -lt[1] / l]));
+                        changed = true;
+                    }
+                }
+                forces = Some(sol);
+                if !changed {
+                    break;
+                }
+            }
+            let Some(f) = forces.as_ref() else {
+                return Err(failed(t, "no resting contact".into()));
+            };
+            let scale = f.ln.amax().max(f64::MIN_POSITIVE);
+            carrying = (0..resting.len())
+                .filter(|&k| f.ln[k] > 1e-12 * scale && f.ln[k] > 0.0)
+                .collect();
+            now = carrying.iter().map(|&k| resting[k]).collect();
+        }
+        let now_slides: Vec<Option<Slide>> = carrying.iter().map(|&k| slides[k]).collect();
         let released: Vec<usize> = self
             .active
             .iter()
@@ -565,7 +881,7 @@ impl ContactRun<'_> {
                 &released,
                 (&r, e),
                 (&r, e),
-                &zeros,
+                (&zeros, &[]),
                 vec![0.0; s.v.len()],
             );
             self.events.push(ev);
@@ -575,30 +891,61 @@ impl ContactRun<'_> {
             .copied()
             .filter(|i| !self.active.contains(i))
             .collect();
-        if !arriving.is_empty() {
-            // Their remaining normal speed (below the rest speed) taken by
-            // one plastic impulse; the sustained ones keep ġ = 0.
-            let mm = mass()?;
-            let slides = vec![None; now.len()];
-            let plastic = |_: usize| 0.0;
-            let sol = impact(&mm, None, &r, &now, &plastic, true, &slides)
-                .ok_or_else(|| no_solution(now.len()))?;
-            let e0 = m.total_energy(s);
-            for (v, d) in s.v.iter_mut().zip(sol.du.iter()) {
-                *v += d;
+        // Rows that stay and change between sticking and sliding.
+        let (mut to_stick, mut to_slip) = (Vec::new(), Vec::new());
+        for (k, &i) in now.iter().enumerate() {
+            if !self.active.contains(&i) {
+                continue;
             }
-            let after = self.gaps.at(s);
-            let ln: Vec<f64> = sol.ln.iter().copied().collect();
+            match (self.slides[i], now_slides[k]) {
+                (Some(Slide::Slip(_)), Some(Slide::Stick)) => to_stick.push(i),
+                (Some(Slide::Stick), Some(Slide::Slip(_))) => to_slip.push(i),
+                _ => {}
+            }
+        }
+        if !arriving.is_empty() || !to_stick.is_empty() {
+            // Their remaining normal speed (below the rest speed) and the
+            // remaining sliding speed of the sticking ones taken by one
+            // plastic impulse; the sustained ones keep ġ = 0.
+            let mm = mass()?;
+            let plastic = |_: usize| 0.0;
+            let sol = impact(&mm, None, &r, &now, &plastic, true, &now_slides)
+                .ok_or_else(|| no_solution(now.len()))?;
+            let kind = if arriving.is_empty() {
+                ContactEventKind::Stick
+            } else {
+                ContactEventKind::Rest
+            };
+            r = self.jump(m, s, kind, &now, (&r, &mm), &sol);
+        }
+        if !to_slip.is_empty() {
+            // The start of a slide: no jump; the forces at its start.
+            let e = m.total_energy(s);
+            let f = forces.as_ref();
+            let pick = |i: usize| {
+                let k = carrying.iter().position(|&k| resting[k] == i);
+                match (f, k) {
+                    (Some(f), Some(k)) => (f.ln[carrying[k]], f.lt[carrying[k]]),
+                    _ => (0.0, [0.0; 2]),
+                }
+            };
+            let ln: Vec<f64> = to_slip.iter().map(|&i| pick(i).0).collect();
+            let lt: Vec<[f64; 2]> = to_slip.iter().map(|&i| pick(i).1).collect();
             let ev = self.event(
                 t,
-                ContactEventKind::Rest,
-                &now,
-                (&r, e0),
-                (&after, m.total_energy(s)),
-                &ln,
-                (&mm * &sol.du).as_slice().to_vec(),
+                ContactEventKind::Slip,
+                &to_slip,
+                (&r, e),
+                (&r, e),
+                (&ln, &lt),
+                vec![0.0; s.v.len()],
             );
             self.events.push(ev);
+        }
+        self.slides = vec![None; nk];
+        for (&i, sl) in now.iter().zip(&now_slides) {
+            self.slides[i] = *sl;
+            self.anchors[i] = [0, 1].map(|a| self.gaps.tdot(i, a, &s.q));
         }
         self.active = now;
         Ok(())
@@ -624,7 +971,7 @@ impl ContactRun<'_> {
         }
         let mut stalled = 0;
         loop {
-            let held = Held::new(m, self.gaps, &self.active);
+            let held = Held::new(m, self.gaps, &self.active, &self.slides, &self.anchors);
             let mut ga = match GeneralizedAlpha::new(&held, state.clone(), opts.clone()) {
                 Ok(ga) => ga,
                 Err(e) => return (state, Some(e)),
@@ -637,20 +984,28 @@ impl ContactRun<'_> {
                 }
                 let prev = ga.state().clone();
                 let f0 = held.forces(ga.multipliers());
+                let c0 = held.cone_margins(ga.multipliers());
+                let p0 = held.slip_speeds(&prev.v);
                 if let Err(e) = ga.step_within(t_end) {
                     self.add_stats(&ga.stats);
                     return (prev, Some(e));
                 }
                 let new = ga.state().clone();
                 let f1 = held.forces(ga.multipliers());
+                let c1 = held.cone_margins(ga.multipliers());
+                let p1 = held.slip_speeds(&new.v);
                 // The first crossing: an open gap falling through 0 on the
-                // step's interpolant, a held force falling through 0.
+                // step's interpolant, a held force falling through 0, a
+                // stick's force leaving the cone (`μ λ − ‖λ_t‖` falling
+                // through 0), a slide stopping (`v_t · s0` falling through
+                // 0); the last three linearly between the step's ends.
                 // With the row whose gap closes (and the level it closes
-                // at), `None` for a held force.
-                let mut first: Option<(f64, Option<(usize, f64)>)> = None;
-                let mut take = |t: f64, row: Option<(usize, f64)>| {
-                    if first.is_none_or(|(f, _)| t < f) {
-                        first = Some((t, row));
+                // at), `None` otherwise, and the stick that breaks.
+                type First = (f64, Option<(usize, f64)>, Option<usize>);
+                let mut first: Option<First> = None;
+                let mut take = |t: f64, row: Option<(usize, f64)>, breaks: Option<usize>| {
+                    if first.is_none_or(|(f, _, _)| t < f) {
+                        first = Some((t, row, breaks));
                     }
                 };
                 for i in (0..nk).filter(|i| !self.active.contains(i)) {
@@ -666,14 +1021,38 @@ impl ContactRun<'_> {
                                 .gap(i, &super::simulate::hermite(&prev, &new, t).q)
                                 - level
                         };
-                        take(locate(g, prev.t, new.t), Some((i, level)));
+                        take(locate(g, prev.t, new.t), Some((i, level)), None);
                     }
                 }
+                let linear = |a: f64, b: f64| prev.t + (new.t - prev.t) * a / (a - b);
                 for k in 0..self.active.len() {
                     if f1[k] < 0.0 && f0[k] >= 0.0 {
-                        take(prev.t + (new.t - prev.t) * f0[k] / (f0[k] - f1[k]), None);
+                        take(linear(f0[k], f1[k]), None, None);
                     } else if f1[k] < 0.0 {
-                        take(prev.t, None);
+                        take(prev.t, None, None);
+                    }
+                    if let (Some(a), Some(b)) = (c0[k], c1[k])
+                        && b < 0.0
+                    {
+                        let t = if a >= 0.0 { linear(a, b) } else { prev.t };
+                        take(t, None, Some(self.active[k]));
+                    }
+                    // A slide from rest starts at `v_t · s0 ≤ 0`: only a
+                    // slide under way stops. One that starts the step at
+                    // rest to round-off and ends it reversed (an axial
+                    // vibration turning it within the step) is taken at
+                    // the step's end: located at its start it would be
+                    // found there again.
+                    if let (Some(a), Some(b)) = (p0[k], p1[k])
+                        && a > 0.0
+                        && b <= 0.0
+                    {
+                        let t = if a <= 1e-9 * (a - b) {
+                            new.t
+                        } else {
+                            linear(a, b)
+                        };
+                        take(t, None, None);
                     }
                 }
                 match first {
@@ -681,7 +1060,8 @@ impl ContactRun<'_> {
                         self.forces = f1;
                         observe(&new, Some(ga.q_full()));
                     }
-                    Some((t, row)) => {
+                    Some((t, row, breaks)) => {
+                        self.breaking.extend(breaks);
                         // Restart at the event: the step retaken from its
                         // start to the located time (an integrator state,
                         // not the interpolant's), the interpolant if that
@@ -690,19 +1070,56 @@ impl ContactRun<'_> {
                         // only guesses where the integrator crosses.
                         let s = if t >= new.t {
                             new
+                        } else if t <= prev.t {
+                            // At the step's start (a force already past
+                            // zero there): no step to retake.
+                            prev
                         } else {
                             let retake = |t: f64| {
                                 GeneralizedAlpha::new(&held, prev.clone(), opts.clone())
                                     .and_then(|mut g| g.step_within(t).map(|()| g.state().clone()))
                                     .ok()
                             };
-                            let located = match row {
-                                Some((i, level)) => {
+                            let located = match (row, breaks) {
+                                (Some((i, level)), _) => {
                                     let gap = |s: &State| self.gaps.gap(i, &s.q) - level;
                                     let ends = ((prev.t, gap(&prev)), (new.t, gap(&new)));
-                                    on_the_steps(t, ends, retake, gap)
+                                    on_the_steps(t, ends, 0.5 * GAP_TOL, retake, gap)
                                 }
-                                None => retake(t),
+                                // A stick leaving its cone: its distance to
+                                // the cone from the retaken step's
+                                // multipliers, brought to zero likewise (a
+                                // slide's stop stays linear: refined on the
+                                // retaken steps too, the oblique drop's
+                                // run failed in a later impact).
+                                (None, Some(i)) => {
+                                    let k = self.active.iter().position(|&j| j == i);
+                                    let margin = |x: &(State, Vec<f64>)| {
+                                        k.and_then(|k| held.cone_margins(&x.1)[k]).unwrap_or(0.0)
+                                    };
+                                    let retake_m = |t: f64| {
+                                        GeneralizedAlpha::new(&held, prev.clone(), opts.clone())
+                                            .and_then(|mut g| {
+                                                g.step_within(t).map(|()| {
+                                                    (g.state().clone(), g.multipliers().to_vec())
+                                                })
+                                            })
+                                            .ok()
+                                    };
+                                    let (a, b) = k
+                                        .and_then(|k| Some((c0[k]?, c1[k]?)))
+                                        .unwrap_or((0.0, 0.0));
+                                    let tol = 1e-9 * (a.abs() + b.abs());
+                                    on_the_steps(
+                                        t,
+                                        ((prev.t, a), (new.t, b)),
+                                        tol,
+                                        retake_m,
+                                        margin,
+                                    )
+                                    .map(|x| x.0)
+                                }
+                                (None, None) => retake(t),
                             };
                             located.unwrap_or_else(|| super::simulate::hermite(&prev, &new, t))
                         };

@@ -465,6 +465,8 @@ pub struct StructuralModel {
     /// (`usize::MAX` where a fixed coordinate is involved).
     slots: Vec<Vec<usize>>,
     mass: SparseMatrix,
+    /// The initial speeds of the full coordinates (zero unless set).
+    v0: Vec<f64>,
 }
 
 /// Builds a [`StructuralModel`].
@@ -616,6 +618,7 @@ impl ModelBuilder {
             pattern,
             slots,
             mass,
+            v0: Vec::new(),
         }
     }
 }
@@ -634,6 +637,25 @@ impl StructuralModel {
     /// The initial full coordinates (fixed ones keep these values).
     pub fn q0(&self) -> &[f64] {
         &self.q0
+    }
+
+    /// Sets the initial speeds of the full coordinates (m/s, and 1/s for
+    /// slopes; a run starts from them instead of rest). The speeds of
+    /// fixed coordinates are ignored; a `v0` of another length than
+    /// [`StructuralModel::n_full`] is padded with zeros or cut.
+    pub fn set_initial_velocity(&mut self, mut v0: Vec<f64>) {
+        v0.resize(self.q0.len(), 0.0);
+        self.v0 = v0;
+    }
+
+    /// The initial speeds on the free coordinates (zero unless set by
+    /// [`StructuralModel::set_initial_velocity`]).
+    pub fn initial_velocity(&self) -> Vec<f64> {
+        if self.v0.is_empty() {
+            vec![0.0; self.n_free()]
+        } else {
+            self.restrict(&self.v0)
+        }
     }
 
     /// The sparse pattern over the free coordinates.

@@ -517,13 +517,7 @@ fn run_contacts<M: Reported>(
     let clock = Instant::now();
     let start = state.clone();
     let mut rec = Recorder::new(cables, names, run);
-    let mut contacts = ContactRun {
-        gaps,
-        active: Vec::new(),
-        events: Vec::new(),
-        stats: DynamicsStats::default(),
-        forces: Vec::new(),
-    };
+    let mut contacts = ContactRun::new(gaps);
     let (end, error) = contacts.run(m, state, &run.alpha_options(), run.t_end, |s, q| {
         progress(s.t);
         match q {
@@ -561,7 +555,8 @@ fn run_contacts<M: Reported>(
 }
 
 /// Runs cables alone: `model` holds every cable (`cables` says where),
-/// from its reference configuration at rest.
+/// from its reference configuration, at rest unless its initial speeds are
+/// set ([`StructuralModel::set_initial_velocity`]).
 pub fn simulate_structure(
     model: &StructuralModel,
     cables: &[CableLayout],
@@ -582,7 +577,7 @@ pub fn simulate_structure(
     let state = State {
         t: 0.0,
         q: model.restrict(model.q0()),
-        v: vec![0.0; model.n_free()],
+        v: model.initial_velocity(),
     };
     if run.integrator != Integrator::Rk4 {
         let gaps = Gaps::new(contacts, |i| model.free_index(i), model.q0());

@@ -107,15 +107,15 @@ pub(crate) enum Slide {
 /// impact `Δ` is the jump of the speeds and `b` the speeds it is measured
 /// from; for sustained contact `Δ` is the accelerations' part from the
 /// contact forces and `b` the free accelerations' `g̈`.
-pub(super) struct Problem<'a> {
-    pub(super) m: &'a DMatrix<f64>,
-    pub(super) j: Option<&'a DMatrix<f64>>,
-    pub(super) r: &'a Rows,
-    pub(super) set: &'a [usize],
-    pub(super) slide: &'a [Option<Slide>],
-    pub(super) b: DVector<f64>,
-    pub(super) bt: Vec<[f64; 2]>,
-    pub(super) held: bool,
+pub(crate) struct Problem<'a> {
+    pub(crate) m: &'a DMatrix<f64>,
+    pub(crate) j: Option<&'a DMatrix<f64>>,
+    pub(crate) r: &'a Rows,
+    pub(crate) set: &'a [usize],
+    pub(crate) slide: &'a [Option<Slide>],
+    pub(crate) b: DVector<f64>,
+    pub(crate) bt: Vec<[f64; 2]>,
+    pub(crate) held: bool,
 }
 
 /// A solved [`Problem`], per element of its `set`.
@@ -130,7 +130,7 @@ pub(crate) struct Solved {
 }
 
 impl Problem<'_> {
-    pub(super) fn solve(&self) -> Option<Solved> {
+    pub(crate) fn solve(&self) -> Option<Solved> {
         let set = self.set;
         let (n, nu) = (set.len(), self.m.nrows());
         if n == 0 {
@@ -409,7 +409,7 @@ impl Problem<'_> {
 }
 
 /// `‖v‖` of a tangential pair.
-pub(super) fn norm2(v: [f64; 2]) -> f64 {
+pub(crate) fn norm2(v: [f64; 2]) -> f64 {
     v[0].hypot(v[1])
 }
 

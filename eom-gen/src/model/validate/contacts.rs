@@ -321,20 +321,10 @@ impl Ctx<'_> {
         }
         let e = self.coefficient(e, &join(path, &[f("e")]), "`e`", name, 1.0);
         let mu = self.coefficient(mu, &join(path, &[f("mu")]), "`mu`", name, f64::INFINITY);
-        if let Some(m) = mu
-            && m > 0.0
-        {
-            self.error(
-                &join(path, &[f("mu")]),
-                format!("contact `{name}` at a cable node has Coulomb friction (mu = {m})"),
-                "friction at cable nodes is not implemented (the cable runner holds sustained contacts as index-3 constraints, normal rows only): set `mu: 0`, or model the touching part as a body",
-            );
-            ok = false;
-        }
         let r = self.nonnegative(radius, &join(path, &[f("radius")]), "radius", name);
         let p = self.vec3(point, &join(path, &[f("point")]), Scope::Params);
         let n = self.axis(normal, &join(path, &[f("normal")]), "the plane's normal");
-        let (cable, e, r, p, n) = (cable?, e?, r?, p?, n?);
+        let (cable, e, mu, r, p, n) = (cable?, e?, mu?, r?, p?, n?);
         if !ok {
             return None;
         }
@@ -348,6 +338,7 @@ impl Ctx<'_> {
             point,
             normal,
             e,
+            mu,
             span: self.span(path),
         })
     }
