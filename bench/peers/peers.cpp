@@ -213,9 +213,11 @@ int main(int argc, char** argv) {
 
   // Accelerations at the check states.
   //
-  // And the derivatives at the same q, v with zero forces, by rows:
-  // Pinocchio's ddq_dq, ddq_dv and Minv (computeABADerivatives fills only
-  // the upper triangle of Minv; the lower is copied from it here), and
+  // And the derivatives at the same q, v with zero applied forces (the
+  // dampers' −D v only: eom's operating point), by rows: Pinocchio's
+  // ddq_dq, ddq_dv (at fixed τ: the dampers' −M⁻¹ D is peers.py's to add)
+  // and Minv (computeABADerivatives fills only the upper triangle of Minv;
+  // the lower is copied from it here), and
   // MuJoCo's centred finite differences of its transition read back as
   // derivatives of qacc. MuJoCo's Euler step is v' = v + h qacc(q, v),
   // q' = q + h v' (no damping here), so the rows of v' in A are
@@ -225,7 +227,7 @@ int main(int argc, char** argv) {
   int const nx = 2 * nv + m->na;
   std::vector<mjtNum> A(size_t(nx) * nx);
   double const h = m->opt.timestep;
-  Eigen::VectorXd const zero = Eigen::VectorXd::Zero(nv);
+  Eigen::VectorXd damper(nv);
   std::string checks = "[";
   for (int k = 0; k < check; ++k) {
     pinocchio::aba(model, data, q[k], v[k], tau_d[k]);
@@ -234,7 +236,8 @@ int main(int argc, char** argv) {
     checks += std::string(k ? "," : "") + "{\"q\":" + json(q[k].data(), nq) +
               ",\"u\":" + json(v[k].data(), nv) + ",\"tau\":" + json(tau[k].data(), nv) +
               ",\"pinocchio\":" + json(data.ddq.data(), nv) + ",\"mujoco\":" + json(mj_qacc(), nv);
-    pinocchio::computeABADerivatives(model, data, q[k], v[k], zero);
+    for (int i = 0; i < nv; ++i) damper[i] = -damping[size_t(i)] * v[k][i];
+    pinocchio::computeABADerivatives(model, data, q[k], v[k], damper);
     Eigen::MatrixXd dq = data.ddq_dq, dv = data.ddq_dv, minv = data.Minv;
     for (int i = 0; i < nv; ++i)
       for (int j = 0; j < i; ++j) minv(i, j) = minv(j, i);

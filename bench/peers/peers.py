@@ -87,15 +87,30 @@ def rel_diff(ours, theirs):
     return max(abs(x - y) for x, y in zip(ours, theirs)) / scale
 
 
-def derivative_check(a, ron, peer, env):
+def derivative_check(a, ron, peer, env, perm, eom_order, robot):
     """eom's dudot/dq, dudot/du, dudot/dtau (`linearize --json` at q, u of the
-    first --deriv-check states, zero forces: its operating point) against
-    Pinocchio's computeABADerivatives and MuJoCo's centred differences there.
-    Returns the largest relative difference per (tool, matrix)."""
+    first --deriv-check states, zero applied forces: its operating point)
+    against Pinocchio's computeABADerivatives and MuJoCo's centred
+    differences there. `perm[k]` is eom's index of Pinocchio's speed k,
+    `eom_order` maps a vector in Pinocchio's order to eom's. On the robots
+    the URDF's dampers are in eom's model (`τ − D u`): Pinocchio's ddq_dv
+    (at fixed τ = −D v) gets their `−M⁻¹ D`; MuJoCo's differences (in its
+    own joint order, its dampers integrated implicitly) are compared on the
+    chains only. Returns the largest relative difference per (tool, matrix)."""
+    import numpy as np
+
     err = {}
+    damping = np.array(peer["damping"])
     for s in peer["check"][: a.deriv_check]:
         join = lambda v: ",".join(repr(x) for x in v)  # noqa: E731
-        lin = eom_json(a.eom, ["linearize", ron, "--q", join(s["q"]), "--u", join(s["u"]), "--json"], env)
+        # (The random states leave the robots' joint limits, which the peers
+        # do not model either: eom imports the URDF without them here.)
+        limits = ["--no-urdf-limits"] if robot else []
+        lin = eom_json(
+            a.eom,
+            ["linearize", ron, *limits, "--q", join(eom_order(s["q"])), "--u", join(eom_order(s["u"])), "--json"],
+            env,
+        )
         n = len(s["u"])
         big_a, big_b = lin["A"], lin["B"]
         if len(big_a) != 2 * n or len(big_b) != 2 * n or len(big_b[0]) != n:
@@ -103,16 +118,23 @@ def derivative_check(a, ron, peer, env):
                 f"{ron}: linearize gave A {len(big_a)}x{len(big_a[0])}, B {len(big_b)}x{len(big_b[0])}; "
                 f"expected {2 * n}, {2 * n}x{n}"
             )
-        dq = [big_a[n + i][j] for i in range(n) for j in range(n)]
-        du = [big_a[n + i][n + j] for i in range(n) for j in range(n)]
-        dtau = [big_b[n + i][j] for i in range(n) for j in range(n)]
-        for key, ours, theirs in [
+        # eom's blocks in Pinocchio's order.
+        dq = [big_a[n + perm[i]][perm[j]] for i in range(n) for j in range(n)]
+        du = [big_a[n + perm[i]][n + perm[j]] for i in range(n) for j in range(n)]
+        dtau = [big_b[n + perm[i]][perm[j]] for i in range(n) for j in range(n)]
+        minv = np.array(s["pinocchio_minv_upper"]).reshape(n, n)
+        pin_du = (np.array(s["pinocchio_ddq_dv"]).reshape(n, n) - minv * damping[None, :]).ravel().tolist()
+        pairs = [
             (("pinocchio", "dq"), dq, s["pinocchio_ddq_dq"]),
-            (("pinocchio", "du"), du, s["pinocchio_ddq_dv"]),
+            (("pinocchio", "du"), du, pin_du),
             (("pinocchio", "dtau"), dtau, s["pinocchio_minv_upper"]),
-            (("mujoco_fd", "dq"), dq, s["mujoco_fd_dq"]),
-            (("mujoco_fd", "du"), du, s["mujoco_fd_dv"]),
-        ]:
+        ]
+        if not robot:
+            pairs += [
+                (("mujoco_fd", "dq"), dq, s["mujoco_fd_dq"]),
+                (("mujoco_fd", "du"), du, s["mujoco_fd_dv"]),
+            ]
+        for key, ours, theirs in pairs:
             err[key] = max(err.get(key, 0.0), rel_diff(ours, theirs))
     return err
 
@@ -180,9 +202,9 @@ def main():
             ron = os.path.join(a.root, "models", "arm7.ron") if name == "arm7" else base + ".ron"
 
         info = eom_json(a.eom, ["check", ron, "--json"], env)
-        # (Not on the robots: the peers' derivative columns leave out the
-        # damping and MuJoCo's are in its own order; see peers.cpp.)
-        deriv = not robot and info["nu"] <= a.deriv_max_dof
+        # (On the robots, against Pinocchio only: MuJoCo's differences are
+        # in its own order with its dampers; see derivative_check.)
+        deriv = info["nu"] <= a.deriv_max_dof
         peer = json.loads(
             run([a.peers, base + ".urdf", mj_path, str(a.states), str(a.reps), str(a.seed), str(a.check),
                  "1" if deriv else "0"])
@@ -274,7 +296,7 @@ def main():
                     failures.append(f"{name}: {tool} accelerations differ from the 40-digit reference by {x:.2e} (relative)")
 
         # Derivatives at the first check states.
-        derr = derivative_check(a, ron, peer, env) if deriv else {}
+        derr = derivative_check(a, ron, peer, env, perm, eom_order, robot) if deriv else {}
         for (tool, what), x in derr.items():
             limit = TOLERANCE if tool == "pinocchio" else FD_TOLERANCE
             if not x <= limit:
@@ -355,8 +377,8 @@ def main():
                 "max_rel_diff_pinocchio_dq": derr[("pinocchio", "dq")],
                 "max_rel_diff_pinocchio_du": derr[("pinocchio", "du")],
                 "max_rel_diff_pinocchio_minv": derr[("pinocchio", "dtau")],
-                "max_rel_diff_mujoco_fd_dq": derr[("mujoco_fd", "dq")],
-                "max_rel_diff_mujoco_fd_du": derr[("mujoco_fd", "du")],
+                "max_rel_diff_mujoco_fd_dq": derr.get(("mujoco_fd", "dq"), float("nan")),
+                "max_rel_diff_mujoco_fd_du": derr.get(("mujoco_fd", "du"), float("nan")),
                 "checked_states": a.deriv_check,
                 "mujoco_integrator": peer["mujoco_integrator"],
                 "mujoco_timestep": peer["mujoco_timestep"],
@@ -371,7 +393,7 @@ def main():
                 f"{name}: eom derivatives {eom_d:.0f} ns, Pinocchio computeABADerivatives {pin_d:.0f} ns, "
                 f"MuJoCo mjd_transitionFD {drow['mujoco_transition_fd_forward_ns']:.0f} ns (forward); "
                 f"max relative difference {max(v for (t, _), v in derr.items() if t == 'pinocchio'):.1e} (Pinocchio) "
-                f"/ {max(v for (t, _), v in derr.items() if t == 'mujoco_fd'):.1e} (MuJoCo FD)",
+                f"/ {max([v for (t, _), v in derr.items() if t == 'mujoco_fd'] or [float('nan')]):.1e} (MuJoCo FD)",
                 file=sys.stderr,
             )
         print(

@@ -296,12 +296,6 @@ pub fn forward_dynamics_derivatives_recursive<'cx>(
     inputs: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Program {
-    let add = |a: Vec<Vec<Expr<'cx>>>, b: Vec<Vec<Expr<'cx>>>| -> Vec<Vec<Expr<'cx>>> {
-        a.into_iter()
-            .zip(b)
-            .map(|(ra, rb)| ra.into_iter().zip(rb).map(|(x, y)| x + y).collect())
-            .collect()
-    };
     let (gq, gu, gi) = if loads.iter().all(|l| l.is_zero()) {
         (gq, gu, vec![vec![Expr::zero(); inputs.len()]; u.len()])
     } else {
@@ -312,6 +306,14 @@ pub fn forward_dynamics_derivatives_recursive<'cx>(
         )
     };
     lower_solved(cx, minv, [gq, gu, gi], opts)
+}
+
+/// `a + b`, matrices by rows.
+fn add<'cx>(a: Vec<Vec<Expr<'cx>>>, b: Vec<Vec<Expr<'cx>>>) -> Vec<Vec<Expr<'cx>>> {
+    a.into_iter()
+        .zip(b)
+        .map(|(ra, rb)| ra.into_iter().zip(rb).map(|(x, y)| x + y).collect())
+        .collect()
 }
 
 /// The program of `inverse_dynamics_derivatives` for inverse dynamics
@@ -359,12 +361,6 @@ pub fn inverse_dynamics_derivatives_recursive<'cx>(
     inputs: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Program {
-    let add = |a: Vec<Vec<Expr<'cx>>>, b: Vec<Vec<Expr<'cx>>>| -> Vec<Vec<Expr<'cx>>> {
-        a.into_iter()
-            .zip(b)
-            .map(|(ra, rb)| ra.into_iter().zip(rb).map(|(x, y)| x + y).collect())
-            .collect()
-    };
     let (gq, gu) = if loads.iter().all(|l| l.is_zero()) {
         (rd.dq, rd.du)
     } else {

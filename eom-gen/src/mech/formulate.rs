@@ -354,6 +354,17 @@ fn input_span(sys: &System, k: usize) -> Option<Span> {
     })
 }
 
+/// A form and its program.
+type Formed<F> = (F, Program);
+
+/// The operation counts of `programs` (forms and their programs, in the
+/// order of preference on a tie), and the cheapest, taken out of the list.
+fn cheapest<F: Copy>(programs: &mut Vec<(F, Program)>) -> (Vec<(F, OpCount)>, Option<Formed<F>>) {
+    let counts: Vec<(F, OpCount)> = programs.iter().map(|(f, p)| (*f, p.op_count())).collect();
+    let best = (0..programs.len()).min_by_key(|&i| (counts[i].1.total(), i));
+    (counts, best.map(|i| programs.remove(i)))
+}
+
 /// Builds the programs `request` asks for, completed by
 /// [`FunctionSet::derivable`], and those the model needs (outputs,
 /// constraints, reactions); programs not asked for are absent. The mass
@@ -538,13 +549,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
                 }
             }
         }
-        let candidates: Vec<(DerivativeForm, OpCount)> =
-            programs.iter().map(|(f, p)| (*f, p.op_count())).collect();
-        let best = (0..programs.len())
-            .min_by_key(|&i| (candidates[i].1.total(), i))
-            .unwrap_or(0);
-        let kept = programs.remove(best);
-        (Some((kept.1, kept.0)), candidates, programs)
+        let (candidates, kept) = cheapest(&mut programs);
+        (kept.map(|(form, p)| (p, form)), candidates, programs)
     } else {
         (None, Vec::new(), Vec::new())
     };
@@ -585,13 +591,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
                     }
                 }
             }
-            let candidates: Vec<(IdDerivativeForm, OpCount)> =
-                programs.iter().map(|(f, p)| (*f, p.op_count())).collect();
-            let best = (0..programs.len())
-                .min_by_key(|&i| (candidates[i].1.total(), i))
-                .unwrap_or(0);
-            let (form, kept) = programs.swap_remove(best);
-            (Some((kept, form)), candidates)
+            let (candidates, kept) = cheapest(&mut programs);
+            (kept.map(|(form, p)| (p, form)), candidates)
         } else {
             (None, Vec::new())
         };
