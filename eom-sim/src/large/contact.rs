@@ -43,7 +43,7 @@ use super::alpha::{AlphaModel, GeneralizedAlpha};
 use super::run::{AlphaOptions, DynamicsError, DynamicsStats, State};
 use crate::constrained::{DMatrix, DVector};
 use crate::run::contact::Rows;
-use crate::run::impulse::{Problem, Slide, Solved, impact, norm2};
+use crate::run::impulse::{Slide, Solved, impact, norm2, resting_forces};
 use crate::run::{ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, MAX_LCP, lcp};
 use nalgebra::Dyn;
 use nalgebra::linalg::LU;
@@ -796,68 +796,24 @@ impl<'g> ContactRun<'g> {
             let mm = mass()?;
             let b = DVector::from_fn(resting.len(), |k, _| acc(resting[k]));
             let bt: Vec<[f64; 2]> = resting.iter().map(|&i| tacc(i)).collect();
-            for _ in 0..(2 + 2 * resting.len()) {
-                let Some(sol) = (Problem {
-                    m: &mm,
-                    j: None,
-                    r: &r,
-                    set: &resting,
-                    slide: &slides,
-                    b: b.clone(),
-                    bt: bt.clone(),
-                    held: false,
-                })
-                .solve() else {
-                    // Sticking has no solution: those rows slide, along
-                    // their sliding speed, or from rest the way they would
-                    // accelerate without friction.
-                    let mut changed = false;
-                    for (k, &i) in resting.iter().enumerate() {
-                        let v = if norm2(r.vt[i]) > 0.0 { r.vt[i] } else { bt[k] };
-                        let nv = norm2(v);
-                        if slides[k] == Some(Slide::Stick) && nv > 0.0 {
-                            slides[k] = Some(Slide::Slip([v[0] / nv, v[1] / nv]));
-                            changed = true;
-                        }
-                    }
-                    if changed {
-                        continue;
-                    }
-                    return Err(failed(
-                        t,
-                        format!(
-                            "the contact forces of {} resting contact(s) at cable nodes have no solution",
-                            resting.len()
-                        ),
-                    ));
-                };
-                let mut changed = false;
-                for k in 0..resting.len() {
-                    let (ln, lt) = (sol.ln[k], sol.lt[k]);
-                    let l = norm2(lt);
-                    // A stick located breaking leaves the cone at once (the
-                    // located time is that of the step's linear force).
-                    let margin = if breaking.contains(&resting[k]) {
-                        1e-3
-                    } else {
-                        1e-6
-                    };
-                    if slides[k] == Some(Slide::Stick)
-                        && ln > 0.0
-                        && l > 0.0
-                        && l >= r.mu[resting[k]] * ln * (1.0 - margin)
-                    {
-                        slides[k] = Some(Slide::Slip([-lt[0] / l, -lt[1] / l]));
-                        changed = true;
-                    }
+            // A stick located breaking leaves the cone at once (the
+            // located time is that of the step's linear force).
+            let margin = |k: usize| {
+                if breaking.contains(&resting[k]) {
+                    1e-3
+                } else {
+                    1e-6
                 }
-                forces = Some(sol);
-                if !changed {
-                    break;
-                }
-            }
+            };
+            forces = resting_forces(&mm, None, &r, &resting, &mut slides, &b, &bt, &margin);
             let Some(f) = forces.as_ref() else {
-                return Err(failed(t, "no resting contact".into()));
+                return Err(failed(
+                    t,
+                    format!(
+                        "the contact forces of {} resting contact(s) at cable nodes have no solution",
+                        resting.len()
+                    ),
+                ));
             };
             let scale = f.ln.amax().max(f64::MIN_POSITIVE);
             carrying = (0..resting.len())

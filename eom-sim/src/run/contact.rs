@@ -50,7 +50,7 @@
 //! inverse dynamics of the velocity jump with the contact impulses as
 //! loads).
 
-use super::impulse::{Problem, Slide, Solved, impact, norm2};
+use super::impulse::{Problem, Slide, Solved, impact, norm2, resting_forces};
 use super::{Simulate, energy};
 use crate::constrained::{ConstraintValues, DMatrix, DVector};
 use crate::integrate::Stats;
@@ -606,60 +606,15 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
             .iter()
             .map(|&i| [0, 1].map(|a| r.tangential_dot(i, a, &free) - r.gamma_t[i][a]))
             .collect();
-        let mut forces = None;
-        for _ in 0..(2 + 2 * resting.len()) {
-            let Some(sol) = (Problem {
-                m: &m,
-                j: j.as_ref(),
-                r: &r,
-                set: &resting,
-                slide: &slides,
-                b: b.clone(),
-                bt: bt.clone(),
-                held: false,
+        let Some(forces) =
+            resting_forces(&m, j.as_ref(), &r, &resting, &mut slides, &b, &bt, &|_| {
+                1e-6
             })
-            .solve() else {
-                // Sticking has no solution (a row whose tangential row is
-                // nearly a multiple of its normal one): those rows slide,
-                // along their sliding speed, or from rest the way they
-                // would accelerate without friction.
-                let mut changed = false;
-                for (k, &i) in resting.iter().enumerate() {
-                    let v = if norm2(r.vt[i]) > 0.0 { r.vt[i] } else { bt[k] };
-                    let nv = norm2(v);
-                    if slides[k] == Some(Slide::Stick) && nv > 0.0 {
-                        slides[k] = Some(Slide::Slip([v[0] / nv, v[1] / nv]));
-                        changed = true;
-                    }
-                }
-                if changed {
-                    continue;
-                }
-                return Err(fail(&format!(
-                    "the contact forces of {} resting contact(s) have no solution",
-                    resting.len()
-                )));
-            };
-            let mut changed = false;
-            for k in 0..resting.len() {
-                let (ln, lt) = (sol.ln[k], sol.lt[k]);
-                let l = norm2(lt);
-                if slides[k] == Some(Slide::Stick)
-                    && ln > 0.0
-                    && l > 0.0
-                    && l >= r.mu[resting[k]] * ln * (1.0 - 1e-6)
-                {
-                    slides[k] = Some(Slide::Slip([-lt[0] / l, -lt[1] / l]));
-                    changed = true;
-                }
-            }
-            forces = Some(sol);
-            if !changed {
-                break;
-            }
-        }
-        let Some(forces) = forces else {
-            return Err(fail("no resting contact"));
+        else {
+            return Err(fail(&format!(
+                "the contact forces of {} resting contact(s) have no solution",
+                resting.len()
+            )));
         };
         let scale = forces.ln.amax().max(f64::MIN_POSITIVE);
         let carrying: Vec<usize> = (0..resting.len())

@@ -11,6 +11,77 @@ use super::redundant::{Cone, min_norm_feasible};
 use super::soccp;
 use crate::constrained::{DMatrix, DVector};
 
+/// The sustained forces of the rows `set` at rest, with friction (both
+/// runtimes' force problem between events): each row sticks while the
+/// force it needs fits its cone, else slides — along its sliding speed, or
+/// from rest the way it would accelerate without friction, or against the
+/// tangential force that left the cone (a sticking row whose `‖λ_t‖`
+/// comes within `margin(k)` of `μ λ`). `slides` holds the rows' modes in
+/// and out; `b`, `bt` are the normal and tangential rows' free
+/// accelerations. `None`: no modes give forces.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn resting_forces(
+    m: &DMatrix<f64>,
+    j: Option<&DMatrix<f64>>,
+    r: &Rows,
+    set: &[usize],
+    slides: &mut [Option<Slide>],
+    b: &DVector<f64>,
+    bt: &[[f64; 2]],
+    margin: &dyn Fn(usize) -> f64,
+) -> Option<Solved> {
+    let mut forces = None;
+    for _ in 0..(2 + 2 * set.len()) {
+        let Some(sol) = (Problem {
+            m,
+            j,
+            r,
+            set,
+            slide: slides,
+            b: b.clone(),
+            bt: bt.to_vec(),
+            held: false,
+        })
+        .solve() else {
+            // Sticking has no solution (a row whose tangential row is
+            // nearly a multiple of its normal one): those rows slide,
+            // along their sliding speed, or from rest the way they
+            // would accelerate without friction.
+            let mut changed = false;
+            for (k, &i) in set.iter().enumerate() {
+                let v = if norm2(r.vt[i]) > 0.0 { r.vt[i] } else { bt[k] };
+                let nv = norm2(v);
+                if slides[k] == Some(Slide::Stick) && nv > 0.0 {
+                    slides[k] = Some(Slide::Slip([v[0] / nv, v[1] / nv]));
+                    changed = true;
+                }
+            }
+            if changed {
+                continue;
+            }
+            return None;
+        };
+        let mut changed = false;
+        for k in 0..set.len() {
+            let (ln, lt) = (sol.ln[k], sol.lt[k]);
+            let l = norm2(lt);
+            if slides[k] == Some(Slide::Stick)
+                && ln > 0.0
+                && l > 0.0
+                && l >= r.mu[set[k]] * ln * (1.0 - margin(k))
+            {
+                slides[k] = Some(Slide::Slip([-lt[0] / l, -lt[1] / l]));
+                changed = true;
+            }
+        }
+        forces = Some(sol);
+        if !changed {
+            break;
+        }
+    }
+    forces
+}
+
 /// Solves the linear complementarity problem `ξ = A x + b`, `x ≥ 0`,
 /// `ξ ≥ 0`, `xᵀ ξ = 0` exactly by enumerating the active sets, smallest
 /// first (at most [`MAX_LCP`] unknowns). For the impact and contact
