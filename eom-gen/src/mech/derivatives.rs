@@ -296,16 +296,31 @@ pub fn forward_dynamics_derivatives_recursive<'cx>(
     inputs: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Program {
-    let (gq, gu, gi) = if loads.iter().all(|l| l.is_zero()) {
-        (gq, gu, vec![vec![Expr::zero(); inputs.len()]; u.len()])
+    let blocks = with_loads(cx, (gq, gu), loads, qdot, q, u, inputs);
+    lower_solved(cx, minv, blocks, opts)
+}
+
+/// `∂ID/∂q` (tangent space), `∂ID/∂u` and `∂ID/∂(inputs)`: the Newton–Euler
+/// forces' `gq` and `gu` plus the derivatives of `loads` (the rest of
+/// inverse dynamics, no `u̇`), differentiated here as expressions.
+fn with_loads<'cx>(
+    cx: &'cx Context,
+    (gq, gu): (Vec<Vec<Expr<'cx>>>, Vec<Vec<Expr<'cx>>>),
+    loads: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    inputs: &[Expr<'cx>],
+) -> [Vec<Vec<Expr<'cx>>>; 3] {
+    if loads.iter().all(|l| l.is_zero()) {
+        [gq, gu, vec![vec![Expr::zero(); inputs.len()]; u.len()]]
     } else {
-        (
+        [
             add(gq, tangent_jacobian(cx, loads, qdot, q, u)),
             add(gu, cx.jacobian(loads, u)),
             cx.jacobian(loads, inputs),
-        )
-    };
-    lower_solved(cx, minv, [gq, gu, gi], opts)
+        ]
+    }
 }
 
 /// `a + b`, matrices by rows.
@@ -361,22 +376,10 @@ pub fn inverse_dynamics_derivatives_recursive<'cx>(
     inputs: &[Expr<'cx>],
     opts: LowerOptions,
 ) -> Program {
-    let (gq, gu) = if loads.iter().all(|l| l.is_zero()) {
-        (rd.dq, rd.du)
-    } else {
-        (
-            add(rd.dq, tangent_jacobian(cx, loads, qdot, q, u)),
-            add(rd.du, cx.jacobian(loads, u)),
-        )
-    };
+    let [gq, gu, gi] = with_loads(cx, (rd.dq, rd.du), loads, qdot, q, u, inputs);
     lower_blocks(
         cx,
-        [
-            ("dq", gq),
-            ("du", gu),
-            ("dud", rd.m),
-            ("dinput", cx.jacobian(loads, inputs)),
-        ],
+        [("dq", gq), ("du", gu), ("dud", rd.m), ("dinput", gi)],
         opts,
     )
 }

@@ -456,6 +456,27 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         } else {
             (None, FdForm::Aba, Vec::new(), Vec::new())
         };
+    // Inverse dynamics at a symbolic `u̇`, less the generalised forces.
+    let inverse_at_symbolic_ud = || {
+        let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
+        let (t, _) = ev.rnea(&k, &ud, &fext);
+        let inverse: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
+        (ud, inverse)
+    };
+    // What both derivative blocks start from: that, `q̇`, and (where the
+    // recursion applies) the loads `load torques − generalised forces`.
+    let derivative_basis = || {
+        let (ud, inverse) = inverse_at_symbolic_ud();
+        let qdot = ev.qdot(&st);
+        let loads: Option<Vec<Expr>> = ev.recursive_derivatives_apply().then(|| {
+            ev.load_torques(&k, &fext)
+                .iter()
+                .zip(&generalized)
+                .map(|(&l, &g)| l - g)
+                .collect()
+        });
+        (ud, qdot, inverse, loads)
+    };
     // Every way that applies, the one with fewer counted operations kept
     // (the first listed on a tie: differentiated forward dynamics, then
     // differentiated Newton–Euler, then its recursion in world axes, then
@@ -468,11 +489,8 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             forward_dynamics_derivatives_rnea,
         };
         use super::rnea_derivatives::Axes;
-        let qdot = ev.qdot(&st);
+        let (ud, qdot, inverse, loads) = derivative_basis();
         let direct = forward_dynamics_derivatives(&cx, &udot, &qdot, &q, &u, &tau, &inputs, opts);
-        let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
-        let (t, _) = ev.rnea(&k, &ud, &fext);
-        let inverse: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
         let via_rnea = forward_dynamics_derivatives_rnea(
             &cx, &udot, &inverse, &ud, &qdot, &q, &u, &tau, &inputs, opts,
         );
@@ -480,13 +498,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             (DerivativeForm::ForwardDynamics, direct),
             (DerivativeForm::InverseDynamics, via_rnea),
         ];
-        if ev.recursive_derivatives_apply() {
-            let loads: Vec<Expr> = ev
-                .load_torques(&k, &fext)
-                .iter()
-                .zip(&generalized)
-                .map(|(&l, &g)| l - g)
-                .collect();
+        if let Some(loads) = loads {
             // `∂ID/∂u` by the recursion, or differentiated (Newton–Euler
             // without the loads; free of `u̇`, as `ID` is affine in `u̇`
             // with `M(q)`): whichever counts fewer, with `M⁻¹ = ∂FD/∂τ`.
@@ -562,23 +574,14 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         if request.contains(Function::InverseDynamicsDerivatives) {
             use super::derivatives::{IdDerivativeForm, inverse_dynamics_derivatives_recursive};
             use super::rnea_derivatives::Axes;
-            let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
-            let qdot = ev.qdot(&st);
-            let (t, _) = ev.rnea(&k, &ud, &fext);
-            let inverse: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
+            let (ud, qdot, inverse, loads) = derivative_basis();
             let mut programs = vec![(
                 IdDerivativeForm::Differentiated,
                 super::derivatives::inverse_dynamics_derivatives(
                     &cx, &inverse, &ud, &qdot, &q, &u, &inputs, opts,
                 ),
             )];
-            if ev.recursive_derivatives_apply() {
-                let loads: Vec<Expr> = ev
-                    .load_torques(&k, &fext)
-                    .iter()
-                    .zip(&generalized)
-                    .map(|(&l, &g)| l - g)
-                    .collect();
+            if let Some(loads) = loads {
                 for (form, axes) in [
                     (IdDerivativeForm::Recursive, Axes::World),
                     (IdDerivativeForm::RecursiveBodyAxes, Axes::Body),
@@ -621,9 +624,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         .contains(Function::Bias)
         .then(|| lower("b", &bias.get_or_insert_with(rnea_bias).clone()));
     let inverse_dynamics = request.contains(Function::InverseDynamics).then(|| {
-        let ud: Vec<Expr> = (0..nu).map(|i| cx.ud(i as u32)).collect();
-        let (t, _) = ev.rnea(&k, &ud, &fext);
-        let tau: Vec<Expr> = t.iter().zip(&generalized).map(|(&t, &g)| t - g).collect();
+        let (_, tau) = inverse_at_symbolic_ud();
         lower("tau", &tau)
     });
     let energy = request.contains(Function::Energy).then(|| {
