@@ -459,6 +459,16 @@ pub fn structure(sys: &System) -> Result<(Chains, Vec<MixedCable>), CableError> 
             }
         }
     }
+    if sys.cables.iter().any(|c| c.initial_motion != [[0.0; 3]; 2]) {
+        let mut v0 = vec![0.0; built.model.n_full()];
+        for (k, c) in sys.cables.iter().enumerate() {
+            let [v, w] = c.initial_motion;
+            for (i, vi) in built.rigid_velocity(k, v, w) {
+                v0[i] = vi;
+            }
+        }
+        built.model.set_initial_velocity(v0);
+    }
     let cables = sys
         .cables
         .iter()

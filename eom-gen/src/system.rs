@@ -792,6 +792,9 @@ pub struct CableInfo {
     pub distributed_load: [f64; 3],
     /// Constant forces on nodes: `(node, force)`, world axes, N.
     pub node_forces: Vec<(usize, [f64; 3])>,
+    /// The initial rigid motion: velocity of the `from` point (m/s) and
+    /// angular velocity about it (rad/s), world axes; zero for rest.
+    pub initial_motion: [[f64; 3]; 2],
 }
 
 /// A chain of ANCF elements as the runtime builds it (`eom_gen::cables`

@@ -296,6 +296,14 @@ pub struct Cable {
     /// Constant (dead) forces on nodes of the chain, world axes.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub node_forces: Vec<NodeForce>,
+    /// Initial velocity: the cable starts as a rigid body moving with
+    /// this velocity of its `from` point, world axes, m/s.
+    #[serde(default, skip_serializing_if = "V3::is_zero")]
+    pub velocity: V3,
+    /// Initial angular velocity of that rigid motion about the `from`
+    /// point, world axes, rad/s.
+    #[serde(default, skip_serializing_if = "V3::is_zero")]
+    pub angular_velocity: V3,
 }
 
 /// A constant force on one node of a cable.

@@ -417,6 +417,47 @@ impl Chains {
         self.model
             .add_group_distributed_load(self.parts[k].group, w);
     }
+
+    /// Chain `k`'s full coordinate speeds in a rigid motion from its
+    /// reference configuration: its first node moving at `v` (m/s), the
+    /// whole turning at `w` (rad/s) about that node, world axes. A node's
+    /// position moves at `v + w × (r − r₀)`, each of its direction vectors
+    /// (the gradient `∂r/∂x`, and `∂r/∂y` of `Beam2D`) turns at `w × d`;
+    /// a planar chain keeps its x and y components (`w` about z). Returns
+    /// `(full index, speed)` for every coordinate of the chain.
+    pub fn rigid_velocity(&self, k: usize, v: [f64; 3], w: [f64; 3]) -> Vec<(usize, f64)> {
+        let part = &self.parts[k];
+        let q0 = self.model.q0();
+        let r0 = part.node_position(q0, 0);
+        let cross = |a: [f64; 3], b: [f64; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let mut out = Vec::with_capacity(part.nodes * part.node_coords);
+        for node in 0..part.nodes {
+            let base = part.position_index(node, 0);
+            for chunk in 0..part.node_coords / part.dim {
+                let mut d = [0.0; 3];
+                for (a, da) in d.iter_mut().enumerate().take(part.dim) {
+                    *da = q0[base + chunk * part.dim + a];
+                }
+                let rate = if chunk == 0 {
+                    let arm = [d[0] - r0[0], d[1] - r0[1], d[2] - r0[2]];
+                    let turn = cross(w, arm);
+                    [v[0] + turn[0], v[1] + turn[1], v[2] + turn[2]]
+                } else {
+                    cross(w, d)
+                };
+                for (a, &ra) in rate.iter().enumerate().take(part.dim) {
+                    out.push((base + chunk * part.dim + a, ra));
+                }
+            }
+        }
+        out
+    }
 }
 
 /// Why one chain of several cannot be built: its index and the reason.

@@ -231,6 +231,8 @@ impl Ctx<'_> {
                 }
                 node_forces.push((nf.node, [fv.x, fv.y, fv.z]));
             }
+            let motion = self.cable_motion(c, &path, (from.as_ref(), to.as_ref()), planar, spec);
+            ok &= motion.is_some();
             if planar && g[2] != 0.0 {
                 self.warning(
                     &[f("gravity")],
@@ -331,9 +333,116 @@ impl Ctx<'_> {
                 end_at,
                 distributed_load: v(&distributed),
                 node_forces,
+                initial_motion: motion.unwrap_or_default(),
             });
         }
         ok.then_some(out)
+    }
+
+    /// A cable's initial rigid motion, `[velocity of from, angular
+    /// velocity]`: finite, in the plane of a planar cable, only in a model
+    /// of cables alone (the mixed runtime starts its cables at rest), and
+    /// at rest at every end held to the ground (a clamped end also not
+    /// turning). `None` after reporting what is wrong.
+    fn cable_motion(
+        &mut self,
+        c: &spec::Cable,
+        path: &[Seg<'static>],
+        (from, to): (Option<&Vec3Q>, Option<&Vec3Q>),
+        planar: bool,
+        spec: &Spec,
+    ) -> Option<[[f64; 3]; 2]> {
+        let name = c.name.as_str();
+        let at = |field: &'static str| join(path, &[f(field)]);
+        let v = self.vec3(&c.velocity, &at("velocity"), Scope::Params);
+        let w = self.vec3(&c.angular_velocity, &at("angular_velocity"), Scope::Params);
+        let (v, w) = (values(&v?), values(&w?));
+        let mut ok = true;
+        for (x, field, what) in [(v, "velocity", "m/s"), (w, "angular_velocity", "rad/s")] {
+            if !x.iter().all(|c| c.is_finite()) {
+                self.error(
+                    &at(field),
+                    format!("the initial `{field}` of cable `{name}` is not finite"),
+                    format!("give three numbers in {what}"),
+                );
+                ok = false;
+            }
+        }
+        if planar && v.z != 0.0 {
+            self.error(
+                &at("velocity"),
+                format!(
+                    "`{}` cable `{name}` would leave its plane: initial velocity z = {}",
+                    c.element.name(),
+                    v.z
+                ),
+                "planar elements move in the x–y plane: give z = 0, or use `Cable3D`",
+            );
+            ok = false;
+        }
+        if planar && (w.x != 0.0 || w.y != 0.0) {
+            self.error(
+                &at("angular_velocity"),
+                format!(
+                    "`{}` cable `{name}` would leave its plane: angular velocity ({}, {}, {}) rad/s",
+                    c.element.name(),
+                    w.x,
+                    w.y,
+                    w.z
+                ),
+                "a planar cable turns about z only: give (0, 0, ω)",
+            );
+            ok = false;
+        }
+        let moving = v.norm() > 0.0 || w.norm() > 0.0;
+        let field = if v.norm() > 0.0 {
+            "velocity"
+        } else {
+            "angular_velocity"
+        };
+        if ok && moving && !spec.bodies.is_empty() {
+            self.error(
+                &at(field),
+                format!("cable `{name}` is given an initial `{field}` in a model with rigid bodies"),
+                "initial cable velocities are for models of cables alone; with rigid bodies every cable starts at rest",
+            );
+            ok = false;
+        }
+        if let (true, true, Some(a), Some(b)) = (ok, moving, from, to) {
+            let (a, b) = (values(a), values(b));
+            let scale = v.norm() + w.norm() * (b - a).norm();
+            let tangent = (b - a).normalize();
+            let ends = [
+                ("start", c.start, c.start_at.is_some(), a),
+                ("end", c.end, c.end_at.is_some(), b),
+            ];
+            for (end, held, mounted, p) in ends {
+                if held.is_free() || mounted {
+                    continue;
+                }
+                let speed = v + w.cross(&(p - a));
+                let turning = w.cross(&tangent);
+                let clamped = held == spec::CableEnd::Clamped;
+                if speed.norm() > 1e-12 * scale || (clamped && turning.norm() > 1e-12 * w.norm()) {
+                    let how = if clamped { "clamped" } else { "pinned" };
+                    self.error(
+                        &at(field),
+                        format!(
+                            "the {end} of cable `{name}` is {how} to the ground but its initial motion moves it \
+                             (speed ({:.6}, {:.6}, {:.6}) m/s{})",
+                            speed.x,
+                            speed.y,
+                            speed.z,
+                            if clamped && turning.norm() > 0.0 { ", and turns it" } else { "" }
+                        ),
+                        "an end held to the ground starts at rest: give a motion that vanishes there \
+                         (a pinned start: `velocity` zero and an `angular_velocity` about it)",
+                    );
+                    ok = false;
+                }
+            }
+        }
+        ok.then_some([[v.x, v.y, v.z], [w.x, w.y, w.z]])
     }
 
     /// A cable end held at a marker of a rigid body: the body and marker
