@@ -188,6 +188,7 @@ pub fn linearize_cmd(
 pub fn simulate_cmd(
     checked: &Checked,
     run: &ElementRun,
+    tangent: eom_sim::Jacobian,
     (csv, events_csv): (Option<&str>, Option<&str>),
     json_out: bool,
 ) -> Result<ExitCode, Error> {
@@ -204,7 +205,8 @@ pub fn simulate_cmd(
     let mut coordinates: Vec<&str> = Vec::new();
     let (report, table) = if eom_gen::cables::has_mounts(sys) {
         let f = rigid_part(sys).map_err(Error::Refused)?;
-        let mixed = mixed_model(sys, &f).map_err(Error::Refused)?;
+        let mut mixed = mixed_model(sys, &f).map_err(Error::Refused)?;
+        mixed.model.set_tangent(tangent);
         let (q0, u0) = eom_gen::cables::rigid_start(sys, &f).map_err(refused)?;
         coordinates = sys.coordinate_names();
         let own = |v: Vec<&str>| v.into_iter().map(str::to_string).collect::<Vec<_>>();
@@ -219,7 +221,8 @@ pub fn simulate_cmd(
         )
     } else {
         cables_alone(checked)?;
-        let (built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
+        let (mut built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
+        built.model.set_tangent(tangent);
         let contacts = eom_gen::cables::node_contacts(sys, &cables);
         simulate_structure(&built.model, &cables, &contacts, run, &mut progress)
     }

@@ -667,3 +667,48 @@ fn independent_subsystems_in_one_mixed_model_move_as_each_alone() {
     assert!(dv < gamma / (beta * h) * 1e-12, "Δv {dv:e}");
     assert!(residual < 1e-9);
 }
+
+/// The differenced tangent (`set_tangent(Differences)`: forward
+/// differences of the internal forces, columns sharing no row perturbed
+/// together) is the elements' generated tangent to the differences'
+/// accuracy, `a ∂f/∂q + b ∂f/∂q̇ + c M`, at a deformed and moving state of
+/// three chains of three kernels, with Kelvin–Voigt damping in one; and it
+/// counts its force evaluations: one at the point and one per colour and
+/// block, a few per chain's bandwidth, not one per coordinate.
+#[test]
+fn the_differenced_tangent_is_the_generated_one_to_the_differences_accuracy() {
+    let mut specs = three_chains();
+    specs[0].section.damping_axial = 0.7;
+    specs[0].section.damping_bending = 0.02;
+    let mut all = chains(&specs).unwrap_or_else(|e| panic!("{e}"));
+    let mut rng = Lcg(11);
+    let m = &all.model;
+    let x: Vec<f64> = m
+        .restrict(m.q0())
+        .iter()
+        .map(|x| x + 0.05 * rng.next())
+        .collect();
+    let xd: Vec<f64> = (0..m.n_free()).map(|_| rng.next()).collect();
+    let (q, qd) = (m.expand(&x), m.expand_rate(&xd));
+    let (a, b, c) = (0.7, 0.3, 1.1);
+    let mut generated = eom_sim::large::SparseMatrix::zeros(m.pattern().clone());
+    m.jacobian(&q, &qd, a, b, c, &mut generated);
+    all.model.set_tangent(eom_sim::Jacobian::Differences);
+    let m = &all.model;
+    let mut differenced = eom_sim::large::SparseMatrix::zeros(m.pattern().clone());
+    m.jacobian(&q, &qd, a, b, c, &mut differenced);
+    let scale = generated.values.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
+    for (i, j, slot) in m.pattern().entries() {
+        let (g, d) = (generated.values[slot], differenced.values[slot]);
+        assert!(
+            (g - d).abs() <= 1e-6 * scale,
+            "K[{i}][{j}]: generated {g}, differenced {d} (largest entry {scale})"
+        );
+    }
+    let evaluations = m.differenced_evaluations();
+    assert!(
+        evaluations < m.n_free(),
+        "{evaluations} force evaluations for {} coordinates",
+        m.n_free()
+    );
+}

@@ -79,7 +79,10 @@ pub struct SimulateArgs {
     /// `generated` (the symbolic derivatives, generated for the run;
     /// unconstrained models without quaternions), `differences` (forward
     /// differences of the right-hand side) or `auto` (generated where it
-    /// applies and the model has at most 12 speeds; the default).
+    /// applies and the model has at most 12 speeds; the default). Models
+    /// with cables: where generalized-α's Newton matrix takes the
+    /// elements' tangent, `generated` (their kernels; `auto` is the same)
+    /// or `differences` (of their forces).
     #[arg(long)]
     pub jacobian: Option<String>,
     /// Print one JSON object instead of the summary.
@@ -272,7 +275,7 @@ fn simulate_cables(
             checked.system.name
         ));
     }
-    let refused: [(&str, bool); 14] = [
+    let refused: [(&str, bool); 13] = [
         ("--ensemble", a.ensemble.is_some()),
         ("--seed", a.seed.is_some()),
         ("--perturb", a.perturb.is_some()),
@@ -280,7 +283,6 @@ fn simulate_cables(
         ("--lanes", a.lanes.is_some()),
         ("--native", a.native),
         ("--plot", a.plot.is_some()),
-        ("--jacobian", a.jacobian.is_some()),
         ("--max-steps", a.max_steps.is_some()),
         ("--constraints", a.constraints.is_some()),
         ("--q0", a.initial.q0.is_some()),
@@ -294,10 +296,25 @@ fn simulate_cables(
                 "{option} does not apply to `{}`, a model with cables: it runs generalized-α \
                  (fixed step, or step control with --rtol/--atol) or rk4 (fixed step); its \
                  options are --t-end, --dt, --rtol, --atol, --integrator generalized-alpha|rk4, \
-                 --rho-inf, --param, --csv, --every, --events-csv, --html and --json",
+                 --rho-inf, --jacobian, --param, --csv, --every, --events-csv, --html and --json",
                 checked.system.name
             ));
         }
+    }
+    // Generalized-α's Newton matrix: the elements' generated tangent, or
+    // differences of their forces (to compare the two).
+    let tangent = parse_names::<eom_sim::Jacobian>(
+        &[a.jacobian.clone().unwrap_or_else(|| "auto".into())],
+        &mut problems,
+    )
+    .pop()
+    .unwrap_or_default();
+    if a.jacobian.is_some() && integrator == Integrator::Rk4 {
+        problems.push(format!(
+            "--jacobian does not apply to rk4, which is explicit: it sets where generalized-α's \
+             Newton matrix for `{}` takes the elements' tangent from (generated or differences)",
+            checked.system.name
+        ));
     }
     if !integrator.runs_element_models() {
         problems.push(format!(
@@ -340,6 +357,7 @@ fn simulate_cables(
     let code = match crate::ancf::simulate_cmd(
         checked,
         &run,
+        tangent,
         (csv.as_deref(), a.events_csv.as_deref()),
         a.json,
     ) {

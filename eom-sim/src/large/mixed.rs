@@ -408,6 +408,13 @@ impl<'r> MixedModel<'r> {
         &self.structure
     }
 
+    /// Where the structure's tangent comes from
+    /// ([`StructuralModel::set_tangent`]); the rigid part's block is by
+    /// differences always.
+    pub fn set_tangent(&mut self, tangent: crate::run::Jacobian) {
+        self.structure.set_tangent(tangent);
+    }
+
     /// The rigid part.
     pub fn rigid(&self) -> &(dyn RigidPart + 'r) {
         self.rigid.as_ref()

@@ -10,8 +10,10 @@
 
 use super::sparse::{Pattern, SparseMatrix};
 use crate::elements::{ElementKernel, Lanes};
+use crate::run::Jacobian;
 use std::marker::PhantomData;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Gauss–Legendre nodes and weights on `[0, 1]` used for the strain energy
 /// as a path integral of the elastic force (16 points: exact for
@@ -467,6 +469,14 @@ pub struct StructuralModel {
     mass: SparseMatrix,
     /// The initial speeds of the full coordinates (zero unless set).
     v0: Vec<f64>,
+    /// Where the tangent of the internal forces comes from
+    /// ([`StructuralModel::set_tangent`]).
+    tangent: Jacobian,
+    /// Columns of the pattern that share no row, perturbed together by the
+    /// differenced tangent (greedy colouring, computed when first asked).
+    colors: std::sync::OnceLock<Vec<Vec<usize>>>,
+    /// Internal-force evaluations spent on differenced tangents.
+    differenced: AtomicUsize,
 }
 
 /// Builds a [`StructuralModel`].
@@ -619,6 +629,9 @@ impl ModelBuilder {
             slots,
             mass,
             v0: Vec::new(),
+            tangent: Jacobian::Generated,
+            colors: std::sync::OnceLock::new(),
+            differenced: AtomicUsize::new(0),
         }
     }
 }
@@ -727,17 +740,124 @@ impl StructuralModel {
         }
     }
 
-    /// `out = a ∂f_int/∂q + b ∂f_int/∂q̇ + c M` on the free coordinates.
+    /// Where [`StructuralModel::jacobian`] takes the tangent of the
+    /// internal forces from: the elements' generated kernels
+    /// ([`Jacobian::Generated`], the default; `Auto` is the same), or
+    /// forward differences of the internal forces ([`Jacobian::Differences`]:
+    /// columns that share no row of the pattern perturbed together, two
+    /// evaluations per colour and per `q`/`q̇` block; what the generated
+    /// tangent saves, for work-precision comparisons).
+    pub fn set_tangent(&mut self, tangent: Jacobian) {
+        self.tangent = tangent;
+    }
+
+    /// The tangent's source ([`StructuralModel::set_tangent`]).
+    pub fn tangent(&self) -> Jacobian {
+        match self.tangent {
+            Jacobian::Differences => Jacobian::Differences,
+            Jacobian::Auto | Jacobian::Generated => Jacobian::Generated,
+        }
+    }
+
+    /// Internal-force evaluations spent on differenced tangents so far.
+    pub fn differenced_evaluations(&self) -> usize {
+        self.differenced.load(Ordering::Relaxed)
+    }
+
+    /// `out = a ∂f_int/∂q + b ∂f_int/∂q̇ + c M` on the free coordinates,
+    /// the tangent as [`StructuralModel::set_tangent`] says.
     pub fn jacobian(&self, q: &[f64], qd: &[f64], a: f64, b: f64, c: f64, out: &mut SparseMatrix) {
         out.clear();
-        for (g, s) in self.groups.iter().zip(&self.slots) {
-            g.add_jacobian(q, qd, a, b, s, &mut out.values);
+        if self.tangent() == Jacobian::Differences {
+            self.add_differenced_tangent(q, qd, a, b, out);
+        } else {
+            for (g, s) in self.groups.iter().zip(&self.slots) {
+                g.add_jacobian(q, qd, a, b, s, &mut out.values);
+            }
         }
         if c != 0.0 {
             for (o, m) in out.values.iter_mut().zip(&self.mass.values) {
                 *o += c * m;
             }
         }
+    }
+
+    /// Columns of the pattern in groups that share no row (greedy, in
+    /// column order): a banded tangent needs about its bandwidth of them.
+    fn colors(&self) -> &[Vec<usize>] {
+        self.colors.get_or_init(|| {
+            let p = &self.pattern;
+            let mut rows: Vec<Vec<usize>> = vec![Vec::new(); p.n()];
+            for (i, j, _) in p.entries() {
+                rows[j].push(i);
+            }
+            let mut colors: Vec<Vec<usize>> = Vec::new();
+            let mut taken: Vec<Vec<bool>> = Vec::new();
+            for (j, rj) in rows.iter().enumerate() {
+                let k = taken
+                    .iter()
+                    .position(|t| rj.iter().all(|&i| !t[i]))
+                    .unwrap_or_else(|| {
+                        colors.push(Vec::new());
+                        taken.push(vec![false; p.n()]);
+                        colors.len() - 1
+                    });
+                colors[k].push(j);
+                for &i in rj {
+                    taken[k][i] = true;
+                }
+            }
+            colors
+        })
+    }
+
+    /// `out += a ∂f_int/∂q + b ∂f_int/∂q̇` by forward differences of
+    /// [`StructuralModel::internal`], increment `√ε · max(1, |x_j|)`.
+    fn add_differenced_tangent(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        a: f64,
+        b: f64,
+        out: &mut SparseMatrix,
+    ) {
+        let n = self.n_free();
+        let mut scratch = vec![0.0; q.len()];
+        let (mut f0, mut f1) = (vec![0.0; n], vec![0.0; n]);
+        self.internal(q, qd, &mut scratch, &mut f0);
+        let mut evaluations = 1;
+        let mut x = Vec::with_capacity(q.len());
+        let pattern = self.pattern.clone();
+        for (block, coef) in [(0, a), (1, b)] {
+            if coef == 0.0 {
+                continue;
+            }
+            for color in self.colors() {
+                x.clear();
+                x.extend_from_slice(if block == 0 { q } else { qd });
+                let step = |xj: f64| f64::EPSILON.sqrt() * xj.abs().max(1.0);
+                for &j in color {
+                    let i = self.full_of_free[j];
+                    x[i] += step(x[i]);
+                }
+                if block == 0 {
+                    self.internal(&x, qd, &mut scratch, &mut f1);
+                } else {
+                    self.internal(q, &x, &mut scratch, &mut f1);
+                }
+                evaluations += 1;
+                let base = if block == 0 { q } else { qd };
+                for &j in color {
+                    let i = self.full_of_free[j];
+                    let h = x[i] - base[i];
+                    for (row, col, slot) in pattern.entries_of(j) {
+                        debug_assert_eq!(col, j);
+                        out.values[slot] += coef * (f1[row] - f0[row]) / h;
+                    }
+                }
+            }
+        }
+        self.differenced.fetch_add(evaluations, Ordering::Relaxed);
     }
 
     /// Kinetic energy `½ vᵀ M v` for free velocities `v`.

@@ -169,6 +169,8 @@ trait Reported: Impacts {
     fn full_of(&self, y: &[f64]) -> Vec<f64>;
     /// The markers' forces on the cable ends from the multipliers, named.
     fn mounts(&self, lambda: &[f64]) -> Vec<MountForce>;
+    /// The structure of the cables.
+    fn structural(&self) -> &StructuralModel;
 }
 
 impl Reported for StructuralModel {
@@ -189,9 +191,15 @@ impl Reported for StructuralModel {
     fn mounts(&self, _: &[f64]) -> Vec<MountForce> {
         Vec::new()
     }
+    fn structural(&self) -> &StructuralModel {
+        self
+    }
 }
 
 impl Reported for MixedModel<'_> {
+    fn structural(&self) -> &StructuralModel {
+        self.structure()
+    }
     fn rigid_len(&self) -> usize {
         self.n() - self.n_structural()
     }
@@ -421,9 +429,8 @@ fn report<M: Reported + ?Sized>(
             rejected: stats.rejected,
             rhs_evals: stats.force_evaluations,
             jacobian_evals: stats.factorizations,
-            // Generalized-α's Newton matrix: the elements' generated
-            // kernels, a rigid part's block by differences (not one of
-            // `run::Jacobian`'s choices).
+            // Set by generalized-α's runs (`run_alpha`): the elements'
+            // tangent; a rigid part's block is by differences always.
             jacobian: None,
             lu_decompositions: stats.factorizations,
             newton_iterations: stats.newton_iterations,
@@ -473,9 +480,30 @@ fn run_alpha<M: Reported>(
     gaps: &Gaps,
     progress: &mut dyn FnMut(f64),
 ) -> Result<(RunReport, Option<Table>), RunError> {
-    if gaps.len() > 0 {
-        return run_contacts(m, cables, state, names, run, gaps, progress);
-    }
+    let st = m.structural();
+    let before = st.differenced_evaluations();
+    let mut out = if gaps.len() > 0 {
+        run_contacts(m, cables, state, names, run, gaps, progress)?
+    } else {
+        run_free(m, cables, state, names, run, progress)?
+    };
+    // The Newton matrix's tangent: the elements' generated kernels, or
+    // differences whose force evaluations count as right-hand sides (as
+    // the rigid integrators count theirs).
+    out.0.stats.jacobian = Some(st.tangent());
+    out.0.stats.rhs_evals += st.differenced_evaluations() - before;
+    Ok(out)
+}
+
+/// Generalized-α on `m` without contacts.
+fn run_free<M: Reported>(
+    m: &M,
+    cables: &[CableLayout],
+    state: State,
+    names: (&[String], &[String]),
+    run: &ElementRun,
+    progress: &mut dyn FnMut(f64),
+) -> Result<(RunReport, Option<Table>), RunError> {
     let clock = Instant::now();
     let start = state.clone();
     let mut ga =

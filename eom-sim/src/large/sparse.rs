@@ -66,6 +66,11 @@ impl Pattern {
         })
     }
 
+    /// The stored entries of column `col` as `(row, col, slot)`.
+    pub fn entries_of(&self, col: usize) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
+        (self.col_ptr[col]..self.col_ptr[col + 1]).map(move |k| (self.row_idx[k], col, k))
+    }
+
     fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
         SymbolicSparseColMatRef::new_checked(self.n, self.n, &self.col_ptr, None, &self.row_idx)
     }
