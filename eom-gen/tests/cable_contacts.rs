@@ -678,6 +678,15 @@ fn a_wire_dropped_flat_while_moving_sideways_takes_coulomb_impulses() {
             d.speed_before
         );
     }
+    let count = |k: ContactEventKind| report.contact_events.iter().filter(|x| x.kind == k).count();
+    eprintln!(
+        "{} impacts, {} rests, {} releases, {} sticks, {} slips",
+        count(ContactEventKind::Impact),
+        count(ContactEventKind::Rest),
+        count(ContactEventKind::Release),
+        count(ContactEventKind::Stick),
+        count(ContactEventKind::Slip)
+    );
     // The energy never rises above its start, at any step or event.
     let energy = table.column("energy").expect("energy column");
     let highest = energy.iter().fold(f64::NEG_INFINITY, |a, &x| a.max(x));
