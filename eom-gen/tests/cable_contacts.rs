@@ -29,10 +29,14 @@
 //!   μ = 0.3), every node's impulse lies in the cone and, sliding on,
 //!   `Λ_t = −μ Λ v̂_t⁺` (Newton–Coulomb), so every node leaves at
 //!   `u₀ − μ (1 + e) √(2 g h₀)` (the x and y blocks of `M` are equal) and
-//!   the energy is not gained; with the weight distributed (gravity
+//!   the energy is not gained; the nodes leave the floor rising and land
+//!   again (a rebound is never taken as a rest); with the weight distributed (gravity
 //!   turned by θ, tan θ = 0.3 < μ) the nodes stick and slip in turn as the
 //!   spans sag and the wire vibrates, each slip's stick force on the cone,
 //!   no event gaining energy, and the wire only creeps.
+//! - **No event pulls**: in every run of this file every normal impulse
+//!   is a push, `Λ ≥ 0` (a rest's plastic impulse with `Λ < 0` would
+//!   mean the contact separates).
 //! - **Located refusals**: a node inside its plane at the start (with the
 //!   penetration), a negative friction coefficient, a node the cable does not
 //!   have, a cable that does not exist, a plane on a body, a node contact
