@@ -524,6 +524,12 @@ pub(super) trait Impacts: AlphaModel {
     fn total_energy(&self, s: &State) -> f64;
 }
 
+/// The normal speed below which a contact's own impulse counts as
+/// round-off, m/s: a rest impulse that takes more than this from a
+/// row's speed by pulling it (`Λ < 0`) is of the wrong sign, and a row
+/// leaving an impact faster than this flies.
+const REST_SPEED: f64 = 1e-9;
+
 /// Why a contact event could not be resolved.
 fn failed(t: f64, what: String) -> DynamicsError {
     DynamicsError::Contact { t, message: what }
@@ -544,6 +550,15 @@ pub(super) struct ContactRun<'g> {
     pub anchors: Vec<[f64; 2]>,
     /// Sticking rows whose force was located leaving the cone.
     breaking: Vec<usize>,
+    /// Per contact row, when it last left its plane (an impact it left
+    /// rising, or a release), while it flies.
+    left: Vec<Option<f64>>,
+    /// Per contact row, the duration of its last hop (from leaving its
+    /// plane to landing again), while it hops.
+    hops: Vec<Option<f64>>,
+    /// Per contact row, it left its plane rising from an impact: its
+    /// landing is located at the level it left from.
+    bounced: Vec<bool>,
 }
 
 /// The first crossing of `f` from `≥ 0` at `a` to `< 0` at `b` (bisection
@@ -620,7 +635,28 @@ impl<'g> ContactRun<'g> {
             slides: vec![None; gaps.len()],
             anchors: vec![[0.0; 2]; gaps.len()],
             breaking: Vec::new(),
+            left: vec![None; gaps.len()],
+            hops: vec![None; gaps.len()],
+            bounced: vec![false; gaps.len()],
         }
+    }
+
+    /// Row `i` landing at `t` ends a Zeno accumulation of hops: the hops
+    /// it made since it last left its plane shrink (the last hop `τ`
+    /// shorter than the one before, ratio `q = τ/τ₋₁`) and the geometric
+    /// series of the hops still to come, `τ q/(1 − q)`, sums to at most
+    /// one step `h`. It then comes to rest at that landing (the limit of
+    /// the series, `ġ⁺ = 0`: a plastic impulse, if it carries a force).
+    /// Records the hop.
+    fn accumulates(&mut self, i: usize, t: f64, h: f64) -> bool {
+        let Some(left) = self.left[i].take() else {
+            return false;
+        };
+        let tau = t - left;
+        let shrinks = self.hops[i].is_some_and(|p| tau < p);
+        let q = self.hops[i].map_or(1.0, |p| tau / p);
+        self.hops[i] = Some(tau);
+        shrinks && tau * q <= h * (1.0 - q)
     }
 
     /// The event record of the impulses `(ln, lt)` on the rows `set`.
@@ -691,9 +727,16 @@ impl<'g> ContactRun<'g> {
     /// Resolves the contacts at `s` (as the rigid runtime's `settle`):
     /// the impact of the closed rows if one approaches (Newton–Coulomb on
     /// the rows with friction), then the force problem of the rows at rest
-    /// (a rebound that would land within one step `h`, `ġ ≤ |g̈| h`): those
-    /// that carry a force `λ > 0` are held (those arriving lose their
-    /// remaining speed by a plastic impulse), the others released. A row
+    /// (held ones, and closed ones not leaving, `ġ ≤` [`REST_SPEED`]):
+    /// those that carry a force `λ > 0` are held (those arriving lose
+    /// their remaining speed by a plastic impulse, never one that pulls),
+    /// the others released. Rest is decided on the steps, not on the
+    /// instantaneous `g̈` (a flexible node's elastic accelerations, 10²–10⁴
+    /// m/s² just after an impact, cannot tell its bounce from a Zeno
+    /// tail): a row leaving an impact rising flies, its landing is located
+    /// on the steps, and the landing that ends a series of shrinking hops
+    /// whose remainder sums to at most one step `h` is plastic
+    /// ([`ContactRun::accumulates`]), after which it rests. A row
     /// with friction slides along `v_t` if faster than its slip speed (as
     /// the rigid runtime's: a slide that would stop within the gap
     /// tolerance against its friction and drive,
@@ -734,14 +777,48 @@ impl<'g> ContactRun<'g> {
             .any(|&i| r.gdot[i] < 0.0 && !self.active.contains(&i))
         {
             let mm = mass()?;
-            let slides: Vec<Option<Slide>> = closed
+            // A landing that ends a Zeno series of shrinking hops takes no
+            // Newton impact: the row comes to rest there (the series' limit,
+            // `ġ⁺ = 0`), by the rest's plastic impulse below if it carries
+            // a force.
+            let landing: Vec<usize> = closed
                 .iter()
-                .map(|&i| self.gaps.rough(i).then_some(Slide::Stick))
+                .copied()
+                .filter(|&i| r.gdot[i] < 0.0 && !self.active.contains(&i))
                 .collect();
-            let e = |i: usize| r.e[i];
-            let sol = impact(&mm, None, &r, &closed, &e, false, &slides)
-                .ok_or_else(|| no_solution(closed.len()))?;
-            r = self.jump(m, s, ContactEventKind::Impact, &closed, (&r, &mm), &sol);
+            let zeno: Vec<usize> = landing
+                .iter()
+                .copied()
+                .filter(|&i| self.accumulates(i, t, h))
+                .collect();
+            for &i in &zeno {
+                self.bounced[i] = false;
+            }
+            if landing.iter().any(|i| !zeno.contains(i)) {
+                let set: Vec<usize> = closed
+                    .iter()
+                    .copied()
+                    .filter(|i| !zeno.contains(i))
+                    .collect();
+                let slides: Vec<Option<Slide>> = set
+                    .iter()
+                    .map(|&i| self.gaps.rough(i).then_some(Slide::Stick))
+                    .collect();
+                let e = |i: usize| r.e[i];
+                let sol = impact(&mm, None, &r, &set, &e, false, &slides)
+                    .ok_or_else(|| no_solution(set.len()))?;
+                r = self.jump(m, s, ContactEventKind::Impact, &set, (&r, &mm), &sol);
+                // Rows leaving rising fly: their landing is located at the
+                // level they leave from (not below it: a hop's landing
+                // GAP_TOL below its take-off ratchets a hopping node into
+                // its plane).
+                for &i in &set {
+                    if r.gdot[i] > REST_SPEED {
+                        self.left[i] = Some(t);
+                        self.bounced[i] = true;
+                    }
+                }
+            }
         }
         let free = m
             .free_acceleration(s)
@@ -751,7 +828,7 @@ impl<'g> ContactRun<'g> {
         let resting: Vec<usize> = closed
             .iter()
             .copied()
-            .filter(|&i| r.gdot[i] <= acc(i).abs() * h)
+            .filter(|&i| self.active.contains(&i) || r.gdot[i] <= REST_SPEED)
             .collect();
         let rough = resting.iter().any(|&i| self.gaps.rough(i));
         // The force problem: g̈ = W M⁻¹ (Wᵀ λ + W_tᵀ λ_t) + W a_free ≥ 0,
@@ -771,7 +848,7 @@ impl<'g> ContactRun<'g> {
                 })
             })
             .collect();
-        let now: Vec<usize>;
+        let mut now: Vec<usize>;
         let mut forces: Option<Solved> = None;
         let mut carrying: Vec<usize> = Vec::new();
         if resting.is_empty() {
@@ -821,7 +898,7 @@ impl<'g> ContactRun<'g> {
                 .collect();
             now = carrying.iter().map(|&k| resting[k]).collect();
         }
-        let now_slides: Vec<Option<Slide>> = carrying.iter().map(|&k| slides[k]).collect();
+        let mut now_slides: Vec<Option<Slide>> = carrying.iter().map(|&k| slides[k]).collect();
         let released: Vec<usize> = self
             .active
             .iter()
@@ -842,7 +919,7 @@ impl<'g> ContactRun<'g> {
             );
             self.events.push(ev);
         }
-        let arriving: Vec<usize> = now
+        let mut arriving: Vec<usize> = now
             .iter()
             .copied()
             .filter(|i| !self.active.contains(i))
@@ -860,19 +937,104 @@ impl<'g> ContactRun<'g> {
             }
         }
         if !arriving.is_empty() || !to_stick.is_empty() {
-            // Their remaining normal speed (below the rest speed) and the
-            // remaining sliding speed of the sticking ones taken by one
-            // plastic impulse; the sustained ones keep ġ = 0.
+            // Their remaining normal speed and the remaining sliding speed
+            // of the sticking ones taken by one plastic impulse; the
+            // sustained ones keep ġ = 0. A row whose plastic impulse would
+            // pull it (`Λ < 0`, taking away more than [`REST_SPEED`] of
+            // its own speed) separates: an arriving one flies instead
+            // (its landing is located and its hops run until they
+            // accumulate, [`ContactRun::accumulates`]); for the others no
+            // impulse is consistent, and the run stops.
             let mm = mass()?;
-            let plastic = |_: usize| 0.0;
-            let sol = impact(&mm, None, &r, &now, &plastic, true, &now_slides)
-                .ok_or_else(|| no_solution(now.len()))?;
-            let kind = if arriving.is_empty() {
-                ContactEventKind::Stick
-            } else {
-                ContactEventKind::Rest
+            let chol = mm
+                .clone()
+                .cholesky()
+                .ok_or_else(|| failed(t, "the mass matrix is not positive definite".into()))?;
+            let own = |i: usize| {
+                let w = DVector::from_fn(s.v.len(), |k, _| r.w[(i, k)]);
+                w.dot(&chol.solve(&w))
             };
-            r = self.jump(m, s, kind, &now, (&r, &mm), &sol);
+            // The speed row `set[k]` loses by its own impulse if that
+            // pulls (> 0: a pull).
+            let pull = |sol: &Solved, k: usize, i: usize| -sol.ln[k] * own(i);
+            let plastic = |_: usize| 0.0;
+            // The rows the impulse acts on: `now`, less arriving rows that
+            // fly and held ones it would pull (a held row's `ġ > 0` is the
+            // index-3 integrator's drift at velocity level: it stays held
+            // at `g = 0` without an impulse).
+            let mut set = now.clone();
+            let slides_of = |set: &[usize], now: &[usize], now_slides: &[Option<Slide>]| {
+                set.iter()
+                    .map(|i| now.iter().position(|j| j == i).and_then(|k| now_slides[k]))
+                    .collect::<Vec<_>>()
+            };
+            let mut sol = impact(
+                &mm,
+                None,
+                &r,
+                &set,
+                &plastic,
+                true,
+                &slides_of(&set, &now, &now_slides),
+            )
+            .ok_or_else(|| no_solution(set.len()))?;
+            loop {
+                let pulled: Vec<usize> = set
+                    .iter()
+                    .enumerate()
+                    .filter(|&(k, &i)| !to_stick.contains(&i) && pull(&sol, k, i) > REST_SPEED)
+                    .map(|(_, &i)| i)
+                    .collect();
+                if pulled.is_empty() {
+                    break;
+                }
+                let keep: Vec<bool> = now
+                    .iter()
+                    .map(|i| !(pulled.contains(i) && arriving.contains(i)))
+                    .collect();
+                let mut k = 0;
+                now_slides.retain(|_| {
+                    k += 1;
+                    keep[k - 1]
+                });
+                now.retain(|i| !(pulled.contains(i) && arriving.contains(i)));
+                arriving.retain(|i| !pulled.contains(i));
+                set.retain(|i| !pulled.contains(i));
+                if arriving.is_empty() && to_stick.is_empty() {
+                    break;
+                }
+                sol = impact(
+                    &mm,
+                    None,
+                    &r,
+                    &set,
+                    &plastic,
+                    true,
+                    &slides_of(&set, &now, &now_slides),
+                )
+                .ok_or_else(|| no_solution(set.len()))?;
+            }
+            if !arriving.is_empty() || !to_stick.is_empty() {
+                if let Some((k, &i)) = set
+                    .iter()
+                    .enumerate()
+                    .find(|&(k, &i)| pull(&sol, k, i) > REST_SPEED)
+                {
+                    return Err(failed(
+                        t,
+                        format!(
+                            "the rest impulse at cable-node contact `{}` would pull it onto its plane (Λ = {:e} N s at ġ = {:e} m/s): the contact separates there, and no consistent impulse was found for the contacts held with it",
+                            self.gaps.names[i], sol.ln[k], r.gdot[i]
+                        ),
+                    ));
+                }
+                let kind = if arriving.is_empty() {
+                    ContactEventKind::Stick
+                } else {
+                    ContactEventKind::Rest
+                };
+                r = self.jump(m, s, kind, &set, (&r, &mm), &sol);
+            }
         }
         if !to_slip.is_empty() {
             // The start of a slide: no jump; the forces at its start.
@@ -897,6 +1059,16 @@ impl<'g> ContactRun<'g> {
                 vec![0.0; s.v.len()],
             );
             self.events.push(ev);
+        }
+        for &i in &released {
+            self.left[i] = Some(t);
+            self.hops[i] = None;
+            self.bounced[i] = false;
+        }
+        for &i in &now {
+            self.left[i] = None;
+            self.hops[i] = None;
+            self.bounced[i] = false;
         }
         self.slides = vec![None; nk];
         for (&i, sl) in now.iter().zip(&now_slides) {
@@ -934,6 +1106,10 @@ impl<'g> ContactRun<'g> {
             };
             self.forces = held.forces(ga.multipliers());
             let t_start = state.t;
+            // Halvings of a fixed step after a Newton failure, and the
+            // small steps left before the run returns to `h`.
+            let (mut halvings, mut substeps) = (0u32, 0usize);
+            let h_fixed = opts.h;
             let event = loop {
                 if ga.state().t >= t_end - eps {
                     break None;
@@ -944,7 +1120,25 @@ impl<'g> ContactRun<'g> {
                 let p0 = held.slip_speeds(&prev.v);
                 if let Err(e) = ga.step_within(t_end) {
                     self.add_stats(&ga.stats);
-                    return (prev, Some(e));
+                    // At a fixed step, a step whose Newton fails (the
+                    // violent elastic transient of a wire just after an
+                    // impact) is retaken in halves, down to h/64, and the
+                    // run goes on at `h` after them.
+                    let retry = opts.control.is_none()
+                        && halvings < 6
+                        && matches!(e, DynamicsError::NewtonFailed { .. });
+                    if !retry {
+                        return (prev, Some(e));
+                    }
+                    halvings += 1;
+                    let mut small = opts.clone();
+                    small.h = opts.h / f64::from(1u32 << halvings);
+                    substeps = 1usize << halvings;
+                    ga = match GeneralizedAlpha::new(&held, prev.clone(), small) {
+                        Ok(g) => g,
+                        Err(e) => return (prev, Some(e)),
+                    };
+                    continue;
                 }
                 let new = ga.state().clone();
                 let f1 = held.forces(ga.multipliers());
@@ -968,9 +1162,15 @@ impl<'g> ContactRun<'g> {
                     // A row that starts the step at or inside its plane (just
                     // released, or left by a plastic impact) counts as
                     // closing once it sinks GAP_TOL further: the force
-                    // problem has found it not pressing.
+                    // problem has found it not pressing. A row that left
+                    // an impact rising closes where it left (a hop lands
+                    // at its take-off level, not GAP_TOL below it).
                     let g0 = self.gaps.gap(i, &prev.q);
-                    let level = if g0 < 0.0 { g0 - GAP_TOL } else { 0.0 };
+                    let level = match (g0 < 0.0, self.bounced[i]) {
+                        (false, _) => 0.0,
+                        (true, true) => g0,
+                        (true, false) => g0 - GAP_TOL,
+                    };
                     if self.gaps.gap(i, &new.q) < level {
                         let g = |t: f64| {
                             self.gaps
@@ -1015,6 +1215,17 @@ impl<'g> ContactRun<'g> {
                     None => {
                         self.forces = f1;
                         observe(&new, Some(ga.q_full()));
+                        if substeps > 0 {
+                            substeps -= 1;
+                            if substeps == 0 {
+                                halvings = 0;
+                                self.add_stats(&ga.stats);
+                                ga = match GeneralizedAlpha::new(&held, new, opts.clone()) {
+                                    Ok(g) => g,
+                                    Err(e) => return (prev, Some(e)),
+                                };
+                            }
+                        }
                     }
                     Some((t, row, breaks)) => {
                         self.breaking.extend(breaks);
@@ -1024,17 +1235,37 @@ impl<'g> ContactRun<'g> {
                         // step fails. For a closing gap the retaken step's
                         // own gap is brought to the level: the interpolant
                         // only guesses where the integrator crosses.
+                        // A force's crossing within a part in 10⁶ of the
+                        // step from its start is taken at the start: a
+                        // retaken step of ~1e-13 s is ill-conditioned for
+                        // index-3 generalized-α (its matrix ~ M/(β h²)),
+                        // and once returned a wire moving at 10⁷ m/s.
                         let s = if t >= new.t {
                             new
-                        } else if t <= prev.t {
+                        } else if t <= prev.t
+                            || (row.is_none() && t - prev.t <= 1e-6 * (new.t - prev.t))
+                        {
                             // At the step's start (a force already past
                             // zero there): no step to retake.
                             prev
                         } else {
+                            // A retaken step is taken only if its speeds
+                            // stay within ten times the step's ends' (a
+                            // very short retaken step is ill-conditioned
+                            // for index-3 generalized-α, and once returned
+                            // a wire moving at 10⁷ m/s); else the
+                            // interpolant stands for it.
+                            let vmax = prev
+                                .v
+                                .iter()
+                                .chain(&new.v)
+                                .fold(0.0f64, |a, x| a.max(x.abs()));
+                            let sane = |s: &State| s.v.iter().all(|x| x.abs() <= 10.0 * vmax + 1.0);
                             let retake = |t: f64| {
                                 GeneralizedAlpha::new(&held, prev.clone(), opts.clone())
                                     .and_then(|mut g| g.step_within(t).map(|()| g.state().clone()))
                                     .ok()
+                                    .filter(|s| sane(s))
                             };
                             let located = match (row, breaks) {
                                 (Some((i, level)), _) => {
@@ -1061,6 +1292,7 @@ impl<'g> ContactRun<'g> {
                                                 })
                                             })
                                             .ok()
+                                            .filter(|x| sane(&x.0))
                                     };
                                     let (a, b) = k
                                         .and_then(|k| Some((c0[k]?, c1[k]?)))
@@ -1084,7 +1316,11 @@ impl<'g> ContactRun<'g> {
                 }
             };
             self.add_stats(&ga.stats);
-            opts.h = ga.step_size();
+            opts.h = if opts.control.is_none() {
+                h_fixed
+            } else {
+                ga.step_size()
+            };
             let Some(mut s) = event else {
                 return (ga.state().clone(), None);
             };
