@@ -309,3 +309,64 @@ fn divisions_by_one_value_share_its_reciprocal() {
         );
     }
 }
+
+#[test]
+fn squares_of_one_angle_with_unequal_coefficients_share_pythagoras() {
+    // 0.005 cos²q + 0.3775 sin²q + 0.005 = 0.01 + 0.3725 sin²q (issue #28):
+    // sin, the square, one multiplication and one addition.
+    let mut a = Arena::new();
+    let e = a
+        .parse("(+ (* 0.005 (^ (cos q) 2)) (* 0.3775 (^ (sin q) 2)) 0.005)")
+        .unwrap();
+    let p = a.lower(&[("e", e)], LowerOptions::default());
+    let c = p.op_count();
+    assert_eq!(
+        (c.trig, c.muls, c.adds, c.total()),
+        (1, 2, 1, 4),
+        "got {c}\n{p}"
+    );
+    for q in [-2.0f64, 0.3, 1.7] {
+        let want = 0.005 * q.cos().powi(2) + 0.3775 * q.sin().powi(2) + 0.005;
+        let got = p.eval(&[q])[0];
+        assert!(
+            (got - want).abs() <= 1e-15,
+            "q = {q}: got {got} want {want}"
+        );
+    }
+}
+
+#[test]
+fn a_difference_and_its_reverse_are_one_subtraction() {
+    // x = a − b, y = 0.3 (b − a) = −0.3 (a − b): the negation folds into
+    // the constant, bit for bit.
+    let (a, b) = (Operand::Var(0), Operand::Var(1));
+    let t = Operand::Tmp;
+    let sym = |name: &str| Symbol {
+        kind: SymKind::Param,
+        name: name.into(),
+    };
+    let mut p = Program {
+        inputs: vec![sym("a"), sym("b")],
+        instrs: vec![
+            Instr {
+                dst: 0,
+                op: Op::Sub(a, b),
+            },
+            Instr {
+                dst: 1,
+                op: Op::Sub(b, a),
+            },
+            Instr {
+                dst: 2,
+                op: Op::Mul(Operand::Const(eom_gen::sym::Num::from_f64(0.3)), t(1)),
+            },
+        ],
+        outputs: vec![("x".into(), t(0)), ("y".into(), t(2))],
+        n_tmps: 3,
+    };
+    p.optimize();
+    let c = p.op_count();
+    assert_eq!((c.adds, c.muls, c.negs), (1, 1, 0), "got {c}\n{p}");
+    let (va, vb) = (0.7f64, 2.3f64);
+    assert_eq!(p.eval(&[va, vb]), vec![va - vb, 0.3 * (vb - va)]);
+}

@@ -1256,7 +1256,7 @@ impl ::eom_sim::ConstrainedModel for FourbarN2 {
         let x244 = x243 - x238;
         let x245 = x244 - x236;
         let x246 = x21 * x85;
-        let x247 = x235 - x237;
+        let x247 = -x239;
         let x248 = x247 - x246;
         let x249 = x82 * x213;
         let x250 = x86 * x212;
@@ -2362,7 +2362,7 @@ impl FourbarN2 {
         let x244 = x243 - x238;
         let x245 = x244 - x236;
         let x246 = x21 * x85;
-        let x247 = x235 - x237;
+        let x247 = -x239;
         let x248 = x247 - x246;
         let x249 = x82 * x213;
         let x250 = x86 * x212;

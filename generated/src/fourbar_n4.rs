@@ -2048,7 +2048,7 @@ impl ::eom_sim::ConstrainedModel for FourbarN4 {
         let x332 = x331 - x326;
         let x333 = x332 - x324;
         let x334 = x21 * x115;
-        let x335 = x323 - x325;
+        let x335 = -x327;
         let x336 = x335 - x334;
         let x337 = x112 * x301;
         let x338 = x116 * x300;
@@ -2147,7 +2147,7 @@ impl ::eom_sim::ConstrainedModel for FourbarN4 {
         let x431 = x359 * x360;
         let x432 = x428 + x431;
         let x433 = 2.0 * x432;
-        let x434 = x394 - x412;
+        let x434 = -x416;
         let x435 = x37 * x434;
         let x436 = x430 + x433;
         let x437 = x435 + x436;
@@ -4219,7 +4219,7 @@ impl FourbarN4 {
         let x332 = x331 - x326;
         let x333 = x332 - x324;
         let x334 = x21 * x115;
-        let x335 = x323 - x325;
+        let x335 = -x327;
         let x336 = x335 - x334;
         let x337 = x112 * x301;
         let x338 = x116 * x300;
@@ -4318,7 +4318,7 @@ impl FourbarN4 {
         let x431 = x359 * x360;
         let x432 = x428 + x431;
         let x433 = ::eom_sim::Lanes::<W>::splat(2.0) * x432;
-        let x434 = x394 - x412;
+        let x434 = -x416;
         let x435 = x37 * x434;
         let x436 = x430 + x433;
         let x437 = x435 + x436;

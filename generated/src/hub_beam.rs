@@ -63,7 +63,7 @@ impl ::eom_sim::Model for HubBeam {
         qdot[3] = u[3];
         qdot[4] = u[4];
     }
-    /// Forward dynamics by the articulated-body algorithm (104 operations): `u̇ = M⁻¹ (τ − b)`.
+    /// Forward dynamics by the articulated-body algorithm (103 operations): `u̇ = M⁻¹ (τ − b)`.
     fn forward_dynamics(
         &self,
         _t: f64,
@@ -165,21 +165,20 @@ impl ::eom_sim::Model for HubBeam {
         let x90 = x89 - x86;
         let x91 = 693.4029773595092 * q[1];
         let x92 = 0.5023732934567654 * x84;
-        let x93 = tau[1] - x41;
-        let x94 = 0.9999999999999998 * x93;
-        let x95 = x42 + x94;
-        let x96 = x95 - x91;
-        let x97 = x96 - x92;
-        let x98 = 0.08016303147756354 * x84;
-        let x99 = 27234.42877857022 * q[3];
-        let x100 = 0.9999999999999998 * x70;
-        let x101 = x51 + x98;
-        let x102 = x100 + x101;
-        let x103 = x102 - x99;
+        let x93 = (-0.9999999999999998) * x72;
+        let x94 = x42 + x93;
+        let x95 = x94 - x91;
+        let x96 = x95 - x92;
+        let x97 = 0.08016303147756354 * x84;
+        let x98 = 27234.42877857022 * q[3];
+        let x99 = 0.9999999999999998 * x70;
+        let x100 = x51 + x97;
+        let x101 = x99 + x100;
+        let x102 = x101 - x98;
         udot[0] = x84;
-        udot[1] = x97;
+        udot[1] = x96;
         udot[2] = x49;
-        udot[3] = x103;
+        udot[3] = x102;
         udot[4] = x90;
     }
     fn mass_matrix(&self, _t: f64, q: &[f64; 5], m: &mut [[f64; 5]; 5]) {
@@ -774,7 +773,7 @@ impl HubBeam {
         out[3] = u[3];
         out[4] = u[4];
     }
-    /// `forward_dynamics` of `W` states at once, one per lane (104 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
+    /// `forward_dynamics` of `W` states at once, one per lane (103 operations per state): forward dynamics `u̇ = M⁻¹ (τ − b)`. Arguments `t`, `q`, `u`, `tau` as `forward_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (5 entries per lane) laid out as `Model::evaluate("forward_dynamics")`'s result.
     pub fn forward_dynamics_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -876,21 +875,20 @@ impl HubBeam {
         let x90 = x89 - x86;
         let x91 = ::eom_sim::Lanes::<W>::splat(693.4029773595092) * q[1];
         let x92 = ::eom_sim::Lanes::<W>::splat(0.5023732934567654) * x84;
-        let x93 = tau[1] - x41;
-        let x94 = ::eom_sim::Lanes::<W>::splat(0.9999999999999998) * x93;
-        let x95 = x42 + x94;
-        let x96 = x95 - x91;
-        let x97 = x96 - x92;
-        let x98 = ::eom_sim::Lanes::<W>::splat(0.08016303147756354) * x84;
-        let x99 = ::eom_sim::Lanes::<W>::splat(27234.42877857022) * q[3];
-        let x100 = ::eom_sim::Lanes::<W>::splat(0.9999999999999998) * x70;
-        let x101 = x51 + x98;
-        let x102 = x100 + x101;
-        let x103 = x102 - x99;
+        let x93 = ::eom_sim::Lanes::<W>::splat(-0.9999999999999998) * x72;
+        let x94 = x42 + x93;
+        let x95 = x94 - x91;
+        let x96 = x95 - x92;
+        let x97 = ::eom_sim::Lanes::<W>::splat(0.08016303147756354) * x84;
+        let x98 = ::eom_sim::Lanes::<W>::splat(27234.42877857022) * q[3];
+        let x99 = ::eom_sim::Lanes::<W>::splat(0.9999999999999998) * x70;
+        let x100 = x51 + x97;
+        let x101 = x99 + x100;
+        let x102 = x101 - x98;
         out[0] = x84;
-        out[1] = x97;
+        out[1] = x96;
         out[2] = x49;
-        out[3] = x103;
+        out[3] = x102;
         out[4] = x90;
     }
     /// `mass_matrix` of `W` states at once, one per lane (30 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (25 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.

@@ -985,7 +985,7 @@ impl ::eom_sim::ConstrainedModel for RollingDisk {
         let x288 = x287 - x1;
         let x289 = x184 * x288;
         let x290 = 0.1 * x289;
-        let x291 = x15 - x13;
+        let x291 = -x25;
         let x292 = x67 * x291;
         let x293 = x26 * x292;
         let x294 = 0.1 * x293;
@@ -1860,7 +1860,7 @@ impl RollingDisk {
         let x288 = x287 - x1;
         let x289 = x184 * x288;
         let x290 = ::eom_sim::Lanes::<W>::splat(0.1) * x289;
-        let x291 = x15 - x13;
+        let x291 = -x25;
         let x292 = x67 * x291;
         let x293 = x26 * x292;
         let x294 = ::eom_sim::Lanes::<W>::splat(0.1) * x293;

@@ -522,7 +522,7 @@ impl ::eom_sim::ConstrainedModel for SliderCrankDriven {
         let x65 = x63 - x64;
         let x66 = x6 * x52;
         let x67 = x7 * x50;
-        let x68 = x44 - x54;
+        let x68 = -x59;
         let x69 = x6 * x68;
         let x70 = x7 * x57;
         let x71 = x66 + x67;
@@ -845,7 +845,7 @@ impl SliderCrankDriven {
         let x65 = x63 - x64;
         let x66 = x6 * x52;
         let x67 = x7 * x50;
-        let x68 = x44 - x54;
+        let x68 = -x59;
         let x69 = x6 * x68;
         let x70 = x7 * x57;
         let x71 = x66 + x67;

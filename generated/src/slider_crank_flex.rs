@@ -806,7 +806,7 @@ impl ::eom_sim::ConstrainedModel for SliderCrankFlex {
         let x103 = x21 * x71;
         let x104 = x102 - x78;
         let x105 = x22 * x104;
-        let x106 = x59 - x58;
+        let x106 = -x61;
         let x107 = x41 * x106;
         let x108 = 2.0 * x107;
         let x109 = x101 + x105;
@@ -824,7 +824,7 @@ impl ::eom_sim::ConstrainedModel for SliderCrankFlex {
         let x121 = x119 + x120;
         let x122 = -x121;
         let x123 = x11 * x15;
-        let x124 = x32 - x31;
+        let x124 = -x33;
         let x125 = x124 - x123;
         let x126 = 0.0000000000000000000003521260160147477 * x10;
         let x127 = 38.099556119621745 * x33;
@@ -1477,7 +1477,7 @@ impl SliderCrankFlex {
         let x103 = x21 * x71;
         let x104 = x102 - x78;
         let x105 = x22 * x104;
-        let x106 = x59 - x58;
+        let x106 = -x61;
         let x107 = x41 * x106;
         let x108 = ::eom_sim::Lanes::<W>::splat(2.0) * x107;
         let x109 = x101 + x105;
@@ -1497,7 +1497,7 @@ impl SliderCrankFlex {
         let x121 = x119 + x120;
         let x122 = -x121;
         let x123 = x11 * x15;
-        let x124 = x32 - x31;
+        let x124 = -x33;
         let x125 = x124 - x123;
         let x126 = ::eom_sim::Lanes::<W>::splat(0.0000000000000000000003521260160147477)
             * x10;

@@ -1194,17 +1194,16 @@ impl ::eom_sim::ConstrainedModel for SliderCrankSimeon {
         let x108 = x10 * x12;
         let x109 = x35 - x108;
         let x110 = x109 - x34;
-        let x111 = x34 - x35;
-        let x112 = 10.471975511965978 * x111;
-        let x113 = 20.943951023931955 * x36;
-        let x114 = -x11;
-        let x115 = x11 * x12;
-        let x116 = x32 + x115;
-        let x117 = x31 + x116;
-        let x118 = -x117;
-        let x119 = 10.471975511965978 * x33;
-        let x120 = 20.943951023931955 * x33;
-        let x121 = -x120;
+        let x111 = (-10.471975511965978) * x36;
+        let x112 = 20.943951023931955 * x36;
+        let x113 = -x11;
+        let x114 = x11 * x12;
+        let x115 = x32 + x114;
+        let x116 = x31 + x115;
+        let x117 = -x116;
+        let x118 = 10.471975511965978 * x33;
+        let x119 = 20.943951023931955 * x33;
+        let x120 = -x119;
         phi[0] = x33;
         phidot[0] = x58;
         gamma[0] = x90;
@@ -1212,14 +1211,14 @@ impl ::eom_sim::ConstrainedModel for SliderCrankSimeon {
         phidot[1] = x96;
         gamma[1] = x107;
         jacobian[0] = x110;
-        jacobian[1] = x112;
-        jacobian[2] = x113;
+        jacobian[1] = x111;
+        jacobian[2] = x112;
         jacobian[3] = 0.0;
-        jacobian[4] = x114;
+        jacobian[4] = x113;
         jacobian[5] = x21;
-        jacobian[6] = x118;
-        jacobian[7] = x119;
-        jacobian[8] = x121;
+        jacobian[6] = x117;
+        jacobian[7] = x118;
+        jacobian[8] = x120;
         jacobian[9] = 0.0;
         jacobian[10] = x10;
         jacobian[11] = x22;
@@ -2069,7 +2068,7 @@ impl SliderCrankSimeon {
         out[4] = x85;
         out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
     }
-    /// `constraints` of `W` states at once, one per lane (118 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (18 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
+    /// `constraints` of `W` states at once, one per lane (117 operations per state): constraint equations: `Φ`, `Φ̇ = J u + Φ_t`, `γ` (`J u̇ = γ`) and `J`. Arguments `t`, `q`, `u` as `constraints`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (18 entries per lane) laid out as `Model::evaluate("constraints")`'s result.
     pub fn constraints_lanes<const W: usize>(
         _m: &[Self; W],
         t: ::eom_sim::Lanes<W>,
@@ -2184,17 +2183,16 @@ impl SliderCrankSimeon {
         let x108 = x10 * x12;
         let x109 = x35 - x108;
         let x110 = x109 - x34;
-        let x111 = x34 - x35;
-        let x112 = ::eom_sim::Lanes::<W>::splat(10.471975511965978) * x111;
-        let x113 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * x36;
-        let x114 = -x11;
-        let x115 = x11 * x12;
-        let x116 = x32 + x115;
-        let x117 = x31 + x116;
-        let x118 = -x117;
-        let x119 = ::eom_sim::Lanes::<W>::splat(10.471975511965978) * x33;
-        let x120 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * x33;
-        let x121 = -x120;
+        let x111 = ::eom_sim::Lanes::<W>::splat(-10.471975511965978) * x36;
+        let x112 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * x36;
+        let x113 = -x11;
+        let x114 = x11 * x12;
+        let x115 = x32 + x114;
+        let x116 = x31 + x115;
+        let x117 = -x116;
+        let x118 = ::eom_sim::Lanes::<W>::splat(10.471975511965978) * x33;
+        let x119 = ::eom_sim::Lanes::<W>::splat(20.943951023931955) * x33;
+        let x120 = -x119;
         out[0] = x33;
         out[2] = x58;
         out[4] = x90;
@@ -2202,14 +2200,14 @@ impl SliderCrankSimeon {
         out[3] = x96;
         out[5] = x107;
         out[6] = x110;
-        out[7] = x112;
-        out[8] = x113;
+        out[7] = x111;
+        out[8] = x112;
         out[9] = ::eom_sim::Lanes::<W>::splat(0.0);
-        out[10] = x114;
+        out[10] = x113;
         out[11] = x21;
-        out[12] = x118;
-        out[13] = x119;
-        out[14] = x121;
+        out[12] = x117;
+        out[13] = x118;
+        out[14] = x120;
         out[15] = ::eom_sim::Lanes::<W>::splat(0.0);
         out[16] = x10;
         out[17] = x22;

@@ -17,9 +17,9 @@ use super::program::{Instr, Op, Operand, Program};
 
 /// One term of a sum tree: `sign · value`.
 #[derive(Clone, Copy)]
-struct Term {
-    neg: bool,
-    value: Operand,
+pub(super) struct Term {
+    pub(super) neg: bool,
+    pub(super) value: Operand,
 }
 
 impl Program {
@@ -27,42 +27,9 @@ impl Program {
     /// module comment); returns the number of multiplications saved before
     /// the clean-up that follows ([`Program::optimize`]).
     pub fn factor_sums(&mut self) -> usize {
-        let n = self.n_tmps as usize;
-        let mut uses = vec![0usize; n + 1];
-        for ins in &self.instrs {
-            for o in ins.op.operands() {
-                if let Operand::Tmp(t) = o {
-                    uses[t as usize] += 1;
-                }
-            }
-        }
-        for (_, o) in &self.outputs {
-            if let Operand::Tmp(t) = o {
-                // Outputs are never folded into a tree.
-                uses[*t as usize] += 2;
-            }
-        }
-        let mut def: Vec<Option<Op>> = vec![None; n + 1];
-        for ins in &self.instrs {
-            def[ins.dst as usize] = Some(ins.op);
-        }
+        let SumTrees { uses, def, folded } = SumTrees::of(self);
         let single = |o: Operand| matches!(o, Operand::Tmp(t) if uses[t as usize] == 1);
         let is_sum = |op: &Op| matches!(op, Op::Add(..) | Op::Sub(..) | Op::Neg(_));
-        // A tree's root is a sum not folded into a bigger one: a sum whose
-        // result is read by anything but a single-use sum context.
-        let mut folded = vec![false; n + 1];
-        for ins in &self.instrs {
-            if is_sum(&ins.op) {
-                for o in ins.op.operands() {
-                    if let Operand::Tmp(t) = o
-                        && single(o)
-                        && def[t as usize].as_ref().is_some_and(is_sum)
-                    {
-                        folded[t as usize] = true;
-                    }
-                }
-            }
-        }
         let mut out: Vec<Instr> = Vec::with_capacity(self.instrs.len());
         let mut saved = 0;
         for ins in &self.instrs {
@@ -102,8 +69,59 @@ impl Program {
     }
 }
 
+/// A program's sum trees: the uses of each temporary (outputs count
+/// twice, so they are never folded into a tree), each temporary's
+/// definition, and which sums are folded into a bigger one (not roots).
+pub(super) struct SumTrees {
+    pub(super) uses: Vec<usize>,
+    pub(super) def: Vec<Option<Op>>,
+    pub(super) folded: Vec<bool>,
+}
+
+impl SumTrees {
+    pub(super) fn of(p: &Program) -> SumTrees {
+        let n = p.n_tmps as usize;
+        let mut uses = vec![0usize; n + 1];
+        for ins in &p.instrs {
+            for o in ins.op.operands() {
+                if let Operand::Tmp(t) = o {
+                    uses[t as usize] += 1;
+                }
+            }
+        }
+        for (_, o) in &p.outputs {
+            if let Operand::Tmp(t) = o {
+                // Outputs are never folded into a tree.
+                uses[*t as usize] += 2;
+            }
+        }
+        let mut def: Vec<Option<Op>> = vec![None; n + 1];
+        for ins in &p.instrs {
+            def[ins.dst as usize] = Some(ins.op);
+        }
+        let single = |o: Operand| matches!(o, Operand::Tmp(t) if uses[t as usize] == 1);
+        let is_sum = |op: &Op| matches!(op, Op::Add(..) | Op::Sub(..) | Op::Neg(_));
+        // A tree's root is a sum not folded into a bigger one: a sum whose
+        // result is read by anything but a single-use sum context.
+        let mut folded = vec![false; n + 1];
+        for ins in &p.instrs {
+            if is_sum(&ins.op) {
+                for o in ins.op.operands() {
+                    if let Operand::Tmp(t) = o
+                        && single(o)
+                        && def[t as usize].as_ref().is_some_and(is_sum)
+                    {
+                        folded[t as usize] = true;
+                    }
+                }
+            }
+        }
+        SumTrees { uses, def, folded }
+    }
+}
+
 /// The terms of the sum tree at `o` (single-use sums expanded).
-fn collect(
+pub(super) fn collect(
     def: &[Option<Op>],
     single: &dyn Fn(Operand) -> bool,
     o: Operand,
@@ -255,7 +273,7 @@ fn signed_sum(
 
 /// The last operation of `Σ ±x` (the earlier ones emitted): positive
 /// terms added first, negative ones subtracted; all negative is `−(Σ x)`.
-fn sum_op(
+pub(super) fn sum_op(
     terms: &[Term],
     out: &mut Vec<Instr>,
     fresh: &mut dyn FnMut(Op, &mut Vec<Instr>) -> Operand,

@@ -65,6 +65,7 @@ mod linalg;
 mod node;
 mod num;
 mod program;
+mod pythagoras;
 mod reimport;
 mod rules;
 mod scalar;

@@ -590,6 +590,8 @@ impl Arena {
         if opts.optimize {
             p.optimize();
             p.share_reciprocals();
+            // `x·c² + y·s² → x + (y − x)·s²`, kept if it pays.
+            p = p.with_pythagoras();
             // Common factors out of sums, kept while they pay.
             for _ in 0..4 {
                 let mut q = p.clone();
@@ -696,11 +698,42 @@ impl Program {
                 changed = true;
                 continue;
             }
+            // A negated operand folds into the operation (exact in IEEE
+            // arithmetic, so the results are unchanged bit for bit).
+            let negated = |o: Operand| match o {
+                Operand::Tmp(t) => negs[t as usize],
+                _ => None,
+            };
+            let op = match op {
+                Op::Add(a, b) if negated(b).is_some() => Op::Sub(a, negated(b).unwrap_or(b)),
+                Op::Add(a, b) if negated(a).is_some() => Op::Sub(b, negated(a).unwrap_or(a)),
+                Op::Sub(a, b) if negated(b).is_some() => Op::Add(a, negated(b).unwrap_or(b)),
+                Op::Mul(Operand::Const(k), b) if negated(b).is_some() => {
+                    Op::Mul(Operand::Const(k.negated()), negated(b).unwrap_or(b))
+                }
+                _ => op,
+            };
+            let op = canonical(op);
             let op = match op {
                 Op::Sub(a, b) if a == zero => Op::Neg(b),
                 Op::Mul(Operand::Const(m), b) if m == Num::MINUS_ONE => Op::Neg(b),
                 _ => op,
             };
+            // `b − a` when `a − b` is known: its negation.
+            let op = match op {
+                Op::Sub(a, b) => match vn.get(&Op::Sub(b, a)) {
+                    Some(&prev) => Op::Neg(prev),
+                    None => op,
+                },
+                _ => op,
+            };
+            if let Op::Neg(Operand::Tmp(t)) = op
+                && let Some(x) = negs[t as usize]
+            {
+                subst[ins.dst as usize] = Some(x);
+                changed = true;
+                continue;
+            }
             if let Some(&prev) = vn.get(&op) {
                 subst[ins.dst as usize] = Some(prev);
                 if let (Op::SinCos(_), Operand::Tmp(p)) = (op, prev) {
@@ -834,6 +867,19 @@ impl Program {
         }
         self.instrs = out;
         self.n_tmps = next;
+    }
+
+    /// This program with [`Program::pythagoras`] and the clean-up, if that
+    /// has fewer operations; else itself.
+    fn with_pythagoras(self) -> Program {
+        let mut q = self.clone();
+        if q.pythagoras() > 0 {
+            q.optimize();
+            if q.op_count().total() < self.op_count().total() {
+                return q;
+            }
+        }
+        self
     }
 
     /// Operation counts.

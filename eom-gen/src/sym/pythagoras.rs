@@ -1,0 +1,206 @@
+//! Pythagoras with unequal coefficients after lowering:
+//! `x·cos²θ + y·sin²θ → x + (y − x)·sin²θ`.
+//!
+//! A congruence `E A Eᵀ` by a rotation about one axis leaves sums such as
+//! `0.005·c² + 0.3775·s² + 0.005` in the program (issue #28); with
+//! `s² + c² = 1` that is `0.01 + 0.3725·s²`, one multiplication and one
+//! addition fewer, and the other square often dies. The rule applies to one
+//! sum tree at a time (as [`Program::factor_sums`]), to pairs of terms
+//! `±x·c²` and `±y·s²` of the same angle whose products are used only in
+//! the tree; the constant terms of a rewritten tree are added up. Exact over
+//! the reals; the rounding differs by a few ulps (`fl(s²) + fl(c²)` is
+//! within an ulp or two of 1).
+
+use super::factor::{SumTrees, Term, collect, sum_op};
+use super::num::Num;
+use super::program::{Instr, Op, Operand, Program};
+
+/// A term `±coef·sq` where `sq` is the square of `sin` or `cos` of `angle`.
+#[derive(Clone, Copy)]
+struct Square {
+    term: usize,
+    angle: Operand,
+    is_sin: bool,
+    sq: Operand,
+    coef: Operand,
+}
+
+impl Program {
+    /// Rewrites `x·c² + y·s²` of one angle in every sum tree (see the
+    /// module comment); returns the number of pairs rewritten, before the
+    /// clean-up that follows ([`Program::optimize`]).
+    pub fn pythagoras(&mut self) -> usize {
+        let SumTrees { uses, def, folded } = SumTrees::of(self);
+        let n = def.len();
+        // sin or cos of which angle each temporary holds.
+        let mut trig: Vec<Option<(Operand, bool)>> = vec![None; n + 1];
+        for ins in &self.instrs {
+            let d = ins.dst as usize;
+            match ins.op {
+                Op::SinCos(a) => {
+                    trig[d] = Some((a, true));
+                    trig[d + 1] = Some((a, false));
+                }
+                Op::Sin(a) => trig[d] = Some((a, true)),
+                Op::Cos(a) => trig[d] = Some((a, false)),
+                _ => {}
+            }
+        }
+        let square = |o: Operand| -> Option<(Operand, bool)> {
+            let Operand::Tmp(t) = o else { return None };
+            match def.get(t as usize).copied().flatten() {
+                Some(Op::Mul(Operand::Tmp(a), Operand::Tmp(b))) if a == b => trig[a as usize],
+                _ => None,
+            }
+        };
+        let single = |o: Operand| matches!(o, Operand::Tmp(t) if uses[t as usize] == 1);
+        let is_sum = |op: &Op| matches!(op, Op::Add(..) | Op::Sub(..) | Op::Neg(_));
+        let mut out: Vec<Instr> = Vec::with_capacity(self.instrs.len());
+        let mut pairs = 0;
+        for ins in &self.instrs {
+            if !is_sum(&ins.op) || folded[ins.dst as usize] {
+                out.push(*ins);
+                continue;
+            }
+            let mut terms = Vec::new();
+            collect(&def, &single, Operand::Tmp(ins.dst), false, &mut terms);
+            // The terms that are squares or single-use multiples of one.
+            let squares: Vec<Square> = terms
+                .iter()
+                .enumerate()
+                .filter_map(|(i, t)| {
+                    if let Some((angle, is_sin)) = square(t.value) {
+                        return Some(Square {
+                            term: i,
+                            angle,
+                            is_sin,
+                            sq: t.value,
+                            coef: Operand::Const(Num::ONE),
+                        });
+                    }
+                    let Operand::Tmp(p) = t.value else {
+                        return None;
+                    };
+                    let Some(Op::Mul(a, b)) = def[p as usize] else {
+                        return None;
+                    };
+                    if !single(t.value) {
+                        return None;
+                    }
+                    for (sq, coef) in [(b, a), (a, b)] {
+                        if let Some((angle, is_sin)) = square(sq) {
+                            return Some(Square {
+                                term: i,
+                                angle,
+                                is_sin,
+                                sq,
+                                coef,
+                            });
+                        }
+                    }
+                    None
+                })
+                .collect();
+            // Pair a cos² term with a sin² term of the same angle.
+            let mut taken = vec![false; squares.len()];
+            let mut found: Vec<(Square, Square)> = Vec::new();
+            for (i, c) in squares.iter().enumerate() {
+                if c.is_sin || taken[i] {
+                    continue;
+                }
+                if let Some(j) = (0..squares.len())
+                    .find(|&j| !taken[j] && squares[j].is_sin && squares[j].angle == c.angle)
+                {
+                    taken[i] = true;
+                    taken[j] = true;
+                    found.push((*c, squares[j]));
+                }
+            }
+            if found.is_empty() {
+                out.push(*ins);
+                continue;
+            }
+            pairs += found.len();
+            let mut next = self.n_tmps;
+            let mut fresh = |op: Op, out: &mut Vec<Instr>| {
+                let dst = next;
+                next += 1;
+                out.push(Instr { dst, op });
+                Operand::Tmp(dst)
+            };
+            let mut gone = vec![false; terms.len()];
+            let mut new_terms: Vec<Term> = Vec::new();
+            for (c, s) in found {
+                gone[c.term] = true;
+                gone[s.term] = true;
+                // Keep the square read more often: the other may die.
+                let sq_uses = |o: Operand| match o {
+                    Operand::Tmp(t) => uses[t as usize],
+                    Operand::Const(_) | Operand::Var(_) => 0,
+                };
+                let (drop, keep) = if sq_uses(c.sq) > sq_uses(s.sq) {
+                    (s, c)
+                } else {
+                    (c, s)
+                };
+                let (n_drop, n_keep) = (terms[drop.term].neg, terms[keep.term].neg);
+                // ±x·(1 − q) ± y·q = ±x + (±y ∓ x)·q.
+                let d = if n_drop == n_keep {
+                    fresh(Op::Sub(keep.coef, drop.coef), &mut out)
+                } else {
+                    fresh(Op::Add(keep.coef, drop.coef), &mut out)
+                };
+                let prod = fresh(Op::Mul(d, keep.sq), &mut out);
+                new_terms.push(Term {
+                    neg: n_drop,
+                    value: drop.coef,
+                });
+                new_terms.push(Term {
+                    neg: n_keep,
+                    value: prod,
+                });
+            }
+            let all: Vec<Term> = terms
+                .iter()
+                .zip(&gone)
+                .filter(|(_, g)| !**g)
+                .map(|(t, _)| *t)
+                .chain(new_terms)
+                .collect();
+            let all = add_constants(all);
+            let op = sum_op(&all, &mut out, &mut fresh);
+            self.n_tmps = next;
+            out.push(Instr { dst: ins.dst, op });
+        }
+        self.instrs = out;
+        pairs
+    }
+}
+
+/// The constant terms of a sum added into one, put first (unless the sum
+/// would overflow or the constants cancel out and other terms remain).
+fn add_constants(terms: Vec<Term>) -> Vec<Term> {
+    let mut total = Num::ZERO;
+    let mut rest = Vec::with_capacity(terms.len());
+    for t in terms {
+        match t.value {
+            Operand::Const(c) => {
+                let c = if t.neg { c.negated() } else { c };
+                match total.checked_add(c) {
+                    Some(s) => total = s,
+                    None => rest.push(t),
+                }
+            }
+            _ => rest.push(t),
+        }
+    }
+    if total.is_zero() && !rest.is_empty() {
+        return rest;
+    }
+    let mut all = vec![Term {
+        neg: false,
+        value: Operand::Const(total),
+    }];
+    all.extend(rest);
+    all
+}
