@@ -160,14 +160,26 @@ fn statements(
         Some(lt) => quote!(#lt::mul_add),
         None => quote!(f64::mul_add),
     };
+    // An operand as a function argument, negated if asked: a constant is
+    // written with its sign folded in and without parentheses (rustc's
+    // `unused_parens` lints `f(( -1.0 ))`; the generated code is
+    // warning-free).
+    let arg = |x: Operand, negate: bool| -> TokenStream {
+        match x {
+            Operand::Const(n) if b.lanes.is_none() => {
+                let c = n.to_f64();
+                float(if negate { -c } else { c })
+            }
+            _ => {
+                let x = o(x);
+                if negate { quote!(-#x) } else { x }
+            }
+        }
+    };
     let fma = |m: u32, c: TokenStream, negate_product: bool| -> TokenStream {
         let (x, y) = fused[&m];
-        let (x, y) = (o(x), o(y));
-        if negate_product {
-            quote!(#mul_add(-#x, #y, #c))
-        } else {
-            quote!(#mul_add(#x, #y, #c))
-        }
+        let (x, y) = (arg(x, negate_product), arg(y, false));
+        quote!(#mul_add(#x, #y, #c))
     };
     let is_fused = |x: Operand| matches!(x, Operand::Tmp(t) if fused.contains_key(&t));
     let mut out = TokenStream::new();
@@ -175,13 +187,14 @@ fn statements(
         let dst = tmp(ins.dst);
         let value = match ins.op {
             Op::Mul(..) if fused.contains_key(&ins.dst) => continue,
-            Op::Add(Operand::Tmp(m), y) if is_fused(Operand::Tmp(m)) => fma(m, o(y), false),
-            Op::Add(x, Operand::Tmp(m)) if is_fused(Operand::Tmp(m)) => fma(m, o(x), false),
-            Op::Sub(x, Operand::Tmp(m)) if is_fused(Operand::Tmp(m)) => fma(m, o(x), true),
-            Op::Sub(Operand::Tmp(m), y) if is_fused(Operand::Tmp(m)) => {
-                let y = o(y);
-                fma(m, quote!(-#y), false)
+            Op::Add(Operand::Tmp(m), y) if is_fused(Operand::Tmp(m)) => {
+                fma(m, arg(y, false), false)
             }
+            Op::Add(x, Operand::Tmp(m)) if is_fused(Operand::Tmp(m)) => {
+                fma(m, arg(x, false), false)
+            }
+            Op::Sub(x, Operand::Tmp(m)) if is_fused(Operand::Tmp(m)) => fma(m, arg(x, false), true),
+            Op::Sub(Operand::Tmp(m), y) if is_fused(Operand::Tmp(m)) => fma(m, arg(y, true), false),
             Op::Add(x, y) => {
                 let (x, y) = (o(x), o(y));
                 quote!(#x + #y)
