@@ -968,16 +968,19 @@ impl<'g> ContactRun<'g> {
                     .map(|i| now.iter().position(|j| j == i).and_then(|k| now_slides[k]))
                     .collect::<Vec<_>>()
             };
-            let mut sol = impact(
-                &mm,
-                None,
-                &r,
-                &set,
-                &plastic,
-                true,
-                &slides_of(&set, &now, &now_slides),
-            )
-            .ok_or_else(|| no_solution(set.len()))?;
+            let plastic_on = |set: &[usize], now: &[usize], now_slides: &[Option<Slide>]| {
+                impact(
+                    &mm,
+                    None,
+                    &r,
+                    set,
+                    &plastic,
+                    true,
+                    &slides_of(set, now, now_slides),
+                )
+                .ok_or_else(|| no_solution(set.len()))
+            };
+            let mut sol = plastic_on(&set, &now, &now_slides)?;
             loop {
                 let pulled: Vec<usize> = set
                     .iter()
@@ -1003,16 +1006,7 @@ impl<'g> ContactRun<'g> {
                 if arriving.is_empty() && to_stick.is_empty() {
                     break;
                 }
-                sol = impact(
-                    &mm,
-                    None,
-                    &r,
-                    &set,
-                    &plastic,
-                    true,
-                    &slides_of(&set, &now, &now_slides),
-                )
-                .ok_or_else(|| no_solution(set.len()))?;
+                sol = plastic_on(&set, &now, &now_slides)?;
             }
             if !arriving.is_empty() || !to_stick.is_empty() {
                 if let Some((k, &i)) = set
