@@ -35,3 +35,19 @@ pub fn random_state(sys: &System, rng: &mut Rng) -> (Vec<f64>, Vec<f64>) {
     let u = rng.vec(sys.nu(), 1.5);
     (q, u)
 }
+
+/// What `eom-gen check` says of a model file's `text` read as `path`:
+/// `"valid"`, or the whole report; panics if a diagnostic has no
+/// location, since every error in a model file must point at its place.
+pub fn diagnose(path: &str, text: &str) -> String {
+    match crate::model::check(&crate::model::Source::new(path, text.to_string())) {
+        Ok(_) => "valid".into(),
+        Err(report) => {
+            assert!(
+                report.diagnostics.iter().all(|d| d.span.is_some()),
+                "every diagnostic has a location"
+            );
+            report.to_string()
+        }
+    }
+}

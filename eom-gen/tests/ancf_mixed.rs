@@ -53,16 +53,7 @@ fn system(name: &str, text: &str) -> eom_gen::System {
 }
 
 fn diagnose(text: &str) -> String {
-    match check(&Source::new("models/mix.ron", text.to_string())) {
-        Ok(_) => "valid".into(),
-        Err(report) => {
-            assert!(
-                report.diagnostics.iter().all(|d| d.span.is_some()),
-                "every diagnostic has a location"
-            );
-            report.to_string()
-        }
-    }
+    eom_gen::testkit::diagnose("models/mix.ron", text)
 }
 
 /// A link on a cart (`x`, `theta`) with a rod clamped at the link's tip.

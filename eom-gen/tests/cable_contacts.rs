@@ -61,16 +61,7 @@ fn system(text: &str) -> eom_gen::System {
 }
 
 fn diagnose(text: &str) -> String {
-    match check(&Source::new("models/drop.ron", text.to_string())) {
-        Ok(_) => "valid".into(),
-        Err(report) => {
-            assert!(
-                report.diagnostics.iter().all(|d| d.span.is_some()),
-                "every diagnostic has a location"
-            );
-            report.to_string()
-        }
-    }
+    eom_gen::testkit::diagnose("models/drop.ron", text)
 }
 
 /// A free wire of `n` elements, level at height `h`, above the floor

@@ -38,16 +38,7 @@ fn wire(gravity: &str, start: &str, motion: &str) -> String {
 }
 
 fn diagnose(text: &str) -> String {
-    match check(&Source::new("models/thrown.ron", text.to_string())) {
-        Ok(_) => "valid".into(),
-        Err(report) => {
-            assert!(
-                report.diagnostics.iter().all(|d| d.span.is_some()),
-                "every diagnostic has a location"
-            );
-            report.to_string()
-        }
-    }
+    eom_gen::testkit::diagnose("models/thrown.ron", text)
 }
 
 fn simulate(text: &str, t_end: f64) -> eom_sim::RunReport {

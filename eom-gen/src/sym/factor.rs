@@ -27,45 +27,71 @@ impl Program {
     /// module comment); returns the number of multiplications saved before
     /// the clean-up that follows ([`Program::optimize`]).
     pub fn factor_sums(&mut self) -> usize {
-        let SumTrees { uses, def, folded } = SumTrees::of(self);
-        let single = |o: Operand| matches!(o, Operand::Tmp(t) if uses[t as usize] == 1);
-        let is_sum = |op: &Op| matches!(op, Op::Add(..) | Op::Sub(..) | Op::Neg(_));
-        let mut out: Vec<Instr> = Vec::with_capacity(self.instrs.len());
         let mut saved = 0;
+        self.rewrite_sums(|trees, terms, emit| {
+            let (groups, mut all) = regroup(trees, terms)?;
+            saved += groups.iter().map(|(_, g)| g.len() - 1).sum::<usize>();
+            for (k, g) in groups {
+                let (s, neg) = signed_sum(&g, emit);
+                let value = emit.op(Op::Mul(k, s));
+                all.push(Term { neg, value });
+            }
+            Some(all)
+        });
+        saved
+    }
+
+    /// Rewrites every sum tree of the program (additions, subtractions and
+    /// negations whose intermediate results are read only inside the tree):
+    /// `rewrite` gets the tree's terms and returns the terms of the sum
+    /// that replaces it, emitting what they need through [`Emit`], or
+    /// `None` to keep the tree. The root keeps its temporary: the last
+    /// operation of the rebuilt sum is written to it, so every reader of
+    /// the tree reads the new sum. What the old tree no longer needs is
+    /// left for [`Program::optimize`] to remove.
+    pub(super) fn rewrite_sums(
+        &mut self,
+        mut rewrite: impl FnMut(&SumTrees, &[Term], &mut Emit) -> Option<Vec<Term>>,
+    ) {
+        let trees = SumTrees::of(self);
+        let mut out: Vec<Instr> = Vec::with_capacity(self.instrs.len());
+        let mut next = self.n_tmps;
         for ins in &self.instrs {
-            if !is_sum(&ins.op) || folded[ins.dst as usize] {
+            if !trees.is_root(ins) {
                 out.push(*ins);
                 continue;
             }
-            let mut terms = Vec::new();
-            collect(&def, &single, Operand::Tmp(ins.dst), false, &mut terms);
-            match regroup(&def, &single, &terms) {
-                Some((groups, rest)) => {
-                    saved += groups.iter().map(|(_, g)| g.len() - 1).sum::<usize>();
-                    let mut next = self.n_tmps;
-                    let mut fresh = |op: Op, out: &mut Vec<Instr>| {
-                        let dst = next;
-                        next += 1;
-                        out.push(Instr { dst, op });
-                        Operand::Tmp(dst)
-                    };
-                    let mut all: Vec<Term> = rest;
-                    for (k, g) in groups {
-                        let (s, neg) = signed_sum(&g, &mut out, &mut fresh);
-                        let p = fresh(Op::Mul(k, s), &mut out);
-                        all.push(Term { neg, value: p });
-                    }
-                    // The root keeps its temporary: the last operation of
-                    // the rebuilt sum is written to it.
-                    let op = sum_op(&all, &mut out, &mut fresh);
-                    self.n_tmps = next;
-                    out.push(Instr { dst: ins.dst, op });
-                }
-                None => out.push(*ins),
-            }
+            let terms = trees.terms(ins.dst);
+            let mut emit = Emit {
+                next,
+                out: &mut out,
+            };
+            let op = rewrite(&trees, &terms, &mut emit).map(|all| sum_op(&all, &mut emit));
+            next = emit.next;
+            out.push(Instr {
+                dst: ins.dst,
+                op: op.unwrap_or(ins.op),
+            });
         }
+        self.n_tmps = next;
         self.instrs = out;
-        saved
+    }
+}
+
+/// Where a rewrite emits its new temporaries: before the root of the tree
+/// it rewrites, numbered after the program's own.
+pub(super) struct Emit<'a> {
+    next: u32,
+    out: &'a mut Vec<Instr>,
+}
+
+impl Emit<'_> {
+    /// Emits `op` into a new temporary and returns it.
+    pub(super) fn op(&mut self, op: Op) -> Operand {
+        let dst = self.next;
+        self.next += 1;
+        self.out.push(Instr { dst, op });
+        Operand::Tmp(dst)
     }
 }
 
@@ -75,11 +101,11 @@ impl Program {
 pub(super) struct SumTrees {
     pub(super) uses: Vec<usize>,
     pub(super) def: Vec<Option<Op>>,
-    pub(super) folded: Vec<bool>,
+    folded: Vec<bool>,
 }
 
 impl SumTrees {
-    pub(super) fn of(p: &Program) -> SumTrees {
+    fn of(p: &Program) -> SumTrees {
         let n = p.n_tmps as usize;
         let mut uses = vec![0usize; n + 1];
         for ins in &p.instrs {
@@ -99,75 +125,77 @@ impl SumTrees {
         for ins in &p.instrs {
             def[ins.dst as usize] = Some(ins.op);
         }
-        let single = |o: Operand| matches!(o, Operand::Tmp(t) if uses[t as usize] == 1);
-        let is_sum = |op: &Op| matches!(op, Op::Add(..) | Op::Sub(..) | Op::Neg(_));
+        let mut trees = SumTrees {
+            uses,
+            def,
+            folded: vec![false; n + 1],
+        };
         // A tree's root is a sum not folded into a bigger one: a sum whose
         // result is read by anything but a single-use sum context.
-        let mut folded = vec![false; n + 1];
         for ins in &p.instrs {
             if is_sum(&ins.op) {
                 for o in ins.op.operands() {
                     if let Operand::Tmp(t) = o
-                        && single(o)
-                        && def[t as usize].as_ref().is_some_and(is_sum)
+                        && trees.single(o)
+                        && trees.is_sum(o)
                     {
-                        folded[t as usize] = true;
+                        trees.folded[t as usize] = true;
                     }
                 }
             }
         }
-        SumTrees { uses, def, folded }
+        trees
     }
-}
 
-/// The terms of the sum tree at `o` (single-use sums expanded).
-pub(super) fn collect(
-    def: &[Option<Op>],
-    single: &dyn Fn(Operand) -> bool,
-    o: Operand,
-    neg: bool,
-    terms: &mut Vec<Term>,
-) {
-    let expand = |x: Operand| single(x);
-    let Operand::Tmp(t) = o else {
-        terms.push(Term { neg, value: o });
-        return;
-    };
-    match def[t as usize] {
-        Some(Op::Add(a, b)) => {
-            for x in [a, b] {
-                if expand(x) && is_sum_def(def, x) {
-                    collect(def, single, x, neg, terms);
-                } else {
-                    terms.push(Term { neg, value: x });
-                }
+    /// Whether `o` is a temporary read exactly once (and not an output).
+    pub(super) fn single(&self, o: Operand) -> bool {
+        matches!(o, Operand::Tmp(t) if self.uses[t as usize] == 1)
+    }
+
+    /// Whether `o` is a temporary defined by a sum.
+    fn is_sum(&self, o: Operand) -> bool {
+        matches!(o, Operand::Tmp(t) if self.def[t as usize].as_ref().is_some_and(is_sum))
+    }
+
+    /// Whether `ins` is the root of a sum tree.
+    fn is_root(&self, ins: &Instr) -> bool {
+        is_sum(&ins.op) && !self.folded[ins.dst as usize]
+    }
+
+    /// The terms of the sum tree rooted at temporary `root`.
+    fn terms(&self, root: u32) -> Vec<Term> {
+        let mut terms = Vec::new();
+        self.collect(Operand::Tmp(root), false, &mut terms);
+        terms
+    }
+
+    /// The terms of `neg · o`, single-use sums expanded.
+    fn collect(&self, o: Operand, neg: bool, terms: &mut Vec<Term>) {
+        let Operand::Tmp(t) = o else {
+            terms.push(Term { neg, value: o });
+            return;
+        };
+        let parts: &[(Operand, bool)] = match self.def[t as usize] {
+            Some(Op::Add(a, b)) => &[(a, neg), (b, neg)],
+            Some(Op::Sub(a, b)) => &[(a, neg), (b, !neg)],
+            Some(Op::Neg(a)) => &[(a, !neg)],
+            _ => {
+                terms.push(Term { neg, value: o });
+                return;
             }
-        }
-        Some(Op::Sub(a, b)) => {
-            for (x, n) in [(a, neg), (b, !neg)] {
-                if expand(x) && is_sum_def(def, x) {
-                    collect(def, single, x, n, terms);
-                } else {
-                    terms.push(Term { neg: n, value: x });
-                }
-            }
-        }
-        Some(Op::Neg(a)) => {
-            if expand(a) && is_sum_def(def, a) {
-                collect(def, single, a, !neg, terms);
+        };
+        for &(x, n) in parts {
+            if self.single(x) && self.is_sum(x) {
+                self.collect(x, n, terms);
             } else {
-                terms.push(Term {
-                    neg: !neg,
-                    value: a,
-                });
+                terms.push(Term { neg: n, value: x });
             }
         }
-        _ => terms.push(Term { neg, value: o }),
     }
 }
 
-fn is_sum_def(def: &[Option<Op>], x: Operand) -> bool {
-    matches!(x, Operand::Tmp(t) if matches!(def[t as usize], Some(Op::Add(..) | Op::Sub(..) | Op::Neg(_))))
+fn is_sum(op: &Op) -> bool {
+    matches!(op, Op::Add(..) | Op::Sub(..) | Op::Neg(_))
 }
 
 /// A factor common to two or more single-use product terms, greedily by
@@ -175,12 +203,12 @@ fn is_sum_def(def: &[Option<Op>], x: Operand) -> bool {
 /// left. `None` when no factor is shared.
 type Groups = (Vec<(Operand, Vec<Term>)>, Vec<Term>);
 
-fn regroup(def: &[Option<Op>], single: &dyn Fn(Operand) -> bool, terms: &[Term]) -> Option<Groups> {
+fn regroup(trees: &SumTrees, terms: &[Term]) -> Option<Groups> {
     // Each term's factors, if it is a single-use product.
     let factors: Vec<Option<(Operand, Operand)>> = terms
         .iter()
         .map(|t| match t.value {
-            Operand::Tmp(i) if single(t.value) => match def[i as usize] {
+            Operand::Tmp(i) if trees.single(t.value) => match trees.def[i as usize] {
                 Some(Op::Mul(a, b)) => Some((a, b)),
                 _ => None,
             },
@@ -251,11 +279,7 @@ fn regroup(def: &[Option<Op>], single: &dyn Fn(Operand) -> bool, terms: &[Term])
 
 /// `Σ ±x` as one operand and whether it carries a leading minus (all
 /// terms negative: `−(Σ x)` is returned as `(Σ x, true)`).
-fn signed_sum(
-    terms: &[Term],
-    out: &mut Vec<Instr>,
-    fresh: &mut dyn FnMut(Op, &mut Vec<Instr>) -> Operand,
-) -> (Operand, bool) {
+fn signed_sum(terms: &[Term], emit: &mut Emit) -> (Operand, bool) {
     let all_neg = terms.iter().all(|t| t.neg);
     let flipped: Vec<Term> = terms
         .iter()
@@ -267,17 +291,13 @@ fn signed_sum(
     if flipped.len() == 1 {
         return (flipped[0].value, all_neg);
     }
-    let op = sum_op(&flipped, out, fresh);
-    (fresh(op, out), all_neg)
+    let op = sum_op(&flipped, emit);
+    (emit.op(op), all_neg)
 }
 
 /// The last operation of `Σ ±x` (the earlier ones emitted): positive
 /// terms added first, negative ones subtracted; all negative is `−(Σ x)`.
-pub(super) fn sum_op(
-    terms: &[Term],
-    out: &mut Vec<Instr>,
-    fresh: &mut dyn FnMut(Op, &mut Vec<Instr>) -> Operand,
-) -> Op {
+fn sum_op(terms: &[Term], emit: &mut Emit) -> Op {
     let pos: Vec<Operand> = terms.iter().filter(|t| !t.neg).map(|t| t.value).collect();
     let neg: Vec<Operand> = terms.iter().filter(|t| t.neg).map(|t| t.value).collect();
     let all_neg = pos.is_empty();
@@ -301,7 +321,7 @@ pub(super) fn sum_op(
         if k + 1 == steps.len() && !all_neg {
             return op;
         }
-        acc = fresh(op, out);
+        acc = emit.op(op);
     }
     if all_neg {
         Op::Neg(acc)

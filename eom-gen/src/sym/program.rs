@@ -705,11 +705,14 @@ impl Program {
                 _ => None,
             };
             let op = match op {
-                Op::Add(a, b) if negated(b).is_some() => Op::Sub(a, negated(b).unwrap_or(b)),
-                Op::Add(a, b) if negated(a).is_some() => Op::Sub(b, negated(a).unwrap_or(a)),
-                Op::Sub(a, b) if negated(b).is_some() => Op::Add(a, negated(b).unwrap_or(b)),
-                Op::Mul(Operand::Const(k), b) if negated(b).is_some() => {
-                    Op::Mul(Operand::Const(k.negated()), negated(b).unwrap_or(b))
+                Op::Add(a, b) => match (negated(a), negated(b)) {
+                    (_, Some(nb)) => Op::Sub(a, nb),
+                    (Some(na), None) => Op::Sub(b, na),
+                    (None, None) => op,
+                },
+                Op::Sub(a, b) => negated(b).map_or(op, |nb| Op::Add(a, nb)),
+                Op::Mul(Operand::Const(k), b) => {
+                    negated(b).map_or(op, |nb| Op::Mul(Operand::Const(k.negated()), nb))
                 }
                 _ => op,
             };

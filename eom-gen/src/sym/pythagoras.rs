@@ -11,9 +11,9 @@
 //! the reals; the rounding differs by a few ulps (`fl(s²) + fl(c²)` is
 //! within an ulp or two of 1).
 
-use super::factor::{SumTrees, Term, collect, sum_op};
+use super::factor::{SumTrees, Term};
 use super::num::Num;
-use super::program::{Instr, Op, Operand, Program};
+use super::program::{Op, Operand, Program};
 
 /// A term `±coef·sq` where `sq` is the square of `sin` or `cos` of `angle`.
 #[derive(Clone, Copy)]
@@ -30,10 +30,8 @@ impl Program {
     /// module comment); returns the number of pairs rewritten, before the
     /// clean-up that follows ([`Program::optimize`]).
     pub fn pythagoras(&mut self) -> usize {
-        let SumTrees { uses, def, folded } = SumTrees::of(self);
-        let n = def.len();
         // sin or cos of which angle each temporary holds.
-        let mut trig: Vec<Option<(Operand, bool)>> = vec![None; n + 1];
+        let mut trig: Vec<Option<(Operand, bool)>> = vec![None; self.n_tmps as usize + 1];
         for ins in &self.instrs {
             let d = ins.dst as usize;
             match ins.op {
@@ -46,88 +44,13 @@ impl Program {
                 _ => {}
             }
         }
-        let square = |o: Operand| -> Option<(Operand, bool)> {
-            let Operand::Tmp(t) = o else { return None };
-            match def.get(t as usize).copied().flatten() {
-                Some(Op::Mul(Operand::Tmp(a), Operand::Tmp(b))) if a == b => trig[a as usize],
-                _ => None,
-            }
-        };
-        let single = |o: Operand| matches!(o, Operand::Tmp(t) if uses[t as usize] == 1);
-        let is_sum = |op: &Op| matches!(op, Op::Add(..) | Op::Sub(..) | Op::Neg(_));
-        let mut out: Vec<Instr> = Vec::with_capacity(self.instrs.len());
         let mut pairs = 0;
-        for ins in &self.instrs {
-            if !is_sum(&ins.op) || folded[ins.dst as usize] {
-                out.push(*ins);
-                continue;
-            }
-            let mut terms = Vec::new();
-            collect(&def, &single, Operand::Tmp(ins.dst), false, &mut terms);
-            // The terms that are squares or single-use multiples of one.
-            let squares: Vec<Square> = terms
-                .iter()
-                .enumerate()
-                .filter_map(|(i, t)| {
-                    if let Some((angle, is_sin)) = square(t.value) {
-                        return Some(Square {
-                            term: i,
-                            angle,
-                            is_sin,
-                            sq: t.value,
-                            coef: Operand::Const(Num::ONE),
-                        });
-                    }
-                    let Operand::Tmp(p) = t.value else {
-                        return None;
-                    };
-                    let Some(Op::Mul(a, b)) = def[p as usize] else {
-                        return None;
-                    };
-                    if !single(t.value) {
-                        return None;
-                    }
-                    for (sq, coef) in [(b, a), (a, b)] {
-                        if let Some((angle, is_sin)) = square(sq) {
-                            return Some(Square {
-                                term: i,
-                                angle,
-                                is_sin,
-                                sq,
-                                coef,
-                            });
-                        }
-                    }
-                    None
-                })
-                .collect();
-            // Pair a cos² term with a sin² term of the same angle.
-            let mut taken = vec![false; squares.len()];
-            let mut found: Vec<(Square, Square)> = Vec::new();
-            for (i, c) in squares.iter().enumerate() {
-                if c.is_sin || taken[i] {
-                    continue;
-                }
-                if let Some(j) = (0..squares.len())
-                    .find(|&j| !taken[j] && squares[j].is_sin && squares[j].angle == c.angle)
-                {
-                    taken[i] = true;
-                    taken[j] = true;
-                    found.push((*c, squares[j]));
-                }
-            }
+        self.rewrite_sums(|trees, terms, emit| {
+            let found = pairs_in(trees, &trig, terms);
             if found.is_empty() {
-                out.push(*ins);
-                continue;
+                return None;
             }
             pairs += found.len();
-            let mut next = self.n_tmps;
-            let mut fresh = |op: Op, out: &mut Vec<Instr>| {
-                let dst = next;
-                next += 1;
-                out.push(Instr { dst, op });
-                Operand::Tmp(dst)
-            };
             let mut gone = vec![false; terms.len()];
             let mut new_terms: Vec<Term> = Vec::new();
             for (c, s) in found {
@@ -135,7 +58,7 @@ impl Program {
                 gone[s.term] = true;
                 // Keep the square read more often: the other may die.
                 let sq_uses = |o: Operand| match o {
-                    Operand::Tmp(t) => uses[t as usize],
+                    Operand::Tmp(t) => trees.uses[t as usize],
                     Operand::Const(_) | Operand::Var(_) => 0,
                 };
                 let (drop, keep) = if sq_uses(c.sq) > sq_uses(s.sq) {
@@ -146,11 +69,11 @@ impl Program {
                 let (n_drop, n_keep) = (terms[drop.term].neg, terms[keep.term].neg);
                 // ±x·(1 − q) ± y·q = ±x + (±y ∓ x)·q.
                 let d = if n_drop == n_keep {
-                    fresh(Op::Sub(keep.coef, drop.coef), &mut out)
+                    emit.op(Op::Sub(keep.coef, drop.coef))
                 } else {
-                    fresh(Op::Add(keep.coef, drop.coef), &mut out)
+                    emit.op(Op::Add(keep.coef, drop.coef))
                 };
-                let prod = fresh(Op::Mul(d, keep.sq), &mut out);
+                let prod = emit.op(Op::Mul(d, keep.sq));
                 new_terms.push(Term {
                     neg: n_drop,
                     value: drop.coef,
@@ -167,14 +90,75 @@ impl Program {
                 .map(|(t, _)| *t)
                 .chain(new_terms)
                 .collect();
-            let all = add_constants(all);
-            let op = sum_op(&all, &mut out, &mut fresh);
-            self.n_tmps = next;
-            out.push(Instr { dst: ins.dst, op });
-        }
-        self.instrs = out;
+            Some(add_constants(all))
+        });
         pairs
     }
+}
+
+/// The pairs of a `cos²` term and a `sin²` term of one angle among a sum
+/// tree's `terms` (squares, or single-use multiples of one); `trig` says
+/// which angle's sine or cosine each temporary holds.
+fn pairs_in(
+    trees: &SumTrees,
+    trig: &[Option<(Operand, bool)>],
+    terms: &[Term],
+) -> Vec<(Square, Square)> {
+    let square = |o: Operand| -> Option<(Operand, bool)> {
+        let Operand::Tmp(t) = o else { return None };
+        match trees.def.get(t as usize).copied().flatten() {
+            Some(Op::Mul(Operand::Tmp(a), Operand::Tmp(b))) if a == b => trig[a as usize],
+            _ => None,
+        }
+    };
+    let squares: Vec<Square> = terms
+        .iter()
+        .enumerate()
+        .filter_map(|(i, t)| {
+            if let Some((angle, is_sin)) = square(t.value) {
+                return Some(Square {
+                    term: i,
+                    angle,
+                    is_sin,
+                    sq: t.value,
+                    coef: Operand::Const(Num::ONE),
+                });
+            }
+            let Operand::Tmp(p) = t.value else {
+                return None;
+            };
+            let Some(Op::Mul(a, b)) = trees.def[p as usize] else {
+                return None;
+            };
+            if !trees.single(t.value) {
+                return None;
+            }
+            [(b, a), (a, b)].into_iter().find_map(|(sq, coef)| {
+                square(sq).map(|(angle, is_sin)| Square {
+                    term: i,
+                    angle,
+                    is_sin,
+                    sq,
+                    coef,
+                })
+            })
+        })
+        .collect();
+    let mut taken = vec![false; squares.len()];
+    let mut found = Vec::new();
+    for (i, c) in squares.iter().enumerate() {
+        if c.is_sin || taken[i] {
+            continue;
+        }
+        if let Some(j) = (0..squares.len())
+            .find(|&j| !taken[j] && squares[j].is_sin && squares[j].angle == c.angle)
+        {
+            taken[i] = true;
+            taken[j] = true;
+            found.push((*c, squares[j]));
+        }
+    }
+    found
 }
 
 /// The constant terms of a sum added into one, put first (unless the sum

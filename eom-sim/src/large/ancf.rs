@@ -15,6 +15,7 @@
 
 use super::model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 use crate::elements::{Element, ElementKernel, with_element};
+use nalgebra::Vector3;
 use std::fmt;
 
 /// Builds a chain of the element type its spec names.
@@ -428,32 +429,20 @@ impl Chains {
     pub fn rigid_velocity(&self, k: usize, v: [f64; 3], w: [f64; 3]) -> Vec<(usize, f64)> {
         let part = &self.parts[k];
         let q0 = self.model.q0();
-        let r0 = part.node_position(q0, 0);
-        let cross = |a: [f64; 3], b: [f64; 3]| {
-            [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ]
-        };
+        let r0 = Vector3::from(part.node_position(q0, 0));
+        let (v, w) = (Vector3::from(v), Vector3::from(w));
         let mut out = Vec::with_capacity(part.nodes * part.node_coords);
         for node in 0..part.nodes {
             let base = part.position_index(node, 0);
             for chunk in 0..part.node_coords / part.dim {
-                let mut d = [0.0; 3];
-                for (a, da) in d.iter_mut().enumerate().take(part.dim) {
-                    *da = q0[base + chunk * part.dim + a];
-                }
+                let first = base + chunk * part.dim;
+                let d = Vector3::from_fn(|a, _| if a < part.dim { q0[first + a] } else { 0.0 });
                 let rate = if chunk == 0 {
-                    let arm = [d[0] - r0[0], d[1] - r0[1], d[2] - r0[2]];
-                    let turn = cross(w, arm);
-                    [v[0] + turn[0], v[1] + turn[1], v[2] + turn[2]]
+                    v + w.cross(&(d - r0))
                 } else {
-                    cross(w, d)
+                    w.cross(&d)
                 };
-                for (a, &ra) in rate.iter().enumerate().take(part.dim) {
-                    out.push((base + chunk * part.dim + a, ra));
-                }
+                out.extend((0..part.dim).map(|a| (first + a, rate[a])));
             }
         }
         out

@@ -744,9 +744,9 @@ impl StructuralModel {
     /// internal forces from: the elements' generated kernels
     /// ([`Jacobian::Generated`], the default; `Auto` is the same), or
     /// forward differences of the internal forces ([`Jacobian::Differences`]:
-    /// columns that share no row of the pattern perturbed together, two
-    /// evaluations per colour and per `q`/`q̇` block; what the generated
-    /// tangent saves, for work-precision comparisons).
+    /// columns that share no row of the pattern perturbed together: one
+    /// evaluation at the point, and one per colour and per `q`/`q̇` block;
+    /// what the generated tangent saves, for work-precision comparisons).
     pub fn set_tangent(&mut self, tangent: Jacobian) {
         self.tangent = tangent;
     }
@@ -787,23 +787,19 @@ impl StructuralModel {
     fn colors(&self) -> &[Vec<usize>] {
         self.colors.get_or_init(|| {
             let p = &self.pattern;
-            let mut rows: Vec<Vec<usize>> = vec![Vec::new(); p.n()];
-            for (i, j, _) in p.entries() {
-                rows[j].push(i);
-            }
             let mut colors: Vec<Vec<usize>> = Vec::new();
             let mut taken: Vec<Vec<bool>> = Vec::new();
-            for (j, rj) in rows.iter().enumerate() {
+            for j in 0..p.n() {
                 let k = taken
                     .iter()
-                    .position(|t| rj.iter().all(|&i| !t[i]))
+                    .position(|t| p.entries_of(j).all(|(i, _)| !t[i]))
                     .unwrap_or_else(|| {
                         colors.push(Vec::new());
                         taken.push(vec![false; p.n()]);
                         colors.len() - 1
                     });
                 colors[k].push(j);
-                for &i in rj {
+                for (i, _) in p.entries_of(j) {
                     taken[k][i] = true;
                 }
             }
@@ -827,7 +823,6 @@ impl StructuralModel {
         self.internal(q, qd, &mut scratch, &mut f0);
         let mut evaluations = 1;
         let mut x = Vec::with_capacity(q.len());
-        let pattern = self.pattern.clone();
         for (block, coef) in [(0, a), (1, b)] {
             if coef == 0.0 {
                 continue;
@@ -850,8 +845,7 @@ impl StructuralModel {
                 for &j in color {
                     let i = self.full_of_free[j];
                     let h = x[i] - base[i];
-                    for (row, col, slot) in pattern.entries_of(j) {
-                        debug_assert_eq!(col, j);
+                    for (row, slot) in self.pattern.entries_of(j) {
                         out.values[slot] += coef * (f1[row] - f0[row]) / h;
                     }
                 }

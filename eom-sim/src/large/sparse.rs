@@ -61,14 +61,12 @@ impl Pattern {
 
     /// Every stored entry as `(row, col, slot)`, column by column.
     pub fn entries(&self) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
-        (0..self.n).flat_map(move |j| {
-            (self.col_ptr[j]..self.col_ptr[j + 1]).map(move |k| (self.row_idx[k], j, k))
-        })
+        (0..self.n).flat_map(move |j| self.entries_of(j).map(move |(i, k)| (i, j, k)))
     }
 
-    /// The stored entries of column `col` as `(row, col, slot)`.
-    pub fn entries_of(&self, col: usize) -> impl Iterator<Item = (usize, usize, usize)> + '_ {
-        (self.col_ptr[col]..self.col_ptr[col + 1]).map(move |k| (self.row_idx[k], col, k))
+    /// The stored entries of column `col` as `(row, slot)`.
+    pub fn entries_of(&self, col: usize) -> impl Iterator<Item = (usize, usize)> + '_ {
+        (self.col_ptr[col]..self.col_ptr[col + 1]).map(move |k| (self.row_idx[k], k))
     }
 
     fn symbolic(&self) -> SymbolicSparseColMatRef<'_, usize> {
