@@ -33,11 +33,19 @@
 //! multipliers to a part in 10⁹; **slip**), a force falls through 0
 //! (**release**).
 //!
-//! Not here: cables hung at rigid bodies (the impact map would need the
-//! rigid part's mass matrix and constraints at velocity level; the
-//! validator refuses node contacts there). A sliding row's direction is
-//! not differentiated in generalized-α's Newton matrix (exact for a slide
-//! along a fixed direction, a quasi-Newton one for a curving slide).
+//! **Cables hung at rigid bodies** (a [`super::mixed::MixedModel`]): the
+//! same run over `y = (x, q_r)`, the model giving through [`Impacts`] its
+//! mass `diag(M_s, M_r(q_r))`, the Jacobian `J` of its attachments and
+//! loops, and its free accelerations with those constraints held. Every
+//! impulse problem holds them at the speed level (`J Δu = 0`, the rigid
+//! runtime's loop rows), after the speeds have been brought onto them
+//! (`J u + Φ_t = 0`: the index-3 integrator leaves them off by its drift,
+//! and the constraints would otherwise work in the impulse); an event
+//! state from the step's interpolant is first brought onto `Φ = 0`.
+//!
+//! Not here: a sliding row's direction is not differentiated in
+//! generalized-α's Newton matrix (exact for a slide along a fixed
+//! direction, a quasi-Newton one for a curving slide).
 
 use super::alpha::{AlphaModel, GeneralizedAlpha};
 use super::run::{AlphaOptions, DynamicsError, DynamicsStats, State};

@@ -99,7 +99,7 @@ impl Ctx<'_> {
                         "contact `{name}` is on a body in a model with cables (`{}`), whose runner handles contacts at cable nodes only",
                         cable.name
                     ),
-                    "contacts work on rigid and flexible (floating-frame) bodies and their nodes in models without cables, and at the nodes of cables alone (`at: (body: CABLE, node: K)`): leave this contact or the cables out",
+                    "contacts work on rigid and flexible (floating-frame) bodies and their nodes in models without cables, and at the nodes of cables, alone or hung at bodies (`at: (body: CABLE, node: K)`): leave this contact or the cables out",
                 );
                 ok = false;
             }
