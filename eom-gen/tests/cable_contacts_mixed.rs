@@ -26,6 +26,9 @@
 //!   of the impulse: Carnot's law for one row, the attachments doing no
 //!   work at the speed level); the attachment residual stays at its
 //!   tolerance.
+//! - **The same pendulum with Coulomb friction** (μ = 0.3): impacts, rest,
+//!   stick, slip and release; every impact keeps `ġ⁺ = −e ġ⁻`, does not
+//!   raise the energy, and has its tangential impulse in the cone.
 //! - **No event pulls**: every normal impulse is a push, `Λ ≥ 0`.
 
 use eom_gen::functions::FunctionSet;
@@ -112,9 +115,10 @@ fn no_event_pulls(report: &eom_sim::RunReport) {
 }
 
 /// Every impact: `ġ⁺ = −e ġ⁻` to 1e-9 on every row, the energy not
-/// raised, and the energy lost `½ (1 − e) Λ |ġ⁻|` (one row; to `rel`).
+/// raised, and (with `rel`, frictionless) the energy lost
+/// `½ (1 − e) Λ |ġ⁻|` (one row; to `rel`).
 /// Returns the number of impacts.
-fn impacts_obey_newton_and_carnot(report: &eom_sim::RunReport, e: f64, rel: f64) -> usize {
+fn impacts_obey_newton_and_carnot(report: &eom_sim::RunReport, e: f64, rel: Option<f64>) -> usize {
     let mut n = 0;
     for ev in report
         .contact_events
@@ -140,7 +144,7 @@ fn impacts_obey_newton_and_carnot(report: &eom_sim::RunReport, e: f64, rel: f64)
                 -e * c.speed_before
             );
         }
-        if let [c] = ev.contacts.as_slice() {
+        if let (Some(rel), [c]) = (rel, ev.contacts.as_slice()) {
             let lost = ev.energy_before - ev.energy_after;
             let carnot = 0.5 * (1.0 - e) * c.impulse * (-c.speed_before);
             eprintln!(
@@ -209,7 +213,7 @@ fn a_block_dropped_on_its_arms_held_node_hops_and_comes_to_rest() {
         (lost - carnot).abs() < 1e-6 * carnot,
         "lost {lost} J, Carnot {carnot} J"
     );
-    let impacts = impacts_obey_newton_and_carnot(&report, e, 1e-6);
+    let impacts = impacts_obey_newton_and_carnot(&report, e, Some(1e-6));
     // The hops accumulate and the block rests: the node held, its force
     // carrying block and arm.
     let el = report.elements.as_ref().expect("element report");
@@ -271,7 +275,7 @@ fn a_block_dropped_plastically_rests_at_the_first_strike() {
         (lost - carnot).abs() < 1e-6 * carnot,
         "lost {lost} J, Carnot {carnot} J"
     );
-    impacts_obey_newton_and_carnot(&report, 0.0, 1e-6);
+    impacts_obey_newton_and_carnot(&report, 0.0, Some(1e-6));
     let el = report.elements.as_ref().expect("element report");
     let weight = (M_BLOCK + M_ARM) * G;
     let [held] = el.contact_forces.as_slice() else {
@@ -299,6 +303,11 @@ fn a_block_dropped_plastically_rests_at_the_first_strike() {
 /// pinned at its tip and hanging straight down; the cable's end node
 /// touches the floor `y = −0.25` with restitution `e`.
 fn pendulum_cable(e: f64) -> String {
+    pendulum_cable_with(e, "")
+}
+
+/// [`pendulum_cable`] with `extra` appended to the contact.
+fn pendulum_cable_with(e: f64, extra: &str) -> String {
     format!(
         r#"Model(
     name: "pendulum_cable",
@@ -317,7 +326,7 @@ fn pendulum_cable(e: f64) -> String {
               damping_bending: 1e-4, start: Pinned, start_at: (body: "link", marker: "tip")),
     ],
     contacts: [
-        Plane(name: "floor", at: (body: "rope", node: 2), point: (0, -0.25, 0), normal: (0, 1, 0), e: {e:?}),
+        Plane(name: "floor", at: (body: "rope", node: 2), point: (0, -0.25, 0), normal: (0, 1, 0), e: {e:?}{extra}),
     ],
 )"#
     )
@@ -333,7 +342,7 @@ fn a_pendulums_hanging_cable_strikes_the_floor_by_newtons_law() {
         "{:?}",
         report.stop
     );
-    let impacts = impacts_obey_newton_and_carnot(&report, e, 1e-6);
+    let impacts = impacts_obey_newton_and_carnot(&report, e, Some(1e-6));
     let el = report.elements.as_ref().expect("element report");
     println!(
         "pendulum_cable e = {e}: {impacts} impacts, {} events, {} steps; largest |Φ| {:.1e}",
@@ -347,4 +356,49 @@ fn a_pendulums_hanging_cable_strikes_the_floor_by_newtons_law() {
         "attachment residual {:e}",
         el.largest_constraint_residual
     );
+}
+
+/// With Coulomb friction (μ = 0.3) at the end node the same pendulum runs
+/// through impacts, a rest, a stick, a slip and a release: every impact
+/// still has `ġ⁺ = −e ġ⁻` to 1e-9 and never raises the energy (the
+/// tangential impulse works too, so Carnot's one-row law does not apply),
+/// its tangential impulse lies in the cone `‖Λ_t‖ ≤ μ Λ`, and no event
+/// pulls.
+#[test]
+fn a_pendulums_hanging_cable_with_friction_keeps_newton_and_coulomb() {
+    let (e, mu) = (0.5, 0.3);
+    let report = simulate(
+        &pendulum_cable_with(e, &format!(", mu: {mu:?}")),
+        &run(0.25, 1e-3, 0.8),
+    );
+    assert!(
+        matches!(report.stop, eom_sim::Stop::Finished),
+        "{:?}",
+        report.stop
+    );
+    let impacts = impacts_obey_newton_and_carnot(&report, e, None);
+    assert!(impacts >= 1, "the end node strikes the floor");
+    for ev in report
+        .contact_events
+        .iter()
+        .filter(|x| x.kind == ContactEventKind::Impact)
+    {
+        for c in &ev.contacts {
+            let lt = c.tangential_impulse[0].hypot(c.tangential_impulse[1]);
+            assert!(
+                lt <= mu * c.impulse * (1.0 + 1e-9) + 1e-15,
+                "impact at {}: ‖Λ_t‖ = {lt} outside μ Λ = {}",
+                ev.t,
+                mu * c.impulse
+            );
+        }
+    }
+    let el = report.elements.as_ref().expect("element report");
+    println!(
+        "pendulum_cable e = {e}, μ = {mu}: {impacts} impacts, {} events, {} steps; largest |Φ| {:.1e}",
+        report.contact_events.len(),
+        report.stats.accepted,
+        el.largest_constraint_residual
+    );
+    assert!(el.largest_constraint_residual < 1e-9);
 }
