@@ -211,9 +211,11 @@ pub fn simulate_cmd(
         coordinates = sys.coordinate_names();
         let own = |v: Vec<&str>| v.into_iter().map(str::to_string).collect::<Vec<_>>();
         let (qn, un) = (own(sys.coordinate_names()), own(sys.speed_names()));
+        let contacts = eom_gen::cables::node_contacts(sys, &mixed.cables);
         simulate_mixed(
             &mixed.model,
             &mixed.cables,
+            &contacts,
             (&q0, &u0),
             (&qn, &un),
             run,
@@ -229,13 +231,23 @@ pub fn simulate_cmd(
     .map_err(run_error)?;
     if let Some(path) = events_csv {
         // The node contacts' rows, and the structure's free coordinates
-        // as the speeds of the generalised impulse.
+        // (then a rigid part's speeds) as the speeds of the generalised
+        // impulse.
         let rows: Vec<String> = sys.cable_contacts.iter().map(|c| c.name.clone()).collect();
         let n = report
             .contact_events
             .first()
             .map_or(0, |e| e.generalized_impulse.len());
-        let speeds: Vec<String> = (1..=n).map(|k| format!("y{k}")).collect();
+        let rigid: Vec<&str> = if coordinates.is_empty() {
+            Vec::new()
+        } else {
+            sys.speed_names()
+        };
+        let ns = n.saturating_sub(rigid.len());
+        let speeds: Vec<String> = (1..=ns)
+            .map(|k| format!("y{k}"))
+            .chain(rigid.iter().map(|s| s.to_string()))
+            .collect();
         eom_sim::run::events_table(&rows, &speeds, &[], false, &report.contact_events)
             .write(path)
             .map_err(|e| Error::io(path, e))?;

@@ -364,9 +364,11 @@ fn run_mixed(
     };
     let own = |v: Vec<&str>| v.into_iter().map(str::to_string).collect::<Vec<_>>();
     let (qn, un) = (own(sys.coordinate_names()), own(sys.speed_names()));
+    let contacts = eom_gen::cables::node_contacts(sys, &mixed.cables);
     eom_sim::large::simulate_mixed(
         &mixed.model,
         &mixed.cables,
+        &contacts,
         (&q0, &u0),
         (&qn, &un),
         run,

@@ -845,3 +845,71 @@ fn simulate_reports_the_contact_events_of_a_cable_dropped_on_a_floor() {
     );
     assert_eq!(lines.count(), ev.len(), "one row per event");
 }
+
+/// `simulate` on the bundled block dropped onto its clamped arm's node 0
+/// (`models/ancf/block_drop.ron`: a contact at a cable node in a model
+/// whose cable hangs at a rigid body, issue #26): the first event an
+/// impact at `t₁ = √(2h₀/g)` with `ġ⁺ = −e ġ⁻` and the block's mass in the
+/// impulse, `Λ = (1 + e) M |ġ⁻|` (`M` between the block's 1 kg and the
+/// block with its arm, 1.0002 kg); the hops accumulate and the node rests,
+/// its force carrying block and arm at the end; the events CSV names the
+/// rigid part's speed after the cables' coordinates.
+#[test]
+fn simulate_reports_the_contact_events_of_a_cable_node_at_a_rigid_body() {
+    let events = write("block_drop_events.csv", "");
+    let out = eom_gen(&[
+        "simulate",
+        "models/ancf/block_drop.ron",
+        "--t-end",
+        "0.5",
+        "--dt",
+        "1e-3",
+        "--rho-inf",
+        "0.5",
+        "--json",
+        "--events-csv",
+        &events,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let ev = r["contact_events"].as_array().expect("contact events");
+    let (h0, e) = (0.05, 0.5);
+    let t1 = (2.0 * h0 / 9.81_f64).sqrt();
+    let v1 = (2.0 * 9.81 * h0).sqrt();
+    assert_eq!(ev[0]["kind"], "impact");
+    assert!((ev[0]["t"].as_f64().unwrap_or(f64::NAN) - t1).abs() < 1e-9);
+    let c = &ev[0]["contacts"][0];
+    let (before, after) = (
+        c["speed_before"].as_f64().unwrap_or(f64::NAN),
+        c["speed_after"].as_f64().unwrap_or(f64::NAN),
+    );
+    assert!((before + v1).abs() < 1e-9, "ġ⁻ {before}");
+    assert!((after + e * before).abs() < 1e-9, "ġ⁺ {after}");
+    let m = c["impulse"].as_f64().unwrap_or(f64::NAN) / ((1.0 + e) * v1);
+    assert!((1.0..=1.0002).contains(&m), "Λ/((1 + e)|ġ⁻|) = {m} kg");
+    let weight = (1.0 + 2e-4) * 9.81;
+    let forces = r["contact_forces"]
+        .as_array()
+        .expect("the held node's force");
+    let sum: f64 = forces.iter().filter_map(|c| c["force"].as_f64()).sum();
+    assert!(
+        (sum - weight).abs() < 1e-3 * weight,
+        "{sum} N, want {weight} N"
+    );
+    let csv = std::fs::read_to_string(&events).expect("the events CSV");
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap_or_default();
+    assert!(
+        header.starts_with("t,kind,energy_before,energy_after,foot.impulse"),
+        "{header}"
+    );
+    // The generalised impulse: the arm's free coordinates, then the
+    // block's speed `y_dot` (the rail's).
+    assert!(header.contains(",impulse_y1,"), "{header}");
+    assert!(header.ends_with(",impulse_y_dot"), "{header}");
+    assert_eq!(lines.count(), ev.len(), "one row per event");
+}

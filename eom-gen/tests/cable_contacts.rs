@@ -39,8 +39,9 @@
 //!   mean the contact separates).
 //! - **Located refusals**: a node inside its plane at the start (with the
 //!   penetration), a negative friction coefficient, a node the cable does not
-//!   have, a cable that does not exist, a plane on a body, a node contact
-//!   in a model whose cable hangs at a body.
+//!   have, a cable that does not exist, a plane on a body. (A node contact
+//!   in a model whose cable hangs at a body is a model:
+//!   `cable_contacts_mixed.rs`.)
 
 use eom_gen::model::{Source, check};
 use eom_sim::Integrator;

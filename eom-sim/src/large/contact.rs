@@ -33,20 +33,31 @@
 //! multipliers to a part in 10⁹; **slip**), a force falls through 0
 //! (**release**).
 //!
-//! Not here: cables hung at rigid bodies (the impact map would need the
-//! rigid part's mass matrix and constraints at velocity level; the
-//! validator refuses node contacts there). A sliding row's direction is
-//! not differentiated in generalized-α's Newton matrix (exact for a slide
-//! along a fixed direction, a quasi-Newton one for a curving slide).
+//! **Cables hung at rigid bodies** (a [`super::mixed::MixedModel`]): the
+//! same run over `y = (x, q_r)`, the model giving through [`Impacts`] its
+//! mass `diag(M_s, M_r(q_r))`, the Jacobian `J` of its attachments and
+//! loops, and its free accelerations with those constraints held. Every
+//! impulse problem holds them at the speed level (`J Δu = 0`, the rigid
+//! runtime's loop rows), after the speeds have been brought onto them
+//! (`J u + Φ_t = 0`: the index-3 integrator leaves them off by its drift,
+//! and the constraints would otherwise work in the impulse); an event
+//! state from the step's interpolant is first brought onto `Φ = 0`.
+//!
+//! Not here: a sliding row's direction is not differentiated in
+//! generalized-α's Newton matrix (exact for a slide along a fixed
+//! direction, a quasi-Newton one for a curving slide).
 
 use super::alpha::{AlphaModel, GeneralizedAlpha};
 use super::run::{AlphaOptions, DynamicsError, DynamicsStats, State};
 use crate::constrained::{DMatrix, DVector};
 use crate::run::contact::Rows;
-use crate::run::impulse::{Slide, Solved, impact, norm2, resting_forces};
+use crate::run::impulse::{
+    Slide, Solved, effective_inverse, impact, norm2, onto_constraints, resting_forces,
+};
 use crate::run::{ContactEvent, ContactEventKind, ContactImpulse, GAP_TOL, MAX_LCP, lcp};
 use nalgebra::Dyn;
 use nalgebra::linalg::LU;
+use std::cell::OnceCell;
 
 /// A contact of one cable node against a plane fixed in the world, over
 /// the structure's full coordinates: `g = Σ c_i y_i − level`.
@@ -513,15 +524,41 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
     }
 }
 
-/// What the contact run needs of a vector model beyond [`AlphaModel`].
+/// What the contact run needs of a vector model beyond [`AlphaModel`]:
+/// the impact map `M (u⁺ − u⁻) = Wᵀ Λ + Jᵀ μ` with the model's own
+/// constraints kept at the speed level, `J (u⁺ − u⁻) = 0`, and the
+/// sustained contact forces on the accelerations those constraints allow.
 pub(super) trait Impacts: AlphaModel {
-    /// The mass matrix on the free coordinates, dense (`None`: this model
-    /// has no impact map).
-    fn dense_mass(&self) -> Option<DMatrix<f64>>;
-    /// The accelerations without contact forces at `s`.
+    /// The mass matrix on the free coordinates at `s`, dense (`None`: this
+    /// model has no impact map).
+    fn dense_mass(&self, s: &State) -> Option<DMatrix<f64>>;
+    /// The Jacobian `J = Φ_y` of the model's own constraint rows at `s`
+    /// on the free coordinates (`q̇ = u`: it acts on the speeds), held
+    /// through every impulse and force problem; `None`: no constraints.
+    fn constraint_rows(&self, s: &State) -> Option<DMatrix<f64>> {
+        let _ = s;
+        None
+    }
+    /// The rates of the model's own constraints at `s`, `dΦ/dt = J u + Φ_t`
+    /// (zero on consistent speeds; an index-3 integrator leaves them at
+    /// its drift); `None`: no constraints.
+    fn constraint_rates(&self, s: &State) -> Option<DVector<f64>> {
+        let _ = s;
+        None
+    }
+    /// The accelerations without contact forces at `s`, the model's own
+    /// constraints held (`J a = γ`, their forces included).
     fn free_acceleration(&self, s: &State) -> Option<DVector<f64>>;
     /// Total energy at `s`.
     fn total_energy(&self, s: &State) -> f64;
+    /// Brings an event's state onto the model's own constraints where it
+    /// is off them (a state from the step's interpolant, not from the
+    /// integrator): positions `Φ = 0`, then speeds `J u + Φ_t = 0`, each
+    /// by the least change in the mass metric. Nothing to do by default.
+    fn onto_constraints(&self, s: &mut State) -> Result<(), DynamicsError> {
+        let _ = s;
+        Ok(())
+    }
 }
 
 /// The normal speed below which a contact's own impulse counts as
@@ -544,12 +581,18 @@ pub(super) struct ContactRun<'g> {
     pub stats: DynamicsStats,
     /// The sustained rows' normal forces at the last accepted step.
     pub forces: Vec<f64>,
+    /// The model's own multipliers (a mixed model's mount forces) at the
+    /// last accepted step.
+    pub multipliers: Vec<f64>,
     /// Per contact row, its [`Slide`] while active with friction.
     pub slides: Vec<Option<Slide>>,
     /// Per contact row, the tangential position `t_a·y` a stick holds.
     pub anchors: Vec<[f64; 2]>,
     /// Sticking rows whose force was located leaving the cone.
     breaking: Vec<usize>,
+    /// Held rows whose force was located falling through zero at the
+    /// start of a step (released by the next `settle`).
+    releasing: Vec<usize>,
     /// Per contact row, when it last left its plane (an impact it left
     /// rising, or a release), while it flies.
     left: Vec<Option<f64>>,
@@ -632,9 +675,11 @@ impl<'g> ContactRun<'g> {
             events: Vec::new(),
             stats: DynamicsStats::default(),
             forces: Vec::new(),
+            multipliers: Vec::new(),
             slides: vec![None; gaps.len()],
             anchors: vec![[0.0; 2]; gaps.len()],
             breaking: Vec::new(),
+            releasing: Vec::new(),
             left: vec![None; gaps.len()],
             hops: vec![None; gaps.len()],
             bounced: vec![false; gaps.len()],
@@ -754,13 +799,32 @@ impl<'g> ContactRun<'g> {
         let t = s.t;
         let nk = self.gaps.len();
         let breaking = std::mem::take(&mut self.breaking);
+        let releasing = std::mem::take(&mut self.releasing);
         let mut r = self.gaps.at(s);
         let closed: Vec<usize> = (0..nk).filter(|&i| r.g[i] <= GAP_TOL).collect();
+        // The mass matrix and the model's own constraint rows at the
+        // event's positions (an impulse jumps the speeds only), each
+        // evaluated once when first needed.
+        let at = s.clone();
+        let (mass_at, rows_at) = (OnceCell::new(), OnceCell::new());
         let mass = || {
-            m.dense_mass().ok_or_else(|| {
+            mass_at
+                .get_or_init(|| m.dense_mass(&at))
+                .clone()
+                .ok_or_else(|| {
+                    failed(
+                        t,
+                        "this model has no impact map for contacts at cable nodes".into(),
+                    )
+                })
+        };
+        let jac = || rows_at.get_or_init(|| m.constraint_rows(&at)).as_ref();
+        // `M⁻¹ R` with the model's constraints held (`J Δ = 0`).
+        let inverse = |mm: &DMatrix<f64>, rhs: &DMatrix<f64>| {
+            effective_inverse(mm, jac(), rhs).ok_or_else(|| {
                 failed(
                     t,
-                    "this model has no impact map for contacts at cable nodes".into(),
+                    "the mass matrix with the model's constraints is singular".into(),
                 )
             })
         };
@@ -772,6 +836,29 @@ impl<'g> ContactRun<'g> {
                 ),
             )
         };
+        // Impulses keep the model's own constraints at the speed level,
+        // `J (u⁺ − u⁻) = 0`: the speeds are first brought onto them
+        // (`J u + Φ_t = 0`, the least change in kinetic energy; the
+        // index-3 integrator's speeds miss them by its drift), so that
+        // `J u⁺ + Φ_t = 0` after every impulse and the constraints do no
+        // work in it. The event's speeds and energy before are these.
+        if !closed.is_empty()
+            && let Some(j) = jac()
+            && let Some(d) = m.constraint_rates(s)
+            && d.amax() > 0.0
+        {
+            let mm = mass()?;
+            let du = onto_constraints(&mm, j, &d).ok_or_else(|| {
+                failed(
+                    t,
+                    "the speeds cannot be brought onto the model's constraints (a singular mass matrix)".into(),
+                )
+            })?;
+            for (v, x) in s.v.iter_mut().zip(du.iter()) {
+                *v += x;
+            }
+            r = self.gaps.at(s);
+        }
         if closed
             .iter()
             .any(|&i| r.gdot[i] < 0.0 && !self.active.contains(&i))
@@ -805,7 +892,7 @@ impl<'g> ContactRun<'g> {
                     .map(|&i| self.gaps.rough(i).then_some(Slide::Stick))
                     .collect();
                 let e = |i: usize| r.e[i];
-                let sol = impact(&mm, None, &r, &set, &e, false, &slides)
+                let sol = impact(&mm, jac(), &r, &set, &e, false, &slides)
                     .ok_or_else(|| no_solution(set.len()))?;
                 r = self.jump(m, s, ContactEventKind::Impact, &set, (&r, &mm), &sol);
                 // Rows leaving rising fly: their landing is located at the
@@ -829,6 +916,7 @@ impl<'g> ContactRun<'g> {
             .iter()
             .copied()
             .filter(|&i| self.active.contains(&i) || r.gdot[i] <= REST_SPEED)
+            .filter(|i| !releasing.contains(i))
             .collect();
         let rough = resting.iter().any(|&i| self.gaps.rough(i));
         // The force problem: g̈ = W M⁻¹ (Wᵀ λ + W_tᵀ λ_t) + W a_free ≥ 0,
@@ -856,11 +944,7 @@ impl<'g> ContactRun<'g> {
         } else if !rough {
             let mm = mass()?;
             let wn = DMatrix::from_fn(resting.len(), free.len(), |a, k| r.w[(resting[a], k)]);
-            let minv_wt = mm
-                .clone()
-                .cholesky()
-                .map(|c| c.solve(&wn.transpose()))
-                .ok_or_else(|| failed(t, "the mass matrix is not positive definite".into()))?;
+            let minv_wt = inverse(&mm, &wn.transpose())?;
             let a = &wn * minv_wt;
             let b = DVector::from_fn(resting.len(), |k, _| acc(resting[k]));
             let lambda = lcp(&a, &b).ok_or_else(|| no_solution(resting.len()))?;
@@ -882,7 +966,7 @@ impl<'g> ContactRun<'g> {
                     1e-6
                 }
             };
-            forces = resting_forces(&mm, None, &r, &resting, &mut slides, &b, &bt, &margin);
+            forces = resting_forces(&mm, jac(), &r, &resting, &mut slides, &b, &bt, &margin);
             let Some(f) = forces.as_ref() else {
                 return Err(failed(
                     t,
@@ -946,13 +1030,19 @@ impl<'g> ContactRun<'g> {
             // accumulate, [`ContactRun::accumulates`]); for the others no
             // impulse is consistent, and the run stops.
             let mm = mass()?;
-            let chol = mm
-                .clone()
-                .cholesky()
-                .ok_or_else(|| failed(t, "the mass matrix is not positive definite".into()))?;
+            // `w M⁻¹ wᵀ` of each row of `now`, the constraints held.
+            let wn = DMatrix::from_fn(s.v.len(), now.len(), |k, a| r.w[(now[a], k)]);
+            let minv_wt = inverse(&mm, &wn)?;
+            let own_of: Vec<(usize, f64)> = now
+                .iter()
+                .enumerate()
+                .map(|(a, &i)| (i, wn.column(a).dot(&minv_wt.column(a))))
+                .collect();
             let own = |i: usize| {
-                let w = DVector::from_fn(s.v.len(), |k, _| r.w[(i, k)]);
-                w.dot(&chol.solve(&w))
+                own_of
+                    .iter()
+                    .find(|&&(j, _)| j == i)
+                    .map_or(0.0, |&(_, x)| x)
             };
             // The speed row `set[k]` loses by its own impulse if that
             // pulls (> 0: a pull).
@@ -971,7 +1061,7 @@ impl<'g> ContactRun<'g> {
             let plastic_on = |set: &[usize], now: &[usize], now_slides: &[Option<Slide>]| {
                 impact(
                     &mm,
-                    None,
+                    jac(),
                     &r,
                     set,
                     &plastic,
@@ -1099,6 +1189,8 @@ impl<'g> ContactRun<'g> {
                 Err(e) => return (state, Some(e)),
             };
             self.forces = held.forces(ga.multipliers());
+            let own = m.n_constraints();
+            self.multipliers = ga.multipliers()[..own].to_vec();
             let t_start = state.t;
             // Halvings of a fixed step after a Newton failure, and the
             // small steps left before the run returns to `h`.
@@ -1208,6 +1300,7 @@ impl<'g> ContactRun<'g> {
                 match first {
                     None => {
                         self.forces = f1;
+                        self.multipliers = ga.multipliers()[..own].to_vec();
                         observe(&new, Some(ga.q_full()));
                         if substeps > 0 {
                             substeps -= 1;
@@ -1223,6 +1316,24 @@ impl<'g> ContactRun<'g> {
                     }
                     Some((t, row, breaks)) => {
                         self.breaking.extend(breaks);
+                        // A held force that crosses zero within a part in
+                        // 10⁶ of the step from its start is zero there (to
+                        // that part of the step's change): the row is
+                        // released at the start. Held again by the force
+                        // problem (its force there, tiny, still positive),
+                        // it would cross at once again, with no time
+                        // passing (a four-bar's cable node yanked off the
+                        // floor: 8e-6 N at the start, −13 N one step on).
+                        if row.is_none() && breaks.is_none() {
+                            let near = |k: usize| {
+                                f1[k] < 0.0 && f0[k] >= 0.0 && f0[k] <= 1e-6 * (f0[k] - f1[k])
+                            };
+                            self.releasing.extend(
+                                (0..self.active.len())
+                                    .filter(|&k| near(k))
+                                    .map(|k| self.active[k]),
+                            );
+                        }
                         // Restart at the event: the step retaken from its
                         // start to the located time (an integrator state,
                         // not the interpolant's), the interpolant if that
@@ -1318,6 +1429,9 @@ impl<'g> ContactRun<'g> {
             let Some(mut s) = event else {
                 return (ga.state().clone(), None);
             };
+            if let Err(e) = m.onto_constraints(&mut s) {
+                return (s, Some(e));
+            }
             observe(&s, None);
             stalled = if s.t - t_start <= 1e-9 * opts.h {
                 stalled + 1

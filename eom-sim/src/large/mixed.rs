@@ -58,6 +58,7 @@ use super::model::StructuralModel;
 use super::norm_inf;
 use super::run::{DynamicsError, State, Violation};
 use super::sparse::{FaerLu, Pattern, SparseMatrix, SparseSolver};
+use crate::constrained::DMatrix;
 use crate::model::Point;
 use std::fmt;
 use std::sync::Arc;
@@ -487,6 +488,52 @@ impl<'r> MixedModel<'r> {
         c.phi
     }
 
+    /// `Φ_y(y, t)`, dense (`n_constraints × n`: the attachment rows, then
+    /// the rigid part's own); it acts on the speeds as on the coordinates'
+    /// rates (`q̇ = u`).
+    pub(super) fn constraint_jacobian(&self, t: f64, y: &[f64]) -> DMatrix<f64> {
+        let q_full = self.structural_full(y);
+        let mut c = ConstraintEval::default();
+        let mut mounts = vec![0.0; self.buffer_len()];
+        self.constraints(t, &q_full, &y[self.n_s..], &mut mounts, &mut c);
+        let mut j = DMatrix::zeros(self.m, self.n());
+        for &(row, col, v) in &c.jac {
+            if row < self.m && col < self.n() {
+                j[(row, col)] += v;
+            }
+        }
+        j
+    }
+
+    /// `dΦ/dt = Φ_y v + Φ_t` at `s`: the Jacobian exact, `Φ_t` by a
+    /// central difference in time at fixed `y` (zero for the attachments
+    /// and for scleronomic loops).
+    pub(super) fn rates_of_constraints(&self, s: &State) -> Vec<f64> {
+        let j = self.constraint_jacobian(s.t, &s.q);
+        let eps = 1e-6 * (1.0 + s.t.abs());
+        let (plus, minus) = (
+            self.constraint_residual(s.t + eps, &s.q),
+            self.constraint_residual(s.t - eps, &s.q),
+        );
+        (0..self.m)
+            .map(|k| {
+                let jv: f64 = (0..self.n()).map(|c| j[(k, c)] * s.v[c]).sum();
+                jv + (plus[k] - minus[k]) / (2.0 * eps)
+            })
+            .collect()
+    }
+
+    /// The accelerations at `s` without forces beyond the model's own
+    /// (no contacts), the constraints held: `[[M, Φ_yᵀ], [Φ_y, 0]] (a, λ)
+    /// = (f_ext − f_int − b, γ)`, as at a start.
+    pub(super) fn constrained_acceleration(&self, s: &State) -> Result<Vec<f64>, DynamicsError> {
+        let mut w = self.work(s);
+        let mut acc = vec![0.0; self.n()];
+        let mut lambda = vec![0.0; self.m];
+        self.initial_acceleration(&mut w, s, &mut acc, &mut lambda)?;
+        Ok(acc)
+    }
+
     /// `Φ` with its Jacobian and the clamps' coupling terms.
     fn constraints(
         &self,
@@ -627,7 +674,7 @@ impl MixedModel<'_> {
         for a in &self.attachments {
             let mut f = [0.0; 3];
             for (k, fk) in f.iter_mut().enumerate().take(a.dim) {
-                *fk = -lambda[row + k];
+                *fk = -lambda.get(row + k).copied().unwrap_or(f64::NAN);
             }
             out.push(f);
             row += a.equations();

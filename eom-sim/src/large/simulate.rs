@@ -229,22 +229,27 @@ impl Reported for MixedModel<'_> {
     }
 }
 
-impl Impacts for StructuralModel {
-    fn dense_mass(&self) -> Option<DMatrix<f64>> {
-        let n = self.n_free();
-        let mut m = DMatrix::zeros(n, n);
-        let mut e = vec![0.0; n];
-        let mut col = vec![0.0; n];
-        for j in 0..n {
-            e[j] = 1.0;
-            col.fill(0.0);
-            self.mass().sym_mul_add(1.0, &e, &mut col);
-            e[j] = 0.0;
-            for (i, c) in col.iter().enumerate() {
-                m[(i, j)] = *c;
-            }
+/// The structure's mass matrix on its free coordinates, dense.
+fn structural_mass(st: &StructuralModel) -> DMatrix<f64> {
+    let n = st.n_free();
+    let mut m = DMatrix::zeros(n, n);
+    let mut e = vec![0.0; n];
+    let mut col = vec![0.0; n];
+    for j in 0..n {
+        e[j] = 1.0;
+        col.fill(0.0);
+        st.mass().sym_mul_add(1.0, &e, &mut col);
+        e[j] = 0.0;
+        for (i, c) in col.iter().enumerate() {
+            m[(i, j)] = *c;
         }
-        Some(m)
+    }
+    m
+}
+
+impl Impacts for StructuralModel {
+    fn dense_mass(&self, _: &State) -> Option<DMatrix<f64>> {
+        Some(structural_mass(self))
     }
     fn free_acceleration(&self, s: &State) -> Option<DVector<f64>> {
         let (q, v) = (self.expand(&s.q), self.expand_rate(&s.v));
@@ -253,22 +258,85 @@ impl Impacts for StructuralModel {
         self.internal(&q, &v, &mut scratch, &mut f);
         let rhs =
             DVector::from_iterator(f.len(), self.load_free().iter().zip(&f).map(|(a, b)| a - b));
-        self.dense_mass()?.cholesky().map(|c| c.solve(&rhs))
+        structural_mass(self).cholesky().map(|c| c.solve(&rhs))
     }
     fn total_energy(&self, s: &State) -> f64 {
         self.energies(s).0
     }
 }
 
+/// The mixed model's impact map: `M = diag(M_s, M_r(q_r))` on
+/// `y = (x, q_r)`, the attachments and the rigid part's loops as the
+/// constraint rows kept at the speed level.
 impl Impacts for MixedModel<'_> {
-    fn dense_mass(&self) -> Option<DMatrix<f64>> {
-        None
+    fn dense_mass(&self, s: &State) -> Option<DMatrix<f64>> {
+        let (ns, n) = (self.n_structural(), self.n());
+        let nr = n - ns;
+        let mut m = DMatrix::zeros(n, n);
+        m.view_mut((0, 0), (ns, ns))
+            .copy_from(&structural_mass(self.structure()));
+        let mut mr = vec![0.0; nr * nr];
+        self.rigid().mass_matrix(s.t, &s.q[ns..], &mut mr);
+        for i in 0..nr {
+            for j in 0..nr {
+                m[(ns + i, ns + j)] = mr[i * nr + j];
+            }
+        }
+        m.iter().all(|x| x.is_finite()).then_some(m)
     }
-    fn free_acceleration(&self, _: &State) -> Option<DVector<f64>> {
-        None
+    fn constraint_rows(&self, s: &State) -> Option<DMatrix<f64>> {
+        let j = self.constraint_jacobian(s.t, &s.q);
+        (j.nrows() > 0).then_some(j)
+    }
+    fn constraint_rates(&self, s: &State) -> Option<DVector<f64>> {
+        let d = self.rates_of_constraints(s);
+        (!d.is_empty()).then(|| DVector::from_vec(d))
+    }
+    fn free_acceleration(&self, s: &State) -> Option<DVector<f64>> {
+        let a = self.constrained_acceleration(s).ok()?;
+        Some(DVector::from_vec(a))
     }
     fn total_energy(&self, s: &State) -> f64 {
         self.energies(s).0
+    }
+    fn onto_constraints(&self, s: &mut State) -> Result<(), DynamicsError> {
+        // Within a thousandth of the start's tolerance (`1e-8`): a state
+        // of the integrator's own is left as it is.
+        let worst = |s: &State| super::norm_inf(&self.constraint_residual(s.t, &s.q));
+        if worst(s) <= 1e-11 {
+            return Ok(());
+        }
+        let off = |s: &State, why: &str| DynamicsError::Contact {
+            t: s.t,
+            message: format!(
+                "the event's state cannot be brought onto the model's constraints ({why})"
+            ),
+        };
+        let m = Impacts::dense_mass(self, s).ok_or_else(|| off(s, "no mass matrix"))?;
+        for _ in 0..10 {
+            if worst(s) <= 1e-12 {
+                break;
+            }
+            let phi = DVector::from_vec(self.constraint_residual(s.t, &s.q));
+            let j = self.constraint_jacobian(s.t, &s.q);
+            let dy = crate::run::impulse::onto_constraints(&m, &j, &phi)
+                .ok_or_else(|| off(s, "a singular mass matrix"))?;
+            for (y, d) in s.q.iter_mut().zip(dy.iter()) {
+                *y += d;
+            }
+        }
+        let left = worst(s);
+        if left.is_nan() || left > 1e-10 {
+            return Err(off(s, "Newton on the positions does not converge"));
+        }
+        let d = DVector::from_vec(self.rates_of_constraints(s));
+        let j = self.constraint_jacobian(s.t, &s.q);
+        let du = crate::run::impulse::onto_constraints(&m, &j, &d)
+            .ok_or_else(|| off(s, "a singular mass matrix"))?;
+        for (v, x) in s.v.iter_mut().zip(du.iter()) {
+            *v += x;
+        }
+        Ok(())
     }
 }
 
@@ -561,7 +629,7 @@ fn run_contacts<M: Reported>(
         cables,
         &start,
         &end,
-        &[],
+        &contacts.multipliers,
         stop,
         &contacts.stats,
         cpu,
@@ -658,6 +726,7 @@ pub fn simulate_structure(
 pub fn simulate_mixed(
     model: &MixedModel<'_>,
     cables: &[CableLayout],
+    contacts: &[NodeContact],
     (q0, u0): (&[f64], &[f64]),
     names: (&[String], &[String]),
     run: &ElementRun,
@@ -676,8 +745,11 @@ pub fn simulate_mixed(
         return Err(RunError::Options(problems));
     }
     let state = model.initial_state(0.0, q0, u0);
-    let none = Gaps::new(&[], Some, &[]);
-    run_alpha(model, cables, state, names, run, &none, progress)
+    // The structure's free coordinates come first in `y`: its free
+    // indices are the mixed model's.
+    let st = model.structure();
+    let gaps = Gaps::new(contacts, |i| st.free_index(i), st.q0());
+    run_alpha(model, cables, state, names, run, &gaps, progress)
 }
 
 fn load_steps(steps: &[LoadStep]) -> Vec<LoadStepReport> {

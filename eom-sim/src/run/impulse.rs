@@ -133,28 +133,60 @@ pub fn lcp(a: &DMatrix<f64>, b: &DVector<f64>) -> Option<DVector<f64>> {
 /// `M⁻¹ R` with the loop constraints `J Δu = 0` held: the first `n_u`
 /// rows of `[[M, Jᵀ], [J, 0]]⁻¹ [R; 0]` (least squares on redundant
 /// constraints).
-fn effective_inverse(
+pub(crate) fn effective_inverse(
     m: &DMatrix<f64>,
     j: Option<&DMatrix<f64>>,
     r: &DMatrix<f64>,
 ) -> Option<DMatrix<f64>> {
-    let nu = m.nrows();
     let x = match j.filter(|j| j.nrows() > 0) {
         None => m.clone().cholesky().map(|c| c.solve(r))?,
         Some(j) => {
-            let nc = j.nrows();
-            let mut k = DMatrix::zeros(nu + nc, nu + nc);
-            k.view_mut((0, 0), (nu, nu)).copy_from(m);
-            k.view_mut((nu, 0), (nc, nu)).copy_from(j);
-            k.view_mut((0, nu), (nu, nc)).copy_from(&j.transpose());
-            let mut rhs = DMatrix::zeros(nu + nc, r.ncols());
-            rhs.view_mut((0, 0), (nu, r.ncols())).copy_from(r);
-            let eps = 1e-12 * k.amax().max(f64::MIN_POSITIVE);
-            let x = k.svd(true, true).solve(&rhs, eps).ok()?;
-            x.rows(0, nu).into_owned()
+            let zero = DMatrix::zeros(j.nrows(), r.ncols());
+            bordered(m, j, r, &zero)?
         }
     };
     x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// The first `n_u` rows of `[[M, Jᵀ], [J, 0]]⁻¹ [R; C]` (least squares on
+/// redundant constraints).
+fn bordered(
+    m: &DMatrix<f64>,
+    j: &DMatrix<f64>,
+    r: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+) -> Option<DMatrix<f64>> {
+    let (nu, nc) = (m.nrows(), j.nrows());
+    let mut k = DMatrix::zeros(nu + nc, nu + nc);
+    k.view_mut((0, 0), (nu, nu)).copy_from(m);
+    k.view_mut((nu, 0), (nc, nu)).copy_from(j);
+    k.view_mut((0, nu), (nu, nc)).copy_from(&j.transpose());
+    let mut rhs = DMatrix::zeros(nu + nc, r.ncols());
+    rhs.view_mut((0, 0), (nu, r.ncols())).copy_from(r);
+    rhs.view_mut((nu, 0), (nc, r.ncols())).copy_from(c);
+    let eps = 1e-12 * k.amax().max(f64::MIN_POSITIVE);
+    let x = k.svd(true, true).solve(&rhs, eps).ok()?;
+    Some(x.rows(0, nu).into_owned())
+}
+
+/// The speed change `Δu` that brings speeds whose constraint rates are
+/// `d = J u + Φ_t` onto the constraints (`J (u + Δu) + Φ_t = 0`) with the
+/// least kinetic energy, `M Δu = Jᵀ ν`: the projection of the speeds an
+/// index-3 integrator leaves off its velocity constraints.
+pub(crate) fn onto_constraints(
+    m: &DMatrix<f64>,
+    j: &DMatrix<f64>,
+    d: &DVector<f64>,
+) -> Option<DVector<f64>> {
+    if j.nrows() == 0 || d.len() != j.nrows() {
+        return None;
+    }
+    let r = DMatrix::zeros(m.nrows(), 1);
+    let c = DMatrix::from_fn(d.len(), 1, |i, _| -d[i]);
+    let x = bordered(m, j, &r, &c)?;
+    x.iter()
+        .all(|v| v.is_finite())
+        .then(|| DVector::from_fn(m.nrows(), |i, _| x[(i, 0)]))
 }
 
 /// How a contact with Coulomb friction moves along its plane.

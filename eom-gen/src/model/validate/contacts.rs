@@ -99,7 +99,7 @@ impl Ctx<'_> {
                         "contact `{name}` is on a body in a model with cables (`{}`), whose runner handles contacts at cable nodes only",
                         cable.name
                     ),
-                    "contacts work on rigid and flexible (floating-frame) bodies and their nodes in models without cables, and at the nodes of cables alone (`at: (body: CABLE, node: K)`): leave this contact or the cables out",
+                    "contacts work on rigid and flexible (floating-frame) bodies and their nodes in models without cables, and at the nodes of cables, alone or hung at bodies (`at: (body: CABLE, node: K)`): leave this contact or the cables out",
                 );
                 ok = false;
             }
@@ -231,9 +231,10 @@ impl Ctx<'_> {
     }
 
     /// A `Plane` contact whose `at` is a cable node: the cable and node
-    /// exist, the cables run alone (no end at a body), the plane is fixed
-    /// in the world, no friction, and the node is not inside the plane at
-    /// the start (the cable straight from `from` to `to`).
+    /// exist (the cable alone, or hung at a body: the impact map then
+    /// holds the attachments at the speed level), the plane is fixed in
+    /// the world, and the node is not inside the plane at the start (the
+    /// cable straight from `from` to `to`).
     fn cable_contact(
         &mut self,
         spec: &Spec,
@@ -295,21 +296,6 @@ impl Ctx<'_> {
                 );
                 ok = false;
             }
-        }
-        if let Some(held) = spec
-            .cables
-            .iter()
-            .find(|x| x.start_at.is_some() || x.end_at.is_some())
-        {
-            self.error(
-                path,
-                format!(
-                    "contact `{name}` is at a cable node in a model whose cable `{}` hangs at a body",
-                    held.name
-                ),
-                "contacts at cable nodes run with cables alone (held to ground or free): the impact map with a rigid part's mass matrix and constraints is not implemented; hold the cable ends to ground (`start: Pinned`, no `start_at`)",
-            );
-            ok = false;
         }
         if let Some(b) = on {
             self.error(
