@@ -793,19 +793,17 @@ fn sweep_of_a_mixed_model_equals_runs_one_by_one() {
     assert!(err.contains("--rho-inf sets generalized-α"), "{err}");
 }
 
-/// `simulate` on the bundled wire dropped onto a floor (contacts at cable
-/// nodes, issue #26): the events in the JSON report as for rigid models —
-/// the first an impact of all five nodes at once at `t₁ = √(2h₀/g)` —, the
-/// same events as CSV with `--events-csv`, and at the end the held nodes'
-/// normal forces carrying the wire's weight `ρ A L g`.
-#[test]
-fn simulate_reports_the_contact_events_of_a_cable_dropped_on_a_floor() {
-    let events = write("cable_drop_events.csv", "");
+/// `eom-gen simulate models/ancf/MODEL.ron --t-end T --dt 1e-3 --rho-inf
+/// 0.5 --json --events-csv F`, which must succeed: its JSON report and
+/// the events CSV's path.
+fn simulate_with_events(model: &str, t_end: &str) -> (serde_json::Value, String) {
+    let events = write(&format!("{model}_events.csv"), "");
+    let path = format!("models/ancf/{model}.ron");
     let out = eom_gen(&[
         "simulate",
-        "models/ancf/cable_drop.ron",
+        &path,
         "--t-end",
-        "0.6",
+        t_end,
         "--dt",
         "1e-3",
         "--rho-inf",
@@ -819,7 +817,17 @@ fn simulate_reports_the_contact_events_of_a_cable_dropped_on_a_floor() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    (serde_json::from_slice(&out.stdout).expect("JSON"), events)
+}
+
+/// `simulate` on the bundled wire dropped onto a floor (contacts at cable
+/// nodes, issue #26): the events in the JSON report as for rigid models —
+/// the first an impact of all five nodes at once at `t₁ = √(2h₀/g)` —, the
+/// same events as CSV with `--events-csv`, and at the end the held nodes'
+/// normal forces carrying the wire's weight `ρ A L g`.
+#[test]
+fn simulate_reports_the_contact_events_of_a_cable_dropped_on_a_floor() {
+    let (r, events) = simulate_with_events("cable_drop", "0.6");
     let ev = r["contact_events"].as_array().expect("contact events");
     let t1 = (2.0 * 0.2 / 9.81_f64).sqrt();
     assert_eq!(ev[0]["kind"], "impact");
@@ -856,26 +864,7 @@ fn simulate_reports_the_contact_events_of_a_cable_dropped_on_a_floor() {
 /// rigid part's speed after the cables' coordinates.
 #[test]
 fn simulate_reports_the_contact_events_of_a_cable_node_at_a_rigid_body() {
-    let events = write("block_drop_events.csv", "");
-    let out = eom_gen(&[
-        "simulate",
-        "models/ancf/block_drop.ron",
-        "--t-end",
-        "0.5",
-        "--dt",
-        "1e-3",
-        "--rho-inf",
-        "0.5",
-        "--json",
-        "--events-csv",
-        &events,
-    ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let (r, events) = simulate_with_events("block_drop", "0.5");
     let ev = r["contact_events"].as_array().expect("contact events");
     let (h0, e) = (0.05, 0.5);
     let t1 = (2.0 * h0 / 9.81_f64).sqrt();

@@ -51,3 +51,37 @@ pub fn diagnose(path: &str, text: &str) -> String {
         }
     }
 }
+
+/// Every normal impulse of every contact event of `report` is a push,
+/// `Λ ≥ 0` (to the round-off of the runtime's rest speed, 1e-9 m/s, on a
+/// node's mass): a plastic (rest) impulse with `Λ < 0` would mean the
+/// contact separates there. Prints each event with `verbose`, and the
+/// count with the lowest impulse.
+pub fn no_event_pulls(report: &eom_sim::RunReport, verbose: bool) {
+    let mut lowest = f64::INFINITY;
+    for ev in &report.contact_events {
+        for c in &ev.contacts {
+            if verbose {
+                eprintln!(
+                    "  {:?} at {:.9} s: {} Λ = {:.3e} N s, ġ {:.3e} → {:.3e} m/s",
+                    ev.kind, ev.t, c.contact, c.impulse, c.speed_before, c.speed_after
+                );
+            }
+            lowest = lowest.min(c.impulse);
+            assert!(
+                c.impulse >= -1e-10,
+                "{:?} at {}: {} takes Λ = {} N s (ġ {} → {}): a pull",
+                ev.kind,
+                ev.t,
+                c.contact,
+                c.impulse,
+                c.speed_before,
+                c.speed_after
+            );
+        }
+    }
+    eprintln!(
+        "{} events, lowest normal impulse {lowest:e} N s",
+        report.contact_events.len()
+    );
+}

@@ -136,7 +136,7 @@ fn simulate(
     assert_eq!(contacts.len(), sys.cable_contacts.len());
     let (report, _) =
         simulate_structure(&built.model, &cables, &contacts, r, &mut |_| {}).expect("runs");
-    no_event_pulls(&report);
+    eom_gen::testkit::no_event_pulls(&report, false);
     (report, built.model, cables)
 }
 
@@ -385,7 +385,7 @@ fn a_cable_pendulum_bounces_and_slides_on_its_stop_for_a_whole_second() {
         simulate_structure(&built.model, &cables, &contacts, &r, &mut |_| {}).expect("runs");
     assert_eq!(report.stop, eom_sim::Stop::Finished, "{:?}", report.stop);
     assert!((report.t - 1.0).abs() < 1e-12);
-    no_event_pulls(&report);
+    eom_gen::testkit::no_event_pulls(&report, false);
     let count = |k: ContactEventKind| report.contact_events.iter().filter(|x| x.kind == k).count();
     let (impacts, rests, releases) = (
         count(ContactEventKind::Impact),
@@ -492,7 +492,7 @@ fn sliding(
     let (report, table) =
         simulate_structure(&built.model, &cables, &contacts, &r, &mut |_| {}).expect("runs");
     assert_eq!(report.stop, eom_sim::Stop::Finished, "{:?}", report.stop);
-    no_event_pulls(&report);
+    eom_gen::testkit::no_event_pulls(&report, false);
     (report, table.expect("recorded"), x0)
 }
 
@@ -602,33 +602,6 @@ fn a_wire_on_a_tilted_floor_sticks_below_the_friction_angle_and_slides_above() {
             "tan θ > μ: node {k} slid {moved} m in {t_end} s, want ½ g (sin θ − μ cos θ) t² = {want}"
         );
     }
-}
-
-/// No contact event of a run pulls a node onto its plane: a normal
-/// impulse is a push, `Λ ≥ 0` (to the round-off of the runtime's rest
-/// speed, 1e-9 m/s, on a node's mass). A plastic (rest) impulse with
-/// `Λ < 0` would mean the contact separates there.
-fn no_event_pulls(report: &eom_sim::RunReport) {
-    let mut lowest = f64::INFINITY;
-    for ev in &report.contact_events {
-        for c in &ev.contacts {
-            lowest = lowest.min(c.impulse);
-            assert!(
-                c.impulse >= -1e-10,
-                "{:?} at {}: {} takes Λ = {} N s (ġ {} → {}): a pull",
-                ev.kind,
-                ev.t,
-                c.contact,
-                c.impulse,
-                c.speed_before,
-                c.speed_after
-            );
-        }
-    }
-    eprintln!(
-        "{} events, lowest normal impulse {lowest:e} N s",
-        report.contact_events.len()
-    );
 }
 
 /// The impact and the rebound. Every node leaves the floor rising,

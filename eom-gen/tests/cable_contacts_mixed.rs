@@ -86,36 +86,8 @@ fn simulate(text: &str, r: &ElementRun) -> eom_sim::RunReport {
         &mut |_| {},
     )
     .unwrap_or_else(|e| panic!("{e}"));
-    no_event_pulls(&report);
+    eom_gen::testkit::no_event_pulls(&report, true);
     report
-}
-
-/// Every normal impulse of every event is a push.
-fn no_event_pulls(report: &eom_sim::RunReport) {
-    let mut lowest = f64::INFINITY;
-    for ev in &report.contact_events {
-        for c in &ev.contacts {
-            eprintln!(
-                "  {:?} at {:.9} s: {} Λ = {:.3e} N s, ġ {:.3e} → {:.3e} m/s",
-                ev.kind, ev.t, c.contact, c.impulse, c.speed_before, c.speed_after
-            );
-            lowest = lowest.min(c.impulse);
-            assert!(
-                c.impulse >= -1e-10,
-                "{:?} at {}: {} takes Λ = {} N s (ġ {} → {}): a pull",
-                ev.kind,
-                ev.t,
-                c.contact,
-                c.impulse,
-                c.speed_before,
-                c.speed_after
-            );
-        }
-    }
-    eprintln!(
-        "{} events, lowest normal impulse {lowest:e} N s",
-        report.contact_events.len()
-    );
 }
 
 /// Every impact: `ġ⁺ = −e ġ⁻` to 1e-9 on every row, the energy not
@@ -341,25 +313,33 @@ fn a_pendulums_hanging_cable_strikes_the_floor_by_newtons_law() {
     let e = 0.5;
     let (t_end, dt) = (0.25, 1e-3);
     let report = simulate(&pendulum_cable(e), &run(t_end, dt, 0.8));
+    let impacts = finished_with_impacts_by_newton(&report, e, "pendulum_cable");
+    assert!(impacts >= 1, "the end node strikes the floor");
+}
+
+/// `report` finished, every impact obeys Newton's law with `e` and
+/// Carnot's energy loss ([`impacts_obey_newton_and_carnot`]), and the
+/// attachments and loops held to 1e-9 throughout; returns the impacts.
+fn finished_with_impacts_by_newton(report: &eom_sim::RunReport, e: f64, label: &str) -> usize {
     assert!(
         matches!(report.stop, eom_sim::Stop::Finished),
         "{:?}",
         report.stop
     );
-    let impacts = impacts_obey_newton_and_carnot(&report, e, Some(1e-6));
+    let impacts = impacts_obey_newton_and_carnot(report, e, Some(1e-6));
     let el = report.elements.as_ref().expect("element report");
     println!(
-        "pendulum_cable e = {e}: {impacts} impacts, {} events, {} steps; largest |Φ| {:.1e}",
+        "{label} e = {e}: {impacts} impacts, {} events, {} steps; largest |Φ| {:.1e}",
         report.contact_events.len(),
         report.stats.accepted,
         el.largest_constraint_residual
     );
-    assert!(impacts >= 1, "the end node strikes the floor");
     assert!(
         el.largest_constraint_residual < 1e-9,
-        "attachment residual {:e}",
+        "constraint residual {:e}",
         el.largest_constraint_residual
     );
+    impacts
 }
 
 /// With Coulomb friction (μ = 0.3) at the end node the same pendulum runs
@@ -435,23 +415,6 @@ fn a_four_bars_hanging_cable_strikes_the_floor_with_the_loop_held() {
         &text[..i]
     );
     let report = simulate(&text, &run(1.25, 1e-3, 0.8));
-    assert!(
-        matches!(report.stop, eom_sim::Stop::Finished),
-        "{:?}",
-        report.stop
-    );
-    let impacts = impacts_obey_newton_and_carnot(&report, e, Some(1e-6));
-    let el = report.elements.as_ref().expect("element report");
-    println!(
-        "fourbar_cable e = {e}: {impacts} impacts, {} events, {} steps; largest |Φ| {:.1e}",
-        report.contact_events.len(),
-        report.stats.accepted,
-        el.largest_constraint_residual
-    );
+    let impacts = finished_with_impacts_by_newton(&report, e, "fourbar_cable");
     assert!(impacts >= 3, "the end node strikes the floor: {impacts}");
-    assert!(
-        el.largest_constraint_residual < 1e-9,
-        "constraint residual {:e}",
-        el.largest_constraint_residual
-    );
 }

@@ -540,10 +540,11 @@ pub(super) trait Impacts: AlphaModel {
         None
     }
     /// The rates of the model's own constraints at `s`, `dΦ/dt = J u + Φ_t`
-    /// (zero on consistent speeds; an index-3 integrator leaves them at
-    /// its drift); `None`: no constraints.
-    fn constraint_rates(&self, s: &State) -> Option<DVector<f64>> {
-        let _ = s;
+    /// with `j` their Jacobian at `s` ([`Impacts::constraint_rows`]; zero
+    /// on consistent speeds; an index-3 integrator leaves them at its
+    /// drift); `None`: no constraints.
+    fn constraint_rates(&self, s: &State, j: &DMatrix<f64>) -> Option<DVector<f64>> {
+        let _ = (s, j);
         None
     }
     /// The accelerations without contact forces at `s`, the model's own
@@ -844,7 +845,7 @@ impl<'g> ContactRun<'g> {
         // work in it. The event's speeds and energy before are these.
         if !closed.is_empty()
             && let Some(j) = jac()
-            && let Some(d) = m.constraint_rates(s)
+            && let Some(d) = m.constraint_rates(s, j)
             && d.amax() > 0.0
         {
             let mm = mass()?;

@@ -58,7 +58,7 @@ use super::model::StructuralModel;
 use super::norm_inf;
 use super::run::{DynamicsError, State, Violation};
 use super::sparse::{FaerLu, Pattern, SparseMatrix, SparseSolver};
-use crate::constrained::DMatrix;
+use crate::constrained::{DMatrix, DVector};
 use crate::model::Point;
 use std::fmt;
 use std::sync::Arc;
@@ -505,22 +505,17 @@ impl<'r> MixedModel<'r> {
         j
     }
 
-    /// `dΦ/dt = Φ_y v + Φ_t` at `s`: the Jacobian exact, `Φ_t` by a
-    /// central difference in time at fixed `y` (zero for the attachments
-    /// and for scleronomic loops).
-    pub(super) fn rates_of_constraints(&self, s: &State) -> Vec<f64> {
-        let j = self.constraint_jacobian(s.t, &s.q);
+    /// `dΦ/dt = Φ_y v + Φ_t` at `s`, `j` the Jacobian `Φ_y` at `s`
+    /// ([`MixedModel::constraint_jacobian`]): `Φ_t` by a central
+    /// difference in time at fixed `y` (zero for the attachments and for
+    /// scleronomic loops).
+    pub(super) fn rates_of_constraints(&self, s: &State, j: &DMatrix<f64>) -> DVector<f64> {
         let eps = 1e-6 * (1.0 + s.t.abs());
         let (plus, minus) = (
-            self.constraint_residual(s.t + eps, &s.q),
-            self.constraint_residual(s.t - eps, &s.q),
+            DVector::from_vec(self.constraint_residual(s.t + eps, &s.q)),
+            DVector::from_vec(self.constraint_residual(s.t - eps, &s.q)),
         );
-        (0..self.m)
-            .map(|k| {
-                let jv: f64 = (0..self.n()).map(|c| j[(k, c)] * s.v[c]).sum();
-                jv + (plus[k] - minus[k]) / (2.0 * eps)
-            })
-            .collect()
+        j * DVector::from_column_slice(&s.v) + (plus - minus) / (2.0 * eps)
     }
 
     /// The accelerations at `s` without forces beyond the model's own
@@ -669,6 +664,12 @@ impl MixedModel<'_> {
     /// the multipliers `lambda` (`−λ` of the position rows; `z = 0` when
     /// planar).
     pub fn mount_forces(&self, lambda: &[f64]) -> Vec<[f64; 3]> {
+        debug_assert!(
+            lambda.len() >= self.m,
+            "{} multipliers for {} constraint rows",
+            lambda.len(),
+            self.m
+        );
         let mut out = Vec::new();
         let mut row = 0;
         for a in &self.attachments {

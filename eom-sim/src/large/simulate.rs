@@ -288,9 +288,8 @@ impl Impacts for MixedModel<'_> {
         let j = self.constraint_jacobian(s.t, &s.q);
         (j.nrows() > 0).then_some(j)
     }
-    fn constraint_rates(&self, s: &State) -> Option<DVector<f64>> {
-        let d = self.rates_of_constraints(s);
-        (!d.is_empty()).then(|| DVector::from_vec(d))
+    fn constraint_rates(&self, s: &State, j: &DMatrix<f64>) -> Option<DVector<f64>> {
+        (j.nrows() > 0).then(|| self.rates_of_constraints(s, j))
     }
     fn free_acceleration(&self, s: &State) -> Option<DVector<f64>> {
         let a = self.constrained_acceleration(s).ok()?;
@@ -329,8 +328,8 @@ impl Impacts for MixedModel<'_> {
         if left.is_nan() || left > 1e-10 {
             return Err(off(s, "Newton on the positions does not converge"));
         }
-        let d = DVector::from_vec(self.rates_of_constraints(s));
         let j = self.constraint_jacobian(s.t, &s.q);
+        let d = self.rates_of_constraints(s, &j);
         let du = crate::run::impulse::onto_constraints(&m, &j, &d)
             .ok_or_else(|| off(s, "a singular mass matrix"))?;
         for (v, x) in s.v.iter_mut().zip(du.iter()) {

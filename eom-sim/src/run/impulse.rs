@@ -172,7 +172,9 @@ fn bordered(
 /// The speed change `Δu` that brings speeds whose constraint rates are
 /// `d = J u + Φ_t` onto the constraints (`J (u + Δu) + Φ_t = 0`) with the
 /// least kinetic energy, `M Δu = Jᵀ ν`: the projection of the speeds an
-/// index-3 integrator leaves off its velocity constraints.
+/// index-3 integrator leaves off its velocity constraints (the vector
+/// runtime's, with cables).
+#[cfg(feature = "cables")]
 pub(crate) fn onto_constraints(
     m: &DMatrix<f64>,
     j: &DMatrix<f64>,
