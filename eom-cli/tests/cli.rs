@@ -846,6 +846,90 @@ fn simulate_rejects_bad_numbers_up_front_with_exit_2() {
     assert!(err.contains("--rtol") && err.contains("--every"), "{err}");
 }
 
+/// An option the run would not read is a usage error (exit 2) that
+/// names it and what it applies to, never silently ignored: a step size
+/// for an adaptive integrator, tolerances for a fixed-step one, a CSV
+/// interval with nothing recorded (rigid and cable models alike). Nothing
+/// runs: each is refused before anything is built.
+#[test]
+fn simulate_refuses_options_its_integrator_does_not_read() {
+    for (model, args, says) in [
+        (
+            "models/pendulum.ron",
+            &["--dt", "1e-3"][..],
+            "dopri5 chooses its own steps",
+        ),
+        (
+            "models/pendulum.ron",
+            &["--integrator", "dop853", "--dt", "1e-3"],
+            "--dt sets the step of the fixed-step integrators (euler, rk4, midpoint)",
+        ),
+        (
+            "models/pendulum.ron",
+            &["--integrator", "rk4", "--rtol", "1e-6"],
+            "rk4 takes fixed steps of --dt",
+        ),
+        (
+            "models/pendulum.ron",
+            &["--integrator", "euler", "--atol", "1e-9"],
+            "--rtol and --atol control the steps of the adaptive integrators (dopri5",
+        ),
+        (
+            "models/pendulum.ron",
+            &["--every", "0.1"],
+            "nothing is recorded without --csv, --html or --plot",
+        ),
+        (
+            "models/ancf/pendulum.ron",
+            &["--every", "0.1"],
+            "nothing is recorded without --csv, --html or --plot",
+        ),
+    ] {
+        let mut all = vec!["simulate", model, "--t-end", "0.01"];
+        all.extend_from_slice(args);
+        let out = eom_gen(&all);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?} should say `{says}`: {err}");
+    }
+    // `sweep` runs the same integrators by the same rule.
+    let out = eom_gen(&[
+        "sweep",
+        "models/pendulum.ron",
+        "--param",
+        "l=1,2",
+        "--t-end",
+        "0.01",
+        "--dt",
+        "1e-3",
+        "--out",
+        "/nonexistent/never",
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "sweep --dt: {err}");
+    assert!(err.contains("dopri5 chooses its own steps"), "{err}");
+    // What applies runs: a fixed step for rk4, tolerances for dopri5.
+    for args in [
+        &["--integrator", "rk4", "--dt", "1e-3"][..],
+        &["--rtol", "1e-6", "--atol", "1e-9"],
+    ] {
+        let mut all = vec![
+            "simulate",
+            "models/pendulum.ron",
+            "--t-end",
+            "0.01",
+            "--interpret",
+        ];
+        all.extend_from_slice(args);
+        let out = eom_gen(&all);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}
+
 #[test]
 fn simulate_csv_always_ends_with_the_final_state() {
     let csv = temp_path("final.csv");

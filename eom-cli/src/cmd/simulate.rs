@@ -28,9 +28,11 @@ pub struct SimulateArgs {
     /// Absolute tolerance (adaptive methods; default 1e-10).
     #[arg(long, allow_hyphen_values = true)]
     pub atol: Option<f64>,
-    /// Step size (fixed-step methods).
-    #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true)]
-    pub dt: f64,
+    /// Step size, s (fixed-step methods: rk4, euler, midpoint; with
+    /// cables generalized-α's step, its first one under --rtol/--atol;
+    /// default 1e-3).
+    #[arg(long, allow_hyphen_values = true)]
+    pub dt: Option<f64>,
     /// Most attempted steps; a run that needs more stops (exit 3;
     /// default 100000).
     #[arg(long)]
@@ -149,6 +151,15 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
             };
         }
     };
+    // `--every` samples the recorded trajectory: without a CSV, a page
+    // or a plot nothing is recorded.
+    if a.every.is_some() && a.csv.is_none() && a.html.is_none() && a.plot.is_none() {
+        problems.push(
+            "--every sets the interval of the recorded trajectory's rows; nothing is recorded \
+             without --csv, --html or --plot"
+                .into(),
+        );
+    }
     // Models with cables run on the large-model runtime.
     if crate::ancf::has_cables(&opened.checked) {
         return simulate_cables(&opened, a, problems);
@@ -164,6 +175,11 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
     )
     .pop()
     .unwrap_or(Integrator::Dopri5);
+    problems.extend(unread_step_options(
+        integrator,
+        a.dt.is_some(),
+        a.rtol.is_some() || a.atol.is_some(),
+    ));
     let sys = &opened.checked.system;
     if a.constraints.is_some() && sys.graph.cut_joints().is_empty() && sys.constraints.is_empty() {
         problems.push(format!(
@@ -188,7 +204,7 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         integrator,
         rtol: a.rtol.unwrap_or(1e-8),
         atol: a.atol.unwrap_or(1e-10),
-        dt: a.dt,
+        dt: a.dt.unwrap_or(1e-3),
         t_end: a.t_end,
         max_steps: a.max_steps.unwrap_or(100_000),
         method: constraints,
@@ -251,6 +267,33 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         html: a.html.as_deref(),
     };
     simulate(&opened, &vary, &o, a.json, a.interpret, &pictures)
+}
+
+/// A step size or tolerances that `integrator` (of the models without
+/// cables) would not read, each an error naming the integrators it
+/// applies to: `--dt` (`dt`) is the fixed-step methods' step, `--rtol`
+/// and `--atol` (`tolerances`) the adaptive methods' control.
+pub(crate) fn unread_step_options(
+    integrator: Integrator,
+    dt: bool,
+    tolerances: bool,
+) -> Vec<String> {
+    let mut problems = Vec::new();
+    if integrator.is_adaptive() && dt {
+        problems.push(format!(
+            "--dt sets the step of the fixed-step integrators ({}); {integrator} chooses its own \
+             steps by --rtol and --atol",
+            Integrator::names_where(|i| i.runs_odes() && !i.is_adaptive())
+        ));
+    }
+    if !integrator.is_adaptive() && integrator.runs_odes() && tolerances {
+        problems.push(format!(
+            "--rtol and --atol control the steps of the adaptive integrators ({}); {integrator} \
+             takes fixed steps of --dt",
+            Integrator::names_where(Integrator::is_adaptive)
+        ));
+    }
+    problems
 }
 
 /// `simulate` on a model with cables: the options of the large-model
@@ -331,7 +374,7 @@ fn simulate_cables(
     let run = eom_sim::large::ElementRun {
         integrator,
         t_end: a.t_end,
-        dt: a.dt,
+        dt: a.dt.unwrap_or(1e-3),
         rho_inf: a.rho_inf.unwrap_or(1.0),
         control: (a.rtol.is_some() || a.atol.is_some()).then(|| {
             let rtol = a.rtol.unwrap_or(1e-6);

@@ -204,6 +204,11 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         return crate::cable_sweep::run(a, &plan);
     }
     problems.extend(options.problems());
+    problems.extend(crate::cmd::simulate::unread_step_options(
+        integrator,
+        a.dt.is_some(),
+        a.rtol.is_some() || a.atol.is_some(),
+    ));
     let sys = &opened.checked.system;
     if a.rho_inf.is_some() {
         problems.push(format!(
