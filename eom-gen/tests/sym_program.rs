@@ -370,3 +370,70 @@ fn a_difference_and_its_reverse_are_one_subtraction() {
     let (va, vb) = (0.7f64, 2.3f64);
     assert_eq!(p.eval(&[va, vb]), vec![va - vb, 0.3 * (vb - va)]);
 }
+
+/// Eight products of inputs summed: as lowered, a chain of seven
+/// additions (critical path 3 + 7·3 = 24 cycles in the model); rebuilt, a
+/// balanced tree of depth 3 (3 + 3·3 = 12), the same seven additions and
+/// eight multiplications, and the same value to rounding.
+#[test]
+fn a_sum_of_terms_ready_at_once_becomes_a_balanced_tree() {
+    let mut a = Arena::new();
+    let e = a
+        .parse("(+ (* a b) (* c d) (* e f) (* g h) (* i j) (* k l) (* m n) (* o p))")
+        .unwrap();
+    let opts = LowerOptions {
+        optimize: false,
+        ..LowerOptions::default()
+    };
+    let chain = a.lower(&[("e", e)], opts);
+    assert_eq!(chain.critical_path(), 24, "{chain}");
+    let mut tree = chain.clone();
+    assert_eq!(tree.balance_sums(), 1);
+    assert_eq!(tree.critical_path(), 12, "{tree}");
+    assert_eq!(tree.op_count(), chain.op_count());
+    let x: Vec<f64> = (0..16).map(|i| 0.37 * i as f64 - 2.1).collect();
+    let (want, got) = (chain.eval(&x)[0], tree.eval(&x)[0]);
+    assert!((got - want).abs() <= 8.0 * f64::EPSILON * want.abs().max(1.0));
+}
+
+/// A term that comes late (a quotient) is added last, after the others
+/// are summed while it is computed, and the negated terms become
+/// subtractions: `(p/q)/(2 + r²) − x·y − z + w` has no negation left.
+#[test]
+fn a_late_term_is_added_last_and_negations_become_subtractions() {
+    let mut a = Arena::new();
+    let e = a
+        .parse("(+ (/ (/ p q) (+ 2 (^ r 2))) (- (* x y)) (- z) w)")
+        .unwrap();
+    let opts = LowerOptions {
+        optimize: false,
+        ..LowerOptions::default()
+    };
+    let mut p = a.lower(&[("e", e)], opts);
+    p.optimize();
+    let before = p.clone();
+    p.balance_sums();
+    assert_eq!(p.op_count().negs, 0, "{p}");
+    assert!(p.op_count().total() <= before.op_count().total());
+    assert!(p.critical_path() <= before.critical_path(), "{before}\n{p}");
+    // The root reads the division's result directly.
+    let Some((_, Operand::Tmp(root))) = p.outputs.first() else {
+        panic!("the output is computed: {p}")
+    };
+    let root = *root;
+    let root_op = p.instrs.iter().find(|i| i.dst == root).map(|i| i.op);
+    let divs: Vec<u32> = p
+        .instrs
+        .iter()
+        .filter(|i| matches!(i.op, Op::Div(..)))
+        .map(|i| i.dst)
+        .collect();
+    assert!(
+        matches!(root_op, Some(Op::Add(x, y) | Op::Sub(x, y)) if [x, y].iter().any(|o| matches!(o, Operand::Tmp(t) if divs.contains(t)))),
+        "{p}"
+    );
+    for pt in [[1.5, -0.5, 2.0, 0.25, 3.0, -1.0, 0.7], [-2.0, 1.0, 0.1, 0.2, 0.3, 0.4, 0.5]] {
+        let (want, got) = (before.eval(&pt)[0], p.eval(&pt)[0]);
+        assert!((got - want).abs() <= 1e-14 * want.abs().max(1.0), "{got} vs {want}");
+    }
+}

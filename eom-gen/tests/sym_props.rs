@@ -307,6 +307,38 @@ proptest! {
         prop_assert!(full.op_count().total() <= reference.op_count().total());
     }
 
+    /// Sums and products rebuilt as trees of least latency keep every
+    /// value and never add an operation or lengthen the critical path;
+    /// the instructions written as late as their readers allow (in blocks
+    /// of any size) give the same values bit for bit.
+    #[test]
+    fn balanced_and_scheduled_programs_keep_their_values(srcs in vec(expr(false), 1..5), p in point(), window in 1usize..40) {
+        let mut a = Arena::new();
+        let ids: Vec<_> = srcs.iter().map(|s| a.parse(s).unwrap()).collect();
+        let vals = values(&a, &p);
+        let want = a.eval_many(&ids, &vals);
+        prop_assume!(want.iter().all(|w| w.is_finite() && w.abs() < 1e6));
+        let names: Vec<String> = (0..ids.len()).map(|i| format!("out{i}")).collect();
+        let outs: Vec<(&str, _)> = names.iter().map(|n| n.as_str()).zip(ids.iter().copied()).collect();
+        let mut p0 = a.lower(&outs, LowerOptions { optimize: false, ..LowerOptions::default() });
+        p0.optimize();
+        let mut b = p0.clone();
+        b.balance_products();
+        b.balance_sums();
+        prop_assert!(b.op_count().total() <= p0.op_count().total(), "{p0}\n{b}");
+        prop_assert!(b.critical_path() <= p0.critical_path(), "{p0}\n{b}");
+        let got = b.eval_arena_values(&a, &vals);
+        for i in 0..ids.len() {
+            prop_assert!(close(got[i], want[i], TOL), "got {} want {}\n{b}", got[i], want[i]);
+        }
+        let late = b.scheduled_late(window);
+        prop_assert_eq!(late.op_count(), b.op_count());
+        let (x, y) = (b.eval_arena_values(&a, &vals), late.eval_arena_values(&a, &vals));
+        for i in 0..ids.len() {
+            prop_assert!(x[i].to_bits() == y[i].to_bits() || (x[i].is_nan() && y[i].is_nan()), "{b}\n{late}");
+        }
+    }
+
     /// ∂e/∂v against a central difference with step 1e-5 (error ~1e-10
     /// truncation + 1e-11 rounding); tolerance 1e-5 relative.
     #[test]

@@ -77,8 +77,8 @@ impl ::eom_sim::Model for BouncingBall {
         tau[0] = x0;
     }
     fn energy(&self, _t: f64, q: &[f64; 1], u: &[f64; 1]) -> [f64; 2] {
-        let x0 = u[0] * u[0];
-        let x1 = 0.5 * x0;
+        let x0 = 0.5 * u[0];
+        let x1 = u[0] * x0;
         let x2 = 9.81 * q[0];
         [x1, x2]
     }
@@ -398,8 +398,8 @@ impl BouncingBall {
         u: &[::eom_sim::Lanes<W>; 1],
         out: &mut [::eom_sim::Lanes<W>; 2],
     ) {
-        let x0 = u[0] * u[0];
-        let x1 = ::eom_sim::Lanes::<W>::splat(0.5) * x0;
+        let x0 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x1 = u[0] * x0;
         let x2 = ::eom_sim::Lanes::<W>::splat(9.81) * q[0];
         out[0] = x1;
         out[1] = x2;

@@ -51,33 +51,33 @@ impl ::eom_sim::Model for HeavyTop {
     fn qdot(&self, q: &[f64; 4], u: &[f64; 3], qdot: &mut [f64; 4]) {
         let x0 = q[1] * u[0];
         let x1 = q[3] * u[2];
-        let x2 = q[2] * u[1];
-        let x3 = x0 + x2;
-        let x4 = x1 + x3;
-        let x5 = 0.5 * x4;
-        let x6 = -x5;
-        let x7 = q[0] * u[0];
-        let x8 = q[3] * u[1];
-        let x9 = q[2] * u[2];
-        let x10 = x7 + x9;
-        let x11 = x10 - x8;
-        let x12 = 0.5 * x11;
-        let x13 = q[3] * u[0];
-        let x14 = q[1] * u[2];
-        let x15 = q[0] * u[1];
-        let x16 = x13 + x15;
-        let x17 = x16 - x14;
-        let x18 = 0.5 * x17;
-        let x19 = q[0] * u[2];
-        let x20 = q[1] * u[1];
-        let x21 = q[2] * u[0];
-        let x22 = x19 + x20;
-        let x23 = x22 - x21;
-        let x24 = 0.5 * x23;
-        qdot[0] = x6;
-        qdot[1] = x12;
-        qdot[2] = x18;
-        qdot[3] = x24;
+        let x2 = q[0] * u[0];
+        let x3 = q[2] * u[2];
+        let x4 = q[3] * u[0];
+        let x5 = q[0] * u[1];
+        let x6 = q[0] * u[2];
+        let x7 = q[1] * u[1];
+        let x8 = x0 + x1;
+        let x9 = q[2] * u[1];
+        let x10 = q[3] * u[1];
+        let x11 = x2 + x3;
+        let x12 = q[1] * u[2];
+        let x13 = x4 + x5;
+        let x14 = x6 + x7;
+        let x15 = q[2] * u[0];
+        let x16 = x8 + x9;
+        let x17 = x11 - x10;
+        let x18 = x13 - x12;
+        let x19 = x14 - x15;
+        let x20 = 0.5 * x16;
+        let x21 = 0.5 * x17;
+        let x22 = 0.5 * x18;
+        let x23 = 0.5 * x19;
+        let x24 = -x20;
+        qdot[0] = x24;
+        qdot[1] = x21;
+        qdot[2] = x22;
+        qdot[3] = x23;
     }
     /// Forward dynamics by the articulated-body algorithm (20 operations): `u̇ = M⁻¹ (τ − b)`.
     fn forward_dynamics(
@@ -89,27 +89,27 @@ impl ::eom_sim::Model for HeavyTop {
         udot: &mut [f64; 3],
     ) {
         let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = 0.06564102564102564 * tau[0];
-        let x3 = u[1] * u[2];
-        let x4 = 2.1333333333333333 * tau[1];
-        let x5 = u[0] * u[1];
-        let x6 = 0.9692307692307692 * x5;
-        let x7 = 0.06564102564102564 * tau[2];
-        let x8 = 0.9692307692307692 * x3;
-        let x9 = x0 + x1;
-        let x10 = 19.318153846153848 * x9;
-        let x11 = x2 + x10;
-        let x12 = x11 - 9.659076923076924;
-        let x13 = x12 - x8;
-        let x14 = q[1] * q[3];
-        let x15 = q[0] * q[2];
-        let x16 = x14 - x15;
-        let x17 = 19.318153846153848 * x16;
-        let x18 = x6 + x7;
-        let x19 = x17 + x18;
-        udot[0] = x13;
-        udot[1] = x4;
+        let x1 = 0.9692307692307692 * u[0];
+        let x2 = 0.9692307692307692 * u[1];
+        let x3 = q[2] * q[2];
+        let x4 = 0.06564102564102564 * tau[0];
+        let x5 = q[1] * q[3];
+        let x6 = q[0] * q[2];
+        let x7 = x4 - 9.659076923076924;
+        let x8 = u[1] * x1;
+        let x9 = 0.06564102564102564 * tau[2];
+        let x10 = u[2] * x2;
+        let x11 = x0 + x3;
+        let x12 = x5 - x6;
+        let x13 = x8 + x9;
+        let x14 = x7 - x10;
+        let x15 = 19.318153846153848 * x11;
+        let x16 = 19.318153846153848 * x12;
+        let x17 = 2.1333333333333333 * tau[1];
+        let x18 = x14 + x15;
+        let x19 = x13 + x16;
+        udot[0] = x18;
+        udot[1] = x17;
         udot[2] = x19;
     }
     fn mass_matrix(&self, _t: f64, _q: &[f64; 4], m: &mut [[f64; 3]; 3]) {
@@ -125,21 +125,21 @@ impl ::eom_sim::Model for HeavyTop {
     }
     fn bias(&self, _t: f64, q: &[f64; 4], u: &[f64; 3], b: &mut [f64; 3]) {
         let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = q[1] * q[3];
-        let x3 = q[0] * q[2];
-        let x4 = u[1] * u[2];
-        let x5 = 14.765625 * x4;
-        let x6 = u[0] * u[1];
-        let x7 = 147.15 + x5;
-        let x8 = x0 + x1;
-        let x9 = 294.3 * x8;
-        let x10 = x7 - x9;
-        let x11 = 14.765625 * x6;
-        let x12 = x3 - x2;
-        let x13 = 294.3 * x12;
-        let x14 = x13 - x11;
-        b[0] = x10;
+        let x1 = 14.765625 * u[1];
+        let x2 = q[2] * q[2];
+        let x3 = q[1] * q[3];
+        let x4 = q[0] * q[2];
+        let x5 = 14.765625 * u[0];
+        let x6 = u[2] * x1;
+        let x7 = x0 + x2;
+        let x8 = x4 - x3;
+        let x9 = 147.15 + x6;
+        let x10 = 294.3 * x7;
+        let x11 = u[1] * x5;
+        let x12 = 294.3 * x8;
+        let x13 = x9 - x10;
+        let x14 = x12 - x11;
+        b[0] = x13;
         b[1] = 0.0;
         b[2] = x14;
     }
@@ -152,107 +152,100 @@ impl ::eom_sim::Model for HeavyTop {
         tau: &mut [f64; 3],
     ) {
         let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = q[1] * q[3];
-        let x3 = q[0] * q[2];
-        let x4 = u[1] * u[2];
-        let x5 = 14.765625 * x4;
-        let x6 = u[0] * u[1];
-        let x7 = 15.234375 * udot[0];
-        let x8 = 0.46875 * udot[1];
+        let x1 = 14.765625 * u[1];
+        let x2 = 14.765625 * u[0];
+        let x3 = q[2] * q[2];
+        let x4 = q[1] * q[3];
+        let x5 = q[0] * q[2];
+        let x6 = 15.234375 * udot[0];
+        let x7 = u[2] * x1;
+        let x8 = 147.15 + x6;
         let x9 = 15.234375 * udot[2];
-        let x10 = x0 + x1;
-        let x11 = 294.3 * x10;
-        let x12 = 147.15 + x5;
-        let x13 = x7 + x12;
-        let x14 = x13 - x11;
-        let x15 = 14.765625 * x6;
-        let x16 = x3 - x2;
-        let x17 = 294.3 * x16;
-        let x18 = x9 + x17;
-        let x19 = x18 - x15;
-        tau[0] = x14;
-        tau[1] = x8;
+        let x10 = x0 + x3;
+        let x11 = u[1] * x2;
+        let x12 = x5 - x4;
+        let x13 = x7 + x8;
+        let x14 = 294.3 * x10;
+        let x15 = x9 - x11;
+        let x16 = 294.3 * x12;
+        let x17 = 0.46875 * udot[1];
+        let x18 = x13 - x14;
+        let x19 = x15 + x16;
+        tau[0] = x18;
+        tau[1] = x17;
         tau[2] = x19;
     }
     fn energy(&self, _t: f64, q: &[f64; 4], u: &[f64; 3]) -> [f64; 2] {
-        let x0 = q[2] * q[3];
-        let x1 = q[0] * q[1];
-        let x2 = x0 + x1;
-        let x3 = 294.3 * x2;
-        let x4 = u[2] * u[2];
-        let x5 = u[0] * u[0];
-        let x6 = u[1] * u[1];
-        let x7 = 0.234375 * x6;
-        let x8 = x4 + x5;
-        let x9 = 7.6171875 * x8;
-        let x10 = x7 + x9;
-        [x10, x3]
+        let x0 = u[2] * u[2];
+        let x1 = u[0] * u[0];
+        let x2 = q[2] * q[3];
+        let x3 = 0.234375 * u[1];
+        let x4 = q[0] * q[1];
+        let x5 = x0 + x1;
+        let x6 = x2 + x4;
+        let x7 = u[1] * x3;
+        let x8 = 7.6171875 * x5;
+        let x9 = 294.3 * x6;
+        let x10 = x7 + x8;
+        [x10, x9]
     }
     fn momentum(&self, _t: f64, q: &[f64; 4], u: &[f64; 3]) -> [f64; 6] {
-        let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = q[3] * q[3];
-        let x3 = 2.0 * x2;
-        let x4 = 2.0 * x1;
-        let x5 = 1.0 - x3;
-        let x6 = x5 - x4;
-        let x7 = q[0] * q[3];
-        let x8 = q[1] * q[2];
-        let x9 = 2.0 * x8;
-        let x10 = 2.0 * x7;
-        let x11 = x9 - x10;
-        let x12 = q[0] * q[2];
-        let x13 = 2.0 * x12;
-        let x14 = q[1] * q[3];
-        let x15 = 2.0 * x14;
-        let x16 = x13 + x15;
-        let x17 = x9 + x10;
-        let x18 = 2.0 * x0;
-        let x19 = 1.0 - x18;
-        let x20 = x19 - x3;
-        let x21 = q[0] * q[1];
-        let x22 = q[2] * q[3];
-        let x23 = 2.0 * x22;
-        let x24 = 2.0 * x21;
-        let x25 = x23 - x24;
-        let x26 = x15 - x13;
-        let x27 = x23 + x24;
-        let x28 = x19 - x4;
-        let x29 = u[2] * x6;
-        let x30 = u[0] * x16;
-        let x31 = x30 - x29;
-        let x32 = 15.0 * x31;
+        let x0 = 2.0 * q[3];
+        let x1 = 2.0 * q[1];
+        let x2 = 2.0 * q[2];
+        let x3 = 2.0 * q[0];
+        let x4 = q[3] * x0;
+        let x5 = q[1] * x1;
+        let x6 = 1.0 - x4;
+        let x7 = q[2] * x2;
+        let x8 = q[2] * x1;
+        let x9 = q[3] * x3;
+        let x10 = q[2] * x3;
+        let x11 = q[3] * x1;
+        let x12 = 1.0 - x5;
+        let x13 = q[3] * x2;
+        let x14 = q[1] * x3;
+        let x15 = x6 - x7;
+        let x16 = x10 + x11;
+        let x17 = x8 + x9;
+        let x18 = x13 - x14;
+        let x19 = x11 - x10;
+        let x20 = x12 - x7;
+        let x21 = u[0] * x15;
+        let x22 = u[2] * x16;
+        let x23 = u[0] * x17;
+        let x24 = u[2] * x18;
+        let x25 = u[0] * x19;
+        let x26 = u[2] * x20;
+        let x27 = 0.46875 * u[1];
+        let x28 = x8 - x9;
+        let x29 = x12 - x4;
+        let x30 = x13 + x14;
+        let x31 = u[2] * x15;
+        let x32 = u[0] * x16;
         let x33 = u[2] * x17;
-        let x34 = u[0] * x25;
-        let x35 = x34 - x33;
-        let x36 = 15.0 * x35;
-        let x37 = u[2] * x26;
-        let x38 = u[0] * x28;
-        let x39 = x38 - x37;
-        let x40 = 15.0 * x39;
-        let x41 = u[0] * x6;
-        let x42 = u[1] * x11;
-        let x43 = 0.46875 * x42;
-        let x44 = u[2] * x16;
-        let x45 = x41 + x44;
-        let x46 = 15.234375 * x45;
-        let x47 = x43 + x46;
-        let x48 = u[0] * x17;
-        let x49 = u[1] * x20;
-        let x50 = 0.46875 * x49;
-        let x51 = u[2] * x25;
-        let x52 = x48 + x51;
-        let x53 = 15.234375 * x52;
-        let x54 = x50 + x53;
-        let x55 = u[0] * x26;
-        let x56 = u[1] * x27;
-        let x57 = 0.46875 * x56;
-        let x58 = u[2] * x28;
-        let x59 = x55 + x58;
-        let x60 = 15.234375 * x59;
-        let x61 = x57 + x60;
-        [x47, x54, x61, x32, x36, x40]
+        let x34 = u[0] * x18;
+        let x35 = u[2] * x19;
+        let x36 = u[0] * x20;
+        let x37 = x21 + x22;
+        let x38 = x23 + x24;
+        let x39 = x25 + x26;
+        let x40 = x32 - x31;
+        let x41 = x34 - x33;
+        let x42 = x36 - x35;
+        let x43 = x27 * x28;
+        let x44 = 15.234375 * x37;
+        let x45 = x27 * x29;
+        let x46 = 15.234375 * x38;
+        let x47 = x27 * x30;
+        let x48 = 15.234375 * x39;
+        let x49 = 15.0 * x40;
+        let x50 = 15.0 * x41;
+        let x51 = 15.0 * x42;
+        let x52 = x43 + x44;
+        let x53 = x45 + x46;
+        let x54 = x47 + x48;
+        [x52, x53, x54, x49, x50, x51]
     }
     fn outputs(
         &self,
@@ -266,17 +259,17 @@ impl ::eom_sim::Model for HeavyTop {
         let x1 = q[3] * q[3];
         let x2 = q[0] * q[3];
         let x3 = q[1] * q[2];
-        let x4 = x3 - x2;
-        let x5 = 2.0 * x4;
-        let x6 = x0 + x1;
-        let x7 = 2.0 * x6;
-        let x8 = 1.0 - x7;
-        let x9 = q[2] * q[3];
-        let x10 = q[0] * q[1];
-        let x11 = x9 + x10;
-        let x12 = 2.0 * x11;
-        out[0] = x5;
-        out[1] = x8;
+        let x4 = x0 + x1;
+        let x5 = q[2] * q[3];
+        let x6 = q[0] * q[1];
+        let x7 = x3 - x2;
+        let x8 = 2.0 * x4;
+        let x9 = x5 + x6;
+        let x10 = 2.0 * x7;
+        let x11 = 1.0 - x8;
+        let x12 = 2.0 * x9;
+        out[0] = x10;
+        out[1] = x11;
         out[2] = x12;
     }
     const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
@@ -485,42 +478,41 @@ impl ::eom_sim::ConstrainedModel for HeavyTop {
 }
 /// Generated functions beyond the model trait's.
 impl HeavyTop {
-    /// Partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed (25 operations); `top_tip_x`, `top_tip_y`, `top_tip_z`.
+    /// Partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed (24 operations); `top_tip_x`, `top_tip_y`, `top_tip_z`.
     pub fn marker_jacobians(&self, _t: f64, q: &[f64; 4], out: &mut [f64; 9]) {
-        let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = q[3] * q[3];
-        let x3 = 2.0 * x2;
-        let x4 = 2.0 * x1;
-        let x5 = q[0] * q[3];
-        let x6 = q[0] * q[2];
-        let x7 = 2.0 * x6;
-        let x8 = q[1] * q[3];
-        let x9 = 2.0 * x8;
-        let x10 = x7 + x9;
-        let x11 = q[0] * q[1];
-        let x12 = q[2] * q[3];
-        let x13 = x12 - x11;
-        let x14 = 2.0 * x13;
-        let x15 = 2.0 * x0;
-        let x16 = 1.0 - x15;
-        let x17 = x16 - x4;
-        let x18 = x3 + x4;
-        let x19 = x18 - 1.0;
-        let x20 = q[1] * q[2];
-        let x21 = x5 + x20;
-        let x22 = 2.0 * x21;
-        let x23 = -x22;
-        let x24 = x7 - x9;
-        out[0] = x10;
+        let x0 = 2.0 * q[3];
+        let x1 = 2.0 * q[1];
+        let x2 = q[0] * q[3];
+        let x3 = q[1] * q[2];
+        let x4 = 2.0 * q[2];
+        let x5 = 2.0 * q[0];
+        let x6 = q[3] * x0;
+        let x7 = q[0] * q[1];
+        let x8 = q[2] * q[3];
+        let x9 = q[1] * x1;
+        let x10 = x2 + x3;
+        let x11 = x6 - 1.0;
+        let x12 = q[2] * x4;
+        let x13 = q[2] * x5;
+        let x14 = q[3] * x1;
+        let x15 = x8 - x7;
+        let x16 = 1.0 - x9;
+        let x17 = 2.0 * x10;
+        let x18 = x13 + x14;
+        let x19 = 2.0 * x15;
+        let x20 = x16 - x12;
+        let x21 = x11 + x12;
+        let x22 = x13 - x14;
+        let x23 = -x17;
+        out[0] = x18;
         out[1] = 0.0;
-        out[2] = x19;
-        out[3] = x14;
+        out[2] = x21;
+        out[3] = x19;
         out[4] = 0.0;
         out[5] = x23;
-        out[6] = x17;
+        out[6] = x20;
         out[7] = 0.0;
-        out[8] = x24;
+        out[8] = x22;
     }
 }
 /// The generated functions over lanes: `W` states per call (see
@@ -535,9 +527,9 @@ impl HeavyTop {
     ) {
         let x0 = q[1] * u[0];
         let x1 = q[3] * u[2];
-        let x2 = q[2] * u[1];
-        let x3 = x0 + x2;
-        let x4 = x1 + x3;
+        let x2 = x0 + x1;
+        let x3 = q[2] * u[1];
+        let x4 = x2 + x3;
         let x5 = ::eom_sim::Lanes::<W>::splat(0.5) * x4;
         let x6 = -x5;
         let x7 = q[0] * u[0];
@@ -554,9 +546,9 @@ impl HeavyTop {
         let x18 = ::eom_sim::Lanes::<W>::splat(0.5) * x17;
         let x19 = q[0] * u[2];
         let x20 = q[1] * u[1];
-        let x21 = q[2] * u[0];
-        let x22 = x19 + x20;
-        let x23 = x22 - x21;
+        let x21 = x19 + x20;
+        let x22 = q[2] * u[0];
+        let x23 = x21 - x22;
         let x24 = ::eom_sim::Lanes::<W>::splat(0.5) * x23;
         out[0] = x6;
         out[1] = x12;
@@ -573,27 +565,27 @@ impl HeavyTop {
         out: &mut [::eom_sim::Lanes<W>; 3],
     ) {
         let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = ::eom_sim::Lanes::<W>::splat(0.06564102564102564) * tau[0];
-        let x3 = u[1] * u[2];
-        let x4 = ::eom_sim::Lanes::<W>::splat(2.1333333333333333) * tau[1];
-        let x5 = u[0] * u[1];
-        let x6 = ::eom_sim::Lanes::<W>::splat(0.9692307692307692) * x5;
-        let x7 = ::eom_sim::Lanes::<W>::splat(0.06564102564102564) * tau[2];
-        let x8 = ::eom_sim::Lanes::<W>::splat(0.9692307692307692) * x3;
-        let x9 = x0 + x1;
-        let x10 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x9;
-        let x11 = x2 + x10;
-        let x12 = x11 - ::eom_sim::Lanes::<W>::splat(9.659076923076924);
-        let x13 = x12 - x8;
-        let x14 = q[1] * q[3];
-        let x15 = q[0] * q[2];
-        let x16 = x14 - x15;
-        let x17 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x16;
-        let x18 = x6 + x7;
-        let x19 = x17 + x18;
-        out[0] = x13;
-        out[1] = x4;
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.9692307692307692) * u[0];
+        let x2 = ::eom_sim::Lanes::<W>::splat(0.9692307692307692) * u[1];
+        let x3 = q[2] * q[2];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.06564102564102564) * tau[0];
+        let x5 = x4 - ::eom_sim::Lanes::<W>::splat(9.659076923076924);
+        let x6 = ::eom_sim::Lanes::<W>::splat(2.1333333333333333) * tau[1];
+        let x7 = u[1] * x1;
+        let x8 = ::eom_sim::Lanes::<W>::splat(0.06564102564102564) * tau[2];
+        let x9 = x7 + x8;
+        let x10 = u[2] * x2;
+        let x11 = x5 - x10;
+        let x12 = x0 + x3;
+        let x13 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x12;
+        let x14 = x11 + x13;
+        let x15 = q[1] * q[3];
+        let x16 = q[0] * q[2];
+        let x17 = x15 - x16;
+        let x18 = ::eom_sim::Lanes::<W>::splat(19.318153846153848) * x17;
+        let x19 = x9 + x18;
+        out[0] = x14;
+        out[1] = x6;
         out[2] = x19;
     }
     /// `mass_matrix` of `W` states at once, one per lane (0 operations per state): mass matrix `M(q)`, by rows. Arguments `t`, `q` as `mass_matrix`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("mass_matrix")`'s result.
@@ -622,18 +614,18 @@ impl HeavyTop {
         out: &mut [::eom_sim::Lanes<W>; 3],
     ) {
         let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = q[1] * q[3];
-        let x3 = q[0] * q[2];
-        let x4 = u[1] * u[2];
-        let x5 = ::eom_sim::Lanes::<W>::splat(14.765625) * x4;
-        let x6 = u[0] * u[1];
-        let x7 = ::eom_sim::Lanes::<W>::splat(147.15) + x5;
-        let x8 = x0 + x1;
+        let x1 = ::eom_sim::Lanes::<W>::splat(14.765625) * u[1];
+        let x2 = ::eom_sim::Lanes::<W>::splat(14.765625) * u[0];
+        let x3 = q[2] * q[2];
+        let x4 = q[1] * q[3];
+        let x5 = q[0] * q[2];
+        let x6 = u[2] * x1;
+        let x7 = ::eom_sim::Lanes::<W>::splat(147.15) + x6;
+        let x8 = x0 + x3;
         let x9 = ::eom_sim::Lanes::<W>::splat(294.3) * x8;
         let x10 = x7 - x9;
-        let x11 = ::eom_sim::Lanes::<W>::splat(14.765625) * x6;
-        let x12 = x3 - x2;
+        let x11 = u[1] * x2;
+        let x12 = x5 - x4;
         let x13 = ::eom_sim::Lanes::<W>::splat(294.3) * x12;
         let x14 = x13 - x11;
         out[0] = x10;
@@ -650,27 +642,27 @@ impl HeavyTop {
         out: &mut [::eom_sim::Lanes<W>; 3],
     ) {
         let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = q[1] * q[3];
-        let x3 = q[0] * q[2];
-        let x4 = u[1] * u[2];
-        let x5 = ::eom_sim::Lanes::<W>::splat(14.765625) * x4;
-        let x6 = u[0] * u[1];
+        let x1 = ::eom_sim::Lanes::<W>::splat(14.765625) * u[1];
+        let x2 = ::eom_sim::Lanes::<W>::splat(14.765625) * u[0];
+        let x3 = q[2] * q[2];
+        let x4 = q[1] * q[3];
+        let x5 = q[0] * q[2];
+        let x6 = u[2] * x1;
         let x7 = ::eom_sim::Lanes::<W>::splat(15.234375) * udot[0];
-        let x8 = ::eom_sim::Lanes::<W>::splat(0.46875) * udot[1];
-        let x9 = ::eom_sim::Lanes::<W>::splat(15.234375) * udot[2];
-        let x10 = x0 + x1;
-        let x11 = ::eom_sim::Lanes::<W>::splat(294.3) * x10;
-        let x12 = ::eom_sim::Lanes::<W>::splat(147.15) + x5;
-        let x13 = x7 + x12;
-        let x14 = x13 - x11;
-        let x15 = ::eom_sim::Lanes::<W>::splat(14.765625) * x6;
-        let x16 = x3 - x2;
-        let x17 = ::eom_sim::Lanes::<W>::splat(294.3) * x16;
-        let x18 = x9 + x17;
-        let x19 = x18 - x15;
+        let x8 = ::eom_sim::Lanes::<W>::splat(147.15) + x7;
+        let x9 = x6 + x8;
+        let x10 = ::eom_sim::Lanes::<W>::splat(0.46875) * udot[1];
+        let x11 = ::eom_sim::Lanes::<W>::splat(15.234375) * udot[2];
+        let x12 = x0 + x3;
+        let x13 = ::eom_sim::Lanes::<W>::splat(294.3) * x12;
+        let x14 = x9 - x13;
+        let x15 = u[1] * x2;
+        let x16 = x11 - x15;
+        let x17 = x5 - x4;
+        let x18 = ::eom_sim::Lanes::<W>::splat(294.3) * x17;
+        let x19 = x16 + x18;
         out[0] = x14;
-        out[1] = x8;
+        out[1] = x10;
         out[2] = x19;
     }
     /// `energy` of `W` states at once, one per lane (11 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
@@ -682,20 +674,20 @@ impl HeavyTop {
         out: &mut [::eom_sim::Lanes<W>; 2],
     ) {
         let x0 = q[2] * q[3];
-        let x1 = q[0] * q[1];
-        let x2 = x0 + x1;
-        let x3 = ::eom_sim::Lanes::<W>::splat(294.3) * x2;
-        let x4 = u[2] * u[2];
-        let x5 = u[0] * u[0];
-        let x6 = u[1] * u[1];
-        let x7 = ::eom_sim::Lanes::<W>::splat(0.234375) * x6;
-        let x8 = x4 + x5;
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.234375) * u[1];
+        let x2 = q[0] * q[1];
+        let x3 = x0 + x2;
+        let x4 = ::eom_sim::Lanes::<W>::splat(294.3) * x3;
+        let x5 = u[2] * u[2];
+        let x6 = u[0] * u[0];
+        let x7 = u[1] * x1;
+        let x8 = x5 + x6;
         let x9 = ::eom_sim::Lanes::<W>::splat(7.6171875) * x8;
         let x10 = x7 + x9;
         out[0] = x10;
-        out[1] = x3;
+        out[1] = x4;
     }
-    /// `momentum` of `W` states at once, one per lane (62 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
+    /// `momentum` of `W` states at once, one per lane (55 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
     pub fn momentum_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -703,74 +695,67 @@ impl HeavyTop {
         u: &[::eom_sim::Lanes<W>; 3],
         out: &mut [::eom_sim::Lanes<W>; 6],
     ) {
-        let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = q[3] * q[3];
-        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
-        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
-        let x5 = ::eom_sim::Lanes::<W>::splat(1.0) - x3;
-        let x6 = x5 - x4;
-        let x7 = q[0] * q[3];
-        let x8 = q[1] * q[2];
-        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
-        let x10 = ::eom_sim::Lanes::<W>::splat(2.0) * x7;
+        let x0 = ::eom_sim::Lanes::<W>::splat(2.0) * q[3];
+        let x1 = ::eom_sim::Lanes::<W>::splat(2.0) * q[2];
+        let x2 = ::eom_sim::Lanes::<W>::splat(2.0) * q[1];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * q[0];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.46875) * u[1];
+        let x5 = q[3] * x0;
+        let x6 = ::eom_sim::Lanes::<W>::splat(1.0) - x5;
+        let x7 = q[2] * x1;
+        let x8 = x6 - x7;
+        let x9 = q[2] * x2;
+        let x10 = q[3] * x3;
         let x11 = x9 - x10;
-        let x12 = q[0] * q[2];
-        let x13 = ::eom_sim::Lanes::<W>::splat(2.0) * x12;
-        let x14 = q[1] * q[3];
-        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x14;
-        let x16 = x13 + x15;
-        let x17 = x9 + x10;
-        let x18 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
-        let x19 = ::eom_sim::Lanes::<W>::splat(1.0) - x18;
-        let x20 = x19 - x3;
-        let x21 = q[0] * q[1];
-        let x22 = q[2] * q[3];
-        let x23 = ::eom_sim::Lanes::<W>::splat(2.0) * x22;
-        let x24 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
-        let x25 = x23 - x24;
-        let x26 = x15 - x13;
-        let x27 = x23 + x24;
-        let x28 = x19 - x4;
-        let x29 = u[2] * x6;
-        let x30 = u[0] * x16;
+        let x12 = q[2] * x3;
+        let x13 = q[3] * x2;
+        let x14 = x12 + x13;
+        let x15 = x9 + x10;
+        let x16 = q[1] * x2;
+        let x17 = ::eom_sim::Lanes::<W>::splat(1.0) - x16;
+        let x18 = x17 - x5;
+        let x19 = q[3] * x1;
+        let x20 = q[1] * x3;
+        let x21 = x19 - x20;
+        let x22 = x13 - x12;
+        let x23 = x19 + x20;
+        let x24 = x17 - x7;
+        let x25 = u[2] * x8;
+        let x26 = u[0] * x14;
+        let x27 = x26 - x25;
+        let x28 = ::eom_sim::Lanes::<W>::splat(15.0) * x27;
+        let x29 = u[2] * x15;
+        let x30 = u[0] * x21;
         let x31 = x30 - x29;
         let x32 = ::eom_sim::Lanes::<W>::splat(15.0) * x31;
-        let x33 = u[2] * x17;
-        let x34 = u[0] * x25;
+        let x33 = u[2] * x22;
+        let x34 = u[0] * x24;
         let x35 = x34 - x33;
         let x36 = ::eom_sim::Lanes::<W>::splat(15.0) * x35;
-        let x37 = u[2] * x26;
-        let x38 = u[0] * x28;
-        let x39 = x38 - x37;
-        let x40 = ::eom_sim::Lanes::<W>::splat(15.0) * x39;
-        let x41 = u[0] * x6;
-        let x42 = u[1] * x11;
-        let x43 = ::eom_sim::Lanes::<W>::splat(0.46875) * x42;
-        let x44 = u[2] * x16;
-        let x45 = x41 + x44;
-        let x46 = ::eom_sim::Lanes::<W>::splat(15.234375) * x45;
-        let x47 = x43 + x46;
-        let x48 = u[0] * x17;
-        let x49 = u[1] * x20;
-        let x50 = ::eom_sim::Lanes::<W>::splat(0.46875) * x49;
-        let x51 = u[2] * x25;
-        let x52 = x48 + x51;
+        let x37 = u[0] * x8;
+        let x38 = x4 * x11;
+        let x39 = u[2] * x14;
+        let x40 = x37 + x39;
+        let x41 = ::eom_sim::Lanes::<W>::splat(15.234375) * x40;
+        let x42 = x38 + x41;
+        let x43 = u[0] * x15;
+        let x44 = x4 * x18;
+        let x45 = u[2] * x21;
+        let x46 = x43 + x45;
+        let x47 = ::eom_sim::Lanes::<W>::splat(15.234375) * x46;
+        let x48 = x44 + x47;
+        let x49 = u[0] * x22;
+        let x50 = x4 * x23;
+        let x51 = u[2] * x24;
+        let x52 = x49 + x51;
         let x53 = ::eom_sim::Lanes::<W>::splat(15.234375) * x52;
         let x54 = x50 + x53;
-        let x55 = u[0] * x26;
-        let x56 = u[1] * x27;
-        let x57 = ::eom_sim::Lanes::<W>::splat(0.46875) * x56;
-        let x58 = u[2] * x28;
-        let x59 = x55 + x58;
-        let x60 = ::eom_sim::Lanes::<W>::splat(15.234375) * x59;
-        let x61 = x57 + x60;
-        out[0] = x47;
-        out[1] = x54;
-        out[2] = x61;
-        out[3] = x32;
-        out[4] = x36;
-        out[5] = x40;
+        out[0] = x42;
+        out[1] = x48;
+        out[2] = x54;
+        out[3] = x28;
+        out[4] = x32;
+        out[5] = x36;
     }
     /// `outputs` of `W` states at once, one per lane (13 operations per state): the model's requested outputs (marker positions and velocities in world axes, joint reactions in the child joint frame). Arguments `t`, `q`, `u`, `udot` as `outputs`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (3 entries per lane) laid out as `Model::evaluate("outputs")`'s result.
     pub fn outputs_lanes<const W: usize>(
@@ -798,47 +783,46 @@ impl HeavyTop {
         out[1] = x8;
         out[2] = x12;
     }
-    /// `marker_jacobians` of `W` states at once, one per lane (25 operations per state): partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed. Arguments `t`, `q` as `marker_jacobians`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("marker_jacobians")`'s result.
+    /// `marker_jacobians` of `W` states at once, one per lane (24 operations per state): partial velocities `∂v/∂u_k` of the requested marker positions (world axes): marker by marker, axis by axis, speed by speed. Arguments `t`, `q` as `marker_jacobians`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (9 entries per lane) laid out as `Model::evaluate("marker_jacobians")`'s result.
     pub fn marker_jacobians_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
         q: &[::eom_sim::Lanes<W>; 4],
         out: &mut [::eom_sim::Lanes<W>; 9],
     ) {
-        let x0 = q[1] * q[1];
-        let x1 = q[2] * q[2];
-        let x2 = q[3] * q[3];
-        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * x2;
-        let x4 = ::eom_sim::Lanes::<W>::splat(2.0) * x1;
-        let x5 = q[0] * q[3];
-        let x6 = q[0] * q[2];
-        let x7 = ::eom_sim::Lanes::<W>::splat(2.0) * x6;
-        let x8 = q[1] * q[3];
-        let x9 = ::eom_sim::Lanes::<W>::splat(2.0) * x8;
-        let x10 = x7 + x9;
+        let x0 = ::eom_sim::Lanes::<W>::splat(2.0) * q[3];
+        let x1 = ::eom_sim::Lanes::<W>::splat(2.0) * q[2];
+        let x2 = ::eom_sim::Lanes::<W>::splat(2.0) * q[0];
+        let x3 = ::eom_sim::Lanes::<W>::splat(2.0) * q[1];
+        let x4 = q[3] * x0;
+        let x5 = x4 - ::eom_sim::Lanes::<W>::splat(1.0);
+        let x6 = q[2] * x1;
+        let x7 = q[0] * q[3];
+        let x8 = q[2] * x2;
+        let x9 = q[3] * x3;
+        let x10 = x8 + x9;
         let x11 = q[0] * q[1];
         let x12 = q[2] * q[3];
         let x13 = x12 - x11;
         let x14 = ::eom_sim::Lanes::<W>::splat(2.0) * x13;
-        let x15 = ::eom_sim::Lanes::<W>::splat(2.0) * x0;
+        let x15 = q[1] * x3;
         let x16 = ::eom_sim::Lanes::<W>::splat(1.0) - x15;
-        let x17 = x16 - x4;
-        let x18 = x3 + x4;
-        let x19 = x18 - ::eom_sim::Lanes::<W>::splat(1.0);
-        let x20 = q[1] * q[2];
-        let x21 = x5 + x20;
-        let x22 = ::eom_sim::Lanes::<W>::splat(2.0) * x21;
-        let x23 = -x22;
-        let x24 = x7 - x9;
+        let x17 = x16 - x6;
+        let x18 = x5 + x6;
+        let x19 = q[1] * q[2];
+        let x20 = x7 + x19;
+        let x21 = ::eom_sim::Lanes::<W>::splat(2.0) * x20;
+        let x22 = -x21;
+        let x23 = x8 - x9;
         out[0] = x10;
         out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
-        out[2] = x19;
+        out[2] = x18;
         out[3] = x14;
         out[4] = ::eom_sim::Lanes::<W>::splat(0.0);
-        out[5] = x23;
+        out[5] = x22;
         out[6] = x17;
         out[7] = ::eom_sim::Lanes::<W>::splat(0.0);
-        out[8] = x24;
+        out[8] = x23;
     }
 }
 /// The batched functions by name: `qdot`, `forward_dynamics`, `mass_matrix`, `bias`, `inverse_dynamics`, `energy`, `momentum`, `outputs`, `marker_jacobians`.

@@ -94,8 +94,8 @@ impl ::eom_sim::Model for Pendulum {
     }
     fn energy(&self, _t: f64, q: &[f64; 1], u: &[f64; 1]) -> [f64; 2] {
         let x0 = f64::cos(q[0]);
-        let x1 = u[0] * u[0];
-        let x2 = 0.5 * x1;
+        let x1 = 0.5 * u[0];
+        let x2 = u[0] * x1;
         let x3 = (-9.81) * x0;
         [x2, x3]
     }
@@ -114,21 +114,21 @@ impl ::eom_sim::Model for Pendulum {
         out: &mut [f64; 9],
     ) {
         let (x0, x1) = f64::sin_cos(q[0]);
-        let x2 = -x1;
-        let x3 = 9.81 * x0;
-        let x4 = 9.81 * x1;
-        let x5 = u[0] * u[0];
-        let x6 = x4 + x5;
-        let x7 = udot[0] + x3;
+        let x2 = 9.81 * x0;
+        let x3 = 9.81 * x1;
+        let x4 = u[0] * u[0];
+        let x5 = x3 + x4;
+        let x6 = udot[0] + x2;
+        let x7 = -x1;
         out[0] = x0;
-        out[1] = x2;
+        out[1] = x7;
         out[2] = 0.0;
-        out[3] = x7;
-        out[4] = x6;
+        out[3] = x6;
+        out[4] = x5;
         out[5] = 0.0;
         out[6] = 0.0;
         out[7] = 0.0;
-        out[8] = x7;
+        out[8] = x6;
     }
     const FUNCTIONS: &'static [::eom_sim::FunctionInfo] = &[
         ::eom_sim::FunctionInfo {
@@ -424,8 +424,8 @@ impl Pendulum {
         out: &mut [::eom_sim::Lanes<W>; 2],
     ) {
         let x0 = q[0].cos();
-        let x1 = u[0] * u[0];
-        let x2 = ::eom_sim::Lanes::<W>::splat(0.5) * x1;
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.5) * u[0];
+        let x2 = u[0] * x1;
         let x3 = ::eom_sim::Lanes::<W>::splat(-9.81) * x0;
         out[0] = x2;
         out[1] = x3;

@@ -86,19 +86,19 @@ impl ::eom_sim::Model for PendulumRod {
     }
     fn energy(&self, _t: f64, q: &[f64; 1], u: &[f64; 1]) -> [f64; 2] {
         let x0 = f64::sin(q[0]);
-        let x1 = u[0] * u[0];
-        let x2 = 0.0075 * x1;
+        let x1 = 0.0075 * u[0];
+        let x2 = u[0] * x1;
         let x3 = 0.73575 * x0;
         [x2, x3]
     }
     fn momentum(&self, _t: f64, q: &[f64; 1], u: &[f64; 1]) -> [f64; 6] {
         let (x0, x1) = f64::sin_cos(q[0]);
-        let x2 = 0.015 * u[0];
-        let x3 = u[0] * x0;
-        let x4 = (-0.075) * x3;
-        let x5 = u[0] * x1;
-        let x6 = 0.075 * x5;
-        [0.0, 0.0, x2, x4, x6, 0.0]
+        let x2 = (-0.075) * u[0];
+        let x3 = 0.075 * u[0];
+        let x4 = 0.015 * u[0];
+        let x5 = x0 * x2;
+        let x6 = x1 * x3;
+        [0.0, 0.0, x4, x5, x6, 0.0]
     }
     fn outputs(
         &self,
@@ -378,8 +378,8 @@ impl PendulumRod {
         out: &mut [::eom_sim::Lanes<W>; 2],
     ) {
         let x0 = q[0].sin();
-        let x1 = u[0] * u[0];
-        let x2 = ::eom_sim::Lanes::<W>::splat(0.0075) * x1;
+        let x1 = ::eom_sim::Lanes::<W>::splat(0.0075) * u[0];
+        let x2 = u[0] * x1;
         let x3 = ::eom_sim::Lanes::<W>::splat(0.73575) * x0;
         out[0] = x2;
         out[1] = x3;
@@ -393,15 +393,15 @@ impl PendulumRod {
         out: &mut [::eom_sim::Lanes<W>; 6],
     ) {
         let (x0, x1) = q[0].sin_cos();
-        let x2 = ::eom_sim::Lanes::<W>::splat(0.015) * u[0];
-        let x3 = u[0] * x0;
-        let x4 = ::eom_sim::Lanes::<W>::splat(-0.075) * x3;
-        let x5 = u[0] * x1;
-        let x6 = ::eom_sim::Lanes::<W>::splat(0.075) * x5;
+        let x2 = ::eom_sim::Lanes::<W>::splat(-0.075) * u[0];
+        let x3 = ::eom_sim::Lanes::<W>::splat(0.075) * u[0];
+        let x4 = ::eom_sim::Lanes::<W>::splat(0.015) * u[0];
+        let x5 = x0 * x2;
+        let x6 = x1 * x3;
         out[0] = ::eom_sim::Lanes::<W>::splat(0.0);
         out[1] = ::eom_sim::Lanes::<W>::splat(0.0);
-        out[2] = x2;
-        out[3] = x4;
+        out[2] = x4;
+        out[3] = x5;
         out[4] = x6;
         out[5] = ::eom_sim::Lanes::<W>::splat(0.0);
     }

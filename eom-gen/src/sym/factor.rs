@@ -105,7 +105,7 @@ pub(super) struct SumTrees {
 }
 
 impl SumTrees {
-    fn of(p: &Program) -> SumTrees {
+    pub(super) fn of(p: &Program) -> SumTrees {
         let n = p.n_tmps as usize;
         let mut uses = vec![0usize; n + 1];
         for ins in &p.instrs {
@@ -153,17 +153,17 @@ impl SumTrees {
     }
 
     /// Whether `o` is a temporary defined by a sum.
-    fn is_sum(&self, o: Operand) -> bool {
+    pub(super) fn is_sum(&self, o: Operand) -> bool {
         matches!(o, Operand::Tmp(t) if self.def[t as usize].as_ref().is_some_and(is_sum))
     }
 
     /// Whether `ins` is the root of a sum tree.
-    fn is_root(&self, ins: &Instr) -> bool {
+    pub(super) fn is_root(&self, ins: &Instr) -> bool {
         is_sum(&ins.op) && !self.folded[ins.dst as usize]
     }
 
     /// The terms of the sum tree rooted at temporary `root`.
-    fn terms(&self, root: u32) -> Vec<Term> {
+    pub(super) fn terms(&self, root: u32) -> Vec<Term> {
         let mut terms = Vec::new();
         self.collect(Operand::Tmp(root), false, &mut terms);
         terms

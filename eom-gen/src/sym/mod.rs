@@ -55,6 +55,7 @@
 //! ```
 
 mod arena;
+mod balance;
 mod build;
 mod diff;
 mod eval;
@@ -69,6 +70,7 @@ mod pythagoras;
 mod reimport;
 mod rules;
 mod scalar;
+mod schedule;
 mod sexpr;
 mod simplify;
 mod subst;

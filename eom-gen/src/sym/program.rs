@@ -604,6 +604,10 @@ impl Arena {
                 }
                 p = q;
             }
+            // Sums as trees of least latency: same operations, shorter chains.
+            p.balance_products();
+            p.balance_sums();
+            p.optimize();
         } else {
             p.remove_dead();
         }
