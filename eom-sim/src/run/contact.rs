@@ -97,7 +97,9 @@ pub enum ContactEventKind {
     Release,
     /// A sliding contact stopped and is held by friction (`v_t = 0`,
     /// `‖λ_t‖ ≤ μ λ`); a tangential impulse takes what is left of its
-    /// sliding speed (below the slip speed, see `Run::settle`).
+    /// sliding speed (below the slip speed, see `Run::settle`). Located
+    /// where the slide's speed falls through half its slip speed, or
+    /// where it reverses (`v_t · s` falling through zero).
     Stick,
     /// A sticking contact starts to slide: the friction force it needs
     /// reached the cone `‖λ_t‖ = μ λ`.
