@@ -97,7 +97,9 @@ pub enum ContactEventKind {
     Release,
     /// A sliding contact stopped and is held by friction (`v_t = 0`,
     /// `‖λ_t‖ ≤ μ λ`); a tangential impulse takes what is left of its
-    /// sliding speed (below the slip speed, see `Run::settle`).
+    /// sliding speed (below the slip speed, see `Run::settle`). Located
+    /// where the slide's speed falls through half its slip speed, or
+    /// where it reverses (`v_t · s` falling through zero).
     Stick,
     /// A sticking contact starts to slide: the friction force it needs
     /// reached the cone `‖λ_t‖ = μ λ`.
@@ -890,16 +892,39 @@ impl<S: Simulate + ?Sized> Run<'_, S> {
                         Direction::Falling,
                         EventAction::Stop,
                     )),
-                    // A slide stops (or turns by more than a right angle):
-                    // v_t · s falls through zero.
-                    Some(Slide::Slip(s0)) => list.push(Event::new(
-                        move |t: f64, y: &[f64; N]| {
-                            rows(self.model, nk, t, &y[..nq], &y[nq..nq + nu])
-                                .map_or(f64::NAN, |r| r.vt[i][0] * s0[0] + r.vt[i][1] * s0[1])
-                        },
-                        Direction::Falling,
-                        EventAction::Stop,
-                    )),
+                    // A slide reverses (or turns by more than a right
+                    // angle): v_t · s falls through zero.
+                    Some(Slide::Slip(s0)) => {
+                        list.push(Event::new(
+                            move |t: f64, y: &[f64; N]| {
+                                rows(self.model, nk, t, &y[..nq], &y[nq..nq + nu])
+                                    .map_or(f64::NAN, |r| r.vt[i][0] * s0[0] + r.vt[i][1] * s0[1])
+                            },
+                            Direction::Falling,
+                            EventAction::Stop,
+                        ));
+                        // A slide stops: its speed falls through half its
+                        // slip speed (below which `settle` tests it for
+                        // sticking). A slide whose direction turns as it
+                        // slows (friction turns the body: one corner of a
+                        // box) reaches v_t = 0 with v_t · s > 0, and
+                        // without this event the integrator would follow
+                        // it into v_t = 0, where the sliding direction is
+                        // undefined, in steps of picoseconds.
+                        list.push(Event::new(
+                            move |t: f64, y: &[f64; N]| {
+                                rows(self.model, nk, t, &y[..nq], &y[nq..nq + nu]).map_or(
+                                    f64::NAN,
+                                    |r| {
+                                        let free = free_rates(self.model, free, t, y);
+                                        norm2(r.vt[i]) - 0.5 * self.slip_speed(&r, i, &free)
+                                    },
+                                )
+                            },
+                            Direction::Falling,
+                            EventAction::Stop,
+                        ));
+                    }
                     None => {}
                 }
             }
