@@ -308,22 +308,16 @@ fn pendulum_cable_with(e: f64, extra: &str) -> String {
     )
 }
 
-#[test]
-fn a_pendulums_hanging_cable_strikes_the_floor_by_newtons_law() {
-    let e = 0.5;
-    let (t_end, dt) = (0.25, 1e-3);
-    let report = simulate(&pendulum_cable(e), &run(t_end, dt, 0.8));
-    let impacts = finished_with_impacts_by_newton(&report, e, "pendulum_cable");
-    assert!(impacts >= 1, "the end node strikes the floor");
-}
-
 /// The pendulum's stiff cable at steps around 1e-3 s (issue #26, wt62):
-/// it should finish at each with every impact by Newton and Carnot. It
-/// does not yet: on main 0.8e-3, 1.1e-3 and 1.2e-3 s stop ("Newton
-/// failed"), and the runs that finish pass through states of 10²–10³ J
-/// (from −0.02 J): generalized-α restarted at `a = ÿ` after each event
-/// overshoots the cable's unresolved stiff modes (BENCHMARKS.md, "Contacts
-/// at cable nodes in mixed models").
+/// it should finish at each with every impact by Newton and Carnot and
+/// the energy never above its start. It does not yet: 0.8e-3, 1.1e-3 and
+/// 1.2e-3 s stop ("Newton failed"), and the runs that finish pass
+/// through states of 10²–10³ J (from −0.02 J): generalized-α restarted
+/// at `a = ÿ` after each event overshoots the cable's unresolved stiff
+/// modes (BENCHMARKS.md, "Contacts at cable nodes in mixed models"). This
+/// replaces the test at 1e-3 s alone, which passed on such a run (684 J
+/// at t = 0.219 s) because it checked the impacts only, and which a
+/// change of rounding in the rigid part turned into "Newton failed".
 #[test]
 #[ignore = "issue #26: the stiff cable's unresolved modes overshoot at each generalized-α restart (BENCHMARKS.md, wt62)"]
 fn a_pendulums_hanging_cable_strikes_the_floor_at_steps_around_1e_3() {
@@ -336,9 +330,35 @@ fn a_pendulums_hanging_cable_strikes_the_floor_at_steps_around_1e_3() {
     }
 }
 
+/// The models here are passive (gravity, damping, impacts): the energy
+/// before and after every contact event is never above the start by more
+/// than 1e-3 of the run's energy scale (generalized-α's energy error over
+/// these runs is far smaller: the block drop's largest energy is its start
+/// to 1e-16 J, the four-bar's 3.7 J throughout). Impacts checked one by
+/// one cannot see energy gained between them.
+fn energy_never_rises(report: &eom_sim::RunReport, label: &str) {
+    let e0 = report.energy[0];
+    let tol = 1e-3 * report.energy_scale.max(e0.abs()).max(1e-12);
+    for ev in &report.contact_events {
+        for en in [ev.energy_before, ev.energy_after] {
+            assert!(
+                en <= e0 + tol,
+                "{label}: energy {en} J at the event at t = {} above the start {e0} J",
+                ev.t
+            );
+        }
+    }
+    assert!(
+        report.energy[1] <= e0 + tol,
+        "{label}: energy {:?}",
+        report.energy
+    );
+}
+
 /// `report` finished, every impact obeys Newton's law with `e` and
-/// Carnot's energy loss ([`impacts_obey_newton_and_carnot`]), and the
-/// attachments and loops held to 1e-9 throughout; returns the impacts.
+/// Carnot's energy loss ([`impacts_obey_newton_and_carnot`]), the energy
+/// never rises ([`energy_never_rises`]), and the attachments and loops
+/// held to 1e-9 throughout; returns the impacts.
 fn finished_with_impacts_by_newton(report: &eom_sim::RunReport, e: f64, label: &str) -> usize {
     assert!(
         matches!(report.stop, eom_sim::Stop::Finished),
@@ -346,6 +366,7 @@ fn finished_with_impacts_by_newton(report: &eom_sim::RunReport, e: f64, label: &
         report.stop
     );
     let impacts = impacts_obey_newton_and_carnot(report, e, Some(1e-6));
+    energy_never_rises(report, label);
     let el = report.elements.as_ref().expect("element report");
     println!(
         "{label} e = {e}: {impacts} impacts, {} events, {} steps; largest |Φ| {:.1e}",
@@ -366,8 +387,14 @@ fn finished_with_impacts_by_newton(report: &eom_sim::RunReport, e: f64, label: &
 /// still has `ġ⁺ = −e ġ⁻` to 1e-9 and never raises the energy (the
 /// tangential impulse works too, so Carnot's one-row law does not apply),
 /// its tangential impulse lies in the cone `‖Λ_t‖ ≤ μ Λ`, and no event
-/// pulls.
+/// pulls, and the energy never rises ([`energy_never_rises`]).
+///
+/// Ignored: the same defect as the frictionless pendulum's above. At
+/// 1e-3 s the run ends at 1.29 J from 0 J (it passed before the energy
+/// check on that wrong run); at 0.5e-3 s it stops at t = 0.1213 s ("the
+/// rest impulse … would pull it onto its plane").
 #[test]
+#[ignore = "issue #26: the stiff cable's unresolved modes overshoot at each generalized-α restart (BENCHMARKS.md, wt62)"]
 fn a_pendulums_hanging_cable_with_friction_keeps_newton_and_coulomb() {
     let (e, mu) = (0.5, 0.3);
     let report = simulate(
@@ -380,6 +407,7 @@ fn a_pendulums_hanging_cable_with_friction_keeps_newton_and_coulomb() {
         report.stop
     );
     let impacts = impacts_obey_newton_and_carnot(&report, e, None);
+    energy_never_rises(&report, "pendulum_cable with friction");
     assert!(impacts >= 1, "the end node strikes the floor");
     for ev in report
         .contact_events

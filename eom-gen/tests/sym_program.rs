@@ -432,8 +432,14 @@ fn a_late_term_is_added_last_and_negations_become_subtractions() {
         matches!(root_op, Some(Op::Add(x, y) | Op::Sub(x, y)) if [x, y].iter().any(|o| matches!(o, Operand::Tmp(t) if divs.contains(t)))),
         "{p}"
     );
-    for pt in [[1.5, -0.5, 2.0, 0.25, 3.0, -1.0, 0.7], [-2.0, 1.0, 0.1, 0.2, 0.3, 0.4, 0.5]] {
+    for pt in [
+        [1.5, -0.5, 2.0, 0.25, 3.0, -1.0, 0.7],
+        [-2.0, 1.0, 0.1, 0.2, 0.3, 0.4, 0.5],
+    ] {
         let (want, got) = (before.eval(&pt)[0], p.eval(&pt)[0]);
-        assert!((got - want).abs() <= 1e-14 * want.abs().max(1.0), "{got} vs {want}");
+        assert!(
+            (got - want).abs() <= 1e-14 * want.abs().max(1.0),
+            "{got} vs {want}"
+        );
     }
 }

@@ -248,7 +248,14 @@ pub fn derive(kind: Kind) -> Kernels {
     };
     let lower = |a: &Arena, outs: &[(String, Id)]| {
         let outs: Vec<(&str, Id)> = outs.iter().map(|(s, id)| (s.as_str(), *id)).collect();
-        a.lower(&outs, LowerOptions::default())
+        // Lanes only, bound by throughput: chains, not trees.
+        a.lower(
+            &outs,
+            LowerOptions {
+                balance: false,
+                ..LowerOptions::default()
+            },
+        )
     };
     let fnames: Vec<String> = (0..n).map(|i| format!("f{i}")).collect();
     let mids: Vec<Id> = def.mass.iter().flatten().copied().collect();
@@ -609,7 +616,14 @@ fn derive_pass(a: &mut Arena, def: &Definition, elastic: bool) -> Pass {
     };
     let lower = |a: &Arena, outs: &[(String, Id)]| {
         let outs: Vec<(&str, Id)> = outs.iter().map(|(s, id)| (s.as_str(), *id)).collect();
-        a.lower(&outs, LowerOptions::default())
+        // Lanes only, bound by throughput: chains, not trees.
+        a.lower(
+            &outs,
+            LowerOptions {
+                balance: false,
+                ..LowerOptions::default()
+            },
+        )
     };
     let zip = |names: Vec<String>, ids: &[Id]| -> Vec<(String, Id)> {
         names.into_iter().zip(ids.iter().copied()).collect()

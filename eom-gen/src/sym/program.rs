@@ -214,6 +214,12 @@ pub struct LowerOptions {
     /// while it doubles lowering time; it pays off on graphs built raw or
     /// with fewer rules.
     pub second_round: bool,
+    /// With `optimize`, rebuild sums and products as trees of least
+    /// latency ([`Program::balance_sums`]): what one call at a time waits
+    /// on. Off for code that only runs in lanes and is bound by throughput
+    /// (the ANCF element kernels), where the wider trees keep more values
+    /// live and cost spills (BENCHMARKS.md, "Sums as trees").
+    pub balance: bool,
 }
 
 impl Default for LowerOptions {
@@ -222,6 +228,7 @@ impl Default for LowerOptions {
             cse: true,
             optimize: true,
             second_round: false,
+            balance: true,
         }
     }
 }
@@ -232,6 +239,7 @@ impl LowerOptions {
         cse: false,
         optimize: false,
         second_round: false,
+        balance: false,
     };
 }
 
@@ -605,9 +613,11 @@ impl Arena {
                 p = q;
             }
             // Sums as trees of least latency: same operations, shorter chains.
-            p.balance_products();
-            p.balance_sums();
-            p.optimize();
+            if opts.balance {
+                p.balance_products();
+                p.balance_sums();
+                p.optimize();
+            }
         } else {
             p.remove_dead();
         }
