@@ -231,3 +231,30 @@ where
         })
         .collect()
 }
+
+/// A step size or tolerances that `integrator` (of the models without
+/// cables) would not read, each an error naming the integrators it
+/// applies to: `--dt` (`dt`) is the fixed-step methods' step, `--rtol`
+/// and `--atol` (`tolerances`) the adaptive methods' control.
+pub fn unread_step_options(
+    integrator: eom_sim::Integrator,
+    dt: bool,
+    tolerances: bool,
+) -> Vec<String> {
+    let mut problems = Vec::new();
+    if integrator.is_adaptive() && dt {
+        problems.push(format!(
+            "--dt sets the step of the fixed-step integrators ({}); {integrator} chooses its own \
+             steps by --rtol and --atol",
+            eom_sim::Integrator::names_where(|i| i.runs_odes() && !i.is_adaptive())
+        ));
+    }
+    if !integrator.is_adaptive() && integrator.runs_odes() && tolerances {
+        problems.push(format!(
+            "--rtol and --atol control the steps of the adaptive integrators ({}); {integrator} \
+             takes fixed steps of --dt",
+            eom_sim::Integrator::names_where(eom_sim::Integrator::is_adaptive)
+        ));
+    }
+    problems
+}

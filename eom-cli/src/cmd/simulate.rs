@@ -2,7 +2,9 @@
 //! (built once, cached) or interpreted; models with cables on the
 //! large-model runtime (`crate::ancf`).
 
-use crate::args::{InitialArgs, InputArgs, ParamArgs, Vary, numbers, parse_names};
+use crate::args::{
+    InitialArgs, InputArgs, ParamArgs, Vary, numbers, parse_names, unread_step_options,
+};
 use crate::error::Error;
 use crate::output::fail;
 use crate::report::{Setting, finish};
@@ -267,33 +269,6 @@ pub fn run(a: SimulateArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         html: a.html.as_deref(),
     };
     simulate(&opened, &vary, &o, a.json, a.interpret, &pictures)
-}
-
-/// A step size or tolerances that `integrator` (of the models without
-/// cables) would not read, each an error naming the integrators it
-/// applies to: `--dt` (`dt`) is the fixed-step methods' step, `--rtol`
-/// and `--atol` (`tolerances`) the adaptive methods' control.
-pub(crate) fn unread_step_options(
-    integrator: Integrator,
-    dt: bool,
-    tolerances: bool,
-) -> Vec<String> {
-    let mut problems = Vec::new();
-    if integrator.is_adaptive() && dt {
-        problems.push(format!(
-            "--dt sets the step of the fixed-step integrators ({}); {integrator} chooses its own \
-             steps by --rtol and --atol",
-            Integrator::names_where(|i| i.runs_odes() && !i.is_adaptive())
-        ));
-    }
-    if !integrator.is_adaptive() && integrator.runs_odes() && tolerances {
-        problems.push(format!(
-            "--rtol and --atol control the steps of the adaptive integrators ({}); {integrator} \
-             takes fixed steps of --dt",
-            Integrator::names_where(Integrator::is_adaptive)
-        ));
-    }
-    problems
 }
 
 /// `simulate` on a model with cables: the options of the large-model

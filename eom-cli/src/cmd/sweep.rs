@@ -204,7 +204,7 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         return crate::cable_sweep::run(a, &plan);
     }
     problems.extend(options.problems());
-    problems.extend(crate::cmd::simulate::unread_step_options(
+    problems.extend(crate::args::unread_step_options(
         integrator,
         a.dt.is_some(),
         a.rtol.is_some() || a.atol.is_some(),

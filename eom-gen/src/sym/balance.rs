@@ -95,28 +95,16 @@ impl Program {
                 continue;
             }
             rebuilt += 1;
-            // (ready time, order met) of each pending term, smallest first.
-            let mut heap: BinaryHeap<Reverse<(u32, usize)>> = BinaryHeap::new();
-            let mut pending: Vec<Term> = Vec::with_capacity(2 * terms.len());
-            for t in &terms {
-                heap.push(Reverse((at(&ready, t.value), pending.len())));
-                pending.push(*t);
-            }
-            loop {
-                let (Some(Reverse((_, i))), Some(Reverse((_, j)))) = (heap.pop(), heap.pop())
-                else {
-                    unreachable!("a sum tree has two or more terms, and each step leaves one")
-                };
-                let (a, b) = (pending[i], pending[j]);
+            let items: Vec<(u32, Term)> = terms.iter().map(|t| (at(&ready, t.value), *t)).collect();
+            earliest_first(&items, |a, b, last| {
                 let (op, neg) = match (a.neg, b.neg) {
                     (false, true) => (Op::Sub(a.value, b.value), false),
                     (true, false) => (Op::Sub(b.value, a.value), false),
                     (n, _) => (Op::Add(a.value, b.value), n),
                 };
-                let last = heap.is_empty();
                 if last && !neg {
                     push(&mut out, &mut ready, Instr { dst: ins.dst, op });
-                    break;
+                    return None;
                 }
                 let dst = next;
                 next += 1;
@@ -124,20 +112,12 @@ impl Program {
                 let value = Operand::Tmp(dst);
                 if last {
                     // Every term negative: the sum of their magnitudes, negated.
-                    let neg = Op::Neg(value);
-                    push(
-                        &mut out,
-                        &mut ready,
-                        Instr {
-                            dst: ins.dst,
-                            op: neg,
-                        },
-                    );
-                    break;
+                    let op = Op::Neg(value);
+                    push(&mut out, &mut ready, Instr { dst: ins.dst, op });
+                    return None;
                 }
-                heap.push(Reverse((at(&ready, value), pending.len())));
-                pending.push(Term { neg, value });
-            }
+                Some((at(&ready, value), Term { neg, value }))
+            });
         }
         self.instrs = place_early(out, self.n_tmps);
         self.n_tmps = next;
@@ -214,34 +194,48 @@ impl Program {
                 }
             }
             rebuilt += 1;
-            let mut heap: BinaryHeap<Reverse<(u32, usize)>> = BinaryHeap::new();
-            let mut pending: Vec<Operand> = Vec::with_capacity(2 * factors.len());
-            for &f in &factors {
-                heap.push(Reverse((at(&ready, f), pending.len())));
-                pending.push(f);
-            }
-            loop {
-                let (Some(Reverse((_, i))), Some(Reverse((_, j)))) = (heap.pop(), heap.pop())
-                else {
-                    unreachable!("a product tree has two or more factors, and each step leaves one")
-                };
-                let op = Op::Mul(pending[i], pending[j]);
-                if heap.is_empty() {
+            let items: Vec<(u32, Operand)> = factors.iter().map(|&f| (at(&ready, f), f)).collect();
+            earliest_first(&items, |x, y, last| {
+                let op = Op::Mul(x, y);
+                if last {
                     push(&mut out, &mut ready, Instr { dst: ins.dst, op });
-                    break;
+                    return None;
                 }
                 let dst = next;
                 next += 1;
                 push(&mut out, &mut ready, Instr { dst, op });
                 let value = Operand::Tmp(dst);
-                heap.push(Reverse((at(&ready, value), pending.len())));
-                pending.push(value);
-            }
+                Some((at(&ready, value), value))
+            });
         }
         self.instrs = place_early(out, self.n_tmps);
         self.n_tmps = next;
         self.remove_dead();
         rebuilt
+    }
+}
+
+/// Huffman's construction on ready times: `items` (ready time, item) are
+/// joined two at a time, the two ready first (ties: the one met first),
+/// by `join(a, b, last)`, which emits the operation and returns the new
+/// item with its ready time, or `None` for the last join (`last`: no
+/// other item is left). Needs two or more items.
+fn earliest_first<T: Copy>(
+    items: &[(u32, T)],
+    mut join: impl FnMut(T, T, bool) -> Option<(u32, T)>,
+) {
+    let mut heap: BinaryHeap<Reverse<(u32, usize)>> = BinaryHeap::new();
+    let mut pending: Vec<T> = Vec::with_capacity(2 * items.len());
+    for &(r, x) in items {
+        heap.push(Reverse((r, pending.len())));
+        pending.push(x);
+    }
+    while let (Some(Reverse((_, i))), Some(Reverse((_, j)))) = (heap.pop(), heap.pop()) {
+        let Some((r, x)) = join(pending[i], pending[j], heap.is_empty()) else {
+            return;
+        };
+        heap.push(Reverse((r, pending.len())));
+        pending.push(x);
     }
 }
 
