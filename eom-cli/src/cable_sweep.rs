@@ -314,7 +314,8 @@ fn rigid_with<'a>(
         .with_constraints(
             f.constraint_names.len(),
             eom_gen::cables::holonomic_names(f),
-        ),
+        )
+        .with_energy_source(eom_gen::cables::energy_source(rigid_sys)),
     )
 }
 

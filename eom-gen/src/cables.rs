@@ -377,8 +377,17 @@ pub fn interpreted_rigid<'a>(f: &'a Formulation, sys: &'a System) -> Box<dyn Rig
         ByName::new(sys.nu(), len, move |name, at, out| {
             eom_sim::Simulate::evaluate(&interp, name, at, out)
         })
-        .with_constraints(f.constraint_names.len(), holonomic_names(f)),
+        .with_constraints(f.constraint_names.len(), holonomic_names(f))
+        .with_energy_source(energy_source(sys)),
     )
+}
+
+/// What can feed energy into the rigid part of `sys`
+/// ([`System::energy_sources`], joined), for
+/// [`ByName::with_energy_source`]; `None` for a passive rigid part.
+pub fn energy_source(sys: &System) -> Option<String> {
+    let sources = sys.energy_sources();
+    (!sources.is_empty()).then(|| sources.join(", "))
 }
 
 /// The names of the rigid part's holonomic equations (the rows

@@ -1065,6 +1065,38 @@ impl System {
         self.coordinate_blocks().map(|b| b.nu()).sum()
     }
 
+    /// What can feed energy into the rigid bodies, named: actuators, joint
+    /// forces, prescribed motions, and constraints that move with `t`.
+    /// Empty for a passive model (gravity, springs and dampers, whose data
+    /// are constants, joints, constant constraints and rolling without
+    /// slipping), whose energy never rises: a run of it whose energy rises
+    /// is wrong and refuses (`eom_sim::large`'s energy guard).
+    pub fn energy_sources(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for f in &self.forces {
+            match &f.element {
+                ForceElement::Actuator { .. } => out.push(format!("the actuator `{}`", f.name)),
+                ForceElement::JointForce { .. } => {
+                    out.push(format!("the joint force `{}`", f.name))
+                }
+                ForceElement::SpringDamper { .. } | ForceElement::JointSpringDamper { .. } => {}
+            }
+        }
+        for j in &self.joints {
+            if matches!(j.motion, Motion::Prescribed(_)) {
+                out.push(format!("the prescribed motion of joint `{}`", j.name));
+            }
+        }
+        for c in &self.constraints {
+            if let ConstraintKind::Holonomic(expr) = &c.kind
+                && expr.expr.names().iter().any(|(n, _)| *n == "t")
+            {
+                out.push(format!("the constraint `{}`, which moves with t", c.name));
+            }
+        }
+        out
+    }
+
     /// Index in `q` of the first entry (`w`) of every unit quaternion
     /// (spherical and free joints), in coordinate order.
     pub fn quaternion_indices(&self) -> Vec<usize> {

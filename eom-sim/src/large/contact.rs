@@ -630,20 +630,37 @@ fn locate(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
 /// where the cubic interpolant of a flexible cable's step missed by up to
 /// 0.3 mm —; for a stick's distance to its cone, a force, a part in 10⁹
 /// of its friction force), or `None` if a retaken step fails.
+///
+/// A state within `tol` is taken only where `closing` says the row meets
+/// its level there; one that does not (a node that left an impact rising,
+/// still within `tol` of its plane a few picoseconds on, whose step ends
+/// below it because it comes back down) lies before the crossing, and the
+/// bracket is halved from it. Taken, it gave an event with nothing to do
+/// and the same crossing again, each a retaken step of picoseconds.
 fn on_the_steps<T>(
     guess: f64,
     ((mut a, mut fa), (mut b, mut fb)): ((f64, f64), (f64, f64)),
     tol: f64,
     step: impl Fn(f64) -> Option<T>,
     gap: impl Fn(&T) -> f64,
+    closing: impl Fn(&T) -> bool,
 ) -> Option<T> {
     let mut t = guess;
     let mut side = 0;
     for _ in 0..60 {
         let s = step(t)?;
         let f = gap(&s);
-        if f.abs() <= tol || b - a <= 4.0 * f64::EPSILON * b.abs().max(1.0) {
+        if b - a <= 4.0 * f64::EPSILON * b.abs().max(1.0) {
             return Some(s);
+        }
+        if f.abs() <= tol {
+            if closing(&s) {
+                return Some(s);
+            }
+            (a, fa) = (t, fa.max(tol));
+            side = 0;
+            t = 0.5 * (a + b);
+            continue;
         }
         if f > 0.0 {
             (a, fa) = (t, f);
@@ -857,6 +874,45 @@ impl<'g> ContactRun<'g> {
             })?;
             for (v, x) in s.v.iter_mut().zip(du.iter()) {
                 *v += x;
+            }
+            r = self.gaps.at(s);
+        }
+        // The held rows are constraints while held: their speeds are
+        // brought onto `ġ = 0` (and a sticking row's onto `v_t = 0`) the
+        // same way, with the model's constraints kept. The index-3
+        // integrator holds their `g` (and a stick's anchor), not their
+        // speeds, and a restart's first step turns a held row's speed over
+        // (`w·(y₁ − y₀) = 0` with Newmark's `β = ½`, `γ = 1`): left in, a
+        // drift off the plane made the plastic impulse that sticks the row
+        // a pull (2.5e-6 m/s at the pendulum cable's stick).
+        // Rows of the projection: held rows' normals, and a sticking row's
+        // tangents (held by its anchors), each with its speed.
+        let mut held: Vec<(DVector<f64>, f64)> = Vec::new();
+        for &i in self.active.iter().filter(|i| closed.contains(i)) {
+            held.push((r.w.row(i).transpose(), r.gdot[i]));
+            if matches!(self.slides[i], Some(Slide::Stick)) {
+                for a in 0..2 {
+                    let row = r.wt.row(2 * i + a).transpose();
+                    if row.amax() > 0.0 {
+                        held.push((row, r.vt[i][a]));
+                    }
+                }
+            }
+        }
+        if held.iter().any(|(_, v)| *v != 0.0) {
+            let mm = mass()?;
+            let wn = DMatrix::from_fn(held.len(), s.v.len(), |a, k| held[a].0[k]);
+            let x = inverse(&mm, &wn.transpose())?;
+            let drift = DVector::from_fn(held.len(), |a, _| -held[a].1);
+            let nu = (&wn * &x).lu().solve(&drift).ok_or_else(|| {
+                failed(
+                    t,
+                    "the sustained contact rows are dependent (their speeds cannot be held)".into(),
+                )
+            })?;
+            let dv = x * nu;
+            for (v, d) in s.v.iter_mut().zip(dv.iter()) {
+                *v += d;
             }
             r = self.gaps.at(s);
         }
@@ -1166,15 +1222,15 @@ impl<'g> ContactRun<'g> {
 
     /// Generalized-α on `m` from `state` to `t_end` through every contact
     /// event; `observe` sees every accepted state (and each event's state
-    /// before its jump). Returns the last state and, if the run stopped
-    /// early, why.
+    /// before its jump), and its error stops the run. Returns the last
+    /// state and, if the run stopped early, why.
     pub fn run<M: Impacts + ?Sized>(
         &mut self,
         m: &M,
         mut state: State,
         opts: &AlphaOptions,
         t_end: f64,
-        mut observe: impl FnMut(&State, Option<&[f64]>),
+        mut observe: impl FnMut(&State, Option<&[f64]>) -> Result<(), DynamicsError>,
     ) -> (State, Option<DynamicsError>) {
         let nk = self.gaps.len();
         let mut opts = opts.clone();
@@ -1183,9 +1239,20 @@ impl<'g> ContactRun<'g> {
             return (state, Some(e));
         }
         let mut stalled = 0;
+        // The run's start is generalized-α's (`a₀ = ÿ₀`); every later
+        // segment starts at an event, where the motion changed abruptly,
+        // and restarts without exciting the modes the step does not resolve
+        // (`GeneralizedAlpha::restarted`).
+        let mut at_event = false;
         loop {
             let held = Held::new(m, self.gaps, &self.active, &self.slides, &self.anchors);
-            let mut ga = match GeneralizedAlpha::new(&held, state.clone(), opts.clone()) {
+            let started = if at_event {
+                GeneralizedAlpha::restarted(&held, state.clone(), opts.clone())
+            } else {
+                GeneralizedAlpha::new(&held, state.clone(), opts.clone())
+            };
+            at_event = true;
+            let mut ga = match started {
                 Ok(ga) => ga,
                 Err(e) => return (state, Some(e)),
             };
@@ -1201,30 +1268,27 @@ impl<'g> ContactRun<'g> {
                 if ga.state().t >= t_end - eps {
                     break None;
                 }
-                let prev = ga.state().clone();
+                let before = ga.carried();
+                let prev = before.state().clone();
                 let f0 = held.forces(ga.multipliers());
                 let c0 = held.cone_margins(ga.multipliers());
                 let p0 = held.slip_speeds(&prev.v);
                 if let Err(e) = ga.step_within(t_end) {
-                    self.add_stats(&ga.stats);
                     // At a fixed step, a step whose Newton fails (the
                     // violent elastic transient of a wire just after an
                     // impact) is retaken in halves, down to h/64, and the
-                    // run goes on at `h` after them.
+                    // run goes on at `h` after them. A failed step leaves
+                    // the integrator where it was.
                     let retry = opts.control.is_none()
                         && halvings < 6
                         && matches!(e, DynamicsError::NewtonFailed { .. });
                     if !retry {
+                        self.add_stats(&ga.stats);
                         return (prev, Some(e));
                     }
                     halvings += 1;
-                    let mut small = opts.clone();
-                    small.h = opts.h / f64::from(1u32 << halvings);
                     substeps = 1usize << halvings;
-                    ga = match GeneralizedAlpha::new(&held, prev.clone(), small) {
-                        Ok(g) => g,
-                        Err(e) => return (prev, Some(e)),
-                    };
+                    ga.set_step_size(opts.h / f64::from(1u32 << halvings));
                     continue;
                 }
                 let new = ga.state().clone();
@@ -1282,15 +1346,18 @@ impl<'g> ContactRun<'g> {
                     }
                     // A slide from rest starts at `v_t · s0 ≤ 0`: only a
                     // slide under way stops. One that starts the step at
-                    // rest to round-off and ends it reversed (an axial
-                    // vibration turning it within the step) is taken at
-                    // the step's end: located at its start it would be
-                    // found there again.
+                    // rest (its stop linearly within a part in 10⁶ of the
+                    // step from its start, as a held force's) and ends it
+                    // reversed (an axial vibration turning it within the
+                    // step) is taken at the step's end: located at its
+                    // start it would be found there again. (A wire creeping
+                    // by stick–slip: 9.6e-11 m/s at the start of a
+                    // restart's first step, −1.1e-4 m/s at its end.)
                     if let (Some(a), Some(b)) = (p0[k], p1[k])
                         && a > 0.0
                         && b <= 0.0
                     {
-                        let t = if a <= 1e-9 * (a - b) {
+                        let t = if a <= 1e-6 * (a - b) {
                             new.t
                         } else {
                             linear(a, b)
@@ -1302,16 +1369,15 @@ impl<'g> ContactRun<'g> {
                     None => {
                         self.forces = f1;
                         self.multipliers = ga.multipliers()[..own].to_vec();
-                        observe(&new, Some(ga.q_full()));
+                        if let Err(e) = observe(&new, Some(ga.q_full())) {
+                            self.add_stats(&ga.stats);
+                            return (new, Some(e));
+                        }
                         if substeps > 0 {
                             substeps -= 1;
                             if substeps == 0 {
                                 halvings = 0;
-                                self.add_stats(&ga.stats);
-                                ga = match GeneralizedAlpha::new(&held, new, opts.clone()) {
-                                    Ok(g) => g,
-                                    Err(e) => return (prev, Some(e)),
-                                };
+                                ga.set_step_size(opts.h);
                             }
                         }
                     }
@@ -1367,17 +1433,22 @@ impl<'g> ContactRun<'g> {
                                 .chain(&new.v)
                                 .fold(0.0f64, |a, x| a.max(x.abs()));
                             let sane = |s: &State| s.v.iter().all(|x| x.abs() <= 10.0 * vmax + 1.0);
+                            // Retaken from what the integrator carried
+                            // at the step's start: the step the run takes.
                             let retake = |t: f64| {
-                                GeneralizedAlpha::new(&held, prev.clone(), opts.clone())
-                                    .and_then(|mut g| g.step_within(t).map(|()| g.state().clone()))
+                                let mut g =
+                                    GeneralizedAlpha::resume(&held, before.clone(), opts.clone());
+                                g.step_within(t)
                                     .ok()
+                                    .map(|()| g.state().clone())
                                     .filter(|s| sane(s))
                             };
                             let located = match (row, breaks) {
                                 (Some((i, level)), _) => {
                                     let gap = |s: &State| self.gaps.gap(i, &s.q) - level;
                                     let ends = ((prev.t, gap(&prev)), (new.t, gap(&new)));
-                                    on_the_steps(t, ends, 0.5 * GAP_TOL, retake, gap)
+                                    let closing = |s: &State| self.gaps.dot(i, &s.v) <= REST_SPEED;
+                                    on_the_steps(t, ends, 0.5 * GAP_TOL, retake, gap, closing)
                                 }
                                 // A stick leaving its cone: its distance to
                                 // the cone from the retaken step's
@@ -1391,13 +1462,14 @@ impl<'g> ContactRun<'g> {
                                         k.and_then(|k| held.cone_margins(&x.1)[k]).unwrap_or(0.0)
                                     };
                                     let retake_m = |t: f64| {
-                                        GeneralizedAlpha::new(&held, prev.clone(), opts.clone())
-                                            .and_then(|mut g| {
-                                                g.step_within(t).map(|()| {
-                                                    (g.state().clone(), g.multipliers().to_vec())
-                                                })
-                                            })
+                                        let mut g = GeneralizedAlpha::resume(
+                                            &held,
+                                            before.clone(),
+                                            opts.clone(),
+                                        );
+                                        g.step_within(t)
                                             .ok()
+                                            .map(|()| (g.state().clone(), g.multipliers().to_vec()))
                                             .filter(|x| sane(&x.0))
                                     };
                                     let (a, b) = k
@@ -1410,6 +1482,7 @@ impl<'g> ContactRun<'g> {
                                         tol,
                                         retake_m,
                                         margin,
+                                        |_| true,
                                     )
                                     .map(|x| x.0)
                                 }
@@ -1433,7 +1506,9 @@ impl<'g> ContactRun<'g> {
             if let Err(e) = m.onto_constraints(&mut s) {
                 return (s, Some(e));
             }
-            observe(&s, None);
+            if let Err(e) = observe(&s, None) {
+                return (s, Some(e));
+            }
             stalled = if s.t - t_start <= 1e-9 * opts.h {
                 stalled + 1
             } else {

@@ -75,6 +75,13 @@ pub trait RigidPart {
     fn bias(&self, t: f64, q: &[f64], u: &[f64], b: &mut [f64]);
     /// Kinetic plus potential energy.
     fn energy(&self, t: f64, q: &[f64], u: &[f64]) -> f64;
+    /// The size of the energies [`RigidPart::energy`] sums, `|T| + |V|`
+    /// (what its error is measured against: the sum alone can cancel, a
+    /// pendulum's `T + V` staying near zero as it swings); `|T + V|` by
+    /// default.
+    fn energy_scale(&self, t: f64, q: &[f64], u: &[f64]) -> f64 {
+        self.energy(t, q, u).abs()
+    }
     /// The mounts, flat: for each mount in order, the rows `p_x, p_y, p_z`
     /// (world position of the marker) and for a clamped mount also
     /// `n₁` and `n₂` (unit normals of the clamp's axis, world axes); each
@@ -100,6 +107,16 @@ pub trait RigidPart {
     fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
         let _ = (t, q, out);
     }
+    /// What can feed energy into the rigid part (an actuator, a force
+    /// given as a function, a prescribed motion, a constraint that moves
+    /// with time), named; `None` if nothing can: gravity and springs are in
+    /// [`RigidPart::energy`], dampers only take energy out, and a run of
+    /// the model whose energy rises refuses to go on
+    /// (`DynamicsError::EnergyRose`). By default the rigid part's forces
+    /// are not known, and no run is refused.
+    fn energy_source(&self) -> Option<String> {
+        Some("a rigid part whose forces the runtime does not know".into())
+    }
 }
 
 /// A rigid part from the generated functions by name (`mass_matrix`,
@@ -113,6 +130,8 @@ pub struct ByName<F> {
     /// Names of the holonomic constraint equations (see
     /// [`ByName::with_constraints`]).
     constraint_names: Vec<String>,
+    /// See [`ByName::with_energy_source`].
+    energy_source: Option<String>,
     /// All equations of the generated `constraints` function.
     nc_all: usize,
 }
@@ -127,7 +146,16 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
             evaluate,
             constraint_names: Vec::new(),
             nc_all: 0,
+            energy_source: Some("generated functions whose forces are not stated".into()),
         }
+    }
+
+    /// States what can feed energy into the rigid part
+    /// ([`RigidPart::energy_source`]; `None`: nothing can, its energy never
+    /// rises). Unstated, a run is never refused for its energy.
+    pub fn with_energy_source(mut self, source: Option<String>) -> Self {
+        self.energy_source = source;
+        self
     }
 
     /// The same with constraint equations of its own from the generated
@@ -160,6 +188,9 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
 }
 
 impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> RigidPart for ByName<F> {
+    fn energy_source(&self) -> Option<String> {
+        self.energy_source.clone()
+    }
     fn n(&self) -> usize {
         self.n
     }
@@ -173,6 +204,11 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> RigidPart for ByName<F> {
         let mut e = [0.0; 2];
         self.call("energy", t, q, u, &mut e);
         e[0] + e[1]
+    }
+    fn energy_scale(&self, t: f64, q: &[f64], u: &[f64]) -> f64 {
+        let mut e = [0.0; 2];
+        self.call("energy", t, q, u, &mut e);
+        e[0].abs() + e[1].abs()
     }
     fn attachments(&self, t: f64, q: &[f64], out: &mut [f64]) {
         debug_assert_eq!(out.len(), self.mounts);

@@ -37,7 +37,7 @@ pub mod simulate;
 pub mod sparse;
 pub mod statics;
 
-pub use alpha::{AlphaModel, GeneralizedAlpha};
+pub use alpha::{AlphaModel, Carried, GeneralizedAlpha};
 pub use contact::NodeContact;
 pub use dynamics::integrate_rk4;
 pub use linear::{SecondOrder, second_order};

@@ -101,6 +101,21 @@ pub enum DynamicsError {
         /// Why.
         message: String,
     },
+    /// The energy of a model that can gain none (gravity, springs,
+    /// dampers, impacts and friction only) rose above its start by more
+    /// than a hundredth of the energies it is made of: the integration is
+    /// wrong, and the run stops rather than report it.
+    EnergyRose {
+        /// Time of the state.
+        t: f64,
+        /// The energy at the start, J.
+        start: f64,
+        /// The energy reached, J.
+        reached: f64,
+        /// The size of the energies it is measured against
+        /// (`|T| + |V|`, the larger of the start's and the state's), J.
+        scale: f64,
+    },
 }
 
 impl fmt::Display for DynamicsError {
@@ -155,6 +170,15 @@ impl fmt::Display for DynamicsError {
             }
             DynamicsError::NonFinite { t } => write!(f, "the state became non-finite at t = {t}"),
             DynamicsError::Contact { t, message } => write!(f, "at t = {t}: {message}"),
+            DynamicsError::EnergyRose {
+                t,
+                start,
+                reached,
+                scale,
+            } => write!(
+                f,
+                "the energy rose from {start:.6e} J to {reached:.6e} J by t = {t} (the energies it is made of are {scale:.3e} J) in a model that can gain none (gravity, springs, dampers, impacts and friction only): the integration is wrong, not the model; take a smaller --dt, or a smaller --rho-inf to damp the modes the step does not resolve"
+            ),
             DynamicsError::StepTooSmall { t, h, error } => write!(
                 f,
                 "step size {h:.1e} s still too large at t = {t} (error estimate {error:.1e} of the tolerance); loosen --rtol/--atol or check the model"

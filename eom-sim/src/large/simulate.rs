@@ -171,6 +171,60 @@ trait Reported: Impacts {
     fn mounts(&self, lambda: &[f64]) -> Vec<MountForce>;
     /// The structure of the cables.
     fn structural(&self) -> &StructuralModel;
+    /// What can feed energy into the model, or `None` if nothing can
+    /// ([`RigidPart::energy_source`]); a structure alone has constant loads
+    /// and fixed supports.
+    fn energy_source(&self) -> Option<String>;
+}
+
+/// The share of the energies a passive model is made of by which its
+/// energy may rise before the run refuses: integration error stays far
+/// below it (the cable tests' runs lose energy or keep it to 1e-6 of it),
+/// a run gone wrong passes it by orders of magnitude (the pendulum's stiff
+/// cable before its restarts were fixed: 684 J from −0.02 J).
+const ENERGY_RISE: f64 = 1e-2;
+
+/// A rise of at most this many joules is never refused: the round-off of
+/// a model at rest, whose energies are all zero (a wire lying on a floor
+/// at its datum: 1e-29 J from 0 J).
+const ENERGY_FLOOR: f64 = 1e-9;
+
+/// Stops a run of a model that can gain no energy when its energy rises
+/// above the start by more than [`ENERGY_RISE`] of the energies it is made
+/// of (`|T| + |V|`, the largest of the run so far): checked at every
+/// accepted state and every event. A model with an energy source (an
+/// actuator, a given force, a prescribed motion) is not checked.
+struct EnergyGuard {
+    /// The start's energy and the largest scale so far, if the model is
+    /// passive.
+    start: Option<(f64, f64)>,
+}
+
+impl EnergyGuard {
+    fn new<M: Reported + ?Sized>(m: &M, s: &State) -> Self {
+        EnergyGuard {
+            start: m.energy_source().is_none().then(|| m.energies(s)),
+        }
+    }
+
+    fn check<M: Reported + ?Sized>(&mut self, m: &M, s: &State) -> Result<(), DynamicsError> {
+        let Some((e0, largest)) = &mut self.start else {
+            return Ok(());
+        };
+        let e0 = *e0;
+        let (e, scale) = m.energies(s);
+        *largest = largest.max(scale);
+        let scale = *largest;
+        if e - e0 > (ENERGY_RISE * scale).max(ENERGY_FLOOR) || !e.is_finite() {
+            return Err(DynamicsError::EnergyRose {
+                t: s.t,
+                start: e0,
+                reached: e,
+                scale,
+            });
+        }
+        Ok(())
+    }
 }
 
 impl Reported for StructuralModel {
@@ -194,11 +248,17 @@ impl Reported for StructuralModel {
     fn structural(&self) -> &StructuralModel {
         self
     }
+    fn energy_source(&self) -> Option<String> {
+        None
+    }
 }
 
 impl Reported for MixedModel<'_> {
     fn structural(&self) -> &StructuralModel {
         self.structure()
+    }
+    fn energy_source(&self) -> Option<String> {
+        self.rigid().energy_source()
     }
     fn rigid_len(&self) -> usize {
         self.n() - self.n_structural()
@@ -211,8 +271,10 @@ impl Reported for MixedModel<'_> {
             st.kinetic_energy(&s.v[..ns]),
             st.strain_energy(&q) + st.load_potential(&q),
         );
-        let rigid = self.rigid().energy(s.t, &s.q[ns..], &s.v[ns..]);
-        (t + v + rigid, t.abs() + v.abs() + rigid.abs())
+        let (qr, vr) = (&s.q[ns..], &s.v[ns..]);
+        let rigid = self.rigid().energy(s.t, qr, vr);
+        let scale = self.rigid().energy_scale(s.t, qr, vr);
+        (t + v + rigid, t.abs() + v.abs() + scale)
     }
     fn full_of(&self, y: &[f64]) -> Vec<f64> {
         self.structural_full(y)
@@ -529,7 +591,8 @@ fn stop_of(e: DynamicsError) -> Stop {
         DynamicsError::NewtonFailed { t, .. }
         | DynamicsError::Singular { t, .. }
         | DynamicsError::Inconsistent { t, .. }
-        | DynamicsError::Contact { t, .. } => Stop::Failed {
+        | DynamicsError::Contact { t, .. }
+        | DynamicsError::EnergyRose { t, .. } => Stop::Failed {
             t,
             message: e.to_string(),
         },
@@ -577,9 +640,11 @@ fn run_free<M: Reported>(
         GeneralizedAlpha::new(m, state, run.alpha_options()).map_err(RunError::Elements)?;
     let mut rec = Recorder::new(cables, names, run);
     rec.record(m, &start, &m.full_of(&start.q));
-    let result = ga.run_to(run.t_end, |s, q| {
+    let mut guard = EnergyGuard::new(m, &start);
+    let result = ga.run_to_checked(run.t_end, |s, q| {
         progress(s.t);
         rec.record(m, s, q);
+        guard.check(m, s)
     });
     let cpu = clock.elapsed().as_secs_f64();
     rec.finish(m, ga.state());
@@ -613,12 +678,14 @@ fn run_contacts<M: Reported>(
     let start = state.clone();
     let mut rec = Recorder::new(cables, names, run);
     let mut contacts = ContactRun::new(gaps);
+    let mut guard = EnergyGuard::new(m, &start);
     let (end, error) = contacts.run(m, state, &run.alpha_options(), run.t_end, |s, q| {
         progress(s.t);
         match q {
             Some(q) => rec.record(m, s, q),
             None => rec.record(m, s, &m.full_of(&s.q)),
         }
+        guard.check(m, s)
     });
     let cpu = clock.elapsed().as_secs_f64();
     rec.finish(m, &end);
