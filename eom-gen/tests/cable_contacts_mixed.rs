@@ -423,33 +423,19 @@ fn finished_with_impacts_by_newton(report: &eom_sim::RunReport, e: f64, label: &
 /// its tangential impulse lies in the cone `‖Λ_t‖ ≤ μ Λ`, and no event
 /// pulls, and the energy never rises ([`energy_never_rises`]).
 ///
-/// Steps 0.6e-3 to 2e-3 s. (Until session 44 the run at 1e-3 s ended at
-/// 1.29 J from 0 J, the defect of the frictionless pendulum's above.)
-///
-/// Not yet at 0.5e-3 s: the stick at t = 0.1207 s stops the run ("the
-/// rest impulse … would pull it onto its plane", Λ = −1.1e-11 N s): the
-/// tangential impulse that stops the slide lifts the node by 3e-9 m/s
-/// through the cable, and a sticking row that would separate is refused
-/// rather than released (issue #26). Asserted as a refusal below, so the
-/// day it runs this test says so.
+/// Steps 0.3e-3 to 2e-3 s. (Until session 44 the run at 1e-3 s ended at
+/// 1.29 J from 0 J, the defect of the frictionless pendulum's above, and
+/// the runs at 0.3e-3 to 0.5e-3 s stopped at the stick at t = 0.1207 s:
+/// the tangential impulse that stops the slide lifts the node by 3e-9 m/s
+/// through the cable, Λ = −1.1e-11 N s, and a sticking row that would
+/// separate was refused. It is released now: with no normal impulse the
+/// cone allows no tangential one. At these steps the node lands again and
+/// hops before it rests, slips and leaves: 6 impacts in 11 events.)
 #[test]
 fn a_pendulums_hanging_cable_with_friction_keeps_newton_and_coulomb() {
     let (e, mu) = (0.5, 0.3);
-    for dt in [0.6e-3, 0.8e-3, 1e-3, 1.2e-3, 1.5e-3, 2e-3] {
+    for dt in [0.3e-3, 0.5e-3, 0.6e-3, 0.8e-3, 1e-3, 1.2e-3, 1.5e-3, 2e-3] {
         friction_run(e, mu, dt);
-    }
-    let report = simulate(
-        &pendulum_cable_with(e, &format!(", mu: {mu:?}")),
-        &run(0.25, 0.5e-3, 0.8),
-    );
-    match &report.stop {
-        eom_sim::Stop::Failed { message, .. } => {
-            assert!(
-                message.contains("would pull it onto its plane"),
-                "{message}"
-            )
-        }
-        other => panic!("dt = 0.5e-3 with friction: {other:?} (update the test: it runs now)"),
     }
 }
 

@@ -1084,8 +1084,8 @@ impl<'g> ContactRun<'g> {
             // pull it (`Λ < 0`, taking away more than [`REST_SPEED`] of
             // its own speed) separates: an arriving one flies instead
             // (its landing is located and its hops run until they
-            // accumulate, [`ContactRun::accumulates`]); for the others no
-            // impulse is consistent, and the run stops.
+            // accumulate, [`ContactRun::accumulates`]), a sticking one is
+            // released, and a sustained one keeps its speed (its drift).
             let mm = mass()?;
             // `w M⁻¹ wᵀ` of each row of `now`, the constraints held.
             let wn = DMatrix::from_fn(s.v.len(), now.len(), |k, a| r.w[(now[a], k)]);
@@ -1128,32 +1128,54 @@ impl<'g> ContactRun<'g> {
                 .ok_or_else(|| no_solution(set.len()))
             };
             let mut sol = plastic_on(&set, &now, &now_slides)?;
+            // Sticking rows the impulse would pull: stopping their slide
+            // lifts them (the pendulum cable's node, by 3e-9 m/s through
+            // the cable). With no normal impulse the cone allows no
+            // tangential one: they leave their plane, released, and their
+            // landing is located as any other.
+            let mut lifted: Vec<usize> = Vec::new();
             loop {
                 let pulled: Vec<usize> = set
                     .iter()
                     .enumerate()
-                    .filter(|&(k, &i)| !to_stick.contains(&i) && pull(&sol, k, i) > REST_SPEED)
+                    .filter(|&(k, &i)| pull(&sol, k, i) > REST_SPEED)
                     .map(|(_, &i)| i)
                     .collect();
                 if pulled.is_empty() {
                     break;
                 }
-                let keep: Vec<bool> = now
-                    .iter()
-                    .map(|i| !(pulled.contains(i) && arriving.contains(i)))
-                    .collect();
+                let leaves = |i: &usize| {
+                    pulled.contains(i) && (arriving.contains(i) || to_stick.contains(i))
+                };
+                let keep: Vec<bool> = now.iter().map(|i| !leaves(i)).collect();
                 let mut k = 0;
                 now_slides.retain(|_| {
                     k += 1;
                     keep[k - 1]
                 });
-                now.retain(|i| !(pulled.contains(i) && arriving.contains(i)));
+                lifted.extend(to_stick.iter().copied().filter(|i| pulled.contains(i)));
+                now.retain(|i| !leaves(i));
                 arriving.retain(|i| !pulled.contains(i));
+                to_stick.retain(|i| !pulled.contains(i));
                 set.retain(|i| !pulled.contains(i));
                 if arriving.is_empty() && to_stick.is_empty() {
                     break;
                 }
                 sol = plastic_on(&set, &now, &now_slides)?;
+            }
+            if !lifted.is_empty() {
+                let e = m.total_energy(s);
+                let zeros = vec![0.0; lifted.len()];
+                let ev = self.event(
+                    t,
+                    ContactEventKind::Release,
+                    &lifted,
+                    (&r, e),
+                    (&r, e),
+                    (&zeros, &[]),
+                    vec![0.0; s.v.len()],
+                );
+                self.events.push(ev);
             }
             if !arriving.is_empty() || !to_stick.is_empty() {
                 if let Some((k, &i)) = set
