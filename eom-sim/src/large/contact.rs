@@ -722,6 +722,26 @@ impl<'g> ContactRun<'g> {
         shrinks && tau * q <= h * (1.0 - q)
     }
 
+    /// Records the release of the rows `rows` at `s` (no impulse, no jump;
+    /// nothing if `rows` is empty).
+    fn release<M: Impacts + ?Sized>(&mut self, m: &M, s: &State, rows: &[usize], r: &Rows) {
+        if rows.is_empty() {
+            return;
+        }
+        let e = m.total_energy(s);
+        let zeros = vec![0.0; rows.len()];
+        let ev = self.event(
+            s.t,
+            ContactEventKind::Release,
+            rows,
+            (r, e),
+            (r, e),
+            (&zeros, &[]),
+            vec![0.0; s.v.len()],
+        );
+        self.events.push(ev);
+    }
+
     /// The event record of the impulses `(ln, lt)` on the rows `set`.
     #[allow(clippy::too_many_arguments)]
     fn event(
@@ -1046,20 +1066,7 @@ impl<'g> ContactRun<'g> {
             .copied()
             .filter(|i| !now.contains(i))
             .collect();
-        if !released.is_empty() {
-            let e = m.total_energy(s);
-            let zeros = vec![0.0; released.len()];
-            let ev = self.event(
-                t,
-                ContactEventKind::Release,
-                &released,
-                (&r, e),
-                (&r, e),
-                (&zeros, &[]),
-                vec![0.0; s.v.len()],
-            );
-            self.events.push(ev);
-        }
+        self.release(m, s, &released, &r);
         let mut arriving: Vec<usize> = now
             .iter()
             .copied()
@@ -1163,34 +1170,8 @@ impl<'g> ContactRun<'g> {
                 }
                 sol = plastic_on(&set, &now, &now_slides)?;
             }
-            if !lifted.is_empty() {
-                let e = m.total_energy(s);
-                let zeros = vec![0.0; lifted.len()];
-                let ev = self.event(
-                    t,
-                    ContactEventKind::Release,
-                    &lifted,
-                    (&r, e),
-                    (&r, e),
-                    (&zeros, &[]),
-                    vec![0.0; s.v.len()],
-                );
-                self.events.push(ev);
-            }
+            self.release(m, s, &lifted, &r);
             if !arriving.is_empty() || !to_stick.is_empty() {
-                if let Some((k, &i)) = set
-                    .iter()
-                    .enumerate()
-                    .find(|&(k, &i)| pull(&sol, k, i) > REST_SPEED)
-                {
-                    return Err(failed(
-                        t,
-                        format!(
-                            "the rest impulse at cable-node contact `{}` would pull it onto its plane (Λ = {:e} N s at ġ = {:e} m/s): the contact separates there, and no consistent impulse was found for the contacts held with it",
-                            self.gaps.names[i], sol.ln[k], r.gdot[i]
-                        ),
-                    ));
-                }
                 let kind = if arriving.is_empty() {
                     ContactEventKind::Stick
                 } else {
