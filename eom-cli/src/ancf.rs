@@ -230,10 +230,15 @@ pub fn simulate_cmd(
     }
     .map_err(run_error)?;
     if let Some(path) = events_csv {
-        // The node contacts' rows, and the structure's free coordinates
-        // (then a rigid part's speeds) as the speeds of the generalised
-        // impulse.
-        let rows: Vec<String> = sys.cable_contacts.iter().map(|c| c.name.clone()).collect();
+        // The node contacts' rows then the rigid bodies' (the run's
+        // order), and the structure's free coordinates (then a rigid
+        // part's speeds) as the speeds of the generalised impulse.
+        let rows: Vec<String> = sys
+            .cable_contacts
+            .iter()
+            .map(|c| c.name.clone())
+            .chain(eom_gen::cables::contact_names(sys))
+            .collect();
         let n = report
             .contact_events
             .first()

@@ -315,7 +315,8 @@ fn rigid_with<'a>(
             f.constraint_names.len(),
             eom_gen::cables::holonomic_names(f),
         )
-        .with_energy_source(eom_gen::cables::energy_source(rigid_sys)),
+        .with_energy_source(eom_gen::cables::energy_source(rigid_sys))
+        .with_contacts(eom_gen::cables::contact_names(rigid_sys)),
     )
 }
 

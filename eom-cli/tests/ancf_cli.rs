@@ -797,11 +797,16 @@ fn sweep_of_a_mixed_model_equals_runs_one_by_one() {
 /// 0.5 --json --events-csv F`, which must succeed: its JSON report and
 /// the events CSV's path.
 fn simulate_with_events(model: &str, t_end: &str) -> (serde_json::Value, String) {
-    let events = write(&format!("{model}_events.csv"), "");
-    let path = format!("models/ancf/{model}.ron");
+    simulate_file_with_events(&format!("models/ancf/{model}.ron"), model, t_end)
+}
+
+/// [`simulate_with_events`] on the model file `path`, the events CSV
+/// named after `label`.
+fn simulate_file_with_events(path: &str, label: &str, t_end: &str) -> (serde_json::Value, String) {
+    let events = write(&format!("{label}_events.csv"), "");
     let out = eom_gen(&[
         "simulate",
-        &path,
+        path,
         "--t-end",
         t_end,
         "--dt",
@@ -865,6 +870,35 @@ fn simulate_reports_the_contact_events_of_a_cable_dropped_on_a_floor() {
 #[test]
 fn simulate_reports_the_contact_events_of_a_cable_node_at_a_rigid_body() {
     let (r, events) = simulate_with_events("block_drop", "0.5");
+    block_drop_events(&r, &events, "foot");
+}
+
+/// The same block dropped on its rail's lower limit instead of its arm's
+/// node: a rigid body's contact in a model with a cable, the same events
+/// and closed forms through the CLI.
+#[test]
+fn simulate_reports_the_contact_events_of_a_body_beside_a_cable() {
+    let bundled = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/ancf/block_drop.ron"
+    ))
+    .expect("the bundled block_drop");
+    let node = r#"Plane(name: "foot", at: (body: "arm", node: 0), point: (0, "-h0", 0), normal: (0, 1, 0), e: "e"),"#;
+    assert!(bundled.contains(node), "the bundled contact");
+    let path = write(
+        "block_on_rail.ron",
+        &bundled.replace(
+            node,
+            r#"JointLimit(name: "foot", joint: "rail", lower: "-h0", e: "e"),"#,
+        ),
+    );
+    let (r, events) = simulate_file_with_events(&path, "block_on_rail", "0.5");
+    block_drop_events(&r, &events, "foot.lower");
+}
+
+/// The bundled block drop's first impact by its closed forms, its rest on
+/// the row `contact` carrying block and arm, and the events CSV.
+fn block_drop_events(r: &serde_json::Value, events: &str, contact: &str) {
     let ev = r["contact_events"].as_array().expect("contact events");
     let (h0, e) = (0.05, 0.5);
     let t1 = (2.0 * h0 / 9.81_f64).sqrt();
@@ -889,11 +923,14 @@ fn simulate_reports_the_contact_events_of_a_cable_node_at_a_rigid_body() {
         (sum - weight).abs() < 1e-3 * weight,
         "{sum} N, want {weight} N"
     );
-    let csv = std::fs::read_to_string(&events).expect("the events CSV");
+    assert_eq!(c["contact"], contact);
+    let csv = std::fs::read_to_string(events).expect("the events CSV");
     let mut lines = csv.lines();
     let header = lines.next().unwrap_or_default();
     assert!(
-        header.starts_with("t,kind,energy_before,energy_after,foot.impulse"),
+        header.starts_with(&format!(
+            "t,kind,energy_before,energy_after,{contact}.impulse"
+        )),
         "{header}"
     );
     // The generalised impulse: the arm's free coordinates, then the

@@ -378,8 +378,16 @@ pub fn interpreted_rigid<'a>(f: &'a Formulation, sys: &'a System) -> Box<dyn Rig
             eom_sim::Simulate::evaluate(&interp, name, at, out)
         })
         .with_constraints(f.constraint_names.len(), holonomic_names(f))
-        .with_energy_source(energy_source(sys)),
+        .with_energy_source(energy_source(sys))
+        .with_contacts(contact_names(sys)),
     )
+}
+
+/// The names of the rigid part's contact rows (a joint limit's lower and
+/// upper rows apart), the rows of the generated `contacts`, for
+/// [`ByName::with_contacts`].
+pub fn contact_names(sys: &System) -> Vec<String> {
+    sys.contact_rows().into_iter().map(|(_, r)| r).collect()
 }
 
 /// What can feed energy into the rigid part of `sys`

@@ -148,6 +148,20 @@ fn block_drop(e: f64) -> String {
     )
 }
 
+/// [`block_drop`] with the floor under the block instead of under its
+/// arm's node: the rail's lower limit at `y = −h₀`, a rigid body's contact
+/// beside the cable (the node 0 sits at the block's hook, so both gaps are
+/// `y + h₀`, and the closed forms are the same).
+fn block_drop_on_its_rail(e: f64) -> String {
+    let node = r#"Plane(name: "foot", at: (body: "arm", node: 0), point: (0, "-h0", 0), normal: (0, 1, 0), e: "e"),"#;
+    let text = block_drop(e);
+    assert!(text.contains(node), "the bundled block_drop's contact");
+    text.replace(
+        node,
+        r#"JointLimit(name: "foot", joint: "rail", lower: "-h0", e: "e"),"#,
+    )
+}
+
 /// Block 1 kg, arm ρ A L = 100 · 1e-5 · 0.2 kg, dropped from 0.05 m.
 const M_BLOCK: f64 = 1.0;
 const M_ARM: f64 = 100.0 * 1e-5 * 0.2;
@@ -155,9 +169,21 @@ const H0: f64 = 0.05;
 
 #[test]
 fn a_block_dropped_on_its_arms_held_node_hops_and_comes_to_rest() {
-    let e = 0.5;
+    hops_and_comes_to_rest(&block_drop(0.5), 0.5, "block_drop");
+}
+
+/// The same drop on the rail's lower limit: a rigid body's contact in a
+/// model with a cable (its row from the rigid part's generated
+/// `contacts`, held as an index-3 row while it rests), by the same closed
+/// forms.
+#[test]
+fn a_block_dropped_on_its_rails_limit_beside_its_arm_hops_and_comes_to_rest() {
+    hops_and_comes_to_rest(&block_drop_on_its_rail(0.5), 0.5, "block_drop on its rail");
+}
+
+fn hops_and_comes_to_rest(text: &str, e: f64, label: &str) {
     let (t_end, dt) = (0.5, 1e-3);
-    let report = simulate(&block_drop(e), &run(t_end, dt, 0.5));
+    let report = simulate(text, &run(t_end, dt, 0.5));
     assert!(
         matches!(report.stop, eom_sim::Stop::Finished),
         "{:?}",
@@ -198,7 +224,7 @@ fn a_block_dropped_on_its_arms_held_node_hops_and_comes_to_rest() {
         panic!("the node rests at the end: {:?}", el.contact_forces);
     };
     println!(
-        "block_drop e = {e}: {impacts} impacts, {} events, {} steps; force at the end {} N (weight {weight} N); largest |Φ| {:.1e}",
+        "{label} e = {e}: {impacts} impacts, {} events, {} steps; force at the end {} N (weight {weight} N); largest |Φ| {:.1e}",
         report.contact_events.len(),
         report.stats.accepted,
         held.force,
@@ -227,8 +253,13 @@ fn a_block_dropped_on_its_arms_held_node_hops_and_comes_to_rest() {
 
 #[test]
 fn a_block_dropped_plastically_rests_at_the_first_strike() {
+    rests_at_the_first_strike(&block_drop(0.0), "block_drop");
+    rests_at_the_first_strike(&block_drop_on_its_rail(0.0), "block_drop on its rail");
+}
+
+fn rests_at_the_first_strike(text: &str, label: &str) {
     let (t_end, dt) = (0.3, 1e-3);
-    let report = simulate(&block_drop(0.0), &run(t_end, dt, 0.5));
+    let report = simulate(text, &run(t_end, dt, 0.5));
     assert!(
         matches!(report.stop, eom_sim::Stop::Finished),
         "{:?}",
@@ -258,7 +289,7 @@ fn a_block_dropped_plastically_rests_at_the_first_strike() {
         panic!("the node rests: {:?}", el.contact_forces);
     };
     println!(
-        "block_drop e = 0: {} events, {} steps; force {} N (weight {weight} N); largest |Φ| {:.1e}",
+        "{label} e = 0: {} events, {} steps; force {} N (weight {weight} N); largest |Φ| {:.1e}",
         report.contact_events.len(),
         report.stats.accepted,
         held.force,
@@ -508,6 +539,90 @@ fn a_four_bars_hanging_cable_strikes_the_floor_with_the_loop_held() {
     let report = simulate(&text, &run(1.25, 1e-3, 0.8));
     let impacts = finished_with_impacts_by_newton(&report, e, "fourbar_cable");
     assert!(impacts >= 3, "the end node strikes the floor: {impacts}");
+}
+
+/// The pendulum with its cable, the floor `y = −0.28` under the point
+/// `at` (`e = 0.5`) instead of under the cable's end node.
+fn pendulum_tip_on_the_floor(at: &str) -> String {
+    let text = pendulum_cable(0.5);
+    let node = r#"at: (body: "rope", node: 2), point: (0, -0.25, 0)"#;
+    assert!(text.contains(node), "the pendulum's contact");
+    text.replace(node, &format!("at: {at}, point: (0, -0.28, 0)"))
+}
+
+/// A rigid body's contact whose row is not constant, beside a cable,
+/// against its twin at a cable node. The link's tip strikes the floor
+/// `y = −0.28`: `g = 0.3 sin θ + 0.28`, `w = 0.3 cos θ`, `γ = 0.3 sin θ θ̇²`
+/// from the rigid part's generated `contacts`, held while it rests as an
+/// index-3 row re-evaluated at every Newton iterate. Its twin is the same
+/// floor under the cable's node 0, pinned at the tip: a row constant in
+/// the node's `y`. On the attachment's manifold the two are one gap and
+/// the impact map holds the attachment, so the runs are one motion: the
+/// same events at the same times (to 1e-7 s; 5e-9 s measured), the same
+/// impulses and resting force (to 1e-6 of each; 3e-8 measured), each
+/// impact by Newton and Carnot, the energy never above its start, and the
+/// link at rest on the floor at the end.
+///
+/// At `--dt 1e-3` the run needs `ρ∞ = 0.5`: with `ρ∞ = 0.8` the tip's
+/// impact yanks the stiff cable (E = 2e9) whose axial modes the step does
+/// not resolve, the energy rises to 10.6 J from 0 J, and both twins are
+/// refused by the energy guard at t = 0.2360 s (BENCHMARKS.md, "A body's
+/// contact beside a cable"); at `--dt 2e-4` they finish with `ρ∞ = 0.8`.
+#[test]
+fn a_links_tip_striking_the_floor_beside_its_cable_is_its_pinned_nodes_twin() {
+    let r = run(1.0, 1e-3, 0.5);
+    let body = simulate(
+        &pendulum_tip_on_the_floor(r#"(body: "link", marker: "tip")"#),
+        &r,
+    );
+    let node = simulate(&pendulum_tip_on_the_floor(r#"(body: "rope", node: 0)"#), &r);
+    let impacts = finished_with_impacts_by_newton(&body, 0.5, "link tip on the floor");
+    finished_with_impacts_by_newton(&node, 0.5, "node 0 on the floor");
+    assert!(impacts >= 3, "the tip strikes and hops: {impacts}");
+    assert_eq!(
+        body.contact_events.len(),
+        node.contact_events.len(),
+        "the same events"
+    );
+    for (b, n) in body.contact_events.iter().zip(&node.contact_events) {
+        assert_eq!(b.kind, n.kind, "at {} s", b.t);
+        assert!(
+            (b.t - n.t).abs() < 1e-7,
+            "{:?} at {} s and {} s",
+            b.kind,
+            b.t,
+            n.t
+        );
+        for (cb, cn) in b.contacts.iter().zip(&n.contacts) {
+            assert!(
+                (cb.impulse - cn.impulse).abs() <= 1e-6 * cn.impulse.abs() + 1e-12,
+                "{:?} at {} s: Λ {} and {}",
+                b.kind,
+                b.t,
+                cb.impulse,
+                cn.impulse
+            );
+            assert!((cb.speed_before - cn.speed_before).abs() < 1e-6);
+        }
+    }
+    let force = |r: &eom_sim::RunReport| {
+        let el = r.elements.as_ref().expect("element report");
+        let [held] = el.contact_forces.as_slice() else {
+            panic!("the tip rests on the floor: {:?}", el.contact_forces);
+        };
+        held.force
+    };
+    let (fb, fnode) = (force(&body), force(&node));
+    assert!(
+        fb > 0.0 && (fb - fnode).abs() <= 1e-6 * fnode,
+        "{fb} N and {fnode} N"
+    );
+    assert!(
+        (body.q[0] - node.q[0]).abs() < 1e-9,
+        "θ {} and {}",
+        body.q[0],
+        node.q[0]
+    );
 }
 
 /// The energy guard's premise, read from the model: a pendulum with its

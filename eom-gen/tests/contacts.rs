@@ -111,41 +111,50 @@ fn bad_contacts_are_all_reported_located() {
     assert_eq!(out.matches("error:").count(), 1, "{out}");
 }
 
-/// A model with cables: its runner (generalized-α) handles contacts at
-/// cable nodes only (`eom-gen/tests/cable_contacts.rs`), so a contact on a
-/// body there is refused at the contact, naming the cable (it used to be
-/// ignored: the stop let the boom through). A node contact beside a rigid
-/// part (the rope hangs at the boom) is a model since the impact map holds
-/// the attachments (`eom-gen/tests/cable_contacts_mixed.rs`; it used to be
-/// refused).
+/// A model with cables: its runner (generalized-α, sustained contacts
+/// held as index-3 rows) handles frictionless contacts on bodies beside
+/// the cables (`eom-gen/tests/cable_contacts_mixed.rs`; they used to be
+/// refused, and before that ignored: the stop let the boom through) and
+/// contacts at cable nodes with or without friction. Coulomb friction on a
+/// body's contact there is refused at its `mu`, naming the cable: a
+/// sticking row is held at the position level, which a body's rolling or
+/// pivoting contact point does not have.
 #[test]
-fn contacts_beside_cables_are_refused() {
-    let text = std::fs::read_to_string(format!(
+fn friction_on_a_bodys_contact_beside_cables_is_refused() {
+    let crane = std::fs::read_to_string(format!(
         "{}/../models/ancf/crane_rope.ron",
         env!("CARGO_MANIFEST_DIR")
     ))
-    .expect("model")
-    .replacen(
-        "    cables: [",
-        "    contacts: [JointLimit(name: \"stop\", joint: \"pivot\", lower: -0.2, e: 0.5)],\n    cables: [",
-        1,
+    .expect("model");
+    let with = |contacts: &str| {
+        let text = crane.replacen(
+            "    cables: [",
+            &format!("    contacts: [{contacts}],\n    cables: ["),
+            1,
+        );
+        check(&Source::new("models/crane.ron", text))
+            .map(|_| "valid".to_string())
+            .unwrap_or_else(|r| r.to_string())
+    };
+    let out = with(r#"JointLimit(name: "stop", joint: "pivot", lower: -0.2, e: 0.5)"#);
+    assert_eq!(out, "valid", "a frictionless joint limit beside the rope");
+    let out = with(
+        r#"Plane(name: "ground", at: (body: "boom", point: (1, 0, 0)), point: (0, -1, 0), normal: (0, 1, 0), e: 0.5, mu: 0.4)"#,
     );
-    let out = check(&Source::new("models/crane.ron", text.clone()))
-        .map(|_| "valid".to_string())
-        .unwrap_or_else(|r| r.to_string());
     assert!(
-        out.contains("error: contact `stop` is on a body in a model with cables (`rope`), whose runner handles contacts at cable nodes only"),
+        out.contains("error: contact `ground` on a body has Coulomb friction (mu = 0.4) in a model with cables (`rope`)")
+            && out.contains("give it `mu: 0`"),
         "{out}"
     );
     assert!(out.contains("models/crane.ron:"), "located: {out}");
-    let text = text.replace(
-        r#"JointLimit(name: "stop", joint: "pivot", lower: -0.2, e: 0.5)"#,
-        r#"Plane(name: "floor", at: (body: "rope", node: 1), point: (0, -50, 0), normal: (0, 1, 0), e: 0.5)"#,
+    assert_eq!(out.matches("error:").count(), 1, "{out}");
+    let out = with(
+        r#"Plane(name: "floor", at: (body: "rope", node: 1), point: (0, -50, 0), normal: (0, 1, 0), e: 0.5, mu: 0.4)"#,
     );
-    let out = check(&Source::new("models/crane.ron", text))
-        .map(|_| "valid".to_string())
-        .unwrap_or_else(|r| r.to_string());
-    assert_eq!(out, "valid", "a node contact on a rope hung at the boom");
+    assert_eq!(
+        out, "valid",
+        "a node contact with friction on a rope hung at the boom"
+    );
 }
 
 /// A contact closed at the initial state is refused with its penetration

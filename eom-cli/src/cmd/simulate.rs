@@ -287,7 +287,10 @@ fn simulate_cables(
     )
     .pop()
     .unwrap_or(Integrator::GeneralizedAlpha);
-    if a.events_csv.is_some() && checked.system.cable_contacts.is_empty() {
+    if a.events_csv.is_some()
+        && checked.system.cable_contacts.is_empty()
+        && checked.system.contacts.is_empty()
+    {
         problems.push(format!(
             "--events-csv writes the contact events; `{}` has no contacts",
             checked.system.name

@@ -43,6 +43,16 @@
 //! and the constraints would otherwise work in the impulse); an event
 //! state from the step's interpolant is first brought onto `Φ = 0`.
 //!
+//! **The rigid part's own contacts** (joint limits, markers and spheres
+//! against planes, spheres: [`Impacts::body_rows`], from the generated
+//! `contacts`) come after the node rows in the same run, frictionless.
+//! Their rows are not constant: they are evaluated at each state (gaps,
+//! speeds, `γ` of `g̈ = wᵀ a − γ`), and while one is held [`Held`]
+//! re-evaluates its `g` and `w` at every Newton iterate (the change of `w`
+//! with `y` times the force left out of the matrix). A closing gap is
+//! located as a node's: its value on the step's cubic Hermite interpolant
+//! of the state, then on the retaken steps.
+//!
 //! Not here: a sliding row's direction is not differentiated in
 //! generalized-α's Newton matrix (exact for a slide along a fixed
 //! direction, a quasi-Newton one for a curving slide).
@@ -81,7 +91,10 @@ pub struct NodeContact {
 }
 
 /// The contacts' rows on a model's free coordinates (`y`, the structure's
-/// free coordinates first): fixed coordinates folded into the level.
+/// free coordinates first): the cable nodes' first, constant, fixed
+/// coordinates folded into the level; then the model's own contacts (a
+/// mixed model's rigid part's, [`Impacts::body_rows`]), evaluated at each
+/// state (their `row`, `level` and `tangents` here are empty).
 #[derive(Clone, Debug)]
 pub(super) struct Gaps {
     pub names: Vec<String>,
@@ -90,6 +103,8 @@ pub(super) struct Gaps {
     pub e: Vec<f64>,
     pub mu: Vec<f64>,
     pub tangents: Vec<[Vec<(usize, f64)>; 2]>,
+    /// The number of node rows (the first ones).
+    nodes: usize,
 }
 
 impl Gaps {
@@ -107,6 +122,7 @@ impl Gaps {
             e: Vec::new(),
             mu: Vec::new(),
             tangents: Vec::new(),
+            nodes: contacts.len(),
         };
         for c in contacts {
             let mut row = Vec::new();
@@ -137,6 +153,93 @@ impl Gaps {
         self.rows.len()
     }
 
+    /// The same with the model's own contacts `names` after the node rows
+    /// ([`Impacts::body_rows`]), their `e` and `μ` from their rows at `s`.
+    /// Frictionless only: a sticking row is held at the position level
+    /// here (a node's tangential coordinates), which a body's rolling or
+    /// pivoting contact point does not have.
+    pub fn with_bodies<M: Impacts + ?Sized>(
+        mut self,
+        m: &M,
+        names: &[String],
+        s: &State,
+    ) -> Result<Gaps, String> {
+        if names.is_empty() {
+            return Ok(self);
+        }
+        let r = m
+            .body_rows(s.t, &s.q, &s.v)
+            .filter(|r| r.g.len() == names.len())
+            .ok_or("the rigid part's contacts cannot be evaluated at the start")?;
+        let rough: Vec<&str> = (0..names.len())
+            .filter(|&b| r.mu[b] != 0.0)
+            .map(|b| names[b].as_str())
+            .collect();
+        if !rough.is_empty() {
+            return Err(format!(
+                "Coulomb friction at a rigid body's contact beside cables is not supported ({}): give it mu: 0, or friction at cable nodes only",
+                rough.join(", ")
+            ));
+        }
+        for (b, name) in names.iter().enumerate() {
+            self.names.push(name.clone());
+            self.rows.push(Vec::new());
+            self.level.push(0.0);
+            self.e.push(r.e[b]);
+            self.mu.push(0.0);
+            self.tangents.push([Vec::new(), Vec::new()]);
+        }
+        Ok(self)
+    }
+
+    /// Row `i` is a cable node's (constant, on `rows`).
+    fn node(&self, i: usize) -> bool {
+        i < self.nodes
+    }
+
+    /// The model's own contacts' rows at `(t, y, v)` if it has any
+    /// (`Some(None)`: they cannot be evaluated).
+    fn bodies<M: Impacts + ?Sized>(
+        &self,
+        m: &M,
+        t: f64,
+        y: &[f64],
+        v: &[f64],
+    ) -> Option<Option<Rows>> {
+        (self.len() > self.nodes).then(|| m.body_rows(t, y, v))
+    }
+
+    /// The gap of row `i` at `s` (NaN if it cannot be evaluated).
+    fn gap_at<M: Impacts + ?Sized>(&self, m: &M, i: usize, s: &State) -> f64 {
+        if self.node(i) {
+            return self.gap(i, &s.q);
+        }
+        m.body_rows(s.t, &s.q, &s.v)
+            .map_or(f64::NAN, |r| r.g[i - self.nodes])
+    }
+
+    /// The gaps of all rows at `s` (the model's own NaN if they cannot be
+    /// evaluated).
+    fn gaps_at<M: Impacts + ?Sized>(&self, m: &M, s: &State) -> Vec<f64> {
+        let mut g: Vec<f64> = (0..self.len()).map(|i| self.gap(i, &s.q)).collect();
+        if let Some(b) = self.bodies(m, s.t, &s.q, &s.v) {
+            for (k, x) in g[self.nodes..].iter_mut().enumerate() {
+                *x = b.as_ref().map_or(f64::NAN, |r| r.g[k]);
+            }
+        }
+        g
+    }
+
+    /// The normal speed `ġ` of row `i` at `s` (NaN if it cannot be
+    /// evaluated).
+    fn speed_at<M: Impacts + ?Sized>(&self, m: &M, i: usize, s: &State) -> f64 {
+        if self.node(i) {
+            return self.dot(i, &s.v);
+        }
+        m.body_rows(s.t, &s.q, &s.v)
+            .map_or(f64::NAN, |r| r.gdot[i - self.nodes])
+    }
+
     fn dot(&self, i: usize, x: &[f64]) -> f64 {
         self.rows[i].iter().map(|&(k, a)| a * x[k]).sum()
     }
@@ -161,13 +264,14 @@ impl Gaps {
         self.dot(i, y) - self.level[i]
     }
 
-    /// The contact rows at `s` in the runtime's [`Rows`] (`γ = γ_t = 0`:
-    /// the normal and tangential rows are constant).
-    fn at(&self, s: &State) -> Rows {
+    /// The contact rows at `s` in the runtime's [`Rows`] (a node's
+    /// `γ = γ_t = 0`: its normal and tangential rows are constant; the
+    /// model's own from [`Impacts::body_rows`]).
+    fn at<M: Impacts + ?Sized>(&self, m: &M, s: &State) -> Result<Rows, DynamicsError> {
         let (nk, n) = (self.len(), s.v.len());
         let mut w = DMatrix::zeros(nk, n);
         let mut wt = DMatrix::zeros(2 * nk, n);
-        for i in 0..nk {
+        for i in 0..self.nodes {
             for &(k, a) in &self.rows[i] {
                 w[(i, k)] += a;
             }
@@ -177,7 +281,7 @@ impl Gaps {
                 }
             }
         }
-        Rows {
+        let mut r = Rows {
             g: (0..nk).map(|i| self.gap(i, &s.q)).collect(),
             gdot: (0..nk).map(|i| self.dot(i, &s.v)).collect(),
             gamma: vec![0.0; nk],
@@ -187,7 +291,19 @@ impl Gaps {
             vt: (0..nk).map(|i| self.vt(i, &s.v)).collect(),
             gamma_t: vec![[0.0; 2]; nk],
             wt,
+        };
+        if let Some(b) = self.bodies(m, s.t, &s.q, &s.v) {
+            let b = b.ok_or_else(|| {
+                failed(s.t, "the rigid part's contacts cannot be evaluated".into())
+            })?;
+            for (k, i) in (self.nodes..nk).enumerate() {
+                r.g[i] = b.g[k];
+                r.gdot[i] = b.gdot[k];
+                r.gamma[i] = b.gamma[k];
+                r.w.row_mut(i).copy_from(&b.w.row(k));
+            }
         }
+        Ok(r)
     }
 
     /// The sliding direction of row `i` at speeds `v` that started along
@@ -234,14 +350,16 @@ pub(super) struct Held<'m, M: ?Sized> {
 }
 
 /// [`Held`]'s scratch: the model's, and the bordered solve's `A⁻¹ D`
-/// columns with the factored `S`.
+/// columns with the factored `S` (and the model's own contact rows `C`
+/// it was built with, if it has any).
 pub(super) struct HeldWork<W> {
     inner: W,
     x: Vec<Vec<f64>>,
     s: Option<LU<f64, Dyn, Dyn>>,
+    rows: Option<Rows>,
 }
 
-impl<'m, M: AlphaModel + ?Sized> Held<'m, M> {
+impl<'m, M: Impacts + ?Sized> Held<'m, M> {
     /// `slides` and `anchors` per contact row (`None`: frictionless or not
     /// held).
     pub fn new(
@@ -270,7 +388,8 @@ impl<'m, M: AlphaModel + ?Sized> Held<'m, M> {
         }
     }
 
-    /// The constraint row of hold `h`.
+    /// The constant row of hold `h` (empty for the model's own contacts,
+    /// whose rows are `body`'s).
     fn row(&self, h: Hold) -> &[(usize, f64)] {
         match h {
             Hold::Normal(i) => &self.gaps.rows[i],
@@ -278,21 +397,62 @@ impl<'m, M: AlphaModel + ?Sized> Held<'m, M> {
         }
     }
 
-    /// Hold `h`'s residual at `y`.
-    fn value(&self, h: Hold, y: &[f64]) -> f64 {
+    /// The model's own contact row of hold `h` in `body` (its rows at the
+    /// iterate), if `h` is one.
+    fn own<'b>(&self, h: Hold, body: Option<&'b Rows>) -> Option<(usize, &'b Rows)> {
         match h {
+            Hold::Normal(i) if !self.gaps.node(i) => Some((i - self.gaps.nodes, body?)),
+            _ => None,
+        }
+    }
+
+    /// The model's own contacts' rows at `(t, y, v)` if a hold is one of
+    /// them.
+    fn body_at(&self, t: f64, y: &[f64], v: &[f64]) -> Option<Rows> {
+        let own = self.holds.iter().any(|&h| match h {
+            Hold::Normal(i) => !self.gaps.node(i),
+            Hold::Tangent(..) => false,
+        });
+        if own {
+            self.inner.body_rows(t, y, v)
+        } else {
+            None
+        }
+    }
+
+    /// Hold `h`'s residual at `y` (`body`: the model's own contacts' rows
+    /// there).
+    fn value(&self, h: Hold, y: &[f64], body: Option<&Rows>) -> f64 {
+        match h {
+            Hold::Normal(i) if !self.gaps.node(i) => {
+                self.own(h, body).map_or(f64::NAN, |(b, r)| r.g[b])
+            }
             Hold::Normal(i) => self.gaps.gap(i, y),
             Hold::Tangent(i, a, c) => self.gaps.tdot(i, a, y) - c,
         }
     }
 
     /// `C_h x`.
-    fn dot(&self, h: Hold, x: &[f64]) -> f64 {
+    fn dot(&self, h: Hold, x: &[f64], body: Option<&Rows>) -> f64 {
+        if let Some((b, r)) = self.own(h, body) {
+            return (0..x.len()).map(|k| r.w[(b, k)] * x[k]).sum();
+        }
         self.row(h).iter().map(|&(k, a)| a * x[k]).sum()
     }
 
+    /// `γ_h` of `C_h a = γ_h` (`g̈ = 0`): a node's rows are constant.
+    fn gamma(&self, h: Hold, body: Option<&Rows>) -> f64 {
+        self.own(h, body).map_or(0.0, |(b, r)| r.gamma[b])
+    }
+
     /// Adds `scale` times hold `h`'s force column at speeds `v` to `r`.
-    fn add_column(&self, h: Hold, v: &[f64], scale: f64, r: &mut [f64]) {
+    fn add_column(&self, h: Hold, v: &[f64], body: Option<&Rows>, scale: f64, r: &mut [f64]) {
+        if let Some((b, rows)) = self.own(h, body) {
+            for (k, x) in r.iter_mut().enumerate() {
+                *x += rows.w[(b, k)] * scale;
+            }
+            return;
+        }
         for &(c, a) in self.row(h) {
             r[c] += a * scale;
         }
@@ -354,17 +514,25 @@ impl<'m, M: AlphaModel + ?Sized> Held<'m, M> {
             .collect()
     }
 
-    /// `A⁻¹ [D; 0]` and `S` at the matrix just factored.
-    fn border(&self, w: &mut HeldWork<M::Work>, t: f64, v: &[f64]) -> Result<(), DynamicsError> {
+    /// `A⁻¹ [D; 0]` and `S` at the matrix just factored, at `(t, y, v)`.
+    fn border(
+        &self,
+        w: &mut HeldWork<M::Work>,
+        t: f64,
+        y: &[f64],
+        v: &[f64],
+    ) -> Result<(), DynamicsError> {
         let (n, mi, k) = (self.inner.n(), self.inner.n_constraints(), self.holds.len());
+        w.rows = self.body_at(t, y, v);
+        let body = w.rows.as_ref();
         w.x.clear();
         for &h in &self.holds {
             let mut col = vec![0.0; n + mi];
-            self.add_column(h, v, 1.0, &mut col);
+            self.add_column(h, v, body, 1.0, &mut col[..n]);
             self.inner.solve(&mut w.inner, &mut col);
             w.x.push(col);
         }
-        let s = DMatrix::from_fn(k, k, |a, b| self.dot(self.holds[a], &w.x[b][..n]));
+        let s = DMatrix::from_fn(k, k, |a, b| self.dot(self.holds[a], &w.x[b][..n], body));
         let lu = s.lu();
         if !lu.is_invertible() {
             return Err(failed(
@@ -377,7 +545,7 @@ impl<'m, M: AlphaModel + ?Sized> Held<'m, M> {
     }
 }
 
-impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
+impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
     type Work = HeldWork<M::Work>;
 
     fn n(&self) -> usize {
@@ -393,6 +561,7 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
             inner: self.inner.work(state),
             x: Vec::new(),
             s: None,
+            rows: None,
         }
     }
 
@@ -409,9 +578,10 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
         if self.holds.is_empty() {
             return Ok(());
         }
-        // The held rows' accelerations `C a = 0` (the rows are constant):
-        // `[a; λ] −= A⁻¹ D μ` with `S μ = C a₀`, `A` the model's matrix at
-        // `β' = γ' = 0` (`M` with its own constraint rows).
+        // The held rows' accelerations `C a = γ` (`g̈ = 0`; a node's `γ`
+        // is 0, its rows constant): `[a; λ] −= A⁻¹ D μ` with
+        // `S μ = C a₀ − γ`, `A` the model's matrix at `β' = γ' = 0` (`M`
+        // with its own constraint rows).
         let mut r = vec![0.0; n + mi];
         self.inner.residual(
             &mut w.inner,
@@ -432,8 +602,12 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
             0.0,
             0.0,
         )?;
-        self.border(w, state.t, &state.v)?;
-        let rhs = DVector::from_fn(self.holds.len(), |a, _| self.dot(self.holds[a], acc));
+        self.border(w, state.t, &state.q, &state.v)?;
+        let body = w.rows.as_ref();
+        let rhs = DVector::from_fn(self.holds.len(), |a, _| {
+            let h = self.holds[a];
+            self.dot(h, acc, body) - self.gamma(h, body)
+        });
         let Some(mu) = w.s.as_ref().and_then(|s| s.solve(&rhs)) else {
             return Err(failed(
                 state.t,
@@ -465,9 +639,10 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
         let (n, mi) = (self.inner.n(), self.inner.n_constraints());
         self.inner
             .residual(&mut w.inner, t, y, v, acc, &lambda[..mi], &mut r[..n + mi]);
+        let body = self.body_at(t, y, v);
         for (b, &h) in self.holds.iter().enumerate() {
-            self.add_column(h, v, lambda[mi + b], &mut r[..n]);
-            r[n + mi + b] = self.value(h, y);
+            self.add_column(h, v, body.as_ref(), lambda[mi + b], &mut r[..n]);
+            r[n + mi + b] = self.value(h, y, body.as_ref());
         }
     }
 
@@ -488,7 +663,7 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
         if self.holds.is_empty() {
             return Ok(());
         }
-        self.border(w, t, v)
+        self.border(w, t, y, v)
     }
 
     fn solve(&self, w: &mut Self::Work, r: &mut [f64]) {
@@ -499,7 +674,10 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
             return;
         };
         // `μ = S⁻¹ (C A⁻¹ r₁ − r₂)`, `x = A⁻¹ r₁ − A⁻¹ D μ`.
-        let rhs = DVector::from_fn(k, |a, _| self.dot(self.holds[a], &r[..n]) - r[n + mi + a]);
+        let body = w.rows.as_ref();
+        let rhs = DVector::from_fn(k, |a, _| {
+            self.dot(self.holds[a], &r[..n], body) - r[n + mi + a]
+        });
         let mu = s
             .solve(&rhs)
             .unwrap_or_else(|| DVector::from_element(k, f64::NAN));
@@ -513,9 +691,10 @@ impl<M: AlphaModel + ?Sized> AlphaModel for Held<'_, M> {
 
     fn accepted(&self, w: &mut Self::Work, state: &State) -> f64 {
         let own = self.inner.accepted(&mut w.inner, state);
+        let body = self.body_at(state.t, &state.q, &state.v);
         self.holds
             .iter()
-            .map(|&h| self.value(h, &state.q).abs())
+            .map(|&h| self.value(h, &state.q, body.as_ref()).abs())
             .fold(own, f64::max)
     }
 
@@ -552,6 +731,14 @@ pub(super) trait Impacts: AlphaModel {
     fn free_acceleration(&self, s: &State) -> Option<DVector<f64>>;
     /// Total energy at `s`.
     fn total_energy(&self, s: &State) -> f64;
+    /// The rows of the model's own contacts (a mixed model's rigid part's:
+    /// joint limits, markers against planes, spheres) at `(t, y, v)`, on
+    /// all the free coordinates; `None` if they cannot be evaluated. None
+    /// by default (no contacts of its own).
+    fn body_rows(&self, t: f64, y: &[f64], v: &[f64]) -> Option<Rows> {
+        let _ = (t, y, v);
+        None
+    }
     /// Brings an event's state onto the model's own constraints where it
     /// is off them (a state from the step's interpolant, not from the
     /// integrator): positions `Φ = 0`, then speeds `J u + Φ_t = 0`, each
@@ -787,12 +974,12 @@ impl<'g> ContactRun<'g> {
         set: &[usize],
         (r, mm): (&Rows, &DMatrix<f64>),
         sol: &Solved,
-    ) -> Rows {
+    ) -> Result<Rows, DynamicsError> {
         let e0 = m.total_energy(s);
         for (v, d) in s.v.iter_mut().zip(sol.du.iter()) {
             *v += d;
         }
-        let after = self.gaps.at(s);
+        let after = self.gaps.at(m, s)?;
         let ln: Vec<f64> = sol.ln.iter().copied().collect();
         let ev = self.event(
             s.t,
@@ -804,7 +991,7 @@ impl<'g> ContactRun<'g> {
             (mm * &sol.du).as_slice().to_vec(),
         );
         self.events.push(ev);
-        after
+        Ok(after)
     }
 
     /// Resolves the contacts at `s` (as the rigid runtime's `settle`):
@@ -838,7 +1025,7 @@ impl<'g> ContactRun<'g> {
         let nk = self.gaps.len();
         let breaking = std::mem::take(&mut self.breaking);
         let releasing = std::mem::take(&mut self.releasing);
-        let mut r = self.gaps.at(s);
+        let mut r = self.gaps.at(m, s)?;
         let closed: Vec<usize> = (0..nk).filter(|&i| r.g[i] <= GAP_TOL).collect();
         // The mass matrix and the model's own constraint rows at the
         // event's positions (an impulse jumps the speeds only), each
@@ -849,12 +1036,7 @@ impl<'g> ContactRun<'g> {
             mass_at
                 .get_or_init(|| m.dense_mass(&at))
                 .clone()
-                .ok_or_else(|| {
-                    failed(
-                        t,
-                        "this model has no impact map for contacts at cable nodes".into(),
-                    )
-                })
+                .ok_or_else(|| failed(t, "this model has no impact map for its contacts".into()))
         };
         let jac = || rows_at.get_or_init(|| m.constraint_rows(&at)).as_ref();
         // `M⁻¹ R` with the model's constraints held (`J Δ = 0`).
@@ -870,7 +1052,7 @@ impl<'g> ContactRun<'g> {
             failed(
                 t,
                 format!(
-                    "the impact of {n} contact(s) at cable nodes has no solution (more than {MAX_LCP} contacts closed at once, a singular mass matrix, or sliding directions that do not settle)"
+                    "the impact of {n} contact(s) in a model with cables has no solution (more than {MAX_LCP} contacts closed at once, a singular mass matrix, or sliding directions that do not settle)"
                 ),
             )
         };
@@ -895,7 +1077,7 @@ impl<'g> ContactRun<'g> {
             for (v, x) in s.v.iter_mut().zip(du.iter()) {
                 *v += x;
             }
-            r = self.gaps.at(s);
+            r = self.gaps.at(m, s)?;
         }
         // The held rows are constraints while held: their speeds are
         // brought onto `ġ = 0` (and a sticking row's onto `v_t = 0`) the
@@ -934,7 +1116,7 @@ impl<'g> ContactRun<'g> {
             for (v, d) in s.v.iter_mut().zip(dv.iter()) {
                 *v += d;
             }
-            r = self.gaps.at(s);
+            r = self.gaps.at(m, s)?;
         }
         if closed
             .iter()
@@ -971,7 +1153,7 @@ impl<'g> ContactRun<'g> {
                 let e = |i: usize| r.e[i];
                 let sol = impact(&mm, jac(), &r, &set, &e, false, &slides)
                     .ok_or_else(|| no_solution(set.len()))?;
-                r = self.jump(m, s, ContactEventKind::Impact, &set, (&r, &mm), &sol);
+                r = self.jump(m, s, ContactEventKind::Impact, &set, (&r, &mm), &sol)?;
                 // Rows leaving rising fly: their landing is located at the
                 // level they leave from (not below it: a hop's landing
                 // GAP_TOL below its take-off ratchets a hopping node into
@@ -987,8 +1169,15 @@ impl<'g> ContactRun<'g> {
         let free = m
             .free_acceleration(s)
             .ok_or_else(|| failed(t, "no accelerations at the contact event".into()))?;
-        let acc = |i: usize| -> f64 { self.gaps.dot(i, free.as_slice()) };
-        let tacc = |i: usize| -> [f64; 2] { self.gaps.vt(i, free.as_slice()) };
+        // Each row's `g̈` and `v̇_t` without contact forces.
+        let acc_of: Vec<f64> = (0..nk)
+            .map(|i| r.w.row(i).transpose().dot(&free) - r.gamma[i])
+            .collect();
+        let tacc_of: Vec<[f64; 2]> = (0..nk)
+            .map(|i| [0, 1].map(|a| r.tangential_dot(i, a, &free) - r.gamma_t[i][a]))
+            .collect();
+        let acc = |i: usize| acc_of[i];
+        let tacc = |i: usize| tacc_of[i];
         let resting: Vec<usize> = closed
             .iter()
             .copied()
@@ -1048,7 +1237,7 @@ impl<'g> ContactRun<'g> {
                 return Err(failed(
                     t,
                     format!(
-                        "the contact forces of {} resting contact(s) at cable nodes have no solution",
+                        "the contact forces of {} resting contact(s) in a model with cables have no solution",
                         resting.len()
                     ),
                 ));
@@ -1177,7 +1366,7 @@ impl<'g> ContactRun<'g> {
                 } else {
                     ContactEventKind::Rest
                 };
-                r = self.jump(m, s, kind, &set, (&r, &mm), &sol);
+                r = self.jump(m, s, kind, &set, (&r, &mm), &sol)?;
             }
         }
         if !to_slip.is_empty() {
@@ -1312,6 +1501,17 @@ impl<'g> ContactRun<'g> {
                         first = Some((t, row, breaks));
                     }
                 };
+                let (gaps0, gaps1) = (self.gaps.gaps_at(m, &prev), self.gaps.gaps_at(m, &new));
+                if gaps1.iter().any(|g| g.is_nan()) {
+                    self.add_stats(&ga.stats);
+                    return (
+                        prev,
+                        Some(failed(
+                            new.t,
+                            "the rigid part's contacts cannot be evaluated".into(),
+                        )),
+                    );
+                }
                 for i in (0..nk).filter(|i| !self.active.contains(i)) {
                     // A row that starts the step at or inside its plane (just
                     // released, or left by a plastic impact) counts as
@@ -1319,16 +1519,16 @@ impl<'g> ContactRun<'g> {
                     // problem has found it not pressing. A row that left
                     // an impact rising closes where it left (a hop lands
                     // at its take-off level, not GAP_TOL below it).
-                    let g0 = self.gaps.gap(i, &prev.q);
+                    let g0 = gaps0[i];
                     let level = match (g0 < 0.0, self.bounced[i]) {
                         (false, _) => 0.0,
                         (true, true) => g0,
                         (true, false) => g0 - GAP_TOL,
                     };
-                    if self.gaps.gap(i, &new.q) < level {
+                    if gaps1[i] < level {
                         let g = |t: f64| {
                             self.gaps
-                                .gap(i, &super::simulate::hermite(&prev, &new, t).q)
+                                .gap_at(m, i, &super::simulate::hermite(&prev, &new, t))
                                 - level
                         };
                         take(locate(g, prev.t, new.t), Some((i, level)), None);
@@ -1448,9 +1648,10 @@ impl<'g> ContactRun<'g> {
                             };
                             let located = match (row, breaks) {
                                 (Some((i, level)), _) => {
-                                    let gap = |s: &State| self.gaps.gap(i, &s.q) - level;
+                                    let gap = |s: &State| self.gaps.gap_at(m, i, s) - level;
                                     let ends = ((prev.t, gap(&prev)), (new.t, gap(&new)));
-                                    let closing = |s: &State| self.gaps.dot(i, &s.v) <= REST_SPEED;
+                                    let closing =
+                                        |s: &State| self.gaps.speed_at(m, i, s) <= REST_SPEED;
                                     on_the_steps(t, ends, 0.5 * GAP_TOL, retake, gap, closing)
                                 }
                                 // A stick leaving its cone: its distance to

@@ -107,6 +107,20 @@ pub trait RigidPart {
     fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
         let _ = (t, q, out);
     }
+    /// Names of the rigid part's unilateral contacts (joint limits,
+    /// markers against planes, spheres: the rows of the generated
+    /// `contacts`); none by default.
+    fn contact_names(&self) -> Vec<String> {
+        Vec::new()
+    }
+    /// The generated `contacts` at `(t, q, u)`, flat: `g`, `ġ`, `γ`
+    /// (`g̈ = wᵀ u̇ − γ`), `e` and `μ`, one each per contact, then the rows
+    /// `w` (`n` each); `false` if it cannot be evaluated. `false` by
+    /// default (no contacts).
+    fn contacts(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) -> bool {
+        let _ = (t, q, u, out);
+        false
+    }
     /// What can feed energy into the rigid part (an actuator, a force
     /// given as a function, a prescribed motion, a constraint that moves
     /// with time), named; `None` if nothing can: gravity and springs are in
@@ -134,6 +148,8 @@ pub struct ByName<F> {
     energy_source: Option<String>,
     /// All equations of the generated `constraints` function.
     nc_all: usize,
+    /// See [`ByName::with_contacts`].
+    contact_names: Vec<String>,
 }
 
 impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
@@ -147,7 +163,15 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
             constraint_names: Vec::new(),
             nc_all: 0,
             energy_source: Some("generated functions whose forces are not stated".into()),
+            contact_names: Vec::new(),
         }
+    }
+
+    /// The same with unilateral contacts of its own, named `names`, from
+    /// the generated `contacts` ([`RigidPart::contacts`]).
+    pub fn with_contacts(mut self, names: Vec<String>) -> Self {
+        self.contact_names = names;
+        self
     }
 
     /// States what can feed energy into the rigid part
@@ -172,7 +196,7 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
         self
     }
 
-    fn call(&self, name: &str, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) {
+    fn call(&self, name: &str, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) -> bool {
         let at = Point {
             t,
             q,
@@ -181,9 +205,11 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
             tau: &[],
             lambda: &[],
         };
-        if !(self.evaluate)(name, &at, out) {
+        let done = (self.evaluate)(name, &at, out);
+        if !done {
             out.fill(f64::NAN);
         }
+        done
     }
 }
 
@@ -219,6 +245,12 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> RigidPart for ByName<F> {
     }
     fn constraint_names(&self) -> Vec<String> {
         self.constraint_names.clone()
+    }
+    fn contact_names(&self) -> Vec<String> {
+        self.contact_names.clone()
+    }
+    fn contacts(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) -> bool {
+        !self.contact_names.is_empty() && self.call("contacts", t, q, u, out)
     }
     fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
         let (n, nc, nh) = (self.n, self.nc_all, self.constraint_names.len());

@@ -24,6 +24,7 @@ use super::statics::{LoadStep, StaticError, StaticOptions, solve_static};
 use crate::Integrator;
 use crate::constrained::{DMatrix, DVector};
 use crate::run::ContactForce;
+use crate::run::contact::Rows;
 use crate::run::{
     CableState, ElementReport, LoadStepReport, MountForce, RunError, RunReport, RunStats,
     StabilityReport, StaticReport, Stop,
@@ -381,6 +382,24 @@ impl Impacts for MixedModel<'_> {
     }
     fn total_energy(&self, s: &State) -> f64 {
         self.energies(s).0
+    }
+    fn body_rows(&self, t: f64, y: &[f64], v: &[f64]) -> Option<Rows> {
+        let (ns, n) = (self.n_structural(), self.n());
+        let nr = n - ns;
+        let nk = self.rigid().contact_names().len();
+        let mut out = vec![0.0; nk * (5 + nr)];
+        if nk == 0 || !self.rigid().contacts(t, &y[ns..], &v[ns..], &mut out) {
+            return None;
+        }
+        // The rigid part's rows on `q_r`, after the structure's columns.
+        let own = Rows::of_contacts(nk, nr, &out);
+        let mut w = DMatrix::zeros(nk, n);
+        w.view_mut((0, ns), (nk, nr)).copy_from(&own.w);
+        Some(Rows {
+            w,
+            wt: DMatrix::zeros(2 * nk, n),
+            ..own
+        })
     }
     fn onto_constraints(&self, s: &mut State) -> Result<(), DynamicsError> {
         // Within a thousandth of the start's tolerance (`1e-8`): a state
@@ -844,7 +863,9 @@ pub fn simulate_mixed(
     // The structure's free coordinates come first in `y`: its free
     // indices are the mixed model's.
     let st = model.structure();
-    let gaps = Gaps::new(contacts, |i| st.free_index(i), st.q0());
+    let gaps = Gaps::new(contacts, |i| st.free_index(i), st.q0())
+        .with_bodies(model, &model.rigid().contact_names(), &state)
+        .map_err(|e| RunError::Options(vec![e]))?;
     run_alpha(model, cables, state, names, run, &gaps, progress)
 }
 

@@ -203,6 +203,24 @@ pub(crate) struct Rows {
 }
 
 impl Rows {
+    /// The rows of `nk` contacts on `nu` speeds from the generated
+    /// `contacts`, flat: `g`, `ġ`, `γ`, `e`, `μ` (each `nk`), then `w` by
+    /// rows (`nk × nu`); frictionless (`v_t`, `γ_t`, `W_t` zero).
+    pub(crate) fn of_contacts(nk: usize, nu: usize, v: &[f64]) -> Rows {
+        let part = |k: usize| v[k * nk..(k + 1) * nk].to_vec();
+        Rows {
+            g: part(0),
+            gdot: part(1),
+            gamma: part(2),
+            e: part(3),
+            mu: part(4),
+            w: DMatrix::from_row_slice(nk, nu, &v[5 * nk..5 * nk + nk * nu]),
+            vt: vec![[0.0; 2]; nk],
+            gamma_t: vec![[0.0; 2]; nk],
+            wt: DMatrix::zeros(2 * nk, nu),
+        }
+    }
+
     /// Row `i` has Coulomb friction.
     fn rough(&self, i: usize) -> bool {
         self.mu[i] > 0.0
@@ -214,7 +232,7 @@ impl Rows {
     }
 
     /// `W_t,a` of row `i` dotted with `x`.
-    pub(super) fn tangential_dot(&self, i: usize, a: usize, x: &DVector<f64>) -> f64 {
+    pub(crate) fn tangential_dot(&self, i: usize, a: usize, x: &DVector<f64>) -> f64 {
         (0..self.wt.ncols())
             .map(|k| self.wt[(2 * i + a, k)] * x[k])
             .sum()
@@ -246,10 +264,7 @@ pub(super) fn rows<S: Simulate + ?Sized>(
     if !model.evaluate(CONTACTS, &at, &mut v) {
         return None;
     }
-    let part = |k: usize| v[k * nk..(k + 1) * nk].to_vec();
-    let mut vt = vec![[0.0; 2]; nk];
-    let mut gamma_t = vec![[0.0; 2]; nk];
-    let mut wt = DMatrix::zeros(2 * nk, nu);
+    let mut r = Rows::of_contacts(nk, nu, &v);
     let len = nk * (4 + 2 * nu);
     if model.function_len(FRICTION) == Some(len) {
         let mut f = vec![0.0; len];
@@ -258,25 +273,15 @@ pub(super) fn rows<S: Simulate + ?Sized>(
         }
         for i in 0..nk {
             for a in 0..2 {
-                vt[i][a] = f[a * nk + i];
-                gamma_t[i][a] = f[(2 + a) * nk + i];
+                r.vt[i][a] = f[a * nk + i];
+                r.gamma_t[i][a] = f[(2 + a) * nk + i];
                 for k in 0..nu {
-                    wt[(2 * i + a, k)] = f[4 * nk + a * nk * nu + i * nu + k];
+                    r.wt[(2 * i + a, k)] = f[4 * nk + a * nk * nu + i * nu + k];
                 }
             }
         }
     }
-    Some(Rows {
-        g: part(0),
-        gdot: part(1),
-        gamma: part(2),
-        e: part(3),
-        mu: part(4),
-        w: DMatrix::from_row_slice(nk, nu, &v[5 * nk..]),
-        vt,
-        gamma_t,
-        wt,
-    })
+    Some(r)
 }
 
 /// A model whose sustained contacts `active` hold `g̈ = 0`, those with

@@ -89,20 +89,6 @@ impl Ctx<'_> {
                     }
                 }
             }
-            // The cables' runner (generalized-α over the rigid part and the
-            // cables' nodes) has no generated contacts: a body's contact
-            // would be ignored.
-            if let Some(cable) = spec.cables.first() {
-                self.error(
-                    &path,
-                    format!(
-                        "contact `{name}` is on a body in a model with cables (`{}`), whose runner handles contacts at cable nodes only",
-                        cable.name
-                    ),
-                    "contacts work on rigid and flexible (floating-frame) bodies and their nodes in models without cables, and at the nodes of cables, alone or hung at bodies (`at: (body: CABLE, node: K)`): leave this contact or the cables out",
-                );
-                ok = false;
-            }
             let (e, mu) = match c {
                 spec::Contact::JointLimit { e, mu, .. }
                 | spec::Contact::Plane { e, mu, .. }
@@ -110,6 +96,22 @@ impl Ctx<'_> {
             };
             let e = self.coefficient(e, &join(&path, &[f("e")]), "`e`", name, 1.0);
             let mu = self.coefficient(mu, &join(&path, &[f("mu")]), "`mu`", name, f64::INFINITY);
+            // Beside cables, generalized-α holds a sustained contact at the
+            // position level: a node's sticking tangential coordinates,
+            // which a body's rolling or pivoting contact point lacks.
+            if let (Some(cable), Some(m)) = (spec.cables.first(), mu)
+                && m > 0.0
+            {
+                self.error(
+                    &join(&path, &[f("mu")]),
+                    format!(
+                        "contact `{name}` on a body has Coulomb friction (mu = {m}) in a model with cables (`{}`), whose runner holds a body's contacts frictionless",
+                        cable.name
+                    ),
+                    "give it `mu: 0`; friction works at cable nodes (`at: (body: CABLE, node: K)`) and at bodies' contacts in models without cables",
+                );
+                ok = false;
+            }
             let kind = match c {
                 spec::Contact::JointLimit {
                     joint,
