@@ -104,12 +104,14 @@ pub fn solve_static_cmd(
         let f = rigid_part(sys).map_err(Error::Refused)?;
         let mixed = mixed_model(sys, &f).map_err(Error::Refused)?;
         let (q0, _) = eom_gen::cables::rigid_start(sys, &f).map_err(refused)?;
-        equilibrium_mixed(&mixed.model, &mixed.cables, &q0, opts)
+        let contacts = eom_gen::cables::node_contacts(sys, &mixed.cables);
+        equilibrium_mixed(&mixed.model, &mixed.cables, &contacts, &q0, opts)
             .map_err(|e| refusal(&sys.name, &coordinates, &e))?
     } else {
         cables_alone(checked)?;
         let (built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
-        equilibrium_structure(&built.model, &cables, opts)
+        let contacts = eom_gen::cables::node_contacts(sys, &cables);
+        equilibrium_structure(&built.model, &cables, &contacts, opts)
             .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?
     };
     if json_out {
@@ -125,6 +127,27 @@ pub fn solve_static_cmd(
     }
 }
 
+/// Refuses a linearisation about an equilibrium with a contact closed (a
+/// gap at or below `GAP_TOL`), as for rigid models: a sustained contact's
+/// constraint is not part of it (and the equilibrium, found without the
+/// contacts, may go through one).
+fn closed(model: &str, gaps: Vec<(String, f64)>) -> Result<(), Error> {
+    let closed: Vec<(String, f64)> = gaps
+        .into_iter()
+        .filter(|(_, g)| g.is_nan() || *g <= eom_sim::run::GAP_TOL)
+        .collect();
+    if closed.is_empty() {
+        return Ok(());
+    }
+    Err(Error::Refused(
+        eom_gen::linearize::LinearizeError::ClosedContacts {
+            model: model.to_string(),
+            rows: closed,
+        }
+        .to_string(),
+    ))
+}
+
 /// `eom-gen linearize` on a model with cables: about the static
 /// equilibrium (as `solve-static` finds it, default options), the element
 /// runtime's linear equations (`eom_sim::large::second_order`) in minimal
@@ -134,7 +157,10 @@ pub fn solve_static_cmd(
 pub fn linearize_cmd(
     checked: &Checked,
 ) -> Result<(eom_gen::linearize::Linearization, Vec<f64>, Vec<f64>), Error> {
-    use eom_sim::large::{State, second_order, solve_static, solve_static_mixed};
+    use eom_sim::large::{
+        State, contact_gaps_mixed, contact_gaps_structure, second_order, solve_static,
+        solve_static_mixed,
+    };
     let sys = &checked.system;
     let refused = |e: eom_gen::cables::CableError| Error::Refused(e.to_string());
     let dynamics = |e: eom_sim::large::DynamicsError| {
@@ -148,6 +174,11 @@ pub fn linearize_cmd(
         let coordinates = sys.coordinate_names();
         let sol = solve_static_mixed(&mixed.model, 0.0, &q0, &opts)
             .map_err(|e| refusal(&sys.name, &coordinates, &e))?;
+        let contacts = eom_gen::cables::node_contacts(sys, &mixed.cables);
+        closed(
+            &sys.name,
+            contact_gaps_mixed(&mixed.model, &contacts, &sol.y),
+        )?;
         let n = sol.y.len();
         let state = State {
             t: 0.0,
@@ -163,10 +194,15 @@ pub fn linearize_cmd(
         (eq, state, names)
     } else {
         cables_alone(checked)?;
-        let (built, _) = eom_gen::cables::structure(sys).map_err(refused)?;
+        let (built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
         let sol = solve_static(&built.model, &opts)
             .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
         let q = built.model.restrict(&sol.q);
+        let contacts = eom_gen::cables::node_contacts(sys, &cables);
+        closed(
+            &sys.name,
+            contact_gaps_structure(&built.model, &contacts, &q),
+        )?;
         let n = q.len();
         let state = State {
             t: 0.0,

@@ -939,3 +939,71 @@ fn block_drop_events(r: &serde_json::Value, events: &str, contact: &str) {
     assert!(header.ends_with(",impulse_y_dot"), "{header}");
     assert_eq!(lines.count(), ev.len(), "one row per event");
 }
+
+/// Statics and linearisation hold no contacts. A pendulum (0.3 m) with a
+/// cable hanging from its tip hangs, without contacts, with its tip at
+/// `y = −0.3`: with a floor at `y = −0.28` under the tip (a body's contact)
+/// or under the cable's node 0 pinned there (a node's), that equilibrium
+/// goes 2 cm through the floor. `solve-static` used to report it, stable,
+/// and `linearize` its modes, both exiting 0; both now refuse it (exit 1),
+/// naming the contact and the penetration. With the floor at `y = −0.35`
+/// the hanging equilibrium leaves it open and both run.
+#[test]
+fn statics_and_linearize_refuse_an_equilibrium_through_a_contact() {
+    let pendulum = |at: &str, floor: f64| {
+        format!(
+            r#"Model(
+    name: "pendulum_cable",
+    gravity: (0, -9.81, 0),
+    bodies: [
+        (name: "link", mass: 0.5, com: (0.15, 0, 0), inertia: Diag(0, 0.00375, 0.00375),
+         markers: [(name: "tip", position: (0.3, 0, 0))]),
+    ],
+    joints: [
+        (name: "pivot", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "link",
+         coordinates: ["theta"]),
+    ],
+    cables: [
+        Cable(name: "rope", element: Cable2D, from: (0.3, 0, 0), to: (0.3, -0.15, 0), elements: 2,
+              young: 2e9, density: 7800, area: 1e-5, second_moment: 1e-10,
+              damping_bending: 1e-4, start: Pinned, start_at: (body: "link", marker: "tip")),
+    ],
+    contacts: [
+        Plane(name: "floor", at: {at}, point: (0, {floor:?}, 0), normal: (0, 1, 0), e: 0.5),
+    ],
+)"#
+        )
+    };
+    for (label, at) in [
+        ("tip", r#"(body: "link", marker: "tip")"#),
+        ("node", r#"(body: "rope", node: 0)"#),
+    ] {
+        let through = write(
+            &format!("statics_{label}_through.ron"),
+            &pendulum(at, -0.28),
+        );
+        let out = eom_gen(&["solve-static", &through]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{label}: {err}");
+        assert!(
+            err.contains("the equilibrium found goes through contact(s) `floor` by 2.000e-2"),
+            "{label}: {err}"
+        );
+        let out = eom_gen(&["linearize", &through]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{label}: {err}");
+        assert!(
+            err.contains("unilateral contact(s) closed at this state (`floor` gap -2.000e-2)"),
+            "{label}: {err}"
+        );
+        let open = write(&format!("statics_{label}_open.ron"), &pendulum(at, -0.35));
+        for command in ["solve-static", "linearize"] {
+            let out = eom_gen(&[command, &open]);
+            assert!(
+                out.status.success(),
+                "{label} {command}: {}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+        }
+    }
+}

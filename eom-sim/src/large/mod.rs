@@ -46,8 +46,8 @@ pub use mixed::{Attachment, ByName, MixedAlpha, MixedError, MixedModel, RigidPar
 pub use model::{ElementGroup, Elements, ModelBuilder, StructuralModel};
 pub use run::{AlphaOptions, DynamicsError, DynamicsStats, State, StepControl, Violation};
 pub use simulate::{
-    CableLayout, ElementRun, equilibrium_mixed, equilibrium_structure, simulate_mixed,
-    simulate_structure,
+    CableLayout, ElementRun, contact_gaps_mixed, contact_gaps_structure, equilibrium_mixed,
+    equilibrium_structure, simulate_mixed, simulate_structure,
 };
 pub use sparse::{AutoLu, BandedLu, FaerCholesky, FaerLu, Pattern, SparseMatrix, SparseSolver};
 pub use statics::{LoadStep, StaticError, StaticOptions, StaticSolution, solve_static};

@@ -880,15 +880,88 @@ fn load_steps(steps: &[LoadStep]) -> Vec<LoadStepReport> {
         .collect()
 }
 
+/// The gaps of every contact of `m` at rest at its free coordinates `y`:
+/// the cable nodes' `contacts` (`gaps`), then the model's own (`bodies`,
+/// a mixed model's rigid part's), named; NaN where they cannot be
+/// evaluated.
+fn gaps_at_rest<M: Impacts + ?Sized>(
+    m: &M,
+    gaps: &Gaps,
+    bodies: &[String],
+    y: &[f64],
+) -> Vec<(String, f64)> {
+    let s = State {
+        t: 0.0,
+        q: y.to_vec(),
+        v: vec![0.0; y.len()],
+    };
+    let own = (!bodies.is_empty()).then(|| m.body_rows(s.t, &s.q, &s.v));
+    (0..gaps.len())
+        .map(|i| (gaps.names[i].clone(), gaps.gap(i, y)))
+        .chain(bodies.iter().enumerate().map(|(b, name)| {
+            let g = own
+                .as_ref()
+                .and_then(Option::as_ref)
+                .map_or(f64::NAN, |r| r.g[b]);
+            (name.clone(), g)
+        }))
+        .collect()
+}
+
+/// The gaps of the contacts of cables alone (`contacts`, at their nodes)
+/// at the free coordinates `y`, named: what statics and linearisation,
+/// which hold no contacts, check their equilibrium against.
+pub fn contact_gaps_structure(
+    model: &StructuralModel,
+    contacts: &[NodeContact],
+    y: &[f64],
+) -> Vec<(String, f64)> {
+    let gaps = Gaps::new(contacts, |i| model.free_index(i), model.q0());
+    gaps_at_rest(model, &gaps, &[], y)
+}
+
+/// The gaps of a mixed model's contacts at its free coordinates `y` at
+/// rest, named: the cable nodes' (`contacts`), then the rigid part's own
+/// (its generated `contacts`); NaN where they cannot be evaluated.
+pub fn contact_gaps_mixed(
+    model: &MixedModel<'_>,
+    contacts: &[NodeContact],
+    y: &[f64],
+) -> Vec<(String, f64)> {
+    let st = model.structure();
+    let gaps = Gaps::new(contacts, |i| st.free_index(i), st.q0());
+    gaps_at_rest(model, &gaps, &model.rigid().contact_names(), y)
+}
+
+/// The contacts an equilibrium found without them goes through (a gap
+/// below `−GAP_TOL`, or one that cannot be evaluated).
+fn penetrated(gaps: Vec<(String, f64)>) -> Vec<(String, f64)> {
+    gaps.into_iter()
+        .filter(|(_, g)| g.is_nan() || *g < -crate::run::GAP_TOL)
+        .collect()
+}
+
 /// The static equilibrium of cables alone: Newton with load stepping on
-/// the structure of every cable (`cables` says where each sits).
+/// the structure of every cable (`cables` says where each sits). Statics
+/// holds no contacts: an equilibrium through one of the node `contacts`
+/// is refused ([`StaticError::Penetrated`]); one that leaves them open or
+/// touching is an equilibrium with them.
 pub fn equilibrium_structure(
     model: &StructuralModel,
     cables: &[CableLayout],
+    contacts: &[NodeContact],
     opts: &StaticOptions,
 ) -> Result<StaticReport, StaticError> {
     let clock = Instant::now();
     let sol = solve_static(model, opts)?;
+    let through = penetrated(contact_gaps_structure(
+        model,
+        contacts,
+        &model.restrict(&sol.q),
+    ));
+    if !through.is_empty() {
+        return Err(StaticError::Penetrated(through));
+    }
     let cpu_s = clock.elapsed().as_secs_f64();
     Ok(StaticReport {
         q: Vec::new(),
@@ -909,15 +982,22 @@ pub fn equilibrium_structure(
 
 /// The static equilibrium of a rigid part with cables hung at its
 /// markers, from the rigid coordinates `q0` (Newton on the KKT system
-/// with load stepping), with its stability.
+/// with load stepping), with its stability. Statics holds no contacts: an
+/// equilibrium through one (the node `contacts`, or the rigid part's own)
+/// is refused ([`MixedStaticError::Penetrated`]).
 pub fn equilibrium_mixed(
     model: &MixedModel<'_>,
     cables: &[CableLayout],
+    contacts: &[NodeContact],
     q0: &[f64],
     opts: &StaticOptions,
 ) -> Result<StaticReport, MixedStaticError> {
     let clock = Instant::now();
     let sol = solve_static_mixed(model, 0.0, q0, opts)?;
+    let through = penetrated(contact_gaps_mixed(model, contacts, &sol.y));
+    if !through.is_empty() {
+        return Err(MixedStaticError::Penetrated(through));
+    }
     let cpu_s = clock.elapsed().as_secs_f64();
     let summary = sol.stability.to_string();
     let stability = match &sol.stability {

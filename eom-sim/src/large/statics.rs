@@ -119,11 +119,28 @@ pub enum StaticError {
         /// The estimate (NaN where it could not be formed).
         condition: f64,
     },
+    /// The equilibrium found goes through contacts, which statics does not
+    /// hold: each with its gap (negative; NaN where it could not be
+    /// evaluated).
+    Penetrated(Vec<(String, f64)>),
+}
+
+/// The message of an equilibrium found through the contacts `through`.
+pub(crate) fn penetrated_message(through: &[(String, f64)]) -> String {
+    let list: Vec<String> = through
+        .iter()
+        .map(|(c, g)| format!("`{c}` by {:.3e}", -g))
+        .collect();
+    format!(
+        "the equilibrium found goes through contact(s) {}: statics holds no contacts (unilateral, they would carry a force there); it is an equilibrium only where every contact is open or touching: simulate the model to its rest instead, with a damper if it swings",
+        list.join(", ")
+    )
 }
 
 impl fmt::Display for StaticError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            StaticError::Penetrated(through) => f.write_str(&penetrated_message(through)),
             StaticError::NoConvergence {
                 lambda_reached,
                 lambda_tried,

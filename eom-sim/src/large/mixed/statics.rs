@@ -234,6 +234,10 @@ pub enum MixedStaticError {
         /// Structural free coordinates (the first entries of `direction`).
         n_structural: usize,
     },
+    /// The equilibrium found goes through contacts, which statics does not
+    /// hold: each with its gap (negative; NaN where it could not be
+    /// evaluated).
+    Penetrated(Vec<(String, f64)>),
 }
 
 impl MixedStaticError {
@@ -263,6 +267,9 @@ impl MixedStaticError {
 impl fmt::Display for MixedStaticError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
+            MixedStaticError::Penetrated(through) => {
+                f.write_str(&crate::large::statics::penetrated_message(through))
+            }
             MixedStaticError::StartSize { given, needed } => {
                 write!(f, "the rigid part has {needed} coordinates, not {given}")
             }
