@@ -143,4 +143,60 @@ pub mod __private {
         }
         v.try_into().ok()
     }
+
+    /// `(sin x, cos x)` of several angles in one vectorised pass (the
+    /// branch-free kernel of the lanes, within 1 ulp of the C library;
+    /// `f64::sin_cos` for `|x| ≥ 10⁶` and non-finite `x`).
+    pub use eom_lanes::sincos::sin_cos_lanes;
+
+    /// `(sin x, cos x)` of the first `n` angles by the C library's
+    /// `f64::sin_cos`, one call each (the other lanes zero): the
+    /// [`sin_cos_lanes`] of builds without 256-bit vectors.
+    #[inline(always)]
+    pub fn sin_cos_each<const W: usize>(x: [f64; W], n: usize) -> ([f64; W], [f64; W]) {
+        let (mut s, mut c) = ([0.0; W], [0.0; W]);
+        for i in 0..n.min(W) {
+            (s[i], c[i]) = f64::sin_cos(x[i]);
+        }
+        (s, c)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::__private::{sin_cos_each, sin_cos_lanes};
+
+    /// The two branches of a generated function's `sin_cos` of its inputs:
+    /// the C library's bit for bit on the first `n` lanes (the padding
+    /// zero), and the vectorised kernel within 1 ulp of it, on angles of
+    /// a robot's range and beyond the reduction's (which go to the C
+    /// library).
+    #[test]
+    fn the_inputs_sin_cos_match_the_c_library() {
+        let x = [0.3, -2.9, 1e-9, 7.5, -1.2e3, 2e6, -0.0, 3.0];
+        let (s, c) = sin_cos_each(x, 6);
+        for i in 0..8 {
+            let (es, ec) = if i < 6 {
+                f64::sin_cos(x[i])
+            } else {
+                (0.0, 0.0)
+            };
+            assert_eq!(
+                (s[i].to_bits(), c[i].to_bits()),
+                (es.to_bits(), ec.to_bits()),
+                "lane {i}"
+            );
+        }
+        let (s, c) = sin_cos_lanes(x);
+        let ulp = |a: f64, b: f64| (a - b).abs() / (f64::EPSILON * b.abs().max(f64::MIN_POSITIVE));
+        for i in 0..8 {
+            let (es, ec) = f64::sin_cos(x[i]);
+            assert!(
+                ulp(s[i], es) <= 1.0 && ulp(c[i], ec) <= 1.0,
+                "lane {i}: {} {} against {es} {ec}",
+                s[i],
+                c[i]
+            );
+        }
+    }
 }

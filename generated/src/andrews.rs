@@ -91,10 +91,11 @@ impl ::eom_sim::Model for Andrews {
         tau: &[f64; 7],
         udot: &mut [f64; 7],
     ) {
-        let (x0, x1) = f64::sin_cos(q[2]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[6]);
-        let (x6, x7) = f64::sin_cos(q[4]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[2], q[1], q[6], q[4]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[2], q[1], q[6], q[4]], 4)
+        };
         let x8 = 0.02 * x1;
         let x9 = 0.02 * x0;
         let x10 = x8 - 0.05035;
@@ -352,10 +353,11 @@ impl ::eom_sim::Model for Andrews {
         m[6][6] = 0.000000803380146;
     }
     fn bias(&self, _t: f64, q: &[f64; 7], u: &[f64; 7], b: &mut [f64; 7]) {
-        let (x0, x1) = f64::sin_cos(q[2]);
-        let (x2, x3) = f64::sin_cos(q[6]);
-        let (x4, x5) = f64::sin_cos(q[4]);
-        let (x6, x7) = f64::sin_cos(q[1]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[2], q[6], q[4], q[1]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[2], q[6], q[4], q[1]], 4)
+        };
         let x8 = 0.02 * x1;
         let x9 = 0.02 * x0;
         let x10 = x8 - 0.05035;
@@ -493,10 +495,11 @@ impl ::eom_sim::Model for Andrews {
         udot: &[f64; 7],
         tau: &mut [f64; 7],
     ) {
-        let (x0, x1) = f64::sin_cos(q[2]);
-        let (x2, x3) = f64::sin_cos(q[6]);
-        let (x4, x5) = f64::sin_cos(q[1]);
-        let (x6, x7) = f64::sin_cos(q[4]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[2], q[6], q[1], q[4]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[2], q[6], q[1], q[4]], 4)
+        };
         let x8 = 0.02 * x1;
         let x9 = 0.02 * x0;
         let x10 = x8 - 0.05035;
@@ -682,10 +685,11 @@ impl ::eom_sim::Model for Andrews {
         tau[6] = x180;
     }
     fn energy(&self, _t: f64, q: &[f64; 7], u: &[f64; 7]) -> [f64; 2] {
-        let (x0, x1) = f64::sin_cos(q[2]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[4]);
-        let (x6, x7) = f64::sin_cos(q[6]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[2], q[1], q[4], q[6]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[2], q[1], q[4], q[6]], 4)
+        };
         let x8 = 0.02 * x1;
         let x9 = 0.02 * x0;
         let x10 = x8 - 0.05035;
@@ -766,19 +770,30 @@ impl ::eom_sim::Model for Andrews {
         [x84, x83]
     }
     fn momentum(&self, _t: f64, q: &[f64; 7], u: &[f64; 7]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[4]);
-        let (x4, x5) = f64::sin_cos(q[6]);
+        let ([x0, x2, x4, x7, x12, x14, x21, _], [x1, x3, x5, x8, x13, x15, x22, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[4],
+                q[6],
+                q[5],
+                q[2],
+                q[3],
+                q[0],
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[4], q[6], q[5], q[2], q[3], q[0], 0.0], 7)
+        };
         let x6 = q[0] + q[1];
-        let (x7, x8) = f64::sin_cos(q[5]);
         let x9 = q[5] + q[6];
         let (x10, x11) = f64::sin_cos(x6);
-        let (x12, x13) = f64::sin_cos(q[2]);
-        let (x14, x15) = f64::sin_cos(q[3]);
         let x16 = q[3] + q[4];
         let (x17, x18) = f64::sin_cos(x9);
         let (x19, x20) = f64::sin_cos(x16);
-        let (x21, x22) = f64::sin_cos(q[0]);
         let x23 = u[4] + u[5];
         let x24 = u[3] + u[6];
         let x25 = 0.0000009237125 * u[1];
@@ -1162,16 +1177,17 @@ impl ::eom_sim::ConstrainedModel for Andrews {
         gamma: &mut [f64; 6],
         jacobian: &mut [f64; 42],
     ) {
+        let ([x1, x4, x7, x15], [x2, x5, x8, x16]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[3], q[5], q[0], q[2]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[3], q[5], q[0], q[2]], 4)
+        };
         let x0 = q[0] + q[1];
-        let (x1, x2) = f64::sin_cos(q[3]);
         let x3 = q[3] + q[4];
-        let (x4, x5) = f64::sin_cos(q[5]);
         let x6 = q[5] + q[6];
-        let (x7, x8) = f64::sin_cos(q[0]);
         let (x9, x10) = f64::sin_cos(x0);
         let (x11, x12) = f64::sin_cos(x3);
         let (x13, x14) = f64::sin_cos(x6);
-        let (x15, x16) = f64::sin_cos(q[2]);
         let x17 = q[2] - q[1];
         let x18 = x17 - q[0];
         let x19 = x3 - x0;

@@ -78,15 +78,27 @@ impl ::eom_sim::Model for Arm7 {
         tau: &[f64; 7],
         udot: &mut [f64; 7],
     ) {
-        let (x0, x1) = f64::sin_cos(q[5]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[2]);
-        let (x6, x7) = f64::sin_cos(q[3]);
-        let (x8, x9) = f64::sin_cos(q[4]);
+        let ([x0, x2, x4, x6, x8, x13, _, _], [x1, x3, x5, x7, x9, x14, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[5],
+                q[1],
+                q[2],
+                q[3],
+                q[4],
+                q[6],
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[5], q[1], q[2], q[3], q[4], q[6], 0.0, 0.0], 6)
+        };
         let x10 = x0 * x0;
         let x11 = 0.3725 * x10;
         let x12 = 0.01 + x11;
-        let (x13, x14) = f64::sin_cos(q[6]);
         let x15 = 1.0 / x12;
         let x16 = x0 * x1;
         let x17 = u[0] * x2;
@@ -1262,11 +1274,24 @@ impl ::eom_sim::Model for Arm7 {
         udot[6] = x1180;
     }
     fn mass_matrix(&self, _t: f64, q: &[f64; 7], m: &mut [[f64; 7]; 7]) {
-        let (x0, x1) = f64::sin_cos(q[5]);
-        let (x2, x3) = f64::sin_cos(q[4]);
-        let (x4, x5) = f64::sin_cos(q[3]);
-        let (x6, x7) = f64::sin_cos(q[2]);
-        let (x8, x9) = f64::sin_cos(q[1]);
+        let ([x0, x2, x4, x6, x8, _, _, _], [x1, x3, x5, x7, x9, _, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[5],
+                q[4],
+                q[3],
+                q[2],
+                q[1],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[5], q[4], q[3], q[2], q[1], 0.0, 0.0, 0.0], 5)
+        };
         let x10 = 0.36750000000000005 * x0;
         let x11 = x0 * x0;
         let x12 = 0.5399999999999999 * x1;
@@ -1571,12 +1596,24 @@ impl ::eom_sim::Model for Arm7 {
         m[6][6] = 0.005;
     }
     fn bias(&self, _t: f64, q: &[f64; 7], u: &[f64; 7], b: &mut [f64; 7]) {
-        let (x0, x1) = f64::sin_cos(q[2]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[3]);
-        let (x6, x7) = f64::sin_cos(q[4]);
-        let (x8, x9) = f64::sin_cos(q[5]);
-        let (x10, x11) = f64::sin_cos(q[6]);
+        let ([x0, x2, x4, x6, x8, x10, _, _], [x1, x3, x5, x7, x9, x11, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[2],
+                q[1],
+                q[3],
+                q[4],
+                q[5],
+                q[6],
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[2], q[1], q[3], q[4], q[5], q[6], 0.0, 0.0], 6)
+        };
         let x12 = u[0] * x1;
         let x13 = u[0] * x0;
         let x14 = u[1] * x3;
@@ -2342,12 +2379,24 @@ impl ::eom_sim::Model for Arm7 {
         udot: &[f64; 7],
         tau: &mut [f64; 7],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[2]);
-        let (x4, x5) = f64::sin_cos(q[3]);
-        let (x6, x7) = f64::sin_cos(q[4]);
-        let (x8, x9) = f64::sin_cos(q[5]);
-        let (x10, x11) = f64::sin_cos(q[6]);
+        let ([x0, x2, x4, x6, x8, x10, _, _], [x1, x3, x5, x7, x9, x11, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[2],
+                q[3],
+                q[4],
+                q[5],
+                q[6],
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[2], q[3], q[4], q[5], q[6], 0.0, 0.0], 6)
+        };
         let x12 = u[0] * u[1];
         let x13 = u[0] * x0;
         let x14 = x1 * x12;
@@ -3149,12 +3198,24 @@ impl ::eom_sim::Model for Arm7 {
         tau[6] = x799;
     }
     fn energy(&self, _t: f64, q: &[f64; 7], u: &[f64; 7]) -> [f64; 2] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[2]);
-        let (x4, x5) = f64::sin_cos(q[3]);
-        let (x6, x7) = f64::sin_cos(q[4]);
-        let (x8, x9) = f64::sin_cos(q[5]);
-        let (x10, x11) = f64::sin_cos(q[6]);
+        let ([x0, x2, x4, x6, x8, x10, _, _], [x1, x3, x5, x7, x9, x11, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[2],
+                q[3],
+                q[4],
+                q[5],
+                q[6],
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[2], q[3], q[4], q[5], q[6], 0.0, 0.0], 6)
+        };
         let x12 = u[0] * x0;
         let x13 = u[0] * x1;
         let x14 = x12 * x3;
@@ -3421,13 +3482,24 @@ impl ::eom_sim::Model for Arm7 {
         [x273, x274]
     }
     fn momentum(&self, _t: f64, q: &[f64; 7], u: &[f64; 7]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[2]);
-        let (x4, x5) = f64::sin_cos(q[0]);
-        let (x6, x7) = f64::sin_cos(q[3]);
-        let (x8, x9) = f64::sin_cos(q[4]);
-        let (x10, x11) = f64::sin_cos(q[5]);
-        let (x12, x13) = f64::sin_cos(q[6]);
+        let ([x0, x2, x4, x6, x8, x10, x12, _], [x1, x3, x5, x7, x9, x11, x13, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[2],
+                q[0],
+                q[3],
+                q[4],
+                q[5],
+                q[6],
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[2], q[0], q[3], q[4], q[5], q[6], 0.0], 7)
+        };
         let x14 = u[0] * x0;
         let x15 = u[0] * x1;
         let x16 = x14 * x3;

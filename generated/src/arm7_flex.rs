@@ -98,14 +98,28 @@ impl ::eom_sim::Model for Arm7Flex {
         udot[8] = s[258];
     }
     fn mass_matrix(&self, _t: f64, q: &[f64; 9], m: &mut [[f64; 9]; 9]) {
+        let ([x1, x6, x10, x12, x77, _, _, _], [x2, x7, x11, x13, x78, _, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[7],
+                q[6],
+                q[3],
+                q[2],
+                q[1],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[7], q[6], q[3], q[2], q[1], 0.0, 0.0, 0.0], 5)
+        };
         let x0 = 7.4928453306645455 * q[5];
-        let (x1, x2) = f64::sin_cos(q[7]);
         let x3 = 7.4928453306645455 * q[4];
         let (x4, x5) = f64::sin_cos(x0);
-        let (x6, x7) = f64::sin_cos(q[6]);
         let (x8, x9) = f64::sin_cos(x3);
-        let (x10, x11) = f64::sin_cos(q[3]);
-        let (x12, x13) = f64::sin_cos(q[2]);
         let x14 = 0.8999999999999999 * x2;
         let x15 = x1 * x1;
         let x16 = 0.36750000000000005 * x1;
@@ -169,7 +183,6 @@ impl ::eom_sim::Model for Arm7Flex {
         let x74 = 12.000314714079604 * x31;
         let x75 = 0.26999999999999996 * x42;
         let x76 = x53 + x54;
-        let (x77, x78) = f64::sin_cos(q[1]);
         let x79 = x56 * x1;
         let x80 = 0.8999999999999999 * x57;
         let x81 = x8 * x50;
@@ -962,17 +975,29 @@ impl ::eom_sim::Model for Arm7Flex {
         m[8][8] = 0.005;
     }
     fn bias(&self, _t: f64, q: &[f64; 9], u: &[f64; 9], b: &mut [f64; 9]) {
-        let (x0, x1) = f64::sin_cos(q[2]);
-        let (x2, x3) = f64::sin_cos(q[1]);
+        let ([x0, x2, x8, x12, x14, x17, _, _], [x1, x3, x9, x13, x15, x18, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[2],
+                q[1],
+                q[6],
+                q[3],
+                q[7],
+                q[8],
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[2], q[1], q[6], q[3], q[7], q[8], 0.0, 0.0], 6)
+        };
         let x4 = 7.4928453306645455 * q[5];
         let x5 = 7.4928453306645455 * q[4];
         let (x6, x7) = f64::sin_cos(x4);
-        let (x8, x9) = f64::sin_cos(q[6]);
         let (x10, x11) = f64::sin_cos(x5);
-        let (x12, x13) = f64::sin_cos(q[3]);
-        let (x14, x15) = f64::sin_cos(q[7]);
         let x16 = u[0] * x1;
-        let (x17, x18) = f64::sin_cos(q[8]);
         let x19 = u[0] * x3;
         let x20 = x2 * x16;
         let x21 = u[1] * x0;
@@ -2219,15 +2244,28 @@ impl ::eom_sim::Model for Arm7Flex {
         udot: &[f64; 9],
         tau: &mut [f64; 9],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[2]);
+        let ([x0, x2, x8, x12, x14, x23, _, _], [x1, x3, x9, x13, x15, x24, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[2],
+                q[6],
+                q[3],
+                q[7],
+                q[8],
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[2], q[6], q[3], q[7], q[8], 0.0, 0.0], 6)
+        };
         let x4 = 7.4928453306645455 * q[5];
         let x5 = 7.4928453306645455 * q[4];
         let (x6, x7) = f64::sin_cos(x4);
-        let (x8, x9) = f64::sin_cos(q[6]);
         let (x10, x11) = f64::sin_cos(x5);
-        let (x12, x13) = f64::sin_cos(q[3]);
-        let (x14, x15) = f64::sin_cos(q[7]);
         let x16 = u[0] * u[1];
         let x17 = u[0] * x0;
         let x18 = x1 * x16;
@@ -2235,7 +2273,6 @@ impl ::eom_sim::Model for Arm7Flex {
         let x20 = u[0] * x1;
         let x21 = x17 * x3;
         let x22 = u[1] * x2;
-        let (x23, x24) = f64::sin_cos(q[8]);
         let x25 = x18 + x19;
         let x26 = x22 - x21;
         let x27 = x17 * x2;
@@ -3503,20 +3540,32 @@ impl ::eom_sim::Model for Arm7Flex {
         tau[8] = x1275;
     }
     fn energy(&self, _t: f64, q: &[f64; 9], u: &[f64; 9]) -> [f64; 2] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[2]);
+        let ([x0, x2, x8, x10, x14, x20, _, _], [x1, x3, x9, x11, x15, x21, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[2],
+                q[6],
+                q[3],
+                q[7],
+                q[8],
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[2], q[6], q[3], q[7], q[8], 0.0, 0.0], 6)
+        };
         let x4 = 7.4928453306645455 * q[5];
         let x5 = 7.4928453306645455 * q[4];
         let (x6, x7) = f64::sin_cos(x4);
-        let (x8, x9) = f64::sin_cos(q[6]);
-        let (x10, x11) = f64::sin_cos(q[3]);
         let (x12, x13) = f64::sin_cos(x5);
-        let (x14, x15) = f64::sin_cos(q[7]);
         let x16 = u[0] * x0;
         let x17 = u[0] * x1;
         let x18 = x16 * x3;
         let x19 = u[1] * x2;
-        let (x20, x21) = f64::sin_cos(q[8]);
         let x22 = x19 - x18;
         let x23 = u[1] * x3;
         let x24 = u[2] + x17;
@@ -4011,21 +4060,32 @@ impl ::eom_sim::Model for Arm7Flex {
         [x511, x512]
     }
     fn momentum(&self, _t: f64, q: &[f64; 9], u: &[f64; 9]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[2]);
+        let ([x0, x2, x8, x10, x14, x16, x22, _], [x1, x3, x9, x11, x15, x17, x23, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[2],
+                q[6],
+                q[3],
+                q[0],
+                q[7],
+                q[8],
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[2], q[6], q[3], q[0], q[7], q[8], 0.0], 7)
+        };
         let x4 = 7.4928453306645455 * q[5];
         let x5 = 7.4928453306645455 * q[4];
         let (x6, x7) = f64::sin_cos(x4);
-        let (x8, x9) = f64::sin_cos(q[6]);
-        let (x10, x11) = f64::sin_cos(q[3]);
         let (x12, x13) = f64::sin_cos(x5);
-        let (x14, x15) = f64::sin_cos(q[0]);
-        let (x16, x17) = f64::sin_cos(q[7]);
         let x18 = u[0] * x0;
         let x19 = u[0] * x1;
         let x20 = x18 * x3;
         let x21 = u[1] * x2;
-        let (x22, x23) = f64::sin_cos(q[8]);
         let x24 = x21 - x20;
         let x25 = u[1] * x3;
         let x26 = u[2] + x19;
@@ -4999,9 +5059,53 @@ impl Arm7Flex {
         tau: &[f64; 9],
         s: &mut [f64; 259],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
+        let (
+            [x0,
+            x28,
+            x52,
+            x157,
+            x276,
+            x325,
+            _,
+            _,
+            ],
+            [x1,
+            x29,
+            x53,
+            x158,
+            x277,
+            x326,
+            _,
+            _,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[2],
+                q[3],
+                q[6],
+                q[7],
+                q[8],
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[2], q[3], q[6], q[7], q[8], 0.0, 0.0], 6)
+        };
         s[0] = x0;
         s[1] = x1;
+        s[9] = x28;
+        s[10] = x29;
+        s[12] = x52;
+        s[13] = x53;
+        s[31] = x157;
+        s[32] = x158;
+        s[42] = x276;
+        s[43] = x277;
+        s[55] = x325;
+        s[56] = x326;
         let x2 = 0.9999999999999989 * q[4];
         let x3 = 0.9999999999999991 * q[5];
         let x4 = 1.9999999999999982 * q[4];
@@ -5035,9 +5139,6 @@ impl Arm7Flex {
         let x26 = x1 * x25;
         s[8] = x26;
         let x27 = u[0] * x1;
-        let (x28, x29) = f64::sin_cos(q[2]);
-        s[9] = x28;
-        s[10] = x29;
         let x30 = 0.3 * x28;
         let x31 = 0.3 * x29;
         let x32 = 0.2876895071558992 * x29;
@@ -5061,9 +5162,6 @@ impl Arm7Flex {
         let x49 = x47 + x48;
         let x50 = (-0.3) * x41;
         let x51 = u[2] + x27;
-        let (x52, x53) = f64::sin_cos(q[3]);
-        s[12] = x52;
-        s[13] = x53;
         let x54 = 0.6 * x53;
         let x55 = u[3] * x53;
         let x56 = u[3] * x52;
@@ -5182,9 +5280,6 @@ impl Arm7Flex {
         let x154 = x123 * x146;
         let x155 = x149 + x154;
         let x156 = 0.053749999999999985 + x73;
-        let (x157, x158) = f64::sin_cos(q[6]);
-        s[31] = x157;
-        s[32] = x158;
         let x159 = x124 * x158;
         s[33] = x159;
         let x160 = x124 * x157;
@@ -5311,9 +5406,6 @@ impl Arm7Flex {
         let x273 = x259 + x262;
         let x274 = x263 + x264;
         let x275 = x266 + x274;
-        let (x276, x277) = f64::sin_cos(q[7]);
-        s[42] = x276;
-        s[43] = x277;
         let x278 = 0.36750000000000005 * x276;
         let x279 = 0.8999999999999999 * x276;
         let x280 = x52 * x276;
@@ -5372,9 +5464,6 @@ impl Arm7Flex {
         s[53] = x323;
         let x324 = x227 + x268;
         s[54] = x324;
-        let (x325, x326) = f64::sin_cos(q[8]);
-        s[55] = x325;
-        s[56] = x326;
         let x327 = x291 * x326;
         let x328 = x324 * x325;
         let x329 = x327 + x328;

@@ -71,10 +71,11 @@ impl ::eom_sim::Model for Bricard {
         tau: &[f64; 5],
         udot: &mut [f64; 5],
     ) {
-        let (x0, x1) = f64::sin_cos(q[2]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[4]);
-        let (x6, x7) = f64::sin_cos(q[3]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[2], q[1], q[4], q[3]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[2], q[1], q[4], q[3]], 4)
+        };
         let x8 = 0.5 * x0;
         let x9 = 0.5 * x2;
         let x10 = u[0] * x1;
@@ -957,10 +958,11 @@ impl ::eom_sim::Model for Bricard {
         udot[4] = x882;
     }
     fn mass_matrix(&self, _t: f64, q: &[f64; 5], m: &mut [[f64; 5]; 5]) {
-        let (x0, x1) = f64::sin_cos(q[3]);
-        let (x2, x3) = f64::sin_cos(q[4]);
-        let (x4, x5) = f64::sin_cos(q[2]);
-        let (x6, x7) = f64::sin_cos(q[1]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[3], q[4], q[2], q[1]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[3], q[4], q[2], q[1]], 4)
+        };
         let x8 = 0.5 * x0;
         let x9 = 0.08416666666666667 * x2;
         let x10 = x3 * x3;
@@ -1331,10 +1333,11 @@ impl ::eom_sim::Model for Bricard {
         m[4][4] = 0.33416666666666667;
     }
     fn bias(&self, _t: f64, q: &[f64; 5], u: &[f64; 5], b: &mut [f64; 5]) {
-        let (x0, x1) = f64::sin_cos(q[2]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[3]);
-        let (x6, x7) = f64::sin_cos(q[4]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[2], q[1], q[3], q[4]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[2], q[1], q[3], q[4]], 4)
+        };
         let x8 = 0.5 * x0;
         let x9 = 0.5 * x2;
         let x10 = u[0] * x1;
@@ -1788,10 +1791,11 @@ impl ::eom_sim::Model for Bricard {
         udot: &[f64; 5],
         tau: &mut [f64; 5],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[2]);
-        let (x4, x5) = f64::sin_cos(q[3]);
-        let (x6, x7) = f64::sin_cos(q[4]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[2], q[3], q[4]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[2], q[3], q[4]], 4)
+        };
         let x8 = u[0] * u[1];
         let x9 = u[0] * x1;
         let x10 = 0.5 * x0;
@@ -2265,10 +2269,11 @@ impl ::eom_sim::Model for Bricard {
         tau[4] = x469;
     }
     fn energy(&self, _t: f64, q: &[f64; 5], u: &[f64; 5]) -> [f64; 2] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[2]);
-        let (x4, x5) = f64::sin_cos(q[3]);
-        let (x6, x7) = f64::sin_cos(q[4]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[2], q[3], q[4]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[2], q[3], q[4]], 4)
+        };
         let x8 = 0.5 * x0;
         let x9 = 0.5 * x2;
         let x10 = 0.5 + x8;
@@ -2451,11 +2456,24 @@ impl ::eom_sim::Model for Bricard {
         [x185, x186]
     }
     fn momentum(&self, _t: f64, q: &[f64; 5], u: &[f64; 5]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[2]);
-        let (x4, x5) = f64::sin_cos(q[0]);
-        let (x6, x7) = f64::sin_cos(q[3]);
-        let (x8, x9) = f64::sin_cos(q[4]);
+        let ([x0, x2, x4, x6, x8, _, _, _], [x1, x3, x5, x7, x9, _, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[2],
+                q[0],
+                q[3],
+                q[4],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[2], q[0], q[3], q[4], 0.0, 0.0, 0.0], 5)
+        };
         let x10 = 0.5 * x0;
         let x11 = 0.5 * x2;
         let x12 = 0.5 + x10;
@@ -3119,11 +3137,24 @@ impl ::eom_sim::ConstrainedModel for Bricard {
         gamma: &mut [f64; 5],
         jacobian: &mut [f64; 25],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[2]);
-        let (x6, x7) = f64::sin_cos(q[3]);
-        let (x8, x9) = f64::sin_cos(q[4]);
+        let ([x0, x2, x4, x6, x8, _, _, _], [x1, x3, x5, x7, x9, _, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[2],
+                q[3],
+                q[4],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[0], q[1], q[2], q[3], q[4], 0.0, 0.0, 0.0], 5)
+        };
         let x10 = u[1] * x3;
         let x11 = x1 * x5;
         let x12 = x1 * x4;
@@ -4306,11 +4337,24 @@ impl Bricard {
     /// Force and torque each cut joint applies to its child body, in the parent joint frame's axes, from the multipliers `λ`: six numbers per cut joint (32 operations); `J6`.
     /// Reads the multipliers `λ` from the `multipliers` field.
     pub fn cut_joint_reactions(&self, _t: f64, q: &[f64; 5], out: &mut [f64; 6]) {
-        let (x0, x1) = f64::sin_cos(q[0]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[2]);
-        let (x6, x7) = f64::sin_cos(q[3]);
-        let (x8, x9) = f64::sin_cos(q[4]);
+        let ([x0, x2, x4, x6, x8, _, _, _], [x1, x3, x5, x7, x9, _, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[2],
+                q[3],
+                q[4],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[0], q[1], q[2], q[3], q[4], 0.0, 0.0, 0.0], 5)
+        };
         let x10 = x1 * x2;
         let x11 = x10 * x4;
         let x12 = x0 * x5;

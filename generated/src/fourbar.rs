@@ -246,8 +246,11 @@ impl ::eom_sim::Model for Fourbar {
         udot: &[f64; 3],
         tau: &mut [f64; 3],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[0]);
+        let ([x0, x2, _, _], [x1, x3, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[0], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[0], 0.0, 0.0], 2)
+        };
         let x4 = 0.5 * x0;
         let x5 = f64::sin(q[2]);
         let x6 = 0.5 + x4;
@@ -324,8 +327,11 @@ impl ::eom_sim::Model for Fourbar {
         tau[2] = x72;
     }
     fn energy(&self, _t: f64, q: &[f64; 3], u: &[f64; 3]) -> [f64; 2] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[0]);
+        let ([x0, x2, _, _], [x1, x3, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[0], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[0], 0.0, 0.0], 2)
+        };
         let x4 = f64::cos(q[2]);
         let x5 = 0.5 * x0;
         let x6 = 0.5 + x5;
@@ -366,10 +372,12 @@ impl ::eom_sim::Model for Fourbar {
         [x39, x40]
     }
     fn momentum(&self, _t: f64, q: &[f64; 3], u: &[f64; 3]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[0]);
+        let ([x0, x2, x5, _], [x1, x3, x6, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[0], q[2], 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[0], q[2], 0.0], 3)
+        };
         let x4 = q[0] + q[1];
-        let (x5, x6) = f64::sin_cos(q[2]);
         let (x7, x8) = f64::sin_cos(x4);
         let x9 = 0.5 * x0;
         let x10 = 0.5 + x9;
@@ -669,11 +677,13 @@ impl ::eom_sim::ConstrainedModel for Fourbar {
         gamma: &mut [f64; 2],
         jacobian: &mut [f64; 6],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
-        let (x2, x3) = f64::sin_cos(q[1]);
+        let ([x0, x2, x7, _], [x1, x3, x8, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[0], q[1], q[2], 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[0], q[1], q[2], 0.0], 3)
+        };
         let x4 = q[0] + q[1];
         let (x5, x6) = f64::sin_cos(x4);
-        let (x7, x8) = f64::sin_cos(q[2]);
         let x9 = q[2] - q[1];
         let x10 = x9 - q[0];
         let (x11, x12) = f64::sin_cos(x10);

@@ -63,8 +63,11 @@ impl ::eom_sim::Model for FourbarCable {
         tau: &[f64; 3],
         udot: &mut [f64; 3],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[0]);
+        let ([x0, x2, _, _], [x1, x3, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[0], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[0], 0.0, 0.0], 2)
+        };
         let x4 = 0.1341640786499874 * u[0];
         let x5 = u[0] + u[1];
         let x6 = f64::cos(q[2]);
@@ -211,8 +214,11 @@ impl ::eom_sim::Model for FourbarCable {
         udot: &[f64; 3],
         tau: &mut [f64; 3],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
-        let (x2, x3) = f64::sin_cos(q[1]);
+        let ([x0, x2, _, _], [x1, x3, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[0], q[1], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[0], q[1], 0.0, 0.0], 2)
+        };
         let x4 = f64::cos(q[2]);
         let x5 = u[0] + u[1];
         let x6 = u[0] * u[1];
@@ -324,11 +330,13 @@ impl ::eom_sim::Model for FourbarCable {
         [x33, x34]
     }
     fn momentum(&self, _t: f64, q: &[f64; 3], u: &[f64; 3]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[1]);
+        let ([x0, x5, x7, _], [x1, x6, x8, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[0], q[2], 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[0], q[2], 0.0], 3)
+        };
         let x2 = q[0] + q[1];
         let (x3, x4) = f64::sin_cos(x2);
-        let (x5, x6) = f64::sin_cos(q[0]);
-        let (x7, x8) = f64::sin_cos(q[2]);
         let x9 = u[0] * x1;
         let x10 = u[0] + u[1];
         let x11 = 0.1341640786499874 * u[0];
@@ -622,9 +630,12 @@ impl ::eom_sim::ConstrainedModel for FourbarCable {
         gamma: &mut [f64; 2],
         jacobian: &mut [f64; 6],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
+        let ([x0, x3, _, _], [x1, x4, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[0], q[2], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[0], q[2], 0.0, 0.0], 2)
+        };
         let x2 = q[0] + q[1];
-        let (x3, x4) = f64::sin_cos(q[2]);
         let (x5, x6) = f64::sin_cos(x2);
         let x7 = q[2] - q[1];
         let x8 = x7 - q[0];

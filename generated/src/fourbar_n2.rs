@@ -77,8 +77,11 @@ impl ::eom_sim::Model for FourbarN2 {
         tau: &[f64; 5],
         udot: &mut [f64; 5],
     ) {
-        let (x0, x1) = f64::sin_cos(q[3]);
-        let (x2, x3) = f64::sin_cos(q[1]);
+        let ([x0, x2, _, _], [x1, x3, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[3], q[1], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[3], q[1], 0.0, 0.0], 2)
+        };
         let x4 = q[2] + q[3];
         let x5 = q[0] + q[1];
         let (x6, x7) = f64::sin_cos(x4);
@@ -253,8 +256,11 @@ impl ::eom_sim::Model for FourbarN2 {
         udot[4] = x169;
     }
     fn mass_matrix(&self, _t: f64, q: &[f64; 5], m: &mut [[f64; 5]; 5]) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[3]);
+        let ([x0, x2, _, _], [x1, x3, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[3], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[3], 0.0, 0.0], 2)
+        };
         let x4 = 0.5 * x0;
         let x5 = 0.5 * x2;
         let x6 = 0.25 * x1;
@@ -310,8 +316,11 @@ impl ::eom_sim::Model for FourbarN2 {
         m[4][4] = 0.3333333333333333;
     }
     fn bias(&self, _t: f64, q: &[f64; 5], u: &[f64; 5], b: &mut [f64; 5]) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[3]);
+        let ([x0, x2, _, _], [x1, x3, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[3], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[3], 0.0, 0.0], 2)
+        };
         let x4 = q[0] + q[1];
         let x5 = q[2] + q[3];
         let (x6, x7) = f64::sin_cos(x4);
@@ -428,10 +437,11 @@ impl ::eom_sim::Model for FourbarN2 {
         udot: &[f64; 5],
         tau: &mut [f64; 5],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[3]);
-        let (x4, x5) = f64::sin_cos(q[2]);
-        let (x6, x7) = f64::sin_cos(q[0]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[3], q[2], q[0]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[3], q[2], q[0]], 4)
+        };
         let x8 = 0.5 * x0;
         let x9 = 0.5 * x2;
         let x10 = f64::sin(q[4]);
@@ -578,10 +588,11 @@ impl ::eom_sim::Model for FourbarN2 {
         tau[4] = x142;
     }
     fn energy(&self, _t: f64, q: &[f64; 5], u: &[f64; 5]) -> [f64; 2] {
-        let (x0, x1) = f64::sin_cos(q[3]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[0]);
-        let (x6, x7) = f64::sin_cos(q[2]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[3], q[1], q[0], q[2]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[3], q[1], q[0], q[2]], 4)
+        };
         let x8 = f64::cos(q[4]);
         let x9 = 0.5 * x0;
         let x10 = 0.5 * x2;
@@ -653,11 +664,24 @@ impl ::eom_sim::Model for FourbarN2 {
         [x74, x75]
     }
     fn momentum(&self, _t: f64, q: &[f64; 5], u: &[f64; 5]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[3]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[2]);
-        let (x6, x7) = f64::sin_cos(q[4]);
-        let (x8, x9) = f64::sin_cos(q[0]);
+        let ([x0, x2, x4, x6, x8, _, _, _], [x1, x3, x5, x7, x9, _, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[3],
+                q[1],
+                q[2],
+                q[4],
+                q[0],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[3], q[1], q[2], q[4], q[0], 0.0, 0.0, 0.0], 5)
+        };
         let x10 = q[2] + q[3];
         let x11 = q[0] + q[1];
         let (x12, x13) = f64::sin_cos(x10);
@@ -1010,15 +1034,28 @@ impl ::eom_sim::ConstrainedModel for FourbarN2 {
         gamma: &mut [f64; 4],
         jacobian: &mut [f64; 20],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
-        let (x2, x3) = f64::sin_cos(q[1]);
+        let ([x0, x2, x5, x10, x14, _, _, _], [x1, x3, x6, x11, x15, _, _, _]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[2],
+                q[3],
+                q[4],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[0], q[1], q[2], q[3], q[4], 0.0, 0.0, 0.0], 5)
+        };
         let x4 = q[0] + q[1];
-        let (x5, x6) = f64::sin_cos(q[2]);
         let x7 = q[2] + q[3];
         let (x8, x9) = f64::sin_cos(x4);
-        let (x10, x11) = f64::sin_cos(q[3]);
         let (x12, x13) = f64::sin_cos(x7);
-        let (x14, x15) = f64::sin_cos(q[4]);
         let x16 = q[2] - q[1];
         let x17 = x16 - q[0];
         let x18 = x7 - q[4];

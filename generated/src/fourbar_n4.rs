@@ -89,10 +89,11 @@ impl ::eom_sim::Model for FourbarN4 {
         tau: &[f64; 9],
         udot: &mut [f64; 9],
     ) {
-        let (x0, x1) = f64::sin_cos(q[3]);
-        let (x2, x3) = f64::sin_cos(q[5]);
-        let (x4, x5) = f64::sin_cos(q[1]);
-        let (x6, x7) = f64::sin_cos(q[7]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[3], q[5], q[1], q[7]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[3], q[5], q[1], q[7]], 4)
+        };
         let x8 = q[2] + q[3];
         let x9 = q[4] + q[5];
         let x10 = q[0] + q[1];
@@ -434,10 +435,11 @@ impl ::eom_sim::Model for FourbarN4 {
         udot[8] = x335;
     }
     fn mass_matrix(&self, _t: f64, q: &[f64; 9], m: &mut [[f64; 9]; 9]) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[3]);
-        let (x4, x5) = f64::sin_cos(q[5]);
-        let (x6, x7) = f64::sin_cos(q[7]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[3], q[5], q[7]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[3], q[5], q[7]], 4)
+        };
         let x8 = 0.5 * x0;
         let x9 = 0.5 * x2;
         let x10 = 0.5 * x4;
@@ -577,10 +579,11 @@ impl ::eom_sim::Model for FourbarN4 {
         m[8][8] = 0.3333333333333333;
     }
     fn bias(&self, _t: f64, q: &[f64; 9], u: &[f64; 9], b: &mut [f64; 9]) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[3]);
-        let (x4, x5) = f64::sin_cos(q[5]);
-        let (x6, x7) = f64::sin_cos(q[7]);
+        let ([x0, x2, x4, x6], [x1, x3, x5, x7]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[3], q[5], q[7]])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[3], q[5], q[7]], 4)
+        };
         let x8 = q[0] + q[1];
         let x9 = q[2] + q[3];
         let x10 = q[4] + q[5];
@@ -801,14 +804,24 @@ impl ::eom_sim::Model for FourbarN4 {
         udot: &[f64; 9],
         tau: &mut [f64; 9],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[3]);
-        let (x4, x5) = f64::sin_cos(q[5]);
-        let (x6, x7) = f64::sin_cos(q[7]);
-        let (x8, x9) = f64::sin_cos(q[2]);
-        let (x10, x11) = f64::sin_cos(q[4]);
-        let (x12, x13) = f64::sin_cos(q[0]);
-        let (x14, x15) = f64::sin_cos(q[6]);
+        let ([x0, x2, x4, x6, x8, x10, x12, x14], [x1, x3, x5, x7, x9, x11, x13, x15]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[3],
+                q[5],
+                q[7],
+                q[2],
+                q[4],
+                q[0],
+                q[6],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[1], q[3], q[5], q[7], q[2], q[4], q[0], q[6]], 8)
+        };
         let x16 = 0.5 * x0;
         let x17 = 0.5 * x2;
         let x18 = 0.5 * x4;
@@ -1094,14 +1107,24 @@ impl ::eom_sim::Model for FourbarN4 {
         tau[8] = x281;
     }
     fn energy(&self, _t: f64, q: &[f64; 9], u: &[f64; 9]) -> [f64; 2] {
-        let (x0, x1) = f64::sin_cos(q[7]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[3]);
-        let (x6, x7) = f64::sin_cos(q[5]);
-        let (x8, x9) = f64::sin_cos(q[0]);
-        let (x10, x11) = f64::sin_cos(q[2]);
-        let (x12, x13) = f64::sin_cos(q[4]);
-        let (x14, x15) = f64::sin_cos(q[6]);
+        let ([x0, x2, x4, x6, x8, x10, x12, x14], [x1, x3, x5, x7, x9, x11, x13, x15]) = if cfg!(
+            target_feature = "avx2"
+        ) {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[7],
+                q[1],
+                q[3],
+                q[5],
+                q[0],
+                q[2],
+                q[4],
+                q[6],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                8,
+            >([q[7], q[1], q[3], q[5], q[0], q[2], q[4], q[6]], 8)
+        };
         let x16 = f64::cos(q[8]);
         let x17 = 0.5 * x0;
         let x18 = 0.5 * x2;
@@ -1235,15 +1258,53 @@ impl ::eom_sim::Model for FourbarN4 {
         [x144, x145]
     }
     fn momentum(&self, _t: f64, q: &[f64; 9], u: &[f64; 9]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[3]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[5]);
-        let (x6, x7) = f64::sin_cos(q[7]);
-        let (x8, x9) = f64::sin_cos(q[2]);
-        let (x10, x11) = f64::sin_cos(q[4]);
-        let (x12, x13) = f64::sin_cos(q[6]);
-        let (x14, x15) = f64::sin_cos(q[8]);
-        let (x16, x17) = f64::sin_cos(q[0]);
+        let (
+            [x0,
+            x2,
+            x4,
+            x6,
+            x8,
+            x10,
+            x12,
+            x14,
+            x16,
+            _,
+            _,
+            _,
+            ],
+            [x1,
+            x3,
+            x5,
+            x7,
+            x9,
+            x11,
+            x13,
+            x15,
+            x17,
+            _,
+            _,
+            _,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[3],
+                q[1],
+                q[5],
+                q[7],
+                q[2],
+                q[4],
+                q[6],
+                q[8],
+                q[0],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >([q[3], q[1], q[5], q[7], q[2], q[4], q[6], q[8], q[0], 0.0, 0.0, 0.0], 9)
+        };
         let x18 = q[2] + q[3];
         let x19 = q[0] + q[1];
         let (x20, x21) = f64::sin_cos(x18);
@@ -1715,23 +1776,61 @@ impl ::eom_sim::ConstrainedModel for FourbarN4 {
         gamma: &mut [f64; 8],
         jacobian: &mut [f64; 72],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
-        let (x2, x3) = f64::sin_cos(q[1]);
+        let (
+            [x0,
+            x2,
+            x5,
+            x8,
+            x10,
+            x13,
+            x15,
+            x20,
+            x28,
+            _,
+            _,
+            _,
+            ],
+            [x1,
+            x3,
+            x6,
+            x9,
+            x11,
+            x14,
+            x16,
+            x21,
+            x29,
+            _,
+            _,
+            _,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[2],
+                q[4],
+                q[5],
+                q[6],
+                q[7],
+                q[3],
+                q[8],
+                0.0,
+                0.0,
+                0.0,
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >([q[0], q[1], q[2], q[4], q[5], q[6], q[7], q[3], q[8], 0.0, 0.0, 0.0], 9)
+        };
         let x4 = q[0] + q[1];
-        let (x5, x6) = f64::sin_cos(q[2]);
         let x7 = q[2] + q[3];
-        let (x8, x9) = f64::sin_cos(q[4]);
-        let (x10, x11) = f64::sin_cos(q[5]);
         let x12 = q[4] + q[5];
-        let (x13, x14) = f64::sin_cos(q[6]);
-        let (x15, x16) = f64::sin_cos(q[7]);
         let x17 = q[6] + q[7];
         let (x18, x19) = f64::sin_cos(x4);
-        let (x20, x21) = f64::sin_cos(q[3]);
         let (x22, x23) = f64::sin_cos(x7);
         let (x24, x25) = f64::sin_cos(x12);
         let (x26, x27) = f64::sin_cos(x17);
-        let (x28, x29) = f64::sin_cos(q[8]);
         let x30 = q[2] - q[1];
         let x31 = q[6] - q[5];
         let x32 = q[8] - q[7];

@@ -63,8 +63,11 @@ impl ::eom_sim::Model for SliderCrank {
         tau: &[f64; 3],
         udot: &mut [f64; 3],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[0]);
+        let ([x0, x2, _, _], [x1, x3, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[0], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[0], 0.0, 0.0], 2)
+        };
         let x4 = 0.05 * u[0];
         let x5 = u[0] + u[1];
         let x6 = u[0] * u[0];
@@ -204,8 +207,11 @@ impl ::eom_sim::Model for SliderCrank {
         udot: &[f64; 3],
         tau: &mut [f64; 3],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[0]);
+        let ([x0, x2, _, _], [x1, x3, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[0], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[0], 0.0, 0.0], 2)
+        };
         let x4 = u[0] + u[1];
         let x5 = 0.05 * u[0];
         let x6 = u[0] * x4;
@@ -307,10 +313,13 @@ impl ::eom_sim::Model for SliderCrank {
         [x28, x29]
     }
     fn momentum(&self, _t: f64, q: &[f64; 3], u: &[f64; 3]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[1]);
+        let ([x0, x5, _, _], [x1, x6, _, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[1], q[0], 0.0, 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[1], q[0], 0.0, 0.0], 2)
+        };
         let x2 = q[0] + q[1];
         let (x3, x4) = f64::sin_cos(x2);
-        let (x5, x6) = f64::sin_cos(q[0]);
         let x7 = u[0] * x1;
         let x8 = u[0] + u[1];
         let x9 = 0.05 * u[0];

@@ -1282,8 +1282,69 @@ impl ::eom_sim::Model for Stewart {
         m[20][20] = 0.5;
     }
     fn bias(&self, _t: f64, q: &[f64; 22], u: &[f64; 21], b: &mut [f64; 21]) {
-        let (x0, x1) = f64::sin_cos(q[0]);
-        let (x2, x3) = f64::sin_cos(q[1]);
+        let (
+            [x0,
+            x2,
+            x77,
+            x79,
+            x81,
+            x113,
+            x115,
+            x117,
+            x119,
+            x121,
+            x123,
+            x148,
+            ],
+            [x1,
+            x3,
+            x78,
+            x80,
+            x82,
+            x114,
+            x116,
+            x118,
+            x120,
+            x122,
+            x124,
+            x149,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[8],
+                q[11],
+                q[20],
+                q[7],
+                q[10],
+                q[13],
+                q[14],
+                q[17],
+                q[19],
+                q[16],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[0],
+                    q[1],
+                    q[8],
+                    q[11],
+                    q[20],
+                    q[7],
+                    q[10],
+                    q[13],
+                    q[14],
+                    q[17],
+                    q[19],
+                    q[16],
+                ],
+                12,
+            )
+        };
         let x4 = q[3] * q[4];
         let x5 = q[5] * q[6];
         let x6 = q[4] * q[4];
@@ -1357,9 +1418,6 @@ impl ::eom_sim::Model for Stewart {
         let x74 = x44 + x45;
         let x75 = 0.6010643124368242 * x13;
         let x76 = x46 - x35;
-        let (x77, x78) = f64::sin_cos(q[8]);
-        let (x79, x80) = f64::sin_cos(q[11]);
-        let (x81, x82) = f64::sin_cos(q[20]);
         let x83 = 0.853538457714928 + x27;
         let x84 = x47 + x28;
         let x85 = 1.707076915429856 * x50;
@@ -1390,12 +1448,6 @@ impl ::eom_sim::Model for Stewart {
         let x110 = x61 + x74;
         let x111 = x62 + x75;
         let x112 = x76 - x48;
-        let (x113, x114) = f64::sin_cos(q[7]);
-        let (x115, x116) = f64::sin_cos(q[10]);
-        let (x117, x118) = f64::sin_cos(q[13]);
-        let (x119, x120) = f64::sin_cos(q[14]);
-        let (x121, x122) = f64::sin_cos(q[17]);
-        let (x123, x124) = f64::sin_cos(q[19]);
         let x125 = x83 - x84;
         let x126 = x49 + x85;
         let x127 = x86 + x88;
@@ -1419,7 +1471,6 @@ impl ::eom_sim::Model for Stewart {
         let x145 = x107 + x108;
         let x146 = x109 + x111;
         let x147 = x112 - x110;
-        let (x148, x149) = f64::sin_cos(q[16]);
         let x150 = q[2] * u[0];
         let x151 = x125 - x126;
         let x152 = x127 + x128;
@@ -2398,8 +2449,69 @@ impl ::eom_sim::Model for Stewart {
         udot: &[f64; 21],
         tau: &mut [f64; 21],
     ) {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[0]);
+        let (
+            [x0,
+            x2,
+            x104,
+            x106,
+            x108,
+            x110,
+            x112,
+            x114,
+            x133,
+            x135,
+            x158,
+            x160,
+            ],
+            [x1,
+            x3,
+            x105,
+            x107,
+            x109,
+            x111,
+            x113,
+            x115,
+            x134,
+            x136,
+            x159,
+            x161,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[0],
+                q[7],
+                q[8],
+                q[10],
+                q[11],
+                q[17],
+                q[20],
+                q[13],
+                q[14],
+                q[16],
+                q[19],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[1],
+                    q[0],
+                    q[7],
+                    q[8],
+                    q[10],
+                    q[11],
+                    q[17],
+                    q[20],
+                    q[13],
+                    q[14],
+                    q[16],
+                    q[19],
+                ],
+                12,
+            )
+        };
         let x4 = q[3] * q[4];
         let x5 = q[5] * q[6];
         let x6 = q[4] * q[4];
@@ -2500,12 +2612,6 @@ impl ::eom_sim::Model for Stewart {
         let x101 = x71 + x83;
         let x102 = x72 + x84;
         let x103 = x85 - x66;
-        let (x104, x105) = f64::sin_cos(q[7]);
-        let (x106, x107) = f64::sin_cos(q[8]);
-        let (x108, x109) = f64::sin_cos(q[10]);
-        let (x110, x111) = f64::sin_cos(q[11]);
-        let (x112, x113) = f64::sin_cos(q[17]);
-        let (x114, x115) = f64::sin_cos(q[20]);
         let x116 = 0.853538457714928 + x38;
         let x117 = x86 + x39;
         let x118 = 1.707076915429856 * x87;
@@ -2523,8 +2629,6 @@ impl ::eom_sim::Model for Stewart {
         let x130 = x98 + x99;
         let x131 = x100 + x102;
         let x132 = x103 - x101;
-        let (x133, x134) = f64::sin_cos(q[13]);
-        let (x135, x136) = f64::sin_cos(q[14]);
         let x137 = x116 - x117;
         let x138 = x67 + x118;
         let x139 = x119 + x120;
@@ -2546,8 +2650,6 @@ impl ::eom_sim::Model for Stewart {
         let x155 = x131 + x132;
         let x156 = u[0] * x130;
         let x157 = u[1] * x129;
-        let (x158, x159) = f64::sin_cos(q[16]);
-        let (x160, x161) = f64::sin_cos(q[19]);
         let x162 = u[0] * u[1];
         let x163 = u[0] * x0;
         let x164 = q[2] * u[1];
@@ -3621,18 +3723,69 @@ impl ::eom_sim::Model for Stewart {
         tau[20] = x1195;
     }
     fn energy(&self, _t: f64, q: &[f64; 22], u: &[f64; 21]) -> [f64; 2] {
-        let (x0, x1) = f64::sin_cos(q[1]);
-        let (x2, x3) = f64::sin_cos(q[8]);
-        let (x4, x5) = f64::sin_cos(q[11]);
-        let (x6, x7) = f64::sin_cos(q[17]);
-        let (x8, x9) = f64::sin_cos(q[20]);
-        let (x10, x11) = f64::sin_cos(q[14]);
-        let (x12, x13) = f64::sin_cos(q[0]);
-        let (x14, x15) = f64::sin_cos(q[16]);
-        let (x16, x17) = f64::sin_cos(q[19]);
-        let (x18, x19) = f64::sin_cos(q[7]);
-        let (x20, x21) = f64::sin_cos(q[10]);
-        let (x22, x23) = f64::sin_cos(q[13]);
+        let (
+            [x0,
+            x2,
+            x4,
+            x6,
+            x8,
+            x10,
+            x12,
+            x14,
+            x16,
+            x18,
+            x20,
+            x22,
+            ],
+            [x1,
+            x3,
+            x5,
+            x7,
+            x9,
+            x11,
+            x13,
+            x15,
+            x17,
+            x19,
+            x21,
+            x23,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[8],
+                q[11],
+                q[17],
+                q[20],
+                q[14],
+                q[0],
+                q[16],
+                q[19],
+                q[7],
+                q[10],
+                q[13],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[1],
+                    q[8],
+                    q[11],
+                    q[17],
+                    q[20],
+                    q[14],
+                    q[0],
+                    q[16],
+                    q[19],
+                    q[7],
+                    q[10],
+                    q[13],
+                ],
+                12,
+            )
+        };
         let x24 = q[3] * q[4];
         let x25 = q[5] * q[6];
         let x26 = q[4] * q[4];
@@ -4177,18 +4330,69 @@ impl ::eom_sim::Model for Stewart {
         [x563, x564]
     }
     fn momentum(&self, _t: f64, q: &[f64; 22], u: &[f64; 21]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[0]);
-        let (x2, x3) = f64::sin_cos(q[1]);
-        let (x4, x5) = f64::sin_cos(q[7]);
-        let (x6, x7) = f64::sin_cos(q[8]);
-        let (x8, x9) = f64::sin_cos(q[10]);
-        let (x10, x11) = f64::sin_cos(q[11]);
-        let (x12, x13) = f64::sin_cos(q[13]);
-        let (x14, x15) = f64::sin_cos(q[14]);
-        let (x16, x17) = f64::sin_cos(q[16]);
-        let (x18, x19) = f64::sin_cos(q[17]);
-        let (x20, x21) = f64::sin_cos(q[19]);
-        let (x22, x23) = f64::sin_cos(q[20]);
+        let (
+            [x0,
+            x2,
+            x4,
+            x6,
+            x8,
+            x10,
+            x12,
+            x14,
+            x16,
+            x18,
+            x20,
+            x22,
+            ],
+            [x1,
+            x3,
+            x5,
+            x7,
+            x9,
+            x11,
+            x13,
+            x15,
+            x17,
+            x19,
+            x21,
+            x23,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[7],
+                q[8],
+                q[10],
+                q[11],
+                q[13],
+                q[14],
+                q[16],
+                q[17],
+                q[19],
+                q[20],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[0],
+                    q[1],
+                    q[7],
+                    q[8],
+                    q[10],
+                    q[11],
+                    q[13],
+                    q[14],
+                    q[16],
+                    q[17],
+                    q[19],
+                    q[20],
+                ],
+                12,
+            )
+        };
         let x24 = q[3] * q[4];
         let x25 = q[5] * q[6];
         let x26 = q[4] * q[4];
@@ -6095,7 +6299,78 @@ impl Stewart {
         tau: &[f64; 21],
         s: &mut [f64; 115],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
+        let (
+            [x0,
+            x52,
+            x295,
+            x299,
+            x304,
+            x308,
+            x313,
+            x317,
+            x321,
+            x325,
+            x330,
+            x334,
+            ],
+            [x1,
+            x53,
+            x296,
+            x300,
+            x305,
+            x309,
+            x314,
+            x318,
+            x322,
+            x326,
+            x331,
+            x335,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[7],
+                q[8],
+                q[10],
+                q[11],
+                q[13],
+                q[14],
+                q[16],
+                q[17],
+                q[19],
+                q[20],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[0],
+                    q[1],
+                    q[7],
+                    q[8],
+                    q[10],
+                    q[11],
+                    q[13],
+                    q[14],
+                    q[16],
+                    q[17],
+                    q[19],
+                    q[20],
+                ],
+                12,
+            )
+        };
+        s[0] = x52;
+        s[1] = x53;
+        s[3] = x300;
+        s[4] = x309;
+        s[7] = x318;
+        s[10] = x325;
+        s[11] = x326;
+        s[14] = x334;
+        s[15] = x335;
         let x2 = 0.5 * q[21];
         let x3 = 0.5 * q[18];
         let x4 = 0.5 * q[15];
@@ -6146,9 +6421,6 @@ impl Stewart {
         let x49 = u[11] * x33;
         let x50 = u[8] * x36;
         let x51 = u[0] * x41;
-        let (x52, x53) = f64::sin_cos(q[1]);
-        s[0] = x52;
-        s[1] = x53;
         let x54 = u[1] * x52;
         let x55 = x9 * x53;
         let x56 = x51 * x53;
@@ -6391,50 +6663,33 @@ impl Stewart {
         let x292 = x279 + x281;
         let x293 = x292 - x225;
         let x294 = x284 + x287;
-        let (x295, x296) = f64::sin_cos(q[7]);
         let x297 = 8.338826697589905 * x296;
         let x298 = 0.7899732893569971 * x295;
-        let (x299, x300) = f64::sin_cos(q[8]);
-        s[3] = x300;
         let x301 = u[6] * x299;
         let x302 = u[6] * x300;
         let x303 = x43 * x299;
-        let (x304, x305) = f64::sin_cos(q[10]);
         let x306 = 4.027344034075436 * x304;
         let x307 = 8.338826697589905 * x305;
-        let (x308, x309) = f64::sin_cos(q[11]);
-        s[4] = x309;
         let x310 = u[9] * x308;
         let x311 = u[9] * x309;
         let x312 = x44 * x308;
-        let (x313, x314) = f64::sin_cos(q[13]);
         let x315 = 4.817317323432434 * x313;
         s[5] = x315;
         let x316 = 8.338826697589905 * x314;
         s[6] = x316;
-        let (x317, x318) = f64::sin_cos(q[14]);
-        s[7] = x318;
         let x319 = u[12] * x317;
         let x320 = x46 * x317;
-        let (x321, x322) = f64::sin_cos(q[16]);
         let x323 = 4.817317323432434 * x321;
         s[8] = x323;
         let x324 = 8.338826697589905 * x322;
         s[9] = x324;
-        let (x325, x326) = f64::sin_cos(q[17]);
-        s[10] = x325;
-        s[11] = x326;
         let x327 = u[15] * x325;
         let x328 = u[15] * x326;
         let x329 = x47 * x325;
-        let (x330, x331) = f64::sin_cos(q[19]);
         let x332 = 4.027344034075436 * x330;
         s[12] = x332;
         let x333 = 8.338826697589905 * x331;
         s[13] = x333;
-        let (x334, x335) = f64::sin_cos(q[20]);
-        s[14] = x334;
-        s[15] = x335;
         let x336 = u[18] * x334;
         let x337 = u[18] * x335;
         let x338 = x48 * x334;
@@ -7995,9 +8250,93 @@ impl Stewart {
         u: &[f64; 21],
         s: &mut [f64; 684],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
+        let (
+            [x0,
+            x8,
+            x245,
+            x247,
+            x286,
+            x288,
+            x328,
+            x331,
+            x372,
+            x374,
+            x417,
+            x420,
+            ],
+            [x1,
+            x9,
+            x246,
+            x248,
+            x287,
+            x289,
+            x329,
+            x332,
+            x373,
+            x375,
+            x418,
+            x421,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[7],
+                q[8],
+                q[10],
+                q[11],
+                q[13],
+                q[14],
+                q[16],
+                q[17],
+                q[19],
+                q[20],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[0],
+                    q[1],
+                    q[7],
+                    q[8],
+                    q[10],
+                    q[11],
+                    q[13],
+                    q[14],
+                    q[16],
+                    q[17],
+                    q[19],
+                    q[20],
+                ],
+                12,
+            )
+        };
         s[0] = x0;
         s[1] = x1;
+        s[8] = x8;
+        s[9] = x9;
+        s[99] = x245;
+        s[100] = x246;
+        s[101] = x247;
+        s[102] = x248;
+        s[116] = x286;
+        s[117] = x287;
+        s[118] = x288;
+        s[119] = x289;
+        s[137] = x328;
+        s[138] = x329;
+        s[140] = x331;
+        s[141] = x332;
+        s[159] = x372;
+        s[160] = x373;
+        s[161] = x374;
+        s[162] = x375;
+        s[180] = x417;
+        s[181] = x418;
+        s[183] = x420;
+        s[184] = x421;
         let x2 = 2.0 * u[2];
         s[2] = x2;
         let x3 = 2.0 * u[8];
@@ -8010,9 +8349,6 @@ impl Stewart {
         s[6] = x6;
         let x7 = 2.0 * u[20];
         s[7] = x7;
-        let (x8, x9) = f64::sin_cos(q[1]);
-        s[8] = x8;
-        s[9] = x9;
         let x10 = u[1] * x9;
         s[10] = x10;
         let x11 = 0.853538457714928 * x9;
@@ -8337,12 +8673,6 @@ impl Stewart {
         let x242 = x58 + x241;
         let x243 = x51 * x216;
         let x244 = x57 * x234;
-        let (x245, x246) = f64::sin_cos(q[7]);
-        s[99] = x245;
-        s[100] = x246;
-        let (x247, x248) = f64::sin_cos(q[8]);
-        s[101] = x247;
-        s[102] = x248;
         let x249 = 0.853538457714928 * x248;
         let x250 = x245 * x247;
         s[103] = x250;
@@ -8393,12 +8723,6 @@ impl Stewart {
         let x284 = 0.8500333025066162 * x259;
         let x285 = x283 + x284;
         s[115] = x285;
-        let (x286, x287) = f64::sin_cos(q[10]);
-        s[116] = x286;
-        s[117] = x287;
-        let (x288, x289) = f64::sin_cos(q[11]);
-        s[118] = x288;
-        s[119] = x289;
         let x290 = 0.9411336220337473 * x289;
         let x291 = x286 * x288;
         s[120] = x291;
@@ -8454,14 +8778,8 @@ impl Stewart {
         s[135] = x326;
         let x327 = x325 - x323;
         s[136] = x327;
-        let (x328, x329) = f64::sin_cos(q[13]);
-        s[137] = x328;
-        s[138] = x329;
         let x330 = u[12] * x328;
         s[139] = x330;
-        let (x331, x332) = f64::sin_cos(q[14]);
-        s[140] = x331;
-        s[141] = x332;
         let x333 = 0.9803778740112491 * x332;
         let x334 = x328 * x331;
         s[142] = x334;
@@ -8518,12 +8836,6 @@ impl Stewart {
         s[157] = x370;
         let x371 = x369 - x367;
         s[158] = x371;
-        let (x372, x373) = f64::sin_cos(q[16]);
-        s[159] = x372;
-        s[160] = x373;
-        let (x374, x375) = f64::sin_cos(q[17]);
-        s[161] = x374;
-        s[162] = x375;
         let x376 = u[16] * x375;
         s[163] = x376;
         let x377 = 0.9803778740112491 * x375;
@@ -8582,14 +8894,8 @@ impl Stewart {
         s[178] = x415;
         let x416 = x412 + x414;
         s[179] = x416;
-        let (x417, x418) = f64::sin_cos(q[19]);
-        s[180] = x417;
-        s[181] = x418;
         let x419 = u[19] * x417;
         s[182] = x419;
-        let (x420, x421) = f64::sin_cos(q[20]);
-        s[183] = x420;
-        s[184] = x421;
         let x422 = 0.9411336220337473 * x421;
         let x423 = x417 * x420;
         s[185] = x423;

@@ -1018,10 +1018,71 @@ impl ::eom_sim::Model for StewartDriven {
         m[14][14] = x619;
     }
     fn bias(&self, t: f64, q: &[f64; 16], u: &[f64; 15], b: &mut [f64; 15]) {
+        let (
+            [x1,
+            x5,
+            x35,
+            x62,
+            x64,
+            x66,
+            x72,
+            x74,
+            x100,
+            x102,
+            x104,
+            x106,
+            ],
+            [x2,
+            x6,
+            x36,
+            x63,
+            x65,
+            x67,
+            x73,
+            x75,
+            x101,
+            x103,
+            x105,
+            x107,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[0],
+                q[7],
+                q[6],
+                q[8],
+                q[9],
+                q[14],
+                q[15],
+                q[10],
+                q[11],
+                q[12],
+                q[13],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[1],
+                    q[0],
+                    q[7],
+                    q[6],
+                    q[8],
+                    q[9],
+                    q[14],
+                    q[15],
+                    q[10],
+                    q[11],
+                    q[12],
+                    q[13],
+                ],
+                12,
+            )
+        };
         let x0 = ::core::f64::consts::PI * t;
-        let (x1, x2) = f64::sin_cos(q[1]);
         let (x3, x4) = f64::sin_cos(x0);
-        let (x5, x6) = f64::sin_cos(q[0]);
         let x7 = q[3] * q[5];
         let x8 = q[2] * q[4];
         let x9 = q[3] * q[3];
@@ -1050,7 +1111,6 @@ impl ::eom_sim::Model for StewartDriven {
         let x32 = 0.7206496609499872 * x12;
         let x33 = 0.6886068633892909 * x13;
         let x34 = (-0.05694143423655203) * x16;
-        let (x35, x36) = f64::sin_cos(q[7]);
         let (x37, x38) = f64::sin_cos(x17);
         let (x39, x40) = f64::sin_cos(x18);
         let x41 = ::core::f64::consts::PI + x0;
@@ -1073,13 +1133,8 @@ impl ::eom_sim::Model for StewartDriven {
         let x59 = x32 + x33;
         let x60 = 0.05694143423655201 * x20;
         let x61 = x34 - x28;
-        let (x62, x63) = f64::sin_cos(q[6]);
-        let (x64, x65) = f64::sin_cos(q[8]);
-        let (x66, x67) = f64::sin_cos(q[9]);
         let (x68, x69) = f64::sin_cos(x41);
         let (x70, x71) = f64::sin_cos(x42);
-        let (x72, x73) = f64::sin_cos(q[14]);
-        let (x74, x75) = f64::sin_cos(q[15]);
         let x76 = 1.0410739277570336 * x7;
         let x77 = 1.0410739277570336 * x8;
         let x78 = x46 + x47;
@@ -1104,10 +1159,6 @@ impl ::eom_sim::Model for StewartDriven {
         let x97 = 0.31113378278020415 * x11;
         let x98 = 0.3111337827802041 * x12;
         let x99 = 0.6010643124368242 * x20;
-        let (x100, x101) = f64::sin_cos(q[10]);
-        let (x102, x103) = f64::sin_cos(q[11]);
-        let (x104, x105) = f64::sin_cos(q[12]);
-        let (x106, x107) = f64::sin_cos(q[13]);
         let x108 = 0.04531535888671232 * x12;
         let x109 = 0.04531535888671232 * x13;
         let x110 = x10 + x11;
@@ -2085,10 +2136,71 @@ impl ::eom_sim::Model for StewartDriven {
         udot: &[f64; 15],
         tau: &mut [f64; 15],
     ) {
+        let (
+            [x1,
+            x5,
+            x33,
+            x36,
+            x42,
+            x62,
+            x66,
+            x68,
+            x72,
+            x76,
+            x111,
+            x113,
+            ],
+            [x2,
+            x6,
+            x34,
+            x37,
+            x43,
+            x63,
+            x67,
+            x69,
+            x73,
+            x77,
+            x112,
+            x114,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[0],
+                q[7],
+                q[9],
+                q[15],
+                q[6],
+                q[8],
+                q[11],
+                q[13],
+                q[14],
+                q[10],
+                q[12],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[1],
+                    q[0],
+                    q[7],
+                    q[9],
+                    q[15],
+                    q[6],
+                    q[8],
+                    q[11],
+                    q[13],
+                    q[14],
+                    q[10],
+                    q[12],
+                ],
+                12,
+            )
+        };
         let x0 = ::core::f64::consts::PI * t;
-        let (x1, x2) = f64::sin_cos(q[1]);
         let (x3, x4) = f64::sin_cos(x0);
-        let (x5, x6) = f64::sin_cos(q[0]);
         let x7 = q[3] * q[5];
         let x8 = q[2] * q[4];
         let x9 = q[3] * q[3];
@@ -2115,13 +2227,10 @@ impl ::eom_sim::Model for StewartDriven {
         let x30 = 0.7206496609499872 * x12;
         let x31 = 0.6886068633892909 * x13;
         let x32 = (-0.05694143423655203) * x16;
-        let (x33, x34) = f64::sin_cos(q[7]);
         let x35 = 1.0471975511965976 + x0;
-        let (x36, x37) = f64::sin_cos(q[9]);
         let (x38, x39) = f64::sin_cos(x17);
         let x40 = ::core::f64::consts::PI + x0;
         let x41 = 4.1887902047863905 + x0;
-        let (x42, x43) = f64::sin_cos(q[15]);
         let x44 = 5.235987755982988 + x0;
         let x45 = 0.5205369638785168 + x19;
         let x46 = 0.04531535888671232 * x14;
@@ -2140,14 +2249,9 @@ impl ::eom_sim::Model for StewartDriven {
         let x59 = x30 + x31;
         let x60 = 0.05694143423655201 * x18;
         let x61 = x32 - x26;
-        let (x62, x63) = f64::sin_cos(q[6]);
         let (x64, x65) = f64::sin_cos(x35);
-        let (x66, x67) = f64::sin_cos(q[8]);
-        let (x68, x69) = f64::sin_cos(q[11]);
         let (x70, x71) = f64::sin_cos(x40);
-        let (x72, x73) = f64::sin_cos(q[13]);
         let (x74, x75) = f64::sin_cos(x41);
-        let (x76, x77) = f64::sin_cos(q[14]);
         let (x78, x79) = f64::sin_cos(x44);
         let x80 = 1.0410739277570336 * x7;
         let x81 = 1.0410739277570336 * x8;
@@ -2180,8 +2284,6 @@ impl ::eom_sim::Model for StewartDriven {
         let x108 = 0.31113378278020415 * x11;
         let x109 = 0.3111337827802041 * x12;
         let x110 = 0.6010643124368242 * x18;
-        let (x111, x112) = f64::sin_cos(q[10]);
-        let (x113, x114) = f64::sin_cos(q[12]);
         let x115 = 0.853538457714928 + x80;
         let x116 = x81 + x82;
         let x117 = 1.707076915429856 * x84;
@@ -3249,10 +3351,72 @@ impl ::eom_sim::Model for StewartDriven {
         tau[14] = x1150;
     }
     fn energy(&self, t: f64, q: &[f64; 16], u: &[f64; 15]) -> [f64; 2] {
+        let (
+            [x3,
+            x20,
+            x22,
+            x24,
+            x26,
+            x28,
+            x30,
+            x32,
+            x34,
+            x38,
+            x40,
+            x42,
+            ],
+            [x4,
+            x21,
+            x23,
+            x25,
+            x27,
+            x29,
+            x31,
+            x33,
+            x35,
+            x39,
+            x41,
+            x43,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[1],
+                q[7],
+                q[11],
+                q[13],
+                q[15],
+                q[9],
+                q[0],
+                q[8],
+                q[14],
+                q[6],
+                q[10],
+                q[12],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[1],
+                    q[7],
+                    q[11],
+                    q[13],
+                    q[15],
+                    q[9],
+                    q[0],
+                    q[8],
+                    q[14],
+                    q[6],
+                    q[10],
+                    q[12],
+                ],
+                12,
+            )
+        };
         let x0 = ::core::f64::consts::PI * t;
         let x1 = 2.0943951023931953 + x0;
         let x2 = ::core::f64::consts::PI + x0;
-        let (x3, x4) = f64::sin_cos(q[1]);
         let (x5, x6) = f64::sin_cos(x0);
         let x7 = 1.0471975511965976 + x0;
         let (x8, x9) = f64::sin_cos(x1);
@@ -3262,19 +3426,8 @@ impl ::eom_sim::Model for StewartDriven {
         let (x14, x15) = f64::sin_cos(x7);
         let (x16, x17) = f64::sin_cos(x12);
         let (x18, x19) = f64::sin_cos(x13);
-        let (x20, x21) = f64::sin_cos(q[7]);
-        let (x22, x23) = f64::sin_cos(q[11]);
-        let (x24, x25) = f64::sin_cos(q[13]);
-        let (x26, x27) = f64::sin_cos(q[15]);
-        let (x28, x29) = f64::sin_cos(q[9]);
-        let (x30, x31) = f64::sin_cos(q[0]);
-        let (x32, x33) = f64::sin_cos(q[8]);
-        let (x34, x35) = f64::sin_cos(q[14]);
         let x36 = q[3] * q[5];
         let x37 = q[2] * q[4];
-        let (x38, x39) = f64::sin_cos(q[6]);
-        let (x40, x41) = f64::sin_cos(q[10]);
-        let (x42, x43) = f64::sin_cos(q[12]);
         let x44 = q[3] * q[3];
         let x45 = q[4] * q[4];
         let x46 = q[5] * q[5];
@@ -3821,22 +3974,73 @@ impl ::eom_sim::Model for StewartDriven {
         [x585, x586]
     }
     fn momentum(&self, t: f64, q: &[f64; 16], u: &[f64; 15]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[0]);
-        let (x2, x3) = f64::sin_cos(q[1]);
+        let (
+            [x0,
+            x2,
+            x5,
+            x7,
+            x9,
+            x11,
+            x13,
+            x15,
+            x20,
+            x22,
+            x25,
+            x27,
+            ],
+            [x1,
+            x3,
+            x6,
+            x8,
+            x10,
+            x12,
+            x14,
+            x16,
+            x21,
+            x23,
+            x26,
+            x28,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[6],
+                q[7],
+                q[12],
+                q[13],
+                q[14],
+                q[15],
+                q[8],
+                q[9],
+                q[10],
+                q[11],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[0],
+                    q[1],
+                    q[6],
+                    q[7],
+                    q[12],
+                    q[13],
+                    q[14],
+                    q[15],
+                    q[8],
+                    q[9],
+                    q[10],
+                    q[11],
+                ],
+                12,
+            )
+        };
         let x4 = ::core::f64::consts::PI * t;
-        let (x5, x6) = f64::sin_cos(q[6]);
-        let (x7, x8) = f64::sin_cos(q[7]);
-        let (x9, x10) = f64::sin_cos(q[12]);
-        let (x11, x12) = f64::sin_cos(q[13]);
-        let (x13, x14) = f64::sin_cos(q[14]);
-        let (x15, x16) = f64::sin_cos(q[15]);
         let (x17, x18) = f64::sin_cos(x4);
         let x19 = 1.0471975511965976 + x4;
-        let (x20, x21) = f64::sin_cos(q[8]);
-        let (x22, x23) = f64::sin_cos(q[9]);
         let x24 = 2.0943951023931953 + x4;
-        let (x25, x26) = f64::sin_cos(q[10]);
-        let (x27, x28) = f64::sin_cos(q[11]);
         let x29 = ::core::f64::consts::PI + x4;
         let x30 = 4.1887902047863905 + x4;
         let x31 = 5.235987755982988 + x4;
@@ -5664,7 +5868,76 @@ impl StewartDriven {
         tau: &[f64; 15],
         s: &mut [f64; 86],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
+        let (
+            [x0,
+            x33,
+            x280,
+            x282,
+            x296,
+            x298,
+            x315,
+            x317,
+            x331,
+            x333,
+            x348,
+            x350,
+            ],
+            [x1,
+            x34,
+            x281,
+            x283,
+            x297,
+            x299,
+            x316,
+            x318,
+            x332,
+            x334,
+            x349,
+            x351,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[6],
+                q[7],
+                q[8],
+                q[9],
+                q[10],
+                q[11],
+                q[12],
+                q[13],
+                q[14],
+                q[15],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[0],
+                    q[1],
+                    q[6],
+                    q[7],
+                    q[8],
+                    q[9],
+                    q[10],
+                    q[11],
+                    q[12],
+                    q[13],
+                    q[14],
+                    q[15],
+                ],
+                12,
+            )
+        };
+        s[0] = x33;
+        s[1] = x34;
+        s[4] = x283;
+        s[5] = x299;
+        s[6] = x318;
+        s[7] = x334;
+        s[8] = x351;
         let x2 = 8.338826697589905 * x1;
         let x3 = 0.7899732893569971 * x0;
         let x4 = 0.3125 * u[4];
@@ -5696,9 +5969,6 @@ impl StewartDriven {
         let x30 = u[11] * x15;
         let x31 = u[13] * x17;
         let x32 = u[0] * x25;
-        let (x33, x34) = f64::sin_cos(q[1]);
-        s[0] = x33;
-        s[1] = x34;
         let x35 = u[1] * x33;
         let x36 = u[0] * x34;
         let x37 = u[0] * x33;
@@ -5945,9 +6215,6 @@ impl StewartDriven {
         let x277 = x255 + x260;
         let x278 = x262 + x267;
         let x279 = x269 + x273;
-        let (x280, x281) = f64::sin_cos(q[6]);
-        let (x282, x283) = f64::sin_cos(q[7]);
-        s[4] = x283;
         let x284 = u[6] * x282;
         let x285 = u[5] * x282;
         let x286 = x27 * x282;
@@ -5959,9 +6226,6 @@ impl StewartDriven {
         let x293 = 0.05 * x288;
         let x294 = 1.1331232264171525 + x293;
         let x295 = 0.5 * x294;
-        let (x296, x297) = f64::sin_cos(q[8]);
-        let (x298, x299) = f64::sin_cos(q[9]);
-        s[5] = x299;
         let x300 = u[7] * x299;
         let x301 = u[8] * x298;
         let x302 = u[7] * x298;
@@ -5976,9 +6240,6 @@ impl StewartDriven {
         let x312 = 1.1331232264171525 + x311;
         let x313 = 0.5 * x312;
         let x314 = u[7] * x312;
-        let (x315, x316) = f64::sin_cos(q[10]);
-        let (x317, x318) = f64::sin_cos(q[11]);
-        s[6] = x318;
         let x319 = u[9] * x318;
         let x320 = u[9] * x317;
         let x321 = x14 * x317;
@@ -5990,9 +6251,6 @@ impl StewartDriven {
         let x328 = 0.05 * x325;
         let x329 = 1.1764244966063744 + x328;
         let x330 = 0.5 * x329;
-        let (x331, x332) = f64::sin_cos(q[12]);
-        let (x333, x334) = f64::sin_cos(q[13]);
-        s[7] = x334;
         let x335 = u[11] * x334;
         let x336 = u[11] * x333;
         let x337 = x19 * x334;
@@ -6005,9 +6263,6 @@ impl StewartDriven {
         let x345 = 0.05 * x340;
         let x346 = 1.2197257667955963 + x345;
         let x347 = 0.5 * x346;
-        let (x348, x349) = f64::sin_cos(q[14]);
-        let (x350, x351) = f64::sin_cos(q[15]);
-        s[8] = x351;
         let x352 = u[13] * x350;
         let x353 = x31 * x350;
         let x354 = 5.235987755982988 + x41;
@@ -7424,12 +7679,93 @@ impl StewartDriven {
         u: &[f64; 15],
         s: &mut [f64; 686],
     ) {
-        let (x0, x1) = f64::sin_cos(q[0]);
+        let (
+            [x0,
+            x2,
+            x249,
+            x251,
+            x297,
+            x299,
+            x346,
+            x348,
+            x395,
+            x397,
+            x445,
+            x447,
+            ],
+            [x1,
+            x3,
+            x250,
+            x252,
+            x298,
+            x300,
+            x347,
+            x349,
+            x396,
+            x398,
+            x446,
+            x448,
+            ],
+        ) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([
+                q[0],
+                q[1],
+                q[6],
+                q[7],
+                q[8],
+                q[9],
+                q[10],
+                q[11],
+                q[12],
+                q[13],
+                q[14],
+                q[15],
+            ])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<
+                12,
+            >(
+                [
+                    q[0],
+                    q[1],
+                    q[6],
+                    q[7],
+                    q[8],
+                    q[9],
+                    q[10],
+                    q[11],
+                    q[12],
+                    q[13],
+                    q[14],
+                    q[15],
+                ],
+                12,
+            )
+        };
         s[0] = x0;
         s[1] = x1;
-        let (x2, x3) = f64::sin_cos(q[1]);
         s[2] = x2;
         s[3] = x3;
+        s[100] = x249;
+        s[101] = x250;
+        s[102] = x251;
+        s[103] = x252;
+        s[122] = x297;
+        s[123] = x298;
+        s[124] = x299;
+        s[125] = x300;
+        s[144] = x346;
+        s[145] = x347;
+        s[146] = x348;
+        s[147] = x349;
+        s[165] = x395;
+        s[166] = x396;
+        s[167] = x397;
+        s[168] = x398;
+        s[188] = x445;
+        s[189] = x446;
+        s[190] = x447;
+        s[191] = x448;
         let x4 = u[1] * x3;
         s[4] = x4;
         let x5 = 0.853538457714928 * x3;
@@ -7770,12 +8106,6 @@ impl StewartDriven {
         let x246 = x51 * x234;
         let x247 = x244 + x246;
         let x248 = x242 + x246;
-        let (x249, x250) = f64::sin_cos(q[6]);
-        s[100] = x249;
-        s[101] = x250;
-        let (x251, x252) = f64::sin_cos(q[7]);
-        s[102] = x251;
-        s[103] = x252;
         let x253 = 0.853538457714928 * x252;
         let x254 = x249 * x251;
         s[104] = x254;
@@ -7837,12 +8167,6 @@ impl StewartDriven {
         s[120] = x295;
         let x296 = x271 * x294;
         s[121] = x296;
-        let (x297, x298) = f64::sin_cos(q[8]);
-        s[122] = x297;
-        s[123] = x298;
-        let (x299, x300) = f64::sin_cos(q[9]);
-        s[124] = x299;
-        s[125] = x300;
         let x301 = 0.9411336220337473 * x300;
         let x302 = x297 * x299;
         s[126] = x302;
@@ -7905,12 +8229,6 @@ impl StewartDriven {
         s[142] = x344;
         let x345 = x319 * x342;
         s[143] = x345;
-        let (x346, x347) = f64::sin_cos(q[10]);
-        s[144] = x346;
-        s[145] = x347;
-        let (x348, x349) = f64::sin_cos(q[11]);
-        s[146] = x348;
-        s[147] = x349;
         let x350 = 0.9803778740112491 * x349;
         let x351 = x346 * x348;
         s[148] = x351;
@@ -7972,12 +8290,6 @@ impl StewartDriven {
         s[163] = x393;
         let x394 = x378 * x391;
         s[164] = x394;
-        let (x395, x396) = f64::sin_cos(q[12]);
-        s[165] = x395;
-        s[166] = x396;
-        let (x397, x398) = f64::sin_cos(q[13]);
-        s[167] = x397;
-        s[168] = x398;
         let x399 = u[12] * x397;
         s[169] = x399;
         let x400 = 0.9803778740112491 * x398;
@@ -8042,12 +8354,6 @@ impl StewartDriven {
         s[186] = x443;
         let x444 = x429 * x442;
         s[187] = x444;
-        let (x445, x446) = f64::sin_cos(q[14]);
-        s[188] = x445;
-        s[189] = x446;
-        let (x447, x448) = f64::sin_cos(q[15]);
-        s[190] = x447;
-        s[191] = x448;
         let x449 = 0.9411336220337473 * x448;
         let x450 = x445 * x447;
         s[192] = x450;

@@ -155,7 +155,11 @@ impl ::eom_sim::Model for Whipple {
         tau: &[f64; 9],
         udot: &mut [f64; 9],
     ) {
-        let (x0, x1) = f64::sin_cos(q[8]);
+        let ([x0, x18, x28, _], [x1, x19, x29, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[8], q[9], q[7], 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[8], q[9], q[7], 0.0], 3)
+        };
         let x2 = 0.2938926261462366 * x1;
         let x3 = 0.0954915028125263 * x1;
         let x4 = 0.2148717265240403 * x1;
@@ -172,7 +176,6 @@ impl ::eom_sim::Model for Whipple {
         let x15 = 0.14636504523570384 + x8;
         let x16 = 0.05568941688362944 * x6;
         let x17 = 0.9510565162951532 + x9;
-        let (x18, x19) = f64::sin_cos(q[9]);
         let x20 = x10 * x12;
         let x21 = x11 * x13;
         let x22 = x14 + x16;
@@ -181,7 +184,6 @@ impl ::eom_sim::Model for Whipple {
         let x25 = x22 - x23;
         let x26 = 0.695339513474539 * x0;
         let x27 = (-0.5831871448600165) * x1;
-        let (x28, x29) = f64::sin_cos(q[7]);
         let x30 = x24 + x25;
         let x31 = 0.30901699437494745 * x0;
         let x32 = 0.17792760436849323 * x0;
@@ -1329,9 +1331,11 @@ impl ::eom_sim::Model for Whipple {
         m[8][8] = 0.28;
     }
     fn bias(&self, _t: f64, q: &[f64; 10], u: &[f64; 9], b: &mut [f64; 9]) {
-        let (x0, x1) = f64::sin_cos(q[8]);
-        let (x2, x3) = f64::sin_cos(q[9]);
-        let (x4, x5) = f64::sin_cos(q[7]);
+        let ([x0, x2, x4, _], [x1, x3, x5, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[8], q[9], q[7], 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[8], q[9], q[7], 0.0], 3)
+        };
         let x6 = 0.04999999999999999 * u[4];
         let x7 = 0.9862781063184829 * u[5];
         let x8 = 0.9862781063184829 * u[4];
@@ -1962,9 +1966,11 @@ impl ::eom_sim::Model for Whipple {
         udot: &[f64; 9],
         tau: &mut [f64; 9],
     ) {
-        let (x0, x1) = f64::sin_cos(q[8]);
-        let (x2, x3) = f64::sin_cos(q[7]);
-        let (x4, x5) = f64::sin_cos(q[9]);
+        let ([x0, x2, x4, _], [x1, x3, x5, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[8], q[7], q[9], 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[8], q[7], q[9], 0.0], 3)
+        };
         let x6 = 0.04999999999999999 * u[4];
         let x7 = 0.9862781063184829 * u[5];
         let x8 = 0.9862781063184829 * u[4];
@@ -2714,9 +2720,11 @@ impl ::eom_sim::Model for Whipple {
         tau[8] = x622;
     }
     fn energy(&self, _t: f64, q: &[f64; 10], u: &[f64; 9]) -> [f64; 2] {
-        let (x0, x1) = f64::sin_cos(q[8]);
-        let (x2, x3) = f64::sin_cos(q[7]);
-        let (x4, x5) = f64::sin_cos(q[9]);
+        let ([x0, x2, x4, _], [x1, x3, x5, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[8], q[7], q[9], 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[8], q[7], q[9], 0.0], 3)
+        };
         let x6 = 0.9862781063184829 * u[5];
         let x7 = 0.04999999999999999 * u[4];
         let x8 = u[1] + x6;
@@ -3038,9 +3046,11 @@ impl ::eom_sim::Model for Whipple {
         [x322, x323]
     }
     fn momentum(&self, _t: f64, q: &[f64; 10], u: &[f64; 9]) -> [f64; 6] {
-        let (x0, x1) = f64::sin_cos(q[8]);
-        let (x2, x3) = f64::sin_cos(q[7]);
-        let (x4, x5) = f64::sin_cos(q[9]);
+        let ([x0, x2, x4, _], [x1, x3, x5, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[8], q[7], q[9], 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[8], q[7], q[9], 0.0], 3)
+        };
         let x6 = 0.9862781063184829 * u[5];
         let x7 = q[6] * q[6];
         let x8 = u[1] + x6;
@@ -3820,7 +3830,11 @@ impl ::eom_sim::ConstrainedModel for Whipple {
         gamma: &mut [f64; 6],
         jacobian: &mut [f64; 54],
     ) {
-        let (x0, x1) = f64::sin_cos(q[8]);
+        let ([x0, x11, x38, _], [x1, x12, x39, _]) = if cfg!(target_feature = "avx2") {
+            ::eom_sim::__private::sin_cos_lanes([q[8], q[9], q[7], 0.0])
+        } else {
+            ::eom_sim::__private::sin_cos_each::<4>([q[8], q[9], q[7], 0.0], 3)
+        };
         let x2 = q[5] * q[5];
         let x3 = q[4] * q[4];
         let x4 = 2.0 * x2;
@@ -3830,7 +3844,6 @@ impl ::eom_sim::ConstrainedModel for Whipple {
         let x8 = 2.0 * x5;
         let x9 = 2.0 * x6;
         let x10 = 2.0 * x3;
-        let (x11, x12) = f64::sin_cos(q[9]);
         let x13 = q[4] * u[3];
         let x14 = q[6] * u[5];
         let x15 = q[3] * q[4];
@@ -3856,7 +3869,6 @@ impl ::eom_sim::ConstrainedModel for Whipple {
         let x35 = q[4] * u[5];
         let x36 = x23 + x24;
         let x37 = q[5] * u[3];
-        let (x38, x39) = f64::sin_cos(q[7]);
         let x40 = x25 + x26;
         let x41 = x27 + x28;
         let x42 = x29 - 0.0000000000000002220446049250313;

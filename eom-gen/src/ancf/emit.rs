@@ -86,6 +86,7 @@ fn body(
         input: &read,
         fma: false,
         lanes: lanes.then(|| quote!(Lanes)),
+        sin_cos_together: false,
         methods: false,
     };
     let args: Vec<Arg<'_>> = args

@@ -59,6 +59,7 @@ pub(super) fn emit(
         input: &input,
         fma,
         lanes: Some(lt.clone()),
+        sin_cos_together: false,
         methods: true,
     };
     let arg_m = || Arg {

@@ -80,6 +80,7 @@ fn step_fn(fname: &str, p: usize, k: usize, l: &Loop, fma: bool) -> TokenStream 
         input: &input,
         fma,
         lanes: None,
+        sin_cos_together: true,
         methods: false,
     };
     let args = step_args(l, pass);

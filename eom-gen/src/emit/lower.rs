@@ -38,6 +38,10 @@ pub struct Style<'a> {
     /// Parts are methods of `&self` (else free functions); with `lanes`,
     /// associated functions called through `Self::`.
     pub methods: bool,
+    /// Scalar code in a crate that depends on `eom_sim`: the `sin_cos` of
+    /// the inputs in one vectorised call
+    /// (`::eom_sim::__private::sin_cos_lanes`).
+    pub sin_cos_together: bool,
 }
 
 impl Style<'_> {
@@ -183,7 +187,61 @@ fn statements(
     };
     let is_fused = |x: Operand| matches!(x, Operand::Tmp(t) if fused.contains_key(&t));
     let mut out = TokenStream::new();
+    // Scalar code: the `sin_cos` of the inputs (the joint angles) in one
+    // vectorised call at the part's start, padded to a multiple of four
+    // lanes, where there are two or more.
+    let hoisted: Vec<(u32, Operand)> = if b.lanes.is_none() && b.sin_cos_together {
+        p.instrs[range.clone()]
+            .iter()
+            .filter_map(|i| match i.op {
+                Op::SinCos(x) if !matches!(x, Operand::Tmp(_)) => Some((i.dst, x)),
+                _ => None,
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let hoisted = if hoisted.len() >= 2 {
+        hoisted
+    } else {
+        Vec::new()
+    };
+    if !hoisted.is_empty() {
+        let width = hoisted.len().div_ceil(4) * 4;
+        let pad = width - hoisted.len();
+        let sn = hoisted.iter().map(|&(d, _)| tmp(d));
+        let cs = hoisted.iter().map(|&(d, _)| tmp(d + 1));
+        let xs = hoisted.iter().map(|&(_, x)| o(x));
+        let blank = (0..pad).map(|_| quote!(_));
+        let blank2 = (0..pad).map(|_| quote!(_));
+        let zeros = (0..pad).map(|_| quote!(0.0));
+        let xs2 = hoisted.iter().map(|&(_, x)| o(x));
+        let zeros2 = (0..pad).map(|_| quote!(0.0));
+        let width_lit = Literal::usize_unsuffixed(width);
+        // The vectorised kernel only where the build has 256-bit vectors
+        // (`target-cpu=native` on this machine): with SSE2 alone the
+        // padded lanes cost more than the C library's calls on most
+        // functions (BENCHMARKS.md, "One vectorised sin_cos"). Both
+        // branches are compiled (and type-checked) in every build.
+        let n = Literal::usize_unsuffixed(hoisted.len());
+        out.extend(quote!(
+            let ([#(#sn,)* #(#blank,)*], [#(#cs,)* #(#blank2,)*]) =
+                if cfg!(target_feature = "avx2") {
+                    ::eom_sim::__private::sin_cos_lanes([#(#xs,)* #(#zeros,)*])
+                } else {
+                    ::eom_sim::__private::sin_cos_each::<#width_lit>([#(#xs2,)* #(#zeros2,)*], #n)
+                };
+        ));
+        for &(d, _) in &hoisted {
+            for t in [d, d + 1] {
+                out.extend(store(slots, t, split));
+            }
+        }
+    }
     for ins in &p.instrs[range] {
+        if hoisted.iter().any(|&(d, _)| d == ins.dst) {
+            continue;
+        }
         let dst = tmp(ins.dst);
         let value = match ins.op {
             Op::Mul(..) if fused.contains_key(&ins.dst) => continue,

@@ -6,7 +6,9 @@
 //! implementation of `eom_sim::Model` and one of `eom_sim::OdeSystem` on the
 //! state `y = (q, u)`. Every function is straight-line: one `let` per
 //! instruction, constants inlined as unsuffixed literals (or `std` float
-//! constants where they match one exactly), `sin_cos` for paired trig, and
+//! constants where they match one exactly), `sin_cos` for paired trig
+//! (the inputs' together in one vectorised call where the build has
+//! 256-bit vectors, `eom_sim::__private::sin_cos_lanes`), and
 //! array indices that are compile-time constants into fixed-size arrays,
 //! so nothing can panic or allocate. Functions a scene leaves out (mass
 //! matrix, bias, inverse dynamics; see `model::scene::Function`) are
@@ -305,6 +307,7 @@ pub fn emit_tokens(
         input: &input,
         fma: opts.fma,
         lanes: None,
+        sin_cos_together: true,
         methods: true,
     };
     let q_doc = format!("`q` = ({})", list(&coords));
