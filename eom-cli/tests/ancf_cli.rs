@@ -940,9 +940,9 @@ fn block_drop_events(r: &serde_json::Value, events: &str, contact: &str) {
     assert_eq!(lines.count(), ev.len(), "one row per event");
 }
 
-/// Statics and linearisation hold no contacts. A pendulum (0.3 m) with a
-/// cable hanging from its tip hangs, without contacts, with its tip at
-/// `y = −0.3`: with a floor at `y = −0.28` under the tip (a body's contact)
+/// Statics and linearisation hold no contacts. The bundled pendulum
+/// (0.3 m) with a cable hanging from its tip (`pendulum_cable.ron`)
+/// hangs, without contacts, with its tip at `y = −0.3`: with a floor at `y = −0.28` under the tip (a body's contact)
 /// or under the cable's node 0 pinned there (a node's), that equilibrium
 /// goes 2 cm through the floor. `solve-static` used to report it, stable,
 /// and `linearize` its modes, both exiting 0; both now refuse it (exit 1),
@@ -950,29 +950,15 @@ fn block_drop_events(r: &serde_json::Value, events: &str, contact: &str) {
 /// the hanging equilibrium leaves it open and both run.
 #[test]
 fn statics_and_linearize_refuse_an_equilibrium_through_a_contact() {
+    let bundled = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/ancf/pendulum_cable.ron"
+    ))
+    .expect("the bundled pendulum_cable");
+    let node = r#"at: (body: "rope", node: 2), point: (0, -0.25, 0)"#;
+    assert!(bundled.contains(node), "the bundled contact");
     let pendulum = |at: &str, floor: f64| {
-        format!(
-            r#"Model(
-    name: "pendulum_cable",
-    gravity: (0, -9.81, 0),
-    bodies: [
-        (name: "link", mass: 0.5, com: (0.15, 0, 0), inertia: Diag(0, 0.00375, 0.00375),
-         markers: [(name: "tip", position: (0.3, 0, 0))]),
-    ],
-    joints: [
-        (name: "pivot", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "link",
-         coordinates: ["theta"]),
-    ],
-    cables: [
-        Cable(name: "rope", element: Cable2D, from: (0.3, 0, 0), to: (0.3, -0.15, 0), elements: 2,
-              young: 2e9, density: 7800, area: 1e-5, second_moment: 1e-10,
-              damping_bending: 1e-4, start: Pinned, start_at: (body: "link", marker: "tip")),
-    ],
-    contacts: [
-        Plane(name: "floor", at: {at}, point: (0, {floor:?}, 0), normal: (0, 1, 0), e: 0.5),
-    ],
-)"#
-        )
+        bundled.replace(node, &format!("at: {at}, point: (0, {floor:?}, 0)"))
     };
     for (label, at) in [
         ("tip", r#"(body: "link", marker: "tip")"#),

@@ -305,38 +305,29 @@ fn rests_at_the_first_strike(text: &str, label: &str) {
     assert!(report.stats.accepted <= fixed + 4 * report.contact_events.len() + 10);
 }
 
-/// A uniform link (0.3 m, 0.5 kg) pivoted at the origin about z, starting
-/// level along +x at rest, with a short stiff cable (0.15 m, 2 elements)
-/// pinned at its tip and hanging straight down; the cable's end node
-/// touches the floor `y = −0.25` with restitution `e`.
+/// The bundled `models/ancf/pendulum_cable.ron`: a uniform link (0.3 m,
+/// 0.5 kg) pivoted at the origin about z, starting level along +x at rest,
+/// with a short stiff cable (0.15 m, 2 elements) pinned at its tip and
+/// hanging straight down; the cable's end node touches the floor
+/// `y = −0.25`, here with restitution `e`.
 fn pendulum_cable(e: f64) -> String {
     pendulum_cable_with(e, "")
 }
 
 /// [`pendulum_cable`] with `extra` appended to the contact.
 fn pendulum_cable_with(e: f64, extra: &str) -> String {
-    format!(
-        r#"Model(
-    name: "pendulum_cable",
-    gravity: (0, -9.81, 0),
-    bodies: [
-        (name: "link", mass: 0.5, com: (0.15, 0, 0), inertia: Diag(0, 0.00375, 0.00375),
-         markers: [(name: "tip", position: (0.3, 0, 0))]),
-    ],
-    joints: [
-        (name: "pivot", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "link",
-         coordinates: ["theta"]),
-    ],
-    cables: [
-        Cable(name: "rope", element: Cable2D, from: (0.3, 0, 0), to: (0.3, -0.15, 0), elements: 2,
-              young: 2e9, density: 7800, area: 1e-5, second_moment: 1e-10,
-              damping_bending: 1e-4, start: Pinned, start_at: (body: "link", marker: "tip")),
-    ],
-    contacts: [
-        Plane(name: "floor", at: (body: "rope", node: 2), point: (0, -0.25, 0), normal: (0, 1, 0), e: {e:?}{extra}),
-    ],
-)"#
-    )
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/ancf/pendulum_cable.ron"
+    );
+    let text = std::fs::read_to_string(path).unwrap_or_else(|err| panic!("{path}: {err}"));
+    let (param, contact) = (r#"(name: "e", value: 0.5,"#, r#"e: "e"),"#);
+    assert!(
+        text.contains(param) && text.contains(contact),
+        "the bundled pendulum_cable"
+    );
+    text.replace(param, &format!(r#"(name: "e", value: {e:?},"#))
+        .replace(contact, &format!(r#"e: "e"{extra}),"#))
 }
 
 /// The pendulum's stiff cable (E = 2e9, `ω h` ≫ 100 for its bending
