@@ -406,14 +406,17 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         }
     }
 
+    /// A hold is one of the model's own contacts.
+    fn holds_a_body(&self) -> bool {
+        self.holds
+            .iter()
+            .any(|&h| matches!(h, Hold::Normal(i) if !self.gaps.node(i)))
+    }
+
     /// The model's own contacts' rows at `(t, y, v)` if a hold is one of
     /// them.
     fn body_at(&self, t: f64, y: &[f64], v: &[f64]) -> Option<Rows> {
-        let own = self.holds.iter().any(|&h| match h {
-            Hold::Normal(i) => !self.gaps.node(i),
-            Hold::Tangent(..) => false,
-        });
-        if own {
+        if self.holds_a_body() {
             self.inner.body_rows(t, y, v)
         } else {
             None
@@ -524,6 +527,12 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
     ) -> Result<(), DynamicsError> {
         let (n, mi, k) = (self.inner.n(), self.inner.n_constraints(), self.holds.len());
         w.rows = self.body_at(t, y, v);
+        if w.rows.is_none() && self.holds_a_body() {
+            return Err(failed(
+                t,
+                "the rigid part's contacts cannot be evaluated".into(),
+            ));
+        }
         let body = w.rows.as_ref();
         w.x.clear();
         for &h in &self.holds {
@@ -695,7 +704,14 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
         self.holds
             .iter()
             .map(|&h| self.value(h, &state.q, body.as_ref()).abs())
-            .fold(own, f64::max)
+            // NaN (a body's row that cannot be evaluated) is kept.
+            .fold(own, |a, x| {
+                if a.is_nan() || x.is_nan() {
+                    f64::NAN
+                } else {
+                    a.max(x)
+                }
+            })
     }
 
     fn full<'w>(&self, w: &'w Self::Work) -> &'w [f64] {
@@ -1456,6 +1472,9 @@ impl<'g> ContactRun<'g> {
             // small steps left before the run returns to `h`.
             let (mut halvings, mut substeps) = (0u32, 0usize);
             let h_fixed = opts.h;
+            // The gaps at the step's start: the last accepted step's end
+            // (a body's are an evaluation of the rigid part's contacts).
+            let mut gaps0 = self.gaps.gaps_at(m, ga.state());
             let event = loop {
                 if ga.state().t >= t_end - eps {
                     break None;
@@ -1501,7 +1520,7 @@ impl<'g> ContactRun<'g> {
                         first = Some((t, row, breaks));
                     }
                 };
-                let (gaps0, gaps1) = (self.gaps.gaps_at(m, &prev), self.gaps.gaps_at(m, &new));
+                let gaps1 = self.gaps.gaps_at(m, &new);
                 if gaps1.iter().any(|g| g.is_nan()) {
                     self.add_stats(&ga.stats);
                     return (
@@ -1570,6 +1589,7 @@ impl<'g> ContactRun<'g> {
                 }
                 match first {
                     None => {
+                        gaps0 = gaps1;
                         self.forces = f1;
                         self.multipliers = ga.multipliers()[..own].to_vec();
                         if let Err(e) = observe(&new, Some(ga.q_full())) {
