@@ -669,3 +669,144 @@ fn what_can_feed_energy_into_a_mixed_model_is_named() {
         Some("the constraint `hold`, which moves with t")
     );
 }
+
+/// [`pendulum_cable`] (e = 0.5) with a 2 kg block beside it on a planar
+/// joint (x, y, angle), touching at its centre of mass a plane through
+/// the origin with normal `(nx, ny, 0)`, plastic, friction `mu`, starting
+/// at the origin with speeds `u0`. The block and the pendulum share no
+/// joint, force or mass: the block moves by its closed forms while the
+/// cable strikes its floor beside it.
+fn block_beside_the_pendulum(nx: f64, ny: f64, mu: f64, u0: [f64; 3]) -> String {
+    let text = pendulum_cable(0.5);
+    for list in ["bodies: [", "joints: [", "contacts: ["] {
+        assert!(text.contains(list), "the bundled pendulum_cable's {list}");
+    }
+    text.replace(
+        "bodies: [",
+        r#"bodies: [
+        (name: "block", mass: 2, inertia: Diag(0.1, 0.1, 0.1)),"#,
+    )
+    .replace(
+        "joints: [",
+        &format!(
+            r#"joints: [
+        (name: "p", kind: Planar, parent: "ground", child: "block", coordinates: ["x", "y", "a"], q0: [0, 0, 0], u0: [{:?}, {:?}, {:?}]),"#,
+            u0[0], u0[1], u0[2]
+        ),
+    )
+    .replace(
+        "contacts: [",
+        &format!(
+            r#"contacts: [
+        Plane(name: "slope", at: (body: "block"), normal: ({nx:?}, {ny:?}, 0), e: 0, mu: {mu:?}),"#
+        ),
+    )
+}
+
+/// The rigid coordinates and speeds of `report` by name.
+fn rigid_state(text: &str, report: &eom_sim::RunReport, name: &str) -> (f64, f64) {
+    let sys = system(text);
+    let k = sys
+        .coordinate_names()
+        .iter()
+        .position(|c| *c == name)
+        .unwrap_or_else(|| panic!("no coordinate {name}: {:?}", sys.coordinate_names()));
+    (report.q[k], report.u[k])
+}
+
+/// Coulomb friction at a rigid body's contact beside cables, against
+/// the closed forms of a block (`eom-gen/tests/friction.rs` runs the same
+/// block alone through the rigid runtime): on an incline of `θ = 0.4`
+/// (`tan θ = 0.4228`) it sticks for `μ = 0.5` (every coordinate and
+/// speed stays 0) and slides for `μ = 0.3` with `g (sin θ − μ cos θ)`
+/// (distance and speed after 0.6 s to 1e-9); pushed along a level floor
+/// at `v₀ = 2 m/s` with `μ = 0.3` it stops after `v₀²/(2 μ g)` at
+/// `t = v₀/(μ g)` (a located `stick`, to 1e-9) and stays. Meanwhile the
+/// pendulum's cable strikes its own floor, hops and rests: every segment
+/// restart and every impact of the cable re-solves the block's contact,
+/// which must come out unchanged. The block's rows are the generated
+/// `contacts` and `friction` of the rigid part, evaluated per state; a
+/// stick holds its tangential row step by step (`W_t (y − y_n) = 0`).
+#[test]
+fn a_block_beside_a_cable_sticks_slides_and_stops_by_coulomb() {
+    let theta: f64 = 0.4;
+    let (s, c) = theta.sin_cos();
+    let r = run(0.6, 1e-3, 0.8);
+    // Sticks.
+    let text = block_beside_the_pendulum(-s, c, 0.5, [0.0; 3]);
+    let report = simulate(&text, &r);
+    finished_with_impacts_by_newton(&report, 0.5, "block stuck beside the pendulum");
+    for name in ["x", "y", "a"] {
+        let (q, u) = rigid_state(&text, &report, name);
+        assert!(
+            q.abs() < 1e-10 && u.abs() < 1e-10,
+            "sticks: {name} = {q}, speed {u}"
+        );
+    }
+    // Slides.
+    let mu = 0.3;
+    let text = block_beside_the_pendulum(-s, c, mu, [0.0; 3]);
+    let report = simulate(&text, &r);
+    finished_with_impacts_by_newton(&report, 0.5, "block sliding beside the pendulum");
+    let a = G * (s - mu * c);
+    let (t_end, dist) = (0.6, 0.5 * a * 0.36);
+    let ((x, vx), (y, vy)) = (
+        rigid_state(&text, &report, "x"),
+        rigid_state(&text, &report, "y"),
+    );
+    assert!(
+        (x + dist * c).abs() < 1e-9 && (y + dist * s).abs() < 1e-9,
+        "slid to ({x}, {y}), want {dist} m down the slope: ({}, {})",
+        -dist * c,
+        -dist * s
+    );
+    assert!(
+        (vx.hypot(vy) - a * t_end).abs() < 1e-9,
+        "speed {}, want g (sin θ − μ cos θ) t = {}",
+        vx.hypot(vy),
+        a * t_end
+    );
+    assert!(
+        rigid_state(&text, &report, "a").0.abs() < 1e-12,
+        "no turning"
+    );
+    // Pushed along a level floor: stops and stays.
+    let v0 = 2.0;
+    let text = block_beside_the_pendulum(0.0, 1.0, mu, [v0, 0.0, 0.0]);
+    let report = simulate(&text, &run(1.0, 1e-3, 0.8));
+    finished_with_impacts_by_newton(&report, 0.5, "block pushed beside the pendulum");
+    let want = v0 * v0 / (2.0 * mu * G);
+    let (x, vx) = rigid_state(&text, &report, "x");
+    assert!(
+        (x - want).abs() < 1e-9 && vx.abs() < 1e-12,
+        "stopped at {x} (speed {vx}), want v0²/(2 μ g) = {want}"
+    );
+    // The block's changes between sliding and sticking: its stop, once.
+    let changes: Vec<_> = report
+        .contact_events
+        .iter()
+        .filter(|e| matches!(e.kind, ContactEventKind::Stick | ContactEventKind::Slip))
+        .filter(|e| e.contacts.iter().any(|c| c.contact == "slope"))
+        .collect();
+    let t_stop = v0 / (mu * G);
+    let [stop] = changes.as_slice() else {
+        panic!("the block stops once and stays: {changes:?}");
+    };
+    assert!(
+        stop.kind == ContactEventKind::Stick && (stop.t - t_stop).abs() < 1e-9,
+        "{:?} at t = {}, want a stick at v0/(μ g) = {t_stop}",
+        stop.kind,
+        stop.t
+    );
+    // Every event of the cable's floor afterwards left the block stuck.
+    for ev in report.contact_events.iter().filter(|e| e.t > t_stop) {
+        for c in ev.contacts.iter().filter(|c| c.contact == "slope") {
+            assert!(
+                c.tangential_speed_after[0].abs() < 1e-12,
+                "the block moved at {}: {:?}",
+                ev.t,
+                c
+            );
+        }
+    }
+}

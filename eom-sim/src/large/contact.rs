@@ -155,9 +155,6 @@ impl Gaps {
 
     /// The same with the model's own contacts `names` after the node rows
     /// ([`Impacts::body_rows`]), their `e` and `μ` from their rows at `s`.
-    /// Frictionless only: a sticking row is held at the position level
-    /// here (a node's tangential coordinates), which a body's rolling or
-    /// pivoting contact point does not have.
     pub fn with_bodies<M: Impacts + ?Sized>(
         mut self,
         m: &M,
@@ -171,22 +168,12 @@ impl Gaps {
             .body_rows(s.t, &s.q, &s.v)
             .filter(|r| r.g.len() == names.len())
             .ok_or("the rigid part's contacts cannot be evaluated at the start")?;
-        let rough: Vec<&str> = (0..names.len())
-            .filter(|&b| r.mu[b] != 0.0)
-            .map(|b| names[b].as_str())
-            .collect();
-        if !rough.is_empty() {
-            return Err(format!(
-                "Coulomb friction at a rigid body's contact beside cables is not supported ({}): give it mu: 0, or friction at cable nodes only",
-                rough.join(", ")
-            ));
-        }
         for (b, name) in names.iter().enumerate() {
             self.names.push(name.clone());
             self.rows.push(Vec::new());
             self.level.push(0.0);
             self.e.push(r.e[b]);
-            self.mu.push(0.0);
+            self.mu.push(r.mu[b]);
             self.tangents.push([Vec::new(), Vec::new()]);
         }
         Ok(self)
@@ -301,30 +288,48 @@ impl Gaps {
                 r.gdot[i] = b.gdot[k];
                 r.gamma[i] = b.gamma[k];
                 r.w.row_mut(i).copy_from(&b.w.row(k));
+                r.vt[i] = b.vt[k];
+                r.gamma_t[i] = b.gamma_t[k];
+                for a in 0..2 {
+                    r.wt.row_mut(2 * i + a).copy_from(&b.wt.row(2 * k + a));
+                }
             }
         }
         Ok(r)
     }
+}
 
-    /// The sliding direction of row `i` at speeds `v` that started along
-    /// `s0`: `v̂_t` while `v_t · s0 > 0`, else `s0` (as the rigid runtime).
-    fn direction(&self, i: usize, s0: [f64; 2], v: &[f64]) -> [f64; 2] {
-        let vt = self.vt(i, v);
-        let nv = norm2(vt);
-        if nv > 0.0 && vt[0] * s0[0] + vt[1] * s0[1] > 0.0 {
-            [vt[0] / nv, vt[1] / nv]
-        } else {
-            s0
-        }
+/// The sliding direction at tangential speeds `vt` of a slide that
+/// started along `s0`: `v̂_t` while `v_t · s0 > 0`, else `s0` (as the
+/// rigid runtime).
+fn direction(vt: [f64; 2], s0: [f64; 2]) -> [f64; 2] {
+    let nv = norm2(vt);
+    if nv > 0.0 && vt[0] * s0[0] + vt[1] * s0[1] > 0.0 {
+        [vt[0] / nv, vt[1] / nv]
+    } else {
+        s0
     }
 }
 
 /// One held row of [`Held`]: a sustained contact's normal row `g = 0`,
-/// or a sticking one's tangent axis `a` held at its anchor `t_a·y = c`.
+/// or a sticking one's tangent axis `a`: a node's held at its anchor
+/// `t_a·y = c`; the model's own contacts' tangential rows `W_t,a(y)`,
+/// which need not be the gradient of any position (a rolling or pivoting
+/// contact point), held step by step, `W_t,a(y)·(y − y_n) = 0` from the
+/// step's start `y_n` (the tangential displacement over each step zero;
+/// for a constant row the anchor's own condition).
 #[derive(Clone, Copy, Debug)]
 enum Hold {
     Normal(usize),
     Tangent(usize, usize, f64),
+}
+
+/// Which of the model's own contacts' rows a hold is: the normal row `b`
+/// or the tangential row `j = 2b + a` (of `Rows::wt`).
+#[derive(Clone, Copy, Debug)]
+enum Own {
+    Normal(usize),
+    Tangent(usize),
 }
 
 /// A vector model with the sustained contact rows `active` held as
@@ -357,24 +362,43 @@ pub(super) struct HeldWork<W> {
     x: Vec<Vec<f64>>,
     s: Option<LU<f64, Dyn, Dyn>>,
     rows: Option<Rows>,
+    /// The step's start `y_n` (the last accepted coordinates), from which
+    /// a body's sticking tangential rows hold the displacement at zero.
+    base: Vec<f64>,
 }
 
 impl<'m, M: Impacts + ?Sized> Held<'m, M> {
     /// `slides` and `anchors` per contact row (`None`: frictionless or not
-    /// held).
+    /// held), starting at `s` (where a body's sticking row's tangential
+    /// rows are looked at: an axis without a coordinate, as `t2` of a
+    /// planar motion, is not held).
     pub fn new(
         inner: &'m M,
         gaps: &'m Gaps,
         active: &[usize],
         slides: &[Option<Slide>],
         anchors: &[[f64; 2]],
+        s: &State,
     ) -> Self {
         let mut holds: Vec<Hold> = active.iter().map(|&i| Hold::Normal(i)).collect();
-        for &i in active {
-            if slides.get(i) == Some(&Some(Slide::Stick)) {
+        let sticks = |i: usize| slides.get(i) == Some(&Some(Slide::Stick));
+        let body = active
+            .iter()
+            .any(|&i| sticks(i) && !gaps.node(i))
+            .then(|| inner.body_rows(s.t, &s.q, &s.v))
+            .flatten();
+        for &i in active.iter().filter(|&&i| sticks(i)) {
+            if gaps.node(i) {
                 for (a, row) in gaps.tangents[i].iter().enumerate() {
                     if !row.is_empty() {
                         holds.push(Hold::Tangent(i, a, anchors[i][a]));
+                    }
+                }
+            } else if let Some(r) = &body {
+                let b = i - gaps.nodes;
+                for a in 0..2 {
+                    if r.wt.row(2 * b + a).amax() > 0.0 {
+                        holds.push(Hold::Tangent(i, a, 0.0));
                     }
                 }
             }
@@ -399,18 +423,28 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
 
     /// The model's own contact row of hold `h` in `body` (its rows at the
     /// iterate), if `h` is one.
-    fn own<'b>(&self, h: Hold, body: Option<&'b Rows>) -> Option<(usize, &'b Rows)> {
+    fn own<'b>(&self, h: Hold, body: Option<&'b Rows>) -> Option<(Own, &'b Rows)> {
         match h {
-            Hold::Normal(i) if !self.gaps.node(i) => Some((i - self.gaps.nodes, body?)),
+            Hold::Normal(i) if !self.gaps.node(i) => {
+                Some((Own::Normal(i - self.gaps.nodes), body?))
+            }
+            Hold::Tangent(i, a, _) if !self.gaps.node(i) => {
+                Some((Own::Tangent(2 * (i - self.gaps.nodes) + a), body?))
+            }
             _ => None,
+        }
+    }
+
+    /// Hold `h` is on one of the model's own contacts.
+    fn on_a_body(&self, h: Hold) -> bool {
+        match h {
+            Hold::Normal(i) | Hold::Tangent(i, _, _) => !self.gaps.node(i),
         }
     }
 
     /// A hold is one of the model's own contacts.
     fn holds_a_body(&self) -> bool {
-        self.holds
-            .iter()
-            .any(|&h| matches!(h, Hold::Normal(i) if !self.gaps.node(i)))
+        self.holds.iter().any(|&h| self.on_a_body(h))
     }
 
     /// The model's own contacts' rows at `(t, y, v)` if a hold is one of
@@ -423,13 +457,19 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         }
     }
 
-    /// Hold `h`'s residual at `y` (`body`: the model's own contacts' rows
-    /// there).
-    fn value(&self, h: Hold, y: &[f64], body: Option<&Rows>) -> f64 {
+    /// Hold `h`'s residual at `y` (`base`: the step's start; `body`: the
+    /// model's own contacts' rows at `y`).
+    fn value(&self, h: Hold, y: &[f64], base: &[f64], body: Option<&Rows>) -> f64 {
+        if self.on_a_body(h) {
+            return match self.own(h, body) {
+                Some((Own::Normal(b), r)) => r.g[b],
+                Some((Own::Tangent(j), r)) => (0..y.len())
+                    .map(|k| r.wt[(j, k)] * (y[k] - base.get(k).copied().unwrap_or(y[k])))
+                    .sum(),
+                None => f64::NAN,
+            };
+        }
         match h {
-            Hold::Normal(i) if !self.gaps.node(i) => {
-                self.own(h, body).map_or(f64::NAN, |(b, r)| r.g[b])
-            }
             Hold::Normal(i) => self.gaps.gap(i, y),
             Hold::Tangent(i, a, c) => self.gaps.tdot(i, a, y) - c,
         }
@@ -437,32 +477,61 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
 
     /// `C_h x`.
     fn dot(&self, h: Hold, x: &[f64], body: Option<&Rows>) -> f64 {
-        if let Some((b, r)) = self.own(h, body) {
-            return (0..x.len()).map(|k| r.w[(b, k)] * x[k]).sum();
+        match self.own(h, body) {
+            Some((Own::Normal(b), r)) => (0..x.len()).map(|k| r.w[(b, k)] * x[k]).sum(),
+            Some((Own::Tangent(j), r)) => (0..x.len()).map(|k| r.wt[(j, k)] * x[k]).sum(),
+            None => self.row(h).iter().map(|&(k, a)| a * x[k]).sum(),
         }
-        self.row(h).iter().map(|&(k, a)| a * x[k]).sum()
     }
 
-    /// `γ_h` of `C_h a = γ_h` (`g̈ = 0`): a node's rows are constant.
+    /// `γ_h` of `C_h a = γ_h` (`g̈ = 0`, `v̇_t = 0`): a node's rows are
+    /// constant.
     fn gamma(&self, h: Hold, body: Option<&Rows>) -> f64 {
-        self.own(h, body).map_or(0.0, |(b, r)| r.gamma[b])
+        match self.own(h, body) {
+            Some((Own::Normal(b), r)) => r.gamma[b],
+            Some((Own::Tangent(j), r)) => r.gamma_t[j / 2][j % 2],
+            None => 0.0,
+        }
     }
 
-    /// Adds `scale` times hold `h`'s force column at speeds `v` to `r`.
+    /// Adds `scale` times hold `h`'s force column at speeds `v` to `r`
+    /// (a sliding row's with its friction, `w − μ sᵀ W_t`).
     fn add_column(&self, h: Hold, v: &[f64], body: Option<&Rows>, scale: f64, r: &mut [f64]) {
-        if let Some((b, rows)) = self.own(h, body) {
+        let slip = match h {
+            Hold::Normal(i) => match self.slides.get(i) {
+                Some(Some(Slide::Slip(s0))) => Some((i, *s0)),
+                _ => None,
+            },
+            Hold::Tangent(..) => None,
+        };
+        if let Some((o, rows)) = self.own(h, body) {
+            let j = match o {
+                Own::Normal(b) => b,
+                Own::Tangent(j) => j,
+            };
+            let row = match o {
+                Own::Normal(_) => rows.w.row(j),
+                Own::Tangent(_) => rows.wt.row(j),
+            };
             for (k, x) in r.iter_mut().enumerate() {
-                *x += rows.w[(b, k)] * scale;
+                *x += row[k] * scale;
+            }
+            if let (Own::Normal(b), Some((i, s0))) = (o, slip) {
+                let s = direction(rows.vt[b], s0);
+                let mu = self.gaps.mu[i];
+                for (a, sa) in s.iter().enumerate() {
+                    for (k, x) in r.iter_mut().enumerate() {
+                        *x -= mu * sa * rows.wt[(2 * b + a, k)] * scale;
+                    }
+                }
             }
             return;
         }
         for &(c, a) in self.row(h) {
             r[c] += a * scale;
         }
-        if let Hold::Normal(i) = h
-            && let Some(Some(Slide::Slip(s0))) = self.slides.get(i)
-        {
-            let s = self.gaps.direction(i, *s0, v);
+        if let Some((i, s0)) = slip {
+            let s = direction(self.gaps.vt(i, v), s0);
             let mu = self.gaps.mu[i];
             for (a, sa) in s.iter().enumerate() {
                 for &(c, t) in &self.gaps.tangents[i][a] {
@@ -501,15 +570,21 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
             .collect()
     }
 
-    /// Per active row, `v_t · s0` for a sliding row that started along
-    /// `s0` (falls through zero when the slide stops), `None` for the
-    /// others.
-    pub fn slip_speeds(&self, v: &[f64]) -> Vec<Option<f64>> {
+    /// Per active row, `v_t · s0` at `s` for a sliding row that started
+    /// along `s0` (falls through zero when the slide stops), `None` for
+    /// the others (NaN: a body's row that cannot be evaluated).
+    pub fn slip_speeds(&self, s: &State) -> Vec<Option<f64>> {
+        let body = self.body_at(s.t, &s.q, &s.v);
         self.active
             .iter()
             .map(|&i| match self.slides[i] {
                 Some(Slide::Slip(s0)) => {
-                    let vt = self.gaps.vt(i, v);
+                    let vt = if self.gaps.node(i) {
+                        self.gaps.vt(i, &s.v)
+                    } else {
+                        body.as_ref()
+                            .map_or([f64::NAN; 2], |r| r.vt[i - self.gaps.nodes])
+                    };
                     Some(vt[0] * s0[0] + vt[1] * s0[1])
                 }
                 _ => None,
@@ -571,6 +646,7 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
             x: Vec::new(),
             s: None,
             rows: None,
+            base: state.q.clone(),
         }
     }
 
@@ -582,6 +658,7 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
         lambda: &mut [f64],
     ) -> Result<(), DynamicsError> {
         let (n, mi) = (self.inner.n(), self.inner.n_constraints());
+        w.base.clone_from(&state.q);
         self.inner
             .start(&mut w.inner, state, acc, &mut lambda[..mi])?;
         if self.holds.is_empty() {
@@ -651,7 +728,7 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
         let body = self.body_at(t, y, v);
         for (b, &h) in self.holds.iter().enumerate() {
             self.add_column(h, v, body.as_ref(), lambda[mi + b], &mut r[..n]);
-            r[n + mi + b] = self.value(h, y, body.as_ref());
+            r[n + mi + b] = self.value(h, y, &w.base, body.as_ref());
         }
     }
 
@@ -701,9 +778,10 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
     fn accepted(&self, w: &mut Self::Work, state: &State) -> f64 {
         let own = self.inner.accepted(&mut w.inner, state);
         let body = self.body_at(state.t, &state.q, &state.v);
-        self.holds
+        let worst = self
+            .holds
             .iter()
-            .map(|&h| self.value(h, &state.q, body.as_ref()).abs())
+            .map(|&h| self.value(h, &state.q, &w.base, body.as_ref()).abs())
             // NaN (a body's row that cannot be evaluated) is kept.
             .fold(own, |a, x| {
                 if a.is_nan() || x.is_nan() {
@@ -711,7 +789,10 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
                 } else {
                     a.max(x)
                 }
-            })
+            });
+        // The next step starts here.
+        w.base.clone_from(&state.q);
+        worst
     }
 
     fn full<'w>(&self, w: &'w Self::Work) -> &'w [f64] {
@@ -1453,7 +1534,14 @@ impl<'g> ContactRun<'g> {
         // (`GeneralizedAlpha::restarted`).
         let mut at_event = false;
         loop {
-            let held = Held::new(m, self.gaps, &self.active, &self.slides, &self.anchors);
+            let held = Held::new(
+                m,
+                self.gaps,
+                &self.active,
+                &self.slides,
+                &self.anchors,
+                &state,
+            );
             let started = if at_event {
                 GeneralizedAlpha::restarted(&held, state.clone(), opts.clone())
             } else {
@@ -1483,7 +1571,7 @@ impl<'g> ContactRun<'g> {
                 let prev = before.state().clone();
                 let f0 = held.forces(ga.multipliers());
                 let c0 = held.cone_margins(ga.multipliers());
-                let p0 = held.slip_speeds(&prev.v);
+                let p0 = held.slip_speeds(&prev);
                 if let Err(e) = ga.step_within(t_end) {
                     // At a fixed step, a step whose Newton fails (the
                     // violent elastic transient of a wire just after an
@@ -1505,7 +1593,7 @@ impl<'g> ContactRun<'g> {
                 let new = ga.state().clone();
                 let f1 = held.forces(ga.multipliers());
                 let c1 = held.cone_margins(ga.multipliers());
-                let p1 = held.slip_speeds(&new.v);
+                let p1 = held.slip_speeds(&new);
                 // The first crossing: an open gap falling through 0 on the
                 // step's interpolant, a held force falling through 0, a
                 // stick's force leaving the cone (`μ λ − ‖λ_t‖` falling

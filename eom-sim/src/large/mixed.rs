@@ -121,6 +121,15 @@ pub trait RigidPart {
         let _ = (t, q, u, out);
         false
     }
+    /// The generated `friction` at `(t, q, u)`, flat: the tangential
+    /// speeds `v_t1`, `v_t2`, then `γ_t1`, `γ_t2` (`v̇_t = W_t u̇ − γ_t`),
+    /// one each per contact, then the rows `W_t1` (`n` each, per contact)
+    /// and `W_t2`; `false` if it cannot be evaluated or the part has no
+    /// friction (every contact's `μ = 0`). `false` by default.
+    fn friction(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) -> bool {
+        let _ = (t, q, u, out);
+        false
+    }
     /// What can feed energy into the rigid part (an actuator, a force
     /// given as a function, a prescribed motion, a constraint that moves
     /// with time), named; `None` if nothing can: gravity and springs are in
@@ -251,6 +260,9 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> RigidPart for ByName<F> {
     }
     fn contacts(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) -> bool {
         !self.contact_names.is_empty() && self.call("contacts", t, q, u, out)
+    }
+    fn friction(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) -> bool {
+        !self.contact_names.is_empty() && self.call("friction", t, q, u, out)
     }
     fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
         let (n, nc, nh) = (self.n, self.nc_all, self.constraint_names.len());

@@ -395,11 +395,29 @@ impl Impacts for MixedModel<'_> {
         let own = Rows::of_contacts(nk, nr, &out);
         let mut w = DMatrix::zeros(nk, n);
         w.view_mut((0, ns), (nk, nr)).copy_from(&own.w);
-        Some(Rows {
+        let mut r = Rows {
             w,
             wt: DMatrix::zeros(2 * nk, n),
             ..own
-        })
+        };
+        // With friction, the tangential rows of the generated `friction`
+        // (a rough row without them cannot be evaluated).
+        if r.mu.iter().any(|&mu| mu != 0.0) {
+            let mut f = vec![0.0; nk * (4 + 2 * nr)];
+            if !self.rigid().friction(t, &y[ns..], &v[ns..], &mut f) {
+                return None;
+            }
+            for i in 0..nk {
+                for a in 0..2 {
+                    r.vt[i][a] = f[a * nk + i];
+                    r.gamma_t[i][a] = f[(2 + a) * nk + i];
+                    for k in 0..nr {
+                        r.wt[(2 * i + a, ns + k)] = f[4 * nk + a * nk * nr + i * nr + k];
+                    }
+                }
+            }
+        }
+        Some(r)
     }
     fn onto_constraints(&self, s: &mut State) -> Result<(), DynamicsError> {
         // Within a thousandth of the start's tolerance (`1e-8`): a state

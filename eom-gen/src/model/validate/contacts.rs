@@ -96,22 +96,6 @@ impl Ctx<'_> {
             };
             let e = self.coefficient(e, &join(&path, &[f("e")]), "`e`", name, 1.0);
             let mu = self.coefficient(mu, &join(&path, &[f("mu")]), "`mu`", name, f64::INFINITY);
-            // Beside cables, generalized-α holds a sustained contact at the
-            // position level: a node's sticking tangential coordinates,
-            // which a body's rolling or pivoting contact point lacks.
-            if let (Some(cable), Some(m)) = (spec.cables.first(), mu)
-                && m > 0.0
-            {
-                self.error(
-                    &join(&path, &[f("mu")]),
-                    format!(
-                        "contact `{name}` on a body has Coulomb friction (mu = {m}) in a model with cables (`{}`), whose runner holds a body's contacts frictionless",
-                        cable.name
-                    ),
-                    "give it `mu: 0`; friction works at cable nodes (`at: (body: CABLE, node: K)`) and at bodies' contacts in models without cables",
-                );
-                ok = false;
-            }
             let kind = match c {
                 spec::Contact::JointLimit {
                     joint,
