@@ -33,6 +33,13 @@
 //!   carries a hanging cable, its end node striking a floor — the loop's
 //!   rows and the attachment held together through every impulse, the
 //!   same Newton, energy and Carnot checks.
+//! - **Coulomb friction at a body's contact beside cables**: a block
+//!   beside the pendulum sticks on an incline for `tan θ < μ`, slides with
+//!   `g (sin θ − μ cos θ)` for `tan θ > μ`, and pushed along a floor stops
+//!   after `v₀²/(2 μ g)` at `v₀/(μ g)` (all to 1e-9), while the cable
+//!   strikes beside it; a block braking on a table with a rope hanging
+//!   from it is the same motion with the table's contact at the block or
+//!   at the rope's node pinned there.
 //! - **No event pulls**: every normal impulse is a push, `Λ ≥ 0`.
 
 use eom_gen::functions::FunctionSet;
@@ -809,4 +816,102 @@ fn a_block_beside_a_cable_sticks_slides_and_stops_by_coulomb() {
             );
         }
     }
+}
+
+/// A 1 kg block sliding on a table (a planar joint: x, y, angle) with a
+/// rope (Cable2D, 0.3 m, 3 elements) pinned at its centre and hanging
+/// through a slot in the table, pushed at 1 m/s; the table's contact,
+/// plastic with friction μ = 0.3, is `at` (the block's hook, or the
+/// rope's node 0 held there).
+fn block_with_a_rope(at: &str) -> String {
+    format!(
+        r#"Model(
+    name: "block_rope",
+    gravity: (0, -{G}, 0),
+    bodies: [(name: "block", mass: 1, inertia: Diag(0.01, 0.01, 0.01),
+              markers: [(name: "hook", position: (0, 0, 0))])],
+    joints: [(name: "p", kind: Planar, parent: "ground", child: "block", coordinates: ["x", "y", "a"], q0: [0, 0, 0], u0: [1, 0, 0])],
+    cables: [
+        Cable(name: "rope", element: Cable2D, from: (0, 0, 0), to: (0, -0.3, 0), elements: 3,
+              young: 1e8, density: 1000, area: 1e-4, second_moment: 1e-11,
+              damping_bending: 1e-4, start: Pinned, start_at: (body: "block", marker: "hook")),
+    ],
+    contacts: [Plane(name: "table", at: {at}, normal: (0, 1, 0), e: 0, mu: 0.3)],
+)"#
+    )
+}
+
+/// Friction at a body's contact whose motion the cable changes, against
+/// its twin at a cable node: the block with its rope (0.03 kg) slides on
+/// the table and the rope, swinging back as the block brakes, loads and
+/// pulls it until it stops. The table's contact at the block's hook (the
+/// rigid part's generated rows, its stick held step by step) and at the
+/// rope's node 0 pinned there (constant rows, its stick held at an
+/// anchor) are one contact on the attachment's manifold: the same events
+/// (rest, the slide's stop, any slip after it) at the same times, the
+/// same normal forces, the block at the same place; the stop near
+/// `v₀²/(2 μ g)` (the rope's swing changes the normal force by a few
+/// per cent).
+#[test]
+fn a_block_braking_with_its_rope_by_friction_is_its_pinned_nodes_twin() {
+    let r = run(0.6, 1e-3, 0.8);
+    let body = simulate(&block_with_a_rope(r#"(body: "block", marker: "hook")"#), &r);
+    let node = simulate(&block_with_a_rope(r#"(body: "rope", node: 0)"#), &r);
+    for (label, rep) in [("hook", &body), ("node 0", &node)] {
+        assert!(
+            matches!(rep.stop, eom_sim::Stop::Finished),
+            "{label}: {:?}",
+            rep.stop
+        );
+        energy_never_rises(rep, label);
+        let kinds: Vec<_> = rep.contact_events.iter().map(|e| (e.kind, e.t)).collect();
+        println!("{label}: x = {:.9} m, events {kinds:?}", rep.q[0]);
+    }
+    assert_eq!(
+        body.contact_events.len(),
+        node.contact_events.len(),
+        "the same events"
+    );
+    for (b, n) in body.contact_events.iter().zip(&node.contact_events) {
+        assert_eq!(b.kind, n.kind, "at {} s", b.t);
+        assert!(
+            (b.t - n.t).abs() < 1e-7,
+            "{:?} at {} s and {} s",
+            b.kind,
+            b.t,
+            n.t
+        );
+    }
+    assert!(
+        body.contact_events
+            .iter()
+            .any(|e| e.kind == ContactEventKind::Stick),
+        "the block stops"
+    );
+    let stop = 1.0 / (2.0 * 0.3 * G);
+    assert!(
+        (body.q[0] - stop).abs() < 0.1 * stop,
+        "stopped at {} m, near v0²/(2 μ g) = {stop} m",
+        body.q[0]
+    );
+    assert!(
+        (body.q[0] - node.q[0]).abs() < 1e-9 && (body.q[1] - node.q[1]).abs() < 1e-9,
+        "x {} and {}, y {} and {}",
+        body.q[0],
+        node.q[0],
+        body.q[1],
+        node.q[1]
+    );
+    let force = |r: &eom_sim::RunReport| {
+        let el = r.elements.as_ref().expect("element report");
+        let [held] = el.contact_forces.as_slice() else {
+            panic!("the block rests on the table: {:?}", el.contact_forces);
+        };
+        held.force
+    };
+    let (fb, fnode) = (force(&body), force(&node));
+    assert!(
+        fb > 0.0 && (fb - fnode).abs() <= 1e-6 * fnode,
+        "{fb} N and {fnode} N"
+    );
 }

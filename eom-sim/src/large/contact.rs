@@ -45,13 +45,17 @@
 //!
 //! **The rigid part's own contacts** (joint limits, markers and spheres
 //! against planes, spheres: [`Impacts::body_rows`], from the generated
-//! `contacts`) come after the node rows in the same run, frictionless.
-//! Their rows are not constant: they are evaluated at each state (gaps,
-//! speeds, `γ` of `g̈ = wᵀ a − γ`), and while one is held [`Held`]
-//! re-evaluates its `g` and `w` at every Newton iterate (the change of `w`
-//! with `y` times the force left out of the matrix). A closing gap is
-//! located as a node's: its value on the step's cubic Hermite interpolant
-//! of the state, then on the retaken steps.
+//! `contacts` and, with friction, `friction`) come after the node rows in
+//! the same run. Their rows are not constant: they are evaluated at each
+//! state (gaps, speeds, `γ` of `g̈ = wᵀ a − γ`, and the tangential `v_t`,
+//! `γ_t`, `W_t`), and while one is held [`Held`] re-evaluates its `g` and
+//! `w` at every Newton iterate (the change of `w` with `y` times the force
+//! left out of the matrix). A sliding one has `w − μ sᵀ W_t` in its force
+//! column; a sticking one holds its tangential rows step by step,
+//! `W_t(y)·(y − y_n) = 0` from the step's start `y_n` (they need not be
+//! the gradient of a position: a rolling or pivoting contact point). A
+//! closing gap is located as a node's: its value on the step's cubic
+//! Hermite interpolant of the state, then on the retaken steps.
 //!
 //! Not here: a sliding row's direction is not differentiated in
 //! generalized-α's Newton matrix (exact for a slide along a fixed
