@@ -289,7 +289,10 @@ pub fn simulate_cmd(
             .map(|k| format!("y{k}"))
             .chain(rigid.iter().map(|s| s.to_string()))
             .collect();
-        eom_sim::run::events_table(&rows, &speeds, &[], false, &report.contact_events)
+        // With friction at any contact, every row's tangential impulses.
+        let rough = sys.cable_contacts.iter().any(|c| c.mu > 0.0)
+            || eom_gen::mech::contacts::has_friction(sys);
+        eom_sim::run::events_table(&rows, &speeds, &[], rough, &report.contact_events)
             .write(path)
             .map_err(|e| Error::io(path, e))?;
     }

@@ -993,3 +993,72 @@ fn statics_and_linearize_refuse_an_equilibrium_through_a_contact() {
         }
     }
 }
+
+/// A block braking by Coulomb friction on a table (a rigid body's
+/// contact, `mu: 0.3`) with a rope hanging from it, through the CLI: the
+/// run finishes, the block's stop is a `stick` event in the JSON report
+/// with the block at rest after it, and the events CSV carries every
+/// contact row's tangential impulses (`table.impulse_t1`, `…_t2`) as the
+/// rigid runtime's does — the stick's own among them.
+#[test]
+fn simulate_reports_the_stick_of_a_body_braking_beside_a_cable() {
+    let path = write(
+        "block_rope.ron",
+        r#"Model(
+    name: "block_rope",
+    gravity: (0, -9.81, 0),
+    bodies: [(name: "block", mass: 1, inertia: Diag(0.01, 0.01, 0.01),
+              markers: [(name: "hook", position: (0, 0, 0))])],
+    joints: [(name: "p", kind: Planar, parent: "ground", child: "block", coordinates: ["x", "y", "a"], q0: [0, 0, 0], u0: [1, 0, 0])],
+    cables: [
+        Cable(name: "rope", element: Cable2D, from: (0, 0, 0), to: (0, -0.3, 0), elements: 3,
+              young: 1e8, density: 1000, area: 1e-4, second_moment: 1e-11,
+              damping_bending: 1e-4, start: Pinned, start_at: (body: "block", marker: "hook")),
+    ],
+    contacts: [Plane(name: "table", at: (body: "block", marker: "hook"), normal: (0, 1, 0), e: 0, mu: 0.3)],
+)"#,
+    );
+    let (r, events) = simulate_file_with_events(&path, "block_rope", "0.6");
+    let ev = r["contact_events"].as_array().expect("contact events");
+    let stick = ev
+        .iter()
+        .find(|e| e["kind"] == "stick")
+        .unwrap_or_else(|| panic!("the block stops: {ev:?}"));
+    let t = stick["t"].as_f64().unwrap_or(f64::NAN);
+    assert!(t > 0.2 && t < 0.4, "stops at {t} s (v0/(μ g) = 0.34 s)");
+    assert_eq!(stick["contacts"][0]["contact"], "table");
+    let lt = stick["contacts"][0]["tangential_impulse"][0]
+        .as_f64()
+        .unwrap_or(f64::NAN);
+    let csv = std::fs::read_to_string(events).expect("the events CSV");
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap_or_default().split(',').collect();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("no column {name}: {header:?}"))
+    };
+    let (kind, t1) = (col("kind"), col("table.impulse_t1"));
+    col("table.impulse_t2");
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap_or(f64::NAN)).collect())
+        .collect();
+    assert_eq!(rows.len(), ev.len(), "one row per event");
+    let stick_row = rows
+        .iter()
+        .find(|r| r[kind] == 3.0)
+        .expect("the stick's row");
+    assert!(
+        lt != 0.0 && (stick_row[t1] - lt).abs() <= 1e-12 * lt.abs(),
+        "the stick's Λ_t1: {} in the CSV, {lt} in the report",
+        stick_row[t1]
+    );
+    let u = r["u"].as_array().expect("speeds");
+    assert!(
+        u.iter()
+            .take(3)
+            .all(|x| x.as_f64().is_some_and(|x| x.abs() < 1e-9)),
+        "the block at rest at the end: {u:?}"
+    );
+}
