@@ -1042,7 +1042,11 @@ fn simulate_reports_the_stick_of_a_body_braking_beside_a_cable() {
     let (kind, t1) = (col("kind"), col("table.impulse_t1"));
     col("table.impulse_t2");
     let rows: Vec<Vec<f64>> = lines
-        .map(|l| l.split(',').map(|x| x.parse().unwrap_or(f64::NAN)).collect())
+        .map(|l| {
+            l.split(',')
+                .map(|x| x.parse().unwrap_or(f64::NAN))
+                .collect()
+        })
         .collect();
     assert_eq!(rows.len(), ev.len(), "one row per event");
     let stick_row = rows

@@ -521,14 +521,51 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
                     .map(|a| (base + a, d[a]))
                     .collect()
             };
-            let n = c.normal;
+            let coords = |layout: &MixedCable, node: usize| -> Vec<usize> {
+                let base = layout.offset + node * layout.node_coords;
+                (0..layout.dim.min(3)).map(|a| base + a).collect()
+            };
+            let (point, n) = match &c.against {
+                crate::system::CableTarget::Plane { point, normal } => (*point, *normal),
+                other => {
+                    // A sphere: rows evaluated per state by the runtime.
+                    let (b, centre) = match other {
+                        crate::system::CableTarget::Node { cable, node } => {
+                            (coords(cables.get(*cable)?, *node), [0.0; 3])
+                        }
+                        crate::system::CableTarget::Sphere { centre } => (Vec::new(), *centre),
+                        crate::system::CableTarget::Plane { .. } => (Vec::new(), [0.0; 3]),
+                    };
+                    let reference = (layout.dim != 2).then(|| {
+                        let mut a = [0.0; 3];
+                        let line = c.line_at_start(sys).unwrap_or([0.0, 0.0, 1.0]);
+                        a[crate::mech::contacts::least_aligned_axis(line)] = 1.0;
+                        a
+                    });
+                    return Some(eom_sim::large::NodeContact {
+                        name: c.name.clone(),
+                        row: Vec::new(),
+                        level: 0.0,
+                        e: c.e,
+                        mu: c.mu,
+                        tangents: [Vec::new(), Vec::new()],
+                        sphere: Some(eom_sim::large::NodeSphere {
+                            a: coords(layout, c.node),
+                            b,
+                            centre,
+                            radius: c.radius,
+                            reference,
+                        }),
+                    });
+                }
+            };
             let [t1, t2] = if layout.dim == 2 {
                 [[n[1], -n[0], 0.0], [0.0, 0.0, -1.0]]
             } else {
                 crate::mech::contacts::tangent_axes(n)
             };
-            let row = (0..layout.dim).map(|a| (base + a, c.normal[a])).collect();
-            let level = (0..3).map(|a| c.normal[a] * c.point[a]).sum::<f64>() + c.radius;
+            let row = (0..layout.dim).map(|a| (base + a, n[a])).collect();
+            let level = (0..3).map(|a| n[a] * point[a]).sum::<f64>() + c.radius;
             Some(eom_sim::large::NodeContact {
                 name: c.name.clone(),
                 row,
@@ -536,6 +573,7 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
                 e: c.e,
                 mu: c.mu,
                 tangents: [along(t1), along(t2)],
+                sphere: None,
             })
         })
         .collect()

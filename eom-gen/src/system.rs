@@ -672,7 +672,9 @@ pub struct System {
 }
 
 /// A cable node (a point, or a sphere of `radius` about it) against a plane
-/// fixed in the world: `g = n·(x_node − point) − radius`.
+/// fixed in the world, `g = n·(x_node − point) − radius`, or against a
+/// sphere fixed in the world or about another node,
+/// `g = ‖x_node − x_other‖ − radius` ([`CableTarget`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct CableContactInfo {
     /// Name.
@@ -681,18 +683,80 @@ pub struct CableContactInfo {
     pub cable: usize,
     /// Its node, `0..=elements`.
     pub node: usize,
-    /// Radius of the sphere about the node, m.
+    /// Radius of the sphere about the node (for spheres, the sum of both
+    /// radii), m.
     pub radius: f64,
-    /// A point of the plane, world axes, m.
-    pub point: [f64; 3],
-    /// The plane's unit normal towards the free side.
-    pub normal: [f64; 3],
+    /// What the node touches.
+    pub against: CableTarget,
     /// Newton's coefficient of restitution.
     pub e: f64,
     /// Coulomb's friction coefficient, `μ ≥ 0` (0: frictionless).
     pub mu: f64,
     /// Where it is defined.
     pub span: Span,
+}
+
+impl CableContactInfo {
+    /// The node's position at the start (the cable straight from `from`
+    /// to `to`) and the other centre's (a plane's point for a plane).
+    fn centres_at_start(&self, sys: &System) -> Option<([f64; 3], [f64; 3])> {
+        let x = sys.cable_node_start(self.cable, self.node)?;
+        let other = match &self.against {
+            CableTarget::Plane { point, .. } => *point,
+            CableTarget::Sphere { centre } => *centre,
+            CableTarget::Node { cable, node } => sys.cable_node_start(*cable, *node)?,
+        };
+        Some((x, other))
+    }
+
+    /// The gap at the start, m (`None` for a cable or node the model does
+    /// not have).
+    pub fn gap_at_start(&self, sys: &System) -> Option<f64> {
+        let (x, o) = self.centres_at_start(sys)?;
+        let d: [f64; 3] = std::array::from_fn(|k| x[k] - o[k]);
+        Some(match &self.against {
+            CableTarget::Plane { normal, .. } => {
+                (0..3).map(|k| normal[k] * d[k]).sum::<f64>() - self.radius
+            }
+            _ => d.iter().map(|x| x * x).sum::<f64>().sqrt() - self.radius,
+        })
+    }
+
+    /// The line of centres at the start, from the other centre to the
+    /// node (the plane's normal for a plane).
+    pub fn line_at_start(&self, sys: &System) -> Option<[f64; 3]> {
+        if let CableTarget::Plane { normal, .. } = &self.against {
+            return Some(*normal);
+        }
+        let (x, o) = self.centres_at_start(sys)?;
+        Some(std::array::from_fn(|k| x[k] - o[k]))
+    }
+}
+
+/// What a cable node's contact touches.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CableTarget {
+    /// A plane fixed in the world: a point of it (world axes, m) and its
+    /// unit normal towards the free side.
+    Plane {
+        /// A point of the plane, m.
+        point: [f64; 3],
+        /// The unit normal.
+        normal: [f64; 3],
+    },
+    /// A sphere fixed in the world (`Spheres` with `b` on the ground),
+    /// centred at `centre` (world axes, m).
+    Sphere {
+        /// The centre, m.
+        centre: [f64; 3],
+    },
+    /// A sphere about another cable node (`Spheres` with both at nodes).
+    Node {
+        /// The other cable (index into `System::cables`).
+        cable: usize,
+        /// Its node.
+        node: usize,
+    },
 }
 
 /// What a unilateral contact's gap measures.
@@ -883,6 +947,16 @@ impl System {
             .enumerate()
             .flat_map(|(c, k)| k.rows().into_iter().map(move |r| (c, r)))
             .collect()
+    }
+
+    /// Node `node` of cable `cable` at the start (the cable straight from
+    /// its `from` to its `to`), world axes, m.
+    pub fn cable_node_start(&self, cable: usize, node: usize) -> Option<[f64; 3]> {
+        let ch = &self.cables.get(cable)?.chain;
+        let s = node as f64 / ch.elements.max(1) as f64;
+        Some(std::array::from_fn(|a| {
+            ch.start[a] + s * (ch.end[a] - ch.start[a])
+        }))
     }
 
     /// The cable ends held at markers of rigid bodies, in order (cable by

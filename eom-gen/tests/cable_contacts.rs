@@ -34,6 +34,12 @@
 //!   turned by θ, tan θ = 0.3 < μ) the nodes stick and slip in turn as the
 //!   spans sag and the wire vibrates, each slip's stick force on the cone,
 //!   no event gaining energy, and the wire only creeps.
+//! - **Spheres at nodes**: a falling wire's middle node (a sphere) striking
+//!   a fixed sphere at its top, at `t₁ = √(2h/g)` with
+//!   `Λ = (1 + e)|ġ⁻|/(wᵀ M⁻¹ w)` and Carnot's energy, the same impact as
+//!   the tangent plane's (with friction too: Newton–Coulomb's impulses),
+//!   and the same run as a sphere about a node pinned at that centre;
+//!   two cables' end nodes striking head-on, `wᵀ M⁻¹ w` over both.
 //! - **No event pulls**: in every run of this file every normal impulse
 //!   is a push, `Λ ≥ 0` (a rest's plastic impulse with `Λ < 0` would
 //!   mean the contact separates).
@@ -785,5 +791,391 @@ fn a_wire_with_its_weight_distributed_inside_the_friction_angle_creeps_by_stick_
             creep.abs() < 1e-4,
             "node {k} crept {creep} m inside the friction angle"
         );
+    }
+}
+
+/// The wire of [`wire_drop`] (4 elements, at `H0`, no contacts of its
+/// own) with its middle node (x = 0.5) a sphere of radius 0.01 above
+/// `target`'s contact `touch`: a fixed sphere of radius 0.05 centred at
+/// (0.5, −0.05, 0) (its top at y = 0), the same sphere about node 0 of a
+/// stub pinned there (its node fixed, the rest hanging free below), or
+/// the plane y = 0 under that node alone. The node strikes each at the
+/// same point with the same normal (0, 1, 0).
+fn wire_on_a_sphere(target: &str, e: f64) -> String {
+    wire_on_a_sphere_with(target, e, "", ("", 0.0))
+}
+
+/// [`wire_on_a_sphere`] with `contact` appended to the contact's fields
+/// and `cable` to the wire's, the wire starting `shift` m to the left.
+fn wire_on_a_sphere_with(
+    target: &str,
+    e: f64,
+    contact: &str,
+    (cable, shift): (&str, f64),
+) -> String {
+    let (x0, x1) = (-shift, 1.0 - shift);
+    let (stub, touch) = match target {
+        "sphere" => (
+            "",
+            format!(
+                r#"Spheres(name: "touch", a: (body: "wire", node: 2), b: (body: "ground", point: (0.5, -0.05, 0)), radius_a: 0.01, radius_b: 0.05, e: {e}{contact})"#
+            ),
+        ),
+        "node" => (
+            r#",
+        Cable(name: "stub", element: Cable2D, from: (0.5, -0.05, 0), to: (0.5, -0.25, 0),
+        elements: 2, young: 2e9, density: 7850, area: 8e-6, second_moment: 5e-12, start: Pinned)"#,
+            format!(
+                r#"Spheres(name: "touch", a: (body: "wire", node: 2), b: (body: "stub", node: 0), radius_a: 0.01, radius_b: 0.05, e: {e}{contact})"#
+            ),
+        ),
+        _ => (
+            "",
+            format!(
+                r#"Plane(name: "touch", at: (body: "wire", node: 2), radius: 0.01, normal: (0, 1, 0), e: {e}{contact})"#
+            ),
+        ),
+    };
+    format!(
+        r#"Model(
+    name: "wire_on_a_sphere",
+    gravity: (0, -9.81, 0),
+    bodies: [],
+    joints: [],
+    cables: [Cable(name: "wire", element: Cable2D, from: ({x0}, {H0}, 0), to: ({x1}, {H0}, 0),
+        elements: 4, young: 2e9, density: 7850, area: 8e-6, second_moment: 5e-12,
+        damping_bending: 2e-4, start: Free{cable}){stub}],
+    contacts: [{touch}],
+)"#
+    )
+}
+
+/// A cable node's sphere against a sphere (issue #26: spheres at the
+/// nodes of flexible bodies). The free wire falls flat and its middle
+/// node strikes a fixed sphere at its top: at `t₁ = √(2h/g)`,
+/// `h = H0 − 0.01`, with `ġ⁻ = −√(2gh)` (free fall, exact for
+/// generalized-α), `ġ⁺ = −e ġ⁻`, the impulse `Λ = (1 + e)|ġ⁻|/(wᵀ M⁻¹ w)`
+/// with `w` the node's y coordinate and `M⁻¹` inverted here, and Carnot's
+/// energy `½ (1 − e²) ġ⁻²/(wᵀ M⁻¹ w)`; the plane tangent to the sphere
+/// there gives the same impact. Afterwards the wire pivots on the sphere
+/// (the normal turns with the node: the row is evaluated at every state,
+/// `γ = −ṅ·v`), hops and slides off; the same sphere about node 0 of a
+/// stub pinned at its centre is the same contact over the whole run
+/// (a node's fixed coordinates stand for the centre): the same events at
+/// the same times and impulses. No event raises the energy.
+#[test]
+fn a_wire_striking_a_sphere_at_a_node_obeys_newton_and_carnot() {
+    let e = 0.5;
+    let r = run(0.5, 1e-3, 0.8);
+    let (sphere, model, cables) = simulate(&wire_on_a_sphere("sphere", e), &r);
+    let (plane, _, _) = simulate(&wire_on_a_sphere("plane", e), &r);
+    let (node, _, _) = simulate(&wire_on_a_sphere("node", e), &r);
+    for (label, rep) in [("sphere", &sphere), ("plane", &plane), ("node", &node)] {
+        assert!(
+            matches!(rep.stop, eom_sim::Stop::Finished),
+            "{label}: {:?}",
+            rep.stop
+        );
+        let e0 = rep.contact_events.first().map_or(0.0, |e| e.energy_before);
+        for ev in &rep.contact_events {
+            assert!(
+                ev.energy_after <= ev.energy_before + 1e-12 * e0.abs().max(1.0),
+                "{label}: {:?} at {} raises the energy {} → {}",
+                ev.kind,
+                ev.t,
+                ev.energy_before,
+                ev.energy_after
+            );
+        }
+    }
+    let h = H0 - 0.01;
+    let (t1, v1) = ((2.0 * h / G).sqrt(), (2.0 * G * h).sqrt());
+    let first = |rep: &eom_sim::RunReport| rep.contact_events[0].clone();
+    let ev = first(&sphere);
+    assert_eq!(ev.kind, ContactEventKind::Impact);
+    assert!((ev.t - t1).abs() < 1e-9, "impact at {}, want {t1}", ev.t);
+    let c = &ev.contacts[0];
+    assert!(
+        (c.speed_before + v1).abs() < 1e-8,
+        "ġ⁻ = {}",
+        c.speed_before
+    );
+    assert!(
+        (c.speed_after + e * c.speed_before).abs() < 1e-9,
+        "ġ⁺ = {}",
+        c.speed_after
+    );
+    let minv = dense_mass(&model).try_inverse().expect("M is invertible");
+    let k = free(&model, &cables[0], 2, 1);
+    let want = (1.0 + e) * c.speed_before.abs() / minv[(k, k)];
+    assert!(
+        (c.impulse - want).abs() < 1e-9 * want,
+        "Λ = {}, want (1 + e)|ġ⁻|/(wᵀ M⁻¹ w) = {want}",
+        c.impulse
+    );
+    let carnot = 0.5 * (1.0 - e * e) * c.speed_before.powi(2) / minv[(k, k)];
+    let lost = ev.energy_before - ev.energy_after;
+    assert!(
+        (lost - carnot).abs() < 1e-9 * carnot,
+        "lost {lost}, want Carnot's {carnot}"
+    );
+    let p = first(&plane);
+    assert!(
+        (p.t - ev.t).abs() < 1e-12 && (p.contacts[0].impulse - c.impulse).abs() < 1e-12 * want,
+        "the tangent plane's impact: {} s, {} N s",
+        p.t,
+        p.contacts[0].impulse
+    );
+    // The sphere's run goes on differently from the plane's: the wire
+    // pivots off the sphere.
+    assert!(
+        sphere.contact_events.len() >= 2,
+        "{:?}",
+        sphere.contact_events
+    );
+    assert_eq!(
+        sphere.contact_events.len(),
+        node.contact_events.len(),
+        "the fixed sphere and the pinned node: the same events"
+    );
+    for (a, b) in sphere.contact_events.iter().zip(&node.contact_events) {
+        assert_eq!(a.kind, b.kind, "at {}", a.t);
+        assert!(
+            (a.t - b.t).abs() < 1e-9,
+            "{:?} at {} and {}",
+            a.kind,
+            a.t,
+            b.t
+        );
+        let (x, y) = (a.contacts[0].impulse, b.contacts[0].impulse);
+        assert!(
+            (x - y).abs() <= 1e-9 * want,
+            "{:?} at {}: Λ {x} and {y}",
+            a.kind,
+            a.t
+        );
+    }
+    println!(
+        "sphere: {:?}",
+        sphere
+            .contact_events
+            .iter()
+            .map(|e| (e.kind, e.t, e.contacts[0].impulse))
+            .collect::<Vec<_>>()
+    );
+}
+
+/// Two free wires (Cable2D, 0.5 m each, steel) on one line, without
+/// gravity: `a` moving along it at 1 m/s, `b` at rest, the end node of
+/// `a` and the start node of `b` spheres of 0.01 m, 0.03 m apart.
+fn wires_head_on(e: f64, mu: f64) -> String {
+    format!(
+        r#"Model(
+    name: "wires_head_on",
+    gravity: (0, 0, 0),
+    bodies: [],
+    joints: [],
+    cables: [
+        Cable(name: "a", element: Cable2D, from: (-0.55, 0, 0), to: (-0.05, 0, 0), elements: 2,
+              young: 2e9, density: 7850, area: 8e-6, second_moment: 5e-12, start: Free, velocity: (1, 0, 0)),
+        Cable(name: "b", element: Cable2D, from: (0, 0, 0), to: (0.5, 0, 0), elements: 2,
+              young: 2e9, density: 7850, area: 8e-6, second_moment: 5e-12, start: Free),
+    ],
+    contacts: [Spheres(name: "knock", a: (body: "a", node: 2), b: (body: "b", node: 0), radius_a: 0.01, radius_b: 0.01, e: {e}, mu: {mu})],
+)"#
+    )
+}
+
+/// Two cables' nodes striking head-on (both moving after the impact):
+/// at `t = 0.03 s` (the gap over the speed), `ġ⁻ = −1 m/s`, the impulse
+/// `Λ = (1 + e)|ġ⁻|/(wᵀ M⁻¹ w)` with `w = +1` on `a`'s end x and `−1` on
+/// `b`'s start x (so `wᵀ M⁻¹ w = M⁻¹_aa + M⁻¹_bb − 2 M⁻¹_ab`, `M⁻¹`
+/// inverted here), Carnot's energy lost, `ġ⁺ = −e ġ⁻`; with `e = 1` the
+/// energy is kept through the impact. With friction (μ = 0.3) a head-on
+/// impact has no tangential speed and takes no tangential impulse.
+#[test]
+fn two_cables_nodes_strike_head_on_by_the_generalised_newton_law() {
+    for (e, mu) in [(0.5, 0.0), (1.0, 0.0), (0.5, 0.3)] {
+        let (rep, model, cables) = simulate(&wires_head_on(e, mu), &run(0.1, 1e-3, 0.8));
+        assert!(
+            matches!(rep.stop, eom_sim::Stop::Finished),
+            "e = {e}, μ = {mu}: {:?}",
+            rep.stop
+        );
+        let ev = &rep.contact_events[0];
+        assert_eq!(ev.kind, ContactEventKind::Impact);
+        assert!((ev.t - 0.03).abs() < 1e-9, "impact at {}", ev.t);
+        let c = &ev.contacts[0];
+        assert!(
+            (c.speed_before + 1.0).abs() < 1e-9,
+            "ġ⁻ = {}",
+            c.speed_before
+        );
+        assert!(
+            (c.speed_after - e).abs() < 1e-9,
+            "ġ⁺ = {}, want {e}",
+            c.speed_after
+        );
+        let minv = dense_mass(&model).try_inverse().expect("M is invertible");
+        let (ka, kb) = (
+            free(&model, &cables[0], 2, 0),
+            free(&model, &cables[1], 0, 0),
+        );
+        let wmw = minv[(ka, ka)] + minv[(kb, kb)] - 2.0 * minv[(ka, kb)];
+        let want = (1.0 + e) / wmw;
+        assert!(
+            (c.impulse - want).abs() < 1e-9 * want,
+            "e = {e}: Λ = {}, want {want}",
+            c.impulse
+        );
+        let lost = ev.energy_before - ev.energy_after;
+        let carnot = 0.5 * (1.0 - e * e) / wmw;
+        assert!(
+            (lost - carnot).abs() < 1e-9 * ev.energy_before,
+            "e = {e}: lost {lost}, want Carnot's {carnot}"
+        );
+        assert!(
+            c.tangential_impulse.iter().all(|x| x.abs() < 1e-12 * want),
+            "head-on: no tangential impulse, {:?}",
+            c.tangential_impulse
+        );
+    }
+}
+
+/// Coulomb friction at a node's sphere: the wire of
+/// [`wire_on_a_sphere`] falling while it moves sideways at 0.5 m/s onto
+/// the fixed sphere with μ = 0.3, e = 0.5. At the sphere's top its tangent
+/// plane is the floor y = 0, so the impact is Newton–Coulomb's on that
+/// plane: the same normal and tangential impulses as the plane twin (to
+/// 1e-12 of the normal one), the tangential one in the cone `‖Λ_t‖ ≤ μ Λ`
+/// and against the slide; then the node slides over the curving sphere
+/// (its tangent axis `t1 = n × z` turning with the line of centres) and
+/// no event raises the energy.
+#[test]
+fn a_sliding_wire_striking_a_sphere_takes_coulombs_impulse_at_the_node() {
+    let (e, mu) = (0.5, 0.3);
+    let r = run(0.4, 1e-3, 0.8);
+    // Started to the left by what it slides until it strikes.
+    let shift = 0.5 * (2.0 * (H0 - 0.01) / G).sqrt();
+    let text = |target: &str| {
+        wire_on_a_sphere_with(
+            target,
+            e,
+            &format!(", mu: {mu}"),
+            (", velocity: (0.5, 0, 0)", shift),
+        )
+    };
+    let (sphere, _, _) = simulate(&text("sphere"), &r);
+    let (plane, _, _) = simulate(&text("plane"), &r);
+    for (label, rep) in [("sphere", &sphere), ("plane", &plane)] {
+        assert!(
+            matches!(rep.stop, eom_sim::Stop::Finished),
+            "{label}: {:?}",
+            rep.stop
+        );
+        for ev in &rep.contact_events {
+            assert!(
+                ev.energy_after <= ev.energy_before + 1e-12,
+                "{label}: {:?} at {} raises the energy",
+                ev.kind,
+                ev.t
+            );
+        }
+    }
+    let (a, b) = (&sphere.contact_events[0], &plane.contact_events[0]);
+    assert_eq!(a.kind, ContactEventKind::Impact);
+    let (ca, cb) = (&a.contacts[0], &b.contacts[0]);
+    assert!(
+        ca.tangential_speed_before[0].abs() > 0.4,
+        "sliding in: {ca:?}"
+    );
+    let lt = ca.tangential_impulse[0].hypot(ca.tangential_impulse[1]);
+    assert!(
+        lt > 0.0 && lt <= mu * ca.impulse * (1.0 + 1e-12),
+        "cone: {ca:?}"
+    );
+    assert!(
+        ca.tangential_impulse[0] * ca.tangential_speed_before[0] < 0.0,
+        "against the slide: {ca:?}"
+    );
+    let tol = 1e-12 * ca.impulse;
+    assert!(
+        (a.t - b.t).abs() < 1e-12
+            && (ca.impulse - cb.impulse).abs() < tol
+            && (ca.tangential_impulse[0] - cb.tangential_impulse[0]).abs() < tol,
+        "sphere {ca:?}\nplane {cb:?}"
+    );
+    println!(
+        "sliding onto the sphere: {:?}",
+        sphere
+            .contact_events
+            .iter()
+            .map(|e| (e.kind, e.t))
+            .collect::<Vec<_>>()
+    );
+}
+
+/// A node's sphere is refused, at its field, where it cannot be run: its
+/// node given as `b` only, against a body's sphere (the cable runtime
+/// evaluates node rows), about the same node twice, at a node the cable
+/// does not have, and inside the other sphere at the start (with the
+/// penetration and what opens it).
+#[test]
+fn node_spheres_refused_with_their_locations() {
+    let text = wire_on_a_sphere("sphere", 0.5);
+    assert_eq!(diagnose(&text), "valid");
+    assert_eq!(diagnose(&wire_on_a_sphere("node", 0.5)), "valid");
+    let swap = text.replace(
+        r#"a: (body: "wire", node: 2), b: (body: "ground", point: (0.5, -0.05, 0))"#,
+        r#"a: (body: "ground", point: (0.5, -0.05, 0)), b: (body: "wire", node: 2)"#,
+    );
+    let out = diagnose(&swap);
+    assert!(
+        out.contains("contact `touch` has its cable node as `b`") && out.contains("as `a`"),
+        "{out}"
+    );
+    let body = text
+        .replace(
+            "bodies: [],",
+            r#"bodies: [(name: "ball", mass: 1, inertia: Diag(1, 1, 1))],"#,
+        )
+        .replace(
+            "joints: [],",
+            r#"joints: [(name: "j", kind: Planar, parent: "ground", child: "ball")],"#,
+        )
+        .replace(
+            r#"b: (body: "ground", point: (0.5, -0.05, 0))"#,
+            r#"b: (body: "ball")"#,
+        );
+    let out = diagnose(&body);
+    assert!(
+        out.contains("puts cable node 2's sphere against a sphere on body `ball`"),
+        "{out}"
+    );
+    let twice = text.replace(
+        r#"b: (body: "ground", point: (0.5, -0.05, 0))"#,
+        r#"b: (body: "wire", node: 2)"#,
+    );
+    let out = diagnose(&twice);
+    assert!(
+        out.contains("both spheres of contact `touch` are about node 2"),
+        "{out}"
+    );
+    let far = text.replace(
+        r#"a: (body: "wire", node: 2)"#,
+        r#"a: (body: "wire", node: 9)"#,
+    );
+    let out = diagnose(&far);
+    assert!(out.contains("whose nodes are 0..=4"), "{out}");
+    let inside = text.replace("radius_b: 0.05", "radius_b: 0.3");
+    let out = diagnose(&inside);
+    assert!(
+        out.contains("node 2 of cable `wire` penetrates the fixed sphere by 6.000000e-2 m")
+            && out.contains("away from the sphere's centre"),
+        "{out}"
+    );
+    for out in [&swap, &body, &twice, &far, &inside].map(|t| diagnose(t)) {
+        assert!(out.contains("models/drop.ron:"), "located: {out}");
+        assert_eq!(out.matches("error:").count(), 1, "{out}");
     }
 }

@@ -1,7 +1,10 @@
 //! Contacts at the nodes of cables (issue #26) on the vector runtime: a
 //! cable node (a point, or a sphere about it) against a plane fixed in the
-//! world. The gap is linear in the node's position coordinates,
-//! `g = n·x_j − n·p − r`, so its row `w = ∂g/∂y` is constant and exact.
+//! world — the gap is linear in the node's position coordinates,
+//! `g = n·x_j − n·p − r`, so its row `w = ∂g/∂y` is constant and exact —
+//! or a sphere about a node against a sphere fixed in the world or about
+//! another node ([`NodeSphere`]: `g = ‖x_a − x_b‖ − r`, its row `±n`
+//! evaluated at every state).
 //!
 //! The run is the one contact run of `crate::run::contact`, written over
 //! the vector state: the same [`ContactEvent`]s, the same impact map
@@ -92,13 +95,152 @@ pub struct NodeContact {
     /// position coordinates, as `row` (an empty row: no coordinate along
     /// that axis, as `t2 = z` of a planar cable).
     pub tangents: [Vec<(usize, f64)>; 2],
+    /// A sphere about the node against a sphere fixed in the world or
+    /// about another node (`Spheres`); `None` for a plane (`row`, `level`
+    /// and `tangents`, which a sphere leaves empty).
+    pub sphere: Option<NodeSphere>,
+}
+
+/// The sphere of a [`NodeContact`]: `g = ‖x_a − x_b‖ − radius` with
+/// `x_a` the node's position and `x_b` another node's or a fixed centre,
+/// normal `n = (x_a − x_b)/‖x_a − x_b‖` (from `b` to `a`). Not constant:
+/// the run evaluates its rows at every state (`w = ±n` on the two nodes'
+/// coordinates, `γ = −ṅ·(ẋ_a − ẋ_b)`), as a rigid body's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeSphere {
+    /// The node's position coordinates, one per axis (2 for a planar
+    /// cable, 3), as full structural indices.
+    pub a: Vec<usize>,
+    /// The other node's, the same way; empty: a sphere fixed in the world
+    /// at `centre`.
+    pub b: Vec<usize>,
+    /// The fixed sphere's centre, world axes, m (with `b` empty).
+    pub centre: [f64; 3],
+    /// The sum of both radii, m.
+    pub radius: f64,
+    /// The world axis the friction's tangent axes are taken from in
+    /// space, `t1 = (a − (a·n) n)/‖a − (a·n) n‖`, `t2 = n × t1` (the axis
+    /// least aligned with the line of centres at the start, as for rigid
+    /// spheres); `None` for planar cables, whose `t1 = n × z` turns in
+    /// their plane (`t2 = z` has no coordinate).
+    pub reference: Option<[f64; 3]>,
+}
+
+/// A [`NodeSphere`] on a model's free coordinates: per axis the free index
+/// of the coordinate, or its fixed value.
+#[derive(Clone, Debug)]
+struct SphereRow {
+    a: Vec<(Option<usize>, f64)>,
+    b: Vec<(Option<usize>, f64)>,
+    centre: [f64; 3],
+    radius: f64,
+    reference: Option<[f64; 3]>,
+}
+
+impl SphereRow {
+    /// Position and speed of a centre given by `coords`.
+    fn centre_of(coords: &[(Option<usize>, f64)], y: &[f64], v: &[f64]) -> ([f64; 3], [f64; 3]) {
+        let (mut x, mut xd) = ([0.0; 3], [0.0; 3]);
+        for (k, &(free, fixed)) in coords.iter().enumerate().take(3) {
+            match free {
+                Some(i) => {
+                    x[k] = y[i];
+                    xd[k] = v[i];
+                }
+                None => x[k] = fixed,
+            }
+        }
+        (x, xd)
+    }
+
+    /// Row `j` of `r` (and its tangential rows `2j`, `2j + 1`) at `(y, v)`:
+    /// `g`, `ġ = n·v_rel`, `γ = −ṅ·v_rel`, `w = ±n`, and with friction
+    /// `v_t = t·v_rel`, `γ_t = −ṫ·v_rel`, `W_t = ±t`. `false` if the
+    /// centres coincide (no normal).
+    fn fill(&self, y: &[f64], v: &[f64], rough: bool, j: usize, r: &mut Rows) -> bool {
+        let (xa, va) = Self::centre_of(&self.a, y, v);
+        let (xb, vb) = if self.b.is_empty() {
+            (self.centre, [0.0; 3])
+        } else {
+            Self::centre_of(&self.b, y, v)
+        };
+        let d: [f64; 3] = std::array::from_fn(|k| xa[k] - xb[k]);
+        let vr: [f64; 3] = std::array::from_fn(|k| va[k] - vb[k]);
+        let dist = dot3(d, d).sqrt();
+        if !(dist > 0.0) {
+            return false;
+        }
+        let n = d.map(|x| x / dist);
+        let nv = dot3(n, vr);
+        let ndot: [f64; 3] = std::array::from_fn(|k| (vr[k] - n[k] * nv) / dist);
+        r.g[j] = dist - self.radius;
+        r.gdot[j] = nv;
+        r.gamma[j] = -dot3(ndot, vr);
+        let put = |m: &mut DMatrix<f64>, row: usize, dir: [f64; 3]| {
+            for (k, &(free, _)) in self.a.iter().enumerate() {
+                if let Some(i) = free {
+                    m[(row, i)] += dir[k];
+                }
+            }
+            for (k, &(free, _)) in self.b.iter().enumerate() {
+                if let Some(i) = free {
+                    m[(row, i)] -= dir[k];
+                }
+            }
+        };
+        put(&mut r.w, j, n);
+        if rough {
+            let (t, tdot) = self.tangents(n, ndot);
+            for a in 0..2 {
+                r.vt[j][a] = dot3(t[a], vr);
+                r.gamma_t[j][a] = -dot3(tdot[a], vr);
+                put(&mut r.wt, 2 * j + a, t[a]);
+            }
+        }
+        true
+    }
+
+    /// The tangent axes at normal `n` turning at `ṅ`, and their rates.
+    fn tangents(&self, n: [f64; 3], ndot: [f64; 3]) -> ([[f64; 3]; 2], [[f64; 3]; 2]) {
+        let Some(a) = self.reference else {
+            // Planar: `t1 = n × z` in the plane, `t2 = −z`, as a node's
+            // plane has them.
+            let t1 = [n[1], -n[0], 0.0];
+            let t1d = [ndot[1], -ndot[0], 0.0];
+            return ([t1, [0.0, 0.0, -1.0]], [t1d, [0.0; 3]]);
+        };
+        let an = dot3(a, n);
+        let u: [f64; 3] = std::array::from_fn(|k| a[k] - an * n[k]);
+        let len = dot3(u, u).sqrt();
+        let t1 = u.map(|x| x / len);
+        let and = dot3(a, ndot);
+        let ud: [f64; 3] = std::array::from_fn(|k| -and * n[k] - an * ndot[k]);
+        let along = dot3(t1, ud);
+        let t1d: [f64; 3] = std::array::from_fn(|k| (ud[k] - t1[k] * along) / len);
+        let t2 = cross3(n, t1);
+        let t2d: [f64; 3] = std::array::from_fn(|k| cross3(ndot, t1)[k] + cross3(n, t1d)[k]);
+        ([t1, t2], [t1d, t2d])
+    }
+}
+
+fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 /// The contacts' rows on a model's free coordinates (`y`, the structure's
-/// free coordinates first): the cable nodes' first, constant, fixed
-/// coordinates folded into the level; then the model's own contacts (a
-/// mixed model's rigid part's, [`Impacts::body_rows`]), evaluated at each
-/// state (their `row`, `level` and `tangents` here are empty).
+/// free coordinates first): the cable nodes' planes first, constant,
+/// fixed coordinates folded into the level; then the rows evaluated at
+/// each state (their `row`, `level` and `tangents` here are empty): the
+/// nodes' spheres, then the model's own contacts (a mixed model's rigid
+/// part's, [`Impacts::body_rows`]).
 #[derive(Clone, Debug)]
 pub(super) struct Gaps {
     pub names: Vec<String>,
@@ -107,8 +249,10 @@ pub(super) struct Gaps {
     pub e: Vec<f64>,
     pub mu: Vec<f64>,
     pub tangents: Vec<[Vec<(usize, f64)>; 2]>,
-    /// The number of node rows (the first ones).
+    /// The number of constant rows (the nodes' planes, the first ones).
     nodes: usize,
+    /// The nodes' spheres (the rows after the planes).
+    spheres: Vec<SphereRow>,
 }
 
 impl Gaps {
@@ -119,6 +263,7 @@ impl Gaps {
         free_index: impl Fn(usize) -> Option<usize>,
         q0_full: &[f64],
     ) -> Gaps {
+        let planes = contacts.iter().filter(|c| c.sphere.is_none());
         let mut g = Gaps {
             names: Vec::new(),
             rows: Vec::new(),
@@ -126,9 +271,10 @@ impl Gaps {
             e: Vec::new(),
             mu: Vec::new(),
             tangents: Vec::new(),
-            nodes: contacts.len(),
+            nodes: planes.clone().count(),
+            spheres: Vec::new(),
         };
-        for c in contacts {
+        for c in planes {
             let mut row = Vec::new();
             let mut level = c.level;
             for &(i, a) in &c.row {
@@ -149,6 +295,29 @@ impl Gaps {
                     .filter_map(|&(i, a)| Some((free_index(i)?, a)))
                     .collect()
             }));
+        }
+        let coords = |idx: &[usize]| -> Vec<(Option<usize>, f64)> {
+            idx.iter()
+                .map(|&i| (free_index(i), q0_full.get(i).copied().unwrap_or(0.0)))
+                .collect()
+        };
+        for c in contacts {
+            let Some(sp) = &c.sphere else {
+                continue;
+            };
+            g.names.push(c.name.clone());
+            g.rows.push(Vec::new());
+            g.level.push(0.0);
+            g.e.push(c.e);
+            g.mu.push(c.mu);
+            g.tangents.push([Vec::new(), Vec::new()]);
+            g.spheres.push(SphereRow {
+                a: coords(&sp.a),
+                b: coords(&sp.b),
+                centre: sp.centre,
+                radius: sp.radius,
+                reference: sp.reference,
+            });
         }
         g
     }
@@ -183,21 +352,62 @@ impl Gaps {
         Ok(self)
     }
 
-    /// Row `i` is a cable node's (constant, on `rows`).
+    /// Row `i` is a node's plane (constant, on `rows`).
     fn node(&self, i: usize) -> bool {
         i < self.nodes
     }
 
-    /// The model's own contacts' rows at `(t, y, v)` if it has any
-    /// (`Some(None)`: they cannot be evaluated).
-    fn bodies<M: Impacts + ?Sized>(
+    /// The rows evaluated per state at `(t, y, v)` (the nodes' spheres,
+    /// then the model's own contacts), row `k` of the result being row
+    /// `nodes + k`; `None` if there are none, `Some(None)` if they cannot
+    /// be evaluated.
+    fn evaluated<M: Impacts + ?Sized>(
         &self,
         m: &M,
         t: f64,
         y: &[f64],
         v: &[f64],
     ) -> Option<Option<Rows>> {
-        (self.len() > self.nodes).then(|| m.body_rows(t, y, v))
+        let k = self.len() - self.nodes;
+        if k == 0 {
+            return None;
+        }
+        let (ns, n) = (self.spheres.len(), v.len());
+        let mut r = Rows {
+            g: vec![0.0; k],
+            gdot: vec![0.0; k],
+            gamma: vec![0.0; k],
+            e: self.e[self.nodes..].to_vec(),
+            mu: self.mu[self.nodes..].to_vec(),
+            w: DMatrix::zeros(k, n),
+            vt: vec![[0.0; 2]; k],
+            gamma_t: vec![[0.0; 2]; k],
+            wt: DMatrix::zeros(2 * k, n),
+        };
+        for (j, sp) in self.spheres.iter().enumerate() {
+            if !sp.fill(y, v, self.rough(self.nodes + j), j, &mut r) {
+                return Some(None);
+            }
+        }
+        if k > ns {
+            let Some(b) = m.body_rows(t, y, v) else {
+                return Some(None);
+            };
+            for (x, j) in (ns..k).enumerate() {
+                r.g[j] = b.g[x];
+                r.gdot[j] = b.gdot[x];
+                r.gamma[j] = b.gamma[x];
+                r.e[j] = b.e[x];
+                r.mu[j] = b.mu[x];
+                r.w.row_mut(j).copy_from(&b.w.row(x));
+                r.vt[j] = b.vt[x];
+                r.gamma_t[j] = b.gamma_t[x];
+                for a in 0..2 {
+                    r.wt.row_mut(2 * j + a).copy_from(&b.wt.row(2 * x + a));
+                }
+            }
+        }
+        Some(Some(r))
     }
 
     /// The gap of row `i` at `s` (NaN if it cannot be evaluated).
@@ -205,15 +415,16 @@ impl Gaps {
         if self.node(i) {
             return self.gap(i, &s.q);
         }
-        m.body_rows(s.t, &s.q, &s.v)
+        self.evaluated(m, s.t, &s.q, &s.v)
+            .flatten()
             .map_or(f64::NAN, |r| r.g[i - self.nodes])
     }
 
     /// The gaps of all rows at `s` (the model's own NaN if they cannot be
     /// evaluated).
-    fn gaps_at<M: Impacts + ?Sized>(&self, m: &M, s: &State) -> Vec<f64> {
+    pub fn gaps_at<M: Impacts + ?Sized>(&self, m: &M, s: &State) -> Vec<f64> {
         let mut g: Vec<f64> = (0..self.len()).map(|i| self.gap(i, &s.q)).collect();
-        if let Some(b) = self.bodies(m, s.t, &s.q, &s.v) {
+        if let Some(b) = self.evaluated(m, s.t, &s.q, &s.v) {
             for (k, x) in g[self.nodes..].iter_mut().enumerate() {
                 *x = b.as_ref().map_or(f64::NAN, |r| r.g[k]);
             }
@@ -227,7 +438,8 @@ impl Gaps {
         if self.node(i) {
             return self.dot(i, &s.v);
         }
-        m.body_rows(s.t, &s.q, &s.v)
+        self.evaluated(m, s.t, &s.q, &s.v)
+            .flatten()
             .map_or(f64::NAN, |r| r.gdot[i - self.nodes])
     }
 
@@ -283,14 +495,14 @@ impl Gaps {
             gamma_t: vec![[0.0; 2]; nk],
             wt,
         };
-        if let Some(b) = self.bodies(m, s.t, &s.q, &s.v) {
-            let b = b.ok_or_else(|| {
-                failed(s.t, "the rigid part's contacts cannot be evaluated".into())
-            })?;
+        if let Some(b) = self.evaluated(m, s.t, &s.q, &s.v) {
+            let b = b.ok_or_else(|| failed(s.t, UNEVALUATED.into()))?;
             for (k, i) in (self.nodes..nk).enumerate() {
                 r.g[i] = b.g[k];
                 r.gdot[i] = b.gdot[k];
                 r.gamma[i] = b.gamma[k];
+                r.e[i] = b.e[k];
+                r.mu[i] = b.mu[k];
                 r.w.row_mut(i).copy_from(&b.w.row(k));
                 r.vt[i] = b.vt[k];
                 r.gamma_t[i] = b.gamma_t[k];
@@ -389,7 +601,7 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         let body = active
             .iter()
             .any(|&i| sticks(i) && !gaps.node(i))
-            .then(|| inner.body_rows(s.t, &s.q, &s.v))
+            .then(|| gaps.evaluated(inner, s.t, &s.q, &s.v).flatten())
             .flatten();
         for &i in active.iter().filter(|&&i| sticks(i)) {
             if gaps.node(i) {
@@ -416,8 +628,9 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         }
     }
 
-    /// The constant row of hold `h` (empty for the model's own contacts,
-    /// whose rows are `body`'s).
+    /// The constant row of hold `h` (empty for the rows evaluated per
+    /// state, the nodes' spheres and the model's own contacts, whose rows
+    /// are `body`'s).
     fn row(&self, h: Hold) -> &[(usize, f64)] {
         match h {
             Hold::Normal(i) => &self.gaps.rows[i],
@@ -425,8 +638,9 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         }
     }
 
-    /// The model's own contact row of hold `h` in `body` (its rows at the
-    /// iterate), if `h` is one.
+    /// Hold `h`'s row among the rows evaluated per state `body` (at the
+    /// iterate: the nodes' spheres, then the model's own contacts), if it
+    /// is one of them.
     fn own<'b>(&self, h: Hold, body: Option<&'b Rows>) -> Option<(Own, &'b Rows)> {
         match h {
             Hold::Normal(i) if !self.gaps.node(i) => {
@@ -439,7 +653,8 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         }
     }
 
-    /// Hold `h` is on one of the model's own contacts.
+    /// Hold `h` is on a row evaluated per state (a node's sphere or one of
+    /// the model's own contacts).
     fn on_a_body(&self, h: Hold) -> bool {
         match h {
             Hold::Normal(i) | Hold::Tangent(i, _, _) => !self.gaps.node(i),
@@ -451,11 +666,11 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         self.holds.iter().any(|&h| self.on_a_body(h))
     }
 
-    /// The model's own contacts' rows at `(t, y, v)` if a hold is one of
-    /// them.
+    /// The rows evaluated per state (nodes' spheres, the model's own
+    /// contacts) at `(t, y, v)` if a hold is one of them.
     fn body_at(&self, t: f64, y: &[f64], v: &[f64]) -> Option<Rows> {
         if self.holds_a_body() {
-            self.inner.body_rows(t, y, v)
+            self.gaps.evaluated(self.inner, t, y, v).flatten()
         } else {
             None
         }
@@ -607,10 +822,7 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         let (n, mi, k) = (self.inner.n(), self.inner.n_constraints(), self.holds.len());
         w.rows = self.body_at(t, y, v);
         if w.rows.is_none() && self.holds_a_body() {
-            return Err(failed(
-                t,
-                "the rigid part's contacts cannot be evaluated".into(),
-            ));
+            return Err(failed(t, UNEVALUATED.into()));
         }
         let body = w.rows.as_ref();
         w.x.clear();
@@ -855,6 +1067,9 @@ pub(super) trait Impacts: AlphaModel {
 /// row's speed by pulling it (`Λ < 0`) is of the wrong sign, and a row
 /// leaving an impact faster than this flies.
 const REST_SPEED: f64 = 1e-9;
+
+/// Why a run stops when its rows evaluated per state give none.
+const UNEVALUATED: &str = "the contacts evaluated per state cannot be evaluated (the rigid part's generated `contacts` or `friction` failed, or two spheres' centres coincide)";
 
 /// Why a contact event could not be resolved.
 fn failed(t: f64, what: String) -> DynamicsError {
@@ -1615,13 +1830,7 @@ impl<'g> ContactRun<'g> {
                 let gaps1 = self.gaps.gaps_at(m, &new);
                 if gaps1.iter().any(|g| g.is_nan()) {
                     self.add_stats(&ga.stats);
-                    return (
-                        prev,
-                        Some(failed(
-                            new.t,
-                            "the rigid part's contacts cannot be evaluated".into(),
-                        )),
-                    );
+                    return (prev, Some(failed(new.t, UNEVALUATED.into())));
                 }
                 for i in (0..nk).filter(|i| !self.active.contains(i)) {
                     // A row that starts the step at or inside its plane (just

@@ -899,9 +899,9 @@ fn load_steps(steps: &[LoadStep]) -> Vec<LoadStepReport> {
 }
 
 /// The gaps of every contact of `m` at rest at its free coordinates `y`:
-/// the cable nodes' `contacts` (`gaps`), then the model's own (`bodies`,
-/// a mixed model's rigid part's), named; NaN where they cannot be
-/// evaluated.
+/// the cable nodes' `contacts` (`gaps`: planes, then spheres), then the
+/// model's own (`bodies`, a mixed model's rigid part's), named; NaN where
+/// they cannot be evaluated.
 fn gaps_at_rest<M: Impacts + ?Sized>(
     m: &M,
     gaps: &Gaps,
@@ -913,17 +913,17 @@ fn gaps_at_rest<M: Impacts + ?Sized>(
         q: y.to_vec(),
         v: vec![0.0; y.len()],
     };
-    let own = (!bodies.is_empty()).then(|| m.body_rows(s.t, &s.q, &s.v));
-    (0..gaps.len())
-        .map(|i| (gaps.names[i].clone(), gaps.gap(i, y)))
-        .chain(bodies.iter().enumerate().map(|(b, name)| {
-            let g = own
-                .as_ref()
-                .and_then(Option::as_ref)
-                .map_or(f64::NAN, |r| r.g[b]);
-            (name.clone(), g)
-        }))
-        .collect()
+    match gaps.clone().with_bodies(m, bodies, &s) {
+        Ok(all) => all.names.iter().cloned().zip(all.gaps_at(m, &s)).collect(),
+        // The model's own contacts cannot be evaluated here.
+        Err(_) => gaps
+            .names
+            .iter()
+            .cloned()
+            .zip(gaps.gaps_at(m, &s))
+            .chain(bodies.iter().map(|b| (b.clone(), f64::NAN)))
+            .collect(),
+    }
 }
 
 /// The gaps of the contacts of cables alone (`contacts`, at their nodes)

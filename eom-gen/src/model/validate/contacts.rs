@@ -77,17 +77,14 @@ impl Ctx<'_> {
                 }
                 continue;
             }
-            if let spec::Contact::Spheres { a, b, .. } = c {
-                for (anchor, field) in [(a, "a"), (b, "b")] {
-                    if anchor.node.is_some() {
-                        self.error(
-                            &join(&path, &[f(field), f("node")]),
-                            format!("contact `{name}` puts a sphere on a cable node"),
-                            "a cable node touches a plane fixed in the world (`Plane` with `at: (body: CABLE, node: K)`); two spheres are on bodies",
-                        );
-                        ok = false;
-                    }
+            if let spec::Contact::Spheres { a, b, .. } = c
+                && (a.node.is_some() || b.node.is_some())
+            {
+                match self.cable_sphere(spec, c, &path) {
+                    Some(info) => at_nodes.push(info),
+                    None => nodes_ok = false,
                 }
+                continue;
             }
             let (e, mu) = match c {
                 spec::Contact::JointLimit { e, mu, .. }
@@ -243,6 +240,146 @@ impl Ctx<'_> {
         let node = at.node?;
         let at_path = join(path, &[f("at")]);
         let mut ok = true;
+        let cable = self.cable_node(spec, at, &at_path, name);
+        if let Some(b) = on {
+            self.error(
+                &join(path, &[f("on")]),
+                format!("contact `{name}` at a cable node touches a plane on body `{b}`"),
+                "a cable node touches a plane fixed in the world: leave `on` out",
+            );
+            ok = false;
+        }
+        let e = self.coefficient(e, &join(path, &[f("e")]), "`e`", name, 1.0);
+        let mu = self.coefficient(mu, &join(path, &[f("mu")]), "`mu`", name, f64::INFINITY);
+        let r = self.nonnegative(radius, &join(path, &[f("radius")]), "radius", name);
+        let p = self.vec3(point, &join(path, &[f("point")]), Scope::Params);
+        let n = self.axis(normal, &join(path, &[f("normal")]), "the plane's normal");
+        let (cable, e, mu, r, p, n) = (cable?, e?, mu?, r?, p?, n?);
+        if !ok {
+            return None;
+        }
+        let point = [p[0].value, p[1].value, p[2].value];
+        let normal = [n.unit[0], n.unit[1], n.unit[2]];
+        Some(CableContactInfo {
+            name: name.clone(),
+            cable,
+            node,
+            radius: r.value,
+            against: CableTarget::Plane { point, normal },
+            e,
+            mu,
+            span: self.span(path),
+        })
+    }
+
+    /// A `Spheres` contact with a cable node: `a` is the node (a sphere of
+    /// `radius_a` about it), `b` another cable node or a sphere fixed in
+    /// the world (`ground` with its centre as `point`); a body's sphere
+    /// against a node is refused (the cable runtime evaluates node rows
+    /// only). The pair is not inside itself at the start (the cables
+    /// straight from `from` to `to`).
+    fn cable_sphere(
+        &mut self,
+        spec: &Spec,
+        c: &spec::Contact,
+        path: &[crate::model::locate::Seg<'static>],
+    ) -> Option<CableContactInfo> {
+        let spec::Contact::Spheres {
+            name,
+            a,
+            b,
+            radius_a,
+            radius_b,
+            e,
+            mu,
+        } = c
+        else {
+            return None;
+        };
+        let (a_path, b_path) = (join(path, &[f("a")]), join(path, &[f("b")]));
+        let mut ok = true;
+        let Some(node) = a.node else {
+            self.error(
+                &join(&b_path, &[f("node")]),
+                format!("contact `{name}` has its cable node as `b` and `{}` as `a`", a.body),
+                "put the cable node's sphere first, as `a`; `b` is another node or a sphere fixed in the world (`body: \"ground\"`)",
+            );
+            return None;
+        };
+        let cable = self.cable_node(spec, a, &a_path, name);
+        let against = if let Some(other) = b.node {
+            let there = self.cable_node(spec, b, &b_path, name);
+            if there.is_some() && there == cable && other == node {
+                self.error(
+                    &join(&b_path, &[f("node")]),
+                    format!(
+                        "both spheres of contact `{name}` are about node {node} of `{}`",
+                        a.body
+                    ),
+                    "a contact is between two nodes: name another node (or cable) as `b`",
+                );
+                ok = false;
+            }
+            there.map(|cable| CableTarget::Node { cable, node: other })
+        } else if b.body == "ground" {
+            if b.marker.is_some() {
+                self.error(
+                    &join(&b_path, &[f("marker")]),
+                    format!("contact `{name}` centres its fixed sphere at a ground marker"),
+                    "give the fixed sphere's centre as `point` (world axes, m)",
+                );
+                ok = false;
+            }
+            let centre = match &b.point {
+                Some(p) => self
+                    .vec3(p, &join(&b_path, &[f("point")]), Scope::Params)
+                    .map(|p| [p[0].value, p[1].value, p[2].value]),
+                None => Some([0.0; 3]),
+            };
+            centre.map(|centre| CableTarget::Sphere { centre })
+        } else {
+            self.error(
+                &join(&b_path, &[f("body")]),
+                format!(
+                    "contact `{name}` puts cable node {node}'s sphere against a sphere on body `{}`",
+                    b.body
+                ),
+                "a cable node's sphere touches a sphere fixed in the world (`b: (body: \"ground\", point: …)`) or about another cable node (`b: (body: CABLE, node: K)`); a body's sphere touches it as a plane on the node's side is not modelled: hang the body's sphere at a node, or put the contact on the body",
+            );
+            None
+        };
+        let e = self.coefficient(e, &join(path, &[f("e")]), "`e`", name, 1.0);
+        let mu = self.coefficient(mu, &join(path, &[f("mu")]), "`mu`", name, f64::INFINITY);
+        let ra = self.nonnegative(radius_a, &join(path, &[f("radius_a")]), "radius_a", name);
+        let rb = self.nonnegative(radius_b, &join(path, &[f("radius_b")]), "radius_b", name);
+        let (cable, against, e, mu, ra, rb) = (cable?, against?, e?, mu?, ra?, rb?);
+        if !ok {
+            return None;
+        }
+        Some(CableContactInfo {
+            name: name.clone(),
+            cable,
+            node,
+            radius: ra.value + rb.value,
+            against,
+            e,
+            mu,
+            span: self.span(path),
+        })
+    }
+
+    /// The cable of a contact's anchor at a cable node (`anchor.node`
+    /// set): the cable exists, the node is one of its nodes, and the
+    /// anchor gives no `point` or `marker`.
+    fn cable_node(
+        &mut self,
+        spec: &Spec,
+        at: &spec::Anchor,
+        at_path: &[crate::model::locate::Seg<'static>],
+        name: &str,
+    ) -> Option<usize> {
+        let node = at.node?;
+        let mut ok = true;
         let cable = spec.cables.iter().position(|x| x.name == at.body);
         if cable.is_none() {
             let names: Vec<String> = spec
@@ -273,7 +410,7 @@ impl Ctx<'_> {
             let cab = &spec.cables[k];
             if node > cab.elements {
                 self.error(
-                    &join(&at_path, &[f("node")]),
+                    &join(at_path, &[f("node")]),
                     format!(
                         "contact `{name}` is at node {node} of cable `{}`, whose nodes are 0..={}",
                         cab.name, cab.elements
@@ -283,36 +420,7 @@ impl Ctx<'_> {
                 ok = false;
             }
         }
-        if let Some(b) = on {
-            self.error(
-                &join(path, &[f("on")]),
-                format!("contact `{name}` at a cable node touches a plane on body `{b}`"),
-                "a cable node touches a plane fixed in the world: leave `on` out",
-            );
-            ok = false;
-        }
-        let e = self.coefficient(e, &join(path, &[f("e")]), "`e`", name, 1.0);
-        let mu = self.coefficient(mu, &join(path, &[f("mu")]), "`mu`", name, f64::INFINITY);
-        let r = self.nonnegative(radius, &join(path, &[f("radius")]), "radius", name);
-        let p = self.vec3(point, &join(path, &[f("point")]), Scope::Params);
-        let n = self.axis(normal, &join(path, &[f("normal")]), "the plane's normal");
-        let (cable, e, mu, r, p, n) = (cable?, e?, mu?, r?, p?, n?);
-        if !ok {
-            return None;
-        }
-        let point = [p[0].value, p[1].value, p[2].value];
-        let normal = [n.unit[0], n.unit[1], n.unit[2]];
-        Some(CableContactInfo {
-            name: name.clone(),
-            cable,
-            node,
-            radius: r.value,
-            point,
-            normal,
-            e,
-            mu,
-            span: self.span(path),
-        })
+        if ok { cable } else { None }
     }
 
     /// A sphere's centre: an anchor on a body that is not the ground
@@ -451,32 +559,39 @@ impl Ctx<'_> {
     /// straight from its start to its end): a closed one is an error with
     /// its penetration and what would open it.
     pub(super) fn check_cable_contacts_open(&mut self, sys: &System) {
-        for (k, c) in sys.cable_contacts.iter().enumerate() {
-            let Some(cable) = sys.cables.get(c.cable) else {
+        for c in &sys.cable_contacts {
+            let (Some(cable), Some(g)) = (sys.cables.get(c.cable), c.gap_at_start(sys)) else {
                 continue;
             };
-            let ch = &cable.chain;
-            let s = c.node as f64 / ch.elements.max(1) as f64;
-            let g: f64 = (0..3)
-                .map(|a| c.normal[a] * (ch.start[a] + s * (ch.end[a] - ch.start[a]) - c.point[a]))
-                .sum::<f64>()
-                - c.radius;
             if g.is_finite() && g >= -PENETRATION_TOL {
                 continue;
             }
-            let _ = k;
+            let (what, help) = match &c.against {
+                CableTarget::Plane { .. } => (
+                    "its plane".to_string(),
+                    "further along the plane's normal (its `from` and `to`), or move the plane",
+                ),
+                CableTarget::Sphere { .. } => (
+                    "the fixed sphere".to_string(),
+                    "away from the sphere's centre (its `from` and `to`), or move the sphere or shrink the radii",
+                ),
+                CableTarget::Node { cable: k, node } => (
+                    format!(
+                        "the sphere about node {node} of cable `{}`",
+                        sys.cables.get(*k).map_or("?", |x| x.name.as_str())
+                    ),
+                    "away from the other node (the cables' `from` and `to`), or shrink the radii",
+                ),
+            };
             self.diags.push(
                 crate::diag::Diagnostic::error(
                     c.span,
                     format!(
-                        "contact `{}`: node {} of cable `{}` penetrates its plane by {:.6e} m at the initial state",
+                        "contact `{}`: node {} of cable `{}` penetrates {what} by {:.6e} m at the initial state",
                         c.name, c.node, cable.name, -g
                     ),
                 )
-                .with_help(format!(
-                    "start the cable at least {:.6e} m further along the plane's normal (its `from` and `to`), or move the plane",
-                    -g
-                )),
+                .with_help(format!("start the cable at least {:.6e} m {help}", -g)),
             );
         }
     }
