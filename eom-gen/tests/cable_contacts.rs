@@ -1179,3 +1179,76 @@ fn node_spheres_refused_with_their_locations() {
         assert_eq!(out.matches("error:").count(), 1, "{out}");
     }
 }
+
+/// The same with a spatial wire (`Cable3D`) sliding in at (0.5, 0, 0.3)
+/// m/s. The fixed sphere's friction axes come from the world axis least
+/// aligned with the line of centres at the start, (−0.098, 0.25, −0.059):
+/// z, so at the top `t1 = z`, `t2 = n × t1 = x`; the plane's are
+/// `t1 = x`, `t2 = −z`. The first impact is the tangent plane's, both
+/// tangential impulses included (the same world vector, to 1e-12 of the
+/// normal impulse), in the cone and against the slide; the run goes on
+/// over the curving sphere in three dimensions without raising the
+/// energy.
+#[test]
+fn a_spatial_wire_striking_a_sphere_takes_coulombs_impulse_in_both_axes() {
+    let (e, mu) = (0.5, 0.3);
+    let r = run(0.4, 1e-3, 0.8);
+    let t1 = (2.0 * (H0 - 0.01) / G).sqrt();
+    let text = |target: &str| {
+        wire_on_a_sphere_with(
+            target,
+            e,
+            &format!(", mu: {mu}"),
+            (", velocity: (0.5, 0, 0.3)", 0.5 * t1),
+        )
+        .replace("Cable2D", "Cable3D")
+        .replace("(0.5, -0.05, 0)", &format!("(0.5, -0.05, {:?})", 0.3 * t1))
+        .replace(
+            "normal: (0, 1, 0)",
+            &format!("point: (0, 0, {:?}), normal: (0, 1, 0)", 0.3 * t1),
+        )
+    };
+    let (sphere, _, _) = simulate(&text("sphere"), &r);
+    let (plane, _, _) = simulate(&text("plane"), &r);
+    for (label, rep) in [("sphere", &sphere), ("plane", &plane)] {
+        assert!(
+            matches!(rep.stop, eom_sim::Stop::Finished),
+            "{label}: {:?}",
+            rep.stop
+        );
+        for ev in &rep.contact_events {
+            assert!(
+                ev.energy_after <= ev.energy_before + 1e-12,
+                "{label}: {:?} at {} raises the energy",
+                ev.kind,
+                ev.t
+            );
+        }
+    }
+    let (a, b) = (&sphere.contact_events[0], &plane.contact_events[0]);
+    let (ca, cb) = (&a.contacts[0], &b.contacts[0]);
+    assert_eq!(a.kind, ContactEventKind::Impact);
+    let vt = ca.tangential_speed_before;
+    assert!(
+        (vt[0] - 0.3).abs() < 1e-9 && (vt[1] - 0.5).abs() < 1e-9,
+        "v_t along (z, x): {vt:?}; the plane's (x, −z) {:?}",
+        cb.tangential_speed_before
+    );
+    let lt = ca.tangential_impulse[0].hypot(ca.tangential_impulse[1]);
+    assert!(
+        lt > 0.0 && lt <= mu * ca.impulse * (1.0 + 1e-12),
+        "cone: {ca:?}"
+    );
+    assert!(
+        ca.tangential_impulse[0] * vt[0] + ca.tangential_impulse[1] * vt[1] < 0.0,
+        "against the slide: {ca:?}"
+    );
+    let tol = 1e-12 * ca.impulse;
+    assert!(
+        (a.t - b.t).abs() < 1e-12
+            && (ca.impulse - cb.impulse).abs() < tol
+            && (ca.tangential_impulse[1] - cb.tangential_impulse[0]).abs() < tol
+            && (ca.tangential_impulse[0] + cb.tangential_impulse[1]).abs() < tol,
+        "sphere {ca:?}\nplane {cb:?}"
+    );
+}

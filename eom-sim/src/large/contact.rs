@@ -167,7 +167,7 @@ impl SphereRow {
         let d: [f64; 3] = std::array::from_fn(|k| xa[k] - xb[k]);
         let vr: [f64; 3] = std::array::from_fn(|k| va[k] - vb[k]);
         let dist = dot3(d, d).sqrt();
-        if !(dist > 0.0) {
+        if dist.is_nan() || dist <= 0.0 {
             return false;
         }
         let n = d.map(|x| x / dist);
@@ -2064,5 +2064,103 @@ impl<'g> ContactRun<'g> {
         a.factorizations += s.factorizations;
         a.newton_iterations += s.newton_iterations;
         a.max_constraint_residual = a.max_constraint_residual.max(s.max_constraint_residual);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rows of a node's sphere against central differences along a
+    /// motion `y(t) = y + v t + ½ a t²`: `w = ∂g/∂y` (so `ġ = w·v`),
+    /// `g̈ = w·a − γ` and `v̇_t = W_t a − γ_t` (`v_t` differentiated along
+    /// the motion), for a spatial pair (both centres moving, the tangent
+    /// axes from a reference axis) and a planar one against a fixed centre
+    /// (`t1 = n × z`), with one of the coordinates fixed.
+    #[test]
+    fn a_node_spheres_rows_are_the_derivatives_of_its_gap_and_speeds() {
+        let spatial = SphereRow {
+            a: vec![(Some(0), 0.0), (Some(1), 0.0), (Some(2), 0.0)],
+            b: vec![(Some(3), 0.0), (None, -0.2), (Some(4), 0.0)],
+            centre: [0.0; 3],
+            radius: 0.05,
+            reference: Some([0.0, 0.0, 1.0]),
+        };
+        let planar = SphereRow {
+            a: vec![(Some(0), 0.0), (Some(1), 0.0)],
+            b: Vec::new(),
+            centre: [0.1, -0.3, 0.0],
+            radius: 0.05,
+            reference: None,
+        };
+        let y = [0.31, 0.12, -0.07, -0.05, 0.2];
+        let v = [0.7, -1.3, 0.4, 0.25, -0.6];
+        let acc = [2.0, -9.81, 1.5, -0.4, 3.0];
+        for (label, sp) in [("spatial", &spatial), ("planar", &planar)] {
+            let n = y.len();
+            let at = |t: f64| {
+                let yt: Vec<f64> = (0..n)
+                    .map(|k| y[k] + v[k] * t + 0.5 * acc[k] * t * t)
+                    .collect();
+                let vt: Vec<f64> = (0..n).map(|k| v[k] + acc[k] * t).collect();
+                let mut r = Rows {
+                    g: vec![0.0],
+                    gdot: vec![0.0],
+                    gamma: vec![0.0],
+                    e: vec![0.5],
+                    mu: vec![0.3],
+                    w: DMatrix::zeros(1, n),
+                    vt: vec![[0.0; 2]],
+                    gamma_t: vec![[0.0; 2]],
+                    wt: DMatrix::zeros(2, n),
+                };
+                assert!(sp.fill(&yt, &vt, true, 0, &mut r), "{label}");
+                r
+            };
+            let r0 = at(0.0);
+            let h = 1e-6;
+            let (rp, rm) = (at(h), at(-h));
+            let gdot = (rp.g[0] - rm.g[0]) / (2.0 * h);
+            assert!(
+                (gdot - r0.gdot[0]).abs() < 1e-8,
+                "{label}: ġ {} against {gdot}",
+                r0.gdot[0]
+            );
+            let wv: f64 = (0..n).map(|k| r0.w[(0, k)] * v[k]).sum();
+            assert!((wv - r0.gdot[0]).abs() < 1e-14, "{label}: w·v");
+            let gddot = (rp.gdot[0] - rm.gdot[0]) / (2.0 * h);
+            let wa: f64 = (0..n).map(|k| r0.w[(0, k)] * acc[k]).sum();
+            assert!(
+                (wa - r0.gamma[0] - gddot).abs() < 1e-7,
+                "{label}: w·a − γ = {} against g̈ {gddot}",
+                wa - r0.gamma[0]
+            );
+            for a in 0..2 {
+                let dv = (rp.vt[0][a] - rm.vt[0][a]) / (2.0 * h);
+                let wta: f64 = (0..n).map(|k| r0.wt[(a, k)] * acc[k]).sum();
+                assert!(
+                    (wta - r0.gamma_t[0][a] - dv).abs() < 1e-7,
+                    "{label}: W_t{} a − γ_t = {} against v̇_t {dv}",
+                    a + 1,
+                    wta - r0.gamma_t[0][a]
+                );
+                let wtv: f64 = (0..n).map(|k| r0.wt[(a, k)] * v[k]).sum();
+                assert!((wtv - r0.vt[0][a]).abs() < 1e-14, "{label}: W_t v");
+            }
+            // The tangent axes are unit, orthogonal and normal to `n`.
+            let (t, _) = sp.tangents(
+                [
+                    r0.w[(0, 0)],
+                    r0.w[(0, 1)],
+                    if n > 2 && sp.a.len() > 2 {
+                        r0.w[(0, 2)]
+                    } else {
+                        0.0
+                    },
+                ],
+                [0.0; 3],
+            );
+            assert!((dot3(t[0], t[0]) - 1.0).abs() < 1e-14 && dot3(t[0], t[1]).abs() < 1e-14);
+        }
     }
 }

@@ -388,7 +388,7 @@ impl Ctx<'_> {
                 .map(|x| format!("`{}`", x.name))
                 .collect();
             self.error(
-                &join(&at_path, &[f("body")]),
+                &join(at_path, &[f("body")]),
                 format!("contact `{name}` is at node {node} of `{}`, which is no cable", at.body),
                 if names.is_empty() {
                     "`node` names a cable's node: this model has no cables (for a body's point, leave `node` out)".to_string()
@@ -400,7 +400,7 @@ impl Ctx<'_> {
         }
         if at.point.is_some() || at.marker.is_some() {
             self.error(
-                &at_path,
+                at_path,
                 format!("contact `{name}` gives a cable node and a `point` or `marker`"),
                 "a cable node is the contact's point itself: give `body` (the cable) and `node` only",
             );
