@@ -994,31 +994,17 @@ fn statics_and_linearize_refuse_an_equilibrium_through_a_contact() {
     }
 }
 
-/// A block braking by Coulomb friction on a table (a rigid body's
-/// contact, `mu: 0.3`) with a rope hanging from it, through the CLI: the
+/// The bundled block braking by Coulomb friction on a table (a rigid
+/// body's contact, `mu: 0.3`) with a rope hanging from it
+/// (`models/ancf/block_rope.ron`), through the CLI: the
 /// run finishes, the block's stop is a `stick` event in the JSON report
 /// with the block at rest after it, and the events CSV carries every
 /// contact row's tangential impulses (`table.impulse_t1`, `…_t2`) as the
 /// rigid runtime's does — the stick's own among them.
 #[test]
 fn simulate_reports_the_stick_of_a_body_braking_beside_a_cable() {
-    let path = write(
-        "block_rope.ron",
-        r#"Model(
-    name: "block_rope",
-    gravity: (0, -9.81, 0),
-    bodies: [(name: "block", mass: 1, inertia: Diag(0.01, 0.01, 0.01),
-              markers: [(name: "hook", position: (0, 0, 0))])],
-    joints: [(name: "p", kind: Planar, parent: "ground", child: "block", coordinates: ["x", "y", "a"], q0: [0, 0, 0], u0: [1, 0, 0])],
-    cables: [
-        Cable(name: "rope", element: Cable2D, from: (0, 0, 0), to: (0, -0.3, 0), elements: 3,
-              young: 1e8, density: 1000, area: 1e-4, second_moment: 1e-11,
-              damping_bending: 1e-4, start: Pinned, start_at: (body: "block", marker: "hook")),
-    ],
-    contacts: [Plane(name: "table", at: (body: "block", marker: "hook"), normal: (0, 1, 0), e: 0, mu: 0.3)],
-)"#,
-    );
-    let (r, events) = simulate_file_with_events(&path, "block_rope", "0.6");
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/ancf/block_rope.ron");
+    let (r, events) = simulate_file_with_events(path, "block_rope", "0.6");
     let ev = r["contact_events"].as_array().expect("contact events");
     let stick = ev
         .iter()
@@ -1064,5 +1050,50 @@ fn simulate_reports_the_stick_of_a_body_braking_beside_a_cable() {
             .take(3)
             .all(|x| x.as_f64().is_some_and(|x| x.abs() < 1e-9)),
         "the block at rest at the end: {u:?}"
+    );
+}
+
+/// The bundled wire dropped onto a peg (`models/ancf/wire_on_peg.ron`: a
+/// cable node's sphere against a sphere fixed in the world, with
+/// friction), through the CLI: its first event is the node's impact on
+/// the peg's top at `t₁ = √(2h/g)`, `h = 0.19 m` (the wire starts left
+/// by what it slides until then), with `ġ⁻ = −√(2gh)` (to 1e-9),
+/// `ġ⁺ = −e ġ⁻`, and a tangential impulse inside the cone
+/// against the slide; the events CSV names the contact's columns.
+#[test]
+fn simulate_reports_a_cable_nodes_impact_on_a_peg() {
+    let (r, events) = simulate_with_events("wire_on_peg", "0.4");
+    let ev = r["contact_events"].as_array().expect("contact events");
+    let first = &ev[0];
+    assert_eq!(first["kind"], "impact");
+    let h = 0.19_f64;
+    let t = first["t"].as_f64().unwrap_or(f64::NAN);
+    assert!(
+        (t - (2.0 * h / 9.81).sqrt()).abs() < 1e-9,
+        "impact at {t} s"
+    );
+    let c = &first["contacts"][0];
+    assert_eq!(c["contact"], "peg");
+    let num = |v: &serde_json::Value| v.as_f64().unwrap_or(f64::NAN);
+    let (before, after) = (num(&c["speed_before"]), num(&c["speed_after"]));
+    assert!(
+        (before + (2.0 * 9.81 * h).sqrt()).abs() < 1e-9,
+        "ġ⁻ {before}"
+    );
+    assert!((after + 0.5 * before).abs() < 1e-9, "ġ⁺ {after}");
+    let (lam, lt, vt) = (
+        num(&c["impulse"]),
+        num(&c["tangential_impulse"][0]),
+        num(&c["tangential_speed_before"][0]),
+    );
+    assert!(
+        lt != 0.0 && lt.abs() <= 0.3 * lam * (1.0 + 1e-12) && lt * vt < 0.0,
+        "Λ {lam}, Λ_t {lt}, v_t {vt}"
+    );
+    let csv = std::fs::read_to_string(events).expect("the events CSV");
+    let header = csv.lines().next().unwrap_or_default();
+    assert!(
+        header.contains("peg.impulse,peg.speed_before,peg.speed_after,peg.impulse_t1"),
+        "{header}"
     );
 }

@@ -818,27 +818,17 @@ fn a_block_beside_a_cable_sticks_slides_and_stops_by_coulomb() {
     }
 }
 
-/// A 1 kg block sliding on a table (a planar joint: x, y, angle) with a
-/// rope (Cable2D, 0.3 m, 3 elements) pinned at its centre and hanging
-/// through a slot in the table, pushed at 1 m/s; the table's contact,
-/// plastic with friction μ = 0.3, is `at` (the block's hook, or the
-/// rope's node 0 held there).
+/// The bundled block braking on a table with its rope
+/// (`models/ancf/block_rope.ron`: 1 kg, pushed at 1 m/s, a 0.3 m rope
+/// pinned at its centre and hanging through a slot), the table's contact
+/// (plastic, μ = 0.3) `at` the block's hook or the rope's node 0 held
+/// there.
 fn block_with_a_rope(at: &str) -> String {
-    format!(
-        r#"Model(
-    name: "block_rope",
-    gravity: (0, -{G}, 0),
-    bodies: [(name: "block", mass: 1, inertia: Diag(0.01, 0.01, 0.01),
-              markers: [(name: "hook", position: (0, 0, 0))])],
-    joints: [(name: "p", kind: Planar, parent: "ground", child: "block", coordinates: ["x", "y", "a"], q0: [0, 0, 0], u0: [1, 0, 0])],
-    cables: [
-        Cable(name: "rope", element: Cable2D, from: (0, 0, 0), to: (0, -0.3, 0), elements: 3,
-              young: 1e8, density: 1000, area: 1e-4, second_moment: 1e-11,
-              damping_bending: 1e-4, start: Pinned, start_at: (body: "block", marker: "hook")),
-    ],
-    contacts: [Plane(name: "table", at: {at}, normal: (0, 1, 0), e: 0, mu: 0.3)],
-)"#
-    )
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/ancf/block_rope.ron");
+    let text = std::fs::read_to_string(path).unwrap_or_else(|err| panic!("{path}: {err}"));
+    let contact = r#"at: (body: "block", marker: "hook"), normal"#;
+    assert!(text.contains(contact), "the bundled block_rope's contact");
+    text.replace(contact, &format!("at: {at}, normal"))
 }
 
 /// Friction at a body's contact whose motion the cable changes, against
