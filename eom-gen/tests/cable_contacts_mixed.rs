@@ -577,20 +577,8 @@ fn a_links_tip_striking_the_floor_beside_its_cable_is_its_pinned_nodes_twin() {
     let impacts = finished_with_impacts_by_newton(&body, 0.5, "link tip on the floor");
     finished_with_impacts_by_newton(&node, 0.5, "node 0 on the floor");
     assert!(impacts >= 3, "the tip strikes and hops: {impacts}");
-    assert_eq!(
-        body.contact_events.len(),
-        node.contact_events.len(),
-        "the same events"
-    );
+    same_events(&body, &node);
     for (b, n) in body.contact_events.iter().zip(&node.contact_events) {
-        assert_eq!(b.kind, n.kind, "at {} s", b.t);
-        assert!(
-            (b.t - n.t).abs() < 1e-7,
-            "{:?} at {} s and {} s",
-            b.kind,
-            b.t,
-            n.t
-        );
         for (cb, cn) in b.contacts.iter().zip(&n.contacts) {
             assert!(
                 (cb.impulse - cn.impulse).abs() <= 1e-6 * cn.impulse.abs() + 1e-12,
@@ -603,14 +591,7 @@ fn a_links_tip_striking_the_floor_beside_its_cable_is_its_pinned_nodes_twin() {
             assert!((cb.speed_before - cn.speed_before).abs() < 1e-6);
         }
     }
-    let force = |r: &eom_sim::RunReport| {
-        let el = r.elements.as_ref().expect("element report");
-        let [held] = el.contact_forces.as_slice() else {
-            panic!("the tip rests on the floor: {:?}", el.contact_forces);
-        };
-        held.force
-    };
-    let (fb, fnode) = (force(&body), force(&node));
+    let (fb, fnode) = (resting_force(&body), resting_force(&node));
     assert!(
         fb > 0.0 && (fb - fnode).abs() <= 1e-6 * fnode,
         "{fb} N and {fnode} N"
@@ -857,21 +838,7 @@ fn a_block_braking_with_its_rope_by_friction_is_its_pinned_nodes_twin() {
         let kinds: Vec<_> = rep.contact_events.iter().map(|e| (e.kind, e.t)).collect();
         println!("{label}: x = {:.9} m, events {kinds:?}", rep.q[0]);
     }
-    assert_eq!(
-        body.contact_events.len(),
-        node.contact_events.len(),
-        "the same events"
-    );
-    for (b, n) in body.contact_events.iter().zip(&node.contact_events) {
-        assert_eq!(b.kind, n.kind, "at {} s", b.t);
-        assert!(
-            (b.t - n.t).abs() < 1e-7,
-            "{:?} at {} s and {} s",
-            b.kind,
-            b.t,
-            n.t
-        );
-    }
+    same_events(&body, &node);
     assert!(
         body.contact_events
             .iter()
@@ -892,16 +859,38 @@ fn a_block_braking_with_its_rope_by_friction_is_its_pinned_nodes_twin() {
         body.q[1],
         node.q[1]
     );
-    let force = |r: &eom_sim::RunReport| {
-        let el = r.elements.as_ref().expect("element report");
-        let [held] = el.contact_forces.as_slice() else {
-            panic!("the block rests on the table: {:?}", el.contact_forces);
-        };
-        held.force
-    };
-    let (fb, fnode) = (force(&body), force(&node));
+    let (fb, fnode) = (resting_force(&body), resting_force(&node));
     assert!(
         fb > 0.0 && (fb - fnode).abs() <= 1e-6 * fnode,
         "{fb} N and {fnode} N"
     );
+}
+
+/// Twins: the same contact events, of the same kinds, at the same times
+/// (to 1e-7 s).
+fn same_events(body: &eom_sim::RunReport, node: &eom_sim::RunReport) {
+    assert_eq!(
+        body.contact_events.len(),
+        node.contact_events.len(),
+        "the same events"
+    );
+    for (b, n) in body.contact_events.iter().zip(&node.contact_events) {
+        assert_eq!(b.kind, n.kind, "at {} s", b.t);
+        assert!(
+            (b.t - n.t).abs() < 1e-7,
+            "{:?} at {} s and {} s",
+            b.kind,
+            b.t,
+            n.t
+        );
+    }
+}
+
+/// The normal force of the one contact held at the end of `r`.
+fn resting_force(r: &eom_sim::RunReport) -> f64 {
+    let el = r.elements.as_ref().expect("element report");
+    let [held] = el.contact_forces.as_slice() else {
+        panic!("one contact rests at the end: {:?}", el.contact_forces);
+    };
+    held.force
 }

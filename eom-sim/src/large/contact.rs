@@ -394,17 +394,7 @@ impl Gaps {
                 return Some(None);
             };
             for (x, j) in (ns..k).enumerate() {
-                r.g[j] = b.g[x];
-                r.gdot[j] = b.gdot[x];
-                r.gamma[j] = b.gamma[x];
-                r.e[j] = b.e[x];
-                r.mu[j] = b.mu[x];
-                r.w.row_mut(j).copy_from(&b.w.row(x));
-                r.vt[j] = b.vt[x];
-                r.gamma_t[j] = b.gamma_t[x];
-                for a in 0..2 {
-                    r.wt.row_mut(2 * j + a).copy_from(&b.wt.row(2 * x + a));
-                }
+                copy_row(&mut r, j, &b, x);
             }
         }
         Some(Some(r))
@@ -498,20 +488,26 @@ impl Gaps {
         if let Some(b) = self.evaluated(m, s.t, &s.q, &s.v) {
             let b = b.ok_or_else(|| failed(s.t, UNEVALUATED.into()))?;
             for (k, i) in (self.nodes..nk).enumerate() {
-                r.g[i] = b.g[k];
-                r.gdot[i] = b.gdot[k];
-                r.gamma[i] = b.gamma[k];
-                r.e[i] = b.e[k];
-                r.mu[i] = b.mu[k];
-                r.w.row_mut(i).copy_from(&b.w.row(k));
-                r.vt[i] = b.vt[k];
-                r.gamma_t[i] = b.gamma_t[k];
-                for a in 0..2 {
-                    r.wt.row_mut(2 * i + a).copy_from(&b.wt.row(2 * k + a));
-                }
+                copy_row(&mut r, i, &b, k);
             }
         }
         Ok(r)
+    }
+}
+
+/// Copies row `k` of `from` (normal and tangential, with `e` and `μ`)
+/// into row `i` of `to` (both on the same speeds).
+fn copy_row(to: &mut Rows, i: usize, from: &Rows, k: usize) {
+    to.g[i] = from.g[k];
+    to.gdot[i] = from.gdot[k];
+    to.gamma[i] = from.gamma[k];
+    to.e[i] = from.e[k];
+    to.mu[i] = from.mu[k];
+    to.w.row_mut(i).copy_from(&from.w.row(k));
+    to.vt[i] = from.vt[k];
+    to.gamma_t[i] = from.gamma_t[k];
+    for a in 0..2 {
+        to.wt.row_mut(2 * i + a).copy_from(&from.wt.row(2 * k + a));
     }
 }
 

@@ -407,15 +407,7 @@ impl Impacts for MixedModel<'_> {
             if !self.rigid().friction(t, &y[ns..], &v[ns..], &mut f) {
                 return None;
             }
-            for i in 0..nk {
-                for a in 0..2 {
-                    r.vt[i][a] = f[a * nk + i];
-                    r.gamma_t[i][a] = f[(2 + a) * nk + i];
-                    for k in 0..nr {
-                        r.wt[(2 * i + a, ns + k)] = f[4 * nk + a * nk * nr + i * nr + k];
-                    }
-                }
-            }
+            r.set_friction(&f, nr, ns);
         }
         Some(r)
     }

@@ -221,6 +221,23 @@ impl Rows {
         }
     }
 
+    /// Sets the tangential rows from the generated `friction` `f` of these
+    /// rows' `nk` contacts on `nu` speeds (`v_t1`, `v_t2`, `γ_t1`, `γ_t2`,
+    /// each `nk`, then `W_t1` and `W_t2` by rows), its speeds at columns
+    /// `col..col + nu` of `wt`.
+    pub(crate) fn set_friction(&mut self, f: &[f64], nu: usize, col: usize) {
+        let nk = self.g.len();
+        for i in 0..nk {
+            for a in 0..2 {
+                self.vt[i][a] = f[a * nk + i];
+                self.gamma_t[i][a] = f[(2 + a) * nk + i];
+                for k in 0..nu {
+                    self.wt[(2 * i + a, col + k)] = f[4 * nk + a * nk * nu + i * nu + k];
+                }
+            }
+        }
+    }
+
     /// Row `i` has Coulomb friction.
     fn rough(&self, i: usize) -> bool {
         self.mu[i] > 0.0
@@ -271,15 +288,7 @@ pub(super) fn rows<S: Simulate + ?Sized>(
         if !model.evaluate(FRICTION, &at, &mut f) {
             return None;
         }
-        for i in 0..nk {
-            for a in 0..2 {
-                r.vt[i][a] = f[a * nk + i];
-                r.gamma_t[i][a] = f[(2 + a) * nk + i];
-                for k in 0..nu {
-                    r.wt[(2 * i + a, k)] = f[4 * nk + a * nk * nu + i * nu + k];
-                }
-            }
-        }
+        r.set_friction(&f, nu, 0);
     }
     Some(r)
 }
