@@ -55,8 +55,9 @@
 //! `w` at every Newton iterate (the change of `w` with `y` times the force
 //! left out of the matrix). A sliding one has `w − μ sᵀ W_t` in its force
 //! column; a sticking one holds its tangential rows step by step,
-//! `W_t(y)·(y − y_n) = 0` from the step's start `y_n` (they need not be
-//! the gradient of a position: a rolling or pivoting contact point). A
+//! `W_t(ȳ)·(y − y_n) = 0` at the midpoint `ȳ` of the step from `y_n`
+//! (they need not be the gradient of a position: a rolling or pivoting
+//! contact point). A
 //! closing gap is located as a node's: its value on the step's cubic
 //! Hermite interpolant of the state, then on the retaken steps.
 //!
@@ -525,11 +526,17 @@ fn direction(vt: [f64; 2], s0: [f64; 2]) -> [f64; 2] {
 
 /// One held row of [`Held`]: a sustained contact's normal row `g = 0`,
 /// or a sticking one's tangent axis `a`: a node's held at its anchor
-/// `t_a·y = c`; the model's own contacts' tangential rows `W_t,a(y)`,
-/// which need not be the gradient of any position (a rolling or pivoting
-/// contact point), held step by step, `W_t,a(y)·(y − y_n) = 0` from the
-/// step's start `y_n` (the tangential displacement over each step zero;
-/// for a constant row the anchor's own condition).
+/// `t_a·y = c`; the rows evaluated per state (a node's sphere, the model's
+/// own contacts), whose tangential rows `W_t,a(y)` need not be the
+/// gradient of any position (a rolling or pivoting contact point), held
+/// step by step, `W_t,a(ȳ)·(y − y_n) = 0` with `ȳ = (y + y_n)/2` the
+/// step's midpoint (the tangential displacement over each step zero to
+/// third order: for a row that is a gradient `∇φ`, `φ(y) − φ(y_n)` to
+/// `O(‖y − y_n‖³)`; for a constant row the anchor's own condition). The
+/// row at the step's end instead, `W_t(y)`, errs by `½ Δyᵀ H Δy`, which
+/// makes the held tangential acceleration `2 γ_t` where it is `γ_t`: a
+/// box pivoting on its sticking corner gained energy and left its cone
+/// at once.
 #[derive(Clone, Copy, Debug)]
 enum Hold {
     Normal(usize),
@@ -662,6 +669,21 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         self.holds.iter().any(|&h| self.on_a_body(h))
     }
 
+    /// The rows evaluated per state at the midpoint of the step from
+    /// `base` to `y` if a sticking row's tangential rows are held among
+    /// them.
+    fn mid_at(&self, t: f64, y: &[f64], base: &[f64], v: &[f64]) -> Option<Rows> {
+        let tangent = self
+            .holds
+            .iter()
+            .any(|&h| matches!(h, Hold::Tangent(..)) && self.on_a_body(h));
+        if !tangent || base.len() != y.len() {
+            return None;
+        }
+        let mid: Vec<f64> = y.iter().zip(base).map(|(a, b)| 0.5 * (a + b)).collect();
+        self.gaps.evaluated(self.inner, t, &mid, v).flatten()
+    }
+
     /// The rows evaluated per state (nodes' spheres, the model's own
     /// contacts) at `(t, y, v)` if a hold is one of them.
     fn body_at(&self, t: f64, y: &[f64], v: &[f64]) -> Option<Rows> {
@@ -672,15 +694,25 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         }
     }
 
-    /// Hold `h`'s residual at `y` (`base`: the step's start; `body`: the
-    /// model's own contacts' rows at `y`).
-    fn value(&self, h: Hold, y: &[f64], base: &[f64], body: Option<&Rows>) -> f64 {
+    /// Hold `h`'s residual at `y` (`body`: the rows evaluated per state at
+    /// `y`; `mid`: the same at the step's midpoint, with `base` the step's
+    /// start).
+    fn value(
+        &self,
+        h: Hold,
+        y: &[f64],
+        body: Option<&Rows>,
+        (base, mid): (&[f64], Option<&Rows>),
+    ) -> f64 {
         if self.on_a_body(h) {
             return match self.own(h, body) {
                 Some((Own::Normal(b), r)) => r.g[b],
-                Some((Own::Tangent(j), r)) => (0..y.len())
-                    .map(|k| r.wt[(j, k)] * (y[k] - base.get(k).copied().unwrap_or(y[k])))
-                    .sum(),
+                Some((Own::Tangent(_), _)) => match self.own(h, mid) {
+                    Some((Own::Tangent(j), m)) => (0..y.len())
+                        .map(|k| m.wt[(j, k)] * (y[k] - base.get(k).copied().unwrap_or(y[k])))
+                        .sum(),
+                    _ => f64::NAN,
+                },
                 None => f64::NAN,
             };
         }
@@ -938,9 +970,10 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
         self.inner
             .residual(&mut w.inner, t, y, v, acc, &lambda[..mi], &mut r[..n + mi]);
         let body = self.body_at(t, y, v);
+        let mid = self.mid_at(t, y, &w.base, v);
         for (b, &h) in self.holds.iter().enumerate() {
             self.add_column(h, v, body.as_ref(), lambda[mi + b], &mut r[..n]);
-            r[n + mi + b] = self.value(h, y, &w.base, body.as_ref());
+            r[n + mi + b] = self.value(h, y, body.as_ref(), (&w.base, mid.as_ref()));
         }
     }
 
@@ -990,10 +1023,14 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
     fn accepted(&self, w: &mut Self::Work, state: &State) -> f64 {
         let own = self.inner.accepted(&mut w.inner, state);
         let body = self.body_at(state.t, &state.q, &state.v);
+        let mid = self.mid_at(state.t, &state.q, &w.base, &state.v);
         let worst = self
             .holds
             .iter()
-            .map(|&h| self.value(h, &state.q, &w.base, body.as_ref()).abs())
+            .map(|&h| {
+                self.value(h, &state.q, body.as_ref(), (&w.base, mid.as_ref()))
+                    .abs()
+            })
             // NaN (a body's row that cannot be evaluated) is kept.
             .fold(own, |a, x| {
                 if a.is_nan() || x.is_nan() {
