@@ -536,7 +536,18 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
                         crate::system::CableTarget::Sphere { centre } => (Vec::new(), *centre),
                         crate::system::CableTarget::Plane { .. } => (Vec::new(), [0.0; 3]),
                     };
-                    let reference = (layout.dim != 2).then(|| {
+                    // The planar rule (`t1 = n × z`) where both centres
+                    // stay in the x–y plane; the spatial one otherwise (a
+                    // `Cable3D` on either side, or a fixed centre off it).
+                    let planar = layout.dim == 2
+                        && match other {
+                            crate::system::CableTarget::Node { cable, .. } => {
+                                cables.get(*cable).is_some_and(|l| l.dim == 2)
+                            }
+                            crate::system::CableTarget::Sphere { centre } => centre[2] == 0.0,
+                            crate::system::CableTarget::Plane { .. } => true,
+                        };
+                    let reference = (!planar).then(|| {
                         let mut a = [0.0; 3];
                         let line = c.line_at_start(sys).unwrap_or([0.0, 0.0, 1.0]);
                         a[crate::mech::contacts::least_aligned_axis(line)] = 1.0;

@@ -1233,3 +1233,30 @@ fn finished_without_gaining(runs: &[(&str, &eom_sim::RunReport)], tol: f64) {
         }
     }
 }
+
+/// The friction axes of a node's sphere: the planar rule (`t1 = n × z`,
+/// no reference axis) only where both centres stay in the x–y plane; a
+/// planar cable's node against a fixed sphere off that plane, or against
+/// a `Cable3D`'s node, takes the spatial rule (its normal leaves the
+/// plane, and `n × z` would not be a unit axis).
+#[test]
+fn a_node_spheres_friction_axes_are_planar_only_in_the_plane() {
+    let reference = |text: &str| {
+        let sys = system(text);
+        let (_, cables) = eom_gen::cables::structure(&sys).expect("structure");
+        let contacts = eom_gen::cables::node_contacts(&sys, &cables);
+        contacts[0].sphere.as_ref().expect("a sphere").reference
+    };
+    let inplane = wire_on_a_sphere_with("sphere", 0.5, ", mu: 0.3", ("", 0.0));
+    assert_eq!(reference(&inplane), None);
+    let off = inplane.replace("(0.5, -0.05, 0)", "(0.5, -0.05, 0.02)");
+    assert_eq!(reference(&off), Some([1.0, 0.0, 0.0]));
+    let node = wire_on_a_sphere_with("node", 0.5, ", mu: 0.3", ("", 0.0));
+    assert_eq!(reference(&node), None);
+    let spatial_stub = node.replace(
+        r#"Cable(name: "stub", element: Cable2D"#,
+        r#"Cable(name: "stub", element: Cable3D"#,
+    );
+    assert!(spatial_stub.contains("Cable3D"));
+    assert!(reference(&spatial_stub).is_some());
+}

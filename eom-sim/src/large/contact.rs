@@ -122,8 +122,9 @@ pub struct NodeSphere {
     /// The world axis the friction's tangent axes are taken from in
     /// space, `t1 = (a − (a·n) n)/‖a − (a·n) n‖`, `t2 = n × t1` (the axis
     /// least aligned with the line of centres at the start, as for rigid
-    /// spheres); `None` for planar cables, whose `t1 = n × z` turns in
-    /// their plane (`t2 = z` has no coordinate).
+    /// spheres); `None` where both centres stay in the x–y plane (planar
+    /// cables), whose `t1 = n × z` turns in that plane (`t2 = z` has no
+    /// coordinate).
     pub reference: Option<[f64; 3]>,
 }
 
