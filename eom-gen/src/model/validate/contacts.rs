@@ -344,7 +344,7 @@ impl Ctx<'_> {
                     "contact `{name}` puts cable node {node}'s sphere against a sphere on body `{}`",
                     b.body
                 ),
-                "a cable node's sphere touches a sphere fixed in the world (`b: (body: \"ground\", point: …)`) or about another cable node (`b: (body: CABLE, node: K)`); a body's sphere touches it as a plane on the node's side is not modelled: hang the body's sphere at a node, or put the contact on the body",
+                "a cable node's sphere touches a sphere fixed in the world (`b: (body: \"ground\", point: …)`) or about another cable node (`b: (body: CABLE, node: K)`); a body's geometry at a cable node is not supported (the runtime would need the body's point, its Jacobian and `J̇ u` there)",
             );
             None
         };
