@@ -525,49 +525,45 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
                 let base = layout.offset + node * layout.node_coords;
                 (0..layout.dim.min(3)).map(|a| base + a).collect()
             };
+            // A node's sphere against `b`'s coordinates or a fixed `centre`:
+            // the planar rule for its friction axes (`t1 = n × z`) where
+            // both centres stay in the x–y plane (`other_planar`), the
+            // spatial one otherwise (a `Cable3D` on either side, or a fixed
+            // centre off the plane).
+            let sphere = |b: Vec<usize>, centre: [f64; 3], other_planar: bool| {
+                let reference = (layout.dim != 2 || !other_planar).then(|| {
+                    let mut a = [0.0; 3];
+                    let line = c.line_at_start(sys).unwrap_or([0.0, 0.0, 1.0]);
+                    a[crate::mech::contacts::least_aligned_axis(line)] = 1.0;
+                    a
+                });
+                eom_sim::large::NodeContact {
+                    name: c.name.clone(),
+                    row: Vec::new(),
+                    level: 0.0,
+                    e: c.e,
+                    mu: c.mu,
+                    tangents: [Vec::new(), Vec::new()],
+                    sphere: Some(eom_sim::large::NodeSphere {
+                        a: coords(layout, c.node),
+                        b,
+                        centre,
+                        radius: c.radius,
+                        reference,
+                    }),
+                }
+            };
             let (point, n) = match &c.against {
                 crate::system::CableTarget::Plane { point, normal } => (*point, *normal),
-                other => {
-                    // A sphere: rows evaluated per state by the runtime.
-                    let (b, centre) = match other {
-                        crate::system::CableTarget::Node { cable, node } => {
-                            (coords(cables.get(*cable)?, *node), [0.0; 3])
-                        }
-                        crate::system::CableTarget::Sphere { centre } => (Vec::new(), *centre),
-                        crate::system::CableTarget::Plane { .. } => (Vec::new(), [0.0; 3]),
-                    };
-                    // The planar rule (`t1 = n × z`) where both centres
-                    // stay in the x–y plane; the spatial one otherwise (a
-                    // `Cable3D` on either side, or a fixed centre off it).
-                    let planar = layout.dim == 2
-                        && match other {
-                            crate::system::CableTarget::Node { cable, .. } => {
-                                cables.get(*cable).is_some_and(|l| l.dim == 2)
-                            }
-                            crate::system::CableTarget::Sphere { centre } => centre[2] == 0.0,
-                            crate::system::CableTarget::Plane { .. } => true,
-                        };
-                    let reference = (!planar).then(|| {
-                        let mut a = [0.0; 3];
-                        let line = c.line_at_start(sys).unwrap_or([0.0, 0.0, 1.0]);
-                        a[crate::mech::contacts::least_aligned_axis(line)] = 1.0;
-                        a
-                    });
-                    return Some(eom_sim::large::NodeContact {
-                        name: c.name.clone(),
-                        row: Vec::new(),
-                        level: 0.0,
-                        e: c.e,
-                        mu: c.mu,
-                        tangents: [Vec::new(), Vec::new()],
-                        sphere: Some(eom_sim::large::NodeSphere {
-                            a: coords(layout, c.node),
-                            b,
-                            centre,
-                            radius: c.radius,
-                            reference,
-                        }),
-                    });
+                // A sphere: rows evaluated per state by the runtime; the
+                // other centre (a node's coordinates, or fixed), and
+                // whether it stays in the x–y plane.
+                crate::system::CableTarget::Sphere { centre } => {
+                    return Some(sphere(Vec::new(), *centre, centre[2] == 0.0));
+                }
+                crate::system::CableTarget::Node { cable, node } => {
+                    let other = cables.get(*cable)?;
+                    return Some(sphere(coords(other, *node), [0.0; 3], other.dim == 2));
                 }
             };
             let [t1, t2] = if layout.dim == 2 {

@@ -375,6 +375,10 @@ impl Gaps {
             return None;
         }
         let (ns, n) = (self.spheres.len(), v.len());
+        if ns == 0 {
+            // The model's own rows alone: as it gives them.
+            return Some(m.body_rows(t, y, v));
+        }
         let mut r = Rows {
             g: vec![0.0; k],
             gdot: vec![0.0; k],
@@ -822,7 +826,14 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
     /// along `s0` (falls through zero when the slide stops), `None` for
     /// the others (NaN: a body's row that cannot be evaluated).
     pub fn slip_speeds(&self, s: &State) -> Vec<Option<f64>> {
-        let body = self.body_at(s.t, &s.q, &s.v);
+        // The rows evaluated per state only where one of them slides.
+        let evaluated_slides = self
+            .active
+            .iter()
+            .any(|&i| !self.gaps.node(i) && matches!(self.slides[i], Some(Slide::Slip(_))));
+        let body = evaluated_slides
+            .then(|| self.body_at(s.t, &s.q, &s.v))
+            .flatten();
         self.active
             .iter()
             .map(|&i| match self.slides[i] {
