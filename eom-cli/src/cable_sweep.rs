@@ -316,7 +316,8 @@ fn rigid_with<'a>(
             eom_gen::cables::holonomic_names(f),
         )
         .with_energy_source(eom_gen::cables::energy_source(rigid_sys))
-        .with_contacts(eom_gen::cables::contact_names(rigid_sys)),
+        .with_contacts(eom_gen::cables::contact_names(rigid_sys))
+        .with_frames(rigid_sys.cable_frames().len()),
     )
 }
 

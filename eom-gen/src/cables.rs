@@ -379,7 +379,8 @@ pub fn interpreted_rigid<'a>(f: &'a Formulation, sys: &'a System) -> Box<dyn Rig
         })
         .with_constraints(f.constraint_names.len(), holonomic_names(f))
         .with_energy_source(energy_source(sys))
-        .with_contacts(contact_names(sys)),
+        .with_contacts(contact_names(sys))
+        .with_frames(sys.cable_frames().len()),
     )
 }
 
@@ -510,9 +511,15 @@ pub fn structure(sys: &System) -> Result<(Chains, Vec<MixedCable>), CableError> 
 /// spatial cable; for a planar one `t1 = n × z` in its plane (`t2 = z`
 /// has no coordinate there, its row is empty).
 pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large::NodeContact> {
+    // A body's plane or sphere: its frame, in `System::cable_frames` order.
+    let start = crate::mech::mounts::frames_at_start(sys);
+    let mut frames = 0..;
     sys.cable_contacts
         .iter()
-        .filter_map(|c| {
+        .map(|c| (c, c.against.on_body().and_then(|_| frames.next())))
+        .collect::<Vec<_>>()
+        .into_iter()
+        .filter_map(|(c, frame)| {
             let layout = cables.get(c.cable)?;
             let base = layout.offset + c.node * layout.node_coords;
             let along = |d: [f64; 3]| -> Vec<(usize, f64)> {
@@ -533,7 +540,7 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
             let sphere = |b: Vec<usize>, centre: [f64; 3], other_planar: bool| {
                 let reference = (layout.dim != 2 || !other_planar).then(|| {
                     let mut a = [0.0; 3];
-                    let line = c.line_at_start(sys).unwrap_or([0.0, 0.0, 1.0]);
+                    let line = c.line_at_start(sys, None).unwrap_or([0.0, 0.0, 1.0]);
                     a[crate::mech::contacts::least_aligned_axis(line)] = 1.0;
                     a
                 });
@@ -551,7 +558,39 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
                         radius: c.radius,
                         reference,
                     }),
+                    body: None,
                 }
+            };
+            // A body's plane (normal and tangent axes in its axes) or
+            // sphere (its reference axis from the line of centres at the
+            // start, as for rigid spheres).
+            let on_body = |plane: Option<[f64; 3]>, radius_b: f64| {
+                let frame = frame?;
+                let line = c
+                    .line_at_start(sys, start.get(frame))
+                    .unwrap_or([0.0, 0.0, 1.0]);
+                let mut reference = [0.0; 3];
+                reference[crate::mech::contacts::least_aligned_axis(line)] = 1.0;
+                Some(eom_sim::large::NodeContact {
+                    name: c.name.clone(),
+                    row: Vec::new(),
+                    level: 0.0,
+                    e: c.e,
+                    mu: c.mu,
+                    tangents: [Vec::new(), Vec::new()],
+                    sphere: None,
+                    body: Some(eom_sim::large::NodeOnBody {
+                        a: coords(layout, c.node),
+                        frame,
+                        plane: plane.map(|n| {
+                            let [t1, t2] = crate::mech::contacts::tangent_axes(n);
+                            [n, t1, t2]
+                        }),
+                        radius_a: c.radius - radius_b,
+                        radius_b,
+                        reference,
+                    }),
+                })
             };
             let (point, n) = match &c.against {
                 crate::system::CableTarget::Plane { point, normal } => (*point, *normal),
@@ -564,6 +603,12 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
                 crate::system::CableTarget::Node { cable, node } => {
                     let other = cables.get(*cable)?;
                     return Some(sphere(coords(other, *node), [0.0; 3], other.dim == 2));
+                }
+                crate::system::CableTarget::BodyPlane { normal, .. } => {
+                    return on_body(Some(*normal), 0.0);
+                }
+                crate::system::CableTarget::BodySphere { radius, .. } => {
+                    return on_body(None, *radius);
                 }
             };
             let [t1, t2] = if layout.dim == 2 {
@@ -581,6 +626,7 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
                 mu: c.mu,
                 tangents: [along(t1), along(t2)],
                 sphere: None,
+                body: None,
             })
         })
         .collect()

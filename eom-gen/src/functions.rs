@@ -49,6 +49,9 @@ pub enum Function {
     /// The unilateral contacts' gaps `g`, normal speeds `ġ = wᵀ u`, `γ`
     /// (`g̈ = wᵀ u̇ − γ`), their `e` and `μ`, and rows `w`.
     Contacts,
+    /// The frames of the bodies cable nodes touch: positions, axes,
+    /// velocities, their rates at `u̇ = 0` and their rows `∂/∂u`.
+    ContactFrames,
     /// Joint impulses of a velocity jump (Wittenburg ch. 6).
     JointImpulses,
     /// The contacts' tangential speeds `v_t = W_t u`, `γ_t` and rows `W_t`
@@ -125,6 +128,8 @@ pub enum When {
     HasContacts,
     /// When a contact has Coulomb friction (`μ > 0`).
     HasFriction,
+    /// When a cable node touches a plane or sphere on a body.
+    HasCableFrames,
     /// Only when asked for by name (a scene's `functions` list, or a
     /// caller's request such as `eom-gen linearize`'s); never by default,
     /// so a model without such a request generates what it did before.
@@ -300,6 +305,17 @@ pub const TABLE: &[Entry] = &[
         uses_multipliers: false,
         layout: Layout::Vector,
         when: When::HasContacts,
+        in_trait: false,
+        derived_from: &[],
+    },
+    Entry {
+        function: Function::ContactFrames,
+        name: "contact_frames",
+        doc: "the frames of the bodies cable nodes touch (issue #26), frame by frame (a plane's point or a sphere's centre on its body): the point's world position `p` (3, m), the body's axes in the world by rows (9), the point's velocity `ṗ` (3, m/s) and the body's angular velocity `ω` (3, rad/s), then their rates at `u̇ = 0` (`p̈ − J_p u̇`, `ω̇ − J_ω u̇`, 6), then the rows `J_p = ∂ṗ/∂u` (3 × `NU`) and `J_ω = ∂ω/∂u` (3 × `NU`), row by row; all in world axes",
+        args: &[Arg::T, Arg::Q, Arg::U],
+        uses_multipliers: false,
+        layout: Layout::Vector,
+        when: When::HasCableFrames,
         in_trait: false,
         derived_from: &[],
     },

@@ -699,37 +699,62 @@ pub struct CableContactInfo {
 impl CableContactInfo {
     /// The node's position at the start (the cable straight from `from`
     /// to `to`) and the other centre's (a plane's point for a plane).
-    fn centres_at_start(&self, sys: &System) -> Option<([f64; 3], [f64; 3])> {
+    /// The node's position at the start (the cable straight from `from`
+    /// to `to`), the other centre's (a plane's point for a plane) and the
+    /// plane's normal, world axes; `frame` is the body's frame at the start
+    /// for a body's plane or sphere (`None` there: not known).
+    fn centres_at_start(
+        &self,
+        sys: &System,
+        frame: Option<&BodyFrame>,
+    ) -> Option<([f64; 3], [f64; 3], Option<[f64; 3]>)> {
         let x = sys.cable_node_start(self.cable, self.node)?;
-        let other = match &self.against {
-            CableTarget::Plane { point, .. } => *point,
-            CableTarget::Sphere { centre } => *centre,
-            CableTarget::Node { cable, node } => sys.cable_node_start(*cable, *node)?,
-        };
-        Some((x, other))
+        Some(match &self.against {
+            CableTarget::Plane { point, normal } => (x, *point, Some(*normal)),
+            CableTarget::Sphere { centre } => (x, *centre, None),
+            CableTarget::Node { cable, node } => (x, sys.cable_node_start(*cable, *node)?, None),
+            CableTarget::BodyPlane { normal, .. } => {
+                let f = frame?;
+                (x, f.p, Some(f.turn(*normal)))
+            }
+            CableTarget::BodySphere { .. } => (x, frame?.p, None),
+        })
     }
 
     /// The gap at the start, m (`None` for a cable or node the model does
-    /// not have).
-    pub fn gap_at_start(&self, sys: &System) -> Option<f64> {
-        let (x, o) = self.centres_at_start(sys)?;
+    /// not have, or a body's geometry without its `frame` at the start).
+    pub fn gap_at_start(&self, sys: &System, frame: Option<&BodyFrame>) -> Option<f64> {
+        let (x, o, normal) = self.centres_at_start(sys, frame)?;
         let d: [f64; 3] = std::array::from_fn(|k| x[k] - o[k]);
-        Some(match &self.against {
-            CableTarget::Plane { normal, .. } => {
-                (0..3).map(|k| normal[k] * d[k]).sum::<f64>() - self.radius
-            }
-            _ => d.iter().map(|x| x * x).sum::<f64>().sqrt() - self.radius,
+        Some(match normal {
+            Some(n) => (0..3).map(|k| n[k] * d[k]).sum::<f64>() - self.radius,
+            None => d.iter().map(|x| x * x).sum::<f64>().sqrt() - self.radius,
         })
     }
 
     /// The line of centres at the start, from the other centre to the
-    /// node (the plane's normal for a plane).
-    pub fn line_at_start(&self, sys: &System) -> Option<[f64; 3]> {
-        if let CableTarget::Plane { normal, .. } = &self.against {
-            return Some(*normal);
-        }
-        let (x, o) = self.centres_at_start(sys)?;
-        Some(std::array::from_fn(|k| x[k] - o[k]))
+    /// node (the plane's normal for a plane), world axes.
+    pub fn line_at_start(&self, sys: &System, frame: Option<&BodyFrame>) -> Option<[f64; 3]> {
+        let (x, o, normal) = self.centres_at_start(sys, frame)?;
+        Some(normal.unwrap_or_else(|| std::array::from_fn(|k| x[k] - o[k])))
+    }
+}
+
+/// A body's frame at a state, world axes: the world position `p` of a
+/// point on the body and the body's axes `e` (`e[i][j]`: world component
+/// `i` of body axis `j`), as the generated `contact_frames` gives them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyFrame {
+    /// The point's world position, m.
+    pub p: [f64; 3],
+    /// The body's axes in the world, by rows.
+    pub e: [[f64; 3]; 3],
+}
+
+impl BodyFrame {
+    /// A vector given in the body's axes, in world axes.
+    pub fn turn(&self, v: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|i| (0..3).map(|j| self.e[i][j] * v[j]).sum())
     }
 }
 
@@ -757,6 +782,35 @@ pub enum CableTarget {
         /// Its node.
         node: usize,
     },
+    /// A plane fixed on a body (`Plane` with `on`): a point of it and its
+    /// unit normal towards the free side, both in the body's axes; it
+    /// moves and turns with the body ([`System::cable_frames`]).
+    BodyPlane {
+        /// The point of the plane on its body (the frame's point).
+        at: Point,
+        /// The unit normal, body axes.
+        normal: [f64; 3],
+    },
+    /// A sphere on a body (`Spheres` with `b` on a body): its centre (the
+    /// frame's point) and its own radius, m (the contact's `radius` is
+    /// the sum of both).
+    BodySphere {
+        /// The sphere's centre on its body.
+        at: Point,
+        /// The body's sphere's radius, m.
+        radius: f64,
+    },
+}
+
+impl CableTarget {
+    /// The point on a body this target moves with (`None`: fixed in the
+    /// world, or a cable node).
+    pub fn on_body(&self) -> Option<&Point> {
+        match self {
+            CableTarget::BodyPlane { at, .. } | CableTarget::BodySphere { at, .. } => Some(at),
+            _ => None,
+        }
+    }
 }
 
 /// What a unilateral contact's gap measures.
@@ -957,6 +1011,17 @@ impl System {
         Some(std::array::from_fn(|a| {
             ch.start[a] + s * (ch.end[a] - ch.start[a])
         }))
+    }
+
+    /// The points on bodies that cable nodes touch (a plane's point, a
+    /// sphere's centre), one per contact at a cable node against a body's
+    /// plane or sphere, in the order of `cable_contacts`. The generated
+    /// `contact_frames` has one block per entry, in this order.
+    pub fn cable_frames(&self) -> Vec<&Point> {
+        self.cable_contacts
+            .iter()
+            .filter_map(|c| c.against.on_body())
+            .collect()
     }
 
     /// The cable ends held at markers of rigid bodies, in order (cable by

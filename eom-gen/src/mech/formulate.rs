@@ -214,6 +214,9 @@ pub struct Formulation {
     /// The cable mounts, in the order of `attachments` (`cable.start`,
     /// `cable.end`).
     pub mounts: Vec<String>,
+    /// The contacts at cable nodes against a body's plane or sphere, in
+    /// the order of `contact_frames`.
+    pub frames: Vec<String>,
     /// The contacts' gap rows, in the order of `contacts` (`stop.lower`,
     /// `ball_floor`).
     pub contact_rows: Vec<String>,
@@ -262,6 +265,7 @@ impl Formulation {
             Function::CutJointReactions => &self.cut_joints,
             Function::Constraints => &self.constraint_names,
             Function::Attachments => &self.mounts,
+            Function::ContactFrames => &self.frames,
             Function::Contacts => &self.contact_rows,
             Function::JointImpulses => &self.impulse_joints,
             Function::Friction => &self.contact_rows,
@@ -731,6 +735,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             .collect();
         (Some(cx.lower(&outs, opts)), labels)
     };
+    let contact_frames = contact_frames(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
     let contacts = contacts(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
     let friction = friction(sys, &cx, &tree, &env, &ev, &k, &q, &u, &qdot_exprs, opts)?;
     let (joint_impulses, impulse_joints) = joint_impulses(sys, &cx, &tree, &env, &ev, &k, opts)?;
@@ -748,6 +753,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         (Function::CutJointReactions, cut_reactions),
         (Function::Attachments, attachments),
         (Function::Contacts, contacts),
+        (Function::ContactFrames, contact_frames),
         (Function::JointImpulses, joint_impulses),
         (Function::Friction, friction),
         (Function::ForwardDynamicsDerivatives, fd_derivatives),
@@ -783,6 +789,12 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
         jacobian_rows: out.jacobian_rows,
         cut_joints,
         mounts,
+        frames: sys
+            .cable_contacts
+            .iter()
+            .filter(|c| c.against.on_body().is_some())
+            .map(|c| c.name.clone())
+            .collect(),
         contact_rows: sys.contact_rows().into_iter().map(|(_, r)| r).collect(),
         impulse_joints,
         loops,
@@ -1130,6 +1142,57 @@ fn contacts<'cx>(
         }
     }
     let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(values).collect();
+    Ok(Some(cx.lower(&outs, opts)))
+}
+
+/// The program of `contact_frames` (see [`crate::functions`]): per frame
+/// of `System::cable_frames` the values of
+/// [`super::mounts::frame_values`] (`p`, `e`, `ṗ`, `ω`), then the rates
+/// of `ṗ` and `ω` at `u̇ = 0` (`p̈ − J_p u̇`, `ω̇ − J_ω u̇`), then the rows
+/// `J_p = ∂ṗ/∂u` (3 × `NU`) and `J_ω = ∂ω/∂u` (3 × `NU`); `None` without
+/// such frames.
+#[allow(clippy::too_many_arguments)]
+fn contact_frames<'cx>(
+    sys: &System,
+    cx: &'cx Context,
+    tree: &TreeModel<Expr<'cx>>,
+    env: &dyn Env<Expr<'cx>>,
+    ev: &Evaluator<'_, Expr<'cx>>,
+    k: &Kinematics<Expr<'cx>>,
+    q: &[Expr<'cx>],
+    u: &[Expr<'cx>],
+    qdot: &[Expr<'cx>],
+    opts: LowerOptions,
+) -> Result<Option<Program>, FormulateError> {
+    if sys.cable_frames().is_empty() {
+        return Ok(None);
+    }
+    let values = super::mounts::frame_values(sys, tree, env, ev, k)?;
+    let mut second = at_rest_along_the_motion(cx, q, u, qdot);
+    let mut names = Vec::new();
+    let mut exprs = Vec::new();
+    for (f, block) in values
+        .chunks(super::mounts::FRAME_VALUES)
+        .enumerate()
+    {
+        for (r, &v) in block.iter().enumerate() {
+            names.push(format!("f{f}_{r}"));
+            exprs.push(v);
+        }
+        // ṗ and ω, the last six values: their rates, then their rows.
+        let speeds = &block[12..];
+        for (r, &v) in speeds.iter().enumerate() {
+            names.push(format!("f{f}_rate{r}"));
+            exprs.push(cx.time_derivative(&mut second, v)?);
+        }
+        for (r, &v) in speeds.iter().enumerate() {
+            for (kk, &uk) in u.iter().enumerate() {
+                names.push(format!("f{f}_j{r}_{kk}"));
+                exprs.push(cx.diff(v, uk));
+            }
+        }
+    }
+    let outs: Vec<(&str, Expr<'cx>)> = names.iter().map(String::as_str).zip(exprs).collect();
     Ok(Some(cx.lower(&outs, opts)))
 }
 

@@ -75,3 +75,76 @@ pub fn mount_values<S: Scalar>(
     }
     Ok(out)
 }
+
+/// The values per frame of [`frame_values`]: the point's position (3),
+/// the body's axes by rows (9), the point's velocity (3) and the body's
+/// angular velocity (3), world axes.
+pub const FRAME_VALUES: usize = 18;
+
+/// The frames of the bodies cable nodes touch (`System::cable_frames`), in
+/// order, [`FRAME_VALUES`] each: the point's world position `p`, the
+/// body's axes `e` in the world by rows, the point's velocity `ṗ` and the
+/// body's angular velocity `ω` (world axes); a point at a flexible body's
+/// node moves and turns with that node. On `f64` the numeric twin
+/// ([`super::Numeric::contact_frames`]); on `Expr` the generated
+/// `contact_frames` adds their rates at `u̇ = 0` and the rows `∂ṗ/∂u`,
+/// `∂ω/∂u`.
+pub fn frame_values<S: Scalar>(
+    sys: &System,
+    tree: &TreeModel<S>,
+    env: &dyn Env<S>,
+    ev: &super::kinematics::Evaluator<'_, S>,
+    k: &Kinematics<S>,
+) -> Result<Vec<S>, MechError> {
+    let low = Lowering::new(env);
+    let mut out = Vec::new();
+    for at in sys.cable_frames() {
+        let point = low.vec3(&at.position)?;
+        let body = tree.index_of_body[at.body];
+        // The frame the point is fixed in, world pose and its spatial
+        // velocity in its own axes (the ground: at rest).
+        let (pose, motion) = match body {
+            None => (Pose::identity(), super::spatial::Motion::zero()),
+            Some(i) => at
+                .node
+                .and_then(|node| ev.node_frame(k, i, node))
+                .unwrap_or((k.world[i], k.v[i])),
+        };
+        let p = pose.point(point);
+        let v = pose.e.mul_vec(motion.v + motion.w.cross(point));
+        let w = pose.e.mul_vec(motion.w);
+        out.extend(p.0);
+        for row in pose.e.0 {
+            out.extend(row);
+        }
+        out.extend(v.0);
+        out.extend(w.0);
+    }
+    Ok(out)
+}
+
+/// The frames of the bodies cable nodes touch at the initial state, in the
+/// order of `System::cable_frames` (empty if they cannot be evaluated: the
+/// model's own errors say why).
+pub fn frames_at_start(sys: &System) -> Vec<crate::system::BodyFrame> {
+    if sys.cable_frames().is_empty() {
+        return Vec::new();
+    }
+    let Ok(num) = super::Numeric::new(sys) else {
+        return Vec::new();
+    };
+    let Ok(values) = num.contact_frames(sys, &sys.q0(), &sys.u0(), 0.0) else {
+        return Vec::new();
+    };
+    values
+        .chunks(FRAME_VALUES)
+        .map(|v| crate::system::BodyFrame {
+            p: [v[0], v[1], v[2]],
+            e: [
+                [v[3], v[4], v[5]],
+                [v[6], v[7], v[8]],
+                [v[9], v[10], v[11]],
+            ],
+        })
+        .collect()
+}

@@ -369,6 +369,26 @@ impl Numeric {
         super::mounts::mount_values(sys, &self.tree, &self.env, &k)
     }
 
+    /// The frames of the bodies cable nodes touch at `(q, u)`, `t`, flat
+    /// (the first values of the generated `contact_frames`; see
+    /// [`super::mounts::frame_values`]).
+    pub fn contact_frames(
+        &self,
+        sys: &System,
+        q: &[f64],
+        u: &[f64],
+        t: f64,
+    ) -> Result<Vec<f64>, MechError> {
+        let ev = self.eval();
+        let k = ev.kinematics(&State {
+            q,
+            u,
+            t,
+            inputs: &[],
+        })?;
+        super::mounts::frame_values(sys, &self.tree, &self.env, &ev, &k)
+    }
+
     /// The gap `g` and normal speed `ġ` of every contact row at `(q, u)`
     /// (the generated `contacts` without `γ` and `w`; see
     /// [`super::contacts`]).

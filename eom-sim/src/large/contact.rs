@@ -100,6 +100,106 @@ pub struct NodeContact {
     /// about another node (`Spheres`); `None` for a plane (`row`, `level`
     /// and `tangents`, which a sphere leaves empty).
     pub sphere: Option<NodeSphere>,
+    /// The node (or a sphere about it) against a plane or sphere on a
+    /// rigid body; `row`, `level` and `tangents` are then empty and
+    /// `sphere` is `None`.
+    pub body: Option<NodeOnBody>,
+}
+
+/// A cable node against a body's plane or sphere: the body's frame at the
+/// plane's point (the sphere's centre) comes from the rigid part's
+/// generated `contact_frames` at every state ([`Frame`]), and the rows are
+/// evaluated from it: with `d = x − p` (the node from the frame's point),
+/// the relative speed `s = ẋ − ṗ − ω × d`,
+/// - a plane, normal `n = E n_b` (turning with the body): `g = n·d − r_a`;
+/// - a sphere: `n = d/‖d‖`, `g = ‖d‖ − r_a − r_b`;
+///
+/// `ġ = n·s`, the row `w = n` on the node's coordinates and
+/// `−J_pᵀ n − J_ωᵀ (d × n)` on the rigid part's, and
+/// `γ = −ṅ·s + n·(a₀ + α₀ × d + ω × ḋ)` (`a₀`, `α₀` the frame's
+/// accelerations at `u̇ = 0`). With friction the tangential speeds are of
+/// the node's touching point against the body's material point there
+/// (`x − r_a n` on the plane, `p + r_b n` on the sphere).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeOnBody {
+    /// The node's position coordinates, one per axis (2 for a planar
+    /// cable, 3), as full structural indices.
+    pub a: Vec<usize>,
+    /// The frame's index in the rigid part's `contact_frames`.
+    pub frame: usize,
+    /// A plane's unit normal and tangent axes `t1`, `t2` in the body's
+    /// axes; `None`: a sphere about the frame's point.
+    pub plane: Option<[[f64; 3]; 3]>,
+    /// The radius of the sphere about the node, m.
+    pub radius_a: f64,
+    /// The body's sphere's radius, m (0 for a plane).
+    pub radius_b: f64,
+    /// A sphere's reference axis for its tangent axes (world axes), as
+    /// for rigid spheres: `t1 = (a − (a·n) n)/‖…‖`, `t2 = n × t1`.
+    pub reference: [f64; 3],
+}
+
+/// A rigid body's frame at a state (one block of the generated
+/// `contact_frames`, world axes), its rows on a model's free coordinates:
+/// the point `p`, the body's axes `e` (by rows), `ṗ`, `ω`, their
+/// accelerations at `u̇ = 0` `a₀`, `α₀`, and per rigid speed `k` the
+/// columns `∂ṗ/∂u_k`, `∂ω/∂u_k` (the rigid speeds from free index
+/// `offset`).
+#[derive(Clone, Debug)]
+pub(super) struct Frame {
+    p: [f64; 3],
+    e: [[f64; 3]; 3],
+    v: [f64; 3],
+    w: [f64; 3],
+    a0: [f64; 3],
+    al0: [f64; 3],
+    jp: Vec<[f64; 3]>,
+    jw: Vec<[f64; 3]>,
+    offset: usize,
+}
+
+impl Frame {
+    /// The number of values of one frame of `contact_frames` for a rigid
+    /// part of `nr` speeds.
+    pub(super) fn len(nr: usize) -> usize {
+        24 + 6 * nr
+    }
+
+    /// The frames of a flat `contact_frames` result (`nr` rigid speeds,
+    /// the first at free index `offset`).
+    pub(super) fn parse(out: &[f64], nr: usize, offset: usize) -> Vec<Frame> {
+        out.chunks(Self::len(nr))
+            .map(|b| {
+                let v3 = |i: usize| [b[i], b[i + 1], b[i + 2]];
+                let col = |r: usize, k: usize| [0, 1, 2].map(|i| b[24 + (r + i) * nr + k]);
+                Frame {
+                    p: v3(0),
+                    e: [v3(3), v3(6), v3(9)],
+                    v: v3(12),
+                    w: v3(15),
+                    a0: v3(18),
+                    al0: v3(21),
+                    jp: (0..nr).map(|k| col(0, k)).collect(),
+                    jw: (0..nr).map(|k| col(3, k)).collect(),
+                    offset,
+                }
+            })
+            .collect()
+    }
+
+    /// `v` in the body's axes, in world axes.
+    fn turn(&self, v: [f64; 3]) -> [f64; 3] {
+        self.e.map(|row| dot3(row, v))
+    }
+
+    /// Adds `−(∂ṗ/∂u)ᵀ dir − (∂ω/∂u)ᵀ (arm × dir)` to row `row` of `m`:
+    /// the row of `dir·(ṗ + ω × arm)` with its sign turned.
+    fn put(&self, m: &mut DMatrix<f64>, row: usize, dir: [f64; 3], arm: [f64; 3]) {
+        let moment = cross3(arm, dir);
+        for (k, (jp, jw)) in self.jp.iter().zip(&self.jw).enumerate() {
+            m[(row, self.offset + k)] -= dot3(*jp, dir) + dot3(*jw, moment);
+        }
+    }
 }
 
 /// The sphere of a [`NodeContact`]: `g = ‖x_a − x_b‖ − radius` with
@@ -211,18 +311,118 @@ impl SphereRow {
             let t1d = [ndot[1], -ndot[0], 0.0];
             return ([t1, [0.0, 0.0, -1.0]], [t1d, [0.0; 3]]);
         };
-        let an = dot3(a, n);
-        let u: [f64; 3] = std::array::from_fn(|k| a[k] - an * n[k]);
-        let len = dot3(u, u).sqrt();
-        let t1 = u.map(|x| x / len);
-        let and = dot3(a, ndot);
-        let ud: [f64; 3] = std::array::from_fn(|k| -and * n[k] - an * ndot[k]);
-        let along = dot3(t1, ud);
-        let t1d: [f64; 3] = std::array::from_fn(|k| (ud[k] - t1[k] * along) / len);
-        let t2 = cross3(n, t1);
-        let t2d: [f64; 3] = std::array::from_fn(|k| cross3(ndot, t1)[k] + cross3(n, t1d)[k]);
-        ([t1, t2], [t1d, t2d])
+        sphere_axes(a, n, ndot)
     }
+}
+
+/// A [`NodeOnBody`] on a model's free coordinates (the node's coordinates
+/// free or fixed, as [`SphereRow`]'s).
+#[derive(Clone, Debug)]
+struct BodyRow {
+    a: Vec<(Option<usize>, f64)>,
+    frame: usize,
+    plane: Option<[[f64; 3]; 3]>,
+    radius_a: f64,
+    radius_b: f64,
+    reference: [f64; 3],
+}
+
+impl BodyRow {
+    /// Row `j` of `r` (and its tangential rows `2j`, `2j + 1`) at
+    /// `(y, v)` with the body's frame `f` at that state (see
+    /// [`NodeOnBody`]); `false` if a sphere's centres coincide.
+    fn fill(&self, f: &Frame, y: &[f64], v: &[f64], rough: bool, j: usize, r: &mut Rows) -> bool {
+        let (x, xv) = SphereRow::centre_of(&self.a, y, v);
+        let d: [f64; 3] = std::array::from_fn(|k| x[k] - f.p[k]);
+        let dd: [f64; 3] = std::array::from_fn(|k| xv[k] - f.v[k]);
+        let (n, ndot, g) = match &self.plane {
+            Some([nb, ..]) => {
+                let n = f.turn(*nb);
+                (n, cross3(f.w, n), dot3(n, d) - self.radius_a)
+            }
+            None => {
+                let dist = dot3(d, d).sqrt();
+                if dist.is_nan() || dist <= 0.0 {
+                    return false;
+                }
+                let n = d.map(|x| x / dist);
+                let nd = dot3(n, dd);
+                let ndot = std::array::from_fn(|k| (dd[k] - n[k] * nd) / dist);
+                (n, ndot, dist - self.radius_a - self.radius_b)
+            }
+        };
+        // The speed of the node against the body's material point at
+        // `p + arm`, and (`arm` turning at `arm_dot`) the acceleration term
+        // of `dir·(that speed)` at `u̇ = 0`, `dir` turning at `dir_dot`.
+        let against = |arm: [f64; 3]| -> [f64; 3] {
+            let wa = cross3(f.w, arm);
+            std::array::from_fn(|k| dd[k] - wa[k])
+        };
+        let gamma = |dir: [f64; 3], dir_dot: [f64; 3], arm: [f64; 3], arm_dot: [f64; 3]| {
+            let (aa, wa) = (cross3(f.al0, arm), cross3(f.w, arm_dot));
+            let rate: [f64; 3] = std::array::from_fn(|k| f.a0[k] + aa[k] + wa[k]);
+            -dot3(dir_dot, against(arm)) + dot3(dir, rate)
+        };
+        let node = |m: &mut DMatrix<f64>, row: usize, dir: [f64; 3]| {
+            for (k, &(free, _)) in self.a.iter().enumerate() {
+                if let Some(i) = free {
+                    m[(row, i)] += dir[k];
+                }
+            }
+        };
+        r.g[j] = g;
+        r.gdot[j] = dot3(n, against(d));
+        r.gamma[j] = gamma(n, ndot, d, dd);
+        node(&mut r.w, j, n);
+        f.put(&mut r.w, j, n, d);
+        if rough {
+            // The touching point's arm from `p` and its rate; the axes.
+            let (arm, arm_dot, t, tdot) = match &self.plane {
+                Some([_, t1, t2]) => {
+                    let t = [f.turn(*t1), f.turn(*t2)];
+                    (
+                        std::array::from_fn(|k| d[k] - self.radius_a * n[k]),
+                        std::array::from_fn(|k| dd[k] - self.radius_a * ndot[k]),
+                        t,
+                        t.map(|t| cross3(f.w, t)),
+                    )
+                }
+                None => {
+                    let (t, tdot) = sphere_axes(self.reference, n, ndot);
+                    (
+                        n.map(|x| self.radius_b * x),
+                        ndot.map(|x| self.radius_b * x),
+                        t,
+                        tdot,
+                    )
+                }
+            };
+            for a in 0..2 {
+                r.vt[j][a] = dot3(t[a], against(arm));
+                r.gamma_t[j][a] = gamma(t[a], tdot[a], arm, arm_dot);
+                node(&mut r.wt, 2 * j + a, t[a]);
+                f.put(&mut r.wt, 2 * j + a, t[a], arm);
+            }
+        }
+        true
+    }
+}
+
+/// The tangent axes of two spheres touching along the unit normal `n`
+/// turning at `ṅ`, from the world axis `a` (`t1 = (a − (a·n) n)/‖…‖`,
+/// `t2 = n × t1`), and their rates.
+fn sphere_axes(a: [f64; 3], n: [f64; 3], ndot: [f64; 3]) -> ([[f64; 3]; 2], [[f64; 3]; 2]) {
+    let an = dot3(a, n);
+    let u: [f64; 3] = std::array::from_fn(|k| a[k] - an * n[k]);
+    let len = dot3(u, u).sqrt();
+    let t1 = u.map(|x| x / len);
+    let and = dot3(a, ndot);
+    let ud: [f64; 3] = std::array::from_fn(|k| -and * n[k] - an * ndot[k]);
+    let along = dot3(t1, ud);
+    let t1d: [f64; 3] = std::array::from_fn(|k| (ud[k] - t1[k] * along) / len);
+    let t2 = cross3(n, t1);
+    let t2d: [f64; 3] = std::array::from_fn(|k| cross3(ndot, t1)[k] + cross3(n, t1d)[k]);
+    ([t1, t2], [t1d, t2d])
 }
 
 fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
@@ -253,8 +453,18 @@ pub(super) struct Gaps {
     pub tangents: Vec<[Vec<(usize, f64)>; 2]>,
     /// The number of constant rows (the nodes' planes, the first ones).
     nodes: usize,
-    /// The nodes' spheres (the rows after the planes).
-    spheres: Vec<SphereRow>,
+    /// The nodes' spheres and their contacts with bodies (the rows after
+    /// the planes, in the contacts' order).
+    spheres: Vec<NodeRow>,
+}
+
+/// A node's row evaluated at every state.
+#[derive(Clone, Debug)]
+enum NodeRow {
+    /// Against a fixed sphere or another node's.
+    Sphere(SphereRow),
+    /// Against a body's plane or sphere.
+    Body(BodyRow),
 }
 
 impl Gaps {
@@ -265,7 +475,9 @@ impl Gaps {
         free_index: impl Fn(usize) -> Option<usize>,
         q0_full: &[f64],
     ) -> Gaps {
-        let planes = contacts.iter().filter(|c| c.sphere.is_none());
+        let planes = contacts
+            .iter()
+            .filter(|c| c.sphere.is_none() && c.body.is_none());
         let mut g = Gaps {
             names: Vec::new(),
             rows: Vec::new(),
@@ -304,8 +516,23 @@ impl Gaps {
                 .collect()
         };
         for c in contacts {
-            let Some(sp) = &c.sphere else {
-                continue;
+            let row = match (&c.sphere, &c.body) {
+                (Some(sp), _) => NodeRow::Sphere(SphereRow {
+                    a: coords(&sp.a),
+                    b: coords(&sp.b),
+                    centre: sp.centre,
+                    radius: sp.radius,
+                    reference: sp.reference,
+                }),
+                (None, Some(b)) => NodeRow::Body(BodyRow {
+                    a: coords(&b.a),
+                    frame: b.frame,
+                    plane: b.plane,
+                    radius_a: b.radius_a,
+                    radius_b: b.radius_b,
+                    reference: b.reference,
+                }),
+                (None, None) => continue,
             };
             g.names.push(c.name.clone());
             g.rows.push(Vec::new());
@@ -313,13 +540,7 @@ impl Gaps {
             g.e.push(c.e);
             g.mu.push(c.mu);
             g.tangents.push([Vec::new(), Vec::new()]);
-            g.spheres.push(SphereRow {
-                a: coords(&sp.a),
-                b: coords(&sp.b),
-                centre: sp.centre,
-                radius: sp.radius,
-                reference: sp.reference,
-            });
+            g.spheres.push(row);
         }
         g
     }
@@ -390,8 +611,24 @@ impl Gaps {
             gamma_t: vec![[0.0; 2]; k],
             wt: DMatrix::zeros(2 * k, n),
         };
+        // The bodies' frames, where a node touches a body.
+        let on_bodies = self.spheres.iter().any(|x| matches!(x, NodeRow::Body(_)));
+        let frames = match on_bodies {
+            true => match m.body_frames(t, y, v) {
+                Some(f) => f,
+                None => return Some(None),
+            },
+            false => Vec::new(),
+        };
         for (j, sp) in self.spheres.iter().enumerate() {
-            if !sp.fill(y, v, self.rough(self.nodes + j), j, &mut r) {
+            let rough = self.rough(self.nodes + j);
+            let done = match sp {
+                NodeRow::Sphere(x) => x.fill(y, v, rough, j, &mut r),
+                NodeRow::Body(x) => frames
+                    .get(x.frame)
+                    .is_some_and(|f| x.fill(f, y, v, rough, j, &mut r)),
+            };
+            if !done {
                 return Some(None);
             }
         }
@@ -1094,6 +1331,14 @@ pub(super) trait Impacts: AlphaModel {
     /// all the free coordinates; `None` if they cannot be evaluated. None
     /// by default (no contacts of its own).
     fn body_rows(&self, t: f64, y: &[f64], v: &[f64]) -> Option<Rows> {
+        let _ = (t, y, v);
+        None
+    }
+    /// The frames of the bodies cable nodes touch at `(t, y, v)` (the
+    /// rigid part's generated `contact_frames`), their rows on all the
+    /// free coordinates; `None` if they cannot be evaluated. None by
+    /// default (no bodies).
+    fn body_frames(&self, t: f64, y: &[f64], v: &[f64]) -> Option<Vec<Frame>> {
         let _ = (t, y, v);
         None
     }
@@ -2206,6 +2451,124 @@ mod tests {
                 [0.0; 3],
             );
             assert!((dot3(t[0], t[0]) - 1.0).abs() < 1e-14 && dot3(t[0], t[1]).abs() < 1e-14);
+        }
+    }
+
+    /// A body moving in space (`q_r = (X, Y, Z, θ, φ)`, axes
+    /// `E = R_z(θ) R_x(φ)`) with its frame at the body point `r_b`
+    /// (`p = X + E r_b`, `ω = θ̇ z + φ̇ R_z(θ) x`), exact: the frame of the
+    /// generated `contact_frames`, its rows on the free coordinates from
+    /// index `offset`.
+    fn spinning_frame(q: &[f64], u: &[f64], offset: usize) -> Frame {
+        let rb = [0.1, -0.05, 0.2];
+        let (th, ph) = (q[3], q[4]);
+        let (c, s, cp, sp) = (th.cos(), th.sin(), ph.cos(), ph.sin());
+        let rz = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
+        let rx = [[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]];
+        let e: [[f64; 3]; 3] =
+            std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| rz[i][k] * rx[k][j]).sum()));
+        let arm: [f64; 3] = std::array::from_fn(|i| dot3(e[i], rb));
+        let (z, xr) = ([0.0, 0.0, 1.0], [c, s, 0.0]);
+        let jw = vec![[0.0; 3], [0.0; 3], [0.0; 3], z, xr];
+        let jp: Vec<[f64; 3]> = (0..5)
+            .map(|k| match k {
+                0..3 => std::array::from_fn(|i| if i == k { 1.0 } else { 0.0 }),
+                _ => cross3(jw[k], arm),
+            })
+            .collect();
+        let w: [f64; 3] = std::array::from_fn(|i| u[3] * z[i] + u[4] * xr[i]);
+        let al0 = cross3(w, xr).map(|x| x * u[4]);
+        let (wa, aa) = (cross3(w, cross3(w, arm)), cross3(al0, arm));
+        Frame {
+            p: std::array::from_fn(|i| q[i] + arm[i]),
+            e,
+            v: std::array::from_fn(|i| u[i] + cross3(w, arm)[i]),
+            w,
+            a0: std::array::from_fn(|i| wa[i] + aa[i]),
+            al0,
+            jp,
+            jw,
+            offset,
+        }
+    }
+
+    /// A node against a spinning body's plane and its sphere: `ġ` is the
+    /// derivative of `g` along the motion, `w·v = ġ`, `g̈ = w·a − γ`,
+    /// `W_t v = v_t` and `v̇_t = W_t a − γ_t` (the frame exact, the node
+    /// and the body accelerating, one of the node's coordinates fixed).
+    #[test]
+    fn a_node_against_a_bodys_plane_or_sphere_has_the_derivatives_of_its_gap_as_rows() {
+        let node = vec![(Some(0), 0.0), (None, 0.45), (Some(1), 0.0)];
+        let plane = BodyRow {
+            a: node.clone(),
+            frame: 0,
+            plane: Some([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]),
+            radius_a: 0.03,
+            radius_b: 0.0,
+            reference: [1.0, 0.0, 0.0],
+        };
+        let sphere = BodyRow {
+            plane: None,
+            radius_b: 0.07,
+            reference: [0.0, 0.0, 1.0],
+            ..plane.clone()
+        };
+        // Free coordinates: the node's two (x, z), then the body's five.
+        let y = [0.31, -0.07, 0.05, 0.1, -0.02, 0.4, -0.3];
+        let v = [0.7, 0.4, -0.3, 0.25, 0.6, 1.3, -0.8];
+        let acc = [2.0, 1.5, -0.4, 3.0, -9.81, 2.5, 4.0];
+        let n = y.len();
+        for (label, row) in [("plane", &plane), ("sphere", &sphere)] {
+            let at = |t: f64| {
+                let yt: Vec<f64> = (0..n)
+                    .map(|k| y[k] + v[k] * t + 0.5 * acc[k] * t * t)
+                    .collect();
+                let vt: Vec<f64> = (0..n).map(|k| v[k] + acc[k] * t).collect();
+                let f = spinning_frame(&yt[2..], &vt[2..], 2);
+                let mut r = Rows {
+                    g: vec![0.0],
+                    gdot: vec![0.0],
+                    gamma: vec![0.0],
+                    e: vec![0.5],
+                    mu: vec![0.3],
+                    w: DMatrix::zeros(1, n),
+                    vt: vec![[0.0; 2]],
+                    gamma_t: vec![[0.0; 2]],
+                    wt: DMatrix::zeros(2, n),
+                };
+                assert!(row.fill(&f, &yt, &vt, true, 0, &mut r), "{label}");
+                r
+            };
+            let r0 = at(0.0);
+            let h = 1e-5;
+            let (rp, rm) = (at(h), at(-h));
+            let gdot = (rp.g[0] - rm.g[0]) / (2.0 * h);
+            assert!(
+                (gdot - r0.gdot[0]).abs() < 1e-8,
+                "{label}: ġ {} against {gdot}",
+                r0.gdot[0]
+            );
+            let wv: f64 = (0..n).map(|k| r0.w[(0, k)] * v[k]).sum();
+            assert!((wv - r0.gdot[0]).abs() < 1e-14, "{label}: w·v {wv}");
+            let gddot = (rp.gdot[0] - rm.gdot[0]) / (2.0 * h);
+            let wa: f64 = (0..n).map(|k| r0.w[(0, k)] * acc[k]).sum();
+            assert!(
+                (wa - r0.gamma[0] - gddot).abs() < 1e-7,
+                "{label}: w·a − γ = {} against g̈ {gddot}",
+                wa - r0.gamma[0]
+            );
+            for a in 0..2 {
+                let wtv: f64 = (0..n).map(|k| r0.wt[(a, k)] * v[k]).sum();
+                assert!((wtv - r0.vt[0][a]).abs() < 1e-14, "{label}: W_t v");
+                let dv = (rp.vt[0][a] - rm.vt[0][a]) / (2.0 * h);
+                let wta: f64 = (0..n).map(|k| r0.wt[(a, k)] * acc[k]).sum();
+                assert!(
+                    (wta - r0.gamma_t[0][a] - dv).abs() < 1e-7,
+                    "{label}: W_t{} a − γ_t = {} against v̇_t {dv}",
+                    a + 1,
+                    wta - r0.gamma_t[0][a]
+                );
+            }
         }
     }
 }

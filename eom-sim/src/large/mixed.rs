@@ -130,6 +130,20 @@ pub trait RigidPart {
         let _ = (t, q, u, out);
         false
     }
+    /// Number of frames of the generated `contact_frames` (the bodies'
+    /// points cable nodes touch); none by default.
+    fn n_frames(&self) -> usize {
+        0
+    }
+    /// The generated `contact_frames` at `(t, q, u)`, flat: per frame its
+    /// point's world position `p`, the body's axes by rows, `ṗ`, `ω`,
+    /// their rates at `u̇ = 0`, then the rows `∂ṗ/∂u` and `∂ω/∂u`
+    /// (`24 + 6 n` values); `false` if it cannot be evaluated. `false` by
+    /// default.
+    fn frames(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) -> bool {
+        let _ = (t, q, u, out);
+        false
+    }
     /// What can feed energy into the rigid part (an actuator, a force
     /// given as a function, a prescribed motion, a constraint that moves
     /// with time), named; `None` if nothing can: gravity and springs are in
@@ -159,6 +173,8 @@ pub struct ByName<F> {
     nc_all: usize,
     /// See [`ByName::with_contacts`].
     contact_names: Vec<String>,
+    /// See [`ByName::with_frames`].
+    frames: usize,
 }
 
 impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
@@ -173,7 +189,15 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> ByName<F> {
             nc_all: 0,
             energy_source: Some("generated functions whose forces are not stated".into()),
             contact_names: Vec::new(),
+            frames: 0,
         }
+    }
+
+    /// The same with `count` frames of the generated `contact_frames`
+    /// ([`RigidPart::frames`]: bodies' points cable nodes touch).
+    pub fn with_frames(mut self, count: usize) -> Self {
+        self.frames = count;
+        self
     }
 
     /// The same with unilateral contacts of its own, named `names`, from
@@ -263,6 +287,12 @@ impl<F: Fn(&str, &Point<'_>, &mut [f64]) -> bool> RigidPart for ByName<F> {
     }
     fn friction(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) -> bool {
         !self.contact_names.is_empty() && self.call("friction", t, q, u, out)
+    }
+    fn n_frames(&self) -> usize {
+        self.frames
+    }
+    fn frames(&self, t: f64, q: &[f64], u: &[f64], out: &mut [f64]) -> bool {
+        self.frames > 0 && self.call("contact_frames", t, q, u, out)
     }
     fn constraints(&self, t: f64, q: &[f64], out: &mut [f64]) {
         let (n, nc, nh) = (self.n, self.nc_all, self.constraint_names.len());

@@ -38,7 +38,7 @@ pub mod sparse;
 pub mod statics;
 
 pub use alpha::{AlphaModel, Carried, GeneralizedAlpha};
-pub use contact::{NodeContact, NodeSphere};
+pub use contact::{NodeContact, NodeOnBody, NodeSphere};
 pub use dynamics::integrate_rk4;
 pub use linear::{SecondOrder, second_order};
 pub use mixed::statics::{MixedStaticError, MixedStaticSolution, Stability, solve_static_mixed};

@@ -14,7 +14,7 @@
 //! explicit method does not solve).
 
 use super::alpha::GeneralizedAlpha;
-use super::contact::{ContactRun, Gaps, Impacts, NodeContact};
+use super::contact::{ContactRun, Frame, Gaps, Impacts, NodeContact};
 use super::dynamics::integrate_rk4;
 use super::mixed::MixedModel;
 use super::mixed::statics::{MixedStaticError, Stability, solve_static_mixed};
@@ -410,6 +410,16 @@ impl Impacts for MixedModel<'_> {
             r.set_friction(&f, nr, ns);
         }
         Some(r)
+    }
+    fn body_frames(&self, t: f64, y: &[f64], v: &[f64]) -> Option<Vec<Frame>> {
+        let (ns, n) = (self.n_structural(), self.n());
+        let nr = n - ns;
+        let nf = self.rigid().n_frames();
+        let mut out = vec![0.0; nf * Frame::len(nr)];
+        if nf == 0 || !self.rigid().frames(t, &y[ns..], &v[ns..], &mut out) {
+            return None;
+        }
+        Some(Frame::parse(&out, nr, ns))
     }
     fn onto_constraints(&self, s: &mut State) -> Result<(), DynamicsError> {
         // Within a thousandth of the start's tolerance (`1e-8`): a state

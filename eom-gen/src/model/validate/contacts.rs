@@ -71,7 +71,7 @@ impl Ctx<'_> {
             if let spec::Contact::Plane { at, .. } = c
                 && at.node.is_some()
             {
-                match self.cable_contact(spec, c, &path) {
+                match self.cable_contact(spec, bodies, c, &path) {
                     Some(info) => at_nodes.push(info),
                     None => nodes_ok = false,
                 }
@@ -80,7 +80,7 @@ impl Ctx<'_> {
             if let spec::Contact::Spheres { a, b, .. } = c
                 && (a.node.is_some() || b.node.is_some())
             {
-                match self.cable_sphere(spec, c, &path) {
+                match self.cable_sphere(spec, bodies, c, &path) {
                     Some(info) => at_nodes.push(info),
                     None => nodes_ok = false,
                 }
@@ -216,11 +216,13 @@ impl Ctx<'_> {
     /// A `Plane` contact whose `at` is a cable node: the cable and node
     /// exist (the cable alone, or hung at a body: the impact map then
     /// holds the attachments at the speed level), the plane is fixed in
-    /// the world, and the node is not inside the plane at the start (the
+    /// the world or on a body (`on`: its point and normal in the body's
+    /// axes), and the node is not inside the plane at the start (the
     /// cable straight from `from` to `to`).
     fn cable_contact(
         &mut self,
         spec: &Spec,
+        bodies: &[BodyInfo],
         c: &spec::Contact,
         path: &[crate::model::locate::Seg<'static>],
     ) -> Option<CableContactInfo> {
@@ -241,12 +243,12 @@ impl Ctx<'_> {
         let at_path = join(path, &[f("at")]);
         let mut ok = true;
         let cable = self.cable_node(spec, at, &at_path, name);
-        if let Some(b) = on {
-            self.error(
-                &join(path, &[f("on")]),
-                format!("contact `{name}` at a cable node touches a plane on body `{b}`"),
-                "a cable node touches a plane fixed in the world: leave `on` out",
-            );
+        // The plane's body (`0`: the ground, the world's axes).
+        let body = match on {
+            None => Some(0),
+            Some(b) => self.body_ref(bodies, b, &join(path, &[f("on")]), "plane"),
+        };
+        if body.is_none() {
             ok = false;
         }
         let e = self.coefficient(e, &join(path, &[f("e")]), "`e`", name, 1.0);
@@ -258,14 +260,27 @@ impl Ctx<'_> {
         if !ok {
             return None;
         }
-        let point = [p[0].value, p[1].value, p[2].value];
         let normal = [n.unit[0], n.unit[1], n.unit[2]];
+        let against = match body {
+            Some(b) if b != 0 => CableTarget::BodyPlane {
+                at: Point {
+                    body: b,
+                    position: p,
+                    node: None,
+                },
+                normal,
+            },
+            _ => CableTarget::Plane {
+                point: [p[0].value, p[1].value, p[2].value],
+                normal,
+            },
+        };
         Some(CableContactInfo {
             name: name.clone(),
             cable,
             node,
             radius: r.value,
-            against: CableTarget::Plane { point, normal },
+            against,
             e,
             mu,
             span: self.span(path),
@@ -281,6 +296,7 @@ impl Ctx<'_> {
     fn cable_sphere(
         &mut self,
         spec: &Spec,
+        bodies: &[BodyInfo],
         c: &spec::Contact,
         path: &[crate::model::locate::Seg<'static>],
     ) -> Option<CableContactInfo> {
@@ -338,23 +354,21 @@ impl Ctx<'_> {
             };
             centre.map(|centre| CableTarget::Sphere { centre })
         } else {
-            self.error(
-                &join(&b_path, &[f("body")]),
-                format!(
-                    "contact `{name}` puts cable node {node}'s sphere against a sphere on body `{}`",
-                    b.body
-                ),
-                "a cable node's sphere touches a sphere fixed in the world (`b: (body: \"ground\", point: …)`) or about another cable node (`b: (body: CABLE, node: K)`); a body's geometry at a cable node is not supported (the runtime would need the body's point, its Jacobian and `J̇ u` there)",
-            );
-            None
+            // A sphere on a body: its centre moves with the body.
+            // (Its radius is set below, once read.)
+            self.contact_anchor(b, bodies, &b_path, name)
+                .map(|at| CableTarget::BodySphere { at, radius: 0.0 })
         };
         let e = self.coefficient(e, &join(path, &[f("e")]), "`e`", name, 1.0);
         let mu = self.coefficient(mu, &join(path, &[f("mu")]), "`mu`", name, f64::INFINITY);
         let ra = self.nonnegative(radius_a, &join(path, &[f("radius_a")]), "radius_a", name);
         let rb = self.nonnegative(radius_b, &join(path, &[f("radius_b")]), "radius_b", name);
-        let (cable, against, e, mu, ra, rb) = (cable?, against?, e?, mu?, ra?, rb?);
+        let (cable, mut against, e, mu, ra, rb) = (cable?, against?, e?, mu?, ra?, rb?);
         if !ok {
             return None;
+        }
+        if let CableTarget::BodySphere { radius, .. } = &mut against {
+            *radius = rb.value;
         }
         Some(CableContactInfo {
             name: name.clone(),
@@ -559,8 +573,15 @@ impl Ctx<'_> {
     /// straight from its start to its end): a closed one is an error with
     /// its penetration and what would open it.
     pub(super) fn check_cable_contacts_open(&mut self, sys: &System) {
+        let frames = crate::mech::mounts::frames_at_start(sys);
+        let mut next = frames.iter();
         for c in &sys.cable_contacts {
-            let (Some(cable), Some(g)) = (sys.cables.get(c.cable), c.gap_at_start(sys)) else {
+            let frame = match c.against.on_body() {
+                Some(_) => next.next(),
+                None => None,
+            };
+            let (Some(cable), Some(g)) = (sys.cables.get(c.cable), c.gap_at_start(sys, frame))
+            else {
                 continue;
             };
             if g.is_finite() && g >= -PENETRATION_TOL {
@@ -574,6 +595,14 @@ impl Ctx<'_> {
                 CableTarget::Sphere { .. } => (
                     "the fixed sphere".to_string(),
                     "away from the sphere's centre (its `from` and `to`), or move the sphere or shrink the radii",
+                ),
+                CableTarget::BodyPlane { at, .. } => (
+                    format!("the plane on body `{}`", sys.bodies[at.body].name),
+                    "further along the plane's normal (its `from` and `to`), or move the body or the plane",
+                ),
+                CableTarget::BodySphere { at, .. } => (
+                    format!("the sphere on body `{}`", sys.bodies[at.body].name),
+                    "away from the sphere's centre (its `from` and `to`), or move the body or shrink the radii",
                 ),
                 CableTarget::Node { cable: k, node } => (
                     format!(
@@ -659,3 +688,4 @@ impl Ctx<'_> {
         }
     }
 }
+
