@@ -186,6 +186,7 @@ fn generated_sources_are_fresh() {
     // example's `MIXED`).
     names.push("ancf/pendulum_rod.ron".to_string());
     names.push("ancf/fourbar_cable.ron".to_string());
+    names.push("ancf/pendulum_peg.ron".to_string());
     for file in names.iter().filter(|n| n.ends_with(".ron")) {
         let name = file
             .trim_end_matches(".ron")
@@ -549,6 +550,7 @@ fn every_bundled_model_compiled_equals_interpreted() {
     compiled_and_interpreted_agree::<g::stewart_driven::StewartDriven>("stewart_driven.ron");
     compiled_and_interpreted_agree::<g::pendulum_rod::PendulumRod>("ancf/pendulum_rod.ron");
     compiled_and_interpreted_agree::<g::fourbar_cable::FourbarCable>("ancf/fourbar_cable.ron");
+    compiled_and_interpreted_agree::<g::pendulum_peg::PendulumPeg>("ancf/pendulum_peg.ron");
 }
 
 /// The bouncing ball compiled runs through the same contact events as

@@ -52,19 +52,6 @@ fn mixed_model<'a>(
         .map_err(|e| e.to_string())
 }
 
-/// Refuses rigid bodies beside cables none of which hangs at them.
-fn cables_alone(checked: &Checked) -> Result<(), Error> {
-    let sys = &checked.system;
-    if sys.bodies.len() > 1 {
-        return Err(Error::Refused(format!(
-            "model `{}` mixes rigid bodies and cables that do not hang at them: \
-             hold a cable end at a marker (`start_at`/`end_at`), or solve the cables in a model of their own",
-            sys.name
-        )));
-    }
-    Ok(())
-}
-
 /// The refusal of a mixed static solve, with the rigid coordinates named.
 fn refusal(model: &str, coords: &[&str], e: &MixedStaticError) -> Error {
     let mut text = e.to_string();
@@ -100,7 +87,7 @@ pub fn solve_static_cmd(
     }
     let refused = |e: eom_gen::cables::CableError| Error::Refused(e.to_string());
     let coordinates = sys.coordinate_names();
-    let report = if eom_gen::cables::has_mounts(sys) {
+    let report = if eom_gen::cables::has_rigid_part(sys) {
         let f = rigid_part(sys).map_err(Error::Refused)?;
         let mixed = mixed_model(sys, &f).map_err(Error::Refused)?;
         let (q0, _) = eom_gen::cables::rigid_start(sys, &f).map_err(refused)?;
@@ -108,7 +95,6 @@ pub fn solve_static_cmd(
         equilibrium_mixed(&mixed.model, &mixed.cables, &contacts, &q0, opts)
             .map_err(|e| refusal(&sys.name, &coordinates, &e))?
     } else {
-        cables_alone(checked)?;
         let (built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
         let contacts = eom_gen::cables::node_contacts(sys, &cables);
         equilibrium_structure(&built.model, &cables, &contacts, opts)
@@ -167,7 +153,7 @@ pub fn linearize_cmd(
         Error::Refused(format!("model `{}` at its equilibrium: {e}", sys.name))
     };
     let opts = StaticOptions::default();
-    let (eq, state, names) = if eom_gen::cables::has_mounts(sys) {
+    let (eq, state, names) = if eom_gen::cables::has_rigid_part(sys) {
         let f = rigid_part(sys).map_err(Error::Refused)?;
         let mixed = mixed_model(sys, &f).map_err(Error::Refused)?;
         let (q0, _) = eom_gen::cables::rigid_start(sys, &f).map_err(refused)?;
@@ -193,7 +179,6 @@ pub fn linearize_cmd(
             .collect();
         (eq, state, names)
     } else {
-        cables_alone(checked)?;
         let (built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
         let sol = solve_static(&built.model, &opts)
             .map_err(|e| Error::Refused(format!("model `{}`: {e}", sys.name)))?;
@@ -239,7 +224,7 @@ pub fn simulate_cmd(
     let bar = step_progress(&sys.name, 1000);
     let mut progress = |t: f64| bar.set_position((1000.0 * t / run.t_end) as u64);
     let mut coordinates: Vec<&str> = Vec::new();
-    let (report, table) = if eom_gen::cables::has_mounts(sys) {
+    let (report, table) = if eom_gen::cables::has_rigid_part(sys) {
         let f = rigid_part(sys).map_err(Error::Refused)?;
         let mut mixed = mixed_model(sys, &f).map_err(Error::Refused)?;
         mixed.model.set_tangent(tangent);
@@ -258,7 +243,6 @@ pub fn simulate_cmd(
             &mut progress,
         )
     } else {
-        cables_alone(checked)?;
         let (mut built, cables) = eom_gen::cables::structure(sys).map_err(refused)?;
         built.model.set_tangent(tangent);
         let contacts = eom_gen::cables::node_contacts(sys, &cables);
@@ -373,7 +357,7 @@ pub fn eval_block(checked: &Checked, q: &[f64], u: &[f64], t: f64) -> Option<ser
         "names": names,
         "scope": "the functions above are the rigid part's alone, without the cables' forces",
     });
-    if eom_gen::cables::has_mounts(sys) {
+    if eom_gen::cables::has_rigid_part(sys) {
         match whole_model(checked, q, u, t) {
             Ok(v) => block["whole_model"] = v,
             Err(e) => block["refused"] = json!(e),

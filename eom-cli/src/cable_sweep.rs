@@ -138,15 +138,7 @@ impl<'a> CableSweep<'a> {
     /// values).
     pub fn formulate(shared: &Checked) -> Result<Option<Formulation>, Error> {
         let sys = &shared.system;
-        if !eom_gen::cables::has_mounts(sys) {
-            if sys.bodies.len() > 1 {
-                return Err(Error::Refused(format!(
-                    "model `{}` mixes rigid bodies and cables that do not hang at them: hold a \
-                     cable end at a marker (`start_at`/`end_at`), or sweep the cables in a model \
-                     of their own",
-                    sys.name
-                )));
-            }
+        if !eom_gen::cables::has_rigid_part(sys) {
             return Ok(None);
         }
         let f = eom_gen::mech::formulate(sys, eom_gen::functions::FunctionSet::all_requested())
@@ -402,7 +394,7 @@ pub struct Plan<'a> {
 /// `eom-gen sweep` on a model with cables (see the module).
 pub fn run(a: &SweepArgs, plan: &Plan<'_>) -> ExitCode {
     let sys = &plan.checked.system;
-    let run = match element_run(a, plan.t_end, eom_gen::cables::has_mounts(sys)) {
+    let run = match element_run(a, plan.t_end, eom_gen::cables::has_rigid_part(sys)) {
         Ok(r) => r,
         Err(p) => return fail(&Error::Usage(p)),
     };

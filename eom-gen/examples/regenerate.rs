@@ -31,7 +31,11 @@ fn elements(root: &str) -> ExitCode {
 
 /// Mixed models of `models/ancf/` whose rigid part is generated too (the
 /// cables' kernels are model-independent, in `elements/src/`).
-pub const MIXED: [&str; 2] = ["ancf/pendulum_rod", "ancf/fourbar_cable"];
+pub const MIXED: [&str; 3] = [
+    "ancf/pendulum_rod",
+    "ancf/fourbar_cable",
+    "ancf/pendulum_peg",
+];
 
 fn main() -> ExitCode {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");

@@ -28,11 +28,6 @@ use eom_sim::large::{ByName, MixedModel, RigidPart};
 /// model, cable, marker or coordinate concerned and what would be right.
 #[derive(Clone, Debug, PartialEq)]
 pub enum CableError {
-    /// No cable end is held at a marker.
-    NoMounts {
-        /// The model.
-        model: String,
-    },
     /// The rigid part has speed-level equations (their names).
     Nonholonomic {
         /// The model.
@@ -111,10 +106,6 @@ pub enum CableError {
 impl std::fmt::Display for CableError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
-            CableError::NoMounts { model } => write!(
-                f,
-                "no cable end of model `{model}` is held at a marker (`start_at`/`end_at`)"
-            ),
             CableError::Nonholonomic { model, rows } => write!(
                 f,
                 "the rigid part of `{model}` has speed-level (nonholonomic) constraint equations ({}): beside cables the index-3 method holds positions only, `Φ(q, t) = 0` (cut joints, `Holonomic` constraints); a rolling contact's no-slip conditions have no position form",
@@ -254,9 +245,11 @@ impl Mixed<'_> {
     }
 }
 
-/// True if a cable end is held at a marker of a rigid body.
-pub fn has_mounts(sys: &System) -> bool {
-    !sys.cable_mounts().is_empty()
+/// True if the model has rigid bodies beside its cables (held at their
+/// markers, touching them, or neither): it runs as one mixed model
+/// ([`mixed`]).
+pub fn has_rigid_part(sys: &System) -> bool {
+    sys.bodies.len() > 1
 }
 
 /// Why the rigid part of `sys` cannot join its cables, or `Ok`: the large
@@ -266,12 +259,6 @@ pub fn has_mounts(sys: &System) -> bool {
 /// planar cable's ends held at markers that move in the plane z = 0
 /// ([`check_planar_mounts`]). Any number of cables, of any kernels.
 pub fn check_rigid(sys: &System, f: &Formulation) -> Result<(), CableError> {
-    let mounted: Vec<usize> = sys.cable_mounts().iter().map(|(c, _, _)| *c).collect();
-    if mounted.is_empty() {
-        return Err(CableError::NoMounts {
-            model: sys.name.clone(),
-        });
-    }
     if f.constraint_names.len() > f.n_holonomic {
         return Err(CableError::Nonholonomic {
             model: sys.name.clone(),

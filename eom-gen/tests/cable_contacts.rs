@@ -364,10 +364,12 @@ fn contacts_at_cable_nodes_refused_with_their_locations() {
         out.contains("contact `n1` is at node 1 of `rope`, which is no cable"),
         "{out}"
     );
-    // A plane on a body.
+    // A plane on a body the model does not have (a plane on a body it
+    // has is a contact: `eom-gen/tests/cable_contacts_mixed.rs`).
     let on = wire_drop(1, H0, 0.5, r#", on: "table""#);
     let out = diagnose(&on);
-    assert!(out.contains("touches a plane on body `table`"), "{out}");
+    assert!(out.contains("unknown plane body `table`"), "{out}");
+    assert!(out.contains("models/drop.ron:9:"), "located: {out}");
 }
 
 #[test]
@@ -1088,8 +1090,8 @@ fn a_sliding_wire_striking_a_sphere_takes_coulombs_impulse_at_the_node() {
 }
 
 /// A node's sphere is refused, at its field, where it cannot be run: its
-/// node given as `b` only, against a body's sphere (the cable runtime
-/// evaluates node rows), about the same node twice, at a node the cable
+/// node given as `b` only, inside a body's sphere at the start, about the
+/// same node twice, at a node the cable
 /// does not have, and inside the other sphere at the start (with the
 /// penetration and what opens it).
 #[test]
@@ -1119,9 +1121,22 @@ fn node_spheres_refused_with_their_locations() {
             r#"b: (body: "ground", point: (0.5, -0.05, 0))"#,
             r#"b: (body: "ball")"#,
         );
-    let out = diagnose(&body);
+    // A body's sphere is a contact (`cable_contacts_mixed.rs`); inside
+    // it at the start, the penetration is named.
+    assert_eq!(diagnose(&body), "valid");
+    let in_ball = body.replace(
+        r#"b: (body: "ball")"#,
+        &format!(r#"b: (body: "ball", point: (0.5, {H0}, 0))"#),
+    );
+    let out = diagnose(&in_ball);
     assert!(
-        out.contains("puts cable node 2's sphere against a sphere on body `ball`"),
+        out.contains(
+            "node 2 of cable `wire` penetrates the sphere on body `ball` by 6.000000e-2 m"
+        ),
+        "{out}"
+    );
+    assert!(
+        out.contains("or move the body or shrink the radii"),
         "{out}"
     );
     let twice = text.replace(
@@ -1146,7 +1161,7 @@ fn node_spheres_refused_with_their_locations() {
             && out.contains("away from the sphere's centre"),
         "{out}"
     );
-    for out in [&swap, &body, &twice, &far, &inside].map(|t| diagnose(t)) {
+    for out in [&swap, &in_ball, &twice, &far, &inside].map(|t| diagnose(t)) {
         assert!(out.contains("models/drop.ron:"), "located: {out}");
         assert_eq!(out.matches("error:").count(), 1, "{out}");
     }

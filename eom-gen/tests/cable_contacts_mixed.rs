@@ -1065,26 +1065,19 @@ fn a_box_tipping_over_its_sticking_corner_beside_a_cable_pivots() {
     );
 }
 
-/// The pendulum with its cable (the floor left out) beside a `peg`: a
-/// short cable pinned to the ground at `(0.14, −0.242487)` (on the circle
-/// of radius 0.28 about the pivot, 60° below the x axis: the tip's sphere
-/// strikes it obliquely) and hanging
-/// straight down, so that its node 0 never moves; `contact` strikes the
-/// link's tip against it.
+/// The bundled pendulum striking a peg (`models/ancf/pendulum_peg.ron`:
+/// the link's tip sphere against a sphere about a pinned cable node),
+/// its contact replaced by `contact`.
 fn pendulum_and_peg(contact: &str) -> String {
-    let text = pendulum_cable(0.5);
-    let floor = r#"Plane(name: "floor", at: (body: "rope", node: 2), point: (0, -0.25, 0), normal: (0, 1, 0), e: "e"),"#;
-    let cable_end = "start_at: (body: \"link\", marker: \"tip\")),\n";
-    assert!(
-        text.contains(floor) && text.contains(cable_end),
-        "the bundled pendulum_cable"
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/ancf/pendulum_peg.ron"
     );
-    text.replace(floor, contact).replace(
-        cable_end,
-        &format!(
-            "{cable_end}        Cable(name: \"peg\", element: Cable2D, from: (0.14, -0.242487, 0), to: (0.14, -0.342487, 0), elements: 1,\n              young: 2e9, density: 7800, area: 1e-5, second_moment: 1e-10, start: Pinned),\n"
-        ),
-    )
+    let text = std::fs::read_to_string(path).unwrap_or_else(|err| panic!("{path}: {err}"));
+    let strike = r#"Spheres(name: "strike", a: (body: "peg", node: 0), b: (body: "link", marker: "tip"),
+                radius_a: 0.01, radius_b: 0.02, e: "e", mu: "mu"),"#;
+    assert!(text.contains(strike), "the bundled pendulum_peg");
+    text.replace(strike, contact)
 }
 
 /// A cable node's sphere against a sphere on a moving body (the runtime's
@@ -1107,7 +1100,7 @@ fn a_nodes_sphere_struck_by_a_swinging_links_sphere_is_the_rigid_spheres_twin() 
     for (e, mu) in [(0.5, 0.0), (1.0, 0.0), (0.5, 0.4)] {
         let node = simulate(
             &pendulum_and_peg(&format!(
-                r#"Spheres(name: "strike", a: (body: "peg", node: 0), b: (body: "link", point: (0.3, 0, 0)), radius_a: 0.01, radius_b: 0.02, e: {e:?}, mu: {mu:?}),"#
+                r#"Spheres(name: "strike", a: (body: "peg", node: 0), b: (body: "link", marker: "tip"), radius_a: 0.01, radius_b: 0.02, e: {e:?}, mu: {mu:?}),"#
             )),
             &r,
         );
@@ -1141,7 +1134,10 @@ fn a_nodes_sphere_struck_by_a_swinging_links_sphere_is_the_rigid_spheres_twin() 
                     (ta - tb).abs() <= 1e-6 * tb + 1e-12,
                     "{label}: ‖Λ_t‖ {ta} and {tb}"
                 );
-                assert!(ta <= mu * ca.impulse * (1.0 + 1e-9) + 1e-15, "{label}: in the cone");
+                assert!(
+                    ta <= mu * ca.impulse * (1.0 + 1e-9) + 1e-15,
+                    "{label}: in the cone"
+                );
             }
         }
         assert!(
@@ -1153,7 +1149,14 @@ fn a_nodes_sphere_struck_by_a_swinging_links_sphere_is_the_rigid_spheres_twin() 
         let kinds: Vec<_> = node
             .contact_events
             .iter()
-            .map(|e| (e.kind, e.t, e.contacts[0].impulse, e.contacts[0].tangential_impulse))
+            .map(|e| {
+                (
+                    e.kind,
+                    e.t,
+                    e.contacts[0].impulse,
+                    e.contacts[0].tangential_impulse,
+                )
+            })
             .collect();
         println!("{label}: θ = {:.9}, events {kinds:?}", node.q[0]);
     }
@@ -1222,11 +1225,191 @@ fn a_blocks_sole_falling_on_a_pinned_node_is_the_rigid_floors_twin() {
         }
     }
     let (fa, fb) = (resting_force(&node), resting_force(&rigid));
-    assert!(fa > 0.0 && (fa - fb).abs() <= 1e-6 * fb, "{fa} N and {fb} N");
+    assert!(
+        fa > 0.0 && (fa - fb).abs() <= 1e-6 * fb,
+        "{fa} N and {fb} N"
+    );
     assert!(
         (node.q[0] - rigid.q[0]).abs() < 1e-9,
         "y {} and {}",
         node.q[0],
         rigid.q[0]
+    );
+}
+
+/// The generated `contact_frames` of a spatial double pendulum (about z,
+/// then about the upper link's x axis) whose links carry a plane and a
+/// sphere that a `Cable3D`'s nodes touch, at random states: its points,
+/// axes and velocities equal the numeric twin's (to 1e-12); the velocity
+/// is the derivative of the position along `q̇ = u` and the axes turn at
+/// `ω` (`Ė = [ω]× E`; central differences, 1e-7); the rows give them,
+/// `J_p u = ṗ`, `J_ω u = ω`; and the rates at `u̇ = 0` are the
+/// derivatives of `ṗ` and `ω` along the motion at fixed `u` (1e-7).
+#[test]
+fn contact_frames_are_the_points_and_axes_with_their_derivatives() {
+    use eom_gen::functions::Function;
+    let text = r#"Model(
+    name: "frames",
+    gravity: (0, -9.81, 0),
+    bodies: [
+        (name: "upper", mass: 1, com: (0.15, 0, 0), inertia: Diag(0.01, 0.01, 0.01)),
+        (name: "lower", mass: 1, com: (0, 0, 0.1), inertia: Diag(0.01, 0.02, 0.03)),
+    ],
+    joints: [
+        (name: "a", kind: Revolute(axis: (0, 0, 1)), parent: "ground", child: "upper", coordinates: ["a"]),
+        (name: "b", kind: Revolute(axis: (1, 0, 0)), parent: "upper", child: "lower",
+         parent_frame: (position: (0.3, 0, 0)), coordinates: ["b"]),
+    ],
+    cables: [
+        Cable(name: "wire", element: Cable3D, from: (1, 1, 1), to: (1.3, 1, 1), elements: 2,
+              young: 1e9, density: 1000, area: 1e-5, second_moment: 1e-10, start: Pinned),
+    ],
+    contacts: [
+        Plane(name: "shelf", at: (body: "wire", node: 1), on: "lower", point: (0.1, 0.05, -0.02), normal: (0, 0.6, 0.8), e: 0.5),
+        Spheres(name: "knob", a: (body: "wire", node: 2), b: (body: "upper", point: (0.2, 0.03, 0.01)), radius_a: 0.01, radius_b: 0.02, e: 0.5),
+    ],
+)"#;
+    let sys = system(text);
+    assert_eq!(sys.cable_frames().len(), 2);
+    let f = formulate(&sys, FunctionSet::all_requested()).unwrap_or_else(|e| panic!("{e}"));
+    let num = eom_gen::mech::Numeric::new(&sys).unwrap_or_else(|e| panic!("{e}"));
+    let nu = sys.nu();
+    let block = 24 + 6 * nu;
+    let generated = |q: &[f64], u: &[f64]| {
+        let x = eom_gen::interpret::Point {
+            sys: &sys,
+            q,
+            u,
+            udot: &[],
+            tau: &[],
+            inputs: &[],
+            params: &[],
+            multipliers: &[],
+            t: 0.0,
+        };
+        eom_gen::interpret::evaluate_function(&f, Function::ContactFrames, &x).expect("evaluated")
+    };
+    let twin = |q: &[f64], u: &[f64]| num.contact_frames(&sys, q, u, 0.0).expect("twin");
+    let close = |what: &str, got: f64, want: f64, tol: f64| {
+        assert!(
+            (got - want).abs() <= tol * (1.0 + want.abs()),
+            "{what}: {got} against {want}"
+        );
+    };
+    for (q, u) in [
+        ([0.3, -0.7], [1.1, -0.4]),
+        ([-1.2, 2.1], [-0.6, 2.3]),
+        ([2.5, 0.4], [0.2, 0.9]),
+    ] {
+        let out = generated(&q, &u);
+        let exact = twin(&q, &u);
+        assert_eq!(out.len(), 2 * block);
+        let h = 1e-6;
+        let shift = |s: f64| -> Vec<f64> { (0..nu).map(|k| q[k] + s * h * u[k]).collect() };
+        let (plus, minus) = (twin(&shift(1.0), &u), twin(&shift(-1.0), &u));
+        for fr in 0..2 {
+            let (o, x, base) = (&out[fr * block..], &exact[fr * 18..], fr * 18);
+            for r in 0..18 {
+                close(&format!("frame {fr} value {r}"), o[r], x[r], 1e-12);
+            }
+            let d = |r: usize| (plus[base + r] - minus[base + r]) / (2.0 * h);
+            for i in 0..3 {
+                close(&format!("frame {fr} ṗ{i}"), o[12 + i], d(i), 1e-7);
+                // Ė = [ω]× E, row i column j: (ω × e_j)_i.
+                for j in 0..3 {
+                    let (w, e) = (&o[15..18], |k: usize| o[3 + 3 * k + j]);
+                    let turn = [
+                        w[1] * e(2) - w[2] * e(1),
+                        w[2] * e(0) - w[0] * e(2),
+                        w[0] * e(1) - w[1] * e(0),
+                    ];
+                    close(
+                        &format!("frame {fr} Ė{i}{j}"),
+                        turn[i],
+                        d(3 + 3 * i + j),
+                        1e-7,
+                    );
+                }
+                close(&format!("frame {fr} p̈₀{i}"), o[18 + i], d(12 + i), 1e-7);
+                close(&format!("frame {fr} α₀{i}"), o[21 + i], d(15 + i), 1e-7);
+                for (r, what) in [(i, "J_p u"), (3 + i, "J_ω u")] {
+                    let ju: f64 = (0..nu).map(|k| o[24 + r * nu + k] * u[k]).sum();
+                    close(&format!("frame {fr} {what}{i}"), ju, o[12 + r], 1e-13);
+                }
+            }
+        }
+    }
+}
+
+/// The bundled wire dropped on a moving cart (`models/ancf/wire_on_cart.ron`)
+/// with Coulomb friction `mu` at its deck.
+fn wire_on_cart(mu: f64) -> String {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../models/ancf/wire_on_cart.ron"
+    );
+    let text = std::fs::read_to_string(path).unwrap_or_else(|err| panic!("{path}: {err}"));
+    let param = r#"(name: "mu", value: 0.5,"#;
+    assert!(text.contains(param), "the bundled wire_on_cart");
+    text.replace(param, &format!(r#"(name: "mu", value: {mu:?},"#))
+}
+
+/// Cable nodes against a plane on a moving body, in a model whose cable
+/// hangs at no body: a free wire (0.5 kg) dropped flat onto a cart (2 kg)
+/// rolling at 1 m/s on a level frictionless rail. Nothing horizontal acts
+/// from outside, so the horizontal momentum is conserved through the
+/// plastic strike, the slide and the stick–slip chatter of the ringing
+/// wire: with friction (μ = 0.5) both end at the common speed
+/// `m_c v₀/(m_c + m_w) = 0.8` m/s (to 1e-6 after 1 s; the wire no longer
+/// moving on the deck), and the energy never rises; without friction the
+/// deck's normal force has no horizontal part, and the cart rolls on at
+/// `v₀` exactly while the wire lies where it fell.
+///
+/// Until this session a slide that turned the wrong way in its first
+/// step (`v_t · s0` from 0 to below 0: the ringing wire pulled the node
+/// back against its slide's direction) was never stopped, and its friction
+/// pushed the slip on: the cart sped up again to 0.972 m/s by 1 s and the
+/// energy rose from 0.562 to 0.700 J.
+#[test]
+fn a_wire_dropped_on_a_moving_cart_shares_its_momentum() {
+    let r = run(1.0, 1e-3, 0.8);
+    let rough = simulate(&wire_on_cart(0.5), &r);
+    assert!(
+        matches!(rough.stop, eom_sim::Stop::Finished),
+        "{:?}",
+        rough.stop
+    );
+    energy_never_rises(&rough, "wire on the cart");
+    let common = 2.0 * 1.0 / (2.0 + 0.5);
+    assert!(
+        (rough.u[0] - common).abs() < 1e-6,
+        "the cart at {} m/s, want m_c v₀/(m_c + m_w) = {common}",
+        rough.u[0]
+    );
+    let kinds = |r: &eom_sim::RunReport, k: ContactEventKind| {
+        r.contact_events.iter().filter(|e| e.kind == k).count()
+    };
+    println!(
+        "wire on the cart: u = {:.12} m/s, {} events ({} sticks, {} slips)",
+        rough.u[0],
+        rough.contact_events.len(),
+        kinds(&rough, ContactEventKind::Stick),
+        kinds(&rough, ContactEventKind::Slip)
+    );
+    assert!(
+        kinds(&rough, ContactEventKind::Stick) >= 1,
+        "the wire sticks"
+    );
+    let smooth = simulate(&wire_on_cart(0.0), &r);
+    assert!(
+        matches!(smooth.stop, eom_sim::Stop::Finished),
+        "{:?}",
+        smooth.stop
+    );
+    assert!(
+        (smooth.u[0] - 1.0).abs() < 1e-12 && (smooth.q[0] - 1.0).abs() < 1e-12,
+        "without friction the cart rolls on: x = {}, u = {}",
+        smooth.q[0],
+        smooth.u[0]
     );
 }

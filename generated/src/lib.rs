@@ -74,3 +74,6 @@ pub mod pendulum_rod;
 /// Model `fourbar_cable`, generated from `models/ancf/fourbar_cable.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod fourbar_cable;
+/// Model `pendulum_peg`, generated from `models/ancf/pendulum_peg.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod pendulum_peg;

@@ -1171,10 +1171,7 @@ fn contact_frames<'cx>(
     let mut second = at_rest_along_the_motion(cx, q, u, qdot);
     let mut names = Vec::new();
     let mut exprs = Vec::new();
-    for (f, block) in values
-        .chunks(super::mounts::FRAME_VALUES)
-        .enumerate()
-    {
+    for (f, block) in values.chunks(super::mounts::FRAME_VALUES).enumerate() {
         for (r, &v) in block.iter().enumerate() {
             names.push(format!("f{f}_{r}"));
             exprs.push(v);

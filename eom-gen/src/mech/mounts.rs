@@ -140,11 +140,7 @@ pub fn frames_at_start(sys: &System) -> Vec<crate::system::BodyFrame> {
         .chunks(FRAME_VALUES)
         .map(|v| crate::system::BodyFrame {
             p: [v[0], v[1], v[2]],
-            e: [
-                [v[3], v[4], v[5]],
-                [v[6], v[7], v[8]],
-                [v[9], v[10], v[11]],
-            ],
+            e: [[v[3], v[4], v[5]], [v[6], v[7], v[8]], [v[9], v[10], v[11]]],
         })
         .collect()
 }

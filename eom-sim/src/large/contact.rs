@@ -1358,6 +1358,11 @@ pub(super) trait Impacts: AlphaModel {
 /// leaving an impact faster than this flies.
 const REST_SPEED: f64 = 1e-9;
 
+/// A sliding speed `v_t · s0` below zero by more than this (m/s) at the
+/// end of a slide's first step turned the wrong way (round-off is far
+/// below it).
+const SLIP_ROUND_OFF: f64 = 1e-12;
+
 /// Why a run stops when its rows evaluated per state give none.
 const UNEVALUATED: &str = "the contacts evaluated per state cannot be evaluated (the rigid part's generated `contacts` or `friction` failed, or two spheres' centres coincide)";
 
@@ -2166,9 +2171,14 @@ impl<'g> ContactRun<'g> {
                     // start it would be found there again. (A wire creeping
                     // by stick–slip: 9.6e-11 m/s at the start of a
                     // restart's first step, −1.1e-4 m/s at its end.)
+                    // A slide that never got under way (`v_t · s0 ≤ 0` at
+                    // the step's start, beyond round-off the wrong way at
+                    // its end: the node and the body it slides on pulled
+                    // apart against `s0`) is taken at the step's end too:
+                    // left alone its friction would push the slip on and
+                    // feed energy in (a wire ringing axially on a cart).
                     if let (Some(a), Some(b)) = (p0[k], p1[k])
-                        && a > 0.0
-                        && b <= 0.0
+                        && ((a > 0.0 && b <= 0.0) || (a <= 0.0 && b < -SLIP_ROUND_OFF))
                     {
                         let t = if a <= 1e-6 * (a - b) {
                             new.t
@@ -2465,8 +2475,9 @@ mod tests {
         let (c, s, cp, sp) = (th.cos(), th.sin(), ph.cos(), ph.sin());
         let rz = [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]];
         let rx = [[1.0, 0.0, 0.0], [0.0, cp, -sp], [0.0, sp, cp]];
-        let e: [[f64; 3]; 3] =
-            std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| rz[i][k] * rx[k][j]).sum()));
+        let e: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..3).map(|k| rz[i][k] * rx[k][j]).sum())
+        });
         let arm: [f64; 3] = std::array::from_fn(|i| dot3(e[i], rb));
         let (z, xr) = ([0.0, 0.0, 1.0], [c, s, 0.0]);
         let jw = vec![[0.0; 3], [0.0; 3], [0.0; 3], z, xr];
