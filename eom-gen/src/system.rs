@@ -707,7 +707,7 @@ impl CableContactInfo {
         &self,
         sys: &System,
         frame: Option<&BodyFrame>,
-    ) -> Option<([f64; 3], [f64; 3], Option<[f64; 3]>)> {
+    ) -> Option<Centres> {
         let x = sys.cable_node_start(self.cable, self.node)?;
         Some(match &self.against {
             CableTarget::Plane { point, normal } => (x, *point, Some(*normal)),
@@ -739,6 +739,10 @@ impl CableContactInfo {
         Some(normal.unwrap_or_else(|| std::array::from_fn(|k| x[k] - o[k])))
     }
 }
+
+/// The node's position, the other centre (a plane's point) and a plane's
+/// normal, world axes ([`CableContactInfo::centres_at_start`]).
+type Centres = ([f64; 3], [f64; 3], Option<[f64; 3]>);
 
 /// A body's frame at a state, world axes: the world position `p` of a
 /// point on the body and the body's axes `e` (`e[i][j]`: world component
