@@ -703,11 +703,7 @@ impl CableContactInfo {
     /// to `to`), the other centre's (a plane's point for a plane) and the
     /// plane's normal, world axes; `frame` is the body's frame at the start
     /// for a body's plane or sphere (`None` there: not known).
-    fn centres_at_start(
-        &self,
-        sys: &System,
-        frame: Option<&BodyFrame>,
-    ) -> Option<Centres> {
+    fn centres_at_start(&self, sys: &System, frame: Option<&BodyFrame>) -> Option<Centres> {
         let x = sys.cable_node_start(self.cable, self.node)?;
         Some(match &self.against {
             CableTarget::Plane { point, normal } => (x, *point, Some(*normal)),
