@@ -128,7 +128,7 @@ fn bad_cables_are_reported_at_once_with_their_places() {
 }
 
 #[test]
-fn simulate_runs_the_pendulum_and_refuses_a_mixed_model() {
+fn simulate_runs_the_pendulum_and_a_mixed_model_and_refuses_one_without_inertia() {
     let out = eom_gen(&[
         "simulate",
         "models/ancf/pendulum.ron",
@@ -169,7 +169,9 @@ fn simulate_runs_the_pendulum_and_refuses_a_mixed_model() {
         "radau5",
     ]);
     assert_eq!(out.status.code(), Some(2));
-    // Rigid bodies and cables in one model: refused with the reason.
+    // Rigid bodies and cables in one model run as one mixed model, hung
+    // at each other or not; one whose body has no inertia is refused with
+    // the reason.
     let path = write(
         "mixed.ron",
         r#"Model(name: "mixed", bodies: [(name: "b", mass: 1)],
@@ -179,7 +181,32 @@ fn simulate_runs_the_pendulum_and_refuses_a_mixed_model() {
     );
     let out = eom_gen(&["simulate", &path, "--t-end", "0.01"]);
     assert_eq!(out.status.code(), Some(1));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("mixes rigid bodies and cables"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("the motion of joint `j` (speed `j_dot`) has no inertia"),
+        "{err}"
+    );
+    // A free wire dropped on a cart rolling at 1 m/s (no cable hangs at
+    // the cart): both end at the shared speed m_c v₀/(m_c + m_w) = 0.8.
+    let out = eom_gen(&[
+        "simulate",
+        "models/ancf/wire_on_cart.ron",
+        "--t-end",
+        "1",
+        "--dt",
+        "2e-3",
+        "--rho-inf",
+        "0.8",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let u = v["u"][0].as_f64().unwrap_or(f64::NAN);
+    assert!((u - 0.8).abs() < 1e-6, "the cart at {u} m/s");
 }
 
 #[test]
