@@ -2417,36 +2417,7 @@ mod tests {
                 assert!(sp.fill(&yt, &vt, true, 0, &mut r), "{label}");
                 r
             };
-            let r0 = at(0.0);
-            let h = 1e-6;
-            let (rp, rm) = (at(h), at(-h));
-            let gdot = (rp.g[0] - rm.g[0]) / (2.0 * h);
-            assert!(
-                (gdot - r0.gdot[0]).abs() < 1e-8,
-                "{label}: ġ {} against {gdot}",
-                r0.gdot[0]
-            );
-            let wv: f64 = (0..n).map(|k| r0.w[(0, k)] * v[k]).sum();
-            assert!((wv - r0.gdot[0]).abs() < 1e-14, "{label}: w·v");
-            let gddot = (rp.gdot[0] - rm.gdot[0]) / (2.0 * h);
-            let wa: f64 = (0..n).map(|k| r0.w[(0, k)] * acc[k]).sum();
-            assert!(
-                (wa - r0.gamma[0] - gddot).abs() < 1e-7,
-                "{label}: w·a − γ = {} against g̈ {gddot}",
-                wa - r0.gamma[0]
-            );
-            for a in 0..2 {
-                let dv = (rp.vt[0][a] - rm.vt[0][a]) / (2.0 * h);
-                let wta: f64 = (0..n).map(|k| r0.wt[(a, k)] * acc[k]).sum();
-                assert!(
-                    (wta - r0.gamma_t[0][a] - dv).abs() < 1e-7,
-                    "{label}: W_t{} a − γ_t = {} against v̇_t {dv}",
-                    a + 1,
-                    wta - r0.gamma_t[0][a]
-                );
-                let wtv: f64 = (0..n).map(|k| r0.wt[(a, k)] * v[k]).sum();
-                assert!((wtv - r0.vt[0][a]).abs() < 1e-14, "{label}: W_t v");
-            }
+            let r0 = rows_are_the_derivatives(label, &at, &v, &acc, 1e-6);
             // The tangent axes are unit, orthogonal and normal to `n`.
             let (t, _) = sp.tangents(
                 [
@@ -2550,36 +2521,51 @@ mod tests {
                 assert!(row.fill(&f, &yt, &vt, true, 0, &mut r), "{label}");
                 r
             };
-            let r0 = at(0.0);
-            let h = 1e-5;
-            let (rp, rm) = (at(h), at(-h));
-            let gdot = (rp.g[0] - rm.g[0]) / (2.0 * h);
-            assert!(
-                (gdot - r0.gdot[0]).abs() < 1e-8,
-                "{label}: ġ {} against {gdot}",
-                r0.gdot[0]
-            );
-            let wv: f64 = (0..n).map(|k| r0.w[(0, k)] * v[k]).sum();
-            assert!((wv - r0.gdot[0]).abs() < 1e-14, "{label}: w·v {wv}");
-            let gddot = (rp.gdot[0] - rm.gdot[0]) / (2.0 * h);
-            let wa: f64 = (0..n).map(|k| r0.w[(0, k)] * acc[k]).sum();
-            assert!(
-                (wa - r0.gamma[0] - gddot).abs() < 1e-7,
-                "{label}: w·a − γ = {} against g̈ {gddot}",
-                wa - r0.gamma[0]
-            );
-            for a in 0..2 {
-                let wtv: f64 = (0..n).map(|k| r0.wt[(a, k)] * v[k]).sum();
-                assert!((wtv - r0.vt[0][a]).abs() < 1e-14, "{label}: W_t v");
-                let dv = (rp.vt[0][a] - rm.vt[0][a]) / (2.0 * h);
-                let wta: f64 = (0..n).map(|k| r0.wt[(a, k)] * acc[k]).sum();
-                assert!(
-                    (wta - r0.gamma_t[0][a] - dv).abs() < 1e-7,
-                    "{label}: W_t{} a − γ_t = {} against v̇_t {dv}",
-                    a + 1,
-                    wta - r0.gamma_t[0][a]
-                );
-            }
+            rows_are_the_derivatives(label, &at, &v, &acc, 1e-5);
         }
+    }
+
+    /// Row 0 of `at(t)` (the rows along the motion with speeds `v` and
+    /// accelerations `acc` at `t = 0`) against central differences of
+    /// step `h`: `ġ` the rate of `g`, `w·v = ġ`, `g̈ = w·a − γ`,
+    /// `W_t v = v_t` and `v̇_t = W_t a − γ_t`; returns the rows at 0.
+    fn rows_are_the_derivatives(
+        label: &str,
+        at: &dyn Fn(f64) -> Rows,
+        v: &[f64],
+        acc: &[f64],
+        h: f64,
+    ) -> Rows {
+        let n = v.len();
+        let r0 = at(0.0);
+        let (rp, rm) = (at(h), at(-h));
+        let gdot = (rp.g[0] - rm.g[0]) / (2.0 * h);
+        assert!(
+            (gdot - r0.gdot[0]).abs() < 1e-8,
+            "{label}: ġ {} against {gdot}",
+            r0.gdot[0]
+        );
+        let wv: f64 = (0..n).map(|k| r0.w[(0, k)] * v[k]).sum();
+        assert!((wv - r0.gdot[0]).abs() < 1e-14, "{label}: w·v {wv}");
+        let gddot = (rp.gdot[0] - rm.gdot[0]) / (2.0 * h);
+        let wa: f64 = (0..n).map(|k| r0.w[(0, k)] * acc[k]).sum();
+        assert!(
+            (wa - r0.gamma[0] - gddot).abs() < 1e-7,
+            "{label}: w·a − γ = {} against g̈ {gddot}",
+            wa - r0.gamma[0]
+        );
+        for a in 0..2 {
+            let wtv: f64 = (0..n).map(|k| r0.wt[(a, k)] * v[k]).sum();
+            assert!((wtv - r0.vt[0][a]).abs() < 1e-14, "{label}: W_t v");
+            let dv = (rp.vt[0][a] - rm.vt[0][a]) / (2.0 * h);
+            let wta: f64 = (0..n).map(|k| r0.wt[(a, k)] * acc[k]).sum();
+            assert!(
+                (wta - r0.gamma_t[0][a] - dv).abs() < 1e-7,
+                "{label}: W_t{} a − γ_t = {} against v̇_t {dv}",
+                a + 1,
+                wta - r0.gamma_t[0][a]
+            );
+        }
+        r0
     }
 }
