@@ -826,6 +826,15 @@ pub(super) struct HeldWork<W> {
     /// The step's start `y_n` (the last accepted coordinates), from which
     /// a body's sticking tangential rows hold the displacement at zero.
     base: Vec<f64>,
+    /// Per contact row, the direction a sliding row's friction opposes
+    /// over the step: its `v̂_t` at the step's start (`s0` where it starts
+    /// at rest, or has turned from `s0` by a right angle or more; zero for
+    /// the rows not sliding). Frozen over the step's Newton iterations:
+    /// taken at each iterate, a slide starting from rest (`v_t` within
+    /// the iterations' corrections of zero) turned its friction from
+    /// iterate to iterate, and Newton stalled (a rod spinning on a floor
+    /// stopped by friction, its tip slipping again as the rod rang).
+    dirs: Vec<[f64; 2]>,
 }
 
 impl<'m, M: Impacts + ?Sized> Held<'m, M> {
@@ -983,12 +992,19 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         }
     }
 
-    /// Adds `scale` times hold `h`'s force column at speeds `v` to `r`
-    /// (a sliding row's with its friction, `w − μ sᵀ W_t`).
-    fn add_column(&self, h: Hold, v: &[f64], body: Option<&Rows>, scale: f64, r: &mut [f64]) {
+    /// Adds `scale` times hold `h`'s force column to `r` (a sliding row's
+    /// with its friction, `w − μ sᵀ W_t`, `s` its direction `dirs`).
+    fn add_column(
+        &self,
+        h: Hold,
+        dirs: &[[f64; 2]],
+        body: Option<&Rows>,
+        scale: f64,
+        r: &mut [f64],
+    ) {
         let slip = match h {
             Hold::Normal(i) => match self.slides.get(i) {
-                Some(Some(Slide::Slip(s0))) => Some((i, *s0)),
+                Some(Some(Slide::Slip(s0))) => Some((i, dirs.get(i).copied().unwrap_or(*s0))),
                 _ => None,
             },
             Hold::Tangent(..) => None,
@@ -1005,8 +1021,7 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
             for (k, x) in r.iter_mut().enumerate() {
                 *x += row[k] * scale;
             }
-            if let (Own::Normal(b), Some((i, s0))) = (o, slip) {
-                let s = direction(rows.vt[b], s0);
+            if let (Own::Normal(b), Some((i, s))) = (o, slip) {
                 let mu = self.gaps.mu[i];
                 for (a, sa) in s.iter().enumerate() {
                     for (k, x) in r.iter_mut().enumerate() {
@@ -1019,8 +1034,7 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         for &(c, a) in self.row(h) {
             r[c] += a * scale;
         }
-        if let Some((i, s0)) = slip {
-            let s = direction(self.gaps.vt(i, v), s0);
+        if let Some((i, s)) = slip {
             let mu = self.gaps.mu[i];
             for (a, sa) in s.iter().enumerate() {
                 for &(c, t) in &self.gaps.tangents[i][a] {
@@ -1063,27 +1077,47 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
     /// along `s0` (falls through zero when the slide stops), `None` for
     /// the others (NaN: a body's row that cannot be evaluated).
     pub fn slip_speeds(&self, s: &State) -> Vec<Option<f64>> {
-        // The rows evaluated per state only where one of them slides.
-        let evaluated_slides = self
-            .active
+        let vt = self.sliding_speeds(s);
+        self.active
             .iter()
-            .any(|&i| !self.gaps.node(i) && matches!(self.slides[i], Some(Slide::Slip(_))));
+            .map(|&i| match (self.slides[i], vt[i]) {
+                (Some(Slide::Slip(s0)), Some(v)) => Some(v[0] * s0[0] + v[1] * s0[1]),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Per contact row, the tangential speeds `v_t` at `s` of a sliding
+    /// row, `None` for the others (NaN: a body's row that cannot be
+    /// evaluated).
+    fn sliding_speeds(&self, s: &State) -> Vec<Option<[f64; 2]>> {
+        let slides = |i: usize| matches!(self.slides[i], Some(Slide::Slip(_)));
+        // The rows evaluated per state only where one of them slides.
+        let evaluated_slides = self.active.iter().any(|&i| !self.gaps.node(i) && slides(i));
         let body = evaluated_slides
             .then(|| self.body_at(s.t, &s.q, &s.v))
             .flatten();
-        self.active
-            .iter()
-            .map(|&i| match self.slides[i] {
-                Some(Slide::Slip(s0)) => {
-                    let vt = if self.gaps.node(i) {
-                        self.gaps.vt(i, &s.v)
-                    } else {
-                        body.as_ref()
-                            .map_or([f64::NAN; 2], |r| r.vt[i - self.gaps.nodes])
-                    };
-                    Some(vt[0] * s0[0] + vt[1] * s0[1])
-                }
-                _ => None,
+        let mut out = vec![None; self.gaps.len()];
+        for &i in self.active.iter().filter(|&&i| slides(i)) {
+            out[i] = Some(if self.gaps.node(i) {
+                self.gaps.vt(i, &s.v)
+            } else {
+                body.as_ref()
+                    .map_or([f64::NAN; 2], |r| r.vt[i - self.gaps.nodes])
+            });
+        }
+        out
+    }
+
+    /// The friction directions of the step starting at `s` (see
+    /// [`HeldWork::dirs`]).
+    fn directions(&self, s: &State) -> Vec<[f64; 2]> {
+        self.sliding_speeds(s)
+            .into_iter()
+            .enumerate()
+            .map(|(i, vt)| match (self.slides[i], vt) {
+                (Some(Slide::Slip(s0)), Some(v)) => direction(v, s0),
+                _ => [0.0; 2],
             })
             .collect()
     }
@@ -1105,7 +1139,7 @@ impl<'m, M: Impacts + ?Sized> Held<'m, M> {
         w.x.clear();
         for &h in &self.holds {
             let mut col = vec![0.0; n + mi];
-            self.add_column(h, v, body, 1.0, &mut col[..n]);
+            self.add_column(h, &w.dirs, body, 1.0, &mut col[..n]);
             self.inner.solve(&mut w.inner, &mut col);
             w.x.push(col);
         }
@@ -1140,6 +1174,7 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
             s: None,
             rows: None,
             base: state.q.clone(),
+            dirs: self.directions(state),
         }
     }
 
@@ -1152,6 +1187,7 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
     ) -> Result<(), DynamicsError> {
         let (n, mi) = (self.inner.n(), self.inner.n_constraints());
         w.base.clone_from(&state.q);
+        w.dirs = self.directions(state);
         self.inner
             .start(&mut w.inner, state, acc, &mut lambda[..mi])?;
         if self.holds.is_empty() {
@@ -1221,7 +1257,7 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
         let body = self.body_at(t, y, v);
         let mid = self.mid_at(t, y, &w.base, v);
         for (b, &h) in self.holds.iter().enumerate() {
-            self.add_column(h, v, body.as_ref(), lambda[mi + b], &mut r[..n]);
+            self.add_column(h, &w.dirs, body.as_ref(), lambda[mi + b], &mut r[..n]);
             r[n + mi + b] = self.value(h, y, body.as_ref(), (&w.base, mid.as_ref()));
         }
     }
@@ -1290,6 +1326,7 @@ impl<M: Impacts + ?Sized> AlphaModel for Held<'_, M> {
             });
         // The next step starts here.
         w.base.clone_from(&state.q);
+        w.dirs = self.directions(state);
         worst
     }
 
