@@ -207,6 +207,24 @@ fn simulate_runs_the_pendulum_and_a_mixed_model_and_refuses_one_without_inertia(
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
     let u = v["u"][0].as_f64().unwrap_or(f64::NAN);
     assert!((u - 0.8).abs() < 1e-6, "the cart at {u} m/s");
+    // Its free wire has no static equilibrium: refused with the reason.
+    let out = eom_gen(&["solve-static", "models/ancf/wire_on_cart.ron"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("a mechanism"), "{err}");
+    // The pendulum beside its peg hangs straight down, θ = −π/2.
+    let out = eom_gen(&["solve-static", "models/ancf/pendulum_peg.ron", "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON object");
+    let theta = v["q"][0].as_f64().unwrap_or(f64::NAN);
+    assert!(
+        (theta + std::f64::consts::FRAC_PI_2).abs() < 1e-9,
+        "θ = {theta}"
+    );
 }
 
 #[test]

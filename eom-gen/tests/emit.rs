@@ -39,3 +39,38 @@ fn arm7_source_is_pinned() {
     let g = generate(&Source::new("models/arm7.ron", text)).unwrap_or_else(|e| panic!("{e}"));
     insta::assert_snapshot!(g.source);
 }
+
+/// arm7's forward-dynamics derivatives (5 945 instructions) are written
+/// one state at a time as one late-scheduled function, not four parts
+/// (4.6 % faster, BENCHMARKS.md "One part for arm7's derivatives"); their
+/// lane version, bound by throughput, keeps its parts, as does forward
+/// dynamics' longest neighbour of 1 500 instructions and more.
+#[test]
+fn arm7s_derivatives_are_one_part() {
+    use eom_gen::functions::{Function, FunctionSet};
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/arm7.ron");
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let sys = eom_gen::model::check(&Source::new("models/arm7.ron", text.clone()))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let f = eom_gen::mech::formulate(
+        &sys,
+        FunctionSet::default().with(Function::ForwardDynamicsDerivatives),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let len = f
+        .program(Function::ForwardDynamicsDerivatives)
+        .map_or(0, |p| p.instrs.len());
+    assert!(
+        len > eom_gen::emit::PART_LIMIT && len <= eom_gen::emit::DERIVATIVES_IN_ONE_PART,
+        "{len} instructions"
+    );
+    let opts = eom_gen::EmitOptions {
+        lanes: true,
+        ..Default::default()
+    };
+    let source = eom_gen::emit::emit_with(&sys, &f, &text, &opts);
+    assert!(source.contains("fn forward_dynamics_derivatives("));
+    assert!(!source.contains("fn forward_dynamics_derivatives_part"));
+    assert!(source.contains("fn forward_dynamics_derivatives_lanes_part0"));
+}

@@ -22,6 +22,25 @@ use std::collections::HashMap;
 /// Instructions per part.
 pub const PART_LIMIT: usize = 1500;
 
+/// The longest derivative program (`forward_dynamics_derivatives`,
+/// `inverse_dynamics_derivatives`) written as one part, late-scheduled,
+/// when evaluated one state at a time: arm7's forward-dynamics derivatives
+/// (5 945 instructions) take 4.6 % less time in one part than in four
+/// (BENCHMARKS.md, "One part for arm7's derivatives"). Longer ones are
+/// cut at [`PART_LIMIT`] like every other function.
+pub const DERIVATIVES_IN_ONE_PART: usize = 6500;
+
+/// The part limit of function `name`'s program `p` (see
+/// [`DERIVATIVES_IN_ONE_PART`]): [`PART_LIMIT`] but for a derivative
+/// program evaluated one state at a time that fits in one part.
+pub fn part_limit(b: &Style<'_>, p: &Program, derivatives: bool) -> usize {
+    if derivatives && b.lanes.is_none() && p.instrs.len() <= DERIVATIVES_IN_ONE_PART {
+        p.instrs.len().max(PART_LIMIT)
+    } else {
+        PART_LIMIT
+    }
+}
+
 /// How a program's values are written.
 pub struct Style<'a> {
     /// How each input symbol is read.
@@ -413,16 +432,28 @@ fn allocate_slots(
     slots
 }
 
-/// Lowers `p` for a function called `name` with arguments `args`.
+/// Lowers `p` for a function called `name` with arguments `args`, in
+/// parts of at most [`PART_LIMIT`] instructions.
 pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
+    lower_in_parts(b, p, name, args, PART_LIMIT)
+}
+
+/// [`lower`] in parts of at most `limit` instructions.
+pub fn lower_in_parts(
+    b: &Style<'_>,
+    p: &Program,
+    name: &str,
+    args: &[Arg<'_>],
+    limit: usize,
+) -> Lowered {
     // One state at a time, the code waits on latency: each instruction as
     // late as its readers allow keeps fewer values live (BENCHMARKS.md,
     // "Sums as trees"). Measured to pay in functions of one part only
     // (arm7's forward dynamics 182 → 169 ns; its derivatives, four parts,
     // 1050 → 1200 ns), and not in lanes, which are bound by throughput.
     let late;
-    let p = if b.lanes.is_none() && p.instrs.len() <= PART_LIMIT {
-        late = p.scheduled_late(PART_LIMIT);
+    let p = if b.lanes.is_none() && p.instrs.len() <= limit {
+        late = p.scheduled_late(limit);
         &late
     } else {
         p
@@ -445,7 +476,7 @@ pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowere
             }
         },
     };
-    if p.instrs.len() <= PART_LIMIT {
+    if p.instrs.len() <= limit {
         let slots = HashMap::new();
         return Lowered {
             body: statements(b, p, 0..p.instrs.len(), &slots, false),
@@ -460,8 +491,8 @@ pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowere
     }
     // Part of each instruction, and of each temporary's definition.
     let parts: Vec<std::ops::Range<usize>> = (0..p.instrs.len())
-        .step_by(PART_LIMIT)
-        .map(|s| s..(s + PART_LIMIT).min(p.instrs.len()))
+        .step_by(limit)
+        .map(|s| s..(s + limit).min(p.instrs.len()))
         .collect();
     let mut part_of_tmp: HashMap<u32, usize> = HashMap::new();
     for (k, r) in parts.iter().enumerate() {

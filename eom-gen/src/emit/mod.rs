@@ -26,6 +26,7 @@ pub(crate) mod lower;
 mod names;
 use crate::system::{Motion, System};
 pub use loops::LoopChoice;
+pub use lower::{DERIVATIVES_IN_ONE_PART, PART_LIMIT};
 pub use names::{field_names, is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
@@ -691,7 +692,12 @@ pub fn emit_tokens(
                 FnArg::Tau => arg_tau(),
             })
             .collect();
-        let l = lower(&style, p, e.name, &args);
+        let derivatives = matches!(
+            e.function,
+            Function::ForwardDynamicsDerivatives | Function::InverseDynamicsDerivatives
+        );
+        let limit = lower::part_limit(&style, p, derivatives);
+        let l = lower::lower_in_parts(&style, p, e.name, &args, limit);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("out", &l.outputs));
         let n = format_ident!("{}", e.name);
