@@ -504,8 +504,6 @@ pub fn node_contacts(sys: &System, cables: &[MixedCable]) -> Vec<eom_sim::large:
     sys.cable_contacts
         .iter()
         .map(|c| (c, c.against.on_body().and_then(|_| frames.next())))
-        .collect::<Vec<_>>()
-        .into_iter()
         .filter_map(|(c, frame)| {
             let layout = cables.get(c.cable)?;
             let base = layout.offset + c.node * layout.node_coords;

@@ -25,14 +25,16 @@ pub const PART_LIMIT: usize = 1500;
 /// The longest derivative program (`forward_dynamics_derivatives`,
 /// `inverse_dynamics_derivatives`) written as one part, late-scheduled,
 /// when evaluated one state at a time: arm7's forward-dynamics derivatives
-/// (5 945 instructions) take 4.6 % less time in one part than in four
-/// (BENCHMARKS.md, "One part for arm7's derivatives"). Longer ones are
-/// cut at [`PART_LIMIT`] like every other function.
+/// (5 945 instructions) take 2.3 % less time in one part than in four
+/// (973.9 against 996.3 ns; BENCHMARKS.md, "One part for arm7's
+/// derivatives"). Longer ones are cut at [`PART_LIMIT`] like every other
+/// function.
 pub const DERIVATIVES_IN_ONE_PART: usize = 6500;
 
-/// The part limit of function `name`'s program `p` (see
-/// [`DERIVATIVES_IN_ONE_PART`]): [`PART_LIMIT`] but for a derivative
-/// program evaluated one state at a time that fits in one part.
+/// The part limit of program `p` written in style `b` (see
+/// [`DERIVATIVES_IN_ONE_PART`]): [`PART_LIMIT`], but for a derivative
+/// program (`derivatives`) evaluated one state at a time that fits in one
+/// part.
 pub fn part_limit(b: &Style<'_>, p: &Program, derivatives: bool) -> usize {
     if derivatives && b.lanes.is_none() && p.instrs.len() <= DERIVATIVES_IN_ONE_PART {
         p.instrs.len().max(PART_LIMIT)
