@@ -163,6 +163,7 @@ fn optimize_applies_identities_and_removes_dead_code() {
         ],
         outputs: vec![("c".into(), t(6))],
         n_tmps: 8,
+        products: Vec::new(),
     };
     let removed = p.optimize();
     let want = "inputs: in0=x\nt0 = cos(in0)\nc = t0\n";
@@ -296,6 +297,7 @@ fn divisions_by_one_value_share_its_reciprocal() {
             ("s".into(), t(4)),
         ],
         n_tmps: 5,
+        products: Vec::new(),
     };
     let x = [1.5, -2.25, 3.0, 7.0];
     let before = p.eval(&x);
@@ -363,6 +365,7 @@ fn a_difference_and_its_reverse_are_one_subtraction() {
         ],
         outputs: vec![("x".into(), t(0)), ("y".into(), t(2))],
         n_tmps: 3,
+        products: Vec::new(),
     };
     p.optimize();
     let c = p.op_count();
@@ -442,4 +445,54 @@ fn a_late_term_is_added_last_and_negations_become_subtractions() {
             "{got} vs {want}"
         );
     }
+}
+
+/// A [`Product`] after the instructions replaces its blocks by `−A B`
+/// (here `A` 3 × 3 and two blocks of 2 and 1 columns side by side, the
+/// layout of `−M⁻¹ [∂ID/∂q ∂ID/∂u]`), counts `2 n² width` operations,
+/// and leaves the other outputs alone (against the same product by
+/// nalgebra, to rounding).
+#[test]
+fn a_product_replaces_its_blocks_by_minus_a_times_b() {
+    use eom_gen::sym::Product;
+    let (n, c1, c2) = (3usize, 2usize, 1usize);
+    // Outputs: B1 (3×2) at 0, A (3×3) at 6, B2 (3×1) at 15, one more at 18.
+    let len = n * c1 + n * n + n * c2 + 1;
+    let inputs: Vec<Symbol> = (0..len)
+        .map(|i| Symbol {
+            kind: SymKind::Param,
+            name: format!("x{i:02}"),
+        })
+        .collect();
+    let outputs = (0..len)
+        .map(|i| (format!("o{i}"), Operand::Var(i as u32)))
+        .collect();
+    let p = Program {
+        inputs,
+        instrs: Vec::new(),
+        outputs,
+        n_tmps: 0,
+        products: vec![Product {
+            a: 6,
+            n,
+            blocks: vec![(0, c1), (15, c2)],
+        }],
+    };
+    let x: Vec<f64> = (0..len)
+        .map(|i| ((i * 7 + 3) % 11) as f64 / 3.0 - 1.4)
+        .collect();
+    let y = p.eval(&x);
+    let a = nalgebra::DMatrix::from_row_slice(n, n, &x[6..15]);
+    let b1 = nalgebra::DMatrix::from_row_slice(n, c1, &x[0..6]);
+    let b2 = nalgebra::DMatrix::from_row_slice(n, c2, &x[15..18]);
+    let (w1, w2) = (-(&a * &b1), -(&a * &b2));
+    for i in 0..n {
+        for j in 0..c1 {
+            assert!((y[i * c1 + j] - w1[(i, j)]).abs() < 1e-15, "B1 ({i}, {j})");
+        }
+        assert!((y[15 + i] - w2[(i, 0)]).abs() < 1e-15, "B2 ({i}, 0)");
+    }
+    assert_eq!(&y[6..15], &x[6..15], "A is read, not written");
+    assert_eq!(y[18], x[18], "outputs outside the blocks are left alone");
+    assert_eq!(p.op_count().total(), 2 * n * n * (c1 + c2));
 }

@@ -698,6 +698,7 @@ pub fn chain(first: &Program, second: &Program) -> Program {
         instrs,
         outputs,
         n_tmps: off + second.n_tmps,
+        products: second.products.clone(),
     };
     p.optimize();
     let _ = Op::Neg;

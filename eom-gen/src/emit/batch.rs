@@ -162,11 +162,13 @@ pub(super) fn emit(
             e.name,
             e.name,
         );
+        let products = super::lower::products(&style, p, &quote!(#out));
         fns.extend(quote! {
             #[doc = #doc]
             pub fn #n<const W: usize>(#params, #out: &mut [#lt<W>; #len_l]) {
                 #body
                 #assign
+                #products
             }
         });
     }

@@ -609,3 +609,62 @@ pub fn lower_in_parts(
         used: vec![true; args.len()],
     }
 }
+
+/// The program's [`Product`](crate::sym::Product)s on the array `out`
+/// (its outputs, already assigned, the blocks `B` holding the gradients):
+/// per product, `A` read into a local array, then each row of `−A B`
+/// summed over `k` along the rows of the blocks as they lie in `out`
+/// (`r[j] −= a_ik b_kj`, or `mul_add` with FMA; loops the compiler runs
+/// in SIMD lanes) into a local result, which is written back at the end.
+pub fn products(b: &Style<'_>, p: &Program, out: &TokenStream) -> TokenStream {
+    let idx = Literal::usize_unsuffixed;
+    let (ty, zero) = match &b.lanes {
+        Some(lt) => (quote!(#lt<W>), quote!(#lt::<W>::splat(0.0))),
+        None => (quote!(f64), quote!(0.0)),
+    };
+    let update = if b.fma {
+        match &b.lanes {
+            Some(lt) => quote!(*x = #lt::mul_add(-*m, *y, *x)),
+            None => quote!(*x = f64::mul_add(-*m, *y, *x)),
+        }
+    } else {
+        quote!(*x = *x - *m * *y)
+    };
+    let mut code = TokenStream::new();
+    for pr in &p.products {
+        let (n, w) = (idx(pr.n), idx(pr.width()));
+        let a0 = idx(pr.a);
+        let mut acc = TokenStream::new();
+        let mut write = TokenStream::new();
+        let mut offset = 0;
+        for &(start, cols) in &pr.blocks {
+            let (s, c, o, e) = (idx(start), idx(cols), idx(offset), idx(offset + cols));
+            let end = idx(start + pr.n * cols);
+            acc.extend(quote! {
+                for (x, y) in rrow[#o..#e].iter_mut().zip(&#out[#s + k * #c..#s + k * #c + #c]) {
+                    #update;
+                }
+            });
+            write.extend(quote! {
+                for (orow, r) in #out[#s..#end].chunks_exact_mut(#c).zip(&res) {
+                    orow.copy_from_slice(&r[#o..#e]);
+                }
+            });
+            offset += cols;
+        }
+        code.extend(quote! {
+            {
+                let a: [[#ty; #n]; #n] =
+                    ::core::array::from_fn(|i| ::core::array::from_fn(|k| #out[#a0 + i * #n + k]));
+                let mut res = [[#zero; #w]; #n];
+                for (arow, rrow) in a.iter().zip(res.iter_mut()) {
+                    for (k, m) in arow.iter().enumerate() {
+                        #acc
+                    }
+                }
+                #write
+            }
+        });
+    }
+    code
+}

@@ -725,12 +725,14 @@ pub fn emit_tokens(
         } else {
             TokenStream::new()
         };
+        let products = lower::products(&style, p, &quote!(#out));
         inherent.extend(quote! {
             #[doc = #doc]
             #lambda_doc
             pub fn #n(&self, #params, #out: &mut [f64; #len]) {
                 #body
                 #assign
+                #products
             }
         });
     }

@@ -43,9 +43,14 @@
 //!
 //! The derivatives go through the same simplification, CSE and emission
 //! as every other generated function (see [`crate::functions`] for the
-//! layout of the result).
+//! layout of the result). In the `−M⁻¹ ∂ID/∂x` forms with at least
+//! [`PRODUCTS_FROM_NU`] speeds the program computes `M⁻¹` and the
+//! gradients `∂ID/∂x` only, and the multiplication `−M⁻¹ [∂ID/∂q ∂ID/∂u
+//! ∂ID/∂(inputs)]` is a dense [`Product`] after it: loops along the rows
+//! of the gradients, which the compiler runs in SIMD lanes, where
+//! straight-line sums ran one operation at a time.
 
-use crate::sym::{Context, Expr, LowerOptions, Program, Scalar};
+use crate::sym::{Context, Expr, LowerOptions, Product, Program, Scalar};
 use std::fmt;
 
 /// How the derivatives of forward dynamics are computed.
@@ -240,17 +245,77 @@ fn lower_solved<'cx>(
     opts: LowerOptions,
 ) -> Program {
     let (nu, ni) = (minv.len(), gi.first().map_or(0, Vec::len));
-    lower_blocks(
+    // Terms of the straight-line sums (structural zeros skipped) against
+    // the dense product's, which run `PRODUCT_LANES` to an instruction.
+    let sparse_terms: usize = [&gq, &gu, &gi]
+        .iter()
+        .map(|g| {
+            let cols = g.first().map_or(0, Vec::len);
+            (0..cols)
+                .map(|j| {
+                    minv.iter()
+                        .map(|mrow| {
+                            mrow.iter()
+                                .zip(g.iter())
+                                .filter(|(m, gk)| !m.is_zero() && !gk[j].is_zero())
+                                .count()
+                        })
+                        .sum::<usize>()
+                })
+                .sum::<usize>()
+        })
+        .sum();
+    let dense_terms = nu * nu * (2 * nu + ni);
+    if nu < PRODUCTS_FROM_NU || dense_terms > PRODUCT_LANES * sparse_terms {
+        return lower_blocks(
+            cx,
+            [
+                ("dq", minus_solve(minv, gq, nu)),
+                ("du", minus_solve(minv, gu, nu)),
+                ("dtau", minv.to_vec()),
+                ("dinput", minus_solve(minv, gi, ni)),
+            ],
+            opts,
+        );
+    }
+    // The gradients in the outputs' places, `−M⁻¹ G` as products after the
+    // instructions (in SIMD lanes in generated code).
+    let mut p = lower_blocks(
         cx,
         [
-            ("dq", minus_solve(minv, gq, nu)),
-            ("du", minus_solve(minv, gu, nu)),
+            ("dq", gq),
+            ("du", gu),
             ("dtau", minv.to_vec()),
-            ("dinput", minus_solve(minv, gi, ni)),
+            ("dinput", gi),
         ],
         opts,
-    )
+    );
+    p.products = vec![Product {
+        a: 2 * nu * nu,
+        n: nu,
+        blocks: [(0, nu), (nu * nu, nu), (3 * nu * nu, ni)]
+            .into_iter()
+            .filter(|&(_, cols)| cols > 0)
+            .collect(),
+    }];
+    p
 }
+
+/// From this many speeds on, `−M⁻¹ G` is left to a dense [`Product`]
+/// after the program (loops along rows, SIMD lanes in generated code)
+/// rather than expanded into straight-line sums with their structural
+/// zeros skipped, unless the dense product has more than
+/// [`PRODUCT_LANES`] times the sums' terms (a branched tree's `M⁻¹` with
+/// its zero blocks: the Stewart platform's spanning tree, 21 speeds).
+/// Measured (BENCHMARKS.md, "`−M⁻¹ ∂ID/∂x` as a dense product"): panda (9
+/// speeds) 19 % fewer instructions and 12 % less time, arm7 (7) 8 % fewer
+/// instructions in the same time; below seven not measured, so not
+/// changed.
+pub const PRODUCTS_FROM_NU: usize = 7;
+
+/// The SIMD lanes a dense product is assumed to run in (four doubles to a
+/// 256-bit instruction).
+pub const PRODUCT_LANES: usize = 4;
 
 /// `−M⁻¹ G` for `G` with `cols` columns (structural zeros skipped).
 fn minus_solve<'cx>(

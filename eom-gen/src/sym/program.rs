@@ -176,6 +176,76 @@ impl fmt::Display for OpCount {
     }
 }
 
+/// A dense matrix product applied to a program's outputs after its
+/// instructions, in place: each block of outputs `B` (`n × cols`,
+/// row-major) becomes `−A B`, `A` the `n × n` block of outputs from `a`.
+///
+/// This is `∂u̇/∂x = −M⁻¹ ∂ID/∂x` of the derivatives (`B` the gradients
+/// with respect to `q`, `u` and the inputs): written as straight-line
+/// scalar code the product costs `2 n² cols` operations one at a time; as
+/// loops along the rows of the blocks it runs in SIMD lanes
+/// (two to eight per instruction, as the target allows). Each entry is summed in the order
+/// of `k`, one product subtracted at a time from zero, in the interpreter
+/// ([`Program::eval`]) and in generated code alike.
+#[derive(Clone, PartialEq, Eq, Debug)]
+pub struct Product {
+    /// First output of `A` (`n × n`, row-major).
+    pub a: usize,
+    /// Rows and columns of `A`.
+    pub n: usize,
+    /// The blocks `B`: first output and number of columns of each.
+    pub blocks: Vec<(usize, usize)>,
+}
+
+impl Product {
+    /// Columns of all blocks side by side.
+    pub fn width(&self) -> usize {
+        self.blocks.iter().map(|&(_, c)| c).sum()
+    }
+
+    /// `2 n² width`: a multiplication and a subtraction per term.
+    pub fn op_count(&self) -> usize {
+        2 * self.n * self.n * self.width()
+    }
+
+    /// Where entry `(k, j)` of the blocks side by side is among the
+    /// outputs.
+    pub fn b_index(&self, k: usize, mut j: usize) -> usize {
+        for &(start, cols) in &self.blocks {
+            if j < cols {
+                return start + k * cols + j;
+            }
+            j -= cols;
+        }
+        usize::MAX
+    }
+
+    /// Applies the product to `out`, the program's outputs (left alone if
+    /// an index is out of range: a product never reaches past the outputs
+    /// its program was built with).
+    pub fn apply(&self, out: &mut [f64]) {
+        let (n, w) = (self.n, self.width());
+        let at = |i: usize| out.get(i).copied();
+        let a: Option<Vec<f64>> = (0..n * n).map(|i| at(self.a + i)).collect();
+        let b: Option<Vec<f64>> = (0..n * w).map(|i| at(self.b_index(i / w, i % w))).collect();
+        let (Some(a), Some(b)) = (a, b) else {
+            return;
+        };
+        for i in 0..n {
+            let mut row = vec![0.0; w];
+            for k in 0..n {
+                let m = a[i * n + k];
+                for (r, x) in row.iter_mut().zip(&b[k * w..(k + 1) * w]) {
+                    *r -= m * x;
+                }
+            }
+            for (j, r) in row.into_iter().enumerate() {
+                out[self.b_index(i, j)] = r;
+            }
+        }
+    }
+}
+
 /// A straight-line program: inputs, SSA assignments in dependency order,
 /// named outputs.
 #[derive(Clone, PartialEq, Debug)]
@@ -188,6 +258,9 @@ pub struct Program {
     pub outputs: Vec<(String, Operand)>,
     /// Number of temporaries (`dst` values are `0..n_tmps`).
     pub n_tmps: u32,
+    /// Dense products applied to the outputs after the instructions, in
+    /// order (see [`Product`]); empty for most programs.
+    pub products: Vec<Product>,
 }
 
 impl Program {
@@ -594,6 +667,7 @@ impl Arena {
             instrs: l.instrs,
             outputs: outs,
             n_tmps: l.next,
+            products: Vec::new(),
         };
         if opts.optimize {
             p.optimize();
@@ -913,6 +987,10 @@ impl Program {
                 Op::Exp(_) | Op::Ln(_) | Op::Abs(_) | Op::Select(..) => c.other += 1,
             }
         }
+        for p in &self.products {
+            c.muls += p.op_count() / 2;
+            c.adds += p.op_count() / 2;
+        }
         c
     }
 
@@ -951,7 +1029,11 @@ impl Program {
             };
             t[d] = v;
         }
-        self.outputs.iter().map(|&(_, o)| get(&t, o)).collect()
+        let mut out: Vec<f64> = self.outputs.iter().map(|&(_, o)| get(&t, o)).collect();
+        for p in &self.products {
+            p.apply(&mut out);
+        }
+        out
     }
 
     /// Run the program with values given per arena symbol (as for

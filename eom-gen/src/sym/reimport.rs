@@ -125,12 +125,14 @@ impl Program {
             .map(|(n, _)| n.as_str())
             .zip(ids)
             .collect();
-        arena.lower(
+        let mut p = arena.lower(
             &outs,
             LowerOptions {
                 second_round: false,
                 ..LowerOptions::default()
             },
-        )
+        );
+        p.products = self.products.clone();
+        p
     }
 }
