@@ -187,18 +187,27 @@ fn generated_sources_are_fresh() {
     names.push("ancf/pendulum_rod.ron".to_string());
     names.push("ancf/fourbar_cable.ron".to_string());
     names.push("ancf/pendulum_peg.ron".to_string());
-    for file in names.iter().filter(|n| n.ends_with(".ron")) {
-        let name = file
-            .trim_end_matches(".ron")
-            .rsplit('/')
-            .next()
-            .unwrap_or(file);
-        let text = std::fs::read_to_string(format!("{dir}/{file}")).unwrap_or_default();
+    let mut files: Vec<(String, String)> = names
+        .iter()
+        .filter(|n| n.ends_with(".ron"))
+        .map(|file| {
+            let name = file.trim_end_matches(".ron").rsplit('/').next();
+            (name.unwrap_or(file).to_string(), format!("models/{file}"))
+        })
+        .collect();
+    // The scenes generated too (the regenerate example's `SCENES`).
+    files.push((
+        "arm7_derivatives".to_string(),
+        "tests/scenes/arm7_derivatives.scene.ron".to_string(),
+    ));
+    for (name, path) in &files {
+        let text = std::fs::read_to_string(format!("{}/{path}", env!("CARGO_MANIFEST_DIR")))
+            .unwrap_or_default();
         let opts = eom_gen::EmitOptions {
             lanes: true,
             ..Default::default()
         };
-        let fresh = eom_gen::generate_with(&Source::new(format!("models/{file}"), text), &opts)
+        let fresh = eom_gen::generate_with(&Source::new(path.clone(), text), &opts)
             .unwrap_or_else(|e| panic!("{e}"))
             .source;
         let committed = std::fs::read_to_string(format!(

@@ -37,6 +37,14 @@ pub const MIXED: [&str; 3] = [
     "ancf/pendulum_peg",
 ];
 
+/// Scenes generated too: arm7 with its derivatives, so that the batched
+/// tests run `forward_dynamics_derivatives_lanes` (with its dense product)
+/// lane by lane against the single-state function.
+pub const SCENES: [(&str, &str); 1] = [(
+    "arm7_derivatives",
+    "tests/scenes/arm7_derivatives.scene.ron",
+)];
+
 fn main() -> ExitCode {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
     if elements(root) != ExitCode::SUCCESS {
@@ -60,14 +68,20 @@ fn main() -> ExitCode {
     // Mixed models (rigid bodies holding ANCF cables) under models/ancf/:
     // their rigid part is generated code like any model's.
     names.extend(MIXED.iter().map(|m| m.to_string()));
+    let mut files: Vec<(String, String)> = names
+        .iter()
+        .map(|path| {
+            let name = path.rsplit('/').next().unwrap_or(path).to_string();
+            (name, format!("models/{path}.ron"))
+        })
+        .collect();
+    files.extend(SCENES.iter().map(|(n, f)| (n.to_string(), f.to_string())));
     let mut lib = String::from(
         "//! Generated source of every bundled model, one module per model, committed\n\
          //! so readers can see what eom-gen emits. A test fails when a file is stale;\n\
          //! refresh with `cargo run -p eom-gen --example regenerate`.\n\n",
     );
-    for path in &names {
-        let name = path.rsplit('/').next().unwrap_or(path);
-        let model = format!("models/{path}.ron");
+    for (name, model) in &files {
         eprintln!("… {model}");
         let src = match std::fs::read_to_string(format!("{root}/{model}")) {
             Ok(text) => eom_gen::Source::new(model.clone(), text),
@@ -90,7 +104,7 @@ fn main() -> ExitCode {
                     return ExitCode::from(1);
                 }
                 lib += &format!(
-                    "/// Model `{name}`, generated from `models/{path}.ron`.\n#[rustfmt::skip] // formatted by prettyplease; stays byte-identical\npub mod {name};\n"
+                    "/// Model `{name}`, generated from `{model}`.\n#[rustfmt::skip] // formatted by prettyplease; stays byte-identical\npub mod {name};\n"
                 );
             }
             Err(e) => {

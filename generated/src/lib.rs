@@ -77,3 +77,6 @@ pub mod fourbar_cable;
 /// Model `pendulum_peg`, generated from `models/ancf/pendulum_peg.ron`.
 #[rustfmt::skip] // formatted by prettyplease; stays byte-identical
 pub mod pendulum_peg;
+/// Model `arm7_derivatives`, generated from `tests/scenes/arm7_derivatives.scene.ron`.
+#[rustfmt::skip] // formatted by prettyplease; stays byte-identical
+pub mod arm7_derivatives;
