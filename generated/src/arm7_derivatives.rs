@@ -8092,17 +8092,14 @@ impl Arm7Derivatives {
             let mut res = [[0.0; 14]; 7];
             for (arow, rrow) in a.iter().zip(res.iter_mut()) {
                 for (k, m) in arow.iter().enumerate() {
-                    for (x, y) in rrow[0..7]
-                        .iter_mut()
-                        .zip(&out[0 + k * 7..0 + k * 7 + 7])
-                    {
-                        *x = *x - *m * *y;
+                    for (x, y) in rrow[0..7].iter_mut().zip(&out[k * 7..k * 7 + 7]) {
+                        *x -= *m * *y;
                     }
                     for (x, y) in rrow[7..14]
                         .iter_mut()
                         .zip(&out[49 + k * 7..49 + k * 7 + 7])
                     {
-                        *x = *x - *m * *y;
+                        *x -= *m * *y;
                     }
                 }
             }
@@ -15018,10 +15015,7 @@ impl Arm7Derivatives {
             let mut res = [[::eom_sim::Lanes::<W>::splat(0.0); 14]; 7];
             for (arow, rrow) in a.iter().zip(res.iter_mut()) {
                 for (k, m) in arow.iter().enumerate() {
-                    for (x, y) in rrow[0..7]
-                        .iter_mut()
-                        .zip(&out[0 + k * 7..0 + k * 7 + 7])
-                    {
+                    for (x, y) in rrow[0..7].iter_mut().zip(&out[k * 7..k * 7 + 7]) {
                         *x = *x - *m * *y;
                     }
                     for (x, y) in rrow[7..14]

@@ -627,8 +627,10 @@ pub fn products(b: &Style<'_>, p: &Program, out: &TokenStream) -> TokenStream {
             Some(lt) => quote!(*x = #lt::mul_add(-*m, *y, *x)),
             None => quote!(*x = f64::mul_add(-*m, *y, *x)),
         }
-    } else {
+    } else if b.lanes.is_some() {
         quote!(*x = *x - *m * *y)
+    } else {
+        quote!(*x -= *m * *y)
     };
     let mut code = TokenStream::new();
     for pr in &p.products {
@@ -638,10 +640,17 @@ pub fn products(b: &Style<'_>, p: &Program, out: &TokenStream) -> TokenStream {
         let mut write = TokenStream::new();
         let mut offset = 0;
         for &(start, cols) in &pr.blocks {
-            let (s, c, o, e) = (idx(start), idx(cols), idx(offset), idx(offset + cols));
-            let end = idx(start + pr.n * cols);
+            let (c, o, e) = (idx(cols), idx(offset), idx(offset + cols));
+            let (s, end) = (idx(start), idx(start + pr.n * cols));
+            // Row `k` of the block, `start + k·cols ..`, with no `0 +`
+            // (clippy's `identity_op`; generated code is lint-free).
+            let row = if start == 0 {
+                quote!(k * #c)
+            } else {
+                quote!(#s + k * #c)
+            };
             acc.extend(quote! {
-                for (x, y) in rrow[#o..#e].iter_mut().zip(&#out[#s + k * #c..#s + k * #c + #c]) {
+                for (x, y) in rrow[#o..#e].iter_mut().zip(&#out[#row..#row + #c]) {
                     #update;
                 }
             });
