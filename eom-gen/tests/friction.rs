@@ -878,11 +878,13 @@ fn tilted_box_runs_a_second_through_its_one_corner_impacts() {
             .filter(|ev| ev.kind == ContactEventKind::Impact)
             .collect();
         eprintln!(
-            "mu {mu}: {} impacts, {} events, energy {:?}, {:.2} s",
+            "mu {mu}: {} impacts, {} events, energy {:?}, {:.2} s, {} steps, {} rhs",
             impacts.len(),
             report.contact_events.len(),
             report.energy,
-            clock.elapsed().as_secs_f64()
+            clock.elapsed().as_secs_f64(),
+            report.stats.steps,
+            report.stats.rhs_evals
         );
         assert!(!impacts.is_empty());
         for ev in &impacts {
