@@ -418,33 +418,44 @@ fn flex_crank_against_the_ivp_test_set() {
     // at 1e-12, both DOP853. (DOPRI5 at 1e-12, the second way before, took 162 s
     // of this test's 200 s in a debug build; it agreed to 14.3 and 14.0
     // digits in φ2 and x3, about as the tighter run does.)
+    // The four runs are independent: two of them on each core.
     let start = Some(init_eom());
-    let a = eom_run(
-        &sys,
-        "partitioning",
-        "dop853",
-        (1e-13, 1e-16),
-        0.1,
-        start,
-        None,
-    );
-    let b = eom_run(
-        &sys,
-        "projection",
-        "dop853",
-        (1e-12, 1e-15),
-        0.1,
-        start,
-        None,
-    );
+    let ((a, b), ((pw, vw), (p15, v15))) = std::thread::scope(|s| {
+        let a = s.spawn(|| {
+            eom_run(
+                &sys,
+                "partitioning",
+                "dop853",
+                (1e-13, 1e-16),
+                0.1,
+                start,
+                None,
+            )
+        });
+        let written = s.spawn(|| {
+            // (2) The written-out equations, consistent and with crank.f's mass.
+            (written_out(1.0, PI, 1e-13), written_out(15.0, PI, 1e-13))
+        });
+        let b = eom_run(
+            &sys,
+            "projection",
+            "dop853",
+            (1e-12, 1e-15),
+            0.1,
+            start,
+            None,
+        );
+        let a = a.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
+        let written = written
+            .join()
+            .unwrap_or_else(|e| std::panic::resume_unwind(e));
+        ((a, b), written)
+    });
     for r in [&a, &b] {
         assert_eq!(r["stop"], "finished", "{r}");
     }
     let (pa, va) = to_simeon(&floats(&a["q"]), &floats(&a["u"]));
     let (pb, vb) = to_simeon(&floats(&b["q"]), &floats(&b["u"]));
-    // (2) The written-out equations, consistent and with crank.f's mass.
-    let (pw, vw) = written_out(1.0, PI, 1e-13);
-    let (p15, v15) = written_out(15.0, PI, 1e-13);
     let eom_two = table(
         "eom DOP853: partitioning at 1e-13 against projection at 1e-12",
         &pa,

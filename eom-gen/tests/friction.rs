@@ -865,49 +865,60 @@ fn assert_newton_coulomb(ev: &eom_sim::run::ContactEvent, e: f64, mu: f64, what:
 /// start), and the run ends below its start.
 #[test]
 fn tilted_box_runs_a_second_through_its_one_corner_impacts() {
-    let (c, s) = (0.05f64.cos(), 0.05f64.sin() / 2f64.sqrt());
-    for mu in [0.2, 0.5, 1.0, 2.0] {
-        let clock = std::time::Instant::now();
-        let sys = box4(mu, 0.5, [c, s, s, 0.0], [0.5, 0.0, -1.0, 0.0, 0.0, 0.0]);
-        let report = run(&sys, &options(1.0));
-        assert!(report.stop.is_finished(), "mu {mu}: {}", report.stop);
-        assert!((report.t - 1.0).abs() < 1e-12, "mu {mu}: t = {}", report.t);
-        let impacts: Vec<_> = report
-            .contact_events
-            .iter()
-            .filter(|ev| ev.kind == ContactEventKind::Impact)
+    // The four runs are independent: on every core.
+    std::thread::scope(|scope| {
+        let runs: Vec<_> = [0.2, 0.5, 1.0, 2.0]
+            .map(|mu| scope.spawn(move || tilted_box_run(mu)))
+            .into_iter()
             .collect();
-        eprintln!(
-            "mu {mu}: {} impacts, {} events, energy {:?}, {:.2} s, {} steps, {} rhs",
-            impacts.len(),
-            report.contact_events.len(),
-            report.energy,
-            clock.elapsed().as_secs_f64(),
-            report.stats.steps,
-            report.stats.rhs_evals
-        );
-        assert!(!impacts.is_empty());
-        for ev in &impacts {
-            assert_newton_coulomb(ev, 0.5, mu, &format!("mu {mu}, t = {}", ev.t));
+        for run in runs {
+            run.join().unwrap_or_else(|e| std::panic::resume_unwind(e));
         }
-        let e0 = report.energy[0];
-        let mut last = e0;
-        for ev in &report.contact_events {
-            assert!(
-                ev.energy_before <= last + 1e-9 * e0
-                    && ev.energy_after <= ev.energy_before + 1e-9 * e0,
-                "mu {mu}, t = {}, {}: energy {last} → {} → {}",
-                ev.t,
-                ev.kind.name(),
-                ev.energy_before,
-                ev.energy_after
-            );
-            last = ev.energy_after;
-        }
-        assert!(
-            report.energy[1] <= last + 1e-9 * e0 && report.energy[1] <= e0 + 1e-9 * e0.abs(),
-            "mu {mu}: energy {:?}",
-            report.energy
-        );
+    });
+}
+
+/// One run of [`tilted_box_runs_a_second_through_its_one_corner_impacts`].
+fn tilted_box_run(mu: f64) {
+    let (c, s) = (0.05f64.cos(), 0.05f64.sin() / 2f64.sqrt());
+    let clock = std::time::Instant::now();
+    let sys = box4(mu, 0.5, [c, s, s, 0.0], [0.5, 0.0, -1.0, 0.0, 0.0, 0.0]);
+    let report = run(&sys, &options(1.0));
+    assert!(report.stop.is_finished(), "mu {mu}: {}", report.stop);
+    assert!((report.t - 1.0).abs() < 1e-12, "mu {mu}: t = {}", report.t);
+    let impacts: Vec<_> = report
+        .contact_events
+        .iter()
+        .filter(|ev| ev.kind == ContactEventKind::Impact)
+        .collect();
+    eprintln!(
+        "mu {mu}: {} impacts, {} events, energy {:?}, {:.2} s, {} steps, {} rhs",
+        impacts.len(),
+        report.contact_events.len(),
+        report.energy,
+        clock.elapsed().as_secs_f64(),
+        report.stats.steps,
+        report.stats.rhs_evals
+    );
+    assert!(!impacts.is_empty());
+    for ev in &impacts {
+        assert_newton_coulomb(ev, 0.5, mu, &format!("mu {mu}, t = {}", ev.t));
     }
+    let e0 = report.energy[0];
+    let mut last = e0;
+    for ev in &report.contact_events {
+        assert!(
+            ev.energy_before <= last + 1e-9 * e0 && ev.energy_after <= ev.energy_before + 1e-9 * e0,
+            "mu {mu}, t = {}, {}: energy {last} → {} → {}",
+            ev.t,
+            ev.kind.name(),
+            ev.energy_before,
+            ev.energy_after
+        );
+        last = ev.energy_after;
+    }
+    assert!(
+        report.energy[1] <= last + 1e-9 * e0 && report.energy[1] <= e0 + 1e-9 * e0.abs(),
+        "mu {mu}: energy {:?}",
+        report.energy
+    );
 }
