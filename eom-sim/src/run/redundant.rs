@@ -12,7 +12,9 @@
 //! sticking friction `‖Λ_t‖ ≤ μ Λ`. Of the feasible impulses we report the
 //! one of minimum norm (a choice: the physics does not fix it; it spreads
 //! the load evenly over symmetric contacts), the projection of the origin
-//! onto the intersection of the affine set and the cones, found by
+//! onto the intersection of the affine set and the cones. Where the set
+//! is a line (a null space of dimension one) it is found in closed form
+//! ([`on_a_line`]: each cone holds the line on an interval); otherwise by
 //! Dykstra's alternating projections (Boyle and Dykstra 1986; the affine
 //! set needs no correction term): both projections are closed-form, the
 //! cone's per contact (the second-order cone `‖v‖ ≤ μ x`).
@@ -165,15 +167,13 @@ fn interval(x: [f64; 2], v: [[f64; 2]; 2], mu: Option<f64>, slack: f64) -> Optio
             let (r1, r2) = (r1.min(r2), r1.max(r2));
             if a < 0.0 {
                 [r1, r2]
-            } else if on[0] > f64::NEG_INFINITY {
-                // y grows with t: the cone is the upper piece.
+            } else if y[1] > 0.0 {
+                // a > 0 needs μ² y_n² > ‖v_n‖², so y_n ≠ 0: the cone is
+                // the piece where y grows, the upper one ...
                 [r2, f64::INFINITY]
-            } else if on[1] < f64::INFINITY {
-                [f64::NEG_INFINITY, r1]
             } else {
-                // y constant (≥ 0): both pieces cannot be in the cone unless
-                // they join (a > 0 with y constant needs ‖vn‖ = 0 … a ≤ 0).
-                [f64::NEG_INFINITY, f64::INFINITY]
+                // ... or, y falling, the lower one.
+                [f64::NEG_INFINITY, r1]
             }
         }
     };
