@@ -309,8 +309,11 @@ fn lower_solved<'cx>(
 /// its zero blocks: the Stewart platform's spanning tree, 21 speeds).
 /// Measured (BENCHMARKS.md, "`−M⁻¹ ∂ID/∂x` as a dense product"): panda (9
 /// speeds) 19 % fewer instructions and 12 % less time, arm7 (7) 8 % fewer
-/// instructions in the same time; below seven not measured, so not
-/// changed.
+/// instructions in the same time, the spatial 10-link chain 22 % fewer
+/// instructions and faster; below seven (session 49) ur5 (6) 10 % fewer
+/// instructions in the same time, the spatial 5-link chain 7 % fewer but
+/// slower (a five-wide row is a four-lane vector and a remainder), so the
+/// threshold stays at seven.
 pub const PRODUCTS_FROM_NU: usize = 7;
 
 /// The SIMD lanes a dense product is assumed to run in (four doubles to a
