@@ -22,7 +22,7 @@ use eom_gen::model::Source;
 use eom_gen::model::builder::n_link_chain;
 use eom_gen::model::spec::Num;
 use std::path::PathBuf;
-use std::process::Command;
+use std::process::{Child, Command, Stdio};
 
 const LINKS: usize = 200;
 
@@ -65,6 +65,32 @@ fn files() -> (PathBuf, PathBuf) {
     (model, scene)
 }
 
+/// `eom-gen ARGS`, started (its output piped) so that the test can work
+/// while it runs.
+fn start(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_eom-gen"))
+        .args(args)
+        .env(
+            "EOM_CACHE_DIR",
+            concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache"),
+        )
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("eom-gen runs")
+}
+
+/// The JSON a started `eom-gen` printed, once it has succeeded.
+fn finish(child: Child, args: &[&str]) -> serde_json::Value {
+    let out = child.wait_with_output().expect("eom-gen finishes");
+    assert!(
+        out.status.success(),
+        "eom-gen {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("JSON")
+}
+
 fn eom_gen(args: &[&str]) -> serde_json::Value {
     let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
         .args(args)
@@ -99,6 +125,27 @@ fn join(v: &[f64]) -> String {
 fn chain_of_200_links_generates_compiles_and_simulates() {
     let (_, scene) = files();
     let scene = scene.to_string_lossy().into_owned();
+
+    // A random state, for the compiled functions against the f64 reference.
+    let mut seed = 5u64;
+    let mut rnd = || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    };
+    let q: Vec<f64> = (0..LINKS).map(|_| 0.5 * rnd()).collect();
+    let u: Vec<f64> = (0..LINKS).map(|_| 0.5 * rnd()).collect();
+    let tau: Vec<f64> = (0..LINKS).map(|_| rnd()).collect();
+    let (qs, us, taus) = (join(&q), join(&u), join(&tau));
+    // `eom-gen eval` generates and builds the cached crate (most of this
+    // test's time) while the test generates the scene itself, on the
+    // other core.
+    let eval_args = [
+        "eval", &scene, "--q", &qs, "--u", &us, "--tau", &taus, "--json",
+    ];
+    let eval = start(&eval_args);
+
     let text = std::fs::read_to_string(&scene).expect("scene");
     let g = eom_gen::generate(&Source::new(scene.clone(), text)).unwrap_or_else(|e| panic!("{e}"));
     let f = &g.formulation;
@@ -122,21 +169,7 @@ fn chain_of_200_links_generates_compiles_and_simulates() {
     let sys = &g.checked.system;
     assert_eq!(sys.nu(), LINKS);
 
-    // A random state: compiled functions against the f64 reference.
-    let mut seed = 5u64;
-    let mut rnd = || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-    };
-    let q: Vec<f64> = (0..LINKS).map(|_| 0.5 * rnd()).collect();
-    let u: Vec<f64> = (0..LINKS).map(|_| 0.5 * rnd()).collect();
-    let tau: Vec<f64> = (0..LINKS).map(|_| rnd()).collect();
-    let (qs, us, taus) = (join(&q), join(&u), join(&tau));
-    let e = eom_gen(&[
-        "eval", &scene, "--q", &qs, "--u", &us, "--tau", &taus, "--json",
-    ]);
+    let e = finish(eval, &eval_args);
     assert_eq!(e["mode"], "compiled", "{e}");
     let udot = floats(&e["udot"]);
     let bias = floats(&e["bias"]);
