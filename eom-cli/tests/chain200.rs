@@ -92,20 +92,7 @@ fn finish(child: Child, args: &[&str]) -> serde_json::Value {
 }
 
 fn eom_gen(args: &[&str]) -> serde_json::Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_eom-gen"))
-        .args(args)
-        .env(
-            "EOM_CACHE_DIR",
-            concat!(env!("CARGO_MANIFEST_DIR"), "/../target/eom-cache"),
-        )
-        .output()
-        .expect("eom-gen runs");
-    assert!(
-        out.status.success(),
-        "eom-gen {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_slice(&out.stdout).expect("JSON")
+    finish(start(args), args)
 }
 
 fn floats(v: &serde_json::Value) -> Vec<f64> {
