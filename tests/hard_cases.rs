@@ -18,7 +18,7 @@
 //!    (`tests/models/mass_scaled_chain*.ron`).
 //!
 //! (The 200-link chain is in its own test.) Run with
-//! `cargo test -p eom --test hard_cases -- --nocapture` to see the figures.
+//! `cargo test -p eom --test all hard_cases:: -- --nocapture` to see the figures.
 
 use eom_generated as g;
 use eom_macros::multibody;

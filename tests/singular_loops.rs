@@ -241,7 +241,7 @@ fn baumgarte_refuses_at_the_first_singular_position() {
 /// Prints crank error, energy, |Φ|, steps and CPU time per method ×
 /// integrator × tolerance (the BENCHMARKS.md table):
 /// `NFB=1 METHODS=projection,partitioning,augmented-lagrangian,baumgarte
-/// cargo test --release --test singular_loops table -- --ignored --nocapture`.
+/// cargo test --release --test all singular_loops::table -- --ignored --nocapture`.
 #[test]
 #[ignore]
 fn table() {

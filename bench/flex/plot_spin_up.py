@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """SVG plot of the spin-up tip deflection (bench/results/spin_up.csv, written by
-`SPIN_UP_CSV=$PWD/bench/results/spin_up.csv cargo test -p eom-gen --test flex_spin_up`).
+`SPIN_UP_CSV=$PWD/bench/results/spin_up.csv cargo test -p eom-gen --test all flex_spin_up::`).
 Usage: python3 bench/flex/plot_spin_up.py bench/results/spin_up.csv bench/results/spin_up.svg"""
 import csv
 import sys

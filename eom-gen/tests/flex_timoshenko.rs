@@ -19,7 +19,7 @@
 //!   matrix from the generated programs.
 //!
 //! The frequency table printed by `pinned_pinned_frequencies_converge_to_the_closed_form`
-//! (`cargo test -p eom-gen --test flex_timoshenko -- --nocapture`) is the
+//! (`cargo test -p eom-gen --test all flex_timoshenko:: -- --nocapture`) is the
 //! one in BENCHMARKS.md.
 
 use eom_gen::System;

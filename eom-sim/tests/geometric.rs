@@ -3,8 +3,6 @@
 // Reference values keep their published digits; loops mirror the formulas.
 #![allow(clippy::excessive_precision, clippy::needless_range_loop)]
 
-mod common;
-
 use eom_sim::{
     Dopri5, ImplicitMidpoint, OdeSystem, Rk4, SecondOrderSystem, SolveOptions, StopReason,
     integrate, stormer_verlet,

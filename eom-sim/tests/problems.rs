@@ -3,7 +3,7 @@
 // Reference values keep their published digits; loops mirror the formulas.
 #![allow(clippy::excessive_precision, clippy::needless_range_loop)]
 
-mod common;
+use crate::common;
 
 use common::*;
 use eom_sim::{Dop853, Dopri5, OdeSystem, Radau5, SolveOptions, Stats, StopReason, integrate};
