@@ -9,8 +9,9 @@
 
 use crate::functions::{Function, Layout, TABLE, When};
 use crate::mech::Formulation;
-use crate::sym::{Program, SymKind};
+use crate::sym::{Program, SymKind, Tape};
 use crate::system::System;
+use std::sync::OnceLock;
 
 /// A state at which to evaluate, with the model's inputs and parameters.
 #[derive(Clone, Debug)]
@@ -39,39 +40,113 @@ pub struct Point<'a> {
 /// inputs not given are zero, as the generated `Model::evaluate` takes
 /// them).
 pub fn run(p: &Program, x: &Point<'_>) -> Vec<f64> {
-    let at = |v: &[f64], i: u32| v.get(i as usize).copied().unwrap_or(f64::NAN);
-    let or_zero = |v: &[f64], i: u32| v.get(i as usize).copied().unwrap_or(0.0);
-    let inputs: Vec<f64> = p
-        .inputs
+    p.eval(&inputs(&sources(p, x), x))
+}
+
+/// Where each input of a program comes from at a point.
+#[derive(Clone, Copy, Debug)]
+enum Source {
+    Q(usize),
+    U(usize),
+    Udot(usize),
+    Tau(usize),
+    Multiplier(usize),
+    Input(usize),
+    Time,
+    /// A parameter's value (or NaN: a symbol with no value).
+    Value(f64),
+}
+
+/// The sources of `p`'s inputs: parameters resolved from `x.params`, else
+/// their defaults; inputs by their place among the model's.
+fn sources(p: &Program, x: &Point<'_>) -> Vec<Source> {
+    p.inputs
         .iter()
         .map(|s| match s.kind {
-            SymKind::Coord(i) => at(x.q, i),
-            SymKind::Speed(i) => at(x.u, i),
-            SymKind::SpeedRate(i) => or_zero(x.udot, i),
-            SymKind::CoordRate(_) => f64::NAN,
-            SymKind::Time => x.t,
-            SymKind::Tau(i) => or_zero(x.tau, i),
-            SymKind::Multiplier(i) => or_zero(x.multipliers, i),
+            SymKind::Coord(i) => Source::Q(i as usize),
+            SymKind::Speed(i) => Source::U(i as usize),
+            SymKind::SpeedRate(i) => Source::Udot(i as usize),
+            SymKind::CoordRate(_) => Source::Value(f64::NAN),
+            SymKind::Time => Source::Time,
+            SymKind::Tau(i) => Source::Tau(i as usize),
+            SymKind::Multiplier(i) => Source::Multiplier(i as usize),
             SymKind::Input => match x.sys.inputs.iter().position(|n| *n == s.name) {
-                Some(k) => x.inputs.get(k).copied().unwrap_or(0.0),
-                None => f64::NAN,
+                Some(k) => Source::Input(k),
+                None => Source::Value(f64::NAN),
             },
-            SymKind::Param => x
-                .params
-                .iter()
-                .find(|(n, _)| *n == s.name)
-                .map(|(_, v)| *v)
-                .or_else(|| {
-                    x.sys
-                        .parameters
-                        .iter()
-                        .find(|p| p.name == s.name)
-                        .map(|p| p.value.value)
-                })
-                .unwrap_or(f64::NAN),
+            SymKind::Param => Source::Value(
+                x.params
+                    .iter()
+                    .find(|(n, _)| *n == s.name)
+                    .map(|(_, v)| *v)
+                    .or_else(|| {
+                        x.sys
+                            .parameters
+                            .iter()
+                            .find(|p| p.name == s.name)
+                            .map(|p| p.value.value)
+                    })
+                    .unwrap_or(f64::NAN),
+            ),
         })
-        .collect();
-    p.eval(&inputs)
+        .collect()
+}
+
+/// The values of `sources` at `x`.
+fn inputs(sources: &[Source], x: &Point<'_>) -> Vec<f64> {
+    let at = |v: &[f64], i: usize| v.get(i).copied().unwrap_or(f64::NAN);
+    let or_zero = |v: &[f64], i: usize| v.get(i).copied().unwrap_or(0.0);
+    sources
+        .iter()
+        .map(|s| match *s {
+            Source::Q(i) => at(x.q, i),
+            Source::U(i) => at(x.u, i),
+            Source::Udot(i) => or_zero(x.udot, i),
+            Source::Tau(i) => or_zero(x.tau, i),
+            Source::Multiplier(i) => or_zero(x.multipliers, i),
+            Source::Input(k) => or_zero(x.inputs, k),
+            Source::Time => x.t,
+            Source::Value(v) => v,
+        })
+        .collect()
+}
+
+/// The programs of a formulation flattened once ([`Program::tape`]) with
+/// their inputs' sources, for a model evaluated at many points with the
+/// same parameters ([`Interpreted`]): each filled at its first call.
+struct Tapes(Vec<(Function, OnceLock<Flat>)>);
+
+/// A program flattened, and the sources of its inputs.
+type Flat = (Tape, Vec<Source>);
+
+impl Tapes {
+    fn new(f: &Formulation) -> Tapes {
+        Tapes(
+            TABLE
+                .iter()
+                .filter(|e| f.program(e.function).is_some())
+                .map(|e| (e.function, OnceLock::new()))
+                .collect(),
+        )
+    }
+}
+
+/// Runs the program of a function at a point: through the tapes of an
+/// [`Interpreted`] model, or flattening it on the spot.
+#[derive(Clone, Copy)]
+struct Runner<'r>(Option<&'r Tapes>);
+
+impl Runner<'_> {
+    fn run(self, function: Function, p: &Program, x: &Point<'_>) -> Vec<f64> {
+        let cached = self
+            .0
+            .and_then(|t| t.0.iter().find(|(g, _)| *g == function))
+            .map(|(_, cell)| cell.get_or_init(|| (p.tape(), sources(p, x))));
+        match cached {
+            Some((tape, sources)) => tape.eval(&inputs(sources, x)),
+            None => run(p, x),
+        }
+    }
 }
 
 /// What `eval` reports: every function the model offers, flat, in table
@@ -101,9 +176,13 @@ impl Evaluation {
 /// scene leaves it out) column `i` = `ID(q, 0, e_i) − ID(q, 0, 0)`,
 /// symmetrised — as the generated code derives it. NaN without either.
 pub fn mass_matrix(f: &Formulation, x: &Point<'_>) -> Vec<Vec<f64>> {
+    mass_matrix_by(f, x, Runner(None))
+}
+
+fn mass_matrix_by(f: &Formulation, x: &Point<'_>, r: Runner<'_>) -> Vec<Vec<f64>> {
     let nu = x.sys.nu();
     if let Some(p) = f.program(Function::MassMatrix) {
-        let lower = run(p, x);
+        let lower = r.run(Function::MassMatrix, p, x);
         return (0..nu)
             .map(|i| (0..nu).map(|j| lower_triangle(&lower, i, j)).collect())
             .collect();
@@ -118,7 +197,7 @@ pub fn mass_matrix(f: &Formulation, x: &Point<'_>) -> Vec<Vec<f64>> {
             udot,
             ..x.clone()
         };
-        run(id, &y)
+        r.run(Function::InverseDynamics, id, &y)
     };
     let tau0 = at(&zero);
     let columns: Vec<Vec<f64>> = (0..nu)
@@ -149,12 +228,17 @@ fn lower_triangle(lower: &[f64], i: usize, j: usize) -> f64 {
 
 /// The bias at `x`: from its program, or `ID(q, u, 0)`.
 pub fn bias(f: &Formulation, x: &Point<'_>) -> Vec<f64> {
+    bias_by(f, x, Runner(None))
+}
+
+fn bias_by(f: &Formulation, x: &Point<'_>, r: Runner<'_>) -> Vec<f64> {
     if let Some(p) = f.program(Function::Bias) {
-        return run(p, x);
+        return r.run(Function::Bias, p, x);
     }
     let zero = vec![0.0; x.sys.nu()];
     match f.program(Function::InverseDynamics) {
-        Some(id) => run(
+        Some(id) => r.run(
+            Function::InverseDynamics,
             id,
             &Point {
                 udot: &zero,
@@ -168,11 +252,15 @@ pub fn bias(f: &Formulation, x: &Point<'_>) -> Vec<f64> {
 /// Inverse dynamics at `x` (accelerations `x.udot`): from its program, or
 /// `M u̇ + b`.
 pub fn inverse_dynamics(f: &Formulation, x: &Point<'_>) -> Vec<f64> {
+    inverse_dynamics_by(f, x, Runner(None))
+}
+
+fn inverse_dynamics_by(f: &Formulation, x: &Point<'_>, r: Runner<'_>) -> Vec<f64> {
     if let Some(p) = f.program(Function::InverseDynamics) {
-        return run(p, x);
+        return r.run(Function::InverseDynamics, p, x);
     }
-    let m = mass_matrix(f, x);
-    let b = bias(f, x);
+    let m = mass_matrix_by(f, x, r);
+    let b = bias_by(f, x, r);
     let at = |v: &[f64], i: usize| v.get(i).copied().unwrap_or(f64::NAN);
     m.iter()
         .enumerate()
@@ -191,14 +279,23 @@ pub fn inverse_dynamics(f: &Formulation, x: &Point<'_>) -> Vec<f64> {
 /// `Model::evaluate` lays it out; `None` if the model has no such function.
 /// Functions a scene leaves out are derived as the generated code does.
 pub fn evaluate_function(f: &Formulation, function: Function, x: &Point<'_>) -> Option<Vec<f64>> {
+    evaluate_function_by(f, function, x, Runner(None))
+}
+
+fn evaluate_function_by(
+    f: &Formulation,
+    function: Function,
+    x: &Point<'_>,
+    r: Runner<'_>,
+) -> Option<Vec<f64>> {
     let e = function.entry();
     match (f.program(function), function) {
-        (_, Function::MassMatrix) => Some(mass_matrix(f, x).concat()),
-        (None, Function::Bias) => Some(bias(f, x)),
-        (None, Function::InverseDynamics) => Some(inverse_dynamics(f, x)),
+        (_, Function::MassMatrix) => Some(mass_matrix_by(f, x, r).concat()),
+        (None, Function::Bias) => Some(bias_by(f, x, r)),
+        (None, Function::InverseDynamics) => Some(inverse_dynamics_by(f, x, r)),
         (None, _) => None,
         (Some(p), _) => {
-            let values = run(p, x);
+            let values = r.run(function, p, x);
             Some(match e.layout {
                 Layout::Vector => values,
                 Layout::LowerTriangle => {
@@ -243,6 +340,8 @@ pub struct Interpreted<'a> {
     quaternions: Vec<usize>,
     inputs: Vec<f64>,
     params: Vec<(String, f64)>,
+    /// The programs flattened at their first call (with `params`).
+    tapes: Tapes,
 }
 
 impl<'a> Interpreted<'a> {
@@ -256,6 +355,7 @@ impl<'a> Interpreted<'a> {
             quaternions: sys.quaternion_indices(),
             inputs: vec![0.0; sys.inputs.len()],
             params: Vec::new(),
+            tapes: Tapes::new(f),
         }
     }
 
@@ -264,6 +364,8 @@ impl<'a> Interpreted<'a> {
     /// is not a tunable parameter of the formulation changes nothing.
     pub fn with_params(mut self, params: &[(String, f64)]) -> Self {
         self.params = params.to_vec();
+        // The tapes resolved the parameters: flatten again.
+        self.tapes = Tapes::new(self.f);
         self
     }
 
@@ -291,7 +393,8 @@ impl<'a> Interpreted<'a> {
     }
 
     fn fill(&self, function: Function, x: &Point<'_>, out: &mut [f64]) {
-        let v = evaluate_function(self.f, function, x).unwrap_or_default();
+        let v = evaluate_function_by(self.f, function, x, Runner(Some(&self.tapes)))
+            .unwrap_or_default();
         out.iter_mut()
             .zip(v.iter().chain(std::iter::repeat(&f64::NAN)))
             .for_each(|(d, s)| *d = *s);
@@ -318,7 +421,7 @@ impl eom_sim::Dynamics for Interpreted<'_> {
         self.fill(Function::Qdot, &self.point(q, u, 0.0), qdot);
     }
     fn mass_matrix(&self, t: f64, q: &[f64], m: &mut nalgebra::DMatrix<f64>) {
-        let full = mass_matrix(self.f, &self.point(q, &[], t));
+        let full = mass_matrix_by(self.f, &self.point(q, &[], t), Runner(Some(&self.tapes)));
         for (i, row) in full.iter().enumerate().take(m.nrows()) {
             for (j, v) in row.iter().enumerate().take(m.ncols()) {
                 m[(i, j)] = *v;
@@ -326,11 +429,16 @@ impl eom_sim::Dynamics for Interpreted<'_> {
         }
     }
     fn bias(&self, t: f64, q: &[f64], u: &[f64], b: &mut nalgebra::DVector<f64>) {
-        let v = bias(self.f, &self.point(q, u, t));
+        let v = bias_by(self.f, &self.point(q, u, t), Runner(Some(&self.tapes)));
         b.iter_mut().zip(v).for_each(|(d, s)| *d = s);
     }
     fn constraints(&self, t: f64, q: &[f64], u: &[f64], c: &mut eom_sim::ConstraintValues) {
-        let Some(v) = evaluate_function(self.f, Function::Constraints, &self.point(q, u, t)) else {
+        let Some(v) = evaluate_function_by(
+            self.f,
+            Function::Constraints,
+            &self.point(q, u, t),
+            Runner(Some(&self.tapes)),
+        ) else {
             return;
         };
         let nc = self.nc();
@@ -384,7 +492,7 @@ impl eom_sim::Simulate for Interpreted<'_> {
             multipliers: at.lambda,
             t: at.t,
         };
-        match evaluate_function(self.f, function, &x) {
+        match evaluate_function_by(self.f, function, &x, Runner(Some(&self.tapes))) {
             Some(v) if v.len() == out.len() => {
                 out.copy_from_slice(&v);
                 true

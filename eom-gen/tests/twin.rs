@@ -459,3 +459,111 @@ fn print_chain_ops() {
         }
     }
 }
+
+/// The interpreter flattens each program once per model
+/// (`Interpreted`'s tapes, `Program::tape`, its parameters resolved then)
+/// and runs the flat program at every call; a one-off evaluation
+/// (`evaluate_function`) flattens on the spot. Both must give the same
+/// bits, for every function the table offers (the derived ones included),
+/// at random states, with inputs set and with tunable parameters set after
+/// the tapes were filled (`with_params` flattens again).
+#[test]
+fn the_interpreters_flat_programs_give_the_bits_of_one_off_evaluation() {
+    use eom_gen::functions::{TABLE, When};
+    use eom_gen::interpret::{Interpreted, Point, evaluate_function};
+    use eom_sim::Simulate;
+    let tunable = variant(
+        "double_pendulum",
+        &[
+            (
+                "(name: \"l2\", value: 1.0,",
+                "(name: \"l2\", value: 1.0, tunable: true,",
+            ),
+            (
+                "(name: \"g\", value: 9.8,",
+                "(name: \"g\", value: 9.8, tunable: true,",
+            ),
+        ],
+    );
+    let mut cases: Vec<(String, System)> = [
+        "arm7",
+        "heavy_top",
+        "fourbar",
+        "slider_crank_driven",
+        "stewart_driven",
+    ]
+    .iter()
+    .map(|n| (n.to_string(), system(n)))
+    .collect();
+    cases.push(("tunable double_pendulum".into(), tunable));
+    for (name, sys) in &cases {
+        let f = formulate(sys, FunctionSet::all_requested()).expect("formulates");
+        let params: Vec<(String, f64)> = if name.starts_with("tunable") {
+            vec![("l2".into(), 0.7), ("g".into(), 3.5)]
+        } else {
+            Vec::new()
+        };
+        let inputs: Vec<f64> = (0..sys.inputs.len()).map(input_value).collect();
+        let mut rng = Rng(11);
+        let (q, u) = random_state(sys, &mut rng);
+        let udot = rng.vec(sys.nu(), 1.0);
+        let tau = rng.vec(sys.nu(), 1.0);
+        let lambda = rng.vec(f.constraint_names.len(), 1.0);
+        let at = eom_sim::Point {
+            t: 0.3,
+            q: &q,
+            u: &u,
+            udot: &udot,
+            tau: &tau,
+            lambda: &lambda,
+            ..Default::default()
+        };
+        let one_off = |function, params: &[(String, f64)]| {
+            let x = Point {
+                sys,
+                q: &q,
+                u: &u,
+                udot: &udot,
+                tau: &tau,
+                inputs: &inputs,
+                params,
+                multipliers: &lambda,
+                t: 0.3,
+            };
+            evaluate_function(&f, function, &x)
+        };
+        let check = |model: &Interpreted<'_>, params: &[(String, f64)]| {
+            let mut checked = 0;
+            for e in TABLE
+                .iter()
+                .filter(|e| f.program(e.function).is_some() || e.when == When::Requested)
+            {
+                let Some(want) = one_off(e.function, params) else {
+                    continue;
+                };
+                let mut got = vec![f64::NAN; want.len()];
+                assert!(model.evaluate(e.name, &at, &mut got), "{name}: {}", e.name);
+                for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+                    assert!(
+                        g.to_bits() == w.to_bits() || (g.is_nan() && w.is_nan()),
+                        "{name}: {}[{k}]: flat {g:e}, one-off {w:e}",
+                        e.name
+                    );
+                }
+                checked += 1;
+            }
+            checked
+        };
+        // Fill the tapes with the defaults first, then set the parameters.
+        let model = Interpreted::new(&f, sys).with_inputs(&inputs);
+        let mut checked = check(&model, &[]);
+        checked += check(&model.with_params(&params), &params);
+        assert!(checked >= 12, "{name}: only {checked} functions compared");
+        if !params.is_empty() {
+            // The parameters reached the flat programs: u̇ moved.
+            let a = one_off(eom_gen::functions::Function::ForwardDynamics, &[]);
+            let b = one_off(eom_gen::functions::Function::ForwardDynamics, &params);
+            assert_ne!(a, b, "{name}: l2 and g change u̇");
+        }
+    }
+}

@@ -83,7 +83,7 @@ pub use expr::{Context, Expr};
 pub use linalg::{Axis, Mat3, Vec3};
 pub use node::{ChildIter, Id, SymId, SymKind, Symbol, View};
 pub use num::Num;
-pub use program::{Instr, LowerOptions, Op, OpCount, Operand, Product, Program};
+pub use program::{Instr, LowerOptions, Op, OpCount, Operand, Product, Program, Tape};
 pub use rules::RuleSet;
 pub use scalar::Scalar;
 pub use sexpr::{Display, MAX_DEPTH, SExpr};

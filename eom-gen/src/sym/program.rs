@@ -263,6 +263,95 @@ pub struct Program {
     pub products: Vec<Product>,
 }
 
+/// One instruction of a [`Tape`]: the destination, then the operands,
+/// as indices into the tape's values.
+#[derive(Clone, Copy, Debug)]
+enum Step {
+    Add(u32, u32, u32),
+    Sub(u32, u32, u32),
+    Mul(u32, u32, u32),
+    Div(u32, u32, u32),
+    Neg(u32, u32),
+    Sqrt(u32, u32),
+    Sin(u32, u32),
+    Cos(u32, u32),
+    /// `sin` into the destination, `cos` into the next value.
+    SinCos(u32, u32),
+    Tan(u32, u32),
+    Atan2(u32, u32, u32),
+    Exp(u32, u32),
+    Ln(u32, u32),
+    Abs(u32, u32),
+    Select(u32, u32, u32, u32),
+}
+
+/// A [`Program`] flattened for repeated evaluation ([`Program::tape`]):
+/// the interpreter builds one per function once and runs it at every
+/// call, instead of matching operands and converting constants per
+/// instruction.
+#[derive(Clone, Debug)]
+pub struct Tape {
+    steps: Vec<Step>,
+    n_inputs: usize,
+    /// Index of the first constant among the values: inputs, then
+    /// temporaries, then constants.
+    first_const: usize,
+    consts: Vec<f64>,
+    outputs: Vec<u32>,
+    products: Vec<Product>,
+}
+
+impl Tape {
+    /// Number of inputs the program reads (`Program::inputs`).
+    pub fn n_inputs(&self) -> usize {
+        self.n_inputs
+    }
+
+    /// Run the program; `inputs[i]` is the value of input `i` (missing
+    /// ones are NaN). Returns the outputs in order.
+    pub fn eval(&self, inputs: &[f64]) -> Vec<f64> {
+        let mut v = vec![0.0; self.first_const + self.consts.len()];
+        for (d, s) in v[..self.n_inputs]
+            .iter_mut()
+            .zip(inputs.iter().chain(std::iter::repeat(&f64::NAN)))
+        {
+            *d = *s;
+        }
+        v[self.first_const..].copy_from_slice(&self.consts);
+        for &st in &self.steps {
+            match st {
+                Step::Add(d, a, b) => v[d as usize] = v[a as usize] + v[b as usize],
+                Step::Sub(d, a, b) => v[d as usize] = v[a as usize] - v[b as usize],
+                Step::Mul(d, a, b) => v[d as usize] = v[a as usize] * v[b as usize],
+                Step::Div(d, a, b) => v[d as usize] = v[a as usize] / v[b as usize],
+                Step::Neg(d, a) => v[d as usize] = -v[a as usize],
+                Step::Sqrt(d, a) => v[d as usize] = v[a as usize].sqrt(),
+                Step::Sin(d, a) => v[d as usize] = v[a as usize].sin(),
+                Step::Cos(d, a) => v[d as usize] = v[a as usize].cos(),
+                Step::SinCos(d, a) => {
+                    let (s, c) = v[a as usize].sin_cos();
+                    v[d as usize] = s;
+                    v[d as usize + 1] = c;
+                }
+                Step::Tan(d, a) => v[d as usize] = v[a as usize].tan(),
+                Step::Atan2(d, y, x) => v[d as usize] = v[y as usize].atan2(v[x as usize]),
+                Step::Exp(d, a) => v[d as usize] = v[a as usize].exp(),
+                Step::Ln(d, a) => v[d as usize] = v[a as usize].ln(),
+                Step::Abs(d, a) => v[d as usize] = v[a as usize].abs(),
+                Step::Select(d, c, a, b) => {
+                    v[d as usize] =
+                        super::eval::ops::select(v[c as usize], v[a as usize], v[b as usize])
+                }
+            }
+        }
+        let mut out: Vec<f64> = self.outputs.iter().map(|&i| v[i as usize]).collect();
+        for p in &self.products {
+            p.apply(&mut out);
+        }
+        out
+    }
+}
+
 impl Program {
     /// True if a constant operand is infinite or NaN: the program divides
     /// by a structural zero (or overflows) for every value of its inputs.
@@ -995,45 +1084,62 @@ impl Program {
     }
 
     /// Run the program; `inputs[i]` is the value of `self.inputs[i]`.
-    /// Returns the outputs in order.
+    /// Returns the outputs in order. To run one program many times,
+    /// flatten it once with [`Program::tape`].
     pub fn eval(&self, inputs: &[f64]) -> Vec<f64> {
-        let mut t = vec![0.0; self.n_tmps as usize];
-        let get = |t: &[f64], o: Operand| match o {
-            Operand::Const(n) => n.to_f64(),
-            Operand::Var(i) => inputs.get(i as usize).copied().unwrap_or(f64::NAN),
-            Operand::Tmp(i) => t[i as usize],
-        };
-        for ins in &self.instrs {
-            let g = |o| get(&t, o);
-            let d = ins.dst as usize;
-            let v = match ins.op {
-                Op::Add(a, b) => g(a) + g(b),
-                Op::Sub(a, b) => g(a) - g(b),
-                Op::Mul(a, b) => g(a) * g(b),
-                Op::Div(a, b) => g(a) / g(b),
-                Op::Neg(a) => -g(a),
-                Op::Sqrt(a) => g(a).sqrt(),
-                Op::Sin(a) => g(a).sin(),
-                Op::Cos(a) => g(a).cos(),
-                Op::SinCos(a) => {
-                    let (s, c) = g(a).sin_cos();
-                    t[d + 1] = c;
-                    s
+        self.tape().eval(inputs)
+    }
+
+    /// The program flattened for repeated evaluation: every operand an
+    /// index into one array of values (inputs, constants converted to
+    /// `f64` once, temporaries). [`Program::eval`] runs through it, so the
+    /// two give the same bits.
+    pub fn tape(&self) -> Tape {
+        let n_inputs = self.inputs.len();
+        let first_const = n_inputs + self.n_tmps as usize;
+        let mut consts = Vec::new();
+        // The index of an operand's value: inputs, temporaries, constants.
+        let mut s = |o: Operand| -> u32 {
+            let i = match o {
+                Operand::Var(i) => i as usize,
+                Operand::Tmp(i) => n_inputs + i as usize,
+                Operand::Const(n) => {
+                    consts.push(n.to_f64());
+                    first_const + consts.len() - 1
                 }
-                Op::Tan(a) => g(a).tan(),
-                Op::Atan2(y, x) => g(y).atan2(g(x)),
-                Op::Exp(a) => g(a).exp(),
-                Op::Ln(a) => g(a).ln(),
-                Op::Abs(a) => g(a).abs(),
-                Op::Select(c, a, b) => super::eval::ops::select(g(c), g(a), g(b)),
             };
-            t[d] = v;
+            i as u32
+        };
+        let mut steps: Vec<Step> = Vec::with_capacity(self.instrs.len());
+        for ins in &self.instrs {
+            let d = (n_inputs + ins.dst as usize) as u32;
+            steps.push(match ins.op {
+                Op::Add(a, b) => Step::Add(d, s(a), s(b)),
+                Op::Sub(a, b) => Step::Sub(d, s(a), s(b)),
+                Op::Mul(a, b) => Step::Mul(d, s(a), s(b)),
+                Op::Div(a, b) => Step::Div(d, s(a), s(b)),
+                Op::Neg(a) => Step::Neg(d, s(a)),
+                Op::Sqrt(a) => Step::Sqrt(d, s(a)),
+                Op::Sin(a) => Step::Sin(d, s(a)),
+                Op::Cos(a) => Step::Cos(d, s(a)),
+                Op::SinCos(a) => Step::SinCos(d, s(a)),
+                Op::Tan(a) => Step::Tan(d, s(a)),
+                Op::Atan2(y, x) => Step::Atan2(d, s(y), s(x)),
+                Op::Exp(a) => Step::Exp(d, s(a)),
+                Op::Ln(a) => Step::Ln(d, s(a)),
+                Op::Abs(a) => Step::Abs(d, s(a)),
+                Op::Select(c, a, b) => Step::Select(d, s(c), s(a), s(b)),
+            });
         }
-        let mut out: Vec<f64> = self.outputs.iter().map(|&(_, o)| get(&t, o)).collect();
-        for p in &self.products {
-            p.apply(&mut out);
+        let outputs: Vec<u32> = self.outputs.iter().map(|&(_, o)| s(o)).collect();
+        Tape {
+            steps,
+            n_inputs,
+            first_const,
+            consts,
+            outputs,
+            products: self.products.clone(),
         }
-        out
     }
 
     /// Run the program with values given per arena symbol (as for
