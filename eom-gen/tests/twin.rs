@@ -516,7 +516,6 @@ fn the_interpreters_flat_programs_give_the_bits_of_one_off_evaluation() {
             udot: &udot,
             tau: &tau,
             lambda: &lambda,
-            ..Default::default()
         };
         let one_off = |function, params: &[(String, f64)]| {
             let x = Point {
