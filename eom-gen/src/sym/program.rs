@@ -220,26 +220,36 @@ impl Product {
         usize::MAX
     }
 
-    /// Applies the product to `out`, the program's outputs (left alone if
-    /// an index is out of range: a product never reaches past the outputs
-    /// its program was built with).
+    /// Applies the product to `out`, the program's outputs. A product
+    /// is built with its program and never reaches past its outputs
+    /// (`Program::products`); `out` shorter than that is an internal
+    /// error, caught in debug builds and left unchanged in release.
     pub fn apply(&self, out: &mut [f64]) {
         let (n, w) = (self.n, self.width());
-        let at = |i: usize| out.get(i).copied();
-        let a: Option<Vec<f64>> = (0..n * n).map(|i| at(self.a + i)).collect();
-        let b: Option<Vec<f64>> = (0..n * w).map(|i| at(self.b_index(i / w, i % w))).collect();
-        let (Some(a), Some(b)) = (a, b) else {
+        let fits = self.a + n * n <= out.len()
+            && self
+                .blocks
+                .iter()
+                .all(|&(start, cols)| start + n * cols <= out.len());
+        debug_assert!(fits, "a product past its program's outputs");
+        if !fits {
             return;
-        };
+        }
+        // `A` and `B` are read whole before any row of `B` is overwritten.
+        let a = out[self.a..self.a + n * n].to_vec();
+        let b: Vec<f64> = (0..n * w)
+            .map(|i| out[self.b_index(i / w, i % w)])
+            .collect();
+        let mut row = vec![0.0; w];
         for i in 0..n {
-            let mut row = vec![0.0; w];
+            row.fill(0.0);
             for k in 0..n {
                 let m = a[i * n + k];
                 for (r, x) in row.iter_mut().zip(&b[k * w..(k + 1) * w]) {
                     *r -= m * x;
                 }
             }
-            for (j, r) in row.into_iter().enumerate() {
+            for (j, &r) in row.iter().enumerate() {
                 out[self.b_index(i, j)] = r;
             }
         }
@@ -302,11 +312,6 @@ pub struct Tape {
 }
 
 impl Tape {
-    /// Number of inputs the program reads (`Program::inputs`).
-    pub fn n_inputs(&self) -> usize {
-        self.n_inputs
-    }
-
     /// Run the program; `inputs[i]` is the value of input `i` (missing
     /// ones are NaN). Returns the outputs in order.
     pub fn eval(&self, inputs: &[f64]) -> Vec<f64> {
@@ -1083,11 +1088,49 @@ impl Program {
         c
     }
 
-    /// Run the program; `inputs[i]` is the value of `self.inputs[i]`.
-    /// Returns the outputs in order. To run one program many times,
-    /// flatten it once with [`Program::tape`].
+    /// Run the program; `inputs[i]` is the value of `self.inputs[i]`
+    /// (missing ones are NaN). Returns the outputs in order. To run one
+    /// program many times, flatten it once with [`Program::tape`]: the
+    /// tape does the same operations in the same order (the same bits),
+    /// but building it costs about as much as one run, so a one-off
+    /// evaluation (`linearize`, `eval`) runs the instructions as they are.
     pub fn eval(&self, inputs: &[f64]) -> Vec<f64> {
-        self.tape().eval(inputs)
+        let mut t = vec![0.0; self.n_tmps as usize];
+        let get = |t: &[f64], o: Operand| match o {
+            Operand::Const(n) => n.to_f64(),
+            Operand::Var(i) => inputs.get(i as usize).copied().unwrap_or(f64::NAN),
+            Operand::Tmp(i) => t[i as usize],
+        };
+        for ins in &self.instrs {
+            let g = |o| get(&t, o);
+            let d = ins.dst as usize;
+            t[d] = match ins.op {
+                Op::Add(a, b) => g(a) + g(b),
+                Op::Sub(a, b) => g(a) - g(b),
+                Op::Mul(a, b) => g(a) * g(b),
+                Op::Div(a, b) => g(a) / g(b),
+                Op::Neg(a) => -g(a),
+                Op::Sqrt(a) => g(a).sqrt(),
+                Op::Sin(a) => g(a).sin(),
+                Op::Cos(a) => g(a).cos(),
+                Op::SinCos(a) => {
+                    let (s, c) = g(a).sin_cos();
+                    t[d + 1] = c;
+                    s
+                }
+                Op::Tan(a) => g(a).tan(),
+                Op::Atan2(y, x) => g(y).atan2(g(x)),
+                Op::Exp(a) => g(a).exp(),
+                Op::Ln(a) => g(a).ln(),
+                Op::Abs(a) => g(a).abs(),
+                Op::Select(c, a, b) => super::eval::ops::select(g(c), g(a), g(b)),
+            };
+        }
+        let mut out: Vec<f64> = self.outputs.iter().map(|&(_, o)| get(&t, o)).collect();
+        for p in &self.products {
+            p.apply(&mut out);
+        }
+        out
     }
 
     /// The program flattened for repeated evaluation: every operand an
