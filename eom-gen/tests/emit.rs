@@ -62,7 +62,7 @@ fn arm7s_derivatives_are_one_part() {
         .program(Function::ForwardDynamicsDerivatives)
         .map_or(0, |p| p.instrs.len());
     assert!(
-        len > eom_gen::emit::PART_LIMIT && len <= eom_gen::emit::DERIVATIVES_IN_ONE_PART,
+        len > eom_gen::emit::PART_LIMIT && len <= eom_gen::emit::ONE_PART_LIMIT,
         "{len} instructions"
     );
     let opts = eom_gen::EmitOptions {
@@ -73,4 +73,53 @@ fn arm7s_derivatives_are_one_part() {
     assert!(source.contains("fn forward_dynamics_derivatives("));
     assert!(!source.contains("fn forward_dynamics_derivatives_part"));
     assert!(source.contains("fn forward_dynamics_derivatives_lanes_part0"));
+}
+
+/// The spatial 20-link chain's forward and inverse dynamics (5 618 and
+/// 2 924 instructions) are each one late-scheduled function one state at a
+/// time (6 % and 12 % faster than in parts, BENCHMARKS.md "One part for
+/// forward and inverse dynamics"); its mass matrix (3 624), which was
+/// slower in one part on talos, keeps its parts, as do the lane versions.
+#[test]
+fn forward_and_inverse_dynamics_up_to_the_limit_are_one_part() {
+    use eom_gen::functions::{Function, FunctionSet};
+    let text = eom_gen::model::builder::n_link_chain(20, true).to_ron();
+    let sys = eom_gen::model::check(&Source::new("chain20.ron", text.clone()))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    // A model without a scene derives `M` from inverse dynamics; ask for it.
+    let request = FunctionSet::all_requested().with(Function::MassMatrix);
+    let f = eom_gen::mech::formulate(&sys, request).unwrap_or_else(|e| panic!("{e}"));
+    for function in [
+        Function::ForwardDynamics,
+        Function::InverseDynamics,
+        Function::MassMatrix,
+    ] {
+        let len = f.program(function).map_or(0, |p| p.instrs.len());
+        assert!(
+            len > eom_gen::emit::PART_LIMIT && len <= eom_gen::emit::ONE_PART_LIMIT,
+            "{function:?}: {len} instructions, want between the two limits"
+        );
+    }
+    let opts = eom_gen::EmitOptions {
+        lanes: true,
+        loops: eom_gen::emit::LoopChoice::Never,
+        ..Default::default()
+    };
+    let source = eom_gen::emit::emit_with(&sys, &f, &text, &opts);
+    for whole in ["forward_dynamics", "inverse_dynamics"] {
+        assert!(source.contains(&format!("fn {whole}(")), "{whole}");
+        assert!(
+            !source.contains(&format!("fn {whole}_part")),
+            "{whole} in parts"
+        );
+        assert!(
+            source.contains(&format!("fn {whole}_lanes_part0")),
+            "{whole}_lanes"
+        );
+    }
+    assert!(
+        source.contains("fn mass_matrix_part0"),
+        "the mass matrix in parts"
+    );
 }

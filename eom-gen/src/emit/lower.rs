@@ -22,21 +22,27 @@ use std::collections::HashMap;
 /// Instructions per part.
 pub const PART_LIMIT: usize = 1500;
 
-/// The longest derivative program (`forward_dynamics_derivatives`,
-/// `inverse_dynamics_derivatives`) written as one part, late-scheduled,
-/// when evaluated one state at a time: arm7's forward-dynamics derivatives
-/// (5 945 instructions) take 2.3 % less time in one part than in four
-/// (973.9 against 996.3 ns; BENCHMARKS.md, "One part for arm7's
-/// derivatives"). Longer ones are cut at [`PART_LIMIT`] like every other
-/// function.
-pub const DERIVATIVES_IN_ONE_PART: usize = 6500;
-
-/// The part limit of program `p` written in style `b` (see
-/// [`DERIVATIVES_IN_ONE_PART`]): [`PART_LIMIT`], but for a derivative
-/// program (`derivatives`) evaluated one state at a time that fits in one
+/// The longest program written as one part, late-scheduled, when
+/// evaluated one state at a time, for the functions that gain from it
+/// (forward and inverse dynamics and their derivatives; see
+/// [`part_limit`]). Measured (BENCHMARKS.md, "One part for arm7's
+/// derivatives" and "One part for forward and inverse dynamics"): arm7's
+/// forward-dynamics derivatives (5 945 instructions) 2.3 % faster in one
+/// part than in four; panda's forward dynamics (2 285) about 8 % and its
+/// inverse dynamics (1 517) about 20 % faster in one part than in two,
+/// the spatial 20-link chain's 6 % and 12 %, talos' inverse dynamics
+/// (5 699) about 7 %. Longer ones are cut at [`PART_LIMIT`] like every
+/// other function: talos' forward dynamics (9 927) was 13 % slower in one
 /// part.
-pub fn part_limit(b: &Style<'_>, p: &Program, derivatives: bool) -> usize {
-    if derivatives && b.lanes.is_none() && p.instrs.len() <= DERIVATIVES_IN_ONE_PART {
+pub const ONE_PART_LIMIT: usize = 6500;
+
+/// The part limit of program `p` written in style `b`: [`PART_LIMIT`],
+/// but for a program of a function that gains from one part (`whole`:
+/// forward and inverse dynamics and their derivatives) evaluated one
+/// state at a time that fits in [`ONE_PART_LIMIT`]. The mass matrix
+/// stays in parts: talos' (2 993 instructions) was 15 % slower in one.
+pub fn part_limit(b: &Style<'_>, p: &Program, whole: bool) -> usize {
+    if whole && b.lanes.is_none() && p.instrs.len() <= ONE_PART_LIMIT {
         p.instrs.len().max(PART_LIMIT)
     } else {
         PART_LIMIT

@@ -26,7 +26,7 @@ pub(crate) mod lower;
 mod names;
 use crate::system::{Motion, System};
 pub use loops::LoopChoice;
-pub use lower::{DERIVATIVES_IN_ONE_PART, PART_LIMIT};
+pub use lower::{ONE_PART_LIMIT, PART_LIMIT};
 pub use names::{field_names, is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
@@ -419,7 +419,13 @@ pub fn emit_tokens(
         .filter(|_| fd_loop.is_none());
     let fd_fn = fd_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
-        let l = lower(&style, p, "forward_dynamics", &args);
+        let l = lower::lower_in_parts(
+            &style,
+            p,
+            "forward_dynamics",
+            &args,
+            lower::part_limit(&style, p, true),
+        );
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("udot", &l.outputs));
         let doc = format!(
@@ -484,7 +490,13 @@ pub fn emit_tokens(
         .filter(|_| id_loop.is_none());
     let id_fn = id_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
-        let l = lower(&style, p, "inverse_dynamics", &args);
+        let l = lower::lower_in_parts(
+            &style,
+            p,
+            "inverse_dynamics",
+            &args,
+            lower::part_limit(&style, p, true),
+        );
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("tau", &l.outputs));
         quote! {
