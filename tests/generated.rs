@@ -9,6 +9,10 @@ use eom_gen::{Source, System, check_file, generate};
 use eom_generated as g;
 use eom_sim::{Model, Vector};
 
+// `generated_files`: the modules of `generated/src/`, as the regenerate
+// example writes them.
+include!("../generated/files.rs");
+
 fn path(name: &str) -> String {
     format!("{}/models/{name}.ron", env!("CARGO_MANIFEST_DIR"))
 }
@@ -174,32 +178,10 @@ fn compiled_models_equal_the_f64_algorithms() {
 #[test]
 fn generated_sources_are_fresh() {
     let mut stale = Vec::new();
-    let dir = format!("{}/models", env!("CARGO_MANIFEST_DIR"));
-    let mut names: Vec<String> = std::fs::read_dir(&dir)
-        .map(|d| {
-            d.filter_map(|e| e.ok()?.file_name().into_string().ok())
-                .collect()
-        })
-        .unwrap_or_default();
-    names.sort();
-    // The mixed models whose rigid part is generated (see the regenerate
-    // example's `MIXED`).
-    names.push("ancf/pendulum_rod.ron".to_string());
-    names.push("ancf/fourbar_cable.ron".to_string());
-    names.push("ancf/pendulum_peg.ron".to_string());
-    let mut files: Vec<(String, String)> = names
-        .iter()
-        .filter(|n| n.ends_with(".ron"))
-        .map(|file| {
-            let name = file.trim_end_matches(".ron").rsplit('/').next();
-            (name.unwrap_or(file).to_string(), format!("models/{file}"))
-        })
-        .collect();
-    // The scenes generated too (the regenerate example's `SCENES`).
-    files.push((
-        "arm7_derivatives".to_string(),
-        "tests/scenes/arm7_derivatives.scene.ron".to_string(),
-    ));
+    // The regenerate example's list: every model, the mixed models' rigid
+    // parts and the scenes.
+    let files = generated_files(env!("CARGO_MANIFEST_DIR")).unwrap_or_default();
+    assert!(!files.is_empty(), "no models found");
     for (name, path) in &files {
         let text = std::fs::read_to_string(format!("{}/{path}", env!("CARGO_MANIFEST_DIR")))
             .unwrap_or_default();
@@ -593,5 +575,41 @@ fn bouncing_ball_compiled_equals_interpreted() {
     {
         assert_eq!(a.kind, b.kind);
         assert!((a.t - b.t).abs() < 1e-9, "{} vs {}", a.t, b.t);
+    }
+}
+
+/// No scope of a committed generated function holds more `let`s than
+/// `eom_gen::emit::BLOCK_LIMIT` (one more for the array of values that
+/// cross its blocks): rustc overflows its stack on about 2 950 nested
+/// `let`s when it writes debug info (the default `dev` profile; CI builds
+/// without it, so a debug build would not show it there). A scope is a
+/// function's body up to its first block, or one block `{ … }` on lines of
+/// its own, as prettyplease writes them.
+#[test]
+fn no_generated_scope_is_too_deep_for_a_debug_build() {
+    let files = generated_files(env!("CARGO_MANIFEST_DIR")).unwrap_or_default();
+    assert!(!files.is_empty(), "no models found");
+    for (name, _) in &files {
+        let path = format!("{}/generated/src/{name}.rs", env!("CARGO_MANIFEST_DIR"));
+        let source = std::fs::read_to_string(&path).unwrap_or_default();
+        let (mut most, mut n, mut at) = (0, 0, "");
+        let mut current = "";
+        for line in source.lines().map(str::trim) {
+            if line.starts_with("fn ") || line.starts_with("pub fn ") {
+                (n, current) = (0, line);
+            } else if line == "{" {
+                n = 0;
+            } else if line.starts_with("let ") {
+                n += 1;
+                if n > most {
+                    (most, at) = (n, current);
+                }
+            }
+        }
+        assert!(
+            most <= eom_gen::emit::BLOCK_LIMIT + 1,
+            "{name}: {most} nested `let`s in `{at}`, more than {} + 1",
+            eom_gen::emit::BLOCK_LIMIT
+        );
     }
 }

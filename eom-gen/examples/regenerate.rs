@@ -29,21 +29,11 @@ fn elements(root: &str) -> ExitCode {
     ExitCode::SUCCESS
 }
 
-/// Mixed models of `models/ancf/` whose rigid part is generated too (the
-/// cables' kernels are model-independent, in `elements/src/`).
-pub const MIXED: [&str; 3] = [
-    "ancf/pendulum_rod",
-    "ancf/fourbar_cable",
-    "ancf/pendulum_peg",
-];
-
-/// Scenes generated too: arm7 with its derivatives, so that the batched
-/// tests run `forward_dynamics_derivatives_lanes` (with its dense product)
-/// lane by lane against the single-state function.
-pub const SCENES: [(&str, &str); 1] = [(
-    "arm7_derivatives",
-    "tests/scenes/arm7_derivatives.scene.ron",
-)];
+// `MIXED`, `SCENES` and `generated_files`, shared with the freshness test.
+include!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../generated/files.rs"
+));
 
 fn main() -> ExitCode {
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
@@ -53,29 +43,13 @@ fn main() -> ExitCode {
     if std::env::args().nth(1).as_deref() == Some("elements") {
         return ExitCode::SUCCESS;
     }
-    let mut names: Vec<String> = match std::fs::read_dir(format!("{root}/models")) {
-        Ok(dir) => dir
-            .filter_map(|e| e.ok())
-            .filter_map(|e| e.file_name().into_string().ok())
-            .filter_map(|n| n.strip_suffix(".ron").map(str::to_string))
-            .collect(),
+    let files = match generated_files(root) {
+        Ok(files) => files,
         Err(e) => {
             eprintln!("cannot read models/: {e}");
             return ExitCode::from(1);
         }
     };
-    names.sort();
-    // Mixed models (rigid bodies holding ANCF cables) under models/ancf/:
-    // their rigid part is generated code like any model's.
-    names.extend(MIXED.iter().map(|m| m.to_string()));
-    let mut files: Vec<(String, String)> = names
-        .iter()
-        .map(|path| {
-            let name = path.rsplit('/').next().unwrap_or(path).to_string();
-            (name, format!("models/{path}.ron"))
-        })
-        .collect();
-    files.extend(SCENES.iter().map(|(n, f)| (n.to_string(), f.to_string())));
     let mut lib = String::from(
         "//! Generated source of every bundled model, one module per model, committed\n\
          //! so readers can see what eom-gen emits. A test fails when a file is stale;\n\

@@ -25,16 +25,26 @@ pub const PART_LIMIT: usize = 1500;
 /// The longest program written as one part, late-scheduled, when
 /// evaluated one state at a time, for the functions that gain from it
 /// (forward and inverse dynamics and their derivatives; see
-/// [`part_limit`]). Measured (BENCHMARKS.md, "One part for arm7's
-/// derivatives" and "One part for forward and inverse dynamics"): arm7's
-/// forward-dynamics derivatives (5 945 instructions) 2.3 % faster in one
-/// part than in four; panda's forward dynamics (2 285) about 8 % and its
-/// inverse dynamics (1 517) about 20 % faster in one part than in two,
-/// the spatial 20-link chain's 6 % and 12 %, talos' inverse dynamics
-/// (5 699) about 7 %. Longer ones are cut at [`PART_LIMIT`] like every
-/// other function: talos' forward dynamics (9 927) was 13 % slower in one
-/// part.
+/// [`part_limit`]). Measured (BENCHMARKS.md, "One part for forward and
+/// inverse dynamics"): panda's inverse dynamics (1 517 instructions) about
+/// 20 % faster in one part than in two, its forward dynamics (2 285) about
+/// 8 %, arm7's forward-dynamics derivatives (5 945) 2.3 % in one part than
+/// in four.
+///
+/// Every `let` opens a lexical scope inside the previous one, and with
+/// debug info (the default `dev` profile) LLVM walks the nested scopes
+/// recursively: rustc 1.95 overflows its stack at about 2 950 of them
+/// (measured on a synthetic function; arm7's derivatives written flat in
+/// one part, 4 707 `let`s, did). So a function written whole is cut into
+/// blocks of at most [`BLOCK_LIMIT`] instructions, each its own scope.
 pub const ONE_PART_LIMIT: usize = 6500;
+
+/// The most instructions of a function written whole between two block
+/// boundaries: a function longer than this is written as blocks `{ … }`
+/// in sequence, values that cross a block kept in a local array (which
+/// release builds keep in registers), because rustc cannot compile one
+/// scope of many more `let`s with debug info (see [`ONE_PART_LIMIT`]).
+pub const BLOCK_LIMIT: usize = PART_LIMIT;
 
 /// The part limit of program `p` written in style `b`: [`PART_LIMIT`],
 /// but for a program of a function that gains from one part (`whole`:
@@ -484,7 +494,10 @@ pub fn lower_in_parts(
             }
         },
     };
-    if p.instrs.len() <= limit {
+    // Chunks: parts (functions of their own), or, for a function written
+    // whole that is longer than a block, blocks of it.
+    let blocks = b.lanes.is_none() && p.instrs.len() <= limit && p.instrs.len() > BLOCK_LIMIT;
+    if p.instrs.len() <= limit && !blocks {
         let slots = HashMap::new();
         return Lowered {
             body: statements(b, p, 0..p.instrs.len(), &slots, false),
@@ -497,10 +510,12 @@ pub fn lower_in_parts(
             used,
         };
     }
-    // Part of each instruction, and of each temporary's definition.
+    // Part (or block) of each instruction, and of each temporary's
+    // definition.
+    let chunk = if blocks { BLOCK_LIMIT } else { limit };
     let parts: Vec<std::ops::Range<usize>> = (0..p.instrs.len())
-        .step_by(limit)
-        .map(|s| s..(s + limit).min(p.instrs.len()))
+        .step_by(chunk)
+        .map(|s| s..(s + chunk).min(p.instrs.len()))
         .collect();
     let mut part_of_tmp: HashMap<u32, usize> = HashMap::new();
     for (k, r) in parts.iter().enumerate() {
@@ -537,6 +552,27 @@ pub fn lower_in_parts(
     }
     let slots = allocate_slots(&last_read, &part_of_tmp);
     let ns = Literal::usize_unsuffixed(slots.values().map(|&k| k + 1).max().unwrap_or(1));
+    if blocks {
+        // One function, its blocks in sequence, values that cross a block
+        // in a local array (which the optimiser keeps in registers: all
+        // its indices are constants).
+        let bodies = parts
+            .iter()
+            .map(|r| statements(b, p, r.clone(), &slots, true));
+        return Lowered {
+            body: quote! {
+                let mut s = [0.0f64; #ns];
+                #({ #bodies })*
+            },
+            outputs: p
+                .outputs
+                .iter()
+                .map(|&(_, o)| output(o, &slots, true))
+                .collect(),
+            parts: TokenStream::new(),
+            used,
+        };
+    }
     let mut methods = TokenStream::new();
     let mut calls = TokenStream::new();
     for (k, r) in parts.iter().enumerate() {

@@ -26,7 +26,7 @@ pub(crate) mod lower;
 mod names;
 use crate::system::{Motion, System};
 pub use loops::LoopChoice;
-pub use lower::{ONE_PART_LIMIT, PART_LIMIT};
+pub use lower::{BLOCK_LIMIT, ONE_PART_LIMIT, PART_LIMIT};
 pub use names::{field_names, is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
