@@ -582,9 +582,8 @@ fn bouncing_ball_compiled_equals_interpreted() {
 /// `eom_gen::emit::BLOCK_LIMIT` (one more for the array of values that
 /// cross its blocks): rustc overflows its stack on about 2 950 nested
 /// `let`s when it writes debug info (the default `dev` profile; CI builds
-/// without it, so a debug build would not show it there). A scope is a
-/// function's body up to its first block, or one block `{ … }` on lines of
-/// its own, as prettyplease writes them.
+/// without it, so a debug build would not show it there;
+/// `eom_gen::testkit::deepest_lets` counts).
 #[test]
 fn no_generated_scope_is_too_deep_for_a_debug_build() {
     let files = generated_files(env!("CARGO_MANIFEST_DIR")).unwrap_or_default();
@@ -592,20 +591,7 @@ fn no_generated_scope_is_too_deep_for_a_debug_build() {
     for (name, _) in &files {
         let path = format!("{}/generated/src/{name}.rs", env!("CARGO_MANIFEST_DIR"));
         let source = std::fs::read_to_string(&path).unwrap_or_default();
-        let (mut most, mut n, mut at) = (0, 0, "");
-        let mut current = "";
-        for line in source.lines().map(str::trim) {
-            if line.starts_with("fn ") || line.starts_with("pub fn ") {
-                (n, current) = (0, line);
-            } else if line == "{" {
-                n = 0;
-            } else if line.starts_with("let ") {
-                n += 1;
-                if n > most {
-                    (most, at) = (n, current);
-                }
-            }
-        }
+        let (most, at) = eom_gen::testkit::deepest_lets(&source);
         assert!(
             most <= eom_gen::emit::BLOCK_LIMIT + 1,
             "{name}: {most} nested `let`s in `{at}`, more than {} + 1",

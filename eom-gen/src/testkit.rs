@@ -85,3 +85,27 @@ pub fn no_event_pulls(report: &eom_sim::RunReport, verbose: bool) {
         report.contact_events.len()
     );
 }
+
+/// How deep the `let`s of generated `source` nest, as prettyplease writes
+/// it, and the function where they nest deepest: per function, the
+/// `let`s since its start or since its latest block (a bare `{` line).
+/// rustc overflows its stack on about 2 950 nested `let`s when it writes
+/// debug info, so emitted code keeps this at most
+/// [`crate::emit::BLOCK_LIMIT`] + 1 (the `let` of the array the blocks
+/// share).
+pub fn deepest_lets(source: &str) -> (usize, &str) {
+    let (mut most, mut n, mut at, mut current) = (0, 0, "", "");
+    for line in source.lines().map(str::trim) {
+        if line.starts_with("fn ") || line.starts_with("pub fn ") {
+            (n, current) = (0, line);
+        } else if line == "{" {
+            n = 0;
+        } else if line.starts_with("let ") {
+            n += 1;
+            if n > most {
+                (most, at) = (n, current);
+            }
+        }
+    }
+    (most, at)
+}

@@ -42,9 +42,9 @@ fn arm7_source_is_pinned() {
 
 /// arm7's forward-dynamics derivatives (6 081 instructions) are written
 /// one state at a time as one late-scheduled function, not four parts
-/// (2.3 % faster, BENCHMARKS.md "One part for arm7's derivatives"), in
-/// blocks of at most `BLOCK_LIMIT` instructions (rustc overflows its stack
-/// on about 2 950 nested `let`s with debug info); their lane version,
+/// in blocks of at most `BLOCK_LIMIT` instructions (rustc overflows its
+/// stack on about 2 950 nested `let`s with debug info; 533 ns against 555
+/// in parts, BENCHMARKS.md "One function or parts"); their lane version,
 /// bound by throughput, keeps its parts.
 #[test]
 fn arm7s_derivatives_are_one_function_in_blocks() {
@@ -74,33 +74,17 @@ fn arm7s_derivatives_are_one_function_in_blocks() {
     assert!(source.contains("fn forward_dynamics_derivatives("));
     assert!(!source.contains("fn forward_dynamics_derivatives_part"));
     assert!(source.contains("fn forward_dynamics_derivatives_lanes_part0"));
-    let deepest = deepest_lets(&source);
+    let (deepest, _) = eom_gen::testkit::deepest_lets(&source);
     assert!(
         deepest <= eom_gen::emit::BLOCK_LIMIT + 1,
         "{deepest} nested `let`s"
     );
 }
 
-/// The most `let` statements in one scope of `source` (a function's body
-/// up to its first block, or one block `{ … }` on lines of its own), as
-/// prettyplease writes generated code: how deep rustc's debug info nests.
-fn deepest_lets(source: &str) -> usize {
-    let (mut most, mut n) = (0, 0);
-    for line in source.lines().map(str::trim) {
-        if line.starts_with("fn ") || line.starts_with("pub fn ") || line == "{" {
-            n = 0;
-        } else if line.starts_with("let ") {
-            n += 1;
-            most = most.max(n);
-        }
-    }
-    most
-}
-
 /// The spatial 20-link chain's forward and inverse dynamics (5 618 and
 /// 2 924 instructions) are each one late-scheduled function one state at a
-/// time, in blocks (6 % and 12 % faster than in parts, BENCHMARKS.md "One
-/// part for forward and inverse dynamics"); its mass matrix (3 624), which
+/// time, in blocks (BENCHMARKS.md "One function or parts": the inverse
+/// dynamics about 15 % faster than in parts); its mass matrix (3 624), which
 /// was slower in one part on talos, keeps its parts, as do the lane
 /// versions.
 #[test]
@@ -145,7 +129,7 @@ fn forward_and_inverse_dynamics_up_to_the_limit_are_one_function() {
         source.contains("fn mass_matrix_part0"),
         "the mass matrix in parts"
     );
-    let deepest = deepest_lets(&source);
+    let (deepest, _) = eom_gen::testkit::deepest_lets(&source);
     assert!(
         deepest <= eom_gen::emit::BLOCK_LIMIT + 1,
         "{deepest} nested `let`s"

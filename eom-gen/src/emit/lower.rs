@@ -25,11 +25,11 @@ pub const PART_LIMIT: usize = 1500;
 /// The longest program written as one part, late-scheduled, when
 /// evaluated one state at a time, for the functions that gain from it
 /// (forward and inverse dynamics and their derivatives; see
-/// [`part_limit`]). Measured (BENCHMARKS.md, "One part for forward and
-/// inverse dynamics"): panda's inverse dynamics (1 517 instructions) about
-/// 20 % faster in one part than in two, its forward dynamics (2 285) about
-/// 8 %, arm7's forward-dynamics derivatives (5 945) 2.3 % in one part than
-/// in four.
+/// [`part_limit`]). Measured (BENCHMARKS.md, "One function or parts"):
+/// panda's inverse dynamics (1 517 instructions) about 20 % faster whole
+/// than in two parts, its forward dynamics (2 285) about 8 %; arm7's
+/// forward-dynamics derivatives (6 081) 4 % faster whole in blocks than in
+/// parts (8 % written flat, which debug builds cannot compile).
 ///
 /// Every `let` opens a lexical scope inside the previous one, and with
 /// debug info (the default `dev` profile) LLVM walks the nested scopes
@@ -454,6 +454,13 @@ fn allocate_slots(
 /// parts of at most [`PART_LIMIT`] instructions.
 pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
     lower_in_parts(b, p, name, args, PART_LIMIT)
+}
+
+/// [`lower`] for a function that gains from being written whole
+/// (forward and inverse dynamics and their derivatives): in one
+/// function up to [`ONE_PART_LIMIT`] instructions (see [`part_limit`]).
+pub fn lower_whole(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
+    lower_in_parts(b, p, name, args, part_limit(b, p, true))
 }
 
 /// [`lower`] in parts of at most `limit` instructions.

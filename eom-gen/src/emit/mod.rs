@@ -419,13 +419,7 @@ pub fn emit_tokens(
         .filter(|_| fd_loop.is_none());
     let fd_fn = fd_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
-        let l = lower::lower_in_parts(
-            &style,
-            p,
-            "forward_dynamics",
-            &args,
-            lower::part_limit(&style, p, true),
-        );
+        let l = lower::lower_whole(&style, p, "forward_dynamics", &args);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("udot", &l.outputs));
         let doc = format!(
@@ -490,13 +484,7 @@ pub fn emit_tokens(
         .filter(|_| id_loop.is_none());
     let id_fn = id_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
-        let l = lower::lower_in_parts(
-            &style,
-            p,
-            "inverse_dynamics",
-            &args,
-            lower::part_limit(&style, p, true),
-        );
+        let l = lower::lower_whole(&style, p, "inverse_dynamics", &args);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, assign_all("tau", &l.outputs));
         quote! {

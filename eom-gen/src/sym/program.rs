@@ -1094,6 +1094,10 @@ impl Program {
     /// tape does the same operations in the same order (the same bits),
     /// but building it costs about as much as one run, so a one-off
     /// evaluation (`linearize`, `eval`) runs the instructions as they are.
+    /// (The match below mirrors `Tape::eval`'s on purpose: making each
+    /// tape step and running it here, one loop for both, measured 0.49–0.52
+    /// s against 0.37–0.41 s for `linearize models/whipple.ron --sweep
+    /// v=0:10:201`; BENCHMARKS.md, "The interpreter".)
     pub fn eval(&self, inputs: &[f64]) -> Vec<f64> {
         let mut t = vec![0.0; self.n_tmps as usize];
         let get = |t: &[f64], o: Operand| match o {
