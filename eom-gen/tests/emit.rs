@@ -135,3 +135,45 @@ fn forward_and_inverse_dynamics_up_to_the_limit_are_one_function() {
         "{deepest} nested `let`s"
     );
 }
+
+/// One state at a time, a function in parts (the 20-link chain's mass
+/// matrix) or in blocks (its forward and inverse dynamics) stores each
+/// output where its value is computed: the parts that compute outputs take
+/// the function's output array, and no output is copied out of the scratch
+/// array at the end (BENCHMARKS.md, "The instruction cache"). Their lane
+/// versions still pass outputs through it.
+#[test]
+fn outputs_are_stored_where_they_are_computed() {
+    use eom_gen::functions::{Function, FunctionSet};
+    let text = eom_gen::model::builder::n_link_chain(20, true).to_ron();
+    let sys = eom_gen::model::check(&Source::new("chain20.ron", text.clone()))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let request = FunctionSet::all_requested().with(Function::MassMatrix);
+    let f = eom_gen::mech::formulate(&sys, request).unwrap_or_else(|e| panic!("{e}"));
+    let opts = eom_gen::EmitOptions {
+        loops: eom_gen::LoopChoice::Never,
+        ..Default::default()
+    };
+    let source = eom_gen::emit::emit_with(&sys, &f, &text, &opts);
+    let flat: String = source.split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(
+        flat.contains("m: &mut [[f64; 20]; 20]) {"),
+        "a part of the mass matrix takes its output array"
+    );
+    assert!(
+        !flat.contains("] = s["),
+        "an output copied from the scratch array"
+    );
+    // Every entry of the lower triangle is stored (and mirrored), in the
+    // parts or, for constants, in the function.
+    for i in 0..20 {
+        for j in 0..=i {
+            assert!(flat.contains(&format!("m[{i}][{j}] = ")), "M[{i}][{j}]");
+        }
+    }
+    for k in 0..20 {
+        assert!(flat.contains(&format!("udot[{k}] = ")), "udot[{k}]");
+        assert!(flat.contains(&format!("tau[{k}] = ")), "tau[{k}]");
+    }
+}

@@ -84,7 +84,7 @@ impl ::eom_sim::Model for Arm7Flex {
         tau: &[f64; 9],
         udot: &mut [f64; 9],
     ) {
-        let mut s = [0.0f64; 237];
+        let mut s = [0.0f64; 228];
         {
             let ([x0, x3, x7, x10, x14, x24, _, _], [x1, x4, x8, x11, x15, x25, _, _]) = if cfg!(
                 target_feature = "avx2"
@@ -2693,7 +2693,7 @@ impl ::eom_sim::Model for Arm7Flex {
             let x2370 = x2366 * x2367;
             let x2371 = x2183 * x2348;
             let x2372 = x2369 - x2370;
-            s[228] = x2372;
+            udot[1] = x2372;
             let x2373 = x2366 * x2368;
             let x2374 = tau[8] + s[197];
             let x2375 = x2136 * x2348;
@@ -2705,7 +2705,7 @@ impl ::eom_sim::Model for Arm7Flex {
             let x2381 = x1659 * s[169];
             let x2382 = x2179 * x2348;
             let x2383 = x2377 - x2376;
-            s[229] = x2383;
+            udot[2] = x2383;
             let x2384 = x1954 * x2372;
             let x2385 = x2321 - x2378;
             let x2386 = x2366 * x2375;
@@ -2718,9 +2718,9 @@ impl ::eom_sim::Model for Arm7Flex {
             let x2393 = x2366 * x2382;
             let x2394 = x2379 + x2380;
             let x2395 = x2366 * x2348;
-            s[230] = x2395;
+            udot[0] = x2395;
             let x2396 = x2390 - x2389;
-            s[231] = x2396;
+            udot[3] = x2396;
             let x2397 = x2387 * x2383;
             let x2398 = x2392 - x2391;
             let x2399 = x1951 * x2372;
@@ -2737,7 +2737,7 @@ impl ::eom_sim::Model for Arm7Flex {
             let x2410 = x1964 * x2395;
             let x2411 = x2402 - s[116];
             let x2412 = x2405 - x2404;
-            s[232] = x2412;
+            udot[4] = x2412;
             let x2413 = s[100] * x2396;
             let x2414 = x2407 - x2406;
             let x2415 = s[127] * x2383;
@@ -2755,7 +2755,7 @@ impl ::eom_sim::Model for Arm7Flex {
             let x2427 = s[126] * x2383;
             let x2428 = x2420 - x2419;
             let x2429 = x2422 - x2421;
-            s[233] = x2429;
+            udot[5] = x2429;
             let x2430 = s[84] * x2412;
             let x2431 = x2424 - x2423;
             let x2432 = s[144] * x2383;
@@ -2769,7 +2769,7 @@ impl ::eom_sim::Model for Arm7Flex {
             let x2440 = s[61] * x2412;
             let x2441 = x2435 - x2434;
             let x2442 = x2437 - x2436;
-            s[234] = x2442;
+            udot[6] = x2442;
             let x2443 = s[73] * x2412;
             let x2444 = x2439 - x2438;
             let x2445 = s[75] * x2429;
@@ -2779,19 +2779,10 @@ impl ::eom_sim::Model for Arm7Flex {
             let x2449 = s[1] * x2442;
             let x2450 = x2446 - x2445;
             let x2451 = x2448 - x2447;
-            s[235] = x2451;
+            udot[7] = x2451;
             let x2452 = x2450 - x2449;
-            s[236] = x2452;
+            udot[8] = x2452;
         }
-        udot[0] = s[230];
-        udot[1] = s[228];
-        udot[2] = s[229];
-        udot[3] = s[231];
-        udot[4] = s[232];
-        udot[5] = s[233];
-        udot[6] = s[234];
-        udot[7] = s[235];
-        udot[8] = s[236];
     }
     fn mass_matrix(&self, _t: f64, q: &[f64; 9], m: &mut [[f64; 9]; 9]) {
         let ([x1, x6, x10, x12, x77, _, _, _], [x2, x7, x11, x13, x78, _, _, _]) = if cfg!(

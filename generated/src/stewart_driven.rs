@@ -134,7 +134,7 @@ impl ::eom_sim::Model for StewartDriven {
         tau: &[f64; 15],
         udot: &mut [f64; 15],
     ) {
-        let mut s = [0.0f64; 119];
+        let mut s = [0.0f64; 104];
         {
             let (
                 [x1,
@@ -1818,7 +1818,7 @@ impl ::eom_sim::Model for StewartDriven {
             let x1540 = s[12] * s[37];
             let x1541 = s[11] * s[37];
             let x1542 = s[51] - s[89];
-            s[104] = x1542;
+            udot[1] = x1542;
             let x1543 = 0.47636667364146346 * s[13];
             let x1544 = s[90] + s[91];
             let x1545 = (-0.3100164066555557) * s[17];
@@ -1849,7 +1849,7 @@ impl ::eom_sim::Model for StewartDriven {
             let x1570 = s[103] * s[15];
             let x1571 = x1538 + x1539;
             let x1572 = s[62] * s[37];
-            s[105] = x1572;
+            udot[0] = x1572;
             let x1573 = s[9] * x1542;
             let x1574 = s[62] * x1540;
             let x1575 = x1543 + x1544;
@@ -1894,15 +1894,15 @@ impl ::eom_sim::Model for StewartDriven {
             let x1614 = s[10] * x1572;
             let x1615 = x1577 + x1578;
             let x1616 = x1584 / x1583;
-            s[106] = x1616;
+            udot[5] = x1616;
             let x1617 = x1585 / x1582;
-            s[107] = x1617;
+            udot[7] = x1617;
             let x1618 = x1586 / x1581;
-            s[108] = x1618;
+            udot[9] = x1618;
             let x1619 = x1587 / x1580;
-            s[109] = x1619;
+            udot[11] = x1619;
             let x1620 = x1588 / x1579;
-            s[110] = x1620;
+            udot[13] = x1620;
             let x1621 = s[14] * s[41];
             let x1622 = x1591 - x1590;
             let x1623 = s[26] * s[42];
@@ -1936,7 +1936,7 @@ impl ::eom_sim::Model for StewartDriven {
             let x1651 = x1635 - x1621;
             let x1652 = x1636 + x1637;
             let x1653 = x1638 + x1639;
-            s[111] = x1653;
+            udot[3] = x1653;
             let x1654 = 0.9428090415820634 * x1612;
             let x1655 = x1641 - x1640;
             let x1656 = x1651 - x1650;
@@ -1948,35 +1948,20 @@ impl ::eom_sim::Model for StewartDriven {
             let x1662 = 0.9428090415820632 * x1653;
             let x1663 = x1654 + x1655;
             let x1664 = s[61] * x1656;
-            s[112] = x1664;
+            udot[6] = x1664;
             let x1665 = s[60] * x1657;
-            s[113] = x1665;
+            udot[8] = x1665;
             let x1666 = s[59] * x1658;
-            s[114] = x1666;
+            udot[10] = x1666;
             let x1667 = s[58] * x1659;
-            s[115] = x1667;
+            udot[12] = x1667;
             let x1668 = s[57] * x1660;
-            s[116] = x1668;
+            udot[14] = x1668;
             let x1669 = x1661 - x1573;
-            s[117] = x1669;
+            udot[2] = x1669;
             let x1670 = x1662 + x1663;
-            s[118] = x1670;
+            udot[4] = x1670;
         }
-        udot[0] = s[105];
-        udot[1] = s[104];
-        udot[2] = s[117];
-        udot[3] = s[111];
-        udot[4] = s[118];
-        udot[5] = s[106];
-        udot[6] = s[112];
-        udot[7] = s[107];
-        udot[8] = s[113];
-        udot[9] = s[108];
-        udot[10] = s[114];
-        udot[11] = s[109];
-        udot[12] = s[115];
-        udot[13] = s[110];
-        udot[14] = s[116];
     }
     fn mass_matrix(&self, t: f64, q: &[f64; 16], m: &mut [[f64; 15]; 15]) {
         let x0 = ::core::f64::consts::PI * t;

@@ -9,9 +9,11 @@
 //! long straight-line functions can exhaust rustc's stack. A program of more
 //! than [`PART_LIMIT`] instructions is cut into consecutive parts, each an
 //! `#[inline(never)]` method; a temporary that is defined in one part and
-//! read in a later one (or is an output) gets a slot in a scratch array
-//! `s` on the caller's stack, so every part stays short and the caller
-//! reads the outputs from `s`.
+//! read in a later one gets a slot in a scratch array `s` on the caller's
+//! stack, so every part stays short. Outputs are stored where they are
+//! computed, the part taking the function's output array ([`lower_into`]);
+//! lanes, and functions lowered with [`lower`], keep their outputs in `s`
+//! for the caller to read.
 
 use super::{float, float_operand, tmp};
 use crate::sym::{Op, Operand, Program, Symbol};
@@ -134,6 +136,28 @@ pub struct Lowered {
     pub parts: TokenStream,
     /// Per argument: is it used (else its name gets a `_` prefix)?
     pub used: Vec<bool>,
+    /// With a [`Dest`] ([`lower_into`]): the stores of the outputs the
+    /// body has not written already (all of them for a function written
+    /// flat; constants and inputs for one in parts or blocks, whose
+    /// temporaries are stored where they are defined). Empty otherwise.
+    pub assign: TokenStream,
+}
+
+/// Where a function's outputs go, for [`lower_into`]: a function in parts
+/// or blocks stores each output where its value is computed, so no output
+/// passes through the scratch array and the caller copies none of them at
+/// the end (code that runs once per call, in functions that are already
+/// longer than the instruction cache holds: BENCHMARKS.md, "The
+/// instruction cache").
+pub struct Dest<'a> {
+    /// The output parameter of the function, passed on to the parts that
+    /// store outputs.
+    pub name: Ident,
+    /// Its type, `&mut [f64; N]` or `&mut [[f64; N]; N]`.
+    pub ty: TokenStream,
+    /// The statements that store output `k` with value `v` (an identifier,
+    /// a constant or an input).
+    pub assign: &'a dyn Fn(usize, &TokenStream) -> TokenStream,
 }
 
 impl Lowered {
@@ -165,6 +189,7 @@ fn statements(
     range: std::ops::Range<usize>,
     slots: &HashMap<u32, usize>,
     split: bool,
+    direct: &HashMap<u32, TokenStream>,
 ) -> TokenStream {
     // Temporaries are numbered in instruction order: the part defines
     // those from its first instruction's up to the next part's first.
@@ -271,7 +296,7 @@ fn statements(
         ));
         for &(d, _) in &hoisted {
             for t in [d, d + 1] {
-                out.extend(store(slots, t, split));
+                out.extend(store(slots, direct, t, split));
             }
         }
     }
@@ -341,13 +366,13 @@ fn statements(
                     out.extend(quote!(let (#sn, #cs) = f64::sin_cos(#x);));
                 }
                 for t in [ins.dst, ins.dst + 1] {
-                    out.extend(store(slots, t, split));
+                    out.extend(store(slots, direct, t, split));
                 }
                 continue;
             }
         };
         out.extend(quote!(let #dst = #value;));
-        out.extend(store(slots, ins.dst, split));
+        out.extend(store(slots, direct, ins.dst, split));
     }
     out
 }
@@ -402,14 +427,28 @@ fn fusable(
     fused
 }
 
-fn store(slots: &HashMap<u32, usize>, t: u32, split: bool) -> TokenStream {
-    match slots.get(&t) {
-        Some(&k) if split => {
+/// After temporary `t` is defined in a part or block: its slot, if a later
+/// part reads it, and the outputs it is stored to (`direct`).
+fn store(
+    slots: &HashMap<u32, usize>,
+    direct: &HashMap<u32, TokenStream>,
+    t: u32,
+    split: bool,
+) -> TokenStream {
+    if !split {
+        return TokenStream::new();
+    }
+    let mut code = match slots.get(&t) {
+        Some(&k) => {
             let (k, x) = (Literal::usize_unsuffixed(k), tmp(t));
             quote!(s[#k] = #x;)
         }
-        _ => TokenStream::new(),
+        None => TokenStream::new(),
+    };
+    if let Some(d) = direct.get(&t) {
+        code.extend(d.clone());
     }
+    code
 }
 
 /// Slots for the values `last_read` names (temporary → the last part that
@@ -453,23 +492,33 @@ fn allocate_slots(
 /// Lowers `p` for a function called `name` with arguments `args`, in
 /// parts of at most [`PART_LIMIT`] instructions.
 pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
-    lower_in_parts(b, p, name, args, PART_LIMIT)
+    lower_parts(b, p, name, args, PART_LIMIT, None)
 }
 
-/// [`lower`] for a function that gains from being written whole
-/// (forward and inverse dynamics and their derivatives): in one
-/// function up to [`ONE_PART_LIMIT`] instructions (see [`part_limit`]).
-pub fn lower_whole(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
-    lower_in_parts(b, p, name, args, part_limit(b, p, true))
-}
-
-/// [`lower`] in parts of at most `limit` instructions.
-pub fn lower_in_parts(
+/// [`lower`] in parts of at most `limit` instructions ([`part_limit`]),
+/// for a function whose outputs go to `dest`: every
+/// store of an output is in [`Lowered::body`] or [`Lowered::assign`] (in
+/// that order), a temporary's where it is defined when the function is in
+/// parts or blocks (one state at a time; lanes keep their outputs in the
+/// scratch array).
+pub fn lower_into(
     b: &Style<'_>,
     p: &Program,
     name: &str,
     args: &[Arg<'_>],
     limit: usize,
+    dest: &Dest<'_>,
+) -> Lowered {
+    lower_parts(b, p, name, args, limit, Some(dest))
+}
+
+fn lower_parts(
+    b: &Style<'_>,
+    p: &Program,
+    name: &str,
+    args: &[Arg<'_>],
+    limit: usize,
+    dest: Option<&Dest<'_>>,
 ) -> Lowered {
     // One state at a time, the code waits on latency: each instruction as
     // late as its readers allow keeps fewer values live (BENCHMARKS.md,
@@ -504,10 +553,24 @@ pub fn lower_in_parts(
     // Chunks: parts (functions of their own), or, for a function written
     // whole that is longer than a block, blocks of it.
     let blocks = b.lanes.is_none() && p.instrs.len() <= limit && p.instrs.len() > BLOCK_LIMIT;
+    // The stores of the outputs `dest` takes that are not temporaries
+    // stored where they are defined (`direct`).
+    let assign_rest = |direct: &HashMap<u32, TokenStream>, slots: &HashMap<u32, usize>, split| {
+        let mut code = TokenStream::new();
+        if let Some(d) = dest {
+            for (k, &(_, o)) in p.outputs.iter().enumerate() {
+                if !matches!(o, Operand::Tmp(t) if direct.contains_key(&t)) {
+                    code.extend((d.assign)(k, &output(o, slots, split)));
+                }
+            }
+        }
+        code
+    };
     if p.instrs.len() <= limit && !blocks {
         let slots = HashMap::new();
+        let direct = HashMap::new();
         return Lowered {
-            body: statements(b, p, 0..p.instrs.len(), &slots, false),
+            body: statements(b, p, 0..p.instrs.len(), &slots, false, &direct),
             outputs: p
                 .outputs
                 .iter()
@@ -515,7 +578,22 @@ pub fn lower_in_parts(
                 .collect(),
             parts: TokenStream::new(),
             used,
+            assign: assign_rest(&direct, &slots, false),
         };
+    }
+    // Outputs stored where their temporaries are defined, one state at a
+    // time with a destination; with lanes, or without one, through slots.
+    let mut direct: HashMap<u32, TokenStream> = HashMap::new();
+    if let Some(d) = dest.filter(|_| b.lanes.is_none()) {
+        for (k, &(_, o)) in p.outputs.iter().enumerate() {
+            if let Operand::Tmp(t) = o {
+                let v = tmp(t);
+                direct
+                    .entry(t)
+                    .or_default()
+                    .extend((d.assign)(k, &quote!(#v)));
+            }
+        }
     }
     // Part (or block) of each instruction, and of each temporary's
     // definition.
@@ -553,7 +631,9 @@ pub fn lower_in_parts(
         }
     }
     for &(_, o) in &p.outputs {
-        if let Operand::Tmp(t) = o {
+        if let Operand::Tmp(t) = o
+            && !direct.contains_key(&t)
+        {
             last_read.insert(t, usize::MAX);
         }
     }
@@ -565,10 +645,15 @@ pub fn lower_in_parts(
         // its indices are constants).
         let bodies = parts
             .iter()
-            .map(|r| statements(b, p, r.clone(), &slots, true));
+            .map(|r| statements(b, p, r.clone(), &slots, true, &direct));
+        let scratch = if slots.is_empty() {
+            TokenStream::new()
+        } else {
+            quote!(let mut s = [0.0f64; #ns];)
+        };
         return Lowered {
             body: quote! {
-                let mut s = [0.0f64; #ns];
+                #scratch
                 #({ #bodies })*
             },
             outputs: p
@@ -578,6 +663,7 @@ pub fn lower_in_parts(
                 .collect(),
             parts: TokenStream::new(),
             used,
+            assign: assign_rest(&direct, &slots, true),
         };
     }
     let mut methods = TokenStream::new();
@@ -597,7 +683,29 @@ pub fn lower_in_parts(
             let ty = &a.ty;
             quote!(#n: #ty)
         });
-        let body = statements(b, p, r.clone(), &slots, true);
+        let body = statements(b, p, r.clone(), &slots, true, &direct);
+        // The output parameter, for a part that stores outputs.
+        let stores = p.instrs[r.clone()].iter().any(|i| {
+            direct.contains_key(&i.dst)
+                || (matches!(i.op, Op::SinCos(_)) && direct.contains_key(&(i.dst + 1)))
+        });
+        // The scratch array, for a part that reads or stores a slot.
+        let first = p.instrs[r.start].dst;
+        let uses_s = p.instrs[r.clone()].iter().any(|i| {
+            slots.contains_key(&i.dst)
+                || (matches!(i.op, Op::SinCos(_)) && slots.contains_key(&(i.dst + 1)))
+                || i.op
+                    .operands()
+                    .any(|o| matches!(o, Operand::Tmp(t) if t < first))
+        });
+        let s_name = if uses_s { quote!(s) } else { quote!(_s) };
+        let (out_param, out_arg) = match dest {
+            Some(d) if stores => {
+                let (n, ty) = (&d.name, &d.ty);
+                (quote!(, #n: #ty), quote!(, #n))
+            }
+            _ => (TokenStream::new(), TokenStream::new()),
+        };
         let doc = format!(
             " Part {} of {} of `{name}` (instructions {}–{}).",
             k + 1,
@@ -618,7 +726,7 @@ pub fn lower_in_parts(
             methods.extend(quote! {
                 #[doc = #doc]
                 #[inline(never)]
-                fn #fname(&self, #(#params,)* s: &mut [f64; #ns]) {
+                fn #fname(&self, #(#params,)* #s_name: &mut [f64; #ns] #out_param) {
                     #body
                 }
             });
@@ -626,7 +734,7 @@ pub fn lower_in_parts(
             methods.extend(quote! {
                 #[doc = #doc]
                 #[inline(never)]
-                fn #fname(#(#params,)* s: &mut [f64; #ns]) {
+                fn #fname(#(#params,)* #s_name: &mut [f64; #ns] #out_param) {
                     #body
                 }
             });
@@ -634,9 +742,9 @@ pub fn lower_in_parts(
         calls.extend(if b.methods && b.lanes.is_some() {
             quote!(Self::#fname(#(#names,)* &mut s);)
         } else if b.methods {
-            quote!(self.#fname(#(#names,)* &mut s);)
+            quote!(self.#fname(#(#names,)* &mut s #out_arg);)
         } else {
-            quote!(#fname(#(#names,)* &mut s);)
+            quote!(#fname(#(#names,)* &mut s #out_arg);)
         });
     }
     let init = if let Some(lt) = &b.lanes {
@@ -656,6 +764,7 @@ pub fn lower_in_parts(
             .collect(),
         parts: methods,
         used: vec![true; args.len()],
+        assign: assign_rest(&direct, &slots, true),
     }
 }
 

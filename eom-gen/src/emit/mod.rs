@@ -365,6 +365,14 @@ pub fn emit_tokens(
         });
         quote!(#(#items)*)
     };
+    // Stores `out[k] = value;` into a flat output array, for `lower_into`.
+    let flat = |out: &Ident| {
+        let out = out.clone();
+        move |k: usize, v: &TokenStream| {
+            let k = idx(k);
+            quote!(#out[#k] = #v;)
+        }
+    };
 
     // Long chains as loops, where chosen: these functions are not lowered
     // straight.
@@ -404,9 +412,22 @@ pub fn emit_tokens(
     let Some(qdot_program) = f.program(Function::Qdot) else {
         return quote!(::core::compile_error!("eom-gen: the formulation has no q̇ program"););
     };
-    let l = lower(&style, qdot_program, "qdot", &args);
+    let store = flat(&qdot_out);
+    let dest = lower::Dest {
+        name: qdot_out.clone(),
+        ty: quote!(&mut [f64; #nq_l]),
+        assign: &store,
+    };
+    let l = lower::lower_into(
+        &style,
+        qdot_program,
+        "qdot",
+        &args,
+        lower::PART_LIMIT,
+        &dest,
+    );
     parts.extend(l.parts.clone());
-    let (params, body, assign) = (l.params(&args), &l.body, assign_all("qdot", &l.outputs));
+    let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
     let qdot_fn = quote! {
         fn qdot(&self, #params, #qdot_out: &mut [f64; #nq_l]) {
             #body
@@ -419,9 +440,16 @@ pub fn emit_tokens(
         .filter(|_| fd_loop.is_none());
     let fd_fn = fd_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
-        let l = lower::lower_whole(&style, p, "forward_dynamics", &args);
+        let store = flat(&udot_out);
+        let dest = lower::Dest {
+            name: udot_out.clone(),
+            ty: quote!(&mut [f64; #nu_l]),
+            assign: &store,
+        };
+        let limit = lower::part_limit(&style, p, true);
+        let l = lower::lower_into(&style, p, "forward_dynamics", &args, limit, &dest);
         parts.extend(l.parts.clone());
-        let (params, body, assign) = (l.params(&args), &l.body, assign_all("udot", &l.outputs));
+        let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         let doc = format!(
             " Forward dynamics by the {} ({} operations): `u̇ = M⁻¹ (τ − b)`.",
             f.fd_form,
@@ -441,22 +469,27 @@ pub fn emit_tokens(
         .filter(|_| mm_loop.is_none());
     let mm_fn = mm_straight.map(|p| {
         let args = [arg_t(), arg_q()];
-        let l = lower(&style, p, "mass_matrix", &args);
-        parts.extend(l.parts.clone());
-        let (params, body) = (l.params(&args), &l.body);
-        let mut assign = TokenStream::new();
-        let mut k = 0;
-        for i in 0..nu {
-            for j in 0..=i {
-                let (il, jl, v) = (idx(i), idx(j), &l.outputs[k]);
-                assign.extend(if i == j {
-                    quote!(m[#il][#jl] = #v;)
-                } else {
-                    quote!(m[#il][#jl] = #v; m[#jl][#il] = m[#il][#jl];)
-                });
-                k += 1;
+        // Output `k` is entry `(i, j)` of the lower triangle by rows,
+        // stored to both triangles.
+        let lower_triangle: Vec<(usize, usize)> =
+            (0..nu).flat_map(|i| (0..=i).map(move |j| (i, j))).collect();
+        let store = |k: usize, v: &TokenStream| {
+            let (i, j) = lower_triangle[k];
+            let (il, jl) = (idx(i), idx(j));
+            if i == j {
+                quote!(m[#il][#jl] = #v;)
+            } else {
+                quote!(m[#il][#jl] = #v; m[#jl][#il] = m[#il][#jl];)
             }
-        }
+        };
+        let dest = lower::Dest {
+            name: m_out.clone(),
+            ty: quote!(&mut [[f64; #nu_l]; #nu_l]),
+            assign: &store,
+        };
+        let l = lower::lower_into(&style, p, "mass_matrix", &args, lower::PART_LIMIT, &dest);
+        parts.extend(l.parts.clone());
+        let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         quote! {
             fn mass_matrix(&self, #params, #m_out: &mut [[f64; #nu_l]; #nu_l]) {
                 #body
@@ -468,9 +501,15 @@ pub fn emit_tokens(
     let bias_straight = f.program(Function::Bias).filter(|_| bias_loop.is_none());
     let bias_fn = bias_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
-        let l = lower(&style, p, "bias", &args);
+        let store = flat(&b_out);
+        let dest = lower::Dest {
+            name: b_out.clone(),
+            ty: quote!(&mut [f64; #nu_l]),
+            assign: &store,
+        };
+        let l = lower::lower_into(&style, p, "bias", &args, lower::PART_LIMIT, &dest);
         parts.extend(l.parts.clone());
-        let (params, body, assign) = (l.params(&args), &l.body, assign_all("b", &l.outputs));
+        let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         quote! {
             fn bias(&self, #params, #b_out: &mut [f64; #nu_l]) {
                 #body
@@ -484,9 +523,16 @@ pub fn emit_tokens(
         .filter(|_| id_loop.is_none());
     let id_fn = id_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
-        let l = lower::lower_whole(&style, p, "inverse_dynamics", &args);
+        let store = flat(&tau_out);
+        let dest = lower::Dest {
+            name: tau_out.clone(),
+            ty: quote!(&mut [f64; #nu_l]),
+            assign: &store,
+        };
+        let limit = lower::part_limit(&style, p, true);
+        let l = lower::lower_into(&style, p, "inverse_dynamics", &args, limit, &dest);
         parts.extend(l.parts.clone());
-        let (params, body, assign) = (l.params(&args), &l.body, assign_all("tau", &l.outputs));
+        let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         quote! {
             fn inverse_dynamics(&self, #params, #tau_out: &mut [f64; #nu_l]) {
                 #body
@@ -697,12 +743,18 @@ pub fn emit_tokens(
             Function::ForwardDynamicsDerivatives | Function::InverseDynamicsDerivatives
         );
         let limit = lower::part_limit(&style, p, derivatives);
-        let l = lower::lower_in_parts(&style, p, e.name, &args, limit);
+        let out = out_arg("out", p.outputs.len());
+        let len = idx(p.outputs.len());
+        let store = flat(&out);
+        let dest = lower::Dest {
+            name: out.clone(),
+            ty: quote!(&mut [f64; #len]),
+            assign: &store,
+        };
+        let l = lower::lower_into(&style, p, e.name, &args, limit, &dest);
         parts.extend(l.parts.clone());
-        let (params, body, assign) = (l.params(&args), &l.body, assign_all("out", &l.outputs));
+        let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         let n = format_ident!("{}", e.name);
-        let out = out_arg("out", l.outputs.len());
-        let len = idx(l.outputs.len());
         let labels = list(
             &f.labels(e.function)
                 .iter()
