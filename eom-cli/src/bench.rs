@@ -35,13 +35,21 @@ pub struct PerCallOptions {
     /// Also generate and time `forward_dynamics_derivatives`.
     pub derivatives: bool,
     /// Also emit the batched functions and time `forward_dynamics_lanes`
-    /// at every pack width of [`WIDTHS`] (ns per state).
+    /// at every pack width of [`WIDTHS`] (ns per state); with
+    /// `derivatives`, `forward_dynamics_derivatives_lanes` too, at
+    /// [`DERIVATIVE_WIDTHS`].
     pub batch: bool,
 }
 
 /// The pack widths `--batch` times: 2 lanes fill an SSE2 register, 4 an
 /// AVX2 one, 8 an AVX-512 one, 16 two of them.
 pub const WIDTHS: [usize; 4] = [2, 4, 8, 16];
+
+/// The pack widths of the batched derivatives: one AVX2 and one AVX-512
+/// register (their programs are several times forward dynamics', so each
+/// width is a long build, and two or sixteen lanes were never the fastest
+/// width of forward dynamics on an AVX2 or AVX-512 machine).
+pub const DERIVATIVE_WIDTHS: [usize; 2] = [4, 8];
 
 impl Default for PerCallOptions {
     fn default() -> Self {
@@ -85,15 +93,29 @@ pub struct PerCall {
     pub derivatives: Option<Timing>,
     /// `forward_dynamics_lanes` per pack width (ns per state), with `--batch`.
     pub batched: Vec<(usize, Timing)>,
+    /// `forward_dynamics_derivatives_lanes` per pack width (ns per state),
+    /// with `--batch --derivatives`.
+    pub batched_derivatives: Vec<(usize, Timing)>,
+}
+
+/// The pack width with the lowest median ns per state, and its timing.
+fn fastest(by_width: &[(usize, Timing)]) -> Option<(usize, Timing)> {
+    by_width
+        .iter()
+        .copied()
+        .min_by(|a, b| a.1.median.total_cmp(&b.1.median))
 }
 
 impl PerCall {
-    /// The pack width with the lowest median ns per state, and its timing.
+    /// The pack width with the lowest median ns per state of batched
+    /// forward dynamics, and its timing.
     pub fn best_batched(&self) -> Option<(usize, Timing)> {
-        self.batched
-            .iter()
-            .copied()
-            .min_by(|a, b| a.1.median.total_cmp(&b.1.median))
+        fastest(&self.batched)
+    }
+
+    /// The same for the batched derivatives.
+    pub fn best_batched_derivatives(&self) -> Option<(usize, Timing)> {
+        fastest(&self.batched_derivatives)
     }
 }
 
@@ -210,19 +232,7 @@ type Pack<const W: usize> = ([Lanes<W>; NQ], [Lanes<W>; NU], [Lanes<W>; NU]);
 
 fn batched<const W: usize>(reps: usize, m: &model::MODEL, states: &[(Q, U, U, U)]) -> String {
     let models = [*m; W];
-    let lanes = |c: &[(Q, U, U, U)], f: &dyn Fn(&(Q, U, U, U)) -> Vec<f64>, k: usize| {
-        Lanes::<W>(std::array::from_fn(|l| f(&c[l])[k]))
-    };
-    let packs: Vec<Pack<W>> = states
-        .chunks_exact(W)
-        .map(|c| {
-            (
-                std::array::from_fn(|k| lanes(c, &|s| s.0.as_ref().to_vec(), k)),
-                std::array::from_fn(|k| lanes(c, &|s| s.1.as_ref().to_vec(), k)),
-                std::array::from_fn(|k| lanes(c, &|s| s.2.as_ref().to_vec(), k)),
-            )
-        })
-        .collect();
+    let packs: Vec<Pack<W>> = packs_of(states);
     let mut udot = [Lanes::<W>::splat(0.0); NU];
     time(packs.len(), W, reps, |k| {
         let (q, u, tau) = &packs[k];
@@ -240,11 +250,69 @@ fn batched<const W: usize>(reps: usize, m: &model::MODEL, states: &[(Q, U, U, U)
 
 fn extra(_n: usize, reps: usize, m: &model::MODEL, states: &[(Q, U, U, U)]) -> String {
     format!(
-        ",\"batched_forward_dynamics\":{{\"2\":{},\"4\":{},\"8\":{},\"16\":{}}}",
+        ",\"batched_forward_dynamics\":{{\"2\":{},\"4\":{},\"8\":{},\"16\":{}}}{}",
         batched::<2>(reps, m, states),
         batched::<4>(reps, m, states),
         batched::<8>(reps, m, states),
         batched::<16>(reps, m, states),
+        batched_derivatives(reps, m, states),
+    )
+}
+
+/// The states packed `W` at a time (lane `l` of pack `k` is state `W k + l`).
+fn packs_of<const W: usize>(states: &[(Q, U, U, U)]) -> Vec<Pack<W>> {
+    let lanes = |c: &[(Q, U, U, U)], f: &dyn Fn(&(Q, U, U, U)) -> Vec<f64>, k: usize| {
+        Lanes::<W>(std::array::from_fn(|l| f(&c[l])[k]))
+    };
+    states
+        .chunks_exact(W)
+        .map(|c| {
+            (
+                std::array::from_fn(|k| lanes(c, &|s| s.0.as_ref().to_vec(), k)),
+                std::array::from_fn(|k| lanes(c, &|s| s.1.as_ref().to_vec(), k)),
+                std::array::from_fn(|k| lanes(c, &|s| s.2.as_ref().to_vec(), k)),
+            )
+        })
+        .collect()
+}
+"#;
+
+/// `BATCHED`'s `batched_derivatives` without `--derivatives`: nothing.
+const NO_BATCHED_DERIVATIVES: &str = r#"
+fn batched_derivatives(_reps: usize, _m: &model::MODEL, _states: &[(Q, U, U, U)]) -> String {
+    String::new()
+}
+"#;
+
+/// `BATCHED`'s `batched_derivatives` with `--derivatives`:
+/// `forward_dynamics_derivatives_lanes` at 4 and 8 lanes, ns per state.
+const BATCHED_DERIVATIVES: &str = r#"
+fn batched_derivatives_at<const W: usize>(
+    reps: usize,
+    m: &model::MODEL,
+    packs: &[Pack<W>],
+) -> String {
+    let models = [*m; W];
+    let mut out = [Lanes::<W>::splat(0.0); model::DERIVATIVES_LEN];
+    time(packs.len(), W, reps, |k| {
+        let (q, u, tau) = &packs[k];
+        model::MODEL::forward_dynamics_derivatives_lanes(
+            &models,
+            Lanes::splat(0.0),
+            black_box(q),
+            black_box(u),
+            black_box(tau),
+            &mut out,
+        );
+        black_box(&mut out);
+    })
+}
+
+fn batched_derivatives(reps: usize, m: &model::MODEL, states: &[(Q, U, U, U)]) -> String {
+    format!(
+        ",\"batched_forward_dynamics_derivatives\":{{\"4\":{},\"8\":{}}}",
+        batched_derivatives_at::<4>(reps, m, &packs_of(states)),
+        batched_derivatives_at::<8>(reps, m, &packs_of(states)),
     )
 }
 "#;
@@ -275,7 +343,16 @@ pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, Error> {
         }
         None => MAIN.to_string(),
     };
-    main += if o.batch { BATCHED } else { NO_EXTRA };
+    if o.batch {
+        main += BATCHED;
+        main += if derivatives.is_some() {
+            BATCHED_DERIVATIVES
+        } else {
+            NO_BATCHED_DERIVATIVES
+        };
+    } else {
+        main += NO_EXTRA;
+    }
     if derivatives.is_some() && !MAIN.contains(PRINT) {
         return Err(Error::Program(
             "internal: the timing program's last line changed; `PRINT` must match it".into(),
@@ -333,6 +410,19 @@ pub fn per_call(g: &Generated, o: &PerCallOptions) -> Result<PerCall, Error> {
         } else {
             Vec::new()
         },
+        batched_derivatives: if o.batch && derivatives.is_some() {
+            DERIVATIVE_WIDTHS
+                .iter()
+                .map(|w| {
+                    Ok((
+                        *w,
+                        timing(&format!("batched_forward_dynamics_derivatives/{w}"))?,
+                    ))
+                })
+                .collect::<Result<_, Error>>()?
+        } else {
+            Vec::new()
+        },
     })
 }
 
@@ -355,7 +445,10 @@ pub fn op_totals(g: &Generated) -> [Option<usize>; 3] {
 /// "reps", "seed", "target_cpu_native", "fma"}`; with `--batch` also
 /// `"batched_forward_dynamics_ns"` (the median ns per state of the fastest
 /// pack width), `"batched_width"` (that width) and
-/// `"batched_forward_dynamics_ns_by_width"`.
+/// `"batched_forward_dynamics_ns_by_width"`, and with `--derivatives` as
+/// well `"batched_forward_dynamics_derivatives_ns"`,
+/// `"batched_derivatives_width"` and
+/// `"batched_forward_dynamics_derivatives_ns_by_width"`.
 pub fn json(g: &Generated, o: &PerCallOptions, r: &PerCall) -> serde_json::Value {
     let [fd, mm, id] = op_totals(g);
     let spread =
@@ -398,6 +491,17 @@ pub fn json(g: &Generated, o: &PerCallOptions, r: &PerCall) -> serde_json::Value
             .into();
         v["spread"]["batched_forward_dynamics"] = spread(&best);
     }
+    if let Some((w, best)) = r.best_batched_derivatives() {
+        v["batched_forward_dynamics_derivatives_ns"] = serde_json::json!(best.median);
+        v["batched_derivatives_width"] = serde_json::json!(w);
+        v["batched_forward_dynamics_derivatives_ns_by_width"] = r
+            .batched_derivatives
+            .iter()
+            .map(|(w, t)| (w.to_string(), serde_json::json!(t.median)))
+            .collect::<serde_json::Map<_, _>>()
+            .into();
+        v["spread"]["batched_forward_dynamics_derivatives"] = spread(&best);
+    }
     v
 }
 
@@ -434,30 +538,36 @@ pub fn table(g: &Generated, o: &PerCallOptions, r: &PerCall) -> String {
             derivative_ops,
         ),
     ];
-    for (f, t, n) in rows {
-        let Some(t) = t else { continue };
+    // One row: the function, its timing, its operations and their rate.
+    let row = |f: &str, t: &Timing, n: Option<usize>| {
         let (n, rate) = match n {
             Some(n) => (n.to_string(), format!("{:.2}", n as f64 / t.median)),
             None => ("-".into(), "-".into()),
         };
-        s += &format!(
+        format!(
             "  {f:<28} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {n:>8} {rate:>7}\n",
             t.median, t.q1, t.q3, t.min, t.max
-        );
+        )
+    };
+    for (f, t, n) in rows {
+        if let Some(t) = t {
+            s += &row(f, t, n);
+        }
     }
     for (w, t) in &r.batched {
-        let f = format!("forward_dynamics_lanes W={w}");
-        let (n, rate) = match ops[0] {
-            Some(n) => (n.to_string(), format!("{:.2}", n as f64 / t.median)),
-            None => ("-".into(), "-".into()),
-        };
-        s += &format!(
-            "  {f:<28} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {:>10.1} {n:>8} {rate:>7}\n",
-            t.median, t.q1, t.q3, t.min, t.max
-        );
+        s += &row(&format!("forward_dynamics_lanes W={w}"), t, ops[0]);
+    }
+    for (w, t) in &r.batched_derivatives {
+        s += &row(&format!("derivatives_lanes W={w}"), t, derivative_ops);
     }
     if let Some((w, _)) = r.best_batched() {
-        s += &format!("  batched rows: ns per state, {w} states per call the fastest\n");
+        let derivatives = r
+            .best_batched_derivatives()
+            .map(|(w, _)| format!(" ({w} for the derivatives)"))
+            .unwrap_or_default();
+        s += &format!(
+            "  batched rows: ns per state, {w} states per call the fastest{derivatives}\n"
+        );
     }
     s += &format!("  forward dynamics: {}\n", g.formulation.fd_form);
     if !sys.graph.cut_joints().is_empty() || !sys.constraints.is_empty() {

@@ -381,6 +381,50 @@ fn simulate_interpreted_and_compiled_agree() {
     }
 }
 
+/// `--batch --derivatives` times the batched derivatives beside the
+/// batched forward dynamics, per state at each of their pack widths.
+#[test]
+fn bench_batch_with_derivatives_reports_batched_derivatives() {
+    let out = cached(&[
+        "bench",
+        "models/pendulum.ron",
+        "--per-call",
+        "--derivatives",
+        "--batch",
+        "--states",
+        "16",
+        "--reps",
+        "3",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    let positive = |x: &serde_json::Value| x.as_f64().is_some_and(|x| x.is_finite() && x > 0.0);
+    for key in [
+        "forward_dynamics_derivatives_ns",
+        "batched_forward_dynamics_ns",
+        "batched_forward_dynamics_derivatives_ns",
+    ] {
+        assert!(positive(&v[key]), "{key} in {v}");
+    }
+    let by_width = &v["batched_forward_dynamics_derivatives_ns_by_width"];
+    assert!(positive(&by_width["4"]) && positive(&by_width["8"]), "{v}");
+    let w = v["batched_derivatives_width"].to_string();
+    assert!(
+        by_width[w.as_str()] == v["batched_forward_dynamics_derivatives_ns"],
+        "the reported width is the fastest: {v}"
+    );
+    let s = &v["spread"]["batched_forward_dynamics_derivatives"];
+    assert!(
+        s["min"].as_f64() <= s["max"].as_f64() && positive(&s["min"]),
+        "{v}"
+    );
+}
+
 #[test]
 fn bench_per_call_reports_positive_times_and_op_counts() {
     let run = cached;

@@ -59,7 +59,9 @@ pub struct BenchArgs {
     pub derivatives: bool,
     /// Also time the batched forward dynamics, `W` states per call in SIMD
     /// lanes for W = 2, 4, 8, 16 (`--per-call`; reported as
-    /// `batched_forward_dynamics_ns`, ns per state at the fastest width).
+    /// `batched_forward_dynamics_ns`, ns per state at the fastest width);
+    /// with `--derivatives` the batched derivatives too, W = 4, 8
+    /// (`batched_forward_dynamics_derivatives_ns`).
     #[arg(long)]
     pub batch: bool,
     /// Integrators to sweep, comma-separated (default rk4,dopri5,dop853,radau5).
