@@ -1,8 +1,8 @@
 //! `W` values of `f64` treated as one: the lane type of eom's ANCF element
 //! kernels (`eom-elements`) and of the batched functions of generated
 //! models (`NAME_lanes`, a pack of `W` states per call). Every operation
-//! is lane-wise on a fixed-size array; where `W` is a multiple of 8 or 4
-//! the arithmetic runs in chunks of `wide`'s `f64x8` or `f64x4`, explicit
+//! is lane-wise on a fixed-size array; in optimised builds, where `W` is a
+//! multiple of 8 or 4, the arithmetic runs in chunks of `wide`'s `f64x8` or `f64x4`, explicit
 //! vectors that LLVM keeps whole (one `zmm` or `ymm` instruction an
 //! operation where the target has them, pairs of narrower ones where not),
 //! instead of arrays its SLP vectoriser must find again in every function,

@@ -157,7 +157,26 @@ pub struct Dest<'a> {
     pub ty: TokenStream,
     /// The statements that store output `k` with value `v` (an identifier,
     /// a constant or an input).
-    pub assign: &'a dyn Fn(usize, &TokenStream) -> TokenStream,
+    pub assign: Store<'a>,
+}
+
+/// The statements that store output `k` with value `v`, for [`Dest`].
+pub type Store<'a> = Box<dyn Fn(usize, &TokenStream) -> TokenStream + 'a>;
+
+impl Dest<'_> {
+    /// The flat output array `name: &mut [f64; len]`, output `k` stored to
+    /// `name[k]`.
+    pub fn flat(name: &Ident, len: usize) -> Dest<'static> {
+        let (out, len_lit) = (name.clone(), Literal::usize_unsuffixed(len));
+        Dest {
+            name: name.clone(),
+            ty: quote!(&mut [f64; #len_lit]),
+            assign: Box::new(move |k, v| {
+                let k = Literal::usize_unsuffixed(k);
+                quote!(#out[#k] = #v;)
+            }),
+        }
+    }
 }
 
 impl Lowered {

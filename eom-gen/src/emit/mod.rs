@@ -365,14 +365,6 @@ pub fn emit_tokens(
         });
         quote!(#(#items)*)
     };
-    // Stores `out[k] = value;` into a flat output array, for `lower_into`.
-    let flat = |out: &Ident| {
-        let out = out.clone();
-        move |k: usize, v: &TokenStream| {
-            let k = idx(k);
-            quote!(#out[#k] = #v;)
-        }
-    };
 
     // Long chains as loops, where chosen: these functions are not lowered
     // straight.
@@ -412,12 +404,7 @@ pub fn emit_tokens(
     let Some(qdot_program) = f.program(Function::Qdot) else {
         return quote!(::core::compile_error!("eom-gen: the formulation has no q̇ program"););
     };
-    let store = flat(&qdot_out);
-    let dest = lower::Dest {
-        name: qdot_out.clone(),
-        ty: quote!(&mut [f64; #nq_l]),
-        assign: &store,
-    };
+    let dest = lower::Dest::flat(&qdot_out, nq);
     let l = lower::lower_into(
         &style,
         qdot_program,
@@ -440,12 +427,7 @@ pub fn emit_tokens(
         .filter(|_| fd_loop.is_none());
     let fd_fn = fd_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
-        let store = flat(&udot_out);
-        let dest = lower::Dest {
-            name: udot_out.clone(),
-            ty: quote!(&mut [f64; #nu_l]),
-            assign: &store,
-        };
+        let dest = lower::Dest::flat(&udot_out, nu);
         let limit = lower::part_limit(&style, p, true);
         let l = lower::lower_into(&style, p, "forward_dynamics", &args, limit, &dest);
         parts.extend(l.parts.clone());
@@ -473,7 +455,7 @@ pub fn emit_tokens(
         // stored to both triangles.
         let lower_triangle: Vec<(usize, usize)> =
             (0..nu).flat_map(|i| (0..=i).map(move |j| (i, j))).collect();
-        let store = |k: usize, v: &TokenStream| {
+        let store = move |k: usize, v: &TokenStream| {
             let (i, j) = lower_triangle[k];
             let (il, jl) = (idx(i), idx(j));
             if i == j {
@@ -485,7 +467,7 @@ pub fn emit_tokens(
         let dest = lower::Dest {
             name: m_out.clone(),
             ty: quote!(&mut [[f64; #nu_l]; #nu_l]),
-            assign: &store,
+            assign: Box::new(store),
         };
         let l = lower::lower_into(&style, p, "mass_matrix", &args, lower::PART_LIMIT, &dest);
         parts.extend(l.parts.clone());
@@ -501,12 +483,7 @@ pub fn emit_tokens(
     let bias_straight = f.program(Function::Bias).filter(|_| bias_loop.is_none());
     let bias_fn = bias_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
-        let store = flat(&b_out);
-        let dest = lower::Dest {
-            name: b_out.clone(),
-            ty: quote!(&mut [f64; #nu_l]),
-            assign: &store,
-        };
+        let dest = lower::Dest::flat(&b_out, nu);
         let l = lower::lower_into(&style, p, "bias", &args, lower::PART_LIMIT, &dest);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
@@ -523,12 +500,7 @@ pub fn emit_tokens(
         .filter(|_| id_loop.is_none());
     let id_fn = id_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
-        let store = flat(&tau_out);
-        let dest = lower::Dest {
-            name: tau_out.clone(),
-            ty: quote!(&mut [f64; #nu_l]),
-            assign: &store,
-        };
+        let dest = lower::Dest::flat(&tau_out, nu);
         let limit = lower::part_limit(&style, p, true);
         let l = lower::lower_into(&style, p, "inverse_dynamics", &args, limit, &dest);
         parts.extend(l.parts.clone());
@@ -745,12 +717,7 @@ pub fn emit_tokens(
         let limit = lower::part_limit(&style, p, derivatives);
         let out = out_arg("out", p.outputs.len());
         let len = idx(p.outputs.len());
-        let store = flat(&out);
-        let dest = lower::Dest {
-            name: out.clone(),
-            ty: quote!(&mut [f64; #len]),
-            assign: &store,
-        };
+        let dest = lower::Dest::flat(&out, p.outputs.len());
         let l = lower::lower_into(&style, p, e.name, &args, limit, &dest);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
