@@ -511,7 +511,7 @@ fn allocate_slots(
 /// Lowers `p` for a function called `name` with arguments `args`, in
 /// parts of at most [`PART_LIMIT`] instructions.
 pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowered {
-    lower_parts(b, p, name, args, PART_LIMIT, None)
+    lower_parts(b, p, name, args, PART_LIMIT, None, Schedule::Late)
 }
 
 /// [`lower`] in parts of at most `limit` instructions ([`part_limit`]),
@@ -528,7 +528,32 @@ pub fn lower_into(
     limit: usize,
     dest: &Dest<'_>,
 ) -> Lowered {
-    lower_parts(b, p, name, args, limit, Some(dest))
+    lower_parts(b, p, name, args, limit, Some(dest), Schedule::Late)
+}
+
+/// The order of the instructions of a function written whole, one state
+/// at a time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Schedule {
+    /// As late as their readers allow ([`Program::scheduled_late`]).
+    Late,
+    /// Depth first from the outputs ([`Program::scheduled_depth_first`])
+    /// where the function is longer than a block, else late.
+    DepthFirst,
+}
+
+/// [`lower_into`] with the instructions of a function written whole in
+/// the order `schedule`.
+pub fn lower_scheduled(
+    b: &Style<'_>,
+    p: &Program,
+    name: &str,
+    args: &[Arg<'_>],
+    limit: usize,
+    dest: &Dest<'_>,
+    schedule: Schedule,
+) -> Lowered {
+    lower_parts(b, p, name, args, limit, Some(dest), schedule)
 }
 
 fn lower_parts(
@@ -538,15 +563,23 @@ fn lower_parts(
     args: &[Arg<'_>],
     limit: usize,
     dest: Option<&Dest<'_>>,
+    schedule: Schedule,
 ) -> Lowered {
     // One state at a time, the code waits on latency: each instruction as
     // late as its readers allow keeps fewer values live (BENCHMARKS.md,
     // "Sums as trees"). Measured to pay in functions of one part only
     // (arm7's forward dynamics 182 → 169 ns; its derivatives, four parts,
     // 1050 → 1200 ns), and not in lanes, which are bound by throughput.
+    // A derivative function written whole in blocks spills most of all:
+    // depth first it keeps fewer values live (BENCHMARKS.md, "Depth-first
+    // order for the derivatives").
     let late;
     let p = if b.lanes.is_none() && p.instrs.len() <= limit {
-        late = p.scheduled_late(limit);
+        late = if schedule == Schedule::DepthFirst && p.instrs.len() > BLOCK_LIMIT {
+            p.scheduled_depth_first()
+        } else {
+            p.scheduled_late(limit)
+        };
         &late
     } else {
         p

@@ -718,7 +718,12 @@ pub fn emit_tokens(
         let out = out_arg("out", p.outputs.len());
         let len = idx(p.outputs.len());
         let dest = lower::Dest::flat(&out, p.outputs.len());
-        let l = lower::lower_into(&style, p, e.name, &args, limit, &dest);
+        let schedule = if derivatives {
+            lower::Schedule::DepthFirst
+        } else {
+            lower::Schedule::Late
+        };
+        let l = lower::lower_scheduled(&style, p, e.name, &args, limit, &dest, schedule);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         let n = format_ident!("{}", e.name);

@@ -49,3 +49,75 @@ impl Program {
         p
     }
 }
+
+impl Program {
+    /// The program with its instructions in depth-first order from the
+    /// outputs: each output's instructions written just before it, every
+    /// instruction right after its operands, the operand on the longer
+    /// path from the inputs first (Sethi and Ullman's order for trees), a
+    /// value shared by later outputs where it is first needed; the
+    /// temporaries renumbered in the new order. The values are those of
+    /// `self`, bit for bit.
+    ///
+    /// Where [`Program::scheduled_late`] shortens the wait on latency, this
+    /// order keeps fewer values live at once, which is what a long
+    /// function that spills needs: its spills and reloads are most of its
+    /// machine code (arm7's derivatives, 57 KB, 39 % of the instructions
+    /// `vmovsd`), and code longer than the instruction cache is fetched
+    /// again on every call (BENCHMARKS.md, "Depth-first order for the
+    /// derivatives").
+    pub fn scheduled_depth_first(&self) -> Program {
+        let n = self.instrs.len();
+        let mut def_at = vec![usize::MAX; self.n_tmps as usize + 1];
+        for (k, ins) in self.instrs.iter().enumerate() {
+            for r in 0..ins.op.results() {
+                def_at[ins.dst as usize + r as usize] = k;
+            }
+        }
+        let operand_defs = |k: usize| {
+            self.instrs[k]
+                .op
+                .operands()
+                .filter_map(|o| match o {
+                    Operand::Tmp(t) => def_at.get(t as usize).copied().filter(|&d| d < n),
+                    _ => None,
+                })
+                .collect::<Vec<usize>>()
+        };
+        // Longest path from the inputs to each instruction.
+        let mut depth = vec![0u32; n];
+        for k in 0..n {
+            depth[k] = 1 + operand_defs(k).iter().map(|&d| depth[d]).max().unwrap_or(0);
+        }
+        let mut done = vec![false; n];
+        let mut order = Vec::with_capacity(n);
+        let roots = self.outputs.iter().filter_map(|(_, o)| match o {
+            Operand::Tmp(t) => def_at.get(*t as usize).copied().filter(|&d| d < n),
+            _ => None,
+        });
+        let mut stack: Vec<(usize, bool)> = Vec::new();
+        for root in roots {
+            stack.push((root, false));
+            while let Some((k, expanded)) = stack.pop() {
+                if done[k] {
+                    continue;
+                }
+                if expanded {
+                    done[k] = true;
+                    order.push(k);
+                    continue;
+                }
+                stack.push((k, true));
+                let mut ops = operand_defs(k);
+                ops.retain(|&d| !done[d]);
+                // The deeper operand is pushed last, so written first.
+                ops.sort_by_key(|&d| depth[d]);
+                stack.extend(ops.into_iter().map(|d| (d, false)));
+            }
+        }
+        let mut p = self.clone();
+        p.instrs = order.into_iter().map(|k| self.instrs[k]).collect();
+        p.remove_dead();
+        p
+    }
+}
