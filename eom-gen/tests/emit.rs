@@ -81,6 +81,39 @@ fn arm7s_derivatives_are_one_function_in_blocks() {
     );
 }
 
+/// The spatial 10-link chain's forward-dynamics derivatives (≈ 9 700
+/// instructions, more than forward dynamics may have written whole) are
+/// one function one state at a time, depth first in blocks (BENCHMARKS.md
+/// "Depth-first order for the derivatives"), nested no deeper than a block.
+#[test]
+fn long_derivatives_are_one_function_in_blocks() {
+    use eom_gen::functions::{Function, FunctionSet};
+    let text = eom_gen::model::builder::n_link_chain(10, true).to_ron();
+    let sys = eom_gen::model::check(&Source::new("chain10.ron", text.clone()))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let f = eom_gen::mech::formulate(
+        &sys,
+        FunctionSet::default().with(Function::ForwardDynamicsDerivatives),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let len = f
+        .program(Function::ForwardDynamicsDerivatives)
+        .map_or(0, |p| p.instrs.len());
+    assert!(
+        len > eom_gen::emit::ONE_PART_LIMIT && len <= eom_gen::emit::DERIVATIVES_ONE_PART_LIMIT,
+        "{len} instructions"
+    );
+    let source = eom_gen::emit::emit_with(&sys, &f, &text, &eom_gen::EmitOptions::default());
+    assert!(source.contains("fn forward_dynamics_derivatives("));
+    assert!(!source.contains("fn forward_dynamics_derivatives_part"));
+    let (deepest, _) = eom_gen::testkit::deepest_lets(&source);
+    assert!(
+        deepest <= eom_gen::emit::BLOCK_LIMIT + 1,
+        "{deepest} nested `let`s"
+    );
+}
+
 /// The spatial 20-link chain's forward and inverse dynamics (5 618 and
 /// 2 924 instructions) are each one late-scheduled function one state at a
 /// time, in blocks (BENCHMARKS.md "One function or parts": the inverse

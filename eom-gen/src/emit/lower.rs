@@ -26,8 +26,8 @@ pub const PART_LIMIT: usize = 1500;
 
 /// The longest program written as one part, late-scheduled, when
 /// evaluated one state at a time, for the functions that gain from it
-/// (forward and inverse dynamics and their derivatives; see
-/// [`part_limit`]). Measured (BENCHMARKS.md, "One function or parts"):
+/// (forward and inverse dynamics; their derivatives up to
+/// [`DERIVATIVES_ONE_PART_LIMIT`]; see [`part_limit`]). Measured (BENCHMARKS.md, "One function or parts"):
 /// panda's inverse dynamics (1 517 instructions) about 20 % faster whole
 /// than in two parts, its forward dynamics (2 285) about 8 %; arm7's
 /// forward-dynamics derivatives (6 081) 4 % faster whole in blocks than in
@@ -41,6 +41,15 @@ pub const PART_LIMIT: usize = 1500;
 /// blocks of at most [`BLOCK_LIMIT`] instructions, each its own scope.
 pub const ONE_PART_LIMIT: usize = 6500;
 
+/// The longest derivative program written as one function (in blocks,
+/// depth first: [`Schedule::DepthFirst`]) one state at a time. Measured
+/// (BENCHMARKS.md, "Depth-first order for the derivatives"), each timing
+/// binary in three copies so that the placement of its code in memory
+/// varies: panda's derivatives (≈ 8 800 instructions) 1 466–1 594 ns whole
+/// against 1 748–2 742 in six parts, the spatial 10-link chain's
+/// (≈ 9 700) 1 684–1 806 against 1 732–2 021.
+pub const DERIVATIVES_ONE_PART_LIMIT: usize = 10_000;
+
 /// The most instructions of a function written whole between two block
 /// boundaries: a function longer than this is written as blocks `{ … }`
 /// in sequence, values that cross a block kept in a local array (which
@@ -49,12 +58,14 @@ pub const ONE_PART_LIMIT: usize = 6500;
 pub const BLOCK_LIMIT: usize = PART_LIMIT;
 
 /// The part limit of program `p` written in style `b`: [`PART_LIMIT`],
-/// but for a program of a function that gains from one part (`whole`:
-/// forward and inverse dynamics and their derivatives) evaluated one
-/// state at a time that fits in [`ONE_PART_LIMIT`]. The mass matrix
-/// stays in parts: talos' (2 993 instructions) was 15 % slower in one.
-pub fn part_limit(b: &Style<'_>, p: &Program, whole: bool) -> usize {
-    if whole && b.lanes.is_none() && p.instrs.len() <= ONE_PART_LIMIT {
+/// but for a program of a function that gains from one part evaluated one
+/// state at a time that has at most `whole` instructions
+/// ([`ONE_PART_LIMIT`] for forward and inverse dynamics,
+/// [`DERIVATIVES_ONE_PART_LIMIT`] for their derivatives, 0 for the rest).
+/// The mass matrix stays in parts: talos' (2 993 instructions) was 15 %
+/// slower in one.
+pub fn part_limit(b: &Style<'_>, p: &Program, whole: usize) -> usize {
+    if b.lanes.is_none() && p.instrs.len() <= whole {
         p.instrs.len().max(PART_LIMIT)
     } else {
         PART_LIMIT

@@ -26,7 +26,7 @@ pub(crate) mod lower;
 mod names;
 use crate::system::{Motion, System};
 pub use loops::LoopChoice;
-pub use lower::{BLOCK_LIMIT, ONE_PART_LIMIT, PART_LIMIT};
+pub use lower::{BLOCK_LIMIT, DERIVATIVES_ONE_PART_LIMIT, ONE_PART_LIMIT, PART_LIMIT};
 pub use names::{field_names, is_keyword, type_name};
 use proc_macro2::{Ident, Literal, Span, TokenStream};
 use quote::{format_ident, quote};
@@ -428,7 +428,7 @@ pub fn emit_tokens(
     let fd_fn = fd_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
         let dest = lower::Dest::flat(&udot_out, nu);
-        let limit = lower::part_limit(&style, p, true);
+        let limit = lower::part_limit(&style, p, ONE_PART_LIMIT);
         let l = lower::lower_into(&style, p, "forward_dynamics", &args, limit, &dest);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
@@ -501,7 +501,7 @@ pub fn emit_tokens(
     let id_fn = id_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
         let dest = lower::Dest::flat(&tau_out, nu);
-        let limit = lower::part_limit(&style, p, true);
+        let limit = lower::part_limit(&style, p, ONE_PART_LIMIT);
         let l = lower::lower_into(&style, p, "inverse_dynamics", &args, limit, &dest);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
@@ -714,7 +714,12 @@ pub fn emit_tokens(
             e.function,
             Function::ForwardDynamicsDerivatives | Function::InverseDynamicsDerivatives
         );
-        let limit = lower::part_limit(&style, p, derivatives);
+        let whole = if derivatives {
+            lower::DERIVATIVES_ONE_PART_LIMIT
+        } else {
+            0
+        };
+        let limit = lower::part_limit(&style, p, whole);
         let out = out_arg("out", p.outputs.len());
         let len = idx(p.outputs.len());
         let dest = lower::Dest::flat(&out, p.outputs.len());
