@@ -2,7 +2,32 @@
 //! committed `generated/` crate pins every other model (see the root
 //! `tests/generated.rs`, which also compiles and runs it).
 
+use eom_gen::functions::{Function, FunctionSet};
 use eom_gen::{Source, generate};
+
+/// The checked system of the model `text` (named `name`) and its
+/// formulation of `request`.
+fn formulated(
+    name: &str,
+    text: &str,
+    request: FunctionSet,
+) -> (eom_gen::System, eom_gen::mech::Formulation) {
+    let sys = eom_gen::model::check(&Source::new(name, text.to_string()))
+        .unwrap_or_else(|r| panic!("{r}"))
+        .system;
+    let f = eom_gen::mech::formulate(&sys, request).unwrap_or_else(|e| panic!("{e}"));
+    (sys, f)
+}
+
+/// No `let` of `source` is nested deeper than a block (rustc overflows its
+/// stack on about 2 950 nested `let`s with debug info).
+fn assert_nested_no_deeper_than_a_block(source: &str) {
+    let (deepest, _) = eom_gen::testkit::deepest_lets(source);
+    assert!(
+        deepest <= eom_gen::emit::BLOCK_LIMIT + 1,
+        "{deepest} nested `let`s"
+    );
+}
 
 #[test]
 fn pendulum_source_is_pinned() {
@@ -48,17 +73,10 @@ fn arm7_source_is_pinned() {
 /// bound by throughput, keeps its parts.
 #[test]
 fn arm7s_derivatives_are_one_function_in_blocks() {
-    use eom_gen::functions::{Function, FunctionSet};
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/arm7.ron");
     let text = std::fs::read_to_string(path).unwrap_or_default();
-    let sys = eom_gen::model::check(&Source::new("models/arm7.ron", text.clone()))
-        .unwrap_or_else(|r| panic!("{r}"))
-        .system;
-    let f = eom_gen::mech::formulate(
-        &sys,
-        FunctionSet::default().with(Function::ForwardDynamicsDerivatives),
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let request = FunctionSet::default().with(Function::ForwardDynamicsDerivatives);
+    let (sys, f) = formulated("models/arm7.ron", &text, request);
     let len = f
         .program(Function::ForwardDynamicsDerivatives)
         .map_or(0, |p| p.instrs.len());
@@ -74,11 +92,7 @@ fn arm7s_derivatives_are_one_function_in_blocks() {
     assert!(source.contains("fn forward_dynamics_derivatives("));
     assert!(!source.contains("fn forward_dynamics_derivatives_part"));
     assert!(source.contains("fn forward_dynamics_derivatives_lanes_part0"));
-    let (deepest, _) = eom_gen::testkit::deepest_lets(&source);
-    assert!(
-        deepest <= eom_gen::emit::BLOCK_LIMIT + 1,
-        "{deepest} nested `let`s"
-    );
+    assert_nested_no_deeper_than_a_block(&source);
 }
 
 /// The spatial 10-link chain's forward-dynamics derivatives (≈ 9 700
@@ -87,16 +101,9 @@ fn arm7s_derivatives_are_one_function_in_blocks() {
 /// "Depth-first order for the derivatives"), nested no deeper than a block.
 #[test]
 fn long_derivatives_are_one_function_in_blocks() {
-    use eom_gen::functions::{Function, FunctionSet};
     let text = eom_gen::model::builder::n_link_chain(10, true).to_ron();
-    let sys = eom_gen::model::check(&Source::new("chain10.ron", text.clone()))
-        .unwrap_or_else(|r| panic!("{r}"))
-        .system;
-    let f = eom_gen::mech::formulate(
-        &sys,
-        FunctionSet::default().with(Function::ForwardDynamicsDerivatives),
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let request = FunctionSet::default().with(Function::ForwardDynamicsDerivatives);
+    let (sys, f) = formulated("chain10.ron", &text, request);
     let len = f
         .program(Function::ForwardDynamicsDerivatives)
         .map_or(0, |p| p.instrs.len());
@@ -107,11 +114,7 @@ fn long_derivatives_are_one_function_in_blocks() {
     let source = eom_gen::emit::emit_with(&sys, &f, &text, &eom_gen::EmitOptions::default());
     assert!(source.contains("fn forward_dynamics_derivatives("));
     assert!(!source.contains("fn forward_dynamics_derivatives_part"));
-    let (deepest, _) = eom_gen::testkit::deepest_lets(&source);
-    assert!(
-        deepest <= eom_gen::emit::BLOCK_LIMIT + 1,
-        "{deepest} nested `let`s"
-    );
+    assert_nested_no_deeper_than_a_block(&source);
 }
 
 /// The spatial 20-link chain's forward and inverse dynamics (5 618 and
@@ -122,14 +125,10 @@ fn long_derivatives_are_one_function_in_blocks() {
 /// versions.
 #[test]
 fn forward_and_inverse_dynamics_up_to_the_limit_are_one_function() {
-    use eom_gen::functions::{Function, FunctionSet};
     let text = eom_gen::model::builder::n_link_chain(20, true).to_ron();
-    let sys = eom_gen::model::check(&Source::new("chain20.ron", text.clone()))
-        .unwrap_or_else(|r| panic!("{r}"))
-        .system;
     // A model without a scene derives `M` from inverse dynamics; ask for it.
     let request = FunctionSet::all_requested().with(Function::MassMatrix);
-    let f = eom_gen::mech::formulate(&sys, request).unwrap_or_else(|e| panic!("{e}"));
+    let (sys, f) = formulated("chain20.ron", &text, request);
     for function in [
         Function::ForwardDynamics,
         Function::InverseDynamics,
@@ -162,11 +161,7 @@ fn forward_and_inverse_dynamics_up_to_the_limit_are_one_function() {
         source.contains("fn mass_matrix_part0"),
         "the mass matrix in parts"
     );
-    let (deepest, _) = eom_gen::testkit::deepest_lets(&source);
-    assert!(
-        deepest <= eom_gen::emit::BLOCK_LIMIT + 1,
-        "{deepest} nested `let`s"
-    );
+    assert_nested_no_deeper_than_a_block(&source);
 }
 
 /// One state at a time, a function in parts (the 20-link chain's mass
@@ -177,13 +172,9 @@ fn forward_and_inverse_dynamics_up_to_the_limit_are_one_function() {
 /// versions still pass outputs through it.
 #[test]
 fn outputs_are_stored_where_they_are_computed() {
-    use eom_gen::functions::{Function, FunctionSet};
     let text = eom_gen::model::builder::n_link_chain(20, true).to_ron();
-    let sys = eom_gen::model::check(&Source::new("chain20.ron", text.clone()))
-        .unwrap_or_else(|r| panic!("{r}"))
-        .system;
     let request = FunctionSet::all_requested().with(Function::MassMatrix);
-    let f = eom_gen::mech::formulate(&sys, request).unwrap_or_else(|e| panic!("{e}"));
+    let (sys, f) = formulated("chain20.ron", &text, request);
     let opts = eom_gen::EmitOptions {
         loops: eom_gen::LoopChoice::Never,
         ..Default::default()
