@@ -525,23 +525,6 @@ pub fn lower(b: &Style<'_>, p: &Program, name: &str, args: &[Arg<'_>]) -> Lowere
     lower_parts(b, p, name, args, PART_LIMIT, None, Schedule::Late)
 }
 
-/// [`lower`] in parts of at most `limit` instructions ([`part_limit`]),
-/// for a function whose outputs go to `dest`: every
-/// store of an output is in [`Lowered::body`] or [`Lowered::assign`] (in
-/// that order), a temporary's where it is defined when the function is in
-/// parts or blocks (one state at a time; lanes keep their outputs in the
-/// scratch array).
-pub fn lower_into(
-    b: &Style<'_>,
-    p: &Program,
-    name: &str,
-    args: &[Arg<'_>],
-    limit: usize,
-    dest: &Dest<'_>,
-) -> Lowered {
-    lower_parts(b, p, name, args, limit, Some(dest), Schedule::Late)
-}
-
 /// The order of the instructions of a function written whole, one state
 /// at a time.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -553,9 +536,14 @@ pub enum Schedule {
     DepthFirst,
 }
 
-/// [`lower_into`] with the instructions of a function written whole in
-/// the order `schedule`.
-pub fn lower_scheduled(
+/// [`lower`] in parts of at most `limit` instructions ([`part_limit`]),
+/// for a function whose outputs go to `dest`: every
+/// store of an output is in [`Lowered::body`] or [`Lowered::assign`] (in
+/// that order), a temporary's where it is defined when the function is in
+/// parts or blocks (one state at a time; lanes keep their outputs in the
+/// scratch array). A function written whole has its instructions in the
+/// order `schedule`.
+pub fn lower_into(
     b: &Style<'_>,
     p: &Program,
     name: &str,
@@ -584,14 +572,14 @@ fn lower_parts(
     // A derivative function written whole in blocks spills most of all:
     // depth first it keeps fewer values live (BENCHMARKS.md, "Depth-first
     // order for the derivatives").
-    let late;
+    let ordered;
     let p = if b.lanes.is_none() && p.instrs.len() <= limit {
-        late = if schedule == Schedule::DepthFirst && p.instrs.len() > BLOCK_LIMIT {
+        ordered = if schedule == Schedule::DepthFirst && p.instrs.len() > BLOCK_LIMIT {
             p.scheduled_depth_first()
         } else {
             p.scheduled_late(limit)
         };
-        &late
+        &ordered
     } else {
         p
     };

@@ -18,7 +18,7 @@
 use crate::functions::{Arg as FnArg, Function, Layout, TABLE};
 use crate::mech::Formulation;
 use crate::sym::{SymKind, Symbol};
-use lower::{Arg, Style, lower};
+use lower::{Arg, Schedule, Style, lower};
 
 mod batch;
 mod loops;
@@ -412,6 +412,7 @@ pub fn emit_tokens(
         &args,
         lower::PART_LIMIT,
         &dest,
+        Schedule::Late,
     );
     parts.extend(l.parts.clone());
     let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
@@ -429,7 +430,15 @@ pub fn emit_tokens(
         let args = [arg_t(), arg_q(), arg_u(), arg_tau()];
         let dest = lower::Dest::flat(&udot_out, nu);
         let limit = lower::part_limit(&style, p, ONE_PART_LIMIT);
-        let l = lower::lower_into(&style, p, "forward_dynamics", &args, limit, &dest);
+        let l = lower::lower_into(
+            &style,
+            p,
+            "forward_dynamics",
+            &args,
+            limit,
+            &dest,
+            Schedule::Late,
+        );
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         let doc = format!(
@@ -469,7 +478,15 @@ pub fn emit_tokens(
             ty: quote!(&mut [[f64; #nu_l]; #nu_l]),
             assign: Box::new(store),
         };
-        let l = lower::lower_into(&style, p, "mass_matrix", &args, lower::PART_LIMIT, &dest);
+        let l = lower::lower_into(
+            &style,
+            p,
+            "mass_matrix",
+            &args,
+            lower::PART_LIMIT,
+            &dest,
+            Schedule::Late,
+        );
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         quote! {
@@ -484,7 +501,15 @@ pub fn emit_tokens(
     let bias_fn = bias_straight.map(|p| {
         let args = [arg_t(), arg_q(), arg_u()];
         let dest = lower::Dest::flat(&b_out, nu);
-        let l = lower::lower_into(&style, p, "bias", &args, lower::PART_LIMIT, &dest);
+        let l = lower::lower_into(
+            &style,
+            p,
+            "bias",
+            &args,
+            lower::PART_LIMIT,
+            &dest,
+            Schedule::Late,
+        );
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         quote! {
@@ -502,7 +527,15 @@ pub fn emit_tokens(
         let args = [arg_t(), arg_q(), arg_u(), arg_udot()];
         let dest = lower::Dest::flat(&tau_out, nu);
         let limit = lower::part_limit(&style, p, ONE_PART_LIMIT);
-        let l = lower::lower_into(&style, p, "inverse_dynamics", &args, limit, &dest);
+        let l = lower::lower_into(
+            &style,
+            p,
+            "inverse_dynamics",
+            &args,
+            limit,
+            &dest,
+            Schedule::Late,
+        );
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         quote! {
@@ -714,21 +747,17 @@ pub fn emit_tokens(
             e.function,
             Function::ForwardDynamicsDerivatives | Function::InverseDynamicsDerivatives
         );
-        let whole = if derivatives {
-            lower::DERIVATIVES_ONE_PART_LIMIT
+        // Derivatives up to their own limit are one function, depth first.
+        let (whole, schedule) = if derivatives {
+            (DERIVATIVES_ONE_PART_LIMIT, Schedule::DepthFirst)
         } else {
-            0
+            (0, Schedule::Late)
         };
         let limit = lower::part_limit(&style, p, whole);
         let out = out_arg("out", p.outputs.len());
         let len = idx(p.outputs.len());
         let dest = lower::Dest::flat(&out, p.outputs.len());
-        let schedule = if derivatives {
-            lower::Schedule::DepthFirst
-        } else {
-            lower::Schedule::Late
-        };
-        let l = lower::lower_scheduled(&style, p, e.name, &args, limit, &dest, schedule);
+        let l = lower::lower_into(&style, p, e.name, &args, limit, &dest, schedule);
         parts.extend(l.parts.clone());
         let (params, body, assign) = (l.params(&args), &l.body, &l.assign);
         let n = format_ident!("{}", e.name);

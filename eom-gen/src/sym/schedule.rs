@@ -20,11 +20,7 @@ impl Program {
     /// one part to another. The values are those of `self`, bit for bit.
     pub fn scheduled_late(&self, window: usize) -> Program {
         let n = self.instrs.len();
-        let mut def_at = vec![usize::MAX; self.n_tmps as usize + 2];
-        for (k, ins) in self.instrs.iter().enumerate() {
-            def_at[ins.dst as usize] = k;
-            def_at[ins.dst as usize + 1] = k;
-        }
+        let def_at = self.definitions();
         // Longest path from each instruction to the end, itself included.
         let mut height = vec![0u32; n];
         for k in (0..n).rev() {
@@ -48,9 +44,19 @@ impl Program {
         p.remove_dead();
         p
     }
-}
 
-impl Program {
+    /// The instruction that defines each temporary (`usize::MAX` for a
+    /// number no instruction defines).
+    fn definitions(&self) -> Vec<usize> {
+        let mut def_at = vec![usize::MAX; self.n_tmps as usize + 1];
+        for (k, ins) in self.instrs.iter().enumerate() {
+            for r in 0..ins.op.results() {
+                def_at[ins.dst as usize + r as usize] = k;
+            }
+        }
+        def_at
+    }
+
     /// The program with its instructions in depth-first order from the
     /// outputs: each output's instructions written just before it, every
     /// instruction right after its operands, the operand on the longer
@@ -68,20 +74,17 @@ impl Program {
     /// derivatives").
     pub fn scheduled_depth_first(&self) -> Program {
         let n = self.instrs.len();
-        let mut def_at = vec![usize::MAX; self.n_tmps as usize + 1];
-        for (k, ins) in self.instrs.iter().enumerate() {
-            for r in 0..ins.op.results() {
-                def_at[ins.dst as usize + r as usize] = k;
-            }
-        }
+        let def_at = self.definitions();
+        // The instruction defining a temporary operand.
+        let def = |o: Operand| match o {
+            Operand::Tmp(t) => def_at.get(t as usize).copied().filter(|&d| d < n),
+            _ => None,
+        };
         let operand_defs = |k: usize| {
             self.instrs[k]
                 .op
                 .operands()
-                .filter_map(|o| match o {
-                    Operand::Tmp(t) => def_at.get(t as usize).copied().filter(|&d| d < n),
-                    _ => None,
-                })
+                .filter_map(def)
                 .collect::<Vec<usize>>()
         };
         // Longest path from the inputs to each instruction.
@@ -91,10 +94,7 @@ impl Program {
         }
         let mut done = vec![false; n];
         let mut order = Vec::with_capacity(n);
-        let roots = self.outputs.iter().filter_map(|(_, o)| match o {
-            Operand::Tmp(t) => def_at.get(*t as usize).copied().filter(|&d| d < n),
-            _ => None,
-        });
+        let roots = self.outputs.iter().filter_map(|&(_, o)| def(o));
         let mut stack: Vec<(usize, bool)> = Vec::new();
         for root in roots {
             stack.push((root, false));
