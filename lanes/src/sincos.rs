@@ -3,7 +3,9 @@
 //! in four parts (the constants of fdlibm's `__rem_pio2`, whose medium
 //! path needs at most three rounds; here every lane takes all of them,
 //! with exact error terms, good to 151 bits), the quadrant chosen by bit
-//! operations.
+//! operations. Where the build targets FMA the kernels' polynomials run as
+//! fused multiply-adds (one rounding each; arm7's eight-lane forward
+//! dynamics 2 893 → 2 845 instructions), else as fdlibm writes them.
 //! Within 1 ulp of the C library for `|x| < 10⁶`; lanes outside that range
 //! (and non-finite ones) are computed by `f64::sin_cos`, so the whole
 //! range is covered (`tests/sincos.rs`).
@@ -51,14 +53,27 @@ fn two_diff(a: f64, b: f64) -> (f64, f64) {
     two_sum(a, -b)
 }
 
+/// `a · b + c`: one fused multiply-add where the target has FMA (one
+/// rounding, and one instruction instead of two), else the product and
+/// the sum rounded separately as fdlibm writes them (`f64::mul_add`
+/// without FMA is a library call).
+#[inline(always)]
+fn fma(a: f64, b: f64, c: f64) -> f64 {
+    if cfg!(target_feature = "fma") {
+        a.mul_add(b, c)
+    } else {
+        a * b + c
+    }
+}
+
 /// `sin(x + y)` for `|x + y| ≤ π/4`, `y` the tail of the reduced argument.
 #[inline(always)]
 fn kernel_sin(x: f64, y: f64) -> f64 {
     let z = x * x;
     let w = z * z;
-    let r = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
+    let r = fma(z * w, fma(z, S6, S5), fma(z, fma(z, S4, S3), S2));
     let v = z * x;
-    x - ((z * (0.5 * y - v * r) - y) - v * S1)
+    x - fma(-v, S1, fma(z, fma(-v, r, 0.5 * y), -y))
 }
 
 /// `cos(x + y)` for `|x + y| ≤ π/4`.
@@ -66,10 +81,14 @@ fn kernel_sin(x: f64, y: f64) -> f64 {
 fn kernel_cos(x: f64, y: f64) -> f64 {
     let z = x * x;
     let w = z * z;
-    let r = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
+    let r = fma(
+        w * w,
+        fma(z, fma(z, C6, C5), C4),
+        z * fma(z, fma(z, C3, C2), C1),
+    );
     let hz = 0.5 * z;
     let w = 1.0 - hz;
-    w + (((1.0 - w) - hz) + (z * r - x * y))
+    w + (((1.0 - w) - hz) + fma(z, r, -(x * y)))
 }
 
 /// `(sin x, cos x)` for `|x| < REDUCTION_LIMIT`, without branches (the
