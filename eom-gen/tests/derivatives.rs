@@ -543,9 +543,10 @@ fn check_forms_agree(
     }
 }
 
-/// The recursion in body axes gives the numbers of the recursion in world
-/// axes (to 1e-9 of each block's largest entry) and of central
-/// differences of the `f64` forward dynamics, at random states: arm7 (a
+/// The recursion in body axes, with its pairs in common axes and along the
+/// tree's paths, gives the numbers of the recursion in world axes (to 1e-9
+/// of each block's largest entry) and of central differences of the `f64`
+/// forward dynamics, at random states: arm7 (a
 /// chain of revolute joints about various axes), heavy_top and free_body
 /// (a spherical and a free joint, quaternion coordinates), slider_crank
 /// (a prismatic joint, springs; as its spanning tree).
@@ -566,10 +567,14 @@ fn body_axis_recursion_equals_world_axis_and_differences() {
             }
             .unwrap_or_else(|| panic!("{name}: no {d} form"))
         };
-        let (world, body) = (
-            form(DerivativeForm::Recursive),
-            form(DerivativeForm::RecursiveBodyAxes),
-        );
+        let world = form(DerivativeForm::Recursive);
+        let body_forms = [
+            ("body axes", form(DerivativeForm::RecursiveBodyAxes)),
+            (
+                "pairs along the paths",
+                form(DerivativeForm::RecursivePaths),
+            ),
+        ];
         let (nu, ni) = (sys.nu(), sys.inputs.len());
         for _ in 0..2 {
             let (q, u) = random_state(&sys, &mut rng);
@@ -580,25 +585,30 @@ fn body_axis_recursion_equals_world_axis_and_differences() {
                 t: rng.uniform().abs(),
                 ..point(&sys, &q, &u, &tau)
             };
-            let (want, got) = (program_blocks(world, &x), program_blocks(body, &x));
-            for (block, w, g) in [
-                ("∂u̇/∂q", &want.dq, &got.dq),
-                ("∂u̇/∂u", &want.du, &got.du),
-                ("∂u̇/∂τ", &want.dtau, &got.dtau),
-                ("∂u̇/∂inputs", &want.dinput, &got.dinput),
-            ] {
-                let scale = w.iter().flatten().fold(1.0f64, |s, x| s.max(x.abs()));
-                for (i, (wr, gr)) in w.iter().zip(g).enumerate() {
-                    for (j, (a, b)) in wr.iter().zip(gr).enumerate() {
-                        assert!(
-                            (a - b).abs() <= 1e-9 * scale,
-                            "{name} {block}[{i}][{j}] at q = {q:?}, u = {u:?}: body axes {b}, world axes {a}"
-                        );
+            let want = program_blocks(world, &x);
+            for (label, body) in body_forms {
+                let got = program_blocks(body, &x);
+                for (block, w, g) in [
+                    ("∂u̇/∂q", &want.dq, &got.dq),
+                    ("∂u̇/∂u", &want.du, &got.du),
+                    ("∂u̇/∂τ", &want.dtau, &got.dtau),
+                    ("∂u̇/∂inputs", &want.dinput, &got.dinput),
+                ] {
+                    let scale = w.iter().flatten().fold(1.0f64, |s, x| s.max(x.abs()));
+                    for (i, (wr, gr)) in w.iter().zip(g).enumerate() {
+                        for (j, (a, b)) in wr.iter().zip(gr).enumerate() {
+                            assert!(
+                                (a - b).abs() <= 1e-9 * scale,
+                                "{name} {block}[{i}][{j}] at q = {q:?}, u = {u:?}: {label} {b}, world axes {a}"
+                            );
+                        }
                     }
                 }
             }
         }
-        program_against_differences(name, &sys, body, &mut rng, 2);
+        for (_, body) in body_forms {
+            program_against_differences(name, &sys, body, &mut rng, 2);
+        }
     }
 }
 

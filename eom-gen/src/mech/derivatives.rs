@@ -67,6 +67,9 @@ pub enum DerivativeForm {
     /// The same recursion in body axes, where inertias are constant and
     /// subspace columns unit axes ([`super::rnea_derivatives::Axes::Body`]).
     RecursiveBodyAxes,
+    /// The recursion in body axes with the pairs along the tree's paths
+    /// ([`super::rnea_derivatives::Axes::Paths`]).
+    RecursivePaths,
 }
 
 /// How `inverse_dynamics_derivatives` was generated: the formulation
@@ -80,6 +83,8 @@ pub enum IdDerivativeForm {
     Recursive,
     /// The same recursion in body axes.
     RecursiveBodyAxes,
+    /// The recursion in body axes, the pairs along the tree's paths.
+    RecursivePaths,
 }
 
 impl fmt::Display for IdDerivativeForm {
@@ -88,6 +93,9 @@ impl fmt::Display for IdDerivativeForm {
             IdDerivativeForm::Differentiated => "differentiated RNEA",
             IdDerivativeForm::Recursive => "RNEA derivatives by recursion",
             IdDerivativeForm::RecursiveBodyAxes => "RNEA derivatives by recursion in body axes",
+            IdDerivativeForm::RecursivePaths => {
+                "RNEA derivatives by recursion in body axes, pairs along the paths"
+            }
         })
     }
 }
@@ -100,6 +108,9 @@ impl fmt::Display for DerivativeForm {
             DerivativeForm::Recursive => "−M⁻¹ ∂ID/∂x (RNEA derivatives by recursion)",
             DerivativeForm::RecursiveBodyAxes => {
                 "−M⁻¹ ∂ID/∂x (RNEA derivatives by recursion in body axes)"
+            }
+            DerivativeForm::RecursivePaths => {
+                "−M⁻¹ ∂ID/∂x (RNEA derivatives by recursion in body axes, pairs along the paths)"
             }
         })
     }

@@ -559,6 +559,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
             for (form, axes) in [
                 (DerivativeForm::Recursive, Axes::World),
                 (DerivativeForm::RecursiveBodyAxes, Axes::Body),
+                (DerivativeForm::RecursivePaths, Axes::Paths),
             ] {
                 if let Some(p) = recursive(axes) {
                     programs.push((form, p));
@@ -589,6 +590,7 @@ pub fn formulate(sys: &System, request: FunctionSet) -> Result<Formulation, Form
                 for (form, axes) in [
                     (IdDerivativeForm::Recursive, Axes::World),
                     (IdDerivativeForm::RecursiveBodyAxes, Axes::Body),
+                    (IdDerivativeForm::RecursivePaths, Axes::Paths),
                 ] {
                     if let Some(rd) = ev.rnea_derivatives(&k, &ud, axes) {
                         let p = inverse_dynamics_derivatives_recursive(

@@ -97,6 +97,16 @@ pub enum Axes {
     /// axes; each column's terms brought to common axes once (a single
     /// root body's, else the world's).
     Body,
+    /// Body axes throughout, no common axes: for the pairs, each column's
+    /// force terms (`P`, `Q`, and the ancestor terms) are carried joint by
+    /// joint up its path to the root, and every pair is taken in the axes
+    /// of the shallower body, where that column's motion terms are still
+    /// sparse (a unit axis `s`, `w` and `β` with four entries) and the
+    /// shallower row's `S_i ·` of the ancestor terms picks one entry.
+    /// Four force transforms per column and ancestor, each by a joint's
+    /// own pose (a rotation about one axis and an offset), instead of eight
+    /// dense transforms per column and dense dot products.
+    Paths,
 }
 
 /// The terms of one free column `j` of the recursion (rows are the same
@@ -236,7 +246,8 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         }
         Some(match axes {
             Axes::World => self.rnea_derivatives_world_axes(k, ud),
-            Axes::Body => self.rnea_derivatives_body_axes(k, ud),
+            Axes::Body => self.rnea_derivatives_body_axes(k, ud, false),
+            Axes::Paths => self.rnea_derivatives_body_axes(k, ud, true),
         })
     }
 
@@ -327,8 +338,15 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
     }
 
     /// [`Self::rnea_derivatives`] with the recursion in body axes (the
-    /// same formulas; see the module documentation, "Body axes").
-    fn rnea_derivatives_body_axes(&self, k: &Kinematics<S>, ud: &[S]) -> RneaDerivatives<S> {
+    /// same formulas; see the module documentation, "Body axes"); the pairs
+    /// in common axes, or with `paths` along the tree's paths
+    /// ([`Axes::Paths`]).
+    fn rnea_derivatives_body_axes(
+        &self,
+        k: &Kinematics<S>,
+        ud: &[S],
+        paths: bool,
+    ) -> RneaDerivatives<S> {
         let bodies = &self.tree.bodies;
         let n = bodies.len();
         let base = Motion {
@@ -379,7 +397,9 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
         // descendants' poses in it are one joint shorter than in the
         // world, its own terms need no transform), else the world's.
         let roots = bodies.iter().filter(|b| b.parent.is_none()).count();
-        let common: Vec<Pose<S>> = if roots == 1 {
+        let common: Vec<Pose<S>> = if paths {
+            Vec::new()
+        } else if roots == 1 {
             let mut poses: Vec<Pose<S>> = Vec::with_capacity(n);
             for (i, body) in bodies.iter().enumerate() {
                 let pose = body
@@ -398,7 +418,6 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
             let Coords::Free { u, .. } = body.coords else {
                 continue;
             };
-            let pose = &common[j];
             let (v, a) = (vl[j], al[j]);
             for (c, &s) in k.s[j].iter().enumerate() {
                 let w = v.cross_motion(s);
@@ -420,12 +439,16 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 cols.push(Column {
                     body: j,
                     index: u + c,
-                    common: own.to_parent(pose),
+                    common: common.get(j).map_or(own, |pose| own.to_parent(pose)),
                     own,
                 });
             }
         }
-        self.pairs(&cols)
+        if paths {
+            self.pairs_along_paths(k, &cols)
+        } else {
+            self.pairs(&cols)
+        }
     }
 
     /// The pass over pairs of columns (module documentation): `∂τ/∂q`,
@@ -456,6 +479,55 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                     dq[row][col] = ti.s.dot(tj.dq);
                     du[row][col] = ti.s.dot(tj.du);
                 }
+            }
+        }
+        RneaDerivatives { dq, du, m }
+    }
+
+    /// The pass over pairs along the tree's paths ([`Axes::Paths`]): the
+    /// same entries as [`Self::pairs`], each pair in the axes of the
+    /// shallower column's body. Every column `d` carries its force terms
+    /// `P_d`, `Q_d` and its ancestor terms up its path, one joint's pose at
+    /// a time; at each body `b` on the way (its own first), for every column
+    /// `a` of `b`:
+    ///
+    /// ```text
+    /// ∂τ_d/∂q_a = ψ_a·P_d + w_a·Q_d,   ∂τ_d/∂u_a = β_a·P_d + s_a·Q_d,   M_da = M_ad = s_a·P_d
+    /// ∂τ_a/∂q_d = s_a·(ancestor term ∂q of d),   ∂τ_a/∂u_d = s_a·(… ∂u of d)   (b above d's body)
+    /// ```
+    ///
+    /// (a dot product of a force and a motion does not depend on the axes
+    /// both are in).
+    fn pairs_along_paths(&self, k: &Kinematics<S>, cols: &[Column<S>]) -> RneaDerivatives<S> {
+        let nu = self.tree.nu;
+        let mut dq = vec![vec![S::zero(); nu]; nu];
+        let mut du = vec![vec![S::zero(); nu]; nu];
+        let mut m = vec![vec![S::zero(); nu]; nu];
+        for deep in cols {
+            let d = deep.index;
+            let own = &deep.own;
+            let (mut p, mut q, mut fq, mut fu) = (own.p, own.q, own.dq, own.du);
+            let mut b = deep.body;
+            loop {
+                for anc in cols.iter().filter(|c| c.body == b) {
+                    let (a, t) = (anc.index, &anc.own);
+                    dq[d][a] = t.psi.dot(p) + t.w.dot(q);
+                    du[d][a] = t.beta.dot(p) + t.s.dot(q);
+                    let mda = t.s.dot(p);
+                    m[d][a] = mda;
+                    m[a][d] = mda;
+                    if b != deep.body {
+                        dq[a][d] = t.s.dot(fq);
+                        du[a][d] = t.s.dot(fu);
+                    }
+                }
+                let Some(parent) = self.tree.bodies[b].parent else {
+                    break;
+                };
+                let x = &k.x[b];
+                (p, q) = (x.force_to_parent(p), x.force_to_parent(q));
+                (fq, fu) = (x.force_to_parent(fq), x.force_to_parent(fu));
+                b = parent;
             }
         }
         RneaDerivatives { dq, du, m }
