@@ -17,7 +17,9 @@
 //!   (`∂ID/∂u` of Newton–Euler may also be differentiated instead, where
 //!   that counts fewer operations: the formulation tries both); the
 //!   recursion in world axes ([`DerivativeForm::Recursive`]) or in body
-//!   axes ([`DerivativeForm::RecursiveBodyAxes`]), two candidates.
+//!   axes with the pairs of columns in common axes
+//!   ([`DerivativeForm::RecursiveBodyAxes`]) or along the tree's paths
+//!   ([`DerivativeForm::RecursivePaths`]), three candidates.
 //!
 //! Coordinates are differentiated in the tangent space: column `j` of
 //! `∂u̇/∂q` is the derivative along `δq = N(q) e_j`, where `q̇ = N(q) u`,

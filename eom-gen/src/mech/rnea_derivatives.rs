@@ -51,7 +51,14 @@
 //! column), to the root body's own axes where the tree has a single root
 //! (poses one joint shorter than the world's), else to world axes; pairs
 //! of columns of one body (a column with itself included) stay in its
-//! own axes. [`Axes::World`] instead brings each body's velocity,
+//! own axes. [`Axes::Paths`] needs no common axes at all: every pair is
+//! one body and one of its ancestors (or itself), so each column's force
+//! terms (`P`, `Q` and the two ancestor terms) are carried up its path one
+//! joint at a time (each a sparse pose), and the pair is taken in the
+//! ancestor's own axes, where its column's `s`, `w`, `β` are still sparse
+//! and `S_i ·` picks one entry (arm7's forward dynamics derivatives: 6 081
+//! operations with common axes, 5 414 along the paths; the formulation
+//! keeps whichever counts fewer). [`Axes::World`] instead brings each body's velocity,
 //! acceleration, inertia, its rate, momentum and force to world axes and
 //! does the rest there (dense).
 //!
