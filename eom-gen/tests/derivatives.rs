@@ -549,11 +549,20 @@ fn check_forms_agree(
 /// forward dynamics, at random states: arm7 (a
 /// chain of revolute joints about various axes), heavy_top and free_body
 /// (a spherical and a free joint, quaternion coordinates), slider_crank
-/// (a prismatic joint, springs; as its spanning tree).
+/// (a prismatic joint, springs; as its spanning tree), whipple (a branched
+/// tree: the rear frame carries the rear wheel and the front frame, which
+/// carries the front wheel) and bricard (the spanning tree of a loop).
 #[test]
 fn body_axis_recursion_equals_world_axis_and_differences() {
     let mut rng = Rng(0xB0D1_5EED_0000_0027);
-    for name in ["arm7", "heavy_top", "free_body", "slider_crank"] {
+    for name in [
+        "arm7",
+        "heavy_top",
+        "free_body",
+        "slider_crank",
+        "whipple",
+        "bricard",
+    ] {
         let sys = system(name);
         let f = with_derivatives(&sys, name);
         let form = |d: DerivativeForm| {
