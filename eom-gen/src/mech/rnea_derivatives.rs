@@ -58,9 +58,9 @@
 //! ancestor's own axes, where its column's `s`, `w`, `β` are still sparse
 //! and `S_i ·` picks one entry (arm7's forward dynamics derivatives: 6 081
 //! operations with common axes, 5 414 along the paths; the formulation
-//! keeps whichever counts fewer). [`Axes::World`] instead brings each body's velocity,
-//! acceleration, inertia, its rate, momentum and force to world axes and
-//! does the rest there (dense).
+//! keeps whichever counts fewer). [`Axes::World`] instead brings each
+//! body's velocity, acceleration, inertia, its rate, momentum and force to
+//! world axes and does the rest there (dense).
 //!
 //! The recursion covers joints whose subspace is constant in body axes
 //! (revolute, prismatic, cylindrical, screw, spherical, free, fixed) on
@@ -446,6 +446,8 @@ impl<'a, S: Scalar> Evaluator<'a, S> {
                 cols.push(Column {
                     body: j,
                     index: u + c,
+                    // (Along the paths there are no common axes, and
+                    // `common` is not read.)
                     common: common.get(j).map_or(own, |pose| own.to_parent(pose)),
                     own,
                 });
