@@ -65,12 +65,13 @@ fn arm7_source_is_pinned() {
     insta::assert_snapshot!(g.source);
 }
 
-/// arm7's forward-dynamics derivatives (6 081 instructions) are written
-/// one state at a time as one late-scheduled function, not four parts
-/// in blocks of at most `BLOCK_LIMIT` instructions (rustc overflows its
-/// stack on about 2 950 nested `let`s with debug info; 533 ns against 555
-/// in parts, BENCHMARKS.md "One function or parts"); their lane version,
-/// bound by throughput, keeps its parts.
+/// arm7's forward-dynamics derivatives (5 414 operations, of them 4 043
+/// instructions before the product `−M⁻¹ G`) are written one state at a
+/// time as one function, depth first, not in parts: in blocks of at most
+/// `BLOCK_LIMIT` instructions (rustc overflows its stack on about 2 950
+/// nested `let`s with debug info; BENCHMARKS.md "One function or parts",
+/// "Depth-first order for the derivatives"); their lane version, bound by
+/// throughput, keeps its parts.
 #[test]
 fn arm7s_derivatives_are_one_function_in_blocks() {
     let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../models/arm7.ron");
@@ -95,7 +96,7 @@ fn arm7s_derivatives_are_one_function_in_blocks() {
     assert_nested_no_deeper_than_a_block(&source);
 }
 
-/// The spatial 10-link chain's forward-dynamics derivatives (≈ 9 700
+/// The spatial 10-link chain's forward-dynamics derivatives (8 612
 /// instructions, more than forward dynamics may have written whole) are
 /// one function one state at a time, depth first in blocks (BENCHMARKS.md
 /// "Depth-first order for the derivatives"), nested no deeper than a block.

@@ -25,9 +25,9 @@ use std::collections::HashMap;
 pub const PART_LIMIT: usize = 1500;
 
 /// The longest program written as one part, late-scheduled, when
-/// evaluated one state at a time, for the functions that gain from it
-/// (forward and inverse dynamics; their derivatives up to
-/// [`DERIVATIVES_ONE_PART_LIMIT`]; see [`part_limit`]). Measured (BENCHMARKS.md, "One function or parts"):
+/// evaluated one state at a time, for forward and inverse dynamics (their
+/// derivatives have [`DERIVATIVES_ONE_PART_LIMIT`]; see [`part_limit`]).
+/// Measured (BENCHMARKS.md, "One function or parts"):
 /// panda's inverse dynamics (1 517 instructions) about 20 % faster whole
 /// than in two parts, its forward dynamics (2 285) about 8 %; arm7's
 /// forward-dynamics derivatives (6 081) 4 % faster whole in blocks than in
