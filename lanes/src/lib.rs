@@ -133,12 +133,12 @@ impl<const W: usize> Lanes<W> {
 /// element kernels' functions of thousands of operations, instantiated
 /// unoptimised in a caller's debug build, overflowed a test thread's 2 MiB
 /// stack; debug builds keep the loops (whose results are the same bits).
-const VECTORS: bool = !cfg!(debug_assertions);
+pub(crate) const VECTORS: bool = !cfg!(debug_assertions);
 
 /// Lanes `i..i + 8` of `a` as one vector (written out: `array::from_fn`
 /// is not inlined in functions this long).
 #[inline(always)]
-fn load8<const W: usize>(a: &[f64; W], i: usize) -> wide::f64x8 {
+pub(crate) fn load8<const W: usize>(a: &[f64; W], i: usize) -> wide::f64x8 {
     wide::f64x8::new([
         a[i],
         a[i + 1],
@@ -153,7 +153,7 @@ fn load8<const W: usize>(a: &[f64; W], i: usize) -> wide::f64x8 {
 
 /// Lanes `i..i + 4` of `a` as one vector.
 #[inline(always)]
-fn load4<const W: usize>(a: &[f64; W], i: usize) -> wide::f64x4 {
+pub(crate) fn load4<const W: usize>(a: &[f64; W], i: usize) -> wide::f64x4 {
     wide::f64x4::new([a[i], a[i + 1], a[i + 2], a[i + 3]])
 }
 

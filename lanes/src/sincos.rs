@@ -1,4 +1,4 @@
-//! A branch-free `sin_cos` that vectorises over lanes: fdlibm's kernels
+//! A branch-free `sin_cos` in vectors over lanes: fdlibm's kernels
 //! (as in musl's `__sin`, `__cos`) after a Cody–Waite reduction by `π/2`
 //! in four parts (the constants of fdlibm's `__rem_pio2`, whose medium
 //! path needs at most three rounds; here every lane takes all of them,
@@ -8,7 +8,12 @@
 //! dynamics 2 893 → 2 845 instructions), else as fdlibm writes them.
 //! Within 1 ulp of the C library for `|x| < 10⁶`; lanes outside that range
 //! (and non-finite ones) are computed by `f64::sin_cos`, so the whole
-//! range is covered (`tests/sincos.rs`).
+//! range is covered (`tests/sincos.rs`). In optimised builds the lanes run
+//! in `wide`'s `f64x8` or `f64x4` (the quadrant's bits through `bytemuck`
+//! casts), bit for bit the scalar [`sin_cos_reduced`] on every lane: one
+//! generic text of the algorithm serves both.
+
+use core::ops::{Add, Mul, Neg, Sub};
 
 /// Above this magnitude the reduction's `n · π/2₁` would no longer be
 /// exact (`n < 2²⁰`); such lanes go to `f64::sin_cos`.
@@ -38,10 +43,120 @@ const C4: f64 = f64::from_bits(0xbe927e4f809c52ad); // -2.7557314351390663e-07
 const C5: f64 = f64::from_bits(0x3e21ee9ebdb4b1c4); // 2.087572321298175e-09
 const C6: f64 = f64::from_bits(0xbda8fae9be8838d4); // -1.1359647557788195e-11
 
+/// What the kernel needs of a lane type: `f64` itself and `wide`'s
+/// vectors, so that one text of the algorithm serves the scalar function
+/// and every width, with the same operations in the same order on each
+/// lane (the same bits). A mask is a value whose lanes are all ones or all
+/// zeros, as the vector comparisons make them.
+trait Lane:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Neg<Output = Self>
+{
+    fn splat(x: f64) -> Self;
+    /// `a · b + c` with one rounding.
+    fn fused(self, b: Self, c: Self) -> Self;
+    fn abs(self) -> Self;
+    /// The mask of the lanes where `self < b`.
+    fn less(self, b: Self) -> Self;
+    /// `mask ? a : b`, lane by lane.
+    fn select(mask: Self, a: Self, b: Self) -> Self;
+    /// The quadrant's masks from `k = x · 2/π + 1.5 · 2⁵²`, whose low
+    /// significand bits are `n (mod 4)`: the lanes where `n` is odd, and
+    /// the sign bits of the sine (`n ≡ 2, 3`) and of the cosine
+    /// (`n ≡ 1, 2`).
+    fn quadrant(k: Self) -> (Self, Self, Self);
+    /// The bits of `self` exclusive-or those of `b`.
+    fn xor(self, b: Self) -> Self;
+}
+
+impl Lane for f64 {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn fused(self, b: Self, c: Self) -> Self {
+        self.mul_add(b, c)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f64::abs(self)
+    }
+    #[inline(always)]
+    fn less(self, b: Self) -> Self {
+        if self < b {
+            f64::from_bits(u64::MAX)
+        } else {
+            0.0
+        }
+    }
+    #[inline(always)]
+    fn select(mask: Self, a: Self, b: Self) -> Self {
+        if mask.to_bits() != 0 { a } else { b }
+    }
+    #[inline(always)]
+    fn quadrant(k: Self) -> (Self, Self, Self) {
+        let q = k.to_bits();
+        let odd = if q & 1 == 1 {
+            f64::from_bits(u64::MAX)
+        } else {
+            0.0
+        };
+        let sin_sign = f64::from_bits((q & 2) << 62);
+        let cos_sign = f64::from_bits((q.wrapping_add(1) & 2) << 62);
+        (odd, sin_sign, cos_sign)
+    }
+    #[inline(always)]
+    fn xor(self, b: Self) -> Self {
+        f64::from_bits(self.to_bits() ^ b.to_bits())
+    }
+}
+
+macro_rules! vector_lane {
+    ($f:ty, $u:ty) => {
+        impl Lane for $f {
+            #[inline(always)]
+            fn splat(x: f64) -> Self {
+                <$f>::splat(x)
+            }
+            #[inline(always)]
+            fn fused(self, b: Self, c: Self) -> Self {
+                self.mul_add(b, c)
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                <$f>::abs(self)
+            }
+            #[inline(always)]
+            fn less(self, b: Self) -> Self {
+                self.simd_lt(b)
+            }
+            #[inline(always)]
+            fn select(mask: Self, a: Self, b: Self) -> Self {
+                wide::Select::select(mask, a, b)
+            }
+            #[inline(always)]
+            fn quadrant(k: Self) -> (Self, Self, Self) {
+                let q: $u = bytemuck::cast(k);
+                let (one, two) = (<$u>::splat(1), <$u>::splat(2));
+                let odd = bytemuck::cast((q & one).simd_eq(one));
+                let sin_sign = bytemuck::cast((q & two) << 62u32);
+                let cos_sign = bytemuck::cast(((q + one) & two) << 62u32);
+                (odd, sin_sign, cos_sign)
+            }
+            #[inline(always)]
+            fn xor(self, b: Self) -> Self {
+                self ^ b
+            }
+        }
+    };
+}
+vector_lane!(wide::f64x8, wide::u64x8);
+vector_lane!(wide::f64x4, wide::u64x4);
+
 /// `a + b` as `(s, e)` with `s + e = a + b` exactly (Knuth's TwoSum; no
 /// condition on the magnitudes).
 #[inline(always)]
-fn two_sum(a: f64, b: f64) -> (f64, f64) {
+fn two_sum<V: Lane>(a: V, b: V) -> (V, V) {
     let s = a + b;
     let bb = s - a;
     (s, (a - (s - bb)) + (b - bb))
@@ -49,7 +164,7 @@ fn two_sum(a: f64, b: f64) -> (f64, f64) {
 
 /// `a − b` as `(d, e)` with `d + e = a − b` exactly.
 #[inline(always)]
-fn two_diff(a: f64, b: f64) -> (f64, f64) {
+fn two_diff<V: Lane>(a: V, b: V) -> (V, V) {
     two_sum(a, -b)
 }
 
@@ -58,9 +173,9 @@ fn two_diff(a: f64, b: f64) -> (f64, f64) {
 /// the sum rounded separately as fdlibm writes them (`f64::mul_add`
 /// without FMA is a library call).
 #[inline(always)]
-fn fma(a: f64, b: f64, c: f64) -> f64 {
+fn fma<V: Lane>(a: V, b: V, c: V) -> V {
     if cfg!(target_feature = "fma") {
-        a.mul_add(b, c)
+        a.fused(b, c)
     } else {
         a * b + c
     }
@@ -68,27 +183,64 @@ fn fma(a: f64, b: f64, c: f64) -> f64 {
 
 /// `sin(x + y)` for `|x + y| ≤ π/4`, `y` the tail of the reduced argument.
 #[inline(always)]
-fn kernel_sin(x: f64, y: f64) -> f64 {
+fn kernel_sin<V: Lane>(x: V, y: V) -> V {
+    let k = V::splat;
     let z = x * x;
     let w = z * z;
-    let r = fma(z * w, fma(z, S6, S5), fma(z, fma(z, S4, S3), S2));
+    let r = fma(
+        z * w,
+        fma(z, k(S6), k(S5)),
+        fma(z, fma(z, k(S4), k(S3)), k(S2)),
+    );
     let v = z * x;
-    x - fma(-v, S1, fma(z, fma(-v, r, 0.5 * y), -y))
+    x - fma(-v, k(S1), fma(z, fma(-v, r, k(0.5) * y), -y))
 }
 
 /// `cos(x + y)` for `|x + y| ≤ π/4`.
 #[inline(always)]
-fn kernel_cos(x: f64, y: f64) -> f64 {
+fn kernel_cos<V: Lane>(x: V, y: V) -> V {
+    let k = V::splat;
     let z = x * x;
     let w = z * z;
     let r = fma(
         w * w,
-        fma(z, fma(z, C6, C5), C4),
-        z * fma(z, fma(z, C3, C2), C1),
+        fma(z, fma(z, k(C6), k(C5)), k(C4)),
+        z * fma(z, fma(z, k(C3), k(C2)), k(C1)),
     );
-    let hz = 0.5 * z;
-    let w = 1.0 - hz;
-    w + (((1.0 - w) - hz) + fma(z, r, -(x * y)))
+    let hz = k(0.5) * z;
+    let w = k(1.0) - hz;
+    w + (((k(1.0) - w) - hz) + fma(z, r, -(x * y)))
+}
+
+/// `(sin x, cos x)` for `|x| < REDUCTION_LIMIT` on every lane of `x`,
+/// without branches (the result for larger or non-finite lanes is
+/// meaningless: see [`sin_cos_lanes`]).
+#[inline(always)]
+fn sin_cos_kernel<V: Lane>(x: V) -> (V, V) {
+    let c = V::splat;
+    // n = round(x · 2/π); the low bits of `k`'s significand are n (mod 4).
+    let k = x * c(INVPIO2) + c(TOINT);
+    let n = k - c(TOINT);
+    // x − n π/2 with π/2 = P₁ + P₂ + P₃ + P₃ₜ (33 bits each in the first
+    // three, so every `n Pᵢ` is exact for n < 2²⁰): r₁ exact, then two
+    // subtractions with their rounding errors kept (TwoSum), the error
+    // terms and `n P₃ₜ` summed into the tail; (y₀, y₁) is the reduced
+    // argument as a double-double. Same 151 bits as fdlibm's third round.
+    let r1 = x - n * c(PIO2_1);
+    let (r2, e2) = two_diff(r1, n * c(PIO2_2));
+    let (r3, e3) = two_diff(r2, n * c(PIO2_3));
+    let tail = (e2 + e3) - n * c(PIO2_3T);
+    let (y0, y1) = two_sum(r3, tail);
+    let s = kernel_sin(y0, y1);
+    let co = kernel_cos(y0, y1);
+    // Quadrant: odd n swaps sine and cosine; n ≡ 2, 3 negates the sine,
+    // n ≡ 1, 2 the cosine.
+    let (odd, sin_sign, cos_sign) = V::quadrant(k);
+    let (s, co) = (V::select(odd, co, s), V::select(odd, s, co));
+    let s = s.xor(sin_sign);
+    // sin x = x below 2⁻²⁶ (as fdlibm), which also keeps the sign of −0.
+    let s = V::select(x.abs().less(c(TINY)), x, s);
+    (s, co.xor(cos_sign))
 }
 
 /// `(sin x, cos x)` for `|x| < REDUCTION_LIMIT`, without branches (the
@@ -96,32 +248,7 @@ fn kernel_cos(x: f64, y: f64) -> f64 {
 /// [`sin_cos_lanes`]).
 #[inline(always)]
 pub fn sin_cos_reduced(x: f64) -> (f64, f64) {
-    // n = round(x · 2/π); the low bits of `k`'s significand are n (mod 4).
-    let k = x * INVPIO2 + TOINT;
-    let n = k - TOINT;
-    let quadrant = k.to_bits();
-    // x − n π/2 with π/2 = P₁ + P₂ + P₃ + P₃ₜ (33 bits each in the first
-    // three, so every `n Pᵢ` is exact for n < 2²⁰): r₁ exact, then two
-    // subtractions with their rounding errors kept (TwoSum), the error
-    // terms and `n P₃ₜ` summed into the tail; (y₀, y₁) is the reduced
-    // argument as a double-double. Same 151 bits as fdlibm's third round.
-    let r1 = x - n * PIO2_1;
-    let (r2, e2) = two_diff(r1, n * PIO2_2);
-    let (r3, e3) = two_diff(r2, n * PIO2_3);
-    let tail = (e2 + e3) - n * PIO2_3T;
-    let (y0, y1) = two_sum(r3, tail);
-    let s = kernel_sin(y0, y1);
-    let c = kernel_cos(y0, y1);
-    // Quadrant: odd n swaps sine and cosine; n ≡ 2, 3 negates the sine,
-    // n ≡ 1, 2 the cosine.
-    let odd = quadrant & 1 == 1;
-    let (s, c) = if odd { (c, s) } else { (s, c) };
-    let sin_sign = (quadrant & 2) << 62;
-    let cos_sign = (quadrant.wrapping_add(1) & 2) << 62;
-    let s = f64::from_bits(s.to_bits() ^ sin_sign);
-    // sin x = x below 2⁻²⁶ (as fdlibm), which also keeps the sign of −0.
-    let s = if x.abs() < TINY { x } else { s };
-    (s, f64::from_bits(c.to_bits() ^ cos_sign))
+    sin_cos_kernel(x)
 }
 
 /// `|x| < REDUCTION_LIMIT`, false for NaN.
@@ -131,14 +258,30 @@ fn reducible(x: f64) -> bool {
 }
 
 /// `(sin x, cos x)` of every lane: [`sin_cos_reduced`] on all lanes (one
-/// vectorised pass), then `f64::sin_cos` on any lane outside its range.
+/// vectorised pass: in chunks of `wide`'s `f64x8` where `W` is a multiple
+/// of 8, of `f64x4` where of 4, in optimised builds; else lane by lane),
+/// then `f64::sin_cos` on any lane outside its range.
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // three arrays by one index
 pub fn sin_cos_lanes<const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
     let mut s = [0.0; W];
     let mut c = [0.0; W];
-    for i in 0..W {
-        (s[i], c[i]) = sin_cos_reduced(x[i]);
+    if super::VECTORS && W.is_multiple_of(8) {
+        for i in (0..W).step_by(8) {
+            let (vs, vc) = sin_cos_kernel(super::load8(&x, i));
+            s[i..i + 8].copy_from_slice(&vs.to_array());
+            c[i..i + 8].copy_from_slice(&vc.to_array());
+        }
+    } else if super::VECTORS && W.is_multiple_of(4) {
+        for i in (0..W).step_by(4) {
+            let (vs, vc) = sin_cos_kernel(super::load4(&x, i));
+            s[i..i + 4].copy_from_slice(&vs.to_array());
+            c[i..i + 4].copy_from_slice(&vc.to_array());
+        }
+    } else {
+        for i in 0..W {
+            (s[i], c[i]) = sin_cos_reduced(x[i]);
+        }
     }
     let mut outside = false;
     for v in x {
@@ -152,4 +295,98 @@ pub fn sin_cos_lanes<const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
         }
     }
     (s, c)
+}
+
+/// The vector kernels against the scalar one, lane by lane, bit for bit:
+/// tested in every build (debug builds' `Lanes` take the scalar loop, so
+/// the vectors are called here directly), with and without FMA (the CI
+/// phase that builds this crate with `+fma`).
+#[cfg(test)]
+mod tests {
+    use super::{REDUCTION_LIMIT, sin_cos_kernel, sin_cos_reduced};
+    use core::f64::consts::FRAC_PI_2;
+
+    /// SplitMix64.
+    struct Rng(u64);
+    impl Rng {
+        fn next(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        fn unit(&mut self) -> f64 {
+            (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// Arguments of every kind the reduction meets: log-uniform magnitudes
+    /// 2⁻⁶⁰ … 10⁶ of both signs, the doubles next to multiples of π/2 (the
+    /// worst cancellations), signed zeros, the tiny threshold's
+    /// neighbours, the reduction limit's.
+    fn arguments() -> Vec<f64> {
+        let mut rng = Rng(0xc0de);
+        let mut xs = Vec::new();
+        for _ in 0..40_000 {
+            let e = -60.0 + rng.unit() * (60.0 + REDUCTION_LIMIT.log2());
+            let x = e.exp2();
+            xs.push(if rng.next() & 1 == 1 { -x } else { x });
+        }
+        for n in -2000i32..2000 {
+            let m = f64::from(n) * FRAC_PI_2;
+            let mut x = m;
+            for _ in 0..3 {
+                xs.extend([x, -x]);
+                x = f64::from_bits(x.to_bits() + 1);
+            }
+            x = m;
+            for _ in 0..3 {
+                x = f64::from_bits(x.to_bits().wrapping_sub(1));
+                xs.extend([x, -x]);
+            }
+        }
+        let tiny = super::TINY;
+        xs.extend([0.0, -0.0, tiny, -tiny, f64::MIN_POSITIVE, 5e-324]);
+        xs.extend([
+            f64::from_bits(tiny.to_bits() - 1),
+            f64::from_bits(tiny.to_bits() + 1),
+        ]);
+        let below = f64::from_bits(REDUCTION_LIMIT.to_bits() - 1);
+        xs.extend([below, -below]);
+        xs
+    }
+
+    fn same(got: (f64, f64), want: (f64, f64), x: f64, width: &str) {
+        assert!(
+            got.0.to_bits() == want.0.to_bits() && got.1.to_bits() == want.1.to_bits(),
+            "{width}: sin_cos({x:e}) = {got:?}, scalar {want:?}"
+        );
+    }
+
+    #[test]
+    fn eight_lane_vectors_are_the_scalar_kernel_bit_for_bit() {
+        let xs = arguments();
+        for chunk in xs.chunks_exact(8) {
+            let x: [f64; 8] = chunk.try_into().expect("eight");
+            let (s, c) = sin_cos_kernel(wide::f64x8::new(x));
+            for (l, &xl) in x.iter().enumerate() {
+                let got = (s.to_array()[l], c.to_array()[l]);
+                same(got, sin_cos_reduced(xl), xl, "f64x8");
+            }
+        }
+    }
+
+    #[test]
+    fn four_lane_vectors_are_the_scalar_kernel_bit_for_bit() {
+        let xs = arguments();
+        for chunk in xs.chunks_exact(4) {
+            let x: [f64; 4] = chunk.try_into().expect("four");
+            let (s, c) = sin_cos_kernel(wide::f64x4::new(x));
+            for (l, &xl) in x.iter().enumerate() {
+                let got = (s.to_array()[l], c.to_array()[l]);
+                same(got, sin_cos_reduced(xl), xl, "f64x4");
+            }
+        }
+    }
 }
