@@ -138,7 +138,9 @@ macro_rules! vector_lane {
             fn quadrant(k: Self) -> (Self, Self, Self) {
                 let q: $u = bytemuck::cast(k);
                 let (one, two) = (<$u>::splat(1), <$u>::splat(2));
-                let odd = bytemuck::cast((q & one).simd_eq(one));
+                // 0 − (q & 1): all ones where n is odd (a subtraction, which
+                // every x86-64 has; a 64-bit comparison needs SSE4.1).
+                let odd = bytemuck::cast(<$u>::splat(0) - (q & one));
                 let sin_sign = bytemuck::cast((q & two) << 62u32);
                 let cos_sign = bytemuck::cast(((q + one) & two) << 62u32);
                 (odd, sin_sign, cos_sign)
