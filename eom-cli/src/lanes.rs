@@ -27,6 +27,20 @@ use std::process::{Command, Stdio};
 /// compiled baseline; 4: an AVX2 register; 8: two, or AVX-512).
 pub const WIDTHS: [usize; 3] = [1, 4, 8];
 
+/// The states per call when `--lanes` is not given: 8 for a `--native`
+/// build on a CPU with AVX-512 (one `zmm` register a value: arm7's
+/// ensemble 48 against 71 ns per state per right-hand side at 4, DOPRI5;
+/// BENCHMARKS.md "Ensembles and sweeps in lanes"), else 4 (the default
+/// build's SSE2 runs 4 and 8 alike; AVX2's register holds 4).
+pub fn default_width(native: bool) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if native && std::arch::is_x86_feature_detected!("avx512f") {
+        return 8;
+    }
+    let _ = native;
+    4
+}
+
 /// How to run every case.
 #[derive(Clone, Debug)]
 pub struct LaneRun {
@@ -365,4 +379,17 @@ pub fn refusal(checked: &eom_gen::Checked) -> Option<String> {
 pub fn integrator_refusal(i: Integrator) -> Option<String> {
     (!matches!(i, Integrator::Rk4 | Integrator::Dopri5))
         .then(|| format!("--integrator {i} does not run in lanes; they run {INTEGRATORS}"))
+}
+
+#[cfg(test)]
+mod width_tests {
+    use super::{WIDTHS, default_width};
+
+    /// The default width is one the runner is built for; the default
+    /// build (SSE2) takes 4 whatever the CPU.
+    #[test]
+    fn default_width_is_a_built_width() {
+        assert_eq!(default_width(false), 4);
+        assert!(WIDTHS.contains(&default_width(true)));
+    }
 }

@@ -114,7 +114,8 @@ pub struct SimulateArgs {
     /// with this standard deviation (made tunable: one build); repeatable.
     #[arg(long = "param-spread", value_name = "NAME=σ")]
     pub param_spread: Vec<String>,
-    /// --ensemble: states per call, 1, 4 (default) or 8.
+    /// --ensemble: states per call, 1, 4 or 8 (default 8 with --native on
+    /// a CPU with AVX-512, else 4).
     #[arg(long, value_name = "W")]
     pub lanes: Option<usize>,
     /// --ensemble: build with `-C target-cpu=native` (wider SIMD lanes;
@@ -578,7 +579,9 @@ fn ensemble_options(
         problems.push(format!("--ensemble: {why}"));
     }
     problems.extend(crate::lanes::integrator_refusal(o.integrator));
-    let width = a.lanes.unwrap_or(4);
+    let width = a
+        .lanes
+        .unwrap_or_else(|| crate::lanes::default_width(a.native));
     if !crate::lanes::WIDTHS.contains(&width) {
         problems.push(format!(
             "--lanes {width}: the ensemble is built for {:?} states per call",

@@ -83,7 +83,8 @@ pub struct SweepArgs {
     /// parameters tunable (cached), no recompiling per case.
     #[arg(long)]
     pub compiled: bool,
-    /// With --compiled: states per call, 1, 4 (default) or 8.
+    /// With --compiled: states per call, 1, 4 or 8 (default 8 with
+    /// --native on a CPU with AVX-512, else 4).
     #[arg(long, value_name = "W")]
     pub lanes: Option<usize>,
     /// With --compiled: build with `-C target-cpu=native` (wider SIMD
@@ -303,7 +304,11 @@ pub fn run(a: &SweepArgs, urdf: &eom_gen::urdf::Options) -> ExitCode {
         ctx.lane_rows(
             &indices,
             &all,
-            (a.lanes.unwrap_or(4), a.native),
+            (
+                a.lanes
+                    .unwrap_or_else(|| crate::lanes::default_width(a.native)),
+                a.native,
+            ),
             threads,
             &bar,
             &reformulated,
