@@ -261,24 +261,43 @@ fn reducible(x: f64) -> bool {
 
 /// `(sin x, cos x)` of every lane: [`sin_cos_reduced`] on all lanes (one
 /// vectorised pass: in chunks of `wide`'s `f64x8` where `W` is a multiple
-/// of 8, of `f64x4` where of 4, in optimised builds; else lane by lane),
-/// then `f64::sin_cos` on any lane outside its range.
+/// of 8, of `f64x4` where of 4, and for other `W` of at least 8 in chunks
+/// of `f64x8` with the last one padded, in optimised builds; else lane by
+/// lane), then `f64::sin_cos` on any lane outside its range.
+#[inline(always)]
+pub fn sin_cos_lanes<const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
+    sin_cos_chunks(super::VECTORS, x)
+}
+
+/// [`sin_cos_lanes`], in vectors if `vectors` (so that the tests take
+/// both paths in every build).
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // three arrays by one index
-pub fn sin_cos_lanes<const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
+fn sin_cos_chunks<const W: usize>(vectors: bool, x: [f64; W]) -> ([f64; W], [f64; W]) {
     let mut s = [0.0; W];
     let mut c = [0.0; W];
-    if super::VECTORS && W.is_multiple_of(8) {
+    if vectors && W.is_multiple_of(8) {
         for i in (0..W).step_by(8) {
             let (vs, vc) = sin_cos_kernel(super::load8(&x, i));
             s[i..i + 8].copy_from_slice(&vs.to_array());
             c[i..i + 8].copy_from_slice(&vc.to_array());
         }
-    } else if super::VECTORS && W.is_multiple_of(4) {
+    } else if vectors && W.is_multiple_of(4) {
         for i in (0..W).step_by(4) {
             let (vs, vc) = sin_cos_kernel(super::load4(&x, i));
             s[i..i + 4].copy_from_slice(&vs.to_array());
             c[i..i + 4].copy_from_slice(&vc.to_array());
+        }
+    } else if vectors && W >= 8 {
+        // The joint angles of a long chain: whole chunks, then the last
+        // lanes in a chunk padded with zeros.
+        for i in (0..W).step_by(8) {
+            let n = (W - i).min(8);
+            let mut chunk = [0.0; 8];
+            chunk[..n].copy_from_slice(&x[i..i + n]);
+            let (vs, vc) = sin_cos_kernel(wide::f64x8::new(chunk));
+            s[i..i + n].copy_from_slice(&vs.to_array()[..n]);
+            c[i..i + n].copy_from_slice(&vc.to_array()[..n]);
         }
     } else {
         for i in 0..W {
@@ -377,6 +396,39 @@ mod tests {
                 same(got, sin_cos_reduced(xl), xl, "f64x8");
             }
         }
+    }
+
+    /// Every width's chunks, the padded last one of long arrays included,
+    /// give each lane the scalar kernel's bits (and libm's beyond the
+    /// reduction limit), in vectors and lane by lane.
+    #[test]
+    fn chunks_of_every_width_are_the_scalar_kernel_bit_for_bit() {
+        fn check<const W: usize>(xs: &[f64]) {
+            for chunk in xs.chunks_exact(W) {
+                let x: [f64; W] = chunk.try_into().expect("W");
+                for vectors in [true, false] {
+                    let (s, c) = super::sin_cos_chunks(vectors, x);
+                    for (l, &xl) in x.iter().enumerate() {
+                        let want = if xl.abs() < REDUCTION_LIMIT {
+                            sin_cos_reduced(xl)
+                        } else {
+                            f64::sin_cos(xl)
+                        };
+                        same((s[l], c[l]), want, xl, "chunks");
+                    }
+                }
+            }
+        }
+        let mut xs = arguments();
+        xs.extend([2.0e6, -3.5e7, 1.0e300]);
+        xs.rotate_left(7);
+        check::<1>(&xs[..64]);
+        check::<3>(&xs);
+        check::<4>(&xs);
+        check::<8>(&xs);
+        check::<10>(&xs);
+        check::<50>(&xs);
+        check::<200>(&xs);
     }
 
     #[test]

@@ -10,12 +10,15 @@
 //! tip to root, [`store_index`]), a pass storing one value writes it into
 //! the function's output. The code does not grow with the number of bodies
 //! once the bodies repeat; nothing allocates, every index is below its
-//! array's length by construction.
+//! array's length by construction. The sines and cosines of the
+//! coordinates are computed for every body before the loops, in one
+//! vectorised pass where the build has 256-bit vectors
+//! ([`with_sin_cos_given`]).
 
 use super::lower::{Arg, Style, lower};
 use crate::functions::Function;
 use crate::mech::looped::{ChainLoops, Loop, Order, Own, Pass};
-use crate::sym::{SymKind, Symbol};
+use crate::sym::{Op, Operand, Program, SymKind, Symbol};
 use proc_macro2::{Literal, TokenStream};
 use quote::{format_ident, quote};
 
@@ -43,11 +46,109 @@ pub(crate) struct Looped {
 
 const STORE_ARGS: [&str; 4] = ["s0", "s1", "s2", "s3"];
 
+/// The names of the sine and cosine of a body's coordinate where a step
+/// reads them instead of computing them.
+const SIN_COS_ARGS: [&str; 2] = ["q_sin", "q_cos"];
+
+/// A step's program with `sin q` and `cos q` read from two inputs
+/// ([`SIN_COS_ARGS`]) instead of computed by it, so that the loop's
+/// caller computes them for every body in one vectorised pass before the
+/// loop (`sin_cos_lanes` where the build has 256-bit vectors, as the
+/// straight-line functions do) rather than one call of the C library's
+/// per body; `None` if the step takes no sine or cosine of its coordinate.
+/// Same values otherwise: the operations on them are unchanged.
+fn with_sin_cos_given(p: &Program) -> Option<Program> {
+    let iq = p
+        .inputs
+        .iter()
+        .position(|s| matches!(s.kind, SymKind::Coord(_)))? as u32;
+    let of_q = |x: Operand| x == Operand::Var(iq);
+    if !p
+        .instrs
+        .iter()
+        .any(|i| matches!(i.op, Op::Sin(x) | Op::Cos(x) | Op::SinCos(x) if of_q(x)))
+    {
+        return None;
+    }
+    // The inputs with the two new ones, kept sorted by kind then name.
+    let mut inputs = p.inputs.clone();
+    for name in SIN_COS_ARGS {
+        inputs.push(Symbol {
+            kind: SymKind::Input,
+            name: name.to_string(),
+        });
+    }
+    inputs.sort_by(|a, b| (a.kind, &a.name).cmp(&(b.kind, &b.name)));
+    let at = |sym: &Symbol| inputs.iter().position(|x| x == sym).map(|i| i as u32);
+    let remap: Vec<u32> = p.inputs.iter().filter_map(at).collect();
+    let given_input = |name: &str| {
+        at(&Symbol {
+            kind: SymKind::Input,
+            name: name.to_string(),
+        })
+        .map(Operand::Var)
+    };
+    let sin_cos = [given_input(SIN_COS_ARGS[0])?, given_input(SIN_COS_ARGS[1])?];
+    // Temporaries that were the sine or cosine of `q`, now those inputs.
+    let mut given: std::collections::HashMap<u32, Operand> = std::collections::HashMap::new();
+    let mut instrs = Vec::with_capacity(p.instrs.len());
+    for ins in &p.instrs {
+        let op = ins.op.map(|o| match o {
+            Operand::Var(i) => Operand::Var(remap[i as usize]),
+            Operand::Tmp(t) => given.get(&t).copied().unwrap_or(o),
+            c => c,
+        });
+        match ins.op {
+            Op::SinCos(x) if of_q(x) => {
+                given.insert(ins.dst, sin_cos[0]);
+                given.insert(ins.dst + 1, sin_cos[1]);
+            }
+            Op::Sin(x) if of_q(x) => {
+                given.insert(ins.dst, sin_cos[0]);
+            }
+            Op::Cos(x) if of_q(x) => {
+                given.insert(ins.dst, sin_cos[1]);
+            }
+            _ => instrs.push(crate::sym::Instr { dst: ins.dst, op }),
+        }
+    }
+    let outputs = p
+        .outputs
+        .iter()
+        .map(|(name, o)| {
+            let o = match *o {
+                Operand::Var(i) => Operand::Var(remap[i as usize]),
+                Operand::Tmp(t) => given.get(&t).copied().unwrap_or(*o),
+                c => c,
+            };
+            (name.clone(), o)
+        })
+        .collect();
+    Some(Program {
+        inputs,
+        instrs,
+        outputs,
+        n_tmps: p.n_tmps,
+        products: p.products.clone(),
+    })
+}
+
+/// True if some step of `pass` reads the sine and cosine of its
+/// coordinate ([`with_sin_cos_given`]).
+fn pass_takes_sin_cos(pass: &Pass) -> bool {
+    pass.own.0 && pass.steps.iter().any(|p| with_sin_cos_given(p).is_some())
+}
+
 /// The step function of one pass's class `k`.
 fn step_fn(fname: &str, p: usize, k: usize, l: &Loop, fma: bool) -> TokenStream {
     let pass = &l.passes[p];
-    let prog = &pass.steps[k];
+    let given = with_sin_cos_given(&pass.steps[k]);
+    let prog = given.as_ref().unwrap_or(&pass.steps[k]);
     let input = |s: &Symbol| -> TokenStream {
+        if s.kind == SymKind::Input && SIN_COS_ARGS.contains(&s.name.as_str()) {
+            let n = format_ident!("{}", s.name);
+            return quote!(#n);
+        }
         match s.kind {
             SymKind::Coord(_) => quote!(q),
             SymKind::Speed(_) => quote!(u),
@@ -170,6 +271,15 @@ fn step_args(l: &Loop, pass: &Pass) -> Vec<Arg<'static>> {
     if pass.own.0 {
         args.push(scalar("q", |k| matches!(k, SymKind::Coord(_))));
     }
+    if pass_takes_sin_cos(pass) {
+        for name in SIN_COS_ARGS {
+            args.push(Arg {
+                name,
+                ty: quote!(f64),
+                carries: Box::new(move |s: &Symbol| s.kind == SymKind::Input && s.name == name),
+            });
+        }
+    }
     if pass.own.1 {
         args.push(scalar("u", |k| matches!(k, SymKind::Speed(_))));
     }
@@ -206,6 +316,18 @@ fn emit_loop(
     let nl = Literal::usize_unsuffixed(n);
     let mut items = TokenStream::new();
     let mut body = TokenStream::new();
+    // Every body's `sin q`, `cos q` at once, where a pass's steps read them:
+    // in one vectorised pass where the build has 256-bit vectors, else by
+    // the C library one at a time (as the straight-line functions).
+    if l.passes.iter().any(pass_takes_sin_cos) {
+        body.extend(quote! {
+            let (q_sin, q_cos) = if cfg!(target_feature = "avx2") {
+                ::eom_sim::__private::sin_cos_lanes(*q)
+            } else {
+                ::eom_sim::__private::sin_cos_each(*q, #nl)
+            };
+        });
+    }
     for (p, pass) in l.passes.iter().enumerate() {
         for k in 0..pass.steps.len() {
             items.extend(step_fn(fname, p, k, l, fma));
@@ -238,6 +360,10 @@ fn emit_loop(
         }
         if pass.own.0 {
             call_args.push(quote!(q[#i]));
+        }
+        if pass_takes_sin_cos(pass) {
+            call_args.push(quote!(q_sin[#i]));
+            call_args.push(quote!(q_cos[#i]));
         }
         if pass.own.1 {
             call_args.push(quote!(u[#i]));
