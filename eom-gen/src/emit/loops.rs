@@ -70,8 +70,20 @@ fn with_sin_cos_given(p: &Program) -> Option<Program> {
     {
         return None;
     }
-    // The inputs with the two new ones, kept sorted by kind then name.
-    let mut inputs = p.inputs.clone();
+    // The inputs with the two new ones, kept sorted by kind then name; `q`
+    // itself only if something else still reads it (a step whose only
+    // use of `q` was its sine and cosine takes it as `_q`).
+    let reads_q = p.instrs.iter().any(|i| {
+        !matches!(i.op, Op::Sin(x) | Op::Cos(x) | Op::SinCos(x) if of_q(x))
+            && i.op.operands().any(of_q)
+    }) || p.outputs.iter().any(|&(_, o)| of_q(o));
+    let mut inputs: Vec<Symbol> = p
+        .inputs
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| reads_q || i as u32 != iq)
+        .map(|(_, s)| s.clone())
+        .collect();
     for name in SIN_COS_ARGS {
         inputs.push(Symbol {
             kind: SymKind::Input,
@@ -80,7 +92,8 @@ fn with_sin_cos_given(p: &Program) -> Option<Program> {
     }
     inputs.sort_by(|a, b| (a.kind, &a.name).cmp(&(b.kind, &b.name)));
     let at = |sym: &Symbol| inputs.iter().position(|x| x == sym).map(|i| i as u32);
-    let remap: Vec<u32> = p.inputs.iter().filter_map(at).collect();
+    // Old input index → new (`q`'s, if dropped, is never read again).
+    let remap: Vec<u32> = p.inputs.iter().map(|s| at(s).unwrap_or(u32::MAX)).collect();
     let given_input = |name: &str| {
         at(&Symbol {
             kind: SymKind::Input,
