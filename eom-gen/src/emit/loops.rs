@@ -564,3 +564,93 @@ pub(crate) fn looped(
     }
     out
 }
+
+/// The steps with their sine and cosine given are the steps: evaluated
+/// with `(q_sin, q_cos)` set to the C library's `sin_cos(q)`, every step
+/// of every pass of the 50-link spatial chain and of a chain of unequal
+/// links (prismatic joints among them) gives its outputs bit for bit, and
+/// the passes that read them are the ones whose steps take a sine.
+#[cfg(test)]
+mod tests {
+    use super::{SIN_COS_ARGS, pass_takes_sin_cos, with_sin_cos_given};
+    use crate::functions::{Function, FunctionSet};
+    use crate::mech::looped::ChainLoops;
+    use crate::model::{Source, check};
+    use crate::sym::{Op, Program, SymKind};
+    use crate::testkit::Rng;
+
+    /// A step's input values: the angle `q`, its sine and cosine by the C
+    /// library, and for every other input a value drawn once per symbol
+    /// name (so both programs get the same).
+    fn inputs(p: &Program, q: f64, seed: u64) -> Vec<f64> {
+        let (sn, cs) = q.sin_cos();
+        p.inputs
+            .iter()
+            .map(|s| match s.kind {
+                SymKind::Coord(_) => q,
+                SymKind::Input if s.name == SIN_COS_ARGS[0] => sn,
+                SymKind::Input if s.name == SIN_COS_ARGS[1] => cs,
+                _ => {
+                    let h = s
+                        .name
+                        .bytes()
+                        .fold(seed, |h, c| h.wrapping_mul(0x100_0000_01b3) ^ u64::from(c));
+                    Rng(h | 1).uniform()
+                }
+            })
+            .collect()
+    }
+
+    fn check_chain(text: String) {
+        let sys = check(&Source::new("chain", text))
+            .unwrap_or_else(|r| panic!("{r}"))
+            .system;
+        let loops = ChainLoops::build(&sys, FunctionSet::all_requested())
+            .expect("builds")
+            .expect("a chain");
+        let mut rewritten = 0;
+        for f in [
+            Function::ForwardDynamics,
+            Function::MassMatrix,
+            Function::Bias,
+            Function::InverseDynamics,
+        ] {
+            let Some(l) = loops.get(f) else { continue };
+            for pass in &l.passes {
+                let takes_sine = pass.steps.iter().any(|p| {
+                    p.instrs
+                        .iter()
+                        .any(|i| matches!(i.op, Op::Sin(_) | Op::Cos(_) | Op::SinCos(_)))
+                });
+                assert_eq!(pass_takes_sin_cos(pass), pass.own.0 && takes_sine);
+                for p in &pass.steps {
+                    let Some(g) = with_sin_cos_given(p) else {
+                        continue;
+                    };
+                    rewritten += 1;
+                    assert!(
+                        !g.instrs
+                            .iter()
+                            .any(|i| matches!(i.op, Op::Sin(_) | Op::Cos(_) | Op::SinCos(_)))
+                    );
+                    for seed in 0..20u64 {
+                        let q = -7.0 + 0.7 * seed as f64;
+                        let want = p.eval(&inputs(p, q, seed));
+                        let got = g.eval(&inputs(&g, q, seed));
+                        assert_eq!(want.len(), got.len());
+                        for (w, x) in want.iter().zip(&got) {
+                            assert_eq!(w.to_bits(), x.to_bits(), "{f:?} at q = {q}");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(rewritten > 0, "some step takes a sine");
+    }
+
+    #[test]
+    fn steps_with_the_sine_and_cosine_given_are_the_steps() {
+        check_chain(crate::model::builder::n_link_chain(50, true).to_ron());
+        check_chain(crate::model::builder::n_link_chain(12, false).to_ron());
+    }
+}
