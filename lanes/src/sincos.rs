@@ -260,10 +260,10 @@ fn reducible(x: f64) -> bool {
 }
 
 /// `(sin x, cos x)` of every lane: [`sin_cos_reduced`] on all lanes (one
-/// vectorised pass: in chunks of `wide`'s `f64x8` where `W` is a multiple
-/// of 8, of `f64x4` where of 4, and for other `W` of at least 8 in chunks
-/// of `f64x8` with the last one padded, in optimised builds; else lane by
-/// lane), then `f64::sin_cos` on any lane outside its range.
+/// vectorised pass for `W ≥ 4` in optimised builds: chunks of `wide`'s
+/// `f64x8`, the rest in one `f64x4` or `f64x8` padded with zeros; lane by
+/// lane for fewer lanes and in debug builds), then `f64::sin_cos` on any
+/// lane outside its range.
 #[inline(always)]
 pub fn sin_cos_lanes<const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
     sin_cos_chunks(super::VECTORS, x)
@@ -276,28 +276,30 @@ pub fn sin_cos_lanes<const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
 fn sin_cos_chunks<const W: usize>(vectors: bool, x: [f64; W]) -> ([f64; W], [f64; W]) {
     let mut s = [0.0; W];
     let mut c = [0.0; W];
-    if vectors && W.is_multiple_of(8) {
-        for i in (0..W).step_by(8) {
+    if vectors && W >= 4 {
+        // Whole chunks of eight, then what is left in one chunk of four
+        // (or eight), padded with zeros where it does not fill it: 12
+        // angles are one `f64x8` and one `f64x4`, not three `f64x4`.
+        let mut i = 0;
+        while i + 8 <= W {
             let (vs, vc) = sin_cos_kernel(super::load8(&x, i));
             s[i..i + 8].copy_from_slice(&vs.to_array());
             c[i..i + 8].copy_from_slice(&vc.to_array());
+            i += 8;
         }
-    } else if vectors && W.is_multiple_of(4) {
-        for i in (0..W).step_by(4) {
-            let (vs, vc) = sin_cos_kernel(super::load4(&x, i));
-            s[i..i + 4].copy_from_slice(&vs.to_array());
-            c[i..i + 4].copy_from_slice(&vc.to_array());
-        }
-    } else if vectors && W >= 8 {
-        // The joint angles of a long chain: whole chunks, then the last
-        // lanes in a chunk padded with zeros.
-        for i in (0..W).step_by(8) {
-            let n = (W - i).min(8);
+        let n = W - i;
+        if n > 4 {
             let mut chunk = [0.0; 8];
-            chunk[..n].copy_from_slice(&x[i..i + n]);
+            chunk[..n].copy_from_slice(&x[i..]);
             let (vs, vc) = sin_cos_kernel(wide::f64x8::new(chunk));
-            s[i..i + n].copy_from_slice(&vs.to_array()[..n]);
-            c[i..i + n].copy_from_slice(&vc.to_array()[..n]);
+            s[i..].copy_from_slice(&vs.to_array()[..n]);
+            c[i..].copy_from_slice(&vc.to_array()[..n]);
+        } else if n > 0 {
+            let mut chunk = [0.0; 4];
+            chunk[..n].copy_from_slice(&x[i..]);
+            let (vs, vc) = sin_cos_kernel(wide::f64x4::new(chunk));
+            s[i..].copy_from_slice(&vs.to_array()[..n]);
+            c[i..].copy_from_slice(&vc.to_array()[..n]);
         }
     } else {
         for i in 0..W {
@@ -427,6 +429,9 @@ mod tests {
         check::<4>(&xs);
         check::<8>(&xs);
         check::<10>(&xs);
+        check::<12>(&xs);
+        check::<13>(&xs);
+        check::<5>(&xs);
         check::<50>(&xs);
         check::<200>(&xs);
     }
