@@ -243,6 +243,27 @@ impl<const W: usize> core::ops::Neg for Lanes<W> {
     }
 }
 
+/// SplitMix64, the unit tests' deterministic generator.
+#[cfg(test)]
+mod test_rng {
+    pub(crate) struct Rng(pub(crate) u64);
+
+    impl Rng {
+        pub(crate) fn next(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+
+        /// Uniform in [0, 1).
+        pub(crate) fn unit(&mut self) -> f64 {
+            (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+}
+
 /// `Lanes<W>` arithmetic is the `f64` arithmetic of each lane, bit for bit,
 /// whatever the chunks it runs in (`f64x8` for `W` a multiple of 8, `f64x4`
 /// of 4, lane by lane otherwise; the vector paths are tested here in every
@@ -257,18 +278,9 @@ mod tests {
     /// An operation's name, its lanes, and each lane one at a time.
     type Case<'a, const W: usize> = (&'a str, Lanes<W>, &'a dyn Fn(usize) -> f64);
 
-    /// SplitMix64.
-    struct Rng(u64);
+    use crate::test_rng::Rng;
 
     impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        }
-
         /// Mostly ordinary numbers of all magnitudes, some special values.
         fn value(&mut self) -> f64 {
             const SPECIAL: [f64; 10] = [

@@ -322,27 +322,15 @@ fn sin_cos_chunks<const W: usize>(vectors: bool, x: [f64; W]) -> ([f64; W], [f64
 
 /// The vector kernels against the scalar one, lane by lane, bit for bit:
 /// tested in every build (debug builds' `Lanes` take the scalar loop, so
-/// the vectors are called here directly), with and without FMA (the CI
+/// the vector path is asked for here directly; W = 4 and 8 are one `f64x4`
+/// and one `f64x8`), with and without FMA (the CI
 /// phase that builds this crate with `+fma`).
 #[cfg(test)]
 mod tests {
-    use super::{REDUCTION_LIMIT, sin_cos_kernel, sin_cos_reduced};
+    use super::{REDUCTION_LIMIT, sin_cos_reduced};
     use core::f64::consts::FRAC_PI_2;
 
-    /// SplitMix64.
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-            z ^ (z >> 31)
-        }
-        fn unit(&mut self) -> f64 {
-            (self.next() >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
+    use crate::test_rng::Rng;
 
     /// Arguments of every kind the reduction meets: log-uniform magnitudes
     /// 2⁻⁶⁰ … 10⁶ of both signs, the doubles next to multiples of π/2 (the
@@ -387,19 +375,6 @@ mod tests {
         );
     }
 
-    #[test]
-    fn eight_lane_vectors_are_the_scalar_kernel_bit_for_bit() {
-        let xs = arguments();
-        for chunk in xs.chunks_exact(8) {
-            let x: [f64; 8] = chunk.try_into().expect("eight");
-            let (s, c) = sin_cos_kernel(wide::f64x8::new(x));
-            for (l, &xl) in x.iter().enumerate() {
-                let got = (s.to_array()[l], c.to_array()[l]);
-                same(got, sin_cos_reduced(xl), xl, "f64x8");
-            }
-        }
-    }
-
     /// Every width's chunks, the padded last one of long arrays included,
     /// give each lane the scalar kernel's bits (and libm's beyond the
     /// reduction limit), in vectors and lane by lane.
@@ -434,18 +409,5 @@ mod tests {
         check::<5>(&xs);
         check::<50>(&xs);
         check::<200>(&xs);
-    }
-
-    #[test]
-    fn four_lane_vectors_are_the_scalar_kernel_bit_for_bit() {
-        let xs = arguments();
-        for chunk in xs.chunks_exact(4) {
-            let x: [f64; 4] = chunk.try_into().expect("four");
-            let (s, c) = sin_cos_kernel(wide::f64x4::new(x));
-            for (l, &xl) in x.iter().enumerate() {
-                let got = (s.to_array()[l], c.to_array()[l]);
-                same(got, sin_cos_reduced(xl), xl, "f64x4");
-            }
-        }
     }
 }
