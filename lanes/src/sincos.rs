@@ -155,6 +155,42 @@ macro_rules! vector_lane {
 vector_lane!(wide::f64x8, wide::u64x8);
 vector_lane!(wide::f64x4, wide::u64x4);
 
+/// A [`Lane`] of `N` doubles in one vector, to and from an array.
+trait Vector<const N: usize>: Lane {
+    fn from_array(a: [f64; N]) -> Self;
+    fn to_array(self) -> [f64; N];
+}
+
+macro_rules! vector_array {
+    ($f:ty, $n:literal) => {
+        impl Vector<$n> for $f {
+            #[inline(always)]
+            fn from_array(a: [f64; $n]) -> Self {
+                <$f>::new(a)
+            }
+            #[inline(always)]
+            fn to_array(self) -> [f64; $n] {
+                <$f>::to_array(self)
+            }
+        }
+    };
+}
+
+vector_array!(wide::f64x8, 8);
+vector_array!(wide::f64x4, 4);
+
+/// The kernel on the angles `x` (at most `N`), padded with zeros to one
+/// vector `V`, into `s` and `c` (as long as `x`).
+#[inline(always)]
+fn sin_cos_padded<V: Vector<N>, const N: usize>(x: &[f64], s: &mut [f64], c: &mut [f64]) {
+    let n = x.len();
+    let mut chunk = [0.0; N];
+    chunk[..n].copy_from_slice(x);
+    let (vs, vc) = sin_cos_kernel(V::from_array(chunk));
+    s.copy_from_slice(&vs.to_array()[..n]);
+    c.copy_from_slice(&vc.to_array()[..n]);
+}
+
 /// `a + b` as `(s, e)` with `s + e = a + b` exactly (Knuth's TwoSum; no
 /// condition on the magnitudes).
 #[inline(always)]
@@ -289,17 +325,9 @@ fn sin_cos_chunks<const W: usize>(vectors: bool, x: [f64; W]) -> ([f64; W], [f64
         }
         let n = W - i;
         if n > 4 {
-            let mut chunk = [0.0; 8];
-            chunk[..n].copy_from_slice(&x[i..]);
-            let (vs, vc) = sin_cos_kernel(wide::f64x8::new(chunk));
-            s[i..].copy_from_slice(&vs.to_array()[..n]);
-            c[i..].copy_from_slice(&vc.to_array()[..n]);
+            sin_cos_padded::<wide::f64x8, 8>(&x[i..], &mut s[i..], &mut c[i..]);
         } else if n > 0 {
-            let mut chunk = [0.0; 4];
-            chunk[..n].copy_from_slice(&x[i..]);
-            let (vs, vc) = sin_cos_kernel(wide::f64x4::new(chunk));
-            s[i..].copy_from_slice(&vs.to_array()[..n]);
-            c[i..].copy_from_slice(&vc.to_array()[..n]);
+            sin_cos_padded::<wide::f64x4, 4>(&x[i..], &mut s[i..], &mut c[i..]);
         }
     } else {
         for i in 0..W {
