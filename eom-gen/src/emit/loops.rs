@@ -58,16 +58,9 @@ const SIN_COS_ARGS: [&str; 2] = ["q_sin", "q_cos"];
 /// per body; `None` if the step takes no sine or cosine of its coordinate.
 /// Same values otherwise: the operations on them are unchanged.
 fn with_sin_cos_given(p: &Program) -> Option<Program> {
-    let iq = p
-        .inputs
-        .iter()
-        .position(|s| matches!(s.kind, SymKind::Coord(_)))? as u32;
+    let iq = coordinate(p)?;
     let of_q = |x: Operand| x == Operand::Var(iq);
-    if !p
-        .instrs
-        .iter()
-        .any(|i| matches!(i.op, Op::Sin(x) | Op::Cos(x) | Op::SinCos(x) if of_q(x)))
-    {
+    if !reads_sin_cos(p) {
         return None;
     }
     // The inputs with the two new ones, kept sorted by kind then name; `q`
@@ -146,10 +139,30 @@ fn with_sin_cos_given(p: &Program) -> Option<Program> {
     })
 }
 
+/// The input index of a step's coordinate, if it reads one.
+fn coordinate(p: &Program) -> Option<u32> {
+    let i = p
+        .inputs
+        .iter()
+        .position(|s| matches!(s.kind, SymKind::Coord(_)))?;
+    Some(i as u32)
+}
+
+/// True if the step `p` takes the sine or cosine of its coordinate (what
+/// [`with_sin_cos_given`] rewrites).
+fn reads_sin_cos(p: &Program) -> bool {
+    coordinate(p).is_some_and(|iq| {
+        let of_q = |x: Operand| x == Operand::Var(iq);
+        p.instrs
+            .iter()
+            .any(|i| matches!(i.op, Op::Sin(x) | Op::Cos(x) | Op::SinCos(x) if of_q(x)))
+    })
+}
+
 /// True if some step of `pass` reads the sine and cosine of its
 /// coordinate ([`with_sin_cos_given`]).
 fn pass_takes_sin_cos(pass: &Pass) -> bool {
-    pass.own.0 && pass.steps.iter().any(|p| with_sin_cos_given(p).is_some())
+    pass.own.0 && pass.steps.iter().any(reads_sin_cos)
 }
 
 /// The step function of one pass's class `k`.
