@@ -28,6 +28,7 @@ import csv
 import json
 import os
 import subprocess
+import statistics
 import sys
 
 import models
@@ -75,6 +76,28 @@ def robots_dir():
 
     site = sysconfig.get_paths()["purelib"]
     return os.path.join(site, "cmeel.prefix", "share", "example-robot-data", "robots")
+
+
+def merged_rounds(runs):
+    """One report from the reports of several rounds of the same timing
+    program: every figure the median over the rounds (a timing's `median`,
+    an `_ns` number, a `by_width` entry), every fastest pass the minimum;
+    everything else from the first round."""
+    first = runs[0]
+    if isinstance(first, dict):
+        out = {}
+        for k, v in first.items():
+            vals = [r[k] for r in runs if isinstance(r, dict) and k in r]
+            if k in ("min",) and all(isinstance(x, (int, float)) for x in vals):
+                out[k] = min(vals)
+            elif isinstance(v, dict):
+                out[k] = merged_rounds(vals)
+            elif isinstance(v, float) and (k == "median" or k.endswith("_ns") or k.isdigit()):
+                out[k] = statistics.median(vals)
+            else:
+                out[k] = v
+        return out
+    return first
 
 
 def ratio(a, b):
@@ -147,6 +170,13 @@ def main():
     ap.add_argument("--root", required=True, help="the repository root")
     ap.add_argument("--states", type=int, default=1024)
     ap.add_argument("--reps", type=int, default=31)
+    ap.add_argument(
+        "--rounds",
+        type=int,
+        default=3,
+        help="times each side's timing program runs, alternately (eom, peers, eom, …); "
+        "every figure is the median over the rounds, every fastest pass the minimum",
+    )
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--check", type=int, default=5, help="states whose accelerations are compared")
     ap.add_argument("--deriv-check", type=int, default=3, help="states whose derivatives are compared")
@@ -302,16 +332,40 @@ def main():
             if not x <= limit:
                 failures.append(f"{name}: {tool} d(udot)/{what} differs from eom's by {x:.2e} (relative)")
 
-        bench = {}
+        # Timings: each side's program `--rounds` times, alternately (a
+        # process's figures move by up to half between runs on this shared
+        # host; BENCHMARKS.md "Rounds in the peers harness"). The peers'
+        # first round is the checked run above.
         native = ["--native"] + (["--derivatives"] if deriv else [])
         flavours = [("native", native)] + ([] if a.native_only else [("generic", [])])
-        for flavour, extra in flavours:
-            bench[flavour] = eom_json(
-                a.eom,
-                ["bench", ron, "--per-call", "--json", "--states", str(a.states), "--reps", str(a.reps),
-                 "--seed", str(a.seed), *extra],
-                env,
+        eom_runs = {flavour: [] for flavour, _ in flavours}
+        peer_runs = [peer]
+        for r in range(a.rounds):
+            if r > 0:
+                peer_runs.append(
+                    json.loads(
+                        run([a.peers, base + ".urdf", mj_path, str(a.states), str(a.reps), str(a.seed),
+                             "1", "1" if deriv else "0"])
+                    )
+                )
+            for flavour, extra in flavours:
+                eom_runs[flavour].append(
+                    eom_json(
+                        a.eom,
+                        ["bench", ron, "--per-call", "--json", "--states", str(a.states), "--reps",
+                         str(a.reps), "--seed", str(a.seed), *extra],
+                        env,
+                    )
+                )
+        bench = {flavour: merged_rounds(v) for flavour, v in eom_runs.items()}
+        peer = merged_rounds(peer_runs)
+
+        def per_round(theirs, ours):
+            """Their figure over ours in each round, as `a/b/c`."""
+            return "/".join(
+                f"{ratio(p[theirs]['median'], e[ours]):.2f}" for p, e in zip(peer_runs, eom_runs["native"])
             )
+
         eom_fd = bench["native"]["forward_dynamics_ns"]
         row = {
             "model": name,
@@ -324,6 +378,8 @@ def main():
             "mujoco_forward_ns": peer["mujoco_forward"]["median"],
             "pinocchio_aba_over_eom": ratio(peer["pinocchio_aba"]["median"], eom_fd),
             "mujoco_forward_over_eom": ratio(peer["mujoco_forward"]["median"], eom_fd),
+            "pinocchio_aba_over_eom_rounds": per_round("pinocchio_aba", "forward_dynamics_ns"),
+            "mujoco_forward_over_eom_rounds": per_round("mujoco_forward", "forward_dynamics_ns"),
             "eom_id_ns": bench["native"]["inverse_dynamics_ns"],
             "pinocchio_rnea_ns": peer["pinocchio_rnea"]["median"],
             "eom_mass_matrix_ns": bench["native"]["mass_matrix_ns"],
@@ -339,6 +395,7 @@ def main():
             "mujoco_version": peer["mujoco_version"],
             "states": a.states,
             "reps": a.reps,
+            "rounds": a.rounds,
             "seed": a.seed,
         }
         rows.append(row)
@@ -360,6 +417,9 @@ def main():
                 "pinocchio_aba_derivatives_min_ns": peer["pinocchio_aba_derivatives"]["min"],
                 "mujoco_transition_fd_forward_min_ns": peer["mujoco_transition_fd_forward"]["min"],
                 "pinocchio_over_eom": ratio(pin_d, eom_d),
+                "pinocchio_over_eom_rounds": per_round(
+                    "pinocchio_aba_derivatives", "forward_dynamics_derivatives_ns"
+                ),
                 "mujoco_fd_forward_over_eom": ratio(peer["mujoco_transition_fd_forward"]["median"], eom_d),
                 "pinocchio_over_eom_min": ratio(
                     peer["pinocchio_aba_derivatives"]["min"],
@@ -386,6 +446,7 @@ def main():
                 "mujoco_version": peer["mujoco_version"],
                 "states": a.states,
                 "reps": a.reps,
+                "rounds": a.rounds,
                 "seed": a.seed,
             }
             drows.append(drow)
@@ -421,22 +482,24 @@ def main():
 
     print(
         "| model | dof | eom FD ns (native / generic) | Pinocchio ABA ns | MuJoCo mj_forward ns "
-        "| ABA / eom | mj_forward / eom | eom ID ns | Pinocchio RNEA ns | eom M ns | Pinocchio CRBA ns "
-        "| max rel. diff (Pin / MuJoCo) |"
+        "| ABA / eom (rounds) | mj_forward / eom (rounds) | eom ID ns | Pinocchio RNEA ns | eom M ns "
+        "| Pinocchio CRBA ns | max rel. diff (Pin / MuJoCo) |"
     )
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(
             f"| {r['model']} | {r['dof']} | {r['eom_fd_ns']:.0f} / {r['eom_fd_ns_generic']:.0f} "
             f"| {r['pinocchio_aba_ns']:.0f} | {r['mujoco_forward_ns']:.0f} "
-            f"| {r['pinocchio_aba_over_eom']:.1f}× | {r['mujoco_forward_over_eom']:.1f}× "
+            f"| {r['pinocchio_aba_over_eom']:.1f}× ({r['pinocchio_aba_over_eom_rounds']}) "
+            f"| {r['mujoco_forward_over_eom']:.1f}× ({r['mujoco_forward_over_eom_rounds']}) "
             f"| {r['eom_id_ns']:.0f} | {r['pinocchio_rnea_ns']:.0f} "
             f"| {r['eom_mass_matrix_ns']:.0f} | {r['pinocchio_crba_ns']:.0f} "
             f"| {r['max_rel_diff_pinocchio']:.1e} / {r['max_rel_diff_mujoco']:.1e} |"
         )
     print(
         "\n| model | dof | eom ∂u̇/∂(q, u, τ) ns (ops) | Pinocchio computeABADerivatives ns "
-        "| MuJoCo mjd_transitionFD ns (forward / centred) | Pinocchio / eom (fastest passes) | MuJoCo forward / eom "
+        "| MuJoCo mjd_transitionFD ns (forward / centred) | Pinocchio / eom (fastest passes; rounds) "
+        "| MuJoCo forward / eom "
         f"| ≥ {TARGET:g}× Pinocchio | max rel. diff Pinocchio (∂q / ∂u / M⁻¹) "
         "| max rel. diff MuJoCo FD (∂q / ∂u) |"
     )
@@ -446,7 +509,7 @@ def main():
             f"| {r['model']} | {r['dof']} | {r['eom_derivatives_ns']:.0f} ({r['eom_derivatives_ops']}) "
             f"| {r['pinocchio_aba_derivatives_ns']:.0f} "
             f"| {r['mujoco_transition_fd_forward_ns']:.0f} / {r['mujoco_transition_fd_centered_ns']:.0f} "
-            f"| {r['pinocchio_over_eom']:.1f}× ({r['pinocchio_over_eom_min']:.1f}×) "
+            f"| {r['pinocchio_over_eom']:.1f}× ({r['pinocchio_over_eom_min']:.1f}×; {r['pinocchio_over_eom_rounds']}) "
             f"| {r['mujoco_fd_forward_over_eom']:.0f}× "
             f"| {'yes' if r['target_met'] else 'no'} "
             f"| {r['max_rel_diff_pinocchio_dq']:.1e} / {r['max_rel_diff_pinocchio_du']:.1e} / "
