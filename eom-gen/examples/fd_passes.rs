@@ -1,16 +1,22 @@
 //! Forward dynamics' operations pass by pass (articulated bodies, rigid
 //! trees): `cargo run --release -p eom-gen --example fd_passes -- MODEL…`;
 //! with `--program` first, both forms' counts and the lowered
-//! forward-dynamics program too. `chain:N:planar` and `chain:N:spatial`
-//! name the builder's chains (`n_link_chain`).
+//! forward-dynamics program too; with `--derivatives` first, the parts of
+//! the derivatives `−M⁻¹ ∂ID/∂x` instead (`u̇`, `M⁻¹`, the recursion's
+//! `∂ID/∂(q, u)`). `chain:N:planar` and `chain:N:spatial` name the
+//! builder's chains (`n_link_chain`).
 
-use eom_gen::mech::passes::aba_pass_counts;
+use eom_gen::mech::passes::{aba_pass_counts, derivative_part_counts};
 use eom_gen::model::{Source, check};
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     let listing = args.first().is_some_and(|a| a == "--program");
     if listing {
+        args.remove(0);
+    }
+    let derivatives = args.first().is_some_and(|a| a == "--derivatives");
+    if derivatives {
         args.remove(0);
     }
     for path in args {
@@ -51,7 +57,12 @@ fn main() {
                 Err(e) => println!("  {e}"),
             }
         }
-        match aba_pass_counts(&sys) {
+        let counts = if derivatives {
+            derivative_part_counts(&sys)
+        } else {
+            aba_pass_counts(&sys)
+        };
+        match counts {
             Ok(Some(passes)) => {
                 let mut total = 0;
                 for (name, c) in passes {

@@ -961,3 +961,28 @@ fn index3_generated_jacobian_is_the_differenced_one() {
         eprintln!("{what}: largest relative difference {worst:.1e}");
     }
 }
+
+/// The breakdown of the derivatives by part (`fd_passes --derivatives`):
+/// its first part is forward dynamics by articulated bodies, as many
+/// operations as the generated `forward_dynamics` where that is the form
+/// kept (arm7), and `M⁻¹` and the recursion's gradients each add some.
+#[test]
+fn derivative_parts_start_from_forward_dynamics() {
+    let sys = system("arm7");
+    let parts = eom_gen::mech::passes::derivative_part_counts(&sys)
+        .expect("formulates")
+        .expect("a rigid tree the recursion covers");
+    let f = formulate(&sys, FunctionSet::default()).expect("formulates");
+    assert_eq!(f.fd_form, eom_gen::mech::FdForm::Aba);
+    let fd = f
+        .program(Function::ForwardDynamics)
+        .expect("forward dynamics")
+        .op_count()
+        .total();
+    assert_eq!(parts.len(), 3);
+    assert_eq!(parts[0].1.total(), fd, "{}", parts[0].0);
+    assert!(
+        parts[1].1.total() > 0 && parts[2].1.total() > 0,
+        "{parts:?}"
+    );
+}

@@ -2,7 +2,8 @@
 //! a rigid tree (Featherstone §7.3, Table 7.1) lowered pass by pass. Each
 //! pass's outputs are lowered together with every earlier pass's, so a
 //! pass is charged only the operations it adds (common subexpressions go
-//! to the first pass that needs them).
+//! to the first pass that needs them). [`derivative_part_counts`] does the
+//! same for the parts of `−M⁻¹ ∂ID/∂x`.
 
 use super::applied::Applied;
 use super::formulate::{FormulateError, SymEnv};
@@ -37,6 +38,11 @@ fn inertia_parts<'a>(ia: &Inertia6<Expr<'a>>, out: &mut Vec<Expr<'a>>) {
 /// and the forward pass (`u̇`). `None` for trees the breakdown does not
 /// cover (flexible bodies, nodes, locked or prescribed joints).
 pub fn aba_pass_counts(sys: &System) -> Result<Option<PassCounts>, FormulateError> {
+    part_counts(sys, false)
+}
+
+/// [`aba_pass_counts`], or with `derivatives` [`derivative_part_counts`].
+fn part_counts(sys: &System, derivatives: bool) -> Result<Option<PassCounts>, FormulateError> {
     let cx = Context::new();
     let env = SymEnv::new(&cx, sys)?;
     let tree = super::tree::TreeModel::new(sys, &env)?;
@@ -69,6 +75,28 @@ pub fn aba_pass_counts(sys: &System) -> Result<Option<PassCounts>, FormulateErro
     let tau: Vec<Expr> = (0..tree.nu)
         .map(|i| generalized[i] + cx.tau(i as u32))
         .collect();
+    if derivatives {
+        // u̇, then M⁻¹ = ∂u̇/∂τ, then Newton–Euler's ∂τ/∂(q, u) at u̇ by
+        // the recursion along the paths.
+        let udot = ev.aba(&k, &tau, &fext);
+        let taus: Vec<Expr> = (0..tree.nu).map(|i| cx.tau(i as u32)).collect();
+        let minv: Vec<Expr> = cx.jacobian(&udot, &taus).into_iter().flatten().collect();
+        let Some(rd) = ev.rnea_derivatives(&k, &udot, super::rnea_derivatives::Axes::Paths) else {
+            return Ok(None);
+        };
+        let grads: Vec<Expr> = rd.dq.into_iter().chain(rd.du).flatten().collect();
+        return Ok(Some(cumulative(
+            &cx,
+            vec![
+                ("forward dynamics u̇ (articulated bodies)", udot),
+                ("M⁻¹ = ∂u̇/∂τ", minv),
+                (
+                    "∂ID/∂q, ∂ID/∂u at u̇ (recursion, pairs along the paths)",
+                    grads,
+                ),
+            ],
+        )));
+    }
     let n = tree.bodies.len();
     let mut stages: Vec<(&'static str, Vec<Expr>)> = Vec::new();
     let mut out = Vec::new();
@@ -165,6 +193,21 @@ pub fn aba_pass_counts(sys: &System) -> Result<Option<PassCounts>, FormulateErro
         outs.retain(|&e| needed.contains(&cx.id(e)));
     }
     stages.push(("forward pass: a_i, u̇", udot));
+    Ok(Some(cumulative(&cx, stages)))
+}
+
+/// Operations added by each part of `forward_dynamics_derivatives` by
+/// `−M⁻¹ ∂ID/∂x` on a rigid tree ([`aba_pass_counts`]'s trees): `u̇`,
+/// `M⁻¹` and the recursion's `∂ID/∂(q, u)` (the dense product after them
+/// and the force elements' terms not counted). `None` for trees the
+/// breakdown or the recursion does not cover.
+pub fn derivative_part_counts(sys: &System) -> Result<Option<PassCounts>, FormulateError> {
+    part_counts(sys, true)
+}
+
+/// Each stage's outputs lowered with every earlier stage's: the operations
+/// each adds.
+fn cumulative<'a>(cx: &'a Context, stages: Vec<(&'static str, Vec<Expr<'a>>)>) -> PassCounts {
     let mut so_far: Vec<Expr> = Vec::new();
     let mut last = OpCount::default();
     let mut counts = Vec::new();
@@ -180,7 +223,7 @@ pub fn aba_pass_counts(sys: &System) -> Result<Option<PassCounts>, FormulateErro
         counts.push((name, minus(c, last)));
         last = c;
     }
-    Ok(Some(counts))
+    counts
 }
 
 fn minus(a: OpCount, b: OpCount) -> OpCount {
