@@ -197,6 +197,8 @@ def main():
     a = ap.parse_args()
     if not 1 <= a.deriv_check <= a.check:
         sys.exit("--deriv-check must be between 1 and --check")
+    if a.rounds < 1:
+        sys.exit("--rounds must be at least 1")
 
     env = dict(os.environ)
     table = models.models()
