@@ -88,7 +88,7 @@ def merged_rounds(runs):
         out = {}
         for k, v in first.items():
             vals = [r[k] for r in runs if isinstance(r, dict) and k in r]
-            if k in ("min",) and all(isinstance(x, (int, float)) for x in vals):
+            if k == "min" and all(isinstance(x, (int, float)) for x in vals):
                 out[k] = min(vals)
             elif isinstance(v, dict):
                 out[k] = merged_rounds(vals)
@@ -174,7 +174,7 @@ def main():
         "--rounds",
         type=int,
         default=3,
-        help="times each side's timing program runs, alternately (eom, peers, eom, …); "
+        help="times each side's timing program runs, alternately (peers, eom, peers, …); "
         "every figure is the median over the rounds, every fastest pass the minimum",
     )
     ap.add_argument("--seed", type=int, default=1)
@@ -237,10 +237,15 @@ def main():
         # (On the robots, against Pinocchio only: MuJoCo's differences are
         # in its own order with its dampers; see derivative_check.)
         deriv = info["nu"] <= a.deriv_max_dof
-        peer = json.loads(
-            run([a.peers, base + ".urdf", mj_path, str(a.states), str(a.reps), str(a.seed), str(a.check),
-                 "1" if deriv else "0"])
-        )
+
+        def peer_run(check):
+            """One run of the peers' timing program, `check` states checked."""
+            return json.loads(
+                run([a.peers, base + ".urdf", mj_path, str(a.states), str(a.reps), str(a.seed), str(check),
+                     "1" if deriv else "0"])
+            )
+
+        peer = peer_run(a.check)
         # The peers' models are what we meant them to be.
         assert peer["nq"] == info["nq"] and peer["nv"] == info["nu"], (name, peer["nq"], info["nq"])
         assert robot or peer["nq"] == len(links), (name, peer["nq"])
@@ -344,12 +349,7 @@ def main():
         peer_runs = [peer]
         for r in range(a.rounds):
             if r > 0:
-                peer_runs.append(
-                    json.loads(
-                        run([a.peers, base + ".urdf", mj_path, str(a.states), str(a.reps), str(a.seed),
-                             "1", "1" if deriv else "0"])
-                    )
-                )
+                peer_runs.append(peer_run(1))
             for flavour, extra in flavours:
                 eom_runs[flavour].append(
                     eom_json(

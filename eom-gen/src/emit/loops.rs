@@ -58,11 +58,11 @@ const SIN_COS_ARGS: [&str; 2] = ["q_sin", "q_cos"];
 /// per body; `None` if the step takes no sine or cosine of its coordinate.
 /// Same values otherwise: the operations on them are unchanged.
 fn with_sin_cos_given(p: &Program) -> Option<Program> {
-    let iq = coordinate(p)?;
-    let of_q = |x: Operand| x == Operand::Var(iq);
     if !reads_sin_cos(p) {
         return None;
     }
+    let iq = coordinate(p)?;
+    let of_q = |x: Operand| x == Operand::Var(iq);
     // The inputs with the two new ones, kept sorted by kind then name; `q`
     // itself only if something else still reads it (a step whose only
     // use of `q` was its sine and cosine takes it as `_q`).
