@@ -66,6 +66,8 @@ trait Lane:
     fn quadrant(k: Self) -> (Self, Self, Self);
     /// The bits of `self` exclusive-or those of `b`.
     fn xor(self, b: Self) -> Self;
+    /// Is every lane of the mask `self` set?
+    fn all(self) -> bool;
 }
 
 impl Lane for f64 {
@@ -109,6 +111,10 @@ impl Lane for f64 {
     fn xor(self, b: Self) -> Self {
         f64::from_bits(self.to_bits() ^ b.to_bits())
     }
+    #[inline(always)]
+    fn all(self) -> bool {
+        self.to_bits() != 0
+    }
 }
 
 macro_rules! vector_lane {
@@ -149,6 +155,10 @@ macro_rules! vector_lane {
             fn xor(self, b: Self) -> Self {
                 self ^ b
             }
+            #[inline(always)]
+            fn all(self) -> bool {
+                <$f>::all(self)
+            }
         }
     };
 }
@@ -180,15 +190,28 @@ vector_array!(wide::f64x8, 8);
 vector_array!(wide::f64x4, 4);
 
 /// The kernel on the angles `x` (at most `N`), padded with zeros to one
-/// vector `V`, into `s` and `c` (as long as `x`).
+/// vector `V`, into `s` and `c` (as long as `x`); whether every angle is
+/// within [`REDUCTION_LIMIT`] ([`reducible_all`]).
 #[inline(always)]
-fn sin_cos_padded<V: Vector<N>, const N: usize>(x: &[f64], s: &mut [f64], c: &mut [f64]) {
+fn sin_cos_padded<V: Vector<N>, const N: usize>(x: &[f64], s: &mut [f64], c: &mut [f64]) -> bool {
     let n = x.len();
     let mut chunk = [0.0; N];
     chunk[..n].copy_from_slice(x);
-    let (vs, vc) = sin_cos_kernel(V::from_array(chunk));
+    let v = V::from_array(chunk);
+    let (vs, vc) = sin_cos_kernel(v);
     s.copy_from_slice(&vs.to_array()[..n]);
     c.copy_from_slice(&vc.to_array()[..n]);
+    reducible_all(v)
+}
+
+/// Is every lane of `x` within [`REDUCTION_LIMIT`] (false for NaN)? One
+/// vector comparison and one test of its mask: a lane-by-lane check of
+/// the array after the vectors became a comparison and a branch per lane
+/// (arm7's eight-lane forward dynamics: 138 scalar comparisons, the
+/// vectors stored to the stack for them).
+#[inline(always)]
+fn reducible_all<V: Lane>(x: V) -> bool {
+    x.abs().less(V::splat(REDUCTION_LIMIT)).all()
 }
 
 /// `a + b` as `(s, e)` with `s + e = a + b` exactly (Knuth's TwoSum; no
@@ -317,33 +340,52 @@ fn sin_cos_chunks<const W: usize>(vectors: bool, x: [f64; W]) -> ([f64; W], [f64
         // (or eight), padded with zeros where it does not fill it: 12
         // angles are one `f64x8` and one `f64x4`, not three `f64x4`.
         let mut i = 0;
+        let mut inside = true;
         while i + 8 <= W {
-            let (vs, vc) = sin_cos_kernel(super::load8(&x, i));
+            let v = super::load8(&x, i);
+            let (vs, vc) = sin_cos_kernel(v);
             s[i..i + 8].copy_from_slice(&vs.to_array());
             c[i..i + 8].copy_from_slice(&vc.to_array());
+            inside &= reducible_all(v);
             i += 8;
         }
         let n = W - i;
         if n > 4 {
-            sin_cos_padded::<wide::f64x8, 8>(&x[i..], &mut s[i..], &mut c[i..]);
+            inside &= sin_cos_padded::<wide::f64x8, 8>(&x[i..], &mut s[i..], &mut c[i..]);
         } else if n > 0 {
-            sin_cos_padded::<wide::f64x4, 4>(&x[i..], &mut s[i..], &mut c[i..]);
+            inside &= sin_cos_padded::<wide::f64x4, 4>(&x[i..], &mut s[i..], &mut c[i..]);
+        }
+        if !inside {
+            return lane_by_lane(x);
         }
     } else {
+        let mut inside = true;
         for i in 0..W {
             (s[i], c[i]) = sin_cos_reduced(x[i]);
+            inside &= reducible(x[i]);
+        }
+        if !inside {
+            return lane_by_lane(x);
         }
     }
-    let mut outside = false;
-    for v in x {
-        outside |= !reducible(v);
-    }
-    if outside {
-        for i in 0..W {
-            if !reducible(x[i]) {
-                (s[i], c[i]) = f64::sin_cos(x[i]);
-            }
-        }
+    (s, c)
+}
+
+/// [`sin_cos_lanes`] lane by lane, `f64::sin_cos` on the lanes beyond
+/// [`REDUCTION_LIMIT`] (and the non-finite ones), [`sin_cos_reduced`] on
+/// the others: out of line and cold, for packs with a lane outside the
+/// reduction's range, so that the hot path keeps one test of a vector
+/// comparison's mask and none of the calls' code.
+#[cold]
+#[inline(never)]
+fn lane_by_lane<const W: usize>(x: [f64; W]) -> ([f64; W], [f64; W]) {
+    let (mut s, mut c) = ([0.0; W], [0.0; W]);
+    for ((&xl, sl), cl) in x.iter().zip(&mut s).zip(&mut c) {
+        (*sl, *cl) = if reducible(xl) {
+            sin_cos_reduced(xl)
+        } else {
+            f64::sin_cos(xl)
+        };
     }
     (s, c)
 }
@@ -425,7 +467,14 @@ mod tests {
             }
         }
         let mut xs = arguments();
-        xs.extend([2.0e6, -3.5e7, 1.0e300]);
+        xs.extend([
+            2.0e6,
+            -3.5e7,
+            1.0e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ]);
         xs.rotate_left(7);
         check::<1>(&xs[..64]);
         check::<3>(&xs);
