@@ -323,11 +323,14 @@ fn lower_solved<'cx>(
 /// Measured (BENCHMARKS.md, "`−M⁻¹ ∂ID/∂x` as a dense product"): panda (9
 /// speeds) 19 % fewer instructions and 12 % less time, arm7 (7) 8 % fewer
 /// instructions in the same time, the spatial 10-link chain 22 % fewer
-/// instructions and faster; below seven (session 49) ur5 (6) 10 % fewer
-/// instructions in the same time, the spatial 5-link chain 7 % fewer but
-/// slower (a five-wide row is a four-lane vector and a remainder), so the
-/// threshold stays at seven.
-pub const PRODUCTS_FROM_NU: usize = 7;
+/// instructions and faster. At six speeds (BENCHMARKS.md, "ur5's
+/// derivatives and the instruction cache"): ur5's function 37 KB → 33 KB
+/// of machine code, which then mostly runs from the AMD EPYC host's 32 KiB
+/// instruction cache, 628 → 380 ns (session 49's Intel host, with twice
+/// the cache, gave the same time either way). Below six, the spatial
+/// 5-link chain was slower with it (a five-wide row is a four-lane vector
+/// and a remainder).
+pub const PRODUCTS_FROM_NU: usize = 6;
 
 /// The SIMD lanes a dense product is assumed to run in (four doubles to a
 /// 256-bit instruction).
