@@ -207,7 +207,7 @@ fn sin_cos_padded<V: Vector<N>, const N: usize>(x: &[f64], s: &mut [f64], c: &mu
 /// Is every lane of `x` within [`REDUCTION_LIMIT`] (false for NaN)? One
 /// vector comparison and one test of its mask: a lane-by-lane check of
 /// the array after the vectors became a comparison and a branch per lane
-/// (arm7's eight-lane forward dynamics: 138 scalar comparisons, the
+/// (arm7's sixteen-lane forward dynamics: 138 scalar comparisons, the
 /// vectors stored to the stack for them).
 #[inline(always)]
 fn reducible_all<V: Lane>(x: V) -> bool {
