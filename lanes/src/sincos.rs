@@ -28,6 +28,15 @@ const PIO2_1: f64 = f64::from_bits(0x3ff921fb54400000); // 1.5707963267341256
 const PIO2_2: f64 = f64::from_bits(0x3dd0b4611a600000); // 6.077100506303966e-11
 const PIO2_3: f64 = f64::from_bits(0x3ba3198a2e000000); // 2.0222662487111665e-21
 const PIO2_3T: f64 = f64::from_bits(0x397b839a252049c1); // 8.4784276603689e-32
+/// `π/2 − P₁` rounded (fdlibm's `pio2_1t`): with `P₁`, the first round of
+/// fdlibm's medium path, π/2 to 85 bits.
+const PIO2_1T: f64 = f64::from_bits(0x3dd0b4611a626331); // 6.077100506506192e-11
+/// The first round is enough where it cancels fewer than 15 bits of `x`,
+/// `|y₀| > 2⁻¹⁵ |x|` (fdlibm takes a second round where the exponents of
+/// `x` and `y₀` differ by more than 16), and where `n = 0` (`|x|` below
+/// this bound, under π/4: nothing to reduce).
+const FIRST_ROUND_CANCELS: f64 = 1.0 / 32_768.0;
+const NOTHING_TO_REDUCE: f64 = 0.78;
 
 const S1: f64 = f64::from_bits(0xbfc5555555555549); // -0.16666666666666632
 const S2: f64 = f64::from_bits(0x3f8111111110f8a6); // 0.00833333333332249
@@ -273,25 +282,54 @@ fn kernel_cos<V: Lane>(x: V, y: V) -> V {
     w + (((k(1.0) - w) - hz) + fma(z, r, -(x * y)))
 }
 
+/// `x − n π/2` from `r₁ = x − n P₁` as a double-double `(y₀, y₁)`, with
+/// π/2 = P₁ + P₂ + P₃ + P₃ₜ (33 bits each in the first three, so every
+/// `n Pᵢ` is exact for n < 2²⁰): two subtractions with their rounding
+/// errors kept (TwoSum), the error terms and `n P₃ₜ` summed into the
+/// tail. Same 151 bits as fdlibm's third round: for the lanes next to a
+/// multiple of π/2, where the first round cancels too much.
+#[inline(always)]
+fn full_reduction<V: Lane>(r1: V, n: V) -> (V, V) {
+    let c = V::splat;
+    let (r2, e2) = two_diff(r1, n * c(PIO2_2));
+    let (r3, e3) = two_diff(r2, n * c(PIO2_3));
+    let tail = (e2 + e3) - n * c(PIO2_3T);
+    two_sum(r3, tail)
+}
+
 /// `(sin x, cos x)` for `|x| < REDUCTION_LIMIT` on every lane of `x`,
-/// without branches (the result for larger or non-finite lanes is
-/// meaningless: see [`sin_cos_lanes`]).
+/// without branches but one, to the full reduction where a lane needs it
+/// (the result for larger or non-finite lanes is meaningless: see
+/// [`sin_cos_lanes`]).
 #[inline(always)]
 fn sin_cos_kernel<V: Lane>(x: V) -> (V, V) {
     let c = V::splat;
     // n = round(x · 2/π); the low bits of `k`'s significand are n (mod 4).
     let k = x * c(INVPIO2) + c(TOINT);
     let n = k - c(TOINT);
-    // x − n π/2 with π/2 = P₁ + P₂ + P₃ + P₃ₜ (33 bits each in the first
-    // three, so every `n Pᵢ` is exact for n < 2²⁰): r₁ exact, then two
-    // subtractions with their rounding errors kept (TwoSum), the error
-    // terms and `n P₃ₜ` summed into the tail; (y₀, y₁) is the reduced
-    // argument as a double-double. Same 151 bits as fdlibm's third round.
+    // x − n π/2, first as fdlibm's medium path does in its first round
+    // (π/2 = P₁ + P₁ₜ to 85 bits; `n P₁` exact for n < 2²⁰, so r₁ is):
+    // every lane where that cancels few bits of `x`, or has nothing to
+    // reduce, keeps it; if any lane of the vector does not, the vector
+    // also takes the full reduction and those lanes its result (the same
+    // choice lane by lane as the scalar kernel, so the same bits).
     let r1 = x - n * c(PIO2_1);
-    let (r2, e2) = two_diff(r1, n * c(PIO2_2));
-    let (r3, e3) = two_diff(r2, n * c(PIO2_3));
-    let tail = (e2 + e3) - n * c(PIO2_3T);
-    let (y0, y1) = two_sum(r3, tail);
+    let w = n * c(PIO2_1T);
+    let y0 = r1 - w;
+    let y1 = (r1 - y0) - w;
+    let small = x.abs().less(c(NOTHING_TO_REDUCE));
+    let kept = V::select(
+        small,
+        small,
+        (x.abs() * c(FIRST_ROUND_CANCELS)).less(y0.abs()),
+    );
+    let (y0, y1) = if kept.all() {
+        (y0, y1)
+    } else {
+        core::hint::cold_path();
+        let (f0, f1) = full_reduction(r1, n);
+        (V::select(kept, y0, f0), V::select(kept, y1, f1))
+    };
     let s = kernel_sin(y0, y1);
     let co = kernel_cos(y0, y1);
     // Quadrant: odd n swaps sine and cosine; n ≡ 2, 3 negates the sine,
