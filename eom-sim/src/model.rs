@@ -145,7 +145,7 @@ pub mod __private {
     }
 
     /// `(sin x, cos x)` of several angles in one vectorised pass (the
-    /// branch-free kernel of the lanes, within 1 ulp of the C library;
+    /// kernel of the lanes, within 1 ulp of the C library;
     /// `f64::sin_cos` for `|x| ≥ 10⁶` and non-finite `x`).
     pub use eom_lanes::sincos::sin_cos_lanes;
 

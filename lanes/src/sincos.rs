@@ -1,9 +1,12 @@
-//! A branch-free `sin_cos` in vectors over lanes: fdlibm's kernels
-//! (as in musl's `__sin`, `__cos`) after a Cody–Waite reduction by `π/2`
-//! in four parts (the constants of fdlibm's `__rem_pio2`, whose medium
-//! path needs at most three rounds; here every lane takes all of them,
-//! with exact error terms, good to 151 bits), the quadrant chosen by bit
-//! operations. Where the build targets FMA the kernels' polynomials run as
+//! A `sin_cos` in vectors over lanes: fdlibm's kernels (as in musl's
+//! `__sin`, `__cos`) after a Cody–Waite reduction by `π/2`, the quadrant
+//! chosen by bit operations, with no branch but one test a vector. The
+//! reduction is fdlibm's medium path: its first round (π/2 to 85 bits)
+//! where that cancels fewer than 15 bits of the argument, else, for every
+//! lane of a vector that has such a lane next to a multiple of π/2, all
+//! four parts of the constants of fdlibm's `__rem_pio2` with exact error
+//! terms, good to 151 bits (the same choice lane by lane in the scalar
+//! kernel). Where the build targets FMA the kernels' polynomials run as
 //! fused multiply-adds (one rounding each; arm7's eight-lane forward
 //! dynamics 2 893 → 2 845 instructions), else as fdlibm writes them.
 //! Within 1 ulp of the C library for `|x| < 10⁶`; lanes outside that range
@@ -342,9 +345,8 @@ fn sin_cos_kernel<V: Lane>(x: V) -> (V, V) {
     (s, co.xor(cos_sign))
 }
 
-/// `(sin x, cos x)` for `|x| < REDUCTION_LIMIT`, without branches (the
-/// result for larger or non-finite `x` is meaningless: see
-/// [`sin_cos_lanes`]).
+/// `(sin x, cos x)` for `|x| < REDUCTION_LIMIT` (the result for larger or
+/// non-finite `x` is meaningless: see [`sin_cos_lanes`]).
 #[inline(always)]
 pub fn sin_cos_reduced(x: f64) -> (f64, f64) {
     sin_cos_kernel(x)
