@@ -7,7 +7,7 @@
 //! operation where the target has them, pairs of narrower ones where not),
 //! instead of arrays its SLP vectoriser must find again in every function,
 //! which it gave up on in long ones (BENCHMARKS.md, "Explicit vectors for
-//! the lanes, again"). `sin_cos` is a polynomial with one test a vector
+//! the lanes, again"). `sin_cos` is a polynomial with two tests a vector
 //! ([`sincos`]) so that it vectorises too.
 
 pub mod sincos;
@@ -74,7 +74,7 @@ impl<const W: usize> Lanes<W> {
     pub fn cos(self) -> Self {
         self.sin_cos().1
     }
-    /// Lane-wise sine and cosine by a polynomial (one test a vector) that
+    /// Lane-wise sine and cosine by a polynomial (two tests a vector) that
     /// vectorises ([`sincos::sin_cos_lanes`]): within 1 ulp of the C
     /// library's over the whole range.
     #[inline(always)]

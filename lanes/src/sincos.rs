@@ -1,6 +1,7 @@
 //! A `sin_cos` in vectors over lanes: fdlibm's kernels (as in musl's
 //! `__sin`, `__cos`) after a Cody–Waite reduction by `π/2`, the quadrant
-//! chosen by bit operations, with no branch but one test a vector. The
+//! chosen by bit operations, with no branches but two tests a vector
+//! (the reduction's range, and whether its first round is enough). The
 //! reduction is fdlibm's medium path: its first round (π/2 to 85 bits)
 //! where that cancels fewer than 15 bits of the argument, else, for every
 //! lane of a vector that has such a lane next to a multiple of π/2, all
@@ -36,9 +37,10 @@ const PIO2_3T: f64 = f64::from_bits(0x397b839a252049c1); // 8.4784276603689e-32
 const PIO2_1T: f64 = f64::from_bits(0x3dd0b4611a626331); // 6.077100506506192e-11
 /// The first round is enough where it cancels fewer than 15 bits of `x`,
 /// `|y₀| > 2⁻¹⁵ |x|` (fdlibm takes a second round where the exponents of
-/// `x` and `y₀` differ by more than 16), and where `n = 0` (`|x|` below
-/// this bound, under π/4: nothing to reduce).
+/// `x` and `y₀` differ by more than 16).
 const FIRST_ROUND_CANCELS: f64 = 1.0 / 32_768.0;
+/// Below this `|x|` (under π/4) `n = 0`: nothing to reduce, the first
+/// round is exact.
 const NOTHING_TO_REDUCE: f64 = 0.78;
 
 const S1: f64 = f64::from_bits(0xbfc5555555555549); // -0.16666666666666632
@@ -320,6 +322,7 @@ fn sin_cos_kernel<V: Lane>(x: V) -> (V, V) {
     let w = n * c(PIO2_1T);
     let y0 = r1 - w;
     let y1 = (r1 - y0) - w;
+    // kept = small or cancelling little (a select of masks is their `or`).
     let small = x.abs().less(c(NOTHING_TO_REDUCE));
     let kept = V::select(
         small,

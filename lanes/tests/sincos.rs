@@ -85,6 +85,24 @@ fn sin_cos_is_within_one_ulp_of_libm_over_the_whole_range() {
         check(xs, &mut worst);
         k = (k * 1.07).ceil();
     }
+    // Within 2⁻⁶⁰ … 2⁻¹ (relative) of n·π/2, |n| up to 10⁵: both sides of
+    // where the reduction's first round stops being enough (it cancels
+    // more than 15 bits, |y₀| ≤ 2⁻¹⁵ |x|), lanes of either kind in one
+    // vector, so that a vector takes the full reduction for some lanes
+    // and keeps the first round for the others.
+    for _ in 0..40_000 {
+        let xs = std::array::from_fn(|_| {
+            let n = (rng.next() % 200_001) as f64 - 100_000.0;
+            let m = n * std::f64::consts::FRAC_PI_2;
+            let off = m.abs().max(1.0) * (-(rng.unit() * 60.0)).exp2();
+            if rng.next() & 1 == 0 {
+                m + off
+            } else {
+                m - off
+            }
+        });
+        check(xs, &mut worst);
+    }
     // Special values.
     check(
         [

@@ -10,7 +10,7 @@
 //! Lane `l` reads its tunable parameters, inputs and multipliers from
 //! `m[l]`; time and every array argument are lanes. Nothing allocates or
 //! panics: indices are constants into fixed-size arrays, and the lane
-//! functions (`sin_cos` included, `eom_lanes::sincos`, with one test a
+//! functions (`sin_cos` included, `eom_lanes::sincos`, with two tests a
 //! vector) are lane-wise code that LLVM vectorises.
 
 use super::lower::{Arg, Style, lower};
