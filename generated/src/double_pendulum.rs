@@ -176,73 +176,69 @@ impl ::eom_sim::Model for DoublePendulum {
             ::eom_sim::__private::sin_cos_each::<4>([q[0], q[1], 0.0, 0.0], 2)
         };
         let x4 = u[0] + u[1];
-        let x5 = u[0] * x3;
-        let x6 = u[0] * x4;
-        let x7 = 9.8 * x0;
-        let x8 = udot[0] + udot[1];
-        let x9 = 9.8 * x1;
-        let x10 = u[0] * u[1];
-        let x11 = u[0] * u[0];
+        let x5 = u[0] * x4;
+        let x6 = 9.8 * x1;
+        let x7 = u[0] * u[1];
+        let x8 = u[0] * x3;
+        let x9 = 9.8 * x0;
+        let x10 = u[0] * u[0];
+        let x11 = udot[0] + udot[1];
         let x12 = u[0] * x2;
-        let x13 = x4 + x5;
-        let x14 = x2 * x6;
-        let x15 = udot[0] + x7;
-        let x16 = x11 * x3;
-        let x17 = x9 * x2;
-        let x18 = x9 * x3;
+        let x13 = x4 + x8;
+        let x14 = x5 * x2;
+        let x15 = udot[0] + x9;
+        let x16 = x6 - x7;
+        let x17 = x10 * x2;
+        let x18 = x6 * x2;
         let x19 = u[1] * x12;
-        let x20 = x10 * x3;
-        let x21 = x8 + x14;
-        let x22 = x4 * x13;
-        let x23 = x3 * x15;
-        let x24 = x2 * x15;
-        let x25 = x17 - x19;
-        let x26 = x18 - x20;
-        let x27 = x2 * x16;
-        let x28 = x12 * x13;
+        let x20 = x11 + x14;
+        let x21 = x4 * x13;
+        let x22 = x3 * x15;
+        let x23 = x3 * x16;
+        let x24 = x18 - x19;
+        let x25 = x3 * x17;
+        let x26 = x12 * x13;
+        let x27 = x20 + x22;
+        let x28 = x2 * x15;
         let x29 = x21 + x23;
-        let x30 = x22 - x24;
-        let x31 = x19 + x27;
-        let x32 = x17 + x15;
-        let x33 = x8 + x28;
-        let x34 = x25 + x29;
-        let x35 = x26 + x30;
-        let x36 = x17 - x27;
-        let x37 = x32 + x23;
-        let x38 = x33 - x31;
-        let x39 = x3 * x34;
-        let x40 = x2 * x35;
-        let x41 = x23 - x19;
-        let x42 = x36 + x33;
-        let x43 = x37 + x38;
-        let x44 = x39 - x40;
-        let x45 = x41 + x42;
-        let x46 = x43 + x44;
-        tau[0] = x46;
-        tau[1] = x45;
+        let x30 = x19 + x25;
+        let x31 = x18 + x15;
+        let x32 = x11 + x26;
+        let x33 = x24 + x27;
+        let x34 = x29 - x28;
+        let x35 = x31 + x22;
+        let x36 = x32 - x30;
+        let x37 = x3 * x33;
+        let x38 = x2 * x34;
+        let x39 = x22 - x25;
+        let x40 = x24 + x32;
+        let x41 = x35 + x36;
+        let x42 = x37 - x38;
+        let x43 = x39 + x40;
+        let x44 = x41 + x42;
+        tau[0] = x44;
+        tau[1] = x43;
     }
     fn energy(&self, _t: f64, q: &[f64; 2], u: &[f64; 2]) -> [f64; 2] {
         let (x0, x1) = f64::sin_cos(q[1]);
         let x2 = q[0] + q[1];
         let x3 = f64::cos(q[0]);
         let x4 = f64::cos(x2);
-        let x5 = u[0] + u[1];
-        let x6 = u[0] * x1;
-        let x7 = u[0] * u[0];
-        let x8 = x0 * x7;
-        let x9 = x5 + x6;
-        let x10 = x6 * x9;
-        let x11 = x0 * x8;
-        let x12 = x5 * x9;
-        let x13 = x7 + x11;
-        let x14 = x10 + x12;
-        let x15 = 19.6 * x3;
-        let x16 = 9.8 * x4;
-        let x17 = x13 + x14;
-        let x18 = x15 + x16;
-        let x19 = 0.5 * x17;
-        let x20 = -x18;
-        [x19, x20]
+        let x5 = u[0] * u[0];
+        let x6 = u[0] + u[1];
+        let x7 = u[0] * x1;
+        let x8 = x0 * x5;
+        let x9 = x6 + x7;
+        let x10 = x0 * x8;
+        let x11 = x5 + x10;
+        let x12 = x9 * x9;
+        let x13 = 19.6 * x3;
+        let x14 = 9.8 * x4;
+        let x15 = x11 + x12;
+        let x16 = x13 + x14;
+        let x17 = 0.5 * x15;
+        let x18 = -x16;
+        [x17, x18]
     }
     fn momentum(&self, _t: f64, q: &[f64; 2], u: &[f64; 2]) -> [f64; 6] {
         let ([x0, x5, _, _], [x1, x6, _, _]) = if cfg!(target_feature = "avx2") {
@@ -654,7 +650,7 @@ impl DoublePendulum {
         out[0] = x37;
         out[1] = x31;
     }
-    /// `inverse_dynamics` of `W` states at once, one per lane (45 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
+    /// `inverse_dynamics` of `W` states at once, one per lane (43 operations per state): inverse dynamics `τ = M u̇ + b`. Arguments `t`, `q`, `u`, `udot` as `inverse_dynamics`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("inverse_dynamics")`'s result.
     pub fn inverse_dynamics_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -664,54 +660,52 @@ impl DoublePendulum {
         out: &mut [::eom_sim::Lanes<W>; 2],
     ) {
         let (x0, x1) = q[0].sin_cos();
-        let x2 = u[0] + u[1];
-        let x3 = udot[0] + udot[1];
-        let x4 = ::eom_sim::Lanes::<W>::splat(9.8) * x1;
-        let x5 = u[0] * u[1];
-        let x6 = u[0] * u[0];
-        let (x7, x8) = q[1].sin_cos();
-        let x9 = x6 * x8;
-        let x10 = u[0] * x8;
-        let x11 = u[0] * x2;
+        let x2 = u[0] * u[0];
+        let x3 = u[0] + u[1];
+        let x4 = u[0] * x3;
+        let x5 = udot[0] + udot[1];
+        let x6 = ::eom_sim::Lanes::<W>::splat(9.8) * x1;
+        let x7 = u[0] * u[1];
+        let (x8, x9) = q[1].sin_cos();
+        let x10 = x2 * x8;
+        let x11 = u[0] * x9;
         let x12 = ::eom_sim::Lanes::<W>::splat(9.8) * x0;
-        let x13 = x4 * x7;
-        let x14 = x4 * x8;
-        let x15 = u[0] * x7;
-        let x16 = u[1] * x15;
-        let x17 = x13 - x16;
-        let x18 = x5 * x8;
-        let x19 = x14 - x18;
-        let x20 = x2 + x10;
-        let x21 = x7 * x9;
-        let x22 = x13 - x21;
-        let x23 = x16 + x21;
-        let x24 = x15 * x20;
-        let x25 = x7 * x11;
-        let x26 = x3 + x25;
-        let x27 = x2 * x20;
-        let x28 = udot[0] + x12;
-        let x29 = x13 + x28;
-        let x30 = x8 * x28;
-        let x31 = x30 - x16;
-        let x32 = x29 + x30;
-        let x33 = x26 + x30;
-        let x34 = x7 * x28;
-        let x35 = x27 - x34;
-        let x36 = x3 + x24;
-        let x37 = x22 + x36;
-        let x38 = x36 - x23;
-        let x39 = x32 + x38;
-        let x40 = x31 + x37;
-        let x41 = x17 + x33;
-        let x42 = x19 + x35;
-        let x43 = x8 * x41;
-        let x44 = x7 * x42;
-        let x45 = x43 - x44;
-        let x46 = x39 + x45;
-        out[0] = x46;
-        out[1] = x40;
+        let x13 = x6 * x8;
+        let x14 = u[0] * x8;
+        let x15 = u[1] * x14;
+        let x16 = x13 - x15;
+        let x17 = x3 + x11;
+        let x18 = x9 * x10;
+        let x19 = x15 + x18;
+        let x20 = x14 * x17;
+        let x21 = x4 * x8;
+        let x22 = x5 + x21;
+        let x23 = x3 * x17;
+        let x24 = udot[0] + x12;
+        let x25 = x13 + x24;
+        let x26 = x9 * x24;
+        let x27 = x26 - x18;
+        let x28 = x22 + x26;
+        let x29 = x25 + x26;
+        let x30 = x8 * x24;
+        let x31 = x5 + x20;
+        let x32 = x16 + x31;
+        let x33 = x31 - x19;
+        let x34 = x29 + x33;
+        let x35 = x27 + x32;
+        let x36 = x16 + x28;
+        let x37 = x6 - x7;
+        let x38 = x9 * x37;
+        let x39 = x23 + x38;
+        let x40 = x39 - x30;
+        let x41 = x9 * x36;
+        let x42 = x8 * x40;
+        let x43 = x41 - x42;
+        let x44 = x34 + x43;
+        out[0] = x44;
+        out[1] = x35;
     }
-    /// `energy` of `W` states at once, one per lane (20 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
+    /// `energy` of `W` states at once, one per lane (18 operations per state): kinetic and potential energy. Arguments `t`, `q`, `u` as `energy`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (2 entries per lane) laid out as `Model::evaluate("energy")`'s result.
     pub fn energy_lanes<const W: usize>(
         _m: &[Self; W],
         _t: ::eom_sim::Lanes<W>,
@@ -728,19 +722,17 @@ impl DoublePendulum {
         let x7 = u[0] * u[0];
         let x8 = x2 * x7;
         let x9 = x1 + x4;
-        let x10 = x4 * x9;
-        let x11 = x2 * x8;
-        let x12 = x7 + x11;
-        let x13 = x1 * x9;
-        let x14 = x10 + x13;
-        let x15 = x12 + x14;
-        let x16 = ::eom_sim::Lanes::<W>::splat(0.5) * x15;
-        let x17 = ::eom_sim::Lanes::<W>::splat(19.6) * x0;
-        let x18 = ::eom_sim::Lanes::<W>::splat(9.8) * x6;
-        let x19 = x17 + x18;
-        let x20 = -x19;
-        out[0] = x16;
-        out[1] = x20;
+        let x10 = x2 * x8;
+        let x11 = x7 + x10;
+        let x12 = x9 * x9;
+        let x13 = x11 + x12;
+        let x14 = ::eom_sim::Lanes::<W>::splat(0.5) * x13;
+        let x15 = ::eom_sim::Lanes::<W>::splat(19.6) * x0;
+        let x16 = ::eom_sim::Lanes::<W>::splat(9.8) * x6;
+        let x17 = x15 + x16;
+        let x18 = -x17;
+        out[0] = x14;
+        out[1] = x18;
     }
     /// `momentum` of `W` states at once, one per lane (27 operations per state): angular momentum about the world origin, then linear momentum, world axes. Arguments `t`, `q`, `u` as `momentum`'s, each number a `Lanes<W>` (entry `k`, lane `l`: entry `k` of state `l`); lane `l` reads parameters, inputs and multipliers from `m[l]`; `out` (6 entries per lane) laid out as `Model::evaluate("momentum")`'s result.
     pub fn momentum_lanes<const W: usize>(

@@ -785,6 +785,25 @@ impl Arena {
                 p.balance_products();
                 p.balance_sums();
                 p.optimize();
+                // Balanced sums hold pairs with a common factor that the
+                // factoring above left apart (arm7: `0.6·x − 0.6·y`, read
+                // by three sums, where `y − x` is computed elsewhere):
+                // factor again, balance again, while it pays (arm7's
+                // forward dynamics 1 175 → 1 151 operations).
+                for _ in 0..4 {
+                    let mut q = p.clone();
+                    if q.factor_sums() == 0 {
+                        break;
+                    }
+                    q.optimize();
+                    q.balance_products();
+                    q.balance_sums();
+                    q.optimize();
+                    if q.op_count().total() >= p.op_count().total() {
+                        break;
+                    }
+                    p = q;
+                }
             }
         } else {
             p.remove_dead();
