@@ -65,8 +65,8 @@ fn arm7_source_is_pinned() {
     insta::assert_snapshot!(g.source);
 }
 
-/// arm7's forward-dynamics derivatives (5 414 operations, of them 4 043
-/// instructions before the product `−M⁻¹ G`) are written one state at a
+/// arm7's forward-dynamics derivatives (5 330 operations, most of them
+/// before the product `−M⁻¹ G`) are written one state at a
 /// time as one function, depth first, not in parts: in blocks of at most
 /// `BLOCK_LIMIT` instructions (rustc overflows its stack on about 2 950
 /// nested `let`s with debug info; BENCHMARKS.md "One function or parts",

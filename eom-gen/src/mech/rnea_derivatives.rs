@@ -57,8 +57,9 @@
 //! joint at a time (each a sparse pose), and the pair is taken in the
 //! ancestor's own axes, where its column's `s`, `w`, `β` are still sparse
 //! and `S_i ·` picks one entry (arm7's forward dynamics derivatives: 6 081
-//! operations with common axes, 5 414 along the paths; the formulation
-//! keeps whichever counts fewer). [`Axes::World`] instead brings each
+//! operations with common axes, 5 414 along the paths, counted before
+//! sums were factored a second time; the formulation keeps whichever
+//! counts fewer). [`Axes::World`] instead brings each
 //! body's velocity, acceleration, inertia, its rate, momentum and force to
 //! world axes and does the rest there (dense).
 //!
