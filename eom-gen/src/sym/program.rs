@@ -769,17 +769,7 @@ impl Arena {
             // `x·c² + y·s² → x + (y − x)·s²`, kept if it pays.
             p = p.with_pythagoras();
             // Common factors out of sums, kept while they pay.
-            for _ in 0..4 {
-                let mut q = p.clone();
-                if q.factor_sums() == 0 {
-                    break;
-                }
-                q.optimize();
-                if q.op_count().total() >= p.op_count().total() {
-                    break;
-                }
-                p = q;
-            }
+            p = p.factored(false);
             // Sums as trees of least latency: same operations, shorter chains.
             if opts.balance {
                 p.balance_products();
@@ -790,20 +780,7 @@ impl Arena {
                 // by three sums, where `y − x` is computed elsewhere):
                 // factor again, balance again, while it pays (arm7's
                 // forward dynamics 1 175 → 1 151 operations).
-                for _ in 0..4 {
-                    let mut q = p.clone();
-                    if q.factor_sums() == 0 {
-                        break;
-                    }
-                    q.optimize();
-                    q.balance_products();
-                    q.balance_sums();
-                    q.optimize();
-                    if q.op_count().total() >= p.op_count().total() {
-                        break;
-                    }
-                    p = q;
-                }
+                p = p.factored(true);
             }
         } else {
             p.remove_dead();
@@ -1071,6 +1048,31 @@ impl Program {
         }
         self.instrs = out;
         self.n_tmps = next;
+    }
+
+    /// This program with common factors out of its sums
+    /// ([`Program::factor_sums`] and the clean-up, then balanced again if
+    /// `balance`), repeated while that lowers the count, at most four
+    /// rounds.
+    fn factored(self, balance: bool) -> Program {
+        let mut p = self;
+        for _ in 0..4 {
+            let mut q = p.clone();
+            if q.factor_sums() == 0 {
+                break;
+            }
+            q.optimize();
+            if balance {
+                q.balance_products();
+                q.balance_sums();
+                q.optimize();
+            }
+            if q.op_count().total() >= p.op_count().total() {
+                break;
+            }
+            p = q;
+        }
+        p
     }
 
     /// This program with [`Program::pythagoras`] and the clean-up, if that
